@@ -1,0 +1,184 @@
+//! `plume`: check, compile (and later run, render, bench) particle effects.
+
+mod output;
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand, ValueEnum};
+use plume_compiler::{compile_str, CompileError, CompileOptions, Integrator};
+
+/// Plume compiles declarative particle effects (RON) into fused, validated WGSL compute kernels.
+#[derive(Parser, Debug)]
+#[command(name = "plume", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Check effect files: errors and warnings with their locations; exit 1 on any error.
+    Check {
+        /// Effect files (.ron).
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+    },
+    /// Compile one effect and print its WGSL, IR or layout.
+    Compile {
+        /// The effect file (.ron).
+        file: PathBuf,
+        /// Write to this file instead of standard output.
+        #[arg(short, long)]
+        output: Option<PathBuf>,
+        /// What to print.
+        #[arg(long, value_enum, default_value_t = Emit::Wgsl)]
+        emit: Emit,
+        #[command(flatten)]
+        overrides: Overrides,
+    },
+}
+
+/// What `plume compile` prints.
+#[derive(Clone, Copy, Debug, ValueEnum)]
+enum Emit {
+    /// The WGSL module (spawn_prepare, spawn, update kernels).
+    Wgsl,
+    /// The IR after the passes.
+    Ir,
+    /// The particle struct, bytes per particle and the bindings.
+    Layout,
+}
+
+/// Values that replace the effect file's own.
+#[derive(clap::Args, Debug, Default)]
+struct Overrides {
+    /// Seconds per step.
+    #[arg(long)]
+    dt: Option<f64>,
+    /// Random seed.
+    #[arg(long)]
+    seed: Option<u32>,
+    /// Integrator: Euler, SemiImplicitEuler, Verlet, Midpoint, Rk4, Exact or Auto.
+    #[arg(long, value_parser = parse_integrator)]
+    integrator: Option<Integrator>,
+    /// Integration substeps per step.
+    #[arg(long)]
+    substeps: Option<u32>,
+}
+
+impl Overrides {
+    fn options(&self) -> CompileOptions {
+        CompileOptions {
+            dt: self.dt,
+            seed: self.seed,
+            integrator: self.integrator,
+            substeps: self.substeps,
+        }
+    }
+}
+
+fn parse_integrator(s: &str) -> Result<Integrator, String> {
+    Integrator::from_name(s).ok_or_else(|| {
+        format!("unknown integrator `{s}`; expected Euler, SemiImplicitEuler, Verlet, Midpoint, Rk4, Exact or Auto")
+    })
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        Command::Check { files } => check(&files),
+        Command::Compile {
+            file,
+            output,
+            emit,
+            overrides,
+        } => compile(&file, output.as_deref(), emit, &overrides.options()),
+    }
+}
+
+fn read_source(file: &Path) -> Result<String, String> {
+    std::fs::read_to_string(file)
+        .map_err(|e| format!("{}: error: cannot read file: {e}", file.display()))
+}
+
+fn check(files: &[PathBuf]) -> ExitCode {
+    let (mut failed, mut warnings) = (0usize, 0usize);
+    for file in files {
+        let name = file.display().to_string();
+        let source = match read_source(file) {
+            Ok(s) => s,
+            Err(e) => {
+                eprintln!("{e}");
+                failed += 1;
+                continue;
+            }
+        };
+        match compile_str(&source, &CompileOptions::default()) {
+            Ok(compiled) => {
+                warnings += compiled.warnings.items.len();
+                if !compiled.warnings.is_empty() {
+                    eprintln!("{}", compiled.warnings.render(&name, &source));
+                }
+            }
+            Err(e) => {
+                failed += 1;
+                eprintln!("{}", e.render(&name, &source));
+            }
+        }
+    }
+    let ok = files.len() - failed;
+    eprintln!(
+        "checked {} file(s): {ok} ok, {failed} with errors, {warnings} warning(s)",
+        files.len()
+    );
+    if failed > 0 {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    }
+}
+
+fn compile(file: &Path, output: Option<&Path>, emit: Emit, options: &CompileOptions) -> ExitCode {
+    let name = file.display().to_string();
+    let source = match read_source(file) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let compiled = match compile_str(&source, options) {
+        Ok(c) => c,
+        Err(e @ CompileError::Invalid(_)) | Err(e @ CompileError::Internal(_)) => {
+            eprintln!("{}", e.render(&name, &source));
+            return ExitCode::FAILURE;
+        }
+    };
+    if !compiled.warnings.is_empty() {
+        eprintln!("{}", compiled.warnings.render(&name, &source));
+    }
+    eprintln!(
+        "{name}: note: integrator {} ({})",
+        compiled.ir.integrator.name(),
+        compiled.ir.integrator_reason
+    );
+    let text = match emit {
+        Emit::Wgsl => compiled.wgsl,
+        Emit::Ir => compiled.ir.to_string(),
+        Emit::Layout => compiled.layout.to_string(),
+    };
+    match output {
+        None => {
+            print!("{text}");
+            ExitCode::SUCCESS
+        }
+        Some(out) => match output::write_atomically(out, text.as_bytes(), &[file]) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("{}: error: {e}", out.display());
+                ExitCode::FAILURE
+            }
+        },
+    }
+}

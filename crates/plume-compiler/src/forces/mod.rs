@@ -1,0 +1,230 @@
+//! Forces: each module owns one force's schema, checks, lowering to IR terms, WGSL and f64
+//! reference. Adding a force means adding a module here and a variant to [`Force`] and [`Term`].
+//!
+//! Forces are accelerations `a(x, v, t)`, summed. Schemas are what users write; terms are what
+//! the IR keeps after lowering (Gravity and noiseless Wind both lower to a [`constant`] term).
+
+pub mod attractor;
+pub mod constant;
+pub mod drag;
+pub mod noise;
+pub mod vortex;
+pub mod wind;
+
+use glam::DVec3;
+use std::marker::PhantomData;
+
+use serde::de::{
+    self, value::MapAccessDeserializer, Deserialize, Deserializer, EnumAccess, VariantAccess,
+};
+
+use crate::check::Checker;
+use crate::path::ValuePath;
+use crate::schema::Vec3;
+use crate::wgsl::writer::Writer;
+
+/// A force as written in an effect file.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Force {
+    /// Constant acceleration `a = g`.
+    Gravity(Vec3),
+    /// Linear drag toward a fluid velocity.
+    Drag(drag::Drag),
+    /// Constant push plus optional smooth noise.
+    Wind(wind::Wind),
+    /// The thesis's gravity point.
+    Attractor(attractor::Attractor),
+    /// The thesis's vortex, with its bugs fixed.
+    Vortex(vortex::Vortex),
+}
+
+impl Force {
+    /// The variant's name as written in effect files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Force::Gravity(_) => "Gravity",
+            Force::Drag(_) => "Drag",
+            Force::Wind(_) => "Wind",
+            Force::Attractor(_) => "Attractor",
+            Force::Vortex(_) => "Vortex",
+        }
+    }
+
+    /// Checks the force's parameters; `path` already names the variant.
+    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+        match self {
+            Force::Gravity(g) => {
+                c.vec3(&path.inner(), *g);
+            }
+            Force::Drag(f) => f.check(path, c),
+            Force::Wind(f) => f.check(path, c),
+            Force::Attractor(f) => f.check(path, c),
+            Force::Vortex(f) => f.check(path, c),
+        }
+    }
+
+    /// Whether the Exact integrator has a closed form with this force.
+    pub fn has_closed_form(&self) -> bool {
+        match self {
+            Force::Gravity(_) | Force::Drag(_) => true,
+            Force::Wind(w) => w.noise == 0.0,
+            Force::Attractor(_) | Force::Vortex(_) => false,
+        }
+    }
+
+    /// Lowers to IR terms; `origin` is the force's index in the file, `seed` the effect's seed.
+    pub fn lower(&self, origin: usize, seed: u32) -> Vec<Term> {
+        match self {
+            Force::Gravity(g) => vec![Term::Constant(constant::ConstantTerm {
+                accel: g.d(),
+                origins: vec![origin],
+            })],
+            Force::Drag(f) => vec![Term::Drag(f.lower(origin))],
+            Force::Wind(f) => f.lower(origin, seed),
+            Force::Attractor(f) => vec![Term::Attractor(f.lower(origin))],
+            Force::Vortex(f) => vec![Term::Vortex(f.lower(origin))],
+        }
+    }
+}
+
+/// Variant names, as written in effect files.
+pub const VARIANTS: &[&str] = &["Gravity", "Drag", "Wind", "Attractor", "Vortex"];
+
+/// Reads `Name(field: value, ...)` into the force module's own struct, so each force's
+/// schema lives with the rest of the force (serde's derive would need struct variants here).
+struct StructVariant<T>(PhantomData<T>);
+
+impl<'de, T: Deserialize<'de>> de::Visitor<'de> for StructVariant<T> {
+    type Value = T;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("named fields")
+    }
+    fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
+        T::deserialize(MapAccessDeserializer::new(map))
+    }
+}
+
+/// The variant names (serde reports unknown ones with the list of expected names).
+#[derive(serde::Deserialize)]
+#[serde(variant_identifier)]
+enum Kind {
+    Gravity,
+    Drag,
+    Wind,
+    Attractor,
+    Vortex,
+}
+
+struct ForceVisitor;
+
+impl<'de> de::Visitor<'de> for ForceVisitor {
+    type Value = Force;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a force: Gravity, Drag, Wind, Attractor or Vortex")
+    }
+    fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<Force, A::Error> {
+        let (kind, variant): (Kind, _) = data.variant()?;
+        Ok(match kind {
+            Kind::Gravity => Force::Gravity(variant.newtype_variant()?),
+            Kind::Drag => {
+                Force::Drag(variant.struct_variant(drag::FIELDS, StructVariant(PhantomData))?)
+            }
+            Kind::Wind => {
+                Force::Wind(variant.struct_variant(wind::FIELDS, StructVariant(PhantomData))?)
+            }
+            Kind::Attractor => Force::Attractor(
+                variant.struct_variant(attractor::FIELDS, StructVariant(PhantomData))?,
+            ),
+            Kind::Vortex => {
+                Force::Vortex(variant.struct_variant(vortex::FIELDS, StructVariant(PhantomData))?)
+            }
+        })
+    }
+}
+
+impl<'de> Deserialize<'de> for Force {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_enum("Force", VARIANTS, ForceVisitor)
+    }
+}
+
+/// How a term limits the step size, for the stability analysis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Stiffness {
+    /// No step-size limit from this term.
+    None,
+    /// Linear damping rate k (1/s): the limit is on k*h.
+    Damping(f64),
+    /// Oscillation frequency omega (rad/s): the limit is on omega*h.
+    Oscillation(f64),
+}
+
+/// What every IR force term provides: WGSL, the f64 reference, and facts for the passes.
+pub trait ForceTerm {
+    /// Indices in the file's `forces` list that this term came from.
+    fn origins(&self) -> &[usize];
+    /// One line for `--emit ir`.
+    fn describe(&self) -> String;
+    /// False when the term is zero everywhere (the prune pass drops it).
+    fn can_act(&self) -> bool;
+    /// Whether the acceleration depends on velocity.
+    fn uses_velocity(&self) -> bool {
+        false
+    }
+    /// Whether the acceleration depends on time.
+    fn uses_time(&self) -> bool {
+        false
+    }
+    /// The step-size limit this term imposes.
+    fn stiffness(&self) -> Stiffness {
+        Stiffness::None
+    }
+    /// WGSL statements that add this term's acceleration to `a`, with `x`, `v` (vec3<f32>) and
+    /// `t` (f32, seconds mod the noise period) in scope. Locals go in a `{ }` block.
+    fn emit_wgsl(&self, w: &mut Writer);
+    /// The same acceleration in f64: the CPU reference.
+    fn accel(&self, x: DVec3, v: DVec3, t: f64) -> DVec3;
+}
+
+/// A force term in the IR.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Term {
+    /// Constant acceleration (gravity, noiseless wind; folded into one).
+    Constant(constant::ConstantTerm),
+    /// Linear drag (merged into one).
+    Drag(drag::DragTerm),
+    /// Smooth noise acceleration from Wind.
+    Noise(noise::NoiseTerm),
+    /// Gravity point.
+    Attractor(attractor::AttractorTerm),
+    /// Vortex.
+    Vortex(vortex::VortexTerm),
+}
+
+impl Term {
+    /// The term behind the common interface.
+    pub fn as_dyn(&self) -> &dyn ForceTerm {
+        match self {
+            Term::Constant(t) => t,
+            Term::Drag(t) => t,
+            Term::Noise(t) => t,
+            Term::Attractor(t) => t,
+            Term::Vortex(t) => t,
+        }
+    }
+}
+
+/// `v / |v|`, or zero when `v` is too short to normalise (mirrors the WGSL guard).
+pub fn safe_normalize(v: DVec3) -> DVec3 {
+    let l2 = v.length_squared();
+    if l2 > 1e-20 {
+        v / l2.sqrt()
+    } else {
+        DVec3::ZERO
+    }
+}
+
+/// Path of the `i`-th force, with its variant named.
+pub fn force_path(i: usize, f: &Force) -> ValuePath {
+    ValuePath::root().field("forces").index(i).variant(f.name())
+}

@@ -1,0 +1,342 @@
+//! The typed IR: an effect after checking, with vectors in f64, directions normalised, spawn
+//! bases precomputed and forces lowered to terms. Passes rewrite it; the WGSL writer and the
+//! CPU reference both read it.
+
+use std::fmt;
+
+use glam::DVec3;
+
+use crate::forces::Term;
+use crate::schema::Integrator;
+
+/// An effect in the IR.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EffectIr {
+    /// The effect's name.
+    pub name: String,
+    /// Most live particles at once.
+    pub capacity: u32,
+    /// The file's seed.
+    pub seed: u32,
+    /// `rng::seed_mix(seed)`, baked into the kernels.
+    pub seed_mix: u32,
+    /// Seconds per step.
+    pub dt: f64,
+    /// Substeps per step.
+    pub substeps: u32,
+    /// Particle sources, in id order.
+    pub emitters: Vec<EmitterIr>,
+    /// Force terms (after the passes: folded, merged, pruned).
+    pub terms: Vec<Term>,
+    /// Speed limit after every velocity update.
+    pub max_speed: Option<f64>,
+    /// The integrator; concrete (never Auto) after the integrator pass.
+    pub integrator: Integrator,
+    /// Why this integrator: the file chose it, or what Auto decided and why.
+    pub integrator_reason: String,
+    /// Collision planes.
+    pub planes: Vec<PlaneIr>,
+    /// Kill volumes.
+    pub kills: Vec<KillIr>,
+    /// Whether a depth sort is requested.
+    pub sort: bool,
+    /// The camera.
+    pub camera: CameraIr,
+}
+
+impl EffectIr {
+    /// Integration step: `dt / substeps`.
+    pub fn h(&self) -> f64 {
+        self.dt / f64::from(self.substeps)
+    }
+
+    /// True when any emitter gives its particles a lifetime.
+    pub fn has_lifetimes(&self) -> bool {
+        self.emitters.iter().any(|e| e.lifetime.is_some())
+    }
+
+    /// True when any force term reads the velocity.
+    pub fn forces_use_velocity(&self) -> bool {
+        self.terms.iter().any(|t| t.as_dyn().uses_velocity())
+    }
+
+    /// True when any force term reads the time.
+    pub fn forces_use_time(&self) -> bool {
+        self.terms.iter().any(|t| t.as_dyn().uses_time())
+    }
+}
+
+/// One emitter.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EmitterIr {
+    /// Spawned at step 0.
+    pub burst: u32,
+    /// Per second.
+    pub rate: f64,
+    /// Spawn position.
+    pub shape: ShapeIr,
+    /// Spawn velocity.
+    pub velocity: VelocityIr,
+    /// Lifetime range (s).
+    pub lifetime: Option<(f64, f64)>,
+}
+
+/// An orthonormal pair spanning the plane perpendicular to a unit vector.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Basis {
+    /// First tangent.
+    pub t1: DVec3,
+    /// Second tangent (`n × t1`).
+    pub t2: DVec3,
+}
+
+impl Basis {
+    /// A right-handed basis around unit `n`.
+    pub fn around(n: DVec3) -> Self {
+        let helper = if n.x.abs() > 0.9 { DVec3::Y } else { DVec3::X };
+        let t1 = n.cross(helper).normalize();
+        let t2 = n.cross(t1);
+        Self { t1, t2 }
+    }
+}
+
+/// Spawn shape in the IR.
+#[derive(Clone, Debug, PartialEq)]
+pub enum ShapeIr {
+    /// One point.
+    Point(DVec3),
+    /// Uniform in a ball.
+    Sphere {
+        /// Centre.
+        center: DVec3,
+        /// Radius.
+        radius: f64,
+    },
+    /// Uniform in a box.
+    Box {
+        /// Lower corner.
+        min: DVec3,
+        /// Upper corner.
+        max: DVec3,
+    },
+    /// Uniform in a disc.
+    Disc {
+        /// Centre.
+        center: DVec3,
+        /// Radius.
+        radius: f64,
+        /// Tangents of the disc's plane.
+        basis: Basis,
+    },
+    /// Lattice: point (ix, iy, iz) is `origin + i * step` per axis.
+    Grid {
+        /// Position of lattice point (0, 0, 0).
+        origin: DVec3,
+        /// Spacing per axis (0 on an axis with one point).
+        step: DVec3,
+        /// Points per axis.
+        counts: [u32; 3],
+    },
+    /// Listed points, in order.
+    Points(Vec<DVec3>),
+}
+
+impl ShapeIr {
+    /// The centre that radial velocities point away from.
+    pub fn center(&self) -> DVec3 {
+        match self {
+            ShapeIr::Point(p) => *p,
+            ShapeIr::Sphere { center, .. } | ShapeIr::Disc { center, .. } => *center,
+            ShapeIr::Box { min, max } => (*min + *max) * 0.5,
+            ShapeIr::Grid {
+                origin,
+                step,
+                counts,
+            } => {
+                let n = DVec3::new(
+                    f64::from(counts[0] - 1),
+                    f64::from(counts[1] - 1),
+                    f64::from(counts[2] - 1),
+                );
+                *origin + *step * n * 0.5
+            }
+            ShapeIr::Points(ps) => ps.iter().copied().sum::<DVec3>() / ps.len().max(1) as f64,
+        }
+    }
+
+    /// The farthest any spawn position lies from the origin (for precision warnings).
+    pub fn extent(&self) -> f64 {
+        match self {
+            ShapeIr::Point(p) => p.abs().max_element(),
+            ShapeIr::Sphere { center, radius } | ShapeIr::Disc { center, radius, .. } => {
+                center.abs().max_element() + radius
+            }
+            ShapeIr::Box { min, max } => min.abs().max(max.abs()).max_element(),
+            ShapeIr::Grid { .. } => self.center().abs().max_element(),
+            ShapeIr::Points(ps) => ps.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max),
+        }
+    }
+}
+
+/// Spawn velocity in the IR.
+#[derive(Clone, Debug, PartialEq)]
+pub enum VelocityIr {
+    /// Fixed velocity.
+    Constant(DVec3),
+    /// Uniform in a cone: cos θ uniform in [cos angle, 1].
+    Cone {
+        /// Unit axis.
+        axis: DVec3,
+        /// Tangents of the axis.
+        basis: Basis,
+        /// Cosine of the half-angle.
+        cos_angle: f64,
+        /// Speed range.
+        speed: (f64, f64),
+    },
+    /// Away from the shape's centre.
+    Radial {
+        /// Speed range.
+        speed: (f64, f64),
+    },
+}
+
+impl VelocityIr {
+    /// The largest spawn speed.
+    pub fn max_speed(&self) -> f64 {
+        match self {
+            VelocityIr::Constant(v) => v.length(),
+            VelocityIr::Cone { speed, .. } | VelocityIr::Radial { speed } => {
+                speed.0.abs().max(speed.1.abs())
+            }
+        }
+    }
+}
+
+/// A collision plane with a unit normal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlaneIr {
+    /// A point on the plane.
+    pub point: DVec3,
+    /// Unit normal, into the allowed side.
+    pub normal: DVec3,
+    /// Restitution in [0, 1].
+    pub restitution: f64,
+    /// Friction in [0, 1].
+    pub friction: f64,
+}
+
+/// A kill volume.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum KillIr {
+    /// Inside an axis-aligned box.
+    InsideBox(DVec3, DVec3),
+    /// Outside an axis-aligned box.
+    OutsideBox(DVec3, DVec3),
+    /// Inside a ball (centre, radius).
+    InsideSphere(DVec3, f64),
+    /// Outside a ball (centre, radius).
+    OutsideSphere(DVec3, f64),
+}
+
+impl KillIr {
+    /// Whether a particle at `x` dies (the f64 twin of the WGSL test).
+    pub fn kills(&self, x: DVec3) -> bool {
+        match *self {
+            KillIr::InsideBox(min, max) => x.cmpge(min).all() && x.cmple(max).all(),
+            KillIr::OutsideBox(min, max) => !(x.cmpge(min).all() && x.cmple(max).all()),
+            KillIr::InsideSphere(c, r) => (x - c).length_squared() < r * r,
+            KillIr::OutsideSphere(c, r) => (x - c).length_squared() > r * r,
+        }
+    }
+
+    /// The thinnest a particle must cross to pass through an Inside volume (None for Outside).
+    pub fn thickness(&self) -> Option<f64> {
+        match *self {
+            KillIr::InsideBox(min, max) => Some((max - min).min_element()),
+            KillIr::InsideSphere(_, r) => Some(2.0 * r),
+            _ => None,
+        }
+    }
+}
+
+/// The camera, for sorting and rendering.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraIr {
+    /// Eye position.
+    pub eye: DVec3,
+    /// Look-at point.
+    pub target: DVec3,
+    /// Vertical field of view, degrees.
+    pub fov_y: f64,
+}
+
+impl fmt::Display for EffectIr {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = |v: DVec3| format!("({}, {}, {})", v.x, v.y, v.z);
+        writeln!(f, "effect {:?}", self.name)?;
+        writeln!(
+            f,
+            "  capacity {}  seed {} (mix {:#010x})",
+            self.capacity, self.seed, self.seed_mix
+        )?;
+        writeln!(
+            f,
+            "  dt {} s  substeps {}  h {} s",
+            self.dt,
+            self.substeps,
+            self.h()
+        )?;
+        writeln!(
+            f,
+            "  integrator {} ({})",
+            self.integrator.name(),
+            self.integrator_reason
+        )?;
+        match self.max_speed {
+            Some(s) => writeln!(f, "  max_speed {s} m/s")?,
+            None => writeln!(f, "  max_speed none")?,
+        }
+        writeln!(f, "  emitters")?;
+        for (i, e) in self.emitters.iter().enumerate() {
+            writeln!(
+                f,
+                "    [{i}] burst {} rate {}/s lifetime {:?}",
+                e.burst, e.rate, e.lifetime
+            )?;
+            writeln!(f, "        shape {:?}", e.shape)?;
+            writeln!(f, "        velocity {:?}", e.velocity)?;
+        }
+        writeln!(f, "  forces")?;
+        if self.terms.is_empty() {
+            writeln!(f, "    (none)")?;
+        }
+        for t in &self.terms {
+            let t = t.as_dyn();
+            writeln!(f, "    {}  <- forces{:?}", t.describe(), t.origins())?;
+        }
+        writeln!(f, "  planes")?;
+        for p in &self.planes {
+            writeln!(
+                f,
+                "    point {} normal {} restitution {} friction {}",
+                v(p.point),
+                v(p.normal),
+                p.restitution,
+                p.friction
+            )?;
+        }
+        writeln!(f, "  kill")?;
+        for k in &self.kills {
+            writeln!(f, "    {k:?}")?;
+        }
+        writeln!(
+            f,
+            "  sort {}  camera eye {} target {} fov_y {}",
+            self.sort,
+            v(self.camera.eye),
+            v(self.camera.target),
+            self.camera.fov_y
+        )
+    }
+}

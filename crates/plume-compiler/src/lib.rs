@@ -1,0 +1,162 @@
+//! # plume-compiler
+//!
+//! Compiles Plume particle effects, written in RON, into one WGSL module per effect: a fused
+//! `update` kernel and `spawn` kernels, validated by naga. The pipeline, one module per stage:
+//! parse ([`schema`], with [`diagnostics`] and [`locate`]) → check ([`validate`]) → lower to the
+//! [`ir`] → [`passes`] (fold, prune, integrator, stability, layout) → [`wgsl`] writer →
+//! [`naga_check`]. This crate does not depend on wgpu.
+//!
+//! ```
+//! let source = r#"Effect(
+//!     name: "drop",
+//!     capacity: 1000,
+//!     emitters: [Emitter(burst: 100, shape: Point((0.0, 1.0, 0.0)),
+//!                        velocity: Constant((0.0, 0.0, 0.0)))],
+//!     forces: [Gravity((0.0, -9.81, 0.0))],
+//! )"#;
+//! let effect = plume_compiler::compile_str(source, &Default::default()).unwrap();
+//! assert_eq!(effect.ir.integrator, plume_compiler::Integrator::Exact); // picked by Auto
+//! assert!(effect.wgsl.contains("fn update"));
+//! assert_eq!(effect.layout.bytes_per_particle, 28); // position, velocity, id
+//! ```
+
+pub mod check;
+pub mod diagnostics;
+pub mod forces;
+pub mod integrators;
+pub mod ir;
+pub mod locate;
+pub mod lower;
+pub mod naga_check;
+pub mod passes;
+pub mod path;
+pub mod rng;
+pub mod schema;
+pub mod validate;
+pub mod wgsl;
+
+pub use diagnostics::{Diagnostic, Diagnostics, Severity};
+pub use ir::EffectIr;
+pub use passes::layout::Layout;
+pub use schema::{Effect, Integrator};
+
+use locate::SourceMap;
+
+/// Overrides applied on top of the effect file (as `plume run --dt` etc. do).
+#[derive(Clone, Debug, Default)]
+pub struct CompileOptions {
+    /// Replaces the file's `dt`.
+    pub dt: Option<f64>,
+    /// Replaces the file's `seed`.
+    pub seed: Option<u32>,
+    /// Replaces the file's `integrator`.
+    pub integrator: Option<Integrator>,
+    /// Replaces the file's `substeps`.
+    pub substeps: Option<u32>,
+}
+
+/// A compiled effect: the IR after the passes, its layout, the WGSL and any warnings.
+#[derive(Clone, Debug)]
+pub struct CompiledEffect {
+    /// The IR after all passes (integrator resolved).
+    pub ir: EffectIr,
+    /// Particle struct and bindings.
+    pub layout: Layout,
+    /// The naga-validated WGSL module.
+    pub wgsl: String,
+    /// Warnings from the stability analysis and other checks, located in the source.
+    pub warnings: Diagnostics,
+}
+
+/// Why compilation failed.
+#[derive(Debug, thiserror::Error)]
+pub enum CompileError {
+    /// The effect has errors: syntax, unknown fields, or invalid values.
+    #[error("{0}")]
+    Invalid(Diagnostics),
+    /// The compiler emitted WGSL that naga rejects: a bug in Plume, never the user's fault.
+    #[error(transparent)]
+    Internal(#[from] naga_check::NagaRejection),
+}
+
+impl CompileError {
+    /// Renders the error for a terminal: rustc-style diagnostics, or the internal error text.
+    pub fn render(&self, file_name: &str, source: &str) -> String {
+        match self {
+            CompileError::Invalid(d) => d.render(file_name, source),
+            CompileError::Internal(e) => format!("{file_name}: {e}\n"),
+        }
+    }
+}
+
+/// Parses RON text into the effect schema, with syntax errors located.
+pub fn parse(source: &str) -> Result<Effect, Diagnostics> {
+    ron::Options::default()
+        .from_str::<Effect>(source)
+        .map_err(|e| {
+            let start = diagnostics::Pos {
+                line: e.span.start.line.max(1),
+                col: e.span.start.col.max(1),
+            };
+            let end = diagnostics::Pos {
+                line: e.span.end.line.max(1),
+                col: e.span.end.col.max(1),
+            };
+            Diagnostics {
+                items: vec![Diagnostic {
+                    severity: Severity::Error,
+                    path: String::new(),
+                    message: e.code.to_string(),
+                    span: Some(diagnostics::Span { start, end }),
+                }],
+            }
+        })
+}
+
+/// Compiles effect source text: parse, check, lower, run the passes, emit and validate WGSL.
+pub fn compile_str(source: &str, options: &CompileOptions) -> Result<CompiledEffect, CompileError> {
+    let mut effect = parse(source).map_err(CompileError::Invalid)?;
+    if let Some(dt) = options.dt {
+        effect.dt = dt;
+    }
+    if let Some(seed) = options.seed {
+        effect.seed = seed;
+    }
+    if let Some(i) = options.integrator {
+        effect.integrator = i;
+    }
+    if let Some(s) = options.substeps {
+        effect.substeps = s;
+    }
+    compile_effect(&effect, source)
+}
+
+/// Compiles an already-parsed effect; `source` (may be empty) is used only to locate diagnostics.
+pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, CompileError> {
+    let map = SourceMap::build(source);
+    let located = |items: Vec<(Diagnostic, String)>| Diagnostics {
+        items: items
+            .into_iter()
+            .map(|(mut d, lookup)| {
+                d.span = map.find(&lookup);
+                d
+            })
+            .collect(),
+    };
+    let checker = validate::check_effect(effect);
+    if !checker.errors.is_empty() {
+        return Err(CompileError::Invalid(located(checker.errors)));
+    }
+    let mut ir = lower::lower(effect);
+    let names: Vec<&'static str> = effect.forces.iter().map(|f| f.name()).collect();
+    let (layout, warnings) =
+        passes::run(&mut ir, &names).map_err(|c| CompileError::Invalid(located(c.errors)))?;
+    let wgsl = wgsl::emit_module(&ir, &layout);
+    naga_check::validate(&wgsl)?;
+    Ok(CompiledEffect {
+        ir,
+        layout,
+        wgsl,
+        warnings: located(warnings),
+    })
+}

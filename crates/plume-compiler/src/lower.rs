@@ -1,0 +1,139 @@
+//! Lowering: a checked [`Effect`] becomes an [`EffectIr`] (f64 vectors, unit directions,
+//! precomputed bases and grid steps, forces as terms). The integrator is still as written.
+
+use glam::DVec3;
+
+use crate::forces::safe_normalize;
+use crate::ir::{Basis, CameraIr, EffectIr, EmitterIr, KillIr, PlaneIr, ShapeIr, VelocityIr};
+use crate::rng::seed_mix;
+use crate::schema::{Collider, Effect, KillVolume, Shape, Velocity};
+
+/// Lowers a checked effect. Call only after [`crate::validate::check_effect`] found no errors.
+pub fn lower(effect: &Effect) -> EffectIr {
+    EffectIr {
+        name: effect.name.clone(),
+        capacity: effect.capacity,
+        seed: effect.seed,
+        seed_mix: seed_mix(effect.seed),
+        dt: effect.dt,
+        substeps: effect.substeps,
+        emitters: effect
+            .emitters
+            .iter()
+            .map(|e| EmitterIr {
+                burst: e.burst,
+                rate: e.rate,
+                shape: lower_shape(&e.shape),
+                velocity: lower_velocity(&e.velocity),
+                lifetime: e.lifetime.map(|r| (r.0, r.1)),
+            })
+            .collect(),
+        terms: effect
+            .forces
+            .iter()
+            .enumerate()
+            .flat_map(|(i, f)| f.lower(i, effect.seed))
+            .collect(),
+        max_speed: effect.max_speed,
+        integrator: effect.integrator,
+        integrator_reason: String::from("chosen in the file"),
+        planes: effect
+            .collide
+            .iter()
+            .map(
+                |Collider::Plane {
+                     point,
+                     normal,
+                     restitution,
+                     friction,
+                 }| PlaneIr {
+                    point: point.d(),
+                    normal: safe_normalize(normal.d()),
+                    restitution: *restitution,
+                    friction: *friction,
+                },
+            )
+            .collect(),
+        kills: effect
+            .kill
+            .iter()
+            .map(|k| match k {
+                KillVolume::InsideBox { min, max } => KillIr::InsideBox(min.d(), max.d()),
+                KillVolume::OutsideBox { min, max } => KillIr::OutsideBox(min.d(), max.d()),
+                KillVolume::InsideSphere { center, radius } => {
+                    KillIr::InsideSphere(center.d(), *radius)
+                }
+                KillVolume::OutsideSphere { center, radius } => {
+                    KillIr::OutsideSphere(center.d(), *radius)
+                }
+            })
+            .collect(),
+        sort: effect.sort,
+        camera: CameraIr {
+            eye: effect.camera.eye.d(),
+            target: effect.camera.target.d(),
+            fov_y: effect.camera.fov_y,
+        },
+    }
+}
+
+fn lower_shape(s: &Shape) -> ShapeIr {
+    match s {
+        Shape::Point(p) => ShapeIr::Point(p.d()),
+        Shape::Sphere { center, radius } => ShapeIr::Sphere {
+            center: center.d(),
+            radius: *radius,
+        },
+        Shape::Box { min, max } => ShapeIr::Box {
+            min: min.d(),
+            max: max.d(),
+        },
+        Shape::Disc {
+            center,
+            normal,
+            radius,
+        } => ShapeIr::Disc {
+            center: center.d(),
+            radius: *radius,
+            basis: Basis::around(safe_normalize(normal.d())),
+        },
+        Shape::Grid { min, max, counts } => {
+            let n = [counts.0, counts.1, counts.2];
+            let (lo, hi) = (min.d().to_array(), max.d().to_array());
+            let mut origin = [0.0; 3];
+            let mut step = [0.0; 3];
+            for a in 0..3 {
+                if n[a] == 1 {
+                    origin[a] = 0.5 * (lo[a] + hi[a]);
+                } else {
+                    origin[a] = lo[a];
+                    step[a] = (hi[a] - lo[a]) / f64::from(n[a] - 1);
+                }
+            }
+            ShapeIr::Grid {
+                origin: DVec3::from_array(origin),
+                step: DVec3::from_array(step),
+                counts: n,
+            }
+        }
+        Shape::Points(ps) => ShapeIr::Points(ps.iter().map(|p| p.d()).collect()),
+    }
+}
+
+fn lower_velocity(v: &Velocity) -> VelocityIr {
+    match v {
+        Velocity::Constant(v) => VelocityIr::Constant(v.d()),
+        Velocity::Cone { axis, angle, speed } => {
+            let axis = safe_normalize(axis.d());
+            VelocityIr::Cone {
+                axis,
+                basis: Basis::around(axis),
+                cos_angle: angle.to_radians().cos(),
+                speed: (speed.0, speed.1),
+            }
+        }
+        Velocity::Radial { speed } => VelocityIr::Radial {
+            speed: (speed.0, speed.1),
+        },
+    }
+}

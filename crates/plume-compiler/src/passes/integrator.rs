@@ -1,0 +1,71 @@
+//! Integrator resolution: Auto becomes Exact where a closed form exists, else
+//! SemiImplicitEuler; an explicit Exact without a closed form is an error naming the cause.
+
+use crate::check::Checker;
+use crate::forces::Term;
+use crate::ir::EffectIr;
+use crate::path::ValuePath;
+use crate::schema::Integrator;
+
+/// Why the Exact integrator cannot be used, naming the force or feature, or None if it can.
+pub fn exact_blocker(ir: &EffectIr, force_names: &[&'static str]) -> Option<(String, ValuePath)> {
+    for term in &ir.terms {
+        if matches!(term, Term::Constant(_) | Term::Drag(_)) {
+            continue;
+        }
+        let origin = term.as_dyn().origins()[0];
+        let name = force_names.get(origin).copied().unwrap_or("force");
+        let what = if matches!(term, Term::Noise(_)) {
+            format!("forces[{origin}] ({name}) has noise")
+        } else {
+            format!("forces[{origin}] ({name}) has no closed form")
+        };
+        let path = ValuePath::root()
+            .field("forces")
+            .index(origin)
+            .variant(name);
+        return Some((what, path));
+    }
+    if !ir.planes.is_empty() {
+        return Some((
+            "collide[0] (Plane) needs collision handling".into(),
+            ValuePath::root().field("collide").index(0).variant("Plane"),
+        ));
+    }
+    if ir.max_speed.is_some() {
+        return Some((
+            "max_speed clamps the velocity".into(),
+            ValuePath::root().field("max_speed"),
+        ));
+    }
+    None
+}
+
+/// Resolves `ir.integrator` to a concrete integrator and records why.
+pub fn resolve(ir: &mut EffectIr, force_names: &[&'static str]) -> Result<(), Checker> {
+    let blocker = exact_blocker(ir, force_names);
+    match (ir.integrator, blocker) {
+        (Integrator::Auto, None) => {
+            ir.integrator = Integrator::Exact;
+            ir.integrator_reason =
+                "Auto: only gravity, drag and noiseless wind act, so the closed form is exact"
+                    .into();
+        }
+        (Integrator::Auto, Some((why, _))) => {
+            ir.integrator = Integrator::SemiImplicitEuler;
+            ir.integrator_reason = format!("Auto: no closed form because {why}");
+        }
+        (Integrator::Exact, Some((why, _))) => {
+            let mut c = Checker::default();
+            c.error(
+                &ValuePath::root().field("integrator"),
+                format!(
+                    "Exact is not allowed because {why}; Exact needs only Gravity, Drag and Wind with noise 0, no collide planes and no max_speed (use Rk4 or Auto)"
+                ),
+            );
+            return Err(c);
+        }
+        _ => {}
+    }
+    Ok(())
+}

@@ -1,0 +1,185 @@
+//! Layout: the particle struct holds only the attributes this effect needs, as scalar f32/u32
+//! fields (no vec3 padding), so bytes per particle are the fewest the kernels read and write.
+
+use std::fmt;
+
+use crate::ir::EffectIr;
+use crate::schema::Integrator;
+
+/// What an attribute of the particle struct holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Attribute {
+    /// Position (m): `px, py, pz`.
+    Position,
+    /// Velocity (m/s): `vx, vy, vz`.
+    Velocity,
+    /// Verlet's displacement `x - x_prev` over one substep (m): `dx, dy, dz`.
+    Displacement,
+    /// Seconds since spawn: `age`. Only when some emitter sets a lifetime.
+    Age,
+    /// Seconds the particle lives: `life`. Only when some emitter sets a lifetime.
+    Lifetime,
+    /// Global spawn index, or `0xffffffff` for a free slot: `id`.
+    Id,
+}
+
+impl Attribute {
+    /// The WGSL field names and their scalar type.
+    pub fn fields(self) -> (&'static [&'static str], &'static str) {
+        match self {
+            Attribute::Position => (&["px", "py", "pz"], "f32"),
+            Attribute::Velocity => (&["vx", "vy", "vz"], "f32"),
+            Attribute::Displacement => (&["dx", "dy", "dz"], "f32"),
+            Attribute::Age => (&["age"], "f32"),
+            Attribute::Lifetime => (&["life"], "f32"),
+            Attribute::Id => (&["id"], "u32"),
+        }
+    }
+
+    /// Bytes this attribute takes per particle.
+    pub fn bytes(self) -> u32 {
+        4 * self.fields().0.len() as u32
+    }
+
+    /// What it holds, for `--emit layout`.
+    pub fn meaning(self) -> &'static str {
+        match self {
+            Attribute::Position => "position (m)",
+            Attribute::Velocity => "velocity (m/s)",
+            Attribute::Displacement => "Verlet displacement x - x_prev per substep (m)",
+            Attribute::Age => "seconds since spawn",
+            Attribute::Lifetime => "seconds this particle lives",
+            Attribute::Id => "global spawn index; 0xffffffff marks a free slot",
+        }
+    }
+}
+
+/// One resource binding of the compiled module (group 0).
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Binding {
+    /// Binding index.
+    pub binding: u32,
+    /// WGSL variable name.
+    pub name: &'static str,
+    /// Address space and access, as in WGSL.
+    pub space: &'static str,
+    /// Size in bytes for this effect's capacity.
+    pub bytes: u64,
+    /// What it holds.
+    pub meaning: &'static str,
+}
+
+/// The particle struct and the bindings of an effect.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Layout {
+    /// Attributes in struct order.
+    pub attributes: Vec<Attribute>,
+    /// Bytes per particle (sum of the attributes; all fields are 4-byte scalars).
+    pub bytes_per_particle: u32,
+    /// Bindings, in binding order.
+    pub bindings: Vec<Binding>,
+    /// Number of emitter entries in the step parameters (at least 1).
+    pub emitter_slots: u32,
+}
+
+impl Layout {
+    /// Whether the layout has `a`.
+    pub fn has(&self, a: Attribute) -> bool {
+        self.attributes.contains(&a)
+    }
+
+    /// Bytes of the uniform step parameters: 16 of header, 16 per emitter slot.
+    pub fn params_bytes(&self) -> u64 {
+        16 + 16 * u64::from(self.emitter_slots)
+    }
+}
+
+/// Bytes of the counters struct (free count, spawn base, spawn count, spawned, dropped, died).
+pub const COUNTERS_BYTES: u64 = 24;
+
+/// Decides the layout for a resolved IR.
+pub fn decide(ir: &EffectIr) -> Layout {
+    let mut attributes = vec![Attribute::Position];
+    attributes.push(if ir.integrator == Integrator::Verlet {
+        Attribute::Displacement
+    } else {
+        Attribute::Velocity
+    });
+    if ir.has_lifetimes() {
+        attributes.push(Attribute::Age);
+        attributes.push(Attribute::Lifetime);
+    }
+    attributes.push(Attribute::Id);
+    let bytes_per_particle = attributes.iter().map(|a| a.bytes()).sum();
+    let cap = u64::from(ir.capacity);
+    let emitter_slots = ir.emitters.len().max(1) as u32;
+    let mut layout = Layout {
+        attributes,
+        bytes_per_particle,
+        bindings: Vec::new(),
+        emitter_slots,
+    };
+    layout.bindings = vec![
+        Binding {
+            binding: 0,
+            name: "particles",
+            space: "storage, read_write",
+            bytes: cap * u64::from(bytes_per_particle),
+            meaning: "array<Particle>, one slot per capacity",
+        },
+        Binding {
+            binding: 1,
+            name: "free_list",
+            space: "storage, read_write",
+            bytes: cap * 4,
+            meaning: "stack of free slot indices (pushed on death, popped on spawn)",
+        },
+        Binding {
+            binding: 2,
+            name: "counters",
+            space: "storage, read_write",
+            bytes: COUNTERS_BYTES,
+            meaning: "free count, this step's spawn base and count, totals spawned, dropped, died",
+        },
+        Binding {
+            binding: 3,
+            name: "params",
+            space: "uniform",
+            bytes: layout.params_bytes(),
+            meaning: "per-step: first id, spawns requested, time mod 256 s, per-emitter counts",
+        },
+    ];
+    layout
+}
+
+impl fmt::Display for Layout {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "struct Particle ({} bytes per particle)",
+            self.bytes_per_particle
+        )?;
+        let mut offset = 0;
+        for a in &self.attributes {
+            let (names, ty) = a.fields();
+            writeln!(
+                f,
+                "  {:<14} {:<4} offset {:>2}  {}",
+                names.join(", "),
+                ty,
+                offset,
+                a.meaning()
+            )?;
+            offset += a.bytes();
+        }
+        writeln!(f, "bindings (group 0)")?;
+        for b in &self.bindings {
+            writeln!(
+                f,
+                "  @binding({}) {:<10} var<{}>  {} bytes  {}",
+                b.binding, b.name, b.space, b.bytes, b.meaning
+            )?;
+        }
+        Ok(())
+    }
+}

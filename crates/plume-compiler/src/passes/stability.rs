@@ -1,0 +1,267 @@
+//! Stability analysis: warnings with numbers, from the linear stability limits of each
+//! integrator (see docs/effect-format.md, "Stability"). Limits, for h = dt / substeps:
+//!
+//! | integrator        | drag k*h      | oscillation ω*h (attractor, vortex)           |
+//! |-------------------|---------------|-----------------------------------------------|
+//! | Euler             | < 2 (≤ 1 no overshoot) | always grows: × sqrt(1 + (ωh)²) per step |
+//! | SemiImplicitEuler | < 2           | < 2                                           |
+//! | Verlet            | < 2           | < 2                                           |
+//! | Midpoint          | < 2           | always grows: × sqrt(1 + (ωh)⁴/4) per step    |
+//! | Rk4               | < 2.785       | < 2√2                                         |
+//! | Exact             | none          | (not allowed with oscillating forces)         |
+//!
+//! For the always-growing cases the warning fires when the amplitude would more than double
+//! over the particles' lifetime (60 s for immortal particles).
+
+use crate::diagnostics::Diagnostic;
+use crate::forces::Stiffness;
+use crate::ir::EffectIr;
+use crate::path::ValuePath;
+use crate::schema::Integrator;
+
+/// Horizon (s) for growth warnings when some particles never die.
+pub const IMMORTAL_HORIZON: f64 = 60.0;
+/// Growth factor over the horizon that triggers a warning.
+pub const GROWTH_LIMIT: f64 = 2.0;
+/// Coordinates beyond this (m) lose visible precision in f32.
+pub const PRECISION_LIMIT: f64 = 1.0e5;
+
+/// The largest stable k*h for linear drag, or None when unconditionally stable.
+pub fn drag_limit(i: Integrator) -> Option<f64> {
+    match i {
+        Integrator::Rk4 => Some(2.785),
+        Integrator::Exact | Integrator::Auto => None,
+        _ => Some(2.0),
+    }
+}
+
+/// The largest stable ω*h for an undamped oscillation, or None when no hard limit exists.
+pub fn oscillation_limit(i: Integrator) -> Option<f64> {
+    match i {
+        Integrator::SemiImplicitEuler | Integrator::Verlet => Some(2.0),
+        Integrator::Rk4 => Some(2.0 * std::f64::consts::SQRT_2),
+        _ => None,
+    }
+}
+
+/// Amplitude growth per step for integrators that always gain energy, at ω*h = `wh`.
+pub fn growth_per_step(i: Integrator, wh: f64) -> Option<f64> {
+    match i {
+        Integrator::Euler => Some((1.0 + wh * wh).sqrt()),
+        Integrator::Midpoint => Some((1.0 + wh.powi(4) / 4.0).sqrt()),
+        _ => None,
+    }
+}
+
+/// The longest a particle lives (s), or [`IMMORTAL_HORIZON`] when some never die.
+pub fn horizon(ir: &EffectIr) -> f64 {
+    let mut longest: f64 = 0.0;
+    for e in &ir.emitters {
+        match e.lifetime {
+            Some((_, max)) => longest = longest.max(max),
+            None => return IMMORTAL_HORIZON,
+        }
+    }
+    if longest > 0.0 {
+        longest
+    } else {
+        IMMORTAL_HORIZON
+    }
+}
+
+/// An upper bound on particle speed used for tunnelling checks, and where it comes from.
+fn speed_bound(ir: &EffectIr) -> (f64, &'static str) {
+    match ir.max_speed {
+        Some(s) => (s, "max_speed"),
+        None => (
+            ir.emitters
+                .iter()
+                .map(|e| e.velocity.max_speed())
+                .fold(0.0, f64::max),
+            "the fastest spawn speed (set max_speed for a real bound)",
+        ),
+    }
+}
+
+fn force_value_path(force_names: &[&'static str], origin: usize, field: &str) -> ValuePath {
+    let name = force_names.get(origin).copied().unwrap_or("force");
+    ValuePath::root()
+        .field("forces")
+        .index(origin)
+        .variant(name)
+        .field(field)
+}
+
+/// Analyses the IR and returns warnings (with lookup paths).
+pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, String)> {
+    let mut out: Vec<(Diagnostic, String)> = Vec::new();
+    let mut warn = |path: ValuePath, msg: String| {
+        out.push((Diagnostic::warning(path.display, msg), path.lookup));
+    };
+    let h = ir.h();
+    let integ = ir.integrator;
+    let name = integ.name();
+    let steps = horizon(ir) / h;
+    for term in &ir.terms {
+        let t = term.as_dyn();
+        let origin = t.origins()[0];
+        match t.stiffness() {
+            Stiffness::None => {}
+            Stiffness::Damping(k) => {
+                let z = k * h;
+                let merged = if t.origins().len() > 1 {
+                    format!(" (drags {:?} merged)", t.origins())
+                } else {
+                    String::new()
+                };
+                if let Some(limit) = drag_limit(integ) {
+                    if z >= limit {
+                        warn(
+                            force_value_path(force_names, origin, "k"),
+                            format!(
+                                "k*h = {z:.3}{merged} is past {name}'s drag stability limit {limit} (h = {h:.4e} s): velocities oscillate and grow; raise substeps to at least {}, or use Exact where allowed",
+                                (k * ir.dt / limit).floor() as u64 + 1
+                            ),
+                        );
+                    } else if integ == Integrator::Euler && z > 1.0 {
+                        warn(
+                            force_value_path(force_names, origin, "k"),
+                            format!(
+                                "k*h = {z:.3}{merged} > 1: Euler overshoots, flipping the relative velocity every step; raise substeps to at least {}",
+                                (k * ir.dt).floor() as u64 + 1
+                            ),
+                        );
+                    }
+                }
+            }
+            Stiffness::Oscillation(omega) => {
+                let wh = omega * h;
+                let field = if matches!(term, crate::forces::Term::Vortex(_)) {
+                    "spin"
+                } else {
+                    "strength"
+                };
+                if let Some(limit) = oscillation_limit(integ) {
+                    if wh >= limit {
+                        warn(
+                            force_value_path(force_names, origin, field),
+                            format!(
+                                "stiffness ω*h = {wh:.3} (ω = {omega:.3} rad/s, h = {h:.4e} s) is past {name}'s limit {limit:.3}: orbits blow up; raise substeps to at least {}",
+                                (omega * ir.dt / limit).floor() as u64 + 1
+                            ),
+                        );
+                    }
+                } else if let Some(g) = growth_per_step(integ, wh) {
+                    let total = g.powf(steps);
+                    if total >= GROWTH_LIMIT {
+                        warn(
+                            force_value_path(force_names, origin, field),
+                            format!(
+                                "{name} gains energy on this force: ω*h = {wh:.3} (ω = {omega:.3} rad/s) grows amplitudes {}x over {:.1} s; use SemiImplicitEuler, Verlet or Rk4, or more substeps",
+                                fmt_factor(total),
+                                horizon(ir)
+                            ),
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    let (speed, source) = speed_bound(ir);
+    for (i, k) in ir.kills.iter().enumerate() {
+        if let Some(thick) = k.thickness() {
+            if speed * ir.dt > thick {
+                warn(
+                    ValuePath::root().field("kill").index(i),
+                    format!(
+                        "a particle at {speed} m/s ({source}) moves {:.3} m per step, more than this volume's thickness {thick:.3} m: it can pass through between checks",
+                        speed * ir.dt
+                    ),
+                );
+            }
+        }
+    }
+    for (i, p) in ir.planes.iter().enumerate() {
+        for e in &ir.emitters {
+            let gap = (e.shape.center() - p.point).dot(p.normal);
+            if gap > 0.0 && speed * h > gap {
+                warn(
+                    ValuePath::root().field("collide").index(i).variant("Plane"),
+                    format!(
+                        "a particle at {speed} m/s ({source}) moves {:.3} m per substep, more than the {gap:.3} m from an emitter to this plane: contacts are resolved only at substep ends, so bounces land late; raise substeps",
+                        speed * h
+                    ),
+                );
+                break;
+            }
+        }
+    }
+
+    let mut extent: f64 = 0.0;
+    for e in &ir.emitters {
+        extent = extent.max(e.shape.extent());
+    }
+    for p in &ir.planes {
+        extent = extent.max(p.point.abs().max_element());
+    }
+    if extent >= PRECISION_LIMIT {
+        let ulp = f64::from(f32::EPSILON) * extent;
+        warn(
+            ValuePath::root().field("emitters"),
+            format!(
+                "positions near {extent:.3e} m are kept in f32 to about {ulp:.3e} m; motion smaller than that per step is lost (move the effect nearer the origin)"
+            ),
+        );
+    }
+
+    if ir.emitters.is_empty() {
+        warn(
+            ValuePath::root().field("emitters"),
+            "no emitters: the effect spawns nothing".into(),
+        );
+    }
+    let burst: u64 = ir.emitters.iter().map(|e| u64::from(e.burst)).sum();
+    if burst > u64::from(ir.capacity) {
+        warn(
+            ValuePath::root().field("capacity"),
+            format!(
+                "the bursts spawn {burst} particles at step 0 but capacity is {}: {} are dropped",
+                ir.capacity,
+                burst - u64::from(ir.capacity)
+            ),
+        );
+    }
+    let steady: f64 = ir
+        .emitters
+        .iter()
+        .map(|e| match e.lifetime {
+            Some((_, max)) => e.rate * max,
+            None if e.rate > 0.0 && ir.kills.is_empty() => f64::INFINITY,
+            None => 0.0,
+        })
+        .sum();
+    if steady > f64::from(ir.capacity) && burst <= u64::from(ir.capacity) {
+        let msg = if steady.is_finite() {
+            format!(
+                "rate x lifetime keeps up to {steady:.0} particles alive but capacity is {}: spawns will be dropped",
+                ir.capacity
+            )
+        } else {
+            format!(
+                "particles that never die are spawned at a steady rate with no kill volume: capacity {} fills and later spawns are dropped",
+                ir.capacity
+            )
+        };
+        warn(ValuePath::root().field("capacity"), msg);
+    }
+    out
+}
+
+fn fmt_factor(x: f64) -> String {
+    if x.is_finite() && x < 1e6 {
+        format!("{x:.1}")
+    } else {
+        String::from("more than 1e6")
+    }
+}

@@ -1,0 +1,294 @@
+//! The effect file format, v1: serde types that mirror the RON document one to one.
+//!
+//! Field and variant names are a contract with users' files and other tools: extend, never rename.
+//! Unknown fields and variants are rejected. Semantic checks live in [`crate::validate`];
+//! force schemas live with the rest of each force in [`crate::forces`].
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::forces::Force;
+
+/// A 3-vector written `(x, y, z)`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub struct Vec3(pub f64, pub f64, pub f64);
+
+impl Vec3 {
+    /// As a glam f64 vector.
+    pub fn d(self) -> DVec3 {
+        DVec3::new(self.0, self.1, self.2)
+    }
+}
+
+/// A `(min, max)` interval; values are drawn uniformly from it.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub struct Range(pub f64, pub f64);
+
+/// Three counts written `(nx, ny, nz)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+pub struct Counts(pub u32, pub u32, pub u32);
+
+fn default_dt() -> f64 {
+    1.0 / 60.0
+}
+
+fn default_substeps() -> u32 {
+    1
+}
+
+/// A whole effect file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Effect {
+    /// A name for messages and outputs.
+    pub name: String,
+    /// Most live particles at once.
+    pub capacity: u32,
+    /// Seed of every random draw.
+    #[serde(default)]
+    pub seed: u32,
+    /// Seconds per step.
+    #[serde(default = "default_dt")]
+    pub dt: f64,
+    /// Integration substeps per step.
+    #[serde(default = "default_substeps")]
+    pub substeps: u32,
+    /// Where particles come from, in id order.
+    #[serde(default)]
+    pub emitters: Vec<Emitter>,
+    /// Accelerations, summed.
+    #[serde(default)]
+    pub forces: Vec<Force>,
+    /// Speed limit applied after every velocity update.
+    #[serde(default)]
+    pub max_speed: Option<f64>,
+    /// How positions and velocities advance.
+    #[serde(default)]
+    pub integrator: Integrator,
+    /// Surfaces particles bounce off.
+    #[serde(default)]
+    pub collide: Vec<Collider>,
+    /// Volumes that kill particles at the end of a step.
+    #[serde(default)]
+    pub kill: Vec<KillVolume>,
+    /// Draw back to front as seen from `camera`.
+    #[serde(default)]
+    pub sort: bool,
+    /// The viewpoint for sorting and rendering.
+    #[serde(default)]
+    pub camera: Camera,
+}
+
+/// One particle source.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Emitter {
+    /// Particles spawned once, at step 0.
+    #[serde(default)]
+    pub burst: u32,
+    /// Particles per second; the fractional remainder carries to the next step.
+    #[serde(default)]
+    pub rate: f64,
+    /// Where particles start.
+    pub shape: Shape,
+    /// How fast and where they start moving.
+    pub velocity: Velocity,
+    /// Lifetime range in seconds; `None` lives forever.
+    #[serde(default)]
+    pub lifetime: Option<Range>,
+}
+
+/// Spawn positions.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Shape {
+    /// Every particle at one point.
+    Point(Vec3),
+    /// Uniform in the ball's volume.
+    Sphere {
+        /// Centre of the ball.
+        center: Vec3,
+        /// Radius (>= 0).
+        radius: f64,
+    },
+    /// Uniform in an axis-aligned box.
+    Box {
+        /// Lower corner.
+        min: Vec3,
+        /// Upper corner.
+        max: Vec3,
+    },
+    /// Uniform in a flat disc.
+    Disc {
+        /// Centre of the disc.
+        center: Vec3,
+        /// The disc's normal (any length but zero).
+        normal: Vec3,
+        /// Radius (>= 0).
+        radius: f64,
+    },
+    /// Deterministic lattice points, handed out in x-then-y-then-z order.
+    Grid {
+        /// First lattice corner.
+        min: Vec3,
+        /// Last lattice corner.
+        max: Vec3,
+        /// Points per axis (>= 1 each).
+        counts: Counts,
+    },
+    /// Listed points, handed out in order.
+    Points(Vec<Vec3>),
+}
+
+/// Spawn velocities.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Velocity {
+    /// The same velocity for every particle.
+    Constant(Vec3),
+    /// Uniform directions within a cone around `axis`.
+    Cone {
+        /// Cone axis (any length but zero).
+        axis: Vec3,
+        /// Half-angle in degrees, in [0, 180].
+        angle: f64,
+        /// Speed range (m/s).
+        speed: Range,
+    },
+    /// Away from the shape's centre.
+    Radial {
+        /// Speed range (m/s).
+        speed: Range,
+    },
+}
+
+/// The integration scheme.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Integrator {
+    /// Explicit (forward) Euler: first order, unstable for oscillation.
+    Euler,
+    /// Symplectic Euler: first order, bounded energy.
+    SemiImplicitEuler,
+    /// Latta's position Verlet (displacement form): second order.
+    Verlet,
+    /// Midpoint RK2: second order.
+    Midpoint,
+    /// Classic RK4: fourth order.
+    Rk4,
+    /// The closed-form solution (gravity, drag, noiseless wind only).
+    Exact,
+    /// Let the compiler choose: Exact where allowed, else SemiImplicitEuler.
+    #[default]
+    Auto,
+}
+
+impl Integrator {
+    /// Every concrete integrator (not Auto), in order of increasing cost.
+    pub const CONCRETE: [Integrator; 6] = [
+        Integrator::Euler,
+        Integrator::SemiImplicitEuler,
+        Integrator::Verlet,
+        Integrator::Midpoint,
+        Integrator::Rk4,
+        Integrator::Exact,
+    ];
+
+    /// The name as written in effect files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Integrator::Euler => "Euler",
+            Integrator::SemiImplicitEuler => "SemiImplicitEuler",
+            Integrator::Verlet => "Verlet",
+            Integrator::Midpoint => "Midpoint",
+            Integrator::Rk4 => "Rk4",
+            Integrator::Exact => "Exact",
+            Integrator::Auto => "Auto",
+        }
+    }
+
+    /// Parses a name as written in effect files (case-insensitive, for the command line).
+    pub fn from_name(s: &str) -> Option<Self> {
+        [Integrator::Auto]
+            .into_iter()
+            .chain(Self::CONCRETE)
+            .find(|i| i.name().eq_ignore_ascii_case(s))
+    }
+}
+
+/// Collision surfaces.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Collider {
+    /// A half-space boundary: particles live on the side the normal points to.
+    Plane {
+        /// Any point on the plane.
+        point: Vec3,
+        /// Points into the allowed side (any length but zero).
+        normal: Vec3,
+        /// Fraction of normal speed kept on a bounce, in [0, 1].
+        restitution: f64,
+        /// Fraction of tangential speed lost on a bounce, in [0, 1].
+        friction: f64,
+    },
+}
+
+/// Volumes that kill particles at the end of a step.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum KillVolume {
+    /// Kills particles inside the box.
+    InsideBox {
+        /// Lower corner.
+        min: Vec3,
+        /// Upper corner.
+        max: Vec3,
+    },
+    /// Kills particles outside the box.
+    OutsideBox {
+        /// Lower corner.
+        min: Vec3,
+        /// Upper corner.
+        max: Vec3,
+    },
+    /// Kills particles inside the ball.
+    InsideSphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius (> 0).
+        radius: f64,
+    },
+    /// Kills particles outside the ball.
+    OutsideSphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius (> 0).
+        radius: f64,
+    },
+}
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    /// Where the camera is.
+    pub eye: Vec3,
+    /// What it looks at.
+    pub target: Vec3,
+    /// Vertical field of view in degrees, in (0, 180).
+    #[serde(default = "default_fov")]
+    pub fov_y: f64,
+}
+
+fn default_fov() -> f64 {
+    45.0
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self {
+            eye: Vec3(0.0, 2.0, 10.0),
+            target: Vec3(0.0, 1.0, 0.0),
+            fov_y: default_fov(),
+        }
+    }
+}

@@ -1,0 +1,169 @@
+//! Semantic checks of a parsed effect: every value that would make the IR meaningless
+//! (non-finite numbers, zero directions, empty lists, inverted ranges, ...) is an error here,
+//! named by its path, so lowering and code generation never see bad input.
+
+use crate::check::Checker;
+use crate::forces::force_path;
+use crate::path::ValuePath;
+use crate::schema::{Collider, Effect, Emitter, KillVolume, Shape, Velocity};
+
+/// Checks the whole effect; returns the checker holding every error found.
+pub fn check_effect(effect: &Effect) -> Checker {
+    let mut c = Checker::default();
+    let root = ValuePath::root();
+    if effect.capacity == 0 {
+        c.error(&root.field("capacity"), "must be >= 1, got 0");
+    }
+    c.positive(&root.field("dt"), effect.dt);
+    if effect.substeps == 0 {
+        c.error(&root.field("substeps"), "must be >= 1, got 0");
+    }
+    for (i, e) in effect.emitters.iter().enumerate() {
+        check_emitter(&mut c, &root.field("emitters").index(i), e);
+    }
+    for (i, f) in effect.forces.iter().enumerate() {
+        f.check(&force_path(i, f), &mut c);
+    }
+    if let Some(s) = effect.max_speed {
+        c.positive(&root.field("max_speed"), s);
+    }
+    for (
+        i,
+        Collider::Plane {
+            point,
+            normal,
+            restitution,
+            friction,
+        },
+    ) in effect.collide.iter().enumerate()
+    {
+        let p = root.field("collide").index(i).variant("Plane");
+        c.vec3(&p.field("point"), *point);
+        c.direction(&p.field("normal"), *normal);
+        c.within(&p.field("restitution"), *restitution, 0.0, 1.0);
+        c.within(&p.field("friction"), *friction, 0.0, 1.0);
+    }
+    for (i, k) in effect.kill.iter().enumerate() {
+        let p = root.field("kill").index(i);
+        match k {
+            KillVolume::InsideBox { min, max } => {
+                c.box_corners(&p.variant("InsideBox"), *min, *max)
+            }
+            KillVolume::OutsideBox { min, max } => {
+                c.box_corners(&p.variant("OutsideBox"), *min, *max)
+            }
+            KillVolume::InsideSphere { center, radius } => {
+                let p = p.variant("InsideSphere");
+                c.vec3(&p.field("center"), *center);
+                c.positive(&p.field("radius"), *radius);
+            }
+            KillVolume::OutsideSphere { center, radius } => {
+                let p = p.variant("OutsideSphere");
+                c.vec3(&p.field("center"), *center);
+                c.positive(&p.field("radius"), *radius);
+            }
+        }
+    }
+    let cam = root.field("camera");
+    let eye_ok = c.vec3(&cam.field("eye"), effect.camera.eye);
+    let target_ok = c.vec3(&cam.field("target"), effect.camera.target);
+    if eye_ok
+        && target_ok
+        && (effect.camera.eye.d() - effect.camera.target.d()).length_squared() <= 1e-20
+    {
+        c.error(&cam.field("target"), "must differ from camera.eye");
+    }
+    if c.finite(&cam.field("fov_y"), effect.camera.fov_y)
+        && !(effect.camera.fov_y > 0.0 && effect.camera.fov_y < 180.0)
+    {
+        c.error(
+            &cam.field("fov_y"),
+            format!("must be in (0, 180) degrees, got {}", effect.camera.fov_y),
+        );
+    }
+    c
+}
+
+fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter) {
+    c.non_negative(&path.field("rate"), e.rate);
+    let shape = path.field("shape");
+    match &e.shape {
+        Shape::Point(p) => {
+            c.vec3(&shape.variant("Point").inner(), *p);
+        }
+        Shape::Sphere { center, radius } => {
+            let s = shape.variant("Sphere");
+            c.vec3(&s.field("center"), *center);
+            c.non_negative(&s.field("radius"), *radius);
+        }
+        Shape::Box { min, max } => c.box_corners(&shape.variant("Box"), *min, *max),
+        Shape::Disc {
+            center,
+            normal,
+            radius,
+        } => {
+            let s = shape.variant("Disc");
+            c.vec3(&s.field("center"), *center);
+            c.direction(&s.field("normal"), *normal);
+            c.non_negative(&s.field("radius"), *radius);
+        }
+        Shape::Grid { min, max, counts } => {
+            let s = shape.variant("Grid");
+            c.box_corners(&s, *min, *max);
+            let n = [counts.0, counts.1, counts.2];
+            if n.contains(&0) {
+                c.error(
+                    &s.field("counts"),
+                    format!(
+                        "every count must be >= 1, got ({}, {}, {})",
+                        n[0], n[1], n[2]
+                    ),
+                );
+            } else if n.iter().map(|&k| u64::from(k)).product::<u64>() > u64::from(u32::MAX) {
+                c.error(&s.field("counts"), "holds more than 4294967295 points");
+            }
+        }
+        Shape::Points(ps) => {
+            let s = shape.variant("Points");
+            if ps.is_empty() {
+                c.error(&s, "must list at least one point");
+            }
+            for (i, p) in ps.iter().enumerate() {
+                c.vec3(&s.inner().index(i), *p);
+            }
+        }
+    }
+    let vel = path.field("velocity");
+    match &e.velocity {
+        Velocity::Constant(v) => {
+            c.vec3(&vel.variant("Constant").inner(), *v);
+        }
+        Velocity::Cone { axis, angle, speed } => {
+            let v = vel.variant("Cone");
+            c.direction(&v.field("axis"), *axis);
+            c.within(&v.field("angle"), *angle, 0.0, 180.0);
+            check_speed(c, &v.field("speed"), *speed);
+        }
+        Velocity::Radial { speed } => {
+            check_speed(c, &vel.variant("Radial").field("speed"), *speed);
+        }
+    }
+    if let Some(life) = e.lifetime {
+        let p = path.field("lifetime");
+        if c.range(&p, life) && life.0 <= 0.0 {
+            c.error(
+                &p.component(0, "min"),
+                format!("must be > 0 seconds, got {}", life.0),
+            );
+        }
+    }
+}
+
+fn check_speed(c: &mut Checker, path: &ValuePath, speed: crate::schema::Range) {
+    if c.range(path, speed) && speed.0 < 0.0 {
+        c.error(
+            &path.component(0, "min"),
+            format!("must be >= 0 m/s, got {}", speed.0),
+        );
+    }
+}

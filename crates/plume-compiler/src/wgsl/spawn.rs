@@ -1,0 +1,262 @@
+//! The spawn kernels. `spawn_prepare` (one thread) pops this step's slots off the free list:
+//! n = min(requested, free), the rest counted as dropped (live particles are never
+//! overwritten). `spawn` then initialises particle `first_id + i` in slot
+//! `free_list[spawn_base + i]`: its emitter, position, velocity and lifetime come from the
+//! IR and the integer hash of (seed, id, stream), so the CPU reference draws the same.
+
+use std::f64::consts::PI;
+
+use crate::ir::{EffectIr, EmitterIr, ShapeIr, VelocityIr};
+use crate::passes::layout::{Attribute, Layout};
+use crate::rng::stream;
+use crate::wgsl::writer::{f32_lit, u32_lit, vec3_lit, Writer};
+
+/// Emits `spawn_prepare` and `spawn`.
+pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+    w.comment(
+        "Pops this step's slots: never more than are free; the rest are dropped and counted.",
+    );
+    w.line("@compute @workgroup_size(1)");
+    w.block("fn spawn_prepare()", |w| {
+        w.line("let free = atomicLoad(&counters.free_count);");
+        w.line("let n = min(params.requested, free);");
+        w.line("atomicStore(&counters.free_count, free - n);");
+        w.line("counters.spawn_base = free - n;");
+        w.line("counters.spawn_count = n;");
+        w.line("counters.spawned = counters.spawned + n;");
+        w.line("counters.dropped = counters.dropped + (params.requested - n);");
+    });
+    w.blank();
+    for (e, em) in ir.emitters.iter().enumerate() {
+        emit_emitter_fn(w, ir, e, em);
+        w.blank();
+    }
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn spawn(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
+            w.block("if (i >= counters.spawn_count)", |w| w.line("return;"));
+            w.line("let slot = free_list[counters.spawn_base + i];");
+            w.line("let id = params.first_id + i;");
+            w.comment("Find the emitter: ids are handed out to emitters in the order they are listed.");
+            w.line("var e = 0u;");
+            w.line("var local = i;");
+            w.block(format!("for (; e < {}u; e++)", layout.emitter_slots), |w| {
+                w.block("if (local < params.emitters[e].x)", |w| w.line("break;"));
+                w.line("local = local - params.emitters[e].x;");
+            });
+            w.line("let k = params.emitters[e].y + local;");
+            w.line("var s: Spawned;");
+            if ir.emitters.is_empty() {
+                w.line("return;");
+            } else {
+                w.block("switch e", |w| {
+                    for e in 0..ir.emitters.len() {
+                        let label = if e + 1 == ir.emitters.len() {
+                            format!("case {e}u, default")
+                        } else {
+                            format!("case {e}u")
+                        };
+                        w.block(label, |w| w.line(format!("s = emit_{e}(id, k);")));
+                    }
+                });
+                let mut fields = vec!["s.x.x", "s.x.y", "s.x.z"];
+                if layout.has(Attribute::Displacement) {
+                    // Verlet: store the displacement that makes step one x0 + v0 h + a h²/2.
+                    let h = ir.h();
+                    w.line(format!(
+                        "let d = s.v * {} - accel(s.x, s.v, params.time) * {};",
+                        f32_lit(h),
+                        f32_lit(0.5 * h * h)
+                    ));
+                    fields.extend(["d.x", "d.y", "d.z"]);
+                } else {
+                    fields.extend(["s.v.x", "s.v.y", "s.v.z"]);
+                }
+                if layout.has(Attribute::Age) {
+                    fields.extend(["0.0", "s.life"]);
+                }
+                fields.push("id");
+                w.line(format!("particles[slot] = Particle({});", fields.join(", ")));
+            }
+        },
+    );
+}
+
+/// A function per emitter: `emit_E(id, k) -> Spawned`, k the emitter's own spawn counter.
+fn emit_emitter_fn(w: &mut Writer, ir: &EffectIr, e: usize, em: &EmitterIr) {
+    if let ShapeIr::Points(ps) = &em.shape {
+        let items: Vec<String> = ps.iter().map(|p| vec3_lit(*p)).collect();
+        w.line(format!(
+            "const POINTS_{e} = array<vec3<f32>, {}>({});",
+            ps.len(),
+            items.join(", ")
+        ));
+    }
+    w.block(format!("fn emit_{e}(id: u32, k: u32) -> Spawned"), |w| {
+        w.line("var s: Spawned;");
+        emit_shape(w, e, &em.shape);
+        emit_velocity(w, &em.shape, &em.velocity);
+        match em.lifetime {
+            Some((lo, hi)) => w.line(format!(
+                "s.life = {} + {} * rand_unit(id, {}u);",
+                f32_lit(lo),
+                f32_lit(hi - lo),
+                stream::LIFETIME
+            )),
+            None if ir.has_lifetimes() => {
+                w.comment("Lives forever: the largest finite f32.");
+                w.line(format!("s.life = {};", f32_lit(f64::from(f32::MAX))));
+            }
+            None => {}
+        }
+        w.line("return s;");
+    });
+}
+
+fn unit3(base: u32) -> String {
+    format!(
+        "vec3<f32>(rand_unit(id, {}u), rand_unit(id, {}u), rand_unit(id, {}u))",
+        base,
+        base + 1,
+        base + 2
+    )
+}
+
+fn emit_shape(w: &mut Writer, e: usize, shape: &ShapeIr) {
+    let two_pi = f32_lit(2.0 * PI);
+    let pi = f32_lit(PI);
+    match shape {
+        ShapeIr::Point(p) => w.line(format!("s.x = {};", vec3_lit(*p))),
+        ShapeIr::Sphere { center, radius } => {
+            w.comment("Uniform in the ball: cos(polar) uniform, radius ~ cube root.");
+            w.line(format!("let u = {};", unit3(stream::POSITION)));
+            w.line("let cz = 1.0 - 2.0 * u.x;");
+            w.line(format!("let phi = {two_pi} * u.y - {pi};"));
+            w.line("let sz = sqrt(max(0.0, 1.0 - cz * cz));");
+            w.line(format!(
+                "let r = {} * pow(max(u.z, 1e-30), {});",
+                f32_lit(*radius),
+                f32_lit(1.0 / 3.0)
+            ));
+            w.line(format!(
+                "s.x = {} + r * vec3<f32>(sz * cos(phi), sz * sin(phi), cz);",
+                vec3_lit(*center)
+            ));
+        }
+        ShapeIr::Box { min, max } => {
+            w.line(format!(
+                "s.x = {} + {} * {};",
+                vec3_lit(*min),
+                vec3_lit(*max - *min),
+                unit3(stream::POSITION)
+            ));
+        }
+        ShapeIr::Disc {
+            center,
+            radius,
+            basis,
+        } => {
+            w.comment("Uniform in the disc: radius ~ sqrt(u).");
+            w.line(format!("let u = {};", unit3(stream::POSITION)));
+            w.line(format!("let r = {} * sqrt(u.x);", f32_lit(*radius)));
+            w.line(format!("let phi = {two_pi} * u.y - {pi};"));
+            w.line(format!(
+                "s.x = {} + r * (cos(phi) * {} + sin(phi) * {});",
+                vec3_lit(*center),
+                vec3_lit(basis.t1),
+                vec3_lit(basis.t2)
+            ));
+        }
+        ShapeIr::Grid {
+            origin,
+            step,
+            counts,
+        } => {
+            let [nx, ny, nz] = *counts;
+            w.comment("Lattice point k (mod the lattice size): x fastest, then y, then z.");
+            w.line(format!(
+                "let g = k % {};",
+                u32_lit(nx.wrapping_mul(ny).wrapping_mul(nz))
+            ));
+            w.line(format!(
+                "let gi = vec3<u32>(g % {nx}u, (g / {nx}u) % {ny}u, g / {});",
+                u32_lit(nx * ny)
+            ));
+            w.line(format!(
+                "s.x = {} + vec3<f32>(gi) * {};",
+                vec3_lit(*origin),
+                vec3_lit(*step)
+            ));
+        }
+        ShapeIr::Points(ps) => {
+            w.line(format!("s.x = POINTS_{e}[k % {}u];", ps.len()));
+        }
+    }
+}
+
+fn emit_speed(w: &mut Writer, speed: (f64, f64)) {
+    w.line(format!(
+        "let speed = {} + {} * rand_unit(id, {}u);",
+        f32_lit(speed.0),
+        f32_lit(speed.1 - speed.0),
+        stream::VELOCITY + 2
+    ));
+}
+
+fn emit_velocity(w: &mut Writer, shape: &ShapeIr, vel: &VelocityIr) {
+    let two_pi = f32_lit(2.0 * PI);
+    let pi = f32_lit(PI);
+    match vel {
+        VelocityIr::Constant(v) => w.line(format!("s.v = {};", vec3_lit(*v))),
+        VelocityIr::Cone {
+            axis,
+            basis,
+            cos_angle,
+            speed,
+        } => {
+            w.comment("Uniform on the spherical cap: cos(theta) uniform in [cos(angle), 1].");
+            w.line(format!(
+                "let cos_t = 1.0 - rand_unit(id, {}u) * {};",
+                stream::VELOCITY,
+                f32_lit(1.0 - cos_angle)
+            ));
+            w.line("let sin_t = sqrt(max(0.0, 1.0 - cos_t * cos_t));");
+            w.line(format!(
+                "let psi = {two_pi} * rand_unit(id, {}u) - {pi};",
+                stream::VELOCITY + 1
+            ));
+            emit_speed(w, *speed);
+            w.line(format!(
+                "s.v = speed * (cos_t * {} + sin_t * (cos(psi) * {} + sin(psi) * {}));",
+                vec3_lit(*axis),
+                vec3_lit(basis.t1),
+                vec3_lit(basis.t2)
+            ));
+        }
+        VelocityIr::Radial { speed } => {
+            emit_speed(w, *speed);
+            w.line(format!("let out = s.x - {};", vec3_lit(shape.center())));
+            w.line("let out2 = dot(out, out);");
+            w.line("var dir: vec3<f32>;");
+            w.block("if (out2 > 1e-20)", |w| {
+                w.line("dir = out * inverseSqrt(out2);")
+            });
+            w.block("else", |w| {
+                w.comment("At the centre itself: a uniformly random direction instead.");
+                w.line(format!(
+                    "let cz = 1.0 - 2.0 * rand_unit(id, {}u);",
+                    stream::FALLBACK_DIRECTION
+                ));
+                w.line(format!(
+                    "let phi = {two_pi} * rand_unit(id, {}u) - {pi};",
+                    stream::FALLBACK_DIRECTION + 1
+                ));
+                w.line("let sz = sqrt(max(0.0, 1.0 - cz * cz));");
+                w.line("dir = vec3<f32>(sz * cos(phi), sz * sin(phi), cz);");
+            });
+            w.line("s.v = speed * dir;");
+        }
+    }
+}

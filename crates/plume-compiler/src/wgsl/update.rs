@@ -1,0 +1,130 @@
+//! The fused `update` kernel: for every live particle, all substeps of forces + integrator +
+//! max speed + plane collisions, then ageing, lifetime and kill volumes, in one pass. A dying
+//! particle frees its slot by pushing it on the free list.
+
+use crate::integrators;
+use crate::ir::{EffectIr, KillIr, PlaneIr};
+use crate::passes::layout::{Attribute, Layout};
+use crate::wgsl::writer::{f32_lit, vec3_lit, Writer};
+
+/// Emits `update`.
+pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+    let verlet = layout.has(Attribute::Displacement);
+    let lifetimes = layout.has(Attribute::Age);
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
+            w.block("if (i >= CAPACITY)", |w| w.line("return;"));
+            w.line("var p = particles[i];");
+            w.block("if (p.id == DEAD)", |w| w.line("return;"));
+            w.line("var x = vec3<f32>(p.px, p.py, p.pz);");
+            if verlet {
+                w.line("var d = vec3<f32>(p.dx, p.dy, p.dz);");
+            } else {
+                w.line("var v = vec3<f32>(p.vx, p.vy, p.vz);");
+            }
+            let body = |w: &mut Writer| {
+                integrators::emit_step(w, ir);
+                for plane in &ir.planes {
+                    emit_plane(w, ir, plane, verlet);
+                }
+            };
+            if ir.substeps == 1 {
+                w.line("let t = params.time;");
+                body(w);
+            } else {
+                w.block(format!("for (var s = 0u; s < {}u; s++)", ir.substeps), |w| {
+                    w.line(format!("let t = params.time + f32(s) * {};", f32_lit(ir.h())));
+                    body(w);
+                });
+            }
+            // Only effects with lifetimes or kill volumes get the death code.
+            if lifetimes || !ir.kills.is_empty() {
+                w.line("var dies = false;");
+                if lifetimes {
+                    w.line(format!("p.age = p.age + {};", f32_lit(ir.dt)));
+                    w.line("dies = p.age >= p.life;");
+                }
+                for k in &ir.kills {
+                    emit_kill(w, k);
+                }
+                w.block("if (dies)", |w| {
+                    w.line("particles[i].id = DEAD;");
+                    w.line("let top = atomicAdd(&counters.free_count, 1u);");
+                    w.line("free_list[top] = i;");
+                    w.line("atomicAdd(&counters.died, 1u);");
+                    w.line("return;");
+                });
+            }
+            w.line("p.px = x.x;");
+            w.line("p.py = x.y;");
+            w.line("p.pz = x.z;");
+            if verlet {
+                w.line("p.dx = d.x;");
+                w.line("p.dy = d.y;");
+                w.line("p.dz = d.z;");
+            } else {
+                w.line("p.vx = v.x;");
+                w.line("p.vy = v.y;");
+                w.line("p.vz = v.z;");
+            }
+            w.line("particles[i] = p;");
+        },
+    );
+}
+
+/// A particle whose substep ends behind the plane is put back on it (plus a margin of a few
+/// f32 ulps so it is not behind after rounding) and, if moving into the plane, bounces:
+/// v' = (1 - mu) v_t - e v_n.
+fn emit_plane(w: &mut Writer, ir: &EffectIr, p: &PlaneIr, verlet: bool) {
+    w.block("", |w| {
+        w.line(format!("let n = {};", vec3_lit(p.normal)));
+        w.line(format!("let dist = dot(x - {}, n);", vec3_lit(p.point)));
+        w.block("if (dist < 0.0)", |w| {
+            w.line("let big = max(max(abs(x.x), abs(x.y)), max(abs(x.z), 1.0));");
+            w.line("x = x + (4.8e-7 * big - dist) * n;");
+            if verlet {
+                w.line(format!("var v = d * {};", f32_lit(1.0 / ir.h())));
+            }
+            w.line("let vn = dot(v, n);");
+            w.block("if (vn < 0.0)", |w| {
+                w.line("let v_n = vn * n;");
+                w.line(format!(
+                    "v = {} * (v - v_n) - {} * v_n;",
+                    f32_lit(1.0 - p.friction),
+                    f32_lit(p.restitution)
+                ));
+            });
+            if verlet {
+                w.line(format!("d = v * {};", f32_lit(ir.h())));
+            }
+        });
+    });
+}
+
+fn emit_kill(w: &mut Writer, k: &KillIr) {
+    match *k {
+        KillIr::InsideBox(min, max) => w.line(format!(
+            "dies = dies || (all(x >= {}) && all(x <= {}));",
+            vec3_lit(min),
+            vec3_lit(max)
+        )),
+        KillIr::OutsideBox(min, max) => w.line(format!(
+            "dies = dies || !(all(x >= {}) && all(x <= {}));",
+            vec3_lit(min),
+            vec3_lit(max)
+        )),
+        KillIr::InsideSphere(c, r) => w.line(format!(
+            "dies = dies || dot(x - {c}, x - {c}) < {};",
+            f32_lit(r * r),
+            c = vec3_lit(c)
+        )),
+        KillIr::OutsideSphere(c, r) => w.line(format!(
+            "dies = dies || dot(x - {c}, x - {c}) > {};",
+            f32_lit(r * r),
+            c = vec3_lit(c)
+        )),
+    }
+}

@@ -1,0 +1,51 @@
+//! Snapshot tests: the WGSL, IR and layout of every example effect, and the diagnostics of
+//! every bad input in tests/bad. One glob each, so a new file gets its snapshot with no new code.
+
+use plume::{compile_str, CompileError, CompileOptions};
+
+#[test]
+fn every_example_compiles_without_warnings_and_matches_its_snapshots() {
+    insta::glob!("../effects", "*.ron", |path| {
+        let source = std::fs::read_to_string(path).unwrap();
+        let compiled = compile_str(&source, &CompileOptions::default())
+            .unwrap_or_else(|e| panic!("{}", e.render(&path.display().to_string(), &source)));
+        assert!(
+            compiled.warnings.is_empty(),
+            "examples must compile without warnings:\n{}",
+            compiled
+                .warnings
+                .render(&path.display().to_string(), &source)
+        );
+        insta::assert_snapshot!("wgsl", compiled.wgsl);
+        insta::assert_snapshot!(
+            "ir_and_layout",
+            format!("{}\n{}", compiled.ir, compiled.layout)
+        );
+    });
+}
+
+#[test]
+fn every_bad_input_gets_a_located_error_and_matches_its_snapshot() {
+    insta::glob!("bad", "*.ron", |path| {
+        let source = std::fs::read_to_string(path).unwrap();
+        let name = format!("tests/bad/{}", path.file_name().unwrap().to_string_lossy());
+        let err = match compile_str(&source, &CompileOptions::default()) {
+            Ok(_) => panic!("{name} compiled, but it is in tests/bad"),
+            Err(e) => e,
+        };
+        let rendered = err.render(&name, &source);
+        match &err {
+            CompileError::Invalid(d) => {
+                assert!(!d.items.is_empty());
+                for item in &d.items {
+                    assert!(
+                        item.span.is_some(),
+                        "{name}: diagnostic without a location: {item}"
+                    );
+                }
+            }
+            CompileError::Internal(_) => panic!("bad input reached naga: {rendered}"),
+        }
+        insta::assert_snapshot!("diagnostics", rendered);
+    });
+}
