@@ -170,8 +170,8 @@ fn layout_follows_the_integrator_and_lifetimes() {
         "velocity: Constant((1.0, 2.0, 0.0)), lifetime: Some((1.0, 2.0)))",
     );
     let c = compile(&src);
-    assert!(c.layout.has(Attribute::Age) && c.layout.has(Attribute::Lifetime));
-    assert_eq!(c.layout.bytes_per_particle, 36);
+    assert!(c.layout.has(Attribute::DeathStep));
+    assert_eq!(c.layout.bytes_per_particle, 32);
 }
 
 fn warnings(src: &str) -> Vec<String> {

@@ -1,6 +1,7 @@
 //! `plume`: check, compile (and later run, render, bench) particle effects.
 
 mod output;
+mod run;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -37,6 +38,14 @@ enum Command {
         #[command(flatten)]
         overrides: Overrides,
     },
+    /// Run an effect on the GPU (or the CPU reference) and print a summary; optionally export.
+    Run(run::RunArgs),
+    /// List the adapters wgpu sees.
+    Adapters {
+        /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
+        #[arg(long)]
+        backend: Option<String>,
+    },
 }
 
 /// What `plume compile` prints.
@@ -52,7 +61,7 @@ enum Emit {
 
 /// Values that replace the effect file's own.
 #[derive(clap::Args, Debug, Default)]
-struct Overrides {
+pub(crate) struct Overrides {
     /// Seconds per step.
     #[arg(long)]
     dt: Option<f64>,
@@ -68,7 +77,7 @@ struct Overrides {
 }
 
 impl Overrides {
-    fn options(&self) -> CompileOptions {
+    pub(crate) fn options(&self) -> CompileOptions {
         CompileOptions {
             dt: self.dt,
             seed: self.seed,
@@ -94,10 +103,22 @@ fn main() -> ExitCode {
             emit,
             overrides,
         } => compile(&file, output.as_deref(), emit, &overrides.options()),
+        Command::Run(args) => run::run(&args),
+        Command::Adapters { backend } => {
+            let adapters = plume_runtime::gpu::list_adapters(&plume_runtime::GpuChoice { backend });
+            if adapters.is_empty() {
+                eprintln!("no adapters found; without a GPU install Mesa (Debian: `apt-get install mesa-vulkan-drivers` or `libegl1 libgl1-mesa-dri`)");
+                return ExitCode::FAILURE;
+            }
+            for a in adapters {
+                println!("{a}");
+            }
+            ExitCode::SUCCESS
+        }
     }
 }
 
-fn read_source(file: &Path) -> Result<String, String> {
+pub(crate) fn read_source(file: &Path) -> Result<String, String> {
     std::fs::read_to_string(file)
         .map_err(|e| format!("{}: error: cannot read file: {e}", file.display()))
 }

@@ -7,6 +7,7 @@ use std::fmt;
 use glam::DVec3;
 
 use crate::forces::Term;
+use crate::lifetime::LifetimeSteps;
 use crate::schema::Integrator;
 
 /// An effect in the IR.
@@ -79,6 +80,8 @@ pub struct EmitterIr {
     pub velocity: VelocityIr,
     /// Lifetime range (s).
     pub lifetime: Option<(f64, f64)>,
+    /// The lifetime as whole steps (see [`crate::lifetime`]).
+    pub lifetime_steps: Option<LifetimeSteps>,
 }
 
 /// An orthonormal pair spanning the plane perpendicular to a unit vector.
@@ -172,7 +175,20 @@ impl ShapeIr {
                 center.abs().max_element() + radius
             }
             ShapeIr::Box { min, max } => min.abs().max(max.abs()).max_element(),
-            ShapeIr::Grid { .. } => self.center().abs().max_element(),
+            ShapeIr::Grid {
+                origin,
+                step,
+                counts,
+            } => {
+                let last = *origin
+                    + *step
+                        * DVec3::new(
+                            f64::from(counts[0] - 1),
+                            f64::from(counts[1] - 1),
+                            f64::from(counts[2] - 1),
+                        );
+                origin.abs().max(last.abs()).max_element()
+            }
             ShapeIr::Points(ps) => ps.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max),
         }
     }
@@ -301,8 +317,8 @@ impl fmt::Display for EffectIr {
         for (i, e) in self.emitters.iter().enumerate() {
             writeln!(
                 f,
-                "    [{i}] burst {} rate {}/s lifetime {:?}",
-                e.burst, e.rate, e.lifetime
+                "    [{i}] burst {} rate {}/s lifetime {:?} steps {:?}",
+                e.burst, e.rate, e.lifetime, e.lifetime_steps
             )?;
             writeln!(f, "        shape {:?}", e.shape)?;
             writeln!(f, "        velocity {:?}", e.velocity)?;

@@ -37,7 +37,10 @@ impl SourceMap {
                 return Some(*s);
             }
             // Drop the last segment: `.name` or `[i]`.
-            let cut = p.rfind(['.', '['])?;
+            let Some(cut) = p.rfind(['.', '[']) else {
+                // A top-level field the file does not write: point at the document itself.
+                return self.spans.get("").copied();
+            };
             p.truncate(cut);
             if p.is_empty() {
                 return self.spans.get("").copied();

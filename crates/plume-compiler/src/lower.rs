@@ -5,6 +5,7 @@ use glam::DVec3;
 
 use crate::forces::safe_normalize;
 use crate::ir::{Basis, CameraIr, EffectIr, EmitterIr, KillIr, PlaneIr, ShapeIr, VelocityIr};
+use crate::lifetime::LifetimeSteps;
 use crate::rng::seed_mix;
 use crate::schema::{Collider, Effect, KillVolume, Shape, Velocity};
 
@@ -26,6 +27,9 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 shape: lower_shape(&e.shape),
                 velocity: lower_velocity(&e.velocity),
                 lifetime: e.lifetime.map(|r| (r.0, r.1)),
+                lifetime_steps: e
+                    .lifetime
+                    .and_then(|r| LifetimeSteps::new(r.0, r.1, effect.dt)),
             })
             .collect(),
         terms: effect

@@ -19,7 +19,7 @@ pub fn check_effect(effect: &Effect) -> Checker {
         c.error(&root.field("substeps"), "must be >= 1, got 0");
     }
     for (i, e) in effect.emitters.iter().enumerate() {
-        check_emitter(&mut c, &root.field("emitters").index(i), e);
+        check_emitter(&mut c, &root.field("emitters").index(i), e, effect.dt);
     }
     for (i, f) in effect.forces.iter().enumerate() {
         f.check(&force_path(i, f), &mut c);
@@ -84,7 +84,7 @@ pub fn check_effect(effect: &Effect) -> Checker {
     c
 }
 
-fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter) {
+fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: f64) {
     c.non_negative(&path.field("rate"), e.rate);
     let shape = path.field("shape");
     match &e.shape {
@@ -150,11 +150,19 @@ fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter) {
     }
     if let Some(life) = e.lifetime {
         let p = path.field("lifetime");
-        if c.range(&p, life) && life.0 <= 0.0 {
-            c.error(
-                &p.component(0, "min"),
-                format!("must be > 0 seconds, got {}", life.0),
-            );
+        if c.range(&p, life) {
+            if life.0 <= 0.0 {
+                c.error(
+                    &p.component(0, "min"),
+                    format!("must be > 0 seconds, got {}", life.0),
+                );
+            } else if dt > 0.0 && crate::lifetime::LifetimeSteps::new(life.0, life.1, dt).is_none()
+            {
+                c.error(
+                    &p.component(1, "max"),
+                    format!("is more than 2^31 steps of dt = {dt} s, got {}", life.1),
+                );
+            }
         }
     }
 }

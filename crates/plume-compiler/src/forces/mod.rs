@@ -63,15 +63,6 @@ impl Force {
         }
     }
 
-    /// Whether the Exact integrator has a closed form with this force.
-    pub fn has_closed_form(&self) -> bool {
-        match self {
-            Force::Gravity(_) | Force::Drag(_) => true,
-            Force::Wind(w) => w.noise == 0.0,
-            Force::Attractor(_) | Force::Vortex(_) => false,
-        }
-    }
-
     /// Lowers to IR terms; `origin` is the force's index in the file, `seed` the effect's seed.
     pub fn lower(&self, origin: usize, seed: u32) -> Vec<Term> {
         match self {
@@ -174,6 +165,10 @@ pub trait ForceTerm {
     /// Whether the acceleration depends on time.
     fn uses_time(&self) -> bool {
         false
+    }
+    /// The field a stiffness warning points at.
+    fn stiffness_field(&self) -> &'static str {
+        "strength"
     }
     /// The step-size limit this term imposes.
     fn stiffness(&self) -> Stiffness {

@@ -137,6 +137,13 @@ impl ForceTerm for VortexTerm {
     fn can_act(&self) -> bool {
         self.spin != 0.0 || self.pull != 0.0 || self.down != 0.0
     }
+    fn stiffness_field(&self) -> &'static str {
+        if self.pull.abs() > self.spin.abs() {
+            "pull"
+        } else {
+            "spin"
+        }
+    }
     fn stiffness(&self) -> Stiffness {
         // Spin and pull both change by about their size over one funnel radius.
         Stiffness::Oscillation((self.spin.abs().max(self.pull.abs()) / self.range).sqrt())

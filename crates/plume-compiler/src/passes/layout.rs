@@ -15,10 +15,9 @@ pub enum Attribute {
     Velocity,
     /// Verlet's displacement `x - x_prev` over one substep (m): `dx, dy, dz`.
     Displacement,
-    /// Seconds since spawn: `age`. Only when some emitter sets a lifetime.
-    Age,
-    /// Seconds the particle lives: `life`. Only when some emitter sets a lifetime.
-    Lifetime,
+    /// Index of the step whose update kills the particle (`0xffffffff`: never): `die_at`.
+    /// Only when some emitter sets a lifetime; age itself is derived on the CPU from the id.
+    DeathStep,
     /// Global spawn index, or `0xffffffff` for a free slot: `id`.
     Id,
 }
@@ -30,8 +29,7 @@ impl Attribute {
             Attribute::Position => (&["px", "py", "pz"], "f32"),
             Attribute::Velocity => (&["vx", "vy", "vz"], "f32"),
             Attribute::Displacement => (&["dx", "dy", "dz"], "f32"),
-            Attribute::Age => (&["age"], "f32"),
-            Attribute::Lifetime => (&["life"], "f32"),
+            Attribute::DeathStep => (&["die_at"], "u32"),
             Attribute::Id => (&["id"], "u32"),
         }
     }
@@ -47,8 +45,7 @@ impl Attribute {
             Attribute::Position => "position (m)",
             Attribute::Velocity => "velocity (m/s)",
             Attribute::Displacement => "Verlet displacement x - x_prev per substep (m)",
-            Attribute::Age => "seconds since spawn",
-            Attribute::Lifetime => "seconds this particle lives",
+            Attribute::DeathStep => "step whose update kills it (0xffffffff: never)",
             Attribute::Id => "global spawn index; 0xffffffff marks a free slot",
         }
     }
@@ -83,6 +80,18 @@ pub struct Layout {
 }
 
 impl Layout {
+    /// Offset of attribute `a` in the particle struct, in 4-byte words.
+    pub fn word_offset(&self, a: Attribute) -> Option<usize> {
+        let mut word = 0;
+        for &b in &self.attributes {
+            if a == b {
+                return Some(word);
+            }
+            word += b.fields().0.len();
+        }
+        None
+    }
+
     /// Whether the layout has `a`.
     pub fn has(&self, a: Attribute) -> bool {
         self.attributes.contains(&a)
@@ -106,8 +115,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
         Attribute::Velocity
     });
     if ir.has_lifetimes() {
-        attributes.push(Attribute::Age);
-        attributes.push(Attribute::Lifetime);
+        attributes.push(Attribute::DeathStep);
     }
     attributes.push(Attribute::Id);
     let bytes_per_particle = attributes.iter().map(|a| a.bytes()).sum();
@@ -146,7 +154,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
             name: "params",
             space: "uniform",
             bytes: layout.params_bytes(),
-            meaning: "per-step: first id, spawns requested, time mod 256 s, per-emitter counts",
+            meaning: "per step: first id, spawns requested, time mod 256 s, step index, per-emitter counts",
         },
     ];
     layout

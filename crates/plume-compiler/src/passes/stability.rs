@@ -136,11 +136,7 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
             }
             Stiffness::Oscillation(omega) => {
                 let wh = omega * h;
-                let field = if matches!(term, crate::forces::Term::Vortex(_)) {
-                    "spin"
-                } else {
-                    "strength"
-                };
+                let field = t.stiffness_field();
                 if let Some(limit) = oscillation_limit(integ) {
                     if wh >= limit {
                         warn(

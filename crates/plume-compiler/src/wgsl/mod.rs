@@ -59,7 +59,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         w.line("first_id: u32,");
         w.line("requested: u32,");
         w.line("time: f32,");
-        w.line("pad: u32,");
+        w.line("step: u32,");
         w.line(format!(
             "emitters: array<vec4<u32>, {}>,",
             layout.emitter_slots
@@ -69,7 +69,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     w.block("struct Spawned", |w| {
         w.line("x: vec3<f32>,");
         w.line("v: vec3<f32>,");
-        w.line("life: f32,");
+        w.line("die_at: u32,");
     });
     w.blank();
     for b in &layout.bindings {

@@ -74,8 +74,8 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                 } else {
                     fields.extend(["s.v.x", "s.v.y", "s.v.z"]);
                 }
-                if layout.has(Attribute::Age) {
-                    fields.extend(["0.0", "s.life"]);
+                if layout.has(Attribute::DeathStep) {
+                    fields.push("s.die_at");
                 }
                 fields.push("id");
                 w.line(format!("particles[slot] = Particle({});", fields.join(", ")));
@@ -98,16 +98,15 @@ fn emit_emitter_fn(w: &mut Writer, ir: &EffectIr, e: usize, em: &EmitterIr) {
         w.line("var s: Spawned;");
         emit_shape(w, e, &em.shape);
         emit_velocity(w, &em.shape, &em.velocity);
-        match em.lifetime {
-            Some((lo, hi)) => w.line(format!(
-                "s.life = {} + {} * rand_unit(id, {}u);",
-                f32_lit(lo),
-                f32_lit(hi - lo),
-                stream::LIFETIME
-            )),
+        match em.lifetime_steps {
+            Some(steps) => {
+                w.comment("Whole steps lived, drawn with integer arithmetic (see lifetime.rs).");
+                w.line(format!("let lu = rand_u32(id, {}u);", stream::LIFETIME));
+                w.line(format!("s.die_at = params.step + ({}) - 1u;", steps.wgsl()));
+            }
             None if ir.has_lifetimes() => {
-                w.comment("Lives forever: the largest finite f32.");
-                w.line(format!("s.life = {};", f32_lit(f64::from(f32::MAX))));
+                w.comment("Lives forever.");
+                w.line("s.die_at = DEAD;");
             }
             None => {}
         }
@@ -216,13 +215,15 @@ fn emit_velocity(w: &mut Writer, shape: &ShapeIr, vel: &VelocityIr) {
             cos_angle,
             speed,
         } => {
-            w.comment("Uniform on the spherical cap: cos(theta) uniform in [cos(angle), 1].");
+            w.comment("Uniform on the spherical cap: cos(theta) = 1 - w, w uniform in [0, 1 - cos(angle)];");
+            w.comment("sin(theta) = sqrt(w (2 - w)) avoids the cancellation of 1 - cos².");
             w.line(format!(
-                "let cos_t = 1.0 - rand_unit(id, {}u) * {};",
+                "let w = rand_unit(id, {}u) * {};",
                 stream::VELOCITY,
                 f32_lit(1.0 - cos_angle)
             ));
-            w.line("let sin_t = sqrt(max(0.0, 1.0 - cos_t * cos_t));");
+            w.line("let cos_t = 1.0 - w;");
+            w.line("let sin_t = sqrt(max(0.0, w * (2.0 - w)));");
             w.line(format!(
                 "let psi = {two_pi} * rand_unit(id, {}u) - {pi};",
                 stream::VELOCITY + 1

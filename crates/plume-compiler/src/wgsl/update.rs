@@ -10,7 +10,7 @@ use crate::wgsl::writer::{f32_lit, vec3_lit, Writer};
 /// Emits `update`.
 pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     let verlet = layout.has(Attribute::Displacement);
-    let lifetimes = layout.has(Attribute::Age);
+    let lifetimes = layout.has(Attribute::DeathStep);
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
         "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
@@ -44,8 +44,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             if lifetimes || !ir.kills.is_empty() {
                 w.line("var dies = false;");
                 if lifetimes {
-                    w.line(format!("p.age = p.age + {};", f32_lit(ir.dt)));
-                    w.line("dies = p.age >= p.life;");
+                    w.line("dies = params.step >= p.die_at;");
                 }
                 for k in &ir.kills {
                     emit_kill(w, k);
@@ -83,7 +82,11 @@ fn emit_plane(w: &mut Writer, ir: &EffectIr, p: &PlaneIr, verlet: bool) {
         w.line(format!("let n = {};", vec3_lit(p.normal)));
         w.line(format!("let dist = dot(x - {}, n);", vec3_lit(p.point)));
         w.block("if (dist < 0.0)", |w| {
-            w.line("let big = max(max(abs(x.x), abs(x.y)), max(abs(x.z), 1.0));");
+            // A few f32 ulps of the larger of |x| and |point|, so rounding cannot leave it behind.
+            w.line(format!(
+                "let big = max(max(abs(x.x), abs(x.y)), max(abs(x.z), {}));",
+                f32_lit(p.point.abs().max_element().max(1.0))
+            ));
             w.line("x = x + (4.8e-7 * big - dist) * n;");
             if verlet {
                 w.line(format!("var v = d * {};", f32_lit(1.0 / ir.h())));

@@ -1,0 +1,173 @@
+//! `plume run`: simulate an effect on the GPU (or with `--cpu-reference`, the CPU f64
+//! reference), print a summary or JSON, and optionally export the live particles.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use plume_compiler::reference::{ParticleRecord, ReferenceSim, Totals};
+use plume_compiler::{compile_str, CompiledEffect};
+use plume_runtime::export::{export, summarize};
+use plume_runtime::{Gpu, GpuChoice, GpuSim, RuntimeError};
+
+use crate::{read_source, Overrides};
+
+/// Options of `plume run`.
+#[derive(clap::Args, Debug)]
+pub struct RunArgs {
+    /// The effect file (.ron).
+    file: PathBuf,
+    /// Steps to simulate.
+    #[arg(long, default_value_t = 600)]
+    steps: u64,
+    #[command(flatten)]
+    overrides: Overrides,
+    /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
+    #[arg(long)]
+    backend: Option<String>,
+    /// Write the live particles (sorted by id) to a .csv or .ply file.
+    #[arg(long)]
+    export: Option<PathBuf>,
+    /// Print one JSON object instead of the summary.
+    #[arg(long)]
+    json: bool,
+    /// Run the CPU f64 reference simulator instead of the GPU.
+    #[arg(long)]
+    cpu_reference: bool,
+}
+
+struct Outcome {
+    engine: String,
+    totals: Totals,
+    records: Vec<ParticleRecord>,
+    seconds: f64,
+}
+
+fn progress_bar(steps: u64, quiet: bool) -> ProgressBar {
+    if quiet {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(steps);
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} {msg} [{bar:30}] {pos}/{len} steps ({eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar
+}
+
+fn simulate(args: &RunArgs, effect: CompiledEffect) -> Result<Outcome, RuntimeError> {
+    let bar = progress_bar(args.steps, args.json);
+    if args.cpu_reference {
+        bar.set_message("cpu reference");
+        let start = Instant::now();
+        let mut sim = ReferenceSim::new(&effect.ir);
+        for _ in 0..args.steps {
+            sim.step();
+            bar.inc(1);
+        }
+        bar.finish_and_clear();
+        return Ok(Outcome {
+            engine: "cpu reference (f64)".into(),
+            totals: sim.totals(),
+            records: sim.records(),
+            seconds: start.elapsed().as_secs_f64(),
+        });
+    }
+    let gpu = Gpu::new(&GpuChoice {
+        backend: args.backend.clone(),
+    })?;
+    bar.set_message("gpu");
+    let mut sim = GpuSim::new(&gpu, effect)?;
+    let start = Instant::now();
+    sim.run(args.steps, |done| bar.set_position(done))?;
+    let seconds = start.elapsed().as_secs_f64();
+    bar.finish_and_clear();
+    Ok(Outcome {
+        engine: gpu.describe(),
+        totals: sim.totals()?,
+        records: sim.records()?,
+        seconds,
+    })
+}
+
+/// Runs `plume run`.
+pub fn run(args: &RunArgs) -> ExitCode {
+    let name = args.file.display().to_string();
+    let source = match read_source(&args.file) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let effect = match compile_str(&source, &args.overrides.options()) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("{}", e.render(&name, &source));
+            return ExitCode::FAILURE;
+        }
+    };
+    if !effect.warnings.is_empty() {
+        eprintln!("{}", effect.warnings.render(&name, &source));
+    }
+    let dt = effect.ir.dt;
+    let outcome = match simulate(args, effect) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("{name}: error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    if let Some(path) = &args.export {
+        if let Err(e) = export(path, &outcome.records, &[args.file.as_path()]) {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    }
+    let s = summarize(&outcome.records);
+    let t = outcome.totals;
+    if args.json {
+        let v = serde_json::json!({
+            "steps": t.steps,
+            "alive": t.alive,
+            "spawned": t.spawned,
+            "died": t.died,
+            "dropped": t.dropped,
+            "nonfinite": s.nonfinite,
+            "bbox_min": [s.bbox_min.x, s.bbox_min.y, s.bbox_min.z],
+            "bbox_max": [s.bbox_max.x, s.bbox_max.y, s.bbox_max.z],
+            "mean_speed": s.mean_speed,
+            "seconds": outcome.seconds,
+            "adapter": outcome.engine,
+        });
+        println!("{v}");
+    } else {
+        let v = |v: glam::DVec3| format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z);
+        println!("{name}");
+        println!("  adapter     {}", outcome.engine);
+        println!(
+            "  steps       {} ({:.3} s simulated, dt {} s)",
+            t.steps,
+            t.steps as f64 * dt,
+            dt
+        );
+        println!("  alive       {}", t.alive);
+        println!("  spawned     {}", t.spawned);
+        println!("  died        {}", t.died);
+        println!("  dropped     {}", t.dropped);
+        println!("  nonfinite   {}", s.nonfinite);
+        println!("  bbox        {} .. {}", v(s.bbox_min), v(s.bbox_max));
+        println!("  mean speed  {:.4} m/s", s.mean_speed);
+        println!("  wall time   {:.3} s", outcome.seconds);
+        if let Some(path) = &args.export {
+            println!(
+                "  exported    {} particles to {}",
+                outcome.records.len(),
+                path.display()
+            );
+        }
+    }
+    ExitCode::SUCCESS
+}

@@ -1,0 +1,90 @@
+//! f64 twins of the update kernel's pieces (integrators.rs, wgsl/update.rs): one substep of each
+//! integrator, the speed clamp and the plane response.
+
+use glam::DVec3;
+
+use crate::integrators::ExactStep;
+use crate::ir::{EffectIr, PlaneIr};
+use crate::schema::Integrator;
+
+/// Sum of the force terms at (x, v, t).
+pub fn accel(ir: &EffectIr, x: DVec3, v: DVec3, t: f64) -> DVec3 {
+    ir.terms
+        .iter()
+        .map(|term| term.as_dyn().accel(x, v, t))
+        .sum()
+}
+
+fn clamp(v: DVec3, limit: Option<f64>) -> DVec3 {
+    match limit {
+        Some(s) if v.length_squared() > s * s => v * (s / v.length()),
+        _ => v,
+    }
+}
+
+/// One substep of length h = ir.h() at time t. `v` holds Verlet's displacement for Verlet.
+pub fn substep(ir: &EffectIr, exact: Option<&ExactStep>, x: &mut DVec3, v: &mut DVec3, t: f64) {
+    let h = ir.h();
+    let a = |x: DVec3, v: DVec3, t: f64| accel(ir, x, v, t);
+    match ir.integrator {
+        Integrator::Euler => {
+            let acc = a(*x, *v, t);
+            *x += *v * h;
+            *v = clamp(*v + acc * h, ir.max_speed);
+        }
+        Integrator::SemiImplicitEuler | Integrator::Auto => {
+            *v = clamp(*v + a(*x, *v, t) * h, ir.max_speed);
+            *x += *v * h;
+        }
+        Integrator::Verlet => {
+            let d = *v + a(*x, *v / h, t) * (h * h);
+            *v = clamp(d, ir.max_speed.map(|s| s * h));
+            *x += *v;
+        }
+        Integrator::Midpoint => {
+            let a1 = a(*x, *v, t);
+            let xm = *x + *v * (0.5 * h);
+            let vm = *v + a1 * (0.5 * h);
+            let a2 = a(xm, vm, t + 0.5 * h);
+            *x += vm * h;
+            *v = clamp(*v + a2 * h, ir.max_speed);
+        }
+        Integrator::Rk4 => {
+            let k1 = a(*x, *v, t);
+            let (x2, v2) = (*x + *v * (0.5 * h), *v + k1 * (0.5 * h));
+            let k2 = a(x2, v2, t + 0.5 * h);
+            let (x3, v3) = (*x + v2 * (0.5 * h), *v + k2 * (0.5 * h));
+            let k3 = a(x3, v3, t + 0.5 * h);
+            let (x4, v4) = (*x + v3 * h, *v + k3 * h);
+            let k4 = a(x4, v4, t + h);
+            *x += (*v + 2.0 * (v2 + v3) + v4) * (h / 6.0);
+            *v = clamp(*v + (k1 + 2.0 * (k2 + k3) + k4) * (h / 6.0), ir.max_speed);
+        }
+        Integrator::Exact => {
+            let s = exact.expect("Exact needs its coefficients");
+            *x += s.f * *v + s.cx;
+            *v = s.e * *v + s.cv;
+        }
+    }
+}
+
+/// Puts a particle that ended behind the plane back on it (plus the kernel's ulp margin) and
+/// bounces it if it moves into the plane. `verlet`: `v` holds the displacement over h.
+pub fn collide(p: &PlaneIr, x: &mut DVec3, v: &mut DVec3, verlet: bool, h: f64) {
+    let dist = (*x - p.point).dot(p.normal);
+    if dist >= 0.0 {
+        return;
+    }
+    let big = x
+        .abs()
+        .max_element()
+        .max(p.point.abs().max_element().max(1.0));
+    *x += (4.8e-7 * big - dist) * p.normal;
+    let mut vel = if verlet { *v / h } else { *v };
+    let vn = vel.dot(p.normal);
+    if vn < 0.0 {
+        let v_n = vn * p.normal;
+        vel = (1.0 - p.friction) * (vel - v_n) - p.restitution * v_n;
+    }
+    *v = if verlet { vel * h } else { vel };
+}

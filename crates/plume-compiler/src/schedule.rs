@@ -1,0 +1,119 @@
+//! The step contract's bookkeeping, shared by the GPU runtime and the CPU reference so both
+//! spawn exactly the same ids at the same steps.
+//!
+//! At step k (time t = k dt): each emitter spawns its burst (k = 0 only) plus the whole part of
+//! its accumulated `rate * dt`, the fractional remainder carried to the next step. Ids are handed
+//! out across emitters in the order they are listed, step by step; spawns dropped for lack of
+//! capacity still consume their ids, so ids never depend on what the GPU had free.
+
+use crate::forces::noise::TIME_PERIOD;
+use crate::ir::EffectIr;
+
+/// What one step spawns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepPlan {
+    /// Step index k.
+    pub step: u64,
+    /// Simulation time at the start of the step, k dt (f64, never accumulated).
+    pub time: f64,
+    /// Id of the first particle requested this step.
+    pub first_id: u32,
+    /// Per emitter: (spawns this step, the emitter's own spawn counter before them).
+    pub emitters: Vec<(u32, u32)>,
+}
+
+impl StepPlan {
+    /// Total spawns requested this step.
+    pub fn requested(&self) -> u32 {
+        self.emitters.iter().map(|e| e.0).sum()
+    }
+
+    /// Time passed to kernels: t mod the noise period, as f32.
+    pub fn kernel_time(&self) -> f32 {
+        self.time.rem_euclid(TIME_PERIOD) as f32
+    }
+}
+
+/// Produces the [`StepPlan`] of each step in turn and remembers which step each id was
+/// requested at (for ages).
+#[derive(Clone, Debug)]
+pub struct Schedule {
+    dt: f64,
+    bursts: Vec<u32>,
+    rates: Vec<f64>,
+    carried: Vec<f64>,
+    emitted: Vec<u32>,
+    next_step: u64,
+    next_id: u32,
+    /// (first id, step) for every step that requested at least one spawn, in order.
+    first_ids: Vec<(u32, u64)>,
+}
+
+impl Schedule {
+    /// A schedule at step 0 for `ir`.
+    pub fn new(ir: &EffectIr) -> Self {
+        Self {
+            dt: ir.dt,
+            bursts: ir.emitters.iter().map(|e| e.burst).collect(),
+            rates: ir.emitters.iter().map(|e| e.rate).collect(),
+            carried: vec![0.0; ir.emitters.len()],
+            emitted: vec![0; ir.emitters.len()],
+            next_step: 0,
+            next_id: 0,
+            first_ids: Vec::new(),
+        }
+    }
+
+    /// Steps planned so far.
+    pub fn steps_done(&self) -> u64 {
+        self.next_step
+    }
+
+    /// Ids requested so far (the next id to hand out).
+    pub fn ids_requested(&self) -> u32 {
+        self.next_id
+    }
+
+    /// Plans the next step.
+    pub fn next_plan(&mut self) -> StepPlan {
+        let step = self.next_step;
+        let first_id = self.next_id;
+        let mut emitters = Vec::with_capacity(self.rates.len());
+        for e in 0..self.rates.len() {
+            let mut count = if step == 0 {
+                u64::from(self.bursts[e])
+            } else {
+                0
+            };
+            self.carried[e] += self.rates[e] * self.dt;
+            let whole = self.carried[e].floor();
+            self.carried[e] -= whole;
+            count += whole as u64;
+            let count = count.min(u64::from(u32::MAX - self.next_id)) as u32;
+            emitters.push((count, self.emitted[e]));
+            self.emitted[e] = self.emitted[e].wrapping_add(count);
+            self.next_id += count;
+        }
+        if self.next_id > first_id {
+            self.first_ids.push((first_id, step));
+        }
+        self.next_step += 1;
+        StepPlan {
+            step,
+            time: step as f64 * self.dt,
+            first_id,
+            emitters,
+        }
+    }
+
+    /// The step at which particle `id` was spawned.
+    pub fn spawn_step(&self, id: u32) -> u64 {
+        let i = self.first_ids.partition_point(|&(first, _)| first <= id);
+        self.first_ids[i.saturating_sub(1)].1
+    }
+
+    /// Age in seconds of particle `id` after the steps done so far: (done - spawn step) dt.
+    pub fn age(&self, id: u32) -> f64 {
+        (self.next_step - self.spawn_step(id)) as f64 * self.dt
+    }
+}

@@ -1,0 +1,46 @@
+//! Runtime errors: each says what went wrong and, where it can, what to do.
+
+/// Why running an effect failed.
+#[derive(Debug, thiserror::Error)]
+pub enum RuntimeError {
+    /// No adapter with compute shaders was found.
+    #[error("no GPU adapter with compute shaders found (backends tried: {backends}).\n  \
+             Without a GPU, install a software driver: Debian/Ubuntu `apt-get install mesa-vulkan-drivers` \
+             (lavapipe, Vulkan) or `apt-get install libegl1 libgl1-mesa-dri` (llvmpipe, OpenGL), \
+             then run again (choose one with --backend vulkan|gl or WGPU_BACKEND)")]
+    NoAdapter {
+        /// The backends that were searched.
+        backends: String,
+    },
+    /// The adapter refused to create a device.
+    #[error("the adapter {adapter} could not open a device: {message}")]
+    Device {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's message.
+        message: String,
+    },
+    /// The effect's particle buffer does not fit one storage binding on this adapter.
+    #[error("capacity {capacity} needs a {bytes}-byte particle buffer ({bytes_per_particle} bytes per particle), but this adapter's max_storage_buffer_binding_size is {limit} bytes: at most {max_capacity} particles fit; lower capacity or use an adapter with larger bindings")]
+    CapacityTooLarge {
+        /// Requested capacity.
+        capacity: u32,
+        /// Bytes per particle of the layout.
+        bytes_per_particle: u32,
+        /// Bytes the particle buffer would need.
+        bytes: u64,
+        /// The adapter's limit.
+        limit: u64,
+        /// The largest capacity that fits.
+        max_capacity: u64,
+    },
+    /// wgpu reported a validation or out-of-memory error.
+    #[error("GPU error: {0}")]
+    Gpu(String),
+    /// Reading results back from the GPU failed.
+    #[error("reading back from the GPU failed: {0}")]
+    Readback(String),
+    /// Writing an output file failed.
+    #[error("{0}")]
+    Output(String),
+}

@@ -1,0 +1,152 @@
+//! Adapter and device selection. `--backend` or `WGPU_BACKEND` choose the backends; on a
+//! machine with no GPU, wgpu's GL backend finds Mesa's llvmpipe with nothing to install.
+
+use std::sync::{Arc, Mutex};
+
+use crate::error::RuntimeError;
+
+/// Which backends to search.
+#[derive(Clone, Debug, Default)]
+pub struct GpuChoice {
+    /// Backend names (`vulkan`, `gl`, `metal`, `dx12`, comma-separated); None: `WGPU_BACKEND`
+    /// if set, else all.
+    pub backend: Option<String>,
+}
+
+impl GpuChoice {
+    /// The wgpu backend set this choice means.
+    pub fn backends(&self) -> wgpu::Backends {
+        match &self.backend {
+            Some(names) => wgpu::Backends::from_comma_list(names),
+            None => wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all()),
+        }
+    }
+}
+
+/// An open device, its queue and what it is.
+pub struct Gpu {
+    /// The adapter in use.
+    pub adapter: wgpu::Adapter,
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// Name, backend and driver.
+    pub info: wgpu::AdapterInfo,
+    /// The limits the device was opened with (all the adapter offers).
+    pub limits: wgpu::Limits,
+    /// The first uncaptured wgpu error since the last [`Gpu::take_error`].
+    errors: Arc<Mutex<Option<String>>>,
+}
+
+fn instance(backends: wgpu::Backends) -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
+    desc.backends = backends;
+    wgpu::Instance::new(desc)
+}
+
+/// Every adapter wgpu sees for `choice`, as (name, backend, device type, driver) lines.
+pub fn list_adapters(choice: &GpuChoice) -> Vec<String> {
+    let backends = choice.backends();
+    let adapters = pollster::block_on(instance(backends).enumerate_adapters(backends));
+    adapters
+        .iter()
+        .map(|a| {
+            let i = a.get_info();
+            let compute = a
+                .get_downlevel_capabilities()
+                .flags
+                .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS);
+            format!(
+                "{} ({:?}, {:?}, driver {} {}){}",
+                i.name,
+                i.backend,
+                i.device_type,
+                i.driver,
+                i.driver_info,
+                if compute { "" } else { " [no compute shaders]" }
+            )
+        })
+        .collect()
+}
+
+impl Gpu {
+    /// Opens the best adapter with compute shaders among `choice`'s backends.
+    pub fn new(choice: &GpuChoice) -> Result<Self, RuntimeError> {
+        let backends = choice.backends();
+        let instance = instance(backends);
+        let no_adapter = || RuntimeError::NoAdapter {
+            backends: format!("{backends:?}"),
+        };
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            ..Default::default()
+        }))
+        .map_err(|_| no_adapter())?;
+        if !adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+        {
+            return Err(no_adapter());
+        }
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("plume"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits.clone(),
+            experimental_features: wgpu::ExperimentalFeatures::disabled(),
+            memory_hints: wgpu::MemoryHints::Performance,
+            trace: wgpu::Trace::Off,
+        }))
+        .map_err(|e| RuntimeError::Device {
+            adapter: info.name.clone(),
+            message: e.to_string(),
+        })?;
+        // wgpu's default handler panics; keep the first error and report it as a RuntimeError.
+        let errors: Arc<Mutex<Option<String>>> = Arc::default();
+        let sink = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            let mut slot = sink.lock().unwrap_or_else(|p| p.into_inner());
+            slot.get_or_insert_with(|| e.to_string());
+        }));
+        Ok(Self {
+            adapter,
+            device,
+            queue,
+            info,
+            limits,
+            errors,
+        })
+    }
+
+    /// One line naming the adapter, backend and driver.
+    pub fn describe(&self) -> String {
+        format!(
+            "{} ({:?}, {:?}, {} {})",
+            self.info.name,
+            self.info.backend,
+            self.info.device_type,
+            self.info.driver,
+            self.info.driver_info
+        )
+    }
+
+    /// Returns the first wgpu error since the last call, as a [`RuntimeError`].
+    pub fn take_error(&self) -> Result<(), RuntimeError> {
+        let mut slot = self.errors.lock().unwrap_or_else(|p| p.into_inner());
+        match slot.take() {
+            Some(msg) => Err(RuntimeError::Gpu(msg)),
+            None => Ok(()),
+        }
+    }
+
+    /// Waits until all submitted work is done.
+    pub fn wait(&self) -> Result<(), RuntimeError> {
+        self.device
+            .poll(wgpu::PollType::wait_indefinitely())
+            .map_err(|e| RuntimeError::Gpu(e.to_string()))?;
+        self.take_error()
+    }
+}

@@ -1,0 +1,386 @@
+//! A compiled effect running on the GPU. Buffers hold only the layout's attributes; spawning
+//! pops slots from a GPU free list (never a readback per step); many steps are recorded into one
+//! submission, their per-step parameters in one uniform buffer addressed by dynamic offsets.
+
+use std::borrow::Cow;
+
+use glam::DVec3;
+use plume_compiler::passes::layout::{Attribute, COUNTERS_BYTES};
+use plume_compiler::reference::{ParticleRecord, Totals};
+use plume_compiler::schedule::{Schedule, StepPlan};
+use plume_compiler::wgsl::WORKGROUP;
+use plume_compiler::CompiledEffect;
+
+use crate::error::RuntimeError;
+use crate::gpu::Gpu;
+
+/// Steps recorded per submission: bounds the parameter buffer (256 B a step) and how long
+/// one submission keeps the GPU busy.
+pub const STEPS_PER_SUBMIT: u32 = 256;
+
+/// Marks a free slot (the `id` field) and a particle that never dies.
+const DEAD: u32 = u32::MAX;
+
+/// An effect's GPU state and kernels.
+pub struct GpuSim<'g> {
+    gpu: &'g Gpu,
+    effect: CompiledEffect,
+    schedule: Schedule,
+    particles: wgpu::Buffer,
+    counters: wgpu::Buffer,
+    params: wgpu::Buffer,
+    params_stride: u64,
+    bind_group: wgpu::BindGroup,
+    prepare: wgpu::ComputePipeline,
+    spawn: wgpu::ComputePipeline,
+    update: wgpu::ComputePipeline,
+}
+
+impl<'g> GpuSim<'g> {
+    /// Allocates buffers and builds the kernels of `effect` on `gpu`.
+    pub fn new(gpu: &'g Gpu, effect: CompiledEffect) -> Result<Self, RuntimeError> {
+        let device = &gpu.device;
+        let cap = u64::from(effect.ir.capacity);
+        let bpp = u64::from(effect.layout.bytes_per_particle);
+        let limit = gpu
+            .limits
+            .max_storage_buffer_binding_size
+            .min(gpu.limits.max_buffer_size);
+        if cap * bpp > limit {
+            return Err(RuntimeError::CapacityTooLarge {
+                capacity: effect.ir.capacity,
+                bytes_per_particle: effect.layout.bytes_per_particle,
+                bytes: cap * bpp,
+                limit,
+                max_capacity: limit / bpp,
+            });
+        }
+        let storage = wgpu::BufferUsages::STORAGE
+            | wgpu::BufferUsages::COPY_SRC
+            | wgpu::BufferUsages::COPY_DST;
+        // All bits set: every slot's id is DEAD (free), every die_at is "never".
+        let particles = filled_buffer(device, "particles", cap * bpp, storage, |bytes| {
+            bytes.fill(0xff)
+        });
+        // The free list holds every slot; pops take from the top.
+        let free_list = filled_buffer(device, "free_list", cap * 4, storage, |bytes| {
+            for (j, word) in bytes.chunks_exact_mut(4).enumerate() {
+                word.copy_from_slice(&((cap - 1 - j as u64) as u32).to_le_bytes());
+            }
+        });
+        let counters = filled_buffer(
+            device,
+            "counters",
+            COUNTERS_BYTES.next_multiple_of(16),
+            storage,
+            |bytes| {
+                bytes.fill(0);
+                bytes[..4].copy_from_slice(&effect.ir.capacity.to_le_bytes());
+            },
+        );
+        let align = u64::from(gpu.limits.min_uniform_buffer_offset_alignment);
+        let params_stride = effect.layout.params_bytes().next_multiple_of(align.max(16));
+        let params = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("params"),
+            size: params_stride * u64::from(STEPS_PER_SUBMIT),
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(&effect.ir.name),
+            source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(&effect.wgsl)),
+        });
+        let storage_entry = |binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: false },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("plume"),
+            entries: &[
+                storage_entry(0),
+                storage_entry(1),
+                storage_entry(2),
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::COMPUTE,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(effect.layout.params_bytes()),
+                    },
+                    count: None,
+                },
+            ],
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("plume"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: particles.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: free_list.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: counters.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer: &params,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(effect.layout.params_bytes()),
+                    }),
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("plume"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = |entry: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let (prepare, spawn, update) = (
+            pipeline("spawn_prepare"),
+            pipeline("spawn"),
+            pipeline("update"),
+        );
+        gpu.take_error()?;
+        Ok(Self {
+            gpu,
+            schedule: Schedule::new(&effect.ir),
+            effect,
+            particles,
+            counters,
+            params,
+            params_stride,
+            bind_group,
+            prepare,
+            spawn,
+            update,
+        })
+    }
+
+    /// The compiled effect being run.
+    pub fn effect(&self) -> &CompiledEffect {
+        &self.effect
+    }
+
+    /// The spawn schedule (steps done, ids requested, ages).
+    pub fn schedule(&self) -> &Schedule {
+        &self.schedule
+    }
+
+    /// Runs `steps` steps, [`STEPS_PER_SUBMIT`] per submission, calling `progress(done)` after
+    /// each submission is recorded. Returns when the GPU has finished.
+    pub fn run(&mut self, steps: u64, mut progress: impl FnMut(u64)) -> Result<(), RuntimeError> {
+        let mut done = 0;
+        while done < steps {
+            let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
+            let plans: Vec<StepPlan> = (0..n).map(|_| self.schedule.next_plan()).collect();
+            self.submit(&plans)?;
+            done += n;
+            progress(done);
+        }
+        self.gpu.wait()
+    }
+
+    fn submit(&self, plans: &[StepPlan]) -> Result<(), RuntimeError> {
+        let slots = self.effect.layout.emitter_slots as usize;
+        let mut bytes = vec![0u8; self.params_stride as usize * plans.len()];
+        for (j, plan) in plans.iter().enumerate() {
+            let at = j * self.params_stride as usize;
+            let mut words: Vec<u32> = vec![
+                plan.first_id,
+                plan.requested(),
+                plan.kernel_time().to_bits(),
+                plan.step as u32,
+            ];
+            for e in 0..slots {
+                let (count, k0) = plan.emitters.get(e).copied().unwrap_or((0, 0));
+                words.extend([count, k0, 0, 0]);
+            }
+            for (w, chunk) in words.iter().zip(bytes[at..].chunks_exact_mut(4)) {
+                chunk.copy_from_slice(&w.to_le_bytes());
+            }
+        }
+        self.gpu.queue.write_buffer(&self.params, 0, &bytes);
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("steps"),
+                timestamp_writes: None,
+            });
+            let update_groups = self.groups(u64::from(self.effect.ir.capacity))?;
+            for (j, plan) in plans.iter().enumerate() {
+                let offset = (j as u64 * self.params_stride) as u32;
+                pass.set_bind_group(0, &self.bind_group, &[offset]);
+                pass.set_pipeline(&self.prepare);
+                pass.dispatch_workgroups(1, 1, 1);
+                if plan.requested() > 0 {
+                    let (x, y) = self.groups(u64::from(plan.requested()))?;
+                    pass.set_pipeline(&self.spawn);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+                pass.set_pipeline(&self.update);
+                pass.dispatch_workgroups(update_groups.0, update_groups.1, 1);
+            }
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()
+    }
+
+    /// A 2D grid of workgroups covering `threads` (one dimension is capped at 65,535 groups).
+    fn groups(&self, threads: u64) -> Result<(u32, u32), RuntimeError> {
+        let per_dim = u64::from(self.gpu.limits.max_compute_workgroups_per_dimension);
+        let groups = threads.div_ceil(u64::from(WORKGROUP)).max(1);
+        let x = groups.min(per_dim);
+        let y = groups.div_ceil(x);
+        if y > per_dim {
+            return Err(RuntimeError::Gpu(format!(
+                "{threads} threads need more than {per_dim} x {per_dim} workgroups"
+            )));
+        }
+        Ok((x as u32, y as u32))
+    }
+
+    /// Copies a buffer to host memory.
+    fn read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RuntimeError> {
+        let size = buffer.size();
+        let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("readback"),
+            size,
+            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+        self.gpu.queue.submit([encoder.finish()]);
+        let (tx, rx) = std::sync::mpsc::channel();
+        staging.map_async(wgpu::MapMode::Read, .., move |r| {
+            let _ = tx.send(r);
+        });
+        self.gpu.wait()?;
+        rx.recv()
+            .map_err(|e| RuntimeError::Readback(e.to_string()))?
+            .map_err(|e| RuntimeError::Readback(e.to_string()))?;
+        let data = staging
+            .get_mapped_range(..)
+            .map_err(|e| RuntimeError::Readback(e.to_string()))?
+            .to_vec();
+        staging.unmap();
+        Ok(data)
+    }
+
+    /// Steps done and the GPU's counters: alive, spawned, died, dropped.
+    pub fn totals(&self) -> Result<Totals, RuntimeError> {
+        let c = self.read(&self.counters)?;
+        let word = |i: usize| {
+            u64::from(u32::from_le_bytes([
+                c[4 * i],
+                c[4 * i + 1],
+                c[4 * i + 2],
+                c[4 * i + 3],
+            ]))
+        };
+        Ok(Totals {
+            steps: self.schedule.steps_done(),
+            alive: u64::from(self.effect.ir.capacity) - word(0),
+            spawned: word(3),
+            dropped: word(4),
+            died: word(5),
+        })
+    }
+
+    /// The live particles in id order, velocity as the integrator knows it (Verlet's derived).
+    pub fn records(&self) -> Result<Vec<ParticleRecord>, RuntimeError> {
+        let bytes = self.read(&self.particles)?;
+        let layout = &self.effect.layout;
+        let stride = layout.bytes_per_particle as usize;
+        let missing = |what| RuntimeError::Readback(format!("layout has no {what}"));
+        let id_at = layout
+            .word_offset(Attribute::Id)
+            .ok_or_else(|| missing("id"))?;
+        let pos_at = layout
+            .word_offset(Attribute::Position)
+            .ok_or_else(|| missing("position"))?;
+        // Verlet stores the displacement over one substep: velocity is displacement / h.
+        let (vel_at, scale) = match layout.word_offset(Attribute::Velocity) {
+            Some(at) => (at, 1.0),
+            None => (
+                layout
+                    .word_offset(Attribute::Displacement)
+                    .ok_or_else(|| missing("velocity"))?,
+                1.0 / self.effect.ir.h(),
+            ),
+        };
+        let mut out = Vec::new();
+        for slot in bytes.chunks_exact(stride) {
+            let u = |w: usize| {
+                u32::from_le_bytes([
+                    slot[4 * w],
+                    slot[4 * w + 1],
+                    slot[4 * w + 2],
+                    slot[4 * w + 3],
+                ])
+            };
+            let f = |w: usize| f64::from(f32::from_bits(u(w)));
+            let id = u(id_at);
+            if id == DEAD {
+                continue;
+            }
+            out.push(ParticleRecord {
+                id,
+                position: DVec3::new(f(pos_at), f(pos_at + 1), f(pos_at + 2)),
+                velocity: DVec3::new(f(vel_at), f(vel_at + 1), f(vel_at + 2)) * scale,
+                age: self.schedule.age(id),
+            });
+        }
+        out.sort_by_key(|r| r.id);
+        Ok(out)
+    }
+}
+
+/// A buffer created mapped and filled by `fill`.
+fn filled_buffer(
+    device: &wgpu::Device,
+    label: &str,
+    size: u64,
+    usage: wgpu::BufferUsages,
+    fill: impl FnOnce(&mut [u8]),
+) -> wgpu::Buffer {
+    let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage,
+        mapped_at_creation: true,
+    });
+    let mut bytes = vec![0u8; size as usize];
+    fill(&mut bytes);
+    buffer
+        .slice(..)
+        .get_mapped_range_mut()
+        .expect("a buffer created with mapped_at_creation is mapped")
+        .copy_from_slice(&bytes);
+    buffer.unmap();
+    buffer
+}
