@@ -15,3 +15,4 @@ pub use plume_compiler::{
     compile_effect, compile_str, parse, CompileError, CompileOptions, CompiledEffect, Diagnostic,
     Diagnostics, EffectIr, Integrator, Layout, Severity,
 };
+pub use plume_runtime as runtime;

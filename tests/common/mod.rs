@@ -1,0 +1,50 @@
+//! Shared helpers of the GPU tests: one GPU for the whole test binary (wgpu's GL backend on
+//! llvmpipe where there is no GPU), and runners for the GPU and the CPU reference.
+#![allow(dead_code)]
+
+use std::sync::{Mutex, MutexGuard, OnceLock};
+
+use plume::compiler::reference::{ParticleRecord, ReferenceSim, Totals};
+use plume::runtime::{Gpu, GpuChoice, GpuSim};
+use plume::{compile_str, CompileOptions, CompiledEffect};
+
+/// The test binary's GPU. Tests never skip: with no adapter they fail with the runtime's
+/// message, which says how to install a software driver.
+pub fn gpu() -> MutexGuard<'static, Gpu> {
+    static GPU: OnceLock<Result<Mutex<Gpu>, String>> = OnceLock::new();
+    match GPU.get_or_init(|| {
+        Gpu::new(&GpuChoice::default())
+            .map(Mutex::new)
+            .map_err(|e| e.to_string())
+    }) {
+        Ok(m) => m.lock().unwrap_or_else(|p| p.into_inner()),
+        Err(e) => panic!("{e}"),
+    }
+}
+
+/// Compiles `source` or fails the test with the rendered diagnostics.
+pub fn compile(source: &str) -> CompiledEffect {
+    compile_str(source, &CompileOptions::default())
+        .unwrap_or_else(|e| panic!("{}", e.render("test.ron", source)))
+}
+
+/// Runs `steps` on the GPU; returns totals and live particles.
+pub fn run_gpu(effect: &CompiledEffect, steps: u64) -> (Totals, Vec<ParticleRecord>) {
+    let gpu = gpu();
+    let mut sim = GpuSim::new(&gpu, effect.clone()).expect("GPU sim");
+    sim.run(steps, |_| {}).expect("GPU run");
+    (
+        sim.totals().expect("totals"),
+        sim.records().expect("records"),
+    )
+}
+
+/// Runs `steps` on the CPU reference.
+pub fn run_cpu(effect: &CompiledEffect, steps: u64) -> (Totals, Vec<ParticleRecord>) {
+    let mut sim = ReferenceSim::new(&effect.ir);
+    sim.run(steps);
+    (sim.totals(), sim.records())
+}
+
+/// f32 unit roundoff.
+pub const U32: f64 = 1.0 / 16_777_216.0;
