@@ -1,6 +1,7 @@
 //! `plume`: check, compile (and later run, render, bench) particle effects.
 
 mod output;
+mod render;
 mod run;
 
 use std::path::{Path, PathBuf};
@@ -40,6 +41,8 @@ enum Command {
     },
     /// Run an effect on the GPU (or the CPU reference) and print a summary; optionally export.
     Run(run::RunArgs),
+    /// Simulate and render headless to a PNG (last frame or --sheet) or an animated GIF.
+    Render(render::RenderArgs),
     /// List the adapters wgpu sees.
     Adapters {
         /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
@@ -104,6 +107,7 @@ fn main() -> ExitCode {
             overrides,
         } => compile(&file, output.as_deref(), emit, &overrides.options()),
         Command::Run(args) => run::run(&args),
+        Command::Render(args) => render::render(&args),
         Command::Adapters { backend } => {
             let adapters = plume_runtime::gpu::list_adapters(&plume_runtime::GpuChoice { backend });
             if adapters.is_empty() {

@@ -43,6 +43,52 @@ pub struct EffectIr {
     pub sort: bool,
     /// The camera.
     pub camera: CameraIr,
+    /// How particles look when rendered.
+    pub render: RenderIr,
+}
+
+/// The render section in the IR, with gradients ready to evaluate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderIr {
+    /// Colour stops (t, rgba), t increasing.
+    pub color: Vec<(f64, [f64; 4])>,
+    /// Size stops (t, diameter in m), t increasing.
+    pub size: Vec<(f64, f64)>,
+    /// Blending.
+    pub blend: crate::schema::Blend,
+    /// Background colour.
+    pub background: DVec3,
+}
+
+/// Piecewise-linear interpolation through stops (t increasing), constant beyond the ends.
+fn interpolate<const N: usize>(stops: &[(f64, [f64; N])], t: f64) -> [f64; N] {
+    let Some(first) = stops.first() else {
+        return [0.0; N];
+    };
+    if t <= first.0 {
+        return first.1;
+    }
+    for w in stops.windows(2) {
+        let ((t0, a), (t1, b)) = (w[0], w[1]);
+        if t <= t1 {
+            let f = if t1 > t0 { (t - t0) / (t1 - t0) } else { 1.0 };
+            return std::array::from_fn(|i| a[i] + (b[i] - a[i]) * f);
+        }
+    }
+    stops[stops.len() - 1].1
+}
+
+impl RenderIr {
+    /// The colour at life fraction `t`.
+    pub fn color_at(&self, t: f64) -> [f64; 4] {
+        interpolate(&self.color, t)
+    }
+
+    /// The sprite diameter (m) at life fraction `t`.
+    pub fn size_at(&self, t: f64) -> f64 {
+        let stops: Vec<(f64, [f64; 1])> = self.size.iter().map(|&(t, s)| (t, [s])).collect();
+        interpolate(&stops, t)[0]
+    }
 }
 
 impl EffectIr {
@@ -346,6 +392,14 @@ impl fmt::Display for EffectIr {
         for k in &self.kills {
             writeln!(f, "    {k:?}")?;
         }
+        writeln!(
+            f,
+            "  render {:?} background {} colour {:?} size {:?}",
+            self.render.blend,
+            v(self.render.background),
+            self.render.color,
+            self.render.size
+        )?;
         writeln!(
             f,
             "  sort {}  camera eye {} target {} fov_y {}",

@@ -4,7 +4,9 @@
 use glam::DVec3;
 
 use crate::forces::safe_normalize;
-use crate::ir::{Basis, CameraIr, EffectIr, EmitterIr, KillIr, PlaneIr, ShapeIr, VelocityIr};
+use crate::ir::{
+    Basis, CameraIr, EffectIr, EmitterIr, KillIr, PlaneIr, RenderIr, ShapeIr, VelocityIr,
+};
 use crate::lifetime::LifetimeSteps;
 use crate::rng::seed_mix;
 use crate::schema::{Collider, Effect, KillVolume, Shape, Velocity};
@@ -73,6 +75,19 @@ pub fn lower(effect: &Effect) -> EffectIr {
             })
             .collect(),
         sort: effect.sort,
+        render: {
+            let r = &effect.render;
+            RenderIr {
+                color: r
+                    .color
+                    .iter()
+                    .map(|s| (s.0, [s.1 .0, s.1 .1, s.1 .2, s.1 .3]))
+                    .collect(),
+                size: r.size.iter().map(|s| (s.0, s.1)).collect(),
+                blend: r.blend,
+                background: r.background.d(),
+            }
+        },
         camera: CameraIr {
             eye: effect.camera.eye.d(),
             target: effect.camera.target.d(),

@@ -112,6 +112,16 @@ impl Schedule {
         self.first_ids[i.saturating_sub(1)].1
     }
 
+    /// Lifetime in seconds of particle `id` that dies at the update of step `die_at`
+    /// (None for [`crate::lifetime::NEVER`]).
+    pub fn lifetime(&self, id: u32, die_at: u32) -> Option<f64> {
+        if die_at == crate::lifetime::NEVER {
+            return None;
+        }
+        let lived = u64::from(die_at).wrapping_sub(self.spawn_step(id) & 0xffff_ffff) + 1;
+        Some((lived & 0xffff_ffff) as f64 * self.dt)
+    }
+
     /// Age in seconds of particle `id` after the steps done so far: (done - spawn step) dt.
     pub fn age(&self, id: u32) -> f64 {
         (self.next_step - self.spawn_step(id)) as f64 * self.dt

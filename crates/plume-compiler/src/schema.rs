@@ -77,6 +77,75 @@ pub struct Effect {
     /// The viewpoint for sorting and rendering.
     #[serde(default)]
     pub camera: Camera,
+    /// How particles look when rendered (an extension of v1; defaults when absent).
+    #[serde(default)]
+    pub render: Render,
+}
+
+/// An RGBA colour written `(r, g, b, a)`, each in [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub struct Rgba(pub f64, pub f64, pub f64, pub f64);
+
+/// A colour at a fraction of a particle's life, written `(t, (r, g, b, a))`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub struct ColorStop(pub f64, pub Rgba);
+
+/// A sprite diameter in metres at a fraction of a particle's life, written `(t, size)`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub struct SizeStop(pub f64, pub f64);
+
+/// How sprites combine with what is behind them.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Blend {
+    /// `over` compositing: order matters, so use `sort: true`.
+    #[default]
+    Alpha,
+    /// Colours add up (fire, sparks); order does not matter.
+    Additive,
+}
+
+fn default_colors() -> Vec<ColorStop> {
+    vec![
+        ColorStop(0.0, Rgba(1.0, 1.0, 1.0, 1.0)),
+        ColorStop(1.0, Rgba(1.0, 1.0, 1.0, 0.0)),
+    ]
+}
+
+fn default_sizes() -> Vec<SizeStop> {
+    vec![SizeStop(0.0, 0.1)]
+}
+
+fn default_background() -> Vec3 {
+    Vec3(0.02, 0.02, 0.04)
+}
+
+/// The `render:` section: colour and size over life, blending and background.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Render {
+    /// Colour gradient over the life fraction age / lifetime (0 for immortal particles).
+    #[serde(default = "default_colors")]
+    pub color: Vec<ColorStop>,
+    /// Sprite diameter (m) over the life fraction.
+    #[serde(default = "default_sizes")]
+    pub size: Vec<SizeStop>,
+    /// Alpha or Additive.
+    #[serde(default)]
+    pub blend: Blend,
+    /// Background colour `(r, g, b)`.
+    #[serde(default = "default_background")]
+    pub background: Vec3,
+}
+
+impl Default for Render {
+    fn default() -> Self {
+        Self {
+            color: default_colors(),
+            size: default_sizes(),
+            blend: Blend::Alpha,
+            background: default_background(),
+        }
+    }
 }
 
 /// One particle source.

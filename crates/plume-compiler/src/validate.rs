@@ -64,6 +64,7 @@ pub fn check_effect(effect: &Effect) -> Checker {
             }
         }
     }
+    check_render(&mut c, &root.field("render"), &effect.render);
     let cam = root.field("camera");
     let eye_ok = c.vec3(&cam.field("eye"), effect.camera.eye);
     let target_ok = c.vec3(&cam.field("target"), effect.camera.target);
@@ -173,5 +174,53 @@ fn check_speed(c: &mut Checker, path: &ValuePath, speed: crate::schema::Range) {
             &path.component(0, "min"),
             format!("must be >= 0 m/s, got {}", speed.0),
         );
+    }
+}
+
+fn check_stop_times(c: &mut Checker, path: &ValuePath, times: &[f64]) {
+    if times.is_empty() {
+        c.error(path, "must list at least one stop");
+    }
+    for (i, &t) in times.iter().enumerate() {
+        c.within(&path.index(i).component(0, "t"), t, 0.0, 1.0);
+        if i > 0 && t < times[i - 1] {
+            c.error(
+                &path.index(i).component(0, "t"),
+                format!(
+                    "stops must be in increasing t, got {t} after {}",
+                    times[i - 1]
+                ),
+            );
+        }
+    }
+}
+
+fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
+    let colors = path.field("color");
+    check_stop_times(c, &colors, &r.color.iter().map(|s| s.0).collect::<Vec<_>>());
+    for (i, s) in r.color.iter().enumerate() {
+        let p = colors.index(i).component(1, "color");
+        for (j, (name, x)) in [("r", s.1 .0), ("g", s.1 .1), ("b", s.1 .2), ("a", s.1 .3)]
+            .into_iter()
+            .enumerate()
+        {
+            c.within(&p.component(j, name), x, 0.0, 1.0);
+        }
+    }
+    let sizes = path.field("size");
+    check_stop_times(c, &sizes, &r.size.iter().map(|s| s.0).collect::<Vec<_>>());
+    for (i, s) in r.size.iter().enumerate() {
+        c.non_negative(&sizes.index(i).component(1, "size"), s.1);
+    }
+    let bg = path.field("background");
+    for (j, (name, x)) in [
+        ("r", r.background.0),
+        ("g", r.background.1),
+        ("b", r.background.2),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        c.within(&bg.component(j, name), x, 0.0, 1.0);
     }
 }

@@ -8,6 +8,8 @@
 pub mod error;
 pub mod export;
 pub mod gpu;
+pub mod images;
+pub mod render;
 pub mod sim;
 
 pub use error::RuntimeError;

@@ -333,6 +333,7 @@ impl<'g> GpuSim<'g> {
                 1.0 / self.effect.ir.h(),
             ),
         };
+        let die_at = layout.word_offset(Attribute::DeathStep);
         let mut out = Vec::new();
         for slot in bytes.chunks_exact(stride) {
             let u = |w: usize| {
@@ -353,6 +354,7 @@ impl<'g> GpuSim<'g> {
                 position: DVec3::new(f(pos_at), f(pos_at + 1), f(pos_at + 2)),
                 velocity: DVec3::new(f(vel_at), f(vel_at + 1), f(vel_at + 2)) * scale,
                 age: self.schedule.age(id),
+                lifetime: die_at.and_then(|w| self.schedule.lifetime(id, u(w))),
             });
         }
         out.sort_by_key(|r| r.id);

@@ -22,6 +22,8 @@ pub struct ParticleRecord {
     pub velocity: DVec3,
     /// Seconds since spawn.
     pub age: f64,
+    /// Seconds it lives in all (whole steps), or None when it never dies of age.
+    pub lifetime: Option<f64>,
 }
 
 /// Totals of a run so far.

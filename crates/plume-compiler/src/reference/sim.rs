@@ -121,6 +121,7 @@ impl ReferenceSim {
                 position: p.x,
                 velocity: if verlet { p.v / h } else { p.v },
                 age: self.schedule.age(p.id),
+                lifetime: self.schedule.lifetime(p.id, p.die_at),
             })
             .collect()
     }

@@ -1,0 +1,161 @@
+//! `plume render`: simulate on the GPU and render frames headless to a PNG (last frame, or a
+//! contact sheet with `--sheet`) or an animated GIF.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use plume_compiler::compile_str;
+use plume_runtime::export::write_atomically;
+use plume_runtime::images::{contact_sheet, gif, png, Frame8};
+use plume_runtime::render::{sprites, Renderer};
+use plume_runtime::{Gpu, GpuChoice, GpuSim, RuntimeError};
+
+use crate::{read_source, Overrides};
+
+/// Options of `plume render`.
+#[derive(clap::Args, Debug)]
+pub struct RenderArgs {
+    /// The effect file (.ron).
+    file: PathBuf,
+    /// Frames to render.
+    #[arg(long, default_value_t = 60)]
+    frames: u32,
+    /// Simulation steps between frames (the first frame is taken after this many steps).
+    #[arg(long, default_value_t = 2)]
+    every: u32,
+    /// Image size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "640x360", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Output: .png (the last frame, or a contact sheet with --sheet) or .gif (the animation).
+    #[arg(long)]
+    out: PathBuf,
+    /// With a .png output: tile every frame into one contact sheet.
+    #[arg(long)]
+    sheet: bool,
+    /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
+    #[arg(long)]
+    backend: Option<String>,
+    #[command(flatten)]
+    overrides: Overrides,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("size `{s}` must look like 640x360"))?;
+    let parse = |v: &str| {
+        v.trim()
+            .parse::<u32>()
+            .map_err(|_| format!("size `{s}` must look like 640x360"))
+    };
+    let (w, h) = (parse(w)?, parse(h)?);
+    if w == 0 || h == 0 {
+        return Err(format!("size `{s}` must be at least 1x1"));
+    }
+    Ok((w, h))
+}
+
+enum Format {
+    Png,
+    Gif,
+}
+
+fn render_frames(
+    args: &RenderArgs,
+    effect: plume_compiler::CompiledEffect,
+) -> Result<Vec<Frame8>, RuntimeError> {
+    let gpu = Gpu::new(&GpuChoice {
+        backend: args.backend.clone(),
+    })?;
+    eprintln!("adapter: {}", gpu.describe());
+    let (w, h) = args.size;
+    let ir = effect.ir.clone();
+    let renderer = Renderer::new(&gpu, w, h, ir.render.blend, ir.render.background)?;
+    let mut sim = GpuSim::new(&gpu, effect)?;
+    let bar = ProgressBar::new(u64::from(args.frames));
+    bar.set_style(
+        ProgressStyle::with_template("rendering [{bar:30}] {pos}/{len} frames ({eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    let mut frames = Vec::with_capacity(args.frames as usize);
+    for _ in 0..args.frames {
+        sim.run(u64::from(args.every), |_| {})?;
+        let records = sim.records()?;
+        let pixels = renderer.draw(
+            &sprites(&records, &ir.render, &ir.camera, ir.sort),
+            &ir.camera,
+        )?;
+        frames.push(Frame8 {
+            width: w,
+            height: h,
+            pixels,
+        });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(frames)
+}
+
+/// Runs `plume render`.
+pub fn render(args: &RenderArgs) -> ExitCode {
+    let name = args.file.display().to_string();
+    let format = match args
+        .out
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .as_deref()
+    {
+        Some("png") => Format::Png,
+        Some("gif") => Format::Gif,
+        _ => {
+            eprintln!(
+                "{}: error: the output must be a .png or .gif file",
+                args.out.display()
+            );
+            return ExitCode::FAILURE;
+        }
+    };
+    if args.frames == 0 || args.every == 0 {
+        eprintln!("error: --frames and --every must be at least 1");
+        return ExitCode::FAILURE;
+    }
+    let source = match read_source(&args.file) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let effect = match compile_str(&source, &args.overrides.options()) {
+        Ok(c) => c,
+        Err(e) => {
+            eprintln!("{}", e.render(&name, &source));
+            return ExitCode::FAILURE;
+        }
+    };
+    if !effect.warnings.is_empty() {
+        eprintln!("{}", effect.warnings.render(&name, &source));
+    }
+    let delay_ms = ((f64::from(args.every) * effect.ir.dt * 1000.0).round() as u32).max(20);
+    let encoded = render_frames(args, effect).and_then(|frames| match format {
+        Format::Png if args.sheet => png(&contact_sheet(&frames)?),
+        Format::Png => png(frames.last().expect("at least one frame")),
+        Format::Gif => gif(&frames, delay_ms),
+    });
+    let bytes = match encoded {
+        Ok(b) => b,
+        Err(e) => {
+            eprintln!("{name}: error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    if let Err(e) = write_atomically(&args.out, &bytes, &[args.file.as_path()]) {
+        eprintln!("error: {e}");
+        return ExitCode::FAILURE;
+    }
+    eprintln!("wrote {} ({} bytes)", args.out.display(), bytes.len());
+    ExitCode::SUCCESS
+}

@@ -1,0 +1,48 @@
+// Camera-facing soft round sprites, one instance per particle, six vertices per quad.
+// Not generated: this shader is the same for every effect (the effect kernels are generated).
+
+struct Camera {
+    view: mat4x4<f32>,
+    proj: mat4x4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> camera: Camera;
+
+struct Out {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) uv: vec2<f32>,
+    @location(1) color: vec4<f32>,
+}
+
+@vertex
+fn vs(
+    @builtin(vertex_index) vi: u32,
+    @location(0) center: vec3<f32>,
+    @location(1) size: f32,
+    @location(2) color: vec4<f32>,
+) -> Out {
+    var corners = array<vec2<f32>, 6>(
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
+    );
+    let uv = corners[vi % 6u];
+    // Offset in view space so the quad always faces the camera.
+    let center_view = camera.view * vec4<f32>(center, 1.0);
+    let corner_view = center_view + vec4<f32>(uv * (0.5 * size), 0.0, 0.0);
+    var out: Out;
+    out.clip = camera.proj * corner_view;
+    out.uv = uv;
+    out.color = color;
+    return out;
+}
+
+@fragment
+fn fs(in: Out) -> @location(0) vec4<f32> {
+    let r2 = dot(in.uv, in.uv);
+    if (r2 >= 1.0) {
+        discard;
+    }
+    // Soft round falloff: full at the centre, zero at the rim.
+    let falloff = (1.0 - r2) * (1.0 - r2);
+    return vec4<f32>(in.color.rgb, in.color.a * falloff);
+}
