@@ -1,5 +1,6 @@
 //! `plume`: check, compile (and later run, render, bench) particle effects.
 
+mod accuracy;
 mod output;
 mod render;
 mod run;
@@ -41,6 +42,8 @@ enum Command {
     },
     /// Run an effect on the GPU (or the CPU reference) and print a summary; optionally export.
     Run(run::RunArgs),
+    /// Measure every integrator's error against time per step.
+    Accuracy(accuracy::AccuracyArgs),
     /// Simulate and render headless to a PNG (last frame or --sheet) or an animated GIF.
     Render(render::RenderArgs),
     /// List the adapters wgpu sees.
@@ -90,7 +93,7 @@ impl Overrides {
     }
 }
 
-fn parse_integrator(s: &str) -> Result<Integrator, String> {
+pub(crate) fn parse_integrator(s: &str) -> Result<Integrator, String> {
     Integrator::from_name(s).ok_or_else(|| {
         format!("unknown integrator `{s}`; expected Euler, SemiImplicitEuler, Verlet, Midpoint, Rk4, Exact or Auto")
     })
@@ -108,6 +111,7 @@ fn main() -> ExitCode {
         } => compile(&file, output.as_deref(), emit, &overrides.options()),
         Command::Run(args) => run::run(&args),
         Command::Render(args) => render::render(&args),
+        Command::Accuracy(args) => accuracy::accuracy(&args),
         Command::Adapters { backend } => {
             let adapters = plume_runtime::gpu::list_adapters(&plume_runtime::GpuChoice { backend });
             if adapters.is_empty() {

@@ -5,10 +5,12 @@
 //! with no CPU round trip per step ([`sim`]), reads particles back when asked and writes them out
 //! ([`export`]). The CPU f64 reference lives in `plume_compiler::reference`.
 
+pub mod accuracy;
 pub mod error;
 pub mod export;
 pub mod gpu;
 pub mod images;
+pub mod plot;
 pub mod render;
 pub mod sim;
 

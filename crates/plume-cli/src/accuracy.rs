@@ -1,0 +1,198 @@
+//! `plume accuracy`: each integrator x step size, the position error at the end against the
+//! closed form or an f64 RK4 at 1/64 of the smallest step, the time per step and the observed
+//! order; a table, JSON, and an SVG plot with the Pareto front.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use plume_compiler::{parse, Integrator};
+use plume_runtime::accuracy::{measure, pareto_front, AccuracyPlan, Engine, ReferenceKind};
+use plume_runtime::export::write_atomically;
+use plume_runtime::plot::accuracy_svg;
+use plume_runtime::{Gpu, GpuChoice};
+
+use crate::read_source;
+
+/// Options of `plume accuracy`.
+#[derive(clap::Args, Debug)]
+pub struct AccuracyArgs {
+    /// The effect file (.ron).
+    file: PathBuf,
+    /// Step sizes in seconds, comma-separated [default: the file's dt x 4, 2, 1, 1/2, 1/4].
+    #[arg(long, value_delimiter = ',')]
+    dt_list: Option<Vec<f64>>,
+    /// Integrators, comma-separated [default: all; Exact only where it is allowed].
+    #[arg(long, value_delimiter = ',', value_parser = crate::parse_integrator)]
+    integrators: Option<Vec<Integrator>>,
+    /// Measure after this many steps of the file's dt [default: 120].
+    #[arg(long, conflicts_with = "duration")]
+    steps: Option<u64>,
+    /// Measure after this many seconds (a multiple of every dt).
+    #[arg(long)]
+    duration: Option<f64>,
+    /// Print JSON instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Write the error-vs-time plot (SVG).
+    #[arg(long)]
+    plot: Option<PathBuf>,
+    /// Run the integrators on the CPU reference (f64) instead of the GPU (f32).
+    #[arg(long)]
+    cpu: bool,
+    /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
+    #[arg(long)]
+    backend: Option<String>,
+}
+
+/// Runs `plume accuracy`.
+pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
+    let name = args.file.display().to_string();
+    let source = match read_source(&args.file) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let effect = match parse(&source) {
+        Ok(e) => e,
+        Err(d) => {
+            eprintln!("{}", d.render(&name, &source));
+            return ExitCode::FAILURE;
+        }
+    };
+    // Check the file as written first, so errors point at it.
+    if let Err(e) = plume_compiler::compile_effect(&effect, &source) {
+        eprintln!("{}", e.render(&name, &source));
+        return ExitCode::FAILURE;
+    }
+    let dts = args.dt_list.clone().unwrap_or_else(|| {
+        [4.0, 2.0, 1.0, 0.5, 0.25]
+            .iter()
+            .map(|f| effect.dt * f)
+            .collect()
+    });
+    if dts.iter().any(|d| !(d.is_finite() && *d > 0.0)) {
+        eprintln!("error: every --dt-list value must be a positive number");
+        return ExitCode::FAILURE;
+    }
+    let duration = args
+        .duration
+        .unwrap_or_else(|| effect.dt * args.steps.unwrap_or(120) as f64);
+    let plan = AccuracyPlan {
+        integrators: args
+            .integrators
+            .clone()
+            .unwrap_or_else(|| Integrator::CONCRETE.to_vec()),
+        dts,
+        duration,
+    };
+    let gpu = if args.cpu {
+        None
+    } else {
+        match Gpu::new(&GpuChoice {
+            backend: args.backend.clone(),
+        }) {
+            Ok(g) => Some(g),
+            Err(e) => {
+                eprintln!("error: {e}");
+                return ExitCode::FAILURE;
+            }
+        }
+    };
+    let engine = match &gpu {
+        Some(g) => Engine::Gpu(g),
+        None => Engine::Cpu,
+    };
+    let bar = if args.json {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(0)
+    };
+    bar.set_style(
+        ProgressStyle::with_template("measuring [{bar:30}] {pos}/{len} runs ({eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    let (rows, kind) = match measure(&engine, &effect, &plan, |done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    }) {
+        Ok(r) => r,
+        Err(e) => {
+            bar.finish_and_clear();
+            eprintln!("{name}: error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    bar.finish_and_clear();
+    let engine_name = gpu
+        .as_ref()
+        .map(|g| g.describe())
+        .unwrap_or_else(|| "cpu reference (f64)".into());
+    let reference = match kind {
+        ReferenceKind::ClosedForm => "the closed form (Exact in f64)".to_string(),
+        ReferenceKind::Rk4(h) => format!("RK4 in f64 at dt = {h:.3e} s"),
+    };
+    let front = pareto_front(&rows);
+    if args.json {
+        let items: Vec<_> = rows
+            .iter()
+            .enumerate()
+            .map(|(i, r)| {
+                serde_json::json!({
+                    "integrator": r.integrator.name(), "dt": r.dt, "steps": r.steps,
+                    "max_error": r.max_error, "rms_error": r.rms_error,
+                    "seconds_per_step": r.seconds_per_step, "order": r.order,
+                    "compared": r.compared, "pareto": front.contains(&i),
+                })
+            })
+            .collect();
+        println!(
+            "{}",
+            serde_json::json!({ "effect": name, "engine": engine_name, "reference": reference,
+                                "duration": duration, "rows": items })
+        );
+    } else {
+        println!("{name}: position error after {duration:.4} s against {reference}");
+        println!("engine: {engine_name}; * marks the Pareto front (no row is both faster and more accurate)");
+        println!(
+            "{:<18} {:>10} {:>6} {:>12} {:>12} {:>12} {:>7} {:>6}",
+            "integrator", "dt (s)", "steps", "max err (m)", "rms err (m)", "us/step", "order", "n"
+        );
+        for (i, r) in rows.iter().enumerate() {
+            let order = r
+                .order
+                .map(|o| format!("{o:.2}"))
+                .unwrap_or_else(|| "-".into());
+            println!(
+                "{:<18} {:>10.5} {:>6} {:>12.3e} {:>12.3e} {:>12.1} {:>7} {:>6}{}",
+                r.integrator.name(),
+                r.dt,
+                r.steps,
+                r.max_error,
+                r.rms_error,
+                r.seconds_per_step * 1e6,
+                order,
+                r.compared,
+                if front.contains(&i) { " *" } else { "" }
+            );
+        }
+    }
+    if let Some(path) = &args.plot {
+        let title = format!("{name}: error after {duration:.3} s vs time per step");
+        if let Err(e) = write_atomically(
+            path,
+            accuracy_svg(&rows, &title).as_bytes(),
+            &[args.file.as_path()],
+        ) {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+        if !args.json {
+            println!("plot written to {}", path.display());
+        }
+    }
+    ExitCode::SUCCESS
+}
