@@ -135,6 +135,11 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
         ReferenceKind::ClosedForm => "the closed form (Exact in f64)".to_string(),
         ReferenceKind::Rk4(h) => format!("RK4 in f64 at dt = {h:.3e} s"),
     };
+    if rows.iter().any(|r| r.compared == 0) {
+        eprintln!(
+            "{name}: warning: some runs had no particle alive at the end in both runs (lifetimes or kill volumes); use a shorter --duration"
+        );
+    }
     let front = pareto_front(&rows);
     if args.json {
         let items: Vec<_> = rows
