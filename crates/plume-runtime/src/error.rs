@@ -20,8 +20,9 @@ pub enum RuntimeError {
         /// wgpu's message.
         message: String,
     },
-    /// The effect's particle buffer does not fit one storage binding on this adapter.
-    #[error("capacity {capacity} needs a {bytes}-byte particle buffer ({bytes_per_particle} bytes per particle), but this adapter's max_storage_buffer_binding_size is {limit} bytes: at most {max_capacity} particles fit; lower capacity or use an adapter with larger bindings")]
+    /// The free list (one binding, 4 bytes a slot) does not fit on this adapter. Particle
+    /// state itself is split across bindings; the free list is not.
+    #[error("capacity {capacity} needs a {bytes}-byte free list ({bytes_per_particle} bytes per slot, one binding), but this adapter's max_storage_buffer_binding_size is {limit} bytes: at most {max_capacity} particles fit; lower capacity or use an adapter with larger bindings")]
     CapacityTooLarge {
         /// Requested capacity.
         capacity: u32,

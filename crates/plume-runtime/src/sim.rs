@@ -21,24 +21,68 @@ pub const STEPS_PER_SUBMIT: u32 = 256;
 /// Marks a free slot (the `id` field) and a particle that never dies.
 const DEAD: u32 = u32::MAX;
 
-/// An effect's GPU state and kernels.
+/// One particle buffer: global slots `base .. base + len`, and the bind group that binds it.
+struct Chunk {
+    len: u64,
+    buffer: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+}
+
+/// An effect's GPU state and kernels. Particle state is split into chunks of at most one
+/// storage binding each, so capacities past the binding limit (2 GiB on Vulkan) run; the free
+/// list and counters are shared.
 pub struct GpuSim<'g> {
     gpu: &'g Gpu,
     effect: CompiledEffect,
     schedule: Schedule,
-    particles: wgpu::Buffer,
+    chunks: Vec<Chunk>,
     counters: wgpu::Buffer,
     params: wgpu::Buffer,
     params_stride: u64,
-    bind_group: wgpu::BindGroup,
     prepare: wgpu::ComputePipeline,
     spawn: wgpu::ComputePipeline,
     update: wgpu::ComputePipeline,
 }
 
+fn buffer_entry(
+    binding: u32,
+    ty: wgpu::BufferBindingType,
+    dynamic: bool,
+    min: Option<u64>,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: dynamic,
+            min_binding_size: min.and_then(wgpu::BufferSize::new),
+        },
+        count: None,
+    }
+}
+
+fn sized(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset,
+        size: wgpu::BufferSize::new(size),
+    })
+}
+
 impl<'g> GpuSim<'g> {
     /// Allocates buffers and builds the kernels of `effect` on `gpu`.
     pub fn new(gpu: &'g Gpu, effect: CompiledEffect) -> Result<Self, RuntimeError> {
+        Self::with_chunk_slots(gpu, effect, None)
+    }
+
+    /// Like [`GpuSim::new`] with at most `max_chunk_slots` particles per buffer (tests use it
+    /// to exercise the split on small effects).
+    pub fn with_chunk_slots(
+        gpu: &'g Gpu,
+        effect: CompiledEffect,
+        max_chunk_slots: Option<u64>,
+    ) -> Result<Self, RuntimeError> {
         let device = &gpu.device;
         let cap = u64::from(effect.ir.capacity);
         let bpp = u64::from(effect.layout.bytes_per_particle);
@@ -46,27 +90,28 @@ impl<'g> GpuSim<'g> {
             .limits
             .max_storage_buffer_binding_size
             .min(gpu.limits.max_buffer_size);
-        if cap * bpp > limit {
+        // The free list is one binding of 4 bytes a slot: that bounds the capacity.
+        if cap * 4 > limit {
             return Err(RuntimeError::CapacityTooLarge {
                 capacity: effect.ir.capacity,
-                bytes_per_particle: effect.layout.bytes_per_particle,
-                bytes: cap * bpp,
+                bytes_per_particle: 4,
+                bytes: cap * 4,
                 limit,
-                max_capacity: limit / bpp,
+                max_capacity: limit / 4,
             });
         }
+        let chunk_slots = (limit / bpp)
+            .min(max_chunk_slots.unwrap_or(u64::MAX))
+            .max(1);
+        let chunk_count = cap.div_ceil(chunk_slots);
         let storage = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;
-        // All bits set: every slot's id is DEAD (free), every die_at is "never".
-        let particles = filled_buffer(device, "particles", cap * bpp, storage, |bytes| {
-            bytes.fill(0xff)
-        });
-        // The free list holds every slot; pops take from the top.
-        let free_list = filled_buffer(device, "free_list", cap * 4, storage, |bytes| {
-            for (j, word) in bytes.chunks_exact_mut(4).enumerate() {
-                word.copy_from_slice(&((cap - 1 - j as u64) as u32).to_le_bytes());
-            }
+        let free_list = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("free_list"),
+            size: cap * 4,
+            usage: storage,
+            mapped_at_creation: false,
         });
         let counters = filled_buffer(
             device,
@@ -78,72 +123,89 @@ impl<'g> GpuSim<'g> {
                 bytes[..4].copy_from_slice(&effect.ir.capacity.to_le_bytes());
             },
         );
-        let align = u64::from(gpu.limits.min_uniform_buffer_offset_alignment);
-        let params_stride = effect.layout.params_bytes().next_multiple_of(align.max(16));
+        let align = u64::from(gpu.limits.min_uniform_buffer_offset_alignment).max(16);
+        let params_stride = effect.layout.params_bytes().next_multiple_of(align);
         let params = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("params"),
             size: params_stride * u64::from(STEPS_PER_SUBMIT),
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let chunk_params = filled_buffer(
+            device,
+            "chunks",
+            align * chunk_count,
+            wgpu::BufferUsages::UNIFORM,
+            |bytes| {
+                for k in 0..chunk_count {
+                    let (base, len) = (k * chunk_slots, chunk_slots.min(cap - k * chunk_slots));
+                    let at = (k * align) as usize;
+                    bytes[at..at + 4].copy_from_slice(&(base as u32).to_le_bytes());
+                    bytes[at + 4..at + 8].copy_from_slice(&(len as u32).to_le_bytes());
+                }
+            },
+        );
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(&effect.ir.name),
             source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(&effect.wgsl)),
         });
-        let storage_entry = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
+        let rw = wgpu::BufferBindingType::Storage { read_only: false };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("plume"),
             entries: &[
-                storage_entry(0),
-                storage_entry(1),
-                storage_entry(2),
-                wgpu::BindGroupLayoutEntry {
-                    binding: 3,
-                    visibility: wgpu::ShaderStages::COMPUTE,
-                    ty: wgpu::BindingType::Buffer {
-                        ty: wgpu::BufferBindingType::Uniform,
-                        has_dynamic_offset: true,
-                        min_binding_size: wgpu::BufferSize::new(effect.layout.params_bytes()),
+                buffer_entry(0, rw, false, None),
+                buffer_entry(1, rw, false, None),
+                buffer_entry(2, rw, false, None),
+                buffer_entry(
+                    3,
+                    wgpu::BufferBindingType::Uniform,
+                    true,
+                    Some(effect.layout.params_bytes()),
+                ),
+                buffer_entry(4, wgpu::BufferBindingType::Uniform, false, Some(16)),
+            ],
+        });
+        let mut chunks = Vec::new();
+        for k in 0..chunk_count {
+            let len = chunk_slots.min(cap - k * chunk_slots);
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("particles"),
+                size: len * bpp,
+                usage: storage,
+                mapped_at_creation: false,
+            });
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("plume"),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: buffer.as_entire_binding(),
                     },
-                    count: None,
-                },
-            ],
-        });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("plume"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: particles.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: free_list.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 2,
-                    resource: counters.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 3,
-                    resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                        buffer: &params,
-                        offset: 0,
-                        size: wgpu::BufferSize::new(effect.layout.params_bytes()),
-                    }),
-                },
-            ],
-        });
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: free_list.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: counters.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 3,
+                        resource: sized(&params, 0, effect.layout.params_bytes()),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 4,
+                        resource: sized(&chunk_params, k * align, 16),
+                    },
+                ],
+            });
+            chunks.push(Chunk {
+                len,
+                buffer,
+                bind_group,
+            });
+        }
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("plume"),
             bind_group_layouts: &[Some(&layout)],
@@ -159,25 +221,38 @@ impl<'g> GpuSim<'g> {
                 cache: None,
             })
         };
-        let (prepare, spawn, update) = (
-            pipeline("spawn_prepare"),
-            pipeline("spawn"),
-            pipeline("update"),
-        );
-        gpu.take_error()?;
-        Ok(Self {
+        let sim = Self {
             gpu,
             schedule: Schedule::new(&effect.ir),
+            prepare: pipeline("spawn_prepare"),
+            spawn: pipeline("spawn"),
+            update: pipeline("update"),
             effect,
-            particles,
+            chunks,
             counters,
             params,
             params_stride,
-            bind_group,
-            prepare,
-            spawn,
-            update,
-        })
+        };
+        // Mark every slot free and fill the free list, on the GPU: no host copy of the state.
+        let init = pipeline("init");
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&init);
+            for chunk in &sim.chunks {
+                let (x, y) = sim.groups(chunk.len)?;
+                pass.set_bind_group(0, &chunk.bind_group, &[0]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+        gpu.queue.submit([encoder.finish()]);
+        gpu.take_error()?;
+        Ok(sim)
+    }
+
+    /// Number of particle buffers the state is split into.
+    pub fn chunk_count(&self) -> usize {
+        self.chunks.len()
     }
 
     /// The compiled effect being run.
@@ -230,19 +305,26 @@ impl<'g> GpuSim<'g> {
                 label: Some("steps"),
                 timestamp_writes: None,
             });
-            let update_groups = self.groups(u64::from(self.effect.ir.capacity))?;
             for (j, plan) in plans.iter().enumerate() {
                 let offset = (j as u64 * self.params_stride) as u32;
-                pass.set_bind_group(0, &self.bind_group, &[offset]);
+                pass.set_bind_group(0, &self.chunks[0].bind_group, &[offset]);
                 pass.set_pipeline(&self.prepare);
                 pass.dispatch_workgroups(1, 1, 1);
                 if plan.requested() > 0 {
+                    // Every chunk sees every spawn; each writes only the slots it holds.
                     let (x, y) = self.groups(u64::from(plan.requested()))?;
                     pass.set_pipeline(&self.spawn);
-                    pass.dispatch_workgroups(x, y, 1);
+                    for chunk in &self.chunks {
+                        pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+                        pass.dispatch_workgroups(x, y, 1);
+                    }
                 }
                 pass.set_pipeline(&self.update);
-                pass.dispatch_workgroups(update_groups.0, update_groups.1, 1);
+                for chunk in &self.chunks {
+                    let (x, y) = self.groups(chunk.len)?;
+                    pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
             }
         }
         self.gpu.queue.submit([encoder.finish()]);
@@ -313,7 +395,10 @@ impl<'g> GpuSim<'g> {
 
     /// The live particles in id order, velocity as the integrator knows it (Verlet's derived).
     pub fn records(&self) -> Result<Vec<ParticleRecord>, RuntimeError> {
-        let bytes = self.read(&self.particles)?;
+        let mut bytes = Vec::new();
+        for chunk in &self.chunks {
+            bytes.extend(self.read(&chunk.buffer)?);
+        }
         let layout = &self.effect.layout;
         let stride = layout.bytes_per_particle as usize;
         let missing = |what| RuntimeError::Readback(format!("layout has no {what}"));

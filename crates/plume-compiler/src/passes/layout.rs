@@ -133,7 +133,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
             name: "particles",
             space: "storage, read_write",
             bytes: cap * u64::from(bytes_per_particle),
-            meaning: "array<Particle>, one slot per capacity",
+            meaning: "array<Particle>, one slot per capacity (split into chunks past the binding limit)",
         },
         Binding {
             binding: 1,
@@ -155,6 +155,13 @@ pub fn decide(ir: &EffectIr) -> Layout {
             space: "uniform",
             bytes: layout.params_bytes(),
             meaning: "per step: first id, spawns requested, time mod 256 s, step index, per-emitter counts",
+        },
+        Binding {
+            binding: 4,
+            name: "chunk",
+            space: "uniform",
+            bytes: 16,
+            meaning: "the slots this dispatch's particle buffer holds: first global slot, count",
         },
     ];
     layout

@@ -66,6 +66,14 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         ));
     });
     w.blank();
+    w.comment("The slots bound as `particles` in this dispatch: global slots base .. base + len.");
+    w.block("struct Chunk", |w| {
+        w.line("base: u32,");
+        w.line("len: u32,");
+        w.line("pad0: u32,");
+        w.line("pad1: u32,");
+    });
+    w.blank();
     w.block("struct Spawned", |w| {
         w.line("x: vec3<f32>,");
         w.line("v: vec3<f32>,");
@@ -77,6 +85,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "particles" => "array<Particle>",
             "free_list" => "array<u32>",
             "counters" => "Counters",
+            "chunk" => "Chunk",
             _ => "StepParams",
         };
         w.line(format!(
@@ -108,5 +117,24 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     spawn::emit(&mut w, ir, layout);
     w.blank();
     update::emit(&mut w, ir, layout);
+    w.blank();
+    emit_init(&mut w);
     w.finish()
+}
+
+/// `init`: marks every slot of the chunk free and fills the free list with all slots, so no
+/// host memory the size of the particle buffer is ever needed.
+fn emit_init(w: &mut Writer) {
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let local = gid.x + gid.y * groups.x * WORKGROUP;");
+            w.block("if (local >= chunk.len)", |w| w.line("return;"));
+            w.line("particles[local].id = DEAD;");
+            w.line("let slot = chunk.base + local;");
+            w.comment("Pops take from the top: the first spawns get the lowest slots.");
+            w.line("free_list[slot] = CAPACITY - 1u - slot;");
+        },
+    );
 }

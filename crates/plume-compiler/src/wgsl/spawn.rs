@@ -38,6 +38,8 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
             w.block("if (i >= counters.spawn_count)", |w| w.line("return;"));
             w.line("let slot = free_list[counters.spawn_base + i];");
+            w.comment("Dispatched once per chunk: only the chunk that holds the slot writes it.");
+            w.block("if (slot < chunk.base || slot - chunk.base >= chunk.len)", |w| w.line("return;"));
             w.line("let id = params.first_id + i;");
             w.comment("Find the emitter: ids are handed out to emitters in the order they are listed.");
             w.line("var e = 0u;");
@@ -78,7 +80,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                     fields.push("s.die_at");
                 }
                 fields.push("id");
-                w.line(format!("particles[slot] = Particle({});", fields.join(", ")));
+                w.line(format!("particles[slot - chunk.base] = Particle({});", fields.join(", ")));
             }
         },
     );

@@ -16,7 +16,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
             w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
-            w.block("if (i >= CAPACITY)", |w| w.line("return;"));
+            w.block("if (i >= chunk.len)", |w| w.line("return;"));
             w.line("var p = particles[i];");
             w.block("if (p.id == DEAD)", |w| w.line("return;"));
             w.line("var x = vec3<f32>(p.px, p.py, p.pz);");
@@ -52,7 +52,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                 w.block("if (dies)", |w| {
                     w.line("particles[i].id = DEAD;");
                     w.line("let top = atomicAdd(&counters.free_count, 1u);");
-                    w.line("free_list[top] = i;");
+                    w.line("free_list[top] = chunk.base + i;");
                     w.line("atomicAdd(&counters.died, 1u);");
                     w.line("return;");
                 });
