@@ -169,19 +169,32 @@ fn the_same_file_and_seed_export_identical_bytes() {
 #[test]
 fn a_capacity_beyond_the_free_list_binding_is_refused_with_the_limit_named() {
     let gpu = gpu();
-    let limit = gpu.limits.max_storage_buffer_binding_size.min(gpu.limits.max_buffer_size);
+    let limit = gpu
+        .limits
+        .max_storage_buffer_binding_size
+        .min(gpu.limits.max_buffer_size);
     // One more slot than a 4-byte free list holds in one binding.
     let capacity = (limit / 4 + 1).min(u64::from(u32::MAX)) as u32;
-    let e = compile(&effect(capacity, "rate: 10.0, lifetime: Some((1.0, 2.0))", ""));
+    let e = compile(&effect(
+        capacity,
+        "rate: 10.0, lifetime: Some((1.0, 2.0))",
+        "",
+    ));
     match GpuSim::new(&gpu, e) {
         Err(err) => {
             let msg = err.to_string();
             assert!(msg.contains("max_storage_buffer_binding_size"), "{msg}");
-            assert!(msg.contains(&format!("at most {} particles fit", limit / 4)), "{msg}");
+            assert!(
+                msg.contains(&format!("at most {} particles fit", limit / 4)),
+                "{msg}"
+            );
         }
         Ok(_) => {
             // Only an adapter whose binding limit exceeds u32::MAX * 4 bytes gets here.
-            assert!(limit / 4 >= u64::from(u32::MAX), "capacity {capacity} should not fit in {limit} bytes");
+            assert!(
+                limit / 4 >= u64::from(u32::MAX),
+                "capacity {capacity} should not fit in {limit} bytes"
+            );
         }
     }
 }
@@ -192,7 +205,8 @@ fn particle_state_split_across_many_buffers_matches_the_reference() {
     // all of them. Compared at 100 steps, before the first drops reach the ground: after a
     // contact, a particle within f32 rounding of the plane may bounce a step earlier on one
     // side (see docs/running.md), which no position tolerance covers.
-    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/fountain.ron")).unwrap();
+    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/fountain.ron"))
+        .unwrap();
     let e = compile(&src);
     let gpu = gpu();
     let mut sim = GpuSim::with_chunk_slots(&gpu, e.clone(), Some(7_000)).unwrap();
@@ -202,9 +216,20 @@ fn particle_state_split_across_many_buffers_matches_the_reference() {
     cpu.run(100);
     assert_eq!(sim.totals().unwrap(), cpu.totals());
     let (g, c) = (sim.records().unwrap(), cpu.records());
-    assert_eq!(g.iter().map(|r| r.id).collect::<Vec<_>>(), c.iter().map(|r| r.id).collect::<Vec<_>>());
+    assert_eq!(
+        g.iter().map(|r| r.id).collect::<Vec<_>>(),
+        c.iter().map(|r| r.id).collect::<Vec<_>>()
+    );
     for (g, c) in g.iter().zip(&c) {
-        assert!((g.position - c.position).length() <= 4.0 * 100.0 * U32 * (1.0 + c.position.length()), "{} gpu {:?} {:?} cpu {:?} {:?}", g.id, g.position, g.velocity, c.position, c.velocity);
+        assert!(
+            (g.position - c.position).length() <= 4.0 * 100.0 * U32 * (1.0 + c.position.length()),
+            "{} gpu {:?} {:?} cpu {:?} {:?}",
+            g.id,
+            g.position,
+            g.velocity,
+            c.position,
+            c.velocity
+        );
     }
 }
 

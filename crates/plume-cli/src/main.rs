@@ -1,6 +1,7 @@
 //! `plume`: check, compile (and later run, render, bench) particle effects.
 
 mod accuracy;
+mod bench;
 mod output;
 mod render;
 mod run;
@@ -42,6 +43,8 @@ enum Command {
     },
     /// Run an effect on the GPU (or the CPU reference) and print a summary; optionally export.
     Run(run::RunArgs),
+    /// Time the update against a copy kernel moving the same bytes.
+    Bench(bench::BenchArgs),
     /// Measure every integrator's error against time per step.
     Accuracy(accuracy::AccuracyArgs),
     /// Simulate and render headless to a PNG (last frame or --sheet) or an animated GIF.
@@ -112,6 +115,7 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(&args),
         Command::Render(args) => render::render(&args),
         Command::Accuracy(args) => accuracy::accuracy(&args),
+        Command::Bench(args) => bench::bench_command(&args),
         Command::Adapters { backend } => {
             let adapters = plume_runtime::gpu::list_adapters(&plume_runtime::GpuChoice { backend });
             if adapters.is_empty() {

@@ -94,7 +94,8 @@ impl Gpu {
         let limits = adapter.limits();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("plume"),
-            required_features: wgpu::Features::empty(),
+            // Timestamps where the adapter has them (for `plume bench`); nothing else.
+            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
             required_limits: limits.clone(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -119,6 +120,13 @@ impl Gpu {
             limits,
             errors,
         })
+    }
+
+    /// Whether GPU timestamp queries are available.
+    pub fn has_timestamps(&self) -> bool {
+        self.device
+            .features()
+            .contains(wgpu::Features::TIMESTAMP_QUERY)
     }
 
     /// One line naming the adapter, backend and driver.

@@ -6,6 +6,7 @@
 //! ([`export`]). The CPU f64 reference lives in `plume_compiler::reference`.
 
 pub mod accuracy;
+pub mod bench;
 pub mod error;
 pub mod export;
 pub mod gpu;
@@ -13,6 +14,7 @@ pub mod images;
 pub mod plot;
 pub mod render;
 pub mod sim;
+pub mod timer;
 
 pub use error::RuntimeError;
 pub use gpu::{Gpu, GpuChoice};

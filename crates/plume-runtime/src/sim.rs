@@ -13,6 +13,7 @@ use plume_compiler::CompiledEffect;
 
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
+use crate::timer::PassTimer;
 
 /// Steps recorded per submission: bounds the parameter buffer (256 B a step) and how long
 /// one submission keeps the GPU busy.
@@ -280,6 +281,21 @@ impl<'g> GpuSim<'g> {
     }
 
     fn submit(&self, plans: &[StepPlan]) -> Result<(), RuntimeError> {
+        self.write_params(plans);
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("steps"),
+                timestamp_writes: None,
+            });
+            self.record(&mut pass, plans)?;
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()
+    }
+
+    /// Writes the steps' parameters at their dynamic offsets.
+    fn write_params(&self, plans: &[StepPlan]) {
         let slots = self.effect.layout.emitter_slots as usize;
         let mut bytes = vec![0u8; self.params_stride as usize * plans.len()];
         for (j, plan) in plans.iter().enumerate() {
@@ -299,36 +315,47 @@ impl<'g> GpuSim<'g> {
             }
         }
         self.gpu.queue.write_buffer(&self.params, 0, &bytes);
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("steps"),
-                timestamp_writes: None,
-            });
-            for (j, plan) in plans.iter().enumerate() {
-                let offset = (j as u64 * self.params_stride) as u32;
+    }
+
+    /// Records the steps' dispatches into `pass`: per step, the spawn kernels when something
+    /// spawns (a step that requests nothing changes no counter), then the update per chunk.
+    fn record(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        plans: &[StepPlan],
+    ) -> Result<(), RuntimeError> {
+        for (j, plan) in plans.iter().enumerate() {
+            let offset = (j as u64 * self.params_stride) as u32;
+            if plan.requested() > 0 {
                 pass.set_bind_group(0, &self.chunks[0].bind_group, &[offset]);
                 pass.set_pipeline(&self.prepare);
                 pass.dispatch_workgroups(1, 1, 1);
-                if plan.requested() > 0 {
-                    // Every chunk sees every spawn; each writes only the slots it holds.
-                    let (x, y) = self.groups(u64::from(plan.requested()))?;
-                    pass.set_pipeline(&self.spawn);
-                    for chunk in &self.chunks {
-                        pass.set_bind_group(0, &chunk.bind_group, &[offset]);
-                        pass.dispatch_workgroups(x, y, 1);
-                    }
-                }
-                pass.set_pipeline(&self.update);
+                // Every chunk sees every spawn; each writes only the slots it holds.
+                let (x, y) = self.groups(u64::from(plan.requested()))?;
+                pass.set_pipeline(&self.spawn);
                 for chunk in &self.chunks {
-                    let (x, y) = self.groups(chunk.len)?;
                     pass.set_bind_group(0, &chunk.bind_group, &[offset]);
                     pass.dispatch_workgroups(x, y, 1);
                 }
             }
+            pass.set_pipeline(&self.update);
+            for chunk in &self.chunks {
+                let (x, y) = self.groups(chunk.len)?;
+                pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
         }
-        self.gpu.queue.submit([encoder.finish()]);
-        self.gpu.take_error()
+        Ok(())
+    }
+
+    /// Runs `steps` (at most [`STEPS_PER_SUBMIT`]) in one timed compute pass; returns seconds.
+    pub fn time_steps(&mut self, timer: &PassTimer<'_>, steps: u32) -> Result<f64, RuntimeError> {
+        let steps = steps.min(STEPS_PER_SUBMIT);
+        let plans: Vec<StepPlan> = (0..steps).map(|_| self.schedule.next_plan()).collect();
+        self.write_params(&plans);
+        let seconds = timer.time(|pass| self.record(pass, &plans))?;
+        self.gpu.take_error()?;
+        Ok(seconds)
     }
 
     /// A 2D grid of workgroups covering `threads` (one dimension is capped at 65,535 groups).

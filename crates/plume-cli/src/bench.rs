@@ -1,0 +1,115 @@
+//! `plume bench`: update throughput against a copy kernel moving the same bytes, in one run.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use plume_compiler::parse;
+use plume_runtime::bench::bench;
+use plume_runtime::timer::TimingSource;
+use plume_runtime::{Gpu, GpuChoice};
+
+use crate::read_source;
+
+/// Options of `plume bench`.
+#[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    /// The effect file (.ron).
+    file: PathBuf,
+    /// Live particles during the timed steps.
+    #[arg(long, default_value_t = 1_000_000)]
+    particles: u32,
+    /// Timed steps (at most 256, one submission).
+    #[arg(long, default_value_t = 100)]
+    steps: u32,
+    /// Print one JSON object.
+    #[arg(long)]
+    json: bool,
+    /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
+    #[arg(long)]
+    backend: Option<String>,
+}
+
+/// Runs `plume bench`.
+pub fn bench_command(args: &BenchArgs) -> ExitCode {
+    let name = args.file.display().to_string();
+    let source = match read_source(&args.file) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("{e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let effect = match parse(&source) {
+        Ok(e) => e,
+        Err(d) => {
+            eprintln!("{}", d.render(&name, &source));
+            return ExitCode::FAILURE;
+        }
+    };
+    if let Err(e) = plume_compiler::compile_effect(&effect, &source) {
+        eprintln!("{}", e.render(&name, &source));
+        return ExitCode::FAILURE;
+    }
+    let gpu = match Gpu::new(&GpuChoice {
+        backend: args.backend.clone(),
+    }) {
+        Ok(g) => g,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    if !args.json {
+        eprintln!(
+            "benchmarking {name} at {} particles on {} ...",
+            args.particles,
+            gpu.describe()
+        );
+    }
+    let r = match bench(&gpu, &effect, args.particles, args.steps) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("{name}: error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let timing = match r.timing {
+        TimingSource::Timestamps => "gpu timestamps",
+        TimingSource::WallClock => "wall clock (no timestamp queries on this adapter)",
+    };
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "effect": name, "adapter": r.adapter, "particles": r.particles, "steps": r.steps,
+                "bytes_per_particle": r.bytes_per_particle, "chunks": r.chunks,
+                "ms_per_step": r.seconds_per_step * 1e3,
+                "particle_steps_per_second": r.particle_steps_per_second(),
+                "gb_per_s": r.update_gbps(), "copy_gb_per_s": r.copy_gbps(),
+                "copy_ms": r.copy_seconds * 1e3, "ratio": r.ratio(), "timing": timing,
+            })
+        );
+    } else {
+        println!("{name}");
+        println!("  adapter             {}", r.adapter);
+        println!(
+            "  particles           {} ({} buffer(s))",
+            r.particles, r.chunks
+        );
+        println!("  bytes per particle  {}", r.bytes_per_particle);
+        println!(
+            "  update              {:.4} ms/step, {:.3} G particle-steps/s, {:.1} GB/s",
+            r.seconds_per_step * 1e3,
+            r.particle_steps_per_second() * 1e-9,
+            r.update_gbps()
+        );
+        println!(
+            "  copy kernel         {:.4} ms for the same bytes, {:.1} GB/s",
+            r.copy_seconds * 1e3,
+            r.copy_gbps()
+        );
+        println!("  ratio               {:.3} (copy time / update time; 1 = at the copy kernel's bandwidth)", r.ratio());
+        println!("  timing              {timing}, {} steps", r.steps);
+    }
+    ExitCode::SUCCESS
+}

@@ -1,0 +1,218 @@
+//! `plume bench`: fill an effect to N live particles, time its update, and in the same run time
+//! a WGSL copy kernel that moves the same bytes (each particle's state read once and written
+//! once). A state-preserving update streams particle state, so the copy kernel is its ceiling;
+//! the ratio copy time / update time says how close the update gets.
+
+use plume_compiler::{compile_effect, CompileError, CompiledEffect, Effect};
+
+use crate::error::RuntimeError;
+use crate::gpu::Gpu;
+use crate::sim::{GpuSim, STEPS_PER_SUBMIT};
+use crate::timer::{PassTimer, TimingSource};
+
+/// The copy kernel: 16 bytes a thread, 2D-indexed like the effect kernels.
+const COPY_WGSL: &str = r#"
+@group(0) @binding(0) var<storage, read> src: array<vec4<u32>>;
+@group(0) @binding(1) var<storage, read_write> dst: array<vec4<u32>>;
+
+@compute @workgroup_size(256)
+fn copy(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = gid.x + gid.y * groups.x * 256u;
+    if (i < arrayLength(&src)) {
+        dst[i] = src[i];
+    }
+}
+"#;
+
+/// What was measured.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchResult {
+    /// Adapter description.
+    pub adapter: String,
+    /// Live particles during the timed steps.
+    pub particles: u64,
+    /// Timed steps.
+    pub steps: u32,
+    /// Bytes of state per particle (the layout's struct).
+    pub bytes_per_particle: u32,
+    /// Particle buffers the state is split into.
+    pub chunks: usize,
+    /// Seconds per update step.
+    pub seconds_per_step: f64,
+    /// Seconds per copy of the same bytes.
+    pub copy_seconds: f64,
+    /// Timestamps or wall clock.
+    pub timing: TimingSource,
+}
+
+impl BenchResult {
+    /// Bytes moved per step: each live particle's state read and written once.
+    pub fn bytes_per_step(&self) -> f64 {
+        2.0 * self.particles as f64 * f64::from(self.bytes_per_particle)
+    }
+    /// Effective bandwidth of the update (GB/s).
+    pub fn update_gbps(&self) -> f64 {
+        self.bytes_per_step() / self.seconds_per_step * 1e-9
+    }
+    /// Bandwidth of the copy kernel (GB/s).
+    pub fn copy_gbps(&self) -> f64 {
+        self.bytes_per_step() / self.copy_seconds * 1e-9
+    }
+    /// Particle-steps per second.
+    pub fn particle_steps_per_second(&self) -> f64 {
+        self.particles as f64 / self.seconds_per_step
+    }
+    /// Copy time over update time: 1 means the update runs at the copy kernel's bandwidth.
+    pub fn ratio(&self) -> f64 {
+        self.copy_seconds / self.seconds_per_step
+    }
+}
+
+/// The benchmark's copy of an effect: capacity N and all N spawned at step 0 (split over the
+/// emitters in proportion to their bursts and rates), lifetimes long enough to outlast the run.
+/// Forces, integrator, collisions and kills are the effect's own, so the layout is too.
+pub fn bench_effect(effect: &Effect, particles: u32) -> Effect {
+    let mut e = effect.clone();
+    e.capacity = particles.max(1);
+    let weights: Vec<f64> = e
+        .emitters
+        .iter()
+        .map(|em| f64::from(em.burst) + em.rate.max(0.0))
+        .collect();
+    let total: f64 = weights.iter().sum();
+    let mut given = 0u32;
+    let n = e.emitters.len();
+    for (i, em) in e.emitters.iter_mut().enumerate() {
+        let share = if i + 1 == n {
+            e.capacity - given
+        } else if total > 0.0 {
+            ((f64::from(e.capacity) * weights[i] / total) as u32).min(e.capacity - given)
+        } else {
+            0
+        };
+        em.burst = share;
+        em.rate = 0.0;
+        given += share;
+        if em.lifetime.is_some() {
+            em.lifetime = Some(plume_compiler::schema::Range(1.0e6, 1.0e6));
+        }
+    }
+    e
+}
+
+/// Compiles the bench copy of `effect`.
+pub fn compile_bench(effect: &Effect, particles: u32) -> Result<CompiledEffect, RuntimeError> {
+    compile_effect(&bench_effect(effect, particles), "").map_err(|e| match e {
+        CompileError::Invalid(d) => RuntimeError::Output(d.to_string()),
+        CompileError::Internal(i) => RuntimeError::Output(i.to_string()),
+    })
+}
+
+/// Runs the benchmark: spawn N, warm up, time `steps` update steps and as many copies.
+pub fn bench(
+    gpu: &Gpu,
+    effect: &Effect,
+    particles: u32,
+    steps: u32,
+) -> Result<BenchResult, RuntimeError> {
+    let steps = steps.clamp(1, STEPS_PER_SUBMIT);
+    let compiled = compile_bench(effect, particles)?;
+    let bpp = compiled.layout.bytes_per_particle;
+    let mut sim = GpuSim::new(gpu, compiled)?;
+    // Step 0 spawns everything; a few more steps warm up the pipelines.
+    sim.run(4, |_| {})?;
+    let live = sim.totals()?.alive;
+    let timer = PassTimer::new(gpu);
+    let update = sim.time_steps(&timer, steps)? / f64::from(steps);
+    let copy =
+        time_copy(gpu, &timer, u64::from(particles) * u64::from(bpp), steps)? / f64::from(steps);
+    Ok(BenchResult {
+        adapter: gpu.describe(),
+        particles: live,
+        steps,
+        bytes_per_particle: bpp,
+        chunks: sim.chunk_count(),
+        seconds_per_step: update,
+        copy_seconds: copy,
+        timing: timer.source(),
+    })
+}
+
+/// Times `repeats` copies of `bytes` (rounded up to 16) through the copy kernel, split into
+/// buffers of at most one binding each, in one pass.
+fn time_copy(
+    gpu: &Gpu,
+    timer: &PassTimer<'_>,
+    bytes: u64,
+    repeats: u32,
+) -> Result<f64, RuntimeError> {
+    let device = &gpu.device;
+    let limit = gpu
+        .limits
+        .max_storage_buffer_binding_size
+        .min(gpu.limits.max_buffer_size)
+        / 16
+        * 16;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("copy"),
+        source: wgpu::ShaderSource::Wgsl(COPY_WGSL.into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("copy"),
+        layout: None,
+        module: &module,
+        entry_point: Some("copy"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let layout = pipeline.get_bind_group_layout(0);
+    let mut parts = Vec::new();
+    let mut left = bytes.next_multiple_of(16).max(16);
+    while left > 0 {
+        let size = left.min(limit);
+        left -= size;
+        let make = |label| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size,
+                usage: wgpu::BufferUsages::STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        let (src, dst) = (make("copy src"), make("copy dst"));
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("copy"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: src.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: dst.as_entire_binding(),
+                },
+            ],
+        });
+        let threads = size / 16;
+        let per_dim = u64::from(gpu.limits.max_compute_workgroups_per_dimension);
+        let groups = threads.div_ceil(256);
+        let x = groups.min(per_dim);
+        parts.push((group, x as u32, groups.div_ceil(x) as u32, src, dst));
+    }
+    let record = |pass: &mut wgpu::ComputePass<'_>, n: u32| {
+        pass.set_pipeline(&pipeline);
+        for _ in 0..n {
+            for (group, x, y, _, _) in &parts {
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups(*x, *y, 1);
+            }
+        }
+        Ok(())
+    };
+    // Warm up once, then time.
+    timer.time(|pass| record(pass, 1))?;
+    let seconds = timer.time(|pass| record(pass, repeats))?;
+    gpu.take_error()?;
+    Ok(seconds)
+}
