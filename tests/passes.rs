@@ -69,7 +69,8 @@ fn gravity_only_wgsl_has_no_trace_of_other_forces_and_a_minimal_layout() {
         c.layout.attributes,
         vec![Attribute::Position, Attribute::Velocity, Attribute::Id]
     );
-    assert_eq!(c.layout.bytes_per_particle, 28);
+    // 28 bytes of attributes, padded to whole 16-byte words for vec4 access.
+    assert_eq!(c.layout.bytes_per_particle, 32);
 }
 
 #[test]

@@ -17,7 +17,7 @@
 //! let effect = plume_compiler::compile_str(source, &Default::default()).unwrap();
 //! assert_eq!(effect.ir.integrator, plume_compiler::Integrator::Exact); // picked by Auto
 //! assert!(effect.wgsl.contains("fn update"));
-//! assert_eq!(effect.layout.bytes_per_particle, 28); // position, velocity, id
+//! assert_eq!(effect.layout.bytes_per_particle, 32); // position, velocity, id (28 B), padded to 16
 //! ```
 
 pub mod check;

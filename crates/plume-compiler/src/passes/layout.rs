@@ -71,7 +71,7 @@ pub struct Binding {
 pub struct Layout {
     /// Attributes in struct order.
     pub attributes: Vec<Attribute>,
-    /// Bytes per particle (sum of the attributes; all fields are 4-byte scalars).
+    /// Bytes per particle: the attributes' 4-byte fields, padded to a multiple of 16.
     pub bytes_per_particle: u32,
     /// Bindings, in binding order.
     pub bindings: Vec<Binding>,
@@ -90,6 +90,22 @@ impl Layout {
             word += b.fields().0.len();
         }
         None
+    }
+
+    /// The struct's 4-byte words in order, as (field name, WGSL scalar type), without padding.
+    pub fn words(&self) -> Vec<(&'static str, &'static str)> {
+        self.attributes
+            .iter()
+            .flat_map(|a| {
+                let (names, ty) = a.fields();
+                names.iter().map(move |n| (*n, ty))
+            })
+            .collect()
+    }
+
+    /// 16-byte words per particle.
+    pub fn vec4s(&self) -> u32 {
+        self.bytes_per_particle / 16
     }
 
     /// Whether the layout has `a`.
@@ -118,7 +134,10 @@ pub fn decide(ir: &EffectIr) -> Layout {
         attributes.push(Attribute::DeathStep);
     }
     attributes.push(Attribute::Id);
-    let bytes_per_particle = attributes.iter().map(|a| a.bytes()).sum();
+    // Padded to a multiple of 16 bytes so kernels move the state as whole vec4 words: scalar
+    // accesses at a 28- or 32-byte stride reached under half the copy kernel's bandwidth on an
+    // H100 (docs/performance.md).
+    let bytes_per_particle = attributes.iter().map(|a| a.bytes()).sum::<u32>().next_multiple_of(16);
     let cap = u64::from(ir.capacity);
     let emitter_slots = ir.emitters.len().max(1) as u32;
     let mut layout = Layout {
@@ -186,6 +205,10 @@ impl fmt::Display for Layout {
                 a.meaning()
             )?;
             offset += a.bytes();
+        }
+        let pad = self.bytes_per_particle - 4 * self.words().len() as u32;
+        if pad > 0 {
+            writeln!(f, "  {:<14} {:<4} offset {:>2}  padding to whole 16-byte words", "(pad)", "", offset)?;
         }
         writeln!(f, "bindings (group 0)")?;
         for b in &self.bindings {

@@ -82,7 +82,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     w.blank();
     for b in &layout.bindings {
         let ty = match b.name {
-            "particles" => "array<Particle>",
+            "particles" => "array<vec4<u32>>",
             "free_list" => "array<u32>",
             "counters" => "Counters",
             "chunk" => "Chunk",
@@ -93,6 +93,8 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             b.binding, b.space, b.name, ty
         ));
     }
+    w.blank();
+    emit_particle_access(&mut w, layout);
     w.blank();
     rng::emit_wgsl(&mut w);
     w.blank();
@@ -131,10 +133,57 @@ fn emit_init(w: &mut Writer) {
         |w| {
             w.line("let local = gid.x + gid.y * groups.x * WORKGROUP;");
             w.block("if (local >= chunk.len)", |w| w.line("return;"));
-            w.line("particles[local].id = DEAD;");
+            w.line("mark_free(local);");
             w.line("let slot = chunk.base + local;");
             w.comment("Pops take from the top: the first spawns get the lowest slots.");
             w.line("free_list[slot] = CAPACITY - 1u - slot;");
         },
     );
+}
+
+/// The component of a vec4 word a field sits in.
+const LANES: [&str; 4] = ["x", "y", "z", "w"];
+
+/// `load_particle`, `store_particle` and `mark_free`: the state is stored as whole vec4<u32>
+/// words (the struct's byte layout, padded to 16 bytes) so every access is a full 16-byte load
+/// or store, as coalesced as a copy kernel's.
+fn emit_particle_access(w: &mut Writer, layout: &Layout) {
+    let words = layout.words();
+    let n = layout.vec4s();
+    w.line(format!("const VEC4S: u32 = {n}u;"));
+    w.block("fn load_particle(i: u32) -> Particle", |w| {
+        for k in 0..n {
+            w.line(format!("let w{k} = particles[i * VEC4S + {k}u];"));
+        }
+        let fields: Vec<String> = words
+            .iter()
+            .enumerate()
+            .map(|(j, (_, ty))| {
+                let word = format!("w{}.{}", j / 4, LANES[j % 4]);
+                if *ty == "f32" {
+                    format!("bitcast<f32>({word})")
+                } else {
+                    word
+                }
+            })
+            .collect();
+        w.line(format!("return Particle({});", fields.join(", ")));
+    });
+    w.block("fn store_particle(i: u32, p: Particle)", |w| {
+        for k in 0..n as usize {
+            let lanes: Vec<String> = (0..4)
+                .map(|l| match words.get(4 * k + l) {
+                    Some((name, "f32")) => format!("bitcast<u32>(p.{name})"),
+                    Some((name, _)) => format!("p.{name}"),
+                    None => "0u".to_string(),
+                })
+                .collect();
+            w.line(format!("particles[i * VEC4S + {k}u] = vec4<u32>({});", lanes.join(", ")));
+        }
+    });
+    let id = words.iter().position(|(name, _)| *name == "id").unwrap_or(0);
+    w.comment("Frees a slot by writing only its id word.");
+    w.block("fn mark_free(i: u32)", |w| {
+        w.line(format!("particles[i * VEC4S + {}u].{} = DEAD;", id / 4, LANES[id % 4]));
+    });
 }

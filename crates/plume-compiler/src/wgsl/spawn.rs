@@ -80,7 +80,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                     fields.push("s.die_at");
                 }
                 fields.push("id");
-                w.line(format!("particles[slot - chunk.base] = Particle({});", fields.join(", ")));
+                w.line(format!("store_particle(slot - chunk.base, Particle({}));", fields.join(", ")));
             }
         },
     );

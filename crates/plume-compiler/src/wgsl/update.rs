@@ -17,7 +17,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         |w| {
             w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
             w.block("if (i >= chunk.len)", |w| w.line("return;"));
-            w.line("var p = particles[i];");
+            w.line("var p = load_particle(i);");
             w.block("if (p.id == DEAD)", |w| w.line("return;"));
             w.line("var x = vec3<f32>(p.px, p.py, p.pz);");
             if verlet {
@@ -50,7 +50,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                     emit_kill(w, k);
                 }
                 w.block("if (dies)", |w| {
-                    w.line("particles[i].id = DEAD;");
+                    w.line("mark_free(i);");
                     w.line("let top = atomicAdd(&counters.free_count, 1u);");
                     w.line("free_list[top] = chunk.base + i;");
                     w.line("atomicAdd(&counters.died, 1u);");
@@ -69,7 +69,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                 w.line("p.vy = v.y;");
                 w.line("p.vz = v.z;");
             }
-            w.line("particles[i] = p;");
+            w.line("store_particle(i, p);");
         },
     );
 }
