@@ -17,7 +17,9 @@ fn compile_examples(c: &mut Criterion) {
         let name = path.file_stem().unwrap().to_string_lossy().to_string();
         let source = std::fs::read_to_string(&path).unwrap();
         group.bench_function(name, |b| {
-            b.iter(|| compile_str(std::hint::black_box(&source), &CompileOptions::default()).unwrap())
+            b.iter(|| {
+                compile_str(std::hint::black_box(&source), &CompileOptions::default()).unwrap()
+            })
         });
     }
     group.finish();

@@ -87,6 +87,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "particle_steps_per_second": r.particle_steps_per_second(),
                 "gb_per_s": r.update_gbps(), "copy_gb_per_s": r.copy_gbps(),
                 "copy_ms": r.copy_seconds * 1e3, "ratio": r.ratio(), "timing": timing,
+                "spawn_step_ms": r.spawn_step_seconds * 1e3,
             })
         );
     } else {
@@ -109,6 +110,11 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             r.copy_gbps()
         );
         println!("  ratio               {:.3} (copy time / update time; 1 = at the copy kernel's bandwidth)", r.ratio());
+        println!(
+            "  spawn               {:.4} ms for step 0: spawning all {} particles and one update",
+            r.spawn_step_seconds * 1e3,
+            r.particles
+        );
         println!("  timing              {timing}, {} steps", r.steps);
     }
     ExitCode::SUCCESS

@@ -41,6 +41,8 @@ pub struct BenchResult {
     pub seconds_per_step: f64,
     /// Seconds per copy of the same bytes.
     pub copy_seconds: f64,
+    /// Seconds of step 0, which spawns all N particles and updates them once.
+    pub spawn_step_seconds: f64,
     /// Timestamps or wall clock.
     pub timing: TimingSource,
 }
@@ -118,11 +120,15 @@ pub fn bench(
     let steps = steps.clamp(1, STEPS_PER_SUBMIT);
     let compiled = compile_bench(effect, particles)?;
     let bpp = compiled.layout.bytes_per_particle;
-    let mut sim = GpuSim::new(gpu, compiled)?;
-    // Step 0 spawns everything; a few more steps warm up the pipelines.
-    sim.run(4, |_| {})?;
-    let live = sim.totals()?.alive;
     let timer = PassTimer::new(gpu);
+    // Warm the pipelines up on a throwaway copy so step 0 of the measured one is not a
+    // first dispatch.
+    GpuSim::new(gpu, compile_bench(effect, 64)?)?.run(2, |_| {})?;
+    let mut sim = GpuSim::new(gpu, compiled)?;
+    // Step 0 spawns everything (timed), then a few steps settle the caches.
+    let spawn_step = sim.time_steps(&timer, 1)?;
+    sim.run(3, |_| {})?;
+    let live = sim.totals()?.alive;
     let update = sim.time_steps(&timer, steps)? / f64::from(steps);
     let copy =
         time_copy(gpu, &timer, u64::from(particles) * u64::from(bpp), steps)? / f64::from(steps);
@@ -134,6 +140,7 @@ pub fn bench(
         chunks: sim.chunk_count(),
         seconds_per_step: update,
         copy_seconds: copy,
+        spawn_step_seconds: spawn_step,
         timing: timer.source(),
     })
 }

@@ -137,7 +137,11 @@ pub fn decide(ir: &EffectIr) -> Layout {
     // Padded to a multiple of 16 bytes so kernels move the state as whole vec4 words: scalar
     // accesses at a 28- or 32-byte stride reached under half the copy kernel's bandwidth on an
     // H100 (docs/performance.md).
-    let bytes_per_particle = attributes.iter().map(|a| a.bytes()).sum::<u32>().next_multiple_of(16);
+    let bytes_per_particle = attributes
+        .iter()
+        .map(|a| a.bytes())
+        .sum::<u32>()
+        .next_multiple_of(16);
     let cap = u64::from(ir.capacity);
     let emitter_slots = ir.emitters.len().max(1) as u32;
     let mut layout = Layout {
@@ -208,7 +212,11 @@ impl fmt::Display for Layout {
         }
         let pad = self.bytes_per_particle - 4 * self.words().len() as u32;
         if pad > 0 {
-            writeln!(f, "  {:<14} {:<4} offset {:>2}  padding to whole 16-byte words", "(pad)", "", offset)?;
+            writeln!(
+                f,
+                "  {:<14} {:<4} offset {:>2}  padding to whole 16-byte words",
+                "(pad)", "", offset
+            )?;
         }
         writeln!(f, "bindings (group 0)")?;
         for b in &self.bindings {

@@ -13,7 +13,7 @@ use crate::rng;
 use writer::{u32_lit, Writer};
 
 /// Threads per workgroup of `spawn` and `update`.
-pub const WORKGROUP: u32 = 64;
+pub const WORKGROUP: u32 = 256;
 
 /// Emits the complete WGSL module for a resolved IR and its layout.
 pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
@@ -178,12 +178,22 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
                     None => "0u".to_string(),
                 })
                 .collect();
-            w.line(format!("particles[i * VEC4S + {k}u] = vec4<u32>({});", lanes.join(", ")));
+            w.line(format!(
+                "particles[i * VEC4S + {k}u] = vec4<u32>({});",
+                lanes.join(", ")
+            ));
         }
     });
-    let id = words.iter().position(|(name, _)| *name == "id").unwrap_or(0);
+    let id = words
+        .iter()
+        .position(|(name, _)| *name == "id")
+        .unwrap_or(0);
     w.comment("Frees a slot by writing only its id word.");
     w.block("fn mark_free(i: u32)", |w| {
-        w.line(format!("particles[i * VEC4S + {}u].{} = DEAD;", id / 4, LANES[id % 4]));
+        w.line(format!(
+            "particles[i * VEC4S + {}u].{} = DEAD;",
+            id / 4,
+            LANES[id % 4]
+        ));
     });
 }
