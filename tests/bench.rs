@@ -13,7 +13,7 @@ fn bench_runs_at_a_tiny_size_and_reports_its_fields() {
         .unwrap();
     let effect = parse(&src).unwrap();
     let gpu = gpu();
-    let r = bench(&gpu, &effect, 2000, 5).unwrap();
+    let r = bench(&gpu, &effect, 2000, 5, Some((64, 36))).unwrap();
     assert_eq!(r.particles, 2000, "all spawned at step 0 and alive");
     assert_eq!(r.steps, 5);
     assert_eq!(r.bytes_per_particle, 32, "position, velocity, die_at, id");
@@ -28,6 +28,8 @@ fn bench_runs_at_a_tiny_size_and_reports_its_fields() {
         assert!(x.is_finite() && x > 0.0, "{r:?}");
     }
     assert!((r.bytes_per_step() - 2.0 * 2000.0 * 32.0).abs() < 1e-9);
+    let (w, h, frame) = r.render.expect("render timed");
+    assert!((w, h) == (64, 36) && frame > 0.0);
 }
 
 #[test]

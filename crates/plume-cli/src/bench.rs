@@ -21,6 +21,9 @@ pub struct BenchArgs {
     /// Timed steps (at most 256, one submission).
     #[arg(long, default_value_t = 100)]
     steps: u32,
+    /// Also time rendering one frame of all live particles at this size (WIDTHxHEIGHT).
+    #[arg(long, value_parser = crate::render::parse_size)]
+    render: Option<(u32, u32)>,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -66,7 +69,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             gpu.describe()
         );
     }
-    let r = match bench(&gpu, &effect, args.particles, args.steps) {
+    let r = match bench(&gpu, &effect, args.particles, args.steps, args.render) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("{name}: error: {e}");
@@ -88,6 +91,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "gb_per_s": r.update_gbps(), "copy_gb_per_s": r.copy_gbps(),
                 "copy_ms": r.copy_seconds * 1e3, "ratio": r.ratio(), "timing": timing,
                 "spawn_step_ms": r.spawn_step_seconds * 1e3,
+                "render_frame_ms": r.render.map(|(_, _, s)| s * 1e3),
             })
         );
     } else {
@@ -115,6 +119,9 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             r.spawn_step_seconds * 1e3,
             r.particles
         );
+        if let Some((w, h, s)) = r.render {
+            println!("  render              {:.2} ms for a {w}x{h} frame of all particles (wall clock: sprite upload, draw, readback)", s * 1e3);
+        }
         println!("  timing              {timing}, {} steps", r.steps);
     }
     ExitCode::SUCCESS

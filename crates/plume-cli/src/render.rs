@@ -40,7 +40,7 @@ pub struct RenderArgs {
     overrides: Overrides,
 }
 
-fn parse_size(s: &str) -> Result<(u32, u32), String> {
+pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     let (w, h) = s
         .split_once(['x', 'X'])
         .ok_or_else(|| format!("size `{s}` must look like 640x360"))?;

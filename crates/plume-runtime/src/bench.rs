@@ -7,6 +7,7 @@ use plume_compiler::{compile_effect, CompileError, CompiledEffect, Effect};
 
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
+use crate::render::{sprites, Renderer};
 use crate::sim::{GpuSim, STEPS_PER_SUBMIT};
 use crate::timer::{PassTimer, TimingSource};
 
@@ -43,6 +44,9 @@ pub struct BenchResult {
     pub copy_seconds: f64,
     /// Seconds of step 0, which spawns all N particles and updates them once.
     pub spawn_step_seconds: f64,
+    /// Seconds to render one frame of all live particles (wall clock: sprite upload, draw and
+    /// image readback), when asked for, with its size.
+    pub render: Option<(u32, u32, f64)>,
     /// Timestamps or wall clock.
     pub timing: TimingSource,
 }
@@ -116,6 +120,7 @@ pub fn bench(
     effect: &Effect,
     particles: u32,
     steps: u32,
+    render_size: Option<(u32, u32)>,
 ) -> Result<BenchResult, RuntimeError> {
     let steps = steps.clamp(1, STEPS_PER_SUBMIT);
     let compiled = compile_bench(effect, particles)?;
@@ -132,7 +137,20 @@ pub fn bench(
     let update = sim.time_steps(&timer, steps)? / f64::from(steps);
     let copy =
         time_copy(gpu, &timer, u64::from(particles) * u64::from(bpp), steps)? / f64::from(steps);
+    let render = match render_size {
+        None => None,
+        Some((w, h)) => {
+            let ir = &sim.effect().ir;
+            let renderer = Renderer::new(gpu, w, h, ir.render.blend, ir.render.background)?;
+            let s = sprites(&sim.records()?, &ir.render, &ir.camera, ir.sort);
+            renderer.draw(&s, &ir.camera)?; // warm-up
+            let start = std::time::Instant::now();
+            renderer.draw(&s, &ir.camera)?;
+            Some((w, h, start.elapsed().as_secs_f64()))
+        }
+    };
     Ok(BenchResult {
+        render,
         adapter: gpu.describe(),
         particles: live,
         steps,
