@@ -14,6 +14,7 @@ pub mod images;
 pub mod plot;
 pub mod render;
 pub mod sim;
+pub mod sort;
 pub mod timer;
 
 pub use error::RuntimeError;

@@ -374,30 +374,7 @@ impl<'g> GpuSim<'g> {
 
     /// Copies a buffer to host memory.
     fn read(&self, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RuntimeError> {
-        let size = buffer.size();
-        let staging = self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("readback"),
-            size,
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
-        self.gpu.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        staging.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = tx.send(r);
-        });
-        self.gpu.wait()?;
-        rx.recv()
-            .map_err(|e| RuntimeError::Readback(e.to_string()))?
-            .map_err(|e| RuntimeError::Readback(e.to_string()))?;
-        let data = staging
-            .get_mapped_range(..)
-            .map_err(|e| RuntimeError::Readback(e.to_string()))?
-            .to_vec();
-        staging.unmap();
-        Ok(data)
+        read_buffer(self.gpu, buffer)
     }
 
     /// Steps done and the GPU's counters: alive, spawned, died, dropped.
@@ -497,4 +474,32 @@ fn filled_buffer(
         .copy_from_slice(&bytes);
     buffer.unmap();
     buffer
+}
+
+/// Copies a GPU buffer to host memory (waits for the GPU).
+pub fn read_buffer(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RuntimeError> {
+    let size = buffer.size();
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    gpu.queue.submit([encoder.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    staging.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.wait()?;
+    rx.recv()
+        .map_err(|e| RuntimeError::Readback(e.to_string()))?
+        .map_err(|e| RuntimeError::Readback(e.to_string()))?;
+    let data = staging
+        .get_mapped_range(..)
+        .map_err(|e| RuntimeError::Readback(e.to_string()))?
+        .to_vec();
+    staging.unmap();
+    Ok(data)
 }

@@ -1,0 +1,268 @@
+//! GPU sorts of (key, value) pairs, ascending by key: a stable LSD radix sort (8-bit digits,
+//! four passes; the default) and a bitonic sort (the baseline it is measured against). Both
+//! run without subgroup operations, so they work on llvmpipe. Keys are u32; equal keys keep
+//! their input order (radix) or are ordered by value (bitonic): the same result when values
+//! start as 0, 1, 2, ... as they do for depth sorting.
+
+use wgpu::util::DeviceExt;
+
+use crate::error::RuntimeError;
+use crate::gpu::Gpu;
+
+/// Which sort.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SortAlgorithm {
+    /// Stable LSD radix sort, 4 passes of 8 bits.
+    Radix,
+    /// Bitonic sorting network on the power-of-two padded array.
+    Bitonic,
+}
+
+/// The sort kernels.
+pub struct GpuSorter<'g> {
+    gpu: &'g Gpu,
+    histogram: wgpu::ComputePipeline,
+    scatter: wgpu::ComputePipeline,
+    scan_blocks: wgpu::ComputePipeline,
+    add_sums: wgpu::ComputePipeline,
+    bitonic: wgpu::ComputePipeline,
+}
+
+const TILE: u64 = 256;
+
+impl<'g> GpuSorter<'g> {
+    /// Builds the kernels on `gpu`.
+    pub fn new(gpu: &'g Gpu) -> Self {
+        let module = gpu
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("sort"),
+                source: wgpu::ShaderSource::Wgsl(include_str!("sort.wgsl").into()),
+            });
+        let pipeline = |entry: &str| {
+            gpu.device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout: None,
+                    module: &module,
+                    entry_point: Some(entry),
+                    compilation_options: Default::default(),
+                    cache: None,
+                })
+        };
+        Self {
+            gpu,
+            histogram: pipeline("histogram"),
+            scatter: pipeline("scatter"),
+            scan_blocks: pipeline("scan_blocks"),
+            add_sums: pipeline("add_sums"),
+            bitonic: pipeline("bitonic_step"),
+        }
+    }
+
+    fn params(&self, n: u64, shift: u32, tiles: u64, j: u64, k: u64) -> wgpu::Buffer {
+        let words: [u32; 8] = [n as u32, shift, tiles as u32, j as u32, k as u32, 0, 0, 0];
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        self.gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("sort params"),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+    }
+
+    fn buffer(&self, label: &str, words: u64) -> wgpu::Buffer {
+        self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: words.max(1) * 4,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Dispatches `pipeline` over `groups` workgroups (2D past the per-dimension limit) with the
+    /// given (binding, buffer) entries.
+    fn dispatch(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        pipeline: &wgpu::ComputePipeline,
+        entries: &[(u32, &wgpu::Buffer)],
+        groups: u64,
+    ) -> Result<(), RuntimeError> {
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = entries
+            .iter()
+            .map(|(b, buf)| wgpu::BindGroupEntry {
+                binding: *b,
+                resource: buf.as_entire_binding(),
+            })
+            .collect();
+        let group = self
+            .gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("sort"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            });
+        let per_dim = u64::from(self.gpu.limits.max_compute_workgroups_per_dimension);
+        let groups = groups.max(1);
+        let x = groups.min(per_dim);
+        let y = groups.div_ceil(x);
+        if y > per_dim {
+            return Err(RuntimeError::Gpu(format!(
+                "sort needs more than {per_dim}² workgroups"
+            )));
+        }
+        pass.set_pipeline(pipeline);
+        pass.set_bind_group(0, &group, &[]);
+        pass.dispatch_workgroups(x as u32, y as u32, 1);
+        Ok(())
+    }
+
+    /// Exclusive scan of the first `len` words of `data`, in place, level by level.
+    fn scan(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        data: &wgpu::Buffer,
+        len: u64,
+    ) -> Result<(), RuntimeError> {
+        let blocks = len.div_ceil(TILE);
+        let sums = self.buffer("scan sums", blocks);
+        let p = self.params(len, 0, blocks, 0, 0);
+        self.dispatch(
+            pass,
+            &self.scan_blocks,
+            &[(4, data), (2, &sums), (5, &p)],
+            blocks,
+        )?;
+        if blocks > 1 {
+            self.scan(pass, &sums, blocks)?;
+            self.dispatch(
+                pass,
+                &self.add_sums,
+                &[(4, data), (2, &sums), (5, &p)],
+                blocks,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Records a sort of the first `n` pairs of `keys`/`vals` into `pass`.
+    pub fn record(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        algorithm: SortAlgorithm,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+    ) -> Result<(), RuntimeError> {
+        if n < 2 {
+            return Ok(());
+        }
+        match algorithm {
+            SortAlgorithm::Radix => {
+                let tiles = n.div_ceil(TILE);
+                let (keys2, vals2) = (self.buffer("keys tmp", n), self.buffer("vals tmp", n));
+                let counts = self.buffer("digit counts", 256 * tiles);
+                for pass_index in 0..4u32 {
+                    let (ki, vi, ko, vo) = if pass_index % 2 == 0 {
+                        (keys, vals, &keys2, &vals2)
+                    } else {
+                        (&keys2, &vals2, keys, vals)
+                    };
+                    let p = self.params(n, 8 * pass_index, tiles, 0, 0);
+                    self.dispatch(
+                        pass,
+                        &self.histogram,
+                        &[(0, ki), (4, &counts), (5, &p)],
+                        tiles,
+                    )?;
+                    self.scan(pass, &counts, 256 * tiles)?;
+                    self.dispatch(
+                        pass,
+                        &self.scatter,
+                        &[(0, ki), (1, vi), (2, ko), (3, vo), (4, &counts), (5, &p)],
+                        tiles,
+                    )?;
+                }
+            }
+            SortAlgorithm::Bitonic => {
+                // The network needs a power-of-two length: the caller's buffers are padded.
+                let len = n.next_power_of_two();
+                if keys.size() < len * 4 || vals.size() < len * 4 {
+                    return Err(RuntimeError::Gpu(format!(
+                        "bitonic sort needs buffers of {len} pairs"
+                    )));
+                }
+                let mut k = 2;
+                while k <= len {
+                    let mut j = k / 2;
+                    while j > 0 {
+                        let p = self.params(len, 0, 0, j, k);
+                        self.dispatch(
+                            pass,
+                            &self.bitonic,
+                            &[(0, keys), (1, vals), (5, &p)],
+                            len.div_ceil(TILE),
+                        )?;
+                        j /= 2;
+                    }
+                    k *= 2;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Sorts `pairs` on the GPU and returns them sorted (for tests and the CPU side).
+    pub fn sort_pairs(
+        &self,
+        algorithm: SortAlgorithm,
+        keys: &[u32],
+        vals: &[u32],
+    ) -> Result<(Vec<u32>, Vec<u32>), RuntimeError> {
+        let n = keys.len() as u64;
+        let len = if algorithm == SortAlgorithm::Bitonic {
+            n.next_power_of_two()
+        } else {
+            n
+        };
+        let mut k = keys.to_vec();
+        let mut v = vals.to_vec();
+        // Padding sorts last: the largest key, and values past every real one.
+        k.resize(len as usize, u32::MAX);
+        v.extend((n..len).map(|i| i as u32));
+        let upload = |label, data: &[u32]| {
+            let bytes: Vec<u8> = data.iter().flat_map(|w| w.to_le_bytes()).collect();
+            self.gpu
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: if bytes.is_empty() { &[0; 4] } else { &bytes },
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_SRC
+                        | wgpu::BufferUsages::COPY_DST,
+                })
+        };
+        let (kb, vb) = (upload("keys", &k), upload("vals", &v));
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            self.record(&mut pass, algorithm, &kb, &vb, n)?;
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()?;
+        let read = |b: &wgpu::Buffer| -> Result<Vec<u32>, RuntimeError> {
+            let bytes = crate::sim::read_buffer(self.gpu, b)?;
+            Ok(bytes
+                .chunks_exact(4)
+                .take(n as usize)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect())
+        };
+        Ok((read(&kb)?, read(&vb)?))
+    }
+}
