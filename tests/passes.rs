@@ -296,6 +296,7 @@ fn overrides_replace_file_values() {
             seed: Some(9),
             substeps: Some(2),
             integrator: Some(Integrator::Rk4),
+            sort: Some(true),
         },
     )
     .unwrap();
@@ -303,6 +304,7 @@ fn overrides_replace_file_values() {
         (c.ir.dt, c.ir.seed, c.ir.substeps, c.ir.integrator),
         (0.01, 9, 2, Integrator::Rk4)
     );
+    assert!(c.ir.sort && c.wgsl.contains("fn depth_keys"));
     let bad = compile_str(
         &src,
         &CompileOptions {

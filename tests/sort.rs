@@ -65,3 +65,39 @@ fn bitonic_baseline_matches_too() {
         check(&sorter, SortAlgorithm::Bitonic, n, 5);
     }
 }
+
+#[test]
+fn draw_order_is_back_to_front_with_ties_by_id_and_covers_every_live_particle() {
+    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/fountain.ron"))
+        .unwrap();
+    let e = compile(&src);
+    assert!(e.ir.sort);
+    let gpu = gpu();
+    let mut sim = plume::runtime::GpuSim::new(&gpu, e.clone()).unwrap();
+    sim.run(150, |_| {}).unwrap();
+    let by_id = sim.records().unwrap();
+    let drawn = sim.records_in_draw_order().unwrap();
+    assert_eq!(drawn.len(), by_id.len());
+    let mut ids: Vec<u32> = drawn.iter().map(|r| r.id).collect();
+    ids.sort_unstable();
+    assert_eq!(
+        ids,
+        by_id.iter().map(|r| r.id).collect::<Vec<_>>(),
+        "draw order lost or repeated a particle"
+    );
+    // Depths (recomputed in f64 from the exported f32 positions) never increase; the GPU's f32
+    // depth may order two particles within a few ulps of each other either way.
+    let cam = e.ir.camera;
+    let forward = (cam.target - cam.eye).normalize();
+    let depth =
+        |r: &plume::compiler::reference::ParticleRecord| (r.position - cam.eye).dot(forward);
+    for w in drawn.windows(2) {
+        let (a, b) = (depth(&w[0]), depth(&w[1]));
+        assert!(
+            a >= b - 1e-5 * a.abs().max(1.0),
+            "particle {} at depth {a} drawn before {} at {b}",
+            w[0].id,
+            w[1].id
+        );
+    }
+}

@@ -92,6 +92,10 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "copy_ms": r.copy_seconds * 1e3, "ratio": r.ratio(), "timing": timing,
                 "spawn_step_ms": r.spawn_step_seconds * 1e3,
                 "render_frame_ms": r.render.map(|(_, _, s)| s * 1e3),
+                "sort_radix_ms": r.sort.map(|(s, _)| s * 1e3),
+                "sort_bitonic_ms": r.sort.map(|(_, s)| s * 1e3),
+                "sort_radix_keys_per_s": r.sort.map(|(s, _)| r.particles as f64 / s),
+                "sort_bitonic_keys_per_s": r.sort.map(|(_, s)| r.particles as f64 / s),
             })
         );
     } else {
@@ -119,6 +123,15 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             r.spawn_step_seconds * 1e3,
             r.particles
         );
+        if let Some((radix, bitonic)) = r.sort {
+            println!(
+                "  sort                radix {:.3} ms ({:.2} G keys/s), bitonic {:.3} ms ({:.2} G keys/s), depth keys included",
+                radix * 1e3,
+                r.particles as f64 / radix * 1e-9,
+                bitonic * 1e3,
+                r.particles as f64 / bitonic * 1e-9
+            );
+        }
         if let Some((w, h, s)) = r.render {
             println!("  render              {:.2} ms for a {w}x{h} frame of all particles (wall clock: sprite upload, draw, readback)", s * 1e3);
         }

@@ -92,6 +92,7 @@ impl Overrides {
             seed: self.seed,
             integrator: self.integrator,
             substeps: self.substeps,
+            sort: None,
         }
     }
 }

@@ -82,9 +82,14 @@ fn render_frames(
     let mut frames = Vec::with_capacity(args.frames as usize);
     for _ in 0..args.frames {
         sim.run(u64::from(args.every), |_| {})?;
-        let records = sim.records()?;
+        // With sort: true the GPU sorts back to front and sprites keep that order.
+        let records = if ir.sort {
+            sim.records_in_draw_order()?
+        } else {
+            sim.records()?
+        };
         let pixels = renderer.draw(
-            &sprites(&records, &ir.render, &ir.camera, ir.sort),
+            &sprites(&records, &ir.render, &ir.camera, false),
             &ir.camera,
         )?;
         frames.push(Frame8 {

@@ -29,12 +29,25 @@ pub struct RunArgs {
     /// Write the live particles (sorted by id) to a .csv or .ply file.
     #[arg(long)]
     export: Option<PathBuf>,
+    /// Export order: `id` (spawn order) or `draw` (back to front from the camera, sorted on
+    /// the GPU; equal depths by id).
+    #[arg(long, value_enum, default_value_t = Order::Id)]
+    order: Order,
     /// Print one JSON object instead of the summary.
     #[arg(long)]
     json: bool,
     /// Run the CPU f64 reference simulator instead of the GPU.
     #[arg(long)]
     cpu_reference: bool,
+}
+
+/// The order of exported particles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Order {
+    /// By id (spawn order).
+    Id,
+    /// Back to front as seen from the camera (the draw order of alpha blending).
+    Draw,
 }
 
 struct Outcome {
@@ -68,10 +81,21 @@ fn simulate(args: &RunArgs, effect: CompiledEffect) -> Result<Outcome, RuntimeEr
             bar.inc(1);
         }
         bar.finish_and_clear();
+        let mut records = sim.records();
+        if args.order == Order::Draw {
+            // The reference sorts in f64 on the CPU: farthest first, equal depths by id.
+            let cam = effect.ir.camera;
+            let forward = (cam.target - cam.eye).normalize_or_zero();
+            records.sort_by(|a, b| {
+                let da = (a.position - cam.eye).dot(forward);
+                let db = (b.position - cam.eye).dot(forward);
+                db.total_cmp(&da).then(a.id.cmp(&b.id))
+            });
+        }
         return Ok(Outcome {
             engine: "cpu reference (f64)".into(),
             totals: sim.totals(),
-            records: sim.records(),
+            records,
             seconds: start.elapsed().as_secs_f64(),
         });
     }
@@ -87,7 +111,10 @@ fn simulate(args: &RunArgs, effect: CompiledEffect) -> Result<Outcome, RuntimeEr
     Ok(Outcome {
         engine: gpu.describe(),
         totals: sim.totals()?,
-        records: sim.records()?,
+        records: match args.order {
+            Order::Id => sim.records()?,
+            Order::Draw => sim.records_in_draw_order()?,
+        },
         seconds,
     })
 }
@@ -102,7 +129,11 @@ pub fn run(args: &RunArgs) -> ExitCode {
             return ExitCode::FAILURE;
         }
     };
-    let effect = match compile_str(&source, &args.overrides.options()) {
+    let mut options = args.overrides.options();
+    if args.order == Order::Draw {
+        options.sort = Some(true);
+    }
+    let effect = match compile_str(&source, &options) {
         Ok(c) => c,
         Err(e) => {
             eprintln!("{}", e.render(&name, &source));

@@ -56,6 +56,8 @@ pub struct CompileOptions {
     pub integrator: Option<Integrator>,
     /// Replaces the file's `substeps`.
     pub substeps: Option<u32>,
+    /// Replaces the file's `sort` (as `plume run --order draw` does).
+    pub sort: Option<bool>,
 }
 
 /// A compiled effect: the IR after the passes, its layout, the WGSL and any warnings.
@@ -130,6 +132,9 @@ pub fn compile_str(source: &str, options: &CompileOptions) -> Result<CompiledEff
     }
     if let Some(s) = options.substeps {
         effect.substeps = s;
+    }
+    if let Some(s) = options.sort {
+        effect.sort = s;
     }
     compile_effect(&effect, source)
 }

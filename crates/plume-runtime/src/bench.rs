@@ -9,6 +9,7 @@ use crate::error::RuntimeError;
 use crate::gpu::Gpu;
 use crate::render::{sprites, Renderer};
 use crate::sim::{GpuSim, STEPS_PER_SUBMIT};
+use crate::sort::SortAlgorithm;
 use crate::timer::{PassTimer, TimingSource};
 
 /// The copy kernel: 16 bytes a thread, 2D-indexed like the effect kernels.
@@ -44,6 +45,9 @@ pub struct BenchResult {
     pub copy_seconds: f64,
     /// Seconds of step 0, which spawns all N particles and updates them once.
     pub spawn_step_seconds: f64,
+    /// Seconds for depth keys plus the radix sort of every slot, and the same with the bitonic
+    /// baseline, when the effect has `sort: true`.
+    pub sort: Option<(f64, f64)>,
     /// Seconds to render one frame of all live particles (wall clock: sprite upload, draw and
     /// image readback), when asked for, with its size.
     pub render: Option<(u32, u32, f64)>,
@@ -137,6 +141,17 @@ pub fn bench(
     let update = sim.time_steps(&timer, steps)? / f64::from(steps);
     let copy =
         time_copy(gpu, &timer, u64::from(particles) * u64::from(bpp), steps)? / f64::from(steps);
+    let sort = if sim.effect().layout.sorts() {
+        // Warm up both, then time them.
+        sim.time_sort(&timer, SortAlgorithm::Radix)?;
+        sim.time_sort(&timer, SortAlgorithm::Bitonic)?;
+        Some((
+            sim.time_sort(&timer, SortAlgorithm::Radix)?,
+            sim.time_sort(&timer, SortAlgorithm::Bitonic)?,
+        ))
+    } else {
+        None
+    };
     let render = match render_size {
         None => None,
         Some((w, h)) => {
@@ -150,6 +165,7 @@ pub fn bench(
         }
     };
     Ok(BenchResult {
+        sort,
         render,
         adapter: gpu.describe(),
         particles: live,

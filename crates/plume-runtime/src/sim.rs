@@ -13,6 +13,7 @@ use plume_compiler::CompiledEffect;
 
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
+use crate::sort::{GpuSorter, SortAlgorithm};
 use crate::timer::PassTimer;
 
 /// Steps recorded per submission: bounds the parameter buffer (256 B a step) and how long
@@ -43,6 +44,14 @@ pub struct GpuSim<'g> {
     prepare: wgpu::ComputePipeline,
     spawn: wgpu::ComputePipeline,
     update: wgpu::ComputePipeline,
+    sort: Option<SortStage>,
+}
+
+/// The sort stage of an effect with `sort: true`: one key and one slot per (padded) slot.
+struct SortStage {
+    keys: wgpu::Buffer,
+    vals: wgpu::Buffer,
+    depth_keys: wgpu::ComputePipeline,
 }
 
 fn buffer_entry(
@@ -164,7 +173,34 @@ impl<'g> GpuSim<'g> {
                     Some(effect.layout.params_bytes()),
                 ),
                 buffer_entry(4, wgpu::BufferBindingType::Uniform, false, Some(16)),
-            ],
+            ]
+            .into_iter()
+            .chain(
+                effect
+                    .layout
+                    .sorts()
+                    .then(|| {
+                        [
+                            buffer_entry(5, rw, false, None),
+                            buffer_entry(6, rw, false, None),
+                        ]
+                    })
+                    .into_iter()
+                    .flatten(),
+            )
+            .collect::<Vec<_>>(),
+        });
+        // Sort keys and slots, padded to a power of two for the bitonic baseline; the padding
+        // holds the largest key so it always sorts last.
+        let sort_buffers = effect.layout.sorts().then(|| {
+            let padded = cap.next_power_of_two();
+            let keys = filled_buffer(device, "sort_keys", padded * 4, storage, |b| b.fill(0xff));
+            let vals = filled_buffer(device, "sort_vals", padded * 4, storage, |b| {
+                for (j, w) in b.chunks_exact_mut(4).enumerate() {
+                    w.copy_from_slice(&(j as u32).to_le_bytes());
+                }
+            });
+            (keys, vals)
         });
         let mut chunks = Vec::new();
         for k in 0..chunk_count {
@@ -199,7 +235,21 @@ impl<'g> GpuSim<'g> {
                         binding: 4,
                         resource: sized(&chunk_params, k * align, 16),
                     },
-                ],
+                ]
+                .into_iter()
+                .chain(sort_buffers.iter().flat_map(|(keys, vals)| {
+                    [
+                        wgpu::BindGroupEntry {
+                            binding: 5,
+                            resource: keys.as_entire_binding(),
+                        },
+                        wgpu::BindGroupEntry {
+                            binding: 6,
+                            resource: vals.as_entire_binding(),
+                        },
+                    ]
+                }))
+                .collect::<Vec<_>>(),
             });
             chunks.push(Chunk {
                 len,
@@ -228,6 +278,11 @@ impl<'g> GpuSim<'g> {
             prepare: pipeline("spawn_prepare"),
             spawn: pipeline("spawn"),
             update: pipeline("update"),
+            sort: sort_buffers.map(|(keys, vals)| SortStage {
+                keys,
+                vals,
+                depth_keys: pipeline("depth_keys"),
+            }),
             effect,
             chunks,
             counters,
@@ -249,6 +304,89 @@ impl<'g> GpuSim<'g> {
         gpu.queue.submit([encoder.finish()]);
         gpu.take_error()?;
         Ok(sim)
+    }
+
+    /// Records the depth keys of every slot and their sort into `pass`.
+    fn record_sort(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        sorter: &GpuSorter<'_>,
+        algorithm: SortAlgorithm,
+    ) -> Result<(), RuntimeError> {
+        let stage = self.sort.as_ref().ok_or_else(|| {
+            RuntimeError::Output("this effect has no sort stage (sort: false)".into())
+        })?;
+        pass.set_pipeline(&stage.depth_keys);
+        for chunk in &self.chunks {
+            let (x, y) = self.groups(chunk.len)?;
+            pass.set_bind_group(0, &chunk.bind_group, &[0]);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        sorter.record(
+            pass,
+            algorithm,
+            &stage.keys,
+            &stage.vals,
+            u64::from(self.effect.ir.capacity),
+        )
+    }
+
+    /// Sorts every slot by view depth on the GPU (farthest first, free slots last) and returns
+    /// the live slots in draw order, each with its key.
+    pub fn draw_order(&self, algorithm: SortAlgorithm) -> Result<Vec<(u32, u32)>, RuntimeError> {
+        let sorter = GpuSorter::new(self.gpu);
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            self.record_sort(&mut pass, &sorter, algorithm)?;
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()?;
+        let alive = self.totals()?.alive as usize;
+        let stage = self.sort.as_ref().expect("checked by record_sort");
+        let words = |b: &wgpu::Buffer| -> Result<Vec<u32>, RuntimeError> {
+            Ok(self
+                .read(b)?
+                .chunks_exact(4)
+                .take(alive)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect())
+        };
+        let (keys, slots) = (words(&stage.keys)?, words(&stage.vals)?);
+        Ok(slots.into_iter().zip(keys).collect())
+    }
+
+    /// Times the depth keys and the sort of every slot in one pass (seconds).
+    pub fn time_sort(
+        &self,
+        timer: &PassTimer<'_>,
+        algorithm: SortAlgorithm,
+    ) -> Result<f64, RuntimeError> {
+        let sorter = GpuSorter::new(self.gpu);
+        let seconds = timer.time(|pass| self.record_sort(pass, &sorter, algorithm))?;
+        self.gpu.take_error()?;
+        Ok(seconds)
+    }
+
+    /// The live particles in draw order: sorted by depth on the GPU, farthest first; equal
+    /// depths by id, so the order is the same run after run.
+    pub fn records_in_draw_order(&self) -> Result<Vec<ParticleRecord>, RuntimeError> {
+        let order = self.draw_order(SortAlgorithm::Radix)?;
+        let by_slot = self.records_by_slot()?;
+        let mut out: Vec<(u32, ParticleRecord)> = Vec::with_capacity(order.len());
+        for (slot, key) in order {
+            let record = by_slot
+                .get(slot as usize)
+                .copied()
+                .flatten()
+                .ok_or_else(|| {
+                    RuntimeError::Readback(format!("sorted slot {slot} holds no live particle"))
+                })?;
+            out.push((key, record));
+        }
+        // Stable: equal keys (equal depths) by id.
+        out.sort_by_key(|(key, r)| (*key, r.id));
+        Ok(out.into_iter().map(|(_, r)| r).collect())
     }
 
     /// Number of particle buffers the state is split into.
@@ -399,6 +537,13 @@ impl<'g> GpuSim<'g> {
 
     /// The live particles in id order, velocity as the integrator knows it (Verlet's derived).
     pub fn records(&self) -> Result<Vec<ParticleRecord>, RuntimeError> {
+        let mut out: Vec<ParticleRecord> = self.records_by_slot()?.into_iter().flatten().collect();
+        out.sort_by_key(|r| r.id);
+        Ok(out)
+    }
+
+    /// Every slot's particle (None for a free slot).
+    fn records_by_slot(&self) -> Result<Vec<Option<ParticleRecord>>, RuntimeError> {
         let mut bytes = Vec::new();
         for chunk in &self.chunks {
             bytes.extend(self.read(&chunk.buffer)?);
@@ -436,17 +581,17 @@ impl<'g> GpuSim<'g> {
             let f = |w: usize| f64::from(f32::from_bits(u(w)));
             let id = u(id_at);
             if id == DEAD {
+                out.push(None);
                 continue;
             }
-            out.push(ParticleRecord {
+            out.push(Some(ParticleRecord {
                 id,
                 position: DVec3::new(f(pos_at), f(pos_at + 1), f(pos_at + 2)),
                 velocity: DVec3::new(f(vel_at), f(vel_at + 1), f(vel_at + 2)) * scale,
                 age: self.schedule.age(id),
                 lifetime: die_at.and_then(|w| self.schedule.lifetime(id, u(w))),
-            });
+            }));
         }
-        out.sort_by_key(|r| r.id);
         Ok(out)
     }
 }

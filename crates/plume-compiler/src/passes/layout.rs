@@ -108,6 +108,11 @@ impl Layout {
         self.bytes_per_particle / 16
     }
 
+    /// Whether the effect has a sort stage (bindings 5 and 6).
+    pub fn sorts(&self) -> bool {
+        self.bindings.iter().any(|b| b.name == "sort_keys")
+    }
+
     /// Whether the layout has `a`.
     pub fn has(&self, a: Attribute) -> bool {
         self.attributes.contains(&a)
@@ -187,6 +192,24 @@ pub fn decide(ir: &EffectIr) -> Layout {
             meaning: "the slots this dispatch's particle buffer holds: first global slot, count",
         },
     ];
+    if ir.sort {
+        // Room for a power-of-two padded sort (the bitonic baseline needs it).
+        let padded = cap.next_power_of_two() * 4;
+        layout.bindings.push(Binding {
+            binding: 5,
+            name: "sort_keys",
+            space: "storage, read_write",
+            bytes: padded,
+            meaning: "depth keys, farthest first; free slots sort last",
+        });
+        layout.bindings.push(Binding {
+            binding: 6,
+            name: "sort_vals",
+            space: "storage, read_write",
+            bytes: padded,
+            meaning: "slot indices, in draw order after the sort",
+        });
+    }
     layout
 }
 

@@ -86,6 +86,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "free_list" => "array<u32>",
             "counters" => "Counters",
             "chunk" => "Chunk",
+            "sort_keys" | "sort_vals" => "array<u32>",
             _ => "StepParams",
         };
         w.line(format!(
@@ -121,6 +122,10 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     update::emit(&mut w, ir, layout);
     w.blank();
     emit_init(&mut w);
+    if layout.sorts() {
+        w.blank();
+        emit_depth_keys(&mut w, ir);
+    }
     w.finish()
 }
 
@@ -196,4 +201,44 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
             LANES[id % 4]
         ));
     });
+}
+
+/// `depth_keys`: one sort key per slot, the view depth from the camera mapped to a u32 that
+/// orders farthest first; free slots get the largest key and non-finite positions the next.
+fn emit_depth_keys(w: &mut Writer, ir: &EffectIr) {
+    let forward = crate::forces::safe_normalize(ir.camera.target - ir.camera.eye);
+    w.line(format!(
+        "const EYE: vec3<f32> = {};",
+        writer::vec3_lit(ir.camera.eye)
+    ));
+    w.line(format!(
+        "const FORWARD: vec3<f32> = {};",
+        writer::vec3_lit(forward)
+    ));
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn depth_keys(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let local = gid.x + gid.y * groups.x * WORKGROUP;");
+            w.block("if (local >= chunk.len)", |w| w.line("return;"));
+            w.line("let slot = chunk.base + local;");
+            w.line("let p = load_particle(local);");
+            w.line("var key = 0xffffffffu;");
+            w.block("if (p.id != DEAD)", |w| {
+                w.line("let depth = dot(vec3<f32>(p.px, p.py, p.pz) - EYE, FORWARD);");
+                w.line("let bits = bitcast<u32>(depth);");
+                w.comment("Integer test for Inf/NaN: WGSL may assume floats are finite.");
+                w.block("if ((bits & 0x7f800000u) == 0x7f800000u)", |w| {
+                    w.line("key = 0xfffffffeu;");
+                });
+                w.block("else", |w| {
+                    w.comment("Order-preserving map of f32 to u32, inverted so the farthest sorts first.");
+                    w.line("let ordered = select(bits | 0x80000000u, ~bits, (bits & 0x80000000u) != 0u);");
+                    w.line("key = min(~ordered, 0xfffffffdu);");
+                });
+            });
+            w.line("sort_keys[slot] = key;");
+            w.line("sort_vals[slot] = slot;");
+        },
+    );
 }
