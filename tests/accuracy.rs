@@ -214,3 +214,113 @@ fn drag_blows_up_just_past_each_limit_and_not_just_below() {
     let (v, w) = speed_after(Integrator::Exact, 10.0 / dt, dt, 150);
     assert!(v < 10.0 && w == 0);
 }
+
+/// Velocities of a particle launched at 10 m/s into still air, after each of `steps` steps.
+fn velocity_history(integrator: Integrator, k: f64, dt: f64, steps: u64) -> Vec<f64> {
+    let src = format!(
+        r#"Effect(name: "drag", capacity: 1, dt: {dt:?}, integrator: {},
+    emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((10.0, 0.0, 0.0)))],
+    forces: [Drag(k: {k:?})],
+)"#,
+        integrator.name()
+    );
+    let e = compile(&src);
+    let gpu = gpu();
+    let mut sim = plume::runtime::GpuSim::new(&gpu, e).unwrap();
+    (0..steps)
+        .map(|_| {
+            sim.run(1, |_| {}).unwrap();
+            sim.records().unwrap()[0].velocity.x
+        })
+        .collect()
+}
+
+#[test]
+fn euler_overshoots_just_past_kh_1_and_not_just_below() {
+    // Explicit Euler multiplies the relative velocity by (1 - k h): past k h = 1 it changes sign
+    // every step (the compiler's overshoot warning); below it decays without changing sign.
+    let dt = 0.01;
+    let past = velocity_history(Integrator::Euler, 1.05 / dt, dt, 10);
+    let below = velocity_history(Integrator::Euler, 0.95 / dt, dt, 10);
+    assert!(
+        past.windows(2).all(|w| w[0] * w[1] < 0.0),
+        "no overshoot past k h = 1: {past:?}"
+    );
+    assert!(
+        below.iter().all(|v| *v > 0.0),
+        "overshoot below k h = 1: {below:?}"
+    );
+    let warned = |k: f64| {
+        compile(&format!(
+            "Effect(name: \"d\", capacity: 1, dt: {dt:?}, integrator: Euler, forces: [Drag(k: {k:?})], emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((1.0, 0.0, 0.0)))])"
+        ))
+        .warnings
+        .items
+        .iter()
+        .any(|w| w.message.contains("overshoots"))
+    };
+    assert!(warned(1.05 / dt) && !warned(0.95 / dt));
+}
+
+#[test]
+fn a_particle_crosses_a_kill_volume_thinner_than_its_step_and_not_a_thicker_one() {
+    // A slab 0.1 m thick at x in [1.0, 1.1]; a particle at 12 m/s from x = 0.95 (0.99 below).
+    let run = |dt: f64| {
+        let src = format!(
+            r#"Effect(name: "slab", capacity: 1, dt: {dt:?}, max_speed: Some(12.0),
+    emitters: [Emitter(burst: 1, shape: Point((0.95, 0.0, 0.0)), velocity: Constant((12.0, 0.0, 0.0)))],
+    kill: [InsideBox(min: (1.0, -1.0, -1.0), max: (1.1, 1.0, 1.0))],
+)"#
+        );
+        let e = compile(&src);
+        let warned = e
+            .warnings
+            .items
+            .iter()
+            .any(|w| w.message.contains("pass through"));
+        let (t, _) = run_gpu(&e, 10);
+        (warned, t.alive)
+    };
+    // 12 m/s x 0.01 s = 0.12 m per step, more than the 0.1 m slab: warned. At dt = 0.005 the
+    // step is 0.06 m: no warning, and some step end must fall inside the slab.
+    let (warned_coarse, _) = run(0.01);
+    let (warned_fine, alive_fine) = run(0.005);
+    assert!(
+        warned_coarse,
+        "no warning at 0.12 m per step through a 0.1 m slab"
+    );
+    assert!(!warned_fine, "warning at 0.06 m per step");
+    assert_eq!(
+        alive_fine, 0,
+        "a 0.06 m step must land inside the 0.1 m slab"
+    );
+    // Jumping over it: from x = 0.99 at 12 m/s with dt = 0.01, the first step lands at 1.11.
+    let src = r#"Effect(name: "jump", capacity: 1, dt: 0.01, max_speed: Some(12.0),
+    emitters: [Emitter(burst: 1, shape: Point((0.99, 0.0, 0.0)), velocity: Constant((12.0, 0.0, 0.0)))],
+    kill: [InsideBox(min: (1.0, -1.0, -1.0), max: (1.1, 1.0, 1.0))],
+)"#;
+    let (t, _) = run_gpu(&compile(src), 10);
+    assert_eq!(
+        t.alive, 1,
+        "the particle should pass through the slab between checks"
+    );
+}
+
+#[test]
+fn capacity_warnings_predict_drops() {
+    // rate x lifetime = 600 x 1 s against capacity 500 (warned) and 700 (not).
+    let src = |cap: u32| {
+        format!(
+            r#"Effect(name: "cap", capacity: {cap},
+    emitters: [Emitter(rate: 600.0, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 1.0, 0.0)), lifetime: Some((1.0, 1.0)))],
+)"#
+        )
+    };
+    for (cap, expect_drops) in [(500u32, true), (700, false)] {
+        let e = compile(&src(cap));
+        let warned = e.warnings.items.iter().any(|w| w.path == "capacity");
+        let (t, _) = run_gpu(&e, 120);
+        assert_eq!(warned, expect_drops, "capacity {cap}: warning");
+        assert_eq!(t.dropped > 0, expect_drops, "capacity {cap}: {t:?}");
+    }
+}
