@@ -2,7 +2,6 @@
 
 mod accuracy;
 mod bench;
-mod output;
 mod render;
 mod run;
 
@@ -207,7 +206,7 @@ fn compile(file: &Path, output: Option<&Path>, emit: Emit, options: &CompileOpti
             print!("{text}");
             ExitCode::SUCCESS
         }
-        Some(out) => match output::write_atomically(out, text.as_bytes(), &[file]) {
+        Some(out) => match plume_runtime::export::write_atomically(out, text.as_bytes(), &[file]) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("{}: error: {e}", out.display());
