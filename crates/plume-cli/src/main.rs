@@ -209,7 +209,7 @@ fn compile(file: &Path, output: Option<&Path>, emit: Emit, options: &CompileOpti
         Some(out) => match plume_runtime::export::write_atomically(out, text.as_bytes(), &[file]) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
-                eprintln!("{}: error: {e}", out.display());
+                eprintln!("error: {e}");
                 ExitCode::FAILURE
             }
         },
