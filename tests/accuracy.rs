@@ -158,16 +158,20 @@ fn vortex_orders() {
     );
 }
 
-/// Speed after `steps` of a particle launched at 10 m/s into still air with drag k at dt.
-fn speed_after(integrator: Integrator, k: f64, dt: f64, steps: u64) -> (f64, usize) {
-    let src = format!(
+/// A particle launched at 10 m/s into still air with drag k, integrated at dt.
+fn drag_effect(integrator: Integrator, k: f64, dt: f64) -> String {
+    format!(
         r#"Effect(name: "drag", capacity: 1, dt: {dt:?}, integrator: {},
     emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((10.0, 0.0, 0.0)))],
     forces: [Drag(k: {k:?})],
 )"#,
         integrator.name()
-    );
-    let e = compile_str_warn(&src);
+    )
+}
+
+/// Speed after `steps` of the drag particle, and the number of compiler warnings.
+fn speed_after(integrator: Integrator, k: f64, dt: f64, steps: u64) -> (f64, usize) {
+    let e = compile_str_warn(&drag_effect(integrator, k, dt));
     let (_, records) = run_gpu(&e.0, steps);
     (records[0].velocity.length(), e.1)
 }
@@ -215,15 +219,9 @@ fn drag_blows_up_just_past_each_limit_and_not_just_below() {
     assert!(v < 10.0 && w == 0);
 }
 
-/// Velocities of a particle launched at 10 m/s into still air, after each of `steps` steps.
+/// The drag particle's x velocity after each of `steps` steps.
 fn velocity_history(integrator: Integrator, k: f64, dt: f64, steps: u64) -> Vec<f64> {
-    let src = format!(
-        r#"Effect(name: "drag", capacity: 1, dt: {dt:?}, integrator: {},
-    emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((10.0, 0.0, 0.0)))],
-    forces: [Drag(k: {k:?})],
-)"#,
-        integrator.name()
-    );
+    let src = drag_effect(integrator, k, dt);
     let e = compile(&src);
     let gpu = gpu();
     let mut sim = plume::runtime::GpuSim::new(&gpu, e).unwrap();

@@ -6,13 +6,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use plume_compiler::{parse, Integrator};
+use plume_compiler::Integrator;
 use plume_runtime::accuracy::{measure, pareto_front, AccuracyPlan, Engine, ReferenceKind};
 use plume_runtime::export::write_atomically;
 use plume_runtime::plot::accuracy_svg;
-use plume_runtime::{Gpu, GpuChoice};
 
-use crate::read_source;
+use crate::load;
 
 /// Options of `plume accuracy`.
 #[derive(clap::Args, Debug)]
@@ -47,26 +46,10 @@ pub struct AccuracyArgs {
 
 /// Runs `plume accuracy`.
 pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
-    let name = args.file.display().to_string();
-    let source = match read_source(&args.file) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
+    let (load::Source { name, .. }, effect) = match load::checked(&args.file) {
+        Ok(x) => x,
+        Err(code) => return code,
     };
-    let effect = match parse(&source) {
-        Ok(e) => e,
-        Err(d) => {
-            eprintln!("{}", d.render(&name, &source));
-            return ExitCode::FAILURE;
-        }
-    };
-    // Check the file as written first, so errors point at it.
-    if let Err(e) = plume_compiler::compile_effect(&effect, &source) {
-        eprintln!("{}", e.render(&name, &source));
-        return ExitCode::FAILURE;
-    }
     let dts = args.dt_list.clone().unwrap_or_else(|| {
         [4.0, 2.0, 1.0, 0.5, 0.25]
             .iter()
@@ -91,14 +74,9 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
     let gpu = if args.cpu {
         None
     } else {
-        match Gpu::new(&GpuChoice {
-            backend: args.backend.clone(),
-        }) {
+        match load::gpu(&args.backend) {
             Ok(g) => Some(g),
-            Err(e) => {
-                eprintln!("error: {e}");
-                return ExitCode::FAILURE;
-            }
+            Err(code) => return code,
         }
     };
     let engine = match &gpu {

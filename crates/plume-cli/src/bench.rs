@@ -3,12 +3,10 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use plume_compiler::parse;
 use plume_runtime::bench::bench;
 use plume_runtime::timer::TimingSource;
-use plume_runtime::{Gpu, GpuChoice};
 
-use crate::read_source;
+use crate::load;
 
 /// Options of `plume bench`.
 #[derive(clap::Args, Debug)]
@@ -34,33 +32,13 @@ pub struct BenchArgs {
 
 /// Runs `plume bench`.
 pub fn bench_command(args: &BenchArgs) -> ExitCode {
-    let name = args.file.display().to_string();
-    let source = match read_source(&args.file) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
+    let (load::Source { name, .. }, effect) = match load::checked(&args.file) {
+        Ok(x) => x,
+        Err(code) => return code,
     };
-    let effect = match parse(&source) {
-        Ok(e) => e,
-        Err(d) => {
-            eprintln!("{}", d.render(&name, &source));
-            return ExitCode::FAILURE;
-        }
-    };
-    if let Err(e) = plume_compiler::compile_effect(&effect, &source) {
-        eprintln!("{}", e.render(&name, &source));
-        return ExitCode::FAILURE;
-    }
-    let gpu = match Gpu::new(&GpuChoice {
-        backend: args.backend.clone(),
-    }) {
+    let gpu = match load::gpu(&args.backend) {
         Ok(g) => g,
-        Err(e) => {
-            eprintln!("error: {e}");
-            return ExitCode::FAILURE;
-        }
+        Err(code) => return code,
     };
     if !args.json {
         eprintln!(

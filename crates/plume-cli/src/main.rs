@@ -2,6 +2,7 @@
 
 mod accuracy;
 mod bench;
+mod load;
 mod render;
 mod run;
 
@@ -9,7 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
-use plume_compiler::{compile_str, CompileError, CompileOptions, Integrator};
+use plume_compiler::{compile_str, CompileOptions, Integrator};
 
 /// Plume compiles declarative particle effects (RON) into fused, validated WGSL compute kernels.
 #[derive(Parser, Debug)]
@@ -130,22 +131,12 @@ fn main() -> ExitCode {
     }
 }
 
-pub(crate) fn read_source(file: &Path) -> Result<String, String> {
-    std::fs::read_to_string(file)
-        .map_err(|e| format!("{}: error: cannot read file: {e}", file.display()))
-}
-
 fn check(files: &[PathBuf]) -> ExitCode {
     let (mut failed, mut warnings) = (0usize, 0usize);
     for file in files {
-        let name = file.display().to_string();
-        let source = match read_source(file) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("{e}");
-                failed += 1;
-                continue;
-            }
+        let Ok(load::Source { name, text: source }) = load::read(file) else {
+            failed += 1;
+            continue;
         };
         match compile_str(&source, &CompileOptions::default()) {
             Ok(compiled) => {
@@ -173,24 +164,10 @@ fn check(files: &[PathBuf]) -> ExitCode {
 }
 
 fn compile(file: &Path, output: Option<&Path>, emit: Emit, options: &CompileOptions) -> ExitCode {
-    let name = file.display().to_string();
-    let source = match read_source(file) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
+    let (load::Source { name, .. }, compiled) = match load::compiled(file, options) {
+        Ok(x) => x,
+        Err(code) => return code,
     };
-    let compiled = match compile_str(&source, options) {
-        Ok(c) => c,
-        Err(e @ CompileError::Invalid(_)) | Err(e @ CompileError::Internal(_)) => {
-            eprintln!("{}", e.render(&name, &source));
-            return ExitCode::FAILURE;
-        }
-    };
-    if !compiled.warnings.is_empty() {
-        eprintln!("{}", compiled.warnings.render(&name, &source));
-    }
     eprintln!(
         "{name}: note: integrator {} ({})",
         compiled.ir.integrator.name(),

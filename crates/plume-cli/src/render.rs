@@ -5,13 +5,12 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use plume_compiler::compile_str;
 use plume_runtime::export::write_atomically;
 use plume_runtime::images::{contact_sheet, gif, png, Frame8};
 use plume_runtime::render::{sprites, Renderer};
 use plume_runtime::{Gpu, GpuChoice, GpuSim, RuntimeError};
 
-use crate::{read_source, Overrides};
+use crate::{load, Overrides};
 
 /// Options of `plume render`.
 #[derive(clap::Args, Debug)]
@@ -127,23 +126,10 @@ pub fn render(args: &RenderArgs) -> ExitCode {
         eprintln!("error: --frames and --every must be at least 1");
         return ExitCode::FAILURE;
     }
-    let source = match read_source(&args.file) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
+    let (_, effect) = match load::compiled(&args.file, &args.overrides.options()) {
+        Ok(x) => x,
+        Err(code) => return code,
     };
-    let effect = match compile_str(&source, &args.overrides.options()) {
-        Ok(c) => c,
-        Err(e) => {
-            eprintln!("{}", e.render(&name, &source));
-            return ExitCode::FAILURE;
-        }
-    };
-    if !effect.warnings.is_empty() {
-        eprintln!("{}", effect.warnings.render(&name, &source));
-    }
     let delay_ms = ((f64::from(args.every) * effect.ir.dt * 1000.0).round() as u32).max(20);
     let encoded = render_frames(args, effect).and_then(|frames| match format {
         Format::Png if args.sheet => png(&contact_sheet(&frames)?),

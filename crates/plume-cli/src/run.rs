@@ -7,11 +7,11 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use plume_compiler::reference::{ParticleRecord, ReferenceSim, Totals};
-use plume_compiler::{compile_str, CompiledEffect};
+use plume_compiler::CompiledEffect;
 use plume_runtime::export::{export, summarize};
 use plume_runtime::{Gpu, GpuChoice, GpuSim, RuntimeError};
 
-use crate::{read_source, Overrides};
+use crate::{load, Overrides};
 
 /// Options of `plume run`.
 #[derive(clap::Args, Debug)]
@@ -121,28 +121,14 @@ fn simulate(args: &RunArgs, effect: CompiledEffect) -> Result<Outcome, RuntimeEr
 
 /// Runs `plume run`.
 pub fn run(args: &RunArgs) -> ExitCode {
-    let name = args.file.display().to_string();
-    let source = match read_source(&args.file) {
-        Ok(s) => s,
-        Err(e) => {
-            eprintln!("{e}");
-            return ExitCode::FAILURE;
-        }
-    };
     let mut options = args.overrides.options();
     if args.order == Order::Draw {
         options.sort = Some(true);
     }
-    let effect = match compile_str(&source, &options) {
-        Ok(c) => c,
-        Err(e) => {
-            eprintln!("{}", e.render(&name, &source));
-            return ExitCode::FAILURE;
-        }
+    let (load::Source { name, .. }, effect) = match load::compiled(&args.file, &options) {
+        Ok(x) => x,
+        Err(code) => return code,
     };
-    if !effect.warnings.is_empty() {
-        eprintln!("{}", effect.warnings.render(&name, &source));
-    }
     let dt = effect.ir.dt;
     let outcome = match simulate(args, effect) {
         Ok(o) => o,

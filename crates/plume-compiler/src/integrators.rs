@@ -34,27 +34,19 @@ pub struct ExactStep {
 impl ExactStep {
     /// The exact step of length `h` for the (folded) terms of `ir`.
     pub fn new(ir: &EffectIr, h: f64) -> Self {
-        let mut g = DVec3::ZERO;
-        let (mut k, mut u) = (0.0, DVec3::ZERO);
+        // The sum of drags -k_i (v - u_i) is -k (v - u) with k = Σk_i, u = Σ(k_i u_i) / k.
+        let (mut g, mut k, mut ku) = (DVec3::ZERO, 0.0, DVec3::ZERO);
         for t in &ir.terms {
             match t {
                 Term::Constant(c) => g += c.accel,
                 Term::Drag(d) => {
-                    let merged = if k == 0.0 {
-                        d.clone()
-                    } else {
-                        d.merge(&crate::forces::drag::DragTerm {
-                            k,
-                            fluid: u,
-                            origins: vec![],
-                        })
-                    };
-                    k = merged.k;
-                    u = merged.fluid;
+                    k += d.k;
+                    ku += d.k * d.fluid;
                 }
                 _ => {}
             }
         }
+        let u = if k > 0.0 { ku / k } else { DVec3::ZERO };
         Self::for_drag(g, k, u, h)
     }
 

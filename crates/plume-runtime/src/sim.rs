@@ -44,14 +44,16 @@ pub struct GpuSim<'g> {
     prepare: wgpu::ComputePipeline,
     spawn: wgpu::ComputePipeline,
     update: wgpu::ComputePipeline,
-    sort: Option<SortStage>,
+    sort: Option<SortStage<'g>>,
 }
 
 /// The sort stage of an effect with `sort: true`: one key and one slot per (padded) slot.
-struct SortStage {
+struct SortStage<'g> {
     keys: wgpu::Buffer,
     vals: wgpu::Buffer,
     depth_keys: wgpu::ComputePipeline,
+    /// Built once with the stage: every frame's sort reuses its pipelines.
+    sorter: GpuSorter<'g>,
 }
 
 fn buffer_entry(
@@ -282,6 +284,7 @@ impl<'g> GpuSim<'g> {
                 keys,
                 vals,
                 depth_keys: pipeline("depth_keys"),
+                sorter: GpuSorter::new(gpu),
             }),
             effect,
             chunks,
@@ -310,7 +313,6 @@ impl<'g> GpuSim<'g> {
     fn record_sort(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
-        sorter: &GpuSorter<'_>,
         algorithm: SortAlgorithm,
     ) -> Result<(), RuntimeError> {
         let stage = self.sort.as_ref().ok_or_else(|| {
@@ -322,7 +324,7 @@ impl<'g> GpuSim<'g> {
             pass.set_bind_group(0, &chunk.bind_group, &[0]);
             pass.dispatch_workgroups(x, y, 1);
         }
-        sorter.record(
+        stage.sorter.record(
             pass,
             algorithm,
             &stage.keys,
@@ -334,11 +336,10 @@ impl<'g> GpuSim<'g> {
     /// Sorts every slot by view depth on the GPU (farthest first, free slots last) and returns
     /// the live slots in draw order, each with its key.
     pub fn draw_order(&self, algorithm: SortAlgorithm) -> Result<Vec<(u32, u32)>, RuntimeError> {
-        let sorter = GpuSorter::new(self.gpu);
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
-            self.record_sort(&mut pass, &sorter, algorithm)?;
+            self.record_sort(&mut pass, algorithm)?;
         }
         self.gpu.queue.submit([encoder.finish()]);
         self.gpu.take_error()?;
@@ -362,8 +363,7 @@ impl<'g> GpuSim<'g> {
         timer: &PassTimer<'_>,
         algorithm: SortAlgorithm,
     ) -> Result<f64, RuntimeError> {
-        let sorter = GpuSorter::new(self.gpu);
-        let seconds = timer.time(|pass| self.record_sort(pass, &sorter, algorithm))?;
+        let seconds = timer.time(|pass| self.record_sort(pass, algorithm))?;
         self.gpu.take_error()?;
         Ok(seconds)
     }

@@ -1,0 +1,77 @@
+//! The steps every command starts with: read the file, compile or check it, print its
+//! diagnostics, open a GPU. Each returns `Err(ExitCode::FAILURE)` after printing why.
+
+use std::path::Path;
+use std::process::ExitCode;
+
+use plume_compiler::{compile_effect, compile_str, parse, CompileOptions, CompiledEffect, Effect};
+use plume_runtime::{Gpu, GpuChoice};
+
+/// An effect file's display name and text.
+pub struct Source {
+    /// The path as given, for messages.
+    pub name: String,
+    /// The file's text.
+    pub text: String,
+}
+
+/// Reads `file`.
+pub fn read(file: &Path) -> Result<Source, ExitCode> {
+    let name = file.display().to_string();
+    match std::fs::read_to_string(file) {
+        Ok(text) => Ok(Source { name, text }),
+        Err(e) => {
+            eprintln!("{name}: error: cannot read file: {e}");
+            Err(ExitCode::FAILURE)
+        }
+    }
+}
+
+/// Reads and compiles `file` with `options`; prints warnings.
+pub fn compiled(
+    file: &Path,
+    options: &CompileOptions,
+) -> Result<(Source, CompiledEffect), ExitCode> {
+    let src = read(file)?;
+    match compile_str(&src.text, options) {
+        Ok(c) => {
+            if !c.warnings.is_empty() {
+                eprintln!("{}", c.warnings.render(&src.name, &src.text));
+            }
+            Ok((src, c))
+        }
+        Err(e) => {
+            eprintln!("{}", e.render(&src.name, &src.text));
+            Err(ExitCode::FAILURE)
+        }
+    }
+}
+
+/// Reads and parses `file`, and checks it compiles as written (so errors point at the file),
+/// for commands that derive their own variants of the effect.
+pub fn checked(file: &Path) -> Result<(Source, Effect), ExitCode> {
+    let src = read(file)?;
+    let effect = match parse(&src.text) {
+        Ok(e) => e,
+        Err(d) => {
+            eprintln!("{}", d.render(&src.name, &src.text));
+            return Err(ExitCode::FAILURE);
+        }
+    };
+    if let Err(e) = compile_effect(&effect, &src.text) {
+        eprintln!("{}", e.render(&src.name, &src.text));
+        return Err(ExitCode::FAILURE);
+    }
+    Ok((src, effect))
+}
+
+/// Opens the best adapter among `backend` (or `WGPU_BACKEND`, or all).
+pub fn gpu(backend: &Option<String>) -> Result<Gpu, ExitCode> {
+    Gpu::new(&GpuChoice {
+        backend: backend.clone(),
+    })
+    .map_err(|e| {
+        eprintln!("error: {e}");
+        ExitCode::FAILURE
+    })
+}
