@@ -44,6 +44,17 @@ impl Checker {
         }
     }
 
+    /// A core radius must be finite, > 0 and no larger than the force's `range`.
+    pub fn core_radius(&mut self, path: &ValuePath, core: f64, range: f64) {
+        if self.finite(path, core) {
+            if core <= 0.0 {
+                self.error(path, format!("must be > 0, got {core}"));
+            } else if range.is_finite() && core > range {
+                self.error(path, format!("must be <= range ({range}), got {core}"));
+            }
+        }
+    }
+
     /// `x` must be finite and in `[lo, hi]`.
     pub fn within(&mut self, path: &ValuePath, x: f64, lo: f64, hi: f64) {
         if self.finite(path, x) && !(lo..=hi).contains(&x) {

@@ -139,6 +139,12 @@ impl<'de> Deserialize<'de> for Force {
     }
 }
 
+/// Reads an optional number written plainly (`core: 1.0`, not `core: Some(1.0)`); a missing
+/// field is `None` through `#[serde(default)]`.
+fn plain_some<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    f64::deserialize(d).map(Some)
+}
+
 /// How a term limits the step size, for the stability analysis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Stiffness {
@@ -148,6 +154,28 @@ pub enum Stiffness {
     Damping(f64),
     /// Oscillation frequency omega (rad/s): the limit is on omega*h.
     Oscillation(f64),
+}
+
+/// A pull toward a centre (or an axis) with a soft core, for the core-transit check: a particle
+/// that falls in from the edge crosses the core at about `fall_speed`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoreWell {
+    /// Speed (m/s) gained falling from the range's edge to the centre, from rest.
+    pub fall_speed: f64,
+    /// Core radius (m).
+    pub core: f64,
+}
+
+impl CoreWell {
+    /// The well of a pull `strength` · clamp(1 − r/range) · min(r, core)/core, whose depth is
+    /// ∫₀^range of it = strength (range/2 − core/2 + core²/(6 range)).
+    pub fn of(strength: f64, core: f64, range: f64) -> Self {
+        let depth = strength * (0.5 * range - 0.5 * core + core * core / (6.0 * range));
+        CoreWell {
+            fall_speed: (2.0 * depth.max(0.0)).sqrt(),
+            core,
+        }
+    }
 }
 
 /// What every IR force term provides: WGSL, the f64 reference, and facts for the passes.
@@ -173,6 +201,10 @@ pub trait ForceTerm {
     /// The step-size limit this term imposes.
     fn stiffness(&self) -> Stiffness {
         Stiffness::None
+    }
+    /// The soft-cored well particles can fall through, if the term has one.
+    fn core_well(&self) -> Option<CoreWell> {
+        None
     }
     /// WGSL statements that add this term's acceleration to `a`, with `x`, `v` (vec3<f32>) and
     /// `t` (f32, seconds mod the noise period) in scope. Locals go in a `{ }` block.

@@ -1,27 +1,29 @@
 //! The thesis's vortex, with its bugs fixed. â = normalize(axis), rel = x - center,
-//! h = rel·â, radial = rel - h â, ρ = |radial|, r̂ = radial / ρ (0 when ρ = 0).
-//! Only 0 < h < height feels it. range_h = range ((height - h) / height)^curve,
-//! w = clamp((range_h - ρ) / range_h, 0, 1) (0 when range_h = 0),
-//! a = w (spin (â × r̂) - pull r̂ + down â). Positive spin is counter-clockwise seen from +axis.
+//! h = rel·â, radial = rel - h â, ρ = |radial|. Only 0 < h < height feels it.
+//! range_h = max(range ((height - h) / height)^curve, core), w = clamp((range_h - ρ) / range_h, 0, 1),
+//! a = w (spin (â × radial) - pull radial) / max(ρ, core) + w down â.
+//! Positive spin is counter-clockwise seen from +axis.
+//!
+//! Why a core (as for the attractor): the thesis's spin and pull keep full strength up to the
+//! axis, so they flip direction within a step as a particle crosses it. Inside `core` they fall
+//! linearly to 0 on the axis, and the funnel never narrows below the core, so the field's slope is
+//! bounded by max(|spin|, |pull|) / core everywhere.
 
 use glam::DVec3;
 use serde::Deserialize;
 
-use super::{safe_normalize, ForceTerm, Stiffness};
+use super::{safe_normalize, CoreWell, ForceTerm, Stiffness};
 use crate::check::Checker;
 use crate::path::ValuePath;
 use crate::schema::Vec3;
 use crate::wgsl::writer::{f32_lit, vec3_lit, Writer};
 
-/// Below this squared radial distance (m²) the radial direction is undefined (r̂ = 0).
-pub const AXIS_EPS2: f64 = 1e-24;
-/// Below this funnel radius (m) the vortex has closed (w = 0).
-pub const RANGE_EPS: f64 = 1e-12;
+/// The default core radius is `range / DEFAULT_CORE_DIVISOR`.
+pub const DEFAULT_CORE_DIVISOR: f64 = 10.0;
 
-/// `Vortex(...)` as written.
 /// Field names, as written in effect files.
 pub const FIELDS: &[&str] = &[
-    "center", "axis", "range", "height", "spin", "pull", "down", "curve",
+    "center", "axis", "range", "height", "spin", "pull", "down", "curve", "core",
 ];
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -46,6 +48,10 @@ pub struct Vortex {
     /// Funnel shape exponent (>= 0): 0 a cylinder, 1 a cone.
     #[serde(default = "one")]
     pub curve: f64,
+    /// Radius (m) inside which spin and pull fall linearly to 0 on the axis, and below which the
+    /// funnel does not narrow; in (0, range]. Defaults to range / 10.
+    #[serde(default, deserialize_with = "super::plain_some")]
+    pub core: Option<f64>,
 }
 
 fn one() -> f64 {
@@ -63,6 +69,14 @@ impl Vortex {
         c.finite(&path.field("pull"), self.pull);
         c.finite(&path.field("down"), self.down);
         c.non_negative(&path.field("curve"), self.curve);
+        if let Some(core) = self.core {
+            c.core_radius(&path.field("core"), core, self.range);
+        }
+    }
+
+    /// The core radius, written or defaulted.
+    pub fn core(&self) -> f64 {
+        self.core.unwrap_or(self.range / DEFAULT_CORE_DIVISOR)
     }
 
     /// Lowers to a vortex term with a unit axis.
@@ -76,6 +90,7 @@ impl Vortex {
             pull: self.pull,
             down: self.down,
             curve: self.curve,
+            core: self.core(),
             origins: vec![origin],
         }
     }
@@ -100,11 +115,18 @@ pub struct VortexTerm {
     pub down: f64,
     /// Funnel exponent.
     pub curve: f64,
+    /// Core radius (m), in (0, range].
+    pub core: f64,
     /// Source forces.
     pub origins: Vec<usize>,
 }
 
 impl VortexTerm {
+    /// The core as written into WGSL: floored at the smallest normal f32 so it stays > 0.
+    fn core_f32(&self) -> f64 {
+        self.core.max(f64::from(f32::MIN_POSITIVE))
+    }
+
     fn funnel_wgsl(&self) -> String {
         let ratio = format!(
             "(({} - h) * {})",
@@ -119,7 +141,11 @@ impl VortexTerm {
             // The base is > 0 here (h < height), so pow is well defined.
             format!("pow({ratio}, {})", f32_lit(self.curve))
         };
-        format!("{} * {scaled}", f32_lit(self.range))
+        format!(
+            "max({} * {scaled}, {})",
+            f32_lit(self.range),
+            f32_lit(self.core_f32())
+        )
     }
 }
 
@@ -129,24 +155,31 @@ impl ForceTerm for VortexTerm {
     }
     fn describe(&self) -> String {
         format!(
-            "Vortex center = ({}, {}, {}) axis = ({}, {}, {}) range = {} height = {} spin = {} pull = {} down = {} curve = {}",
+            "Vortex center = ({}, {}, {}) axis = ({}, {}, {}) range = {} height = {} spin = {} pull = {} down = {} curve = {} core = {}",
             self.center.x, self.center.y, self.center.z, self.axis.x, self.axis.y, self.axis.z,
-            self.range, self.height, self.spin, self.pull, self.down, self.curve
+            self.range, self.height, self.spin, self.pull, self.down, self.curve, self.core
         )
     }
     fn can_act(&self) -> bool {
         self.spin != 0.0 || self.pull != 0.0 || self.down != 0.0
     }
     fn stiffness_field(&self) -> &'static str {
-        if self.pull.abs() > self.spin.abs() {
-            "pull"
-        } else {
-            "spin"
-        }
+        "pull"
     }
     fn stiffness(&self) -> Stiffness {
-        // Spin and pull both change by about their size over one funnel radius.
-        Stiffness::Oscillation((self.spin.abs().max(self.pull.abs()) / self.range).sqrt())
+        // Only a positive pull makes an oscillation: inside the core it is a harmonic well
+        // across the axis with ω² = pull / core. Spin is a rotation field with no oscillating
+        // mode: its linearisation grows in the physics itself (at sqrt(spin / 2 core)), and the
+        // integrators follow that growth at any step (docs/accuracy.md), so it sets no limit.
+        if self.pull > 0.0 {
+            Stiffness::Oscillation((self.pull / self.core).sqrt())
+        } else {
+            Stiffness::None
+        }
+    }
+    fn core_well(&self) -> Option<CoreWell> {
+        // Across the axis at the funnel's base, where the well is widest and deepest.
+        (self.pull > 0.0).then(|| CoreWell::of(self.pull, self.core, self.range))
     }
     fn emit_wgsl(&self, w: &mut Writer) {
         w.block("", |w| {
@@ -156,24 +189,23 @@ impl ForceTerm for VortexTerm {
             w.block(
                 format!("if (h > 0.0 && h < {})", f32_lit(self.height)),
                 |w| {
+                    // range_h >= core > 0 and max(rho, core) > 0: no division by zero, and
+                    // radial / max(rho, core) has length <= 1, so huge strengths cannot make
+                    // inf * 0.
                     w.line(format!("let range_h = {};", self.funnel_wgsl()));
-                    w.block(format!("if (range_h > {})", f32_lit(RANGE_EPS)), |w| {
-                        w.line("let radial = rel - h * axis;");
-                        w.line("let rho2 = dot(radial, radial);");
-                        w.line("var r_hat = vec3<f32>(0.0);");
-                        w.line("var rho = 0.0;");
-                        w.block(format!("if (rho2 > {})", f32_lit(AXIS_EPS2)), |w| {
-                            w.line("rho = sqrt(rho2);");
-                            w.line("r_hat = radial / rho;");
-                        });
-                        w.line("let wgt = clamp((range_h - rho) / range_h, 0.0, 1.0);");
-                        w.line(format!(
-                            "a += wgt * ({} * cross(axis, r_hat) - {} * r_hat + {} * axis);",
-                            f32_lit(self.spin),
-                            f32_lit(self.pull),
-                            f32_lit(self.down)
-                        ));
-                    });
+                    w.line("let radial = rel - h * axis;");
+                    w.line("let rho = length(radial);");
+                    w.line("let wgt = clamp((range_h - rho) / range_h, 0.0, 1.0);");
+                    w.line(format!(
+                        "let r_in = radial / max(rho, {});",
+                        f32_lit(self.core_f32())
+                    ));
+                    w.line(format!(
+                        "a += wgt * ({} * cross(axis, r_in) - {} * r_in + {} * axis);",
+                        f32_lit(self.spin),
+                        f32_lit(self.pull),
+                        f32_lit(self.down)
+                    ));
                 },
             );
         });
@@ -184,20 +216,13 @@ impl ForceTerm for VortexTerm {
         if !(h > 0.0 && h < self.height) {
             return DVec3::ZERO;
         }
-        let range_h = self.range * ((self.height - h) / self.height).powf(self.curve);
-        if range_h <= RANGE_EPS {
-            return DVec3::ZERO;
-        }
+        let range_h =
+            (self.range * ((self.height - h) / self.height).powf(self.curve)).max(self.core);
         let radial = rel - h * self.axis;
-        let rho2 = radial.length_squared();
-        let (rho, r_hat) = if rho2 > AXIS_EPS2 {
-            let rho = rho2.sqrt();
-            (rho, radial / rho)
-        } else {
-            (0.0, DVec3::ZERO)
-        };
+        let rho = radial.length();
         let w = ((range_h - rho) / range_h).clamp(0.0, 1.0);
-        w * (self.spin * self.axis.cross(r_hat) - self.pull * r_hat + self.down * self.axis)
+        let r_in = radial / rho.max(self.core);
+        w * (self.spin * self.axis.cross(r_in) - self.pull * r_in + self.down * self.axis)
     }
 }
 
@@ -216,6 +241,7 @@ mod tests {
             pull: 0.0,
             down: 0.0,
             curve: 1.0,
+            core: None,
         }
         .lower(0);
         // At +x, counter-clockwise seen from +y means moving toward -z.
