@@ -2,6 +2,8 @@
 //! llvmpipe where there is no GPU), and runners for the GPU and the CPU reference.
 #![allow(dead_code)]
 
+pub mod effect_gen;
+
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use plume::compiler::reference::{ParticleRecord, ReferenceSim, Totals};

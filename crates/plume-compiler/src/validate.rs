@@ -7,10 +7,53 @@ use crate::forces::force_path;
 use crate::path::ValuePath;
 use crate::schema::{Collider, Effect, Emitter, KillVolume, Shape, Velocity};
 
+/// The most emitters an effect may have: each takes 16 bytes of the per-step uniform, and
+/// 16 + 16 x 1023 bytes is the 16 KiB every WebGPU adapter must allow in a uniform binding.
+pub const MAX_EMITTERS: usize = 1023;
+/// The most forces (before folding): each can add a block to the fused update kernel, and the
+/// largest kernels tested run on llvmpipe (400 terms, tests/extremes.rs). Past this, shader
+/// compilers slow down sharply and drivers may refuse the kernel.
+pub const MAX_FORCES: usize = 512;
+/// The most collide planes, and separately the most kill volumes (same reason as forces).
+pub const MAX_VOLUMES: usize = 256;
+
 /// Checks the whole effect; returns the checker holding every error found.
 pub fn check_effect(effect: &Effect) -> Checker {
     let mut c = Checker::default();
     let root = ValuePath::root();
+    for (field, len, max, why) in [
+        (
+            "emitters",
+            effect.emitters.len(),
+            MAX_EMITTERS,
+            "each takes 16 bytes of the 16 KiB per-step uniform every adapter allows",
+        ),
+        (
+            "forces",
+            effect.forces.len(),
+            MAX_FORCES,
+            "larger fused kernels are untested and may be refused by drivers",
+        ),
+        (
+            "collide",
+            effect.collide.len(),
+            MAX_VOLUMES,
+            "larger fused kernels are untested and may be refused by drivers",
+        ),
+        (
+            "kill",
+            effect.kill.len(),
+            MAX_VOLUMES,
+            "larger fused kernels are untested and may be refused by drivers",
+        ),
+    ] {
+        if len > max {
+            c.error(
+                &root.field(field),
+                format!("has {len} entries, more than the {max} one kernel can hold ({why})"),
+            );
+        }
+    }
     if effect.capacity == 0 {
         c.error(&root.field("capacity"), "must be >= 1, got 0");
     }

@@ -35,6 +35,24 @@ pub enum RuntimeError {
         /// The largest capacity that fits.
         max_capacity: u64,
     },
+    /// The device was lost (driver reset, GPU removed, or destroyed); nothing more can run on it.
+    #[error("the GPU device ({adapter}) was lost ({reason}); results from this run are incomplete and nothing was written. Run again; if it repeats, the driver is resetting the GPU (check the system log) or try another adapter (--backend)")]
+    DeviceLost {
+        /// Adapter name.
+        adapter: String,
+        /// wgpu's reason and message.
+        reason: String,
+    },
+    /// A GPU allocation failed for lack of memory.
+    #[error("the GPU ran out of memory allocating {what} ({bytes} bytes); lower capacity (the particle state takes {bytes_per_particle} bytes a slot) or free GPU memory")]
+    OutOfMemory {
+        /// What was being allocated.
+        what: String,
+        /// Its size.
+        bytes: u64,
+        /// Bytes per particle slot of the layout.
+        bytes_per_particle: u32,
+    },
     /// wgpu reported a validation or out-of-memory error.
     #[error("GPU error: {0}")]
     Gpu(String),

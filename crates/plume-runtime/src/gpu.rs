@@ -37,6 +37,8 @@ pub struct Gpu {
     pub limits: wgpu::Limits,
     /// The first uncaptured wgpu error since the last [`Gpu::take_error`].
     errors: Arc<Mutex<Option<String>>>,
+    /// Why the device was lost, once it has been (never cleared: a lost device stays lost).
+    lost: Arc<Mutex<Option<String>>>,
 }
 
 fn instance(backends: wgpu::Backends) -> wgpu::Instance {
@@ -112,6 +114,13 @@ impl Gpu {
             let mut slot = sink.lock().unwrap_or_else(|p| p.into_inner());
             slot.get_or_insert_with(|| e.to_string());
         }));
+        // A driver reset, a removed GPU or `Device::destroy`: every later call reports it.
+        let lost: Arc<Mutex<Option<String>>> = Arc::default();
+        let lost_sink = lost.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            let mut slot = lost_sink.lock().unwrap_or_else(|p| p.into_inner());
+            slot.get_or_insert_with(|| format!("{reason:?}: {message}"));
+        });
         Ok(Self {
             adapter,
             device,
@@ -119,6 +128,7 @@ impl Gpu {
             info,
             limits,
             errors,
+            lost,
         })
     }
 
@@ -141,8 +151,15 @@ impl Gpu {
         )
     }
 
-    /// Returns the first wgpu error since the last call, as a [`RuntimeError`].
+    /// Returns [`RuntimeError::DeviceLost`] once the device is lost, else the first wgpu error
+    /// since the last call, as a [`RuntimeError`].
     pub fn take_error(&self) -> Result<(), RuntimeError> {
+        if let Some(reason) = self.lost.lock().unwrap_or_else(|p| p.into_inner()).clone() {
+            return Err(RuntimeError::DeviceLost {
+                adapter: self.info.name.clone(),
+                reason,
+            });
+        }
         let mut slot = self.errors.lock().unwrap_or_else(|p| p.into_inner());
         match slot.take() {
             Some(msg) => Err(RuntimeError::Gpu(msg)),

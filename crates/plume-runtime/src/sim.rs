@@ -119,6 +119,9 @@ impl<'g> GpuSim<'g> {
         let storage = wgpu::BufferUsages::STORAGE
             | wgpu::BufferUsages::COPY_SRC
             | wgpu::BufferUsages::COPY_DST;
+        // Allocation failures (the driver's out-of-memory) are caught here and reported with
+        // the sizes, instead of surfacing later as an invalid-buffer error.
+        let out_of_memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let free_list = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("free_list"),
             size: cap * 4,
@@ -257,6 +260,17 @@ impl<'g> GpuSim<'g> {
                 len,
                 buffer,
                 bind_group,
+            });
+        }
+        if let Some(e) = pollster::block_on(out_of_memory.pop()) {
+            return Err(RuntimeError::OutOfMemory {
+                what: format!(
+                    "{chunk_count} particle buffer(s) of up to {} bytes and a {}-byte free list ({e})",
+                    chunk_slots * bpp,
+                    cap * 4
+                ),
+                bytes: cap * (bpp + 4),
+                bytes_per_particle: effect.layout.bytes_per_particle,
             });
         }
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {

@@ -1,0 +1,336 @@
+//! Random effect files for the fuzz and differential tests, written as RON text.
+//!
+//! Two flavours share one grammar (every section and variant of the format):
+//! - [`Flavor::Wild`]: structurally valid files whose numbers come from a mix of edge values
+//!   (0, -0, ±1e30, 1e-30, f64::MAX, NaN, ±inf, u32::MAX ...) and ordinary ones. The compiler must
+//!   reject them with diagnostics or accept them with naga-valid WGSL, and never panic.
+//! - [`Flavor::Tame`]: valid, moderate effects (small capacity, gentle forces, no planes or kill
+//!   volumes, whose decisions within f32 rounding are known to split GPU from CPU) for the GPU
+//!   vs CPU-reference comparison.
+//! - [`Flavor::Valid`]: the tame numbers with every feature (planes, kill volumes, Exact).
+#![allow(dead_code)]
+
+use proptest::prelude::*;
+
+/// Which kind of numbers to draw.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Flavor {
+    /// Anything, edge values included.
+    Wild,
+    /// Valid and moderate numbers, every feature.
+    Valid,
+    /// Valid and moderate, without planes, kill volumes or Exact.
+    Tame,
+}
+
+/// An f64 as RON writes it (`NaN`, `inf` and `-inf` included).
+fn ron_f64(x: f64) -> String {
+    if x.is_nan() {
+        "NaN".into()
+    } else if x.is_infinite() {
+        if x > 0.0 { "inf" } else { "-inf" }.into()
+    } else {
+        format!("{x:?}")
+    }
+}
+
+/// Mostly the tame range (so that many files get deep into the compiler), sometimes any
+/// ordinary number, sometimes an edge value.
+fn wild_f64(lo: f64, hi: f64) -> BoxedStrategy<f64> {
+    prop_oneof![
+        12 => lo..hi,
+        3 => -10.0..10.0f64,
+        1 => -1e4..1e4f64,
+        1 => prop::sample::select(vec![
+            0.0, -0.0, 1.0, -1.0, 0.5, 1e30, -1e30, 1e-30, -1e-30, 1e-300, f64::MAX, f64::MIN,
+            f64::MIN_POSITIVE, f64::EPSILON, f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 3.4e38,
+            3.5e38, 1e-45, 16777217.0, 1e6, 256.0,
+        ]),
+    ]
+    .boxed()
+}
+
+fn num(flavor: Flavor, lo: f64, hi: f64) -> BoxedStrategy<String> {
+    match flavor {
+        Flavor::Wild => wild_f64(lo, hi).prop_map(ron_f64).boxed(),
+        Flavor::Valid | Flavor::Tame => (lo..hi).prop_map(ron_f64).boxed(),
+    }
+}
+
+fn count(flavor: Flavor, lo: u32, hi: u32) -> BoxedStrategy<u32> {
+    match flavor {
+        Flavor::Wild => prop_oneof![
+            8 => lo..=hi,
+            2 => 0u32..300,
+            1 => prop::sample::select(vec![0, 1, 255, 256, 257, 65_535, 1 << 20, 1 << 31, u32::MAX]),
+        ]
+        .boxed(),
+        Flavor::Valid | Flavor::Tame => (lo..=hi).boxed(),
+    }
+}
+
+fn vec3(flavor: Flavor, lo: f64, hi: f64) -> BoxedStrategy<String> {
+    (
+        num(flavor, lo, hi),
+        num(flavor, lo, hi),
+        num(flavor, lo, hi),
+    )
+        .prop_map(|(x, y, z)| format!("({x}, {y}, {z})"))
+        .boxed()
+}
+
+/// A direction: never near zero in the tame flavour.
+fn direction(flavor: Flavor) -> BoxedStrategy<String> {
+    match flavor {
+        Flavor::Wild => vec3(flavor, -1.0, 1.0),
+        Flavor::Valid | Flavor::Tame => (0.3..1.0f64, -1.0..1.0f64, -1.0..1.0f64, any::<bool>())
+            .prop_map(|(a, b, c, flip)| {
+                let a = if flip { -a } else { a };
+                format!("({}, {}, {})", ron_f64(b), ron_f64(a), ron_f64(c))
+            })
+            .boxed(),
+    }
+}
+
+fn range(flavor: Flavor, lo: f64, hi: f64) -> BoxedStrategy<String> {
+    match flavor {
+        Flavor::Wild => (num(flavor, lo, hi), num(flavor, lo, hi))
+            .prop_map(|(a, b)| format!("({a}, {b})"))
+            .boxed(),
+        Flavor::Valid | Flavor::Tame => (lo..hi, lo..hi)
+            .prop_map(|(a, b)| format!("({}, {})", ron_f64(a.min(b)), ron_f64(a.max(b))))
+            .boxed(),
+    }
+}
+
+fn shape(flavor: Flavor) -> BoxedStrategy<String> {
+    let f = flavor;
+    prop_oneof![
+        vec3(f, -2.0, 2.0).prop_map(|p| format!("Point({p})")),
+        (vec3(f, -2.0, 2.0), num(f, 0.01, 1.0))
+            .prop_map(|(c, r)| format!("Sphere(center: {c}, radius: {r})")),
+        (vec3(f, -2.0, -0.5), vec3(f, 0.5, 2.0))
+            .prop_map(|(a, b)| format!("Box(min: {a}, max: {b})")),
+        (vec3(f, -2.0, 2.0), direction(f), num(f, 0.01, 1.0))
+            .prop_map(|(c, n, r)| format!("Disc(center: {c}, normal: {n}, radius: {r})")),
+        (
+            vec3(f, -2.0, -0.5),
+            vec3(f, 0.5, 2.0),
+            count(f, 1, 3),
+            count(f, 1, 3),
+            count(f, 1, 3)
+        )
+            .prop_map(|(a, b, x, y, z)| format!(
+                "Grid(min: {a}, max: {b}, counts: ({x}, {y}, {z}))"
+            )),
+        prop::collection::vec(vec3(f, -2.0, 2.0), usize::from(f != Flavor::Wild)..4)
+            .prop_map(|ps| format!("Points([{}])", ps.join(", "))),
+    ]
+    .boxed()
+}
+
+fn velocity(flavor: Flavor) -> BoxedStrategy<String> {
+    let f = flavor;
+    prop_oneof![
+        vec3(f, -3.0, 3.0).prop_map(|v| format!("Constant({v})")),
+        (direction(f), num(f, 0.0, 60.0), range(f, 0.0, 4.0))
+            .prop_map(|(a, ang, s)| format!("Cone(axis: {a}, angle: {ang}, speed: {s})")),
+        range(f, 0.0, 4.0).prop_map(|s| format!("Radial(speed: {s})")),
+    ]
+    .boxed()
+}
+
+fn emitter(flavor: Flavor) -> BoxedStrategy<String> {
+    let f = flavor;
+    let lifetime = prop_oneof![
+        Just(String::new()),
+        range(f, 0.5, 3.0).prop_map(|r| format!(", lifetime: Some({r})")),
+    ];
+    (
+        count(f, 1, 24),
+        num(f, 0.0, 60.0),
+        shape(f),
+        velocity(f),
+        lifetime,
+    )
+        .prop_map(|(burst, rate, shape, vel, life)| {
+            format!("Emitter(burst: {burst}, rate: {rate}, shape: {shape}, velocity: {vel}{life})")
+        })
+        .boxed()
+}
+
+fn force(flavor: Flavor) -> BoxedStrategy<String> {
+    let f = flavor;
+    prop_oneof![
+        vec3(f, -3.0, 3.0).prop_map(|g| format!("Gravity({g})")),
+        (num(f, 0.0, 2.0), vec3(f, -1.0, 1.0))
+            .prop_map(|(k, fl)| format!("Drag(k: {k}, fluid: {fl})")),
+        (
+            direction(f),
+            num(f, 0.0, 2.0),
+            num(f, 0.0, 1.0),
+            num(f, 0.5, 4.0)
+        )
+            .prop_map(|(d, s, n, sc)| format!(
+                "Wind(direction: {d}, strength: {s}, noise: {n}, noise_scale: {sc})"
+            )),
+        (vec3(f, -2.0, 2.0), num(f, 2.0, 6.0), num(f, -1.0, 2.0), any::<bool>()).prop_map(
+            |(c, r, s, core)| {
+                let core = if core { ", core: 1.0" } else { "" };
+                format!("Attractor(center: {c}, range: {r}, strength: {s}{core})")
+            }
+        ),
+        (
+            vec3(f, -1.0, 1.0),
+            direction(f),
+            num(f, 1.5, 4.0),
+            num(f, 1.0, 6.0),
+            (num(f, -2.0, 2.0), num(f, -1.0, 1.0), num(f, -1.0, 1.0), num(f, 0.0, 2.0))
+        )
+            .prop_map(|(c, a, r, h, (spin, pull, down, curve))| format!(
+                "Vortex(center: {c}, axis: {a}, range: {r}, height: {h}, spin: {spin}, pull: {pull}, down: {down}, curve: {curve})"
+            )),
+    ]
+    .boxed()
+}
+
+fn plane(flavor: Flavor) -> BoxedStrategy<String> {
+    let f = flavor;
+    (
+        vec3(f, -3.0, -1.0),
+        direction(f),
+        num(f, 0.0, 1.0),
+        num(f, 0.0, 1.0),
+    )
+        .prop_map(|(p, n, r, fr)| {
+            format!("Plane(point: {p}, normal: {n}, restitution: {r}, friction: {fr})")
+        })
+        .boxed()
+}
+
+fn kill(flavor: Flavor) -> BoxedStrategy<String> {
+    let f = flavor;
+    prop_oneof![
+        (vec3(f, -9.0, -8.0), vec3(f, 8.0, 9.0))
+            .prop_map(|(a, b)| format!("InsideBox(min: {a}, max: {b})")),
+        (vec3(f, -9.0, -8.0), vec3(f, 8.0, 9.0))
+            .prop_map(|(a, b)| format!("OutsideBox(min: {a}, max: {b})")),
+        (vec3(f, -1.0, 1.0), num(f, 0.1, 1.0))
+            .prop_map(|(c, r)| format!("InsideSphere(center: {c}, radius: {r})")),
+        (vec3(f, -1.0, 1.0), num(f, 20.0, 30.0))
+            .prop_map(|(c, r)| format!("OutsideSphere(center: {c}, radius: {r})")),
+    ]
+    .boxed()
+}
+
+fn render(flavor: Flavor) -> BoxedStrategy<String> {
+    let f = flavor;
+    // Tame stops sit at t = 0, 0.5, 1 in order; wild ones anywhere.
+    let at = move |i: usize| match f {
+        Flavor::Valid | Flavor::Tame => Just(ron_f64(i as f64 * 0.5)).boxed(),
+        Flavor::Wild => num(f, 0.0, 1.0),
+    };
+    let stop = move |i: usize| {
+        (at(i), vec3(f, 0.0, 1.0), num(f, 0.0, 1.0)).prop_map(|(t, c, a)| {
+            let c = c.trim_start_matches('(').trim_end_matches(')').to_string();
+            format!("({t}, ({c}, {a}))")
+        })
+    };
+    let size = move |i: usize| (at(i), num(f, 0.01, 0.3)).prop_map(|(t, s)| format!("({t}, {s})"));
+    let min = usize::from(f != Flavor::Wild);
+    let stops = (min..3usize).prop_flat_map(move |n| (0..n).map(stop).collect::<Vec<_>>());
+    let sizes = (min..3usize).prop_flat_map(move |n| (0..n).map(size).collect::<Vec<_>>());
+    (
+        stops,
+        sizes,
+        prop::sample::select(vec!["Alpha", "Additive"]),
+        vec3(f, 0.0, 1.0),
+    )
+        .prop_map(|(c, s, b, bg)| {
+            format!(
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}),",
+                c.join(", "),
+                s.join(", ")
+            )
+        })
+        .boxed()
+}
+
+/// The integrator names of the format (Auto included).
+pub const INTEGRATORS: &[&str] = &[
+    "Auto",
+    "Euler",
+    "SemiImplicitEuler",
+    "Verlet",
+    "Midpoint",
+    "Rk4",
+    "Exact",
+];
+
+/// A whole effect file.
+pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
+    let f = flavor;
+    let tame = f == Flavor::Tame;
+    let integrators: Vec<&'static str> = if tame {
+        // Exact is only allowed for some force mixes; Auto covers it where it is.
+        INTEGRATORS
+            .iter()
+            .copied()
+            .filter(|i| *i != "Exact")
+            .collect()
+    } else {
+        INTEGRATORS.to_vec()
+    };
+    let planes = if tame { 0..1usize } else { 0..3 };
+    let kills = if tame { 0..1usize } else { 0..3 };
+    (
+        (
+            count(f, 8, 64),
+            any::<u32>(),
+            num(f, 0.005, 0.034),
+            count(f, 1, 3),
+        ),
+        prop::collection::vec(emitter(f), if tame { 1..3 } else { 0..3 }),
+        prop::collection::vec(force(f), 0..5),
+        prop::collection::vec(plane(f), planes),
+        prop::collection::vec(kill(f), kills),
+        (
+            prop::sample::select(integrators),
+            prop_oneof![Just(String::new()), num(f, 5.0, 50.0).prop_map(|s| format!("max_speed: Some({s}),"))],
+            any::<bool>(),
+            prop_oneof![Just(String::new()), render(f)],
+        ),
+    )
+        .prop_map(
+            move |((cap, seed, dt, substeps), emitters, forces, planes, kills, (integ, max_speed, sort, render))| {
+                format!(
+                    "Effect(\n    name: \"fuzz\",\n    capacity: {cap},\n    seed: {seed},\n    dt: {dt},\n    substeps: {substeps},\n    emitters: [{}],\n    forces: [{}],\n    collide: [{}],\n    kill: [{}],\n    integrator: {integ},\n    {max_speed}\n    sort: {sort},\n    {render}\n)\n",
+                    emitters.join(",\n        "),
+                    forces.join(",\n        "),
+                    planes.join(", "),
+                    kills.join(", "),
+                )
+            },
+        )
+        .boxed()
+}
+
+/// Applies byte-level edits (replace, insert, delete) at random offsets of `text`.
+pub fn mutate(text: &str, edits: &[(usize, u8, u8)]) -> String {
+    let mut bytes = text.as_bytes().to_vec();
+    for &(at, op, byte) in edits {
+        if bytes.is_empty() {
+            bytes.push(byte);
+            continue;
+        }
+        let at = at % bytes.len();
+        match op % 3 {
+            0 => bytes[at] = byte,
+            1 => bytes.insert(at, byte),
+            _ => {
+                bytes.remove(at);
+            }
+        }
+    }
+    String::from_utf8_lossy(&bytes).into_owned()
+}

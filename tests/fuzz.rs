@@ -1,0 +1,128 @@
+//! Fuzzing the compiler: raw bytes, byte-edited example files and structurally valid random
+//! effects (tests/common/effect_gen.rs). The compiler must never panic; every error must render
+//! with a message; every effect it accepts must give WGSL that naga validates (compile_str runs
+//! naga; a rejection is `CompileError::Internal`, a Plume bug) and IR whose numbers are finite.
+//!
+//! CI runs a few hundred inputs per kind. The long run (docs/robustness.md):
+//! `PLUME_FUZZ_CASES=350000 cargo test --release --test fuzz -- --nocapture` (three kinds, so
+//! just over 10^6 inputs); each test prints how many inputs it ran and how many were accepted.
+
+mod common;
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use common::effect_gen::{effect, mutate, Flavor};
+use plume::{compile_str, CompileError, CompileOptions};
+use proptest::prelude::*;
+use proptest::test_runner::{Config, TestRunner};
+
+/// Inputs per test: `PLUME_FUZZ_CASES`, or 300 (CI).
+fn cases() -> u32 {
+    std::env::var("PLUME_FUZZ_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(300)
+}
+
+fn runner() -> TestRunner {
+    TestRunner::new(Config {
+        cases: cases(),
+        // Failures are reported with the shrunk input; no regression files are written.
+        failure_persistence: None,
+        ..Config::default()
+    })
+}
+
+/// Compiles `source` and checks the contract; returns whether it was accepted.
+fn check(source: &str) -> Result<bool, TestCaseError> {
+    match compile_str(source, &CompileOptions::default()) {
+        Ok(c) => {
+            prop_assert!(!c.wgsl.is_empty());
+            // Warnings must render (their spans point into the source).
+            let _ = c.warnings.render("fuzz.ron", source);
+            prop_assert!(c.ir.dt.is_finite() && c.ir.dt > 0.0, "dt {}", c.ir.dt);
+            prop_assert!(c.layout.bytes_per_particle > 0);
+            Ok(true)
+        }
+        Err(CompileError::Invalid(d)) => {
+            prop_assert!(!d.items.is_empty(), "an error with no diagnostics");
+            let text = d.render("fuzz.ron", source);
+            prop_assert!(text.contains("error"), "{text}");
+            Ok(false)
+        }
+        Err(e @ CompileError::Internal(_)) => Err(TestCaseError::fail(format!(
+            "naga rejected accepted input:\n{source}\n{e}"
+        ))),
+    }
+}
+
+/// Runs `strategy` through [`check`], then prints the count.
+fn fuzz<S: Strategy>(name: &str, strategy: S, to_text: impl Fn(S::Value) -> String) {
+    let accepted = AtomicU64::new(0);
+    let total = AtomicU64::new(0);
+    let mut runner = runner();
+    let result = runner.run(&strategy, |value| {
+        let text = to_text(value);
+        total.fetch_add(1, Ordering::Relaxed);
+        if check(&text)? {
+            accepted.fetch_add(1, Ordering::Relaxed);
+        }
+        Ok(())
+    });
+    println!(
+        "fuzz {name}: {} inputs, {} accepted, no panic",
+        total.load(Ordering::Relaxed),
+        accepted.load(Ordering::Relaxed)
+    );
+    if let Err(e) = result {
+        panic!("{name}: {e}");
+    }
+}
+
+#[test]
+fn raw_bytes_never_panic_the_compiler() {
+    fuzz(
+        "raw bytes",
+        prop::collection::vec(any::<u8>(), 0..400),
+        |bytes| String::from_utf8_lossy(&bytes).into_owned(),
+    );
+}
+
+/// Bytes that matter to RON, so that edits reach past the first syntax error.
+const RON_BYTES: &[u8] = b"()[],:.-+e0123456789 \n\"SomeNoneEmitterPoint_xyz";
+
+#[test]
+fn edited_example_files_never_panic_the_compiler() {
+    let examples: Vec<String> = std::fs::read_dir("effects")
+        .unwrap()
+        .map(|e| std::fs::read_to_string(e.unwrap().path()).unwrap())
+        .collect();
+    let n = examples.len();
+    let edit = (any::<usize>(), any::<u8>(), prop::sample::select(RON_BYTES));
+    fuzz(
+        "edited examples",
+        (0..n, prop::collection::vec(edit, 1..6)),
+        move |(which, edits)| mutate(&examples[which], &edits),
+    );
+}
+
+#[test]
+fn wild_structured_effects_are_rejected_cleanly_or_give_valid_wgsl() {
+    // Two thirds with edge values anywhere, one third valid numbers with every feature (planes,
+    // kill volumes, Exact), so that many files reach the passes and naga.
+    let strategy = prop_oneof![2 => effect(Flavor::Wild), 1 => effect(Flavor::Valid)];
+    fuzz("structured", strategy, |text| text);
+}
+
+#[test]
+fn tame_effects_are_all_accepted() {
+    // The differential test's generator must produce valid effects, or it would test nothing.
+    let mut runner = runner();
+    runner
+        .run(&effect(Flavor::Tame), |text| {
+            let accepted = check(&text)?;
+            prop_assert!(accepted, "tame effect rejected:\n{text}");
+            Ok(())
+        })
+        .unwrap();
+}
