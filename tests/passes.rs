@@ -322,3 +322,38 @@ fn overrides_replace_file_values() {
     );
     assert!(matches!(bad, Err(CompileError::Invalid(_))));
 }
+
+#[test]
+fn all_pairs_flocking_warns_from_the_measured_crossover_and_flock_blocks_exact() {
+    let flock = |neighbors: &str| {
+        format!("Flock(radius: 0.5, separation: 1.0, cohesion: 0.1, neighbors: {neighbors})")
+    };
+    let at = |capacity: u32, neighbors: &str| {
+        warnings(
+            &effect(&flock(neighbors), "")
+                .replace("capacity: 1000", &format!("capacity: {capacity}")),
+        )
+    };
+    let crossover = plume::compiler::forces::flock::GRID_FASTER_FROM;
+    let w = at(crossover, "AllPairs");
+    assert!(
+        w.iter()
+            .any(|m| m.contains("(Flock).neighbors: all pairs at capacity")),
+        "{w:?}"
+    );
+    assert!(at(crossover - 1, "AllPairs").is_empty());
+    assert!(at(crossover, "Grid(cell: 0.5)").is_empty());
+    // A flock couples particles: no closed form.
+    let err = plume::compile_str(
+        &effect(&flock("AllPairs"), "integrator: Exact,"),
+        &Default::default(),
+    )
+    .unwrap_err()
+    .render("t.ron", "");
+    assert!(err.contains("(Flock) couples particles"), "{err}");
+    // A grid cell smaller than the radius would miss neighbours: an error.
+    let err = plume::compile_str(&effect(&flock("Grid(cell: 0.4)"), ""), &Default::default())
+        .unwrap_err()
+        .render("t.ron", "");
+    assert!(err.contains("must be >= radius"), "{err}");
+}

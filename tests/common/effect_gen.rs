@@ -190,6 +190,28 @@ fn force(flavor: Flavor) -> BoxedStrategy<String> {
             .prop_map(|(c, a, r, h, (spin, pull, down, curve))| format!(
                 "Vortex(center: {c}, axis: {a}, range: {r}, height: {h}, spin: {spin}, pull: {pull}, down: {down}, curve: {curve})"
             )),
+        (
+            num(f, 0.2, 1.0),
+            (num(f, 0.0, 2.0), num(f, 0.0, 1.0), num(f, 0.0, 0.5), num(f, 0.0, 0.5)),
+            // Tame flocks average globally: a local mean jumps when a neighbour crosses the
+            // radius, so a crossing decided within f32 rounding splits GPU from reference
+            // (tests/flock.rs covers Local against the reference on its own terms).
+            prop::sample::select(if f == Flavor::Tame {
+                vec!["Global"]
+            } else {
+                vec!["Global", "Local"]
+            }),
+            prop_oneof![Just(None), num(f, 1.0, 2.0).prop_map(Some)],
+        )
+            .prop_map(|(r, (sep, avoid, coh, ali), scope, cell)| {
+                let neighbors = match cell {
+                    Some(c) => format!("Grid(cell: {c})"),
+                    None => String::from("AllPairs"),
+                };
+                format!(
+                    "Flock(radius: {r}, separation: {sep}, avoidance: {avoid}, cohesion: {coh}, alignment: {ali}, scope: {scope}, neighbors: {neighbors})"
+                )
+            }),
     ]
     .boxed()
 }
@@ -302,7 +324,15 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
         ),
     )
         .prop_map(
-            move |((cap, seed, dt, substeps), emitters, forces, planes, kills, (integ, max_speed, sort, render))| {
+            move |((cap, seed, dt, substeps), emitters, mut forces, planes, kills, (integ, max_speed, sort, render))| {
+                if f != Flavor::Wild {
+                    // An effect has at most one Flock.
+                    let mut flocks = 0;
+                    forces.retain(|force| !force.starts_with("Flock") || {
+                        flocks += 1;
+                        flocks == 1
+                    });
+                }
                 format!(
                     "Effect(\n    name: \"fuzz\",\n    capacity: {cap},\n    seed: {seed},\n    dt: {dt},\n    substeps: {substeps},\n    emitters: [{}],\n    forces: [{}],\n    collide: [{}],\n    kill: [{}],\n    integrator: {integ},\n    {max_speed}\n    sort: {sort},\n    {render}\n)\n",
                     emitters.join(",\n        "),

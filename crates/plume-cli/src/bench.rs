@@ -74,6 +74,8 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "sort_bitonic_ms": r.sort.map(|(_, s)| s * 1e3),
                 "sort_radix_keys_per_s": r.sort.map(|(s, _)| r.particles as f64 / s),
                 "sort_bitonic_keys_per_s": r.sort.map(|(_, s)| r.particles as f64 / s),
+                "flock_mean_neighbours": r.flock.as_ref().map(|(n, _)| *n),
+                "flock_search": r.flock.as_ref().map(|(_, s)| s.clone()),
             })
         );
     } else {
@@ -109,6 +111,9 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 bitonic * 1e3,
                 r.particles as f64 / bitonic * 1e-9
             );
+        }
+        if let Some((n, search)) = &r.flock {
+            println!("  flock               {search}: {n:.1} neighbours per boid on average (the step time above includes the flocking pass)");
         }
         if let Some((w, h, s)) = r.render {
             println!("  render              {:.2} ms for a {w}x{h} frame of all particles (wall clock: sprite upload, draw, readback)", s * 1e3);

@@ -29,6 +29,8 @@ pub struct EffectIr {
     pub emitters: Vec<EmitterIr>,
     /// Force terms (after the passes: folded, merged, pruned).
     pub terms: Vec<Term>,
+    /// Flocking, when the effect has a Flock force.
+    pub flock: Option<crate::forces::flock::FlockIr>,
     /// Speed limit after every velocity update.
     pub max_speed: Option<f64>,
     /// The integrator; concrete (never Auto) after the integrator pass.
@@ -370,12 +372,15 @@ impl fmt::Display for EffectIr {
             writeln!(f, "        velocity {:?}", e.velocity)?;
         }
         writeln!(f, "  forces")?;
-        if self.terms.is_empty() {
+        if self.terms.is_empty() && self.flock.is_none() {
             writeln!(f, "    (none)")?;
         }
         for t in &self.terms {
             let t = t.as_dyn();
             writeln!(f, "    {}  <- forces{:?}", t.describe(), t.origins())?;
+        }
+        if let Some(flock) = &self.flock {
+            writeln!(f, "    {}  <- forces[{}]", flock.describe(), flock.origin)?;
         }
         writeln!(f, "  planes")?;
         for p in &self.planes {

@@ -3,7 +3,7 @@
 
 use glam::DVec3;
 
-use crate::forces::safe_normalize;
+use crate::forces::{safe_normalize, Force};
 use crate::ir::{
     Basis, CameraIr, EffectIr, EmitterIr, KillIr, PlaneIr, RenderIr, ShapeIr, VelocityIr,
 };
@@ -40,6 +40,10 @@ pub fn lower(effect: &Effect) -> EffectIr {
             .enumerate()
             .flat_map(|(i, f)| f.lower(i, effect.seed))
             .collect(),
+        flock: effect.forces.iter().enumerate().find_map(|(i, f)| match f {
+            Force::Flock(flock) => Some(flock.lower(i)),
+            _ => None,
+        }),
         max_speed: effect.max_speed,
         integrator: effect.integrator,
         integrator_reason: String::from("chosen in the file"),

@@ -64,8 +64,18 @@ pub fn check_effect(effect: &Effect) -> Checker {
     for (i, e) in effect.emitters.iter().enumerate() {
         check_emitter(&mut c, &root.field("emitters").index(i), e, effect.dt);
     }
+    let mut flocks = 0;
     for (i, f) in effect.forces.iter().enumerate() {
         f.check(&force_path(i, f), &mut c);
+        if matches!(f, crate::forces::Force::Flock(_)) {
+            flocks += 1;
+            if flocks == 2 {
+                c.error(
+                    &force_path(i, f),
+                    "a second Flock: an effect has one flock (merge their strengths into one)",
+                );
+            }
+        }
     }
     if let Some(s) = effect.max_speed {
         c.positive(&root.field("max_speed"), s);

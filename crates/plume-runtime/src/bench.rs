@@ -53,6 +53,9 @@ pub struct BenchResult {
     pub render: Option<(u32, u32, f64)>,
     /// Timestamps or wall clock.
     pub timing: TimingSource,
+    /// For flocking effects: the mean number of neighbours within the radius per live boid
+    /// during the timed steps, and the neighbour search used.
+    pub flock: Option<(f64, String)>,
 }
 
 impl BenchResult {
@@ -83,7 +86,27 @@ impl BenchResult {
 /// Forces, integrator, collisions and kills are the effect's own, so the layout is too.
 pub fn bench_effect(effect: &Effect, particles: u32) -> Effect {
     let mut e = effect.clone();
+    let file_count: u32 = e.emitters.iter().map(|em| em.burst).sum();
     e.capacity = particles.max(1);
+    // A flock keeps the file's density: spheres and boxes (and their arrangement) grow with the
+    // cube root of the count, so the neighbours per boid (what the search costs) stay those the
+    // author chose.
+    let flocks = e
+        .forces
+        .iter()
+        .any(|f| matches!(f, plume_compiler::forces::Force::Flock(_)));
+    if flocks && file_count > 0 {
+        let scale = (f64::from(e.capacity) / f64::from(file_count)).cbrt();
+        let centres: Vec<glam::DVec3> = e
+            .emitters
+            .iter()
+            .map(|em| shape_centre(&em.shape))
+            .collect();
+        let about = centres.iter().sum::<glam::DVec3>() / centres.len().max(1) as f64;
+        for em in &mut e.emitters {
+            scale_shape(&mut em.shape, scale, about);
+        }
+    }
     let weights: Vec<f64> = e
         .emitters
         .iter()
@@ -108,6 +131,39 @@ pub fn bench_effect(effect: &Effect, particles: u32) -> Effect {
         }
     }
     e
+}
+
+fn shape_centre(shape: &plume_compiler::schema::Shape) -> glam::DVec3 {
+    use plume_compiler::schema::Shape;
+    match shape {
+        Shape::Sphere { center, .. } => center.d(),
+        Shape::Box { min, max } => (min.d() + max.d()) * 0.5,
+        Shape::Point(p) => p.d(),
+        Shape::Disc { center, .. } => center.d(),
+        Shape::Grid { min, max, .. } => (min.d() + max.d()) * 0.5,
+        Shape::Points(ps) => ps.iter().map(|p| p.d()).sum::<glam::DVec3>() / ps.len().max(1) as f64,
+    }
+}
+
+/// Scales a spawn shape about `about` (spheres and boxes, centres included, so several shapes
+/// keep their arrangement; other shapes are left as they are).
+fn scale_shape(shape: &mut plume_compiler::schema::Shape, scale: f64, about: glam::DVec3) {
+    use plume_compiler::schema::{Shape, Vec3};
+    let map = |p: glam::DVec3| {
+        let q = about + (p - about) * scale;
+        Vec3(q.x, q.y, q.z)
+    };
+    match shape {
+        Shape::Sphere { center, radius } => {
+            *center = map(center.d());
+            *radius *= scale;
+        }
+        Shape::Box { min, max } => {
+            *min = map(min.d());
+            *max = map(max.d());
+        }
+        _ => {}
+    }
 }
 
 /// Compiles the bench copy of `effect`.
@@ -152,6 +208,24 @@ pub fn bench(
     } else {
         None
     };
+    let flock = match &sim.effect().ir.flock {
+        Some(f) => {
+            let words = sim.read_flock_buffer("flock_out")?;
+            // Word 3 of every 12 is the slot's neighbour count (0 for free slots).
+            let total: f64 = words
+                .chunks_exact(48)
+                .map(|c| f64::from(f32::from_le_bytes([c[12], c[13], c[14], c[15]])))
+                .sum();
+            let search = match f.neighbors {
+                plume_compiler::forces::flock::Neighbors::AllPairs => "all pairs".to_string(),
+                plume_compiler::forces::flock::Neighbors::Grid { cell } => {
+                    format!("grid, cell {cell} m")
+                }
+            };
+            Some((total / live.max(1) as f64, search))
+        }
+        None => None,
+    };
     let render = match render_size {
         None => None,
         Some((w, h)) => {
@@ -176,6 +250,7 @@ pub fn bench(
         copy_seconds: copy,
         spawn_step_seconds: spawn_step,
         timing: timer.source(),
+        flock,
     })
 }
 

@@ -53,6 +53,14 @@ pub enum RuntimeError {
         /// Bytes per particle slot of the layout.
         bytes_per_particle: u32,
     },
+    /// A flocking effect's particle state does not fit in one storage binding.
+    #[error("capacity {capacity} is too large for a flocking effect on this adapter: boids must fit in one storage binding, at most {max_capacity} here; lower capacity")]
+    FlockTooLarge {
+        /// Requested capacity.
+        capacity: u32,
+        /// The most that fit.
+        max_capacity: u64,
+    },
     /// wgpu reported a validation or out-of-memory error.
     #[error("GPU error: {0}")]
     Gpu(String),

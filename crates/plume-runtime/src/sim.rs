@@ -45,6 +45,27 @@ pub struct GpuSim<'g> {
     spawn: wgpu::ComputePipeline,
     update: wgpu::ComputePipeline,
     sort: Option<SortStage<'g>>,
+    flock: Option<FlockStage>,
+}
+
+/// The per-step flocking pass of an effect with a Flock force: snapshot (+ partial sums),
+/// global means, then all pairs or the grid (bucket keys, their sort, bucket ranges, search).
+struct FlockStage {
+    snapshot: wgpu::ComputePipeline,
+    reduce: Option<wgpu::ComputePipeline>,
+    neighbours: wgpu::ComputePipeline,
+    grid: Option<GridStage>,
+    /// The buffers (bindings 7 up), kept for the bind group's lifetime and for tests.
+    buffers: Vec<(u32, wgpu::Buffer)>,
+}
+
+/// The uniform grid's extra kernels and its (bucket, slot) sort.
+struct GridStage {
+    bucket: wgpu::ComputePipeline,
+    clear: wgpu::ComputePipeline,
+    ranges: wgpu::ComputePipeline,
+    buckets: u64,
+    sort: crate::sort::SortProgram,
 }
 
 /// The sort stage of an effect with `sort: true`: one key and one slot per (padded) slot.
@@ -193,6 +214,14 @@ impl<'g> GpuSim<'g> {
                     .into_iter()
                     .flatten(),
             )
+            .chain(
+                effect
+                    .layout
+                    .bindings
+                    .iter()
+                    .filter(|b| b.binding >= 7)
+                    .map(|b| buffer_entry(b.binding, rw, false, None)),
+            )
             .collect::<Vec<_>>(),
         });
         // Sort keys and slots, padded to a power of two for the bitonic baseline; the padding
@@ -207,6 +236,29 @@ impl<'g> GpuSim<'g> {
             });
             (keys, vals)
         });
+        // Flocking's buffers (bindings 7 up), sized by the layout. Boids index slots globally,
+        // so a flocking effect must fit in one particle buffer.
+        let flock_buffers: Vec<(u32, wgpu::Buffer)> = effect
+            .layout
+            .bindings
+            .iter()
+            .filter(|b| b.binding >= 7)
+            .map(|b| {
+                let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(b.name),
+                    size: b.bytes.max(16),
+                    usage: storage,
+                    mapped_at_creation: false,
+                });
+                (b.binding, buffer)
+            })
+            .collect();
+        if effect.ir.flock.is_some() && chunk_count > 1 {
+            return Err(RuntimeError::FlockTooLarge {
+                capacity: effect.ir.capacity,
+                max_capacity: chunk_slots,
+            });
+        }
         let mut chunks = Vec::new();
         for k in 0..chunk_count {
             let len = chunk_slots.min(cap - k * chunk_slots);
@@ -242,6 +294,14 @@ impl<'g> GpuSim<'g> {
                     },
                 ]
                 .into_iter()
+                .chain(
+                    flock_buffers
+                        .iter()
+                        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                            binding: *binding,
+                            resource: buffer.as_entire_binding(),
+                        }),
+                )
                 .chain(sort_buffers.iter().flat_map(|(keys, vals)| {
                     [
                         wgpu::BindGroupEntry {
@@ -288,8 +348,61 @@ impl<'g> GpuSim<'g> {
                 cache: None,
             })
         };
+        let flock = match &effect.ir.flock {
+            Some(f) => {
+                let grid = match f.neighbors {
+                    plume_compiler::forces::flock::Neighbors::Grid { .. } => {
+                        let find = |name: &str| {
+                            let binding = effect
+                                .layout
+                                .bindings
+                                .iter()
+                                .find(|b| b.name == name)
+                                .map(|b| b.binding);
+                            flock_buffers
+                                .iter()
+                                .find(|(b, _)| Some(*b) == binding)
+                                .map(|(_, buffer)| buffer)
+                                .expect("the layout binds the grid's buffers")
+                        };
+                        let sorter = GpuSorter::new(gpu);
+                        Some(GridStage {
+                            bucket: pipeline("grid_bucket"),
+                            clear: pipeline("grid_clear"),
+                            ranges: pipeline("grid_ranges"),
+                            buckets: u64::from(
+                                plume_compiler::forces::flock::FlockIr::grid_buckets(
+                                    effect.ir.capacity,
+                                ),
+                            ),
+                            sort: sorter.program(
+                                SortAlgorithm::Radix,
+                                find("grid_keys"),
+                                find("grid_vals"),
+                                cap,
+                            )?,
+                        })
+                    }
+                    plume_compiler::forces::flock::Neighbors::AllPairs => None,
+                };
+                Some(FlockStage {
+                    snapshot: pipeline("flock_snapshot"),
+                    reduce: (f.scope == plume_compiler::forces::flock::Scope::Global)
+                        .then(|| pipeline("flock_reduce")),
+                    neighbours: pipeline(if grid.is_some() {
+                        "flock_grid"
+                    } else {
+                        "flock_pairs"
+                    }),
+                    grid,
+                    buffers: flock_buffers,
+                })
+            }
+            None => None,
+        };
         let sim = Self {
             gpu,
+            flock,
             schedule: Schedule::new(&effect.ir),
             prepare: pipeline("spawn_prepare"),
             spawn: pipeline("spawn"),
@@ -490,6 +603,9 @@ impl<'g> GpuSim<'g> {
                     pass.dispatch_workgroups(x, y, 1);
                 }
             }
+            if let Some(flock) = &self.flock {
+                self.record_flock(pass, flock, offset)?;
+            }
             pass.set_pipeline(&self.update);
             for chunk in &self.chunks {
                 let (x, y) = self.groups(chunk.len)?;
@@ -498,6 +614,56 @@ impl<'g> GpuSim<'g> {
             }
         }
         Ok(())
+    }
+
+    /// Records one step's flocking pass (single chunk): snapshot, means, neighbour search.
+    fn record_flock(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        flock: &FlockStage,
+        offset: u32,
+    ) -> Result<(), RuntimeError> {
+        let chunk = &self.chunks[0];
+        let (x, y) = self.groups(chunk.len)?;
+        pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+        pass.set_pipeline(&flock.snapshot);
+        pass.dispatch_workgroups(x, y, 1);
+        if let Some(reduce) = &flock.reduce {
+            pass.set_pipeline(reduce);
+            pass.dispatch_workgroups(1, 1, 1);
+        }
+        if let Some(grid) = &flock.grid {
+            pass.set_pipeline(&grid.bucket);
+            pass.dispatch_workgroups(x, y, 1);
+            grid.sort.record(pass);
+            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+            let (bx, by) = self.groups(grid.buckets)?;
+            pass.set_pipeline(&grid.clear);
+            pass.dispatch_workgroups(bx, by, 1);
+            pass.set_pipeline(&grid.ranges);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        pass.set_pipeline(&flock.neighbours);
+        pass.dispatch_workgroups(x, y, 1);
+        Ok(())
+    }
+
+    /// Reads a flocking buffer back by its layout name (`boids`, `flock_out`, ...), for tests.
+    pub fn read_flock_buffer(&self, name: &str) -> Result<Vec<u8>, RuntimeError> {
+        let binding = self
+            .effect
+            .layout
+            .bindings
+            .iter()
+            .find(|b| b.name == name)
+            .map(|b| b.binding);
+        let buffer = self
+            .flock
+            .as_ref()
+            .and_then(|f| f.buffers.iter().find(|(b, _)| Some(*b) == binding))
+            .map(|(_, buffer)| buffer)
+            .ok_or_else(|| RuntimeError::Output(format!("this effect has no buffer {name}")))?;
+        read_buffer(self.gpu, buffer)
     }
 
     /// Runs `steps` (at most [`STEPS_PER_SUBMIT`]) in one timed compute pass; returns seconds.

@@ -30,6 +30,30 @@ pub struct GpuSorter<'g> {
 
 const TILE: u64 = 256;
 
+/// One recorded dispatch of a sort.
+struct Dispatch {
+    pipeline: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+    x: u32,
+    y: u32,
+}
+
+/// A sort of fixed buffers and length, built once and recorded any number of times.
+pub struct SortProgram {
+    dispatches: Vec<Dispatch>,
+}
+
+impl SortProgram {
+    /// Records the sort's dispatches into `pass`.
+    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
+        for d in &self.dispatches {
+            pass.set_pipeline(&d.pipeline);
+            pass.set_bind_group(0, &d.group, &[]);
+            pass.dispatch_workgroups(d.x, d.y, 1);
+        }
+    }
+}
+
 impl<'g> GpuSorter<'g> {
     /// Builds the kernels on `gpu`.
     pub fn new(gpu: &'g Gpu) -> Self {
@@ -87,7 +111,7 @@ impl<'g> GpuSorter<'g> {
     /// given (binding, buffer) entries.
     fn dispatch(
         &self,
-        pass: &mut wgpu::ComputePass<'_>,
+        program: &mut SortProgram,
         pipeline: &wgpu::ComputePipeline,
         entries: &[(u32, &wgpu::Buffer)],
         groups: u64,
@@ -116,16 +140,19 @@ impl<'g> GpuSorter<'g> {
                 "sort needs more than {per_dim}² workgroups"
             )));
         }
-        pass.set_pipeline(pipeline);
-        pass.set_bind_group(0, &group, &[]);
-        pass.dispatch_workgroups(x as u32, y as u32, 1);
+        program.dispatches.push(Dispatch {
+            pipeline: pipeline.clone(),
+            group,
+            x: x as u32,
+            y: y as u32,
+        });
         Ok(())
     }
 
     /// Exclusive scan of the first `len` words of `data`, in place, level by level.
     fn scan(
         &self,
-        pass: &mut wgpu::ComputePass<'_>,
+        pass: &mut SortProgram,
         data: &wgpu::Buffer,
         len: u64,
     ) -> Result<(), RuntimeError> {
@@ -159,8 +186,25 @@ impl<'g> GpuSorter<'g> {
         vals: &wgpu::Buffer,
         n: u64,
     ) -> Result<(), RuntimeError> {
+        self.program(algorithm, keys, vals, n)?.record(pass);
+        Ok(())
+    }
+
+    /// Builds the dispatches (with their scratch buffers and bind groups) that sort the first
+    /// `n` pairs of `keys`/`vals`, to be recorded as often as needed without new allocations.
+    pub fn program(
+        &self,
+        algorithm: SortAlgorithm,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+    ) -> Result<SortProgram, RuntimeError> {
+        let mut program = SortProgram {
+            dispatches: Vec::new(),
+        };
+        let pass = &mut program;
         if n < 2 {
-            return Ok(());
+            return Ok(program);
         }
         match algorithm {
             SortAlgorithm::Radix => {
@@ -214,7 +258,7 @@ impl<'g> GpuSorter<'g> {
                 }
             }
         }
-        Ok(())
+        Ok(program)
     }
 
     /// Sorts `pairs` on the GPU and returns them sorted (for tests and the CPU side).

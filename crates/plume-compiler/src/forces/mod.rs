@@ -7,6 +7,7 @@
 pub mod attractor;
 pub mod constant;
 pub mod drag;
+pub mod flock;
 pub mod noise;
 pub mod vortex;
 pub mod wind;
@@ -36,6 +37,8 @@ pub enum Force {
     Attractor(attractor::Attractor),
     /// The thesis's vortex, with its bugs fixed.
     Vortex(vortex::Vortex),
+    /// Flocking: forces between particles (at most one per effect).
+    Flock(flock::Flock),
 }
 
 impl Force {
@@ -47,6 +50,7 @@ impl Force {
             Force::Wind(_) => "Wind",
             Force::Attractor(_) => "Attractor",
             Force::Vortex(_) => "Vortex",
+            Force::Flock(_) => "Flock",
         }
     }
 
@@ -60,10 +64,12 @@ impl Force {
             Force::Wind(f) => f.check(path, c),
             Force::Attractor(f) => f.check(path, c),
             Force::Vortex(f) => f.check(path, c),
+            Force::Flock(f) => f.check(path, c),
         }
     }
 
     /// Lowers to IR terms; `origin` is the force's index in the file, `seed` the effect's seed.
+    /// A Flock lowers to no term: it couples particles, so it is `EffectIr::flock` instead.
     pub fn lower(&self, origin: usize, seed: u32) -> Vec<Term> {
         match self {
             Force::Gravity(g) => vec![Term::Constant(constant::ConstantTerm {
@@ -74,12 +80,13 @@ impl Force {
             Force::Wind(f) => f.lower(origin, seed),
             Force::Attractor(f) => vec![Term::Attractor(f.lower(origin))],
             Force::Vortex(f) => vec![Term::Vortex(f.lower(origin))],
+            Force::Flock(_) => Vec::new(),
         }
     }
 }
 
 /// Variant names, as written in effect files.
-pub const VARIANTS: &[&str] = &["Gravity", "Drag", "Wind", "Attractor", "Vortex"];
+pub const VARIANTS: &[&str] = &["Gravity", "Drag", "Wind", "Attractor", "Vortex", "Flock"];
 
 /// Reads `Name(field: value, ...)` into the force module's own struct, so each force's
 /// schema lives with the rest of the force (serde's derive would need struct variants here).
@@ -104,6 +111,7 @@ enum Kind {
     Wind,
     Attractor,
     Vortex,
+    Flock,
 }
 
 struct ForceVisitor;
@@ -111,7 +119,7 @@ struct ForceVisitor;
 impl<'de> de::Visitor<'de> for ForceVisitor {
     type Value = Force;
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str("a force: Gravity, Drag, Wind, Attractor or Vortex")
+        f.write_str("a force: Gravity, Drag, Wind, Attractor, Vortex or Flock")
     }
     fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<Force, A::Error> {
         let (kind, variant): (Kind, _) = data.variant()?;
@@ -128,6 +136,9 @@ impl<'de> de::Visitor<'de> for ForceVisitor {
             ),
             Kind::Vortex => {
                 Force::Vortex(variant.struct_variant(vortex::FIELDS, StructVariant(PhantomData))?)
+            }
+            Kind::Flock => {
+                Force::Flock(variant.struct_variant(flock::FIELDS, StructVariant(PhantomData))?)
             }
         })
     }

@@ -26,6 +26,15 @@ pub fn exact_blocker(ir: &EffectIr, force_names: &[&'static str]) -> Option<(Str
             .variant(name);
         return Some((what, path));
     }
+    if let Some(flock) = &ir.flock {
+        return Some((
+            format!("forces[{}] (Flock) couples particles", flock.origin),
+            ValuePath::root()
+                .field("forces")
+                .index(flock.origin)
+                .variant("Flock"),
+        ));
+    }
     if !ir.planes.is_empty() {
         return Some((
             "collide[0] (Plane) needs collision handling".into(),

@@ -108,6 +108,11 @@ impl Layout {
         self.bytes_per_particle / 16
     }
 
+    /// Whether the layout has a binding called `name`.
+    pub fn binds(&self, name: &str) -> bool {
+        self.bindings.iter().any(|b| b.name == name)
+    }
+
     /// Whether the effect has a sort stage (bindings 5 and 6).
     pub fn sorts(&self) -> bool {
         self.bindings.iter().any(|b| b.name == "sort_keys")
@@ -192,6 +197,56 @@ pub fn decide(ir: &EffectIr) -> Layout {
             meaning: "the slots this dispatch's particle buffer holds: first global slot, count",
         },
     ];
+    if let Some(flock) = &ir.flock {
+        let groups = u64::from(ir.capacity.div_ceil(crate::wgsl::WORKGROUP));
+        layout.bindings.push(Binding {
+            binding: 7,
+            name: "boids",
+            space: "storage, read_write",
+            bytes: cap * 32,
+            meaning: "flock snapshot at the step's start: (x, alive), (v, 0) per slot",
+        });
+        layout.bindings.push(Binding {
+            binding: 8,
+            name: "flock_out",
+            space: "storage, read_write",
+            bytes: cap * 48,
+            meaning: "per slot: (separation + avoidance, neighbours), neighbour position and velocity sums",
+        });
+        if flock.scope == crate::forces::flock::Scope::Global {
+            layout.bindings.push(Binding {
+                binding: 9,
+                name: "flock_sums",
+                space: "storage, read_write",
+                bytes: (2 * groups + 2) * 16,
+                meaning: "per-workgroup sums of x and v, then the global means",
+            });
+        }
+        if let crate::forces::flock::Neighbors::Grid { .. } = flock.neighbors {
+            let buckets = u64::from(crate::forces::flock::FlockIr::grid_buckets(ir.capacity));
+            layout.bindings.push(Binding {
+                binding: 10,
+                name: "grid_keys",
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: "each slot's grid bucket (free slots: 0xffffffff), sorted each step",
+            });
+            layout.bindings.push(Binding {
+                binding: 11,
+                name: "grid_vals",
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: "slot indices, sorted by bucket",
+            });
+            layout.bindings.push(Binding {
+                binding: 12,
+                name: "cells",
+                space: "storage, read_write",
+                bytes: buckets * 8,
+                meaning: "per bucket: (start, end) of its run in the sorted slots",
+            });
+        }
+    }
     if ir.sort {
         // Room for a power-of-two padded sort (the bitonic baseline needs it).
         let padded = cap.next_power_of_two() * 4;
@@ -210,6 +265,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
             meaning: "slot indices, in draw order after the sort",
         });
     }
+    layout.bindings.sort_by_key(|b| b.binding);
     layout
 }
 

@@ -108,9 +108,21 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
     let integ = ir.integrator;
     let name = integ.name();
     let steps = horizon(ir) / h;
+    // (stiffness, first origin, field the warning points at, merged drags note)
+    let mut stiff: Vec<(Stiffness, usize, &'static str, String)> = Vec::new();
     for term in &ir.terms {
         let t = term.as_dyn();
         let origin = t.origins()[0];
+        let merged = if t.origins().len() > 1 {
+            format!(" (drags {:?} merged)", t.origins())
+        } else {
+            String::new()
+        };
+        let field = match t.stiffness() {
+            Stiffness::Damping(_) => "k",
+            _ => t.stiffness_field(),
+        };
+        stiff.push((t.stiffness(), origin, field, merged));
         if let Some(well) = t.core_well() {
             let q = well.fall_speed * h / well.core;
             if q >= TRANSIT_LIMIT && integ != Integrator::Exact {
@@ -126,19 +138,57 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
                 );
             }
         }
-        match t.stiffness() {
+    }
+    if let Some(flock) = &ir.flock {
+        if flock.neighbors == crate::forces::flock::Neighbors::AllPairs
+            && ir.capacity >= crate::forces::flock::GRID_FASTER_FROM
+        {
+            warn(
+                force_value_path(force_names, flock.origin, "neighbors"),
+                format!(
+                    "all pairs at capacity {}: from {} boids the grid was measured faster (docs/performance.md); use neighbors: Grid(cell: {})",
+                    ir.capacity,
+                    crate::forces::flock::GRID_FASTER_FROM,
+                    flock.radius
+                ),
+            );
+        }
+        // Cohesion is a spring toward the mean (ω² = cohesion); separation pushes a close pair
+        // apart at up to separation / core per metre each, 2 separation / core for the pair's
+        // relative motion (held for the step, like an explicit evaluation). Alignment damps
+        // toward the mean velocity at rate `alignment`, like drag.
+        let w2 = flock.cohesion + 2.0 * flock.separation / flock.core();
+        if w2 > 0.0 {
+            let field = if flock.cohesion >= 2.0 * flock.separation / flock.core() {
+                "cohesion"
+            } else {
+                "separation"
+            };
+            stiff.push((
+                Stiffness::Oscillation(w2.sqrt()),
+                flock.origin,
+                field,
+                String::new(),
+            ));
+        }
+        if flock.alignment > 0.0 {
+            stiff.push((
+                Stiffness::Damping(flock.alignment),
+                flock.origin,
+                "alignment",
+                String::new(),
+            ));
+        }
+    }
+    for (stiffness, origin, field, merged) in stiff {
+        match stiffness {
             Stiffness::None => {}
             Stiffness::Damping(k) => {
                 let z = k * h;
-                let merged = if t.origins().len() > 1 {
-                    format!(" (drags {:?} merged)", t.origins())
-                } else {
-                    String::new()
-                };
                 if let Some(limit) = drag_limit(integ) {
                     if z >= limit {
                         warn(
-                            force_value_path(force_names, origin, "k"),
+                            force_value_path(force_names, origin, field),
                             format!(
                                 "k*h = {z:.3}{merged} is past {name}'s drag stability limit {limit} (h = {h:.4e} s): velocities oscillate and grow; raise substeps to at least {}, or use Exact where allowed",
                                 (k * ir.dt / limit).floor() as u64 + 1
@@ -146,7 +196,7 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
                         );
                     } else if integ == Integrator::Euler && z > 1.0 {
                         warn(
-                            force_value_path(force_names, origin, "k"),
+                            force_value_path(force_names, origin, field),
                             format!(
                                 "k*h = {z:.3}{merged} > 1: Euler overshoots, flipping the relative velocity every step; raise substeps to at least {}",
                                 (k * ir.dt).floor() as u64 + 1
@@ -157,7 +207,6 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
             }
             Stiffness::Oscillation(omega) => {
                 let wh = omega * h;
-                let field = t.stiffness_field();
                 if let Some(limit) = oscillation_limit(integ) {
                     if wh >= limit {
                         warn(

@@ -6,6 +6,7 @@ use glam::DVec3;
 use super::spawn::spawn;
 use super::step::{accel, collide, substep};
 use super::{ParticleRecord, Totals};
+use crate::forces::flock::Frozen;
 use crate::integrators::ExactStep;
 use crate::ir::EffectIr;
 use crate::schedule::Schedule;
@@ -88,10 +89,25 @@ impl ReferenceSim {
         let ir = &self.ir;
         let exact = self.exact.as_ref();
         let before = self.particles.len();
+        // Flocking reads every boid as it is after the spawns, before anyone moves.
+        let frozen: Vec<Frozen> = match &ir.flock {
+            Some(flock) => {
+                let boids: Vec<(DVec3, DVec3)> = self
+                    .particles
+                    .iter()
+                    .map(|p| (p.x, if verlet { p.v / h } else { p.v }))
+                    .collect();
+                flock.frozen(&boids)
+            }
+            None => Vec::new(),
+        };
+        let mut index = 0;
         self.particles.retain_mut(|p| {
+            let flock = frozen.get(index);
+            index += 1;
             for s in 0..ir.substeps {
                 let t = plan.time + f64::from(s) * h;
-                substep(ir, exact, &mut p.x, &mut p.v, t);
+                substep(ir, exact, flock, &mut p.x, &mut p.v, t);
                 for plane in &ir.planes {
                     collide(plane, &mut p.x, &mut p.v, verlet, h);
                 }

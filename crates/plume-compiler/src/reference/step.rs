@@ -3,6 +3,7 @@
 
 use glam::DVec3;
 
+use crate::forces::flock::Frozen;
 use crate::integrators::ExactStep;
 use crate::ir::{EffectIr, PlaneIr};
 use crate::schema::Integrator;
@@ -23,9 +24,23 @@ fn clamp(v: DVec3, limit: Option<f64>) -> DVec3 {
 }
 
 /// One substep of length h = ir.h() at time t. `v` holds Verlet's displacement for Verlet.
-pub fn substep(ir: &EffectIr, exact: Option<&ExactStep>, x: &mut DVec3, v: &mut DVec3, t: f64) {
+/// `flock` is the particle's frozen flock values for this step, when the effect flocks.
+pub fn substep(
+    ir: &EffectIr,
+    exact: Option<&ExactStep>,
+    flock: Option<&Frozen>,
+    x: &mut DVec3,
+    v: &mut DVec3,
+    t: f64,
+) {
     let h = ir.h();
-    let a = |x: DVec3, v: DVec3, t: f64| accel(ir, x, v, t);
+    let a = |x: DVec3, v: DVec3, t: f64| {
+        let own = accel(ir, x, v, t);
+        match (&ir.flock, flock) {
+            (Some(f), Some(frozen)) => own + f.accel(frozen, x, v),
+            _ => own,
+        }
+    };
     match ir.integrator {
         Integrator::Euler => {
             let acc = a(*x, *v, t);

@@ -86,7 +86,9 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "free_list" => "array<u32>",
             "counters" => "Counters",
             "chunk" => "Chunk",
-            "sort_keys" | "sort_vals" => "array<u32>",
+            "sort_keys" | "sort_vals" | "grid_keys" | "grid_vals" => "array<u32>",
+            "boids" | "flock_out" | "flock_sums" => "array<vec4<f32>>",
+            "cells" => "array<vec2<u32>>",
             _ => "StepParams",
         };
         w.line(format!(
@@ -99,6 +101,10 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     w.blank();
     rng::emit_wgsl(&mut w);
     w.blank();
+    if let Some(flock) = &ir.flock {
+        flock.emit_declarations(&mut w, ir.capacity, WORKGROUP);
+        w.blank();
+    }
     if integrators::needs_accel(ir.integrator) {
         if ir.forces_use_time() {
             noise::emit_helpers(&mut w);
@@ -108,7 +114,11 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         w.block(
             "fn accel(x: vec3<f32>, v: vec3<f32>, t: f32) -> vec3<f32>",
             |w| {
-                w.line("var a = vec3<f32>(0.0);");
+                if ir.flock.is_some() {
+                    w.line("var a = flock_accel(x, v);");
+                } else {
+                    w.line("var a = vec3<f32>(0.0);");
+                }
                 for t in &ir.terms {
                     t.as_dyn().emit_wgsl(w);
                 }
@@ -125,6 +135,11 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     if layout.sorts() {
         w.blank();
         emit_depth_keys(&mut w, ir);
+    }
+    if let Some(flock) = &ir.flock {
+        w.blank();
+        let verlet = layout.has(crate::passes::layout::Attribute::Displacement);
+        flock.emit_kernels(&mut w, verlet.then(|| ir.h()));
     }
     w.finish()
 }

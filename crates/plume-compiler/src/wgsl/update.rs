@@ -19,6 +19,9 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             w.block("if (i >= chunk.len)", |w| w.line("return;"));
             w.line("var p = load_particle(i);");
             w.block("if (p.id == DEAD)", |w| w.line("return;"));
+            if let Some(flock) = &ir.flock {
+                flock.emit_update_prologue(w);
+            }
             w.line("var x = vec3<f32>(p.px, p.py, p.pz);");
             if verlet {
                 w.line("var d = vec3<f32>(p.dx, p.dy, p.dz);");

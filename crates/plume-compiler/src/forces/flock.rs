@@ -1,0 +1,629 @@
+//! Flocking (the GPUBoids seed, after Reynolds): forces between particles.
+//!
+//! For boid i with position x and velocity v, over every other live boid j with d = x - x_j,
+//! r = |d| < radius, w = 1 - r / radius and core = radius / 10:
+//!
+//! ```text
+//! separation: a += separation · w · d / max(r, core)
+//! avoidance:  if j is ahead (d · v̂ < 0, v̂ = v / |v|, skipped when |v| <= 1e-6):
+//!             s = d - (d · v̂) v̂,  a += avoidance · w · s / max(|s|, core)   (steer sideways)
+//! cohesion:   a += cohesion · (c - x)       c = mean position: of all live boids (Global)
+//!                                             or of the neighbours within radius (Local)
+//! alignment:  a += alignment · (v̄ - v)      v̄ = mean velocity, same scope
+//! ```
+//! (Local with no neighbour: no cohesion or alignment.)
+//!
+//! Separation, avoidance and the means are computed once per step, at its start, from a
+//! snapshot of every boid taken after the step's spawns: one all-pairs pass over
+//! workgroup-shared tiles (the seed's N² force splatting) or a uniform grid. Cohesion and
+//! alignment then act on the boid's own live x and v inside the integrator, so their
+//! stiffness (a spring of ω² = cohesion, a damping of rate alignment) has each integrator's
+//! usual limits; separation and avoidance are held for the step.
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::check::Checker;
+use crate::path::ValuePath;
+use crate::wgsl::writer::{f32_lit, u32_lit, Writer};
+
+/// Field names, as written in effect files.
+pub const FIELDS: &[&str] = &[
+    "radius",
+    "separation",
+    "avoidance",
+    "cohesion",
+    "alignment",
+    "scope",
+    "neighbors",
+];
+
+/// Where cohesion and alignment take their averages from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Scope {
+    /// Every live boid (a parallel reduction each step; the seed's mip-map average).
+    #[default]
+    Global,
+    /// The neighbours within `radius`.
+    Local,
+}
+
+/// How neighbours within `radius` are found. Both find exactly the same neighbours.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+pub enum Neighbors {
+    /// Every boid against every other, in workgroup-shared tiles.
+    #[default]
+    AllPairs,
+    /// A uniform grid of cubic cells (`cell >= radius`), hashed into a table, searched over the
+    /// 27 cells around each boid.
+    Grid {
+        /// Cell edge (m), at least `radius`.
+        cell: f64,
+    },
+}
+
+/// `Flock(...)` as written.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Flock {
+    /// Neighbour cutoff (m), > 0.
+    pub radius: f64,
+    /// Push apart (m/s²) at zero distance, fading to 0 at `radius`.
+    #[serde(default)]
+    pub separation: f64,
+    /// Sideways steer (m/s²) away from neighbours ahead.
+    #[serde(default)]
+    pub avoidance: f64,
+    /// Spring rate (1/s²) toward the mean position.
+    #[serde(default)]
+    pub cohesion: f64,
+    /// Rate (1/s) toward the mean velocity.
+    #[serde(default)]
+    pub alignment: f64,
+    /// Where the means come from.
+    #[serde(default)]
+    pub scope: Scope,
+    /// Neighbour search.
+    #[serde(default)]
+    pub neighbors: Neighbors,
+}
+
+impl Flock {
+    /// Checks `radius > 0`, non-negative strengths and `cell >= radius`.
+    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+        c.positive(&path.field("radius"), self.radius);
+        c.non_negative(&path.field("separation"), self.separation);
+        c.non_negative(&path.field("avoidance"), self.avoidance);
+        c.non_negative(&path.field("cohesion"), self.cohesion);
+        c.non_negative(&path.field("alignment"), self.alignment);
+        if let Neighbors::Grid { cell } = self.neighbors {
+            let p = path.field("neighbors").variant("Grid").field("cell");
+            if c.finite(&p, cell) && self.radius.is_finite() && cell < self.radius {
+                c.error(
+                    &p,
+                    format!(
+                        "must be >= radius ({}), got {cell}: the 27 cells around a boid must cover its radius",
+                        self.radius
+                    ),
+                );
+            }
+        }
+    }
+
+    /// Lowers to the IR's flock.
+    pub fn lower(&self, origin: usize) -> FlockIr {
+        FlockIr {
+            radius: self.radius,
+            separation: self.separation,
+            avoidance: self.avoidance,
+            cohesion: self.cohesion,
+            alignment: self.alignment,
+            scope: self.scope,
+            neighbors: self.neighbors,
+            origin,
+        }
+    }
+}
+
+/// The flock in the IR.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlockIr {
+    /// Cutoff (m).
+    pub radius: f64,
+    /// Separation strength (m/s²).
+    pub separation: f64,
+    /// Avoidance strength (m/s²).
+    pub avoidance: f64,
+    /// Cohesion rate (1/s²).
+    pub cohesion: f64,
+    /// Alignment rate (1/s).
+    pub alignment: f64,
+    /// Where the means come from.
+    pub scope: Scope,
+    /// Neighbour search.
+    pub neighbors: Neighbors,
+    /// Index in the file's `forces`.
+    pub origin: usize,
+}
+
+/// What the per-step pass gives each boid, held for the step.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Frozen {
+    /// Separation + avoidance (m/s²).
+    pub push: DVec3,
+    /// Mean position and velocity to steer toward, when there is one.
+    pub mean: Option<(DVec3, DVec3)>,
+}
+
+/// From this many boids the grid was measured faster than all pairs (H200, effects/boids.ron
+/// at its own density: 0.406 against 0.544 ms/step at 4,096; all pairs wins at 2,048 and below;
+/// docs/performance.md).
+pub const GRID_FASTER_FROM: u32 = 4096;
+
+/// Below this speed (m/s) a boid has no heading, so no avoidance.
+pub const MIN_HEADING_SPEED: f64 = 1e-6;
+
+impl FlockIr {
+    /// The soft core (m) of separation and avoidance.
+    pub fn core(&self) -> f64 {
+        self.radius / 10.0
+    }
+
+    /// One line for `--emit ir`.
+    pub fn describe(&self) -> String {
+        format!(
+            "Flock radius = {} separation = {} avoidance = {} cohesion = {} alignment = {} scope = {:?} neighbors = {:?}",
+            self.radius, self.separation, self.avoidance, self.cohesion, self.alignment, self.scope, self.neighbors
+        )
+    }
+
+    /// Hash-table buckets of the grid for `capacity` boids: a power of two >= capacity.
+    pub fn grid_buckets(capacity: u32) -> u32 {
+        capacity.max(1).next_power_of_two()
+    }
+
+    /// The f64 reference of the per-step pass: all pairs, in id order.
+    pub fn frozen(&self, boids: &[(DVec3, DVec3)]) -> Vec<Frozen> {
+        let n = boids.len();
+        let global = (self.scope == Scope::Global && n > 0).then(|| {
+            let (sx, sv) = boids
+                .iter()
+                .fold((DVec3::ZERO, DVec3::ZERO), |(a, b), (x, v)| {
+                    (a + *x, b + *v)
+                });
+            (sx / n as f64, sv / n as f64)
+        });
+        boids
+            .iter()
+            .enumerate()
+            .map(|(i, &(x, v))| {
+                let mut push = DVec3::ZERO;
+                let (mut sx, mut sv, mut count) = (DVec3::ZERO, DVec3::ZERO, 0u32);
+                for (j, &(xj, vj)) in boids.iter().enumerate() {
+                    if j == i {
+                        continue;
+                    }
+                    if let Some(p) = self.pair(x, v, xj) {
+                        push += p;
+                        sx += xj;
+                        sv += vj;
+                        count += 1;
+                    }
+                }
+                let mean = match self.scope {
+                    Scope::Global => global,
+                    Scope::Local => {
+                        (count > 0).then(|| (sx / f64::from(count), sv / f64::from(count)))
+                    }
+                };
+                Frozen { push, mean }
+            })
+            .collect()
+    }
+
+    /// Separation + avoidance on a boid at (x, v) from a neighbour at `xj`, or None when `xj`
+    /// is not within the radius.
+    pub fn pair(&self, x: DVec3, v: DVec3, xj: DVec3) -> Option<DVec3> {
+        let d = x - xj;
+        let r = d.length();
+        if r >= self.radius {
+            return None;
+        }
+        let w = 1.0 - r / self.radius;
+        let core = self.core();
+        let mut a = self.separation * w * (d / r.max(core));
+        let speed = v.length();
+        if self.avoidance != 0.0 && speed > MIN_HEADING_SPEED {
+            let heading = v / speed;
+            let along = d.dot(heading);
+            if along < 0.0 {
+                let side = d - along * heading;
+                a += self.avoidance * w * (side / side.length().max(core));
+            }
+        }
+        Some(a)
+    }
+
+    /// The flock's acceleration on a boid at its live (x, v), given the step's frozen values.
+    pub fn accel(&self, frozen: &Frozen, x: DVec3, v: DVec3) -> DVec3 {
+        let mut a = frozen.push;
+        if let Some((c, vbar)) = frozen.mean {
+            a += self.cohesion * (c - x) + self.alignment * (vbar - v);
+        }
+        a
+    }
+
+    /// Module-scope declarations: constants, the per-invocation frozen values and the
+    /// acceleration added to `accel`.
+    pub fn emit_declarations(&self, w: &mut Writer, capacity: u32, workgroup: u32) {
+        if self.scope == Scope::Global {
+            let groups = capacity.div_ceil(workgroup);
+            w.line(format!("const FLOCK_GROUPS: u32 = {};", u32_lit(groups)));
+            w.comment(
+                "flock_sums: FLOCK_GROUPS partial (sum x, count), (sum v, 0) pairs, then the means.",
+            );
+            w.line("const FLOCK_MEAN: u32 = 2u * FLOCK_GROUPS;");
+        }
+        w.comment("The boid's frozen flock values for this step (zero outside `update`).");
+        w.line("var<private> flock_push: vec3<f32>;");
+        w.line("var<private> flock_c: vec3<f32>;");
+        w.line("var<private> flock_vbar: vec3<f32>;");
+        w.line("var<private> flock_has_mean: f32;");
+        w.block(
+            "fn flock_accel(x: vec3<f32>, v: vec3<f32>) -> vec3<f32>",
+            |w| {
+                let mut sum = vec![String::from("flock_push")];
+                if self.cohesion != 0.0 {
+                    sum.push(format!(
+                        "flock_has_mean * {} * (flock_c - x)",
+                        f32_lit(self.cohesion)
+                    ));
+                }
+                if self.alignment != 0.0 {
+                    sum.push(format!(
+                        "flock_has_mean * {} * (flock_vbar - v)",
+                        f32_lit(self.alignment)
+                    ));
+                }
+                w.line(format!("return {};", sum.join(" + ")));
+            },
+        );
+    }
+
+    /// Statements at the start of `update` (slot `i`, single chunk) that load the frozen values.
+    pub fn emit_update_prologue(&self, w: &mut Writer) {
+        w.line("let fo = flock_out[3u * i];");
+        w.line("flock_push = fo.xyz;");
+        match self.scope {
+            Scope::Global => {
+                w.line("let mean_x = flock_sums[FLOCK_MEAN];");
+                w.block("if (mean_x.w > 0.0)", |w| {
+                    w.line("flock_c = mean_x.xyz;");
+                    w.line("flock_vbar = flock_sums[FLOCK_MEAN + 1u].xyz;");
+                    w.line("flock_has_mean = 1.0;");
+                });
+            }
+            Scope::Local => {
+                w.block("if (fo.w > 0.0)", |w| {
+                    w.line("flock_c = flock_out[3u * i + 1u].xyz / fo.w;");
+                    w.line("flock_vbar = flock_out[3u * i + 2u].xyz / fo.w;");
+                    w.line("flock_has_mean = 1.0;");
+                });
+            }
+        }
+    }
+
+    /// The per-step kernels: `flock_snapshot` (+ the partial sums), `flock_reduce` (Global),
+    /// and the neighbour pass (`flock_pairs`, or the grid's kernels).
+    pub fn emit_kernels(&self, w: &mut Writer, verlet_h: Option<f64>) {
+        self.emit_snapshot(w, verlet_h);
+        if self.scope == Scope::Global {
+            w.blank();
+            emit_reduce(w);
+        }
+        w.blank();
+        self.emit_pair_fn(w);
+        w.blank();
+        match self.neighbors {
+            Neighbors::AllPairs => emit_all_pairs(w),
+            Neighbors::Grid { cell } => emit_grid(w, cell),
+        }
+    }
+
+    fn emit_snapshot(&self, w: &mut Writer, verlet_h: Option<f64>) {
+        if self.scope == Scope::Global {
+            w.line("var<workgroup> red_x: array<vec4<f32>, WORKGROUP>;");
+            w.line("var<workgroup> red_v: array<vec4<f32>, WORKGROUP>;");
+        }
+        w.comment(
+            "Copies every slot's (x, alive) and (v, 0) into `boids`, and sums them per workgroup.",
+        );
+        w.line("@compute @workgroup_size(WORKGROUP)");
+        w.block(
+            "fn flock_snapshot(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+            |w| {
+                w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
+                w.line("var bx = vec4<f32>(0.0);");
+                w.line("var bv = vec4<f32>(0.0);");
+                w.block("if (i < chunk.len)", |w| {
+                    w.line("let p = load_particle(i);");
+                    w.block("if (p.id != DEAD)", |w| {
+                        w.line("bx = vec4<f32>(p.px, p.py, p.pz, 1.0);");
+                        match verlet_h {
+                            Some(h) => w.line(format!(
+                                "bv = vec4<f32>(vec3<f32>(p.dx, p.dy, p.dz) * {}, 0.0);",
+                                f32_lit(1.0 / h)
+                            )),
+                            None => w.line("bv = vec4<f32>(p.vx, p.vy, p.vz, 0.0);"),
+                        }
+                    });
+                    w.line("boids[2u * i] = bx;");
+                    w.line("boids[2u * i + 1u] = bv;");
+                });
+                if self.scope == Scope::Global {
+                    w.comment("A fixed reduction tree, so the sums are the same every run.");
+                    w.line("red_x[lid] = vec4<f32>(bx.xyz * bx.w, bx.w);");
+                    w.line("red_v[lid] = vec4<f32>(bv.xyz * bx.w, 0.0);");
+                    w.line("workgroupBarrier();");
+                    w.block(
+                        "for (var s = WORKGROUP / 2u; s > 0u; s = s >> 1u)",
+                        |w| {
+                            w.block("if (lid < s)", |w| {
+                                w.line("red_x[lid] += red_x[lid + s];");
+                                w.line("red_v[lid] += red_v[lid + s];");
+                            });
+                            w.line("workgroupBarrier();");
+                        },
+                    );
+                    w.line("let g = wid.x + wid.y * groups.x;");
+                    w.block("if (lid == 0u && g < FLOCK_GROUPS)", |w| {
+                        w.line("flock_sums[2u * g] = red_x[0];");
+                        w.line("flock_sums[2u * g + 1u] = red_v[0];");
+                    });
+                }
+            },
+        );
+    }
+
+    fn emit_pair_fn(&self, w: &mut Writer) {
+        w.line(format!(
+            "const FLOCK_RADIUS: f32 = {};",
+            f32_lit(self.radius)
+        ));
+        w.comment("Separation and avoidance on a boid at (x, v) from a neighbour at xj.");
+        w.block(
+            "fn flock_pair(x: vec3<f32>, v: vec3<f32>, xj: vec3<f32>) -> vec4<f32>",
+            |w| {
+                w.line("let d = x - xj;");
+                w.line("let r = length(d);");
+                w.block("if (r >= FLOCK_RADIUS)", |w| {
+                    w.line("return vec4<f32>(0.0);");
+                });
+                w.line(format!("let w = 1.0 - r * {};", f32_lit(1.0 / self.radius)));
+                w.line("var a = vec3<f32>(0.0);");
+                let core = f32_lit(self.core().max(f64::from(f32::MIN_POSITIVE)));
+                if self.separation != 0.0 {
+                    w.line(format!(
+                        "a += {} * w * (d / max(r, {core}));",
+                        f32_lit(self.separation)
+                    ));
+                }
+                if self.avoidance != 0.0 {
+                    w.line("let speed = length(v);");
+                    w.block(
+                        format!("if (speed > {})", f32_lit(MIN_HEADING_SPEED)),
+                        |w| {
+                            w.line("let heading = v / speed;");
+                            w.line("let along = dot(d, heading);");
+                            w.block("if (along < 0.0)", |w| {
+                                w.line("let side = d - along * heading;");
+                                w.line(format!(
+                                    "a += {} * w * (side / max(length(side), {core}));",
+                                    f32_lit(self.avoidance)
+                                ));
+                            });
+                        },
+                    );
+                }
+                w.comment("w = 1 marks a neighbour (for the local means and the count).");
+                w.line("return vec4<f32>(a, 1.0);");
+            },
+        );
+    }
+}
+
+/// `flock_reduce`: one workgroup sums the partials in a fixed order and writes the means.
+fn emit_reduce(w: &mut Writer) {
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn flock_reduce(@builtin(local_invocation_index) lid: u32)",
+        |w| {
+            w.line("var sx = vec4<f32>(0.0);");
+            w.line("var sv = vec4<f32>(0.0);");
+            w.block("for (var g = lid; g < FLOCK_GROUPS; g += WORKGROUP)", |w| {
+                w.line("sx += flock_sums[2u * g];");
+                w.line("sv += flock_sums[2u * g + 1u];");
+            });
+            w.line("red_x[lid] = sx;");
+            w.line("red_v[lid] = sv;");
+            w.line("workgroupBarrier();");
+            w.block("for (var s = WORKGROUP / 2u; s > 0u; s = s >> 1u)", |w| {
+                w.block("if (lid < s)", |w| {
+                    w.line("red_x[lid] += red_x[lid + s];");
+                    w.line("red_v[lid] += red_v[lid + s];");
+                });
+                w.line("workgroupBarrier();");
+            });
+            w.block("if (lid == 0u)", |w| {
+                w.line("let n = red_x[0].w;");
+                w.line("let inv = select(0.0, 1.0 / n, n > 0.0);");
+                w.line("flock_sums[FLOCK_MEAN] = vec4<f32>(red_x[0].xyz * inv, n);");
+                w.line("flock_sums[FLOCK_MEAN + 1u] = vec4<f32>(red_v[0].xyz * inv, 0.0);");
+            });
+        },
+    );
+}
+
+/// Writes a boid's accumulated pass results (separation + avoidance, count; neighbour sums).
+fn emit_store_out(w: &mut Writer) {
+    w.block("if (i < chunk.len)", |w| {
+        w.line("flock_out[3u * i] = vec4<f32>(push, count);");
+        w.line("flock_out[3u * i + 1u] = vec4<f32>(sum_x, 0.0);");
+        w.line("flock_out[3u * i + 2u] = vec4<f32>(sum_v, 0.0);");
+    });
+}
+
+/// Adds neighbour `j` (snapshot `ox`, `ov`) to the running sums of boid `i`.
+fn emit_accumulate(w: &mut Writer, j: &str, ox: &str, ov: &str) {
+    w.block(format!("if ({ox}.w > 0.0 && {j} != i)"), |w| {
+        w.line(format!("let f = flock_pair(me.xyz, me_v.xyz, {ox}.xyz);"));
+        w.block("if (f.w > 0.0)", |w| {
+            w.line("push += f.xyz;");
+            w.line(format!("sum_x += {ox}.xyz;"));
+            w.line(format!("sum_v += {ov}.xyz;"));
+            w.line("count += 1.0;");
+        });
+    });
+}
+
+/// `flock_pairs`: every boid against every slot, 256 at a time through workgroup memory. Every
+/// thread takes part in loading each tile (barriers need uniform control flow); only live boids
+/// accumulate.
+fn emit_all_pairs(w: &mut Writer) {
+    w.line("const FLOCK_TILES: u32 = (CAPACITY + WORKGROUP - 1u) / WORKGROUP;");
+    w.line("var<workgroup> tile: array<vec4<f32>, 512>;");
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn flock_pairs(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
+            w.line("var me = vec4<f32>(0.0);");
+            w.line("var me_v = vec4<f32>(0.0);");
+            w.block("if (i < chunk.len)", |w| {
+                w.line("me = boids[2u * i];");
+                w.line("me_v = boids[2u * i + 1u];");
+            });
+            w.line("var push = vec3<f32>(0.0);");
+            w.line("var sum_x = vec3<f32>(0.0);");
+            w.line("var sum_v = vec3<f32>(0.0);");
+            w.line("var count = 0.0;");
+            w.block("for (var t = 0u; t < FLOCK_TILES; t++)", |w| {
+                w.line("let src = t * WORKGROUP + lid;");
+                w.line("var bx = vec4<f32>(0.0);");
+                w.line("var bv = vec4<f32>(0.0);");
+                w.block("if (src < CAPACITY)", |w| {
+                    w.line("bx = boids[2u * src];");
+                    w.line("bv = boids[2u * src + 1u];");
+                });
+                w.line("tile[2u * lid] = bx;");
+                w.line("tile[2u * lid + 1u] = bv;");
+                w.line("workgroupBarrier();");
+                w.block("if (me.w > 0.0)", |w| {
+                    w.block("for (var k = 0u; k < WORKGROUP; k++)", |w| {
+                        w.line("let j = t * WORKGROUP + k;");
+                        w.line("let ox = tile[2u * k];");
+                        w.line("let ov = tile[2u * k + 1u];");
+                        emit_accumulate(w, "j", "ox", "ov");
+                    });
+                });
+                w.line("workgroupBarrier();");
+            });
+            emit_store_out(w);
+        },
+    );
+}
+
+/// The grid: `grid_bucket` gives each live boid its cell's bucket (free slots the largest key);
+/// the runtime sorts (bucket, slot) pairs with the stable radix sort; `grid_ranges` records
+/// where each bucket's run starts and ends (`cells[b]` = (start, end), cleared by `grid_clear`); `flock_grid` visits the 27 cells around each boid,
+/// keeping only entries whose own cell is the visited one (two cells may share a bucket).
+fn emit_grid(w: &mut Writer, cell: f64) {
+    w.line(format!("const INV_CELL: f32 = {};", f32_lit(1.0 / cell)));
+    w.block("fn cell_of(x: vec3<f32>) -> vec3<i32>", |w| {
+        w.comment(
+            "Clamped so that far-away boids share the outermost cells instead of overflowing.",
+        );
+        w.line(
+            "return vec3<i32>(clamp(floor(x * INV_CELL), vec3<f32>(-1.0e6), vec3<f32>(1.0e6)));",
+        );
+    });
+    w.block("fn bucket_of(c: vec3<i32>) -> u32", |w| {
+        w.line("let u = bitcast<vec3<u32>>(c);");
+        w.line("return ((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u)) & (grid_buckets_len() - 1u);");
+    });
+    w.block("fn grid_buckets_len() -> u32", |w| {
+        w.line("return arrayLength(&cells);");
+    });
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn grid_bucket(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
+            w.block("if (i >= chunk.len)", |w| w.line("return;"));
+            w.line("let b = boids[2u * i];");
+            w.line("var key = 0xffffffffu;");
+            w.block("if (b.w > 0.0)", |w| {
+                w.line("key = bucket_of(cell_of(b.xyz));");
+            });
+            w.line("grid_keys[i] = key;");
+            w.line("grid_vals[i] = i;");
+        },
+    );
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn grid_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let k = gid.x + gid.y * groups.x * WORKGROUP;");
+            w.block("if (k < grid_buckets_len())", |w| {
+                w.line("cells[k] = vec2<u32>(0u);");
+            });
+        },
+    );
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn grid_ranges(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let k = gid.x + gid.y * groups.x * WORKGROUP;");
+            w.block("if (k >= chunk.len)", |w| w.line("return;"));
+            w.line("let key = grid_keys[k];");
+            w.block("if (key == 0xffffffffu)", |w| w.line("return;"));
+            w.block("if (k == 0u || grid_keys[k - 1u] != key)", |w| {
+                w.line("cells[key].x = k;");
+            });
+            w.block("if (k + 1u == chunk.len || grid_keys[k + 1u] != key)", |w| {
+                w.line("cells[key].y = k + 1u;");
+            });
+        },
+    );
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn flock_grid(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
+            w.block("if (i >= chunk.len)", |w| w.line("return;"));
+            w.line("let me = boids[2u * i];");
+            w.line("let me_v = boids[2u * i + 1u];");
+            w.line("var push = vec3<f32>(0.0);");
+            w.line("var sum_x = vec3<f32>(0.0);");
+            w.line("var sum_v = vec3<f32>(0.0);");
+            w.line("var count = 0.0;");
+            w.block("if (me.w > 0.0)", |w| {
+                w.line("let home = cell_of(me.xyz);");
+                w.block("for (var n = 0; n < 27; n++)", |w| {
+                    w.line("let c = home + vec3<i32>(n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1);");
+                    w.line("let b = bucket_of(c);");
+                    w.line("let run = cells[b];");
+                    w.block("for (var k = run.x; k < run.y; k++)", |w| {
+                        w.line("let j = grid_vals[k];");
+                        w.line("let ox = boids[2u * j];");
+                        w.comment("Another cell hashed to this bucket: not a neighbour from here.");
+                        w.block("if (any(cell_of(ox.xyz) != c))", |w| w.line("continue;"));
+                        w.line("let ov = boids[2u * j + 1u];");
+                        emit_accumulate(w, "j", "ox", "ov");
+                    });
+                });
+            });
+            emit_store_out(w);
+        },
+    );
+}
