@@ -55,12 +55,13 @@ fn grid_and_all_pairs_find_the_same_neighbours_and_forces() {
             assert_eq!(pairs.len(), grid.len());
             let mut neighbours = 0.0;
             for (slot, (a, b)) in pairs.iter().zip(&grid).enumerate() {
+                // Words: push (0-2), Σw (3), Σ w x (4-6), count (7), Σ w v (8-10).
                 // The same f32 distance test on the same snapshot: identical neighbour sets.
-                assert_eq!(a[3], b[3], "slot {slot}: {} vs {} neighbours", a[3], b[3]);
-                neighbours += a[3];
+                assert_eq!(a[7], b[7], "slot {slot}: {} vs {} neighbours", a[7], b[7]);
+                neighbours += a[7];
                 // Sums over the same terms in another order: f32 rounding of each term
-                // (|term| <= 4 m/s² here, |x| <= 3 m) times the count, with a factor 4 margin.
-                let tol = 4.0 * f32::EPSILON * (1.0 + a[3]) * 4.0;
+                // (|term| <= 4 m/s² or 3 m here) times the count, with a factor 4 margin.
+                let tol = 4.0 * f32::EPSILON * (1.0 + a[7]) * 4.0;
                 for k in [0, 1, 2] {
                     assert!(
                         (a[k] - b[k]).abs() <= tol,
@@ -72,7 +73,12 @@ fn grid_and_all_pairs_find_the_same_neighbours_and_forces() {
                         (a[4 + k] - b[4 + k]).abs() <= tol * 3.0,
                         "slot {slot}: sum x"
                     );
+                    assert!(
+                        (a[8 + k] - b[8 + k]).abs() <= tol * 3.0,
+                        "slot {slot}: sum v"
+                    );
                 }
+                assert!((a[3] - b[3]).abs() <= tol, "slot {slot}: total weight");
             }
             assert!(
                 neighbours / f64::from(burst) as f32 > 2.0,

@@ -18,6 +18,7 @@ use plume::runtime::GpuSim;
 fn compare_at(
     name: &str,
     steps: u64,
+    flocks: bool,
     gpu: &[plume::compiler::reference::ParticleRecord],
     cpu: &[plume::compiler::reference::ParticleRecord],
 ) {
@@ -27,7 +28,14 @@ fn compare_at(
         gpu_ids, cpu_ids,
         "{name}: live ids differ after {steps} steps"
     );
-    let tol = 4.0 * steps as f64 * U32;
+    // Independent particles: 4 roundings of 2^-24 a step. A flock couples them: every boid's
+    // rounding reaches its neighbours, and a dense flock amplifies it (boids.ron: measured
+    // 1.5e-5 (1 + |x|) in position and 3.9e-5 (1 + |v|) in velocity at step 100); allow 1e-4.
+    let tol = if flocks {
+        1e-4
+    } else {
+        4.0 * steps as f64 * U32
+    };
     for (g, c) in gpu.iter().zip(cpu) {
         let dx = (g.position - c.position).length();
         let dv = (g.velocity - c.velocity).length();
@@ -70,13 +78,10 @@ fn every_example_matches_the_reference_after_50_and_100_steps() {
             assert_eq!(gt, ct, "{name}: totals differ after {steps} steps");
             let (g, c) = (gsim.records().unwrap(), csim.records());
             seen_alive |= !c.is_empty();
-            compare_at(&name, steps, &g, &c);
+            compare_at(&name, steps, effect.ir.flock.is_some(), &g, &c);
         }
         assert!(seen_alive, "{name}: nothing alive to compare");
         checked += 1;
     }
-    assert!(
-        checked >= 5,
-        "expected the five examples, checked {checked}"
-    );
+    assert!(checked >= 6, "expected the six examples, checked {checked}");
 }

@@ -193,14 +193,7 @@ fn force(flavor: Flavor) -> BoxedStrategy<String> {
         (
             num(f, 0.2, 1.0),
             (num(f, 0.0, 2.0), num(f, 0.0, 1.0), num(f, 0.0, 0.5), num(f, 0.0, 0.5)),
-            // Tame flocks average globally: a local mean jumps when a neighbour crosses the
-            // radius, so a crossing decided within f32 rounding splits GPU from reference
-            // (tests/flock.rs covers Local against the reference on its own terms).
-            prop::sample::select(if f == Flavor::Tame {
-                vec!["Global"]
-            } else {
-                vec!["Global", "Local"]
-            }),
+            prop::sample::select(vec!["Global", "Local"]),
             prop_oneof![Just(None), num(f, 1.0, 2.0).prop_map(Some)],
         )
             .prop_map(|(r, (sep, avoid, coh, ali), scope, cell)| {

@@ -211,10 +211,10 @@ pub fn bench(
     let flock = match &sim.effect().ir.flock {
         Some(f) => {
             let words = sim.read_flock_buffer("flock_out")?;
-            // Word 3 of every 12 is the slot's neighbour count (0 for free slots).
+            // Word 7 of every 12 is the slot's neighbour count (0 for free slots).
             let total: f64 = words
                 .chunks_exact(48)
-                .map(|c| f64::from(f32::from_le_bytes([c[12], c[13], c[14], c[15]])))
+                .map(|c| f64::from(f32::from_le_bytes([c[28], c[29], c[30], c[31]])))
                 .sum();
             let search = match f.neighbors {
                 plume_compiler::forces::flock::Neighbors::AllPairs => "all pairs".to_string(),

@@ -5,13 +5,16 @@
 //!
 //! ```text
 //! separation: a += separation · w · d / max(r, core)
-//! avoidance:  if j is ahead (d · v̂ < 0, v̂ = v / |v|, skipped when |v| <= 1e-6):
-//!             s = d - (d · v̂) v̂,  a += avoidance · w · s / max(|s|, core)   (steer sideways)
-//! cohesion:   a += cohesion · (c - x)       c = mean position: of all live boids (Global)
-//!                                             or of the neighbours within radius (Local)
-//! alignment:  a += alignment · (v̄ - v)      v̄ = mean velocity, same scope
+//! avoidance:  ahead = max(0, -d · v̂) / max(r, core)    (v̂ = v / |v|; none when |v| <= 1e-6)
+//!             s = d - (d · v̂) v̂,  a += avoidance · w · ahead · s / max(|s|, core)
+//! cohesion:   a += cohesion · (Σ w_j (x_j - x)) / max(Σ w_j, 1)
+//! alignment:  a += alignment · (Σ w_j (v_j - v)) / max(Σ w_j, 1)
 //! ```
-//! (Local with no neighbour: no cohesion or alignment.)
+//! Cohesion and alignment above are the Local scope: a w-weighted mean of the neighbours,
+//! faded in while the neighbourhood is sparse (Σ w < 1). Global uses the plain mean of all live
+//! boids (weight 1 each, itself included) instead. Every term is continuous in the positions: a
+//! neighbour enters or leaves the radius, or passes from ahead to beside, with zero weight, so
+//! the flock has no force jumps for f32 and f64 to decide differently.
 //!
 //! Separation, avoidance and the means are computed once per step, at its start, from a
 //! snapshot of every boid taken after the step's spawns: one all-pairs pass over
@@ -146,17 +149,22 @@ pub struct FlockIr {
     pub origin: usize,
 }
 
-/// What the per-step pass gives each boid, held for the step.
+/// What the per-step pass gives each boid, held for the step: the flock's acceleration on it is
+/// push + cohesion (c - weight x) + alignment (vbar - weight v).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Frozen {
     /// Separation + avoidance (m/s²).
     pub push: DVec3,
-    /// Mean position and velocity to steer toward, when there is one.
-    pub mean: Option<(DVec3, DVec3)>,
+    /// Σ w_j x_j / max(Σ w_j, 1) (Local) or the mean position (Global).
+    pub c: DVec3,
+    /// Σ w_j v_j / max(Σ w_j, 1) (Local) or the mean velocity (Global).
+    pub vbar: DVec3,
+    /// Σ w_j / max(Σ w_j, 1) (Local), or 1 (Global, any boid alive): in [0, 1].
+    pub weight: f64,
 }
 
 /// From this many boids the grid was measured faster than all pairs (H200, effects/boids.ron
-/// at its own density: 0.406 against 0.544 ms/step at 4,096; all pairs wins at 2,048 and below;
+/// at its own density: 0.418 against 0.571 ms/step at 4,096; all pairs wins at 2,048 and below;
 /// docs/performance.md).
 pub const GRID_FASTER_FROM: u32 = 4096;
 
@@ -191,39 +199,45 @@ impl FlockIr {
                 .fold((DVec3::ZERO, DVec3::ZERO), |(a, b), (x, v)| {
                     (a + *x, b + *v)
                 });
-            (sx / n as f64, sv / n as f64)
+            (sx / n as f64, sv / n as f64, 1.0)
         });
         boids
             .iter()
             .enumerate()
             .map(|(i, &(x, v))| {
                 let mut push = DVec3::ZERO;
-                let (mut sx, mut sv, mut count) = (DVec3::ZERO, DVec3::ZERO, 0u32);
+                let (mut sx, mut sv, mut sw) = (DVec3::ZERO, DVec3::ZERO, 0.0);
                 for (j, &(xj, vj)) in boids.iter().enumerate() {
                     if j == i {
                         continue;
                     }
-                    if let Some(p) = self.pair(x, v, xj) {
+                    if let Some((p, w)) = self.pair(x, v, xj) {
                         push += p;
-                        sx += xj;
-                        sv += vj;
-                        count += 1;
+                        sx += w * xj;
+                        sv += w * vj;
+                        sw += w;
                     }
                 }
-                let mean = match self.scope {
-                    Scope::Global => global,
+                let (c, vbar, weight) = match self.scope {
+                    Scope::Global => global.unwrap_or_default(),
                     Scope::Local => {
-                        (count > 0).then(|| (sx / f64::from(count), sv / f64::from(count)))
+                        let norm = f64::max(sw, 1.0);
+                        (sx / norm, sv / norm, sw / norm)
                     }
                 };
-                Frozen { push, mean }
+                Frozen {
+                    push,
+                    c,
+                    vbar,
+                    weight,
+                }
             })
             .collect()
     }
 
-    /// Separation + avoidance on a boid at (x, v) from a neighbour at `xj`, or None when `xj`
-    /// is not within the radius.
-    pub fn pair(&self, x: DVec3, v: DVec3, xj: DVec3) -> Option<DVec3> {
+    /// Separation + avoidance on a boid at (x, v) from a neighbour at `xj`, and the neighbour's
+    /// weight w = 1 - r / radius, or None when `xj` is not within the radius.
+    pub fn pair(&self, x: DVec3, v: DVec3, xj: DVec3) -> Option<(DVec3, f64)> {
         let d = x - xj;
         let r = d.length();
         if r >= self.radius {
@@ -236,21 +250,18 @@ impl FlockIr {
         if self.avoidance != 0.0 && speed > MIN_HEADING_SPEED {
             let heading = v / speed;
             let along = d.dot(heading);
-            if along < 0.0 {
-                let side = d - along * heading;
-                a += self.avoidance * w * (side / side.length().max(core));
-            }
+            let ahead = (-along).max(0.0) / r.max(core);
+            let side = d - along * heading;
+            a += self.avoidance * w * ahead * (side / side.length().max(core));
         }
-        Some(a)
+        Some((a, w))
     }
 
     /// The flock's acceleration on a boid at its live (x, v), given the step's frozen values.
     pub fn accel(&self, frozen: &Frozen, x: DVec3, v: DVec3) -> DVec3 {
-        let mut a = frozen.push;
-        if let Some((c, vbar)) = frozen.mean {
-            a += self.cohesion * (c - x) + self.alignment * (vbar - v);
-        }
-        a
+        frozen.push
+            + self.cohesion * (frozen.c - frozen.weight * x)
+            + self.alignment * (frozen.vbar - frozen.weight * v)
     }
 
     /// Module-scope declarations: constants, the per-invocation frozen values and the
@@ -268,20 +279,20 @@ impl FlockIr {
         w.line("var<private> flock_push: vec3<f32>;");
         w.line("var<private> flock_c: vec3<f32>;");
         w.line("var<private> flock_vbar: vec3<f32>;");
-        w.line("var<private> flock_has_mean: f32;");
+        w.line("var<private> flock_weight: f32;");
         w.block(
             "fn flock_accel(x: vec3<f32>, v: vec3<f32>) -> vec3<f32>",
             |w| {
                 let mut sum = vec![String::from("flock_push")];
                 if self.cohesion != 0.0 {
                     sum.push(format!(
-                        "flock_has_mean * {} * (flock_c - x)",
+                        "{} * (flock_c - flock_weight * x)",
                         f32_lit(self.cohesion)
                     ));
                 }
                 if self.alignment != 0.0 {
                     sum.push(format!(
-                        "flock_has_mean * {} * (flock_vbar - v)",
+                        "{} * (flock_vbar - flock_weight * v)",
                         f32_lit(self.alignment)
                     ));
                 }
@@ -300,15 +311,15 @@ impl FlockIr {
                 w.block("if (mean_x.w > 0.0)", |w| {
                     w.line("flock_c = mean_x.xyz;");
                     w.line("flock_vbar = flock_sums[FLOCK_MEAN + 1u].xyz;");
-                    w.line("flock_has_mean = 1.0;");
+                    w.line("flock_weight = 1.0;");
                 });
             }
             Scope::Local => {
-                w.block("if (fo.w > 0.0)", |w| {
-                    w.line("flock_c = flock_out[3u * i + 1u].xyz / fo.w;");
-                    w.line("flock_vbar = flock_out[3u * i + 2u].xyz / fo.w;");
-                    w.line("flock_has_mean = 1.0;");
-                });
+                w.comment("The w-weighted neighbour means, faded in below a total weight of 1.");
+                w.line("let norm = max(fo.w, 1.0);");
+                w.line("flock_c = flock_out[3u * i + 1u].xyz / norm;");
+                w.line("flock_vbar = flock_out[3u * i + 2u].xyz / norm;");
+                w.line("flock_weight = fo.w / norm;");
             }
         }
     }
@@ -410,23 +421,20 @@ impl FlockIr {
                 }
                 if self.avoidance != 0.0 {
                     w.line("let speed = length(v);");
-                    w.block(
-                        format!("if (speed > {})", f32_lit(MIN_HEADING_SPEED)),
-                        |w| {
-                            w.line("let heading = v / speed;");
-                            w.line("let along = dot(d, heading);");
-                            w.block("if (along < 0.0)", |w| {
-                                w.line("let side = d - along * heading;");
-                                w.line(format!(
-                                    "a += {} * w * (side / max(length(side), {core}));",
-                                    f32_lit(self.avoidance)
-                                ));
-                            });
-                        },
-                    );
+                    w.block(format!("if (speed > {})", f32_lit(MIN_HEADING_SPEED)), |w| {
+                        w.line("let heading = v / speed;");
+                        w.line("let along = dot(d, heading);");
+                        w.comment("How directly ahead the neighbour is: 0 beside or behind, so no jump.");
+                        w.line(format!("let ahead = max(-along, 0.0) / max(r, {core});"));
+                        w.line("let side = d - along * heading;");
+                        w.line(format!(
+                            "a += {} * w * ahead * (side / max(length(side), {core}));",
+                            f32_lit(self.avoidance)
+                        ));
+                    });
                 }
-                w.comment("w = 1 marks a neighbour (for the local means and the count).");
-                w.line("return vec4<f32>(a, 1.0);");
+                w.comment("w > 0 marks a neighbour and weighs it in the local means.");
+                w.line("return vec4<f32>(a, w);");
             },
         );
     }
@@ -464,11 +472,12 @@ fn emit_reduce(w: &mut Writer) {
     );
 }
 
-/// Writes a boid's accumulated pass results (separation + avoidance, count; neighbour sums).
+/// Writes a boid's accumulated pass results: (separation + avoidance, Σ w), (Σ w x, count),
+/// (Σ w v, 0).
 fn emit_store_out(w: &mut Writer) {
     w.block("if (i < chunk.len)", |w| {
-        w.line("flock_out[3u * i] = vec4<f32>(push, count);");
-        w.line("flock_out[3u * i + 1u] = vec4<f32>(sum_x, 0.0);");
+        w.line("flock_out[3u * i] = vec4<f32>(push, sum_w);");
+        w.line("flock_out[3u * i + 1u] = vec4<f32>(sum_x, count);");
         w.line("flock_out[3u * i + 2u] = vec4<f32>(sum_v, 0.0);");
     });
 }
@@ -479,8 +488,9 @@ fn emit_accumulate(w: &mut Writer, j: &str, ox: &str, ov: &str) {
         w.line(format!("let f = flock_pair(me.xyz, me_v.xyz, {ox}.xyz);"));
         w.block("if (f.w > 0.0)", |w| {
             w.line("push += f.xyz;");
-            w.line(format!("sum_x += {ox}.xyz;"));
-            w.line(format!("sum_v += {ov}.xyz;"));
+            w.line(format!("sum_x += f.w * {ox}.xyz;"));
+            w.line(format!("sum_v += f.w * {ov}.xyz;"));
+            w.line("sum_w += f.w;");
             w.line("count += 1.0;");
         });
     });
@@ -506,6 +516,7 @@ fn emit_all_pairs(w: &mut Writer) {
             w.line("var push = vec3<f32>(0.0);");
             w.line("var sum_x = vec3<f32>(0.0);");
             w.line("var sum_v = vec3<f32>(0.0);");
+            w.line("var sum_w = 0.0;");
             w.line("var count = 0.0;");
             w.block("for (var t = 0u; t < FLOCK_TILES; t++)", |w| {
                 w.line("let src = t * WORKGROUP + lid;");
@@ -606,6 +617,7 @@ fn emit_grid(w: &mut Writer, cell: f64) {
             w.line("var push = vec3<f32>(0.0);");
             w.line("var sum_x = vec3<f32>(0.0);");
             w.line("var sum_v = vec3<f32>(0.0);");
+            w.line("var sum_w = 0.0;");
             w.line("var count = 0.0;");
             w.block("if (me.w > 0.0)", |w| {
                 w.line("let home = cell_of(me.xyz);");

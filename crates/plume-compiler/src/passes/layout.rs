@@ -211,7 +211,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
             name: "flock_out",
             space: "storage, read_write",
             bytes: cap * 48,
-            meaning: "per slot: (separation + avoidance, neighbours), neighbour position and velocity sums",
+            meaning: "per slot: (separation + avoidance, total weight), (weighted position sum, neighbours), (weighted velocity sum, 0)",
         });
         if flock.scope == crate::forces::flock::Scope::Global {
             layout.bindings.push(Binding {
