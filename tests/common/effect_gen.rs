@@ -271,6 +271,35 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
         .boxed()
 }
 
+/// A baked field over [-3, 3]³. Tame fields are trilinear (nearest jumps between nodes where f32
+/// and f64 round differently) and baked every step (valid with noise too).
+fn field(flavor: Flavor) -> BoxedStrategy<String> {
+    let f = flavor;
+    let filters = if f == Flavor::Tame {
+        vec!["Trilinear"]
+    } else {
+        vec!["Trilinear", "Nearest"]
+    };
+    let refresh = if f == Flavor::Tame {
+        vec!["EveryStep"]
+    } else {
+        vec!["EveryStep", "Once"]
+    };
+    (
+        (count(f, 2, 12), count(f, 2, 12), count(f, 2, 12)),
+        vec3(f, -3.0, -2.5),
+        vec3(f, 2.5, 3.0),
+        prop::sample::select(filters),
+        prop::sample::select(refresh),
+    )
+        .prop_map(|((nx, ny, nz), min, max, filter, refresh)| {
+            format!(
+                "field: Baked(resolution: ({nx}, {ny}, {nz}), min: {min}, max: {max}, filter: {filter}, refresh: {refresh}),"
+            )
+        })
+        .boxed()
+}
+
 /// The integrator names of the format (Auto included).
 pub const INTEGRATORS: &[&str] = &[
     "Auto",
@@ -314,10 +343,11 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
             prop_oneof![Just(String::new()), num(f, 5.0, 50.0).prop_map(|s| format!("max_speed: Some({s}),"))],
             any::<bool>(),
             prop_oneof![Just(String::new()), render(f)],
+            prop_oneof![Just(String::new()), field(f)],
         ),
     )
         .prop_map(
-            move |((cap, seed, dt, substeps), emitters, mut forces, planes, kills, (integ, max_speed, sort, render))| {
+            move |((cap, seed, dt, substeps), emitters, mut forces, planes, kills, (integ, max_speed, sort, render, field))| {
                 if f != Flavor::Wild {
                     // An effect has at most one Flock.
                     let mut flocks = 0;
@@ -327,7 +357,7 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
                     });
                 }
                 format!(
-                    "Effect(\n    name: \"fuzz\",\n    capacity: {cap},\n    seed: {seed},\n    dt: {dt},\n    substeps: {substeps},\n    emitters: [{}],\n    forces: [{}],\n    collide: [{}],\n    kill: [{}],\n    integrator: {integ},\n    {max_speed}\n    sort: {sort},\n    {render}\n)\n",
+                    "Effect(\n    name: \"fuzz\",\n    capacity: {cap},\n    seed: {seed},\n    dt: {dt},\n    substeps: {substeps},\n    emitters: [{}],\n    forces: [{}],\n    collide: [{}],\n    kill: [{}],\n    integrator: {integ},\n    {max_speed}\n    sort: {sort},\n    {render}\n    {field}\n)\n",
                     emitters.join(",\n        "),
                     forces.join(",\n        "),
                     planes.join(", "),

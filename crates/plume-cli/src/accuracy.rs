@@ -7,7 +7,9 @@ use std::process::ExitCode;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use plume_compiler::Integrator;
-use plume_runtime::accuracy::{measure, pareto_front, AccuracyPlan, Engine, ReferenceKind};
+use plume_runtime::accuracy::{
+    field_sweep, measure, pareto_front, AccuracyPlan, Engine, ReferenceKind,
+};
 use plume_runtime::export::write_atomically;
 use plume_runtime::plot::accuracy_svg;
 
@@ -42,6 +44,13 @@ pub struct AccuracyArgs {
     /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
     #[arg(long)]
     backend: Option<String>,
+    /// Instead of the integrators: the error of a baked field against evaluated forces, at
+    /// each resolution of --resolutions, nearest and trilinear, over the file's field bounds.
+    #[arg(long)]
+    field_sweep: bool,
+    /// Nodes per axis for --field-sweep, comma-separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [16u32, 32, 64, 128])]
+    resolutions: Vec<u32>,
 }
 
 /// Runs `plume accuracy`.
@@ -88,6 +97,9 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
     } else {
         ProgressBar::new(0)
     };
+    if args.field_sweep {
+        return field_sweep_report(args, &name, &effect, &engine, &bar, duration, &gpu);
+    }
     bar.set_style(
         ProgressStyle::with_template("measuring [{bar:30}] {pos}/{len} runs ({eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar())
@@ -176,6 +188,89 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
         if !args.json {
             println!("plot written to {}", path.display());
         }
+    }
+    ExitCode::SUCCESS
+}
+
+/// `--field-sweep`: the baked field's error against evaluated forces, per resolution and filter.
+fn field_sweep_report(
+    args: &AccuracyArgs,
+    name: &str,
+    effect: &plume_compiler::Effect,
+    engine: &Engine,
+    bar: &ProgressBar,
+    duration: f64,
+    gpu: &Option<plume_runtime::Gpu>,
+) -> ExitCode {
+    if args.resolutions.iter().any(|&n| !(2..=256).contains(&n)) {
+        eprintln!("error: every --resolutions value must be in 2..=256");
+        return ExitCode::FAILURE;
+    }
+    bar.set_style(
+        ProgressStyle::with_template("baking [{bar:30}] {pos}/{len} runs ({eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    let result = field_sweep(
+        engine,
+        effect,
+        &args.resolutions,
+        duration,
+        |done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    );
+    bar.finish_and_clear();
+    let (rows, evaluated) = match result {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("{name}: error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let engine_name = gpu
+        .as_ref()
+        .map(|g| g.describe())
+        .unwrap_or_else(|| "cpu reference (f64)".into());
+    if args.json {
+        let items: Vec<_> = rows
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "resolution": r.resolution, "filter": format!("{:?}", r.filter),
+                    "max_error": r.max_error, "rms_error": r.rms_error,
+                    "seconds_per_step": r.seconds_per_step,
+                })
+            })
+            .collect();
+        println!(
+            "{}",
+            serde_json::json!({ "effect": name, "engine": engine_name, "duration": duration,
+                                "evaluated_seconds_per_step": evaluated, "rows": items })
+        );
+        return ExitCode::SUCCESS;
+    }
+    println!(
+        "{name}: position error after {duration:.4} s of the baked field against every force evaluated per particle"
+    );
+    println!(
+        "engine: {engine_name}; evaluated: {:.1} us/step",
+        evaluated * 1e6
+    );
+    println!(
+        "{:>10}  {:<10} {:>12} {:>12} {:>12}",
+        "nodes", "filter", "max err (m)", "rms err (m)", "us/step"
+    );
+    for r in &rows {
+        println!(
+            "{:>10}  {:<10} {:>12.3e} {:>12.3e} {:>12.1}",
+            format!("{0}^3", r.resolution),
+            format!("{:?}", r.filter),
+            r.max_error,
+            r.rms_error,
+            r.seconds_per_step * 1e6
+        );
     }
     ExitCode::SUCCESS
 }

@@ -29,6 +29,8 @@ pub struct EffectIr {
     pub emitters: Vec<EmitterIr>,
     /// Force terms (after the passes: folded, merged, pruned).
     pub terms: Vec<Term>,
+    /// The baked force field, when the effect bakes one.
+    pub field: Option<crate::field::FieldIr>,
     /// Flocking, when the effect has a Flock force.
     pub flock: Option<crate::forces::flock::FlockIr>,
     /// Speed limit after every velocity update.
@@ -381,6 +383,13 @@ impl fmt::Display for EffectIr {
         }
         if let Some(flock) = &self.flock {
             writeln!(f, "    {}  <- forces[{}]", flock.describe(), flock.origin)?;
+        }
+        if let Some(field) = &self.field {
+            writeln!(
+                f,
+                "    {}: Attractor, Vortex and noise terms sampled from it",
+                field.describe()
+            )?;
         }
         writeln!(f, "  planes")?;
         for p in &self.planes {

@@ -22,6 +22,7 @@
 
 pub mod check;
 pub mod diagnostics;
+pub mod field;
 pub mod forces;
 pub mod integrators;
 pub mod ir;

@@ -40,6 +40,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
             .enumerate()
             .flat_map(|(i, f)| f.lower(i, effect.seed))
             .collect(),
+        field: effect.field.lower(),
         flock: effect.forces.iter().enumerate().find_map(|(i, f)| match f {
             Force::Flock(flock) => Some(flock.lower(i)),
             _ => None,

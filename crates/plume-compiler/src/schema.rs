@@ -74,6 +74,9 @@ pub struct Effect {
     /// Draw back to front as seen from `camera`.
     #[serde(default)]
     pub sort: bool,
+    /// Evaluate position-dependent forces per particle (default) or bake them into a grid.
+    #[serde(default)]
+    pub field: crate::field::Field,
     /// The viewpoint for sorting and rendering.
     #[serde(default)]
     pub camera: Camera,

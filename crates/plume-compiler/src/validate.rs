@@ -64,6 +64,11 @@ pub fn check_effect(effect: &Effect) -> Checker {
     for (i, e) in effect.emitters.iter().enumerate() {
         check_emitter(&mut c, &root.field("emitters").index(i), e, effect.dt);
     }
+    let noisy = effect
+        .forces
+        .iter()
+        .position(|f| matches!(f, crate::forces::Force::Wind(w) if w.noise != 0.0));
+    effect.field.check(&root.field("field"), &mut c, noisy);
     let mut flocks = 0;
     for (i, f) in effect.forces.iter().enumerate() {
         f.check(&force_path(i, f), &mut c);

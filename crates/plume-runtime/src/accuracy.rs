@@ -223,3 +223,110 @@ pub fn pareto_front(rows: &[AccuracyRow]) -> Vec<usize> {
         })
         .collect()
 }
+
+/// One row of the baked-field sweep: the baked run's position error against the same effect
+/// with every force evaluated per particle.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FieldRow {
+    /// Nodes per axis (the same on every axis).
+    pub resolution: u32,
+    /// The sampling filter.
+    pub filter: plume_compiler::field::Filter,
+    /// Largest position error over the compared particles (m).
+    pub max_error: f64,
+    /// RMS position error (m).
+    pub rms_error: f64,
+    /// Wall time per step (s), bake included.
+    pub seconds_per_step: f64,
+}
+
+/// The baked-field sweep: for each resolution (n³ nodes over the file's field bounds) and
+/// filter, run the effect with the field baked (every step when a force changes with time)
+/// and compare the positions after `duration` with the run where every force is evaluated.
+/// Returns the rows and the evaluated run's wall time per step.
+pub fn field_sweep(
+    engine: &Engine,
+    effect: &Effect,
+    resolutions: &[u32],
+    duration: f64,
+    mut progress: impl FnMut(usize, usize),
+) -> Result<(Vec<FieldRow>, f64), RuntimeError> {
+    use plume_compiler::field::{Field, Filter, Refresh};
+    let effect = measured_effect(effect);
+    let Field::Baked { min, max, .. } = effect.field.clone() else {
+        return Err(RuntimeError::Output(
+            "the sweep needs the grid's bounds: give the effect a field: Baked(resolution: ..., min: ..., max: ...)".into(),
+        ));
+    };
+    let time_dependent = effect
+        .forces
+        .iter()
+        .any(|f| matches!(f, plume_compiler::forces::Force::Wind(w) if w.noise != 0.0));
+    let refresh = if time_dependent {
+        Refresh::EveryStep
+    } else {
+        Refresh::Once
+    };
+    let steps = steps_for(duration, effect.dt)?;
+    let run = |e: &Effect| -> Result<(Vec<(u32, DVec3)>, f64), RuntimeError> {
+        let c = compile_effect(e, "").map_err(|err| RuntimeError::Output(err.to_string()))?;
+        let (records, seconds) = match engine {
+            Engine::Gpu(gpu) => {
+                GpuSim::new(gpu, c.clone())?.run(1, |_| {})?;
+                let mut sim = GpuSim::new(gpu, c)?;
+                let start = Instant::now();
+                sim.run(steps, |_| {})?;
+                let s = start.elapsed().as_secs_f64();
+                (sim.records()?, s)
+            }
+            Engine::Cpu => {
+                let mut sim = ReferenceSim::new(&c.ir);
+                let start = Instant::now();
+                sim.run(steps);
+                (sim.records(), start.elapsed().as_secs_f64())
+            }
+        };
+        Ok((
+            records.iter().map(|r| (r.id, r.position)).collect(),
+            seconds / steps as f64,
+        ))
+    };
+    let mut evaluated = effect.clone();
+    evaluated.field = Field::Evaluated;
+    let (truth, evaluated_seconds) = run(&evaluated)?;
+    let truth: HashMap<u32, DVec3> = truth.into_iter().collect();
+    let total = resolutions.len() * 2;
+    let mut rows = Vec::new();
+    for &resolution in resolutions {
+        for filter in [Filter::Nearest, Filter::Trilinear] {
+            let mut baked = effect.clone();
+            baked.field = Field::Baked {
+                resolution: (resolution, resolution, resolution),
+                min,
+                max,
+                filter,
+                refresh,
+            };
+            let (positions, seconds_per_step) = run(&baked)?;
+            let errors: Vec<f64> = positions
+                .iter()
+                .filter_map(|(id, x)| truth.get(id).map(|t| (*x - *t).length()))
+                .collect();
+            let max_error = errors.iter().copied().fold(0.0, f64::max);
+            let rms_error = if errors.is_empty() {
+                0.0
+            } else {
+                (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt()
+            };
+            rows.push(FieldRow {
+                resolution,
+                filter,
+                max_error,
+                rms_error,
+                seconds_per_step,
+            });
+            progress(rows.len(), total);
+        }
+    }
+    Ok((rows, evaluated_seconds))
+}

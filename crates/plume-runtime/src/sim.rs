@@ -46,6 +46,8 @@ pub struct GpuSim<'g> {
     update: wgpu::ComputePipeline,
     sort: Option<SortStage<'g>>,
     flock: Option<FlockStage>,
+    /// The baked field's `bake` kernel, its node count, and whether it runs every step.
+    bake: Option<(wgpu::ComputePipeline, u64, bool)>,
 }
 
 /// The per-step flocking pass of an effect with a Flock force: snapshot (+ partial sums),
@@ -400,9 +402,17 @@ impl<'g> GpuSim<'g> {
             }
             None => None,
         };
+        let bake = effect.ir.field.as_ref().map(|f| {
+            (
+                pipeline("bake"),
+                f.nodes(),
+                f.refresh == plume_compiler::field::Refresh::EveryStep,
+            )
+        });
         let sim = Self {
             gpu,
             flock,
+            bake,
             schedule: Schedule::new(&effect.ir),
             prepare: pipeline("spawn_prepare"),
             spawn: pipeline("spawn"),
@@ -428,6 +438,13 @@ impl<'g> GpuSim<'g> {
             for chunk in &sim.chunks {
                 let (x, y) = sim.groups(chunk.len)?;
                 pass.set_bind_group(0, &chunk.bind_group, &[0]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            // A field baked once is baked here, at time 0 (the params buffer starts zeroed).
+            if let Some((bake, nodes, false)) = &sim.bake {
+                let (x, y) = sim.groups(*nodes)?;
+                pass.set_bind_group(0, &sim.chunks[0].bind_group, &[0]);
+                pass.set_pipeline(bake);
                 pass.dispatch_workgroups(x, y, 1);
             }
         }
@@ -591,6 +608,13 @@ impl<'g> GpuSim<'g> {
     ) -> Result<(), RuntimeError> {
         for (j, plan) in plans.iter().enumerate() {
             let offset = (j as u64 * self.params_stride) as u32;
+            // A field baked every step is baked first: the spawn (Verlet's start) samples it too.
+            if let Some((bake, nodes, true)) = &self.bake {
+                let (x, y) = self.groups(*nodes)?;
+                pass.set_bind_group(0, &self.chunks[0].bind_group, &[offset]);
+                pass.set_pipeline(bake);
+                pass.dispatch_workgroups(x, y, 1);
+            }
             if plan.requested() > 0 {
                 pass.set_bind_group(0, &self.chunks[0].bind_group, &[offset]);
                 pass.set_pipeline(&self.prepare);

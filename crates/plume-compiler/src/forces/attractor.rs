@@ -82,6 +82,9 @@ pub struct AttractorTerm {
 }
 
 impl ForceTerm for AttractorTerm {
+    fn bakeable(&self) -> bool {
+        true
+    }
     fn origins(&self) -> &[usize] {
         &self.origins
     }

@@ -205,6 +205,11 @@ pub trait ForceTerm {
     fn uses_time(&self) -> bool {
         false
     }
+    /// Whether a baked field may hold this term: it depends on position (and time) only, and
+    /// is worth a grid (not a constant).
+    fn bakeable(&self) -> bool {
+        false
+    }
     /// The field a stiffness warning points at.
     fn stiffness_field(&self) -> &'static str {
         "strength"

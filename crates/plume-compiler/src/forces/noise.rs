@@ -125,6 +125,9 @@ pub fn emit_helpers(w: &mut Writer) {
 }
 
 impl ForceTerm for NoiseTerm {
+    fn bakeable(&self) -> bool {
+        true
+    }
     fn origins(&self) -> &[usize] {
         &self.origins
     }

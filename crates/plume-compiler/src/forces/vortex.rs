@@ -150,6 +150,9 @@ impl VortexTerm {
 }
 
 impl ForceTerm for VortexTerm {
+    fn bakeable(&self) -> bool {
+        true
+    }
     fn origins(&self) -> &[usize] {
         &self.origins
     }

@@ -197,6 +197,15 @@ pub fn decide(ir: &EffectIr) -> Layout {
             meaning: "the slots this dispatch's particle buffer holds: first global slot, count",
         },
     ];
+    if let Some(field) = &ir.field {
+        layout.bindings.push(Binding {
+            binding: 13,
+            name: "field",
+            space: "storage, read_write",
+            bytes: field.nodes() * 16,
+            meaning: "the baked force field: one (a, 0) per node, x fastest",
+        });
+    }
     if let Some(flock) = &ir.flock {
         let groups = u64::from(ir.capacity.div_ceil(crate::wgsl::WORKGROUP));
         layout.bindings.push(Binding {

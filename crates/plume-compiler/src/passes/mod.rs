@@ -22,7 +22,20 @@ pub fn run(
     fold::fold(ir);
     prune::prune(ir);
     integrator::resolve(ir, force_names)?;
-    let warnings = stability::analyse(ir, force_names);
+    let mut warnings = stability::analyse(ir, force_names);
+    // A baked field with nothing to hold (no attractor, vortex or noise left) is dropped, so
+    // the effect pays for no grid.
+    if ir.field.is_some() && !ir.terms.iter().any(|t| t.as_dyn().bakeable()) {
+        ir.field = None;
+        let path = crate::path::ValuePath::root().field("field");
+        warnings.push((
+            Diagnostic::warning(
+                path.display,
+                "nothing to bake: no Attractor, Vortex or noisy Wind acts, so forces are evaluated and no grid is made",
+            ),
+            path.lookup,
+        ));
+    }
     let layout = layout::decide(ir);
     Ok((layout, warnings))
 }

@@ -29,6 +29,8 @@ pub struct ReferenceSim {
     schedule: Schedule,
     /// Live particles in id order.
     particles: Vec<Particle>,
+    /// The baked field's nodes (baked at time 0, or at each step's start), when there is one.
+    baked: Option<Vec<DVec3>>,
     totals: Totals,
 }
 
@@ -40,6 +42,7 @@ impl ReferenceSim {
             schedule: Schedule::new(ir),
             ir: ir.clone(),
             particles: Vec::new(),
+            baked: ir.field.as_ref().map(|f| f.bake(&ir.terms, 0.0)),
             totals: Totals::default(),
         }
     }
@@ -54,6 +57,11 @@ impl ReferenceSim {
     /// One step: spawn, update every live particle by dt, deaths.
     pub fn step(&mut self) {
         let plan = self.schedule.next_plan();
+        if let Some(field) = &self.ir.field {
+            if field.refresh == crate::field::Refresh::EveryStep {
+                self.baked = Some(field.bake(&self.ir.terms, plan.time));
+            }
+        }
         let verlet = self.ir.integrator == Integrator::Verlet;
         let h = self.ir.h();
         // Spawn: the first `free` requested ids get slots, the rest are dropped.
@@ -70,7 +78,9 @@ impl ReferenceSim {
                 budget -= 1;
                 let s = spawn(&self.ir, e, id + local, k0 + local, plan.step);
                 let v = if verlet {
-                    s.v * h - accel(&self.ir, s.x, s.v, plan.time) * (0.5 * h * h)
+                    s.v * h
+                        - accel(&self.ir, self.baked.as_deref(), s.x, s.v, plan.time)
+                            * (0.5 * h * h)
                 } else {
                     s.v
                 };
@@ -88,6 +98,7 @@ impl ReferenceSim {
         let has_lifetimes = self.ir.has_lifetimes();
         let ir = &self.ir;
         let exact = self.exact.as_ref();
+        let baked = self.baked.as_deref();
         let before = self.particles.len();
         // Flocking reads every boid as it is after the spawns, before anyone moves.
         let frozen: Vec<Frozen> = match &ir.flock {
@@ -107,7 +118,7 @@ impl ReferenceSim {
             index += 1;
             for s in 0..ir.substeps {
                 let t = plan.time + f64::from(s) * h;
-                substep(ir, exact, flock, &mut p.x, &mut p.v, t);
+                substep(ir, exact, baked, flock, &mut p.x, &mut p.v, t);
                 for plane in &ir.planes {
                     collide(plane, &mut p.x, &mut p.v, verlet, h);
                 }

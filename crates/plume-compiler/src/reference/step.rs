@@ -8,12 +8,27 @@ use crate::integrators::ExactStep;
 use crate::ir::{EffectIr, PlaneIr};
 use crate::schema::Integrator;
 
-/// Sum of the force terms at (x, v, t).
-pub fn accel(ir: &EffectIr, x: DVec3, v: DVec3, t: f64) -> DVec3 {
-    ir.terms
-        .iter()
-        .map(|term| term.as_dyn().accel(x, v, t))
-        .sum()
+/// Sum of the force terms at (x, v, t). With a baked field, `baked` holds its nodes (baked at
+/// the step's time) and the bakeable terms are sampled from them instead of evaluated.
+pub fn accel(ir: &EffectIr, baked: Option<&[DVec3]>, x: DVec3, v: DVec3, t: f64) -> DVec3 {
+    match (&ir.field, baked) {
+        (Some(field), Some(nodes)) => {
+            let rest: DVec3 = ir
+                .terms
+                .iter()
+                .filter(|term| !term.as_dyn().bakeable())
+                .map(|term| term.as_dyn().accel(x, v, t))
+                .sum();
+            rest + field
+                .sample(nodes, x)
+                .unwrap_or_else(|| crate::field::baked_sum(&ir.terms, x, t))
+        }
+        _ => ir
+            .terms
+            .iter()
+            .map(|term| term.as_dyn().accel(x, v, t))
+            .sum(),
+    }
 }
 
 fn clamp(v: DVec3, limit: Option<f64>) -> DVec3 {
@@ -28,6 +43,7 @@ fn clamp(v: DVec3, limit: Option<f64>) -> DVec3 {
 pub fn substep(
     ir: &EffectIr,
     exact: Option<&ExactStep>,
+    baked: Option<&[DVec3]>,
     flock: Option<&Frozen>,
     x: &mut DVec3,
     v: &mut DVec3,
@@ -35,7 +51,7 @@ pub fn substep(
 ) {
     let h = ir.h();
     let a = |x: DVec3, v: DVec3, t: f64| {
-        let own = accel(ir, x, v, t);
+        let own = accel(ir, baked, x, v, t);
         match (&ir.flock, flock) {
             (Some(f), Some(frozen)) => own + f.accel(frozen, x, v),
             _ => own,

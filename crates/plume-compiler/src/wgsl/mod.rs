@@ -89,6 +89,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "sort_keys" | "sort_vals" | "grid_keys" | "grid_vals" => "array<u32>",
             "boids" | "flock_out" | "flock_sums" => "array<vec4<f32>>",
             "cells" => "array<vec2<u32>>",
+            "field" => "array<vec4<f32>>",
             _ => "StepParams",
         };
         w.line(format!(
@@ -120,12 +121,24 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
                     w.line("var a = vec3<f32>(0.0);");
                 }
                 for t in &ir.terms {
+                    if ir.field.is_some() && t.as_dyn().bakeable() {
+                        continue;
+                    }
                     t.as_dyn().emit_wgsl(w);
+                }
+                if ir.field.is_some() {
+                    w.line("a += field_sample(x, t);");
                 }
                 w.line("return a;");
             },
         );
         w.blank();
+    }
+    if let Some(field) = &ir.field {
+        if integrators::needs_accel(ir.integrator) {
+            field.emit_wgsl(&mut w, &ir.terms);
+            w.blank();
+        }
     }
     spawn::emit(&mut w, ir, layout);
     w.blank();
