@@ -25,14 +25,7 @@ fn the_gpu_samples_the_grid_the_reference_bakes() {
         let e = compile(&effect(24, filter, refresh));
         assert!(e.ir.field.is_some());
         let steps = 60;
-        let (gt, gpu) = run_gpu(&e, steps);
-        let (ct, cpu) = run_cpu(&e, steps);
-        assert_eq!(gt, ct);
-        let mut worst: f64 = 0.0;
-        for (g, c) in gpu.iter().zip(&cpu) {
-            assert_eq!(g.id, c.id);
-            worst = worst.max((g.position - c.position).length() / (1.0 + c.position.length()));
-        }
+        let worst = worst_gpu_distance(&e, steps);
         // f32 against f64 on the same nodes and weights: the usual 4 N 2^-24 per step bound,
         // except that Nearest jumps between nodes where f32 and f64 round u differently
         // (a node spacing of 0.17 m times a force difference of up to ~1 m/s² for one step).

@@ -48,5 +48,19 @@ pub fn run_cpu(effect: &CompiledEffect, steps: u64) -> (Totals, Vec<ParticleReco
     (sim.totals(), sim.records())
 }
 
+/// Runs `steps` on the GPU and the reference, asserts equal totals and live ids, and returns
+/// the largest position distance over (1 + |x|).
+pub fn worst_gpu_distance(effect: &CompiledEffect, steps: u64) -> f64 {
+    let (gt, gpu) = run_gpu(effect, steps);
+    let (ct, cpu) = run_cpu(effect, steps);
+    assert_eq!(gt, ct, "totals differ after {steps} steps");
+    let mut worst: f64 = 0.0;
+    for (g, c) in gpu.iter().zip(&cpu) {
+        assert_eq!(g.id, c.id, "live ids differ after {steps} steps");
+        worst = worst.max((g.position - c.position).length() / (1.0 + c.position.length()));
+    }
+    worst
+}
+
 /// f32 unit roundoff.
 pub const U32: f64 = 1.0 / 16_777_216.0;

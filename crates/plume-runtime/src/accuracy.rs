@@ -135,6 +135,32 @@ pub fn reference(
     ))
 }
 
+/// Runs `steps` of `c` on `engine`; returns the live particles and the wall time of the steps.
+fn timed_run(
+    engine: &Engine,
+    c: plume_compiler::CompiledEffect,
+    steps: u64,
+) -> Result<(Vec<plume_compiler::reference::ParticleRecord>, f64), RuntimeError> {
+    Ok(match engine {
+        Engine::Gpu(gpu) => {
+            // Warm up: drivers compile shaders on first dispatch; keep that out of the timing.
+            GpuSim::new(gpu, c.clone())?.run(1, |_| {})?;
+            let mut sim = GpuSim::new(gpu, c)?;
+            let start = Instant::now();
+            sim.run(steps, |_| {})?;
+            let s = start.elapsed().as_secs_f64();
+            (sim.records()?, s)
+        }
+        Engine::Cpu => {
+            let mut sim = ReferenceSim::new(&c.ir);
+            let start = Instant::now();
+            sim.run(steps);
+            let s = start.elapsed().as_secs_f64();
+            (sim.records(), s)
+        }
+    })
+}
+
 /// Runs the plan; `progress(done, total)` after each run.
 pub fn measure(
     engine: &Engine,
@@ -160,24 +186,7 @@ pub fn measure(
                 Err(e) => return Err(e),
             };
             let steps = steps_for(plan.duration, dt)?;
-            let (records, seconds) = match engine {
-                Engine::Gpu(gpu) => {
-                    // Warm up: drivers compile shaders on first dispatch; keep that out of the timing.
-                    GpuSim::new(gpu, c.clone())?.run(1, |_| {})?;
-                    let mut sim = GpuSim::new(gpu, c)?;
-                    let start = Instant::now();
-                    sim.run(steps, |_| {})?;
-                    let s = start.elapsed().as_secs_f64();
-                    (sim.records()?, s)
-                }
-                Engine::Cpu => {
-                    let mut sim = ReferenceSim::new(&c.ir);
-                    let start = Instant::now();
-                    sim.run(steps);
-                    let s = start.elapsed().as_secs_f64();
-                    (sim.records(), s)
-                }
-            };
+            let (records, seconds) = timed_run(engine, c, steps)?;
             let errors: Vec<f64> = records
                 .iter()
                 .filter_map(|r| truth.get(&r.id).map(|t| (r.position - *t).length()))
@@ -270,22 +279,7 @@ pub fn field_sweep(
     let steps = steps_for(duration, effect.dt)?;
     let run = |e: &Effect| -> Result<(Vec<(u32, DVec3)>, f64), RuntimeError> {
         let c = compile_effect(e, "").map_err(|err| RuntimeError::Output(err.to_string()))?;
-        let (records, seconds) = match engine {
-            Engine::Gpu(gpu) => {
-                GpuSim::new(gpu, c.clone())?.run(1, |_| {})?;
-                let mut sim = GpuSim::new(gpu, c)?;
-                let start = Instant::now();
-                sim.run(steps, |_| {})?;
-                let s = start.elapsed().as_secs_f64();
-                (sim.records()?, s)
-            }
-            Engine::Cpu => {
-                let mut sim = ReferenceSim::new(&c.ir);
-                let start = Instant::now();
-                sim.run(steps);
-                (sim.records(), start.elapsed().as_secs_f64())
-            }
-        };
+        let (records, seconds) = timed_run(engine, c, steps)?;
         Ok((
             records.iter().map(|r| (r.id, r.position)).collect(),
             seconds / steps as f64,

@@ -375,17 +375,7 @@ impl FlockIr {
                     w.comment("A fixed reduction tree, so the sums are the same every run.");
                     w.line("red_x[lid] = vec4<f32>(bx.xyz * bx.w, bx.w);");
                     w.line("red_v[lid] = vec4<f32>(bv.xyz * bx.w, 0.0);");
-                    w.line("workgroupBarrier();");
-                    w.block(
-                        "for (var s = WORKGROUP / 2u; s > 0u; s = s >> 1u)",
-                        |w| {
-                            w.block("if (lid < s)", |w| {
-                                w.line("red_x[lid] += red_x[lid + s];");
-                                w.line("red_v[lid] += red_v[lid + s];");
-                            });
-                            w.line("workgroupBarrier();");
-                        },
-                    );
+                    emit_tree_reduce(w);
                     w.line("let g = wid.x + wid.y * groups.x;");
                     w.block("if (lid == 0u && g < FLOCK_GROUPS)", |w| {
                         w.line("flock_sums[2u * g] = red_x[0];");
@@ -440,6 +430,28 @@ impl FlockIr {
     }
 }
 
+/// Sums `red_x` and `red_v` into their element 0 by a fixed tree (the same order every run),
+/// with the barriers that need every thread of the workgroup.
+fn emit_tree_reduce(w: &mut Writer) {
+    w.line("workgroupBarrier();");
+    w.block("for (var s = WORKGROUP / 2u; s > 0u; s = s >> 1u)", |w| {
+        w.block("if (lid < s)", |w| {
+            w.line("red_x[lid] += red_x[lid + s];");
+            w.line("red_v[lid] += red_v[lid + s];");
+        });
+        w.line("workgroupBarrier();");
+    });
+}
+
+/// The neighbour pass's running sums, zeroed.
+fn emit_accumulators(w: &mut Writer) {
+    w.line("var push = vec3<f32>(0.0);");
+    w.line("var sum_x = vec3<f32>(0.0);");
+    w.line("var sum_v = vec3<f32>(0.0);");
+    w.line("var sum_w = 0.0;");
+    w.line("var count = 0.0;");
+}
+
 /// `flock_reduce`: one workgroup sums the partials in a fixed order and writes the means.
 fn emit_reduce(w: &mut Writer) {
     w.line("@compute @workgroup_size(WORKGROUP)");
@@ -454,14 +466,7 @@ fn emit_reduce(w: &mut Writer) {
             });
             w.line("red_x[lid] = sx;");
             w.line("red_v[lid] = sv;");
-            w.line("workgroupBarrier();");
-            w.block("for (var s = WORKGROUP / 2u; s > 0u; s = s >> 1u)", |w| {
-                w.block("if (lid < s)", |w| {
-                    w.line("red_x[lid] += red_x[lid + s];");
-                    w.line("red_v[lid] += red_v[lid + s];");
-                });
-                w.line("workgroupBarrier();");
-            });
+            emit_tree_reduce(w);
             w.block("if (lid == 0u)", |w| {
                 w.line("let n = red_x[0].w;");
                 w.line("let inv = select(0.0, 1.0 / n, n > 0.0);");
@@ -513,11 +518,7 @@ fn emit_all_pairs(w: &mut Writer) {
                 w.line("me = boids[2u * i];");
                 w.line("me_v = boids[2u * i + 1u];");
             });
-            w.line("var push = vec3<f32>(0.0);");
-            w.line("var sum_x = vec3<f32>(0.0);");
-            w.line("var sum_v = vec3<f32>(0.0);");
-            w.line("var sum_w = 0.0;");
-            w.line("var count = 0.0;");
+            emit_accumulators(w);
             w.block("for (var t = 0u; t < FLOCK_TILES; t++)", |w| {
                 w.line("let src = t * WORKGROUP + lid;");
                 w.line("var bx = vec4<f32>(0.0);");
@@ -614,11 +615,7 @@ fn emit_grid(w: &mut Writer, cell: f64) {
             w.block("if (i >= chunk.len)", |w| w.line("return;"));
             w.line("let me = boids[2u * i];");
             w.line("let me_v = boids[2u * i + 1u];");
-            w.line("var push = vec3<f32>(0.0);");
-            w.line("var sum_x = vec3<f32>(0.0);");
-            w.line("var sum_v = vec3<f32>(0.0);");
-            w.line("var sum_w = 0.0;");
-            w.line("var count = 0.0;");
+            emit_accumulators(w);
             w.block("if (me.w > 0.0)", |w| {
                 w.line("let home = cell_of(me.xyz);");
                 w.block("for (var n = 0; n < 27; n++)", |w| {
