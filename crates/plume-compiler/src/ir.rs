@@ -217,6 +217,14 @@ impl ShapeIr {
         }
     }
 
+    /// Below this squared distance (m²) from the shape's centre, a Radial velocity has no
+    /// direction and draws a random one. Relative to the shape's size, so that the GPU's f32
+    /// positions (off by a few ulps of the coordinates) and the reference's f64 ones make the
+    /// same choice: a Grid or Points spawn at the centre itself is never pushed by f32 rounding.
+    pub fn radial_center_eps2(&self) -> f64 {
+        (4e-6 * self.extent().max(1.0)).powi(2)
+    }
+
     /// The farthest any spawn position lies from the origin (for precision warnings).
     pub fn extent(&self) -> f64 {
         match self {

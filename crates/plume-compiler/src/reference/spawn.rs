@@ -112,7 +112,7 @@ fn velocity(d: &Draw, shape: &ShapeIr, vel: &VelocityIr, x: DVec3) -> DVec3 {
         VelocityIr::Radial { speed: s } => {
             let out = x - shape.center();
             let out2 = out.length_squared();
-            let dir = if out2 > 1e-20 {
+            let dir = if out2 > shape.radial_center_eps2() {
                 out / out2.sqrt()
             } else {
                 let cz = 1.0 - 2.0 * d.u(stream::FALLBACK_DIRECTION);

@@ -243,9 +243,10 @@ fn emit_velocity(w: &mut Writer, shape: &ShapeIr, vel: &VelocityIr) {
             w.line(format!("let out = s.x - {};", vec3_lit(shape.center())));
             w.line("let out2 = dot(out, out);");
             w.line("var dir: vec3<f32>;");
-            w.block("if (out2 > 1e-20)", |w| {
-                w.line("dir = out * inverseSqrt(out2);")
-            });
+            w.block(
+                format!("if (out2 > {})", f32_lit(shape.radial_center_eps2())),
+                |w| w.line("dir = out * inverseSqrt(out2);"),
+            );
             w.block("else", |w| {
                 w.comment("At the centre itself: a uniformly random direction instead.");
                 w.line(format!(
