@@ -238,9 +238,10 @@ impl<'g> GpuSim<'g> {
             });
             (keys, vals)
         });
-        // Flocking's buffers (bindings 7 up), sized by the layout. Boids index slots globally,
-        // so a flocking effect must fit in one particle buffer.
-        let flock_buffers: Vec<(u32, wgpu::Buffer)> = effect
+        // The buffers past the core bindings (7 up: flocking's and the baked field's), sized by
+        // the layout and shared by every chunk. Boids index slots globally, so a flocking
+        // effect must fit in one particle buffer.
+        let extra_buffers: Vec<(u32, wgpu::Buffer)> = effect
             .layout
             .bindings
             .iter()
@@ -297,7 +298,7 @@ impl<'g> GpuSim<'g> {
                 ]
                 .into_iter()
                 .chain(
-                    flock_buffers
+                    extra_buffers
                         .iter()
                         .map(|(binding, buffer)| wgpu::BindGroupEntry {
                             binding: *binding,
@@ -361,7 +362,7 @@ impl<'g> GpuSim<'g> {
                                 .iter()
                                 .find(|b| b.name == name)
                                 .map(|b| b.binding);
-                            flock_buffers
+                            extra_buffers
                                 .iter()
                                 .find(|(b, _)| Some(*b) == binding)
                                 .map(|(_, buffer)| buffer)
@@ -397,7 +398,7 @@ impl<'g> GpuSim<'g> {
                         "flock_pairs"
                     }),
                     grid,
-                    buffers: flock_buffers,
+                    buffers: extra_buffers,
                 })
             }
             None => None,
