@@ -135,6 +135,17 @@ pub fn reference(
     ))
 }
 
+/// The largest and the root-mean-square of `errors` (0 and 0 when empty).
+fn max_and_rms(errors: &[f64]) -> (f64, f64) {
+    let max = errors.iter().copied().fold(0.0, f64::max);
+    let rms = if errors.is_empty() {
+        0.0
+    } else {
+        (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt()
+    };
+    (max, rms)
+}
+
 /// Runs `steps` of `c` on `engine`; returns the live particles and the wall time of the steps.
 fn timed_run(
     engine: &Engine,
@@ -191,12 +202,7 @@ pub fn measure(
                 .iter()
                 .filter_map(|r| truth.get(&r.id).map(|t| (r.position - *t).length()))
                 .collect();
-            let max_error = errors.iter().copied().fold(0.0, f64::max);
-            let rms_error = if errors.is_empty() {
-                0.0
-            } else {
-                (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt()
-            };
+            let (max_error, rms_error) = max_and_rms(&errors);
             let order = previous.and_then(|(h_prev, e_prev)| {
                 (e_prev > 0.0 && max_error > 0.0)
                     .then(|| (e_prev / max_error).log2() / (h_prev / dt).log2())
@@ -306,12 +312,7 @@ pub fn field_sweep(
                 .iter()
                 .filter_map(|(id, x)| truth.get(id).map(|t| (*x - *t).length()))
                 .collect();
-            let max_error = errors.iter().copied().fold(0.0, f64::max);
-            let rms_error = if errors.is_empty() {
-                0.0
-            } else {
-                (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt()
-            };
+            let (max_error, rms_error) = max_and_rms(&errors);
             rows.push(FieldRow {
                 resolution,
                 filter,
