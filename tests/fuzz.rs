@@ -3,7 +3,8 @@
 //! with a message; every effect it accepts must give WGSL that naga validates (compile_str runs
 //! naga; a rejection is `CompileError::Internal`, a Plume bug) and IR whose numbers are finite.
 //!
-//! CI runs a few hundred inputs per kind. The long run (docs/robustness.md):
+//! CI runs a few hundred inputs per kind from a fixed seed (`PLUME_FUZZ_SEED` picks another).
+//! Build in debug to have integer overflow checked. The long run (docs/robustness.md):
 //! `PLUME_FUZZ_CASES=350000 cargo test --release --test fuzz -- --nocapture` (three kinds, so
 //! just over 10^6 inputs); each test prints how many inputs it ran and how many were accepted.
 
@@ -14,7 +15,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use common::effect_gen::{effect, mutate, Flavor};
 use plume::{compile_str, CompileError, CompileOptions};
 use proptest::prelude::*;
-use proptest::test_runner::{Config, TestRunner};
+use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 
 /// Inputs per test: `PLUME_FUZZ_CASES`, or 300 (CI).
 fn cases() -> u32 {
@@ -24,13 +25,30 @@ fn cases() -> u32 {
         .unwrap_or(300)
 }
 
+/// The generator's seed: `PLUME_FUZZ_SEED`, or a fixed one, so that CI runs the same inputs
+/// every time (a failure there is reproducible; long runs pass their own seeds).
+fn seed() -> [u8; 32] {
+    let s: u64 = std::env::var("PLUME_FUZZ_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20_261_121);
+    let mut bytes = [0u8; 32];
+    for (i, b) in s.to_le_bytes().iter().cycle().take(32).enumerate() {
+        bytes[i] = b.wrapping_add(i as u8);
+    }
+    bytes
+}
+
 fn runner() -> TestRunner {
-    TestRunner::new(Config {
-        cases: cases(),
-        // Failures are reported with the shrunk input; no regression files are written.
-        failure_persistence: None,
-        ..Config::default()
-    })
+    TestRunner::new_with_rng(
+        Config {
+            cases: cases(),
+            // Failures are reported with the shrunk input; no regression files are written.
+            failure_persistence: None,
+            ..Config::default()
+        },
+        TestRng::from_seed(RngAlgorithm::ChaCha, &seed()),
+    )
 }
 
 /// Compiles `source` and checks the contract; returns whether it was accepted.

@@ -87,7 +87,11 @@ impl Field {
                 &p.field("resolution"),
                 format!("every axis needs at least 2 nodes, got ({nx}, {ny}, {nz})"),
             );
-        } else if u64::from(nx) * u64::from(ny) * u64::from(nz) > MAX_NODES {
+        } else if u64::from(nx)
+            .checked_mul(u64::from(ny))
+            .and_then(|n| n.checked_mul(u64::from(nz)))
+            .is_none_or(|n| n > MAX_NODES)
+        {
             c.error(
                 &p.field("resolution"),
                 format!("({nx}, {ny}, {nz}) is more than {MAX_NODES} nodes (256³)"),

@@ -373,10 +373,8 @@ impl<'g> GpuSim<'g> {
                             bucket: pipeline("grid_bucket"),
                             clear: pipeline("grid_clear"),
                             ranges: pipeline("grid_ranges"),
-                            buckets: u64::from(
-                                plume_compiler::forces::flock::FlockIr::grid_buckets(
-                                    effect.ir.capacity,
-                                ),
+                            buckets: plume_compiler::forces::flock::FlockIr::grid_buckets(
+                                effect.ir.capacity,
                             ),
                             sort: sorter.program(
                                 SortAlgorithm::Radix,

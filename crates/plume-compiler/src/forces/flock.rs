@@ -186,8 +186,9 @@ impl FlockIr {
     }
 
     /// Hash-table buckets of the grid for `capacity` boids: a power of two >= capacity.
-    pub fn grid_buckets(capacity: u32) -> u32 {
-        capacity.max(1).next_power_of_two()
+    pub fn grid_buckets(capacity: u32) -> u64 {
+        // In u64: a capacity above 2^31 would overflow u32.
+        u64::from(capacity.max(1)).next_power_of_two()
     }
 
     /// The f64 reference of the per-step pass: all pairs, in id order.

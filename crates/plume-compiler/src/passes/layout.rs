@@ -232,7 +232,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
             });
         }
         if let crate::forces::flock::Neighbors::Grid { .. } = flock.neighbors {
-            let buckets = u64::from(crate::forces::flock::FlockIr::grid_buckets(ir.capacity));
+            let buckets = crate::forces::flock::FlockIr::grid_buckets(ir.capacity);
             layout.bindings.push(Binding {
                 binding: 10,
                 name: "grid_keys",
