@@ -357,3 +357,29 @@ fn all_pairs_flocking_warns_from_the_measured_crossover_and_flock_blocks_exact()
         .render("t.ron", "");
     assert!(err.contains("must be >= radius"), "{err}");
 }
+
+#[test]
+fn absurd_sizes_found_by_the_debug_fuzz_are_errors_or_warnings_not_overflows() {
+    // Each of these overflowed integer arithmetic in a debug build (docs/robustness.md).
+    let huge_dt = effect("Drag(k: 1.36)", "max_speed: Some(5.0),")
+        .replace("capacity: 1000,", "capacity: 1000,\n    dt: 1e30,");
+    let w = warnings(&huge_dt);
+    assert!(
+        w.iter()
+            .any(|m| m.contains("raise substeps to at least 18446744073709551615")),
+        "{w:?}"
+    );
+    for counts in [
+        "(4, 2147483648, 2147483648)",
+        "(4294967295, 4294967295, 4294967295)",
+    ] {
+        let src = format!(
+            r#"Effect(name: "grid", capacity: 8,
+    emitters: [Emitter(burst: 1, shape: Grid(min: (-0.5, -0.5, -0.5), max: (0.5, 0.5, 0.5), counts: {counts}), velocity: Constant((0.0, 0.0, 0.0)))])"#
+        );
+        let err = plume::compile_str(&src, &Default::default())
+            .unwrap_err()
+            .render("grid.ron", &src);
+        assert!(err.contains("holds more than 4294967295 points"), "{err}");
+    }
+}

@@ -88,7 +88,7 @@ impl Schedule {
             self.carried[e] += self.rates[e] * self.dt;
             let whole = self.carried[e].floor();
             self.carried[e] -= whole;
-            count += whole as u64;
+            count = count.saturating_add(whole as u64);
             let count = count.min(u64::from(u32::MAX - self.next_id)) as u32;
             emitters.push((count, self.emitted[e]));
             self.emitted[e] = self.emitted[e].wrapping_add(count);

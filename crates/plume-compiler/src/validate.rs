@@ -178,7 +178,11 @@ fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: f64) {
                         n[0], n[1], n[2]
                     ),
                 );
-            } else if n.iter().map(|&k| u64::from(k)).product::<u64>() > u64::from(u32::MAX) {
+            } else if n
+                .iter()
+                .try_fold(1u64, |acc, &k| acc.checked_mul(u64::from(k)))
+                .is_none_or(|total| total > u64::from(u32::MAX))
+            {
                 c.error(&s.field("counts"), "holds more than 4294967295 points");
             }
         }

@@ -133,7 +133,7 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
                         well.fall_speed,
                         well.core,
                         1.0 / q,
-                        (well.fall_speed * ir.dt / well.core / TRANSIT_LIMIT).floor() as u64 + 1
+                        substeps_for(well.fall_speed * ir.dt / well.core / TRANSIT_LIMIT)
                     ),
                 );
             }
@@ -191,7 +191,7 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
                             force_value_path(force_names, origin, field),
                             format!(
                                 "k*h = {z:.3}{merged} is past {name}'s drag stability limit {limit} (h = {h:.4e} s): velocities oscillate and grow; raise substeps to at least {}, or use Exact where allowed",
-                                (k * ir.dt / limit).floor() as u64 + 1
+                                substeps_for(k * ir.dt / limit)
                             ),
                         );
                     } else if integ == Integrator::Euler && z > 1.0 {
@@ -199,7 +199,7 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
                             force_value_path(force_names, origin, field),
                             format!(
                                 "k*h = {z:.3}{merged} > 1: Euler overshoots, flipping the relative velocity every step; raise substeps to at least {}",
-                                (k * ir.dt).floor() as u64 + 1
+                                substeps_for(k * ir.dt)
                             ),
                         );
                     }
@@ -213,7 +213,7 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
                             force_value_path(force_names, origin, field),
                             format!(
                                 "stiffness ω*h = {wh:.3} (ω = {omega:.3} rad/s, h = {h:.4e} s) is past {name}'s limit {limit:.3}: orbits blow up; raise substeps to at least {}",
-                                (omega * ir.dt / limit).floor() as u64 + 1
+                                substeps_for(omega * ir.dt / limit)
                             ),
                         );
                     }
@@ -322,6 +322,12 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
         warn(ValuePath::root().field("capacity"), msg);
     }
     out
+}
+
+/// The substeps that bring `ratio` (a stiffness times dt over its limit) under 1:
+/// floor(ratio) + 1, saturating for absurd inputs (dt = 1e30) instead of overflowing.
+fn substeps_for(ratio: f64) -> u64 {
+    (ratio.floor() as u64).saturating_add(1)
 }
 
 fn fmt_factor(x: f64) -> String {
