@@ -44,36 +44,6 @@ fn index(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
 }
 
 @compute @workgroup_size(256)
-fn buffer(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let n = index(gid, groups);
-    if (n >= arrayLength(&out)) { return; }
-    let u = position(n) * f32(RES - 1u);
-    let c = min(floor(u), vec3<f32>(f32(RES - 2u)));
-    let f = u - c;
-    let i = u32(c.x); let j = u32(c.y); let k = u32(c.z);
-    let x00 = mix(at_buffer(i, j, k), at_buffer(i + 1u, j, k), f.x);
-    let x10 = mix(at_buffer(i, j + 1u, k), at_buffer(i + 1u, j + 1u, k), f.x);
-    let x01 = mix(at_buffer(i, j, k + 1u), at_buffer(i + 1u, j, k + 1u), f.x);
-    let x11 = mix(at_buffer(i, j + 1u, k + 1u), at_buffer(i + 1u, j + 1u, k + 1u), f.x);
-    out[n] = vec4<f32>(mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z), 0.0);
-}
-
-@compute @workgroup_size(256)
-fn texture32(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let n = index(gid, groups);
-    if (n >= arrayLength(&out)) { return; }
-    let u = position(n) * f32(RES - 1u);
-    let c = min(floor(u), vec3<f32>(f32(RES - 2u)));
-    let f = u - c;
-    let i = u32(c.x); let j = u32(c.y); let k = u32(c.z);
-    let x00 = mix(at_tex(i, j, k), at_tex(i + 1u, j, k), f.x);
-    let x10 = mix(at_tex(i, j + 1u, k), at_tex(i + 1u, j + 1u, k), f.x);
-    let x01 = mix(at_tex(i, j, k + 1u), at_tex(i + 1u, j, k + 1u), f.x);
-    let x11 = mix(at_tex(i, j + 1u, k + 1u), at_tex(i + 1u, j + 1u, k + 1u), f.x);
-    out[n] = vec4<f32>(mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z), 0.0);
-}
-
-@compute @workgroup_size(256)
 fn texture16(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let n = index(gid, groups);
     if (n >= arrayLength(&out)) { return; }
@@ -83,6 +53,29 @@ fn texture16(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgro
     out[n] = vec4<f32>(textureSampleLevel(tex16, samp, t, 0.0).xyz, 0.0);
 }
 "#;
+
+/// A kernel that samples the grid trilinearly by hand through `fetch(i, j, k)`: the buffer and
+/// the f32 texture differ only in how they read a node.
+fn manual_trilinear_kernel(entry: &str, fetch: &str) -> String {
+    format!(
+        r#"
+@compute @workgroup_size(256)
+fn {entry}(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {{
+    let n = index(gid, groups);
+    if (n >= arrayLength(&out)) {{ return; }}
+    let u = position(n) * f32(RES - 1u);
+    let c = min(floor(u), vec3<f32>(f32(RES - 2u)));
+    let f = u - c;
+    let i = u32(c.x); let j = u32(c.y); let k = u32(c.z);
+    let x00 = mix({fetch}(i, j, k), {fetch}(i + 1u, j, k), f.x);
+    let x10 = mix({fetch}(i, j + 1u, k), {fetch}(i + 1u, j + 1u, k), f.x);
+    let x01 = mix({fetch}(i, j, k + 1u), {fetch}(i + 1u, j, k + 1u), f.x);
+    let x11 = mix({fetch}(i, j + 1u, k + 1u), {fetch}(i + 1u, j + 1u, k + 1u), f.x);
+    out[n] = vec4<f32>(mix(mix(x00, x10, f.y), mix(x01, x11, f.y), f.z), 0.0);
+}}
+"#
+    )
+}
 
 /// A smooth test field: a few sines, values of order 1.
 fn value(i: u32, j: u32, k: u32, res: u32) -> [f32; 4] {
@@ -155,7 +148,12 @@ fn main() {
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("field storage"),
-            source: wgpu::ShaderSource::Wgsl(WGSL.replace("RES_VALUE", &format!("{res}u")).into()),
+            source: wgpu::ShaderSource::Wgsl(
+                (WGSL.replace("RES_VALUE", &format!("{res}u"))
+                    + &manual_trilinear_kernel("buffer", "at_buffer")
+                    + &manual_trilinear_kernel("texture32", "at_tex"))
+                    .into(),
+            ),
         });
         for samples in [1_000_000u64, 10_000_000] {
             if samples * 16 > gpu.limits.max_storage_buffer_binding_size {

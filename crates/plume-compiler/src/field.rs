@@ -294,8 +294,7 @@ impl FieldIr {
         w.block(
             "fn bake(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
             |w| {
-                w.line("let n = gid.x + gid.y * groups.x * WORKGROUP;");
-                w.block("if (n >= FIELD_NX * FIELD_NY * FIELD_NZ)", |w| w.line("return;"));
+                crate::wgsl::emit_thread_index(w, "n", Some("FIELD_NX * FIELD_NY * FIELD_NZ"));
                 w.line("let i = n % FIELD_NX;");
                 w.line("let j = (n / FIELD_NX) % FIELD_NY;");
                 w.line("let k = n / (FIELD_NX * FIELD_NY);");

@@ -354,7 +354,7 @@ impl FlockIr {
         w.block(
             "fn flock_snapshot(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32, @builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
             |w| {
-                w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
+                crate::wgsl::emit_thread_index(w, "i", None);
                 w.line("var bx = vec4<f32>(0.0);");
                 w.line("var bv = vec4<f32>(0.0);");
                 w.block("if (i < chunk.len)", |w| {
@@ -512,7 +512,7 @@ fn emit_all_pairs(w: &mut Writer) {
     w.block(
         "fn flock_pairs(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lid: u32, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
+            crate::wgsl::emit_thread_index(w, "i", None);
             w.line("var me = vec4<f32>(0.0);");
             w.line("var me_v = vec4<f32>(0.0);");
             w.block("if (i < chunk.len)", |w| {
@@ -571,8 +571,7 @@ fn emit_grid(w: &mut Writer, cell: f64) {
     w.block(
         "fn grid_bucket(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
-            w.block("if (i >= chunk.len)", |w| w.line("return;"));
+            crate::wgsl::emit_thread_index(w, "i", Some("chunk.len"));
             w.line("let b = boids[2u * i];");
             w.line("var key = 0xffffffffu;");
             w.block("if (b.w > 0.0)", |w| {
@@ -586,7 +585,7 @@ fn emit_grid(w: &mut Writer, cell: f64) {
     w.block(
         "fn grid_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            w.line("let k = gid.x + gid.y * groups.x * WORKGROUP;");
+            crate::wgsl::emit_thread_index(w, "k", None);
             w.block("if (k < grid_buckets_len())", |w| {
                 w.line("cells[k] = vec2<u32>(0u);");
             });
@@ -596,8 +595,7 @@ fn emit_grid(w: &mut Writer, cell: f64) {
     w.block(
         "fn grid_ranges(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            w.line("let k = gid.x + gid.y * groups.x * WORKGROUP;");
-            w.block("if (k >= chunk.len)", |w| w.line("return;"));
+            crate::wgsl::emit_thread_index(w, "k", Some("chunk.len"));
             w.line("let key = grid_keys[k];");
             w.block("if (key == 0xffffffffu)", |w| w.line("return;"));
             w.block("if (k == 0u || grid_keys[k - 1u] != key)", |w| {
@@ -612,8 +610,7 @@ fn emit_grid(w: &mut Writer, cell: f64) {
     w.block(
         "fn flock_grid(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
-            w.block("if (i >= chunk.len)", |w| w.line("return;"));
+            crate::wgsl::emit_thread_index(w, "i", Some("chunk.len"));
             w.line("let me = boids[2u * i];");
             w.line("let me_v = boids[2u * i + 1u];");
             emit_accumulators(w);

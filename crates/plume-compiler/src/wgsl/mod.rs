@@ -15,6 +15,16 @@ use writer::{u32_lit, Writer};
 /// Threads per workgroup of `spawn` and `update`.
 pub const WORKGROUP: u32 = 256;
 
+/// Emits the index of this thread in a 2D dispatch of WORKGROUP-wide groups (`let {var} = ...`;
+/// 2D because one dimension holds at most 65,535 groups), and a return for threads at or past
+/// `bound` when one is given. Every kernel takes `gid` and `groups` builtins for it.
+pub fn emit_thread_index(w: &mut Writer, var: &str, bound: Option<&str>) {
+    w.line(format!("let {var} = gid.x + gid.y * groups.x * WORKGROUP;"));
+    if let Some(bound) = bound {
+        w.block(format!("if ({var} >= {bound})"), |w| w.line("return;"));
+    }
+}
+
 /// Emits the complete WGSL module for a resolved IR and its layout.
 pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     let mut w = Writer::new();
@@ -164,8 +174,7 @@ fn emit_init(w: &mut Writer) {
     w.block(
         "fn init(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            w.line("let local = gid.x + gid.y * groups.x * WORKGROUP;");
-            w.block("if (local >= chunk.len)", |w| w.line("return;"));
+            emit_thread_index(w, "local", Some("chunk.len"));
             w.line("mark_free(local);");
             w.line("let slot = chunk.base + local;");
             w.comment("Pops take from the top: the first spawns get the lowest slots.");
@@ -247,8 +256,7 @@ fn emit_depth_keys(w: &mut Writer, ir: &EffectIr) {
     w.block(
         "fn depth_keys(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            w.line("let local = gid.x + gid.y * groups.x * WORKGROUP;");
-            w.block("if (local >= chunk.len)", |w| w.line("return;"));
+            emit_thread_index(w, "local", Some("chunk.len"));
             w.line("let slot = chunk.base + local;");
             w.line("let p = load_particle(local);");
             w.line("var key = 0xffffffffu;");

@@ -35,8 +35,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.block(
         "fn spawn(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
-            w.block("if (i >= counters.spawn_count)", |w| w.line("return;"));
+            crate::wgsl::emit_thread_index(w, "i", Some("counters.spawn_count"));
             w.line("let slot = free_list[counters.spawn_base + i];");
             w.comment("Dispatched once per chunk: only the chunk that holds the slot writes it.");
             w.block("if (slot < chunk.base || slot - chunk.base >= chunk.len)", |w| w.line("return;"));

@@ -15,8 +15,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.block(
         "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            w.line("let i = gid.x + gid.y * groups.x * WORKGROUP;");
-            w.block("if (i >= chunk.len)", |w| w.line("return;"));
+            crate::wgsl::emit_thread_index(w, "i", Some("chunk.len"));
             w.line("var p = load_particle(i);");
             w.block("if (p.id == DEAD)", |w| w.line("return;"));
             if let Some(flock) = &ir.flock {
