@@ -305,6 +305,7 @@ fn overrides_replace_file_values() {
             substeps: Some(2),
             integrator: Some(Integrator::Rk4),
             sort: Some(true),
+            state: None,
         },
     )
     .unwrap();
@@ -382,4 +383,92 @@ fn absurd_sizes_found_by_the_debug_fuzz_are_errors_or_warnings_not_overflows() {
             .render("grid.ron", &src);
         assert!(err.contains("holds more than 4294967295 points"), "{err}");
     }
+}
+
+/// What the state pass decides, and why, for each thing that needs state.
+#[test]
+fn stateless_only_where_nothing_needs_state() {
+    let stream = |capacity: u32, lifetime: &str, extra: &str| {
+        format!(
+            r#"Effect(name: "s", capacity: {capacity}, dt: 0.01,
+    emitters: [Emitter(burst: 50, rate: 1000.0, shape: Point((0.0, 0.0, 0.0)),
+                       velocity: Constant((0.0, 1.0, 0.0)), lifetime: {lifetime})],
+    forces: [Gravity((0.0, -9.81, 0.0)), Drag(k: 0.3)],
+    {extra}
+)"#
+        )
+    };
+    // Lifetimes up to 2 s = 200 steps: at most 50 + floor(1000 * 0.01 * 200) + 2 = 2052 alive.
+    let ok = compile(&stream(2052, "Some((1.0, 2.0))", ""));
+    let plan = ok.ir.stateless.as_ref().expect("stateless");
+    assert_eq!(
+        (plan.peak, plan.max_segments, plan.lives.clone()),
+        (2052, 200, vec![Some(200)])
+    );
+    assert_eq!(ok.layout.state_bytes_per_particle, 0);
+    assert!(ok.layout.stateless() && !ok.layout.binds("free_list") && !ok.layout.binds("params"));
+    assert!(ok
+        .layout
+        .to_string()
+        .starts_with("state: none, 0 bytes per particle"));
+    assert!(ok.ir.to_string().contains("state stateless (Auto"));
+    // Each cause of state, with the reason the IR records.
+    for (src, why) in [
+        (
+            stream(2051, "Some((1.0, 2.0))", ""),
+            "capacity 2051 may drop spawns (up to 2052 alive at once)",
+        ),
+        (
+            stream(100_000, "None", ""),
+            "emitters[0] spawns at a rate and its particles never die",
+        ),
+        (
+            stream(
+                5000,
+                "Some((1.0, 2.0))",
+                "kill: [InsideSphere(center: (0.0, 0.0, 0.0), radius: 1.0)],",
+            ),
+            "kill[0] decides deaths from every earlier position",
+        ),
+        (
+            stream(5000, "Some((1.0, 2.0))", "integrator: Rk4,"),
+            "the Rk4 integrator carries each particle's state",
+        ),
+        (
+            stream(5000, "Some((1.0, 2.0))", "max_speed: Some(3.0),"),
+            "the SemiImplicitEuler integrator carries",
+        ),
+        (
+            stream(2_000_000, "Some((1.0, 700.0))", ""),
+            "particles stay alive over 70000 spawning steps, more than the 65536",
+        ),
+        (
+            stream(5000, "Some((1.0, 2.0))", "state: Stateful,"),
+            "state: Stateful in the file",
+        ),
+    ] {
+        let c = compile(&src);
+        assert!(c.ir.stateless.is_none(), "{why}");
+        assert!(
+            c.ir.state_reason.contains(why),
+            "{} lacks {why}",
+            c.ir.state_reason
+        );
+        assert!(c.wgsl.contains("fn update") && c.layout.state_bytes_per_particle == 32);
+    }
+    // Asking for it where it cannot be is an error at `state` naming the cause.
+    let err = compile_err(&stream(100, "Some((1.0, 2.0))", "state: Stateless,"));
+    assert!(
+        err.contains("state") && err.contains("capacity 100 may drop spawns"),
+        "{err}"
+    );
+    // A burst that never dies needs one segment forever, and no more capacity than the burst.
+    let burst = compile(
+        &effect("Gravity((0.0, -9.81, 0.0))", "capacity: 100,").replace("capacity: 1000,\n", ""),
+    );
+    let plan = burst.ir.stateless.as_ref().expect("stateless");
+    assert_eq!(
+        (plan.peak, plan.max_segments, plan.lives.clone()),
+        (100, 1, vec![None])
+    );
 }

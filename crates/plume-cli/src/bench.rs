@@ -76,6 +76,12 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "sort_bitonic_keys_per_s": r.sort.map(|(_, s)| r.particles as f64 / s),
                 "flock_mean_neighbours": r.flock.as_ref().map(|(n, _)| *n),
                 "flock_search": r.flock.as_ref().map(|(_, s)| s.clone()),
+                "field_error_max": r.field_error.map(|(m, _, _)| m),
+                "field_error_rms": r.field_error.map(|(_, s, _)| s),
+                "field_error_samples": r.field_error.map(|(_, _, n)| n),
+                "stateless_ms_per_frame": r.stateless.as_ref().ok().map(|s| s * 1e3),
+                "stateless_speedup": r.stateless.as_ref().ok().map(|s| r.seconds_per_step / s),
+                "stateful_because": r.stateless.as_ref().err(),
             })
         );
     } else {
@@ -87,7 +93,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
         );
         println!("  bytes per particle  {}", r.bytes_per_particle);
         println!(
-            "  update              {:.4} ms/step, {:.3} G particle-steps/s, {:.1} GB/s",
+            "  update (stateful)   {:.4} ms/step, {:.3} G particle-steps/s, {:.1} GB/s",
             r.seconds_per_step * 1e3,
             r.particle_steps_per_second() * 1e-9,
             r.update_gbps()
@@ -103,6 +109,20 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             r.spawn_step_seconds * 1e3,
             r.particles
         );
+        if let Some((max, rms, n)) = r.field_error {
+            println!(
+                "  baked field error   max {max:.3e}, RMS {rms:.3e} of the RMS evaluated acceleration, at {n} particles inside the grid (f64 reference)"
+            );
+        }
+        match &r.stateless {
+            Ok(s) => println!(
+                "  stateless           {:.4} ms/frame for `evaluate` (0 bytes of state; writes the {}-byte view), {:.2}x the stateful update's speed",
+                s * 1e3,
+                r.bytes_per_particle,
+                r.seconds_per_step / s
+            ),
+            Err(why) => println!("  stateless           no: {why}"),
+        }
         if let Some((radix, bitonic)) = r.sort {
             println!(
                 "  sort                radix {:.3} ms ({:.2} G keys/s), bitonic {:.3} ms ({:.2} G keys/s), depth keys included",

@@ -10,6 +10,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
+use plume_compiler::schema::State;
 use plume_compiler::{compile_str, CompileOptions, Integrator};
 
 /// Plume compiles declarative particle effects (RON) into fused, validated WGSL compute kernels.
@@ -60,11 +61,11 @@ enum Command {
 /// What `plume compile` prints.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum Emit {
-    /// The WGSL module (spawn_prepare, spawn, update kernels).
+    /// The WGSL module (spawn_prepare, spawn and update kernels, or a stateless evaluate).
     Wgsl,
     /// The IR after the passes.
     Ir,
-    /// The particle struct, bytes per particle and the bindings.
+    /// The particle struct, bytes of state per particle and the bindings.
     Layout,
 }
 
@@ -83,6 +84,9 @@ pub(crate) struct Overrides {
     /// Integration substeps per step.
     #[arg(long)]
     substeps: Option<u32>,
+    /// State: Auto (stateless where exact), Stateful or Stateless.
+    #[arg(long, value_parser = parse_state)]
+    state: Option<State>,
 }
 
 impl Overrides {
@@ -93,6 +97,7 @@ impl Overrides {
             integrator: self.integrator,
             substeps: self.substeps,
             sort: None,
+            state: self.state,
         }
     }
 }
@@ -101,6 +106,11 @@ pub(crate) fn parse_integrator(s: &str) -> Result<Integrator, String> {
     Integrator::from_name(s).ok_or_else(|| {
         format!("unknown integrator `{s}`; expected Euler, SemiImplicitEuler, Verlet, Midpoint, Rk4, Exact or Auto")
     })
+}
+
+pub(crate) fn parse_state(s: &str) -> Result<State, String> {
+    State::from_name(s)
+        .ok_or_else(|| format!("unknown state `{s}`; expected Auto, Stateful or Stateless"))
 }
 
 fn main() -> ExitCode {
@@ -172,6 +182,15 @@ fn compile(file: &Path, output: Option<&Path>, emit: Emit, options: &CompileOpti
         "{name}: note: integrator {} ({})",
         compiled.ir.integrator.name(),
         compiled.ir.integrator_reason
+    );
+    eprintln!(
+        "{name}: note: {} ({})",
+        if compiled.ir.stateless.is_some() {
+            "stateless"
+        } else {
+            "stateful"
+        },
+        compiled.ir.state_reason
     );
     let text = match emit {
         Emit::Wgsl => compiled.wgsl,

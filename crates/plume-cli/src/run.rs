@@ -130,6 +130,13 @@ pub fn run(args: &RunArgs) -> ExitCode {
         Err(code) => return code,
     };
     let dt = effect.ir.dt;
+    let state = match (&effect.ir.stateless, args.cpu_reference) {
+        (Some(_), false) => {
+            "stateless (each step is bookkeeping; positions are computed once, when read)"
+        }
+        (Some(_), true) => "stateless on the GPU; the CPU reference steps it",
+        (None, _) => "stateful",
+    };
     let outcome = match simulate(args, effect) {
         Ok(o) => o,
         Err(e) => {
@@ -158,12 +165,14 @@ pub fn run(args: &RunArgs) -> ExitCode {
             "mean_speed": s.mean_speed,
             "seconds": outcome.seconds,
             "adapter": outcome.engine,
+            "stateless": state.starts_with("stateless ("),
         });
         println!("{v}");
     } else {
         let v = |v: glam::DVec3| format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z);
         println!("{name}");
         println!("  adapter     {}", outcome.engine);
+        println!("  state       {state}");
         println!(
             "  steps       {} ({:.3} s simulated, dt {} s)",
             t.steps,

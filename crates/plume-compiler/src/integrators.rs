@@ -34,20 +34,13 @@ pub struct ExactStep {
 impl ExactStep {
     /// The exact step of length `h` for the (folded) terms of `ir`.
     pub fn new(ir: &EffectIr, h: f64) -> Self {
-        // The sum of drags -k_i (v - u_i) is -k (v - u) with k = Σk_i, u = Σ(k_i u_i) / k.
-        let (mut g, mut k, mut ku) = (DVec3::ZERO, 0.0, DVec3::ZERO);
-        for t in &ir.terms {
-            match t {
-                Term::Constant(c) => g += c.accel,
-                Term::Drag(d) => {
-                    k += d.k;
-                    ku += d.k * d.fluid;
-                }
-                _ => {}
-            }
-        }
-        let u = if k > 0.0 { ku / k } else { DVec3::ZERO };
+        let (g, k, u) = merged_drag(ir);
         Self::for_drag(g, k, u, h)
+    }
+
+    /// Advances a state by this step: (x + f v + cx, e v + cv).
+    pub fn apply(&self, x: DVec3, v: DVec3) -> (DVec3, DVec3) {
+        (x + self.f * v + self.cx, self.e * v + self.cv)
     }
 
     /// The exact step for acceleration `g - k (v - u)` over `h`.
@@ -71,6 +64,99 @@ impl ExactStep {
             cx: (h - f) * u + q * g,
         }
     }
+}
+
+/// The Exact integrator's acceleration `g - k (v - u)`: constants summed into g, and the sum of
+/// drags -k_i (v - u_i) written -k (v - u) with k = Σk_i, u = Σ(k_i u_i) / k. Returns (g, k, u).
+pub fn merged_drag(ir: &EffectIr) -> (DVec3, f64, DVec3) {
+    let (mut g, mut k, mut ku) = (DVec3::ZERO, 0.0, DVec3::ZERO);
+    for t in &ir.terms {
+        match t {
+            Term::Constant(c) => g += c.accel,
+            Term::Drag(d) => {
+                k += d.k;
+                ku += d.k * d.fluid;
+            }
+            _ => {}
+        }
+    }
+    let u = if k > 0.0 { ku / k } else { DVec3::ZERO };
+    (g, k, u)
+}
+
+/// Below this z = k τ the closed form's coefficients are summed as series: the direct
+/// `1 - exp(-z)` cancels (WGSL has no expm1), and past it the alternating series does.
+/// At z = 1 both lose under 3 ulps of f32.
+pub const SERIES_BELOW: f64 = 1.0;
+
+/// Emits `advance(s, tau)`, the Exact closed form for any age `tau` (s), in f32:
+/// x = x0 + F v0 + (τ - F) u + Q g and v = e v0 + (1 - e) u + F g, with e = e^{-kτ},
+/// F = (1 - e)/k and Q = (τ - F)/k (so τ - F = k Q and 1 - e = k F). The stateless kernel
+/// calls it once per particle with its age, so nothing accumulates: no drift at any t.
+pub fn emit_advance(w: &mut Writer, ir: &EffectIr) {
+    let (g, k, u) = merged_drag(ir);
+    w.comment("The Exact closed form at age tau: gravity g plus drag k toward u (integrators.rs).");
+    w.block("fn advance(s: Spawned, tau: f32) -> Spawned", |w| {
+        w.line("var out = s;");
+        if k == 0.0 {
+            // No drag: F = τ, Q = τ²/2, e = 1.
+            w.line(format!(
+                "out.x = s.x + s.v * tau + {} * (0.5 * tau * tau);",
+                vec3_lit(g)
+            ));
+            w.line(format!("out.v = s.v + {} * tau;", vec3_lit(g)));
+            w.line("return out;");
+            return;
+        }
+        w.line(format!("let z = {} * tau;", f32_lit(k)));
+        w.line("var f: f32;");
+        w.line("var q: f32;");
+        w.line("var decay: f32;");
+        w.block(format!("if (z < {})", f32_lit(SERIES_BELOW)), |w| {
+            // F/τ = Σ (-z)^n/(n+1)! = 1 - z/2 (1 - z/3 (1 - ...)), Q/τ² = (1 - z/3 (...))/2:
+            // nested from 1/14 down, the remainder is below 2^-24 for z < 1.
+            w.comment("Series in nested (Horner) form: F/tau = 1 - z/2 P3, Q/tau^2 = P3 / 2.");
+            w.line("var p = 1.0;");
+            for m in (3..=14).rev() {
+                w.line(format!(
+                    "p = 1.0 - z * {} * p;",
+                    f32_lit(1.0 / f64::from(m))
+                ));
+            }
+            w.line("let p2 = 1.0 - z * 0.5 * p;");
+            w.line("f = tau * p2;");
+            w.line("q = tau * tau * (0.5 * p);");
+            w.line("decay = z * p2;");
+        });
+        w.block("else", |w| {
+            w.line("decay = 1.0 - exp(-z);");
+            w.line(format!("f = decay * {};", f32_lit(1.0 / k)));
+            w.line(format!("q = (tau - f) * {};", f32_lit(1.0 / k)));
+        });
+        // Terms with a zero vector (no wind, or drag with no gravity) are left out.
+        let with = |base: &str, terms: [(String, DVec3); 2]| {
+            let mut e = base.to_string();
+            for (coef, vector) in terms {
+                if vector != DVec3::ZERO {
+                    e += &format!(" + {coef} * {}", vec3_lit(vector));
+                }
+            }
+            e
+        };
+        w.line(
+            with(
+                "out.x = s.x + f * s.v",
+                [(format!("({} * q)", f32_lit(k)), u), ("q".into(), g)],
+            ) + ";",
+        );
+        w.line(
+            with(
+                "out.v = (1.0 - decay) * s.v",
+                [("decay".into(), u), ("f".into(), g)],
+            ) + ";",
+        );
+        w.line("return out;");
+    });
 }
 
 /// Emits one substep of `ir.integrator` (x, v or d, and t in scope as `var`s / `let`).

@@ -45,6 +45,12 @@ pub struct EffectIr {
     pub kills: Vec<KillIr>,
     /// Whether a depth sort is requested.
     pub sort: bool,
+    /// The state the file asks for (Auto, Stateful or Stateless).
+    pub state: crate::schema::State,
+    /// The stateless plan, when particles are computed from (id, age) with no state kept.
+    pub stateless: Option<crate::passes::stateless::StatelessIr>,
+    /// Why the effect is stateless or stateful (what the state pass decided).
+    pub state_reason: String,
     /// The camera.
     pub camera: CameraIr,
     /// How particles look when rendered.
@@ -371,6 +377,16 @@ impl fmt::Display for EffectIr {
             Some(s) => writeln!(f, "  max_speed {s} m/s")?,
             None => writeln!(f, "  max_speed none")?,
         }
+        writeln!(
+            f,
+            "  state {} ({})",
+            if self.stateless.is_some() {
+                "stateless"
+            } else {
+                "stateful"
+            },
+            self.state_reason
+        )?;
         writeln!(f, "  emitters")?;
         for (i, e) in self.emitters.iter().enumerate() {
             writeln!(

@@ -59,6 +59,8 @@ pub struct CompileOptions {
     pub substeps: Option<u32>,
     /// Replaces the file's `sort` (as `plume run --order draw` does).
     pub sort: Option<bool>,
+    /// Replaces the file's `state`.
+    pub state: Option<schema::State>,
 }
 
 /// A compiled effect: the IR after the passes, its layout, the WGSL and any warnings.
@@ -136,6 +138,9 @@ pub fn compile_str(source: &str, options: &CompileOptions) -> Result<CompiledEff
     }
     if let Some(s) = options.sort {
         effect.sort = s;
+    }
+    if let Some(s) = options.state {
+        effect.state = s;
     }
     compile_effect(&effect, source)
 }

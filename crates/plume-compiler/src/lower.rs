@@ -80,6 +80,9 @@ pub fn lower(effect: &Effect) -> EffectIr {
             })
             .collect(),
         sort: effect.sort,
+        state: effect.state,
+        stateless: None,
+        state_reason: String::from("not decided yet"),
         render: {
             let r = &effect.render;
             RenderIr {

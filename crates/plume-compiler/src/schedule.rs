@@ -106,6 +106,16 @@ impl Schedule {
         }
     }
 
+    /// Skips `n` steps at once when they can spawn nothing (every rate is 0 and step 0's bursts
+    /// are done), as stepping them would; returns false, skipping nothing, otherwise.
+    pub fn skip_idle(&mut self, n: u64) -> bool {
+        if self.next_step == 0 || self.rates.iter().any(|&r| r > 0.0) {
+            return false;
+        }
+        self.next_step = self.next_step.saturating_add(n);
+        true
+    }
+
     /// The step at which particle `id` was spawned.
     pub fn spawn_step(&self, id: u32) -> u64 {
         let i = self.first_ids.partition_point(|&(first, _)| first <= id);
@@ -125,5 +135,125 @@ impl Schedule {
     /// Age in seconds of particle `id` after the steps done so far: (done - spawn step) dt.
     pub fn age(&self, id: u32) -> f64 {
         (self.next_step - self.spawn_step(id)) as f64 * self.dt
+    }
+}
+
+/// A run of consecutive ids that one emitter spawned at one step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Segment {
+    /// The step that spawned them.
+    pub step: u64,
+    /// The emitter.
+    pub emitter: usize,
+    /// The first id.
+    pub first_id: u32,
+    /// How many ids.
+    pub count: u32,
+    /// The emitter's own spawn counter at the first id.
+    pub k_base: u32,
+}
+
+/// The spawn bookkeeping of a stateless effect: the segments that may still hold live
+/// particles, per emitter in step order, each dropped once every particle in it has died.
+#[derive(Clone, Debug)]
+pub struct LiveSegments {
+    /// Per emitter, the most steps one of its particles lives (None: forever).
+    lives: Vec<Option<u32>>,
+    per_emitter: Vec<std::collections::VecDeque<Segment>>,
+    steps_done: u64,
+}
+
+impl LiveSegments {
+    /// No segments yet, for emitters whose particles live at most `lives` steps.
+    pub fn new(lives: Vec<Option<u32>>) -> Self {
+        Self {
+            per_emitter: vec![Default::default(); lives.len()],
+            lives,
+            steps_done: 0,
+        }
+    }
+
+    /// Records one step's spawns (plans must come in order), then drops the segments whose
+    /// particles have all died by its end: those `lives` or more steps old.
+    pub fn record(&mut self, plan: &StepPlan) {
+        let mut id = plan.first_id;
+        for (e, &(count, k_base)) in plan.emitters.iter().enumerate() {
+            if count > 0 {
+                self.per_emitter[e].push_back(Segment {
+                    step: plan.step,
+                    emitter: e,
+                    first_id: id,
+                    count,
+                    k_base,
+                });
+            }
+            id += count;
+        }
+        self.advance_to(plan.step + 1);
+    }
+
+    /// Moves to `steps_done` steps with no spawns since the last recorded step (after
+    /// [`Schedule::skip_idle`]), dropping the segments whose particles have all died.
+    pub fn advance_to(&mut self, steps_done: u64) {
+        self.steps_done = steps_done;
+        for (segments, life) in self.per_emitter.iter_mut().zip(&self.lives) {
+            if let Some(life) = life {
+                while segments
+                    .front()
+                    .is_some_and(|s| self.steps_done - s.step >= u64::from(*life))
+                {
+                    segments.pop_front();
+                }
+            }
+        }
+    }
+
+    /// Steps recorded so far.
+    pub fn steps_done(&self) -> u64 {
+        self.steps_done
+    }
+
+    /// The segments that may hold live particles, emitter by emitter, each in step order.
+    pub fn iter(&self) -> impl Iterator<Item = &Segment> {
+        self.per_emitter.iter().flatten()
+    }
+
+    /// Particles alive now: per segment, those whose drawn lifetime (the same integer draw as
+    /// the kernels', see [`crate::lifetime`]) exceeds the segment's age in steps.
+    pub fn alive(&self, ir: &EffectIr) -> u64 {
+        let mut alive = 0;
+        for seg in self.iter() {
+            let age = self.steps_done - seg.step;
+            let Some(l) = ir.emitters[seg.emitter].lifetime_steps else {
+                alive += u64::from(seg.count);
+                continue;
+            };
+            if age < u64::from(l.first) {
+                alive += u64::from(seg.count);
+            } else if age < u64::from(l.first) + u64::from(l.span) - 1 {
+                // Within the lifetimes' spread: draw each one.
+                alive += (0..seg.count)
+                    .filter(|j| {
+                        let u = crate::rng::rand_u32(
+                            ir.seed_mix,
+                            seg.first_id + j,
+                            crate::rng::stream::LIFETIME,
+                        );
+                        u64::from(l.draw(u)) > age
+                    })
+                    .count() as u64;
+            }
+        }
+        alive
+    }
+
+    /// Number of segments held.
+    pub fn len(&self) -> usize {
+        self.per_emitter.iter().map(|s| s.len()).sum()
+    }
+
+    /// Whether no segment is held.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
     }
 }

@@ -77,6 +77,9 @@ pub struct Effect {
     /// Evaluate position-dependent forces per particle (default) or bake them into a grid.
     #[serde(default)]
     pub field: crate::field::Field,
+    /// Keep per-particle state, or compute each particle from its id and age (see [`State`]).
+    #[serde(default)]
+    pub state: State,
     /// The viewpoint for sorting and rendering.
     #[serde(default)]
     pub camera: Camera,
@@ -283,6 +286,38 @@ impl Integrator {
         [Integrator::Auto]
             .into_iter()
             .chain(Self::CONCRETE)
+            .find(|i| i.name().eq_ignore_ascii_case(s))
+    }
+}
+
+/// Whether particles keep state between steps.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum State {
+    /// Stateless wherever it is exact (the Exact integrator, no kills, no sort, no drops),
+    /// else stateful.
+    #[default]
+    Auto,
+    /// Always keep position and velocity per particle (to compare against the stateless
+    /// kernel, or to sort by draw order).
+    Stateful,
+    /// Require the stateless kernel: an error naming the cause where it cannot be used.
+    Stateless,
+}
+
+impl State {
+    /// The name as written in effect files.
+    pub fn name(self) -> &'static str {
+        match self {
+            State::Auto => "Auto",
+            State::Stateful => "Stateful",
+            State::Stateless => "Stateless",
+        }
+    }
+
+    /// Parses a name as written in effect files (case-insensitive, for the command line).
+    pub fn from_name(s: &str) -> Option<Self> {
+        [State::Auto, State::Stateful, State::Stateless]
+            .into_iter()
             .find(|i| i.name().eq_ignore_ascii_case(s))
     }
 }

@@ -3,6 +3,7 @@
 //! once). A state-preserving update streams particle state, so the copy kernel is its ceiling;
 //! the ratio copy time / update time says how close the update gets.
 
+use plume_compiler::schema::State;
 use plume_compiler::{compile_effect, CompileError, CompiledEffect, Effect};
 
 use crate::error::RuntimeError;
@@ -56,6 +57,13 @@ pub struct BenchResult {
     /// For flocking effects: the mean number of neighbours within the radius per live boid
     /// during the timed steps, and the neighbour search used.
     pub flock: Option<(f64, String)>,
+    /// For a baked field: the error of the sampled acceleration against the evaluated one at
+    /// the live particles' positions (up to [`FIELD_ERROR_SAMPLES`] of them, f64), as (max, RMS)
+    /// over the RMS evaluated acceleration, and the number of particles inside the grid.
+    pub field_error: Option<(f64, f64, usize)>,
+    /// The stateless comparison: seconds per `evaluate` of the same N particles (what a frame
+    /// costs with no state), or why the effect needs state.
+    pub stateless: Result<f64, String>,
 }
 
 impl BenchResult {
@@ -166,15 +174,28 @@ fn scale_shape(shape: &mut plume_compiler::schema::Shape, scale: f64, about: gla
     }
 }
 
-/// Compiles the bench copy of `effect`.
+/// Compiles the bench copy of `effect` (with its own `state`).
 pub fn compile_bench(effect: &Effect, particles: u32) -> Result<CompiledEffect, RuntimeError> {
-    compile_effect(&bench_effect(effect, particles), "").map_err(|e| match e {
+    compile_bench_as(effect, particles, effect.state)
+}
+
+/// Compiles the bench copy of `effect` with `state` in place of the file's.
+fn compile_bench_as(
+    effect: &Effect,
+    particles: u32,
+    state: State,
+) -> Result<CompiledEffect, RuntimeError> {
+    let mut e = bench_effect(effect, particles);
+    e.state = state;
+    compile_effect(&e, "").map_err(|e| match e {
         CompileError::Invalid(d) => RuntimeError::Output(d.to_string()),
         CompileError::Internal(i) => RuntimeError::Output(i.to_string()),
     })
 }
 
-/// Runs the benchmark: spawn N, warm up, time `steps` update steps and as many copies.
+/// Runs the benchmark: spawn N, warm up, time `steps` update steps and as many copies. The
+/// update is always the stateful one (state read and written every step, against the copy
+/// kernel); an effect that can be stateless also has its `evaluate` timed on the same N.
 pub fn bench(
     gpu: &Gpu,
     effect: &Effect,
@@ -183,12 +204,13 @@ pub fn bench(
     render_size: Option<(u32, u32)>,
 ) -> Result<BenchResult, RuntimeError> {
     let steps = steps.clamp(1, STEPS_PER_SUBMIT);
-    let compiled = compile_bench(effect, particles)?;
+    let compiled = compile_bench_as(effect, particles, State::Stateful)?;
     let bpp = compiled.layout.bytes_per_particle;
     let timer = PassTimer::new(gpu);
     // Warm the pipelines up on a throwaway copy so step 0 of the measured one is not a
     // first dispatch.
-    GpuSim::new(gpu, compile_bench(effect, 64)?)?.run(2, |_| {})?;
+    GpuSim::new(gpu, compile_bench_as(effect, 64, State::Stateful)?)?.run(2, |_| {})?;
+    let stateless = time_stateless(gpu, &timer, effect, particles, steps)?;
     let mut sim = GpuSim::new(gpu, compiled)?;
     // Step 0 spawns everything (timed), then a few steps settle the caches.
     let spawn_step = sim.time_steps(&timer, 1)?;
@@ -226,6 +248,13 @@ pub fn bench(
         }
         None => None,
     };
+    let field_error = match sim.effect().ir.field {
+        Some(_) => {
+            let t = sim.schedule().steps_done() as f64 * sim.effect().ir.dt;
+            field_error(sim.effect(), &sim.records()?, t)
+        }
+        None => None,
+    };
     let render = match render_size {
         None => None,
         Some((w, h)) => {
@@ -251,7 +280,63 @@ pub fn bench(
         spawn_step_seconds: spawn_step,
         timing: timer.source(),
         flock,
+        field_error,
+        stateless,
     })
+}
+
+/// Particles whose baked-field error `plume bench` measures (the first by id).
+pub const FIELD_ERROR_SAMPLES: usize = 4096;
+
+/// The baked field's error at `records`' positions (see [`BenchResult::field_error`]): the
+/// reference's bake at time `t`, sampled, against every bakeable term evaluated (f64). Only
+/// particles inside the grid count; outside it the forces are evaluated anyway.
+fn field_error(
+    c: &CompiledEffect,
+    records: &[plume_compiler::reference::ParticleRecord],
+    t: f64,
+) -> Option<(f64, f64, usize)> {
+    let field = c.ir.field.as_ref()?;
+    let t = match field.refresh {
+        plume_compiler::field::Refresh::Once => 0.0,
+        plume_compiler::field::Refresh::EveryStep => t,
+    };
+    let nodes = field.bake(&c.ir.terms, t);
+    let (mut max, mut sum_err2, mut sum_ref2, mut n) = (0.0f64, 0.0, 0.0, 0usize);
+    for r in records.iter().take(FIELD_ERROR_SAMPLES) {
+        if let Some(baked) = field.sample(&nodes, r.position) {
+            let exact = plume_compiler::field::baked_sum(&c.ir.terms, r.position, t);
+            let err = (baked - exact).length();
+            max = max.max(err);
+            sum_err2 += err * err;
+            sum_ref2 += exact.length_squared();
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return Some((0.0, 0.0, 0));
+    }
+    let scale = (sum_ref2 / n as f64).sqrt().max(1e-300);
+    Some((max / scale, (sum_err2 / n as f64).sqrt() / scale, n))
+}
+
+/// Times `steps` evaluations of the stateless kernel at N particles (after a warm-up), or says
+/// why the effect needs state. The sim is dropped before the stateful one is made.
+fn time_stateless(
+    gpu: &Gpu,
+    timer: &PassTimer<'_>,
+    effect: &Effect,
+    particles: u32,
+    steps: u32,
+) -> Result<Result<f64, String>, RuntimeError> {
+    let compiled = compile_bench_as(effect, particles, State::Auto)?;
+    if compiled.ir.stateless.is_none() {
+        return Ok(Err(compiled.ir.state_reason));
+    }
+    let mut sim = GpuSim::new(gpu, compiled)?;
+    sim.run(4, |_| {})?;
+    sim.time_steps(timer, 2)?;
+    Ok(Ok(sim.time_steps(timer, steps)? / f64::from(steps)))
 }
 
 /// Times `repeats` copies of `bytes` (rounded up to 16) through the copy kernel, split into

@@ -3,11 +3,13 @@
 //! submission, their per-step parameters in one uniform buffer addressed by dynamic offsets.
 
 use std::borrow::Cow;
+use std::cell::Cell;
 
 use glam::DVec3;
 use plume_compiler::passes::layout::{Attribute, COUNTERS_BYTES};
+use plume_compiler::passes::stateless::{FRAME_HEADER_BYTES, SEGMENT_BYTES};
 use plume_compiler::reference::{ParticleRecord, Totals};
-use plume_compiler::schedule::{Schedule, StepPlan};
+use plume_compiler::schedule::{LiveSegments, Schedule, StepPlan};
 use plume_compiler::wgsl::WORKGROUP;
 use plume_compiler::CompiledEffect;
 
@@ -41,13 +43,33 @@ pub struct GpuSim<'g> {
     counters: wgpu::Buffer,
     params: wgpu::Buffer,
     params_stride: u64,
-    prepare: wgpu::ComputePipeline,
-    spawn: wgpu::ComputePipeline,
-    update: wgpu::ComputePipeline,
+    kernels: Kernels,
     sort: Option<SortStage<'g>>,
     flock: Option<FlockStage>,
     /// The baked field's `bake` kernel, its node count, and whether it runs every step.
     bake: Option<(wgpu::ComputePipeline, u64, bool)>,
+}
+
+/// The kernels that advance an effect: the stateful spawn and update, or the stateless
+/// evaluate with its bookkeeping.
+enum Kernels {
+    Stateful {
+        prepare: wgpu::ComputePipeline,
+        spawn: wgpu::ComputePipeline,
+        update: wgpu::ComputePipeline,
+    },
+    Stateless(StatelessStage),
+}
+
+/// A stateless effect's `evaluate` kernel and its bookkeeping: steps only advance the schedule
+/// and the live segments; the view is computed when it is read.
+struct StatelessStage {
+    evaluate: wgpu::ComputePipeline,
+    /// The segment table (binding 1), written before each evaluation.
+    frame: wgpu::Buffer,
+    segments: LiveSegments,
+    /// Steps done when the view was last evaluated.
+    evaluated_at: Cell<Option<u64>>,
 }
 
 /// The per-step flocking pass of an effect with a Flock force: snapshot (+ partial sums),
@@ -125,8 +147,9 @@ impl<'g> GpuSim<'g> {
             .limits
             .max_storage_buffer_binding_size
             .min(gpu.limits.max_buffer_size);
+        let stateless = effect.layout.stateless();
         // The free list is one binding of 4 bytes a slot: that bounds the capacity.
-        if cap * 4 > limit {
+        if !stateless && cap * 4 > limit {
             return Err(RuntimeError::CapacityTooLarge {
                 capacity: effect.ir.capacity,
                 bytes_per_particle: 4,
@@ -145,9 +168,18 @@ impl<'g> GpuSim<'g> {
         // Allocation failures (the driver's out-of-memory) are caught here and reported with
         // the sizes, instead of surfacing later as an invalid-buffer error.
         let out_of_memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        // A stateless effect has no free list (nor any other per-particle state).
+        let free_list_bytes = if stateless { 16 } else { cap * 4 };
+        let frame_bytes = effect.ir.stateless.as_ref().map_or(16, |p| p.table_bytes());
+        let frame = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("frame"),
+            size: frame_bytes,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let free_list = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("free_list"),
-            size: cap * 4,
+            size: free_list_bytes,
             usage: storage,
             mapped_at_creation: false,
         });
@@ -188,43 +220,32 @@ impl<'g> GpuSim<'g> {
             source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(&effect.wgsl)),
         });
         let rw = wgpu::BufferBindingType::Storage { read_only: false };
+        // One entry per binding of the compiled layout, typed by what it holds.
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("plume"),
-            entries: &[
-                buffer_entry(0, rw, false, None),
-                buffer_entry(1, rw, false, None),
-                buffer_entry(2, rw, false, None),
-                buffer_entry(
-                    3,
-                    wgpu::BufferBindingType::Uniform,
-                    true,
-                    Some(effect.layout.params_bytes()),
-                ),
-                buffer_entry(4, wgpu::BufferBindingType::Uniform, false, Some(16)),
-            ]
-            .into_iter()
-            .chain(
-                effect
-                    .layout
-                    .sorts()
-                    .then(|| {
-                        [
-                            buffer_entry(5, rw, false, None),
-                            buffer_entry(6, rw, false, None),
-                        ]
-                    })
-                    .into_iter()
-                    .flatten(),
-            )
-            .chain(
-                effect
-                    .layout
-                    .bindings
-                    .iter()
-                    .filter(|b| b.binding >= 7)
-                    .map(|b| buffer_entry(b.binding, rw, false, None)),
-            )
-            .collect::<Vec<_>>(),
+            entries: &effect
+                .layout
+                .bindings
+                .iter()
+                .map(|b| match b.name {
+                    "params" => buffer_entry(
+                        b.binding,
+                        wgpu::BufferBindingType::Uniform,
+                        true,
+                        Some(effect.layout.params_bytes()),
+                    ),
+                    "chunk" => {
+                        buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
+                    }
+                    "frame" => buffer_entry(
+                        b.binding,
+                        wgpu::BufferBindingType::Storage { read_only: true },
+                        false,
+                        None,
+                    ),
+                    _ => buffer_entry(b.binding, rw, false, None),
+                })
+                .collect::<Vec<_>>(),
         });
         // Sort keys and slots, padded to a power of two for the bitonic baseline; the padding
         // holds the largest key so it always sorts last.
@@ -274,50 +295,33 @@ impl<'g> GpuSim<'g> {
             let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
                 label: Some("plume"),
                 layout: &layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: buffer.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: free_list.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 2,
-                        resource: counters.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 3,
-                        resource: sized(&params, 0, effect.layout.params_bytes()),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 4,
-                        resource: sized(&chunk_params, k * align, 16),
-                    },
-                ]
-                .into_iter()
-                .chain(
-                    extra_buffers
-                        .iter()
-                        .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                            binding: *binding,
-                            resource: buffer.as_entire_binding(),
-                        }),
-                )
-                .chain(sort_buffers.iter().flat_map(|(keys, vals)| {
-                    [
-                        wgpu::BindGroupEntry {
-                            binding: 5,
-                            resource: keys.as_entire_binding(),
+                entries: &effect
+                    .layout
+                    .bindings
+                    .iter()
+                    .map(|b| wgpu::BindGroupEntry {
+                        binding: b.binding,
+                        resource: match b.name {
+                            "particles" => buffer.as_entire_binding(),
+                            "free_list" => free_list.as_entire_binding(),
+                            "counters" => counters.as_entire_binding(),
+                            "params" => sized(&params, 0, effect.layout.params_bytes()),
+                            "chunk" => sized(&chunk_params, k * align, 16),
+                            "frame" => frame.as_entire_binding(),
+                            "sort_keys" => {
+                                sort_buffers.as_ref().expect("sorts").0.as_entire_binding()
+                            }
+                            "sort_vals" => {
+                                sort_buffers.as_ref().expect("sorts").1.as_entire_binding()
+                            }
+                            _ => extra_buffers
+                                .iter()
+                                .find(|(binding, _)| *binding == b.binding)
+                                .map(|(_, buffer)| buffer.as_entire_binding())
+                                .expect("every other binding is an extra buffer"),
                         },
-                        wgpu::BindGroupEntry {
-                            binding: 6,
-                            resource: vals.as_entire_binding(),
-                        },
-                    ]
-                }))
-                .collect::<Vec<_>>(),
+                    })
+                    .collect::<Vec<_>>(),
             });
             chunks.push(Chunk {
                 len,
@@ -413,9 +417,19 @@ impl<'g> GpuSim<'g> {
             flock,
             bake,
             schedule: Schedule::new(&effect.ir),
-            prepare: pipeline("spawn_prepare"),
-            spawn: pipeline("spawn"),
-            update: pipeline("update"),
+            kernels: match &effect.ir.stateless {
+                Some(plan) => Kernels::Stateless(StatelessStage {
+                    evaluate: pipeline("evaluate"),
+                    frame,
+                    segments: LiveSegments::new(plan.lives.clone()),
+                    evaluated_at: Cell::new(None),
+                }),
+                None => Kernels::Stateful {
+                    prepare: pipeline("spawn_prepare"),
+                    spawn: pipeline("spawn"),
+                    update: pipeline("update"),
+                },
+            },
             sort: sort_buffers.map(|(keys, vals)| SortStage {
                 keys,
                 vals,
@@ -428,6 +442,10 @@ impl<'g> GpuSim<'g> {
             params,
             params_stride,
         };
+        if stateless {
+            gpu.take_error()?;
+            return Ok(sim);
+        }
         // Mark every slot free and fill the free list, on the GPU: no host copy of the state.
         let init = pipeline("init");
         let mut encoder = device.create_command_encoder(&Default::default());
@@ -436,13 +454,13 @@ impl<'g> GpuSim<'g> {
             pass.set_pipeline(&init);
             for chunk in &sim.chunks {
                 let (x, y) = sim.groups(chunk.len)?;
-                pass.set_bind_group(0, &chunk.bind_group, &[0]);
+                sim.bind(&mut pass, chunk, 0);
                 pass.dispatch_workgroups(x, y, 1);
             }
             // A field baked once is baked here, at time 0 (the params buffer starts zeroed).
             if let Some((bake, nodes, false)) = &sim.bake {
                 let (x, y) = sim.groups(*nodes)?;
-                pass.set_bind_group(0, &sim.chunks[0].bind_group, &[0]);
+                sim.bind(&mut pass, &sim.chunks[0], 0);
                 pass.set_pipeline(bake);
                 pass.dispatch_workgroups(x, y, 1);
             }
@@ -450,6 +468,15 @@ impl<'g> GpuSim<'g> {
         gpu.queue.submit([encoder.finish()]);
         gpu.take_error()?;
         Ok(sim)
+    }
+
+    /// Binds `chunk`'s group; `offset` is the step's parameters (stateful effects only: a
+    /// stateless one binds no per-step parameters).
+    fn bind(&self, pass: &mut wgpu::ComputePass<'_>, chunk: &Chunk, offset: u32) {
+        match self.kernels {
+            Kernels::Stateful { .. } => pass.set_bind_group(0, &chunk.bind_group, &[offset]),
+            Kernels::Stateless(_) => pass.set_bind_group(0, &chunk.bind_group, &[]),
+        }
     }
 
     /// Records the depth keys of every slot and their sort into `pass`.
@@ -464,7 +491,7 @@ impl<'g> GpuSim<'g> {
         pass.set_pipeline(&stage.depth_keys);
         for chunk in &self.chunks {
             let (x, y) = self.groups(chunk.len)?;
-            pass.set_bind_group(0, &chunk.bind_group, &[0]);
+            self.bind(pass, chunk, 0);
             pass.dispatch_workgroups(x, y, 1);
         }
         stage.sorter.record(
@@ -479,6 +506,7 @@ impl<'g> GpuSim<'g> {
     /// Sorts every slot by view depth on the GPU (farthest first, free slots last) and returns
     /// the live slots in draw order, each with its key.
     pub fn draw_order(&self, algorithm: SortAlgorithm) -> Result<Vec<(u32, u32)>, RuntimeError> {
+        self.evaluate_view()?;
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -506,6 +534,7 @@ impl<'g> GpuSim<'g> {
         timer: &PassTimer<'_>,
         algorithm: SortAlgorithm,
     ) -> Result<f64, RuntimeError> {
+        self.evaluate_view()?;
         let seconds = timer.time(|pass| self.record_sort(pass, algorithm))?;
         self.gpu.take_error()?;
         Ok(seconds)
@@ -551,6 +580,22 @@ impl<'g> GpuSim<'g> {
     /// each submission is recorded. Returns when the GPU has finished.
     pub fn run(&mut self, steps: u64, mut progress: impl FnMut(u64)) -> Result<(), RuntimeError> {
         let mut done = 0;
+        if let Kernels::Stateless(stage) = &mut self.kernels {
+            // Stateless: a step is bookkeeping only; the view is computed when it is read.
+            while done < steps {
+                let n = (steps - done).min(1 << 16);
+                if self.schedule.skip_idle(n) {
+                    stage.segments.advance_to(self.schedule.steps_done());
+                } else {
+                    for _ in 0..n {
+                        stage.segments.record(&self.schedule.next_plan());
+                    }
+                }
+                done += n;
+                progress(done);
+            }
+            return Ok(());
+        }
         while done < steps {
             let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
             let plans: Vec<StepPlan> = (0..n).map(|_| self.schedule.next_plan()).collect();
@@ -610,29 +655,39 @@ impl<'g> GpuSim<'g> {
             // A field baked every step is baked first: the spawn (Verlet's start) samples it too.
             if let Some((bake, nodes, true)) = &self.bake {
                 let (x, y) = self.groups(*nodes)?;
-                pass.set_bind_group(0, &self.chunks[0].bind_group, &[offset]);
+                self.bind(pass, &self.chunks[0], offset);
                 pass.set_pipeline(bake);
                 pass.dispatch_workgroups(x, y, 1);
             }
+            let Kernels::Stateful {
+                prepare,
+                spawn,
+                update,
+            } = &self.kernels
+            else {
+                return Err(RuntimeError::Gpu(
+                    "a stateless effect records no steps".into(),
+                ));
+            };
             if plan.requested() > 0 {
-                pass.set_bind_group(0, &self.chunks[0].bind_group, &[offset]);
-                pass.set_pipeline(&self.prepare);
+                self.bind(pass, &self.chunks[0], offset);
+                pass.set_pipeline(prepare);
                 pass.dispatch_workgroups(1, 1, 1);
                 // Every chunk sees every spawn; each writes only the slots it holds.
                 let (x, y) = self.groups(u64::from(plan.requested()))?;
-                pass.set_pipeline(&self.spawn);
+                pass.set_pipeline(spawn);
                 for chunk in &self.chunks {
-                    pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+                    self.bind(pass, chunk, offset);
                     pass.dispatch_workgroups(x, y, 1);
                 }
             }
             if let Some(flock) = &self.flock {
                 self.record_flock(pass, flock, offset)?;
             }
-            pass.set_pipeline(&self.update);
+            pass.set_pipeline(update);
             for chunk in &self.chunks {
                 let (x, y) = self.groups(chunk.len)?;
-                pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+                self.bind(pass, chunk, offset);
                 pass.dispatch_workgroups(x, y, 1);
             }
         }
@@ -648,7 +703,7 @@ impl<'g> GpuSim<'g> {
     ) -> Result<(), RuntimeError> {
         let chunk = &self.chunks[0];
         let (x, y) = self.groups(chunk.len)?;
-        pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+        self.bind(pass, chunk, offset);
         pass.set_pipeline(&flock.snapshot);
         pass.dispatch_workgroups(x, y, 1);
         if let Some(reduce) = &flock.reduce {
@@ -659,7 +714,7 @@ impl<'g> GpuSim<'g> {
             pass.set_pipeline(&grid.bucket);
             pass.dispatch_workgroups(x, y, 1);
             grid.sort.record(pass);
-            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+            self.bind(pass, chunk, offset);
             let (bx, by) = self.groups(grid.buckets)?;
             pass.set_pipeline(&grid.clear);
             pass.dispatch_workgroups(bx, by, 1);
@@ -689,9 +744,108 @@ impl<'g> GpuSim<'g> {
         read_buffer(self.gpu, buffer)
     }
 
+    /// Whether the effect runs stateless (one `evaluate` per frame read, no state kept).
+    pub fn is_stateless(&self) -> bool {
+        matches!(self.kernels, Kernels::Stateless(_))
+    }
+
+    /// Writes the segment table of the steps done into the frame buffer.
+    fn write_frame(&self, stage: &StatelessStage) -> Result<(), RuntimeError> {
+        let done = stage.segments.steps_done();
+        let count = stage.segments.len() as u64;
+        if FRAME_HEADER_BYTES + count * SEGMENT_BYTES > stage.frame.size() {
+            return Err(RuntimeError::Gpu(format!(
+                "{count} live spawn segments overflow the stateless table (a bug in the compiler's bound)"
+            )));
+        }
+        let mut words: Vec<u32> = vec![0, count as u32, done as u32, 0];
+        let mut threads = 0u64;
+        let dt = self.effect.ir.dt;
+        for seg in stage.segments.iter() {
+            let age = done - seg.step;
+            let tau = (age as f64 * dt) as f32;
+            words.extend([
+                threads as u32,
+                seg.first_id,
+                seg.k_base,
+                seg.emitter as u32,
+                age.min(u64::from(u32::MAX)) as u32,
+                seg.step as u32,
+                tau.to_bits(),
+                0,
+            ]);
+            threads += u64::from(seg.count);
+        }
+        if threads > u64::from(self.effect.ir.capacity) {
+            return Err(RuntimeError::Gpu(format!(
+                "{threads} stateless particles exceed the capacity {} (a bug in the compiler's bound)",
+                self.effect.ir.capacity
+            )));
+        }
+        words[0] = threads as u32;
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        self.gpu.queue.write_buffer(&stage.frame, 0, &bytes);
+        Ok(())
+    }
+
+    /// Records one evaluation of the whole view into `pass`.
+    fn record_evaluate(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        stage: &StatelessStage,
+    ) -> Result<(), RuntimeError> {
+        pass.set_pipeline(&stage.evaluate);
+        for chunk in &self.chunks {
+            let (x, y) = self.groups(chunk.len)?;
+            self.bind(pass, chunk, 0);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        Ok(())
+    }
+
+    /// A stateless effect: computes the view at the steps done, unless it already holds them.
+    /// A stateful effect: nothing to do.
+    fn evaluate_view(&self) -> Result<(), RuntimeError> {
+        let Kernels::Stateless(stage) = &self.kernels else {
+            return Ok(());
+        };
+        let done = stage.segments.steps_done();
+        if stage.evaluated_at.get() == Some(done) {
+            return Ok(());
+        }
+        self.write_frame(stage)?;
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            self.record_evaluate(&mut pass, stage)?;
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()?;
+        stage.evaluated_at.set(Some(done));
+        Ok(())
+    }
+
     /// Runs `steps` (at most [`STEPS_PER_SUBMIT`]) in one timed compute pass; returns seconds.
+    /// A stateless effect advances its bookkeeping by `steps` and times as many evaluations of
+    /// the view (each one what a frame costs), so the two are compared per step drawn.
     pub fn time_steps(&mut self, timer: &PassTimer<'_>, steps: u32) -> Result<f64, RuntimeError> {
         let steps = steps.min(STEPS_PER_SUBMIT);
+        if self.is_stateless() {
+            self.run(u64::from(steps), |_| {})?;
+            let Kernels::Stateless(stage) = &self.kernels else {
+                unreachable!("checked above");
+            };
+            self.write_frame(stage)?;
+            let seconds = timer.time(|pass| {
+                for _ in 0..steps {
+                    self.record_evaluate(pass, stage)?;
+                }
+                Ok(())
+            })?;
+            self.gpu.take_error()?;
+            stage.evaluated_at.set(Some(stage.segments.steps_done()));
+            return Ok(seconds);
+        }
         let plans: Vec<StepPlan> = (0..steps).map(|_| self.schedule.next_plan()).collect();
         self.write_params(&plans);
         let seconds = timer.time(|pass| self.record(pass, &plans))?;
@@ -718,8 +872,20 @@ impl<'g> GpuSim<'g> {
         read_buffer(self.gpu, buffer)
     }
 
-    /// Steps done and the GPU's counters: alive, spawned, died, dropped.
+    /// Steps done and the GPU's counters: alive, spawned, died, dropped. A stateless effect
+    /// drops nothing and counts from its bookkeeping (the kernels' own lifetime draw).
     pub fn totals(&self) -> Result<Totals, RuntimeError> {
+        if let Kernels::Stateless(stage) = &self.kernels {
+            let spawned = u64::from(self.schedule.ids_requested());
+            let alive = stage.segments.alive(&self.effect.ir);
+            return Ok(Totals {
+                steps: self.schedule.steps_done(),
+                alive,
+                spawned,
+                died: spawned - alive,
+                dropped: 0,
+            });
+        }
         let c = self.read(&self.counters)?;
         let word = |i: usize| {
             u64::from(u32::from_le_bytes([
@@ -747,6 +913,7 @@ impl<'g> GpuSim<'g> {
 
     /// Every slot's particle (None for a free slot).
     fn records_by_slot(&self) -> Result<Vec<Option<ParticleRecord>>, RuntimeError> {
+        self.evaluate_view()?;
         let mut bytes = Vec::new();
         for chunk in &self.chunks {
             bytes.extend(self.read(&chunk.buffer)?);

@@ -77,6 +77,9 @@ pub struct Layout {
     pub bindings: Vec<Binding>,
     /// Number of emitter entries in the step parameters (at least 1).
     pub emitter_slots: u32,
+    /// Bytes per particle carried from step to step: `bytes_per_particle`, or 0 when the
+    /// effect is stateless (its `particles` buffer is then a view `evaluate` writes afresh).
+    pub state_bytes_per_particle: u32,
 }
 
 impl Layout {
@@ -111,6 +114,11 @@ impl Layout {
     /// Whether the layout has a binding called `name`.
     pub fn binds(&self, name: &str) -> bool {
         self.bindings.iter().any(|b| b.name == name)
+    }
+
+    /// Whether the effect is stateless: one `evaluate` kernel, no state kept between steps.
+    pub fn stateless(&self) -> bool {
+        self.binds("frame")
     }
 
     /// Whether the effect has a sort stage (bindings 5 and 6).
@@ -159,8 +167,38 @@ pub fn decide(ir: &EffectIr) -> Layout {
         bytes_per_particle,
         bindings: Vec::new(),
         emitter_slots,
+        state_bytes_per_particle: if ir.stateless.is_some() {
+            0
+        } else {
+            bytes_per_particle
+        },
     };
-    layout.bindings = vec![
+    layout.bindings = if let Some(plan) = &ir.stateless {
+        vec![
+            Binding {
+                binding: 0,
+                name: "particles",
+                space: "storage, read_write",
+                bytes: cap * u64::from(bytes_per_particle),
+                meaning: "the view: array<Particle> written afresh by `evaluate` for each frame read or drawn; no kernel reads it back, so it is not state",
+            },
+            Binding {
+                binding: 1,
+                name: "frame",
+                space: "storage, read",
+                bytes: plan.table_bytes(),
+                meaning: "bookkeeping, written by the CPU per frame: threads, segment count, steps done; per spawning (step, emitter) with live particles: first thread, first id, emitter counter, emitter, age in steps, spawn step, age in s",
+            },
+            Binding {
+                binding: 4,
+                name: "chunk",
+                space: "uniform",
+                bytes: 16,
+                meaning: "the slots this dispatch's view buffer holds: first global slot, count",
+            },
+        ]
+    } else {
+        vec![
         Binding {
             binding: 0,
             name: "particles",
@@ -196,7 +234,8 @@ pub fn decide(ir: &EffectIr) -> Layout {
             bytes: 16,
             meaning: "the slots this dispatch's particle buffer holds: first global slot, count",
         },
-    ];
+    ]
+    };
     if let Some(field) = &ir.field {
         layout.bindings.push(Binding {
             binding: 13,
@@ -280,11 +319,28 @@ pub fn decide(ir: &EffectIr) -> Layout {
 
 impl fmt::Display for Layout {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        writeln!(
-            f,
-            "struct Particle ({} bytes per particle)",
-            self.bytes_per_particle
-        )?;
+        if self.stateless() {
+            writeln!(
+                f,
+                "state: none, 0 bytes per particle (stateless: `evaluate` computes each particle from its id and age)"
+            )?;
+            writeln!(
+                f,
+                "struct Particle (the evaluated view, {} bytes per slot; written, never read back)",
+                self.bytes_per_particle
+            )?;
+        } else {
+            writeln!(
+                f,
+                "state: {} bytes per particle",
+                self.state_bytes_per_particle
+            )?;
+            writeln!(
+                f,
+                "struct Particle ({} bytes per particle)",
+                self.bytes_per_particle
+            )?;
+        }
         let mut offset = 0;
         for a in &self.attributes {
             let (names, ty) = a.fields();

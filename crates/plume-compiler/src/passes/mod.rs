@@ -1,12 +1,13 @@
 //! Passes over the IR, run in this order: fold constant terms and merge drags, prune terms that
 //! cannot act, resolve the integrator (Auto, and Exact's preconditions), analyse stability,
-//! and decide the particle layout.
+//! decide whether particles need state at all, and decide the particle layout.
 
 pub mod fold;
 pub mod integrator;
 pub mod layout;
 pub mod prune;
 pub mod stability;
+pub mod stateless;
 
 use crate::check::Checker;
 use crate::diagnostics::Diagnostic;
@@ -36,6 +37,7 @@ pub fn run(
             path.lookup,
         ));
     }
+    stateless::decide(ir)?;
     let layout = layout::decide(ir);
     Ok((layout, warnings))
 }

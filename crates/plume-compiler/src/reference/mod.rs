@@ -2,6 +2,7 @@
 //! spawn schedule, the same integer-hash random draws and the same integer death steps, in f64.
 //! Written for clarity, not speed; it is the oracle of every numeric test.
 
+pub mod closed_form;
 pub mod sim;
 pub mod spawn;
 pub mod step;

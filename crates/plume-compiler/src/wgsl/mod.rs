@@ -1,7 +1,9 @@
 //! WGSL generation: one module per effect with a `spawn_prepare`, a `spawn` and one fused
-//! `update` kernel, effect constants baked in, and only the code and attributes it uses.
+//! `update` kernel (or, for a stateless effect, one `evaluate` kernel), effect constants baked
+//! in, and only the code and attributes it uses.
 
 pub mod spawn;
+pub mod stateless;
 pub mod update;
 pub mod writer;
 
@@ -55,27 +57,32 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         }
     });
     w.blank();
-    w.block("struct Counters", |w| {
-        w.line("free_count: atomic<u32>,");
-        w.line("spawn_base: u32,");
-        w.line("spawn_count: u32,");
-        w.line("spawned: u32,");
-        w.line("dropped: u32,");
-        w.line("died: atomic<u32>,");
-    });
-    w.blank();
-    w.comment("emitters[e] = (spawns this step, emitter's own spawn counter before them, 0, 0).");
-    w.block("struct StepParams", |w| {
-        w.line("first_id: u32,");
-        w.line("requested: u32,");
-        w.line("time: f32,");
-        w.line("step: u32,");
-        w.line(format!(
-            "emitters: array<vec4<u32>, {}>,",
-            layout.emitter_slots
-        ));
-    });
-    w.blank();
+    let stateless = ir.stateless.is_some();
+    if !stateless {
+        w.block("struct Counters", |w| {
+            w.line("free_count: atomic<u32>,");
+            w.line("spawn_base: u32,");
+            w.line("spawn_count: u32,");
+            w.line("spawned: u32,");
+            w.line("dropped: u32,");
+            w.line("died: atomic<u32>,");
+        });
+        w.blank();
+        w.comment(
+            "emitters[e] = (spawns this step, emitter's own spawn counter before them, 0, 0).",
+        );
+        w.block("struct StepParams", |w| {
+            w.line("first_id: u32,");
+            w.line("requested: u32,");
+            w.line("time: f32,");
+            w.line("step: u32,");
+            w.line(format!(
+                "emitters: array<vec4<u32>, {}>,",
+                layout.emitter_slots
+            ));
+        });
+        w.blank();
+    }
     w.comment("The slots bound as `particles` in this dispatch: global slots base .. base + len.");
     w.block("struct Chunk", |w| {
         w.line("base: u32,");
@@ -90,6 +97,10 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         w.line("die_at: u32,");
     });
     w.blank();
+    if stateless {
+        stateless::emit_declarations(&mut w);
+        w.blank();
+    }
     for b in &layout.bindings {
         let ty = match b.name {
             "particles" => "array<vec4<u32>>",
@@ -100,6 +111,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "boids" | "flock_out" | "flock_sums" => "array<vec4<f32>>",
             "cells" => "array<vec2<u32>>",
             "field" => "array<vec4<f32>>",
+            "frame" => "Frame",
             _ => "StepParams",
         };
         w.line(format!(
@@ -150,11 +162,18 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             w.blank();
         }
     }
-    spawn::emit(&mut w, ir, layout);
-    w.blank();
-    update::emit(&mut w, ir, layout);
-    w.blank();
-    emit_init(&mut w);
+    if stateless {
+        spawn::emit_emitter_fns(&mut w, ir);
+        integrators::emit_advance(&mut w, ir);
+        w.blank();
+        stateless::emit(&mut w, ir, layout);
+    } else {
+        spawn::emit(&mut w, ir, layout);
+        w.blank();
+        update::emit(&mut w, ir, layout);
+        w.blank();
+        emit_init(&mut w);
+    }
     if layout.sorts() {
         w.blank();
         emit_depth_keys(&mut w, ir);

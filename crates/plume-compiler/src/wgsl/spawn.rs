@@ -27,10 +27,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         w.line("counters.dropped = counters.dropped + (params.requested - n);");
     });
     w.blank();
-    for (e, em) in ir.emitters.iter().enumerate() {
-        emit_emitter_fn(w, ir, e, em);
-        w.blank();
-    }
+    emit_emitter_fns(w, ir);
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
         "fn spawn(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
@@ -59,7 +56,9 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                         } else {
                             format!("case {e}u")
                         };
-                        w.block(label, |w| w.line(format!("s = emit_{e}(id, k);")));
+                        w.block(label, |w| {
+                            w.line(format!("s = emit_{e}(id, k, params.step);"))
+                        });
                     }
                 });
                 let mut fields = vec!["s.x.x", "s.x.y", "s.x.z"];
@@ -85,7 +84,17 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     );
 }
 
-/// A function per emitter: `emit_E(id, k) -> Spawned`, k the emitter's own spawn counter.
+/// Emits `emit_E(id, k, step) -> Spawned` for every emitter (shared by `spawn` and the
+/// stateless `evaluate`), each followed by a blank line.
+pub fn emit_emitter_fns(w: &mut Writer, ir: &EffectIr) {
+    for (e, em) in ir.emitters.iter().enumerate() {
+        emit_emitter_fn(w, ir, e, em);
+        w.blank();
+    }
+}
+
+/// A function per emitter: `emit_E(id, k, step) -> Spawned`, k the emitter's own spawn counter
+/// and `step` the step it spawns at.
 fn emit_emitter_fn(w: &mut Writer, ir: &EffectIr, e: usize, em: &EmitterIr) {
     if let ShapeIr::Points(ps) = &em.shape {
         let items: Vec<String> = ps.iter().map(|p| vec3_lit(*p)).collect();
@@ -95,24 +104,29 @@ fn emit_emitter_fn(w: &mut Writer, ir: &EffectIr, e: usize, em: &EmitterIr) {
             items.join(", ")
         ));
     }
-    w.block(format!("fn emit_{e}(id: u32, k: u32) -> Spawned"), |w| {
-        w.line("var s: Spawned;");
-        emit_shape(w, e, &em.shape);
-        emit_velocity(w, &em.shape, &em.velocity);
-        match em.lifetime_steps {
-            Some(steps) => {
-                w.comment("Whole steps lived, drawn with integer arithmetic (see lifetime.rs).");
-                w.line(format!("let lu = rand_u32(id, {}u);", stream::LIFETIME));
-                w.line(format!("s.die_at = params.step + ({}) - 1u;", steps.wgsl()));
+    w.block(
+        format!("fn emit_{e}(id: u32, k: u32, step: u32) -> Spawned"),
+        |w| {
+            w.line("var s: Spawned;");
+            emit_shape(w, e, &em.shape);
+            emit_velocity(w, &em.shape, &em.velocity);
+            match em.lifetime_steps {
+                Some(steps) => {
+                    w.comment(
+                        "Whole steps lived, drawn with integer arithmetic (see lifetime.rs).",
+                    );
+                    w.line(format!("let lu = rand_u32(id, {}u);", stream::LIFETIME));
+                    w.line(format!("s.die_at = step + ({}) - 1u;", steps.wgsl()));
+                }
+                None if ir.has_lifetimes() => {
+                    w.comment("Lives forever.");
+                    w.line("s.die_at = DEAD;");
+                }
+                None => {}
             }
-            None if ir.has_lifetimes() => {
-                w.comment("Lives forever.");
-                w.line("s.die_at = DEAD;");
-            }
-            None => {}
-        }
-        w.line("return s;");
-    });
+            w.line("return s;");
+        },
+    );
 }
 
 fn unit3(base: u32) -> String {

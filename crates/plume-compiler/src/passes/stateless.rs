@@ -1,0 +1,164 @@
+//! The state pass: decides whether particles need state at all. With the Exact integrator a
+//! particle's position and velocity are closed-form functions of its spawn draws and its age
+//! (the stateless particle system; Latta's closed-form particles), so when nothing else needs
+//! memory between steps the compiler emits one `evaluate` kernel that computes every live
+//! particle from (id, spawn step, steps done) and keeps 0 bytes of state per particle.
+//!
+//! Spawning becomes bookkeeping: the CPU's schedule already knows which ids were requested at
+//! which step, so it hands the kernel a table of *segments* (one per step and emitter that
+//! spawned something and may still have live particles), and each thread finds its segment.
+//!
+//! What needs state, and so keeps the stateful kernels:
+//! - any integrator but Exact (their result depends on every earlier step);
+//! - kill volumes (whether a particle died depends on every earlier position);
+//! - a capacity that could drop spawns (which ids got a slot depends on the past);
+//! - a window of live spawning steps too long for the segment table.
+//!
+//! Planes, max_speed and Flock already rule out Exact. A depth sort works on the evaluated view.
+
+use crate::check::Checker;
+use crate::ir::EffectIr;
+use crate::path::ValuePath;
+use crate::schema::{Integrator, State};
+
+/// Most segments the table holds: 65,536 × 32 bytes = 2 MiB of bookkeeping, whatever the
+/// particle count.
+pub const MAX_SEGMENTS: u64 = 65_536;
+
+/// Bytes of one segment entry (two vec4<u32>).
+pub const SEGMENT_BYTES: u64 = 32;
+
+/// Bytes of the segment table's header (one vec4<u32>).
+pub const FRAME_HEADER_BYTES: u64 = 16;
+
+/// How a stateless effect is evaluated.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StatelessIr {
+    /// Per emitter, the most steps one of its particles lives (None: it never dies).
+    pub lives: Vec<Option<u32>>,
+    /// Most segments that can hold live particles at once (sizes the table).
+    pub max_segments: u64,
+    /// Most particles alive at once, an upper bound (no more than the capacity).
+    pub peak: u64,
+}
+
+impl StatelessIr {
+    /// Bytes of the segment table binding.
+    pub fn table_bytes(&self) -> u64 {
+        FRAME_HEADER_BYTES + SEGMENT_BYTES * self.max_segments.max(1)
+    }
+}
+
+/// The bounds of one emitter: (most alive at once, most live segments); None when unbounded.
+fn emitter_bounds(ir: &EffectIr, e: usize) -> Option<(u64, u64, Option<u32>)> {
+    let em = &ir.emitters[e];
+    let lives = em.lifetime_steps.map(|l| l.first + l.span - 1);
+    let burst = u64::from(em.burst);
+    if em.rate <= 0.0 {
+        return Some((burst, u64::from(burst > 0), lives));
+    }
+    // A rate emitter whose particles never die outgrows any capacity.
+    let window = u64::from(lives?);
+    // Spawns in any `window` consecutive steps: at most ceil(rate dt window), plus one for the
+    // f64 rounding of the carried fraction.
+    let per_window = (em.rate * ir.dt * window as f64).floor();
+    if !per_window.is_finite() || per_window >= 1e18 {
+        return None;
+    }
+    let spawns = per_window as u64 + 2;
+    Some((burst.saturating_add(spawns), window.min(spawns), lives))
+}
+
+/// Why the effect needs state, naming the cause and its path, or the stateless plan.
+pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
+    if ir.integrator != Integrator::Exact {
+        return Err((
+            format!(
+                "the {} integrator carries each particle's state from step to step (only Exact has a closed form)",
+                ir.integrator.name()
+            ),
+            ValuePath::root().field("integrator"),
+        ));
+    }
+    if !ir.kills.is_empty() {
+        return Err((
+            "kill[0] decides deaths from every earlier position".into(),
+            ValuePath::root().field("kill").index(0),
+        ));
+    }
+    let (mut peak, mut segments, mut lives) = (0u64, 0u64, Vec::new());
+    for e in 0..ir.emitters.len() {
+        let path = ValuePath::root().field("emitters").index(e);
+        let Some((alive, segs, life)) = emitter_bounds(ir, e) else {
+            return Err((
+                format!(
+                    "emitters[{e}] spawns at a rate and its particles never die, so they would outgrow any capacity and be dropped"
+                ),
+                path.field("rate"),
+            ));
+        };
+        peak = peak.saturating_add(alive);
+        segments = segments.saturating_add(segs);
+        lives.push(life);
+    }
+    if peak > u64::from(ir.capacity) {
+        return Err((
+            format!(
+                "capacity {} may drop spawns (up to {peak} alive at once), and which spawns get a slot depends on the past",
+                ir.capacity
+            ),
+            ValuePath::root().field("capacity"),
+        ));
+    }
+    if segments > MAX_SEGMENTS {
+        return Err((
+            format!(
+                "particles stay alive over {segments} spawning steps, more than the {MAX_SEGMENTS} the segment table holds"
+            ),
+            ValuePath::root().field("emitters"),
+        ));
+    }
+    Ok(StatelessIr {
+        lives,
+        max_segments: segments,
+        peak,
+    })
+}
+
+/// Decides `ir.stateless` from the file's `state` and records why.
+pub fn decide(ir: &mut EffectIr) -> Result<(), Checker> {
+    match (ir.state, plan(ir)) {
+        (State::Stateful, _) => {
+            ir.stateless = None;
+            ir.state_reason = "state: Stateful in the file".into();
+        }
+        (State::Auto | State::Stateless, Ok(p)) => {
+            ir.state_reason = format!(
+                "{}: the closed form of (id, age); at most {} alive, spawned at up to {} (step, emitter) pairs still tracked",
+                if ir.state == State::Auto {
+                    "Auto"
+                } else {
+                    "chosen in the file"
+                },
+                p.peak,
+                p.max_segments
+            );
+            ir.stateless = Some(p);
+        }
+        (State::Auto, Err((why, _))) => {
+            ir.stateless = None;
+            ir.state_reason = format!("Auto: {why}");
+        }
+        (State::Stateless, Err((why, _))) => {
+            let mut c = Checker::default();
+            c.error(
+                &ValuePath::root().field("state"),
+                format!(
+                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes and a capacity no spawn can overflow (use Auto)"
+                ),
+            );
+            return Err(c);
+        }
+    }
+    Ok(())
+}

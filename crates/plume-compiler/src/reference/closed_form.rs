@@ -1,0 +1,69 @@
+//! The f64 oracle of stateless effects: every live particle straight from the closed form at
+//! its age, with no stepping at all, so it is exact (to f64) at any t, t = 10^6 s included.
+//! It reads the same spawn draws and the same segment bookkeeping as the GPU's `evaluate`.
+
+use glam::DVec3;
+
+use super::spawn::spawn;
+use super::ParticleRecord;
+use crate::integrators::{merged_drag, ExactStep};
+use crate::ir::EffectIr;
+use crate::lifetime::NEVER;
+use crate::schedule::{LiveSegments, Schedule};
+
+/// A particle's position and velocity at age `tau` (s) under the Exact integrator's forces.
+pub fn state_at(ir: &EffectIr, x0: DVec3, v0: DVec3, tau: f64) -> (DVec3, DVec3) {
+    let (g, k, u) = merged_drag(ir);
+    ExactStep::for_drag(g, k, u, tau).apply(x0, v0)
+}
+
+/// The size of the closed form's terms at age `tau`: |x0| + F|v0| + (τ - F)|u| + Q|g|. A
+/// position computed in f32 is accurate relative to this (it is |x| unless terms cancel).
+pub fn term_scale(ir: &EffectIr, x0: DVec3, v0: DVec3, tau: f64) -> f64 {
+    let (g, k, u) = merged_drag(ir);
+    let s = ExactStep::for_drag(g, k, u, tau);
+    let q = if k > 0.0 {
+        (tau - s.f) / k
+    } else {
+        0.5 * tau * tau
+    };
+    x0.length() + s.f * v0.length() + (tau - s.f) * u.length() + q * g.length()
+}
+
+/// The live particles after the steps `segments` has recorded, in id order, each with the
+/// scale of its closed form's terms. `schedule` must have planned the same steps (for ages).
+pub fn records(
+    ir: &EffectIr,
+    segments: &LiveSegments,
+    schedule: &Schedule,
+) -> Vec<(ParticleRecord, f64)> {
+    let done = segments.steps_done();
+    let mut out = Vec::new();
+    for seg in segments.iter() {
+        let age_steps = done - seg.step;
+        let tau = age_steps as f64 * ir.dt;
+        for j in 0..seg.count {
+            let id = seg.first_id + j;
+            let s = spawn(ir, seg.emitter, id, seg.k_base + j, seg.step);
+            if s.die_at != NEVER {
+                let lives = u64::from(s.die_at.wrapping_sub(seg.step as u32)) + 1;
+                if age_steps >= lives {
+                    continue;
+                }
+            }
+            let (x, v) = state_at(ir, s.x, s.v, tau);
+            out.push((
+                ParticleRecord {
+                    id,
+                    position: x,
+                    velocity: v,
+                    age: tau,
+                    lifetime: schedule.lifetime(id, s.die_at),
+                },
+                term_scale(ir, s.x, s.v, tau),
+            ));
+        }
+    }
+    out.sort_by_key(|(r, _)| r.id);
+    out
+}

@@ -1,0 +1,89 @@
+//! The stateless `evaluate` kernel (see [`crate::passes::stateless`]): thread `slot` of the
+//! frame finds the segment that holds it, rebuilds its particle from the same spawn draws as the
+//! stateful `spawn` kernel, and writes the closed form at the segment's age into the view.
+//! Slots past the frame's threads, and particles whose lifetime has run out, are written free.
+
+use crate::ir::EffectIr;
+use crate::passes::layout::{Attribute, Layout};
+use crate::wgsl::writer::Writer;
+
+/// Emits the segment table's types. A segment is a run of consecutive ids one emitter spawned at
+/// one step: `a` = (first thread, first id, emitter's own counter at the first id, emitter),
+/// `b` = (age in steps, spawn step, age in seconds as f32 bits, 0).
+pub fn emit_declarations(w: &mut Writer) {
+    w.block("struct Segment", |w| {
+        w.line("a: vec4<u32>,");
+        w.line("b: vec4<u32>,");
+    });
+    w.blank();
+    w.comment("One frame's bookkeeping, written by the CPU: threads in use, segments, steps done.");
+    w.block("struct Frame", |w| {
+        w.line("threads: u32,");
+        w.line("count: u32,");
+        w.line("steps: u32,");
+        w.line("pad: u32,");
+        w.line("segments: array<Segment>,");
+    });
+}
+
+/// Emits `evaluate`.
+pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn evaluate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            crate::wgsl::emit_thread_index(w, "local", Some("chunk.len"));
+            w.line("let slot = chunk.base + local;");
+            w.block("if (slot >= frame.threads || frame.count == 0u)", |w| {
+                w.line("mark_free(local);");
+                w.line("return;");
+            });
+            w.comment("The last segment starting at or before this slot (offsets increase).");
+            w.line("var lo = 0u;");
+            w.line("var hi = frame.count;");
+            w.block("while (hi - lo > 1u)", |w| {
+                w.line("let mid = (lo + hi) / 2u;");
+                w.block("if (frame.segments[mid].a.x <= slot)", |w| w.line("lo = mid;"));
+                w.block("else", |w| w.line("hi = mid;"));
+            });
+            w.line("let seg = frame.segments[lo];");
+            w.line("let j = slot - seg.a.x;");
+            w.line("let id = seg.a.y + j;");
+            w.line("let k = seg.a.z + j;");
+            w.line("var s: Spawned;");
+            w.block("switch seg.a.w", |w| {
+                if ir.emitters.is_empty() {
+                    w.block("default", |w| w.line("return;"));
+                }
+                for e in 0..ir.emitters.len() {
+                    let label = if e + 1 == ir.emitters.len() {
+                        format!("case {e}u, default")
+                    } else {
+                        format!("case {e}u")
+                    };
+                    w.block(label, |w| w.line(format!("s = emit_{e}(id, k, seg.b.y);")));
+                }
+            });
+            if layout.has(Attribute::DeathStep) {
+                w.comment("Dead once it has lived its whole steps: die_at - spawn step + 1.");
+                w.block(
+                    "if (s.die_at != DEAD && seg.b.x >= s.die_at - seg.b.y + 1u)",
+                    |w| {
+                        w.line("mark_free(local);");
+                        w.line("return;");
+                    },
+                );
+            }
+            w.line("let now = advance(s, bitcast<f32>(seg.b.z));");
+            let mut fields = vec!["now.x.x", "now.x.y", "now.x.z", "now.v.x", "now.v.y", "now.v.z"];
+            if layout.has(Attribute::DeathStep) {
+                fields.push("s.die_at");
+            }
+            fields.push("id");
+            w.line(format!(
+                "store_particle(local, Particle({}));",
+                fields.join(", ")
+            ));
+        },
+    );
+}
