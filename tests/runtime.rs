@@ -173,12 +173,13 @@ fn a_capacity_beyond_the_free_list_binding_is_refused_with_the_limit_named() {
         .limits
         .max_storage_buffer_binding_size
         .min(gpu.limits.max_buffer_size);
-    // One more slot than a 4-byte free list holds in one binding.
+    // One more slot than a 4-byte free list holds in one binding (stateful: a stateless
+    // effect has no free list).
     let capacity = (limit / 4 + 1).min(u64::from(u32::MAX)) as u32;
     let e = compile(&effect(
         capacity,
         "rate: 10.0, lifetime: Some((1.0, 2.0))",
-        "",
+        "state: Stateful,",
     ));
     match GpuSim::new(&gpu, e) {
         Err(err) => {

@@ -82,6 +82,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "stateless_ms_per_frame": r.stateless.as_ref().ok().map(|s| s * 1e3),
                 "stateless_speedup": r.stateless.as_ref().ok().map(|s| r.seconds_per_step / s),
                 "stateful_because": r.stateless.as_ref().err(),
+                "fill_ms": r.fill_seconds.map(|s| s * 1e3),
             })
         );
     } else {
@@ -122,6 +123,12 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 r.seconds_per_step / s
             ),
             Err(why) => println!("  stateless           no: {why}"),
+        }
+        if let Some(fill) = r.fill_seconds {
+            println!(
+                "  write-only kernel   {:.4} ms for the view's bytes (the stateless ceiling: it reads no state)",
+                fill * 1e3
+            );
         }
         if let Some((radix, bitonic)) = r.sort {
             println!(

@@ -25,6 +25,16 @@ fn copy(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         dst[i] = src[i];
     }
 }
+
+// Write-only: the ceiling of a kernel that reads no state (the stateless evaluate). It takes
+// src's length only, so both kernels share one bind group layout.
+@compute @workgroup_size(256)
+fn fill(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = gid.x + gid.y * groups.x * 256u;
+    if (i < arrayLength(&src)) {
+        dst[i] = vec4<u32>(i);
+    }
+}
 "#;
 
 /// What was measured.
@@ -64,6 +74,9 @@ pub struct BenchResult {
     /// The stateless comparison: seconds per `evaluate` of the same N particles (what a frame
     /// costs with no state), or why the effect needs state.
     pub stateless: Result<f64, String>,
+    /// Seconds per pass of a write-only kernel over the same bytes (the stateless ceiling),
+    /// when the effect can be stateless.
+    pub fill_seconds: Option<f64>,
 }
 
 impl BenchResult {
@@ -217,8 +230,13 @@ pub fn bench(
     sim.run(3, |_| {})?;
     let live = sim.totals()?.alive;
     let update = sim.time_steps(&timer, steps)? / f64::from(steps);
-    let copy =
-        time_copy(gpu, &timer, u64::from(particles) * u64::from(bpp), steps)? / f64::from(steps);
+    let copy = time_copy(
+        gpu,
+        &timer,
+        u64::from(particles) * u64::from(bpp),
+        steps,
+        "copy",
+    )? / f64::from(steps);
     let sort = if sim.effect().layout.sorts() {
         // Warm up both, then time them.
         sim.time_sort(&timer, SortAlgorithm::Radix)?;
@@ -281,6 +299,18 @@ pub fn bench(
         timing: timer.source(),
         flock,
         field_error,
+        fill_seconds: match stateless {
+            Ok(_) => Some(
+                time_copy(
+                    gpu,
+                    &timer,
+                    u64::from(particles) * u64::from(bpp),
+                    steps,
+                    "fill",
+                )? / f64::from(steps),
+            ),
+            Err(_) => None,
+        },
         stateless,
     })
 }
@@ -339,13 +369,14 @@ fn time_stateless(
     Ok(Ok(sim.time_steps(timer, steps)? / f64::from(steps)))
 }
 
-/// Times `repeats` copies of `bytes` (rounded up to 16) through the copy kernel, split into
-/// buffers of at most one binding each, in one pass.
+/// Times `repeats` passes of `entry` (`copy`: read and write `bytes`, rounded up to 16;
+/// `fill`: write them only), split into buffers of at most one binding each, in one pass.
 fn time_copy(
     gpu: &Gpu,
     timer: &PassTimer<'_>,
     bytes: u64,
     repeats: u32,
+    entry: &str,
 ) -> Result<f64, RuntimeError> {
     let device = &gpu.device;
     let limit = gpu
@@ -362,7 +393,7 @@ fn time_copy(
         label: Some("copy"),
         layout: None,
         module: &module,
-        entry_point: Some("copy"),
+        entry_point: Some(entry),
         compilation_options: Default::default(),
         cache: None,
     });

@@ -419,7 +419,11 @@ impl<'g> GpuSim<'g> {
             schedule: Schedule::new(&effect.ir),
             kernels: match &effect.ir.stateless {
                 Some(plan) => Kernels::Stateless(StatelessStage {
-                    evaluate: pipeline("evaluate"),
+                    evaluate: pipeline(if stateless_stores_staged(gpu) {
+                        "evaluate"
+                    } else {
+                        "evaluate_direct"
+                    }),
                     frame,
                     segments: LiveSegments::new(plan.lives.clone()),
                     evaluated_at: Cell::new(None),
@@ -963,6 +967,18 @@ impl<'g> GpuSim<'g> {
             }));
         }
         Ok(out)
+    }
+}
+
+/// Whether the stateless view is written through workgroup memory (`evaluate`, coalesced
+/// stores) or by each thread (`evaluate_direct`): staged on GPUs, direct on CPU adapters, where
+/// a workgroup barrier costs more than the stores. `PLUME_STATELESS_STORES=staged|direct`
+/// overrides the choice, for measuring both.
+pub fn stateless_stores_staged(gpu: &Gpu) -> bool {
+    match std::env::var("PLUME_STATELESS_STORES").as_deref() {
+        Ok("staged") => true,
+        Ok("direct") => false,
+        _ => gpu.adapter.get_info().device_type != wgpu::DeviceType::Cpu,
     }
 }
 

@@ -231,18 +231,8 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
         w.line(format!("return Particle({});", fields.join(", ")));
     });
     w.block("fn store_particle(i: u32, p: Particle)", |w| {
-        for k in 0..n as usize {
-            let lanes: Vec<String> = (0..4)
-                .map(|l| match words.get(4 * k + l) {
-                    Some((name, "f32")) => format!("bitcast<u32>(p.{name})"),
-                    Some((name, _)) => format!("p.{name}"),
-                    None => "0u".to_string(),
-                })
-                .collect();
-            w.line(format!(
-                "particles[i * VEC4S + {k}u] = vec4<u32>({});",
-                lanes.join(", ")
-            ));
+        for (k, word) in packed_words(layout).iter().enumerate() {
+            w.line(format!("particles[i * VEC4S + {k}u] = {word};"));
         }
     });
     let id = words
@@ -257,6 +247,23 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
             LANES[id % 4]
         ));
     });
+}
+
+/// The particle struct `p` as its vec4<u32> words (WGSL expressions, in memory order).
+pub fn packed_words(layout: &Layout) -> Vec<String> {
+    let words = layout.words();
+    (0..layout.vec4s() as usize)
+        .map(|k| {
+            let lanes: Vec<String> = (0..4)
+                .map(|l| match words.get(4 * k + l) {
+                    Some((name, "f32")) => format!("bitcast<u32>(p.{name})"),
+                    Some((name, _)) => format!("p.{name}"),
+                    None => "0u".to_string(),
+                })
+                .collect();
+            format!("vec4<u32>({})", lanes.join(", "))
+        })
+        .collect()
 }
 
 /// `depth_keys`: one sort key per slot, the view depth from the camera mapped to a u32 that

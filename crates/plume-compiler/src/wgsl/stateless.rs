@@ -26,64 +26,112 @@ pub fn emit_declarations(w: &mut Writer) {
     });
 }
 
-/// Emits `evaluate`.
+/// Emits `evaluate_slot` (one particle of the view) and two kernels that write the view:
+/// - `evaluate` stages a workgroup's particles in workgroup memory so that consecutive threads
+///   store consecutive 16-byte words. A thread storing its own 32-byte particle as two words
+///   leaves every store instruction half-coalesced, which reached 66% of a write-only
+///   kernel's bandwidth on an H100 (docs/performance.md).
+/// - `evaluate_direct` stores each particle from its own thread, with no barrier: for CPU
+///   adapters (llvmpipe), where a workgroup barrier costs more than the stores.
 pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+    let words = layout.vec4s();
+    let dead_fields: Vec<&str> = layout
+        .words()
+        .iter()
+        .map(|(name, ty)| match (*name, *ty) {
+            ("id", _) => "DEAD",
+            (_, "f32") => "0.0",
+            _ => "0u",
+        })
+        .collect();
+    w.comment("The particle in global slot `slot` of this frame, or a free slot.");
+    w.block("fn evaluate_slot(slot: u32) -> Particle", |w| {
+        w.line(format!("let free = Particle({});", dead_fields.join(", ")));
+        w.block("if (slot >= frame.threads || frame.count == 0u)", |w| {
+            w.line("return free;");
+        });
+        w.comment("The last segment starting at or before this slot (offsets increase).");
+        w.line("var lo = 0u;");
+        w.line("var hi = frame.count;");
+        w.block("while (hi - lo > 1u)", |w| {
+            w.line("let mid = (lo + hi) / 2u;");
+            w.block("if (frame.segments[mid].a.x <= slot)", |w| {
+                w.line("lo = mid;")
+            });
+            w.block("else", |w| w.line("hi = mid;"));
+        });
+        w.line("let seg = frame.segments[lo];");
+        w.line("let j = slot - seg.a.x;");
+        w.line("let id = seg.a.y + j;");
+        w.line("let k = seg.a.z + j;");
+        w.line("var s: Spawned;");
+        w.block("switch seg.a.w", |w| {
+            if ir.emitters.is_empty() {
+                w.block("default", |w| w.line("return free;"));
+            }
+            for e in 0..ir.emitters.len() {
+                let label = if e + 1 == ir.emitters.len() {
+                    format!("case {e}u, default")
+                } else {
+                    format!("case {e}u")
+                };
+                w.block(label, |w| w.line(format!("s = emit_{e}(id, k, seg.b.y);")));
+            }
+        });
+        if layout.has(Attribute::DeathStep) {
+            w.comment("Dead once it has lived its whole steps: die_at - spawn step + 1.");
+            w.block(
+                "if (s.die_at != DEAD && seg.b.x >= s.die_at - seg.b.y + 1u)",
+                |w| w.line("return free;"),
+            );
+        }
+        w.line("let now = advance(s, bitcast<f32>(seg.b.z));");
+        let mut fields = vec![
+            "now.x.x", "now.x.y", "now.x.z", "now.v.x", "now.v.y", "now.v.z",
+        ];
+        if layout.has(Attribute::DeathStep) {
+            fields.push("s.die_at");
+        }
+        fields.push("id");
+        w.line(format!("return Particle({});", fields.join(", ")));
+    });
+    w.blank();
+    w.line(format!(
+        "var<workgroup> staged: array<vec4<u32>, {}>;",
+        words * crate::wgsl::WORKGROUP
+    ));
+    w.blank();
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
-        "fn evaluate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        "fn evaluate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32)",
+        |w| {
+            crate::wgsl::emit_thread_index(w, "local", None);
+            w.line(format!("var p = Particle({});", dead_fields.join(", ")));
+            w.block("if (local < chunk.len)", |w| {
+                w.line("p = evaluate_slot(chunk.base + local);");
+            });
+            for (k, word) in crate::wgsl::packed_words(layout).iter().enumerate() {
+                w.line(format!("staged[lid * VEC4S + {k}u] = {word};"));
+            }
+            w.comment("No early return above: every thread reaches the barrier.");
+            w.line("workgroupBarrier();");
+            w.comment("Thread lid stores words lid, lid + WORKGROUP, ... of the group's block.");
+            w.line("let first = (local - lid) * VEC4S;");
+            w.block(format!("for (var k = 0u; k < {words}u; k++)"), |w| {
+                w.line("let word = lid + k * WORKGROUP;");
+                w.block("if (first + word < chunk.len * VEC4S)", |w| {
+                    w.line("particles[first + word] = staged[word];");
+                });
+            });
+        },
+    );
+    w.blank();
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn evaluate_direct(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
             crate::wgsl::emit_thread_index(w, "local", Some("chunk.len"));
-            w.line("let slot = chunk.base + local;");
-            w.block("if (slot >= frame.threads || frame.count == 0u)", |w| {
-                w.line("mark_free(local);");
-                w.line("return;");
-            });
-            w.comment("The last segment starting at or before this slot (offsets increase).");
-            w.line("var lo = 0u;");
-            w.line("var hi = frame.count;");
-            w.block("while (hi - lo > 1u)", |w| {
-                w.line("let mid = (lo + hi) / 2u;");
-                w.block("if (frame.segments[mid].a.x <= slot)", |w| w.line("lo = mid;"));
-                w.block("else", |w| w.line("hi = mid;"));
-            });
-            w.line("let seg = frame.segments[lo];");
-            w.line("let j = slot - seg.a.x;");
-            w.line("let id = seg.a.y + j;");
-            w.line("let k = seg.a.z + j;");
-            w.line("var s: Spawned;");
-            w.block("switch seg.a.w", |w| {
-                if ir.emitters.is_empty() {
-                    w.block("default", |w| w.line("return;"));
-                }
-                for e in 0..ir.emitters.len() {
-                    let label = if e + 1 == ir.emitters.len() {
-                        format!("case {e}u, default")
-                    } else {
-                        format!("case {e}u")
-                    };
-                    w.block(label, |w| w.line(format!("s = emit_{e}(id, k, seg.b.y);")));
-                }
-            });
-            if layout.has(Attribute::DeathStep) {
-                w.comment("Dead once it has lived its whole steps: die_at - spawn step + 1.");
-                w.block(
-                    "if (s.die_at != DEAD && seg.b.x >= s.die_at - seg.b.y + 1u)",
-                    |w| {
-                        w.line("mark_free(local);");
-                        w.line("return;");
-                    },
-                );
-            }
-            w.line("let now = advance(s, bitcast<f32>(seg.b.z));");
-            let mut fields = vec!["now.x.x", "now.x.y", "now.x.z", "now.v.x", "now.v.y", "now.v.z"];
-            if layout.has(Attribute::DeathStep) {
-                fields.push("s.die_at");
-            }
-            fields.push("id");
-            w.line(format!(
-                "store_particle(local, Particle({}));",
-                fields.join(", ")
-            ));
+            w.line("store_particle(local, evaluate_slot(chunk.base + local));");
         },
     );
 }
