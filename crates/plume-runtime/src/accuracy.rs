@@ -91,6 +91,9 @@ fn compile(
     let mut e = effect.clone();
     e.integrator = integrator;
     e.dt = dt;
+    // The sweep compares stepping integrators, so Exact steps too: a stateless effect would
+    // compute the closed form once, whatever dt (tests/stateless.rs measures that).
+    e.state = plume_compiler::schema::State::Stateful;
     compile_effect(&e, "").map_err(|err| match err {
         CompileError::Invalid(d) => RuntimeError::Output(format!("{integrator:?} at dt {dt}: {d}")),
         CompileError::Internal(i) => RuntimeError::Output(i.to_string()),
