@@ -6,7 +6,8 @@
 //! few ulps (the series' remainder is under 2^-24; at z = kτ = 1, where the direct form takes
 //! over, 1 - e^{-z} loses under 3 ulps), τ is rounded once from f64, and the spawn draws carry
 //! the few ulps of f32 sin, cos and sqrt. So the error is a few ulps of the *terms'* size,
-//! |x0| + F|v0| + (τ - F)|u| + Q|g|, which is |x| wherever they do not cancel. The tests hold
+//! X + F|v0| + (τ - F)|u| + Q|g| with X = max(|x0|, the spawn shape's extent) (a position drawn
+//! in a box from -2 to 2 carries the rounding of 2), which is |x| wherever terms do not cancel. The tests hold
 //! the kernel to 1e-6 of that size (17 ulps) and report the worst they see.
 
 mod common;
@@ -209,6 +210,58 @@ fn streams_stay_exact_a_million_seconds_in() {
     let t = sim.totals().unwrap();
     assert_eq!((t.spawned, t.dropped), (3_000_000, 0));
     assert_eq!(t.alive, records.len() as u64);
+}
+
+/// Random effects (`common::effect_gen::stateless_effect`: 1 to 3 emitters, mortal or immortal
+/// bursts and streams, gravity, drag, wind) must compile stateless and match the f64 reference's
+/// totals and ids and the closed form within the tolerance above, at steps 1, 60 and 150.
+/// `PLUME_GPU_FUZZ_CASES` raises the count (16 in CI).
+#[test]
+fn random_stateless_effects_match_the_reference_and_the_closed_form() {
+    use proptest::strategy::{Strategy, ValueTree};
+    use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
+    let cases: usize = std::env::var("PLUME_GPU_FUZZ_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(16);
+    let mut runner = TestRunner::new_with_rng(
+        Config::default(),
+        TestRng::from_seed(RngAlgorithm::ChaCha, &[11; 32]),
+    );
+    let mut worst: f64 = 0.0;
+    for case in 0..cases {
+        let text = common::effect_gen::stateless_effect()
+            .new_tree(&mut runner)
+            .unwrap()
+            .current();
+        let e = compile(&text);
+        assert!(e.ir.stateless.is_some(), "case {case}\n{text}");
+        let g = gpu();
+        let mut sim = GpuSim::new(&g, e.clone()).unwrap();
+        let mut reference = ReferenceSim::new(&e.ir);
+        let mut done = 0;
+        for at in [1u64, 60, 150] {
+            sim.run(at - done, |_| {}).unwrap();
+            reference.run(at - done);
+            done = at;
+            assert_eq!(
+                sim.totals().unwrap(),
+                reference.totals(),
+                "case {case} step {at}\n{text}"
+            );
+            let records = sim.records().unwrap();
+            let ids: Vec<u32> = reference.records().iter().map(|r| r.id).collect();
+            assert_eq!(
+                records.iter().map(|r| r.id).collect::<Vec<_>>(),
+                ids,
+                "case {case}\n{text}"
+            );
+            let w = worst_against_closed_form(&records, &closed_form_at(&e, at));
+            assert!(w <= 1e-6, "case {case} step {at}: {w:.3e}\n{text}");
+            worst = worst.max(w);
+        }
+    }
+    eprintln!("{cases} random stateless effects: worst {worst:.2e} of the terms' size");
 }
 
 #[test]

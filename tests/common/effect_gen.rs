@@ -368,6 +368,49 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
         .boxed()
 }
 
+/// A random effect the stateless kernel must run (`state: Stateless`): one to three emitters,
+/// each mortal or a burst that never dies, under gravity, drag and wind (the closed form's
+/// forces), with room for every spawn.
+pub fn stateless_effect() -> BoxedStrategy<String> {
+    let f = Flavor::Tame;
+    let emitter = (
+        count(f, 0, 40),
+        prop_oneof![Just("0.0".to_string()), num(f, 1.0, 300.0)],
+        shape(f),
+        velocity(f),
+        range(f, 0.05, 2.0),
+        any::<bool>(),
+    )
+        .prop_map(|(burst, rate, shape, vel, life, immortal)| {
+            // Only a burst may live forever: a stream that never dies outgrows any capacity.
+            let life = if immortal && rate == "0.0" {
+                String::new()
+            } else {
+                format!(", lifetime: Some({life})")
+            };
+            format!("Emitter(burst: {burst}, rate: {rate}, shape: {shape}, velocity: {vel}{life})")
+        });
+    (
+        any::<u32>(),
+        num(f, 0.005, 0.05),
+        prop::collection::vec(emitter, 1..4),
+        vec3(f, -12.0, 12.0),
+        prop_oneof![Just(String::new()), num(f, 0.01, 4.0).prop_map(|k| format!(", Drag(k: {k})"))],
+        prop_oneof![
+            Just(String::new()),
+            (direction(f), num(f, 0.1, 5.0))
+                .prop_map(|(d, s)| format!(", Wind(direction: {d}, strength: {s})"))
+        ],
+    )
+        .prop_map(|(seed, dt, emitters, g, drag, wind)| {
+            format!(
+                "Effect(\n    name: \"stateless fuzz\",\n    capacity: 100000,\n    seed: {seed},\n    dt: {dt},\n    emitters: [{}],\n    forces: [Gravity({g}){drag}{wind}],\n    state: Stateless,\n)\n",
+                emitters.join(",\n        ")
+            )
+        })
+        .boxed()
+}
+
 /// Applies byte-level edits (replace, insert, delete) at random offsets of `text`.
 pub fn mutate(text: &str, edits: &[(usize, u8, u8)]) -> String {
     let mut bytes = text.as_bytes().to_vec();

@@ -1,7 +1,8 @@
 //! # plume-compiler
 //!
 //! Compiles Plume particle effects, written in RON, into one WGSL module per effect: a fused
-//! `update` kernel and `spawn` kernels, validated by naga. The pipeline, one module per stage:
+//! `update` kernel and `spawn` kernels (or, for a stateless effect, one `evaluate` kernel),
+//! validated by naga. The pipeline, one module per stage:
 //! parse ([`schema`], with [`diagnostics`] and [`locate`]) → check ([`validate`]) → lower to the
 //! [`ir`] → [`passes`] (fold, prune, integrator, stability, layout) → [`wgsl`] writer →
 //! [`naga_check`]. This crate does not depend on wgpu.
@@ -16,8 +17,19 @@
 //! )"#;
 //! let effect = plume_compiler::compile_str(source, &Default::default()).unwrap();
 //! assert_eq!(effect.ir.integrator, plume_compiler::Integrator::Exact); // picked by Auto
-//! assert!(effect.wgsl.contains("fn update"));
-//! assert_eq!(effect.layout.bytes_per_particle, 32); // position, velocity, id (28 B), padded to 16
+//! // Nothing else needs state, so each particle is computed from its id and age:
+//! assert!(effect.ir.stateless.is_some() && effect.wgsl.contains("fn evaluate"));
+//! assert_eq!(effect.layout.state_bytes_per_particle, 0);
+//!
+//! // Kept stateful, it has spawn and update kernels and 32 bytes of state per particle
+//! // (position, velocity, id: 28 bytes, padded to 16).
+//! let options = plume_compiler::CompileOptions {
+//!     state: Some(plume_compiler::schema::State::Stateful),
+//!     ..Default::default()
+//! };
+//! let stateful = plume_compiler::compile_str(source, &options).unwrap();
+//! assert!(stateful.wgsl.contains("fn update"));
+//! assert_eq!(stateful.layout.state_bytes_per_particle, 32);
 //! ```
 
 pub mod check;

@@ -17,9 +17,12 @@ pub fn state_at(ir: &EffectIr, x0: DVec3, v0: DVec3, tau: f64) -> (DVec3, DVec3)
     ExactStep::for_drag(g, k, u, tau).apply(x0, v0)
 }
 
-/// The size of the closed form's terms at age `tau`: |x0| + F|v0| + (τ - F)|u| + Q|g|. A
-/// position computed in f32 is accurate relative to this (it is |x| unless terms cancel).
-pub fn term_scale(ir: &EffectIr, x0: DVec3, v0: DVec3, tau: f64) -> f64 {
+/// The size of the closed form's terms at age `tau`: X + F|v0| + (τ - F)|u| + Q|g|, where X is
+/// the size of the spawn position's own computation (`x0_size`: the larger of |x0| and the
+/// spawn shape's extent, since a point drawn in a box from -2 to 2 carries the rounding of 2
+/// even where it lands near 0). A position computed in f32 is accurate relative to this; it is
+/// |x| unless terms cancel.
+pub fn term_scale(ir: &EffectIr, x0_size: f64, v0: DVec3, tau: f64) -> f64 {
     let (g, k, u) = merged_drag(ir);
     let s = ExactStep::for_drag(g, k, u, tau);
     let q = if k > 0.0 {
@@ -27,7 +30,7 @@ pub fn term_scale(ir: &EffectIr, x0: DVec3, v0: DVec3, tau: f64) -> f64 {
     } else {
         0.5 * tau * tau
     };
-    x0.length() + s.f * v0.length() + (tau - s.f) * u.length() + q * g.length()
+    x0_size + s.f * v0.length() + (tau - s.f) * u.length() + q * g.length()
 }
 
 /// The live particles after the steps `segments` has recorded, in id order, each with the
@@ -60,7 +63,12 @@ pub fn records(
                     age: tau,
                     lifetime: schedule.lifetime(id, s.die_at),
                 },
-                term_scale(ir, s.x, s.v, tau),
+                term_scale(
+                    ir,
+                    s.x.length().max(ir.emitters[seg.emitter].shape.extent()),
+                    s.v,
+                    tau,
+                ),
             ));
         }
     }
