@@ -344,10 +344,16 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
             any::<bool>(),
             prop_oneof![Just(String::new()), render(f)],
             prop_oneof![Just(String::new()), field(f)],
+            // Tame effects must compile, so they never demand Stateless.
+            if tame {
+                prop::sample::select(vec!["", "state: Stateful,"])
+            } else {
+                prop::sample::select(vec!["", "state: Stateful,", "state: Stateless,"])
+            },
         ),
     )
         .prop_map(
-            move |((cap, seed, dt, substeps), emitters, mut forces, planes, kills, (integ, max_speed, sort, render, field))| {
+            move |((cap, seed, dt, substeps), emitters, mut forces, planes, kills, (integ, max_speed, sort, render, field, state))| {
                 if f != Flavor::Wild {
                     // An effect has at most one Flock.
                     let mut flocks = 0;
@@ -357,7 +363,7 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
                     });
                 }
                 format!(
-                    "Effect(\n    name: \"fuzz\",\n    capacity: {cap},\n    seed: {seed},\n    dt: {dt},\n    substeps: {substeps},\n    emitters: [{}],\n    forces: [{}],\n    collide: [{}],\n    kill: [{}],\n    integrator: {integ},\n    {max_speed}\n    sort: {sort},\n    {render}\n    {field}\n)\n",
+                    "Effect(\n    name: \"fuzz\",\n    capacity: {cap},\n    seed: {seed},\n    dt: {dt},\n    substeps: {substeps},\n    emitters: [{}],\n    forces: [{}],\n    collide: [{}],\n    kill: [{}],\n    integrator: {integ},\n    {max_speed}\n    sort: {sort},\n    {state}\n    {render}\n    {field}\n)\n",
                     emitters.join(",\n        "),
                     forces.join(",\n        "),
                     planes.join(", "),
