@@ -49,24 +49,34 @@ impl StatelessIr {
     }
 }
 
-/// The bounds of one emitter: (most alive at once, most live segments); None when unbounded.
-fn emitter_bounds(ir: &EffectIr, e: usize) -> Option<(u64, u64, Option<u32>)> {
+/// The bounds of emitter `e`: (most alive at once, most live segments, its longest life in
+/// steps), or why it has none.
+fn emitter_bounds(ir: &EffectIr, e: usize) -> Result<(u64, u64, Option<u32>), String> {
     let em = &ir.emitters[e];
     let lives = em.lifetime_steps.map(|l| l.first + l.span - 1);
     let burst = u64::from(em.burst);
     if em.rate <= 0.0 {
-        return Some((burst, u64::from(burst > 0), lives));
+        return Ok((burst, u64::from(burst > 0), lives));
     }
-    // A rate emitter whose particles never die outgrows any capacity.
-    let window = u64::from(lives?);
+    let Some(window) = lives else {
+        return Err(format!(
+            "emitters[{e}] spawns at a rate and its particles never die, so they would outgrow any capacity and be dropped"
+        ));
+    };
     // Spawns in any `window` consecutive steps: at most ceil(rate dt window), plus one for the
     // f64 rounding of the carried fraction.
-    let per_window = (em.rate * ir.dt * window as f64).floor();
+    let per_window = (em.rate * ir.dt * f64::from(window)).floor();
     if !per_window.is_finite() || per_window >= 1e18 {
-        return None;
+        return Err(format!(
+            "emitters[{e}] spawns more particles over a lifetime than can be counted"
+        ));
     }
     let spawns = per_window as u64 + 2;
-    Some((burst.saturating_add(spawns), window.min(spawns), lives))
+    Ok((
+        burst.saturating_add(spawns),
+        u64::from(window).min(spawns),
+        lives,
+    ))
 }
 
 /// Why the effect needs state, naming the cause and its path, or the stateless plan.
@@ -89,14 +99,7 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
     let (mut peak, mut segments, mut lives) = (0u64, 0u64, Vec::new());
     for e in 0..ir.emitters.len() {
         let path = ValuePath::root().field("emitters").index(e);
-        let Some((alive, segs, life)) = emitter_bounds(ir, e) else {
-            return Err((
-                format!(
-                    "emitters[{e}] spawns at a rate and its particles never die, so they would outgrow any capacity and be dropped"
-                ),
-                path.field("rate"),
-            ));
-        };
+        let (alive, segs, life) = emitter_bounds(ir, e).map_err(|why| (why, path.field("rate")))?;
         peak = peak.saturating_add(alive);
         segments = segments.saturating_add(segs);
         lives.push(life);
