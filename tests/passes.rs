@@ -405,7 +405,7 @@ fn stateless_only_where_nothing_needs_state() {
         (plan.peak, plan.max_segments, plan.lives.clone()),
         (2052, 200, vec![Some(200)])
     );
-    assert_eq!(ok.layout.state_bytes_per_particle, 0);
+    assert_eq!(ok.layout.state_bytes_per_particle(), 0);
     assert!(ok.layout.stateless() && !ok.layout.binds("free_list") && !ok.layout.binds("params"));
     assert!(ok
         .layout
@@ -454,7 +454,7 @@ fn stateless_only_where_nothing_needs_state() {
             "{} lacks {why}",
             c.ir.state_reason
         );
-        assert!(c.wgsl.contains("fn update") && c.layout.state_bytes_per_particle == 32);
+        assert!(c.wgsl.contains("fn update") && c.layout.state_bytes_per_particle() == 32);
     }
     // Asking for it where it cannot be is an error at `state` naming the cause.
     let err = compile_err(&stream(100, "Some((1.0, 2.0))", "state: Stateless,"));

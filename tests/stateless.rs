@@ -24,18 +24,7 @@ fn closed_form_at(e: &CompiledEffect, steps: u64) -> Vec<(ParticleRecord, f64)> 
     let plan = e.ir.stateless.as_ref().expect("stateless");
     let mut schedule = Schedule::new(&e.ir);
     let mut segments = LiveSegments::new(plan.lives.clone());
-    let mut done = 0;
-    while done < steps {
-        let n = (steps - done).min(1 << 16);
-        if schedule.skip_idle(n) {
-            segments.advance_to(schedule.steps_done());
-        } else {
-            for _ in 0..n {
-                segments.record(&schedule.next_plan());
-            }
-        }
-        done += n;
-    }
+    segments.advance(&mut schedule, steps);
     closed_form::records(&e.ir, &segments, &schedule)
 }
 
@@ -70,7 +59,7 @@ const MIXED: &str = r#"Effect(name: "mixed", capacity: 6000, seed: 11, dt: 0.02,
 fn stateless_gives_the_particles_of_the_stateful_kernels_and_the_reference() {
     let e = compile(MIXED);
     let plan = e.ir.stateless.as_ref().expect("Auto picks stateless");
-    assert_eq!(e.layout.state_bytes_per_particle, 0);
+    assert_eq!(e.layout.state_bytes_per_particle(), 0);
     assert!(e.wgsl.contains("fn evaluate") && !e.wgsl.contains("fn update"));
     assert!(plan.peak <= 6000);
     let stateful = plume::compile_str(

@@ -19,7 +19,7 @@
 //! assert_eq!(effect.ir.integrator, plume_compiler::Integrator::Exact); // picked by Auto
 //! // Nothing else needs state, so each particle is computed from its id and age:
 //! assert!(effect.ir.stateless.is_some() && effect.wgsl.contains("fn evaluate"));
-//! assert_eq!(effect.layout.state_bytes_per_particle, 0);
+//! assert_eq!(effect.layout.state_bytes_per_particle(), 0);
 //!
 //! // Kept stateful, it has spawn and update kernels and 32 bytes of state per particle
 //! // (position, velocity, id: 28 bytes, padded to 16).
@@ -29,7 +29,7 @@
 //! };
 //! let stateful = plume_compiler::compile_str(source, &options).unwrap();
 //! assert!(stateful.wgsl.contains("fn update"));
-//! assert_eq!(stateful.layout.state_bytes_per_particle, 32);
+//! assert_eq!(stateful.layout.state_bytes_per_particle(), 32);
 //! ```
 
 pub mod check;

@@ -192,6 +192,18 @@ impl LiveSegments {
         self.advance_to(plan.step + 1);
     }
 
+    /// Plans `steps` more steps of `schedule` and records them, skipping in O(1) steps that can
+    /// spawn nothing ([`Schedule::skip_idle`]).
+    pub fn advance(&mut self, schedule: &mut Schedule, steps: u64) {
+        for left in (1..=steps).rev() {
+            if schedule.skip_idle(left) {
+                self.advance_to(schedule.steps_done());
+                return;
+            }
+            self.record(&schedule.next_plan());
+        }
+    }
+
     /// Moves to `steps_done` steps with no spawns since the last recorded step (after
     /// [`Schedule::skip_idle`]), dropping the segments whose particles have all died.
     pub fn advance_to(&mut self, steps_done: u64) {

@@ -168,20 +168,23 @@ impl<'g> GpuSim<'g> {
         // Allocation failures (the driver's out-of-memory) are caught here and reported with
         // the sizes, instead of surfacing later as an invalid-buffer error.
         let out_of_memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
-        // A stateless effect has no free list (nor any other per-particle state).
-        let free_list_bytes = if stateless { 16 } else { cap * 4 };
-        let frame_bytes = effect.ir.stateless.as_ref().map_or(16, |p| p.table_bytes());
-        let frame = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("frame"),
-            size: frame_bytes,
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
+        // A stateless effect has a segment table and no free list (nor any other per-particle
+        // state); a stateful one the reverse.
+        let frame = effect.ir.stateless.as_ref().map(|plan| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("frame"),
+                size: plan.table_bytes(),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
         });
-        let free_list = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("free_list"),
-            size: free_list_bytes,
-            usage: storage,
-            mapped_at_creation: false,
+        let free_list = (!stateless).then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("free_list"),
+                size: cap * 4,
+                usage: storage,
+                mapped_at_creation: false,
+            })
         });
         let counters = filled_buffer(
             device,
@@ -303,11 +306,13 @@ impl<'g> GpuSim<'g> {
                         binding: b.binding,
                         resource: match b.name {
                             "particles" => buffer.as_entire_binding(),
-                            "free_list" => free_list.as_entire_binding(),
+                            "free_list" => {
+                                free_list.as_ref().expect("stateful").as_entire_binding()
+                            }
                             "counters" => counters.as_entire_binding(),
                             "params" => sized(&params, 0, effect.layout.params_bytes()),
                             "chunk" => sized(&chunk_params, k * align, 16),
-                            "frame" => frame.as_entire_binding(),
+                            "frame" => frame.as_ref().expect("stateless").as_entire_binding(),
                             "sort_keys" => {
                                 sort_buffers.as_ref().expect("sorts").0.as_entire_binding()
                             }
@@ -330,13 +335,13 @@ impl<'g> GpuSim<'g> {
             });
         }
         if let Some(e) = pollster::block_on(out_of_memory.pop()) {
+            let free_list_bytes = free_list.as_ref().map_or(0, |b| b.size());
             return Err(RuntimeError::OutOfMemory {
                 what: format!(
-                    "{chunk_count} particle buffer(s) of up to {} bytes and a {}-byte free list ({e})",
+                    "{chunk_count} particle buffer(s) of up to {} bytes and a {free_list_bytes}-byte free list ({e})",
                     chunk_slots * bpp,
-                    cap * 4
                 ),
-                bytes: cap * (bpp + 4),
+                bytes: cap * bpp + free_list_bytes,
                 bytes_per_particle: effect.layout.bytes_per_particle,
             });
         }
@@ -424,7 +429,7 @@ impl<'g> GpuSim<'g> {
                     } else {
                         "evaluate_direct"
                     }),
-                    frame,
+                    frame: frame.expect("a stateless layout binds a frame"),
                     segments: LiveSegments::new(plan.lives.clone()),
                     evaluated_at: Cell::new(None),
                 }),
@@ -588,13 +593,7 @@ impl<'g> GpuSim<'g> {
             // Stateless: a step is bookkeeping only; the view is computed when it is read.
             while done < steps {
                 let n = (steps - done).min(1 << 16);
-                if self.schedule.skip_idle(n) {
-                    stage.segments.advance_to(self.schedule.steps_done());
-                } else {
-                    for _ in 0..n {
-                        stage.segments.record(&self.schedule.next_plan());
-                    }
-                }
+                stage.segments.advance(&mut self.schedule, n);
                 done += n;
                 progress(done);
             }
@@ -654,6 +653,16 @@ impl<'g> GpuSim<'g> {
         pass: &mut wgpu::ComputePass<'_>,
         plans: &[StepPlan],
     ) -> Result<(), RuntimeError> {
+        let Kernels::Stateful {
+            prepare,
+            spawn,
+            update,
+        } = &self.kernels
+        else {
+            return Err(RuntimeError::Gpu(
+                "a stateless effect records no steps".into(),
+            ));
+        };
         for (j, plan) in plans.iter().enumerate() {
             let offset = (j as u64 * self.params_stride) as u32;
             // A field baked every step is baked first: the spawn (Verlet's start) samples it too.
@@ -663,16 +672,6 @@ impl<'g> GpuSim<'g> {
                 pass.set_pipeline(bake);
                 pass.dispatch_workgroups(x, y, 1);
             }
-            let Kernels::Stateful {
-                prepare,
-                spawn,
-                update,
-            } = &self.kernels
-            else {
-                return Err(RuntimeError::Gpu(
-                    "a stateless effect records no steps".into(),
-                ));
-            };
             if plan.requested() > 0 {
                 self.bind(pass, &self.chunks[0], offset);
                 pass.set_pipeline(prepare);

@@ -77,9 +77,6 @@ pub struct Layout {
     pub bindings: Vec<Binding>,
     /// Number of emitter entries in the step parameters (at least 1).
     pub emitter_slots: u32,
-    /// Bytes per particle carried from step to step: `bytes_per_particle`, or 0 when the
-    /// effect is stateless (its `particles` buffer is then a view `evaluate` writes afresh).
-    pub state_bytes_per_particle: u32,
 }
 
 impl Layout {
@@ -119,6 +116,16 @@ impl Layout {
     /// Whether the effect is stateless: one `evaluate` kernel, no state kept between steps.
     pub fn stateless(&self) -> bool {
         self.binds("frame")
+    }
+
+    /// Bytes per particle carried from step to step: `bytes_per_particle`, or 0 when the
+    /// effect is stateless (its `particles` buffer is then a view `evaluate` writes afresh).
+    pub fn state_bytes_per_particle(&self) -> u32 {
+        if self.stateless() {
+            0
+        } else {
+            self.bytes_per_particle
+        }
     }
 
     /// Whether the effect has a sort stage (bindings 5 and 6).
@@ -167,75 +174,65 @@ pub fn decide(ir: &EffectIr) -> Layout {
         bytes_per_particle,
         bindings: Vec::new(),
         emitter_slots,
-        state_bytes_per_particle: if ir.stateless.is_some() {
-            0
-        } else {
-            bytes_per_particle
-        },
     };
-    layout.bindings = if let Some(plan) = &ir.stateless {
-        vec![
-            Binding {
-                binding: 0,
-                name: "particles",
-                space: "storage, read_write",
-                bytes: cap * u64::from(bytes_per_particle),
-                meaning: "the view: array<Particle> written afresh by `evaluate` for each frame read or drawn; no kernel reads it back, so it is not state",
-            },
+    // Binding 0 holds the particles: their state, or for a stateless effect the view that
+    // `evaluate` writes; binding 4 names the slots of this dispatch's buffer.
+    let (particles, chunk) = match ir.stateless {
+        Some(_) => (
+            "the view: array<Particle> written afresh by `evaluate` for each frame read or drawn; no kernel reads it back, so it is not state",
+            "the slots this dispatch's view buffer holds: first global slot, count",
+        ),
+        None => (
+            "array<Particle>, one slot per capacity (split into chunks past the binding limit)",
+            "the slots this dispatch's particle buffer holds: first global slot, count",
+        ),
+    };
+    layout.bindings.push(Binding {
+        binding: 0,
+        name: "particles",
+        space: "storage, read_write",
+        bytes: cap * u64::from(bytes_per_particle),
+        meaning: particles,
+    });
+    match &ir.stateless {
+        Some(plan) => layout.bindings.push(Binding {
+            binding: 1,
+            name: "frame",
+            space: "storage, read",
+            bytes: plan.table_bytes(),
+            meaning: "bookkeeping, written by the CPU per frame: threads, segment count, steps done; per spawning (step, emitter) with live particles: first thread, first id, emitter counter, emitter, age in steps, spawn step, age in s",
+        }),
+        None => layout.bindings.extend([
             Binding {
                 binding: 1,
-                name: "frame",
-                space: "storage, read",
-                bytes: plan.table_bytes(),
-                meaning: "bookkeeping, written by the CPU per frame: threads, segment count, steps done; per spawning (step, emitter) with live particles: first thread, first id, emitter counter, emitter, age in steps, spawn step, age in s",
+                name: "free_list",
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: "stack of free slot indices (pushed on death, popped on spawn)",
             },
             Binding {
-                binding: 4,
-                name: "chunk",
-                space: "uniform",
-                bytes: 16,
-                meaning: "the slots this dispatch's view buffer holds: first global slot, count",
+                binding: 2,
+                name: "counters",
+                space: "storage, read_write",
+                bytes: COUNTERS_BYTES,
+                meaning: "free count, this step's spawn base and count, totals spawned, dropped, died",
             },
-        ]
-    } else {
-        vec![
-        Binding {
-            binding: 0,
-            name: "particles",
-            space: "storage, read_write",
-            bytes: cap * u64::from(bytes_per_particle),
-            meaning: "array<Particle>, one slot per capacity (split into chunks past the binding limit)",
-        },
-        Binding {
-            binding: 1,
-            name: "free_list",
-            space: "storage, read_write",
-            bytes: cap * 4,
-            meaning: "stack of free slot indices (pushed on death, popped on spawn)",
-        },
-        Binding {
-            binding: 2,
-            name: "counters",
-            space: "storage, read_write",
-            bytes: COUNTERS_BYTES,
-            meaning: "free count, this step's spawn base and count, totals spawned, dropped, died",
-        },
-        Binding {
-            binding: 3,
-            name: "params",
-            space: "uniform",
-            bytes: layout.params_bytes(),
-            meaning: "per step: first id, spawns requested, time mod 256 s, step index, per-emitter counts",
-        },
-        Binding {
-            binding: 4,
-            name: "chunk",
-            space: "uniform",
-            bytes: 16,
-            meaning: "the slots this dispatch's particle buffer holds: first global slot, count",
-        },
-    ]
-    };
+            Binding {
+                binding: 3,
+                name: "params",
+                space: "uniform",
+                bytes: layout.params_bytes(),
+                meaning: "per step: first id, spawns requested, time mod 256 s, step index, per-emitter counts",
+            },
+        ]),
+    }
+    layout.bindings.push(Binding {
+        binding: 4,
+        name: "chunk",
+        space: "uniform",
+        bytes: 16,
+        meaning: chunk,
+    });
     if let Some(field) = &ir.field {
         layout.bindings.push(Binding {
             binding: 13,
@@ -333,7 +330,7 @@ impl fmt::Display for Layout {
             writeln!(
                 f,
                 "state: {} bytes per particle",
-                self.state_bytes_per_particle
+                self.state_bytes_per_particle()
             )?;
             writeln!(
                 f,

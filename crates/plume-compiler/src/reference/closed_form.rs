@@ -11,26 +11,47 @@ use crate::ir::EffectIr;
 use crate::lifetime::NEVER;
 use crate::schedule::{LiveSegments, Schedule};
 
-/// A particle's position and velocity at age `tau` (s) under the Exact integrator's forces.
-pub fn state_at(ir: &EffectIr, x0: DVec3, v0: DVec3, tau: f64) -> (DVec3, DVec3) {
-    let (g, k, u) = merged_drag(ir);
-    ExactStep::for_drag(g, k, u, tau).apply(x0, v0)
+/// The closed form at one age τ (s) under the Exact integrator's forces: the exact step of
+/// length τ, and the sizes of its terms.
+#[derive(Clone, Copy, Debug)]
+pub struct AtAge {
+    step: ExactStep,
+    /// (τ - F) |u|.
+    wind: f64,
+    /// Q |g|, Q = (τ - F) / k (τ²/2 when k = 0).
+    gravity: f64,
 }
 
-/// The size of the closed form's terms at age `tau`: X + F|v0| + (τ - F)|u| + Q|g|, where X is
-/// the size of the spawn position's own computation (`x0_size`: the larger of |x0| and the
-/// spawn shape's extent, since a point drawn in a box from -2 to 2 carries the rounding of 2
-/// even where it lands near 0). A position computed in f32 is accurate relative to this; it is
-/// |x| unless terms cancel.
-pub fn term_scale(ir: &EffectIr, x0_size: f64, v0: DVec3, tau: f64) -> f64 {
-    let (g, k, u) = merged_drag(ir);
-    let s = ExactStep::for_drag(g, k, u, tau);
-    let q = if k > 0.0 {
-        (tau - s.f) / k
-    } else {
-        0.5 * tau * tau
-    };
-    x0_size + s.f * v0.length() + (tau - s.f) * u.length() + q * g.length()
+impl AtAge {
+    /// The closed form of `ir`'s forces at age `tau`.
+    pub fn new(ir: &EffectIr, tau: f64) -> Self {
+        let (g, k, u) = merged_drag(ir);
+        let step = ExactStep::for_drag(g, k, u, tau);
+        let q = if k > 0.0 {
+            (tau - step.f) / k
+        } else {
+            0.5 * tau * tau
+        };
+        Self {
+            step,
+            wind: (tau - step.f) * u.length(),
+            gravity: q * g.length(),
+        }
+    }
+
+    /// A particle's position and velocity at this age, from its spawn state.
+    pub fn state(&self, x0: DVec3, v0: DVec3) -> (DVec3, DVec3) {
+        self.step.apply(x0, v0)
+    }
+
+    /// The size of the closed form's terms: X + F|v0| + (τ - F)|u| + Q|g|, where X is the size
+    /// of the spawn position's own computation (`x0_size`: the larger of |x0| and the spawn
+    /// shape's extent, since a point drawn in a box from -2 to 2 carries the rounding of 2
+    /// even where it lands near 0). A position computed in f32 is accurate relative to this;
+    /// it is |x| unless terms cancel.
+    pub fn term_scale(&self, x0_size: f64, v0: DVec3) -> f64 {
+        x0_size + self.step.f * v0.length() + self.wind + self.gravity
+    }
 }
 
 /// The live particles after the steps `segments` has recorded, in id order, each with the
@@ -45,6 +66,8 @@ pub fn records(
     for seg in segments.iter() {
         let age_steps = done - seg.step;
         let tau = age_steps as f64 * ir.dt;
+        let closed = AtAge::new(ir, tau);
+        let extent = ir.emitters[seg.emitter].shape.extent();
         for j in 0..seg.count {
             let id = seg.first_id + j;
             let s = spawn(ir, seg.emitter, id, seg.k_base + j, seg.step);
@@ -54,7 +77,7 @@ pub fn records(
                     continue;
                 }
             }
-            let (x, v) = state_at(ir, s.x, s.v, tau);
+            let (x, v) = closed.state(s.x, s.v);
             out.push((
                 ParticleRecord {
                     id,
@@ -63,12 +86,7 @@ pub fn records(
                     age: tau,
                     lifetime: schedule.lifetime(id, s.die_at),
                 },
-                term_scale(
-                    ir,
-                    s.x.length().max(ir.emitters[seg.emitter].shape.extent()),
-                    s.v,
-                    tau,
-                ),
+                closed.term_scale(s.x.length().max(extent), s.v),
             ));
         }
     }

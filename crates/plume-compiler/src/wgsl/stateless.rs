@@ -47,7 +47,8 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.comment("The particle in global slot `slot` of this frame, or a free slot.");
     w.block("fn evaluate_slot(slot: u32) -> Particle", |w| {
         w.line(format!("let free = Particle({});", dead_fields.join(", ")));
-        w.block("if (slot >= frame.threads || frame.count == 0u)", |w| {
+        w.comment("Past the frame's threads (all of them when no segment is live: threads = 0).");
+        w.block("if (slot >= frame.threads)", |w| {
             w.line("return free;");
         });
         w.comment("The last segment starting at or before this slot (offsets increase).");
