@@ -224,7 +224,7 @@ fn main() {
                 timer.time(pass).unwrap(); // warm-up
                 let seconds = timer.time(pass).unwrap() / f64::from(repeats);
                 results.push(seconds);
-                let bytes = plume::runtime::sim::read_buffer(&gpu, &out).unwrap();
+                let bytes = plume::runtime::readback::read_buffer(&gpu, &out).unwrap();
                 outputs.push(
                     bytes
                         .chunks_exact(4)

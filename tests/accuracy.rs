@@ -224,7 +224,7 @@ fn velocity_history(integrator: Integrator, k: f64, dt: f64, steps: u64) -> Vec<
     let src = drag_effect(integrator, k, dt);
     let e = compile(&src);
     let gpu = gpu();
-    let mut sim = plume::runtime::GpuSim::new(&gpu, e).unwrap();
+    let mut sim = plume::runtime::EffectInstance::new(&gpu, e).unwrap();
     (0..steps)
         .map(|_| {
             sim.run(1, |_| {}).unwrap();
@@ -352,7 +352,7 @@ fn trajectory(src: &str, steps: u64) -> (Vec<(glam::DVec3, glam::DVec3)>, bool) 
         .iter()
         .any(|w| w.path.ends_with(".strength") || w.path.ends_with(".pull"));
     let gpu = gpu();
-    let mut sim = plume::runtime::GpuSim::new(&gpu, e).unwrap();
+    let mut sim = plume::runtime::EffectInstance::new(&gpu, e).unwrap();
     let states = (0..steps)
         .map(|_| {
             sim.run(1, |_| {}).unwrap();

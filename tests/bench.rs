@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use plume::parse;
-use plume::runtime::bench::{bench, bench_effect};
+use plume::runtime::bench::{bench, bench_effect, BenchOptions};
 
 #[test]
 fn bench_runs_at_a_tiny_size_and_reports_its_fields() {
@@ -13,7 +13,11 @@ fn bench_runs_at_a_tiny_size_and_reports_its_fields() {
         .unwrap();
     let effect = parse(&src).unwrap();
     let gpu = gpu();
-    let r = bench(&gpu, &effect, 2000, 5, Some((64, 36))).unwrap();
+    let options = BenchOptions {
+        render: Some((64, 36)),
+        ..BenchOptions::new(2000, 5)
+    };
+    let r = bench(&gpu, &effect, &options).unwrap();
     assert_eq!(r.particles, 2000, "all spawned at step 0 and alive");
     assert_eq!(r.steps, 5);
     assert_eq!(r.bytes_per_particle, 32, "position, velocity, die_at, id");
@@ -28,8 +32,46 @@ fn bench_runs_at_a_tiny_size_and_reports_its_fields() {
         assert!(x.is_finite() && x > 0.0, "{r:?}");
     }
     assert!((r.bytes_per_step() - 2.0 * 2000.0 * 32.0).abs() < 1e-9);
-    let (w, h, frame) = r.render.expect("render timed");
-    assert!((w, h) == (64, 36) && frame > 0.0);
+    let d = r.render.expect("draw timed");
+    assert_eq!((d.width, d.height), (64, 36));
+    for x in [d.draw, d.opaque, d.vertex_only] {
+        assert!(x.is_finite() && x > 0.0, "{d:?}");
+    }
+    // The fountain sorts (so a frame prepares keys and a sort) and cannot be stateless.
+    assert!(d.prepare.is_some_and(|p| p > 0.0), "{d:?}");
+    assert_eq!(d.stateless, None);
+}
+
+#[test]
+fn bench_draws_a_stateless_effect_from_its_closed_form() {
+    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/sparks.ron"))
+        .unwrap();
+    let gpu = gpu();
+    let options = BenchOptions {
+        render: Some((32, 18)),
+        ..BenchOptions::new(1000, 3)
+    };
+    let r = bench(&gpu, &parse(&src).unwrap(), &options).unwrap();
+    let d = r.render.expect("draw timed");
+    assert!(d.stateless.is_some_and(|s| s > 0.0), "{d:?}");
+    assert_eq!(d.prepare, None, "sparks does not sort");
+}
+
+#[test]
+fn bench_compares_hidden_and_compacted_dead_slots_at_low_occupancy() {
+    let src =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/snow.ron")).unwrap();
+    let gpu = gpu();
+    let options = BenchOptions {
+        render: Some((32, 18)),
+        occupancy: 0.1,
+        ..BenchOptions::new(4000, 2)
+    };
+    let r = bench(&gpu, &parse(&src).unwrap(), &options).unwrap();
+    assert_eq!(r.particles, 400, "a tenth of the slots alive");
+    let d = r.render.expect("draw timed");
+    let (compact, draw) = d.compacted.expect("snow is stateful and unsorted");
+    assert!(compact > 0.0 && draw > 0.0, "{d:?}");
 }
 
 #[test]

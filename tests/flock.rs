@@ -6,7 +6,7 @@ mod common;
 
 use common::*;
 use plume::compiler::passes::stability::{drag_limit, oscillation_limit};
-use plume::runtime::GpuSim;
+use plume::runtime::EffectInstance;
 use plume::Integrator;
 
 /// A cloud of boids with some slots left free (burst < capacity), so that dead slots are
@@ -25,7 +25,7 @@ fn cloud(capacity: u32, burst: u32, scope: &str, neighbors: &str) -> String {
 fn flock_out(src: &str) -> Vec<[f32; 12]> {
     let e = compile(src);
     let g = gpu();
-    let mut sim = GpuSim::new(&g, e).unwrap();
+    let mut sim = EffectInstance::new(&g, e).unwrap();
     sim.run(1, |_| {}).unwrap();
     let bytes = sim.read_flock_buffer("flock_out").unwrap();
     bytes
@@ -115,7 +115,7 @@ fn a_flock_stays_together_and_apart_for_1000_steps() {
         "Box(min: (-5.0, -3.0, -4.0), max: (5.0, 3.0, 4.0))",
     ));
     let g = gpu();
-    let mut sim = GpuSim::new(&g, e).unwrap();
+    let mut sim = EffectInstance::new(&g, e).unwrap();
     let spread = |r: &[plume::compiler::reference::ParticleRecord]| {
         let n = r.len() as f64;
         let c = r.iter().map(|p| p.position).sum::<glam::DVec3>() / n;
@@ -174,7 +174,7 @@ fn max_after(
     let e = compile(src);
     let warned = e.warnings.items.iter().any(|w| w.path.contains("(Flock)"));
     let g = gpu();
-    let mut sim = GpuSim::new(&g, e).unwrap();
+    let mut sim = EffectInstance::new(&g, e).unwrap();
     let mut worst: f64 = 0.0;
     for _ in 0..steps {
         sim.run(1, |_| {}).unwrap();

@@ -13,7 +13,7 @@ mod common;
 
 use common::*;
 use plume::compiler::reference::ReferenceSim;
-use plume::runtime::GpuSim;
+use plume::runtime::EffectInstance;
 
 fn compare_at(
     name: &str,
@@ -68,7 +68,7 @@ fn every_example_matches_the_reference_after_50_and_100_steps() {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         let effect = compile(&std::fs::read_to_string(&path).unwrap());
         let gpu = gpu();
-        let mut gsim = GpuSim::new(&gpu, effect.clone()).expect("GPU sim");
+        let mut gsim = EffectInstance::new(&gpu, effect.clone()).expect("GPU sim");
         let mut csim = ReferenceSim::new(&effect.ir);
         let mut seen_alive = false;
         for steps in [50u64, 100] {

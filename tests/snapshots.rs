@@ -1,5 +1,5 @@
-//! Snapshot tests: the WGSL, IR and layout of every example effect, and the diagnostics of
-//! every bad input in tests/bad. One glob each, so a new file gets its snapshot with no new code.
+//! Snapshot tests: the WGSL (compute and draw modules), IR and layout of every example effect,
+//! and the diagnostics of every bad input in tests/bad. One glob each, so a new file gets its snapshot with no new code.
 
 use plume::{compile_str, CompileError, CompileOptions};
 
@@ -17,6 +17,7 @@ fn every_example_compiles_without_warnings_and_matches_its_snapshots() {
                 .render(&path.display().to_string(), &source)
         );
         insta::assert_snapshot!("wgsl", compiled.wgsl);
+        insta::assert_snapshot!("draw", compiled.draw_wgsl);
         insta::assert_snapshot!(
             "ir_and_layout",
             format!("{}\n{}", compiled.ir, compiled.layout)

@@ -73,7 +73,7 @@ fn draw_order_is_back_to_front_with_ties_by_id_and_covers_every_live_particle() 
     let e = compile(&src);
     assert!(e.ir.sort);
     let gpu = gpu();
-    let mut sim = plume::runtime::GpuSim::new(&gpu, e.clone()).unwrap();
+    let mut sim = plume::runtime::EffectInstance::new(&gpu, e.clone()).unwrap();
     sim.run(150, |_| {}).unwrap();
     let by_id = sim.records().unwrap();
     let drawn = sim.records_in_draw_order().unwrap();

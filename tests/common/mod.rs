@@ -7,7 +7,7 @@ pub mod effect_gen;
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use plume::compiler::reference::{ParticleRecord, ReferenceSim, Totals};
-use plume::runtime::{Gpu, GpuChoice, GpuSim};
+use plume::runtime::{EffectInstance, Gpu, GpuChoice};
 use plume::{compile_str, CompileOptions, CompiledEffect};
 
 /// The test binary's GPU. Tests never skip: with no adapter they fail with the runtime's
@@ -33,7 +33,7 @@ pub fn compile(source: &str) -> CompiledEffect {
 /// Runs `steps` on the GPU; returns totals and live particles.
 pub fn run_gpu(effect: &CompiledEffect, steps: u64) -> (Totals, Vec<ParticleRecord>) {
     let gpu = gpu();
-    let mut sim = GpuSim::new(&gpu, effect.clone()).expect("GPU sim");
+    let mut sim = EffectInstance::new(&gpu, effect.clone()).expect("GPU sim");
     sim.run(steps, |_| {}).expect("GPU run");
     (
         sim.totals().expect("totals"),

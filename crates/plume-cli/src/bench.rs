@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use plume_runtime::bench::bench;
+use plume_runtime::bench::{bench, BenchOptions};
 use plume_runtime::timer::TimingSource;
 
 use crate::load;
@@ -19,15 +19,26 @@ pub struct BenchArgs {
     /// Timed steps (at most 256, one submission).
     #[arg(long, default_value_t = 100)]
     steps: u32,
-    /// Also time rendering one frame of all live particles at this size (WIDTHxHEIGHT).
+    /// Also time drawing all live particles from the GPU buffers at this size (WIDTHxHEIGHT).
     #[arg(long, value_parser = crate::render::parse_size)]
     render: Option<(u32, u32)>,
+    /// Fraction of the particle slots alive (0 to 1). Below 1, the draw compares hiding the
+    /// free slots in the vertex shader with drawing a compacted list of the live ones.
+    #[arg(long, default_value_t = 1.0, value_parser = parse_fraction)]
+    occupancy: f64,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
     /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
     #[arg(long)]
     backend: Option<String>,
+}
+
+fn parse_fraction(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(f) if f > 0.0 && f <= 1.0 => Ok(f),
+        _ => Err(format!("`{s}` must be a number in (0, 1]")),
+    }
 }
 
 /// Runs `plume bench`.
@@ -47,7 +58,13 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             gpu.describe()
         );
     }
-    let r = match bench(&gpu, &effect, args.particles, args.steps, args.render) {
+    let options = BenchOptions {
+        particles: args.particles,
+        steps: args.steps,
+        render: args.render,
+        occupancy: args.occupancy,
+    };
+    let r = match bench(&gpu, &effect, &options) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("{name}: error: {e}");
@@ -63,13 +80,21 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             "{}",
             serde_json::json!({
                 "effect": name, "adapter": r.adapter, "particles": r.particles, "steps": r.steps,
+                "capacity": args.particles, "occupancy": args.occupancy,
                 "bytes_per_particle": r.bytes_per_particle, "chunks": r.chunks,
                 "ms_per_step": r.seconds_per_step * 1e3,
                 "particle_steps_per_second": r.particle_steps_per_second(),
                 "gb_per_s": r.update_gbps(), "copy_gb_per_s": r.copy_gbps(),
                 "copy_ms": r.copy_seconds * 1e3, "ratio": r.ratio(), "timing": timing,
                 "spawn_step_ms": r.spawn_step_seconds * 1e3,
-                "render_frame_ms": r.render.map(|(_, _, s)| s * 1e3),
+                "render_size": r.render.as_ref().map(|d| format!("{}x{}", d.width, d.height)),
+                "draw_ms": r.render.as_ref().map(|d| d.draw * 1e3),
+                "draw_opaque_ms": r.render.as_ref().map(|d| d.opaque * 1e3),
+                "draw_vertex_only_ms": r.render.as_ref().map(|d| d.vertex_only * 1e3),
+                "draw_prepare_ms": r.render.as_ref().and_then(|d| d.prepare).map(|s| s * 1e3),
+                "compaction_ms": r.render.as_ref().and_then(|d| d.compacted).map(|(c, _)| c * 1e3),
+                "draw_compacted_ms": r.render.as_ref().and_then(|d| d.compacted).map(|(_, s)| s * 1e3),
+                "draw_stateless_ms": r.render.as_ref().and_then(|d| d.stateless).map(|s| s * 1e3),
                 "sort_radix_ms": r.sort.map(|(s, _)| s * 1e3),
                 "sort_bitonic_ms": r.sort.map(|(_, s)| s * 1e3),
                 "sort_radix_keys_per_s": r.sort.map(|(s, _)| r.particles as f64 / s),
@@ -92,6 +117,12 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             "  particles           {} ({} buffer(s))",
             r.particles, r.chunks
         );
+        if args.occupancy < 1.0 {
+            println!(
+                "  occupancy           {} of {} slots alive",
+                r.particles, args.particles
+            );
+        }
         println!("  bytes per particle  {}", r.bytes_per_particle);
         println!(
             "  update (stateful)   {:.4} ms/step, {:.3} G particle-steps/s, {:.1} GB/s",
@@ -142,8 +173,41 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
         if let Some((n, search)) = &r.flock {
             println!("  flock               {search}: {n:.1} neighbours per boid on average (the step time above includes the flocking pass)");
         }
-        if let Some((w, h, s)) = r.render {
-            println!("  render              {:.2} ms for a {w}x{h} frame of all particles (wall clock: sprite upload, draw, readback)", s * 1e3);
+        if let Some(d) = &r.render {
+            println!(
+                "  draw                {:.3} ms for a {}x{} frame of all particles, from the GPU buffers (render pass only)",
+                d.draw * 1e3,
+                d.width,
+                d.height
+            );
+            println!(
+                "    without blending  {:.3} ms (opaque writes)",
+                d.opaque * 1e3
+            );
+            println!(
+                "    vertices only     {:.3} ms (every sprite hidden in the vertex shader: no pixels)",
+                d.vertex_only * 1e3
+            );
+            if let Some(p) = d.prepare {
+                println!(
+                    "    prepare           {:.3} ms before the draw: depth keys and the radix sort",
+                    p * 1e3
+                );
+            }
+            if let Some((compact, draw)) = d.compacted {
+                println!(
+                    "    compacted list    {:.3} ms: {:.3} ms to list the live slots (flags, scan, scatter) + {:.3} ms to draw only them",
+                    (compact + draw) * 1e3,
+                    compact * 1e3,
+                    draw * 1e3
+                );
+            }
+            if let Some(s) = d.stateless {
+                println!(
+                    "    stateless         {:.3} ms: the same particles computed from the closed form in the vertex shader, no compute pass",
+                    s * 1e3
+                );
+            }
         }
         println!("  timing              {timing}, {} steps", r.steps);
     }

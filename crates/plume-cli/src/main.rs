@@ -29,7 +29,7 @@ enum Command {
         #[arg(required = true)]
         files: Vec<PathBuf>,
     },
-    /// Compile one effect and print its WGSL, IR or layout.
+    /// Compile one effect and print its WGSL (compute or draw module), IR or layout.
     Compile {
         /// The effect file (.ron).
         file: PathBuf,
@@ -61,8 +61,11 @@ enum Command {
 /// What `plume compile` prints.
 #[derive(Clone, Copy, Debug, ValueEnum)]
 enum Emit {
-    /// The WGSL module (spawn_prepare, spawn and update kernels, or a stateless evaluate).
+    /// The WGSL compute module (spawn_prepare, spawn and update kernels, or a stateless evaluate).
     Wgsl,
+    /// The WGSL draw module (the vertex shader that reads particles from the GPU buffers, and
+    /// the sprite's fragment shader).
+    Draw,
     /// The IR after the passes.
     Ir,
     /// The particle struct, bytes of state per particle and the bindings.
@@ -194,6 +197,7 @@ fn compile(file: &Path, output: Option<&Path>, emit: Emit, options: &CompileOpti
     );
     let text = match emit {
         Emit::Wgsl => compiled.wgsl,
+        Emit::Draw => compiled.draw_wgsl,
         Emit::Ir => compiled.ir.to_string(),
         Emit::Layout => compiled.layout.to_string(),
     };

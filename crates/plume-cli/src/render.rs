@@ -1,5 +1,6 @@
-//! `plume render`: simulate on the GPU and render frames headless to a PNG (last frame, or a
-//! contact sheet with `--sheet`) or an animated GIF.
+//! `plume render`: simulate on the GPU and draw frames headless, straight from the particle
+//! buffers (the same draw an embedding application records), to a PNG (last frame, or a
+//! contact sheet with `--sheet`) or an animated GIF. Only the finished images are read back.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -7,8 +8,8 @@ use std::process::ExitCode;
 use indicatif::{ProgressBar, ProgressStyle};
 use plume_runtime::export::write_atomically;
 use plume_runtime::images::{contact_sheet, gif, png, Frame8};
-use plume_runtime::render::{sprites, Renderer};
-use plume_runtime::{Gpu, GpuChoice, GpuSim, RuntimeError};
+use plume_runtime::offscreen::Offscreen;
+use plume_runtime::{EffectInstance, Gpu, GpuChoice, RuntimeError};
 
 use crate::{load, Overrides};
 
@@ -69,9 +70,10 @@ fn render_frames(
     })?;
     eprintln!("adapter: {}", gpu.describe());
     let (w, h) = args.size;
-    let ir = effect.ir.clone();
-    let renderer = Renderer::new(&gpu, w, h, ir.render.blend, ir.render.background)?;
-    let mut sim = GpuSim::new(&gpu, effect)?;
+    let target = Offscreen::new(&gpu, w, h)?;
+    let mut sim = EffectInstance::new(&gpu, effect)?;
+    let renderer = sim.renderer(&target.target())?;
+    let camera = target.effect_camera(&sim);
     let bar = ProgressBar::new(u64::from(args.frames));
     bar.set_style(
         ProgressStyle::with_template("rendering [{bar:30}] {pos}/{len} frames ({eta})")
@@ -81,16 +83,9 @@ fn render_frames(
     let mut frames = Vec::with_capacity(args.frames as usize);
     for _ in 0..args.frames {
         sim.run(u64::from(args.every), |_| {})?;
-        // With sort: true the GPU sorts back to front and sprites keep that order.
-        let records = if ir.sort {
-            sim.records_in_draw_order()?
-        } else {
-            sim.records()?
-        };
-        let pixels = renderer.draw(
-            &sprites(&records, &ir.render, &ir.camera, false),
-            &ir.camera,
-        )?;
+        // Drawn from the GPU buffers (sorted on the GPU with sort: true); only the image is
+        // read back.
+        let pixels = target.render(&sim, &renderer, &camera)?;
         frames.push(Frame8 {
             width: w,
             height: h,

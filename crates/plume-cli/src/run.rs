@@ -9,7 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use plume_compiler::reference::{ParticleRecord, ReferenceSim, Totals};
 use plume_compiler::CompiledEffect;
 use plume_runtime::export::{export, summarize};
-use plume_runtime::{Gpu, GpuChoice, GpuSim, RuntimeError};
+use plume_runtime::{EffectInstance, Gpu, GpuChoice, RuntimeError};
 
 use crate::{load, Overrides};
 
@@ -103,7 +103,7 @@ fn simulate(args: &RunArgs, effect: CompiledEffect) -> Result<Outcome, RuntimeEr
         backend: args.backend.clone(),
     })?;
     bar.set_message("gpu");
-    let mut sim = GpuSim::new(&gpu, effect)?;
+    let mut sim = EffectInstance::new(&gpu, effect)?;
     let start = Instant::now();
     sim.run(args.steps, |done| bar.set_position(done))?;
     let seconds = start.elapsed().as_secs_f64();

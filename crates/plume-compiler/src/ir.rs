@@ -99,6 +99,14 @@ impl RenderIr {
         let stops: Vec<(f64, [f64; 1])> = self.size.iter().map(|&(t, s)| (t, [s])).collect();
         interpolate(&stops, t)[0]
     }
+
+    /// Whether colour or size change over a particle's life (some stop differs from the first);
+    /// if not, the draw needs no life fraction at all.
+    pub fn varies_over_life(&self) -> bool {
+        let colour = self.color.iter().any(|(_, c)| *c != self.color[0].1);
+        let size = self.size.iter().any(|(_, s)| *s != self.size[0].1);
+        colour || size
+    }
 }
 
 impl EffectIr {

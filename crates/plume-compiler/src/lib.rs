@@ -1,8 +1,9 @@
 //! # plume-compiler
 //!
-//! Compiles Plume particle effects, written in RON, into one WGSL module per effect: a fused
-//! `update` kernel and `spawn` kernels (or, for a stateless effect, one `evaluate` kernel),
-//! validated by naga. The pipeline, one module per stage:
+//! Compiles Plume particle effects, written in RON, into one WGSL compute module per effect: a
+//! fused `update` kernel and `spawn` kernels (or, for a stateless effect, one `evaluate`
+//! kernel), and one draw module (a vertex shader that reads the particles from the GPU buffers
+//! and a fragment shader for the sprites), both validated by naga. The pipeline, one module per stage:
 //! parse ([`schema`], with [`diagnostics`] and [`locate`]) → check ([`validate`]) → lower to the
 //! [`ir`] → [`passes`] (fold, prune, integrator, stability, layout) → [`wgsl`] writer →
 //! [`naga_check`]. This crate does not depend on wgpu.
@@ -82,8 +83,11 @@ pub struct CompiledEffect {
     pub ir: EffectIr,
     /// Particle struct and bindings.
     pub layout: Layout,
-    /// The naga-validated WGSL module.
+    /// The naga-validated WGSL compute module.
     pub wgsl: String,
+    /// The naga-validated WGSL draw module (vertex and fragment shaders) for one particle
+    /// buffer: see [`wgsl::draw`]. The runtime emits another shape when it needs one.
+    pub draw_wgsl: String,
     /// Warnings from the stability analysis and other checks, located in the source.
     pub warnings: Diagnostics,
 }
@@ -179,10 +183,13 @@ pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, C
         passes::run(&mut ir, &names).map_err(|c| CompileError::Invalid(located(c.errors)))?;
     let wgsl = wgsl::emit_module(&ir, &layout);
     naga_check::validate(&wgsl)?;
+    let draw_wgsl = wgsl::draw::emit(&ir, &layout, &wgsl::draw::DrawShape::single(&ir));
+    naga_check::validate(&draw_wgsl)?;
     Ok(CompiledEffect {
         ir,
         layout,
         wgsl,
+        draw_wgsl,
         warnings: located(warnings),
     })
 }

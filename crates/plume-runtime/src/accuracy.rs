@@ -17,7 +17,7 @@ use plume_compiler::{compile_effect, CompileError, Effect, Integrator};
 
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
-use crate::sim::GpuSim;
+use crate::instance::EffectInstance;
 
 /// What to measure.
 #[derive(Clone, Debug)]
@@ -158,8 +158,8 @@ fn timed_run(
     Ok(match engine {
         Engine::Gpu(gpu) => {
             // Warm up: drivers compile shaders on first dispatch; keep that out of the timing.
-            GpuSim::new(gpu, c.clone())?.run(1, |_| {})?;
-            let mut sim = GpuSim::new(gpu, c)?;
+            EffectInstance::new(gpu, c.clone())?.run(1, |_| {})?;
+            let mut sim = EffectInstance::new(gpu, c)?;
             let start = Instant::now();
             sim.run(steps, |_| {})?;
             let s = start.elapsed().as_secs_f64();

@@ -8,8 +8,9 @@ use plume_compiler::{compile_effect, CompileError, CompiledEffect, Effect};
 
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
-use crate::render::{sprites, Renderer};
-use crate::sim::{GpuSim, STEPS_PER_SUBMIT};
+use crate::instance::EffectInstance;
+use crate::offscreen::Offscreen;
+use crate::resources::STEPS_PER_SUBMIT;
 use crate::sort::SortAlgorithm;
 use crate::timer::{PassTimer, TimingSource};
 
@@ -59,9 +60,8 @@ pub struct BenchResult {
     /// Seconds for depth keys plus the radix sort of every slot, and the same with the bitonic
     /// baseline, when the effect has `sort: true`.
     pub sort: Option<(f64, f64)>,
-    /// Seconds to render one frame of all live particles (wall clock: sprite upload, draw and
-    /// image readback), when asked for, with its size.
-    pub render: Option<(u32, u32, f64)>,
+    /// The draw of all live particles from the GPU buffers, when asked for.
+    pub render: Option<DrawTimes>,
     /// Timestamps or wall clock.
     pub timing: TimingSource,
     /// For flocking effects: the mean number of neighbours within the radius per live boid
@@ -78,6 +78,35 @@ pub struct BenchResult {
     /// when the effect can be stateless.
     pub fill_seconds: Option<f64>,
 }
+
+/// The draw's figures at one image size, in seconds per frame: each the median of
+/// [`DRAW_REPEATS`] frames, timed by GPU timestamps around the render pass alone (the wall
+/// clock of the whole submission on adapters without timestamps).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DrawTimes {
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// The draw as the effect asks for it (its blending, its sizes).
+    pub draw: f64,
+    /// The same draw with blending off (each fragment replaces the pixel): blending's share.
+    pub opaque: f64,
+    /// Every sprite of size 0, hidden by the vertex shader: the vertex work alone, no pixels.
+    pub vertex_only: f64,
+    /// The compute work a frame records before the draw: depth keys, the radix sort and the
+    /// indirect draw's count (sorted effects only).
+    pub prepare: Option<f64>,
+    /// A stateful, unsorted effect drawn through a compacted list of its live slots instead
+    /// of hiding the free ones: (the list's compute passes, its draw).
+    pub compacted: Option<(f64, f64)>,
+    /// The same N particles of a stateless copy of the effect, drawn from the closed form in
+    /// the vertex shader, when the effect can be stateless.
+    pub stateless: Option<f64>,
+}
+
+/// Frames timed per draw figure (the median is reported).
+pub const DRAW_REPEATS: usize = 5;
 
 impl BenchResult {
     /// Bytes moved per step: each live particle's state read and written once.
@@ -106,9 +135,16 @@ impl BenchResult {
 /// emitters in proportion to their bursts and rates), lifetimes long enough to outlast the run.
 /// Forces, integrator, collisions and kills are the effect's own, so the layout is too.
 pub fn bench_effect(effect: &Effect, particles: u32) -> Effect {
+    bench_effect_occupied(effect, particles, particles)
+}
+
+/// Like [`bench_effect`] with capacity `capacity` of which only `live` are spawned (at most
+/// the capacity): the rest of the slots stay free.
+pub fn bench_effect_occupied(effect: &Effect, capacity: u32, live: u32) -> Effect {
     let mut e = effect.clone();
     let file_count: u32 = e.emitters.iter().map(|em| em.burst).sum();
-    e.capacity = particles.max(1);
+    e.capacity = capacity.max(1);
+    let live = live.min(e.capacity);
     // A flock keeps the file's density: spheres and boxes (and their arrangement) grow with the
     // cube root of the count, so the neighbours per boid (what the search costs) stay those the
     // author chose.
@@ -117,7 +153,7 @@ pub fn bench_effect(effect: &Effect, particles: u32) -> Effect {
         .iter()
         .any(|f| matches!(f, plume_compiler::forces::Force::Flock(_)));
     if flocks && file_count > 0 {
-        let scale = (f64::from(e.capacity) / f64::from(file_count)).cbrt();
+        let scale = (f64::from(live.max(1)) / f64::from(file_count)).cbrt();
         let centres: Vec<glam::DVec3> = e
             .emitters
             .iter()
@@ -138,9 +174,9 @@ pub fn bench_effect(effect: &Effect, particles: u32) -> Effect {
     let n = e.emitters.len();
     for (i, em) in e.emitters.iter_mut().enumerate() {
         let share = if i + 1 == n {
-            e.capacity - given
+            live - given
         } else if total > 0.0 {
-            ((f64::from(e.capacity) * weights[i] / total) as u32).min(e.capacity - given)
+            ((f64::from(live) * weights[i] / total) as u32).min(live - given)
         } else {
             0
         };
@@ -198,12 +234,48 @@ fn compile_bench_as(
     particles: u32,
     state: State,
 ) -> Result<CompiledEffect, RuntimeError> {
-    let mut e = bench_effect(effect, particles);
+    compile_occupied(effect, particles, particles, state)
+}
+
+/// Compiles [`bench_effect_occupied`] with `state` in place of the file's.
+fn compile_occupied(
+    effect: &Effect,
+    capacity: u32,
+    live: u32,
+    state: State,
+) -> Result<CompiledEffect, RuntimeError> {
+    let mut e = bench_effect_occupied(effect, capacity, live);
     e.state = state;
     compile_effect(&e, "").map_err(|e| match e {
         CompileError::Invalid(d) => RuntimeError::Output(d.to_string()),
         CompileError::Internal(i) => RuntimeError::Output(i.to_string()),
     })
+}
+
+/// What `plume bench` measures.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BenchOptions {
+    /// Particle slots (the capacity N).
+    pub particles: u32,
+    /// Timed steps (at most [`STEPS_PER_SUBMIT`]).
+    pub steps: u32,
+    /// Also time the draw at this image size.
+    pub render: Option<(u32, u32)>,
+    /// The fraction of the slots alive (1: all N). Below 1 the draw's two ways of skipping
+    /// free slots, hidden quads and a compacted list, are compared.
+    pub occupancy: f64,
+}
+
+impl BenchOptions {
+    /// N particles, all alive, `steps` timed steps, no draw.
+    pub fn new(particles: u32, steps: u32) -> Self {
+        Self {
+            particles,
+            steps,
+            render: None,
+            occupancy: 1.0,
+        }
+    }
 }
 
 /// Runs the benchmark: spawn N, warm up, time `steps` update steps and as many copies. The
@@ -212,19 +284,19 @@ fn compile_bench_as(
 pub fn bench(
     gpu: &Gpu,
     effect: &Effect,
-    particles: u32,
-    steps: u32,
-    render_size: Option<(u32, u32)>,
+    options: &BenchOptions,
 ) -> Result<BenchResult, RuntimeError> {
-    let steps = steps.clamp(1, STEPS_PER_SUBMIT);
-    let compiled = compile_bench_as(effect, particles, State::Stateful)?;
+    let particles = options.particles;
+    let steps = options.steps.clamp(1, STEPS_PER_SUBMIT);
+    let live = ((f64::from(particles) * options.occupancy.clamp(0.0, 1.0)).round() as u32).max(1);
+    let compiled = compile_occupied(effect, particles, live, State::Stateful)?;
     let bpp = compiled.layout.bytes_per_particle;
     let timer = PassTimer::new(gpu);
     // Warm the pipelines up on a throwaway copy so step 0 of the measured one is not a
     // first dispatch.
-    GpuSim::new(gpu, compile_bench_as(effect, 64, State::Stateful)?)?.run(2, |_| {})?;
-    let stateless = time_stateless(gpu, &timer, effect, particles, steps)?;
-    let mut sim = GpuSim::new(gpu, compiled)?;
+    EffectInstance::new(gpu, compile_bench_as(effect, 64, State::Stateful)?)?.run(2, |_| {})?;
+    let stateless = time_stateless(gpu, &timer, effect, (particles, live), steps)?;
+    let mut sim = EffectInstance::new(gpu, compiled)?;
     // Step 0 spawns everything (timed), then a few steps settle the caches.
     let spawn_step = sim.time_steps(&timer, 1)?;
     sim.run(3, |_| {})?;
@@ -273,17 +345,9 @@ pub fn bench(
         }
         None => None,
     };
-    let render = match render_size {
+    let render = match options.render {
         None => None,
-        Some((w, h)) => {
-            let ir = &sim.effect().ir;
-            let renderer = Renderer::new(gpu, w, h, ir.render.blend, ir.render.background)?;
-            let s = sprites(&sim.records()?, &ir.render, &ir.camera, ir.sort);
-            renderer.draw(&s, &ir.camera)?; // warm-up
-            let start = std::time::Instant::now();
-            renderer.draw(&s, &ir.camera)?;
-            Some((w, h, start.elapsed().as_secs_f64()))
-        }
+        Some((w, h)) => Some(time_draws(gpu, &timer, &sim, effect, w, h)?),
     };
     Ok(BenchResult {
         sort,
@@ -311,6 +375,97 @@ pub fn bench(
             ),
             Err(_) => None,
         },
+        stateless,
+    })
+}
+
+/// Times the draws of `sim` (see [`DrawTimes`]) at `width` x `height` from the effect's camera.
+fn time_draws(
+    gpu: &Gpu,
+    timer: &PassTimer<'_>,
+    sim: &EffectInstance,
+    effect: &Effect,
+    width: u32,
+    height: u32,
+) -> Result<DrawTimes, RuntimeError> {
+    let capacity = sim.effect().ir.capacity;
+    let live = sim.totals()?.alive as u32;
+    let target = Offscreen::new(gpu, width, height)?;
+    let camera = target.effect_camera(sim);
+    let median = |times: &mut Vec<f64>| {
+        times.sort_by(f64::total_cmp);
+        times[times.len() / 2]
+    };
+    // Warms the draw up (pipeline creation, first use of the buffers), then times it.
+    let time = |sim: &EffectInstance, renderer: &crate::draw::EffectRenderer| {
+        target.render(sim, renderer, &camera)?;
+        let mut times = Vec::with_capacity(DRAW_REPEATS);
+        for _ in 0..DRAW_REPEATS {
+            times.push(timer.time_render(|encoder, timestamps| {
+                target.record(encoder, sim, renderer, &camera, timestamps)
+            })?);
+        }
+        Ok::<f64, RuntimeError>(median(&mut times))
+    };
+    let draw = time(sim, &sim.renderer(&target.target())?)?;
+    let opaque = time(
+        sim,
+        &sim.renderer_with(
+            &target.target(),
+            &crate::draw::DrawOptions {
+                blend: Some(wgpu::BlendState::REPLACE),
+                ..Default::default()
+            },
+        )?,
+    )?;
+    let mut hidden = sim.renderer(&target.target())?;
+    hidden.set_size_scale(0.0);
+    let vertex_only = time(sim, &hidden)?;
+    let prepare = match sim.effect().ir.sort {
+        true => {
+            sim.time_sort(timer, SortAlgorithm::Radix)?;
+            let mut times: Vec<f64> = (0..DRAW_REPEATS)
+                .map(|_| sim.time_sort(timer, SortAlgorithm::Radix))
+                .collect::<Result<_, _>>()?;
+            Some(median(&mut times))
+        }
+        false => None,
+    };
+    // Hidden quads against a compacted list (stateful, unsorted effects): the list's compute
+    // passes, then its draw.
+    let compacted = match !sim.effect().ir.sort {
+        true => {
+            let renderer = sim.renderer_with(
+                &target.target(),
+                &crate::draw::DrawOptions {
+                    dead_slots: crate::draw::DeadSlots::Compacted,
+                    ..Default::default()
+                },
+            )?;
+            let draw = time(sim, &renderer)?;
+            let mut times: Vec<f64> = (0..DRAW_REPEATS)
+                .map(|_| timer.time(|pass| renderer.record_instance_count(pass)))
+                .collect::<Result<_, _>>()?;
+            Some((median(&mut times), draw))
+        }
+        false => None,
+    };
+    let stateless = match compile_occupied(effect, capacity, live, State::Auto)? {
+        c if c.ir.stateless.is_some() => {
+            let mut s = EffectInstance::new(gpu, c)?;
+            s.run(sim.steps_done(), |_| {})?;
+            Some(time(&s, &s.renderer(&target.target())?)?)
+        }
+        _ => None,
+    };
+    Ok(DrawTimes {
+        width,
+        height,
+        draw,
+        opaque,
+        vertex_only,
+        prepare,
+        compacted,
         stateless,
     })
 }
@@ -356,14 +511,14 @@ fn time_stateless(
     gpu: &Gpu,
     timer: &PassTimer<'_>,
     effect: &Effect,
-    particles: u32,
+    (capacity, live): (u32, u32),
     steps: u32,
 ) -> Result<Result<f64, String>, RuntimeError> {
-    let compiled = compile_bench_as(effect, particles, State::Auto)?;
+    let compiled = compile_occupied(effect, capacity, live, State::Auto)?;
     if compiled.ir.stateless.is_none() {
         return Ok(Err(compiled.ir.state_reason));
     }
-    let mut sim = GpuSim::new(gpu, compiled)?;
+    let mut sim = EffectInstance::new(gpu, compiled)?;
     sim.run(4, |_| {})?;
     sim.time_steps(timer, 2)?;
     Ok(Ok(sim.time_steps(timer, steps)? / f64::from(steps)))

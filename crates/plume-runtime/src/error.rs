@@ -61,6 +61,9 @@ pub enum RuntimeError {
         /// The most that fit.
         max_capacity: u64,
     },
+    /// The adapter lacks a capability the work needs; the message says which and what to use.
+    #[error("{0}")]
+    Unsupported(String),
     /// wgpu reported a validation or out-of-memory error.
     #[error("GPU error: {0}")]
     Gpu(String),

@@ -1,5 +1,6 @@
-//! Adapter and device selection. `--backend` or `WGPU_BACKEND` choose the backends; on a
-//! machine with no GPU, wgpu's GL backend finds Mesa's llvmpipe with nothing to install.
+//! The device Plume runs on: one it opens itself ([`Gpu::new`]: `--backend` or `WGPU_BACKEND`
+//! choose the backends; on a machine with no GPU, wgpu's GL backend finds Mesa's llvmpipe with
+//! nothing to install), or a host application's own device and queue ([`Gpu::from_device`]).
 
 use std::sync::{Arc, Mutex};
 
@@ -23,10 +24,10 @@ impl GpuChoice {
     }
 }
 
-/// An open device, its queue and what it is.
+/// An open device, its queue and what it is. Cloning is cheap (wgpu's handles are shared), so
+/// every effect instance keeps its own clone.
+#[derive(Clone, Debug)]
 pub struct Gpu {
-    /// The adapter in use.
-    pub adapter: wgpu::Adapter,
     /// The device.
     pub device: wgpu::Device,
     /// Its queue.
@@ -35,6 +36,9 @@ pub struct Gpu {
     pub info: wgpu::AdapterInfo,
     /// The limits the device was opened with (all the adapter offers).
     pub limits: wgpu::Limits,
+    /// What the adapter can do below WebGPU's baseline, when known (None for a host's device:
+    /// the host chose the adapter, and wgpu reports its own validation errors).
+    pub downlevel: Option<wgpu::DownlevelFlags>,
     /// The first uncaptured wgpu error since the last [`Gpu::take_error`].
     errors: Arc<Mutex<Option<String>>>,
     /// Why the device was lost, once it has been (never cleared: a lost device stays lost).
@@ -94,6 +98,7 @@ impl Gpu {
         }
         let info = adapter.get_info();
         let limits = adapter.limits();
+        let downlevel = adapter.get_downlevel_capabilities().flags;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("plume"),
             // Timestamps where the adapter has them (for `plume bench`); nothing else.
@@ -122,14 +127,51 @@ impl Gpu {
             slot.get_or_insert_with(|| format!("{reason:?}: {message}"));
         });
         Ok(Self {
-            adapter,
             device,
             queue,
             info,
             limits,
+            downlevel: Some(downlevel),
             errors,
             lost,
         })
+    }
+
+    /// Wraps a host application's device and queue: Plume's effects then run in the host's
+    /// submissions and draw into its render passes. The host's error handlers stay as they
+    /// are, so wgpu errors reach the host; [`Gpu::take_error`] reports only what Plume sees
+    /// itself (an out-of-memory allocation, a device lost after this call).
+    pub fn from_device(device: &wgpu::Device, queue: &wgpu::Queue) -> Self {
+        Self {
+            device: device.clone(),
+            queue: queue.clone(),
+            info: device.adapter_info(),
+            limits: device.limits(),
+            downlevel: None,
+            errors: Arc::default(),
+            lost: Arc::default(),
+        }
+    }
+
+    /// Whether this is a CPU adapter (llvmpipe, lavapipe), where some kernels take another
+    /// variant (a workgroup barrier there costs more than it saves).
+    pub fn is_cpu(&self) -> bool {
+        self.info.device_type == wgpu::DeviceType::Cpu
+    }
+
+    /// A 2D grid of workgroups of `workgroup` threads covering `threads` (2D because one
+    /// dimension holds at most `max_compute_workgroups_per_dimension` groups); at least one.
+    pub fn grid(&self, threads: u64, workgroup: u64) -> Result<(u32, u32), RuntimeError> {
+        let per_dim = u64::from(self.limits.max_compute_workgroups_per_dimension);
+        let groups = threads.div_ceil(workgroup).max(1);
+        let x = groups.min(per_dim);
+        let y = groups.div_ceil(x);
+        if y > per_dim {
+            return Err(RuntimeError::Gpu(format!(
+                "{threads} threads need more than {per_dim} x {per_dim} workgroups"
+            )));
+        }
+        Ok((x as u32, y as u32))
     }
 
     /// Whether GPU timestamp queries are available.

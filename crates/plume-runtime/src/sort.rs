@@ -19,8 +19,8 @@ pub enum SortAlgorithm {
 }
 
 /// The sort kernels.
-pub struct GpuSorter<'g> {
-    gpu: &'g Gpu,
+pub struct GpuSorter {
+    gpu: Gpu,
     histogram: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
     scan_blocks: wgpu::ComputePipeline,
@@ -54,9 +54,9 @@ impl SortProgram {
     }
 }
 
-impl<'g> GpuSorter<'g> {
+impl GpuSorter {
     /// Builds the kernels on `gpu`.
-    pub fn new(gpu: &'g Gpu) -> Self {
+    pub fn new(gpu: &Gpu) -> Self {
         let module = gpu
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -75,7 +75,7 @@ impl<'g> GpuSorter<'g> {
                 })
         };
         Self {
-            gpu,
+            gpu: gpu.clone(),
             histogram: pipeline("histogram"),
             scatter: pipeline("scatter"),
             scan_blocks: pipeline("scan_blocks"),
@@ -131,20 +131,12 @@ impl<'g> GpuSorter<'g> {
                 layout: &pipeline.get_bind_group_layout(0),
                 entries: &entries,
             });
-        let per_dim = u64::from(self.gpu.limits.max_compute_workgroups_per_dimension);
-        let groups = groups.max(1);
-        let x = groups.min(per_dim);
-        let y = groups.div_ceil(x);
-        if y > per_dim {
-            return Err(RuntimeError::Gpu(format!(
-                "sort needs more than {per_dim}² workgroups"
-            )));
-        }
+        let (x, y) = self.gpu.grid(groups, 1)?;
         program.dispatches.push(Dispatch {
             pipeline: pipeline.clone(),
             group,
-            x: x as u32,
-            y: y as u32,
+            x,
+            y,
         });
         Ok(())
     }
@@ -175,6 +167,18 @@ impl<'g> GpuSorter<'g> {
             )?;
         }
         Ok(())
+    }
+
+    /// A program that replaces the first `len` words of `data` by their exclusive prefix sum
+    /// (the scan the radix sort uses for its digit counts).
+    pub fn scan_program(&self, data: &wgpu::Buffer, len: u64) -> Result<SortProgram, RuntimeError> {
+        let mut program = SortProgram {
+            dispatches: Vec::new(),
+        };
+        if len > 0 {
+            self.scan(&mut program, data, len)?;
+        }
+        Ok(program)
     }
 
     /// Records a sort of the first `n` pairs of `keys`/`vals` into `pass`.
@@ -300,7 +304,7 @@ impl<'g> GpuSorter<'g> {
         self.gpu.queue.submit([encoder.finish()]);
         self.gpu.take_error()?;
         let read = |b: &wgpu::Buffer| -> Result<Vec<u32>, RuntimeError> {
-            let bytes = crate::sim::read_buffer(self.gpu, b)?;
+            let bytes = crate::readback::read_buffer(&self.gpu, b)?;
             Ok(bytes
                 .chunks_exact(4)
                 .take(n as usize)

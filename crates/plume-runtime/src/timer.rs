@@ -1,5 +1,5 @@
-//! GPU timing of one compute pass: timestamp queries at the pass's beginning and end where the
-//! adapter has them, otherwise the wall clock around a submission and its completion.
+//! GPU timing of one compute or render pass: timestamp queries at the pass's beginning and end
+//! where the adapter has them, otherwise the wall clock around a submission and its completion.
 
 use std::time::Instant;
 
@@ -55,8 +55,7 @@ impl<'g> PassTimer<'g> {
         &self,
         record: impl FnOnce(&mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError>,
     ) -> Result<f64, RuntimeError> {
-        let device = &self.gpu.device;
-        let mut encoder = device.create_command_encoder(&Default::default());
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         {
             let timestamp_writes =
                 self.queries
@@ -72,6 +71,35 @@ impl<'g> PassTimer<'g> {
             });
             record(&mut pass)?;
         }
+        self.finish(encoder)
+    }
+
+    /// Records with `record`, which must pass the given timestamp writes (None without
+    /// timestamps) to the one render pass it times; submits, waits, and returns the render
+    /// pass's duration (s), or the whole submission's without timestamps.
+    pub fn time_render(
+        &self,
+        record: impl FnOnce(
+            &mut wgpu::CommandEncoder,
+            Option<wgpu::RenderPassTimestampWrites<'_>>,
+        ) -> Result<(), RuntimeError>,
+    ) -> Result<f64, RuntimeError> {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let timestamp_writes =
+            self.queries
+                .as_ref()
+                .map(|(set, _)| wgpu::RenderPassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                });
+        record(&mut encoder, timestamp_writes)?;
+        self.finish(encoder)
+    }
+
+    /// Resolves the timestamps (if any), submits, waits and returns the duration (s).
+    fn finish(&self, mut encoder: wgpu::CommandEncoder) -> Result<f64, RuntimeError> {
+        let device = &self.gpu.device;
         let readback = self.queries.as_ref().map(|(set, resolve)| {
             encoder.resolve_query_set(set, 0..2, resolve, 0);
             let read = device.create_buffer(&wgpu::BufferDescriptor {

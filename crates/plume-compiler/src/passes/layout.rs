@@ -20,6 +20,11 @@ pub enum Attribute {
     DeathStep,
     /// Global spawn index, or `0xffffffff` for a free slot: `id`.
     Id,
+    /// The step the particle spawned at: `born`. Only when the draw needs a life fraction
+    /// (colour or size change over life) and the emitters with lifetimes draw them from
+    /// different ranges, so that the draw cannot re-derive a particle's lifetime from its id
+    /// alone (see [`needs_spawn_step`]).
+    SpawnStep,
 }
 
 impl Attribute {
@@ -31,6 +36,7 @@ impl Attribute {
             Attribute::Displacement => (&["dx", "dy", "dz"], "f32"),
             Attribute::DeathStep => (&["die_at"], "u32"),
             Attribute::Id => (&["id"], "u32"),
+            Attribute::SpawnStep => (&["born"], "u32"),
         }
     }
 
@@ -47,6 +53,9 @@ impl Attribute {
             Attribute::Displacement => "Verlet displacement x - x_prev per substep (m)",
             Attribute::DeathStep => "step whose update kills it (0xffffffff: never)",
             Attribute::Id => "global spawn index; 0xffffffff marks a free slot",
+            Attribute::SpawnStep => {
+                "spawn step, for the draw's life fraction (emitters' lifetime ranges differ)"
+            }
         }
     }
 }
@@ -147,6 +156,24 @@ impl Layout {
 /// Bytes of the counters struct (free count, spawn base, spawn count, spawned, dropped, died).
 pub const COUNTERS_BYTES: u64 = 24;
 
+/// The one lifetime draw that every emitter with a lifetime shares, when there is one: then a
+/// particle's whole-step lifetime is a function of its id alone (the draw of stream
+/// [`crate::rng::stream::LIFETIME`]), and with `die_at` it gives the spawn step.
+pub fn shared_lifetime(ir: &EffectIr) -> Option<crate::lifetime::LifetimeSteps> {
+    let mut draws = ir.emitters.iter().filter_map(|e| e.lifetime_steps);
+    let first = draws.next()?;
+    draws.all(|d| d == first).then_some(first)
+}
+
+/// Whether a stateful particle stores its spawn step (`born`): only when the draw needs a life
+/// fraction and cannot derive the spawn step from `die_at` and the shared lifetime draw.
+pub fn needs_spawn_step(ir: &EffectIr) -> bool {
+    ir.stateless.is_none()
+        && ir.render.varies_over_life()
+        && ir.has_lifetimes()
+        && shared_lifetime(ir).is_none()
+}
+
 /// Decides the layout for a resolved IR.
 pub fn decide(ir: &EffectIr) -> Layout {
     let mut attributes = vec![Attribute::Position];
@@ -159,6 +186,9 @@ pub fn decide(ir: &EffectIr) -> Layout {
         attributes.push(Attribute::DeathStep);
     }
     attributes.push(Attribute::Id);
+    if needs_spawn_step(ir) {
+        attributes.push(Attribute::SpawnStep);
+    }
     // Padded to a multiple of 16 bytes so kernels move the state as whole vec4 words: scalar
     // accesses at a 28- or 32-byte stride reached under half the copy kernel's bandwidth on an
     // H100 (docs/performance.md).
@@ -308,6 +338,13 @@ pub fn decide(ir: &EffectIr) -> Layout {
             space: "storage, read_write",
             bytes: padded,
             meaning: "slot indices, in draw order after the sort",
+        });
+        layout.bindings.push(Binding {
+            binding: 14,
+            name: "depth_axis",
+            space: "uniform",
+            bytes: 16,
+            meaning: "the camera's forward axis and offset: depth = dot(axis.xyz, x) + axis.w, written before each sort",
         });
     }
     layout.bindings.sort_by_key(|b| b.binding);

@@ -1,7 +1,9 @@
-//! WGSL generation: one module per effect with a `spawn_prepare`, a `spawn` and one fused
-//! `update` kernel (or, for a stateless effect, one `evaluate` kernel), effect constants baked
-//! in, and only the code and attributes it uses.
+//! WGSL generation: one compute module per effect with a `spawn_prepare`, a `spawn` and one
+//! fused `update` kernel (or, for a stateless effect, one `evaluate` kernel), effect constants
+//! baked in, and only the code and attributes it uses; and beside it one draw module
+//! ([`draw`]) whose vertex shader reads the particles where the compute module left them.
 
+pub mod draw;
 pub mod spawn;
 pub mod stateless;
 pub mod update;
@@ -101,6 +103,10 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         stateless::emit_declarations(&mut w);
         w.blank();
     }
+    if layout.sorts() {
+        emit_depth_axis_struct(&mut w);
+        w.blank();
+    }
     for b in &layout.bindings {
         let ty = match b.name {
             "particles" => "array<vec4<u32>>",
@@ -112,6 +118,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "cells" => "array<vec2<u32>>",
             "field" => "array<vec4<f32>>",
             "frame" => "Frame",
+            "depth_axis" => "DepthAxis",
             _ => "StepParams",
         };
         w.line(format!(
@@ -216,19 +223,7 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
         for k in 0..n {
             w.line(format!("let w{k} = particles[i * VEC4S + {k}u];"));
         }
-        let fields: Vec<String> = words
-            .iter()
-            .enumerate()
-            .map(|(j, (_, ty))| {
-                let word = format!("w{}.{}", j / 4, LANES[j % 4]);
-                if *ty == "f32" {
-                    format!("bitcast<f32>({word})")
-                } else {
-                    word
-                }
-            })
-            .collect();
-        w.line(format!("return Particle({});", fields.join(", ")));
+        w.line(format!("return {};", particle_from_words(layout)));
     });
     w.block("fn store_particle(i: u32, p: Particle)", |w| {
         for (k, word) in packed_words(layout).iter().enumerate() {
@@ -249,6 +244,26 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
     });
 }
 
+/// The `Particle(...)` constructor from its vec4<u32> words held in `w0`, `w1`, ... (the
+/// inverse of [`packed_words`]); shared by the compute module's `load_particle` and the draw
+/// module's.
+pub fn particle_from_words(layout: &Layout) -> String {
+    let fields: Vec<String> = layout
+        .words()
+        .iter()
+        .enumerate()
+        .map(|(j, (_, ty))| {
+            let word = format!("w{}.{}", j / 4, LANES[j % 4]);
+            if *ty == "f32" {
+                format!("bitcast<f32>({word})")
+            } else {
+                word
+            }
+        })
+        .collect();
+    format!("Particle({})", fields.join(", "))
+}
+
 /// The particle struct `p` as its vec4<u32> words (WGSL expressions, in memory order).
 pub fn packed_words(layout: &Layout) -> Vec<String> {
     let words = layout.words();
@@ -266,28 +281,41 @@ pub fn packed_words(layout: &Layout) -> Vec<String> {
         .collect()
 }
 
-/// `depth_keys`: one sort key per slot, the view depth from the camera mapped to a u32 that
-/// orders farthest first; free slots get the largest key and non-finite positions the next.
+/// The depth axis the sort orders by, from the runtime: depth = dot(axis.xyz, x) + axis.w, the
+/// distance in front of the camera along its forward axis (for a view matrix V, axis = −row 2
+/// of V). Written before each sort, so a host's camera sorts as well as the effect's.
+pub fn emit_depth_axis_struct(w: &mut Writer) {
+    w.block("struct DepthAxis", |w| {
+        w.line("axis: vec4<f32>,");
+    });
+}
+
+/// `depth_keys`: one sort key per slot, the view depth along the `depth_axis` uniform mapped to
+/// a u32 that orders farthest first; free slots get the largest key and non-finite positions
+/// the next. A stateful effect reads each slot's state; a stateless one evaluates its closed
+/// form in place (no view is written: sorting costs keys only).
 fn emit_depth_keys(w: &mut Writer, ir: &EffectIr) {
-    let forward = crate::forces::safe_normalize(ir.camera.target - ir.camera.eye);
-    w.line(format!(
-        "const EYE: vec3<f32> = {};",
-        writer::vec3_lit(ir.camera.eye)
-    ));
-    w.line(format!(
-        "const FORWARD: vec3<f32> = {};",
-        writer::vec3_lit(forward)
-    ));
+    let stateless = ir.stateless.is_some();
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
         "fn depth_keys(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            emit_thread_index(w, "local", Some("chunk.len"));
-            w.line("let slot = chunk.base + local;");
-            w.line("let p = load_particle(local);");
+            if stateless {
+                w.comment("Every slot of the capacity, in one dispatch: there is no view to split.");
+                emit_thread_index(w, "slot", Some("CAPACITY"));
+                w.line("let e = evaluate_at(slot);");
+                w.line("let alive = e.alive;");
+                w.line("let x = e.now.x;");
+            } else {
+                emit_thread_index(w, "local", Some("chunk.len"));
+                w.line("let slot = chunk.base + local;");
+                w.line("let p = load_particle(local);");
+                w.line("let alive = p.id != DEAD;");
+                w.line("let x = vec3<f32>(p.px, p.py, p.pz);");
+            }
             w.line("var key = 0xffffffffu;");
-            w.block("if (p.id != DEAD)", |w| {
-                w.line("let depth = dot(vec3<f32>(p.px, p.py, p.pz) - EYE, FORWARD);");
+            w.block("if (alive)", |w| {
+                w.line("let depth = dot(depth_axis.axis.xyz, x) + depth_axis.axis.w;");
                 w.line("let bits = bitcast<u32>(depth);");
                 w.comment("Integer test for Inf/NaN: WGSL may assume floats are finite.");
                 w.block("if ((bits & 0x7f800000u) == 0x7f800000u)", |w| {

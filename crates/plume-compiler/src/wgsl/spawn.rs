@@ -78,6 +78,9 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                     fields.push("s.die_at");
                 }
                 fields.push("id");
+                if layout.has(Attribute::SpawnStep) {
+                    fields.push("params.step");
+                }
                 w.line(format!("store_particle(slot - chunk.base, Particle({}));", fields.join(", ")));
             }
         },

@@ -26,6 +26,72 @@ pub fn emit_declarations(w: &mut Writer) {
     });
 }
 
+/// Emits `struct Evaluated` and `evaluate_at(slot)`: slot `slot` of this frame computed from its
+/// spawn draws and its age (whether it is alive, its position and velocity now, its `die_at`,
+/// id, spawn step and whole steps lived). Shared by the compute `evaluate` and `depth_keys`
+/// kernels and by the draw module's vertex shader, so all three see the same particle.
+pub fn emit_evaluate_at(w: &mut Writer, ir: &EffectIr) {
+    w.comment("A slot of this frame: alive or not, and if alive its state now (x, v, die_at), id,");
+    w.comment("spawn step and whole steps lived.");
+    w.block("struct Evaluated", |w| {
+        w.line("now: Spawned,");
+        w.line("id: u32,");
+        w.line("born: u32,");
+        w.line("age: u32,");
+        w.line("alive: bool,");
+    });
+    w.block("fn evaluate_at(slot: u32) -> Evaluated", |w| {
+        w.line("var e: Evaluated;");
+        w.line("e.alive = false;");
+        w.comment("Past the frame's threads (all of them when no segment is live: threads = 0).");
+        w.block("if (slot >= frame.threads)", |w| {
+            w.line("return e;");
+        });
+        w.comment("The last segment starting at or before this slot (offsets increase).");
+        w.line("var lo = 0u;");
+        w.line("var hi = frame.count;");
+        w.block("while (hi - lo > 1u)", |w| {
+            w.line("let mid = (lo + hi) / 2u;");
+            w.block("if (frame.segments[mid].a.x <= slot)", |w| {
+                w.line("lo = mid;")
+            });
+            w.block("else", |w| w.line("hi = mid;"));
+        });
+        w.line("let seg = frame.segments[lo];");
+        w.line("let j = slot - seg.a.x;");
+        w.line("e.id = seg.a.y + j;");
+        w.line("e.born = seg.b.y;");
+        w.line("e.age = seg.b.x;");
+        w.line("let k = seg.a.z + j;");
+        w.line("var s: Spawned;");
+        w.block("switch seg.a.w", |w| {
+            if ir.emitters.is_empty() {
+                w.block("default", |w| w.line("return e;"));
+            }
+            for e in 0..ir.emitters.len() {
+                let label = if e + 1 == ir.emitters.len() {
+                    format!("case {e}u, default")
+                } else {
+                    format!("case {e}u")
+                };
+                w.block(label, |w| {
+                    w.line(format!("s = emit_{e}(e.id, k, seg.b.y);"))
+                });
+            }
+        });
+        if ir.has_lifetimes() {
+            w.comment("Dead once it has lived its whole steps: die_at - spawn step + 1.");
+            w.block(
+                "if (s.die_at != DEAD && seg.b.x >= s.die_at - seg.b.y + 1u)",
+                |w| w.line("return e;"),
+            );
+        }
+        w.line("e.now = advance(s, bitcast<f32>(seg.b.z));");
+        w.line("e.alive = true;");
+        w.line("return e;");
+    });
+}
+
 /// Emits `evaluate_slot` (one particle of the view) and two kernels that write the view:
 /// - `evaluate` stages a workgroup's particles in workgroup memory so that consecutive threads
 ///   store consecutive 16-byte words. A thread storing its own 32-byte particle as two words
@@ -44,56 +110,26 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             _ => "0u",
         })
         .collect();
+    emit_evaluate_at(w, ir);
+    w.blank();
     w.comment("The particle in global slot `slot` of this frame, or a free slot.");
     w.block("fn evaluate_slot(slot: u32) -> Particle", |w| {
-        w.line(format!("let free = Particle({});", dead_fields.join(", ")));
-        w.comment("Past the frame's threads (all of them when no segment is live: threads = 0).");
-        w.block("if (slot >= frame.threads)", |w| {
-            w.line("return free;");
+        w.line("let e = evaluate_at(slot);");
+        w.block("if (!e.alive)", |w| {
+            w.line(format!("return Particle({});", dead_fields.join(", ")));
         });
-        w.comment("The last segment starting at or before this slot (offsets increase).");
-        w.line("var lo = 0u;");
-        w.line("var hi = frame.count;");
-        w.block("while (hi - lo > 1u)", |w| {
-            w.line("let mid = (lo + hi) / 2u;");
-            w.block("if (frame.segments[mid].a.x <= slot)", |w| {
-                w.line("lo = mid;")
-            });
-            w.block("else", |w| w.line("hi = mid;"));
-        });
-        w.line("let seg = frame.segments[lo];");
-        w.line("let j = slot - seg.a.x;");
-        w.line("let id = seg.a.y + j;");
-        w.line("let k = seg.a.z + j;");
-        w.line("var s: Spawned;");
-        w.block("switch seg.a.w", |w| {
-            if ir.emitters.is_empty() {
-                w.block("default", |w| w.line("return free;"));
-            }
-            for e in 0..ir.emitters.len() {
-                let label = if e + 1 == ir.emitters.len() {
-                    format!("case {e}u, default")
-                } else {
-                    format!("case {e}u")
-                };
-                w.block(label, |w| w.line(format!("s = emit_{e}(id, k, seg.b.y);")));
-            }
-        });
-        if layout.has(Attribute::DeathStep) {
-            w.comment("Dead once it has lived its whole steps: die_at - spawn step + 1.");
-            w.block(
-                "if (s.die_at != DEAD && seg.b.x >= s.die_at - seg.b.y + 1u)",
-                |w| w.line("return free;"),
-            );
-        }
-        w.line("let now = advance(s, bitcast<f32>(seg.b.z));");
         let mut fields = vec![
-            "now.x.x", "now.x.y", "now.x.z", "now.v.x", "now.v.y", "now.v.z",
+            "e.now.x.x",
+            "e.now.x.y",
+            "e.now.x.z",
+            "e.now.v.x",
+            "e.now.v.y",
+            "e.now.v.z",
         ];
         if layout.has(Attribute::DeathStep) {
-            fields.push("s.die_at");
+            fields.push("e.now.die_at");
         }
-        fields.push("id");
+        fields.push("e.id");
         w.line(format!("return Particle({});", fields.join(", ")));
     });
     w.blank();

@@ -1,14 +1,18 @@
-//! Headless rendering of particles as camera-facing soft round sprites into an RGBA image.
-//! Colour and size come from the effect's `render:` section over each particle's life fraction;
-//! with `sort: true` sprites are drawn back to front as seen from the camera.
+//! The reference drawing, the oracle the GPU draw ([`crate::draw`]) is tested against: particles
+//! read back to the CPU, coloured and sized there in f64 from the effect's `render:` section at
+//! each particle's life fraction ([`sprites`]), uploaded as one instance per sprite and drawn by
+//! a fixed sprite shader. This was Plume's only drawing path before the GPU draw; it now serves
+//! the tests (as the f64 reference serves the simulation), never `plume render`.
 
-use glam::{DVec3, Mat4, Vec3};
+use glam::DVec3;
 use plume_compiler::ir::{CameraIr, RenderIr};
 use plume_compiler::reference::ParticleRecord;
 use plume_compiler::schema::Blend;
 
+use crate::camera::Camera;
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
+use crate::offscreen::read_texture;
 
 /// One sprite: centre (m), diameter (m), colour (RGBA in [0, 1]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,40 +62,9 @@ pub fn sprites(
     keyed.into_iter().map(|(_, s)| s).collect()
 }
 
-/// View and projection matrices of the camera for an image of `aspect` = width / height.
-pub fn camera_matrices(camera: &CameraIr, aspect: f32) -> (Mat4, Mat4) {
-    let eye = camera.eye.as_vec3();
-    let target = camera.target.as_vec3();
-    let forward = (target - eye).normalize_or_zero();
-    // Y is up unless the camera looks straight along it.
-    let up = if forward.cross(Vec3::Y).length_squared() < 1e-6 {
-        Vec3::Z
-    } else {
-        Vec3::Y
-    };
-    let view = Mat4::look_at_rh(eye, target, up);
-    let proj = Mat4::perspective_rh(camera.fov_y.to_radians() as f32, aspect, 0.05, 10_000.0);
-    (view, proj)
-}
-
-/// Where a world point lands in an image of `width` x `height` (pixels, origin top left), or None
-/// when it is behind the camera.
-pub fn project(camera: &CameraIr, width: u32, height: u32, p: DVec3) -> Option<(f32, f32)> {
-    let (view, proj) = camera_matrices(camera, width as f32 / height as f32);
-    let clip = proj * view * p.as_vec3().extend(1.0);
-    if clip.w <= 0.0 {
-        return None;
-    }
-    let ndc = clip.truncate() / clip.w;
-    Some((
-        (ndc.x * 0.5 + 0.5) * width as f32,
-        (0.5 - ndc.y * 0.5) * height as f32,
-    ))
-}
-
-/// A render target and the sprite pipeline for one image size and blend mode.
-pub struct Renderer<'g> {
-    gpu: &'g Gpu,
+/// A render target and the reference sprite pipeline for one image size and blend mode.
+pub struct ReferenceRenderer {
+    gpu: Gpu,
     width: u32,
     height: u32,
     target: wgpu::Texture,
@@ -103,10 +76,10 @@ pub struct Renderer<'g> {
 
 const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
-impl<'g> Renderer<'g> {
+impl ReferenceRenderer {
     /// A renderer of `width` x `height` images with the given blending and background.
     pub fn new(
-        gpu: &'g Gpu,
+        gpu: &Gpu,
         width: u32,
         height: u32,
         blend: Blend,
@@ -135,7 +108,7 @@ impl<'g> Renderer<'g> {
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("sprites"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("sprite.wgsl").into()),
+            source: wgpu::ShaderSource::Wgsl(include_str!("reference_sprite.wgsl").into()),
         });
         let camera = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("camera"),
@@ -211,7 +184,7 @@ impl<'g> Renderer<'g> {
         });
         gpu.take_error()?;
         Ok(Self {
-            gpu,
+            gpu: gpu.clone(),
             width,
             height,
             target,
@@ -223,11 +196,10 @@ impl<'g> Renderer<'g> {
     }
 
     /// Draws `sprites` in order over the background as seen from `camera`; returns RGBA8 rows.
-    pub fn draw(&self, sprites: &[Sprite], camera: &CameraIr) -> Result<Vec<u8>, RuntimeError> {
+    pub fn draw(&self, sprites: &[Sprite], camera: &Camera) -> Result<Vec<u8>, RuntimeError> {
         let device = &self.gpu.device;
-        let (view, proj) = camera_matrices(camera, self.width as f32 / self.height as f32);
         let mut cam = Vec::with_capacity(128);
-        for m in [view, proj] {
+        for m in [camera.view, camera.proj] {
             for x in m.to_cols_array() {
                 cam.extend_from_slice(&x.to_le_bytes());
             }
@@ -250,13 +222,6 @@ impl<'g> Renderer<'g> {
             b
         });
         let view_tex = self.target.create_view(&Default::default());
-        let row = (self.width * 4).next_multiple_of(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT);
-        let readback = device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("frame readback"),
-            size: u64::from(row) * u64::from(self.height),
-            usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let bg = self.background;
@@ -288,46 +253,8 @@ impl<'g> Renderer<'g> {
                 pass.draw(0..6, 0..sprites.len() as u32);
             }
         }
-        encoder.copy_texture_to_buffer(
-            wgpu::TexelCopyTextureInfo {
-                texture: &self.target,
-                mip_level: 0,
-                origin: wgpu::Origin3d::ZERO,
-                aspect: wgpu::TextureAspect::All,
-            },
-            wgpu::TexelCopyBufferInfo {
-                buffer: &readback,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(row),
-                    rows_per_image: Some(self.height),
-                },
-            },
-            wgpu::Extent3d {
-                width: self.width,
-                height: self.height,
-                depth_or_array_layers: 1,
-            },
-        );
         self.gpu.queue.submit([encoder.finish()]);
-        let (tx, rx) = std::sync::mpsc::channel();
-        readback.map_async(wgpu::MapMode::Read, .., move |r| {
-            let _ = tx.send(r);
-        });
-        self.gpu.wait()?;
-        rx.recv()
-            .map_err(|e| RuntimeError::Readback(e.to_string()))?
-            .map_err(|e| RuntimeError::Readback(e.to_string()))?;
-        let data = readback
-            .get_mapped_range(..)
-            .map_err(|e| RuntimeError::Readback(e.to_string()))?;
-        let mut pixels = Vec::with_capacity((self.width * self.height * 4) as usize);
-        for y in 0..self.height as usize {
-            let start = y * row as usize;
-            pixels.extend_from_slice(&data[start..start + self.width as usize * 4]);
-        }
-        drop(data);
-        readback.unmap();
-        Ok(pixels)
+        self.gpu.take_error()?;
+        read_texture(&self.gpu, &self.target, self.width, self.height)
     }
 }

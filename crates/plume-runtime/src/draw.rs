@@ -1,0 +1,437 @@
+//! Drawing particles straight from the GPU buffers: the render pipeline of an effect's
+//! generated draw module (`plume_compiler::wgsl::draw`) for one render target, its per-frame
+//! `DrawView` uniform, and how many instances a draw issues.
+//!
+//! - A stateful effect draws one instance per slot; free slots become degenerate quads. With
+//!   `sort: true` it draws through the sorted slots, and only as many instances as are alive:
+//!   a one-thread kernel writes the indirect draw's instance count (capacity − free count) on
+//!   the GPU, so nothing is read back.
+//! - A stateless effect draws the slots of its segment table (a count the CPU knows); each
+//!   vertex computes its particle from the closed form, so no compute pass runs (a sorted one
+//!   still computes keys and sorts them).
+//!
+//! The draw tests depth against the host's depth buffer when the target has one, and never
+//! writes it: particles are translucent.
+
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use plume_compiler::schema::Blend;
+use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES};
+use plume_compiler::CompiledEffect;
+
+use crate::camera::Camera;
+use crate::error::RuntimeError;
+use crate::gpu::Gpu;
+use crate::live_list::LiveList;
+use crate::resources::{staging, Resources, STORAGE};
+
+/// The depth test against a host's depth buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DepthTest {
+    /// The depth attachment's format.
+    pub format: wgpu::TextureFormat,
+    /// Which fragments pass: `Less` for a standard depth buffer, `Greater` for reversed Z.
+    pub compare: wgpu::CompareFunction,
+}
+
+/// What a draw renders into: the colour attachment's format and sample count, and the depth
+/// attachment when the render pass has one (tested, never written). A pass with a depth
+/// attachment needs a pipeline of that depth format: to draw over everything in such a pass,
+/// use `with_depth_compare(format, CompareFunction::Always)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct DrawTarget {
+    /// The colour attachment's format.
+    pub color_format: wgpu::TextureFormat,
+    /// The depth test, when the render pass has a depth attachment.
+    pub depth: Option<DepthTest>,
+    /// Samples per pixel of the attachments (1: no multisampling).
+    pub sample_count: u32,
+}
+
+impl DrawTarget {
+    /// A colour attachment of `format`, no depth buffer, one sample.
+    pub fn new(color_format: wgpu::TextureFormat) -> Self {
+        Self {
+            color_format,
+            depth: None,
+            sample_count: 1,
+        }
+    }
+
+    /// Tests against a depth attachment of `format` with `Less` (a standard depth buffer).
+    pub fn with_depth(self, format: wgpu::TextureFormat) -> Self {
+        self.with_depth_compare(format, wgpu::CompareFunction::Less)
+    }
+
+    /// Tests against a depth attachment of `format` with `compare`.
+    pub fn with_depth_compare(
+        self,
+        format: wgpu::TextureFormat,
+        compare: wgpu::CompareFunction,
+    ) -> Self {
+        Self {
+            depth: Some(DepthTest { format, compare }),
+            ..self
+        }
+    }
+
+    /// With `count` samples per pixel.
+    pub fn with_samples(self, count: u32) -> Self {
+        Self {
+            sample_count: count,
+            ..self
+        }
+    }
+}
+
+/// How a stateful, unsorted draw skips the free slots (a sorted draw and a stateless draw
+/// already issue only the live instances).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DeadSlots {
+    /// One instance per slot; the vertex shader turns a free slot into a degenerate quad.
+    #[default]
+    Hidden,
+    /// A compacted list of the live slots first (three compute passes, [`crate::live_list`]),
+    /// then an indirect draw of exactly those.
+    Compacted,
+}
+
+/// Choices of a draw beyond its target.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DrawOptions {
+    /// Another blend state than the effect's (the benchmark measures blending's cost with
+    /// `REPLACE`).
+    pub blend: Option<wgpu::BlendState>,
+    /// How free slots are skipped.
+    pub dead_slots: DeadSlots,
+}
+
+/// How many instances a draw issues.
+enum Instances {
+    /// One per slot of the capacity.
+    Slots(u32),
+    /// The stateless frame's threads, set when the frame is prepared.
+    Frame(AtomicU32),
+    /// The compacted live slots, drawn indirectly.
+    Compacted(Box<LiveList>),
+    /// Written on the GPU: an indirect draw whose instance count is capacity − free count.
+    Alive {
+        args: wgpu::Buffer,
+        kernel: wgpu::ComputePipeline,
+        group: wgpu::BindGroup,
+    },
+}
+
+/// Writes the indirect draw's arguments from the counters: 4 vertices, capacity − free count
+/// instances (word 4 of `args` holds the capacity, written once).
+const DRAW_ARGS_WGSL: &str = r#"
+@group(0) @binding(0) var<storage, read> counters: array<u32>;
+@group(0) @binding(1) var<storage, read_write> args: array<u32>;
+
+@compute @workgroup_size(1)
+fn draw_args() {
+    args[0] = 4u;
+    args[1] = args[4] - min(counters[0], args[4]);
+    args[2] = 0u;
+    args[3] = 0u;
+}
+"#;
+
+/// An effect's draw into one kind of target: created by
+/// [`crate::instance::EffectInstance::renderer`], prepared each frame by
+/// [`crate::instance::EffectInstance::prepare_draw`], recorded into a render pass by
+/// [`EffectRenderer::draw`].
+pub struct EffectRenderer {
+    pipeline: wgpu::RenderPipeline,
+    view: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    instances: Instances,
+    size_scale: f32,
+    gpu: Gpu,
+}
+
+impl EffectRenderer {
+    /// The draw of `effect`, whose buffers `res` holds, into `target`.
+    pub(crate) fn new(
+        gpu: &Gpu,
+        effect: &CompiledEffect,
+        res: &Resources,
+        target: &DrawTarget,
+        options: &DrawOptions,
+    ) -> Result<Self, RuntimeError> {
+        if let Some(flags) = gpu.downlevel {
+            if !flags.contains(wgpu::DownlevelFlags::VERTEX_STORAGE) {
+                return Err(RuntimeError::Unsupported(format!(
+                    "{} cannot read storage buffers in vertex shaders, which drawing from the GPU buffers needs; use a Vulkan adapter (without a GPU: Debian's mesa-vulkan-drivers gives lavapipe)",
+                    gpu.info.name
+                )));
+            }
+        }
+        let device = &gpu.device;
+        let stateless = effect.layout.stateless();
+        let compacted = options.dead_slots == DeadSlots::Compacted && !stateless && !effect.ir.sort;
+        let shape = DrawShape {
+            chunks: if stateless {
+                1
+            } else {
+                res.chunk_count() as u32
+            },
+            chunk_slots: res.chunk_slots.min(u64::from(u32::MAX)) as u32,
+            through_list: effect.ir.sort || compacted,
+        };
+        // The compiled effect carries the one-buffer module; other shapes are emitted here.
+        let source = if shape == DrawShape::single(&effect.ir) {
+            effect.draw_wgsl.clone()
+        } else {
+            plume_compiler::wgsl::draw::emit(&effect.ir, &effect.layout, &shape)
+        };
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("draw"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+        let blend = options.blend.unwrap_or(match effect.ir.render.blend {
+            Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
+            Blend::Additive => wgpu::BlendState {
+                color: wgpu::BlendComponent {
+                    src_factor: wgpu::BlendFactor::SrcAlpha,
+                    dst_factor: wgpu::BlendFactor::One,
+                    operation: wgpu::BlendOperation::Add,
+                },
+                alpha: wgpu::BlendComponent::OVER,
+            },
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("draw"),
+            // Derived from the module: only the bindings this effect's shaders use.
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: wgpu::PrimitiveState {
+                topology: wgpu::PrimitiveTopology::TriangleStrip,
+                ..Default::default()
+            },
+            depth_stencil: target.depth.map(|d| wgpu::DepthStencilState {
+                format: d.format,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(d.compare),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState {
+                count: target.sample_count,
+                ..Default::default()
+            },
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: target.color_format,
+                    blend: Some(blend),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let view = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("draw view"),
+            size: DRAW_VIEW_BYTES,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: view.as_entire_binding(),
+        }];
+        let live = match compacted {
+            true => Some(LiveList::new(gpu, res, effect)?),
+            false => None,
+        };
+        if shape.through_list {
+            let order = match &live {
+                Some(live) => &live.list,
+                None => &crate::depth_sort::sort_buffers(res)?.vals,
+            };
+            entries.push(wgpu::BindGroupEntry {
+                binding: 1,
+                resource: order.as_entire_binding(),
+            });
+        }
+        let first = plume_compiler::wgsl::draw::FIRST_DATA_BINDING;
+        if stateless {
+            entries.push(wgpu::BindGroupEntry {
+                binding: first,
+                resource: res
+                    .frame
+                    .as_ref()
+                    .expect("a stateless effect has a frame table")
+                    .as_entire_binding(),
+            });
+        } else {
+            for (k, chunk) in res.chunks(effect)?.iter().enumerate() {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: first + k as u32,
+                    resource: chunk.buffer.as_entire_binding(),
+                });
+            }
+        }
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("draw"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        let instances = if let Some(live) = live {
+            Instances::Compacted(Box::new(live))
+        } else if stateless {
+            Instances::Frame(AtomicU32::new(0))
+        } else if effect.ir.sort {
+            alive_instances(gpu, res, effect.ir.capacity)?
+        } else {
+            Instances::Slots(effect.ir.capacity)
+        };
+        gpu.take_error()?;
+        Ok(Self {
+            pipeline,
+            view,
+            group,
+            instances,
+            size_scale: 1.0,
+            gpu: gpu.clone(),
+        })
+    }
+
+    /// Scales every sprite's size (1: the effect's own sizes).
+    pub fn set_size_scale(&mut self, scale: f32) {
+        self.size_scale = scale;
+    }
+
+    /// Records the frame's `DrawView` (camera and steps done) into `encoder`, as a copy, so
+    /// that several prepares in one submission each draw with their own.
+    pub(crate) fn write_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+        steps: u64,
+    ) -> Result<(), RuntimeError> {
+        let mut bytes = Vec::with_capacity(DRAW_VIEW_BYTES as usize);
+        for m in [camera.view, camera.proj] {
+            for x in m.to_cols_array() {
+                bytes.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        // Steps done, mod 2^32 as the kernels' step index and die_at wrap.
+        bytes.extend_from_slice(&(steps as u32).to_le_bytes());
+        bytes.extend_from_slice(&self.size_scale.to_le_bytes());
+        bytes.extend_from_slice(&[0; 8]);
+        let src = staging(&self.gpu, "draw view", &bytes)?;
+        encoder.copy_buffer_to_buffer(&src, 0, &self.view, 0, DRAW_VIEW_BYTES);
+        Ok(())
+    }
+
+    /// Records what decides the instances on the GPU: the live count, or the compacted list.
+    pub(crate) fn record_instance_count(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+    ) -> Result<(), RuntimeError> {
+        match &self.instances {
+            Instances::Alive { kernel, group, .. } => {
+                pass.set_pipeline(kernel);
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+            Instances::Compacted(live) => live.record(pass)?,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// Whether the draw needs [`Self::record_instance_count`] each frame.
+    pub(crate) fn counts_on_gpu(&self) -> bool {
+        matches!(
+            self.instances,
+            Instances::Alive { .. } | Instances::Compacted(_)
+        )
+    }
+
+    /// Sets a stateless draw's instances (the frame's threads).
+    pub(crate) fn set_frame_instances(&self, threads: u32) {
+        if let Instances::Frame(n) = &self.instances {
+            n.store(threads, Ordering::Relaxed);
+        }
+    }
+
+    /// Records the draw into the caller's render pass (after
+    /// [`crate::instance::EffectInstance::prepare_draw`] in the same or an earlier
+    /// submission). Sets its own pipeline and bind group 0.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.group, &[]);
+        match &self.instances {
+            Instances::Slots(n) => pass.draw(0..4, 0..*n),
+            Instances::Frame(n) => {
+                let n = n.load(Ordering::Relaxed);
+                if n > 0 {
+                    pass.draw(0..4, 0..n);
+                }
+            }
+            Instances::Alive { args, .. } => pass.draw_indirect(args, 0),
+            Instances::Compacted(live) => pass.draw_indirect(&live.args, 0),
+        }
+    }
+}
+
+/// An indirect draw of the live particles (a sorted stateful effect: they come first in the
+/// depth order) and the kernel that writes its count.
+fn alive_instances(gpu: &Gpu, res: &Resources, capacity: u32) -> Result<Instances, RuntimeError> {
+    let device = &gpu.device;
+    let args = crate::resources::filled_buffer(
+        gpu,
+        "draw args",
+        32,
+        STORAGE | wgpu::BufferUsages::INDIRECT,
+        |b| {
+            b[..4].copy_from_slice(&4u32.to_le_bytes());
+            b[16..20].copy_from_slice(&capacity.to_le_bytes());
+        },
+    )?;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("draw args"),
+        source: wgpu::ShaderSource::Wgsl(DRAW_ARGS_WGSL.into()),
+    });
+    let kernel = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("draw_args"),
+        layout: None,
+        module: &module,
+        entry_point: Some("draw_args"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("draw args"),
+        layout: &kernel.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: res
+                    .counters
+                    .as_ref()
+                    .expect("a stateful effect has counters")
+                    .as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: args.as_entire_binding(),
+            },
+        ],
+    });
+    Ok(Instances::Alive {
+        args,
+        kernel,
+        group,
+    })
+}

@@ -1,0 +1,554 @@
+//! An effect instance: a compiled effect running on a device, Plume's own or a host
+//! application's. It owns the effect's resources and ties the pipeline's stages together:
+//! [`crate::steps`] advances it, [`crate::depth_sort`] orders it, [`crate::draw`] draws it into a
+//! render pass, and [`crate::readback`] reads it back. Steps and draws are recorded into the
+//! caller's command encoder and render pass; per-call parameters travel as copies inside that
+//! encoder, so several steps, prepares and draws can share one submission.
+
+use plume_compiler::reference::{ParticleRecord, Totals};
+use plume_compiler::schedule::{Schedule, StepPlan};
+use plume_compiler::CompiledEffect;
+
+use crate::camera::Camera;
+use crate::depth_sort::{sort_buffers, DepthSort};
+use crate::draw::{DrawOptions, DrawTarget, EffectRenderer};
+use crate::error::RuntimeError;
+use crate::gpu::Gpu;
+use crate::readback::{decode_slots, decode_totals, read_buffer, read_words};
+use crate::resources::{staging, Chunk, Resources, STEPS_PER_SUBMIT};
+use crate::sort::SortAlgorithm;
+use crate::steps::{params_bytes, StatelessSteps, Steps};
+use crate::timer::PassTimer;
+
+/// A compiled effect running on a GPU: its buffers, its kernels and its spawn schedule.
+///
+/// ```no_run
+/// # fn frame(device: &wgpu::Device, queue: &wgpu::Queue, view: &wgpu::TextureView,
+/// #          camera: plume_runtime::Camera) -> Result<(), Box<dyn std::error::Error>> {
+/// use plume_runtime::{DrawTarget, EffectInstance, Gpu};
+/// let source = std::fs::read_to_string("effects/fountain.ron")?;
+/// let effect = plume_compiler::compile_str(&source, &Default::default())?;
+/// // On the host's own device and queue:
+/// let mut fountain = EffectInstance::new(&Gpu::from_device(device, queue), effect)?;
+/// let renderer = fountain.renderer(&DrawTarget::new(wgpu::TextureFormat::Rgba8Unorm))?;
+/// // Each frame: steps and the draw's preparation go into the host's encoder ...
+/// let mut encoder = device.create_command_encoder(&Default::default());
+/// fountain.advance(&mut encoder, 1)?;
+/// fountain.prepare_draw(&mut encoder, &renderer, &camera)?;
+/// {
+///     // ... and the draw into the host's render pass, beside its own geometry.
+///     let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+///         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+///             view,
+///             depth_slice: None,
+///             resolve_target: None,
+///             ops: wgpu::Operations::default(),
+///         })],
+///         ..Default::default()
+///     });
+///     renderer.draw(&mut pass);
+/// }
+/// queue.submit([encoder.finish()]);
+/// # Ok(()) }
+/// ```
+pub struct EffectInstance {
+    gpu: Gpu,
+    effect: CompiledEffect,
+    schedule: Schedule,
+    res: Resources,
+    steps: Steps,
+    depth: Option<DepthSort>,
+}
+
+impl EffectInstance {
+    /// Allocates `effect`'s buffers and builds its kernels on `gpu` (Plume's own device, or a
+    /// host's through [`Gpu::from_device`]). Runs the initial state's kernel (every slot free)
+    /// in its own submission.
+    pub fn new(gpu: &Gpu, effect: CompiledEffect) -> Result<Self, RuntimeError> {
+        Self::with_chunk_slots(gpu, effect, None)
+    }
+
+    /// Like [`EffectInstance::new`] with at most `max_chunk_slots` particles per buffer (tests
+    /// use it to exercise the split on small effects).
+    pub fn with_chunk_slots(
+        gpu: &Gpu,
+        effect: CompiledEffect,
+        max_chunk_slots: Option<u64>,
+    ) -> Result<Self, RuntimeError> {
+        let res = Resources::new(gpu, &effect, max_chunk_slots)?;
+        let steps = Steps::new(gpu, &res, &effect)?;
+        let depth = match effect.layout.sorts() {
+            true => Some(DepthSort::new(gpu, &res, &effect)?),
+            false => None,
+        };
+        let instance = Self {
+            gpu: gpu.clone(),
+            schedule: Schedule::new(&effect.ir),
+            effect,
+            res,
+            steps,
+            depth,
+        };
+        if let Steps::Stateful(stateful) = &instance.steps {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                stateful.record_init(gpu, &mut pass, instance.chunks()?)?;
+            }
+            gpu.queue.submit([encoder.finish()]);
+        }
+        gpu.take_error()?;
+        Ok(instance)
+    }
+
+    fn chunks(&self) -> Result<&[Chunk], RuntimeError> {
+        self.res.chunks(&self.effect)
+    }
+
+    /// Records `steps` steps into the caller's `encoder` (a compute pass per
+    /// [`STEPS_PER_SUBMIT`] steps, each preceded by the copy of its steps' parameters). The
+    /// schedule advances now: submit the encoder before reading the instance back. A stateless
+    /// effect only advances its bookkeeping and records nothing.
+    pub fn advance(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        steps: u64,
+    ) -> Result<(), RuntimeError> {
+        if let Steps::Stateless(stateless) = &mut self.steps {
+            stateless.advance(&mut self.schedule, steps, |_| {});
+            return Ok(());
+        }
+        let mut done = 0;
+        while done < steps {
+            let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
+            let plans: Vec<StepPlan> = (0..n).map(|_| self.schedule.next_plan()).collect();
+            self.record_plans(encoder, &plans)?;
+            done += n;
+        }
+        Ok(())
+    }
+
+    /// Records the parameters' copy and one compute pass of `plans` (at most 256 steps).
+    fn record_plans(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        plans: &[StepPlan],
+    ) -> Result<(), RuntimeError> {
+        let Steps::Stateful(stateful) = &self.steps else {
+            return Ok(());
+        };
+        let params = self
+            .res
+            .params
+            .as_ref()
+            .expect("a stateful effect has params");
+        let bytes = params_bytes(
+            plans,
+            self.effect.layout.emitter_slots,
+            self.res.params_stride,
+        );
+        let src = staging(&self.gpu, "step params", &bytes)?;
+        encoder.copy_buffer_to_buffer(&src, 0, params, 0, bytes.len() as u64);
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("steps"),
+            timestamp_writes: None,
+        });
+        stateful.record(
+            &self.gpu,
+            &mut pass,
+            self.chunks()?,
+            plans,
+            self.res.params_stride,
+        )
+    }
+
+    /// Runs `steps` steps in submissions of [`STEPS_PER_SUBMIT`], calling `progress(done)`
+    /// after each is submitted. Returns when the GPU has finished.
+    pub fn run(&mut self, steps: u64, mut progress: impl FnMut(u64)) -> Result<(), RuntimeError> {
+        if let Steps::Stateless(stateless) = &mut self.steps {
+            stateless.advance(&mut self.schedule, steps, progress);
+            return Ok(());
+        }
+        let mut done = 0;
+        while done < steps {
+            let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            self.advance(&mut encoder, n)?;
+            self.gpu.queue.submit([encoder.finish()]);
+            self.gpu.take_error()?;
+            done += n;
+            progress(done);
+        }
+        self.gpu.wait()
+    }
+
+    /// A draw of this effect into render targets like `target`: the effect's draw module on a
+    /// render pipeline for that target. Create one per kind of target; reuse it every frame.
+    pub fn renderer(&self, target: &DrawTarget) -> Result<EffectRenderer, RuntimeError> {
+        self.renderer_with(target, &DrawOptions::default())
+    }
+
+    /// Like [`Self::renderer`] with other choices ([`DrawOptions`]).
+    pub fn renderer_with(
+        &self,
+        target: &DrawTarget,
+        options: &DrawOptions,
+    ) -> Result<EffectRenderer, RuntimeError> {
+        EffectRenderer::new(&self.gpu, &self.effect, &self.res, target, options)
+    }
+
+    /// Records what a draw from `camera` needs this frame into the caller's `encoder`, outside
+    /// any render pass: the camera and the steps done; for a stateless effect its segment
+    /// table; for `sort: true` the depth keys and their sort along the camera's axis, and the
+    /// live count of the indirect draw. Then call [`EffectRenderer::draw`] in a render pass.
+    /// An unsorted stateless effect records no compute pass at all.
+    pub fn prepare_draw(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        renderer: &EffectRenderer,
+        camera: &Camera,
+    ) -> Result<(), RuntimeError> {
+        renderer.write_view(encoder, camera, self.schedule.steps_done())?;
+        if let Steps::Stateless(stateless) = &self.steps {
+            let threads = self.copy_frame(encoder, stateless)?;
+            renderer.set_frame_instances(threads);
+        }
+        if self.depth.is_none() && !renderer.counts_on_gpu() {
+            return Ok(());
+        }
+        if self.depth.is_some() {
+            self.copy_depth_axis(encoder, camera)?;
+        }
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("prepare draw"),
+            timestamp_writes: None,
+        });
+        if let Some(depth) = &self.depth {
+            depth.record(
+                &self.gpu,
+                &mut pass,
+                &self.res,
+                self.sort_chunks()?,
+                SortAlgorithm::Radix,
+            )?;
+        }
+        renderer.record_instance_count(&mut pass)
+    }
+
+    /// The particle buffers the depth keys read (none for a stateless effect: it evaluates in
+    /// place, so sorting allocates no view).
+    fn sort_chunks(&self) -> Result<&[Chunk], RuntimeError> {
+        match self.steps {
+            Steps::Stateless(_) => Ok(&[]),
+            Steps::Stateful(_) => self.chunks(),
+        }
+    }
+
+    /// Copies a stateless effect's segment table for the steps done into the frame buffer;
+    /// returns its threads.
+    fn copy_frame(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        stateless: &StatelessSteps,
+    ) -> Result<u32, RuntimeError> {
+        let frame = self
+            .res
+            .frame
+            .as_ref()
+            .expect("a stateless effect has a frame");
+        let (bytes, threads) = stateless.frame_bytes(&self.effect, frame.size())?;
+        let src = staging(&self.gpu, "frame", &bytes)?;
+        encoder.copy_buffer_to_buffer(&src, 0, frame, 0, bytes.len() as u64);
+        Ok(threads)
+    }
+
+    fn copy_depth_axis(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+    ) -> Result<(), RuntimeError> {
+        let bytes: Vec<u8> = camera
+            .depth_axis()
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let src = staging(&self.gpu, "depth axis", &bytes)?;
+        encoder.copy_buffer_to_buffer(&src, 0, &sort_buffers(&self.res)?.depth_axis, 0, 16);
+        Ok(())
+    }
+
+    /// The effect's own camera (its view matrix is all the sort uses).
+    fn effect_camera(&self) -> Camera {
+        Camera::from_effect(&self.effect.ir.camera, 1.0)
+    }
+
+    /// A stateless effect: computes the view at the steps done, unless it already holds them.
+    /// A stateful effect: nothing to do.
+    fn evaluate_view(&self) -> Result<(), RuntimeError> {
+        let Steps::Stateless(stateless) = &self.steps else {
+            return Ok(());
+        };
+        if stateless.view_is_current() && self.res.has_chunks() {
+            return Ok(());
+        }
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        self.copy_frame(&mut encoder, stateless)?;
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            stateless.record_evaluate(&self.gpu, &mut pass, self.chunks()?)?;
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()?;
+        stateless.mark_view_current();
+        Ok(())
+    }
+
+    /// Sorts every slot by depth along `camera`'s axis on the GPU (farthest first, free slots
+    /// last) and returns the live slots in draw order, each with its key.
+    pub fn draw_order_from(
+        &self,
+        camera: &Camera,
+        algorithm: SortAlgorithm,
+    ) -> Result<Vec<(u32, u32)>, RuntimeError> {
+        let depth = self.depth.as_ref().ok_or_else(|| {
+            RuntimeError::Output("this effect has no sort stage (sort: false)".into())
+        })?;
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        if let Steps::Stateless(stateless) = &self.steps {
+            self.copy_frame(&mut encoder, stateless)?;
+        }
+        self.copy_depth_axis(&mut encoder, camera)?;
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            depth.record(
+                &self.gpu,
+                &mut pass,
+                &self.res,
+                self.sort_chunks()?,
+                algorithm,
+            )?;
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()?;
+        let alive = self.totals()?.alive as usize;
+        let buffers = sort_buffers(&self.res)?;
+        let keys = read_words(&self.gpu, &buffers.keys, alive)?;
+        let slots = read_words(&self.gpu, &buffers.vals, alive)?;
+        Ok(slots.into_iter().zip(keys).collect())
+    }
+
+    /// [`Self::draw_order_from`] the effect's own camera.
+    pub fn draw_order(&self, algorithm: SortAlgorithm) -> Result<Vec<(u32, u32)>, RuntimeError> {
+        self.draw_order_from(&self.effect_camera(), algorithm)
+    }
+
+    /// Times the depth keys and the sort of every slot in one pass (seconds), from the
+    /// effect's camera.
+    pub fn time_sort(
+        &self,
+        timer: &PassTimer<'_>,
+        algorithm: SortAlgorithm,
+    ) -> Result<f64, RuntimeError> {
+        let depth = self.depth.as_ref().ok_or_else(|| {
+            RuntimeError::Output("this effect has no sort stage (sort: false)".into())
+        })?;
+        if let Steps::Stateless(stateless) = &self.steps {
+            let frame = self
+                .res
+                .frame
+                .as_ref()
+                .expect("a stateless effect has a frame");
+            let (bytes, _) = stateless.frame_bytes(&self.effect, frame.size())?;
+            self.gpu.queue.write_buffer(frame, 0, &bytes);
+        }
+        let axis: Vec<u8> = self
+            .effect_camera()
+            .depth_axis()
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        self.gpu
+            .queue
+            .write_buffer(&sort_buffers(&self.res)?.depth_axis, 0, &axis);
+        let chunks = self.sort_chunks()?;
+        let seconds =
+            timer.time(|pass| depth.record(&self.gpu, pass, &self.res, chunks, algorithm))?;
+        self.gpu.take_error()?;
+        Ok(seconds)
+    }
+
+    /// The live particles in draw order: sorted by depth on the GPU, farthest first; equal
+    /// depths by id, so the order is the same run after run.
+    pub fn records_in_draw_order(&self) -> Result<Vec<ParticleRecord>, RuntimeError> {
+        let order = self.draw_order(SortAlgorithm::Radix)?;
+        let by_slot = self.records_by_slot()?;
+        let mut out: Vec<(u32, ParticleRecord)> = Vec::with_capacity(order.len());
+        for (slot, key) in order {
+            let record = by_slot
+                .get(slot as usize)
+                .copied()
+                .flatten()
+                .ok_or_else(|| {
+                    RuntimeError::Readback(format!("sorted slot {slot} holds no live particle"))
+                })?;
+            out.push((key, record));
+        }
+        // Stable: equal keys (equal depths) by id.
+        out.sort_by_key(|(key, r)| (*key, r.id));
+        Ok(out.into_iter().map(|(_, r)| r).collect())
+    }
+
+    /// Runs `steps` (at most [`STEPS_PER_SUBMIT`]) in one timed compute pass; returns seconds.
+    /// A stateless effect advances its bookkeeping by `steps` and times as many evaluations of
+    /// the view (each one what a frame read back costs), so the two compare per step.
+    pub fn time_steps(&mut self, timer: &PassTimer<'_>, steps: u32) -> Result<f64, RuntimeError> {
+        let steps = steps.min(STEPS_PER_SUBMIT);
+        if let Steps::Stateless(stateless) = &mut self.steps {
+            stateless.advance(&mut self.schedule, u64::from(steps), |_| {});
+            let Steps::Stateless(stateless) = &self.steps else {
+                unreachable!("matched above");
+            };
+            let frame = self
+                .res
+                .frame
+                .as_ref()
+                .expect("a stateless effect has a frame");
+            let (bytes, _) = stateless.frame_bytes(&self.effect, frame.size())?;
+            self.gpu.queue.write_buffer(frame, 0, &bytes);
+            let chunks = self.chunks()?;
+            let seconds = timer.time(|pass| {
+                for _ in 0..steps {
+                    stateless.record_evaluate(&self.gpu, pass, chunks)?;
+                }
+                Ok(())
+            })?;
+            self.gpu.take_error()?;
+            stateless.mark_view_current();
+            return Ok(seconds);
+        }
+        let Steps::Stateful(stateful) = &self.steps else {
+            unreachable!("stateless returned above");
+        };
+        let plans: Vec<StepPlan> = (0..steps).map(|_| self.schedule.next_plan()).collect();
+        let bytes = params_bytes(
+            &plans,
+            self.effect.layout.emitter_slots,
+            self.res.params_stride,
+        );
+        let params = self
+            .res
+            .params
+            .as_ref()
+            .expect("a stateful effect has params");
+        self.gpu.queue.write_buffer(params, 0, &bytes);
+        let chunks = self.chunks()?;
+        let stride = self.res.params_stride;
+        let seconds =
+            timer.time(|pass| stateful.record(&self.gpu, pass, chunks, &plans, stride))?;
+        self.gpu.take_error()?;
+        Ok(seconds)
+    }
+
+    /// Steps done and the GPU's counters: alive, spawned, died, dropped. A stateless effect
+    /// drops nothing and counts from its bookkeeping (the kernels' own lifetime draw).
+    pub fn totals(&self) -> Result<Totals, RuntimeError> {
+        if let Steps::Stateless(stateless) = &self.steps {
+            let spawned = u64::from(self.schedule.ids_requested());
+            let alive = stateless.segments.alive(&self.effect.ir);
+            return Ok(Totals {
+                steps: self.schedule.steps_done(),
+                alive,
+                spawned,
+                died: spawned - alive,
+                dropped: 0,
+            });
+        }
+        let counters = self
+            .res
+            .counters
+            .as_ref()
+            .expect("a stateful effect has counters");
+        let bytes = read_buffer(&self.gpu, counters)?;
+        Ok(decode_totals(
+            &bytes,
+            self.effect.ir.capacity,
+            self.schedule.steps_done(),
+        ))
+    }
+
+    /// The live particles in id order, velocity as the integrator knows it (Verlet's derived).
+    pub fn records(&self) -> Result<Vec<ParticleRecord>, RuntimeError> {
+        let mut out: Vec<ParticleRecord> = self.records_by_slot()?.into_iter().flatten().collect();
+        out.sort_by_key(|r| r.id);
+        Ok(out)
+    }
+
+    /// Every slot's particle, in slot order (None for a free slot): the order an unsorted draw
+    /// follows.
+    pub fn records_by_slot(&self) -> Result<Vec<Option<ParticleRecord>>, RuntimeError> {
+        self.evaluate_view()?;
+        let mut bytes = Vec::new();
+        for chunk in self.chunks()? {
+            bytes.extend(read_buffer(&self.gpu, &chunk.buffer)?);
+        }
+        decode_slots(&self.effect, &self.schedule, &bytes)
+    }
+
+    /// Reads a flocking buffer back by its layout name (`boids`, `flock_out`, ...), for tests.
+    pub fn read_flock_buffer(&self, name: &str) -> Result<Vec<u8>, RuntimeError> {
+        let buffer = self
+            .effect
+            .ir
+            .flock
+            .as_ref()
+            .and_then(|_| self.res.extra_named(&self.effect, name))
+            .ok_or_else(|| RuntimeError::Output(format!("this effect has no buffer {name}")))?;
+        read_buffer(&self.gpu, buffer)
+    }
+
+    /// Whether the effect runs stateless (no state kept; computed when read or drawn).
+    pub fn is_stateless(&self) -> bool {
+        matches!(self.steps, Steps::Stateless(_))
+    }
+
+    /// Number of particle buffers the state is split into.
+    pub fn chunk_count(&self) -> usize {
+        self.res.chunk_count()
+    }
+
+    /// Bytes of particle buffers allocated now: the state (stateful), or the view a readback
+    /// made (stateless; 0 for an effect that has only been drawn).
+    pub fn particle_buffer_bytes(&self) -> u64 {
+        if !self.res.has_chunks() {
+            return 0;
+        }
+        self.chunks()
+            .map(|c| c.iter().map(|c| c.buffer.size()).sum())
+            .unwrap_or(0)
+    }
+
+    /// The compiled effect being run.
+    pub fn effect(&self) -> &CompiledEffect {
+        &self.effect
+    }
+
+    /// The spawn schedule (steps done, ids requested, ages).
+    pub fn schedule(&self) -> &Schedule {
+        &self.schedule
+    }
+
+    /// Steps done so far.
+    pub fn steps_done(&self) -> u64 {
+        self.schedule.steps_done()
+    }
+
+    /// Simulation time of the steps done, k · dt (s, f64).
+    pub fn time(&self) -> f64 {
+        self.schedule.steps_done() as f64 * self.effect.ir.dt
+    }
+
+    /// The device this instance runs on.
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+}

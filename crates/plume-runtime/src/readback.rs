@@ -1,0 +1,127 @@
+//! Readback: copying GPU buffers to host memory, and decoding the particle buffers' bytes into
+//! [`ParticleRecord`]s and the counters into [`Totals`]. Only `plume run --export`, the tests and
+//! the measurements read particles back; drawing never does.
+
+use glam::DVec3;
+use plume_compiler::passes::layout::Attribute;
+use plume_compiler::reference::{ParticleRecord, Totals};
+use plume_compiler::schedule::Schedule;
+use plume_compiler::CompiledEffect;
+
+use crate::error::RuntimeError;
+use crate::gpu::Gpu;
+
+/// Marks a free slot (the `id` field) and a particle that never dies.
+pub const DEAD: u32 = u32::MAX;
+
+/// Copies a GPU buffer to host memory (waits for the GPU).
+pub fn read_buffer(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RuntimeError> {
+    let size = buffer.size();
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    gpu.queue.submit([encoder.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    staging.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.wait()?;
+    rx.recv()
+        .map_err(|e| RuntimeError::Readback(e.to_string()))?
+        .map_err(|e| RuntimeError::Readback(e.to_string()))?;
+    let data = staging
+        .get_mapped_range(..)
+        .map_err(|e| RuntimeError::Readback(e.to_string()))?
+        .to_vec();
+    staging.unmap();
+    Ok(data)
+}
+
+/// Reads a buffer of u32 words and returns the first `n`.
+pub fn read_words(gpu: &Gpu, buffer: &wgpu::Buffer, n: usize) -> Result<Vec<u32>, RuntimeError> {
+    Ok(read_buffer(gpu, buffer)?
+        .chunks_exact(4)
+        .take(n)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect())
+}
+
+/// The totals from the counters' bytes (free count, spawn base, spawn count, spawned,
+/// dropped, died): alive is the capacity less the free count.
+pub fn decode_totals(counters: &[u8], capacity: u32, steps: u64) -> Totals {
+    let word = |i: usize| {
+        u64::from(u32::from_le_bytes([
+            counters[4 * i],
+            counters[4 * i + 1],
+            counters[4 * i + 2],
+            counters[4 * i + 3],
+        ]))
+    };
+    Totals {
+        steps,
+        alive: u64::from(capacity) - word(0),
+        spawned: word(3),
+        dropped: word(4),
+        died: word(5),
+    }
+}
+
+/// Every slot's particle in the particle buffers' bytes (None for a free slot), with velocity
+/// as the integrator knows it (Verlet's displacement divided by h) and age and lifetime from
+/// the schedule.
+pub fn decode_slots(
+    effect: &CompiledEffect,
+    schedule: &Schedule,
+    bytes: &[u8],
+) -> Result<Vec<Option<ParticleRecord>>, RuntimeError> {
+    let layout = &effect.layout;
+    let stride = layout.bytes_per_particle as usize;
+    let missing = |what| RuntimeError::Readback(format!("layout has no {what}"));
+    let id_at = layout
+        .word_offset(Attribute::Id)
+        .ok_or_else(|| missing("id"))?;
+    let pos_at = layout
+        .word_offset(Attribute::Position)
+        .ok_or_else(|| missing("position"))?;
+    // Verlet stores the displacement over one substep: velocity is displacement / h.
+    let (vel_at, scale) = match layout.word_offset(Attribute::Velocity) {
+        Some(at) => (at, 1.0),
+        None => (
+            layout
+                .word_offset(Attribute::Displacement)
+                .ok_or_else(|| missing("velocity"))?,
+            1.0 / effect.ir.h(),
+        ),
+    };
+    let die_at = layout.word_offset(Attribute::DeathStep);
+    let mut out = Vec::with_capacity(bytes.len() / stride.max(1));
+    for slot in bytes.chunks_exact(stride) {
+        let u = |w: usize| {
+            u32::from_le_bytes([
+                slot[4 * w],
+                slot[4 * w + 1],
+                slot[4 * w + 2],
+                slot[4 * w + 3],
+            ])
+        };
+        let f = |w: usize| f64::from(f32::from_bits(u(w)));
+        let id = u(id_at);
+        if id == DEAD {
+            out.push(None);
+            continue;
+        }
+        out.push(Some(ParticleRecord {
+            id,
+            position: DVec3::new(f(pos_at), f(pos_at + 1), f(pos_at + 2)),
+            velocity: DVec3::new(f(vel_at), f(vel_at + 1), f(vel_at + 2)) * scale,
+            age: schedule.age(id),
+            lifetime: die_at.and_then(|w| schedule.lifetime(id, u(w))),
+        }));
+    }
+    Ok(out)
+}

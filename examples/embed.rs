@@ -1,0 +1,690 @@
+//! Embedding Plume in a host wgpu application.
+//!
+//! The host owns the device, the queue, the window, the depth buffer and a scene of its own (a
+//! checkered ground and a cube). Plume gets the host's device and queue, records its steps into
+//! the host's command encoder, and draws in the host's render pass after the host's geometry,
+//! testing against the host's depth buffer without writing it: the cube hides the particles
+//! behind it. The particles never leave the GPU.
+//!
+//! ```sh
+//! cargo run --release --example embed -- effects/fountain.ron             # a window
+//! cargo run --release --example embed -- effects/fountain.ron --headless out.png [--size 640x360] [--frames 120] [--steps-per-frame 1]
+//! ```
+//!
+//! `--headless` renders offscreen through the same code and writes the last frame as a PNG
+//! (tests/embed.rs runs it). In the window the effect steps in real time (the effect's dt,
+//! driven by the wall clock); Esc or closing the window quits.
+
+#![allow(dead_code)] // tests/embed.rs includes this file as a module and uses part of it.
+
+use std::error::Error;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Instant;
+
+use glam::{Mat4, Vec3};
+use plume::runtime::wgpu;
+use plume::runtime::{Camera, DrawTarget, EffectInstance, EffectRenderer, Gpu};
+
+/// The host's depth buffer format.
+pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The host's own geometry: flat-coloured triangles (the ground's tiles and a cube) with their
+/// own pipeline, which writes depth.
+struct HostScene {
+    pipeline: wgpu::RenderPipeline,
+    vertices: wgpu::Buffer,
+    count: u32,
+    uniform: wgpu::Buffer,
+    group: wgpu::BindGroup,
+}
+
+const HOST_WGSL: &str = r#"
+@group(0) @binding(0) var<uniform> view_proj: mat4x4<f32>;
+
+struct Out {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) color: vec3<f32>,
+}
+
+@vertex
+fn vs(@location(0) position: vec3<f32>, @location(1) color: vec3<f32>) -> Out {
+    var out: Out;
+    out.clip = view_proj * vec4<f32>(position, 1.0);
+    out.color = color;
+    return out;
+}
+
+@fragment
+fn fs(in: Out) -> @location(0) vec4<f32> {
+    return vec4<f32>(in.color, 1.0);
+}
+"#;
+
+/// The cube's colour: a red no particle in the examples has, so tests can find it.
+pub const CUBE_COLOR: [f32; 3] = [0.55, 0.12, 0.1];
+
+/// Where the host puts its cube for the effect's camera: between the eye and the target, a
+/// little to the right and below the line of sight, big enough to hide part of the effect.
+/// Returns (centre, half size).
+pub fn cube_for(eye: Vec3, target: Vec3) -> (Vec3, f32) {
+    let dist = (target - eye).length().max(1e-3);
+    let forward = (target - eye) / dist;
+    let right = forward.cross(Vec3::Y).normalize_or(Vec3::X);
+    let up = right.cross(forward);
+    (
+        eye + forward * (0.55 * dist) + right * (0.06 * dist) - up * (0.05 * dist),
+        0.055 * dist,
+    )
+}
+
+/// The cube's turn about the vertical (radians), so that two sides and the top show.
+const CUBE_YAW: f32 = 0.6;
+
+/// Six faces of a cube (turned by [`CUBE_YAW`]) and a checkered ground around
+/// `ground_center` at y = 0, as (position, colour) triangles.
+fn host_triangles(cube: (Vec3, f32), ground_center: Vec3) -> Vec<[f32; 6]> {
+    let mut out = Vec::new();
+    let mut quad = |a: Vec3, b: Vec3, c: Vec3, d: Vec3, color: [f32; 3]| {
+        for p in [a, b, c, a, c, d] {
+            out.push([p.x, p.y, p.z, color[0], color[1], color[2]]);
+        }
+    };
+    let (c, s) = cube;
+    // Faces shaded by direction, so the cube reads as a solid.
+    let faces = [
+        (Vec3::X, Vec3::Y, Vec3::Z, 0.8),
+        (-Vec3::X, Vec3::Z, Vec3::Y, 0.6),
+        (Vec3::Y, Vec3::Z, Vec3::X, 1.0),
+        (-Vec3::Y, Vec3::X, Vec3::Z, 0.4),
+        (Vec3::Z, Vec3::X, Vec3::Y, 0.9),
+        (-Vec3::Z, Vec3::Y, Vec3::X, 0.7),
+    ];
+    let turn = glam::Quat::from_rotation_y(CUBE_YAW);
+    for (n, u, v, shade) in faces {
+        let o = c + turn * (n * s);
+        let (u, v) = (turn * (u * s), turn * (v * s));
+        let col = CUBE_COLOR.map(|x| x * shade);
+        quad(o - u - v, o + u - v, o + u + v, o - u + v, col);
+    }
+    // A 16 m x 16 m ground of 1 m tiles in two greys.
+    let (gx, gz) = (ground_center.x.round(), ground_center.z.round());
+    for i in -8..8 {
+        for j in -8..8 {
+            let (x, z) = (gx + i as f32, gz + j as f32);
+            let grey = if (i + j) % 2 == 0 { 0.16 } else { 0.11 };
+            quad(
+                Vec3::new(x, 0.0, z),
+                Vec3::new(x, 0.0, z + 1.0),
+                Vec3::new(x + 1.0, 0.0, z + 1.0),
+                Vec3::new(x + 1.0, 0.0, z),
+                [grey, grey, grey * 1.1],
+            );
+        }
+    }
+    out
+}
+
+impl HostScene {
+    fn new(
+        device: &wgpu::Device,
+        color_format: wgpu::TextureFormat,
+        cube: (Vec3, f32),
+        ground_center: Vec3,
+    ) -> Self {
+        use wgpu::util::DeviceExt;
+        let triangles = host_triangles(cube, ground_center);
+        let bytes: Vec<u8> = triangles
+            .iter()
+            .flatten()
+            .flat_map(|x| x.to_le_bytes())
+            .collect();
+        let vertices = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("host geometry"),
+            contents: &bytes,
+            usage: wgpu::BufferUsages::VERTEX,
+        });
+        let uniform = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("host camera"),
+            size: 64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("host"),
+            source: wgpu::ShaderSource::Wgsl(HOST_WGSL.into()),
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("host"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: 24,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                })],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(color_format.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("host"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniform.as_entire_binding(),
+            }],
+        });
+        Self {
+            pipeline,
+            vertices,
+            count: triangles.len() as u32,
+            uniform,
+            group,
+        }
+    }
+}
+
+/// What the host draws each frame: its scene and, optionally, the effect.
+#[derive(Clone, Copy, Debug)]
+pub struct Layers {
+    /// Draw the host's ground and cube.
+    pub host: bool,
+    /// Draw the effect.
+    pub particles: bool,
+    /// Test the effect against the host's depth buffer (as a real host does).
+    pub depth_test: bool,
+}
+
+impl Default for Layers {
+    fn default() -> Self {
+        Self {
+            host: true,
+            particles: true,
+            depth_test: true,
+        }
+    }
+}
+
+/// The host application's state: its device and scene, and one embedded effect.
+pub struct Host {
+    device: wgpu::Device,
+    queue: wgpu::Queue,
+    scene: HostScene,
+    effect: EffectInstance,
+    particles: EffectRenderer,
+    background: wgpu::Color,
+}
+
+impl Host {
+    /// Loads and compiles `path` and embeds it on the host's `device` and `queue`, drawing
+    /// into `color_format` targets.
+    pub fn new(
+        device: &wgpu::Device,
+        queue: &wgpu::Queue,
+        path: &Path,
+        color_format: wgpu::TextureFormat,
+        layers: Layers,
+    ) -> Result<Self, Box<dyn Error>> {
+        let source = std::fs::read_to_string(path)
+            .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
+        let compiled = plume::compile_str(&source, &Default::default())
+            .map_err(|e| e.render(&path.display().to_string(), &source))?;
+        let ir = &compiled.ir;
+        let (eye, target) = (ir.camera.eye.as_vec3(), ir.camera.target.as_vec3());
+        let bg = ir.render.background;
+        let scene = HostScene::new(device, color_format, cube_for(eye, target), target);
+        // Plume on the host's device: the host keeps its own error handling.
+        let effect = EffectInstance::new(&Gpu::from_device(device, queue), compiled)?;
+        // The pass has the host's depth attachment, so the particles' pipeline names its
+        // format; `Always` (for the test's comparison) draws over everything.
+        let draw_target = match layers.depth_test {
+            true => DrawTarget::new(color_format).with_depth(DEPTH),
+            false => DrawTarget::new(color_format)
+                .with_depth_compare(DEPTH, wgpu::CompareFunction::Always),
+        };
+        let particles = effect.renderer(&draw_target)?;
+        Ok(Self {
+            device: device.clone(),
+            queue: queue.clone(),
+            scene,
+            effect,
+            particles,
+            background: wgpu::Color {
+                r: bg.x,
+                g: bg.y,
+                b: bg.z,
+                a: 1.0,
+            },
+        })
+    }
+
+    /// The effect's camera at `aspect`: the host could use any view and projection.
+    pub fn camera(&self, aspect: f32) -> Camera {
+        Camera::from_effect(&self.effect.effect().ir.camera, aspect)
+    }
+
+    /// One frame: `steps` simulation steps, then one render pass with the host's geometry
+    /// (writing depth) and the particles (testing it), all in one submission.
+    pub fn frame(
+        &mut self,
+        color: &wgpu::TextureView,
+        depth: &wgpu::TextureView,
+        camera: &Camera,
+        steps: u64,
+        layers: Layers,
+    ) -> Result<(), Box<dyn Error>> {
+        let view_proj = camera.proj * camera.view;
+        self.queue
+            .write_buffer(&self.scene.uniform, 0, bytemuck_mat(&view_proj).as_slice());
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        // Plume records its steps and its draw's preparation into the host's encoder ...
+        self.effect.advance(&mut encoder, steps)?;
+        if layers.particles {
+            self.effect
+                .prepare_draw(&mut encoder, &self.particles, camera)?;
+        }
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("host frame"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(self.background),
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: depth,
+                    depth_ops: Some(wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(1.0),
+                        store: wgpu::StoreOp::Store,
+                    }),
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            // ... the host draws its opaque geometry first ...
+            if layers.host {
+                pass.set_pipeline(&self.scene.pipeline);
+                pass.set_bind_group(0, &self.scene.group, &[]);
+                pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
+                pass.draw(0..self.scene.count, 0..1);
+            }
+            // ... and Plume draws its particles into the same pass, after it.
+            if layers.particles {
+                self.particles.draw(&mut pass);
+            }
+        }
+        self.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
+    /// Shows a finished surface frame.
+    pub fn present(&self, frame: wgpu::SurfaceTexture) {
+        self.queue.present(frame);
+    }
+
+    /// The embedded effect's dt (s).
+    pub fn dt(&self) -> f64 {
+        self.effect.effect().ir.dt
+    }
+}
+
+fn bytemuck_mat(m: &Mat4) -> Vec<u8> {
+    m.to_cols_array()
+        .iter()
+        .flat_map(|x| x.to_le_bytes())
+        .collect()
+}
+
+/// A host's own adapter and device (Plume is handed these; it opens nothing itself).
+fn host_device(
+    instance: &wgpu::Instance,
+    surface: Option<&wgpu::Surface<'_>>,
+) -> Result<(wgpu::Adapter, wgpu::Device, wgpu::Queue), Box<dyn Error>> {
+    let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+        power_preference: wgpu::PowerPreference::HighPerformance,
+        compatible_surface: surface,
+        ..Default::default()
+    }))
+    .map_err(|_| {
+        "no GPU adapter found. Without a GPU, install a software driver: Debian/Ubuntu \
+         `apt-get install mesa-vulkan-drivers` (lavapipe) or `libegl1 libgl1-mesa-dri` (llvmpipe)"
+    })?;
+    let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+        label: Some("host"),
+        required_limits: adapter.limits(),
+        ..Default::default()
+    }))?;
+    Ok((adapter, device, queue))
+}
+
+/// Options of the headless mode.
+#[derive(Clone, Copy, Debug)]
+pub struct Headless {
+    /// Image width and height.
+    pub size: (u32, u32),
+    /// Frames rendered; the last is returned.
+    pub frames: u32,
+    /// Simulation steps per frame.
+    pub steps_per_frame: u64,
+    /// What is drawn.
+    pub layers: Layers,
+}
+
+/// Renders `path` embedded in the host scene offscreen, through the same [`Host`] the window
+/// uses; returns the last frame as RGBA8 rows.
+pub fn render_headless(path: &Path, options: &Headless) -> Result<Vec<u8>, Box<dyn Error>> {
+    let instance =
+        wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env());
+    let (_, device, queue) = host_device(&instance, None)?;
+    let (w, h) = options.size;
+    let format = wgpu::TextureFormat::Rgba8Unorm;
+    let texture = |format, usage| {
+        device.create_texture(&wgpu::TextureDescriptor {
+            label: None,
+            size: wgpu::Extent3d {
+                width: w,
+                height: h,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format,
+            usage,
+            view_formats: &[],
+        })
+    };
+    let color = texture(
+        format,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+    );
+    let depth = texture(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let (color_view, depth_view) = (
+        color.create_view(&Default::default()),
+        depth.create_view(&Default::default()),
+    );
+    let mut host = Host::new(&device, &queue, path, format, options.layers)?;
+    let camera = host.camera(w as f32 / h as f32);
+    for _ in 0..options.frames.max(1) {
+        host.frame(
+            &color_view,
+            &depth_view,
+            &camera,
+            options.steps_per_frame,
+            options.layers,
+        )?;
+    }
+    Ok(plume::runtime::offscreen::read_texture(
+        &Gpu::from_device(&device, &queue),
+        &color,
+        w,
+        h,
+    )?)
+}
+
+/// The window: the host's surface, depth buffer and real-time loop.
+mod window {
+    use super::*;
+    use winit::application::ApplicationHandler;
+    use winit::event::{ElementState, KeyEvent, WindowEvent};
+    use winit::event_loop::{ActiveEventLoop, EventLoop};
+    use winit::keyboard::{Key, NamedKey};
+    use winit::window::{Window, WindowId};
+
+    struct Open {
+        window: Arc<Window>,
+        surface: wgpu::Surface<'static>,
+        config: wgpu::SurfaceConfiguration,
+        device: wgpu::Device,
+        depth: wgpu::TextureView,
+        host: Host,
+        start: Instant,
+        steps: u64,
+    }
+
+    struct App {
+        path: PathBuf,
+        open: Option<Open>,
+        error: Option<Box<dyn Error>>,
+    }
+
+    fn depth_view(device: &wgpu::Device, w: u32, h: u32) -> wgpu::TextureView {
+        device
+            .create_texture(&wgpu::TextureDescriptor {
+                label: Some("host depth"),
+                size: wgpu::Extent3d {
+                    width: w.max(1),
+                    height: h.max(1),
+                    depth_or_array_layers: 1,
+                },
+                mip_level_count: 1,
+                sample_count: 1,
+                dimension: wgpu::TextureDimension::D2,
+                format: DEPTH,
+                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+                view_formats: &[],
+            })
+            .create_view(&Default::default())
+    }
+
+    impl App {
+        fn open(&self, event_loop: &ActiveEventLoop) -> Result<Open, Box<dyn Error>> {
+            let window = Arc::new(
+                event_loop.create_window(
+                    Window::default_attributes()
+                        .with_title(format!("Plume embedded: {}", self.path.display())),
+                )?,
+            );
+            let instance =
+                wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
+                    Box::new(event_loop.owned_display_handle()),
+                ));
+            let surface = instance.create_surface(window.clone())?;
+            let (adapter, device, queue) = host_device(&instance, Some(&surface))?;
+            let size = window.inner_size();
+            let mut config = surface
+                .get_default_config(&adapter, size.width.max(1), size.height.max(1))
+                .ok_or("the window's surface is not supported by the adapter")?;
+            // Effect colours are plain 8-bit values (as in `plume render`'s images): prefer a
+            // surface format without sRGB encoding, so the window looks like the renders.
+            if let Some(linear) = surface
+                .get_capabilities(&adapter)
+                .formats
+                .into_iter()
+                .find(|f| !f.is_srgb())
+            {
+                config.format = linear;
+            }
+            surface.configure(&device, &config);
+            let host = Host::new(
+                &device,
+                &queue,
+                &self.path,
+                config.format,
+                Layers::default(),
+            )?;
+            Ok(Open {
+                depth: depth_view(&device, config.width, config.height),
+                window,
+                surface,
+                config,
+                device,
+                host,
+                start: Instant::now(),
+                steps: 0,
+            })
+        }
+    }
+
+    impl ApplicationHandler for App {
+        fn resumed(&mut self, event_loop: &ActiveEventLoop) {
+            if self.open.is_none() {
+                match self.open(event_loop) {
+                    Ok(open) => self.open = Some(open),
+                    Err(e) => {
+                        self.error = Some(e);
+                        event_loop.exit();
+                    }
+                }
+            }
+        }
+
+        fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
+            let Some(open) = &mut self.open else {
+                return;
+            };
+            match event {
+                WindowEvent::CloseRequested
+                | WindowEvent::KeyboardInput {
+                    event:
+                        KeyEvent {
+                            logical_key: Key::Named(NamedKey::Escape),
+                            state: ElementState::Pressed,
+                            ..
+                        },
+                    ..
+                } => event_loop.exit(),
+                WindowEvent::Resized(size) => {
+                    open.config.width = size.width.max(1);
+                    open.config.height = size.height.max(1);
+                    open.surface.configure(&open.device, &open.config);
+                    open.depth = depth_view(&open.device, open.config.width, open.config.height);
+                }
+                WindowEvent::RedrawRequested => {
+                    // Fixed steps of the effect's dt, as many as the wall clock has passed.
+                    // Past 8 behind, the rest are dropped (slow motion, never a spiral).
+                    let due = (open.start.elapsed().as_secs_f64() / open.host.dt()) as u64;
+                    let steps = due.saturating_sub(open.steps).min(8);
+                    open.steps = due;
+                    let frame = match open.surface.get_current_texture() {
+                        wgpu::CurrentSurfaceTexture::Success(f)
+                        | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
+                        _ => {
+                            open.surface.configure(&open.device, &open.config);
+                            open.window.request_redraw();
+                            return;
+                        }
+                    };
+                    let view = frame.texture.create_view(&Default::default());
+                    let aspect = open.config.width as f32 / open.config.height as f32;
+                    let camera = open.host.camera(aspect);
+                    if let Err(e) =
+                        open.host
+                            .frame(&view, &open.depth, &camera, steps, Layers::default())
+                    {
+                        self.error = Some(e);
+                        event_loop.exit();
+                        return;
+                    }
+                    open.host.present(frame);
+                    open.window.request_redraw();
+                }
+                _ => {}
+            }
+        }
+    }
+
+    /// Opens the window and runs until it is closed.
+    pub fn run(path: PathBuf) -> Result<(), Box<dyn Error>> {
+        let event_loop = EventLoop::new().map_err(|e| {
+            format!("cannot open a window ({e}): no display? Use --headless OUT.png, or run under xvfb-run")
+        })?;
+        let mut app = App {
+            path,
+            open: None,
+            error: None,
+        };
+        event_loop.run_app(&mut app)?;
+        match app.error {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+}
+
+fn parse_args() -> Result<(PathBuf, Option<(PathBuf, Headless)>), String> {
+    let usage =
+        "usage: embed EFFECT.ron [--headless OUT.png [--size WxH] [--frames N] [--steps-per-frame K]]";
+    let mut args = std::env::args().skip(1);
+    let mut effect = None;
+    let mut out = None;
+    let mut headless = Headless {
+        size: (640, 360),
+        frames: 120,
+        steps_per_frame: 1,
+        layers: Layers::default(),
+    };
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--headless" => out = Some(PathBuf::from(args.next().ok_or(usage)?)),
+            "--size" => {
+                let s = args.next().ok_or(usage)?;
+                let (w, h) = s.split_once('x').ok_or(usage)?;
+                headless.size = (w.parse().map_err(|_| usage)?, h.parse().map_err(|_| usage)?);
+            }
+            "--frames" => {
+                headless.frames = args.next().ok_or(usage)?.parse().map_err(|_| usage)?;
+            }
+            "--steps-per-frame" => {
+                headless.steps_per_frame = args.next().ok_or(usage)?.parse().map_err(|_| usage)?;
+            }
+            _ if effect.is_none() && !a.starts_with("--") => effect = Some(PathBuf::from(a)),
+            _ => return Err(usage.into()),
+        }
+    }
+    Ok((effect.ok_or(usage)?, out.map(|o| (o, headless))))
+}
+
+/// `--headless`: renders and writes the last frame to `out` as a PNG.
+pub fn write_headless(effect: &Path, out: &Path, options: &Headless) -> Result<(), Box<dyn Error>> {
+    let pixels = render_headless(effect, options)?;
+    let (w, h) = options.size;
+    image::save_buffer(out, &pixels, w, h, image::ExtendedColorType::Rgba8)
+        .map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
+    Ok(())
+}
+
+fn main() -> std::process::ExitCode {
+    let result = parse_args()
+        .map_err(Box::<dyn Error>::from)
+        .and_then(|(effect, headless)| match headless {
+            None => window::run(effect),
+            Some((out, options)) => {
+                write_headless(&effect, &out, &options)?;
+                eprintln!("wrote {}", out.display());
+                Ok(())
+            }
+        });
+    match result {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
