@@ -93,6 +93,9 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "draw_vertex_only_ms": r.render.as_ref().map(|d| d.vertex_only * 1e3),
                 "draw_prepare_ms": r.render.as_ref().and_then(|d| d.prepare).map(|s| s * 1e3),
                 "compaction_ms": r.render.as_ref().and_then(|d| d.compacted).map(|(c, _)| c * 1e3),
+                "draw_triangle_ms": r.render.as_ref().map(|d| d.triangle * 1e3),
+                "splat_ms": r.render.as_ref().map(|d| d.splat.0 * 1e3),
+                "splat_entries": r.render.as_ref().map(|d| d.splat.1),
                 "draw_compacted_ms": r.render.as_ref().and_then(|d| d.compacted).map(|(_, s)| s * 1e3),
                 "draw_stateless_ms": r.render.as_ref().and_then(|d| d.stateless).map(|s| s * 1e3),
                 "sort_radix_ms": r.sort.map(|(s, _)| s * 1e3),
@@ -187,6 +190,15 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             println!(
                 "    vertices only     {:.3} ms (every sprite hidden in the vertex shader: no pixels)",
                 d.vertex_only * 1e3
+            );
+            println!(
+                "    one triangle      {:.3} ms (a triangle per sprite instead of a quad)",
+                d.triangle * 1e3
+            );
+            println!(
+                "    compute splat     {:.3} ms for the same image in compute shaders ({} tile entries sorted)",
+                d.splat.0 * 1e3,
+                d.splat.1
             );
             if let Some(p) = d.prepare {
                 println!(

@@ -9,6 +9,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 use plume_runtime::export::write_atomically;
 use plume_runtime::images::{contact_sheet, gif, png, Frame8};
 use plume_runtime::offscreen::Offscreen;
+use plume_runtime::splat::Splat;
 use plume_runtime::{EffectInstance, Gpu, GpuChoice, RuntimeError};
 
 use crate::{load, Overrides};
@@ -33,6 +34,10 @@ pub struct RenderArgs {
     /// With a .png output: tile every frame into one contact sheet.
     #[arg(long)]
     sheet: bool,
+    /// How frames are drawn: `raster` (the render pipeline an embedding host uses) or `splat`
+    /// (compute shaders only, the same image; faster where raster units are few, as on an H100).
+    #[arg(long, value_enum, default_value_t = DrawMethod::Raster)]
+    draw: DrawMethod,
     /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
     #[arg(long)]
     backend: Option<String>,
@@ -56,6 +61,15 @@ pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
     Ok((w, h))
 }
 
+/// How `plume render` draws its frames.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum DrawMethod {
+    /// The render pipeline: the effect's draw module, as an embedding host draws it.
+    Raster,
+    /// The compute splat: the same image from compute shaders only.
+    Splat,
+}
+
 enum Format {
     Png,
     Gif,
@@ -73,6 +87,10 @@ fn render_frames(
     let target = Offscreen::new(&gpu, w, h)?;
     let mut sim = EffectInstance::new(&gpu, effect)?;
     let renderer = sim.renderer(&target.target())?;
+    let mut splat = match args.draw {
+        DrawMethod::Splat => Some(Splat::new(&sim, w, h)?),
+        DrawMethod::Raster => None,
+    };
     let camera = target.effect_camera(&sim);
     let bar = ProgressBar::new(u64::from(args.frames));
     bar.set_style(
@@ -85,7 +103,10 @@ fn render_frames(
         sim.run(u64::from(args.every), |_| {})?;
         // Drawn from the GPU buffers (sorted on the GPU with sort: true); only the image is
         // read back.
-        let pixels = target.render(&sim, &renderer, &camera)?;
+        let pixels = match &mut splat {
+            Some(splat) => splat.render(&sim, &camera)?,
+            None => target.render(&sim, &renderer, &camera)?,
+        };
         frames.push(Frame8 {
             width: w,
             height: h,

@@ -100,6 +100,13 @@ pub struct DrawTimes {
     /// A stateful, unsorted effect drawn through a compacted list of its live slots instead
     /// of hiding the free ones: (the list's compute passes, its draw).
     pub compacted: Option<(f64, f64)>,
+    /// The same draw with one triangle per sprite instead of a quad (3 vertices and 1
+    /// primitive instead of 4 and 2; 30% more area).
+    pub triangle: f64,
+    /// The compute splat of the same image ([`crate::splat`]): its one compute pass (the frame
+    /// preparation, a sort when the effect sorts, excluded as for the draw), and the (tile,
+    /// sprite) entries it sorted.
+    pub splat: (f64, u64),
     /// The same N particles of a stateless copy of the effect, drawn from the closed form in
     /// the vertex shader, when the effect can be stateless.
     pub stateless: Option<f64>,
@@ -421,6 +428,29 @@ fn time_draws(
     let mut hidden = sim.renderer(&target.target())?;
     hidden.set_size_scale(0.0);
     let vertex_only = time(sim, &hidden)?;
+    let triangle = time(
+        sim,
+        &sim.renderer_with(
+            &target.target(),
+            &crate::draw::DrawOptions {
+                primitive: plume_compiler::wgsl::draw::Primitive::Triangle,
+                ..Default::default()
+            },
+        )?,
+    )?;
+    let splat = {
+        let mut splat = crate::splat::Splat::new(sim, width, height)?;
+        // Draws once, growing the entry list to what the frame needs, then times the pass.
+        splat.render(sim, &camera)?;
+        let mut times = Vec::with_capacity(DRAW_REPEATS);
+        for _ in 0..DRAW_REPEATS {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            splat.prepare(&mut encoder, sim, &camera)?;
+            gpu.queue.submit([encoder.finish()]);
+            times.push(timer.time(|pass| splat.record(pass))?);
+        }
+        (median(&mut times), splat.entries())
+    };
     let prepare = match sim.effect().ir.sort {
         true => {
             sim.time_sort(timer, SortAlgorithm::Radix)?;
@@ -466,6 +496,8 @@ fn time_draws(
         vertex_only,
         prepare,
         compacted,
+        triangle,
+        splat,
         stateless,
     })
 }

@@ -16,7 +16,7 @@
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use plume_compiler::schema::Blend;
-use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES};
+use plume_compiler::wgsl::draw::{DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
 use plume_compiler::CompiledEffect;
 
 use crate::camera::Camera;
@@ -104,6 +104,8 @@ pub struct DrawOptions {
     pub blend: Option<wgpu::BlendState>,
     /// How free slots are skipped.
     pub dead_slots: DeadSlots,
+    /// The sprite's geometry: a quad (the default) or one triangle around the disc.
+    pub primitive: Primitive,
 }
 
 /// How many instances a draw issues.
@@ -122,18 +124,15 @@ enum Instances {
     },
 }
 
-/// Writes the indirect draw's arguments from the counters: 4 vertices, capacity − free count
-/// instances (word 4 of `args` holds the capacity, written once).
+/// Writes the indirect draw's instance count from the counters: capacity − free count (word
+/// 4 of `args` holds the capacity and word 0 the vertices per sprite, written once).
 const DRAW_ARGS_WGSL: &str = r#"
 @group(0) @binding(0) var<storage, read> counters: array<u32>;
 @group(0) @binding(1) var<storage, read_write> args: array<u32>;
 
 @compute @workgroup_size(1)
 fn draw_args() {
-    args[0] = 4u;
     args[1] = args[4] - min(counters[0], args[4]);
-    args[2] = 0u;
-    args[3] = 0u;
 }
 "#;
 
@@ -146,6 +145,8 @@ pub struct EffectRenderer {
     view: wgpu::Buffer,
     group: wgpu::BindGroup,
     instances: Instances,
+    /// Vertices per sprite (4: a quad strip; 3: a triangle).
+    vertices: u32,
     size_scale: f32,
     gpu: Gpu,
 }
@@ -170,25 +171,17 @@ impl EffectRenderer {
         let device = &gpu.device;
         let stateless = effect.layout.stateless();
         let compacted = options.dead_slots == DeadSlots::Compacted && !stateless && !effect.ir.sort;
+        let live = match compacted {
+            true => Some(LiveList::new(gpu, res, effect, options.primitive)?),
+            false => None,
+        };
         let shape = DrawShape {
-            chunks: if stateless {
-                1
-            } else {
-                res.chunk_count() as u32
-            },
-            chunk_slots: res.chunk_slots.min(u64::from(u32::MAX)) as u32,
             through_list: effect.ir.sort || compacted,
+            primitive: options.primitive,
+            ..draw_shape(effect, res)
         };
-        // The compiled effect carries the one-buffer module; other shapes are emitted here.
-        let source = if shape == DrawShape::single(&effect.ir) {
-            effect.draw_wgsl.clone()
-        } else {
-            plume_compiler::wgsl::draw::emit(&effect.ir, &effect.layout, &shape)
-        };
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("draw"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
+        let (module, mut entries) =
+            draw_module(gpu, effect, res, &shape, live.as_ref().map(|l| &l.list))?;
         let blend = options.blend.unwrap_or(match effect.ir.render.blend {
             Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
             Blend::Additive => wgpu::BlendState {
@@ -211,7 +204,10 @@ impl EffectRenderer {
                 buffers: &[],
             },
             primitive: wgpu::PrimitiveState {
-                topology: wgpu::PrimitiveTopology::TriangleStrip,
+                topology: match options.primitive {
+                    Primitive::Quad => wgpu::PrimitiveTopology::TriangleStrip,
+                    Primitive::Triangle => wgpu::PrimitiveTopology::TriangleList,
+                },
                 ..Default::default()
             },
             depth_stencil: target.depth.map(|d| wgpu::DepthStencilState {
@@ -244,42 +240,14 @@ impl EffectRenderer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: view.as_entire_binding(),
-        }];
-        let live = match compacted {
-            true => Some(LiveList::new(gpu, res, effect)?),
-            false => None,
-        };
-        if shape.through_list {
-            let order = match &live {
-                Some(live) => &live.list,
-                None => &crate::depth_sort::sort_buffers(res)?.vals,
-            };
-            entries.push(wgpu::BindGroupEntry {
-                binding: 1,
-                resource: order.as_entire_binding(),
-            });
-        }
-        let first = plume_compiler::wgsl::draw::FIRST_DATA_BINDING;
-        if stateless {
-            entries.push(wgpu::BindGroupEntry {
-                binding: first,
-                resource: res
-                    .frame
-                    .as_ref()
-                    .expect("a stateless effect has a frame table")
-                    .as_entire_binding(),
-            });
-        } else {
-            for (k, chunk) in res.chunks(effect)?.iter().enumerate() {
-                entries.push(wgpu::BindGroupEntry {
-                    binding: first + k as u32,
-                    resource: chunk.buffer.as_entire_binding(),
-                });
-            }
-        }
+        entries.push((0, view.clone()));
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = entries
+            .iter()
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: buffer.as_entire_binding(),
+            })
+            .collect();
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("draw"),
             layout: &pipeline.get_bind_group_layout(0),
@@ -290,7 +258,7 @@ impl EffectRenderer {
         } else if stateless {
             Instances::Frame(AtomicU32::new(0))
         } else if effect.ir.sort {
-            alive_instances(gpu, res, effect.ir.capacity)?
+            alive_instances(gpu, res, effect.ir.capacity, options.primitive)?
         } else {
             Instances::Slots(effect.ir.capacity)
         };
@@ -300,6 +268,7 @@ impl EffectRenderer {
             view,
             group,
             instances,
+            vertices: options.primitive.vertices(),
             size_scale: 1.0,
             gpu: gpu.clone(),
         })
@@ -318,16 +287,7 @@ impl EffectRenderer {
         camera: &Camera,
         steps: u64,
     ) -> Result<(), RuntimeError> {
-        let mut bytes = Vec::with_capacity(DRAW_VIEW_BYTES as usize);
-        for m in [camera.view, camera.proj] {
-            for x in m.to_cols_array() {
-                bytes.extend_from_slice(&x.to_le_bytes());
-            }
-        }
-        // Steps done, mod 2^32 as the kernels' step index and die_at wrap.
-        bytes.extend_from_slice(&(steps as u32).to_le_bytes());
-        bytes.extend_from_slice(&self.size_scale.to_le_bytes());
-        bytes.extend_from_slice(&[0; 8]);
+        let bytes = draw_view_bytes(camera, steps, self.size_scale);
         let src = staging(&self.gpu, "draw view", &bytes)?;
         encoder.copy_buffer_to_buffer(&src, 0, &self.view, 0, DRAW_VIEW_BYTES);
         Ok(())
@@ -371,12 +331,13 @@ impl EffectRenderer {
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.group, &[]);
+        let vertices = 0..self.vertices;
         match &self.instances {
-            Instances::Slots(n) => pass.draw(0..4, 0..*n),
+            Instances::Slots(n) => pass.draw(vertices, 0..*n),
             Instances::Frame(n) => {
                 let n = n.load(Ordering::Relaxed);
                 if n > 0 {
-                    pass.draw(0..4, 0..n);
+                    pass.draw(vertices, 0..n);
                 }
             }
             Instances::Alive { args, .. } => pass.draw_indirect(args, 0),
@@ -387,7 +348,12 @@ impl EffectRenderer {
 
 /// An indirect draw of the live particles (a sorted stateful effect: they come first in the
 /// depth order) and the kernel that writes its count.
-fn alive_instances(gpu: &Gpu, res: &Resources, capacity: u32) -> Result<Instances, RuntimeError> {
+fn alive_instances(
+    gpu: &Gpu,
+    res: &Resources,
+    capacity: u32,
+    primitive: Primitive,
+) -> Result<Instances, RuntimeError> {
     let device = &gpu.device;
     let args = crate::resources::filled_buffer(
         gpu,
@@ -395,7 +361,7 @@ fn alive_instances(gpu: &Gpu, res: &Resources, capacity: u32) -> Result<Instance
         32,
         STORAGE | wgpu::BufferUsages::INDIRECT,
         |b| {
-            b[..4].copy_from_slice(&4u32.to_le_bytes());
+            b[..4].copy_from_slice(&primitive.vertices().to_le_bytes());
             b[16..20].copy_from_slice(&capacity.to_le_bytes());
         },
     )?;
@@ -434,4 +400,77 @@ fn alive_instances(gpu: &Gpu, res: &Resources, capacity: u32) -> Result<Instance
         kernel,
         group,
     })
+}
+
+/// The draw module's shape on this device: how many particle buffers it binds (a stateless
+/// effect binds none), through the depth order when the effect sorts, quads, no splat.
+pub(crate) fn draw_shape(effect: &CompiledEffect, res: &Resources) -> DrawShape {
+    DrawShape {
+        chunks: if effect.layout.stateless() {
+            1
+        } else {
+            res.chunk_count() as u32
+        },
+        chunk_slots: res.chunk_slots.min(u64::from(u32::MAX)) as u32,
+        ..DrawShape::single(&effect.ir)
+    }
+}
+
+/// The draw module of `shape` (the compiled one when it matches) and the buffers its bindings
+/// 1 and up hold: the slot list (`list`, else the depth order), then the particle buffers or
+/// the frame table. Binding 0, the `DrawView`, is the caller's.
+pub(crate) fn draw_module(
+    gpu: &Gpu,
+    effect: &CompiledEffect,
+    res: &Resources,
+    shape: &DrawShape,
+    list: Option<&wgpu::Buffer>,
+) -> Result<(wgpu::ShaderModule, Vec<(u32, wgpu::Buffer)>), RuntimeError> {
+    // The compiled effect carries the one-buffer module; other shapes are emitted here.
+    let source = if *shape == DrawShape::single(&effect.ir) {
+        effect.draw_wgsl.clone()
+    } else {
+        plume_compiler::wgsl::draw::emit(&effect.ir, &effect.layout, shape)
+    };
+    let module = gpu
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("draw"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+    let mut entries = Vec::new();
+    if shape.through_list {
+        let order = match list {
+            Some(list) => list.clone(),
+            None => crate::depth_sort::sort_buffers(res)?.vals.clone(),
+        };
+        entries.push((1, order));
+    }
+    if effect.layout.stateless() {
+        let frame = res
+            .frame
+            .as_ref()
+            .expect("a stateless effect has a frame table");
+        entries.push((FIRST_DATA_BINDING, frame.clone()));
+    } else {
+        for (k, chunk) in res.chunks(effect)?.iter().enumerate() {
+            entries.push((FIRST_DATA_BINDING + k as u32, chunk.buffer.clone()));
+        }
+    }
+    Ok((module, entries))
+}
+
+/// The `DrawView` uniform's bytes: view and projection matrices, steps done (mod 2^32, as the
+/// kernels' step index and die_at wrap), the size scale.
+pub(crate) fn draw_view_bytes(camera: &Camera, steps: u64, size_scale: f32) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(DRAW_VIEW_BYTES as usize);
+    for m in [camera.view, camera.proj] {
+        for x in m.to_cols_array() {
+            bytes.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    bytes.extend_from_slice(&(steps as u32).to_le_bytes());
+    bytes.extend_from_slice(&size_scale.to_le_bytes());
+    bytes.extend_from_slice(&[0; 8]);
+    bytes
 }

@@ -20,6 +20,15 @@ use crate::sort::SortAlgorithm;
 use crate::steps::{params_bytes, StatelessSteps, Steps};
 use crate::timer::PassTimer;
 
+/// What a frame's preparation recorded: the steps done, and for a stateless effect the slots
+/// its segment table covers.
+pub(crate) struct PreparedFrame {
+    /// Steps done.
+    pub steps: u64,
+    /// A stateless effect's frame threads (0 for a stateful one).
+    pub threads: u32,
+}
+
 /// A compiled effect running on a GPU: its buffers, its kernels and its spawn schedule.
 ///
 /// ```no_run
@@ -208,22 +217,39 @@ impl EffectInstance {
         renderer: &EffectRenderer,
         camera: &Camera,
     ) -> Result<(), RuntimeError> {
-        renderer.write_view(encoder, camera, self.schedule.steps_done())?;
+        let frame = self.prepare_frame(encoder, camera)?;
+        renderer.write_view(encoder, camera, frame.steps)?;
+        renderer.set_frame_instances(frame.threads);
+        if renderer.counts_on_gpu() {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("draw count"),
+                timestamp_writes: None,
+            });
+            renderer.record_instance_count(&mut pass)?;
+        }
+        Ok(())
+    }
+
+    /// Records what any view of this frame needs, whatever draws it: a stateless effect's
+    /// segment table, and for `sort: true` the depth keys and their sort along `camera`'s axis.
+    pub(crate) fn prepare_frame(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+    ) -> Result<PreparedFrame, RuntimeError> {
+        let mut frame = PreparedFrame {
+            steps: self.schedule.steps_done(),
+            threads: 0,
+        };
         if let Steps::Stateless(stateless) = &self.steps {
-            let threads = self.copy_frame(encoder, stateless)?;
-            renderer.set_frame_instances(threads);
+            frame.threads = self.copy_frame(encoder, stateless)?;
         }
-        if self.depth.is_none() && !renderer.counts_on_gpu() {
-            return Ok(());
-        }
-        if self.depth.is_some() {
-            self.copy_depth_axis(encoder, camera)?;
-        }
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("prepare draw"),
-            timestamp_writes: None,
-        });
         if let Some(depth) = &self.depth {
+            self.copy_depth_axis(encoder, camera)?;
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("depth sort"),
+                timestamp_writes: None,
+            });
             depth.record(
                 &self.gpu,
                 &mut pass,
@@ -232,7 +258,12 @@ impl EffectInstance {
                 SortAlgorithm::Radix,
             )?;
         }
-        renderer.record_instance_count(&mut pass)
+        Ok(frame)
+    }
+
+    /// The buffers and layout a draw of this effect binds (for [`crate::splat`]).
+    pub(crate) fn resources(&self) -> &Resources {
+        &self.res
     }
 
     /// The particle buffers the depth keys read (none for a stateless effect: it evaluates in

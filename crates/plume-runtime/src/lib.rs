@@ -12,7 +12,8 @@
 //!   drawing straight from the particle buffers into the caller's render pass;
 //! - [`readback`]: particles and counters back to the CPU (exports, tests, measurements);
 //! - [`instance`]: [`EffectInstance`], the public object that ties them together;
-//! - outputs: [`offscreen`] (headless images), [`images`], [`export`], [`bench`],
+//! - outputs: [`offscreen`] (headless images, drawn by the raster pipeline or by [`splat`], a
+//!   compute-shader splat of the same image), [`images`], [`export`], [`bench`],
 //!   [`accuracy`] and [`plot`]; [`reference_draw`] is the CPU-fed drawing the GPU draw is
 //!   tested against.
 //!
@@ -36,6 +37,7 @@ pub mod readback;
 pub mod reference_draw;
 pub mod resources;
 pub mod sort;
+pub mod splat;
 pub mod steps;
 pub mod timer;
 

@@ -7,6 +7,7 @@
 //! are the same run after run. `plume bench --occupancy` measures it against hidden quads.
 
 use plume_compiler::passes::layout::Attribute;
+use plume_compiler::wgsl::draw::Primitive;
 use plume_compiler::CompiledEffect;
 
 use crate::error::RuntimeError;
@@ -58,11 +59,9 @@ fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
     if (live) {
         list[offsets[slot]] = slot;
     }
+    // Word 0, the vertices per sprite, is written once by the host.
     if (slot == part.last) {
-        args[0] = 4u;
         args[1] = offsets[slot] + select(0u, 1u, live);
-        args[2] = 0u;
-        args[3] = 0u;
     }
 }
 "#;
@@ -71,7 +70,7 @@ fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
 pub struct LiveList {
     /// The live slots, in slot order (the first `args[1]` entries).
     pub list: wgpu::Buffer,
-    /// The indirect draw's arguments: 4 vertices, the live count of instances.
+    /// The indirect draw's arguments: the vertices per sprite, the live count of instances.
     pub args: wgpu::Buffer,
     flags: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
@@ -83,7 +82,12 @@ pub struct LiveList {
 
 impl LiveList {
     /// The live list of `effect`, whose buffers `res` holds.
-    pub fn new(gpu: &Gpu, res: &Resources, effect: &CompiledEffect) -> Result<Self, RuntimeError> {
+    pub fn new(
+        gpu: &Gpu,
+        res: &Resources,
+        effect: &CompiledEffect,
+        primitive: Primitive,
+    ) -> Result<Self, RuntimeError> {
         let device = &gpu.device;
         let cap = u64::from(effect.ir.capacity);
         let words = |n: u64, label| {
@@ -100,7 +104,7 @@ impl LiveList {
             "live draw args",
             16,
             STORAGE | wgpu::BufferUsages::INDIRECT,
-            |b| b[..4].copy_from_slice(&4u32.to_le_bytes()),
+            |b| b[..4].copy_from_slice(&primitive.vertices().to_le_bytes()),
         )?;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("live list"),

@@ -181,6 +181,61 @@ impl GpuSorter {
         Ok(program)
     }
 
+    /// A stable LSD radix sort of the first `n` pairs ordering only the low `key_bits` bits of
+    /// the keys (8 bits a pass, an even number of passes so the result ends in `keys`/`vals`).
+    pub fn radix_program(
+        &self,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+        key_bits: u32,
+    ) -> Result<SortProgram, RuntimeError> {
+        let mut program = SortProgram {
+            dispatches: Vec::new(),
+        };
+        if n >= 2 {
+            let passes = key_bits.clamp(1, 32).div_ceil(8).next_multiple_of(2);
+            self.radix_passes(&mut program, keys, vals, n, passes)?;
+        }
+        Ok(program)
+    }
+
+    /// Records `passes` 8-bit digit passes of the radix sort, from the lowest digit up.
+    fn radix_passes(
+        &self,
+        pass: &mut SortProgram,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+        passes: u32,
+    ) -> Result<(), RuntimeError> {
+        let tiles = n.div_ceil(TILE);
+        let (keys2, vals2) = (self.buffer("keys tmp", n), self.buffer("vals tmp", n));
+        let counts = self.buffer("digit counts", 256 * tiles);
+        for pass_index in 0..passes {
+            let (ki, vi, ko, vo) = if pass_index % 2 == 0 {
+                (keys, vals, &keys2, &vals2)
+            } else {
+                (&keys2, &vals2, keys, vals)
+            };
+            let p = self.params(n, 8 * pass_index, tiles, 0, 0);
+            self.dispatch(
+                pass,
+                &self.histogram,
+                &[(0, ki), (4, &counts), (5, &p)],
+                tiles,
+            )?;
+            self.scan(pass, &counts, 256 * tiles)?;
+            self.dispatch(
+                pass,
+                &self.scatter,
+                &[(0, ki), (1, vi), (2, ko), (3, vo), (4, &counts), (5, &p)],
+                tiles,
+            )?;
+        }
+        Ok(())
+    }
+
     /// Records a sort of the first `n` pairs of `keys`/`vals` into `pass`.
     pub fn record(
         &self,
@@ -211,32 +266,7 @@ impl GpuSorter {
             return Ok(program);
         }
         match algorithm {
-            SortAlgorithm::Radix => {
-                let tiles = n.div_ceil(TILE);
-                let (keys2, vals2) = (self.buffer("keys tmp", n), self.buffer("vals tmp", n));
-                let counts = self.buffer("digit counts", 256 * tiles);
-                for pass_index in 0..4u32 {
-                    let (ki, vi, ko, vo) = if pass_index % 2 == 0 {
-                        (keys, vals, &keys2, &vals2)
-                    } else {
-                        (&keys2, &vals2, keys, vals)
-                    };
-                    let p = self.params(n, 8 * pass_index, tiles, 0, 0);
-                    self.dispatch(
-                        pass,
-                        &self.histogram,
-                        &[(0, ki), (4, &counts), (5, &p)],
-                        tiles,
-                    )?;
-                    self.scan(pass, &counts, 256 * tiles)?;
-                    self.dispatch(
-                        pass,
-                        &self.scatter,
-                        &[(0, ki), (1, vi), (2, ko), (3, vo), (4, &counts), (5, &p)],
-                        tiles,
-                    )?;
-                }
-            }
+            SortAlgorithm::Radix => self.radix_passes(pass, keys, vals, n, 4)?,
             SortAlgorithm::Bitonic => {
                 // The network needs a power-of-two length: the caller's buffers are padded.
                 let len = n.next_power_of_two();

@@ -32,7 +32,41 @@ pub struct DrawShape {
     /// Whether instance i draws slot `order[i]` (the depth order of a sorted effect, or a
     /// compacted list of live slots) instead of slot i.
     pub through_list: bool,
+    /// The sprite's primitive: a quad (a 4-vertex strip) or one triangle around the disc.
+    pub primitive: Primitive,
+    /// Whether the module also holds `project`, the compute splat's first kernel (the
+    /// runtime's `splat.rs` draws `plume render`'s images with it).
+    pub splat: bool,
 }
+
+/// The geometry a sprite is drawn with.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Primitive {
+    /// A quad, two triangles as a 4-vertex strip: 4 vertices, 2 triangles, area 4 r².
+    #[default]
+    Quad,
+    /// One equilateral triangle circumscribing the disc: 3 vertices, 1 triangle, area 5.2 r²
+    /// (30% more fragments, all outside the disc discarded).
+    Triangle,
+}
+
+impl Primitive {
+    /// Vertices per sprite.
+    pub fn vertices(self) -> u32 {
+        match self {
+            Primitive::Quad => 4,
+            Primitive::Triangle => 3,
+        }
+    }
+}
+
+/// Bindings of the splat's `project` kernel: its view (image size, tiles, instance count), the
+/// projected sprites (16 bytes each), each sprite's tile count, and the same count again (the
+/// runtime scans that copy in place into offsets).
+pub const SPLAT_BINDINGS: [u32; 4] = [20, 21, 22, 23];
+
+/// Side of the splat's square screen tiles (pixels).
+pub const SPLAT_TILE: u32 = 16;
 
 impl DrawShape {
     /// One particle buffer; through the depth order when the effect sorts.
@@ -41,6 +75,8 @@ impl DrawShape {
             chunks: 1,
             chunk_slots: ir.capacity,
             through_list: ir.sort,
+            primitive: Primitive::Quad,
+            splat: false,
         }
     }
 }
@@ -132,6 +168,10 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
             ));
         }
     }
+    if shape.splat {
+        w.blank();
+        emit_splat_declarations(&mut w);
+    }
     w.blank();
     if draws {
         rng::emit_wgsl(&mut w);
@@ -152,9 +192,15 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.blank();
     emit_gradients(&mut w, ir);
     w.blank();
-    emit_vertex(&mut w, ir, shape, life);
+    emit_sprite_at(&mut w, ir, shape, life);
+    w.blank();
+    emit_vertex(&mut w, shape);
     w.blank();
     emit_fragment(&mut w);
+    if shape.splat {
+        w.blank();
+        emit_project(&mut w);
+    }
     w.finish()
 }
 
@@ -286,19 +332,76 @@ fn emit_gradient(w: &mut Writer, name: &str, ty: &str, stops: &[(f64, String)], 
     });
 }
 
-/// The vertex shader `vs`: one instance per slot (or list entry), four vertices per quad.
-fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
+/// `sprite_at(instance)`: instance → slot (through `order` when there is one) → particle →
+/// whether it shows, its centre in view space, its colour and size. Shared by the vertex shader
+/// and the splat's `project`, so both draw the same sprites.
+fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
     let stateless = ir.stateless.is_some();
-    w.block("struct Sprite", |w| {
-        w.line("@builtin(position) clip: vec4<f32>,");
-        w.line("@location(0) uv: vec2<f32>,");
-        w.line("@location(1) color: vec4<f32>,");
+    w.comment(
+        "A particle as a sprite: whether it shows, its centre in view space, colour and size.",
+    );
+    w.block("struct SpriteAt", |w| {
+        w.line("visible: bool,");
+        w.line("center: vec4<f32>,");
+        w.line("color: vec4<f32>,");
+        w.line("size: f32,");
     });
     w.blank();
     w.comment("Integer test for Inf/NaN: WGSL may assume floats are finite.");
     w.block("fn finite3(x: vec3<f32>) -> bool", |w| {
         w.line("let e = bitcast<vec3<u32>>(x) & vec3<u32>(0x7f800000u);");
         w.line("return all(e != vec3<u32>(0x7f800000u));");
+    });
+    w.blank();
+    w.block("fn sprite_at(instance: u32) -> SpriteAt", |w| {
+        w.line("var s: SpriteAt;");
+        w.line("s.visible = false;");
+        if shape.through_list {
+            w.line("let slot = order[instance];");
+        } else {
+            w.line("let slot = instance;");
+        }
+        if stateless {
+            w.line("let e = evaluate_at(slot);");
+            w.block("if (!e.alive)", |w| w.line("return s;"));
+            w.line("let x = e.now.x;");
+        } else {
+            w.line("let p = load_particle(slot);");
+            w.block("if (p.id == DEAD)", |w| w.line("return s;"));
+            w.line("let x = vec3<f32>(p.px, p.py, p.pz);");
+        }
+        w.block("if (!finite3(x))", |w| w.line("return s;"));
+        match (life, stateless) {
+            (false, _) => w.line("let f = 0.0;"),
+            (true, false) => w.line("let f = life_fraction(p);"),
+            (true, true) => {
+                w.comment("Whole steps lived over whole steps of life.");
+                w.line("var f = 0.0;");
+                w.block("if (e.now.die_at != DEAD)", |w| {
+                    w.line("let life = e.now.die_at - e.born + 1u;");
+                    w.line("f = clamp(f32(e.age) / f32(life), 0.0, 1.0);");
+                });
+            }
+        }
+        w.line("s.color = color_at(f);");
+        w.line("s.size = size_at(f) * draw.size_scale;");
+        w.comment("Nothing to see: blending a zero alpha or a zero-size quad changes no pixel.");
+        w.block("if (s.color.a <= 0.0 || s.size <= 0.0)", |w| {
+            w.line("return s;")
+        });
+        w.line("s.center = draw.view * vec4<f32>(x, 1.0);");
+        w.line("s.visible = true;");
+        w.line("return s;");
+    });
+}
+
+/// The vertex shader `vs`: one instance per slot (or list entry), a quad (4-vertex strip) or a
+/// triangle around the disc per sprite.
+fn emit_vertex(w: &mut Writer, shape: &DrawShape) {
+    w.block("struct Sprite", |w| {
+        w.line("@builtin(position) clip: vec4<f32>,");
+        w.line("@location(0) uv: vec2<f32>,");
+        w.line("@location(1) color: vec4<f32>,");
     });
     w.blank();
     w.line("@vertex");
@@ -309,44 +412,96 @@ fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
             w.line("out.clip = HIDDEN;");
             w.line("out.uv = vec2<f32>(0.0);");
             w.line("out.color = vec4<f32>(0.0);");
-            if shape.through_list {
-                w.line("let slot = order[instance];");
-            } else {
-                w.line("let slot = instance;");
-            }
-            if stateless {
-                w.line("let e = evaluate_at(slot);");
-                w.block("if (!e.alive)", |w| w.line("return out;"));
-                w.line("let x = e.now.x;");
-            } else {
-                w.line("let p = load_particle(slot);");
-                w.block("if (p.id == DEAD)", |w| w.line("return out;"));
-                w.line("let x = vec3<f32>(p.px, p.py, p.pz);");
-            }
-            w.block("if (!finite3(x))", |w| w.line("return out;"));
-            match (life, stateless) {
-                (false, _) => w.line("let f = 0.0;"),
-                (true, false) => w.line("let f = life_fraction(p);"),
-                (true, true) => {
-                    w.comment("Whole steps lived over whole steps of life.");
-                    w.line("var f = 0.0;");
-                    w.block("if (e.now.die_at != DEAD)", |w| {
-                        w.line("let life = e.now.die_at - e.born + 1u;");
-                        w.line("f = clamp(f32(e.age) / f32(life), 0.0, 1.0);");
-                    });
+            w.line("let s = sprite_at(instance);");
+            w.block("if (!s.visible)", |w| w.line("return out;"));
+            match shape.primitive {
+                Primitive::Quad => {
+                    w.comment("Strip corners (-1,-1), (1,-1), (-1,1), (1,1), offset in view space so the quad faces the camera.");
+                    w.line("let corner = vec2<f32>(f32(vertex & 1u), f32((vertex >> 1u) & 1u)) * 2.0 - 1.0;");
+                }
+                Primitive::Triangle => {
+                    w.comment("Corners (0, 2), (-sqrt 3, -1), (sqrt 3, -1): the triangle whose incircle is the disc.");
+                    w.line(format!(
+                        "let corner = select(vec2<f32>((f32(vertex) - 1.5) * {}, -1.0), vec2<f32>(0.0, 2.0), vertex == 0u);",
+                        f32_lit(2.0 * 3f64.sqrt())
+                    ));
                 }
             }
-            w.line("let color = color_at(f);");
-            w.line("let size = size_at(f) * draw.size_scale;");
-            w.comment("Nothing to see: blending a zero alpha or a zero-size quad changes no pixel.");
-            w.block("if (color.a <= 0.0 || size <= 0.0)", |w| w.line("return out;"));
-            w.comment("Strip corners (-1,-1), (1,-1), (-1,1), (1,1), offset in view space so the quad faces the camera.");
-            w.line("let corner = vec2<f32>(f32(vertex & 1u), f32((vertex >> 1u) & 1u)) * 2.0 - 1.0;");
-            w.line("let center = draw.view * vec4<f32>(x, 1.0);");
-            w.line("out.clip = draw.proj * (center + vec4<f32>(corner * (0.5 * size), 0.0, 0.0));");
+            w.line("out.clip = draw.proj * (s.center + vec4<f32>(corner * (0.5 * s.size), 0.0, 0.0));");
             w.line("out.uv = corner;");
-            w.line("out.color = color;");
+            w.line("out.color = s.color;");
             w.line("return out;");
+        },
+    );
+}
+
+/// The splat's declarations: its view and output buffers (bindings [`SPLAT_BINDINGS`]).
+fn emit_splat_declarations(w: &mut Writer) {
+    w.comment("The compute splat's image: size in pixels, tiles, and the instances to project.");
+    w.block("struct SplatView", |w| {
+        w.line("width: u32,");
+        w.line("height: u32,");
+        w.line("tiles_x: u32,");
+        w.line("count: u32,");
+    });
+    let [view, splats, counts, offsets] = SPLAT_BINDINGS;
+    w.line(format!(
+        "@group(0) @binding({view}) var<uniform> splat_view: SplatView;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({splats}) var<storage, read_write> splats: array<vec4<u32>>;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({counts}) var<storage, read_write> tile_counts: array<u32>;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({offsets}) var<storage, read_write> tile_offsets: array<u32>;"
+    ));
+}
+
+/// `project`: the splat's first kernel. Instance k's sprite as the rasteriser would place it,
+/// in 16 bytes: its centre in pixels (two f32), its half extent in pixels and its alpha (two
+/// f16), its RGB (three 10-bit unorms); and how many screen tiles its pixels touch (0 when
+/// hidden, clipped, or covering no pixel centre). Pixels are square (the projection's aspect is
+/// the image's), so one extent serves both axes.
+fn emit_project(w: &mut Writer) {
+    w.line("@compute @workgroup_size(256)");
+    w.block(
+        "fn project(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let k = gid.x + gid.y * groups.x * 256u;");
+            w.block("if (k >= splat_view.count)", |w| w.line("return;"));
+            w.line("var tiles = 0u;");
+            w.line("let s = sprite_at(k);");
+            w.block("if (s.visible)", |w| {
+                w.line("let clip = draw.proj * s.center;");
+                w.comment("All corners share z and w: the rasteriser clips the whole sprite or none of it.");
+                w.block("if (clip.w > 0.0 && clip.z >= 0.0 && clip.z <= clip.w)", |w| {
+                    w.line("let h = 0.5 * s.size;");
+                    w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
+                    w.line("let extent = abs((draw.proj * vec4<f32>(h, 0.0, 0.0, 0.0)).x / clip.w) * 0.5 * size.x;");
+                    w.comment("The extent as stored (f16), so the tiles counted here are those the tile kernels find.");
+                    w.line("let packed = pack2x16float(vec2<f32>(extent, s.color.a));");
+                    w.line("let e = unpack2x16float(packed).x;");
+                    w.line("let c = vec2<f32>(clip.x / clip.w * 0.5 + 0.5, 0.5 - clip.y / clip.w * 0.5) * size;");
+                    w.comment("Pixels whose centres (i + 0.5) lie strictly inside the sprite.");
+                    w.line("let lo = max(ceil(c - e - 0.5), vec2<f32>(0.0));");
+                    w.line("let hi = min(floor(c + e - 0.5), size - 1.0);");
+                    w.block("if (all(lo <= hi))", |w| {
+                        w.line(format!(
+                            "let t0 = vec2<u32>(lo) / {SPLAT_TILE}u;"
+                        ));
+                        w.line(format!(
+                            "let t1 = vec2<u32>(hi) / {SPLAT_TILE}u;"
+                        ));
+                        w.line("tiles = (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
+                        w.line("let rgb = vec3<u32>(round(clamp(s.color.rgb, vec3<f32>(0.0), vec3<f32>(1.0)) * 1023.0));");
+                        w.line("splats[k] = vec4<u32>(bitcast<vec2<u32>>(c), packed, rgb.x | (rgb.y << 10u) | (rgb.z << 20u));");
+                    });
+                });
+            });
+            w.line("tile_counts[k] = tiles;");
+            w.line("tile_offsets[k] = tiles;");
         },
     );
 }

@@ -1,0 +1,177 @@
+// The compute splat's tile kernels (not generated: they are the same for every effect; the
+// effect-specific part, `project`, is in the effect's draw module). After `project` has written
+// each sprite's pixel extent and colour and its tile count, and the counts have been scanned:
+//   clear:  entry keys to the largest key (unused entries sort last), tile ranges to empty;
+//   emit:   one (tile, sprite) entry per tile a sprite touches, at the sprite's scanned offset,
+//           so entries are in draw order; a stable radix sort by tile then keeps that order
+//           within each tile;
+//   ranges: each tile's run of entries;
+//   raster: a workgroup per 16x16 tile, a thread per pixel, blends the tile's sprites in draw
+//           order exactly as the blend unit would: coverage at the pixel centre, alpha
+//           a (1 - r²)², the effect's blend, and the 8-bit rounding after every blend.
+
+struct Params {
+    width: u32,
+    height: u32,
+    tiles_x: u32,
+    tiles: u32,
+    count: u32,
+    entries: u32,
+    additive: u32,
+    background: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+// Per sprite (16 bytes): centre x, y in pixels (f32), then (half extent in pixels, alpha) as
+// two f16, then RGB as three 10-bit unorms.
+@group(0) @binding(1) var<storage, read> splats: array<vec4<u32>>;
+@group(0) @binding(2) var<storage, read> offsets: array<u32>;
+@group(0) @binding(3) var<storage, read> tile_counts: array<u32>;
+@group(0) @binding(4) var<storage, read_write> keys: array<u32>;
+@group(0) @binding(5) var<storage, read_write> vals: array<u32>;
+@group(0) @binding(6) var<storage, read_write> ranges: array<vec2<u32>>;
+@group(0) @binding(7) var<storage, read_write> image: array<u32>;
+// [0]: entries needed this frame (more than `params.entries` means some were dropped).
+@group(0) @binding(8) var<storage, read_write> status: array<u32>;
+
+const TILE: u32 = 16u;
+const UNUSED: u32 = 0xffffffffu;
+
+fn index2d(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return gid.x + gid.y * groups.x * 256u;
+}
+
+@compute @workgroup_size(256)
+fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = index2d(gid, groups);
+    if (i < params.entries) {
+        keys[i] = UNUSED;
+        vals[i] = UNUSED;
+    }
+    if (i < params.tiles) {
+        ranges[i] = vec2<u32>(0u);
+    }
+}
+
+struct Splat {
+    centre: vec2<f32>,
+    extent: f32,
+    color: vec4<f32>,
+}
+
+fn unpack_splat(w: vec4<u32>) -> Splat {
+    var s: Splat;
+    s.centre = bitcast<vec2<f32>>(w.xy);
+    let ea = unpack2x16float(w.z);
+    s.extent = ea.x;
+    s.color = vec4<f32>(
+        vec3<f32>(vec3<u32>(w.w, w.w >> 10u, w.w >> 20u) & vec3<u32>(1023u)) / 1023.0,
+        ea.y,
+    );
+    return s;
+}
+
+// The pixels a sprite covers (its tile range): the same bounds `project` counted.
+fn pixel_box(k: u32) -> vec4<u32> {
+    let p = unpack_splat(splats[k]);
+    let size = vec2<f32>(f32(params.width), f32(params.height));
+    let lo = max(ceil(p.centre - p.extent - 0.5), vec2<f32>(0.0));
+    let hi = min(floor(p.centre + p.extent - 0.5), size - 1.0);
+    return vec4<u32>(vec2<u32>(lo), vec2<u32>(hi));
+}
+
+@compute @workgroup_size(256)
+fn emit(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let k = index2d(gid, groups);
+    if (k >= params.count) {
+        return;
+    }
+    let n = tile_counts[k];
+    let base = offsets[k];
+    if (k + 1u == params.count) {
+        status[0] = base + n;
+    }
+    if (n == 0u) {
+        return;
+    }
+    let b = pixel_box(k) / TILE;
+    var i = base;
+    // At most the n entries `project` counted: a sprite never writes into the next one's.
+    for (var ty = b.y; ty <= b.w; ty++) {
+        for (var tx = b.x; tx <= b.z; tx++) {
+            if (i < params.entries && i < base + n) {
+                keys[i] = ty * params.tiles_x + tx;
+                vals[i] = k;
+            }
+            i++;
+        }
+    }
+}
+
+@compute @workgroup_size(256)
+fn find_ranges(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = index2d(gid, groups);
+    let n = min(status[0], params.entries);
+    if (i >= n) {
+        return;
+    }
+    let key = keys[i];
+    if (key >= params.tiles) {
+        return;
+    }
+    if (i == 0u || keys[i - 1u] != key) {
+        ranges[key].x = i;
+    }
+    if (i + 1u == n || keys[i + 1u] != key) {
+        ranges[key].y = i + 1u;
+    }
+}
+
+var<workgroup> shared_splats: array<vec4<u32>, 256>;
+var<workgroup> tile_range: vec2<u32>;
+
+// Rounds to the 8-bit value the render target would store.
+fn quantize(c: vec3<f32>) -> vec3<f32> {
+    return floor(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0 + 0.5) / 255.0;
+}
+
+@compute @workgroup_size(16, 16)
+fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>,
+          @builtin(local_invocation_index) t: u32) {
+    let tile = wid.x + wid.y * params.tiles_x;
+    let px = wid.x * TILE + lid.x;
+    let py = wid.y * TILE + lid.y;
+    let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);
+    var c = unpack4x8unorm(params.background).rgb;
+    if (t == 0u) {
+        tile_range = ranges[tile];
+    }
+    // Uniform for the whole workgroup, as the barriers in the loop need.
+    let range = workgroupUniformLoad(&tile_range);
+    for (var start = range.x; start < range.y; start += 256u) {
+        let i = start + t;
+        if (i < range.y) {
+            shared_splats[t] = splats[vals[i]];
+        }
+        workgroupBarrier();
+        let batch = min(256u, range.y - start);
+        for (var j = 0u; j < batch; j++) {
+            let s = unpack_splat(shared_splats[j]);
+            let uv = (centre - s.centre) / s.extent;
+            let r2 = dot(uv, uv);
+            if (r2 < 1.0) {
+                let col = s.color;
+                let a = col.a * (1.0 - r2) * (1.0 - r2);
+                if (params.additive != 0u) {
+                    c = quantize(col.rgb * a + c);
+                } else {
+                    c = quantize(col.rgb * a + c * (1.0 - a));
+                }
+            }
+        }
+        workgroupBarrier();
+    }
+    if (px < params.width && py < params.height) {
+        image[py * params.width + px] = pack4x8unorm(vec4<f32>(c, 1.0));
+    }
+}
