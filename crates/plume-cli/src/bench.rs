@@ -41,6 +41,26 @@ fn parse_fraction(s: &str) -> Result<f64, String> {
     }
 }
 
+/// The draw's figures as JSON (the `draw` object of `plume bench --json`).
+fn draw_json(d: &plume_runtime::bench::DrawTimes) -> serde_json::Value {
+    serde_json::json!({
+        "render_size": format!("{}x{}", d.width, d.height),
+        "particles": d.particles,
+        "scene_steps": d.steps,
+        "ms": d.draw * 1e3,
+        "opaque_ms": d.opaque * 1e3,
+        "vertex_only_ms": d.vertex_only * 1e3,
+        "prepare_ms": d.prepare.map(|s| s * 1e3),
+        "compaction_ms": d.compacted.map(|(c, _)| c * 1e3),
+        "triangle_ms": d.triangle * 1e3,
+        "splat_ms": d.splat.0 * 1e3,
+        "splat_entries": d.splat.1,
+        "splat_stages_ms": d.splat_stages.iter().map(|(n, s)| (n.to_string(), s * 1e3)).collect::<std::collections::BTreeMap<_, _>>(),
+        "compacted_ms": d.compacted.map(|(_, s)| s * 1e3),
+        "stateless_ms": d.stateless.map(|s| s * 1e3),
+    })
+}
+
 /// Runs `plume bench`.
 pub fn bench_command(args: &BenchArgs) -> ExitCode {
     let (load::Source { name, .. }, effect) = match load::checked(&args.file) {
@@ -87,17 +107,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "gb_per_s": r.update_gbps(), "copy_gb_per_s": r.copy_gbps(),
                 "copy_ms": r.copy_seconds * 1e3, "ratio": r.ratio(), "timing": timing,
                 "spawn_step_ms": r.spawn_step_seconds * 1e3,
-                "render_size": r.render.as_ref().map(|d| format!("{}x{}", d.width, d.height)),
-                "draw_ms": r.render.as_ref().map(|d| d.draw * 1e3),
-                "draw_opaque_ms": r.render.as_ref().map(|d| d.opaque * 1e3),
-                "draw_vertex_only_ms": r.render.as_ref().map(|d| d.vertex_only * 1e3),
-                "draw_prepare_ms": r.render.as_ref().and_then(|d| d.prepare).map(|s| s * 1e3),
-                "compaction_ms": r.render.as_ref().and_then(|d| d.compacted).map(|(c, _)| c * 1e3),
-                "draw_triangle_ms": r.render.as_ref().map(|d| d.triangle * 1e3),
-                "splat_ms": r.render.as_ref().map(|d| d.splat.0 * 1e3),
-                "splat_entries": r.render.as_ref().map(|d| d.splat.1),
-                "draw_compacted_ms": r.render.as_ref().and_then(|d| d.compacted).map(|(_, s)| s * 1e3),
-                "draw_stateless_ms": r.render.as_ref().and_then(|d| d.stateless).map(|s| s * 1e3),
+                "draw": r.render.as_ref().map(draw_json),
                 "sort_radix_ms": r.sort.map(|(s, _)| s * 1e3),
                 "sort_bitonic_ms": r.sort.map(|(_, s)| s * 1e3),
                 "sort_radix_keys_per_s": r.sort.map(|(s, _)| r.particles as f64 / s),
@@ -178,10 +188,15 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
         }
         if let Some(d) = &r.render {
             println!(
-                "  draw                {:.3} ms for a {}x{} frame of all particles, from the GPU buffers (render pass only)",
+                "  draw                {:.3} ms for a {}x{} frame of {} particles, from the GPU buffers (render pass only)",
                 d.draw * 1e3,
                 d.width,
-                d.height
+                d.height,
+                d.particles
+            );
+            println!(
+                "    scene             the effect as written, scaled to that many alive, after {} steps",
+                d.steps
             );
             println!(
                 "    without blending  {:.3} ms (opaque writes)",
@@ -200,6 +215,12 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 d.splat.0 * 1e3,
                 d.splat.1
             );
+            let stages: Vec<String> = d
+                .splat_stages
+                .iter()
+                .map(|(name, s)| format!("{name} {:.3}", s * 1e3))
+                .collect();
+            println!("      stages (ms)     {}", stages.join(", "));
             if let Some(p) = d.prepare {
                 println!(
                     "    prepare           {:.3} ms before the draw: depth keys and the radix sort",

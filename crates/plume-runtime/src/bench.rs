@@ -84,11 +84,16 @@ pub struct BenchResult {
 /// clock of the whole submission on adapters without timestamps).
 #[derive(Clone, Debug, PartialEq)]
 pub struct DrawTimes {
+    /// Live particles drawn: the effect's own scene scaled to N ([`draw_scene`]).
+    pub particles: u64,
+    /// Steps run before drawing.
+    pub steps: u64,
     /// Image width.
     pub width: u32,
     /// Image height.
     pub height: u32,
-    /// The draw as the effect asks for it (its blending, its sizes).
+    /// The draw as the effect asks for it (its blending, its sizes), one instance per slot
+    /// (free slots hidden, for an unsorted stateful effect; see `compacted` for the default).
     pub draw: f64,
     /// The same draw with blending off (each fragment replaces the pixel): blending's share.
     pub opaque: f64,
@@ -107,6 +112,8 @@ pub struct DrawTimes {
     /// preparation, a sort when the effect sorts, excluded as for the draw), and the (tile,
     /// sprite) entries it sorted.
     pub splat: (f64, u64),
+    /// The splat's stages timed one by one (each the median of [`DRAW_REPEATS`]).
+    pub splat_stages: Vec<(&'static str, f64)>,
     /// The same N particles of a stateless copy of the effect, drawn from the closed form in
     /// the vertex shader, when the effect can be stateless.
     pub stateless: Option<f64>,
@@ -228,6 +235,67 @@ fn scale_shape(shape: &mut plume_compiler::schema::Shape, scale: f64, about: gla
         }
         _ => {}
     }
+}
+
+/// The draw's scene: the effect as written, its emitters scaled so that about `particles` are
+/// alive when it is drawn, and the steps to run before drawing it. The update's copy
+/// ([`bench_effect`]) spawns everything at step 0, which suits a bandwidth measurement but draws
+/// a fountain as one blob at the nozzle; a draw measurement needs the effect's own picture:
+/// - an effect with a stream and lifetimes is drawn at its steady state, after its longest
+///   lifetime (alive ≈ Σ rate × mean lifetime + bursts still alive);
+/// - an effect of bursts with lifetimes is drawn at half its shortest lifetime;
+/// - an effect whose particles never die is drawn after 1.5 s.
+///
+/// The capacity is `slots`, or a tenth more than `particles` if that is more, so the
+/// randomness of lifetimes drops nothing.
+pub fn draw_scene(effect: &Effect, particles: u32, slots: u32) -> (Effect, u64) {
+    let mut e = effect.clone();
+    let mean = |l: &plume_compiler::schema::Range| 0.5 * (l.0 + l.1);
+    let streams = e
+        .emitters
+        .iter()
+        .any(|em| em.rate > 0.0 && em.lifetime.is_some());
+    let t = if streams {
+        e.emitters
+            .iter()
+            .filter_map(|em| em.lifetime.as_ref().map(|l| l.1))
+            .fold(0.0, f64::max)
+    } else if e.emitters.iter().any(|em| em.lifetime.is_some()) {
+        0.5 * e
+            .emitters
+            .iter()
+            .filter_map(|em| em.lifetime.as_ref().map(|l| l.0))
+            .fold(f64::INFINITY, f64::min)
+    } else {
+        1.5
+    };
+    let alive: f64 = e
+        .emitters
+        .iter()
+        .map(|em| {
+            let burst = match &em.lifetime {
+                Some(l) if l.1 < t => 0.0,
+                _ => f64::from(em.burst),
+            };
+            let stream = match &em.lifetime {
+                Some(l) => em.rate * mean(l).min(t),
+                None => em.rate * t,
+            };
+            burst + stream
+        })
+        .sum();
+    let scale = f64::from(particles.max(1)) / alive.max(1.0);
+    for em in &mut e.emitters {
+        em.burst = (f64::from(em.burst) * scale)
+            .round()
+            .min(f64::from(u32::MAX / 2)) as u32;
+        em.rate *= scale;
+    }
+    e.capacity = (f64::from(particles) * 1.1 + 1024.0)
+        .max(f64::from(slots))
+        .min(f64::from(u32::MAX / 2)) as u32;
+    let steps = (t / e.dt).round().max(1.0) as u64;
+    (e, steps)
 }
 
 /// Compiles the bench copy of `effect` (with its own `state`).
@@ -352,18 +420,30 @@ pub fn bench(
         }
         None => None,
     };
+    let chunks = sim.chunk_count();
     let render = match options.render {
         None => None,
-        Some((w, h)) => Some(time_draws(gpu, &timer, &sim, effect, w, h)?),
+        Some((w, h)) => {
+            // The draw is measured on the effect's own picture at N particles (draw_scene),
+            // after the update's copy is gone.
+            drop(sim);
+            Some(time_draws(
+                gpu,
+                &timer,
+                effect,
+                (live as u32, particles),
+                (w, h),
+            )?)
+        }
     };
     Ok(BenchResult {
+        chunks,
         sort,
         render,
         adapter: gpu.describe(),
         particles: live,
         steps,
         bytes_per_particle: bpp,
-        chunks: sim.chunk_count(),
         seconds_per_step: update,
         copy_seconds: copy,
         spawn_step_seconds: spawn_step,
@@ -386,17 +466,26 @@ pub fn bench(
     })
 }
 
-/// Times the draws of `sim` (see [`DrawTimes`]) at `width` x `height` from the effect's camera.
+/// Times the draws (see [`DrawTimes`]) of the effect's scene with about `particles` alive in
+/// `slots` at `width` x `height` from the effect's camera.
 fn time_draws(
     gpu: &Gpu,
     timer: &PassTimer<'_>,
-    sim: &EffectInstance,
     effect: &Effect,
-    width: u32,
-    height: u32,
+    (particles, slots): (u32, u32),
+    (width, height): (u32, u32),
 ) -> Result<DrawTimes, RuntimeError> {
-    let capacity = sim.effect().ir.capacity;
-    let live = sim.totals()?.alive as u32;
+    let (scene, steps) = draw_scene(effect, particles, slots);
+    let compile = |state| {
+        let mut e = scene.clone();
+        e.state = state;
+        compile_effect(&e, "").map_err(|e| RuntimeError::Output(e.to_string()))
+    };
+    // The stateful copy is measured in full; a stateless one (when the effect allows it) is
+    // drawn from its closed form beside it.
+    let mut sim = EffectInstance::new(gpu, compile(State::Stateful)?)?;
+    sim.run(steps, |_| {})?;
+    let sim = &sim;
     let target = Offscreen::new(gpu, width, height)?;
     let camera = target.effect_camera(sim);
     let median = |times: &mut Vec<f64>| {
@@ -414,18 +503,24 @@ fn time_draws(
         }
         Ok::<f64, RuntimeError>(median(&mut times))
     };
-    let draw = time(sim, &sim.renderer(&target.target())?)?;
+    // The draw as a host gets it by default; for an unsorted stateful effect that is the
+    // compacted list, and `draw` below is the other way, every slot with free ones hidden.
+    let hidden_slots = crate::draw::DrawOptions {
+        dead_slots: crate::draw::DeadSlots::Hidden,
+        ..Default::default()
+    };
+    let draw = time(sim, &sim.renderer_with(&target.target(), &hidden_slots)?)?;
     let opaque = time(
         sim,
         &sim.renderer_with(
             &target.target(),
             &crate::draw::DrawOptions {
                 blend: Some(wgpu::BlendState::REPLACE),
-                ..Default::default()
+                ..hidden_slots
             },
         )?,
     )?;
-    let mut hidden = sim.renderer(&target.target())?;
+    let mut hidden = sim.renderer_with(&target.target(), &hidden_slots)?;
     hidden.set_size_scale(0.0);
     let vertex_only = time(sim, &hidden)?;
     let triangle = time(
@@ -434,11 +529,11 @@ fn time_draws(
             &target.target(),
             &crate::draw::DrawOptions {
                 primitive: plume_compiler::wgsl::draw::Primitive::Triangle,
-                ..Default::default()
+                ..hidden_slots
             },
         )?,
     )?;
-    let splat = {
+    let (splat, splat_stages) = {
         let mut splat = crate::splat::Splat::new(sim, width, height)?;
         // Draws once, growing the entry list to what the frame needs, then times the pass.
         splat.render(sim, &camera)?;
@@ -449,7 +544,23 @@ fn time_draws(
             gpu.queue.submit([encoder.finish()]);
             times.push(timer.time(|pass| splat.record(pass))?);
         }
-        (median(&mut times), splat.entries())
+        // Stage by stage, in order, each in its own timed pass: repeating one stage alone is
+        // not the same work (the scan works in place).
+        let mut per_stage = vec![Vec::with_capacity(DRAW_REPEATS); crate::splat::STAGES.len()];
+        for _ in 0..DRAW_REPEATS {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            splat.prepare(&mut encoder, sim, &camera)?;
+            gpu.queue.submit([encoder.finish()]);
+            for (times, stage) in per_stage.iter_mut().zip(crate::splat::STAGES) {
+                times.push(timer.time(|pass| splat.record_stage(pass, stage))?);
+            }
+        }
+        let stages: Vec<(&'static str, f64)> = crate::splat::STAGES
+            .into_iter()
+            .zip(per_stage.iter_mut())
+            .map(|(stage, times)| (stage, median(times)))
+            .collect();
+        ((median(&mut times), splat.entries()), stages)
     };
     let prepare = match sim.effect().ir.sort {
         true => {
@@ -480,15 +591,17 @@ fn time_draws(
         }
         false => None,
     };
-    let stateless = match compile_occupied(effect, capacity, live, State::Auto)? {
+    let stateless = match compile(State::Auto)? {
         c if c.ir.stateless.is_some() => {
             let mut s = EffectInstance::new(gpu, c)?;
-            s.run(sim.steps_done(), |_| {})?;
+            s.run(steps, |_| {})?;
             Some(time(&s, &s.renderer(&target.target())?)?)
         }
         _ => None,
     };
     Ok(DrawTimes {
+        particles: sim.totals()?.alive,
+        steps,
         width,
         height,
         draw,
@@ -498,6 +611,7 @@ fn time_draws(
         compacted,
         triangle,
         splat,
+        splat_stages,
         stateless,
     })
 }

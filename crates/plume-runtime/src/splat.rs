@@ -35,6 +35,7 @@ struct Tiles {
     ranges: wgpu::Buffer,
     image: wgpu::Buffer,
     status: wgpu::Buffer,
+    boxes: wgpu::Buffer,
 }
 
 /// The entry list of one length: its keys and values, their sort, and the tile kernels'
@@ -66,9 +67,12 @@ pub struct Splat {
     background: u32,
 }
 
+/// The splat's stages, in order.
+pub const STAGES: [&str; 6] = ["project", "scan", "emit", "sort", "ranges", "raster"];
+
 /// The tile kernels' bindings: (binding, read-only storage?, uniform?), as `splat.wgsl`
 /// declares them.
-const TILE_BINDINGS: [(u32, bool, bool); 9] = [
+const TILE_BINDINGS: [(u32, bool, bool); 10] = [
     (0, true, true),
     (1, true, false),
     (2, true, false),
@@ -78,6 +82,7 @@ const TILE_BINDINGS: [(u32, bool, bool); 9] = [
     (6, false, false),
     (7, false, false),
     (8, false, false),
+    (9, true, false),
 ];
 
 impl Splat {
@@ -129,8 +134,9 @@ impl Splat {
             ranges: words("tile ranges", 2 * u64::from(tiles_x) * u64::from(tiles_y)),
             image: words("image", u64::from(width) * u64::from(height)),
             status: words("splat status", 4),
+            boxes: words("tile boxes", 2 * u64::from(count)),
         };
-        let [b_view, b_splats, b_counts, b_offsets] = SPLAT_BINDINGS;
+        let [b_view, b_splats, b_counts, b_offsets, b_boxes] = SPLAT_BINDINGS;
         entries.extend([
             (0, draw_view.clone()),
             (
@@ -140,6 +146,7 @@ impl Splat {
             (b_splats, tiles.splats.clone()),
             (b_counts, tiles.counts.clone()),
             (b_offsets, tiles.offsets.clone()),
+            (b_boxes, tiles.boxes.clone()),
         ]);
         let project = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("project"),
@@ -223,6 +230,7 @@ impl Splat {
             (6, t.ranges.clone()),
             (7, t.image.clone()),
             (8, t.status.clone()),
+            (9, t.boxes.clone()),
         ];
         self.entries = Entries {
             len,
@@ -253,27 +261,55 @@ impl Splat {
 
     /// Records the splat itself into `pass`: project, scan, entries, sort, ranges, raster.
     pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
+        for stage in STAGES {
+            self.record_stage(pass, stage)?;
+        }
+        Ok(())
+    }
+
+    /// Records one stage of the splat into `pass` (the benchmark times them one by one).
+    pub fn record_stage(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        stage: &str,
+    ) -> Result<(), RuntimeError> {
         let [clear, emit, ranges, raster] = &self.tiles.kernels;
         let e = &self.entries;
         let (x, y) = self.gpu.grid(u64::from(self.count), 256)?;
-        pass.set_pipeline(&self.project);
-        pass.set_bind_group(0, &self.project_group, &[]);
-        pass.dispatch_workgroups(x, y, 1);
-        self.scan.record(pass);
         let tiles = u64::from(self.tiles_x) * u64::from(self.tiles_y);
-        let (cx, cy) = self.gpu.grid(e.len.max(tiles), 256)?;
-        pass.set_bind_group(0, &e.group, &[]);
-        pass.set_pipeline(clear);
-        pass.dispatch_workgroups(cx, cy, 1);
-        pass.set_pipeline(emit);
-        pass.dispatch_workgroups(x, y, 1);
-        e.sort.record(pass);
-        pass.set_bind_group(0, &e.group, &[]);
-        let (rx, ry) = self.gpu.grid(e.len, 256)?;
-        pass.set_pipeline(ranges);
-        pass.dispatch_workgroups(rx, ry, 1);
-        pass.set_pipeline(raster);
-        pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
+        match stage {
+            "project" => {
+                pass.set_pipeline(&self.project);
+                pass.set_bind_group(0, &self.project_group, &[]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            "scan" => self.scan.record(pass),
+            "emit" => {
+                let (cx, cy) = self.gpu.grid(e.len.max(tiles), 256)?;
+                pass.set_bind_group(0, &e.group, &[]);
+                pass.set_pipeline(clear);
+                pass.dispatch_workgroups(cx, cy, 1);
+                pass.set_pipeline(emit);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            "sort" => e.sort.record(pass),
+            "ranges" => {
+                let (rx, ry) = self.gpu.grid(e.len, 256)?;
+                pass.set_bind_group(0, &e.group, &[]);
+                pass.set_pipeline(ranges);
+                pass.dispatch_workgroups(rx, ry, 1);
+            }
+            "raster" => {
+                pass.set_bind_group(0, &e.group, &[]);
+                pass.set_pipeline(raster);
+                pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
+            }
+            _ => {
+                return Err(RuntimeError::Output(format!(
+                    "the splat has no stage {stage}"
+                )))
+            }
+        }
         Ok(())
     }
 

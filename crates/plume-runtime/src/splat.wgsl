@@ -8,7 +8,9 @@
 //   ranges: each tile's run of entries;
 //   raster: a workgroup per 16x16 tile, a thread per pixel, blends the tile's sprites in draw
 //           order exactly as the blend unit would: coverage at the pixel centre, alpha
-//           a (1 - r²)², the effect's blend, and the 8-bit rounding after every blend.
+//           a (1 - r²)², the effect's blend, and the 8-bit rounding after every blend. Batches
+//           of 256 sprites are binned to the pixels they touch first (bit masks), so a pixel
+//           in a dense tile visits its own sprites, not the whole tile's.
 
 struct Params {
     width: u32,
@@ -33,6 +35,8 @@ struct Params {
 @group(0) @binding(7) var<storage, read_write> image: array<u32>;
 // [0]: entries needed this frame (more than `params.entries` means some were dropped).
 @group(0) @binding(8) var<storage, read_write> status: array<u32>;
+// Each sprite's tiles, as `project` counted them: (x0 | y0 << 16, x1 | y1 << 16).
+@group(0) @binding(9) var<storage, read> tile_boxes: array<vec2<u32>>;
 
 const TILE: u32 = 16u;
 const UNUSED: u32 = 0xffffffffu;
@@ -71,15 +75,6 @@ fn unpack_splat(w: vec4<u32>) -> Splat {
     return s;
 }
 
-// The pixels a sprite covers (its tile range): the same bounds `project` counted.
-fn pixel_box(k: u32) -> vec4<u32> {
-    let p = unpack_splat(splats[k]);
-    let size = vec2<f32>(f32(params.width), f32(params.height));
-    let lo = max(ceil(p.centre - p.extent - 0.5), vec2<f32>(0.0));
-    let hi = min(floor(p.centre + p.extent - 0.5), size - 1.0);
-    return vec4<u32>(vec2<u32>(lo), vec2<u32>(hi));
-}
-
 @compute @workgroup_size(256)
 fn emit(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let k = index2d(gid, groups);
@@ -94,7 +89,8 @@ fn emit(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if (n == 0u) {
         return;
     }
-    let b = pixel_box(k) / TILE;
+    let packed = tile_boxes[k];
+    let b = vec4<u32>(packed & vec2<u32>(0xffffu), packed >> vec2<u32>(16u)).xzyw;
     var i = base;
     // At most the n entries `project` counted: a sprite never writes into the next one's.
     for (var ty = b.y; ty <= b.w; ty++) {
@@ -129,18 +125,24 @@ fn find_ranges(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
 
 var<workgroup> shared_splats: array<vec4<u32>, 256>;
 var<workgroup> tile_range: vec2<u32>;
+// Per pixel of the tile, which of the batch's 256 sprites may cover it: 8 words of bits.
+var<workgroup> masks: array<atomic<u32>, 2048>;
 
 // Rounds to the 8-bit value the render target would store.
 fn quantize(c: vec3<f32>) -> vec3<f32> {
     return floor(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0 + 0.5) / 255.0;
 }
 
+// A workgroup per tile, a thread per pixel. Each batch of 256 sprites is first binned to the
+// pixels their boxes touch (a bit per sprite in each pixel's mask), so a pixel visits only the
+// sprites that may cover it, in ascending bit order: the tile's order, the draw order.
 @compute @workgroup_size(16, 16)
 fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>,
           @builtin(local_invocation_index) t: u32) {
     let tile = wid.x + wid.y * params.tiles_x;
-    let px = wid.x * TILE + lid.x;
-    let py = wid.y * TILE + lid.y;
+    let origin = wid.xy * TILE;
+    let px = origin.x + lid.x;
+    let py = origin.y + lid.y;
     let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);
     var c = unpack4x8unorm(params.background).rgb;
     if (t == 0u) {
@@ -149,23 +151,45 @@ fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) l
     // Uniform for the whole workgroup, as the barriers in the loop need.
     let range = workgroupUniformLoad(&tile_range);
     for (var start = range.x; start < range.y; start += 256u) {
-        let i = start + t;
-        if (i < range.y) {
-            shared_splats[t] = splats[vals[i]];
+        for (var w = 0u; w < 8u; w++) {
+            atomicStore(&masks[t * 8u + w], 0u);
         }
         workgroupBarrier();
-        let batch = min(256u, range.y - start);
-        for (var j = 0u; j < batch; j++) {
-            let s = unpack_splat(shared_splats[j]);
-            let uv = (centre - s.centre) / s.extent;
-            let r2 = dot(uv, uv);
-            if (r2 < 1.0) {
-                let col = s.color;
-                let a = col.a * (1.0 - r2) * (1.0 - r2);
-                if (params.additive != 0u) {
-                    c = quantize(col.rgb * a + c);
-                } else {
-                    c = quantize(col.rgb * a + c * (1.0 - a));
+        let i = start + t;
+        if (i < range.y) {
+            let raw = splats[vals[i]];
+            shared_splats[t] = raw;
+            let s = unpack_splat(raw);
+            let o = vec2<f32>(origin);
+            // A thousandth of a pixel of margin: a pixel this box misses is at the rim, where
+            // the exact test below finds no cover anyway.
+            let lo = max(ceil(s.centre - s.extent - 0.501) - o, vec2<f32>(0.0));
+            let hi = min(floor(s.centre + s.extent - 0.499) - o, vec2<f32>(f32(TILE - 1u)));
+            if (all(lo <= hi)) {
+                let bit = 1u << (t & 31u);
+                for (var y = u32(lo.y); y <= u32(hi.y); y++) {
+                    for (var x = u32(lo.x); x <= u32(hi.x); x++) {
+                        atomicOr(&masks[(y * TILE + x) * 8u + (t >> 5u)], bit);
+                    }
+                }
+            }
+        }
+        workgroupBarrier();
+        for (var w = 0u; w < 8u; w++) {
+            var m = atomicLoad(&masks[t * 8u + w]);
+            while (m != 0u) {
+                let j = w * 32u + firstTrailingBit(m);
+                m &= m - 1u;
+                let s = unpack_splat(shared_splats[j]);
+                let uv = (centre - s.centre) / s.extent;
+                let r2 = dot(uv, uv);
+                if (r2 < 1.0) {
+                    let a = s.color.a * (1.0 - r2) * (1.0 - r2);
+                    if (params.additive != 0u) {
+                        c = quantize(s.color.rgb * a + c);
+                    } else {
+                        c = quantize(s.color.rgb * a + c * (1.0 - a));
+                    }
                 }
             }
         }

@@ -61,9 +61,10 @@ impl Primitive {
 }
 
 /// Bindings of the splat's `project` kernel: its view (image size, tiles, instance count), the
-/// projected sprites (16 bytes each), each sprite's tile count, and the same count again (the
-/// runtime scans that copy in place into offsets).
-pub const SPLAT_BINDINGS: [u32; 4] = [20, 21, 22, 23];
+/// projected sprites (16 bytes each), each sprite's tile count, the same count again (the
+/// runtime scans that copy in place into offsets), and the sprite's tile rectangle (computed
+/// once here, so every later kernel agrees on it).
+pub const SPLAT_BINDINGS: [u32; 5] = [20, 21, 22, 23, 24];
 
 /// Side of the splat's square screen tiles (pixels).
 pub const SPLAT_TILE: u32 = 16;
@@ -444,7 +445,7 @@ fn emit_splat_declarations(w: &mut Writer) {
         w.line("tiles_x: u32,");
         w.line("count: u32,");
     });
-    let [view, splats, counts, offsets] = SPLAT_BINDINGS;
+    let [view, splats, counts, offsets, boxes] = SPLAT_BINDINGS;
     w.line(format!(
         "@group(0) @binding({view}) var<uniform> splat_view: SplatView;"
     ));
@@ -456,6 +457,9 @@ fn emit_splat_declarations(w: &mut Writer) {
     ));
     w.line(format!(
         "@group(0) @binding({offsets}) var<storage, read_write> tile_offsets: array<u32>;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({boxes}) var<storage, read_write> tile_boxes: array<vec2<u32>>;"
     ));
 }
 
@@ -480,7 +484,7 @@ fn emit_project(w: &mut Writer) {
                     w.line("let h = 0.5 * s.size;");
                     w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
                     w.line("let extent = abs((draw.proj * vec4<f32>(h, 0.0, 0.0, 0.0)).x / clip.w) * 0.5 * size.x;");
-                    w.comment("The extent as stored (f16), so the tiles counted here are those the tile kernels find.");
+                    w.comment("The extent as stored (f16), as the tile kernels see it.");
                     w.line("let packed = pack2x16float(vec2<f32>(extent, s.color.a));");
                     w.line("let e = unpack2x16float(packed).x;");
                     w.line("let c = vec2<f32>(clip.x / clip.w * 0.5 + 0.5, 0.5 - clip.y / clip.w * 0.5) * size;");
@@ -495,6 +499,7 @@ fn emit_project(w: &mut Writer) {
                             "let t1 = vec2<u32>(hi) / {SPLAT_TILE}u;"
                         ));
                         w.line("tiles = (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
+                        w.line("tile_boxes[k] = vec2<u32>(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u));");
                         w.line("let rgb = vec3<u32>(round(clamp(s.color.rgb, vec3<f32>(0.0), vec3<f32>(1.0)) * 1023.0));");
                         w.line("splats[k] = vec4<u32>(bitcast<vec2<u32>>(c), packed, rgb.x | (rgb.y << 10u) | (rgb.z << 20u));");
                     });
