@@ -187,17 +187,7 @@ fn the_gpu_draw_matches_the_cpu_fed_drawing_for_every_example() {
     };
     for path in names {
         let src = std::fs::read_to_string(&path).unwrap();
-        let effect = compile(&src);
-        // Half the longest lifetime when that is shorter (sparks): particles still on screen.
-        let longest = effect
-            .ir
-            .emitters
-            .iter()
-            .filter_map(|e| e.lifetime_steps)
-            .map(|l| l.first + l.span - 1)
-            .max();
-        let steps = longest.map_or(90, |l| u64::from(l / 2).min(90));
-        let sim = simulate(&gpu, effect, steps);
+        let sim = advance_to_show(simulate(&gpu, compile(&src), 0));
         let (w, h) = (240, 135);
         let gpu_img = draw_gpu(&sim, w, h);
         let cpu_img = draw_reference(&sim, w, h);
@@ -433,8 +423,7 @@ fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
     let gpu = gpu();
     for path in examples() {
         let src = std::fs::read_to_string(&path).unwrap();
-        let sim = simulate(&gpu, compile(&src), 0);
-        let sim = advance_to_show(sim);
+        let sim = advance_to_show(simulate(&gpu, compile(&src), 0));
         let name = path.file_name().unwrap().to_string_lossy();
         // A larger image where sprites are densest (the missed tile edge was found there).
         let dense = ["fountain.ron", "tornado.ron"].contains(&name.as_ref());

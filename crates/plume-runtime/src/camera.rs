@@ -39,6 +39,14 @@ impl Camera {
         [-v.x_axis.z, -v.y_axis.z, -v.z_axis.z, -v.w_axis.z]
     }
 
+    /// [`Self::depth_axis`] as the `DepthAxis` uniform's bytes.
+    pub fn depth_axis_bytes(&self) -> Vec<u8> {
+        self.depth_axis()
+            .iter()
+            .flat_map(|x| x.to_le_bytes())
+            .collect()
+    }
+
     /// Where a world point lands in an image of `width` x `height` (pixels, origin top left,
     /// pixel centres at half-integers), or None when it is behind the camera.
     pub fn project(&self, width: u32, height: u32, p: DVec3) -> Option<(f32, f32)> {

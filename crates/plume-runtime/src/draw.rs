@@ -185,17 +185,7 @@ impl EffectRenderer {
         };
         let (module, mut entries) =
             draw_module(gpu, effect, res, &shape, live.as_ref().map(|l| &l.list))?;
-        let blend = options.blend.unwrap_or(match effect.ir.render.blend {
-            Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
-            Blend::Additive => wgpu::BlendState {
-                color: wgpu::BlendComponent {
-                    src_factor: wgpu::BlendFactor::SrcAlpha,
-                    dst_factor: wgpu::BlendFactor::One,
-                    operation: wgpu::BlendOperation::Add,
-                },
-                alpha: wgpu::BlendComponent::OVER,
-            },
-        });
+        let blend = options.blend.unwrap_or(blend_state(effect.ir.render.blend));
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("draw"),
             // Derived from the module: only the bindings this effect's shaders use.
@@ -244,18 +234,8 @@ impl EffectRenderer {
             mapped_at_creation: false,
         });
         entries.push((0, view.clone()));
-        let entries: Vec<wgpu::BindGroupEntry<'_>> = entries
-            .iter()
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                binding: *binding,
-                resource: buffer.as_entire_binding(),
-            })
-            .collect();
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("draw"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &entries,
-        });
+        let entries: Vec<(u32, &wgpu::Buffer)> = entries.iter().map(|(b, buf)| (*b, buf)).collect();
+        let group = gpu.bind_buffers("draw", &pipeline.get_bind_group_layout(0), &entries);
         let instances = if let Some(live) = live {
             Instances::Compacted(Box::new(live))
         } else if stateless {
@@ -403,6 +383,22 @@ fn alive_instances(
         kernel,
         group,
     })
+}
+
+/// The blend state of an effect's `Blend`: non-premultiplied "over" for `Alpha`; for
+/// `Additive`, src · α added to the target (alpha composited over, so it stays 1).
+pub fn blend_state(blend: Blend) -> wgpu::BlendState {
+    match blend {
+        Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
+        Blend::Additive => wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::SrcAlpha,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent::OVER,
+        },
+    }
 }
 
 /// The draw module's shape on this device: how many particle buffers it binds (a stateless

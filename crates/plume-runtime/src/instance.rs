@@ -298,14 +298,29 @@ impl EffectInstance {
         encoder: &mut wgpu::CommandEncoder,
         camera: &Camera,
     ) -> Result<(), RuntimeError> {
-        let bytes: Vec<u8> = camera
-            .depth_axis()
-            .iter()
-            .flat_map(|x| x.to_le_bytes())
-            .collect();
-        let src = staging(&self.gpu, "depth axis", &bytes)?;
+        let src = staging(&self.gpu, "depth axis", &camera.depth_axis_bytes())?;
         encoder.copy_buffer_to_buffer(&src, 0, &sort_buffers(&self.res)?.depth_axis, 0, 16);
         Ok(())
+    }
+
+    /// Writes a stateless effect's segment table now, with the queue (for timed passes, which
+    /// record into an encoder of their own; a frame's draw copies it in its encoder instead).
+    fn write_frame_now(&self, stateless: &StatelessSteps) -> Result<(), RuntimeError> {
+        let frame = self
+            .res
+            .frame
+            .as_ref()
+            .expect("a stateless effect has a frame");
+        let (bytes, _) = stateless.frame_bytes(&self.effect, frame.size())?;
+        self.gpu.queue.write_buffer(frame, 0, &bytes);
+        Ok(())
+    }
+
+    /// The sort stage, or the error of asking a `sort: false` effect for an order.
+    fn depth(&self) -> Result<&DepthSort, RuntimeError> {
+        self.depth.as_ref().ok_or_else(|| {
+            RuntimeError::Output("this effect has no sort stage (sort: false)".into())
+        })
     }
 
     /// The effect's own camera (its view matrix is all the sort uses).
@@ -341,9 +356,7 @@ impl EffectInstance {
         camera: &Camera,
         algorithm: SortAlgorithm,
     ) -> Result<Vec<(u32, u32)>, RuntimeError> {
-        let depth = self.depth.as_ref().ok_or_else(|| {
-            RuntimeError::Output("this effect has no sort stage (sort: false)".into())
-        })?;
+        let depth = self.depth()?;
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         if let Steps::Stateless(stateless) = &self.steps {
             self.copy_frame(&mut encoder, stateless)?;
@@ -380,27 +393,15 @@ impl EffectInstance {
         timer: &PassTimer<'_>,
         algorithm: SortAlgorithm,
     ) -> Result<f64, RuntimeError> {
-        let depth = self.depth.as_ref().ok_or_else(|| {
-            RuntimeError::Output("this effect has no sort stage (sort: false)".into())
-        })?;
+        let depth = self.depth()?;
         if let Steps::Stateless(stateless) = &self.steps {
-            let frame = self
-                .res
-                .frame
-                .as_ref()
-                .expect("a stateless effect has a frame");
-            let (bytes, _) = stateless.frame_bytes(&self.effect, frame.size())?;
-            self.gpu.queue.write_buffer(frame, 0, &bytes);
+            self.write_frame_now(stateless)?;
         }
-        let axis: Vec<u8> = self
-            .effect_camera()
-            .depth_axis()
-            .iter()
-            .flat_map(|x| x.to_le_bytes())
-            .collect();
-        self.gpu
-            .queue
-            .write_buffer(&sort_buffers(&self.res)?.depth_axis, 0, &axis);
+        self.gpu.queue.write_buffer(
+            &sort_buffers(&self.res)?.depth_axis,
+            0,
+            &self.effect_camera().depth_axis_bytes(),
+        );
         let chunks = self.sort_chunks()?;
         let seconds =
             timer.time(|pass| depth.record(&self.gpu, pass, &self.res, chunks, algorithm))?;
@@ -439,13 +440,7 @@ impl EffectInstance {
             let Steps::Stateless(stateless) = &self.steps else {
                 unreachable!("matched above");
             };
-            let frame = self
-                .res
-                .frame
-                .as_ref()
-                .expect("a stateless effect has a frame");
-            let (bytes, _) = stateless.frame_bytes(&self.effect, frame.size())?;
-            self.gpu.queue.write_buffer(frame, 0, &bytes);
+            self.write_frame_now(stateless)?;
             let chunks = self.chunks()?;
             let seconds = timer.time(|pass| {
                 for _ in 0..steps {

@@ -145,18 +145,7 @@ impl LiveList {
                 }
             })?;
             let group = |pipeline: &wgpu::ComputePipeline, entries: &[(u32, &wgpu::Buffer)]| {
-                let entries: Vec<wgpu::BindGroupEntry<'_>> = entries
-                    .iter()
-                    .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                        binding: *binding,
-                        resource: buffer.as_entire_binding(),
-                    })
-                    .collect();
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: Some("live list"),
-                    layout: &pipeline.get_bind_group_layout(0),
-                    entries: &entries,
-                })
+                gpu.bind_buffers("live list", &pipeline.get_bind_group_layout(0), entries)
             };
             parts.push((
                 group(&flags, &[(0, &chunk.buffer), (1, &offsets), (4, &part)]),

@@ -75,7 +75,7 @@ impl Offscreen {
     }
 
     /// The colour attachment, cleared to `background`.
-    fn attachment(&self, background: DVec3) -> wgpu::RenderPassColorAttachment<'_> {
+    pub(crate) fn attachment(&self, background: DVec3) -> wgpu::RenderPassColorAttachment<'_> {
         wgpu::RenderPassColorAttachment {
             view: &self.view,
             depth_slice: None,

@@ -10,9 +10,10 @@ use plume_compiler::reference::ParticleRecord;
 use plume_compiler::schema::Blend;
 
 use crate::camera::Camera;
+use crate::draw::blend_state;
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
-use crate::offscreen::read_texture;
+use crate::offscreen::{Offscreen, FORMAT};
 
 /// One sprite: centre (m), diameter (m), colour (RGBA in [0, 1]).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -65,16 +66,12 @@ pub fn sprites(
 /// A render target and the reference sprite pipeline for one image size and blend mode.
 pub struct ReferenceRenderer {
     gpu: Gpu,
-    width: u32,
-    height: u32,
-    target: wgpu::Texture,
+    target: Offscreen,
     pipeline: wgpu::RenderPipeline,
     camera: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     background: DVec3,
 }
-
-const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 
 impl ReferenceRenderer {
     /// A renderer of `width` x `height` images with the given blending and background.
@@ -85,27 +82,8 @@ impl ReferenceRenderer {
         blend: Blend,
         background: DVec3,
     ) -> Result<Self, RuntimeError> {
-        let max = gpu.limits.max_texture_dimension_2d;
-        if width == 0 || height == 0 || width > max || height > max {
-            return Err(RuntimeError::Output(format!(
-                "image size {width}x{height} must be between 1x1 and {max}x{max} on this adapter"
-            )));
-        }
+        let target = Offscreen::new(gpu, width, height)?;
         let device = &gpu.device;
-        let target = device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("frame"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
-            view_formats: &[],
-        });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("sprites"),
             source: wgpu::ShaderSource::Wgsl(include_str!("reference_sprite.wgsl").into()),
@@ -142,17 +120,7 @@ impl ReferenceRenderer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let blend_state = match blend {
-            Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
-            Blend::Additive => wgpu::BlendState {
-                color: wgpu::BlendComponent {
-                    src_factor: wgpu::BlendFactor::SrcAlpha,
-                    dst_factor: wgpu::BlendFactor::One,
-                    operation: wgpu::BlendOperation::Add,
-                },
-                alpha: wgpu::BlendComponent::OVER,
-            },
-        };
+        let blend_state = blend_state(blend);
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("sprites"),
             layout: Some(&pipeline_layout),
@@ -185,8 +153,6 @@ impl ReferenceRenderer {
         gpu.take_error()?;
         Ok(Self {
             gpu: gpu.clone(),
-            width,
-            height,
             target,
             pipeline,
             camera,
@@ -221,26 +187,11 @@ impl ReferenceRenderer {
             self.gpu.queue.write_buffer(&b, 0, &instances);
             b
         });
-        let view_tex = self.target.create_view(&Default::default());
         let mut encoder = device.create_command_encoder(&Default::default());
         {
-            let bg = self.background;
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("sprites"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: &view_tex,
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: bg.x,
-                            g: bg.y,
-                            b: bg.z,
-                            a: 1.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
+                color_attachments: &[Some(self.target.attachment(self.background))],
                 depth_stencil_attachment: None,
                 timestamp_writes: None,
                 occlusion_query_set: None,
@@ -255,6 +206,6 @@ impl ReferenceRenderer {
         }
         self.gpu.queue.submit([encoder.finish()]);
         self.gpu.take_error()?;
-        read_texture(&self.gpu, &self.target, self.width, self.height)
+        self.target.read()
     }
 }

@@ -116,21 +116,9 @@ impl GpuSorter {
         entries: &[(u32, &wgpu::Buffer)],
         groups: u64,
     ) -> Result<(), RuntimeError> {
-        let entries: Vec<wgpu::BindGroupEntry<'_>> = entries
-            .iter()
-            .map(|(b, buf)| wgpu::BindGroupEntry {
-                binding: *b,
-                resource: buf.as_entire_binding(),
-            })
-            .collect();
         let group = self
             .gpu
-            .device
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("sort"),
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &entries,
-            });
+            .bind_buffers("sort", &pipeline.get_bind_group_layout(0), entries);
         let (x, y) = self.gpu.grid(groups, 1)?;
         program.dispatches.push(Dispatch {
             pipeline: pipeline.clone(),

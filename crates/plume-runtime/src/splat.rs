@@ -456,16 +456,6 @@ fn uniform(gpu: &Gpu, label: &str, words: &[u32]) -> Result<wgpu::Buffer, Runtim
 
 /// A bind group of `layout` from (binding, buffer) pairs.
 fn bind(gpu: &Gpu, layout: &wgpu::BindGroupLayout, all: &[(u32, wgpu::Buffer)]) -> wgpu::BindGroup {
-    let entries: Vec<wgpu::BindGroupEntry<'_>> = all
-        .iter()
-        .map(|(binding, buffer)| wgpu::BindGroupEntry {
-            binding: *binding,
-            resource: buffer.as_entire_binding(),
-        })
-        .collect();
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("splat"),
-        layout,
-        entries: &entries,
-    })
+    let entries: Vec<(u32, &wgpu::Buffer)> = all.iter().map(|(b, buffer)| (*b, buffer)).collect();
+    gpu.bind_buffers("splat", layout, &entries)
 }

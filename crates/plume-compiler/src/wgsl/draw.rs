@@ -17,7 +17,7 @@ use crate::lifetime::LifetimeSteps;
 use crate::passes::layout::{self, Attribute, Layout};
 use crate::rng;
 use crate::wgsl::writer::{f32_lit, u32_lit, Writer};
-use crate::wgsl::{particle_from_words, spawn, stateless};
+use crate::wgsl::{emit_particle_struct, particle_from_words, spawn, stateless};
 
 /// How the runtime binds the particles for drawing. The compiled effect's own draw module is
 /// [`DrawShape::single`]; the runtime asks for another shape when its device splits the state
@@ -143,14 +143,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         w.blank();
         stateless::emit_declarations(&mut w);
     } else {
-        w.block("struct Particle", |w| {
-            for a in &layout.attributes {
-                let (names, ty) = a.fields();
-                for n in names {
-                    w.line(format!("{n}: {ty},"));
-                }
-            }
-        });
+        emit_particle_struct(&mut w, layout);
     }
     w.blank();
     w.line("@group(0) @binding(0) var<uniform> draw: DrawView;");

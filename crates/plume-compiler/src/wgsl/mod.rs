@@ -50,14 +50,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     w.line(format!("const WORKGROUP: u32 = {};", u32_lit(WORKGROUP)));
     w.line("const DEAD: u32 = 0xffffffffu;");
     w.blank();
-    w.block("struct Particle", |w| {
-        for a in &layout.attributes {
-            let (names, ty) = a.fields();
-            for n in names {
-                w.line(format!("{n}: {ty},"));
-            }
-        }
-    });
+    emit_particle_struct(&mut w, layout);
     w.blank();
     let stateless = ir.stateless.is_some();
     if !stateless {
@@ -191,6 +184,19 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         flock.emit_kernels(&mut w, verlet.then(|| ir.h()));
     }
     w.finish()
+}
+
+/// `struct Particle`: the layout's attributes as scalar fields, in order (shared by the compute
+/// and draw modules).
+pub fn emit_particle_struct(w: &mut Writer, layout: &Layout) {
+    w.block("struct Particle", |w| {
+        for a in &layout.attributes {
+            let (names, ty) = a.fields();
+            for n in names {
+                w.line(format!("{n}: {ty},"));
+            }
+        }
+    });
 }
 
 /// `init`: marks every slot of the chunk free and fills the free list with all slots, so no
