@@ -3,6 +3,7 @@
 mod accuracy;
 mod bench;
 mod load;
+mod preview;
 mod render;
 mod run;
 
@@ -50,6 +51,8 @@ enum Command {
     Accuracy(accuracy::AccuracyArgs),
     /// Simulate and render headless to a PNG (last frame or --sheet) or an animated GIF.
     Render(render::RenderArgs),
+    /// Show the effect live in a window, reloading it whenever its file changes.
+    Preview(preview::PreviewArgs),
     /// List the adapters wgpu sees.
     Adapters {
         /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
@@ -128,6 +131,7 @@ fn main() -> ExitCode {
         } => compile(&file, output.as_deref(), emit, &overrides.options()),
         Command::Run(args) => run::run(&args),
         Command::Render(args) => render::render(&args),
+        Command::Preview(args) => preview::preview(&args),
         Command::Accuracy(args) => accuracy::accuracy(&args),
         Command::Bench(args) => bench::bench_command(&args),
         Command::Adapters { backend } => {

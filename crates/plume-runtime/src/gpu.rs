@@ -45,7 +45,8 @@ pub struct Gpu {
     lost: Arc<Mutex<Option<String>>>,
 }
 
-fn instance(backends: wgpu::Backends) -> wgpu::Instance {
+/// An instance searching `backends`, with no display (headless work).
+pub fn instance(backends: wgpu::Backends) -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = backends;
     wgpu::Instance::new(desc)
@@ -80,12 +81,31 @@ impl Gpu {
     /// Opens the best adapter with compute shaders among `choice`'s backends.
     pub fn new(choice: &GpuChoice) -> Result<Self, RuntimeError> {
         let backends = choice.backends();
-        let instance = instance(backends);
+        Self::open(&instance(backends), None, backends).map(|(gpu, _)| gpu)
+    }
+
+    /// Opens the best adapter among `instance`'s that can present to `surface` (a window of
+    /// Plume's own, as `plume preview` opens), with Plume's error handling, and returns it with
+    /// the adapter (the surface's configuration needs it).
+    pub fn for_surface(
+        instance: &wgpu::Instance,
+        surface: &wgpu::Surface<'_>,
+        backends: wgpu::Backends,
+    ) -> Result<(Self, wgpu::Adapter), RuntimeError> {
+        Self::open(instance, Some(surface), backends)
+    }
+
+    fn open(
+        instance: &wgpu::Instance,
+        surface: Option<&wgpu::Surface<'_>>,
+        backends: wgpu::Backends,
+    ) -> Result<(Self, wgpu::Adapter), RuntimeError> {
         let no_adapter = || RuntimeError::NoAdapter {
             backends: format!("{backends:?}"),
         };
         let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
             power_preference: wgpu::PowerPreference::HighPerformance,
+            compatible_surface: surface,
             ..Default::default()
         }))
         .map_err(|_| no_adapter())?;
@@ -126,7 +146,7 @@ impl Gpu {
             let mut slot = lost_sink.lock().unwrap_or_else(|p| p.into_inner());
             slot.get_or_insert_with(|| format!("{reason:?}: {message}"));
         });
-        Ok(Self {
+        let gpu = Self {
             device,
             queue,
             info,
@@ -134,7 +154,8 @@ impl Gpu {
             downlevel: Some(downlevel),
             errors,
             lost,
-        })
+        };
+        Ok((gpu, adapter))
     }
 
     /// Wraps a host application's device and queue: Plume's effects then run in the host's

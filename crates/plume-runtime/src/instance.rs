@@ -123,18 +123,35 @@ impl EffectInstance {
         encoder: &mut wgpu::CommandEncoder,
         steps: u64,
     ) -> Result<(), RuntimeError> {
+        self.advance_timed(encoder, steps, None).map(|_| ())
+    }
+
+    /// Like [`Self::advance`], with GPU timestamps: `query_set` gets one at index `first` when
+    /// the steps' first compute pass begins and one at `first + 1` when the last one ends.
+    /// Returns whether any pass was recorded (a stateless effect, or 0 steps, records none).
+    pub fn advance_timed(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        steps: u64,
+        timestamps: Option<(&wgpu::QuerySet, u32)>,
+    ) -> Result<bool, RuntimeError> {
         if let Steps::Stateless(stateless) = &mut self.steps {
             stateless.advance(&mut self.schedule, steps, |_| {});
-            return Ok(());
+            return Ok(false);
         }
         let mut done = 0;
         while done < steps {
             let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
             let plans: Vec<StepPlan> = (0..n).map(|_| self.schedule.next_plan()).collect();
-            self.record_plans(encoder, &plans)?;
+            let writes = timestamps.map(|(set, first)| wgpu::ComputePassTimestampWrites {
+                query_set: set,
+                beginning_of_pass_write_index: (done == 0).then_some(first),
+                end_of_pass_write_index: (done + n == steps).then_some(first + 1),
+            });
+            self.record_plans(encoder, &plans, writes)?;
             done += n;
         }
-        Ok(())
+        Ok(steps > 0)
     }
 
     /// Records the parameters' copy and one compute pass of `plans` (at most 256 steps).
@@ -142,6 +159,7 @@ impl EffectInstance {
         &self,
         encoder: &mut wgpu::CommandEncoder,
         plans: &[StepPlan],
+        timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) -> Result<(), RuntimeError> {
         let Steps::Stateful(stateful) = &self.steps else {
             return Ok(());
@@ -160,7 +178,7 @@ impl EffectInstance {
         encoder.copy_buffer_to_buffer(&src, 0, params, 0, bytes.len() as u64);
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("steps"),
-            timestamp_writes: None,
+            timestamp_writes,
         });
         stateful.record(
             &self.gpu,
@@ -571,6 +589,14 @@ impl EffectInstance {
     /// Simulation time of the steps done, k · dt (s, f64).
     pub fn time(&self) -> f64 {
         self.schedule.steps_done() as f64 * self.effect.ir.dt
+    }
+
+    /// A stateful effect's counters (six u32: free count, spawn base, spawn count, spawned,
+    /// dropped, died), for a host that reads totals without waiting: copy them in its
+    /// encoder, map the copy, and decode it with [`crate::readback::decode_totals`]. None for
+    /// a stateless effect, whose [`Self::totals`] needs no GPU.
+    pub fn counters(&self) -> Option<&wgpu::Buffer> {
+        self.res.counters.as_ref()
     }
 
     /// The device this instance runs on.

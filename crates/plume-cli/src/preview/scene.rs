@@ -1,0 +1,137 @@
+//! The preview's frame target: the effect is drawn into an RGBA8 texture, the format
+//! `plume render` writes, so the window shows the same colours and a screenshot is exactly the
+//! effect's image; a fullscreen triangle then copies it onto the window's surface, pixel for
+//! pixel, and the on-screen text goes over that.
+
+use plume_runtime::offscreen::FORMAT;
+
+const BLIT_WGSL: &str = r#"
+@group(0) @binding(0) var scene: texture_2d<f32>;
+
+@vertex
+fn vs(@builtin(vertex_index) v: u32) -> @builtin(position) vec4<f32> {
+    // One triangle over the whole target: (-1, -1), (3, -1), (-1, 3).
+    let p = vec2<f32>(f32((v << 1u) & 2u), f32(v & 2u)) * 2.0 - 1.0;
+    return vec4<f32>(p, 0.0, 1.0);
+}
+
+@fragment
+fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
+    return textureLoad(scene, vec2<i32>(p.xy), 0);
+}
+"#;
+
+/// The frame texture and the copy onto the surface.
+pub struct Scene {
+    texture: wgpu::Texture,
+    view: wgpu::TextureView,
+    size: (u32, u32),
+    blit: wgpu::RenderPipeline,
+    group: wgpu::BindGroup,
+}
+
+impl Scene {
+    /// A `width` x `height` frame copied onto surfaces of `surface_format`.
+    pub fn new(
+        device: &wgpu::Device,
+        surface_format: wgpu::TextureFormat,
+        size: (u32, u32),
+    ) -> Self {
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("blit"),
+            source: wgpu::ShaderSource::Wgsl(BLIT_WGSL.into()),
+        });
+        let blit = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("blit"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: None,
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(surface_format.into())],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let (texture, view, group) = Self::target(device, &blit, size);
+        Self {
+            texture,
+            view,
+            size,
+            blit,
+            group,
+        }
+    }
+
+    fn target(
+        device: &wgpu::Device,
+        blit: &wgpu::RenderPipeline,
+        (width, height): (u32, u32),
+    ) -> (wgpu::Texture, wgpu::TextureView, wgpu::BindGroup) {
+        let texture = device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("preview frame"),
+            size: wgpu::Extent3d {
+                width: width.max(1),
+                height: height.max(1),
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: FORMAT,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::COPY_SRC,
+            view_formats: &[],
+        });
+        let view = texture.create_view(&Default::default());
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("blit"),
+            layout: &blit.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::TextureView(&view),
+            }],
+        });
+        (texture, view, group)
+    }
+
+    /// A new size (the window was resized).
+    pub fn resize(&mut self, device: &wgpu::Device, size: (u32, u32)) {
+        if size != self.size {
+            (self.texture, self.view, self.group) = Self::target(device, &self.blit, size);
+            self.size = size;
+        }
+    }
+
+    /// The frame, to draw the effect into.
+    pub fn view(&self) -> &wgpu::TextureView {
+        &self.view
+    }
+
+    /// The frame texture, to read a screenshot back.
+    pub fn texture(&self) -> &wgpu::Texture {
+        &self.texture
+    }
+
+    /// Width and height.
+    pub fn size(&self) -> (u32, u32) {
+        self.size
+    }
+
+    /// Records the copy of the frame onto `target` (the surface texture) into `pass`.
+    pub fn blit(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_pipeline(&self.blit);
+        pass.set_bind_group(0, &self.group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}

@@ -1,0 +1,93 @@
+//! `plume preview` in a real window: under Xvfb (Debian's `xvfb`, with Mesa's llvmpipe) the
+//! scripted mode draws 30 frames of the fountain and writes a non-blank screenshot; with no
+//! display at all it fails with a message that says so and suggests `plume render`. These tests
+//! never skip: without `xvfb-run` they fail with how to install it (`.ci/run` installs it).
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn plume() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_plume"))
+}
+
+fn effect(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../../effects")
+        .join(name)
+}
+
+/// `xvfb-run`, or a failure that says how to get it.
+fn xvfb_run() -> Command {
+    let found = Command::new("xvfb-run").arg("--help").output().is_ok();
+    assert!(
+        found,
+        "xvfb-run was not found: the preview's window test needs a virtual display. \
+         Install it with `apt-get install xvfb` (Debian/Ubuntu); .ci/run installs it when it is missing"
+    );
+    let mut c = Command::new("xvfb-run");
+    c.args(["-a", "-s", "-screen 0 1280x720x24"]);
+    c
+}
+
+#[test]
+fn preview_draws_frames_in_a_window_and_writes_the_last_one() {
+    let out = std::env::temp_dir().join(format!("plume-preview-{}.png", std::process::id()));
+    let status = xvfb_run()
+        .arg(env!("CARGO_BIN_EXE_plume"))
+        .arg("preview")
+        .arg(effect("fountain.ron"))
+        .args(["--frames", "30", "--screenshot"])
+        .arg(&out)
+        .output()
+        .expect("xvfb-run runs");
+    let stderr = String::from_utf8_lossy(&status.stderr);
+    assert!(status.status.success(), "preview failed: {stderr}");
+    assert!(stderr.contains("(30 frames)"), "{stderr}");
+    let img = image::open(&out).expect("a PNG").to_rgba8();
+    std::fs::remove_file(&out).ok();
+    assert_eq!(img.dimensions(), (1280, 720), "the window's size");
+    // The fountain after 30 steps: a spray of bright blue drops on the dark background.
+    let bg = *img.get_pixel(0, 0);
+    let lit = img
+        .pixels()
+        .filter(|p| p.0.iter().zip(bg.0).any(|(a, b)| a.abs_diff(b) > 40))
+        .count();
+    assert!(lit > 1000, "only {lit} pixels differ from the background");
+}
+
+#[test]
+fn without_a_display_preview_says_so_and_suggests_render() {
+    let out = plume()
+        .arg("preview")
+        .arg(effect("sparks.ron"))
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("WAYLAND_SOCKET")
+        .output()
+        .expect("plume runs");
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("no display"), "{stderr}");
+    assert!(stderr.contains("plume render"), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
+
+#[test]
+fn a_file_with_errors_fails_to_open_with_located_diagnostics() {
+    let dir = std::env::temp_dir().join(format!("plume-preview-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bad = dir.join("bad.ron");
+    std::fs::write(&bad, "Effect(name: \"x\", capacity: 0)").unwrap();
+    let out = xvfb_run()
+        .arg(env!("CARGO_BIN_EXE_plume"))
+        .arg("preview")
+        .arg(&bad)
+        .args(["--frames", "1"])
+        .output()
+        .expect("xvfb-run runs");
+    std::fs::remove_dir_all(&dir).ok();
+    assert!(!out.status.success());
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(stderr.contains("bad.ron:1:"), "located: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}
