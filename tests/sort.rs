@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use plume::compiler::rng::pcg;
-use plume::runtime::sort::{GpuSorter, SortAlgorithm};
+use plume::runtime::sort::{GpuSorter, Ranking, SortAlgorithm};
 
 /// Deterministic keys; `distinct` bounds how many different keys there are (ties test stability).
 fn keys(n: usize, distinct: u32) -> Vec<u32> {
@@ -26,13 +26,36 @@ fn check(sorter: &GpuSorter, algorithm: SortAlgorithm, n: usize, distinct: u32) 
     }
 }
 
+/// The rankings `gpu` can run: the portable one always, subgroup ballots where the adapter has
+/// subgroups of 32 (the H100; not llvmpipe, where this tests the portable ranking alone).
+fn sorters(gpu: &plume::runtime::Gpu) -> Vec<GpuSorter> {
+    let mut out = vec![GpuSorter::with_ranking(gpu, Ranking::Portable).unwrap()];
+    if Ranking::best_for(gpu) == Ranking::Subgroup {
+        out.push(GpuSorter::with_ranking(gpu, Ranking::Subgroup).unwrap());
+    }
+    eprintln!(
+        "rankings tested on {}: {:?}",
+        gpu.info.name,
+        out.iter().map(GpuSorter::ranking).collect::<Vec<_>>()
+    );
+    out
+}
+
 #[test]
 fn radix_sort_matches_a_stable_cpu_sort_at_every_size() {
     let gpu = gpu();
-    let sorter = GpuSorter::new(&gpu);
-    for n in [0, 1, 2, 3, 255, 256, 257, 1000, 7327, 65537] {
-        check(&sorter, SortAlgorithm::Radix, n, u32::MAX);
-        check(&sorter, SortAlgorithm::Radix, n, 7);
+    for sorter in sorters(&gpu) {
+        radix_sort_matches_at_every_size(&sorter);
+    }
+}
+
+fn radix_sort_matches_at_every_size(sorter: &GpuSorter) {
+    // Around one tile (256 keys) and one partition (2,560 keys), and awkward sizes past them.
+    for n in [
+        0, 1, 2, 3, 255, 256, 257, 1000, 2559, 2560, 2561, 7327, 65537,
+    ] {
+        check(sorter, SortAlgorithm::Radix, n, u32::MAX);
+        check(sorter, SortAlgorithm::Radix, n, 7);
     }
     // Keys that differ only in the top byte, and the extremes.
     let k: Vec<u32> = (0..5000u32)
@@ -48,12 +71,21 @@ fn radix_sort_matches_a_stable_cpu_sort_at_every_size() {
 #[test]
 fn radix_sort_of_a_million_keys() {
     let gpu = gpu();
-    check(
-        &GpuSorter::new(&gpu),
-        SortAlgorithm::Radix,
-        1 << 20,
-        u32::MAX,
-    );
+    for sorter in sorters(&gpu) {
+        check(&sorter, SortAlgorithm::Radix, 1 << 20, u32::MAX);
+        // Depth keys share their high digits: one digit value fills whole partitions.
+        check(&sorter, SortAlgorithm::Radix, 1 << 20, 300);
+    }
+}
+
+#[test]
+fn asking_for_a_ranking_the_adapter_lacks_is_an_error() {
+    let gpu = gpu();
+    let subgroup = GpuSorter::with_ranking(&gpu, Ranking::Subgroup);
+    assert_eq!(subgroup.is_ok(), gpu.has_subgroups_of(32));
+    if let Err(e) = subgroup {
+        assert!(e.to_string().contains("subgroups"), "{e}");
+    }
 }
 
 #[test]

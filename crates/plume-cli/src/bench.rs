@@ -26,6 +26,10 @@ pub struct BenchArgs {
     /// free slots in the vertex shader with drawing a compacted list of the live ones.
     #[arg(long, default_value_t = 1.0, value_parser = parse_fraction)]
     occupancy: f64,
+    /// Also time the radix sort alone on this many random (key, value) pairs, with every
+    /// ranking the adapter runs (subgroup ballots, portable), on 32-bit and 16-bit keys.
+    #[arg(long)]
+    sort_keys: Option<u32>,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -61,6 +65,22 @@ fn draw_json(d: &plume_runtime::bench::DrawTimes) -> serde_json::Value {
     })
 }
 
+/// The sort benchmark's figures as JSON (the `sort_alone` array of `plume bench --json`).
+fn sort_json(s: &plume_runtime::sort_bench::SortBench) -> serde_json::Value {
+    let times = s.times.iter().map(|t| {
+        serde_json::json!({
+            "keys": s.keys, "ranking": format!("{:?}", t.ranking), "key_bits": t.key_bits,
+            "ms": t.seconds * 1e3, "keys_per_s": s.keys as f64 / t.seconds,
+            "first_pass_ms": {
+                "upsweep": t.stages[0] * 1e3,
+                "digit_scan": t.stages[1] * 1e3,
+                "downsweep": t.stages[2] * 1e3,
+            },
+        })
+    });
+    serde_json::Value::Array(times.collect())
+}
+
 /// Runs `plume bench`.
 pub fn bench_command(args: &BenchArgs) -> ExitCode {
     let (load::Source { name, .. }, effect) = match load::checked(&args.file) {
@@ -90,6 +110,16 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             eprintln!("{name}: error: {e}");
             return ExitCode::FAILURE;
         }
+    };
+    let sort_alone = match args.sort_keys {
+        Some(n) => match plume_runtime::sort_bench::bench_sort(&gpu, u64::from(n), 9) {
+            Ok(s) => Some(s),
+            Err(e) => {
+                eprintln!("{name}: error in the sort benchmark: {e}");
+                return ExitCode::FAILURE;
+            }
+        },
+        None => None,
     };
     let timing = match r.timing {
         TimingSource::Timestamps => "gpu timestamps",
@@ -121,6 +151,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "stateless_speedup": r.stateless.as_ref().ok().map(|s| r.seconds_per_step / s),
                 "stateful_because": r.stateless.as_ref().err(),
                 "fill_ms": r.fill_seconds.map(|s| s * 1e3),
+                "sort_alone": sort_alone.as_ref().map(sort_json),
             })
         );
     } else {
@@ -182,6 +213,21 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 bitonic * 1e3,
                 r.particles as f64 / bitonic * 1e-9
             );
+        }
+        if let Some(s) = &sort_alone {
+            for t in &s.times {
+                println!(
+                    "  radix sort alone    {:.3} ms ({:.2} G keys/s): {} random pairs, {}-bit keys, {:?} ranking; first pass: upsweep {:.3}, digit scan {:.3}, downsweep {:.3} ms",
+                    t.seconds * 1e3,
+                    s.keys as f64 / t.seconds * 1e-9,
+                    s.keys,
+                    t.key_bits,
+                    t.ranking,
+                    t.stages[0] * 1e3,
+                    t.stages[1] * 1e3,
+                    t.stages[2] * 1e3
+                );
+            }
         }
         if let Some((n, search)) = &r.flock {
             println!("  flock               {search}: {n:.1} neighbours per boid on average (the step time above includes the flocking pass)");

@@ -121,8 +121,10 @@ impl Gpu {
         let downlevel = adapter.get_downlevel_capabilities().flags;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("plume"),
-            // Timestamps where the adapter has them (for `plume bench`); nothing else.
-            required_features: adapter.features() & wgpu::Features::TIMESTAMP_QUERY,
+            // Timestamps (for `plume bench`) and subgroup operations (the radix sort's ranking)
+            // where the adapter has them; nothing else.
+            required_features: adapter.features()
+                & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP),
             required_limits: limits.clone(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,
@@ -172,6 +174,14 @@ impl Gpu {
             errors: Arc::default(),
             lost: Arc::default(),
         }
+    }
+
+    /// Whether the device has subgroup operations and every subgroup has exactly `size`
+    /// invocations (kernels that split a workgroup into subgroups by size rely on it).
+    pub fn has_subgroups_of(&self, size: u32) -> bool {
+        self.device.features().contains(wgpu::Features::SUBGROUP)
+            && self.info.subgroup_min_size == size
+            && self.info.subgroup_max_size == size
     }
 
     /// Whether this is a CPU adapter (llvmpipe, lavapipe), where some kernels take another

@@ -37,6 +37,7 @@ pub mod readback;
 pub mod reference_draw;
 pub mod resources;
 pub mod sort;
+pub mod sort_bench;
 pub mod splat;
 pub mod steps;
 pub mod timer;

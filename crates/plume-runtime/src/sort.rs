@@ -1,8 +1,13 @@
 //! GPU sorts of (key, value) pairs, ascending by key: a stable LSD radix sort (8-bit digits,
-//! four passes; the default) and a bitonic sort (the baseline it is measured against). Both
-//! run without subgroup operations, so they work on llvmpipe. Keys are u32; equal keys keep
-//! their input order (radix) or are ordered by value (bitonic): the same result when values
-//! start as 0, 1, 2, ... as they do for depth sorting.
+//! one pass each; the default) and a bitonic sort (the baseline it is measured against). Keys
+//! are u32; equal keys keep their input order (radix) or are ordered by value (bitonic): the
+//! same result when values start as 0, 1, 2, ... as they do for depth sorting.
+//!
+//! The radix sort is reduce-then-scan (radix.wgsl: count digits per partition, scan the counts,
+//! rank and scatter), with two ways to rank keys within a partition ([`Ranking`]): subgroup
+//! ballots where the adapter's subgroups are exactly 32 wide (NVIDIA, AMD RDNA in wave32), and
+//! a workgroup-memory sorting network everywhere else (llvmpipe included). Both give the same
+//! output, bit for bit: the sort is stable, so its result is fully determined by its input.
 
 use wgpu::util::DeviceExt;
 
@@ -18,17 +23,45 @@ pub enum SortAlgorithm {
     Bitonic,
 }
 
+/// How the radix sort ranks keys within a partition.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ranking {
+    /// Subgroup ballots (8 per 32 keys) and per-subgroup digit counters; needs
+    /// `wgpu::Features::SUBGROUP` and subgroups of exactly 32 invocations.
+    Subgroup,
+    /// Tiles of 256 keys ranked by a bitonic network over (digit, lane) in workgroup memory; no
+    /// subgroup operations, so every adapter runs it.
+    Portable,
+}
+
+impl Ranking {
+    /// The fastest ranking `gpu` can run.
+    pub fn best_for(gpu: &Gpu) -> Self {
+        if gpu.has_subgroups_of(32) {
+            Ranking::Subgroup
+        } else {
+            Ranking::Portable
+        }
+    }
+}
+
 /// The sort kernels.
 pub struct GpuSorter {
     gpu: Gpu,
-    histogram: wgpu::ComputePipeline,
-    scatter: wgpu::ComputePipeline,
+    ranking: Ranking,
+    upsweep: wgpu::ComputePipeline,
+    digit_scan: wgpu::ComputePipeline,
+    downsweep: wgpu::ComputePipeline,
     scan_blocks: wgpu::ComputePipeline,
     add_sums: wgpu::ComputePipeline,
     bitonic: wgpu::ComputePipeline,
 }
 
+/// Block length of the exclusive scan (`scan_program`) and threads of the bitonic kernel.
 const TILE: u64 = 256;
+
+/// Keys per radix partition (radix.wgsl's PART).
+const PARTITION: u64 = 2560;
 
 /// One recorded dispatch of a sort.
 struct Dispatch {
@@ -46,7 +79,13 @@ pub struct SortProgram {
 impl SortProgram {
     /// Records the sort's dispatches into `pass`.
     pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
-        for d in &self.dispatches {
+        self.record_first(pass, self.dispatches.len());
+    }
+
+    /// Records only the first `count` dispatches (the benchmark times the radix sort's
+    /// stages by difference: a pass is upsweep, digit scan, downsweep).
+    pub fn record_first(&self, pass: &mut wgpu::ComputePass<'_>, count: usize) {
+        for d in self.dispatches.iter().take(count) {
             pass.set_pipeline(&d.pipeline);
             pass.set_bind_group(0, &d.group, &[]);
             pass.dispatch_workgroups(d.x, d.y, 1);
@@ -55,20 +94,63 @@ impl SortProgram {
 }
 
 impl GpuSorter {
-    /// Builds the kernels on `gpu`.
+    /// Builds the kernels on `gpu`, ranking the fastest way it can ([`Ranking::best_for`]).
     pub fn new(gpu: &Gpu) -> Self {
-        let module = gpu
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("sort"),
-                source: wgpu::ShaderSource::Wgsl(include_str!("sort.wgsl").into()),
-            });
-        let pipeline = |entry: &str| {
+        Self::build(gpu, Ranking::best_for(gpu))
+    }
+
+    /// Builds the kernels with the given ranking; an error when `gpu` cannot run it.
+    pub fn with_ranking(gpu: &Gpu, ranking: Ranking) -> Result<Self, RuntimeError> {
+        if ranking == Ranking::Subgroup && !gpu.has_subgroups_of(32) {
+            return Err(RuntimeError::Gpu(format!(
+                "{} has no subgroups of exactly 32 invocations (subgroup ranking)",
+                gpu.info.name
+            )));
+        }
+        Ok(Self::build(gpu, ranking))
+    }
+
+    /// The ranking this sorter's radix sort uses.
+    pub fn ranking(&self) -> Ranking {
+        self.ranking
+    }
+
+    fn build(gpu: &Gpu, ranking: Ranking) -> Self {
+        let module = |label: &str, source: String| {
+            gpu.device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(label),
+                    source: wgpu::ShaderSource::Wgsl(source.into()),
+                })
+        };
+        let sort = module("sort", include_str!("sort.wgsl").to_owned());
+        // The shared kernels and one downsweep: a subgroup module only on adapters with them.
+        let radix = match ranking {
+            Ranking::Subgroup => module(
+                "radix (subgroup ranking)",
+                // naga 30 takes subgroup builtins without WGSL's `enable subgroups;` (it refuses
+                // the directive); the device's SUBGROUP feature is what allows them.
+                format!(
+                    "{}\n{}",
+                    include_str!("radix.wgsl"),
+                    include_str!("radix_subgroup.wgsl")
+                ),
+            ),
+            Ranking::Portable => module(
+                "radix (portable ranking)",
+                format!(
+                    "{}\n{}",
+                    include_str!("radix.wgsl"),
+                    include_str!("radix_portable.wgsl")
+                ),
+            ),
+        };
+        let pipeline = |module: &wgpu::ShaderModule, entry: &str| {
             gpu.device
                 .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
                     label: Some(entry),
                     layout: None,
-                    module: &module,
+                    module,
                     entry_point: Some(entry),
                     compilation_options: Default::default(),
                     cache: None,
@@ -76,16 +158,21 @@ impl GpuSorter {
         };
         Self {
             gpu: gpu.clone(),
-            histogram: pipeline("histogram"),
-            scatter: pipeline("scatter"),
-            scan_blocks: pipeline("scan_blocks"),
-            add_sums: pipeline("add_sums"),
-            bitonic: pipeline("bitonic_step"),
+            ranking,
+            upsweep: pipeline(&radix, "rs_upsweep"),
+            digit_scan: pipeline(&radix, "rs_scan"),
+            downsweep: pipeline(&radix, "rs_downsweep"),
+            scan_blocks: pipeline(&sort, "scan_blocks"),
+            add_sums: pipeline(&sort, "add_sums"),
+            bitonic: pipeline(&sort, "bitonic_step"),
         }
     }
 
     fn params(&self, n: u64, shift: u32, tiles: u64, j: u64, k: u64) -> wgpu::Buffer {
-        let words: [u32; 8] = [n as u32, shift, tiles as u32, j as u32, k as u32, 0, 0, 0];
+        self.uniform(&[n as u32, shift, tiles as u32, j as u32, k as u32, 0, 0, 0])
+    }
+
+    fn uniform(&self, words: &[u32]) -> wgpu::Buffer {
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         self.gpu
             .device
@@ -188,7 +275,8 @@ impl GpuSorter {
         Ok(program)
     }
 
-    /// Records `passes` 8-bit digit passes of the radix sort, from the lowest digit up.
+    /// Records `passes` 8-bit digit passes of the radix sort, from the lowest digit up: per
+    /// pass, the digit counts of each partition, their scan, and the ranked scatter.
     fn radix_passes(
         &self,
         pass: &mut SortProgram,
@@ -197,28 +285,42 @@ impl GpuSorter {
         n: u64,
         passes: u32,
     ) -> Result<(), RuntimeError> {
-        let tiles = n.div_ceil(TILE);
+        let partitions = n.div_ceil(PARTITION);
         let (keys2, vals2) = (self.buffer("keys tmp", n), self.buffer("vals tmp", n));
-        let counts = self.buffer("digit counts", 256 * tiles);
+        let counts = self.buffer("partition digit counts", 256 * partitions);
+        let totals = self.buffer("digit totals", 256);
         for pass_index in 0..passes {
             let (ki, vi, ko, vo) = if pass_index % 2 == 0 {
                 (keys, vals, &keys2, &vals2)
             } else {
                 (&keys2, &vals2, keys, vals)
             };
-            let p = self.params(n, 8 * pass_index, tiles, 0, 0);
+            let p = self.uniform(&[n as u32, 8 * pass_index, partitions as u32, 0]);
             self.dispatch(
                 pass,
-                &self.histogram,
+                &self.upsweep,
                 &[(0, ki), (4, &counts), (5, &p)],
-                tiles,
+                partitions,
             )?;
-            self.scan(pass, &counts, 256 * tiles)?;
             self.dispatch(
                 pass,
-                &self.scatter,
-                &[(0, ki), (1, vi), (2, ko), (3, vo), (4, &counts), (5, &p)],
-                tiles,
+                &self.digit_scan,
+                &[(4, &counts), (5, &p), (6, &totals)],
+                256,
+            )?;
+            self.dispatch(
+                pass,
+                &self.downsweep,
+                &[
+                    (0, ki),
+                    (1, vi),
+                    (2, ko),
+                    (3, vo),
+                    (4, &counts),
+                    (5, &p),
+                    (6, &totals),
+                ],
+                partitions,
             )?;
         }
         Ok(())
@@ -330,5 +432,40 @@ impl GpuSorter {
                 .collect())
         };
         Ok((read(&kb)?, read(&vb)?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use naga::valid::{Capabilities, ValidationFlags, Validator};
+
+    /// Parses and validates `source` with naga, allowing subgroup operations; panics with
+    /// naga's located message otherwise.
+    fn validate(source: &str) {
+        let module = naga::front::wgsl::parse_str(source)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+        Validator::new(
+            ValidationFlags::all(),
+            Capabilities::SUBGROUP | Capabilities::SUBGROUP_BARRIER,
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+    }
+
+    // Both radix modules validate here, on any machine: CI's adapter (llvmpipe) has no
+    // subgroups, so it runs only the portable ranking, and this catches a broken subgroup
+    // module before an adapter with subgroups does.
+    #[test]
+    fn both_radix_modules_validate() {
+        validate(&format!(
+            "{}\n{}",
+            include_str!("radix.wgsl"),
+            include_str!("radix_portable.wgsl")
+        ));
+        validate(&format!(
+            "{}\n{}",
+            include_str!("radix.wgsl"),
+            include_str!("radix_subgroup.wgsl")
+        ));
     }
 }

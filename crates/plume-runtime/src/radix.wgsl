@@ -1,0 +1,151 @@
+// The radix sort's shared kernels: a stable LSD radix sort of (key, value) pairs by 8-bit
+// digits, one pass per digit, in the reduce-then-scan shape (no waiting between workgroups):
+//
+//   rs_upsweep:   per partition of PART keys, count each digit:
+//                 pass_hist[digit * partitions + partition].
+//   rs_scan:      one workgroup per digit: the exclusive scan of its row over the partitions
+//                 (where each partition's run of that digit starts among the digit's keys), and
+//                 the digit's total in digit_totals.
+//   downsweep:    per partition, ranks each key among the partition's keys of its digit, in input
+//                 order, and writes it to
+//                 (keys of smaller digits) + (this digit in earlier partitions) + rank.
+//                 Two versions, in their own files: radix_portable.wgsl (no subgroup operations:
+//                 every adapter, llvmpipe included) and radix_subgroup.wgsl (subgroup ballots, for
+//                 adapters whose subgroups are exactly 32 wide).
+//
+// Not generated: the sort is the same for every effect (the keys are not).
+
+const THREADS: u32 = 256u;
+// Keys per thread and per partition. PART keys staged in workgroup memory, the subgroup
+// downsweep's per-subgroup digit counts and two 256-word scan buffers fill WebGPU's guaranteed
+// 16 KiB of workgroup memory exactly.
+const KPT: u32 = 10u;
+const PART: u32 = 2560u;
+
+struct RadixParams {
+    n: u32,
+    shift: u32,
+    partitions: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<storage, read_write> keys_in: array<u32>;
+@group(0) @binding(1) var<storage, read_write> vals_in: array<u32>;
+@group(0) @binding(2) var<storage, read_write> keys_out: array<u32>;
+@group(0) @binding(3) var<storage, read_write> vals_out: array<u32>;
+@group(0) @binding(4) var<storage, read_write> pass_hist: array<u32>;
+@group(0) @binding(5) var<uniform> params: RadixParams;
+@group(0) @binding(6) var<storage, read_write> digit_totals: array<u32, 256>;
+
+var<workgroup> counts: array<atomic<u32>, 256>;
+var<workgroup> scan_buf: array<u32, 256>;
+
+fn partition_of(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return wid.x + wid.y * groups.x;
+}
+
+fn digit_of(key: u32) -> u32 {
+    return (key >> params.shift) & 255u;
+}
+
+// Exclusive prefix sum of `v` over the workgroup's 256 threads (Hillis-Steele). Every thread
+// must call it (it has barriers).
+fn exclusive_scan_256(t: u32, v: u32) -> u32 {
+    workgroupBarrier();
+    scan_buf[t] = v;
+    workgroupBarrier();
+    for (var off = 1u; off < THREADS; off <<= 1u) {
+        var add = 0u;
+        if (t >= off) {
+            add = scan_buf[t - off];
+        }
+        workgroupBarrier();
+        scan_buf[t] += add;
+        workgroupBarrier();
+    }
+    return scan_buf[t] - v;
+}
+
+@compute @workgroup_size(256)
+fn rs_upsweep(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+              @builtin(local_invocation_index) t: u32) {
+    let part = partition_of(wid, groups);
+    atomicStore(&counts[t], 0u);
+    workgroupBarrier();
+    if (part < params.partitions) {
+        let base = part * PART;
+        // Runs of one digit (common in the high digits of depth keys) are counted with one
+        // atomic each, not one a key: every thread adding to the same counter serialises.
+        // Every load first, so that they are all in flight at once.
+        var keys: array<u32, KPT>;
+        for (var k = 0u; k < KPT; k++) {
+            let i = base + k * THREADS + t;
+            if (i < params.n) {
+                keys[k] = keys_in[i];
+            }
+        }
+        var run_digit = 0u;
+        var run = 0u;
+        for (var k = 0u; k < KPT; k++) {
+            if (base + k * THREADS + t < params.n) {
+                let d = digit_of(keys[k]);
+                if (d != run_digit && run > 0u) {
+                    atomicAdd(&counts[run_digit], run);
+                    run = 0u;
+                }
+                run_digit = d;
+                run += 1u;
+            }
+        }
+        if (run > 0u) {
+            atomicAdd(&counts[run_digit], run);
+        }
+    }
+    workgroupBarrier();
+    if (part < params.partitions) {
+        pass_hist[t * params.partitions + part] = atomicLoad(&counts[t]);
+    }
+}
+
+// One workgroup a digit (256 workgroups): each thread scans a contiguous stretch of the row.
+@compute @workgroup_size(256)
+fn rs_scan(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+    let d = wid.x;
+    let parts = params.partitions;
+    let per = (parts + THREADS - 1u) / THREADS;
+    let first = min(t * per, parts);
+    let last = min(first + per, parts);
+    let row = d * parts;
+    var sum = 0u;
+    for (var p = first; p < last; p++) {
+        sum += pass_hist[row + p];
+    }
+    var run = exclusive_scan_256(t, sum);
+    for (var p = first; p < last; p++) {
+        let c = pass_hist[row + p];
+        pass_hist[row + p] = run;
+        run += c;
+    }
+    if (t == THREADS - 1u) {
+        digit_totals[d] = run;
+    }
+}
+
+// Where the keys of digit `t` from partition `part` start in the output: the keys of every
+// smaller digit, plus this digit's keys in earlier partitions. Every thread must call it.
+fn partition_digit_base(t: u32, part: u32) -> u32 {
+    let smaller = exclusive_scan_256(t, digit_totals[t]);
+    var earlier = 0u;
+    if (part < params.partitions) {
+        earlier = pass_hist[t * params.partitions + part];
+    }
+    return smaller + earlier;
+}
+
+// How many keys partition `part` holds (0 past the last).
+fn partition_len(part: u32) -> u32 {
+    if (part >= params.partitions) {
+        return 0u;
+    }
+    return min(PART, params.n - part * PART);
+}
