@@ -135,7 +135,8 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "ms_per_step": r.seconds_per_step * 1e3,
                 "particle_steps_per_second": r.particle_steps_per_second(),
                 "gb_per_s": r.update_gbps(), "copy_gb_per_s": r.copy_gbps(),
-                "copy_ms": r.copy_seconds * 1e3, "ratio": r.ratio(), "timing": timing,
+                "copy_ms": r.copy_seconds * 1e3,
+                "copy_per_particle_ms": r.copy_per_particle_seconds * 1e3, "ratio": r.ratio(), "timing": timing,
                 "spawn_step_ms": r.spawn_step_seconds * 1e3,
                 "draw": r.render.as_ref().map(draw_json),
                 "sort_radix_ms": r.sort.map(|(s, _)| s * 1e3),
@@ -144,6 +145,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "sort_bitonic_keys_per_s": r.sort.map(|(_, s)| r.particles as f64 / s),
                 "flock_mean_neighbours": r.flock.as_ref().map(|(n, _)| *n),
                 "flock_search": r.flock.as_ref().map(|(_, s)| s.clone()),
+                "flock_stages_ms": r.flock_stages.iter().map(|(n, s)| (n.to_string(), s * 1e3)).collect::<std::collections::BTreeMap<_, _>>(),
                 "field_error_max": r.field_error.map(|(m, _, _)| m),
                 "field_error_rms": r.field_error.map(|(_, s, _)| s),
                 "field_error_samples": r.field_error.map(|(_, _, n)| n),
@@ -178,6 +180,11 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             "  copy kernel         {:.4} ms for the same bytes, {:.1} GB/s",
             r.copy_seconds * 1e3,
             r.copy_gbps()
+        );
+        println!(
+            "  copy, a particle    {:.4} ms with one particle's {} bytes a thread (the update's pattern)",
+            r.copy_per_particle_seconds * 1e3,
+            r.bytes_per_particle
         );
         println!("  ratio               {:.3} (copy time / update time; 1 = at the copy kernel's bandwidth)", r.ratio());
         println!(
@@ -231,6 +238,12 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
         }
         if let Some((n, search)) = &r.flock {
             println!("  flock               {search}: {n:.1} neighbours per boid on average (the step time above includes the flocking pass)");
+            let stages: Vec<String> = r
+                .flock_stages
+                .iter()
+                .map(|(name, s)| format!("{name} {:.3}", s * 1e3))
+                .collect();
+            println!("    stages (ms)       {}", stages.join(", "));
         }
         if let Some(d) = &r.render {
             println!(

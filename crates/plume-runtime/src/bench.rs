@@ -19,11 +19,18 @@ const COPY_WGSL: &str = r#"
 @group(0) @binding(0) var<storage, read> src: array<vec4<u32>>;
 @group(0) @binding(1) var<storage, read_write> dst: array<vec4<u32>>;
 
+// 16-byte words per thread: 1 for the copy kernel; a particle's words for the copy that
+// moves one particle's bytes per thread, as the update does.
+override PER: u32 = 1u;
+
 @compute @workgroup_size(256)
 fn copy(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let i = gid.x + gid.y * groups.x * 256u;
-    if (i < arrayLength(&src)) {
-        dst[i] = src[i];
+    let t = gid.x + gid.y * groups.x * 256u;
+    for (var k = 0u; k < PER; k++) {
+        let i = t * PER + k;
+        if (i < arrayLength(&src)) {
+            dst[i] = src[i];
+        }
     }
 }
 
@@ -55,11 +62,16 @@ pub struct BenchResult {
     pub seconds_per_step: f64,
     /// Seconds per copy of the same bytes.
     pub copy_seconds: f64,
+    /// Seconds per copy of the same bytes with one particle's bytes a thread (the update's
+    /// access pattern: each thread moves its particle's 16-byte words in turn).
+    pub copy_per_particle_seconds: f64,
     /// Seconds of step 0, which spawns all N particles and updates them once.
     pub spawn_step_seconds: f64,
     /// Seconds for depth keys plus the radix sort of every slot, and the same with the bitonic
     /// baseline, when the effect has `sort: true`.
     pub sort: Option<(f64, f64)>,
+    /// The flocking pass's stages (name, seconds) on the timed state, when the effect flocks.
+    pub flock_stages: Vec<(&'static str, f64)>,
     /// The draw of all live particles from the GPU buffers, when asked for.
     pub render: Option<DrawTimes>,
     /// Timestamps or wall clock.
@@ -383,6 +395,15 @@ pub fn bench(
         u64::from(particles) * u64::from(bpp),
         steps,
         "copy",
+        1,
+    )? / f64::from(steps);
+    let copy_per_particle = time_copy(
+        gpu,
+        &timer,
+        u64::from(particles) * u64::from(bpp),
+        steps,
+        "copy",
+        bpp.div_ceil(16),
     )? / f64::from(steps);
     let sort = if sim.effect().layout.sorts() {
         // Warm up both, then time them.
@@ -413,6 +434,7 @@ pub fn bench(
         }
         None => None,
     };
+    let flock_stages = sim.time_flock_stages(&timer, 9)?;
     let field_error = match sim.effect().ir.field {
         Some(_) => {
             let t = sim.schedule().steps_done() as f64 * sim.effect().ir.dt;
@@ -439,6 +461,7 @@ pub fn bench(
     Ok(BenchResult {
         chunks,
         sort,
+        flock_stages,
         render,
         adapter: gpu.describe(),
         particles: live,
@@ -446,6 +469,7 @@ pub fn bench(
         bytes_per_particle: bpp,
         seconds_per_step: update,
         copy_seconds: copy,
+        copy_per_particle_seconds: copy_per_particle,
         spawn_step_seconds: spawn_step,
         timing: timer.source(),
         flock,
@@ -458,6 +482,7 @@ pub fn bench(
                     u64::from(particles) * u64::from(bpp),
                     steps,
                     "fill",
+                    1,
                 )? / f64::from(steps),
             ),
             Err(_) => None,
@@ -678,6 +703,7 @@ fn time_copy(
     bytes: u64,
     repeats: u32,
     entry: &str,
+    words_per_thread: u32,
 ) -> Result<f64, RuntimeError> {
     let device = &gpu.device;
     let limit = gpu
@@ -695,7 +721,10 @@ fn time_copy(
         layout: None,
         module: &module,
         entry_point: Some(entry),
-        compilation_options: Default::default(),
+        compilation_options: wgpu::PipelineCompilationOptions {
+            constants: &[("PER", f64::from(words_per_thread))],
+            ..Default::default()
+        },
         cache: None,
     });
     let layout = pipeline.get_bind_group_layout(0);
@@ -727,11 +756,9 @@ fn time_copy(
                 },
             ],
         });
-        let threads = size / 16;
-        let per_dim = u64::from(gpu.limits.max_compute_workgroups_per_dimension);
-        let groups = threads.div_ceil(256);
-        let x = groups.min(per_dim);
-        parts.push((group, x as u32, groups.div_ceil(x) as u32, src, dst));
+        let threads = (size / 16).div_ceil(u64::from(words_per_thread));
+        let (x, y) = gpu.grid(threads, 256)?;
+        parts.push((group, x, y, src, dst));
     }
     let record = |pass: &mut wgpu::ComputePass<'_>, n: u32| {
         pass.set_pipeline(&pipeline);

@@ -1,6 +1,7 @@
 //! The per-step flocking pass of an effect with a Flock force, recorded between the spawn and
 //! the update: snapshot (+ partial sums), global means, then all pairs or the grid (bucket
-//! keys, their radix sort, bucket ranges, search). The kernels are the compiler's
+//! keys and counts, their radix sort, the counts' scan into run starts, the snapshot reordered
+//! by bucket, search). The kernels are the compiler's
 //! (`forces/flock.rs`); this module only dispatches them.
 
 use plume_compiler::forces::flock::{FlockIr, Neighbors, Scope};
@@ -14,10 +15,14 @@ use crate::sort::{GpuSorter, SortAlgorithm, SortProgram};
 /// The uniform grid's extra kernels and its (bucket, slot) sort.
 struct GridPass {
     bucket: wgpu::ComputePipeline,
+    reorder: wgpu::ComputePipeline,
     clear: wgpu::ComputePipeline,
-    ranges: wgpu::ComputePipeline,
     buckets: u64,
     sort: SortProgram,
+    /// The exclusive scan of the bucket counts into run starts.
+    scan: SortProgram,
+    /// Whether the search runs nine threads a boid (`FlockIr::split_search`).
+    split_search: bool,
 }
 
 /// The flocking kernels of one effect.
@@ -38,20 +43,26 @@ impl FlockPass {
     ) -> Result<Self, RuntimeError> {
         let grid = match flock.neighbors {
             Neighbors::Grid { .. } => {
+                let sorter = GpuSorter::new(gpu);
                 let find = |name: &str| {
                     res.extra_named(effect, name)
                         .expect("the layout binds the grid's buffers")
                 };
                 Some(GridPass {
                     bucket: res.pipeline("grid_bucket"),
+                    reorder: res.pipeline("grid_reorder"),
                     clear: res.pipeline("grid_clear"),
-                    ranges: res.pipeline("grid_ranges"),
+                    split_search: FlockIr::split_search(effect.ir.capacity),
                     buckets: FlockIr::grid_buckets(effect.ir.capacity),
-                    sort: GpuSorter::new(gpu).program(
+                    sort: sorter.program(
                         SortAlgorithm::Radix,
                         find("grid_keys"),
                         find("grid_vals"),
                         u64::from(effect.ir.capacity),
+                    )?,
+                    scan: sorter.scan_program(
+                        find("cell_start"),
+                        FlockIr::grid_buckets(effect.ir.capacity) + 1,
                     )?,
                 })
             }
@@ -69,6 +80,30 @@ impl FlockPass {
         })
     }
 
+    /// The pass's stages in recording order, for timing them one by one.
+    pub fn stage_names(&self) -> &'static [&'static str] {
+        match (&self.grid, &self.reduce) {
+            (Some(_), None) => &[
+                "snapshot",
+                "bucket keys",
+                "sort",
+                "scan",
+                "reorder",
+                "search",
+            ],
+            (Some(_), Some(_)) => &[
+                "snapshot and sums",
+                "bucket keys",
+                "sort",
+                "scan",
+                "reorder",
+                "search",
+            ],
+            (None, None) => &["snapshot", "all pairs"],
+            (None, Some(_)) => &["snapshot and sums", "all pairs"],
+        }
+    }
+
     /// Records one step's flocking pass (one chunk: boids index slots globally) with the
     /// step's parameters at `offset`: snapshot, means, neighbour search.
     pub fn record(
@@ -78,8 +113,31 @@ impl FlockPass {
         chunk: &Chunk,
         offset: u32,
     ) -> Result<(), RuntimeError> {
+        self.record_stages(gpu, pass, chunk, offset, usize::MAX)
+    }
+
+    /// Records only the first `stages` stages of [`FlockPass::stage_names`] (the benchmark
+    /// times each stage by difference; the pass writes only its own buffers, so it can be
+    /// recorded again without changing the simulation).
+    pub fn record_stages(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunk: &Chunk,
+        offset: u32,
+        stages: usize,
+    ) -> Result<(), RuntimeError> {
         let (x, y) = gpu.grid(chunk.len, u64::from(plume_compiler::wgsl::WORKGROUP))?;
         pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+        let mut stage = 0;
+        // Whether stage `stage` is recorded; counts it.
+        let mut next = || {
+            stage += 1;
+            stage <= stages
+        };
+        if !next() {
+            return Ok(());
+        }
         pass.set_pipeline(&self.snapshot);
         pass.dispatch_workgroups(x, y, 1);
         if let Some(reduce) = &self.reduce {
@@ -87,16 +145,41 @@ impl FlockPass {
             pass.dispatch_workgroups(1, 1, 1);
         }
         if let Some(grid) = &self.grid {
-            pass.set_pipeline(&grid.bucket);
-            pass.dispatch_workgroups(x, y, 1);
-            grid.sort.record(pass);
-            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
-            let (bx, by) = gpu.grid(grid.buckets, u64::from(plume_compiler::wgsl::WORKGROUP))?;
+            if !next() {
+                return Ok(());
+            }
+            let (bx, by) =
+                gpu.grid(grid.buckets + 1, u64::from(plume_compiler::wgsl::WORKGROUP))?;
             pass.set_pipeline(&grid.clear);
             pass.dispatch_workgroups(bx, by, 1);
-            pass.set_pipeline(&grid.ranges);
+            pass.set_pipeline(&grid.bucket);
+            pass.dispatch_workgroups(x, y, 1);
+            if !next() {
+                return Ok(());
+            }
+            grid.sort.record(pass);
+            if !next() {
+                return Ok(());
+            }
+            grid.scan.record(pass);
+            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+            if !next() {
+                return Ok(());
+            }
+            pass.set_pipeline(&grid.reorder);
             pass.dispatch_workgroups(x, y, 1);
         }
+        if !next() {
+            return Ok(());
+        }
+        // The grid's split search runs nine threads a boid, a fixed number of boids a group.
+        let (x, y) = match &self.grid {
+            Some(grid) if grid.split_search => gpu.grid(
+                chunk.len,
+                u64::from(plume_compiler::forces::flock::GRID_BOIDS_PER_GROUP),
+            )?,
+            _ => (x, y),
+        };
         pass.set_pipeline(&self.neighbours);
         pass.dispatch_workgroups(x, y, 1);
         Ok(())

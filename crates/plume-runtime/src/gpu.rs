@@ -195,8 +195,10 @@ impl Gpu {
     pub fn grid(&self, threads: u64, workgroup: u64) -> Result<(u32, u32), RuntimeError> {
         let per_dim = u64::from(self.limits.max_compute_workgroups_per_dimension);
         let groups = threads.div_ceil(workgroup).max(1);
-        let x = groups.min(per_dim);
-        let y = groups.div_ceil(x);
+        // As few rows as fit, of equal length: 65,536 groups are 2 x 32,768, not 65,535 + 1
+        // (a second row of 65,535 groups of which all but one exit at once).
+        let y = groups.div_ceil(per_dim);
+        let x = groups.div_ceil(y);
         if y > per_dim {
             return Err(RuntimeError::Gpu(format!(
                 "{threads} threads need more than {per_dim} x {per_dim} workgroups"

@@ -550,6 +550,42 @@ impl EffectInstance {
         read_buffer(&self.gpu, buffer)
     }
 
+    /// Times each stage of the flocking pass on the current state (seconds, by stage name),
+    /// the median of `repeats` runs of each stage prefix, by difference. Empty when the effect
+    /// does not flock. The state does not change: the pass writes only its own buffers.
+    pub fn time_flock_stages(
+        &self,
+        timer: &PassTimer<'_>,
+        repeats: u32,
+    ) -> Result<Vec<(&'static str, f64)>, RuntimeError> {
+        let Steps::Stateful(stateful) = &self.steps else {
+            return Ok(Vec::new());
+        };
+        let Some(flock) = stateful.flock() else {
+            return Ok(Vec::new());
+        };
+        let chunk = &self.chunks()?[0];
+        let mut prefix = vec![0.0];
+        for stages in 1..=flock.stage_names().len() {
+            let mut samples = Vec::new();
+            for _ in 0..repeats.max(1) + 1 {
+                samples.push(
+                    timer.time(|pass| flock.record_stages(&self.gpu, pass, chunk, 0, stages))?,
+                );
+            }
+            samples.remove(0);
+            samples.sort_by(f64::total_cmp);
+            prefix.push(samples[samples.len() / 2]);
+        }
+        self.gpu.take_error()?;
+        Ok(flock
+            .stage_names()
+            .iter()
+            .zip(prefix.windows(2))
+            .map(|(name, w)| (*name, w[1] - w[0]))
+            .collect())
+    }
+
     /// Whether the effect runs stateless (no state kept; computed when read or drawn).
     pub fn is_stateless(&self) -> bool {
         matches!(self.steps, Steps::Stateless(_))

@@ -156,6 +156,13 @@ impl StatefulSteps {
     }
 }
 
+impl StatefulSteps {
+    /// The flocking pass, when the effect flocks.
+    pub fn flock(&self) -> Option<&FlockPass> {
+        self.flock.as_ref()
+    }
+}
+
 /// The steps' parameters as the uniform buffer holds them, step j at j · `stride`: first id,
 /// requested, kernel time, step index, then (count, counter before, 0, 0) per emitter slot.
 pub fn params_bytes(plans: &[StepPlan], emitter_slots: u32, stride: u64) -> Vec<u8> {

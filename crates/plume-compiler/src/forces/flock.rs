@@ -168,6 +168,17 @@ pub struct Frozen {
 /// docs/performance.md).
 pub const GRID_FASTER_FROM: u32 = 4096;
 
+/// Boids per workgroup of the grid's split search (9 threads each, one per run of 3 cells).
+pub const GRID_BOIDS_PER_GROUP: u32 = 32;
+
+/// Below this capacity the grid's search splits each boid over 9 threads (one per run of 3
+/// cells); from it on, one thread walks all 9 runs. Measured on the H100 with
+/// effects/boids.ron (docs/performance.md): split 0.089 against 0.260 ms at 16k boids and 0.285
+/// against 0.330 at 64k, but 1.05 against 0.81 at 256k and 4.76 against 2.92 at 1M, where the
+/// GPU is full anyway and one thread a boid lets a warp's 32 neighbouring boids read the same
+/// candidates together.
+pub const GRID_SPLIT_SEARCH_BELOW: u32 = 131_072;
+
 /// Below this speed (m/s) a boid has no heading, so no avoidance.
 pub const MIN_HEADING_SPEED: f64 = 1e-6;
 
@@ -185,10 +196,17 @@ impl FlockIr {
         )
     }
 
-    /// Hash-table buckets of the grid for `capacity` boids: a power of two >= capacity.
+    /// Hash-table buckets of the grid for `capacity` boids: a power of two >= capacity, at
+    /// most 2^31 (so that the count fits the shaders' u32).
     pub fn grid_buckets(capacity: u32) -> u64 {
         // In u64: a capacity above 2^31 would overflow u32.
-        u64::from(capacity.max(1)).next_power_of_two()
+        u64::from(capacity.max(1)).next_power_of_two().min(1 << 31)
+    }
+
+    /// Whether the grid's search of `capacity` boids runs 9 threads a boid
+    /// ([`GRID_SPLIT_SEARCH_BELOW`]).
+    pub fn split_search(capacity: u32) -> bool {
+        capacity < GRID_SPLIT_SEARCH_BELOW
     }
 
     /// The f64 reference of the per-step pass: all pairs, in id order.
@@ -268,6 +286,12 @@ impl FlockIr {
     /// Module-scope declarations: constants, the per-invocation frozen values and the
     /// acceleration added to `accel`.
     pub fn emit_declarations(&self, w: &mut Writer, capacity: u32, workgroup: u32) {
+        if let Neighbors::Grid { .. } = self.neighbors {
+            w.line(format!(
+                "const GRID_BUCKETS: u32 = {}; // a power of two; cell_start has one more entry",
+                u32_lit(Self::grid_buckets(capacity) as u32)
+            ));
+        }
         if self.scope == Scope::Global {
             let groups = capacity.div_ceil(workgroup);
             w.line(format!("const FLOCK_GROUPS: u32 = {};", u32_lit(groups)));
@@ -327,7 +351,7 @@ impl FlockIr {
 
     /// The per-step kernels: `flock_snapshot` (+ the partial sums), `flock_reduce` (Global),
     /// and the neighbour pass (`flock_pairs`, or the grid's kernels).
-    pub fn emit_kernels(&self, w: &mut Writer, verlet_h: Option<f64>) {
+    pub fn emit_kernels(&self, w: &mut Writer, verlet_h: Option<f64>, capacity: u32) {
         self.emit_snapshot(w, verlet_h);
         if self.scope == Scope::Global {
             w.blank();
@@ -338,11 +362,25 @@ impl FlockIr {
         w.blank();
         match self.neighbors {
             Neighbors::AllPairs => emit_all_pairs(w),
-            Neighbors::Grid { cell } => emit_grid(w, cell),
+            Neighbors::Grid { cell } => emit_grid(w, cell, Self::split_search(capacity)),
         }
     }
 
     fn emit_snapshot(&self, w: &mut Writer, verlet_h: Option<f64>) {
+        w.comment("Slot i's (x, alive) and (v, 0) as the flock sees them this step.");
+        w.block("fn boid_of(i: u32) -> array<vec4<f32>, 2>", |w| {
+            w.line("let p = load_particle(i);");
+            w.block("if (p.id == DEAD)", |w| {
+                w.line("return array<vec4<f32>, 2>(vec4<f32>(0.0), vec4<f32>(0.0));");
+            });
+            let v = match verlet_h {
+                Some(h) => format!("vec3<f32>(p.dx, p.dy, p.dz) * {}", f32_lit(1.0 / h)),
+                None => "vec3<f32>(p.vx, p.vy, p.vz)".to_string(),
+            };
+            w.line(format!(
+                "return array<vec4<f32>, 2>(vec4<f32>(p.px, p.py, p.pz, 1.0), vec4<f32>({v}, 0.0));"
+            ));
+        });
         if self.scope == Scope::Global {
             w.line("var<workgroup> red_x: array<vec4<f32>, WORKGROUP>;");
             w.line("var<workgroup> red_v: array<vec4<f32>, WORKGROUP>;");
@@ -358,17 +396,9 @@ impl FlockIr {
                 w.line("var bx = vec4<f32>(0.0);");
                 w.line("var bv = vec4<f32>(0.0);");
                 w.block("if (i < chunk.len)", |w| {
-                    w.line("let p = load_particle(i);");
-                    w.block("if (p.id != DEAD)", |w| {
-                        w.line("bx = vec4<f32>(p.px, p.py, p.pz, 1.0);");
-                        match verlet_h {
-                            Some(h) => w.line(format!(
-                                "bv = vec4<f32>(vec3<f32>(p.dx, p.dy, p.dz) * {}, 0.0);",
-                                f32_lit(1.0 / h)
-                            )),
-                            None => w.line("bv = vec4<f32>(p.vx, p.vy, p.vz, 0.0);"),
-                        }
-                    });
+                    w.line("let b = boid_of(i);");
+                    w.line("bx = b[0];");
+                    w.line("bv = b[1];");
                     w.line("boids[2u * i] = bx;");
                     w.line("boids[2u * i + 1u] = bv;");
                 });
@@ -478,19 +508,21 @@ fn emit_reduce(w: &mut Writer) {
     );
 }
 
-/// Writes a boid's accumulated pass results: (separation + avoidance, Σ w), (Σ w x, count),
-/// (Σ w v, 0).
-fn emit_store_out(w: &mut Writer) {
-    w.block("if (i < chunk.len)", |w| {
-        w.line("flock_out[3u * i] = vec4<f32>(push, sum_w);");
-        w.line("flock_out[3u * i + 1u] = vec4<f32>(sum_x, count);");
-        w.line("flock_out[3u * i + 2u] = vec4<f32>(sum_v, 0.0);");
-    });
+/// Writes slot `slot`'s accumulated pass results: (separation + avoidance, Σ w), (Σ w x,
+/// count), (Σ w v, 0).
+fn emit_store_out(w: &mut Writer, slot: &str) {
+    w.line(format!("flock_out[3u * {slot}] = vec4<f32>(push, sum_w);"));
+    w.line(format!(
+        "flock_out[3u * {slot} + 1u] = vec4<f32>(sum_x, count);"
+    ));
+    w.line(format!(
+        "flock_out[3u * {slot} + 2u] = vec4<f32>(sum_v, 0.0);"
+    ));
 }
 
-/// Adds neighbour `j` (snapshot `ox`, `ov`) to the running sums of boid `i`.
-fn emit_accumulate(w: &mut Writer, j: &str, ox: &str, ov: &str) {
-    w.block(format!("if ({ox}.w > 0.0 && {j} != i)"), |w| {
+/// Adds a neighbour (snapshot `ox`, `ov`) to the running sums, unless `is_self` holds.
+fn emit_accumulate(w: &mut Writer, is_self: &str, ox: &str, ov: &str) {
+    w.block(format!("if ({ox}.w > 0.0 && !({is_self}))"), |w| {
         w.line(format!("let f = flock_pair(me.xyz, me_v.xyz, {ox}.xyz);"));
         w.block("if (f.w > 0.0)", |w| {
             w.line("push += f.xyz;");
@@ -536,21 +568,29 @@ fn emit_all_pairs(w: &mut Writer) {
                         w.line("let j = t * WORKGROUP + k;");
                         w.line("let ox = tile[2u * k];");
                         w.line("let ov = tile[2u * k + 1u];");
-                        emit_accumulate(w, "j", "ox", "ov");
+                        emit_accumulate(w, "j == i", "ox", "ov");
                     });
                 });
                 w.line("workgroupBarrier();");
             });
-            emit_store_out(w);
+            w.block("if (i < chunk.len)", |w| emit_store_out(w, "i"));
         },
     );
 }
 
-/// The grid: `grid_bucket` gives each live boid its cell's bucket (free slots the largest key);
-/// the runtime sorts (bucket, slot) pairs with the stable radix sort; `grid_ranges` records
-/// where each bucket's run starts and ends (`cells[b]` = (start, end), cleared by `grid_clear`); `flock_grid` visits the 27 cells around each boid,
-/// keeping only entries whose own cell is the visited one (two cells may share a bucket).
-fn emit_grid(w: &mut Writer, cell: f64) {
+/// The grid: `grid_clear` zeroes the bucket counts; `grid_bucket` gives each live boid its
+/// cell's bucket (free slots the largest key) and counts it; the runtime sorts (bucket, slot)
+/// pairs with the stable radix sort and scans the counts into `cell_start` (where each bucket's
+/// run starts among the sorted boids); `grid_reorder` rewrites `boids` in the sorted order, so
+/// that a bucket's boids are contiguous and the boids of one workgroup search the same cells
+/// (their reads coalesce and hit the cache). The bucket hash keeps x-neighbouring cells in
+/// consecutive buckets, so `flock_grid` (one thread per sorted boid, writing to the boid's slot)
+/// visits the 27 cells around a boid as 9 runs of 3 buckets, one thread a run (nine threads a
+/// boid: more loads in flight than one thread walking ~400 candidates in turn), keeping only
+/// entries whose own cell is one of the three (other cells may share a bucket); the boid's
+/// first thread adds the nine partial sums in run order. Within a run the boids stay in slot
+/// order (the sort is stable), so every boid sums its neighbours in the same order every run.
+fn emit_grid(w: &mut Writer, cell: f64, split_search: bool) {
     w.line(format!("const INV_CELL: f32 = {};", f32_lit(1.0 / cell)));
     w.block("fn cell_of(x: vec3<f32>) -> vec3<i32>", |w| {
         w.comment(
@@ -560,13 +600,21 @@ fn emit_grid(w: &mut Writer, cell: f64) {
             "return vec3<i32>(clamp(floor(x * INV_CELL), vec3<f32>(-1.0e6), vec3<f32>(1.0e6)));",
         );
     });
+    w.comment("The (y, z) hash plus x: cells x - 1, x, x + 1 fall in consecutive buckets.");
     w.block("fn bucket_of(c: vec3<i32>) -> u32", |w| {
         w.line("let u = bitcast<vec3<u32>>(c);");
-        w.line("return ((u.x * 73856093u) ^ (u.y * 19349663u) ^ (u.z * 83492791u)) & (grid_buckets_len() - 1u);");
+        w.line("return (((u.y * 19349663u) ^ (u.z * 83492791u)) * 73856093u + u.x) & (GRID_BUCKETS - 1u);");
     });
-    w.block("fn grid_buckets_len() -> u32", |w| {
-        w.line("return arrayLength(&cells);");
-    });
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn grid_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            crate::wgsl::emit_thread_index(w, "k", None);
+            w.block("if (k <= GRID_BUCKETS)", |w| {
+                w.line("atomicStore(&cell_start[k], 0u);");
+            });
+        },
+    );
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
         "fn grid_bucket(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
@@ -576,61 +624,125 @@ fn emit_grid(w: &mut Writer, cell: f64) {
             w.line("var key = 0xffffffffu;");
             w.block("if (b.w > 0.0)", |w| {
                 w.line("key = bucket_of(cell_of(b.xyz));");
+                w.line("atomicAdd(&cell_start[key], 1u);");
             });
             w.line("grid_keys[i] = key;");
             w.line("grid_vals[i] = i;");
         },
     );
+    w.comment("The snapshot again, in sorted order: boids[k] is the boid of slot grid_vals[k].");
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
-        "fn grid_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
-        |w| {
-            crate::wgsl::emit_thread_index(w, "k", None);
-            w.block("if (k < grid_buckets_len())", |w| {
-                w.line("cells[k] = vec2<u32>(0u);");
-            });
-        },
-    );
-    w.line("@compute @workgroup_size(WORKGROUP)");
-    w.block(
-        "fn grid_ranges(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        "fn grid_reorder(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
             crate::wgsl::emit_thread_index(w, "k", Some("chunk.len"));
-            w.line("let key = grid_keys[k];");
-            w.block("if (key == 0xffffffffu)", |w| w.line("return;"));
-            w.block("if (k == 0u || grid_keys[k - 1u] != key)", |w| {
-                w.line("cells[key].x = k;");
-            });
-            w.block("if (k + 1u == chunk.len || grid_keys[k + 1u] != key)", |w| {
-                w.line("cells[key].y = k + 1u;");
-            });
+            w.line("let b = boid_of(grid_vals[k]);");
+            w.line("boids[2u * k] = b[0];");
+            w.line("boids[2u * k + 1u] = b[1];");
         },
     );
+    if split_search {
+        emit_split_search(w);
+    } else {
+        emit_search(w);
+    }
+}
+
+/// The walk over one run of 3 buckets around cell `c` (x - 1 to x + 1), for boid `k` at
+/// (`me`, `me_v`), adding to the running sums.
+fn emit_run_walk(w: &mut Writer) {
+    w.line("let b0 = bucket_of(c - vec3<i32>(1, 0, 0));");
+    w.comment("Buckets b0, b0 + 1, b0 + 2 (mod buckets): one run, or two where they wrap.");
+    w.line("let wrapped = max(b0 + 3u, GRID_BUCKETS) - GRID_BUCKETS;");
+    w.block("for (var r = 0u; r < 2u; r++)", |w| {
+        w.line("let lo = atomicLoad(&cell_start[select(0u, b0, r == 0u)]);");
+        w.line("let hi = atomicLoad(&cell_start[select(wrapped, min(b0 + 3u, GRID_BUCKETS), r == 0u)]);");
+        w.block("for (var m = lo; m < hi; m++)", |w| {
+            w.line("let ox = boids[2u * m];");
+            w.line("let co = cell_of(ox.xyz);");
+            w.comment("Another cell hashed to these buckets: not a neighbour from here.");
+            w.block("if (co.y != c.y || co.z != c.z || abs(co.x - c.x) > 1)", |w| {
+                w.line("continue;");
+            });
+            w.line("let ov = boids[2u * m + 1u];");
+            emit_accumulate(w, "m == k", "ox", "ov");
+        });
+    });
+}
+
+/// `flock_grid`, one thread a boid walking its 9 runs.
+fn emit_search(w: &mut Writer) {
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
         "fn flock_grid(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            crate::wgsl::emit_thread_index(w, "i", Some("chunk.len"));
-            w.line("let me = boids[2u * i];");
-            w.line("let me_v = boids[2u * i + 1u];");
+            crate::wgsl::emit_thread_index(w, "k", Some("chunk.len"));
+            w.line("let me = boids[2u * k];");
+            w.line("let me_v = boids[2u * k + 1u];");
             emit_accumulators(w);
             w.block("if (me.w > 0.0)", |w| {
                 w.line("let home = cell_of(me.xyz);");
-                w.block("for (var n = 0; n < 27; n++)", |w| {
-                    w.line("let c = home + vec3<i32>(n % 3 - 1, (n / 3) % 3 - 1, n / 9 - 1);");
-                    w.line("let b = bucket_of(c);");
-                    w.line("let run = cells[b];");
-                    w.block("for (var k = run.x; k < run.y; k++)", |w| {
-                        w.line("let j = grid_vals[k];");
-                        w.line("let ox = boids[2u * j];");
-                        w.comment("Another cell hashed to this bucket: not a neighbour from here.");
-                        w.block("if (any(cell_of(ox.xyz) != c))", |w| w.line("continue;"));
-                        w.line("let ov = boids[2u * j + 1u];");
-                        emit_accumulate(w, "j", "ox", "ov");
-                    });
+                w.block("for (var n = 0; n < 9; n++)", |w| {
+                    w.line("let c = home + vec3<i32>(0, n % 3 - 1, n / 3 - 1);");
+                    emit_run_walk(w);
                 });
             });
-            emit_store_out(w);
+            emit_store_out(w, "grid_vals[k]");
+        },
+    );
+}
+
+/// `flock_grid`, nine threads a boid (one a run); the boid's first thread adds the nine partial
+/// sums in run order (the same order every run).
+fn emit_split_search(w: &mut Writer) {
+    w.line(format!(
+        "const GRID_BOIDS_PER_GROUP: u32 = {};",
+        u32_lit(GRID_BOIDS_PER_GROUP)
+    ));
+    w.comment("Per thread: its run's (push, Σw), (Σw x, count), (Σw v, 0).");
+    w.line(format!(
+        "var<workgroup> grid_partial: array<vec4<f32>, {}>;",
+        27 * GRID_BOIDS_PER_GROUP
+    ));
+    w.line(format!(
+        "@compute @workgroup_size({})",
+        9 * GRID_BOIDS_PER_GROUP
+    ));
+    w.block(
+        "fn flock_grid(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32)",
+        |w| {
+            w.line("let n = i32(lid % 9u);");
+            w.line("let k = (wid.x + wid.y * groups.x) * GRID_BOIDS_PER_GROUP + lid / 9u;");
+            emit_accumulators(w);
+            w.comment("No early return: every thread reaches the barrier.");
+            w.block("if (k < chunk.len)", |w| {
+                w.line("let me = boids[2u * k];");
+                w.line("let me_v = boids[2u * k + 1u];");
+                w.block("if (me.w > 0.0)", |w| {
+                    w.line("let c = cell_of(me.xyz) + vec3<i32>(0, n % 3 - 1, n / 3 - 1);");
+                    emit_run_walk(w);
+                });
+            });
+            w.line("grid_partial[3u * lid] = vec4<f32>(push, sum_w);");
+            w.line("grid_partial[3u * lid + 1u] = vec4<f32>(sum_x, count);");
+            w.line("grid_partial[3u * lid + 2u] = vec4<f32>(sum_v, 0.0);");
+            w.line("workgroupBarrier();");
+            w.block("if (n == 0 && k < chunk.len)", |w| {
+                w.line("var a = vec4<f32>(0.0);");
+                w.line("var b = vec4<f32>(0.0);");
+                w.line("var d = vec4<f32>(0.0);");
+                w.block("for (var r = 0u; r < 9u; r++)", |w| {
+                    w.line("a += grid_partial[3u * (lid + r)];");
+                    w.line("b += grid_partial[3u * (lid + r) + 1u];");
+                    w.line("d += grid_partial[3u * (lid + r) + 2u];");
+                });
+                w.line("push = a.xyz;");
+                w.line("sum_w = a.w;");
+                w.line("sum_x = b.xyz;");
+                w.line("count = b.w;");
+                w.line("sum_v = d.xyz;");
+                emit_store_out(w, "grid_vals[k]");
+            });
         },
     );
 }

@@ -315,10 +315,10 @@ pub fn decide(ir: &EffectIr) -> Layout {
             });
             layout.bindings.push(Binding {
                 binding: 12,
-                name: "cells",
+                name: "cell_start",
                 space: "storage, read_write",
-                bytes: buckets * 8,
-                meaning: "per bucket: (start, end) of its run in the sorted slots",
+                bytes: (buckets + 1) * 4,
+                meaning: "per bucket: its boids' count, then (scanned) where its run starts in the sorted slots; one past the last: the live boids",
             });
         }
     }

@@ -108,7 +108,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "chunk" => "Chunk",
             "sort_keys" | "sort_vals" | "grid_keys" | "grid_vals" => "array<u32>",
             "boids" | "flock_out" | "flock_sums" => "array<vec4<f32>>",
-            "cells" => "array<vec2<u32>>",
+            "cell_start" => "array<atomic<u32>>",
             "field" => "array<vec4<f32>>",
             "frame" => "Frame",
             "depth_axis" => "DepthAxis",
@@ -181,7 +181,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     if let Some(flock) = &ir.flock {
         w.blank();
         let verlet = layout.has(crate::passes::layout::Attribute::Displacement);
-        flock.emit_kernels(&mut w, verlet.then(|| ir.h()));
+        flock.emit_kernels(&mut w, verlet.then(|| ir.h()), ir.capacity);
     }
     w.finish()
 }

@@ -1,0 +1,43 @@
+#!/usr/bin/env bash
+# The speed issue's figures (docs/performance.md: "Depth sort", "Flocking", "The update at
+# large sizes"), all from one device call. Usage: speed-bench.sh PLUME OUT_DIR
+#   sort.jsonl    the radix sort alone on 1M and 16M random pairs (`--sort-keys`: every ranking
+#                 the adapter runs, 32- and 16-bit keys, per-stage times) and with the depth keys
+#                 of fountain.ron (`sort: true`)
+#   torch.txt     torch.sort (CUB's radix sort) of the same counts of f32 keys, stable, with
+#                 indices, on the same GPU (skipped where python3 has no CUDA torch)
+#   flock.jsonl   effects/boids.ron at 16k to 1M boids: the step, and each stage of the flocking
+#                 pass
+#   update.jsonl  fountain.ron's update at 1M to 100M against the copy kernel, and a copy that
+#                 moves one particle's bytes a thread
+set -euo pipefail
+plume=$1
+out=$2
+mkdir -p "$out"
+for n in 1048576 16777216; do
+    "$plume" bench effects/fountain.ron --particles "$n" --steps 20 --sort-keys "$n" --json
+done >"$out/sort.jsonl"
+python3 - >"$out/torch.txt" 2>&1 <<'PY' || true
+import torch
+for n in [1 << 20, 16 << 20]:
+    keys = torch.rand(n, device="cuda", dtype=torch.float32)
+    for _ in range(3):
+        torch.sort(keys, stable=True)
+    torch.cuda.synchronize()
+    times = []
+    for _ in range(9):
+        start, end = torch.cuda.Event(enable_timing=True), torch.cuda.Event(enable_timing=True)
+        start.record()
+        torch.sort(keys, stable=True)
+        end.record()
+        torch.cuda.synchronize()
+        times.append(start.elapsed_time(end))
+    times.sort()
+    print(f"torch.sort n={n} f32 keys + int64 indices, stable: {times[4]:.3f} ms, {n / times[4] / 1e6:.2f} G keys/s")
+PY
+for n in 16384 65536 262144 1048576; do
+    "$plume" bench effects/boids.ron --particles "$n" --steps 50 --json
+done >"$out/flock.jsonl"
+for n in 1000000 10000000 16777216 100000000; do
+    "$plume" bench effects/fountain.ron --particles "$n" --steps 50 --json
+done >"$out/update.jsonl"
