@@ -18,7 +18,7 @@ use crate::readback::{decode_slots, decode_totals, read_buffer, read_words};
 use crate::resources::{staging, Chunk, Resources, STEPS_PER_SUBMIT};
 use crate::sort::SortAlgorithm;
 use crate::steps::{params_bytes, StatelessSteps, Steps};
-use crate::timer::PassTimer;
+use crate::timer::{median_after_warmup, PassTimer};
 
 /// What a frame's preparation recorded: the steps done, and for a stateless effect the slots
 /// its segment table covers.
@@ -567,15 +567,9 @@ impl EffectInstance {
         let chunk = &self.chunks()?[0];
         let mut prefix = vec![0.0];
         for stages in 1..=flock.stage_names().len() {
-            let mut samples = Vec::new();
-            for _ in 0..repeats.max(1) + 1 {
-                samples.push(
-                    timer.time(|pass| flock.record_stages(&self.gpu, pass, chunk, 0, stages))?,
-                );
-            }
-            samples.remove(0);
-            samples.sort_by(f64::total_cmp);
-            prefix.push(samples[samples.len() / 2]);
+            prefix.push(median_after_warmup(repeats, || {
+                timer.time(|pass| flock.record_stages(&self.gpu, pass, chunk, 0, stages))
+            })?);
         }
         self.gpu.take_error()?;
         Ok(flock

@@ -131,17 +131,6 @@ fn rs_scan(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
     }
 }
 
-// Where the keys of digit `t` from partition `part` start in the output: the keys of every
-// smaller digit, plus this digit's keys in earlier partitions. Every thread must call it.
-fn partition_digit_base(t: u32, part: u32) -> u32 {
-    let smaller = exclusive_scan_256(t, digit_totals[t]);
-    var earlier = 0u;
-    if (part < params.partitions) {
-        earlier = pass_hist[t * params.partitions + part];
-    }
-    return smaller + earlier;
-}
-
 // How many keys partition `part` holds (0 past the last).
 fn partition_len(part: u32) -> u32 {
     if (part >= params.partitions) {

@@ -7,6 +7,17 @@ var<workgroup> order: array<u32, 256>;
 var<workgroup> tile_start: array<u32, 256>;
 var<workgroup> digit_next: array<u32, 256>;
 
+// Where the keys of digit `t` from partition `part` start in the output: the keys of every
+// smaller digit, plus this digit's keys in earlier partitions. Every thread must call it.
+fn partition_digit_base(t: u32, part: u32) -> u32 {
+    let smaller = exclusive_scan_256(t, digit_totals[t]);
+    var earlier = 0u;
+    if (part < params.partitions) {
+        earlier = pass_hist[t * params.partitions + part];
+    }
+    return smaller + earlier;
+}
+
 @compute @workgroup_size(256)
 fn rs_downsweep(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) t: u32) {

@@ -10,7 +10,7 @@ use crate::error::RuntimeError;
 use crate::gpu::Gpu;
 use crate::readback::read_buffer;
 use crate::sort::{GpuSorter, Ranking};
-use crate::timer::PassTimer;
+use crate::timer::{median_after_warmup, PassTimer};
 
 /// One sort configuration's time.
 #[derive(Clone, Debug)]
@@ -74,21 +74,16 @@ pub fn bench_sort(gpu: &Gpu, n: u64, repeats: u32) -> Result<SortBench, RuntimeE
             let program = sorter.radix_program(&work_keys, &work_vals, n, key_bits)?;
             // Median time of the program's first `count` dispatches from the unsorted input.
             let time = |count: usize| -> Result<f64, RuntimeError> {
-                let mut samples = Vec::new();
-                for _ in 0..repeats.max(1) + 1 {
+                median_after_warmup(repeats, || {
                     let mut encoder = gpu.device.create_command_encoder(&Default::default());
                     encoder.copy_buffer_to_buffer(&source_keys, 0, &work_keys, 0, n * 4);
                     encoder.copy_buffer_to_buffer(&source_vals, 0, &work_vals, 0, n * 4);
                     gpu.queue.submit([encoder.finish()]);
-                    samples.push(timer.time(|pass| {
+                    timer.time(|pass| {
                         program.record_first(pass, count);
                         Ok(())
-                    })?);
-                }
-                // The first run warms up.
-                samples.remove(0);
-                samples.sort_by(f64::total_cmp);
-                Ok(samples[samples.len() / 2])
+                    })
+                })
             };
             let prefix = [time(1)?, time(2)?, time(3)?];
             let seconds = time(usize::MAX)?;

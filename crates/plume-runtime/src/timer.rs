@@ -138,3 +138,17 @@ impl<'g> PassTimer<'g> {
         Ok(ticks as f64 * f64::from(self.gpu.queue.get_timestamp_period()) * 1e-9)
     }
 }
+
+/// Runs `run` once to warm up, then `repeats` times (at least once), and returns the median of
+/// the timed runs' seconds.
+pub fn median_after_warmup(
+    repeats: u32,
+    mut run: impl FnMut() -> Result<f64, RuntimeError>,
+) -> Result<f64, RuntimeError> {
+    run()?;
+    let mut samples = (0..repeats.max(1))
+        .map(|_| run())
+        .collect::<Result<Vec<f64>, RuntimeError>>()?;
+    samples.sort_by(f64::total_cmp);
+    Ok(samples[samples.len() / 2])
+}
