@@ -12,7 +12,8 @@ mod common;
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use common::effect_gen::{effect, mutate, Flavor};
+use common::effect_gen::{self, effect, mutate, Flavor};
+use glam::DVec3;
 use plume::{compile_str, CompileError, CompileOptions};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
@@ -143,4 +144,59 @@ fn tame_effects_are_all_accepted() {
             Ok(())
         })
         .unwrap();
+}
+
+/// An effect whose only force is `Custom(accel: "<expr>")`.
+fn custom_effect(expr: &str) -> String {
+    format!(
+        "Effect(name: \"fuzz\", capacity: 16, params: {{\"k\": 0.5}},\n    emitters: [Emitter(burst: 4, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((1.0, 0.0, 0.0)), lifetime: Some((1.0, 2.0)))],\n    forces: [Custom(accel: \"{expr}\")],\n    integrator: Verlet,\n)"
+    )
+}
+
+#[test]
+fn random_expression_trees_are_rejected_cleanly_or_total() {
+    // Random typed trees over every function and operator (edge constants, the particle
+    // context), deep chains, and trees of the wrong type: no panic, naga-valid WGSL, and an f64
+    // value that is finite at ordinary and at extreme states.
+    let deep = (1usize..80).prop_map(|n| format!("{}x{}", "-(".repeat(n), ")".repeat(n)));
+    let strategy = prop_oneof![
+        6 => effect_gen::expression(Flavor::Wild, true, 4),
+        1 => effect_gen::expression(Flavor::Wild, false, 3),
+        1 => deep,
+    ];
+    let mut runner = runner();
+    let accepted = AtomicU64::new(0);
+    runner
+        .run(&strategy, |expr| {
+            let source = custom_effect(&expr);
+            if !check(&source)? {
+                return Ok(());
+            }
+            accepted.fetch_add(1, Ordering::Relaxed);
+            let c = compile_str(&source, &CompileOptions::default()).unwrap();
+            use plume::compiler::forces::{ForceTerm, ParticleCtx};
+            for term in c.ir.custom_terms() {
+                for (x, v, t) in [
+                    (DVec3::new(0.3, -1.0, 2.0), DVec3::new(1.0, 0.0, -0.5), 0.5),
+                    (DVec3::ZERO, DVec3::ZERO, 0.0),
+                    (DVec3::splat(1e30), DVec3::splat(-1e30), 1e9),
+                    (DVec3::splat(-1e-30), DVec3::splat(1e-30), 256.0),
+                ] {
+                    let ctx = ParticleCtx {
+                        id: 7,
+                        age0: 0.25,
+                        t0: t,
+                        life: 1.5,
+                    };
+                    let a = term.accel_at(x, v, t, &ctx);
+                    prop_assert!(a.is_finite(), "{expr} at x = {x}: {a}");
+                }
+            }
+            Ok(())
+        })
+        .unwrap_or_else(|e| panic!("{e}"));
+    println!(
+        "fuzz expressions: {} accepted",
+        accepted.load(Ordering::Relaxed)
+    );
 }

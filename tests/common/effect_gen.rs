@@ -205,8 +205,148 @@ fn force(flavor: Flavor) -> BoxedStrategy<String> {
                     "Flock(radius: {r}, separation: {sep}, avoidance: {avoid}, cohesion: {coh}, alignment: {ali}, scope: {scope}, neighbors: {neighbors})"
                 )
             }),
+        custom_force(f),
     ]
     .boxed()
+}
+
+/// A random expression of type f32 (`vector` false) or vec3, `depth` levels deep. Wild
+/// expressions use every function and operator, edge constants and the particle context; tame
+/// ones only smooth functions of bounded size (the differential test compares GPU and CPU, and a
+/// step or floor could split them at a boundary within f32 rounding).
+pub fn expression(flavor: Flavor, vector: bool, depth: u32) -> BoxedStrategy<String> {
+    let f = flavor;
+    let leaf = if vector {
+        prop_oneof![
+            Just("x".to_string()),
+            Just("v".to_string()),
+            (num(f, -2.0, 2.0), num(f, -2.0, 2.0), num(f, -2.0, 2.0))
+                .prop_map(|(a, b, c)| format!("vec3({a}, {b}, {c})")),
+        ]
+        .boxed()
+    } else {
+        let names = if f == Flavor::Wild {
+            vec![
+                "x.x",
+                "v.y",
+                "x.z",
+                "t",
+                "age",
+                "life",
+                "dt",
+                "rand(0)",
+                "rand(255)",
+                "k",
+            ]
+        } else {
+            vec!["x.x", "x.y", "v.z", "t", "k"]
+        };
+        prop_oneof![
+            num(f, -2.0, 2.0),
+            prop::sample::select(names).prop_map(str::to_string),
+        ]
+        .boxed()
+    };
+    if depth == 0 {
+        return leaf;
+    }
+    let s = || expression(f, false, depth - 1);
+    let v = || expression(f, true, depth - 1);
+    if f != Flavor::Wild {
+        // Smooth and bounded: sums and products of sines of smooth trees.
+        return if vector {
+            prop_oneof![
+                leaf,
+                (s(), s(), s()).prop_map(|(a, b, c)| format!("vec3(sin({a}), cos({b}), sin({c}))")),
+                (v(), s()).prop_map(|(a, b)| format!("0.5 * (sin({b}) * normalize({a}))")),
+                (v(), v()).prop_map(|(a, b)| format!(
+                    "0.1 * cross(sin({a}.x) * {b}, vec3(0.0, 1.0, 0.0))"
+                )),
+            ]
+            .boxed()
+        } else {
+            prop_oneof![
+                leaf,
+                (s(), s()).prop_map(|(a, b)| format!("({a} + {b})")),
+                (s(), s()).prop_map(|(a, b)| format!("sin({a}) * cos({b})")),
+                (v(), v())
+                    .prop_map(|(a, b)| format!("0.1 * dot(sin({a}.x) * {b}, vec3(1.0, 0.0, 0.0))")),
+            ]
+            .boxed()
+        };
+    }
+    let unary = prop::sample::select(vec![
+        "-", "abs", "floor", "fract", "sqrt", "exp", "log", "sin", "cos",
+    ]);
+    let binary = prop::sample::select(vec![
+        "+", "-", "*", "/", "min", "max", "pow", "atan2", "step",
+    ]);
+    let ternary = prop::sample::select(vec!["clamp", "mix", "smoothstep"]);
+    let compare = prop::sample::select(vec!["<", "<=", ">", ">=", "==", "!="]);
+    let call2 = |op: &str, a: String, b: String| match op {
+        "+" | "-" | "*" | "/" => format!("({a} {op} {b})"),
+        _ => format!("{op}({a}, {b})"),
+    };
+    let same = move |vector: bool| {
+        if vector {
+            expression(f, true, depth - 1)
+        } else {
+            expression(f, false, depth - 1)
+        }
+    };
+    let mut options: Vec<BoxedStrategy<String>> = vec![
+        leaf,
+        (unary, same(vector))
+            .prop_map(|(op, a)| format!("{op}({a})"))
+            .boxed(),
+        (binary, same(vector), same(vector))
+            .prop_map(move |(op, a, b)| call2(op, a, b))
+            .boxed(),
+        (ternary, same(vector), same(vector), same(vector))
+            .prop_map(|(op, a, b, c)| format!("{op}({a}, {b}, {c})"))
+            .boxed(),
+        (same(vector), same(vector), compare, s(), s())
+            .prop_map(|(a, b, op, l, r)| format!("select({a}, {b}, {l} {op} {r})"))
+            .boxed(),
+    ];
+    if vector {
+        options.push(
+            (s(), s(), s())
+                .prop_map(|(a, b, c)| format!("vec3({a}, {b}, {c})"))
+                .boxed(),
+        );
+        options.push(
+            (v(), v())
+                .prop_map(|(a, b)| format!("cross({a}, {b})"))
+                .boxed(),
+        );
+        options.push(v().prop_map(|a| format!("normalize({a})")).boxed());
+        options.push((s(), v()).prop_map(|(a, b)| format!("({a} * {b})")).boxed());
+    } else {
+        options.push(
+            (v(), v())
+                .prop_map(|(a, b)| format!("dot({a}, {b})"))
+                .boxed(),
+        );
+        options.push(v().prop_map(|a| format!("length({a})")).boxed());
+        options.push(v().prop_map(|a| format!("{a}.y")).boxed());
+    }
+    proptest::strategy::Union::new(options).boxed()
+}
+
+/// A Custom force: a vec3 expression (tame ones scaled to stay gentle).
+fn custom_force(flavor: Flavor) -> BoxedStrategy<String> {
+    let depth = if flavor == Flavor::Wild { 3 } else { 2 };
+    expression(flavor, true, depth)
+        .prop_map(move |e| {
+            let e = if flavor == Flavor::Wild {
+                e
+            } else {
+                format!("0.5 * sin({e})")
+            };
+            format!("Custom(accel: \"{e}\")")
+        })
+        .boxed()
 }
 
 fn plane(flavor: Flavor) -> BoxedStrategy<String> {
@@ -333,6 +473,7 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
             any::<u32>(),
             num(f, 0.005, 0.034),
             count(f, 1, 3),
+            num(f, -1.0, 1.0),
         ),
         prop::collection::vec(emitter(f), if tame { 1..3 } else { 0..3 }),
         prop::collection::vec(force(f), 0..5),
@@ -353,7 +494,7 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
         ),
     )
         .prop_map(
-            move |((cap, seed, dt, substeps), emitters, mut forces, planes, kills, (integ, max_speed, sort, render, field, state))| {
+            move |((cap, seed, dt, substeps, k), emitters, mut forces, planes, kills, (integ, max_speed, sort, render, field, state))| {
                 if f != Flavor::Wild {
                     // An effect has at most one Flock.
                     let mut flocks = 0;
@@ -363,7 +504,7 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
                     });
                 }
                 format!(
-                    "Effect(\n    name: \"fuzz\",\n    capacity: {cap},\n    seed: {seed},\n    dt: {dt},\n    substeps: {substeps},\n    emitters: [{}],\n    forces: [{}],\n    collide: [{}],\n    kill: [{}],\n    integrator: {integ},\n    {max_speed}\n    sort: {sort},\n    {state}\n    {render}\n    {field}\n)\n",
+                    "Effect(\n    name: \"fuzz\",\n    capacity: {cap},\n    seed: {seed},\n    dt: {dt},\n    substeps: {substeps},\n    params: {{\"k\": {k}}},\n    emitters: [{}],\n    forces: [{}],\n    collide: [{}],\n    kill: [{}],\n    integrator: {integ},\n    {max_speed}\n    sort: {sort},\n    {state}\n    {render}\n    {field}\n)\n",
                     emitters.join(",\n        "),
                     forces.join(",\n        "),
                     planes.join(", "),

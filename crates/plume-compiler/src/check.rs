@@ -20,6 +20,22 @@ impl Checker {
         ));
     }
 
+    /// Records an error at characters `[start, end)` of the string at `path` (an expression's
+    /// mistake): the lookup path carries the range as `path@start..end`, which
+    /// [`crate::locate::SourceMap::find_in_string`] resolves to a line and column.
+    pub fn error_in_string(
+        &mut self,
+        path: &ValuePath,
+        start: usize,
+        end: usize,
+        message: impl Into<String>,
+    ) {
+        self.errors.push((
+            Diagnostic::error(path.display.clone(), message),
+            format!("{}@{start}..{end}", path.lookup),
+        ));
+    }
+
     /// `x` must be a finite number; returns whether it is.
     pub fn finite(&mut self, path: &ValuePath, x: f64) -> bool {
         if x.is_finite() {

@@ -129,6 +129,23 @@ impl EffectIr {
     pub fn forces_use_time(&self) -> bool {
         self.terms.iter().any(|t| t.as_dyn().uses_time())
     }
+
+    /// The custom expression terms.
+    pub fn custom_terms(&self) -> impl Iterator<Item = &crate::forces::custom::CustomTerm> {
+        self.terms.iter().filter_map(|t| match t {
+            crate::forces::Term::Custom(c) => Some(c),
+            _ => None,
+        })
+    }
+
+    /// Whether kernels get the time modulo the noise period (the default: noise repeats
+    /// then, and f32 keeps its sub-millisecond precision) or the whole simulation time, which a
+    /// custom expression reading `t` needs (f32 then, so 1 ms steps at 2.3 hours).
+    pub fn wraps_kernel_time(&self) -> bool {
+        !self
+            .custom_terms()
+            .any(|c| c.expr.reads(crate::expr::Var::T))
+    }
 }
 
 /// One emitter.

@@ -35,6 +35,7 @@
 
 pub mod check;
 pub mod diagnostics;
+pub mod expr;
 pub mod field;
 pub mod forces;
 pub mod integrators;
@@ -168,7 +169,15 @@ pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, C
         items: items
             .into_iter()
             .map(|(mut d, lookup)| {
-                d.span = map.find(&lookup);
+                d.span = match lookup.split_once('@') {
+                    // `path@start..end`: characters of an expression string (Checker::error_in_string).
+                    Some((path, range)) => range
+                        .split_once("..")
+                        .and_then(|(s, e)| Some((s.parse().ok()?, e.parse().ok()?)))
+                        .and_then(|(s, e)| map.find_in_string(source, path, s, e))
+                        .or_else(|| map.find(path)),
+                    None => map.find(&lookup),
+                };
                 d
             })
             .collect(),

@@ -29,6 +29,30 @@ impl SourceMap {
         scanner.map
     }
 
+    /// The span of characters `[start, end)` of the string value at `path` (an expression's
+    /// mistake), or the string's own span when the characters cannot be mapped.
+    pub fn find_in_string(
+        &self,
+        source: &str,
+        path: &str,
+        start: usize,
+        end: usize,
+    ) -> Option<Span> {
+        let whole = self.find(path)?;
+        let Some(exact) = self.spans.get(path) else {
+            return Some(whole);
+        };
+        let positions = string_positions(source, exact.start);
+        let at = |k: usize| positions.get(k).copied();
+        match (
+            at(start),
+            at(end.max(start + 1)).or_else(|| positions.last().copied()),
+        ) {
+            (Some(s), Some(e)) => Some(Span { start: s, end: e }),
+            _ => Some(whole),
+        }
+    }
+
     /// The span of the value at `path`, or of its nearest recorded ancestor.
     pub fn find(&self, path: &str) -> Option<Span> {
         let mut p = path.to_string();
@@ -47,6 +71,61 @@ impl SourceMap {
             }
         }
     }
+}
+
+/// The source position of each character of the string literal starting at `open` (its
+/// opening quote), decoded characters counted as the string's value counts them (an escape such
+/// as `\n` is one character); one more entry for the closing quote.
+fn string_positions(source: &str, open: Pos) -> Vec<Pos> {
+    let mut out = Vec::new();
+    let Some(line_text) = source.lines().nth(open.line - 1) else {
+        return out;
+    };
+    // Walk from the opening quote through the rest of the source (strings may span lines).
+    let line_start: usize = source
+        .lines()
+        .take(open.line - 1)
+        .map(|l| l.len() + 1)
+        .sum();
+    let col_byte: usize = line_text
+        .char_indices()
+        .nth(open.col - 1)
+        .map_or(line_text.len(), |(b, _)| b);
+    let rest = &source[(line_start + col_byte).min(source.len())..];
+    let mut chars = rest.chars().peekable();
+    if chars.next() != Some('"') {
+        return out;
+    }
+    let (mut line, mut col) = (open.line, open.col + 1);
+    let advance = |c: char, line: &mut usize, col: &mut usize| {
+        if c == '\n' {
+            *line += 1;
+            *col = 1;
+        } else {
+            *col += 1;
+        }
+    };
+    while let Some(c) = chars.next() {
+        out.push(Pos { line, col });
+        if c == '"' {
+            break;
+        }
+        advance(c, &mut line, &mut col);
+        if c == '\\' {
+            if let Some(e) = chars.next() {
+                advance(e, &mut line, &mut col);
+                if e == 'u' {
+                    for c in chars.by_ref() {
+                        advance(c, &mut line, &mut col);
+                        if c == '}' {
+                            break;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    out
 }
 
 #[derive(Clone, Debug, PartialEq)]

@@ -13,7 +13,11 @@ use crate::schema::{Collider, Effect, KillVolume, Shape, Velocity};
 
 /// Lowers a checked effect. Call only after [`crate::validate::check_effect`] found no errors.
 pub fn lower(effect: &Effect) -> EffectIr {
-    EffectIr {
+    let scope = crate::forces::custom::Scope {
+        params: &effect.params,
+        dt: effect.dt,
+    };
+    let mut ir = EffectIr {
         name: effect.name.clone(),
         capacity: effect.capacity,
         seed: effect.seed,
@@ -38,7 +42,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
             .forces
             .iter()
             .enumerate()
-            .flat_map(|(i, f)| f.lower(i, effect.seed))
+            .flat_map(|(i, f)| f.lower(i, effect.seed, scope))
             .collect(),
         field: effect.field.lower(),
         flock: effect.forces.iter().enumerate().find_map(|(i, f)| match f {
@@ -101,7 +105,16 @@ pub fn lower(effect: &Effect) -> EffectIr {
             target: effect.camera.target.d(),
             fov_y: effect.camera.fov_y,
         },
+    };
+    // Custom terms estimate their stiffness over the emitters' region, now that it is known.
+    let h = ir.h();
+    let emitters = ir.emitters.clone();
+    for term in &mut ir.terms {
+        if let crate::forces::Term::Custom(c) = term {
+            c.estimate_stiffness(&emitters, h);
+        }
     }
+    ir
 }
 
 fn lower_shape(s: &Shape) -> ShapeIr {

@@ -41,6 +41,8 @@ pub mod stream {
     pub const LIFETIME: u32 = 6;
     /// Three draws for a fallback direction (radial velocity from the exact centre).
     pub const FALLBACK_DIRECTION: u32 = 7;
+    /// `rand(k)` in custom expressions draws from stream CUSTOM + k (k <= 255).
+    pub const CUSTOM: u32 = 64;
 }
 
 /// Emits the WGSL twins of [`pcg`], [`rand_u32`] and [`unit`].

@@ -28,9 +28,14 @@ impl StepPlan {
         self.emitters.iter().map(|e| e.0).sum()
     }
 
-    /// Time passed to kernels: t mod the noise period, as f32.
-    pub fn kernel_time(&self) -> f32 {
-        self.time.rem_euclid(TIME_PERIOD) as f32
+    /// Time passed to kernels, as f32: t mod the noise period when `wrap`
+    /// ([`crate::EffectIr::wraps_kernel_time`]), else t itself.
+    pub fn kernel_time(&self, wrap: bool) -> f32 {
+        if wrap {
+            self.time.rem_euclid(TIME_PERIOD) as f32
+        } else {
+            self.time as f32
+        }
     }
 }
 

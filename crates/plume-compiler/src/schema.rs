@@ -59,6 +59,9 @@ pub struct Effect {
     /// Accelerations, summed.
     #[serde(default)]
     pub forces: Vec<Force>,
+    /// Named constants that custom expressions may use: `params: {"k": 0.4}`.
+    #[serde(default)]
+    pub params: std::collections::BTreeMap<String, f64>,
     /// Speed limit applied after every velocity update.
     #[serde(default)]
     pub max_speed: Option<f64>,

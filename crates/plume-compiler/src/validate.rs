@@ -69,9 +69,14 @@ pub fn check_effect(effect: &Effect) -> Checker {
         .iter()
         .position(|f| matches!(f, crate::forces::Force::Wind(w) if w.noise != 0.0));
     effect.field.check(&root.field("field"), &mut c, noisy);
+    check_params(&mut c, &root.field("params"), effect);
+    let scope = crate::forces::custom::Scope {
+        params: &effect.params,
+        dt: effect.dt,
+    };
     let mut flocks = 0;
     for (i, f) in effect.forces.iter().enumerate() {
-        f.check(&force_path(i, f), &mut c);
+        f.check(&force_path(i, f), &mut c, scope);
         if matches!(f, crate::forces::Force::Flock(_)) {
             flocks += 1;
             if flocks == 2 {
@@ -141,6 +146,43 @@ pub fn check_effect(effect: &Effect) -> Checker {
         );
     }
     c
+}
+
+/// Params: names that expressions can use (identifiers that hide no variable or function),
+/// values within the range expressions compute in.
+fn check_params(c: &mut Checker, path: &ValuePath, effect: &Effect) {
+    use crate::expr::typed::{FUNCTIONS, VARIABLES};
+    for (name, &value) in &effect.params {
+        let p = path.field(name);
+        let mut chars = name.chars();
+        let identifier = chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
+            && chars.all(|c| c.is_alphanumeric() || c == '_');
+        if !identifier {
+            c.error(
+                &p,
+                format!("`{name}` is not a name an expression can use: start with a letter, then letters, digits or _"),
+            );
+        } else if name == "dt"
+            || VARIABLES.iter().any(|v| v.name() == name)
+            || FUNCTIONS.iter().any(|(f, _)| f == name)
+        {
+            c.error(
+                &p,
+                format!(
+                    "`{name}` is already a variable or function in expressions: pick another name"
+                ),
+            );
+        }
+        if c.finite(&p, value) && value.abs() > crate::expr::VALUE_BOUND {
+            c.error(
+                &p,
+                format!(
+                    "must be within ±{:e} (the range expressions compute in), got {value:e}",
+                    crate::expr::VALUE_BOUND
+                ),
+            );
+        }
+    }
 }
 
 fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: f64) {

@@ -173,6 +173,7 @@ impl EffectInstance {
             plans,
             self.effect.layout.emitter_slots,
             self.res.params_stride,
+            self.effect.ir.wraps_kernel_time(),
         );
         let src = staging(&self.gpu, "step params", &bytes)?;
         encoder.copy_buffer_to_buffer(&src, 0, params, 0, bytes.len() as u64);
@@ -478,6 +479,7 @@ impl EffectInstance {
             &plans,
             self.effect.layout.emitter_slots,
             self.res.params_stride,
+            self.effect.ir.wraps_kernel_time(),
         );
         let params = self
             .res

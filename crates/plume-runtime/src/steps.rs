@@ -164,15 +164,21 @@ impl StatefulSteps {
 }
 
 /// The steps' parameters as the uniform buffer holds them, step j at j · `stride`: first id,
-/// requested, kernel time, step index, then (count, counter before, 0, 0) per emitter slot.
-pub fn params_bytes(plans: &[StepPlan], emitter_slots: u32, stride: u64) -> Vec<u8> {
+/// requested, kernel time (wrapped when `wrap_time`, see `EffectIr::wraps_kernel_time`), step
+/// index, then (count, counter before, 0, 0) per emitter slot.
+pub fn params_bytes(
+    plans: &[StepPlan],
+    emitter_slots: u32,
+    stride: u64,
+    wrap_time: bool,
+) -> Vec<u8> {
     let mut bytes = vec![0u8; stride as usize * plans.len()];
     for (j, plan) in plans.iter().enumerate() {
         let at = j * stride as usize;
         let mut words: Vec<u32> = vec![
             plan.first_id,
             plan.requested(),
-            plan.kernel_time().to_bits(),
+            plan.kernel_time(wrap_time).to_bits(),
             plan.step as u32,
         ];
         for e in 0..emitter_slots as usize {

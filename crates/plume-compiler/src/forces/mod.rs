@@ -6,6 +6,7 @@
 
 pub mod attractor;
 pub mod constant;
+pub mod custom;
 pub mod drag;
 pub mod flock;
 pub mod noise;
@@ -39,6 +40,8 @@ pub enum Force {
     Vortex(vortex::Vortex),
     /// Flocking: forces between particles (at most one per effect).
     Flock(flock::Flock),
+    /// An acceleration written as an expression.
+    Custom(custom::Custom),
 }
 
 impl Force {
@@ -51,11 +54,13 @@ impl Force {
             Force::Attractor(_) => "Attractor",
             Force::Vortex(_) => "Vortex",
             Force::Flock(_) => "Flock",
+            Force::Custom(_) => "Custom",
         }
     }
 
-    /// Checks the force's parameters; `path` already names the variant.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+    /// Checks the force's parameters; `path` already names the variant, `scope` holds what
+    /// expressions may name besides their variables.
+    pub fn check(&self, path: &ValuePath, c: &mut Checker, scope: custom::Scope) {
         match self {
             Force::Gravity(g) => {
                 c.vec3(&path.inner(), *g);
@@ -65,12 +70,13 @@ impl Force {
             Force::Attractor(f) => f.check(path, c),
             Force::Vortex(f) => f.check(path, c),
             Force::Flock(f) => f.check(path, c),
+            Force::Custom(f) => f.check(path, c, scope),
         }
     }
 
     /// Lowers to IR terms; `origin` is the force's index in the file, `seed` the effect's seed.
     /// A Flock lowers to no term: it couples particles, so it is `EffectIr::flock` instead.
-    pub fn lower(&self, origin: usize, seed: u32) -> Vec<Term> {
+    pub fn lower(&self, origin: usize, seed: u32, scope: custom::Scope) -> Vec<Term> {
         match self {
             Force::Gravity(g) => vec![Term::Constant(constant::ConstantTerm {
                 accel: g.d(),
@@ -81,12 +87,21 @@ impl Force {
             Force::Attractor(f) => vec![Term::Attractor(f.lower(origin))],
             Force::Vortex(f) => vec![Term::Vortex(f.lower(origin))],
             Force::Flock(_) => Vec::new(),
+            Force::Custom(f) => vec![f.lower(origin, crate::rng::seed_mix(seed), scope)],
         }
     }
 }
 
 /// Variant names, as written in effect files.
-pub const VARIANTS: &[&str] = &["Gravity", "Drag", "Wind", "Attractor", "Vortex", "Flock"];
+pub const VARIANTS: &[&str] = &[
+    "Gravity",
+    "Drag",
+    "Wind",
+    "Attractor",
+    "Vortex",
+    "Flock",
+    "Custom",
+];
 
 /// Reads `Name(field: value, ...)` into the force module's own struct, so each force's
 /// schema lives with the rest of the force (serde's derive would need struct variants here).
@@ -112,6 +127,7 @@ enum Kind {
     Attractor,
     Vortex,
     Flock,
+    Custom,
 }
 
 struct ForceVisitor;
@@ -119,7 +135,7 @@ struct ForceVisitor;
 impl<'de> de::Visitor<'de> for ForceVisitor {
     type Value = Force;
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str("a force: Gravity, Drag, Wind, Attractor, Vortex or Flock")
+        f.write_str("a force: Gravity, Drag, Wind, Attractor, Vortex, Flock or Custom")
     }
     fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<Force, A::Error> {
         let (kind, variant): (Kind, _) = data.variant()?;
@@ -139,6 +155,9 @@ impl<'de> de::Visitor<'de> for ForceVisitor {
             }
             Kind::Flock => {
                 Force::Flock(variant.struct_variant(flock::FIELDS, StructVariant(PhantomData))?)
+            }
+            Kind::Custom => {
+                Force::Custom(variant.struct_variant(custom::FIELDS, StructVariant(PhantomData))?)
             }
         })
     }
@@ -189,6 +208,19 @@ impl CoreWell {
     }
 }
 
+/// What a force may read about the particle besides x, v and t (custom expressions read it).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ParticleCtx {
+    /// The particle's id (for its random numbers).
+    pub id: u32,
+    /// Its age (s) at time `t0`.
+    pub age0: f64,
+    /// The time (s) `age0` was taken at: the age at time t is age0 + (t - t0).
+    pub t0: f64,
+    /// Its lifetime (s), 0 when it never dies.
+    pub life: f64,
+}
+
 /// What every IR force term provides: WGSL, the f64 reference, and facts for the passes.
 pub trait ForceTerm {
     /// Indices in the file's `forces` list that this term came from.
@@ -210,6 +242,14 @@ pub trait ForceTerm {
     fn bakeable(&self) -> bool {
         false
     }
+    /// Why the Exact integrator cannot integrate this term (after "forces[i] (Name) ").
+    fn closed_form_blocker(&self) -> String {
+        "has no closed form".into()
+    }
+    /// Whether [`ForceTerm::stiffness`] is an estimate (sampled) rather than derived.
+    fn stiffness_is_estimate(&self) -> bool {
+        false
+    }
     /// The field a stiffness warning points at.
     fn stiffness_field(&self) -> &'static str {
         "strength"
@@ -227,6 +267,10 @@ pub trait ForceTerm {
     fn emit_wgsl(&self, w: &mut Writer);
     /// The same acceleration in f64: the CPU reference.
     fn accel(&self, x: DVec3, v: DVec3, t: f64) -> DVec3;
+    /// The acceleration of one particle, for terms that read more than x, v and t.
+    fn accel_at(&self, x: DVec3, v: DVec3, t: f64, _particle: &ParticleCtx) -> DVec3 {
+        self.accel(x, v, t)
+    }
 }
 
 /// A force term in the IR.
@@ -242,6 +286,8 @@ pub enum Term {
     Attractor(attractor::AttractorTerm),
     /// Vortex.
     Vortex(vortex::VortexTerm),
+    /// A custom expression.
+    Custom(custom::CustomTerm),
 }
 
 impl Term {
@@ -253,6 +299,7 @@ impl Term {
             Term::Noise(t) => t,
             Term::Attractor(t) => t,
             Term::Vortex(t) => t,
+            Term::Custom(t) => t,
         }
     }
 }

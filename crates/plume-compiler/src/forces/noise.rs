@@ -125,6 +125,9 @@ pub fn emit_helpers(w: &mut Writer) {
 }
 
 impl ForceTerm for NoiseTerm {
+    fn closed_form_blocker(&self) -> String {
+        "has noise".into()
+    }
     fn bakeable(&self) -> bool {
         true
     }

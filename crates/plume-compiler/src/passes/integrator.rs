@@ -15,11 +15,10 @@ pub fn exact_blocker(ir: &EffectIr, force_names: &[&'static str]) -> Option<(Str
         }
         let origin = term.as_dyn().origins()[0];
         let name = force_names.get(origin).copied().unwrap_or("force");
-        let what = if matches!(term, Term::Noise(_)) {
-            format!("forces[{origin}] ({name}) has noise")
-        } else {
-            format!("forces[{origin}] ({name}) has no closed form")
-        };
+        let what = format!(
+            "forces[{origin}] ({name}) {}",
+            term.as_dyn().closed_form_blocker()
+        );
         let path = ValuePath::root()
             .field("forces")
             .index(origin)

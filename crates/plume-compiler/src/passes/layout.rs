@@ -20,10 +20,10 @@ pub enum Attribute {
     DeathStep,
     /// Global spawn index, or `0xffffffff` for a free slot: `id`.
     Id,
-    /// The step the particle spawned at: `born`. Only when the draw needs a life fraction
-    /// (colour or size change over life) and the emitters with lifetimes draw them from
-    /// different ranges, so that the draw cannot re-derive a particle's lifetime from its id
-    /// alone (see [`needs_spawn_step`]).
+    /// The step the particle spawned at: `born`. Only when a custom force reads `age` or
+    /// `life`, or when the draw needs a life fraction (colour or size change over life) and
+    /// the emitters with lifetimes draw them from different ranges, so that the draw cannot
+    /// re-derive a particle's lifetime from its id alone (see [`needs_spawn_step`]).
     SpawnStep,
 }
 
@@ -54,7 +54,7 @@ impl Attribute {
             Attribute::DeathStep => "step whose update kills it (0xffffffff: never)",
             Attribute::Id => "global spawn index; 0xffffffff marks a free slot",
             Attribute::SpawnStep => {
-                "spawn step, for the draw's life fraction (emitters' lifetime ranges differ)"
+                "spawn step, for a custom force's age or the draw's life fraction"
             }
         }
     }
@@ -186,7 +186,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
         attributes.push(Attribute::DeathStep);
     }
     attributes.push(Attribute::Id);
-    if needs_spawn_step(ir) {
+    if needs_spawn_step(ir) || ir.custom_terms().any(|c| c.reads_age_or_life()) {
         attributes.push(Attribute::SpawnStep);
     }
     // Padded to a multiple of 16 bytes so kernels move the state as whole vec4 words: scalar
@@ -252,7 +252,11 @@ pub fn decide(ir: &EffectIr) -> Layout {
                 name: "params",
                 space: "uniform",
                 bytes: layout.params_bytes(),
-                meaning: "per step: first id, spawns requested, time mod 256 s, step index, per-emitter counts",
+                meaning: if ir.wraps_kernel_time() {
+                    "per step: first id, spawns requested, time mod 256 s, step index, per-emitter counts"
+                } else {
+                    "per step: first id, spawns requested, time (s, a custom force reads it), step index, per-emitter counts"
+                },
             },
         ]),
     }

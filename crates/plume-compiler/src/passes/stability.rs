@@ -115,6 +115,8 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
         let origin = t.origins()[0];
         let merged = if t.origins().len() > 1 {
             format!(" (drags {:?} merged)", t.origins())
+        } else if t.stiffness_is_estimate() {
+            " (estimated from the expression's Jacobian sampled over the emitters' region)".into()
         } else {
             String::new()
         };
@@ -212,7 +214,7 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
                         warn(
                             force_value_path(force_names, origin, field),
                             format!(
-                                "stiffness ω*h = {wh:.3} (ω = {omega:.3} rad/s, h = {h:.4e} s) is past {name}'s limit {limit:.3}: orbits blow up; raise substeps to at least {}",
+                                "stiffness ω*h = {wh:.3} (ω = {omega:.3} rad/s, h = {h:.4e} s){merged} is past {name}'s limit {limit:.3}: orbits blow up; raise substeps to at least {}",
                                 substeps_for(omega * ir.dt / limit)
                             ),
                         );
@@ -223,7 +225,7 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
                         warn(
                             force_value_path(force_names, origin, field),
                             format!(
-                                "{name} gains energy on this force: ω*h = {wh:.3} (ω = {omega:.3} rad/s) grows amplitudes {}x over {:.1} s; use SemiImplicitEuler, Verlet or Rk4, or more substeps",
+                                "{name} gains energy on this force: ω*h = {wh:.3} (ω = {omega:.3} rad/s){merged} grows amplitudes {}x over {:.1} s; use SemiImplicitEuler, Verlet or Rk4, or more substeps",
                                 fmt_factor(total),
                                 horizon(ir)
                             ),

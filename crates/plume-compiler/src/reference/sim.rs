@@ -7,6 +7,7 @@ use super::spawn::spawn;
 use super::step::{accel, collide, substep};
 use super::{ParticleRecord, Totals};
 use crate::forces::flock::Frozen;
+use crate::forces::ParticleCtx;
 use crate::integrators::ExactStep;
 use crate::ir::EffectIr;
 use crate::schedule::Schedule;
@@ -19,6 +20,16 @@ struct Particle {
     /// Velocity, or Verlet's displacement over one substep.
     v: DVec3,
     die_at: u32,
+}
+
+/// The lifetime (s) of a particle born at step `born` that dies at the update of `die_at`
+/// (0 for one that never dies), as the kernels compute it: (die_at − born + 1) dt in u32 steps.
+fn lifetime_of(born: u64, die_at: u32, dt: f64) -> f64 {
+    if die_at == crate::lifetime::NEVER {
+        0.0
+    } else {
+        f64::from(die_at.wrapping_sub(born as u32).wrapping_add(1)) * dt
+    }
 }
 
 /// Runs an effect's IR on the CPU in f64.
@@ -78,8 +89,14 @@ impl ReferenceSim {
                 budget -= 1;
                 let s = spawn(&self.ir, e, id + local, k0 + local, plan.step);
                 let v = if verlet {
+                    let ctx = ParticleCtx {
+                        id: id + local,
+                        age0: 0.0,
+                        t0: plan.time,
+                        life: lifetime_of(plan.step, s.die_at, self.ir.dt),
+                    };
                     s.v * h
-                        - accel(&self.ir, self.baked.as_deref(), s.x, s.v, plan.time)
+                        - accel(&self.ir, self.baked.as_deref(), &ctx, s.x, s.v, plan.time)
                             * (0.5 * h * h)
                 } else {
                     s.v
@@ -113,12 +130,20 @@ impl ReferenceSim {
             None => Vec::new(),
         };
         let mut index = 0;
+        let schedule = &self.schedule;
         self.particles.retain_mut(|p| {
             let flock = frozen.get(index);
             index += 1;
+            let born = schedule.spawn_step(p.id);
+            let ctx = ParticleCtx {
+                id: p.id,
+                age0: plan.step.saturating_sub(born) as f64 * ir.dt,
+                t0: plan.time,
+                life: lifetime_of(born, p.die_at, ir.dt),
+            };
             for s in 0..ir.substeps {
                 let t = plan.time + f64::from(s) * h;
-                substep(ir, exact, baked, flock, &mut p.x, &mut p.v, t);
+                substep(ir, exact, baked, flock, &ctx, &mut p.x, &mut p.v, t);
                 for plane in &ir.planes {
                     collide(plane, &mut p.x, &mut p.v, verlet, h);
                 }

@@ -4,20 +4,29 @@
 use glam::DVec3;
 
 use crate::forces::flock::Frozen;
+use crate::forces::ParticleCtx;
 use crate::integrators::ExactStep;
 use crate::ir::{EffectIr, PlaneIr};
 use crate::schema::Integrator;
 
-/// Sum of the force terms at (x, v, t). With a baked field, `baked` holds its nodes (baked at
-/// the step's time) and the bakeable terms are sampled from them instead of evaluated.
-pub fn accel(ir: &EffectIr, baked: Option<&[DVec3]>, x: DVec3, v: DVec3, t: f64) -> DVec3 {
+/// Sum of the force terms at (x, v, t) for particle `p`. With a baked field, `baked` holds its
+/// nodes (baked at the step's time) and the bakeable terms are sampled from them instead of
+/// evaluated.
+pub fn accel(
+    ir: &EffectIr,
+    baked: Option<&[DVec3]>,
+    p: &ParticleCtx,
+    x: DVec3,
+    v: DVec3,
+    t: f64,
+) -> DVec3 {
     match (&ir.field, baked) {
         (Some(field), Some(nodes)) => {
             let rest: DVec3 = ir
                 .terms
                 .iter()
                 .filter(|term| !term.as_dyn().bakeable())
-                .map(|term| term.as_dyn().accel(x, v, t))
+                .map(|term| term.as_dyn().accel_at(x, v, t, p))
                 .sum();
             rest + field
                 .sample(nodes, x)
@@ -26,7 +35,7 @@ pub fn accel(ir: &EffectIr, baked: Option<&[DVec3]>, x: DVec3, v: DVec3, t: f64)
         _ => ir
             .terms
             .iter()
-            .map(|term| term.as_dyn().accel(x, v, t))
+            .map(|term| term.as_dyn().accel_at(x, v, t, p))
             .sum(),
     }
 }
@@ -39,19 +48,22 @@ fn clamp(v: DVec3, limit: Option<f64>) -> DVec3 {
 }
 
 /// One substep of length h = ir.h() at time t. `v` holds Verlet's displacement for Verlet.
-/// `flock` is the particle's frozen flock values for this step, when the effect flocks.
+/// `flock` is the particle's frozen flock values for this step, when the effect flocks; `p`
+/// what custom forces read about the particle.
+#[allow(clippy::too_many_arguments)]
 pub fn substep(
     ir: &EffectIr,
     exact: Option<&ExactStep>,
     baked: Option<&[DVec3]>,
     flock: Option<&Frozen>,
+    p: &ParticleCtx,
     x: &mut DVec3,
     v: &mut DVec3,
     t: f64,
 ) {
     let h = ir.h();
     let a = |x: DVec3, v: DVec3, t: f64| {
-        let own = accel(ir, baked, x, v, t);
+        let own = accel(ir, baked, p, x, v, t);
         match (&ir.flock, flock) {
             (Some(f), Some(frozen)) => own + f.accel(frozen, x, v),
             _ => own,

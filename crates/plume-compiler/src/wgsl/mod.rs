@@ -129,8 +129,16 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         w.blank();
     }
     if integrators::needs_accel(ir.integrator) {
-        if ir.forces_use_time() {
+        if ir
+            .terms
+            .iter()
+            .any(|t| matches!(t, crate::forces::Term::Noise(_)))
+        {
             noise::emit_helpers(&mut w);
+            w.blank();
+        }
+        if ir.custom_terms().any(|c| c.needs_context()) {
+            crate::forces::custom::emit_context(&mut w);
             w.blank();
         }
         w.comment("Sum of the force terms after folding and pruning.");

@@ -65,6 +65,15 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                 if layout.has(Attribute::Displacement) {
                     // Verlet: store the displacement that makes step one x0 + v0 h + a h²/2.
                     let h = ir.h();
+                    if ir.custom_terms().any(|c| c.needs_context()) {
+                        crate::forces::custom::emit_set_context(
+                            w,
+                            ir.dt,
+                            "id",
+                            layout.has(Attribute::SpawnStep).then_some("params.step"),
+                            layout.has(Attribute::DeathStep).then_some("s.die_at"),
+                        );
+                    }
                     w.line(format!(
                         "let d = s.v * {} - accel(s.x, s.v, params.time) * {};",
                         f32_lit(h),

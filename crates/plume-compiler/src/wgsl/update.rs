@@ -21,6 +21,15 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             if let Some(flock) = &ir.flock {
                 flock.emit_update_prologue(w);
             }
+            if ir.custom_terms().any(|c| c.needs_context()) {
+                crate::forces::custom::emit_set_context(
+                    w,
+                    ir.dt,
+                    "p.id",
+                    layout.has(Attribute::SpawnStep).then_some("p.born"),
+                    lifetimes.then_some("p.die_at"),
+                );
+            }
             w.line("var x = vec3<f32>(p.px, p.py, p.pz);");
             if verlet {
                 w.line("var d = vec3<f32>(p.dx, p.dy, p.dz);");

@@ -1,0 +1,561 @@
+//! The typed expression tree, and the type checker that builds it from the syntax tree:
+//! names resolved to variables, parameters and functions, every node given a type, and every
+//! mistake reported at its characters.
+
+use std::collections::BTreeMap;
+
+use glam::DVec3;
+
+use super::parse::{Ast, AstKind, BinOp};
+use super::ExprError;
+
+/// The type of a value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ty {
+    /// A number (f32 on the GPU, f64 in the reference).
+    Scalar,
+    /// Three numbers.
+    Vec3,
+    /// A comparison's result: only `select` takes it.
+    Bool,
+}
+
+impl Ty {
+    /// As written in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Ty::Scalar => "f32",
+            Ty::Vec3 => "vec3",
+            Ty::Bool => "bool",
+        }
+    }
+}
+
+/// What an expression may read about the particle and the simulation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Var {
+    /// Position (m), vec3.
+    X,
+    /// Velocity (m/s), vec3.
+    V,
+    /// Simulation time (s).
+    T,
+    /// The particle's age (s).
+    Age,
+    /// The particle's lifetime (s); 0 for particles that never die.
+    Life,
+}
+
+impl Var {
+    /// The name as written.
+    pub fn name(self) -> &'static str {
+        match self {
+            Var::X => "x",
+            Var::V => "v",
+            Var::T => "t",
+            Var::Age => "age",
+            Var::Life => "life",
+        }
+    }
+
+    fn ty(self) -> Ty {
+        match self {
+            Var::X | Var::V => Ty::Vec3,
+            _ => Ty::Scalar,
+        }
+    }
+}
+
+/// Operations of one operand.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Op1 {
+    /// `-a`
+    Neg,
+    /// `abs`
+    Abs,
+    /// `floor`
+    Floor,
+    /// `fract`: a − floor(a).
+    Fract,
+    /// `sqrt` of max(a, 0).
+    Sqrt,
+    /// `exp`, its argument clamped so the result stays within the value bound.
+    Exp,
+    /// `log` of max(a, [`super::LOG_FLOOR`]).
+    Log,
+    /// `sin`
+    Sin,
+    /// `cos`
+    Cos,
+    /// `length` of a vec3.
+    Length,
+    /// `normalize`: zero for a vector too short to normalise.
+    Normalize,
+    /// Component `.x`, `.y` or `.z` (0, 1, 2).
+    Component(u8),
+}
+
+/// Operations of two operands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Op2 {
+    /// `+`
+    Add,
+    /// `-`
+    Sub,
+    /// `*` (a scalar scales a vec3; two vec3s multiply per component).
+    Mul,
+    /// `/`, zero where the divisor is within [`super::DIV_FLOOR`] of zero.
+    Div,
+    /// `min`
+    Min,
+    /// `max`
+    Max,
+    /// `pow(a, b)`: 0 for a <= 0.
+    Pow,
+    /// `atan2(y, x)`: 0 at (0, 0).
+    Atan2,
+    /// `dot`
+    Dot,
+    /// `cross`
+    Cross,
+    /// `step(edge, a)`: 1 where a >= edge, else 0.
+    Step,
+    /// A comparison (`<` ...), giving a bool.
+    Compare(BinOp),
+}
+
+/// Operations of three operands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Op3 {
+    /// `vec3(a, b, c)`
+    Vec3,
+    /// `clamp(a, lo, hi)` = min(max(a, lo), hi).
+    Clamp,
+    /// `mix(a, b, s)` = a + (b − a) s.
+    Mix,
+    /// `smoothstep(e0, e1, a)`, 0 where e0 == e1.
+    Smoothstep,
+    /// `select(if_false, if_true, cond)`, as in WGSL.
+    Select,
+}
+
+/// A node of the typed tree.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Node {
+    /// A scalar constant.
+    Scalar(f64),
+    /// A vector constant.
+    Vector(DVec3),
+    /// A variable.
+    Var(Var),
+    /// `rand(k)`: the particle's k-th uniform number in [0, 1).
+    Rand(u32),
+    /// One operand.
+    Unary(Op1, Box<Expr>),
+    /// Two operands.
+    Binary(Op2, Box<Expr>, Box<Expr>),
+    /// Three operands.
+    Ternary(Op3, Box<Expr>, Box<Expr>, Box<Expr>),
+}
+
+/// A typed expression.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Expr {
+    /// What it computes.
+    pub node: Node,
+    /// Its type.
+    pub ty: Ty,
+}
+
+impl Expr {
+    /// A node of a known type.
+    pub fn new(node: Node, ty: Ty) -> Self {
+        Self { node, ty }
+    }
+
+    /// The children, in order.
+    pub fn children(&self) -> Vec<&Expr> {
+        match &self.node {
+            Node::Unary(_, a) => vec![a],
+            Node::Binary(_, a, b) => vec![a, b],
+            Node::Ternary(_, a, b, c) => vec![a, b, c],
+            _ => Vec::new(),
+        }
+    }
+
+    /// Every variable the expression reads (after folding, only those that matter).
+    pub fn reads(&self, var: Var) -> bool {
+        matches!(self.node, Node::Var(v) if v == var)
+            || self.children().iter().any(|c| c.reads(var))
+    }
+
+    /// True when it draws random numbers.
+    pub fn draws_random(&self) -> bool {
+        matches!(self.node, Node::Rand(_)) || self.children().iter().any(|c| c.draws_random())
+    }
+
+    /// Number of nodes.
+    pub fn size(&self) -> usize {
+        1 + self.children().iter().map(|c| c.size()).sum::<usize>()
+    }
+}
+
+/// The variables, for messages.
+pub const VARIABLES: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life];
+
+/// Functions and their arities, for messages and the arity check.
+pub const FUNCTIONS: &[(&str, usize)] = &[
+    ("vec3", 3),
+    ("dot", 2),
+    ("cross", 2),
+    ("length", 1),
+    ("normalize", 1),
+    ("abs", 1),
+    ("min", 2),
+    ("max", 2),
+    ("clamp", 3),
+    ("mix", 3),
+    ("step", 2),
+    ("smoothstep", 3),
+    ("sqrt", 1),
+    ("exp", 1),
+    ("log", 1),
+    ("pow", 2),
+    ("sin", 1),
+    ("cos", 1),
+    ("atan2", 2),
+    ("floor", 1),
+    ("fract", 1),
+    ("select", 3),
+    ("rand", 1),
+];
+
+/// The largest `k` in `rand(k)`.
+pub const MAX_RAND: u32 = 255;
+
+/// Names the checker resolves besides variables and parameters: `dt`, the effect's step.
+pub struct Scope<'a> {
+    /// The effect's `params`.
+    pub params: &'a BTreeMap<String, f64>,
+    /// The effect's dt (s).
+    pub dt: f64,
+}
+
+/// Type-checks a syntax tree into a typed tree.
+pub fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
+    let err = |msg: String| ExprError::new(msg, ast.start, ast.end);
+    match &ast.kind {
+        AstKind::Num(x) => {
+            if x.abs() > super::VALUE_BOUND {
+                return Err(err(format!(
+                    "the number {x} is beyond ±{:e}, the range expressions compute in",
+                    super::VALUE_BOUND
+                )));
+            }
+            Ok(Expr::new(Node::Scalar(*x), Ty::Scalar))
+        }
+        AstKind::Name(name) => {
+            if let Some(v) = VARIABLES.iter().find(|v| v.name() == name) {
+                return Ok(Expr::new(Node::Var(*v), v.ty()));
+            }
+            if name == "dt" {
+                return Ok(Expr::new(Node::Scalar(scope.dt), Ty::Scalar));
+            }
+            if let Some(value) = scope.params.get(name) {
+                return Ok(Expr::new(Node::Scalar(*value), Ty::Scalar));
+            }
+            if FUNCTIONS.iter().any(|(f, _)| f == name) {
+                return Err(err(format!(
+                    "`{name}` is a function: call it, `{name}(...)`"
+                )));
+            }
+            let params: Vec<&str> = scope.params.keys().map(String::as_str).collect();
+            Err(err(format!(
+                "unknown name `{name}`: the variables are x, v, t, age, life and dt{}",
+                if params.is_empty() {
+                    ", and the file has no params".to_string()
+                } else {
+                    format!(", and the params are {}", params.join(", "))
+                }
+            )))
+        }
+        AstKind::Neg(a) => {
+            let a = check(a, scope)?;
+            numeric(&a, ast, "-")?;
+            let ty = a.ty;
+            Ok(Expr::new(Node::Unary(Op1::Neg, Box::new(a)), ty))
+        }
+        AstKind::Binary(op, a, b) => {
+            let (ea, eb) = (check(a, scope)?, check(b, scope)?);
+            let sym = op.symbol();
+            numeric(&ea, a, sym)?;
+            numeric(&eb, b, sym)?;
+            let ty = match op {
+                BinOp::Add | BinOp::Sub => {
+                    if ea.ty != eb.ty {
+                        return Err(err(format!(
+                            "`{sym}` needs two values of one type, got {} {sym} {} (write vec3(s, s, s) to make a vec3 of a number)",
+                            ea.ty.name(),
+                            eb.ty.name()
+                        )));
+                    }
+                    ea.ty
+                }
+                BinOp::Mul | BinOp::Div => broadcast(ea.ty, eb.ty),
+                _ => {
+                    for (e, side) in [(&ea, a), (&eb, b)] {
+                        if e.ty != Ty::Scalar {
+                            return Err(ExprError::new(
+                                format!("`{sym}` compares numbers, got a {}", e.ty.name()),
+                                side.start,
+                                side.end,
+                            ));
+                        }
+                    }
+                    Ty::Bool
+                }
+            };
+            let op2 = match op {
+                BinOp::Add => Op2::Add,
+                BinOp::Sub => Op2::Sub,
+                BinOp::Mul => Op2::Mul,
+                BinOp::Div => Op2::Div,
+                c => Op2::Compare(*c),
+            };
+            Ok(Expr::new(Node::Binary(op2, Box::new(ea), Box::new(eb)), ty))
+        }
+        AstKind::Member(a, name, (s, e)) => {
+            let ea = check(a, scope)?;
+            let index = match name.as_str() {
+                "x" => 0,
+                "y" => 1,
+                "z" => 2,
+                _ => {
+                    return Err(ExprError::new(
+                        format!("unknown component `.{name}`: a vec3 has .x, .y and .z"),
+                        *s,
+                        *e,
+                    ))
+                }
+            };
+            if ea.ty != Ty::Vec3 {
+                return Err(ExprError::new(
+                    format!("`.{name}` needs a vec3, got a {}", ea.ty.name()),
+                    a.start,
+                    a.end,
+                ));
+            }
+            Ok(Expr::new(
+                Node::Unary(Op1::Component(index), Box::new(ea)),
+                Ty::Scalar,
+            ))
+        }
+        AstKind::Call(name, name_span, args) => call(name, *name_span, args, ast, scope),
+    }
+}
+
+/// A value usable in arithmetic: not a bool.
+fn numeric(e: &Expr, at: &Ast, what: &str) -> Result<(), ExprError> {
+    if e.ty == Ty::Bool {
+        return Err(ExprError::new(
+            format!("`{what}` needs a number or a vec3, got a bool (a comparison): use select(a, b, condition)"),
+            at.start,
+            at.end,
+        ));
+    }
+    Ok(())
+}
+
+/// The type of an operation applied per component where a scalar stands for (s, s, s).
+fn broadcast(a: Ty, b: Ty) -> Ty {
+    if a == Ty::Vec3 || b == Ty::Vec3 {
+        Ty::Vec3
+    } else {
+        Ty::Scalar
+    }
+}
+
+fn call(
+    name: &str,
+    (ns, ne): (usize, usize),
+    args: &[Ast],
+    ast: &Ast,
+    scope: &Scope,
+) -> Result<Expr, ExprError> {
+    let Some(&(_, arity)) = FUNCTIONS.iter().find(|(f, _)| *f == name) else {
+        let known: Vec<&str> = FUNCTIONS.iter().map(|(f, _)| *f).collect();
+        let hint = if matches!(name, "noise" | "curl") {
+            " (noise and curl come with the Turbulence force, not yet available)"
+        } else {
+            ""
+        };
+        return Err(ExprError::new(
+            format!(
+                "unknown function `{name}`{hint}; the functions are {}",
+                known.join(", ")
+            ),
+            ns,
+            ne,
+        ));
+    };
+    if args.len() != arity {
+        return Err(ExprError::new(
+            format!(
+                "`{name}` takes {arity} argument{}, got {}",
+                if arity == 1 { "" } else { "s" },
+                args.len()
+            ),
+            ast.start,
+            ast.end,
+        ));
+    }
+    if name == "rand" {
+        return match args[0].kind {
+            AstKind::Num(k) if k.fract() == 0.0 && (0.0..=f64::from(MAX_RAND)).contains(&k) => {
+                Ok(Expr::new(Node::Rand(k as u32), Ty::Scalar))
+            }
+            _ => Err(ExprError::new(
+                format!(
+                    "rand(k) takes a whole number k from 0 to {MAX_RAND}, written as a literal"
+                ),
+                args[0].start,
+                args[0].end,
+            )),
+        };
+    }
+    let typed: Vec<Expr> = args
+        .iter()
+        .map(|a| check(a, scope))
+        .collect::<Result<_, _>>()?;
+    let tys: Vec<Ty> = typed.iter().map(|e| e.ty).collect();
+    let arg_err = |i: usize, msg: String| ExprError::new(msg, args[i].start, args[i].end);
+    let want = |i: usize, ty: Ty| -> Result<(), ExprError> {
+        if tys[i] != ty {
+            return Err(arg_err(
+                i,
+                format!(
+                    "argument {} of `{name}` must be a {}, got a {}",
+                    i + 1,
+                    ty.name(),
+                    tys[i].name()
+                ),
+            ));
+        }
+        Ok(())
+    };
+    for (i, ty) in tys.iter().enumerate() {
+        let bool_ok = name == "select" && i == 2;
+        if *ty == Ty::Bool && !bool_ok {
+            return Err(arg_err(
+                i,
+                format!(
+                    "argument {} of `{name}` must be a number or a vec3, got a bool",
+                    i + 1
+                ),
+            ));
+        }
+    }
+    // The first argument's type is the result's for the per-component functions; the others
+    // must match it or be scalars (which stand for (s, s, s)).
+    let same_or_scalar = || -> Result<Ty, ExprError> {
+        let ty = tys.iter().copied().fold(Ty::Scalar, broadcast);
+        for (i, t) in tys.iter().enumerate() {
+            if *t != ty && *t != Ty::Scalar {
+                return Err(arg_err(
+                    i,
+                    format!(
+                        "argument {} of `{name}` must be a {} or a number",
+                        i + 1,
+                        ty.name()
+                    ),
+                ));
+            }
+        }
+        Ok(ty)
+    };
+    let mut it = typed.into_iter();
+    let mut next = || Box::new(it.next().expect("arity checked"));
+    let unary = |op: Op1, ty: Ty, a: Box<Expr>| Ok(Expr::new(Node::Unary(op, a), ty));
+    match name {
+        "vec3" => {
+            for i in 0..3 {
+                want(i, Ty::Scalar)?;
+            }
+            Ok(Expr::new(
+                Node::Ternary(Op3::Vec3, next(), next(), next()),
+                Ty::Vec3,
+            ))
+        }
+        "dot" | "cross" => {
+            want(0, Ty::Vec3)?;
+            want(1, Ty::Vec3)?;
+            let (op, ty) = if name == "dot" {
+                (Op2::Dot, Ty::Scalar)
+            } else {
+                (Op2::Cross, Ty::Vec3)
+            };
+            Ok(Expr::new(Node::Binary(op, next(), next()), ty))
+        }
+        "length" => {
+            want(0, Ty::Vec3)?;
+            unary(Op1::Length, Ty::Scalar, next())
+        }
+        "normalize" => {
+            want(0, Ty::Vec3)?;
+            unary(Op1::Normalize, Ty::Vec3, next())
+        }
+        "abs" | "sqrt" | "exp" | "log" | "sin" | "cos" | "floor" | "fract" => {
+            let a = next();
+            let ty = a.ty;
+            let op = match name {
+                "abs" => Op1::Abs,
+                "sqrt" => Op1::Sqrt,
+                "exp" => Op1::Exp,
+                "log" => Op1::Log,
+                "sin" => Op1::Sin,
+                "cos" => Op1::Cos,
+                "floor" => Op1::Floor,
+                _ => Op1::Fract,
+            };
+            unary(op, ty, a)
+        }
+        "min" | "max" | "pow" | "atan2" | "step" => {
+            let ty = same_or_scalar()?;
+            let op = match name {
+                "min" => Op2::Min,
+                "max" => Op2::Max,
+                "pow" => Op2::Pow,
+                "atan2" => Op2::Atan2,
+                _ => Op2::Step,
+            };
+            Ok(Expr::new(Node::Binary(op, next(), next()), ty))
+        }
+        "clamp" | "mix" | "smoothstep" => {
+            let ty = same_or_scalar()?;
+            let op = match name {
+                "clamp" => Op3::Clamp,
+                "mix" => Op3::Mix,
+                _ => Op3::Smoothstep,
+            };
+            Ok(Expr::new(Node::Ternary(op, next(), next(), next()), ty))
+        }
+        "select" => {
+            want(2, Ty::Bool)?;
+            let (a, b) = (next(), next());
+            if a.ty != b.ty {
+                return Err(ExprError::new(
+                    format!(
+                        "select's first two arguments must have one type, got {} and {}",
+                        a.ty.name(),
+                        b.ty.name()
+                    ),
+                    args[0].start,
+                    args[1].end,
+                ));
+            }
+            let ty = a.ty;
+            Ok(Expr::new(Node::Ternary(Op3::Select, a, b, next()), ty))
+        }
+        _ => unreachable!("every function in FUNCTIONS is handled"),
+    }
+}
