@@ -124,7 +124,14 @@ fn no_particle_ever_ends_a_step_behind_a_plane() {
 )"#
         );
         let e = compile(&src);
-        let planes = e.ir.planes.clone();
+        let planes: Vec<_> =
+            e.ir.colliders
+                .iter()
+                .map(|c| match &c.surface {
+                    plume::compiler::colliders::Surface::Plane(p) => *p,
+                    other => panic!("not a plane: {other:?}"),
+                })
+                .collect();
         let gpu = gpu();
         let mut sim = EffectInstance::new(&gpu, e.clone()).unwrap();
         let mut cpu = plume::compiler::reference::ReferenceSim::new(&e.ir);

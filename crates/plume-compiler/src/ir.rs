@@ -39,8 +39,8 @@ pub struct EffectIr {
     pub integrator: Integrator,
     /// Why this integrator: the file chose it, or what Auto decided and why.
     pub integrator_reason: String,
-    /// Collision planes.
-    pub planes: Vec<PlaneIr>,
+    /// Colliders, in file order.
+    pub colliders: Vec<crate::colliders::ColliderIr>,
     /// Kill volumes.
     pub kills: Vec<KillIr>,
     /// Whether a depth sort is requested.
@@ -136,6 +136,27 @@ impl EffectIr {
             crate::forces::Term::Custom(c) => Some(c),
             _ => None,
         })
+    }
+
+    /// The normal speed below which a contact does not bounce: twice what the effect's constant
+    /// acceleration adds in one substep, so a particle resting on a collider stays at rest.
+    pub fn rest_speed(&self) -> f64 {
+        let g: glam::DVec3 = self
+            .terms
+            .iter()
+            .filter_map(|t| match t {
+                Term::Constant(c) => Some(c.accel),
+                _ => None,
+            })
+            .sum();
+        2.0 * g.length() * self.h()
+    }
+
+    /// Whether any collider needs the `collider_data` binding (a height field's samples).
+    pub fn has_collider_data(&self) -> bool {
+        self.colliders
+            .iter()
+            .any(|c| matches!(c.surface, crate::colliders::Surface::HeightField(_)))
     }
 
     /// Whether kernels get the time modulo the noise period (the default: noise repeats
@@ -318,19 +339,6 @@ impl VelocityIr {
     }
 }
 
-/// A collision plane with a unit normal.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct PlaneIr {
-    /// A point on the plane.
-    pub point: DVec3,
-    /// Unit normal, into the allowed side.
-    pub normal: DVec3,
-    /// Restitution in [0, 1].
-    pub restitution: f64,
-    /// Friction in [0, 1].
-    pub friction: f64,
-}
-
 /// A kill volume.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum KillIr {
@@ -440,15 +448,14 @@ impl fmt::Display for EffectIr {
                 field.describe()
             )?;
         }
-        writeln!(f, "  planes")?;
-        for p in &self.planes {
+        writeln!(f, "  collide")?;
+        for c in &self.colliders {
             writeln!(
                 f,
-                "    point {} normal {} restitution {} friction {}",
-                v(p.point),
-                v(p.normal),
-                p.restitution,
-                p.friction
+                "    {} restitution {} friction {}",
+                c.surface.describe(),
+                c.restitution,
+                c.friction
             )?;
         }
         writeln!(f, "  kill")?;

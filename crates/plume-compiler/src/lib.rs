@@ -34,6 +34,7 @@
 //! ```
 
 pub mod check;
+pub mod colliders;
 pub mod diagnostics;
 pub mod expr;
 pub mod field;

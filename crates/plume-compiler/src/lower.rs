@@ -4,9 +4,7 @@
 use glam::DVec3;
 
 use crate::forces::{safe_normalize, Force};
-use crate::ir::{
-    Basis, CameraIr, EffectIr, EmitterIr, KillIr, PlaneIr, RenderIr, ShapeIr, VelocityIr,
-};
+use crate::ir::{Basis, CameraIr, EffectIr, EmitterIr, KillIr, RenderIr, ShapeIr, VelocityIr};
 use crate::lifetime::LifetimeSteps;
 use crate::rng::seed_mix;
 use crate::schema::{Collider, Effect, KillVolume, Shape, Velocity};
@@ -52,23 +50,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
         max_speed: effect.max_speed,
         integrator: effect.integrator,
         integrator_reason: String::from("chosen in the file"),
-        planes: effect
-            .collide
-            .iter()
-            .map(
-                |Collider::Plane {
-                     point,
-                     normal,
-                     restitution,
-                     friction,
-                 }| PlaneIr {
-                    point: point.d(),
-                    normal: safe_normalize(normal.d()),
-                    restitution: *restitution,
-                    friction: *friction,
-                },
-            )
-            .collect(),
+        colliders: effect.collide.iter().map(Collider::lower).collect(),
         kills: effect
             .kill
             .iter()

@@ -325,22 +325,7 @@ impl State {
     }
 }
 
-/// Collision surfaces.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub enum Collider {
-    /// A half-space boundary: particles live on the side the normal points to.
-    Plane {
-        /// Any point on the plane.
-        point: Vec3,
-        /// Points into the allowed side (any length but zero).
-        normal: Vec3,
-        /// Fraction of normal speed kept on a bounce, in [0, 1].
-        restitution: f64,
-        /// Fraction of tangential speed lost on a bounce, in [0, 1].
-        friction: f64,
-    },
-}
+pub use crate::colliders::Collider;
 
 /// Volumes that kill particles at the end of a step.
 #[derive(Clone, Debug, PartialEq, Deserialize)]

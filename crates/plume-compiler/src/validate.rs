@@ -5,7 +5,7 @@
 use crate::check::Checker;
 use crate::forces::force_path;
 use crate::path::ValuePath;
-use crate::schema::{Collider, Effect, Emitter, KillVolume, Shape, Velocity};
+use crate::schema::{Effect, Emitter, KillVolume, Shape, Velocity};
 
 /// The most emitters an effect may have: each takes 16 bytes of the per-step uniform, and
 /// 16 + 16 x 1023 bytes is the 16 KiB every WebGPU adapter must allow in a uniform binding.
@@ -14,7 +14,7 @@ pub const MAX_EMITTERS: usize = 1023;
 /// largest kernels tested run on llvmpipe (400 terms, tests/extremes.rs). Past this, shader
 /// compilers slow down sharply and drivers may refuse the kernel.
 pub const MAX_FORCES: usize = 512;
-/// The most collide planes, and separately the most kill volumes (same reason as forces).
+/// The most colliders, and separately the most kill volumes (same reason as forces).
 pub const MAX_VOLUMES: usize = 256;
 
 /// Checks the whole effect; returns the checker holding every error found.
@@ -90,21 +90,8 @@ pub fn check_effect(effect: &Effect) -> Checker {
     if let Some(s) = effect.max_speed {
         c.positive(&root.field("max_speed"), s);
     }
-    for (
-        i,
-        Collider::Plane {
-            point,
-            normal,
-            restitution,
-            friction,
-        },
-    ) in effect.collide.iter().enumerate()
-    {
-        let p = root.field("collide").index(i).variant("Plane");
-        c.vec3(&p.field("point"), *point);
-        c.direction(&p.field("normal"), *normal);
-        c.within(&p.field("restitution"), *restitution, 0.0, 1.0);
-        c.within(&p.field("friction"), *friction, 0.0, 1.0);
+    for (i, collider) in effect.collide.iter().enumerate() {
+        collider.check(&crate::colliders::collider_path(i, collider), &mut c);
     }
     for (i, k) in effect.kill.iter().enumerate() {
         let p = root.field("kill").index(i);

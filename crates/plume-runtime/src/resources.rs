@@ -231,15 +231,26 @@ impl Resources {
             .iter()
             .filter(|b| b.binding >= 7 && b.name != "depth_axis")
             .map(|b| {
-                let buffer = device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(b.name),
-                    size: b.bytes.max(16),
-                    usage: STORAGE,
-                    mapped_at_creation: false,
-                });
-                (b.binding, buffer)
+                let size = b.bytes.max(16);
+                let buffer = if b.name == "collider_data" {
+                    // The height fields' samples, written once here.
+                    let data = plume_compiler::colliders::data(&effect.ir.colliders);
+                    filled_buffer(gpu, b.name, size, STORAGE, |bytes| {
+                        for (dst, h) in bytes.chunks_exact_mut(4).zip(&data) {
+                            dst.copy_from_slice(&h.to_le_bytes());
+                        }
+                    })?
+                } else {
+                    device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(b.name),
+                        size,
+                        usage: STORAGE,
+                        mapped_at_creation: false,
+                    })
+                };
+                Ok((b.binding, buffer))
             })
-            .collect();
+            .collect::<Result<_, RuntimeError>>()?;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(&effect.ir.name),
             source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(&effect.wgsl)),
@@ -262,7 +273,7 @@ impl Resources {
                     "chunk" | "depth_axis" => {
                         buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
                     }
-                    "frame" => buffer_entry(
+                    "frame" | "collider_data" => buffer_entry(
                         b.binding,
                         wgpu::BufferBindingType::Storage { read_only: true },
                         false,

@@ -34,10 +34,11 @@ pub fn exact_blocker(ir: &EffectIr, force_names: &[&'static str]) -> Option<(Str
                 .variant("Flock"),
         ));
     }
-    if !ir.planes.is_empty() {
+    if let Some(c) = ir.colliders.first() {
+        let name = c.surface.name();
         return Some((
-            "collide[0] (Plane) needs collision handling".into(),
-            ValuePath::root().field("collide").index(0).variant("Plane"),
+            format!("collide[0] ({name}) needs collision handling"),
+            ValuePath::root().field("collide").index(0).variant(name),
         ));
     }
     if ir.max_speed.is_some() {
@@ -68,7 +69,7 @@ pub fn resolve(ir: &mut EffectIr, force_names: &[&'static str]) -> Result<(), Ch
             c.error(
                 &ValuePath::root().field("integrator"),
                 format!(
-                    "Exact is not allowed because {why}; Exact needs only Gravity, Drag and Wind with noise 0, no collide planes and no max_speed (use Rk4 or Auto)"
+                    "Exact is not allowed because {why}; Exact needs only Gravity, Drag and Wind with noise 0, no colliders and no max_speed (use Rk4 or Auto)"
                 ),
             );
             return Err(c);

@@ -276,6 +276,15 @@ pub fn decide(ir: &EffectIr) -> Layout {
             meaning: "the baked force field: one (a, 0) per node, x fastest",
         });
     }
+    if ir.has_collider_data() {
+        layout.bindings.push(Binding {
+            binding: 15,
+            name: "collider_data",
+            space: "storage, read",
+            bytes: crate::colliders::data(&ir.colliders).len() as u64 * 4,
+            meaning: "the height fields' samples, row by row, x fastest",
+        });
+    }
     if let Some(flock) = &ir.flock {
         let groups = u64::from(ir.capacity.div_ceil(crate::wgsl::WORKGROUP));
         layout.bindings.push(Binding {

@@ -4,8 +4,9 @@
 use glam::DVec3;
 
 use super::spawn::spawn;
-use super::step::{accel, collide, substep};
+use super::step::{accel, substep};
 use super::{ParticleRecord, Totals};
+use crate::colliders::resolve;
 use crate::forces::flock::Frozen;
 use crate::forces::ParticleCtx;
 use crate::integrators::ExactStep;
@@ -131,6 +132,7 @@ impl ReferenceSim {
         };
         let mut index = 0;
         let schedule = &self.schedule;
+        let rest_speed = ir.rest_speed();
         self.particles.retain_mut(|p| {
             let flock = frozen.get(index);
             index += 1;
@@ -143,10 +145,9 @@ impl ReferenceSim {
             };
             for s in 0..ir.substeps {
                 let t = plan.time + f64::from(s) * h;
+                let x0 = p.x;
                 substep(ir, exact, baked, flock, &ctx, &mut p.x, &mut p.v, t);
-                for plane in &ir.planes {
-                    collide(plane, &mut p.x, &mut p.v, verlet, h);
-                }
+                resolve(&ir.colliders, rest_speed, x0, &mut p.x, &mut p.v, verlet, h);
             }
             let dies =
                 (has_lifetimes && step_index >= p.die_at) || ir.kills.iter().any(|k| k.kills(p.x));

@@ -1,12 +1,12 @@
 //! f64 twins of the update kernel's pieces (integrators.rs, wgsl/update.rs): one substep of each
-//! integrator, the speed clamp and the plane response.
+//! integrator and the speed clamp (collisions: crate::colliders::resolve).
 
 use glam::DVec3;
 
 use crate::forces::flock::Frozen;
 use crate::forces::ParticleCtx;
 use crate::integrators::ExactStep;
-use crate::ir::{EffectIr, PlaneIr};
+use crate::ir::EffectIr;
 use crate::schema::Integrator;
 
 /// Sum of the force terms at (x, v, t) for particle `p`. With a baked field, `baked` holds its
@@ -109,25 +109,4 @@ pub fn substep(
             *v = s.e * *v + s.cv;
         }
     }
-}
-
-/// Puts a particle that ended behind the plane back on it (plus the kernel's ulp margin) and
-/// bounces it if it moves into the plane. `verlet`: `v` holds the displacement over h.
-pub fn collide(p: &PlaneIr, x: &mut DVec3, v: &mut DVec3, verlet: bool, h: f64) {
-    let dist = (*x - p.point).dot(p.normal);
-    if dist >= 0.0 {
-        return;
-    }
-    let big = x
-        .abs()
-        .max_element()
-        .max(p.point.abs().max_element().max(1.0));
-    *x += (4.8e-7 * big - dist) * p.normal;
-    let mut vel = if verlet { *v / h } else { *v };
-    let vn = vel.dot(p.normal);
-    if vn < 0.0 {
-        let v_n = vn * p.normal;
-        vel = (1.0 - p.friction) * (vel - v_n) - p.restitution * v_n;
-    }
-    *v = if verlet { vel * h } else { vel };
 }

@@ -112,6 +112,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "field" => "array<vec4<f32>>",
             "frame" => "Frame",
             "depth_axis" => "DepthAxis",
+            "collider_data" => "array<f32>",
             _ => "StepParams",
         };
         w.line(format!(
@@ -169,6 +170,9 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             field.emit_wgsl(&mut w, &ir.terms);
             w.blank();
         }
+    }
+    if !ir.colliders.is_empty() && !stateless {
+        crate::colliders::emit_helpers(&mut w, &ir.colliders);
     }
     if stateless {
         spawn::emit_emitter_fns(&mut w, ir);

@@ -1,9 +1,9 @@
 //! The fused `update` kernel: for every live particle, all substeps of forces + integrator +
-//! max speed + plane collisions, then ageing, lifetime and kill volumes, in one pass. A dying
+//! max speed + swept collisions, then ageing, lifetime and kill volumes, in one pass. A dying
 //! particle frees its slot by pushing it on the free list.
 
 use crate::integrators;
-use crate::ir::{EffectIr, KillIr, PlaneIr};
+use crate::ir::{EffectIr, KillIr};
 use crate::passes::layout::{Attribute, Layout};
 use crate::wgsl::writer::{f32_lit, vec3_lit, Writer};
 
@@ -37,9 +37,18 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                 w.line("var v = vec3<f32>(p.vx, p.vy, p.vz);");
             }
             let body = |w: &mut Writer| {
+                if !ir.colliders.is_empty() {
+                    w.line("let x_start = x;");
+                }
                 integrators::emit_step(w, ir);
-                for plane in &ir.planes {
-                    emit_plane(w, ir, plane, verlet);
+                if !ir.colliders.is_empty() {
+                    crate::colliders::emit_resolve(
+                        w,
+                        &ir.colliders,
+                        ir.rest_speed(),
+                        ir.h(),
+                        verlet,
+                    );
                 }
             };
             if ir.substeps == 1 {
@@ -83,39 +92,6 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             w.line("store_particle(i, p);");
         },
     );
-}
-
-/// A particle whose substep ends behind the plane is put back on it (plus a margin of a few
-/// f32 ulps so it is not behind after rounding) and, if moving into the plane, bounces:
-/// v' = (1 - mu) v_t - e v_n.
-fn emit_plane(w: &mut Writer, ir: &EffectIr, p: &PlaneIr, verlet: bool) {
-    w.block("", |w| {
-        w.line(format!("let n = {};", vec3_lit(p.normal)));
-        w.line(format!("let dist = dot(x - {}, n);", vec3_lit(p.point)));
-        w.block("if (dist < 0.0)", |w| {
-            // A few f32 ulps of the larger of |x| and |point|, so rounding cannot leave it behind.
-            w.line(format!(
-                "let big = max(max(abs(x.x), abs(x.y)), max(abs(x.z), {}));",
-                f32_lit(p.point.abs().max_element().max(1.0))
-            ));
-            w.line("x = x + (4.8e-7 * big - dist) * n;");
-            if verlet {
-                w.line(format!("var v = d * {};", f32_lit(1.0 / ir.h())));
-            }
-            w.line("let vn = dot(v, n);");
-            w.block("if (vn < 0.0)", |w| {
-                w.line("let v_n = vn * n;");
-                w.line(format!(
-                    "v = {} * (v - v_n) - {} * v_n;",
-                    f32_lit(1.0 - p.friction),
-                    f32_lit(p.restitution)
-                ));
-            });
-            if verlet {
-                w.line(format!("d = v * {};", f32_lit(ir.h())));
-            }
-        });
-    });
 }
 
 fn emit_kill(w: &mut Writer, k: &KillIr) {
