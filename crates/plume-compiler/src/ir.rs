@@ -161,11 +161,10 @@ impl EffectIr {
 
     /// Whether kernels get the time modulo the noise period (the default: noise repeats
     /// then, and f32 keeps its sub-millisecond precision) or the whole simulation time, which a
-    /// custom expression reading `t` needs (f32 then, so 1 ms steps at 2.3 hours).
+    /// custom expression reading `t` or evolving turbulence needs (f32 then, so 1 ms steps at
+    /// 2.3 hours).
     pub fn wraps_kernel_time(&self) -> bool {
-        !self
-            .custom_terms()
-            .any(|c| c.expr.reads(crate::expr::Var::T))
+        !self.terms.iter().any(|t| t.as_dyn().reads_whole_time())
     }
 }
 

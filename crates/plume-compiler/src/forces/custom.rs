@@ -257,6 +257,9 @@ impl ForceTerm for CustomTerm {
     fn uses_time(&self) -> bool {
         self.expr.reads(Var::T) || self.expr.reads(Var::Age)
     }
+    fn reads_whole_time(&self) -> bool {
+        self.expr.reads(Var::T)
+    }
     fn closed_form_blocker(&self) -> String {
         let reads: Vec<&str> = [Var::V, Var::T, Var::Age, Var::X]
             .into_iter()

@@ -10,6 +10,7 @@ pub mod custom;
 pub mod drag;
 pub mod flock;
 pub mod noise;
+pub mod turbulence;
 pub mod vortex;
 pub mod wind;
 
@@ -42,6 +43,8 @@ pub enum Force {
     Flock(flock::Flock),
     /// An acceleration written as an expression.
     Custom(custom::Custom),
+    /// Divergence-free curl noise.
+    Turbulence(turbulence::Turbulence),
 }
 
 impl Force {
@@ -55,6 +58,7 @@ impl Force {
             Force::Vortex(_) => "Vortex",
             Force::Flock(_) => "Flock",
             Force::Custom(_) => "Custom",
+            Force::Turbulence(_) => "Turbulence",
         }
     }
 
@@ -71,6 +75,7 @@ impl Force {
             Force::Vortex(f) => f.check(path, c),
             Force::Flock(f) => f.check(path, c),
             Force::Custom(f) => f.check(path, c, scope),
+            Force::Turbulence(f) => f.check(path, c),
         }
     }
 
@@ -88,6 +93,7 @@ impl Force {
             Force::Vortex(f) => vec![Term::Vortex(f.lower(origin))],
             Force::Flock(_) => Vec::new(),
             Force::Custom(f) => vec![f.lower(origin, crate::rng::seed_mix(seed), scope)],
+            Force::Turbulence(f) => vec![Term::Turbulence(f.lower(origin, seed))],
         }
     }
 }
@@ -101,6 +107,7 @@ pub const VARIANTS: &[&str] = &[
     "Vortex",
     "Flock",
     "Custom",
+    "Turbulence",
 ];
 
 /// Reads `Name(field: value, ...)` into the force module's own struct, so each force's
@@ -128,6 +135,7 @@ enum Kind {
     Vortex,
     Flock,
     Custom,
+    Turbulence,
 }
 
 struct ForceVisitor;
@@ -135,7 +143,7 @@ struct ForceVisitor;
 impl<'de> de::Visitor<'de> for ForceVisitor {
     type Value = Force;
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str("a force: Gravity, Drag, Wind, Attractor, Vortex, Flock or Custom")
+        f.write_str("a force: Gravity, Drag, Wind, Attractor, Vortex, Flock, Custom or Turbulence")
     }
     fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<Force, A::Error> {
         let (kind, variant): (Kind, _) = data.variant()?;
@@ -159,6 +167,9 @@ impl<'de> de::Visitor<'de> for ForceVisitor {
             Kind::Custom => {
                 Force::Custom(variant.struct_variant(custom::FIELDS, StructVariant(PhantomData))?)
             }
+            Kind::Turbulence => Force::Turbulence(
+                variant.struct_variant(turbulence::FIELDS, StructVariant(PhantomData))?,
+            ),
         })
     }
 }
@@ -237,6 +248,11 @@ pub trait ForceTerm {
     fn uses_time(&self) -> bool {
         false
     }
+    /// Whether the term needs the whole simulation time in kernels rather than time modulo
+    /// the noise period.
+    fn reads_whole_time(&self) -> bool {
+        false
+    }
     /// Whether a baked field may hold this term: it depends on position (and time) only, and
     /// is worth a grid (not a constant).
     fn bakeable(&self) -> bool {
@@ -288,6 +304,8 @@ pub enum Term {
     Vortex(vortex::VortexTerm),
     /// A custom expression.
     Custom(custom::CustomTerm),
+    /// Curl-noise turbulence.
+    Turbulence(turbulence::TurbulenceTerm),
 }
 
 impl Term {
@@ -300,6 +318,7 @@ impl Term {
             Term::Attractor(t) => t,
             Term::Vortex(t) => t,
             Term::Custom(t) => t,
+            Term::Turbulence(t) => t,
         }
     }
 }

@@ -138,6 +138,14 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             noise::emit_helpers(&mut w);
             w.blank();
         }
+        if ir
+            .terms
+            .iter()
+            .any(|t| matches!(t, crate::forces::Term::Turbulence(_)))
+        {
+            crate::forces::turbulence::emit_helpers(&mut w);
+            w.blank();
+        }
         if ir.custom_terms().any(|c| c.needs_context()) {
             crate::forces::custom::emit_context(&mut w);
             w.blank();
