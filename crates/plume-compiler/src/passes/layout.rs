@@ -255,7 +255,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
                 meaning: if ir.wraps_kernel_time() {
                     "per step: first id, spawns requested, time mod 256 s, step index, per-emitter counts"
                 } else {
-                    "per step: first id, spawns requested, time (s, a custom force reads it), step index, per-emitter counts"
+                    "per step: first id, spawns requested, whole time (s: a force reads it unwrapped), step index, per-emitter counts"
                 },
             },
         ]),
