@@ -356,9 +356,22 @@ fn plane(flavor: Flavor) -> BoxedStrategy<String> {
         direction(f),
         num(f, 0.0, 1.0),
         num(f, 0.0, 1.0),
+        0..5u32,
+        num(f, 0.1, 3.0),
+        num(f, -1.0, 2.0),
     )
-        .prop_map(|(p, n, r, fr)| {
-            format!("Plane(point: {p}, normal: {n}, restitution: {r}, friction: {fr})")
+        .prop_map(|(p, n, r, fr, kind, size, h)| match kind {
+            // Mostly planes; the other colliders built from the same numbers.
+            0 => format!(
+                "Sphere(center: {p}, radius: {size}, restitution: {r}, friction: {fr}, inside: false)"
+            ),
+            1 => format!(
+                "Box(min: (-3.0, -3.0, -3.0), max: (3.0, {size}, 3.0), restitution: {r}, friction: {fr}, inside: true)"
+            ),
+            2 => format!(
+                "HeightField(min: (-4.0, -4.0), max: (4.0, 4.0), heights: [[{h}, 0.0, -1.0], [0.5, {h}, 0.0]], restitution: {r}, friction: {fr})"
+            ),
+            _ => format!("Plane(point: {p}, normal: {n}, restitution: {r}, friction: {fr})"),
         })
         .boxed()
 }
