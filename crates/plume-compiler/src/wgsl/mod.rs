@@ -270,6 +270,35 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
     });
 }
 
+/// The same three accessors on the update's workgroup copy of its particles (`staged`, see
+/// `update.rs`), addressed by the particle's lane in the workgroup.
+pub fn emit_staged_access(w: &mut Writer, layout: &Layout) {
+    let n = layout.vec4s();
+    w.block("fn load_staged(lane: u32) -> Particle", |w| {
+        for k in 0..n {
+            w.line(format!("let w{k} = staged[lane * VEC4S + {k}u];"));
+        }
+        w.line(format!("return {};", particle_from_words(layout)));
+    });
+    w.block("fn store_staged(lane: u32, p: Particle)", |w| {
+        for (k, word) in packed_words(layout).iter().enumerate() {
+            w.line(format!("staged[lane * VEC4S + {k}u] = {word};"));
+        }
+    });
+    let id = layout
+        .words()
+        .iter()
+        .position(|(name, _)| *name == "id")
+        .unwrap_or(0);
+    w.block("fn mark_staged_free(lane: u32)", |w| {
+        w.line(format!(
+            "staged[lane * VEC4S + {}u].{} = DEAD;",
+            id / 4,
+            LANES[id % 4]
+        ));
+    });
+}
+
 /// The `Particle(...)` constructor from its vec4<u32> words held in `w0`, `w1`, ... (the
 /// inverse of [`packed_words`]); shared by the compute module's `load_particle` and the draw
 /// module's.
