@@ -117,19 +117,37 @@ fn draw_order_is_back_to_front_with_ties_by_id_and_covers_every_live_particle() 
         by_id.iter().map(|r| r.id).collect::<Vec<_>>(),
         "draw order lost or repeated a particle"
     );
-    // Depths (recomputed in f64 from the exported f32 positions) never increase; the GPU's f32
-    // depth may order two particles within a few ulps of each other either way.
-    let cam = e.ir.camera;
-    let forward = (cam.target - cam.eye).normalize();
-    let depth =
-        |r: &plume::compiler::reference::ParticleRecord| (r.position - cam.eye).dot(forward);
-    for w in drawn.windows(2) {
-        let (a, b) = (depth(&w[0]), depth(&w[1]));
-        assert!(
-            a >= b - 1e-5 * a.abs().max(1.0),
-            "particle {} at depth {a} drawn before {} at {b}",
-            w[0].id,
-            w[1].id
-        );
-    }
+    // Depths (recomputed in f64 from the exported f32 positions) never increase by more than
+    // one step of the quantised keys.
+    assert_back_to_front(&e, &drawn);
+    // The keys the sort ordered: 16 bits, live ones at most 65,533, in order.
+    let order = sim.draw_order(SortAlgorithm::Radix).unwrap();
+    assert!(order.windows(2).all(|w| w[0].1 <= w[1].1));
+    assert!(
+        order.iter().all(|&(_, key)| key <= 65533),
+        "a live key past 65,533"
+    );
+}
+
+#[test]
+fn particles_at_one_depth_share_key_zero_and_keep_slot_order() {
+    // Every live depth equal: the range is empty, and quantising must neither divide by zero
+    // nor produce anything but key 0 (the sort then keeps slot order, which is id order here).
+    let e = compile(
+        r#"Effect(
+            name: "one depth",
+            capacity: 64,
+            emitters: [Emitter(burst: 40, shape: Point((1.0, 2.0, 3.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+            forces: [],
+            sort: true,
+        )"#,
+    );
+    let gpu = gpu();
+    let mut sim = plume::runtime::EffectInstance::new(&gpu, e.clone()).unwrap();
+    sim.run(2, |_| {}).unwrap();
+    let order = sim.draw_order(SortAlgorithm::Radix).unwrap();
+    assert_eq!(order.len(), 40);
+    assert!(order.iter().all(|&(_, key)| key == 0), "{order:?}");
+    let slots: Vec<u32> = order.iter().map(|&(slot, _)| slot).collect();
+    assert_eq!(slots, (0..40).collect::<Vec<u32>>());
 }

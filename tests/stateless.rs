@@ -268,12 +268,5 @@ fn a_sorted_stateless_effect_draws_back_to_front() {
     let mut by_id = ordered.clone();
     by_id.sort_by_key(|r| r.id);
     assert_eq!(by_id, sim.records().unwrap());
-    let forward = (e.ir.camera.target - e.ir.camera.eye).normalize();
-    let depth = |r: &ParticleRecord| (r.position - e.ir.camera.eye).dot(forward);
-    for pair in ordered.windows(2) {
-        assert!(
-            depth(&pair[0]) >= depth(&pair[1]) - 1e-5,
-            "not back to front"
-        );
-    }
+    assert_back_to_front(&e, &ordered);
 }

@@ -64,3 +64,27 @@ pub fn worst_gpu_distance(effect: &CompiledEffect, steps: u64) -> f64 {
 
 /// f32 unit roundoff.
 pub const U32: f64 = 1.0 / 16_777_216.0;
+
+/// Asserts that `drawn` (the live particles in draw order) runs back to front from `effect`'s
+/// camera as the depth sort promises: a particle comes before a farther one only when their
+/// depths lie within one step of the 16-bit keys, (farthest − nearest live depth) / 65,533
+/// (plume_runtime::depth_quantise), plus the f32 rounding of the GPU's depth (1e-5 relative).
+pub fn assert_back_to_front(effect: &CompiledEffect, drawn: &[ParticleRecord]) {
+    let cam = effect.ir.camera;
+    let forward = (cam.target - cam.eye).normalize();
+    let depth = |r: &ParticleRecord| (r.position - cam.eye).dot(forward);
+    let (near, far) = drawn
+        .iter()
+        .map(depth)
+        .fold((f64::MAX, f64::MIN), |(lo, hi), d| (lo.min(d), hi.max(d)));
+    let step = (far - near).max(0.0) / 65533.0;
+    for w in drawn.windows(2) {
+        let (a, b) = (depth(&w[0]), depth(&w[1]));
+        assert!(
+            a >= b - step - 1e-5 * a.abs().max(1.0),
+            "particle {} at depth {a} drawn before {} at {b} (a key step is {step})",
+            w[0].id,
+            w[1].id
+        );
+    }
+}

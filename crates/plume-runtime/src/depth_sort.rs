@@ -1,12 +1,14 @@
 //! The depth sort of an effect with `sort: true`: the compute module's `depth_keys` kernel gives
-//! every slot a key (farthest first along the camera's depth axis; free slots last), then the
-//! radix sort orders (key, slot) pairs. The sorted slots are the draw order the vertex shader
+//! every slot a key (farthest first along the camera's depth axis; free slots last),
+//! [`DepthQuantise`] maps the keys to 16 bits over the live depth range, then the radix sort
+//! orders (key, slot) pairs in two passes. The sorted slots are the draw order the vertex shader
 //! follows. A stateless effect's keys come from its closed form evaluated in place, so sorting
 //! costs 8 bytes a slot of per-frame scratch and no state.
 
 use plume_compiler::wgsl::WORKGROUP;
 use plume_compiler::CompiledEffect;
 
+use crate::depth_quantise::{DepthQuantise, KEY_BITS};
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
 use crate::resources::{Chunk, Resources, SortBuffers};
@@ -24,7 +26,10 @@ enum Keys {
 /// The depth keys and sorts of one effect.
 pub struct DepthSort {
     keys: Keys,
-    /// The radix sort of every slot, built once: scratch buffers and bind groups reused.
+    /// The keys to 16 bits, built once.
+    quantise: DepthQuantise,
+    /// The radix sort of every slot's 16-bit key, built once: scratch buffers and bind groups
+    /// reused.
     radix: SortProgram,
     sorter: GpuSorter,
     capacity: u64,
@@ -43,7 +48,8 @@ impl DepthSort {
         let sorter = GpuSorter::new(gpu);
         let capacity = u64::from(effect.ir.capacity);
         Ok(Self {
-            radix: sorter.program(SortAlgorithm::Radix, &buffers.keys, &buffers.vals, capacity)?,
+            quantise: DepthQuantise::new(gpu, &buffers.keys, capacity)?,
+            radix: sorter.radix_program(&buffers.keys, &buffers.vals, capacity, KEY_BITS)?,
             keys,
             sorter,
             capacity,
@@ -78,6 +84,7 @@ impl DepthSort {
                 pass.dispatch_workgroups(x, y, 1);
             }
         }
+        self.quantise.record(pass);
         match algorithm {
             SortAlgorithm::Radix => self.radix.record(pass),
             SortAlgorithm::Bitonic => {

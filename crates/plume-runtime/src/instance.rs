@@ -369,7 +369,8 @@ impl EffectInstance {
     }
 
     /// Sorts every slot by depth along `camera`'s axis on the GPU (farthest first, free slots
-    /// last) and returns the live slots in draw order, each with its key.
+    /// last) and returns the live slots in draw order, each with its 16-bit key
+    /// ([`crate::depth_quantise`]).
     pub fn draw_order_from(
         &self,
         camera: &Camera,
@@ -428,8 +429,8 @@ impl EffectInstance {
         Ok(seconds)
     }
 
-    /// The live particles in draw order: sorted by depth on the GPU, farthest first; equal
-    /// depths by id, so the order is the same run after run.
+    /// The live particles in draw order: sorted by their 16-bit depth keys on the GPU,
+    /// farthest first; equal keys by id, so the order is the same run after run.
     pub fn records_in_draw_order(&self) -> Result<Vec<ParticleRecord>, RuntimeError> {
         let order = self.draw_order(SortAlgorithm::Radix)?;
         let by_slot = self.records_by_slot()?;
@@ -444,7 +445,7 @@ impl EffectInstance {
                 })?;
             out.push((key, record));
         }
-        // Stable: equal keys (equal depths) by id.
+        // Stable: equal keys (depths within one key step) by id.
         out.sort_by_key(|(key, r)| (*key, r.id));
         Ok(out.into_iter().map(|(_, r)| r).collect())
     }

@@ -7,7 +7,8 @@
 //! - [`resources`]: an effect's buffers and the compute module's bind groups, from its layout;
 //! - [`steps`] (with [`flock_pass`]): the simulation passes, many steps per submission with
 //!   no CPU round trip, or a stateless effect's bookkeeping;
-//! - [`depth_sort`] (with the generic [`sort`]): depth keys and their GPU radix sort;
+//! - [`depth_sort`] (with [`depth_quantise`] and the generic [`sort`]): depth keys, quantised
+//!   to 16 bits, and their GPU radix sort;
 //! - [`draw`] (with [`live_list`]): the effect's generated draw module on a render pipeline,
 //!   drawing straight from the particle buffers into the caller's render pass;
 //! - [`readback`]: particles and counters back to the CPU (exports, tests, measurements);
@@ -22,6 +23,7 @@
 pub mod accuracy;
 pub mod bench;
 pub mod camera;
+pub mod depth_quantise;
 pub mod depth_sort;
 pub mod draw;
 pub mod error;
