@@ -584,14 +584,19 @@ fn emit_all_pairs(w: &mut Writer) {
 /// run starts among the sorted boids); `grid_reorder` rewrites `boids` in the sorted order, so
 /// that a bucket's boids are contiguous and the boids of one workgroup search the same cells
 /// (their reads coalesce and hit the cache). The bucket hash keeps x-neighbouring cells in
-/// consecutive buckets, so `flock_grid` (one thread per sorted boid, writing to the boid's slot)
-/// visits the 27 cells around a boid as 9 runs of 3 buckets, one thread a run (nine threads a
-/// boid: more loads in flight than one thread walking ~400 candidates in turn), keeping only
-/// entries whose own cell is one of the three (other cells may share a bucket); the boid's
-/// first thread adds the nine partial sums in run order. Within a run the boids stay in slot
-/// order (the sort is stable), so every boid sums its neighbours in the same order every run.
+/// consecutive buckets. Below [`GRID_SPLIT_SEARCH_BELOW`] boids `flock_grid` (writing to each
+/// boid's slot) visits the 27 cells around a boid as 9 runs of 3 buckets, one thread a run
+/// (nine threads a boid: more loads in flight than one thread walking ~400 candidates in
+/// turn); the boid's first thread adds the nine partial sums in run order. From there on the
+/// cells are half as big and one thread a boid walks the rows of them the radius reaches
+/// ([`emit_search`]). Either way only entries whose own cell is a visited one count (other
+/// cells may share a bucket), and within a run the boids stay in slot order (the sort is
+/// stable), so every boid sums its neighbours in the same order every run.
 fn emit_grid(w: &mut Writer, cell: f64, split_search: bool) {
-    w.line(format!("const INV_CELL: f32 = {};", f32_lit(1.0 / cell)));
+    // The one-thread search clips its rows to the radius sphere, which pays on finer cells:
+    // half the given cell (still >= radius / 2, so 2 half cells reach the radius).
+    let hashed = if split_search { cell } else { cell / 2.0 };
+    w.line(format!("const INV_CELL: f32 = {};", f32_lit(1.0 / hashed)));
     w.block("fn cell_of(x: vec3<f32>) -> vec3<i32>", |w| {
         w.comment(
             "Clamped so that far-away boids share the outermost cells instead of overflowing.",
@@ -670,7 +675,15 @@ fn emit_run_walk(w: &mut Writer) {
     });
 }
 
-/// `flock_grid`, one thread a boid walking its 9 runs.
+/// `flock_grid`, one thread a boid, on half cells (`cell_of` uses cell / 2 here, see
+/// [`emit_grid`]): the boid walks the 25 rows of half cells within 2 of its own in y and z,
+/// skips those whose nearest point is farther than the radius, and in each of the others reads
+/// only the x cells the radius sphere's chord reaches. A neighbour is closer than the radius in
+/// (y, z), so its row is walked, and in x, so its cell lies in the chord's range: the same
+/// neighbours as all pairs. The reach is widened by 1e-5 of itself plus 1e-6 of the boid's
+/// coordinate in cells, far more than the f32 rounding of the cell arithmetic, so that a pair at
+/// the radius is never lost to it. Against the 27 whole cells this reads about half as many
+/// candidates (docs/performance.md).
 fn emit_search(w: &mut Writer) {
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
@@ -682,9 +695,40 @@ fn emit_search(w: &mut Writer) {
             emit_accumulators(w);
             w.block("if (me.w > 0.0)", |w| {
                 w.line("let home = cell_of(me.xyz);");
-                w.block("for (var n = 0; n < 9; n++)", |w| {
-                    w.line("let c = home + vec3<i32>(0, n % 3 - 1, n / 3 - 1);");
-                    emit_run_walk(w);
+                w.comment("The boid in cells, and where it sits in its own cell (0 to 1 a side).");
+                w.line("let pc = me.xyz * INV_CELL;");
+                w.line("let f = clamp(pc - vec3<f32>(home), vec3<f32>(0.0), vec3<f32>(1.0));");
+                w.line("let reach = FLOCK_RADIUS * INV_CELL * 1.00001 + 1e-6 * abs(pc.x);");
+                w.block("for (var n = 0; n < 25; n++)", |w| {
+                    w.line("let dy = n % 5 - 2;");
+                    w.line("let dz = n / 5 - 2;");
+                    w.comment("Distance (cells) from the boid to the row's nearest y and z.");
+                    w.line("let gy = select(select(0.0, f.y + f32(-dy - 1), dy < 0), f32(dy) - f.y, dy > 0);");
+                    w.line("let gz = select(select(0.0, f.z + f32(-dz - 1), dz < 0), f32(dz) - f.z, dz > 0);");
+                    w.line("let left = reach * reach - gy * gy - gz * gz;");
+                    w.block("if (left < 0.0)", |w| w.line("continue;"));
+                    w.line("let chord = sqrt(left);");
+                    w.line("let lo = i32(clamp(floor(pc.x - chord), -1.0e6, 1.0e6));");
+                    w.line("let hi = i32(clamp(floor(pc.x + chord), -1.0e6, 1.0e6));");
+                    w.line("let c = vec3<i32>(lo, home.y + dy, home.z + dz);");
+                    w.line("let b0 = bucket_of(c);");
+                    w.line("let len = u32(hi - lo + 1);");
+                    w.comment("Buckets b0 .. b0 + len - 1 (mod buckets): one run, or two where they wrap.");
+                    w.line("let wrapped = max(b0 + len, GRID_BUCKETS) - GRID_BUCKETS;");
+                    w.block("for (var r = 0u; r < 2u; r++)", |w| {
+                        w.line("let first = atomicLoad(&cell_start[select(0u, b0, r == 0u)]);");
+                        w.line("let last = atomicLoad(&cell_start[select(wrapped, min(b0 + len, GRID_BUCKETS), r == 0u)]);");
+                        w.block("for (var m = first; m < last; m++)", |w| {
+                            w.line("let ox = boids[2u * m];");
+                            w.line("let co = cell_of(ox.xyz);");
+                            w.comment("Another cell hashed to these buckets: not a neighbour from here.");
+                            w.block("if (co.y != c.y || co.z != c.z || co.x < lo || co.x > hi)", |w| {
+                                w.line("continue;");
+                            });
+                            w.line("let ov = boids[2u * m + 1u];");
+                            emit_accumulate(w, "m == k", "ox", "ov");
+                        });
+                    });
                 });
             });
             emit_store_out(w, "grid_vals[k]");
