@@ -4,12 +4,12 @@
 #   sort.jsonl    the radix sort alone on 1M and 16M random pairs (`--sort-keys`: every ranking
 #                 the adapter runs, 32- and 16-bit keys, per-stage times) and with the depth keys
 #                 of fountain.ron (`sort: true`)
-#   torch.txt     torch.sort (CUB's radix sort) of the same counts of f32 keys, stable, with
-#                 indices, on the same GPU (skipped where python3 has no CUDA torch)
+#   torch.txt     torch.sort (CUB's radix sort) of the same counts of f32 keys and of int16
+#                 keys, stable, with indices, on the same GPU (skipped where python3 has no CUDA torch)
 #   flock.jsonl   effects/boids.ron at 16k to 1M boids: the step, and each stage of the flocking
 #                 pass
-#   update.jsonl  fountain.ron's update at 1M to 100M against the copy kernel, and a copy that
-#                 moves one particle's bytes a thread
+#   update.jsonl  fountain.ron's update, and update-floor.ron's (an update that does almost
+#                 nothing), at 1M to 100M against the copy kernel and an in-place copy
 set -euo pipefail
 plume=$1
 out=$2
@@ -19,8 +19,7 @@ for n in 1048576 16777216; do
 done >"$out/sort.jsonl"
 python3 - >"$out/torch.txt" 2>&1 <<'PY' || true
 import torch
-for n in [1 << 20, 16 << 20]:
-    keys = torch.rand(n, device="cuda", dtype=torch.float32)
+def median_ms(keys):
     for _ in range(3):
         torch.sort(keys, stable=True)
     torch.cuda.synchronize()
@@ -33,11 +32,19 @@ for n in [1 << 20, 16 << 20]:
         torch.cuda.synchronize()
         times.append(start.elapsed_time(end))
     times.sort()
-    print(f"torch.sort n={n} f32 keys + int64 indices, stable: {times[4]:.3f} ms, {n / times[4] / 1e6:.2f} G keys/s")
+    return times[4]
+for n in [1 << 20, 16 << 20]:
+    t = median_ms(torch.rand(n, device="cuda", dtype=torch.float32))
+    print(f"torch.sort n={n} f32 keys + int64 indices, stable: {t:.3f} ms, {n / t / 1e6:.2f} G keys/s")
+    # 16-bit keys, as the depth sort's: CUB sorts only their 16 bits.
+    t = median_ms(torch.randint(-32768, 32767, (n,), device="cuda", dtype=torch.int16))
+    print(f"torch.sort n={n} int16 keys + int64 indices, stable: {t:.3f} ms, {n / t / 1e6:.2f} G keys/s")
 PY
 for n in 16384 65536 262144 1048576; do
     "$plume" bench effects/boids.ron --particles "$n" --steps 50 --json
 done >"$out/flock.jsonl"
-for n in 1000000 10000000 16777216 100000000; do
-    "$plume" bench effects/fountain.ron --particles "$n" --steps 50 --json
+for e in docs/measurements/update-floor.ron effects/fountain.ron; do
+    for n in 1000000 10000000 16777216 100000000; do
+        "$plume" bench "$e" --particles "$n" --steps 50 --json
+    done
 done >"$out/update.jsonl"

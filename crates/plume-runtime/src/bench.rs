@@ -19,18 +19,20 @@ const COPY_WGSL: &str = r#"
 @group(0) @binding(0) var<storage, read> src: array<vec4<u32>>;
 @group(0) @binding(1) var<storage, read_write> dst: array<vec4<u32>>;
 
-// 16-byte words per thread: 1 for the copy kernel; a particle's words for the copy that
-// moves one particle's bytes per thread, as the update does.
-override PER: u32 = 1u;
-
 @compute @workgroup_size(256)
 fn copy(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let t = gid.x + gid.y * groups.x * 256u;
-    for (var k = 0u; k < PER; k++) {
-        let i = t * PER + k;
-        if (i < arrayLength(&src)) {
-            dst[i] = src[i];
-        }
+    let i = gid.x + gid.y * groups.x * 256u;
+    if (i < arrayLength(&src)) {
+        dst[i] = src[i];
+    }
+}
+
+// The same words read and written back in place, as the update does (one buffer, not two).
+@compute @workgroup_size(256)
+fn copy_in_place(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = gid.x + gid.y * groups.x * 256u;
+    if (i < arrayLength(&src)) {
+        dst[i] = dst[i] + vec4<u32>(1u);
     }
 }
 
@@ -62,9 +64,9 @@ pub struct BenchResult {
     pub seconds_per_step: f64,
     /// Seconds per copy of the same bytes.
     pub copy_seconds: f64,
-    /// Seconds per copy of the same bytes with one particle's bytes a thread (the update's
-    /// access pattern: each thread moves its particle's 16-byte words in turn).
-    pub copy_per_particle_seconds: f64,
+    /// Seconds per in-place copy of the same bytes: each 16-byte word read and written back to
+    /// the same buffer, as the update does (the copy kernel reads one buffer and writes another).
+    pub copy_in_place_seconds: f64,
     /// Seconds of step 0, which spawns all N particles and updates them once.
     pub spawn_step_seconds: f64,
     /// Seconds for depth keys plus the radix sort of every slot, and the same with the bitonic
@@ -389,22 +391,9 @@ pub fn bench(
     sim.run(3, |_| {})?;
     let live = sim.totals()?.alive;
     let update = sim.time_steps(&timer, steps)? / f64::from(steps);
-    let copy = time_copy(
-        gpu,
-        &timer,
-        u64::from(particles) * u64::from(bpp),
-        steps,
-        "copy",
-        1,
-    )? / f64::from(steps);
-    let copy_per_particle = time_copy(
-        gpu,
-        &timer,
-        u64::from(particles) * u64::from(bpp),
-        steps,
-        "copy",
-        bpp.div_ceil(16),
-    )? / f64::from(steps);
+    let bytes = u64::from(particles) * u64::from(bpp);
+    let copy = time_copy(gpu, &timer, bytes, steps, "copy")? / f64::from(steps);
+    let copy_in_place = time_copy(gpu, &timer, bytes, steps, "copy_in_place")? / f64::from(steps);
     let sort = if sim.effect().layout.sorts() {
         // Warm up both, then time them.
         sim.time_sort(&timer, SortAlgorithm::Radix)?;
@@ -469,7 +458,7 @@ pub fn bench(
         bytes_per_particle: bpp,
         seconds_per_step: update,
         copy_seconds: copy,
-        copy_per_particle_seconds: copy_per_particle,
+        copy_in_place_seconds: copy_in_place,
         spawn_step_seconds: spawn_step,
         timing: timer.source(),
         flock,
@@ -482,7 +471,6 @@ pub fn bench(
                     u64::from(particles) * u64::from(bpp),
                     steps,
                     "fill",
-                    1,
                 )? / f64::from(steps),
             ),
             Err(_) => None,
@@ -696,14 +684,13 @@ fn time_stateless(
 }
 
 /// Times `repeats` passes of `entry` (`copy`: read and write `bytes`, rounded up to 16;
-/// `fill`: write them only), split into buffers of at most one binding each, in one pass.
+/// `copy_in_place`: the same, reading and writing one buffer; `fill`: write them only), split into buffers of at most one binding each, in one pass.
 fn time_copy(
     gpu: &Gpu,
     timer: &PassTimer<'_>,
     bytes: u64,
     repeats: u32,
     entry: &str,
-    words_per_thread: u32,
 ) -> Result<f64, RuntimeError> {
     let device = &gpu.device;
     let limit = gpu
@@ -721,10 +708,7 @@ fn time_copy(
         layout: None,
         module: &module,
         entry_point: Some(entry),
-        compilation_options: wgpu::PipelineCompilationOptions {
-            constants: &[("PER", f64::from(words_per_thread))],
-            ..Default::default()
-        },
+        compilation_options: Default::default(),
         cache: None,
     });
     let layout = pipeline.get_bind_group_layout(0);
@@ -756,8 +740,7 @@ fn time_copy(
                 },
             ],
         });
-        let threads = (size / 16).div_ceil(u64::from(words_per_thread));
-        let (x, y) = gpu.grid(threads, 256)?;
+        let (x, y) = gpu.grid(size / 16, 256)?;
         parts.push((group, x, y, src, dst));
     }
     let record = |pass: &mut wgpu::ComputePass<'_>, n: u32| {
