@@ -657,16 +657,27 @@ fn emit_grid(w: &mut Writer, cell: f64, split_search: bool) {
 /// (`me`, `me_v`), adding to the running sums.
 fn emit_run_walk(w: &mut Writer) {
     w.line("let b0 = bucket_of(c - vec3<i32>(1, 0, 0));");
-    w.comment("Buckets b0, b0 + 1, b0 + 2 (mod buckets): one run, or two where they wrap.");
-    w.line("let wrapped = max(b0 + 3u, GRID_BUCKETS) - GRID_BUCKETS;");
+    emit_bucket_run(w, "3u", "abs(co.x - c.x) > 1");
+}
+
+/// The candidates in buckets `b0 .. b0 + len - 1` (mod buckets): one run of sorted boids, or
+/// two where the buckets wrap. A candidate counts only if its own cell is in row `c` and not
+/// `outside` in x (another cell may share the buckets).
+fn emit_bucket_run(w: &mut Writer, len: &str, outside: &str) {
+    w.comment("Buckets b0 .. b0 + len - 1 (mod buckets): one run, or two where they wrap.");
+    w.line(format!(
+        "let wrapped = max(b0 + {len}, GRID_BUCKETS) - GRID_BUCKETS;"
+    ));
     w.block("for (var r = 0u; r < 2u; r++)", |w| {
-        w.line("let lo = atomicLoad(&cell_start[select(0u, b0, r == 0u)]);");
-        w.line("let hi = atomicLoad(&cell_start[select(wrapped, min(b0 + 3u, GRID_BUCKETS), r == 0u)]);");
-        w.block("for (var m = lo; m < hi; m++)", |w| {
+        w.line("let first = atomicLoad(&cell_start[select(0u, b0, r == 0u)]);");
+        w.line(format!(
+            "let last = atomicLoad(&cell_start[select(wrapped, min(b0 + {len}, GRID_BUCKETS), r == 0u)]);"
+        ));
+        w.block("for (var m = first; m < last; m++)", |w| {
             w.line("let ox = boids[2u * m];");
             w.line("let co = cell_of(ox.xyz);");
             w.comment("Another cell hashed to these buckets: not a neighbour from here.");
-            w.block("if (co.y != c.y || co.z != c.z || abs(co.x - c.x) > 1)", |w| {
+            w.block(format!("if (co.y != c.y || co.z != c.z || {outside})"), |w| {
                 w.line("continue;");
             });
             w.line("let ov = boids[2u * m + 1u];");
@@ -713,22 +724,7 @@ fn emit_search(w: &mut Writer) {
                     w.line("let c = vec3<i32>(lo, home.y + dy, home.z + dz);");
                     w.line("let b0 = bucket_of(c);");
                     w.line("let len = u32(hi - lo + 1);");
-                    w.comment("Buckets b0 .. b0 + len - 1 (mod buckets): one run, or two where they wrap.");
-                    w.line("let wrapped = max(b0 + len, GRID_BUCKETS) - GRID_BUCKETS;");
-                    w.block("for (var r = 0u; r < 2u; r++)", |w| {
-                        w.line("let first = atomicLoad(&cell_start[select(0u, b0, r == 0u)]);");
-                        w.line("let last = atomicLoad(&cell_start[select(wrapped, min(b0 + len, GRID_BUCKETS), r == 0u)]);");
-                        w.block("for (var m = first; m < last; m++)", |w| {
-                            w.line("let ox = boids[2u * m];");
-                            w.line("let co = cell_of(ox.xyz);");
-                            w.comment("Another cell hashed to these buckets: not a neighbour from here.");
-                            w.block("if (co.y != c.y || co.z != c.z || co.x < lo || co.x > hi)", |w| {
-                                w.line("continue;");
-                            });
-                            w.line("let ov = boids[2u * m + 1u];");
-                            emit_accumulate(w, "m == k", "ox", "ov");
-                        });
-                    });
+                    emit_bucket_run(w, "len", "co.x < lo || co.x > hi");
                 });
             });
             emit_store_out(w, "grid_vals[k]");
