@@ -40,6 +40,11 @@ fn bench_runs_at_a_tiny_size_and_reports_its_fields() {
     // The fountain sorts (so a frame prepares keys and a sort) and cannot be stateless.
     assert!(d.prepare.is_some_and(|p| p > 0.0), "{d:?}");
     assert_eq!(d.stateless, None);
+    // Round camera-facing sprites: the compute splat draws them too.
+    assert!(
+        d.splat.is_some_and(|(s, entries)| s > 0.0 && entries > 0),
+        "{d:?}"
+    );
 }
 
 #[test]
@@ -55,6 +60,9 @@ fn bench_draws_a_stateless_effect_from_its_closed_form() {
     let d = r.render.expect("draw timed");
     assert!(d.stateless.is_some_and(|s| s > 0.0), "{d:?}");
     assert_eq!(d.prepare, None, "sparks does not sort");
+    // Sparks are streaks along their velocity, which the compute splat does not draw.
+    assert_eq!(d.splat, None);
+    assert!(d.splat_stages.is_empty());
 }
 
 #[test]

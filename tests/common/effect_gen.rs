@@ -408,15 +408,23 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
     let min = usize::from(f != Flavor::Wild);
     let stops = (min..3usize).prop_flat_map(move |n| (0..n).map(stop).collect::<Vec<_>>());
     let sizes = (min..3usize).prop_flat_map(move |n| (0..n).map(size).collect::<Vec<_>>());
+    // Orientation: the default, streaks along the velocity, or a fixed plane.
+    let orient = prop_oneof![
+        Just("Camera".to_string()),
+        (num(f, 0.0, 0.2), num(f, 0.01, 2.0))
+            .prop_map(|(s, m)| format!("Velocity(stretch: {s}, max_length: {m})")),
+        vec3(f, 0.1, 1.0).prop_map(|n| format!("Fixed({n})")),
+    ];
     (
         stops,
         sizes,
         prop::sample::select(vec!["Alpha", "Additive"]),
         vec3(f, 0.0, 1.0),
+        orient,
     )
-        .prop_map(|(c, s, b, bg)| {
+        .prop_map(|(c, s, b, bg, o)| {
             format!(
-                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}),",
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}),",
                 c.join(", "),
                 s.join(", ")
             )

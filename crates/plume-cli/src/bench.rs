@@ -57,8 +57,8 @@ fn draw_json(d: &plume_runtime::bench::DrawTimes) -> serde_json::Value {
         "prepare_ms": d.prepare.map(|s| s * 1e3),
         "compaction_ms": d.compacted.map(|(c, _)| c * 1e3),
         "triangle_ms": d.triangle * 1e3,
-        "splat_ms": d.splat.0 * 1e3,
-        "splat_entries": d.splat.1,
+        "splat_ms": d.splat.map(|s| s.0 * 1e3),
+        "splat_entries": d.splat.map(|s| s.1),
         "splat_stages_ms": d.splat_stages.iter().map(|(n, s)| (n.to_string(), s * 1e3)).collect::<std::collections::BTreeMap<_, _>>(),
         "compacted_ms": d.compacted.map(|(_, s)| s * 1e3),
         "stateless_ms": d.stateless.map(|s| s * 1e3),
@@ -269,17 +269,23 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "    one triangle      {:.3} ms (a triangle per sprite instead of a quad)",
                 d.triangle * 1e3
             );
-            println!(
-                "    compute splat     {:.3} ms for the same image in compute shaders ({} tile entries sorted)",
-                d.splat.0 * 1e3,
-                d.splat.1
-            );
-            let stages: Vec<String> = d
-                .splat_stages
-                .iter()
-                .map(|(name, s)| format!("{name} {:.3}", s * 1e3))
-                .collect();
-            println!("      stages (ms)     {}", stages.join(", "));
+            match d.splat {
+                Some((seconds, entries)) => {
+                    println!(
+                        "    compute splat     {:.3} ms for the same image in compute shaders ({entries} tile entries sorted)",
+                        seconds * 1e3,
+                    );
+                    let stages: Vec<String> = d
+                        .splat_stages
+                        .iter()
+                        .map(|(name, s)| format!("{name} {:.3}", s * 1e3))
+                        .collect();
+                    println!("      stages (ms)     {}", stages.join(", "));
+                }
+                None => println!(
+                    "    compute splat     - (it draws round camera-facing sprites only; this effect's are oriented)"
+                ),
+            }
             if let Some(p) = d.prepare {
                 println!(
                     "    prepare           {:.3} ms before the draw: depth keys and the radix sort",

@@ -68,6 +68,8 @@ pub struct RenderIr {
     pub blend: crate::schema::Blend,
     /// Background colour.
     pub background: DVec3,
+    /// Which way sprites face.
+    pub orient: crate::orient::OrientIr,
 }
 
 /// Piecewise-linear interpolation through stops (t increasing), constant beyond the ends.
@@ -469,6 +471,9 @@ impl fmt::Display for EffectIr {
             self.render.color,
             self.render.size
         )?;
+        if self.render.orient != crate::orient::OrientIr::Camera {
+            writeln!(f, "  orient {:?}", self.render.orient)?;
+        }
         writeln!(
             f,
             "  sort {}  camera eye {} target {} fov_y {}",

@@ -45,6 +45,7 @@ pub mod lifetime;
 pub mod locate;
 pub mod lower;
 pub mod naga_check;
+pub mod orient;
 pub mod passes;
 pub mod path;
 pub mod reference;

@@ -80,6 +80,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 size: r.size.iter().map(|s| (s.0, s.1)).collect(),
                 blend: r.blend,
                 background: r.background.d(),
+                orient: crate::orient::OrientIr::lower(&r.orient),
             }
         },
         camera: CameraIr {

@@ -144,6 +144,9 @@ pub struct Render {
     /// Background colour `(r, g, b)`.
     #[serde(default = "default_background")]
     pub background: Vec3,
+    /// Which way each sprite faces: the camera, stretched along the velocity, or a fixed plane.
+    #[serde(default)]
+    pub orient: Orient,
 }
 
 impl Default for Render {
@@ -153,8 +156,29 @@ impl Default for Render {
             size: default_sizes(),
             blend: Blend::Alpha,
             background: default_background(),
+            orient: Orient::Camera,
         }
     }
+}
+
+/// How a sprite's quad is oriented (`render.orient`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Orient {
+    /// Parallel to the image plane: a round dot from every side.
+    #[default]
+    Camera,
+    /// Facing the camera, its long axis along the velocity's component in the image plane:
+    /// length = max(size, min(size + stretch · speed, max_length)), width = size.
+    Velocity {
+        /// Metres of length per m/s of image-plane speed (seconds), >= 0.
+        stretch: f64,
+        /// Longest a sprite gets (m), > 0.
+        max_length: f64,
+    },
+    /// Lying in the world plane through the particle perpendicular to this normal (a ripple
+    /// on the ground: `Fixed((0.0, 1.0, 0.0))`).
+    Fixed(Vec3),
 }
 
 /// One particle source.

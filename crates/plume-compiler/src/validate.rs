@@ -5,7 +5,7 @@
 use crate::check::Checker;
 use crate::forces::force_path;
 use crate::path::ValuePath;
-use crate::schema::{Effect, Emitter, KillVolume, Shape, Velocity};
+use crate::schema::{Effect, Emitter, KillVolume, Orient, Shape, Velocity};
 
 /// The most emitters an effect may have: each takes 16 bytes of the per-step uniform, and
 /// 16 + 16 x 1023 bytes is the 16 KiB every WebGPU adapter must allow in a uniform binding.
@@ -313,5 +313,18 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
     .enumerate()
     {
         c.within(&bg.component(j, name), x, 0.0, 1.0);
+    }
+    let orient = path.field("orient");
+    match r.orient {
+        Orient::Camera => {}
+        Orient::Velocity {
+            stretch,
+            max_length,
+        } => {
+            let v = orient.variant("Velocity");
+            c.non_negative(&v.field("stretch"), stretch);
+            c.positive(&v.field("max_length"), max_length);
+        }
+        Orient::Fixed(normal) => c.direction(&orient.variant("Fixed").inner(), normal),
     }
 }

@@ -124,8 +124,8 @@ pub struct DrawTimes {
     pub triangle: f64,
     /// The compute splat of the same image ([`crate::splat`]): its one compute pass (the frame
     /// preparation, a sort when the effect sorts, excluded as for the draw), and the (tile,
-    /// sprite) entries it sorted.
-    pub splat: (f64, u64),
+    /// sprite) entries it sorted; None for sprites it cannot draw (oriented ones).
+    pub splat: Option<(f64, u64)>,
     /// The splat's stages timed one by one (each the median of [`DRAW_REPEATS`]).
     pub splat_stages: Vec<(&'static str, f64)>,
     /// The same N particles of a stateless copy of the effect, drawn from the closed form in
@@ -546,7 +546,9 @@ fn time_draws(
             },
         )?,
     )?;
-    let (splat, splat_stages) = {
+    let (splat, splat_stages) = if !crate::splat::Splat::draws(&sim.effect().ir) {
+        (None, Vec::new())
+    } else {
         let mut splat = crate::splat::Splat::new(sim, width, height)?;
         // Draws once, growing the entry list to what the frame needs, then times the pass.
         splat.render(sim, &camera)?;
@@ -573,7 +575,7 @@ fn time_draws(
             .zip(per_stage.iter_mut())
             .map(|(stage, times)| (stage, median(times)))
             .collect();
-        ((median(&mut times), splat.entries()), stages)
+        (Some((median(&mut times), splat.entries())), stages)
     };
     let prepare = match sim.effect().ir.sort {
         true => {

@@ -4,8 +4,8 @@
 //! a fixed sprite shader. This was Plume's only drawing path before the GPU draw; it now serves
 //! the tests (as the f64 reference serves the simulation), never `plume render`.
 
-use glam::DVec3;
-use plume_compiler::ir::{CameraIr, RenderIr};
+use glam::{DVec3, Mat4};
+use plume_compiler::ir::EffectIr;
 use plume_compiler::reference::ParticleRecord;
 use plume_compiler::schema::Blend;
 
@@ -15,26 +15,31 @@ use crate::error::RuntimeError;
 use crate::gpu::Gpu;
 use crate::offscreen::{Offscreen, FORMAT};
 
-/// One sprite: centre (m), diameter (m), colour (RGBA in [0, 1]).
+/// One sprite: centre (m), the quad's half axes (m), colour (RGBA in [0, 1]). Corner
+/// (cx, cy) in [-1, 1]² lies at centre + cx · half_x + cy · half_y.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Sprite {
     /// Centre in world space.
     pub center: [f32; 3],
-    /// Diameter in metres.
-    pub size: f32,
+    /// Half of the quad's first side, in world space.
+    pub half_x: [f32; 3],
+    /// Half of the quad's second side, in world space.
+    pub half_y: [f32; 3],
     /// Colour and opacity.
     pub color: [f32; 4],
 }
 
 /// Builds sprites from particle records: colour and size at each particle's life fraction
-/// (age / lifetime; 0 for particles that never die); back to front from `camera` when `sort`.
+/// (age / lifetime; 0 for particles that never die), the quad oriented as `render.orient` says
+/// for a camera with view matrix `view`; back to front from the effect's camera when `sort`.
 /// Non-finite particles are skipped.
-pub fn sprites(
-    records: &[ParticleRecord],
-    render: &RenderIr,
-    camera: &CameraIr,
-    sort: bool,
-) -> Vec<Sprite> {
+pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool) -> Vec<Sprite> {
+    let (render, camera) = (&ir.render, &ir.camera);
+    // The camera's right and up in world space: rows 0 and 1 of the view rotation.
+    let view = view.as_dmat4();
+    let camera_right = DVec3::new(view.x_axis.x, view.y_axis.x, view.z_axis.x);
+    let camera_up = DVec3::new(view.x_axis.y, view.y_axis.y, view.z_axis.y);
+    let f32s = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
     let mut keyed: Vec<(f64, Sprite)> = records
         .iter()
         .filter(|r| r.position.is_finite())
@@ -45,12 +50,17 @@ pub fn sprites(
             };
             let c = render.color_at(t);
             let p = r.position;
+            let (half_x, half_y) =
+                render
+                    .orient
+                    .half_axes(render.size_at(t), r.velocity, camera_right, camera_up);
             let depth = (p - camera.eye).dot((camera.target - camera.eye).normalize_or_zero());
             (
                 depth,
                 Sprite {
-                    center: [p.x as f32, p.y as f32, p.z as f32],
-                    size: render.size_at(t) as f32,
+                    center: f32s(p),
+                    half_x: f32s(half_x),
+                    half_y: f32s(half_y),
                     color: [c[0] as f32, c[1] as f32, c[2] as f32, c[3] as f32],
                 },
             )
@@ -62,6 +72,9 @@ pub fn sprites(
     }
     keyed.into_iter().map(|(_, s)| s).collect()
 }
+
+/// Bytes of one sprite instance: three vec3 and a vec4 of f32.
+const SPRITE_BYTES: u64 = 52;
 
 /// A render target and the reference sprite pipeline for one image size and blend mode.
 pub struct ReferenceRenderer {
@@ -129,9 +142,9 @@ impl ReferenceRenderer {
                 entry_point: Some("vs"),
                 compilation_options: Default::default(),
                 buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: 32,
+                    array_stride: SPRITE_BYTES,
                     step_mode: wgpu::VertexStepMode::Instance,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x4],
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x4],
                 })],
             },
             primitive: wgpu::PrimitiveState::default(),
@@ -171,9 +184,10 @@ impl ReferenceRenderer {
             }
         }
         self.gpu.queue.write_buffer(&self.camera, 0, &cam);
-        let mut instances = Vec::with_capacity(sprites.len() * 32);
+        let mut instances = Vec::with_capacity(sprites.len() * SPRITE_BYTES as usize);
         for s in sprites {
-            for x in s.center.iter().chain([s.size].iter()).chain(s.color.iter()) {
+            let fields = [&s.center[..], &s.half_x[..], &s.half_y[..], &s.color[..]];
+            for x in fields.into_iter().flatten() {
                 instances.extend_from_slice(&x.to_le_bytes());
             }
         }

@@ -1,4 +1,4 @@
-// Camera-facing soft round sprites, one instance per particle, six vertices per quad.
+// Soft round sprites on quads the CPU placed, one instance per particle, six vertices per quad.
 // Not generated: this shader is the same for every effect (the effect kernels are generated).
 
 struct Camera {
@@ -18,19 +18,19 @@ struct Out {
 fn vs(
     @builtin(vertex_index) vi: u32,
     @location(0) center: vec3<f32>,
-    @location(1) size: f32,
-    @location(2) color: vec4<f32>,
+    @location(1) half_x: vec3<f32>,
+    @location(2) half_y: vec3<f32>,
+    @location(3) color: vec4<f32>,
 ) -> Out {
     var corners = array<vec2<f32>, 6>(
         vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
         vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
     );
     let uv = corners[vi % 6u];
-    // Offset in view space so the quad always faces the camera.
-    let center_view = camera.view * vec4<f32>(center, 1.0);
-    let corner_view = center_view + vec4<f32>(uv * (0.5 * size), 0.0, 0.0);
+    // The corner in world space, from the half axes the CPU computed in f64.
+    let corner = center + uv.x * half_x + uv.y * half_y;
     var out: Out;
-    out.clip = camera.proj * corner_view;
+    out.clip = camera.proj * camera.view * vec4<f32>(corner, 1.0);
     out.uv = uv;
     out.color = color;
     return out;

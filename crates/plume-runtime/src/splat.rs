@@ -12,6 +12,7 @@
 //! count and grown when a frame needs more (the frame is then drawn again). The embedding API
 //! always draws with the raster pipeline, into the host's render pass.
 
+use plume_compiler::orient::OrientIr;
 use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_TILE};
 
 use crate::camera::Camera;
@@ -86,7 +87,13 @@ const TILE_BINDINGS: [(u32, bool, bool); 10] = [
 ];
 
 impl Splat {
-    /// A splat of `instance` into `width` x `height` images.
+    /// Whether the splat can draw `ir`'s sprites: round and camera-facing (`orient: Camera`).
+    pub fn draws(ir: &plume_compiler::EffectIr) -> bool {
+        ir.render.orient == OrientIr::Camera
+    }
+
+    /// A splat of `instance` into `width` x `height` images; an error for sprites it cannot
+    /// draw (see [`Self::draws`]).
     pub fn new(instance: &EffectInstance, width: u32, height: u32) -> Result<Self, RuntimeError> {
         let gpu = instance.gpu().clone();
         let effect = instance.effect();
@@ -95,6 +102,14 @@ impl Splat {
         if width == 0 || height == 0 {
             return Err(RuntimeError::Output(format!(
                 "image size {width}x{height} must be at least 1x1"
+            )));
+        }
+        if !Self::draws(&effect.ir) {
+            return Err(RuntimeError::Output(format!(
+                "the compute splat draws round camera-facing sprites only; this effect's sprites \
+                 are oriented (render.orient: {}): draw it with the raster pipeline \
+                 (plume render --draw raster)",
+                effect.ir.render.orient.name()
             )));
         }
         let count = effect.ir.capacity;

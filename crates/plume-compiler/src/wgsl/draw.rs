@@ -6,14 +6,15 @@
 //! slot list: the depth order when `sort: true`) from the particle buffers, or, for a
 //! stateless effect, computes it from the closed form with the same `evaluate_at` the compute
 //! module uses, so a stateless effect is drawn with no state and no compute pass. It evaluates
-//! the render section's colour and size over life, and expands a camera-facing quad (a
-//! 4-vertex triangle strip). Free slots, dead stateless slots, non-finite positions and fully
+//! the render section's colour and size over life, and expands a quad (a 4-vertex triangle
+//! strip): camera-facing, or oriented as `render.orient` says ([`crate::orient`]). Free slots, dead stateless slots, non-finite positions and fully
 //! transparent or zero-size sprites become a degenerate quad outside the clip volume, which
 //! rasterises nothing. The fragment shader draws the soft round sprite.
 
 use crate::integrators::emit_advance;
 use crate::ir::EffectIr;
 use crate::lifetime::LifetimeSteps;
+use crate::orient::OrientIr;
 use crate::passes::layout::{self, Attribute, Layout};
 use crate::rng;
 use crate::wgsl::writer::{f32_lit, u32_lit, Writer};
@@ -186,9 +187,9 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.blank();
     emit_gradients(&mut w, ir);
     w.blank();
-    emit_sprite_at(&mut w, ir, shape, life);
+    emit_sprite_at(&mut w, ir, layout, shape, life);
     w.blank();
-    emit_vertex(&mut w, shape);
+    emit_vertex(&mut w, shape, ir.render.orient != OrientIr::Camera);
     w.blank();
     emit_fragment(&mut w);
     if shape.splat {
@@ -329,16 +330,22 @@ fn emit_gradient(w: &mut Writer, name: &str, ty: &str, stops: &[(f64, String)], 
 /// `sprite_at(instance)`: instance → slot (through `order` when there is one) → particle →
 /// whether it shows, its centre in view space, its colour and size. Shared by the vertex shader
 /// and the splat's `project`, so both draw the same sprites.
-fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
+fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawShape, life: bool) {
     let stateless = ir.stateless.is_some();
     w.comment(
         "A particle as a sprite: whether it shows, its centre in view space, colour and size.",
     );
+    let oriented = ir.render.orient != OrientIr::Camera;
     w.block("struct SpriteAt", |w| {
         w.line("visible: bool,");
         w.line("center: vec4<f32>,");
         w.line("color: vec4<f32>,");
         w.line("size: f32,");
+        if oriented {
+            w.comment("The quad's half axes in view space (render.orient).");
+            w.line("half_x: vec3<f32>,");
+            w.line("half_y: vec3<f32>,");
+        }
     });
     w.blank();
     w.comment("Integer test for Inf/NaN: WGSL may assume floats are finite.");
@@ -384,6 +391,22 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) 
             w.line("return s;")
         });
         w.line("s.center = draw.view * vec4<f32>(x, 1.0);");
+        if oriented {
+            if ir.render.orient.needs_velocity() {
+                if stateless {
+                    w.line("let vel = e.now.v;");
+                } else if layout.has(Attribute::Velocity) {
+                    w.line("let vel = vec3<f32>(p.vx, p.vy, p.vz);");
+                } else {
+                    w.comment("Verlet stores the displacement over one substep h: v = d / h.");
+                    w.line(format!(
+                        "let vel = vec3<f32>(p.dx, p.dy, p.dz) * {};",
+                        f32_lit(1.0 / ir.h())
+                    ));
+                }
+            }
+            ir.render.orient.emit_half_axes(w);
+        }
         w.line("s.visible = true;");
         w.line("return s;");
     });
@@ -391,7 +414,7 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) 
 
 /// The vertex shader `vs`: one instance per slot (or list entry), a quad (4-vertex strip) or a
 /// triangle around the disc per sprite.
-fn emit_vertex(w: &mut Writer, shape: &DrawShape) {
+fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool) {
     w.block("struct Sprite", |w| {
         w.line("@builtin(position) clip: vec4<f32>,");
         w.line("@location(0) uv: vec2<f32>,");
@@ -421,7 +444,11 @@ fn emit_vertex(w: &mut Writer, shape: &DrawShape) {
                     ));
                 }
             }
-            w.line("out.clip = draw.proj * (s.center + vec4<f32>(corner * (0.5 * s.size), 0.0, 0.0));");
+            if oriented {
+                w.line("out.clip = draw.proj * (s.center + vec4<f32>(corner.x * s.half_x + corner.y * s.half_y, 0.0));");
+            } else {
+                w.line("out.clip = draw.proj * (s.center + vec4<f32>(corner * (0.5 * s.size), 0.0, 0.0));");
+            }
             w.line("out.uv = corner;");
             w.line("out.color = s.color;");
             w.line("return out;");

@@ -1,0 +1,215 @@
+//! How sprites look (`render.orient`), drawn on the GPU (llvmpipe in CI): a velocity-aligned
+//! sprite is elongated along its projected velocity by the documented length, a sprite in a
+//! fixed plane is foreshortened as that plane is, and both match the CPU-fed reference drawing
+//! (f64 half axes) for stateful (Euler and Verlet) and stateless effects alike.
+
+mod common;
+
+use common::*;
+use plume::compiler::schema::State;
+use plume::runtime::offscreen::Offscreen;
+use plume::runtime::reference_draw::{sprites, ReferenceRenderer};
+use plume::runtime::splat::Splat;
+use plume::runtime::{Camera, EffectInstance, Gpu};
+use plume::{compile_str, CompileOptions, Integrator};
+
+/// Image side (square, so a pixel is the same size in x and y).
+const SIDE: u32 = 400;
+
+/// One white opaque particle at the origin moving at `velocity`, seen from `eye`, with the
+/// given orientation; compiled in `state` with `integrator`, run one step on `gpu` (the
+/// caller holds the shared GPU's lock for its whole test).
+fn probe(
+    gpu: &Gpu,
+    velocity: (f64, f64, f64),
+    eye: (f64, f64, f64),
+    orient: &str,
+    state: State,
+    integrator: Integrator,
+) -> EffectInstance {
+    let src = format!(
+        r#"Effect(
+    name: "orient-probe",
+    capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant({velocity:?}))],
+    camera: Camera(eye: {eye:?}, target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 0.3)],
+                   background: (0.0, 0.0, 0.0), orient: {orient}),
+)"#
+    );
+    let options = CompileOptions {
+        state: Some(state),
+        integrator: Some(integrator),
+        ..Default::default()
+    };
+    let effect =
+        compile_str(&src, &options).unwrap_or_else(|e| panic!("{}", e.render("probe.ron", &src)));
+    let mut sim = EffectInstance::new(gpu, effect).unwrap();
+    sim.run(1, |_| {}).unwrap();
+    sim
+}
+
+/// The GPU draw of `sim` from its camera, and the CPU-fed reference drawing of the same
+/// particles (half axes in f64).
+fn draw_both(sim: &EffectInstance) -> (Vec<u8>, Vec<u8>) {
+    let target = Offscreen::new(sim.gpu(), SIDE, SIDE).unwrap();
+    let camera = target.effect_camera(sim);
+    let gpu_img = target
+        .render(sim, &sim.renderer(&target.target()).unwrap(), &camera)
+        .unwrap();
+    let ir = &sim.effect().ir;
+    let reference =
+        ReferenceRenderer::new(sim.gpu(), SIDE, SIDE, ir.render.blend, ir.render.background)
+            .unwrap();
+    let cpu_img = reference
+        .draw(
+            &sprites(&sim.records().unwrap(), ir, camera.view, false),
+            &Camera::from_effect(&ir.camera, 1.0),
+        )
+        .unwrap();
+    (gpu_img, cpu_img)
+}
+
+/// The red channel's second moments: (long axis / short axis, the long axis's angle in degrees
+/// in the image, x right and y up, in (-90, 90]). The sprite's alpha is a function of its
+/// corner coordinates' radius alone, so an affine map of the disc scales the moments' axes
+/// exactly as it scales the quad's: their ratio is the quad's side ratio.
+fn shape(img: &[u8]) -> (f64, f64) {
+    let (mut w, mut mx, mut my) = (0.0, 0.0, 0.0);
+    let mut pixels = Vec::new();
+    for (k, p) in img.chunks(4).enumerate() {
+        let v = f64::from(p[0]);
+        if v > 0.0 {
+            let (x, y) = ((k as u32 % SIDE) as f64, -((k as u32 / SIDE) as f64));
+            pixels.push((x, y, v));
+            w += v;
+            mx += v * x;
+            my += v * y;
+        }
+    }
+    assert!(w > 0.0, "nothing drawn");
+    let (mx, my) = (mx / w, my / w);
+    let (mut a, mut b, mut c) = (0.0, 0.0, 0.0);
+    for (x, y, v) in pixels {
+        a += v * (x - mx) * (x - mx);
+        b += v * (x - mx) * (y - my);
+        c += v * (y - my) * (y - my);
+    }
+    let half_gap = (((a - c) / 2.0).powi(2) + b * b).sqrt();
+    let (big, small) = ((a + c) / 2.0 + half_gap, (a + c) / 2.0 - half_gap);
+    let angle = 0.5 * (2.0 * b).atan2(a - c);
+    ((big / small).sqrt(), angle.to_degrees())
+}
+
+fn assert_angle(got: f64, want: f64, what: &str) {
+    // Axes, not directions: 180 degrees apart is the same axis.
+    let d = (got - want).rem_euclid(180.0);
+    let d = d.min(180.0 - d);
+    assert!(d < 0.5, "{what}: long axis at {got:.2} deg, want {want:.2}");
+}
+
+fn assert_matches_reference(gpu_img: &[u8], cpu_img: &[u8], what: &str) {
+    // The same quad, its corners computed in f32 (view space) on the GPU and in f64 (world
+    // space, rounded to f32) on the CPU: they differ by far less than a pixel, which moves a
+    // rim pixel's coverage by a step or two.
+    let (mut sum, mut max) = (0u64, 0u8);
+    for (a, b) in gpu_img.iter().zip(cpu_img) {
+        let d = a.abs_diff(*b);
+        sum += u64::from(d);
+        max = max.max(d);
+    }
+    let mean = sum as f64 / gpu_img.len() as f64;
+    assert!(
+        mean < 0.01 && max <= 4,
+        "{what}: GPU and CPU-fed draws differ: mean {mean}, max {max}"
+    );
+}
+
+#[test]
+fn a_velocity_aligned_sprite_is_elongated_along_its_projected_velocity() {
+    // Seen along -z, the image plane is the xy plane. 5 m/s in it with stretch 0.1 s: length
+    // 0.3 + 0.5 = 0.8 m, width 0.3 m: a 8/3 ratio, along (3, 4) in the image (53.13 deg).
+    // Moving straight at the camera it has no image-plane speed: a round sprite.
+    let gpu = gpu();
+    let orient = "Velocity(stretch: 0.1, max_length: 2.0)";
+    let cases = [
+        ((3.0, 4.0, 0.0), 8.0 / 3.0, Some(53.130_102)),
+        ((-4.0, 0.0, -3.0), (0.3 + 0.4) / 0.3, Some(0.0)),
+        ((0.0, 60.0, 0.0), 2.0 / 0.3, Some(90.0)),
+        ((0.0, 0.0, 5.0), 1.0, None),
+    ];
+    for (state, integrator) in [
+        (State::Stateful, Integrator::Euler),
+        (State::Stateful, Integrator::Verlet),
+        (State::Stateless, Integrator::Exact),
+    ] {
+        for (v, ratio, angle) in cases {
+            let what = format!("{state:?} {integrator:?} v {v:?}");
+            let sim = probe(&gpu, v, (0.0, 0.0, 10.0), orient, state, integrator);
+            assert_eq!(sim.is_stateless(), state == State::Stateless);
+            let (gpu_img, cpu_img) = draw_both(&sim);
+            let (got_ratio, got_angle) = shape(&gpu_img);
+            eprintln!("{what}: ratio {got_ratio:.4} want {ratio:.4}, angle {got_angle:.3}");
+            assert!(
+                (got_ratio / ratio - 1.0).abs() < 0.01,
+                "{what}: long / short {got_ratio:.3}, want {ratio:.3}"
+            );
+            if let Some(angle) = angle {
+                assert_angle(got_angle, angle, &what);
+            }
+            assert_matches_reference(&gpu_img, &cpu_img, &what);
+        }
+    }
+}
+
+#[test]
+fn a_sprite_in_a_fixed_plane_is_foreshortened_as_the_plane_is() {
+    // A disc lying on the ground (normal +Y) seen from 36.87 deg above the horizon (eye at
+    // (0, 6, 8)): its depth extent shrinks by sin 36.87 = 0.6, its width does not, so it is an
+    // ellipse with axes 1 : 0.6, the long one horizontal. (Perspective changes this by under
+    // 1% for a 0.3 m disc 10 m away.) Facing the camera instead (normal along the view axis),
+    // it is round.
+    let gpu = gpu();
+    for (normal, ratio) in [("(0.0, 1.0, 0.0)", 1.0 / 0.6), ("(0.0, 0.6, 0.8)", 1.0)] {
+        let orient = format!("Fixed({normal})");
+        let sim = probe(
+            &gpu,
+            (0.0, 0.0, 0.0),
+            (0.0, 6.0, 8.0),
+            &orient,
+            State::Stateful,
+            Integrator::Euler,
+        );
+        let (gpu_img, cpu_img) = draw_both(&sim);
+        let (got_ratio, got_angle) = shape(&gpu_img);
+        assert!(
+            (got_ratio / ratio - 1.0).abs() < 0.01,
+            "{orient}: long / short {got_ratio:.3}, want {ratio:.3}"
+        );
+        if ratio > 1.0 {
+            assert_angle(got_angle, 0.0, &orient);
+        }
+        assert_matches_reference(&gpu_img, &cpu_img, &orient);
+    }
+}
+
+#[test]
+fn the_compute_splat_refuses_oriented_sprites_and_says_what_to_use() {
+    let gpu = gpu();
+    let sim = probe(
+        &gpu,
+        (1.0, 0.0, 0.0),
+        (0.0, 0.0, 10.0),
+        "Velocity(stretch: 0.1, max_length: 2.0)",
+        State::Stateful,
+        Integrator::Euler,
+    );
+    let Err(e) = Splat::new(&sim, 64, 64) else {
+        panic!("the splat drew an oriented sprite");
+    };
+    let message = e.to_string();
+    assert!(
+        message.contains("render.orient: Velocity") && message.contains("--draw raster"),
+        "{message}"
+    );
+}
