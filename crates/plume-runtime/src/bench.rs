@@ -705,14 +705,7 @@ fn time_copy(
         label: Some("copy"),
         source: wgpu::ShaderSource::Wgsl(COPY_WGSL.into()),
     });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("copy"),
-        layout: None,
-        module: &module,
-        entry_point: Some(entry),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let pipeline = gpu.compute_pipeline(&module, entry, None);
     let layout = pipeline.get_bind_group_layout(0);
     let mut parts = Vec::new();
     let mut left = bytes.next_multiple_of(16).max(16);

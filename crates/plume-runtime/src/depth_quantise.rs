@@ -36,16 +36,7 @@ impl DepthQuantise {
             label: Some("depth quantise"),
             source: wgpu::ShaderSource::Wgsl(include_str!("depth_quantise.wgsl").into()),
         });
-        let pipeline = |entry| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let pipeline = |entry| gpu.compute_pipeline(&module, entry, None);
         let (reset, reduce, quantise) = (
             pipeline("range_reset"),
             pipeline("range_reduce"),

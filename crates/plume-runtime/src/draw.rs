@@ -352,14 +352,7 @@ fn alive_instances(
         label: Some("draw args"),
         source: wgpu::ShaderSource::Wgsl(DRAW_ARGS_WGSL.into()),
     });
-    let kernel = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("draw_args"),
-        layout: None,
-        module: &module,
-        entry_point: Some("draw_args"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let kernel = gpu.compute_pipeline(&module, "draw_args", None);
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("draw args"),
         layout: &kernel.get_bind_group_layout(0),

@@ -228,6 +228,25 @@ impl Gpu {
         })
     }
 
+    /// The compute pipeline of `module`'s entry point `entry` (also its label), on `layout`, or
+    /// on the layout derived from the bindings the entry point uses when `None`.
+    pub fn compute_pipeline(
+        &self,
+        module: &wgpu::ShaderModule,
+        entry: &str,
+        layout: Option<&wgpu::PipelineLayout>,
+    ) -> wgpu::ComputePipeline {
+        self.device
+            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(entry),
+                layout,
+                module,
+                entry_point: Some(entry),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+    }
+
     /// Whether GPU timestamp queries are available.
     pub fn has_timestamps(&self) -> bool {
         self.device

@@ -110,16 +110,7 @@ impl LiveList {
             label: Some("live list"),
             source: wgpu::ShaderSource::Wgsl(LIVE_LIST_WGSL.into()),
         });
-        let pipeline = |entry| {
-            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: None,
-                module: &module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
-        };
+        let pipeline = |entry| gpu.compute_pipeline(&module, entry, None);
         let (flags, scatter) = (pipeline("flags"), pipeline("scatter"));
         let id_word = effect
             .layout

@@ -451,15 +451,7 @@ impl Resources {
     /// A compute pipeline of the module's entry point `entry`, on the shared layout.
     pub fn pipeline(&self, entry: &str) -> wgpu::ComputePipeline {
         self.gpu
-            .device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout: Some(&self.pipeline_layout),
-                module: &self.module,
-                entry_point: Some(entry),
-                compilation_options: Default::default(),
-                cache: None,
-            })
+            .compute_pipeline(&self.module, entry, Some(&self.pipeline_layout))
     }
 
     /// A compute pipeline of `entry` with a layout of only the bindings it uses, and a bind
@@ -471,14 +463,7 @@ impl Resources {
         entry: &str,
     ) -> (wgpu::ComputePipeline, wgpu::BindGroup) {
         let device = &self.gpu.device;
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: None,
-            module: &self.module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let pipeline = self.gpu.compute_pipeline(&self.module, entry, None);
         let sort = self.sort.as_ref();
         let used = ["frame", "sort_keys", "sort_vals", "depth_axis"];
         let entries: Vec<wgpu::BindGroupEntry<'_>> = effect

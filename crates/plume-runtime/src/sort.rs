@@ -145,17 +145,8 @@ impl GpuSorter {
                 ),
             ),
         };
-        let pipeline = |module: &wgpu::ShaderModule, entry: &str| {
-            gpu.device
-                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                    label: Some(entry),
-                    layout: None,
-                    module,
-                    entry_point: Some(entry),
-                    compilation_options: Default::default(),
-                    cache: None,
-                })
-        };
+        let pipeline =
+            |module: &wgpu::ShaderModule, entry: &str| gpu.compute_pipeline(module, entry, None);
         Self {
             gpu: gpu.clone(),
             ranking,

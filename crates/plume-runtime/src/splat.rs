@@ -163,14 +163,7 @@ impl Splat {
             (b_offsets, tiles.offsets.clone()),
             (b_boxes, tiles.boxes.clone()),
         ]);
-        let project = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("project"),
-            layout: None,
-            module: &module,
-            entry_point: Some("project"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
+        let project = gpu.compute_pipeline(&module, "project", None);
         // `project` uses every binding of its module, so its derived layout holds them all.
         let project_group = bind(&gpu, &project.get_bind_group_layout(0), &entries);
         let bg = effect.ir.render.background;
@@ -434,16 +427,7 @@ fn tile_kernels(
         bind_group_layouts: &[Some(layout)],
         immediate_size: 0,
     });
-    let kernel = |entry| {
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(entry),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some(entry),
-            compilation_options: Default::default(),
-            cache: None,
-        })
-    };
+    let kernel = |entry| gpu.compute_pipeline(&module, entry, Some(&pipeline_layout));
     let kernels = [
         kernel("clear"),
         kernel("emit"),
