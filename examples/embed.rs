@@ -246,7 +246,12 @@ impl Host {
     ) -> Result<Self, Box<dyn Error>> {
         let source = std::fs::read_to_string(path)
             .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-        let compiled = plume::compile_str(&source, &Default::default())
+        // A texture the effect names is relative to the effect file.
+        let options = plume::CompileOptions {
+            base_dir: path.parent().map(Path::to_path_buf),
+            ..Default::default()
+        };
+        let compiled = plume::compile_str(&source, &options)
             .map_err(|e| e.render(&path.display().to_string(), &source))?;
         let ir = &compiled.ir;
         let (eye, target) = (ir.camera.eye.as_vec3(), ir.camera.target.as_vec3());

@@ -75,7 +75,10 @@ fn bench_compares_hidden_and_compacted_dead_slots_at_low_occupancy() {
         occupancy: 0.1,
         ..BenchOptions::new(4000, 2)
     };
-    let r = bench(&gpu, &parse(&src).unwrap(), &options).unwrap();
+    let mut snow = parse(&src).unwrap();
+    // Its snowflake texture is named relative to the effect file.
+    snow.base_dir = Some(concat!(env!("CARGO_MANIFEST_DIR"), "/effects").into());
+    let r = bench(&gpu, &snow, &options).unwrap();
     assert_eq!(r.particles, 400, "a tenth of the slots alive");
     let d = r.render.expect("draw timed");
     let (compact, draw) = d.compacted.expect("snow is stateful and unsorted");

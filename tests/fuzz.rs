@@ -114,7 +114,9 @@ const RON_BYTES: &[u8] = b"()[],:.-+e0123456789 \n\"SomeNoneEmitterPoint_xyz";
 fn edited_example_files_never_panic_the_compiler() {
     let examples: Vec<String> = std::fs::read_dir("effects")
         .unwrap()
-        .map(|e| std::fs::read_to_string(e.unwrap().path()).unwrap())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "ron"))
+        .map(|p| std::fs::read_to_string(p).unwrap())
         .collect();
     let n = examples.len();
     let edit = (any::<usize>(), any::<u8>(), prop::sample::select(RON_BYTES));

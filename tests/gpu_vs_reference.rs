@@ -108,7 +108,7 @@ fn every_example_matches_the_reference_after_50_and_100_steps() {
             continue;
         }
         let name = path.file_name().unwrap().to_string_lossy().to_string();
-        let effect = compile(&std::fs::read_to_string(&path).unwrap());
+        let effect = compile_file(&path);
         let gpu = gpu();
         let mut gsim = EffectInstance::new(&gpu, effect.clone()).expect("GPU sim");
         let mut csim = ReferenceSim::new(&effect.ir);

@@ -58,9 +58,7 @@ fn draw_both(sim: &EffectInstance) -> (Vec<u8>, Vec<u8>) {
         .render(sim, &sim.renderer(&target.target()).unwrap(), &camera)
         .unwrap();
     let ir = &sim.effect().ir;
-    let reference =
-        ReferenceRenderer::new(sim.gpu(), SIDE, SIDE, ir.render.blend, ir.render.background)
-            .unwrap();
+    let reference = ReferenceRenderer::new(sim.gpu(), SIDE, SIDE, &ir.render).unwrap();
     let cpu_img = reference
         .draw(
             &sprites(&sim.records().unwrap(), ir, camera.view, false),

@@ -306,6 +306,7 @@ fn overrides_replace_file_values() {
             integrator: Some(Integrator::Rk4),
             sort: Some(true),
             state: None,
+            base_dir: None,
         },
     )
     .unwrap();

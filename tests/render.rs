@@ -39,7 +39,7 @@ fn draw_reference(sim: &EffectInstance, w: u32, h: u32) -> Vec<u8> {
             .flatten()
             .collect()
     };
-    let r = ReferenceRenderer::new(sim.gpu(), w, h, ir.render.blend, ir.render.background).unwrap();
+    let r = ReferenceRenderer::new(sim.gpu(), w, h, &ir.render).unwrap();
     let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
     r.draw(&sprites(&records, ir, camera.view, false), &camera)
         .unwrap()
@@ -186,8 +186,7 @@ fn the_gpu_draw_matches_the_cpu_fed_drawing_for_every_example() {
         mean < 0.01 && max <= 4 && over * 2000 < len
     };
     for path in names {
-        let src = std::fs::read_to_string(&path).unwrap();
-        let sim = advance_to_show(simulate(&gpu, compile(&src), 0));
+        let sim = advance_to_show(simulate(&gpu, compile_file(&path), 0));
         let (w, h) = (240, 135);
         let gpu_img = draw_gpu(&sim, w, h);
         let cpu_img = draw_reference(&sim, w, h);
@@ -204,8 +203,7 @@ fn the_gpu_draw_matches_the_cpu_fed_drawing_for_every_example() {
         if sim.effect().ir.sort {
             // The comparison sees the order: the same particles drawn in id order fall outside.
             let ir = &sim.effect().ir;
-            let r = ReferenceRenderer::new(sim.gpu(), w, h, ir.render.blend, ir.render.background)
-                .unwrap();
+            let r = ReferenceRenderer::new(sim.gpu(), w, h, &ir.render).unwrap();
             let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
             let ids = sprites(&sim.records().unwrap(), ir, camera.view, false);
             let wrong = differences(&gpu_img, &r.draw(&ids, &camera).unwrap(), 2);
@@ -282,10 +280,9 @@ fn the_draw_is_the_same_when_the_state_is_split_across_buffers() {
     // The fountain (sorted: every buffer is reachable from the depth order) and snow
     // (unsorted), with their state in one buffer and split into three.
     for name in ["fountain", "snow"] {
-        let src =
-            std::fs::read_to_string(format!("{}/effects/{name}.ron", env!("CARGO_MANIFEST_DIR")))
-                .unwrap();
-        let e = compile(&src);
+        let e = compile_file(
+            &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("effects/{name}.ron")),
+        );
         let split = u64::from(e.ir.capacity).div_ceil(3);
         let whole = simulate(&gpu, e.clone(), 40);
         let mut parts = EffectInstance::with_chunk_slots(&gpu, e, Some(split)).unwrap();
@@ -425,8 +422,7 @@ fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
     let gpu = gpu();
     let mut compared = 0;
     for path in examples() {
-        let src = std::fs::read_to_string(&path).unwrap();
-        let sim = advance_to_show(simulate(&gpu, compile(&src), 0));
+        let sim = advance_to_show(simulate(&gpu, compile_file(&path), 0));
         let name = path.file_name().unwrap().to_string_lossy();
         if !Splat::draws(&sim.effect().ir) {
             eprintln!("{name}: oriented sprites, not for the splat");

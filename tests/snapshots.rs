@@ -7,7 +7,11 @@ use plume::{compile_str, CompileError, CompileOptions};
 fn every_example_compiles_without_warnings_and_matches_its_snapshots() {
     insta::glob!("../effects", "*.ron", |path| {
         let source = std::fs::read_to_string(path).unwrap();
-        let compiled = compile_str(&source, &CompileOptions::default())
+        let options = CompileOptions {
+            base_dir: path.parent().map(|p| p.to_path_buf()),
+            ..Default::default()
+        };
+        let compiled = compile_str(&source, &options)
             .unwrap_or_else(|e| panic!("{}", e.render(&path.display().to_string(), &source)));
         assert!(
             compiled.warnings.is_empty(),

@@ -415,16 +415,27 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
             .prop_map(|(s, m)| format!("Velocity(stretch: {s}, max_length: {m})")),
         vec3(f, 0.1, 1.0).prop_map(|n| format!("Fixed({n})")),
     ];
+    // Texture: none, one image, or the bird atlas (4 x 1 frames, relative to the tests' working
+    // directory, the repository) over life or at a rate, with or without a random start.
+    let texture = prop_oneof![
+        Just("None".to_string()),
+        Just(r#"Some(Texture(file: "effects/textures/snowflake.png"))"#.to_string()),
+        Just(r#"Some(Texture(file: "effects/textures/bird.png", frames: (4, 1)))"#.to_string()),
+        (num(f, 0.5, 60.0), any::<bool>()).prop_map(|(fps, random)| format!(
+            r#"Some(Texture(file: "effects/textures/bird.png", frames: (4, 1), play: Rate({fps}), random_start: {random}))"#
+        )),
+    ];
     (
         stops,
         sizes,
         prop::sample::select(vec!["Alpha", "Additive"]),
         vec3(f, 0.0, 1.0),
         orient,
+        texture,
     )
-        .prop_map(|(c, s, b, bg, o)| {
+        .prop_map(|(c, s, b, bg, o, t)| {
             format!(
-                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}),",
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}),",
                 c.join(", "),
                 s.join(", ")
             )

@@ -30,6 +30,19 @@ pub fn compile(source: &str) -> CompiledEffect {
         .unwrap_or_else(|e| panic!("{}", e.render("test.ron", source)))
 }
 
+/// Reads and compiles the effect file at `path` (its texture resolved from its directory), or
+/// fails the test with the rendered diagnostics.
+#[allow(dead_code)]
+pub fn compile_file(path: &std::path::Path) -> CompiledEffect {
+    let source = std::fs::read_to_string(path).unwrap();
+    let options = CompileOptions {
+        base_dir: path.parent().map(|p| p.to_path_buf()),
+        ..Default::default()
+    };
+    compile_str(&source, &options)
+        .unwrap_or_else(|e| panic!("{}", e.render(&path.display().to_string(), &source)))
+}
+
 /// Runs `steps` on the GPU; returns totals and live particles.
 pub fn run_gpu(effect: &CompiledEffect, steps: u64) -> (Totals, Vec<ParticleRecord>) {
     let gpu = gpu();

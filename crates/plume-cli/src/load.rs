@@ -1,7 +1,7 @@
 //! The steps every command starts with: read the file, compile or check it, print its
 //! diagnostics, open a GPU. Each returns `Err(ExitCode::FAILURE)` after printing why.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use plume_compiler::{compile_effect, compile_str, parse, CompileOptions, CompiledEffect, Effect};
@@ -27,13 +27,26 @@ pub fn read(file: &Path) -> Result<Source, ExitCode> {
     }
 }
 
+/// The directory files named in `file` (a texture) are relative to: the file's own.
+pub fn base_dir(file: &Path) -> Option<PathBuf> {
+    file.parent().map(Path::to_path_buf)
+}
+
+/// `options` for compiling `file`: its files resolved from its directory.
+pub fn options_for(file: &Path, options: &CompileOptions) -> CompileOptions {
+    CompileOptions {
+        base_dir: base_dir(file),
+        ..options.clone()
+    }
+}
+
 /// Reads and compiles `file` with `options`; prints warnings.
 pub fn compiled(
     file: &Path,
     options: &CompileOptions,
 ) -> Result<(Source, CompiledEffect), ExitCode> {
     let src = read(file)?;
-    match compile_str(&src.text, options) {
+    match compile_str(&src.text, &options_for(file, options)) {
         Ok(c) => {
             if !c.warnings.is_empty() {
                 eprintln!("{}", c.warnings.render(&src.name, &src.text));
@@ -51,13 +64,14 @@ pub fn compiled(
 /// for commands that derive their own variants of the effect.
 pub fn checked(file: &Path) -> Result<(Source, Effect), ExitCode> {
     let src = read(file)?;
-    let effect = match parse(&src.text) {
+    let mut effect = match parse(&src.text) {
         Ok(e) => e,
         Err(d) => {
             eprintln!("{}", d.render(&src.name, &src.text));
             return Err(ExitCode::FAILURE);
         }
     };
+    effect.base_dir = base_dir(file);
     if let Err(e) = compile_effect(&effect, &src.text) {
         eprintln!("{}", e.render(&src.name, &src.text));
         return Err(ExitCode::FAILURE);

@@ -104,6 +104,7 @@ impl Overrides {
             substeps: self.substeps,
             sort: None,
             state: self.state,
+            base_dir: None,
         }
     }
 }
@@ -155,7 +156,10 @@ fn check(files: &[PathBuf]) -> ExitCode {
             failed += 1;
             continue;
         };
-        match compile_str(&source, &CompileOptions::default()) {
+        match compile_str(
+            &source,
+            &load::options_for(file, &CompileOptions::default()),
+        ) {
             Ok(compiled) => {
                 warnings += compiled.warnings.items.len();
                 if !compiled.warnings.is_empty() {

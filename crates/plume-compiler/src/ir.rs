@@ -70,6 +70,8 @@ pub struct RenderIr {
     pub background: DVec3,
     /// Which way sprites face.
     pub orient: crate::orient::OrientIr,
+    /// The sprite texture, loaded; None draws the soft round dot.
+    pub texture: Option<crate::texture::TextureIr>,
 }
 
 /// Piecewise-linear interpolation through stops (t increasing), constant beyond the ends.
@@ -473,6 +475,9 @@ impl fmt::Display for EffectIr {
         )?;
         if self.render.orient != crate::orient::OrientIr::Camera {
             writeln!(f, "  orient {:?}", self.render.orient)?;
+        }
+        if let Some(t) = &self.render.texture {
+            writeln!(f, "  texture {t:?}")?;
         }
         writeln!(
             f,

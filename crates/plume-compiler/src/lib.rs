@@ -52,6 +52,7 @@ pub mod reference;
 pub mod rng;
 pub mod schedule;
 pub mod schema;
+pub mod texture;
 pub mod validate;
 pub mod wgsl;
 
@@ -77,6 +78,9 @@ pub struct CompileOptions {
     pub sort: Option<bool>,
     /// Replaces the file's `state`.
     pub state: Option<schema::State>,
+    /// The directory the effect's files (`render.texture.file`) are relative to: the effect
+    /// file's directory. None: the current directory.
+    pub base_dir: Option<std::path::PathBuf>,
 }
 
 /// A compiled effect: the IR after the passes, its layout, the WGSL and any warnings.
@@ -161,6 +165,7 @@ pub fn compile_str(source: &str, options: &CompileOptions) -> Result<CompiledEff
     if let Some(s) = options.state {
         effect.state = s;
     }
+    effect.base_dir.clone_from(&options.base_dir);
     compile_effect(&effect, source)
 }
 
@@ -189,6 +194,20 @@ pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, C
         return Err(CompileError::Invalid(located(checker.errors)));
     }
     let mut ir = lower::lower(effect);
+    if let Some(spec) = &effect.render.texture {
+        let texture =
+            texture::TextureIr::load(spec, effect.base_dir.as_deref()).map_err(|message| {
+                let path = path::ValuePath::root()
+                    .field("render")
+                    .field("texture")
+                    .field("file");
+                CompileError::Invalid(located(vec![(
+                    Diagnostic::error(path.display, message),
+                    path.lookup,
+                )]))
+            })?;
+        ir.render.texture = Some(texture);
+    }
     let names: Vec<&'static str> = effect.forces.iter().map(|f| f.name()).collect();
     let (layout, warnings) =
         passes::run(&mut ir, &names).map_err(|c| CompileError::Invalid(located(c.errors)))?;

@@ -81,6 +81,8 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 blend: r.blend,
                 background: r.background.d(),
                 orient: crate::orient::OrientIr::lower(&r.orient),
+                // Loaded by `compile_effect`, which can report a file it cannot read.
+                texture: None,
             }
         },
         camera: CameraIr {

@@ -41,6 +41,8 @@ pub mod stream {
     pub const LIFETIME: u32 = 6;
     /// Three draws for a fallback direction (radial velocity from the exact centre).
     pub const FALLBACK_DIRECTION: u32 = 7;
+    /// One draw for a flipbook's first frame (`render.texture.random_start`).
+    pub const FLIPBOOK: u32 = 10;
     /// `rand(k)` in custom expressions draws from stream CUSTOM + k (k <= 255).
     pub const CUSTOM: u32 = 64;
 }

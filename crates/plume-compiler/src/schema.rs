@@ -89,6 +89,10 @@ pub struct Effect {
     /// How particles look when rendered (an extension of v1; defaults when absent).
     #[serde(default)]
     pub render: Render,
+    /// The directory files the effect names (`render.texture.file`) are resolved against: the
+    /// effect file's directory, set by whoever read the file; the current directory when None.
+    #[serde(skip)]
+    pub base_dir: Option<std::path::PathBuf>,
 }
 
 /// An RGBA colour written `(r, g, b, a)`, each in [0, 1].
@@ -147,6 +151,9 @@ pub struct Render {
     /// Which way each sprite faces: the camera, stretched along the velocity, or a fixed plane.
     #[serde(default)]
     pub orient: Orient,
+    /// A sprite texture (optionally a flipbook atlas) instead of the soft round dot.
+    #[serde(default)]
+    pub texture: Option<Texture>,
 }
 
 impl Default for Render {
@@ -157,8 +164,43 @@ impl Default for Render {
             blend: Blend::Alpha,
             background: default_background(),
             orient: Orient::Camera,
+            texture: None,
         }
     }
+}
+
+/// A sprite texture (`render.texture`): a PNG whose texels multiply the sprite's colour, or an
+/// atlas of flipbook frames played over each particle's life or at a fixed rate.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Texture {
+    /// The PNG file, relative to the effect file's directory.
+    pub file: String,
+    /// The atlas grid `(columns, rows)`: frames read left to right, top to bottom.
+    #[serde(default = "one_frame")]
+    pub frames: (u32, u32),
+    /// How the frames play.
+    #[serde(default)]
+    pub play: Play,
+    /// With `Rate`: each particle starts the loop at a frame drawn from its id, so particles
+    /// born together do not play in step (a flock's wing beats).
+    #[serde(default)]
+    pub random_start: bool,
+}
+
+fn one_frame() -> (u32, u32) {
+    (1, 1)
+}
+
+/// How a flipbook's frames play (`render.texture.play`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+pub enum Play {
+    /// Once over each particle's life: frame k of n from life fraction k/n (frame 0 for a
+    /// particle that never dies).
+    #[default]
+    OverLife,
+    /// At this many frames per second of the particle's age, looping.
+    Rate(f64),
 }
 
 /// How a sprite's quad is oriented (`render.orient`).

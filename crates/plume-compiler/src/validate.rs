@@ -327,4 +327,32 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
         }
         Orient::Fixed(normal) => c.direction(&orient.variant("Fixed").inner(), normal),
     }
+    if let Some(t) = &r.texture {
+        let texture = path.field("texture");
+        if t.file.trim().is_empty() {
+            c.error(
+                &texture.field("file"),
+                "names no file; give a PNG's path relative to the effect file",
+            );
+        }
+        let frames = texture.field("frames");
+        for (i, (name, n)) in [("columns", t.frames.0), ("rows", t.frames.1)]
+            .into_iter()
+            .enumerate()
+        {
+            if n == 0 {
+                c.error(&frames.component(i, name), "must be at least 1");
+            }
+        }
+        match t.play {
+            crate::schema::Play::Rate(fps) => {
+                c.positive(&texture.field("play").variant("Rate").inner(), fps)
+            }
+            crate::schema::Play::OverLife if t.random_start => c.error(
+                &texture.field("random_start"),
+                "applies to frames played at a rate (play: Rate(fps)); a flipbook played over life starts at frame 0",
+            ),
+            crate::schema::Play::OverLife => {}
+        }
+    }
 }

@@ -17,6 +17,7 @@
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use plume_compiler::schema::Blend;
+use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
 use plume_compiler::wgsl::draw::{DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
 use plume_compiler::CompiledEffect;
 
@@ -25,6 +26,7 @@ use crate::error::RuntimeError;
 use crate::gpu::Gpu;
 use crate::live_list::LiveList;
 use crate::resources::{staging, Resources, STORAGE};
+use crate::sprite_texture::SpriteTexture;
 
 /// The depth test against a host's depth buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -234,8 +236,32 @@ impl EffectRenderer {
             mapped_at_creation: false,
         });
         entries.push((0, view.clone()));
-        let entries: Vec<(u32, &wgpu::Buffer)> = entries.iter().map(|(b, buf)| (*b, buf)).collect();
-        let group = gpu.bind_buffers("draw", &pipeline.get_bind_group_layout(0), &entries);
+        let texture = match &effect.ir.render.texture {
+            Some(t) => Some(SpriteTexture::new(gpu, t)?),
+            None => None,
+        };
+        let mut bindings: Vec<wgpu::BindGroupEntry<'_>> = entries
+            .iter()
+            .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: buffer.as_entire_binding(),
+            })
+            .collect();
+        if let Some(t) = &texture {
+            bindings.push(wgpu::BindGroupEntry {
+                binding: TEXTURE_BINDING,
+                resource: wgpu::BindingResource::TextureView(&t.view),
+            });
+            bindings.push(wgpu::BindGroupEntry {
+                binding: SAMPLER_BINDING,
+                resource: wgpu::BindingResource::Sampler(&t.sampler),
+            });
+        }
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("draw"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &bindings,
+        });
         let instances = if let Some(live) = live {
             Instances::Compacted(Box::new(live))
         } else if stateless {

@@ -41,6 +41,7 @@ pub mod resources;
 pub mod sort;
 pub mod sort_bench;
 pub mod splat;
+pub mod sprite_texture;
 pub mod steps;
 pub mod timer;
 

@@ -5,15 +5,15 @@
 //! the tests (as the f64 reference serves the simulation), never `plume render`.
 
 use glam::{DVec3, Mat4};
-use plume_compiler::ir::EffectIr;
+use plume_compiler::ir::{EffectIr, RenderIr};
 use plume_compiler::reference::ParticleRecord;
-use plume_compiler::schema::Blend;
 
 use crate::camera::Camera;
 use crate::draw::blend_state;
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
 use crate::offscreen::{Offscreen, FORMAT};
+use crate::sprite_texture::SpriteTexture;
 
 /// One sprite: centre (m), the quad's half axes (m), colour (RGBA in [0, 1]). Corner
 /// (cx, cy) in [-1, 1]² lies at centre + cx · half_x + cy · half_y.
@@ -27,12 +27,15 @@ pub struct Sprite {
     pub half_y: [f32; 3],
     /// Colour and opacity.
     pub color: [f32; 4],
+    /// The texel rectangle `(x0, y0, width, height)` of the texture frame it shows; all zero
+    /// for the soft round dot of an effect without a texture.
+    pub texels: [f32; 4],
 }
 
 /// Builds sprites from particle records: colour and size at each particle's life fraction
 /// (age / lifetime; 0 for particles that never die), the quad oriented as `render.orient` says
-/// for a camera with view matrix `view`; back to front from the effect's camera when `sort`.
-/// Non-finite particles are skipped.
+/// for a camera with view matrix `view`, the flipbook frame for its age; back to front from the
+/// effect's camera when `sort`. Non-finite particles are skipped.
 pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool) -> Vec<Sprite> {
     let (render, camera) = (&ir.render, &ir.camera);
     // The camera's right and up in world space: rows 0 and 1 of the view rotation.
@@ -54,6 +57,13 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
                 render
                     .orient
                     .half_axes(render.size_at(t), r.velocity, camera_right, camera_up);
+            let texels = render.texture.as_ref().map_or([0.0; 4], |texture| {
+                // Whole steps, as the records' ages and lifetimes are.
+                let steps = |seconds: f64| (seconds / ir.dt).round() as u64;
+                let life = r.lifetime.map_or(0, steps);
+                let frame = texture.frame(r.id, ir.seed_mix, steps(r.age), life, ir.dt);
+                texture.frame_texels(frame).map(|x| x as f32)
+            });
             let depth = (p - camera.eye).dot((camera.target - camera.eye).normalize_or_zero());
             (
                 depth,
@@ -62,6 +72,7 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
                     half_x: f32s(half_x),
                     half_y: f32s(half_y),
                     color: [c[0] as f32, c[1] as f32, c[2] as f32, c[3] as f32],
+                    texels,
                 },
             )
         })
@@ -73,8 +84,8 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
     keyed.into_iter().map(|(_, s)| s).collect()
 }
 
-/// Bytes of one sprite instance: three vec3 and a vec4 of f32.
-const SPRITE_BYTES: u64 = 52;
+/// Bytes of one sprite instance: three vec3 and two vec4 of f32.
+const SPRITE_BYTES: u64 = 68;
 
 /// A render target and the reference sprite pipeline for one image size and blend mode.
 pub struct ReferenceRenderer {
@@ -87,14 +98,15 @@ pub struct ReferenceRenderer {
 }
 
 impl ReferenceRenderer {
-    /// A renderer of `width` x `height` images with the given blending and background.
+    /// A renderer of `width` x `height` images with the blending, background and texture of
+    /// `render`.
     pub fn new(
         gpu: &Gpu,
         width: u32,
         height: u32,
-        blend: Blend,
-        background: DVec3,
+        render: &RenderIr,
     ) -> Result<Self, RuntimeError> {
+        let (blend, background) = (render.blend, render.background);
         let target = Offscreen::new(gpu, width, height)?;
         let device = &gpu.device;
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
@@ -107,26 +119,59 @@ impl ReferenceRenderer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let texture = match &render.texture {
+            Some(t) => SpriteTexture::new(gpu, t)?,
+            // Bound but never sampled: the sprites' texel rectangles are empty.
+            None => SpriteTexture::from_rgba(gpu, 1, 1, &[255; 4])?,
+        };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("camera"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: false,
-                    min_binding_size: wgpu::BufferSize::new(128),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(128),
+                    },
+                    count: None,
                 },
-                count: None,
-            }],
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("camera"),
             layout: &layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: camera.as_entire_binding(),
-            }],
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: camera.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&texture.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&texture.sampler),
+                },
+            ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("sprites"),
@@ -144,7 +189,7 @@ impl ReferenceRenderer {
                 buffers: &[Some(wgpu::VertexBufferLayout {
                     array_stride: SPRITE_BYTES,
                     step_mode: wgpu::VertexStepMode::Instance,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x4],
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x4, 4 => Float32x4],
                 })],
             },
             primitive: wgpu::PrimitiveState::default(),
@@ -186,7 +231,13 @@ impl ReferenceRenderer {
         self.gpu.queue.write_buffer(&self.camera, 0, &cam);
         let mut instances = Vec::with_capacity(sprites.len() * SPRITE_BYTES as usize);
         for s in sprites {
-            let fields = [&s.center[..], &s.half_x[..], &s.half_y[..], &s.color[..]];
+            let fields = [
+                &s.center[..],
+                &s.half_x[..],
+                &s.half_y[..],
+                &s.color[..],
+                &s.texels[..],
+            ];
             for x in fields.into_iter().flatten() {
                 instances.extend_from_slice(&x.to_le_bytes());
             }

@@ -1,5 +1,6 @@
-// Soft round sprites on quads the CPU placed, one instance per particle, six vertices per quad.
-// Not generated: this shader is the same for every effect (the effect kernels are generated).
+// Sprites on quads the CPU placed, one instance per particle, six vertices per quad: soft round
+// dots, or the texel rectangle of the flipbook frame the CPU chose. Not generated: this shader is
+// the same for every effect (the effect kernels are generated).
 
 struct Camera {
     view: mat4x4<f32>,
@@ -7,11 +8,15 @@ struct Camera {
 }
 
 @group(0) @binding(0) var<uniform> camera: Camera;
+// The effect's texture (a 1x1 white one when it has none) and a linear, clamped sampler.
+@group(0) @binding(1) var sprite_texture: texture_2d<f32>;
+@group(0) @binding(2) var sprite_sampler: sampler;
 
 struct Out {
     @builtin(position) clip: vec4<f32>,
     @location(0) uv: vec2<f32>,
     @location(1) color: vec4<f32>,
+    @location(2) @interpolate(flat) texels: vec4<f32>,
 }
 
 @vertex
@@ -21,6 +26,7 @@ fn vs(
     @location(1) half_x: vec3<f32>,
     @location(2) half_y: vec3<f32>,
     @location(3) color: vec4<f32>,
+    @location(4) texels: vec4<f32>,
 ) -> Out {
     var corners = array<vec2<f32>, 6>(
         vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
@@ -33,11 +39,21 @@ fn vs(
     out.clip = camera.proj * camera.view * vec4<f32>(corner, 1.0);
     out.uv = uv;
     out.color = color;
+    out.texels = texels;
     return out;
 }
 
 @fragment
 fn fs(in: Out) -> @location(0) vec4<f32> {
+    // A frame's texel rectangle (x0, y0, width, height); zero width: no texture.
+    if (in.texels.z > 0.0) {
+        // Corner (-1, 1) is the frame's top-left texel corner; sample no nearer the frame's
+        // edge than a texel's centre, so no neighbouring frame blends in.
+        let local = vec2<f32>(in.uv.x + 1.0, 1.0 - in.uv.y) * 0.5 * in.texels.zw;
+        let at = in.texels.xy + clamp(local, vec2<f32>(0.5), in.texels.zw - 0.5);
+        let size = vec2<f32>(textureDimensions(sprite_texture));
+        return in.color * textureSampleLevel(sprite_texture, sprite_sampler, at / size, 0.0);
+    }
     let r2 = dot(in.uv, in.uv);
     if (r2 >= 1.0) {
         discard;

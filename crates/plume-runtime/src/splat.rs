@@ -87,9 +87,10 @@ const TILE_BINDINGS: [(u32, bool, bool); 10] = [
 ];
 
 impl Splat {
-    /// Whether the splat can draw `ir`'s sprites: round and camera-facing (`orient: Camera`).
+    /// Whether the splat can draw `ir`'s sprites: round (no `texture`) and camera-facing
+    /// (`orient: Camera`).
     pub fn draws(ir: &plume_compiler::EffectIr) -> bool {
-        ir.render.orient == OrientIr::Camera
+        ir.render.orient == OrientIr::Camera && ir.render.texture.is_none()
     }
 
     /// A splat of `instance` into `width` x `height` images; an error for sprites it cannot
@@ -105,11 +106,16 @@ impl Splat {
             )));
         }
         if !Self::draws(&effect.ir) {
+            let why = match &effect.ir.render.texture {
+                Some(t) => format!("textured (render.texture: {:?})", t.file),
+                None => format!(
+                    "oriented (render.orient: {})",
+                    effect.ir.render.orient.name()
+                ),
+            };
             return Err(RuntimeError::Output(format!(
                 "the compute splat draws round camera-facing sprites only; this effect's sprites \
-                 are oriented (render.orient: {}): draw it with the raster pipeline \
-                 (plume render --draw raster)",
-                effect.ir.render.orient.name()
+                 are {why}: draw it with the raster pipeline (plume render --draw raster)"
             )));
         }
         let count = effect.ir.capacity;

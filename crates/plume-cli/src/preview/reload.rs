@@ -43,7 +43,7 @@ impl EffectFile {
     pub fn new(path: &Path, options: CompileOptions) -> Self {
         Self {
             path: path.to_path_buf(),
-            options,
+            options: crate::load::options_for(path, &options),
             last_text: None,
             good: None,
         }

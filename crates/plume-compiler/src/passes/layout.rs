@@ -54,7 +54,7 @@ impl Attribute {
             Attribute::DeathStep => "step whose update kills it (0xffffffff: never)",
             Attribute::Id => "global spawn index; 0xffffffff marks a free slot",
             Attribute::SpawnStep => {
-                "spawn step, for a custom force's age or the draw's life fraction"
+                "spawn step, for a custom force's age, the draw's life fraction or a flipbook's frame"
             }
         }
     }
@@ -166,12 +166,19 @@ pub fn shared_lifetime(ir: &EffectIr) -> Option<crate::lifetime::LifetimeSteps> 
 }
 
 /// Whether a stateful particle stores its spawn step (`born`): only when the draw needs a life
-/// fraction and cannot derive the spawn step from `die_at` and the shared lifetime draw.
+/// fraction (gradients, a flipbook played over life) and cannot derive the spawn step from
+/// `die_at` and the shared lifetime draw, or needs every particle's age (a flipbook played at
+/// a rate) and some particles never die.
 pub fn needs_spawn_step(ir: &EffectIr) -> bool {
-    ir.stateless.is_none()
-        && ir.render.varies_over_life()
-        && ir.has_lifetimes()
-        && shared_lifetime(ir).is_none()
+    if ir.stateless.is_some() {
+        return false;
+    }
+    let flipbook = ir.render.texture.as_ref().filter(|t| t.animated());
+    let life = (ir.render.varies_over_life() || flipbook.is_some()) && ir.has_lifetimes();
+    let age = flipbook.is_some_and(|t| t.needs_age_of_immortals());
+    let all_mortal = ir.emitters.iter().all(|e| e.lifetime.is_some());
+    let shared = shared_lifetime(ir).is_some();
+    (life && !shared) || (age && !(all_mortal && shared))
 }
 
 /// Decides the layout for a resolved IR.

@@ -9,7 +9,9 @@
 //! the render section's colour and size over life, and expands a quad (a 4-vertex triangle
 //! strip): camera-facing, or oriented as `render.orient` says ([`crate::orient`]). Free slots, dead stateless slots, non-finite positions and fully
 //! transparent or zero-size sprites become a degenerate quad outside the clip volume, which
-//! rasterises nothing. The fragment shader draws the soft round sprite.
+//! rasterises nothing. The fragment shader draws the soft round sprite, or the texture's
+//! flipbook frame when the effect has one ([`crate::texture`]; the vertex shader picks the
+//! frame from the particle's age).
 
 use crate::integrators::emit_advance;
 use crate::ir::EffectIr;
@@ -108,8 +110,15 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.line("const DEAD: u32 = 0xffffffffu;");
     let life = ir.render.varies_over_life() && ir.has_lifetimes();
     let shared = layout::shared_lifetime(ir);
+    let texture = ir.render.texture.as_ref();
+    let flipbook = texture.filter(|t| t.animated());
     // Random draws: a stateless effect redraws its spawns; a stateful one its lifetimes.
-    let draws = stateless || (life && !layout.has(Attribute::SpawnStep) && shared.is_some());
+    let draws = stateless
+        || flipbook.is_some_and(|t| t.draws_random())
+        || ((life || flipbook.is_some())
+            && ir.has_lifetimes()
+            && !layout.has(Attribute::SpawnStep)
+            && shared.is_some());
     if draws {
         w.line(format!("const SEED_MIX: u32 = {};", u32_lit(ir.seed_mix)));
     }
@@ -163,6 +172,10 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
             ));
         }
     }
+    if let Some(t) = texture {
+        w.blank();
+        t.emit_declarations(&mut w);
+    }
     if shape.splat {
         w.blank();
         emit_splat_declarations(&mut w);
@@ -183,15 +196,28 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
             w.blank();
             emit_life_fraction(&mut w, layout, shared);
         }
+        if flipbook.is_some() {
+            w.blank();
+            emit_age_steps(&mut w, layout, shared);
+        }
+    }
+    if let Some(t) = flipbook {
+        w.blank();
+        t.emit_frame_fn(&mut w, ir.dt);
     }
     w.blank();
     emit_gradients(&mut w, ir);
     w.blank();
     emit_sprite_at(&mut w, ir, layout, shape, life);
     w.blank();
-    emit_vertex(&mut w, shape, ir.render.orient != OrientIr::Camera);
+    emit_vertex(
+        &mut w,
+        shape,
+        ir.render.orient != OrientIr::Camera,
+        texture.is_some(),
+    );
     w.blank();
-    emit_fragment(&mut w);
+    emit_fragment(&mut w, texture);
     if shape.splat {
         w.blank();
         emit_project(&mut w);
@@ -258,6 +284,37 @@ fn emit_life_fraction(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSt
             return;
         }
         w.line("return clamp(f32(lived) / f32(life), 0.0, 1.0);");
+    });
+}
+
+/// `age_steps(p)`: (whole steps lived, whole steps of life; 0 for a particle that never dies),
+/// for choosing a flipbook frame. From the stored spawn step when there is one; otherwise from
+/// `die_at` and the shared lifetime draw (`needs_spawn_step` stores `born` whenever a particle
+/// that never dies needs its age); (0, 0) when no particle ever dies and none needs its age.
+fn emit_age_steps(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSteps>) {
+    let dies = layout.has(Attribute::DeathStep);
+    w.comment("Whole steps lived and whole steps of life (0: never dies), for the flipbook.");
+    w.block("fn age_steps(p: Particle) -> vec2<u32>", |w| {
+        if layout.has(Attribute::SpawnStep) {
+            w.line("let lived = draw.steps - p.born;");
+            if dies {
+                w.block("if (p.die_at != DEAD)", |w| {
+                    w.line("return vec2<u32>(lived, p.die_at - p.born + 1u);");
+                });
+            }
+            w.line("return vec2<u32>(lived, 0u);");
+        } else if let (true, Some(draw)) = (dies, shared) {
+            w.block("if (p.die_at == DEAD)", |w| w.line("return vec2<u32>(0u);"));
+            w.line(format!(
+                "let lu = rand_u32(p.id, {}u);",
+                rng::stream::LIFETIME
+            ));
+            w.line(format!("let life = {};", draw.wgsl()));
+            w.line("let left = p.die_at + 1u - draw.steps;");
+            w.line("return vec2<u32>(life - min(left, life), life);");
+        } else {
+            w.line("return vec2<u32>(0u);");
+        }
     });
 }
 
@@ -341,6 +398,10 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
         w.line("center: vec4<f32>,");
         w.line("color: vec4<f32>,");
         w.line("size: f32,");
+        if ir.render.texture.is_some() {
+            w.comment("The flipbook frame shown.");
+            w.line("frame: u32,");
+        }
         if oriented {
             w.comment("The quad's half axes in view space (render.orient).");
             w.line("half_x: vec3<f32>,");
@@ -384,6 +445,18 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
                 });
             }
         }
+        match ir.render.texture.as_ref().map(|t| t.animated()) {
+            None => {}
+            Some(false) => w.line("s.frame = 0u;"),
+            Some(true) if stateless => {
+                w.line("let life = select(0u, e.now.die_at - e.born + 1u, e.now.die_at != DEAD);");
+                w.line("s.frame = sprite_frame(e.id, e.age, life);");
+            }
+            Some(true) => {
+                w.line("let age = age_steps(p);");
+                w.line("s.frame = sprite_frame(p.id, age.x, age.y);");
+            }
+        }
         w.line("s.color = color_at(f);");
         w.line("s.size = size_at(f) * draw.size_scale;");
         w.comment("Nothing to see: blending a zero alpha or a zero-size quad changes no pixel.");
@@ -414,11 +487,14 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
 
 /// The vertex shader `vs`: one instance per slot (or list entry), a quad (4-vertex strip) or a
 /// triangle around the disc per sprite.
-fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool) {
+fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool, textured: bool) {
     w.block("struct Sprite", |w| {
         w.line("@builtin(position) clip: vec4<f32>,");
         w.line("@location(0) uv: vec2<f32>,");
         w.line("@location(1) color: vec4<f32>,");
+        if textured {
+            w.line("@location(2) @interpolate(flat) frame: u32,");
+        }
     });
     w.blank();
     w.line("@vertex");
@@ -429,6 +505,9 @@ fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool) {
             w.line("out.clip = HIDDEN;");
             w.line("out.uv = vec2<f32>(0.0);");
             w.line("out.color = vec4<f32>(0.0);");
+            if textured {
+                w.line("out.frame = 0u;");
+            }
             w.line("let s = sprite_at(instance);");
             w.block("if (!s.visible)", |w| w.line("return out;"));
             match shape.primitive {
@@ -451,6 +530,9 @@ fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool) {
             }
             w.line("out.uv = corner;");
             w.line("out.color = s.color;");
+            if textured {
+                w.line("out.frame = s.frame;");
+            }
             w.line("return out;");
         },
     );
@@ -531,10 +613,15 @@ fn emit_project(w: &mut Writer) {
     );
 }
 
-/// The fragment shader `fs`: a soft round sprite, alpha a (1 − r²)², nothing at r >= 1.
-fn emit_fragment(w: &mut Writer) {
+/// The fragment shader `fs`: the texture's frame times the colour ([`crate::texture`]), or a
+/// soft round sprite, alpha a (1 − r²)², nothing at r >= 1.
+fn emit_fragment(w: &mut Writer, texture: Option<&crate::texture::TextureIr>) {
     w.line("@fragment");
     w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
+        if let Some(t) = texture {
+            t.emit_fragment_body(w);
+            return;
+        }
         w.line("let r2 = dot(in.uv, in.uv);");
         w.block("if (r2 >= 1.0)", |w| w.line("discard;"));
         w.comment("Soft round falloff: full at the centre, zero at the rim.");

@@ -1,0 +1,169 @@
+#!/usr/bin/env python3
+"""Writes the example effects' sprite textures (effects/textures/*.png), procedurally.
+
+Standard library only, deterministic: `python3 effects/textures/generate.py` rewrites the same
+bytes. Texels are white with the shape in alpha (the effect's colour stops tint them), except
+where a shape wants shading of its own.
+
+- bird.png: 4 frames (4 x 1) of a bird seen from above, head at the top (the direction of
+  flight with `orient: Velocity`), through one wing beat.
+- smoke.png: 16 frames (4 x 4) of a puff of smoke that swells, churns and thins out.
+- snowflake.png: one six-armed flake with side branches.
+"""
+
+import math
+import os
+import struct
+import zlib
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def write_png(path, width, height, pixel):
+    """`pixel(x, y)` -> (r, g, b, a) in [0, 1]; rows top to bottom."""
+    rows = bytearray()
+    for y in range(height):
+        rows.append(0)  # filter: none
+        for x in range(width):
+            rows.extend(max(0, min(255, round(c * 255))) for c in pixel(x, y))
+    chunk = lambda kind, data: (
+        struct.pack(">I", len(data)) + kind + data
+        + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF))
+    header = struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0)
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header)
+                + chunk(b"IDAT", zlib.compress(bytes(rows), 9)) + chunk(b"IEND", b""))
+
+
+def supersampled(inside, x, y, size, n=4):
+    """Fraction of an n x n grid of samples in texel (x, y) for which `inside(u, v)` holds,
+    u, v in [-1, 1] across the frame, v up."""
+    hits = 0
+    for j in range(n):
+        for i in range(n):
+            u = ((x + (i + 0.5) / n) / size) * 2.0 - 1.0
+            v = 1.0 - ((y + (j + 0.5) / n) / size) * 2.0
+            hits += inside(u, v)
+    return hits / (n * n)
+
+
+def bird(phase):
+    """A bird from above at `phase` of its wing beat (0: wings spread level)."""
+    lift = math.sin(2.0 * math.pi * phase)  # > 0: wings raised, seen shorter from above
+    span = 0.92 * (1.0 - 0.45 * abs(lift))
+    sweep = 0.22 * lift  # tips swept back on the up stroke, forward on the down stroke
+
+    def inside(u, v):
+        # Body: a slim ellipse along v; head: a small disc in front; tail: a wedge behind.
+        if (u / 0.11) ** 2 + ((v - 0.05) / 0.5) ** 2 <= 1.0:
+            return True
+        if u * u + (v - 0.55) ** 2 <= 0.1 ** 2:
+            return True
+        if -0.75 <= v <= -0.35 and abs(u) <= 0.08 + 0.35 * (-0.35 - v):
+            return True
+        # Wings: from the shoulders (v = 0.15) out to +-span, thinning towards the tips.
+        a = abs(u)
+        if a <= span:
+            t = a / span
+            lead = 0.2 - sweep * t * t - 0.05 * t  # leading edge
+            chord = 0.32 * (1.0 - t) + 0.05  # wing depth
+            return lead - chord <= v <= lead
+        return False
+
+    return inside
+
+
+def snowflake(u, v):
+    r = math.hypot(u, v)
+    if r > 0.98:
+        return False
+    angle = math.atan2(v, u)
+    # Fold onto one arm along angle 0 (six-fold symmetry, mirrored).
+    sector = math.pi / 3.0
+    a = (angle + sector / 2.0) % sector - sector / 2.0
+    x, y = r * math.cos(a), abs(r * math.sin(a))
+    if r < 0.16:
+        return True  # the hexagonal core, roughly
+    if y <= 0.045 and x <= 0.95:
+        return True  # the arm
+    # Side branches at 60 degrees from the arm, at three distances out.
+    for base, length in ((0.35, 0.28), (0.6, 0.22), (0.8, 0.12)):
+        along = (x - base) * 0.5 + y * (math.sqrt(3.0) / 2.0)
+        across = abs(-(x - base) * (math.sqrt(3.0) / 2.0) + y * 0.5)
+        if 0.0 <= along <= length and across <= 0.035:
+            return True
+    return False
+
+
+def lattice(ix, iy, seed):
+    """A value in [0, 1) per integer lattice point (an integer hash, PCG's output step)."""
+    h = (ix * 374761393 + iy * 668265263 + seed * 2246822519) & 0xFFFFFFFF
+    h = ((h ^ (h >> 13)) * 1274126177) & 0xFFFFFFFF
+    h = ((h >> ((h >> 28) + 4)) ^ h) * 277803737 & 0xFFFFFFFF
+    return ((h >> 22) ^ h) / 4294967296.0
+
+
+def value_noise(x, y, seed):
+    ix, iy = math.floor(x), math.floor(y)
+    fx, fy = x - ix, y - iy
+    sx, sy = fx * fx * (3 - 2 * fx), fy * fy * (3 - 2 * fy)
+    a, b = lattice(ix, iy, seed), lattice(ix + 1, iy, seed)
+    c, d = lattice(ix, iy + 1, seed), lattice(ix + 1, iy + 1, seed)
+    return (a + (b - a) * sx) + ((c + (d - c) * sx) - (a + (b - a) * sx)) * sy
+
+
+def fbm(x, y, seed):
+    total, amplitude, norm = 0.0, 1.0, 0.0
+    for octave in range(4):
+        total += amplitude * value_noise(x, y, seed + octave)
+        norm += amplitude
+        x, y, amplitude = x * 2.03, y * 2.03, amplitude * 0.5
+    return total / norm
+
+
+def smoke(frame, frames):
+    """Frame `frame` of a puff: it swells from 55% to 100% of the frame, churns (the noise
+    drifts and turns) and thins out."""
+    t = frame / (frames - 1)
+    radius = 0.55 + 0.4 * t
+    density = 1.0 - 0.55 * t
+    turn = 0.6 * t
+
+    def texel(u, v):
+        r = math.hypot(u, v) / radius
+        if r >= 1.0:
+            return (1.0, 1.0, 1.0, 0.0)
+        cu = u * math.cos(turn) - v * math.sin(turn)
+        cv = u * math.sin(turn) + v * math.cos(turn)
+        n = fbm(cu * 1.7 + 10.0, cv * 1.7 - 0.8 * t + 10.0, 17)
+        falloff = 1.0 - r * r
+        a = max(0.0, min(1.0, (n - 0.15) * 2.5)) * falloff * density
+        shade = 0.8 + 0.2 * n  # lighter where thicker
+        return (shade, shade, shade, a)
+
+    return texel
+
+
+def main():
+    size = 64
+    # bird.png: 4 frames side by side.
+    beats = [bird(k / 4.0) for k in range(4)]
+    write_png(os.path.join(HERE, "bird.png"), 4 * size, size,
+              lambda x, y: (1.0, 1.0, 1.0,
+                            supersampled(beats[x // size], x % size, y, size)))
+    # smoke.png: 4 x 4 frames, left to right, top to bottom.
+    puffs = [smoke(k, 16) for k in range(16)]
+
+    def smoke_texel(x, y):
+        k = (y // size) * 4 + x // size
+        u = ((x % size + 0.5) / size) * 2.0 - 1.0
+        v = 1.0 - ((y % size + 0.5) / size) * 2.0
+        return puffs[k](u, v)
+
+    write_png(os.path.join(HERE, "smoke.png"), 4 * size, 4 * size, smoke_texel)
+    write_png(os.path.join(HERE, "snowflake.png"), size, size,
+              lambda x, y: (1.0, 1.0, 1.0, supersampled(snowflake, x, y, size)))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,311 @@
+//! Sprite textures and flipbooks (`render.texture`), drawn on the GPU (llvmpipe in CI): a
+//! textured sprite shows its texture's pattern the right way up (and along the velocity when
+//! it is velocity-aligned), a flipbook shows frame k at the documented time (over life and at
+//! a rate, stateful and stateless), each image matches the CPU-fed reference drawing (frame
+//! chosen in f64), and the compute splat refuses textured sprites.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use common::*;
+use plume::compiler::schema::State;
+use plume::runtime::offscreen::Offscreen;
+use plume::runtime::reference_draw::{sprites, ReferenceRenderer};
+use plume::runtime::splat::Splat;
+use plume::runtime::{Camera, EffectInstance, Gpu};
+use plume::{compile_str, CompileOptions};
+
+/// Image side (square).
+const SIDE: u32 = 200;
+
+/// A directory of its own for this test's texture files.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("plume-textures-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Writes a PNG of `columns` x `rows` solid blocks of `block` texels, block k (left to right,
+/// top to bottom) of colour `colours[k]`, opaque.
+fn write_blocks(path: &Path, columns: u32, rows: u32, block: u32, colours: &[[u8; 3]]) {
+    let image = image::RgbaImage::from_fn(columns * block, rows * block, |x, y| {
+        let [r, g, b] = colours[((y / block) * columns + x / block) as usize];
+        image::Rgba([r, g, b, 255])
+    });
+    image.save(path).unwrap();
+}
+
+/// One white opaque particle at the origin moving at `velocity` (with `lifetime`, seconds),
+/// seen from (0, 0, 10), drawn with `render_extra` (texture, orientation) in `state`.
+fn probe(
+    gpu: &Gpu,
+    dir: &Path,
+    velocity: (f64, f64, f64),
+    lifetime: Option<f64>,
+    render_extra: &str,
+    state: State,
+) -> EffectInstance {
+    let lifetime = match lifetime {
+        Some(l) => format!("Some(({l}, {l}))"),
+        None => "None".into(),
+    };
+    let src = format!(
+        r#"Effect(
+    name: "texture-probe",
+    capacity: 1,
+    dt: 0.016666666666666666,
+    emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant({velocity:?}),
+                       lifetime: {lifetime})],
+    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 2.0)],
+                   background: (0.0, 0.0, 0.0), {render_extra}),
+)"#
+    );
+    let options = CompileOptions {
+        state: Some(state),
+        base_dir: Some(dir.to_path_buf()),
+        ..Default::default()
+    };
+    let effect =
+        compile_str(&src, &options).unwrap_or_else(|e| panic!("{}", e.render("probe.ron", &src)));
+    assert_eq!(effect.ir.stateless.is_some(), state == State::Stateless);
+    EffectInstance::new(gpu, effect).unwrap()
+}
+
+/// The GPU draw of `sim` from its camera, and the CPU-fed reference drawing of the same
+/// particles (frame chosen in f64 from the records' ages).
+fn draw_both(sim: &EffectInstance) -> (Vec<u8>, Vec<u8>) {
+    let target = Offscreen::new(sim.gpu(), SIDE, SIDE).unwrap();
+    let camera = target.effect_camera(sim);
+    let gpu_img = target
+        .render(sim, &sim.renderer(&target.target()).unwrap(), &camera)
+        .unwrap();
+    let ir = &sim.effect().ir;
+    let reference = ReferenceRenderer::new(sim.gpu(), SIDE, SIDE, &ir.render).unwrap();
+    let cpu_img = reference
+        .draw(
+            &sprites(&sim.records().unwrap(), ir, camera.view, false),
+            &Camera::from_effect(&ir.camera, 1.0),
+        )
+        .unwrap();
+    (gpu_img, cpu_img)
+}
+
+fn pixel(img: &[u8], x: u32, y: u32) -> [u8; 3] {
+    let k = 4 * (y * SIDE + x) as usize;
+    [img[k], img[k + 1], img[k + 2]]
+}
+
+/// The colour at `(fx, fy)` of the drawn square sprite (fractions of its bounding box, from the
+/// top left), and the box's width and height in pixels.
+fn sample(img: &[u8], points: &[(f64, f64)]) -> (Vec<[u8; 3]>, (u32, u32)) {
+    let (mut x0, mut y0, mut x1, mut y1) = (SIDE, SIDE, 0, 0);
+    for y in 0..SIDE {
+        for x in 0..SIDE {
+            if pixel(img, x, y) != [0, 0, 0] {
+                (x0, y0, x1, y1) = (x0.min(x), y0.min(y), x1.max(x), y1.max(y));
+            }
+        }
+    }
+    assert!(x1 > x0 && y1 > y0, "nothing drawn");
+    let at = |(fx, fy): (f64, f64)| {
+        let x = x0 as f64 + fx * f64::from(x1 - x0);
+        let y = y0 as f64 + fy * f64::from(y1 - y0);
+        pixel(img, x.round() as u32, y.round() as u32)
+    };
+    (
+        points.iter().map(|&p| at(p)).collect(),
+        (x1 - x0 + 1, y1 - y0 + 1),
+    )
+}
+
+fn assert_close(got: [u8; 3], want: [u8; 3], what: &str) {
+    assert!(
+        got.iter().zip(want).all(|(g, w)| g.abs_diff(w) <= 1),
+        "{what}: got {got:?}, want {want:?}"
+    );
+}
+
+fn assert_matches_reference(gpu_img: &[u8], cpu_img: &[u8], what: &str) {
+    // The same quads and the same frames' texels. The corners are computed in f32 (GPU, view
+    // space) and f64 (CPU, world space) and land a tiny fraction of a pixel apart: inside a
+    // sprite the filtered texels then differ by a step or two, but an opaque texture has a hard
+    // rim, and a pixel centre lying on it can be covered in one drawing and not the other (a
+    // whole pixel's difference). Such pixels are rare: at most one in a thousand. A wrong frame
+    // or a misplaced or flipped sprite changes whole blocks of pixels.
+    let (mut sum, mut far) = (0u64, 0usize);
+    for (a, b) in gpu_img.chunks(4).zip(cpu_img.chunks(4)) {
+        let d = a.iter().zip(b).map(|(x, y)| x.abs_diff(*y)).max().unwrap();
+        sum += u64::from(d);
+        far += usize::from(d > 8);
+    }
+    let pixels = gpu_img.len() / 4;
+    let mean = sum as f64 / pixels as f64;
+    assert!(
+        mean < 0.5 && far * 1000 <= pixels,
+        "{what}: GPU and CPU-fed draws differ: mean {mean}, {far} of {pixels} pixels by more than 8"
+    );
+}
+
+const RED: [u8; 3] = [255, 0, 0];
+const GREEN: [u8; 3] = [0, 255, 0];
+const BLUE: [u8; 3] = [0, 0, 255];
+const YELLOW: [u8; 3] = [255, 255, 0];
+
+/// The four quadrants' centres, top left, top right, bottom left, bottom right.
+const QUADRANTS: [(f64, f64); 4] = [(0.25, 0.25), (0.75, 0.25), (0.25, 0.75), (0.75, 0.75)];
+
+#[test]
+fn a_textured_sprite_shows_its_texture_the_right_way_up() {
+    let gpu = gpu();
+    let dir = scratch("quadrants");
+    // Top left red, top right green, bottom left blue, bottom right yellow.
+    write_blocks(&dir.join("q.png"), 2, 2, 8, &[RED, GREEN, BLUE, YELLOW]);
+    // A 2 m sprite 10 m away with a 40 degree field of view: 2 / (2 · 10 · tan 20°) of the
+    // image's 200 pixels, 54.9 pixels a side.
+    let side = 2.0 / (2.0 * 10.0 * 20f64.to_radians().tan()) * f64::from(SIDE);
+    for state in [State::Stateful, State::Stateless] {
+        let texture = r#"texture: Some(Texture(file: "q.png"))"#;
+        let mut sim = probe(&gpu, &dir, (0.0, 0.0, 0.0), None, texture, state);
+        sim.run(1, |_| {}).unwrap();
+        let (gpu_img, cpu_img) = draw_both(&sim);
+        let (got, (w, h)) = sample(&gpu_img, &QUADRANTS);
+        for (g, want) in got.into_iter().zip([RED, GREEN, BLUE, YELLOW]) {
+            assert_close(g, want, &format!("{state:?} upright"));
+        }
+        for extent in [w, h] {
+            assert!(
+                (f64::from(extent) - side).abs() <= 1.5,
+                "{state:?}: {w}x{h} pixels, want {side:.1} a side"
+            );
+        }
+        assert_matches_reference(&gpu_img, &cpu_img, &format!("{state:?} upright"));
+    }
+    // Aligned with its velocity, the texture's top points where the particle goes: moving
+    // right in the image, the top row (red, green) is on the right, red (top left) at the top.
+    let oriented =
+        r#"texture: Some(Texture(file: "q.png")), orient: Velocity(stretch: 0.0, max_length: 2.0)"#;
+    for state in [State::Stateful, State::Stateless] {
+        let mut sim = probe(&gpu, &dir, (1.0, 0.0, 0.0), None, oriented, state);
+        sim.run(1, |_| {}).unwrap();
+        let (gpu_img, cpu_img) = draw_both(&sim);
+        let (got, _) = sample(&gpu_img, &QUADRANTS);
+        for (g, want) in got.into_iter().zip([BLUE, RED, YELLOW, GREEN]) {
+            assert_close(g, want, &format!("{state:?} moving right"));
+        }
+        assert_matches_reference(&gpu_img, &cpu_img, &format!("{state:?} moving right"));
+    }
+}
+
+/// The colour of the drawn sprite's centre after each step of `steps`, with the particle's
+/// age and lifetime (seconds) from the records.
+fn centre_over_time(sim: &mut EffectInstance, steps: u64) -> Vec<([u8; 3], f64, Option<f64>)> {
+    let mut seen = Vec::new();
+    for _ in 0..steps {
+        sim.run(1, |_| {}).unwrap();
+        let records = sim.records().unwrap();
+        assert_eq!(records.len(), 1, "the particle is alive");
+        let (gpu_img, cpu_img) = draw_both(sim);
+        assert_matches_reference(&gpu_img, &cpu_img, "flipbook");
+        let (got, _) = sample(&gpu_img, &[(0.5, 0.5)]);
+        seen.push((got[0], records[0].age, records[0].lifetime));
+    }
+    seen
+}
+
+#[test]
+fn a_flipbook_shows_frame_k_at_the_documented_time() {
+    let gpu = gpu();
+    let dir = scratch("flipbook");
+    let frames = [RED, GREEN, BLUE, YELLOW];
+    write_blocks(&dir.join("f.png"), 4, 1, 4, &frames);
+    for state in [State::Stateful, State::Stateless] {
+        // Over life: 24 steps of life, 4 frames: frame k from life fraction k / 4 (age / life,
+        // whole steps), so 6 steps each.
+        let texture = r#"texture: Some(Texture(file: "f.png", frames: (4, 1)))"#;
+        let mut sim = probe(&gpu, &dir, (0.0, 0.0, 0.0), Some(0.4), texture, state);
+        let seen = centre_over_time(&mut sim, 23);
+        let mut shown = [0; 4];
+        for (colour, age, life) in seen {
+            let k = ((4.0 * age / life.unwrap() + 1e-9).floor() as usize).min(3);
+            assert_close(
+                colour,
+                frames[k],
+                &format!("{state:?} over life, age {age:.4}"),
+            );
+            shown[k] += 1;
+        }
+        // Ages 1..=23 steps of 24: frames of 5, 6, 6 and 6 steps.
+        assert_eq!(shown, [5, 6, 6, 6], "{state:?}: steps per frame over life");
+
+        // At 15 frames per second with 60 steps per second: 4 steps per frame, looping, for a
+        // particle that never dies.
+        let texture = r#"texture: Some(Texture(file: "f.png", frames: (4, 1), play: Rate(15.0)))"#;
+        let mut sim = probe(&gpu, &dir, (0.0, 0.0, 0.0), None, texture, state);
+        for (colour, age, life) in centre_over_time(&mut sim, 20) {
+            assert_eq!(life, None);
+            let k = ((age * 15.0 + 1e-9).floor() as usize) % 4;
+            assert_close(
+                colour,
+                frames[k],
+                &format!("{state:?} at 15 fps, age {age:.4}"),
+            );
+        }
+    }
+}
+
+#[test]
+fn a_random_start_gives_particles_born_together_different_frames() {
+    let gpu = gpu();
+    let dir = scratch("random-start");
+    let frames = [RED, GREEN, BLUE, YELLOW];
+    write_blocks(&dir.join("f.png"), 4, 1, 4, &frames);
+    // 64 particles born in one burst on a line across the image (0.095 m apart, 0.06 m wide:
+    // none overlap), a frame each from its id.
+    let src = r#"Effect(
+    name: "random-start",
+    capacity: 64,
+    emitters: [Emitter(burst: 64, shape: Grid(min: (-3.0, 0.0, 0.0), max: (3.0, 0.0, 0.0), counts: (64, 1, 1)),
+                       velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 0.06)],
+                   background: (0.0, 0.0, 0.0),
+                   texture: Some(Texture(file: "f.png", frames: (4, 1), play: Rate(15.0), random_start: true))),
+)"#;
+    let options = CompileOptions {
+        base_dir: Some(dir.clone()),
+        ..Default::default()
+    };
+    let effect =
+        compile_str(src, &options).unwrap_or_else(|e| panic!("{}", e.render("r.ron", src)));
+    let mut sim = EffectInstance::new(&gpu, effect).unwrap();
+    sim.run(1, |_| {}).unwrap();
+    let (gpu_img, cpu_img) = draw_both(&sim);
+    assert_matches_reference(&gpu_img, &cpu_img, "random start");
+    let mut counts = [0usize; 4];
+    for p in gpu_img.chunks(4) {
+        if let Some(k) = frames.iter().position(|f| p[..3] == f[..]) {
+            counts[k] += 1;
+        }
+    }
+    assert!(
+        counts.iter().all(|&n| n > 0),
+        "every frame shows somewhere: pixels per frame {counts:?}"
+    );
+}
+
+#[test]
+fn the_compute_splat_refuses_textured_sprites_and_says_what_to_use() {
+    let gpu = gpu();
+    let dir = scratch("splat");
+    write_blocks(&dir.join("q.png"), 1, 1, 4, &[RED]);
+    let texture = r#"texture: Some(Texture(file: "q.png"))"#;
+    let sim = probe(&gpu, &dir, (0.0, 0.0, 0.0), None, texture, State::Stateful);
+    assert!(!Splat::draws(&sim.effect().ir));
+    let message = Splat::new(&sim, 64, 64).err().expect("refused").to_string();
+    assert!(
+        message.contains("render.texture") && message.contains("--draw raster"),
+        "{message}"
+    );
+}
