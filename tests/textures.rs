@@ -198,6 +198,48 @@ fn a_textured_sprite_shows_its_texture_the_right_way_up() {
     }
 }
 
+#[test]
+fn a_rotated_sprite_turns_its_texture_by_its_angle_and_spin() {
+    let gpu = gpu();
+    let dir = scratch("rotation");
+    write_blocks(&dir.join("q.png"), 2, 2, 8, &[RED, GREEN, BLUE, YELLOW]);
+    // A quarter turn counter-clockwise brings the texture's right side (green over yellow) to
+    // the top and its top (red, green) to the left; a half turn puts it upside down.
+    let quarter = [GREEN, YELLOW, RED, BLUE];
+    let half = [YELLOW, BLUE, GREEN, RED];
+    let texture = r#"texture: Some(Texture(file: "q.png"))"#;
+    let cases = [
+        // A fixed starting angle, facing the camera or lying in the plane facing it.
+        ("Camera", "angle: (90.0, 90.0)", 1, quarter),
+        ("Fixed((0.0, 0.0, 1.0))", "angle: (90.0, 90.0)", 1, quarter),
+        // 90 degrees a second from 0: a quarter turn after 60 steps of 1/60 s, half after 120.
+        ("Camera", "spin: (90.0, 90.0)", 60, quarter),
+        ("Camera", "spin: (90.0, 90.0)", 120, half),
+        (
+            "Fixed((0.0, 0.0, 1.0))",
+            "angle: (-90.0, -90.0), spin: (90.0, 90.0)",
+            180,
+            half,
+        ),
+    ];
+    for state in [State::Stateful, State::Stateless] {
+        for (orient, rotation, steps, want) in cases {
+            let what = format!("{state:?} {orient} {rotation} after {steps} steps");
+            let extra =
+                format!("{texture}, orient: {orient}, rotation: Some(Rotation({rotation}))");
+            let mut sim = probe(&gpu, &dir, (0.0, 0.0, 0.0), None, &extra, state);
+            sim.run(steps, |_| {}).unwrap();
+            let (gpu_img, cpu_img) = draw_both(&sim);
+            let (got, (w, h)) = sample(&gpu_img, &QUADRANTS);
+            assert!(w.abs_diff(h) <= 1, "{what}: still square, {w}x{h}");
+            for (g, c) in got.into_iter().zip(want) {
+                assert_close(g, c, &what);
+            }
+            assert_matches_reference(&gpu_img, &cpu_img, &what);
+        }
+    }
+}
+
 /// The colour of the drawn sprite's centre after each step of `steps`, with the particle's
 /// age and lifetime (seconds) from the records.
 fn centre_over_time(sim: &mut EffectInstance, steps: u64) -> Vec<([u8; 3], f64, Option<f64>)> {

@@ -425,17 +425,35 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
             r#"Some(Texture(file: "effects/textures/bird.png", frames: (4, 1), play: Rate({fps}), random_start: {random}))"#
         )),
     ];
+    // Rotation: none, or a starting angle and a spin (kept off velocity-aligned sprites, which
+    // refuse it).
+    let rotation = prop_oneof![
+        Just(None),
+        (
+            num(f, -360.0, 0.0),
+            num(f, 0.0, 360.0),
+            num(f, -720.0, 0.0),
+            num(f, 0.0, 720.0)
+        )
+            .prop_map(|(a0, a1, s0, s1)| Some(format!(
+                "Some(Rotation(angle: ({a0}, {a1}), spin: ({s0}, {s1})))"
+            ))),
+    ];
     (
         stops,
         sizes,
         prop::sample::select(vec!["Alpha", "Additive"]),
         vec3(f, 0.0, 1.0),
         orient,
-        texture,
+        (texture, rotation),
     )
-        .prop_map(|(c, s, b, bg, o, t)| {
+        .prop_map(|(c, s, b, bg, o, (t, r))| {
+            let r = match r {
+                Some(r) if !o.starts_with("Velocity") => r,
+                _ => "None".to_string(),
+            };
             format!(
-                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}),",
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}),",
                 c.join(", "),
                 s.join(", ")
             )

@@ -72,6 +72,8 @@ pub struct RenderIr {
     pub orient: crate::orient::OrientIr,
     /// The sprite texture, loaded; None draws the soft round dot.
     pub texture: Option<crate::texture::TextureIr>,
+    /// Each sprite's turn in its plane, when the effect asks for one.
+    pub rotation: Option<crate::rotation::RotationIr>,
 }
 
 /// Piecewise-linear interpolation through stops (t increasing), constant beyond the ends.
@@ -102,6 +104,12 @@ impl RenderIr {
     pub fn size_at(&self, t: f64) -> f64 {
         let stops: Vec<(f64, [f64; 1])> = self.size.iter().map(|&(t, s)| (t, [s])).collect();
         interpolate(&stops, t)[0]
+    }
+
+    /// Whether the quad's half axes are computed (oriented or rotated) rather than the upright
+    /// camera-facing square.
+    pub fn turns_quad(&self) -> bool {
+        self.orient != crate::orient::OrientIr::Camera || self.rotation.is_some()
     }
 
     /// Whether colour or size change over a particle's life (some stop differs from the first);
@@ -478,6 +486,9 @@ impl fmt::Display for EffectIr {
         }
         if let Some(t) = &self.render.texture {
             writeln!(f, "  texture {t:?}")?;
+        }
+        if let Some(r) = &self.render.rotation {
+            writeln!(f, "  rotation {r:?}")?;
         }
         writeln!(
             f,

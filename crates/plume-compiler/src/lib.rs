@@ -50,6 +50,7 @@ pub mod passes;
 pub mod path;
 pub mod reference;
 pub mod rng;
+pub mod rotation;
 pub mod schedule;
 pub mod schema;
 pub mod texture;

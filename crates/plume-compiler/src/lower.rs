@@ -83,6 +83,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 orient: crate::orient::OrientIr::lower(&r.orient),
                 // Loaded by `compile_effect`, which can report a file it cannot read.
                 texture: None,
+                rotation: r.rotation.as_ref().map(crate::rotation::RotationIr::lower),
             }
         },
         camera: CameraIr {

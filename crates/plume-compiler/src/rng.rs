@@ -43,6 +43,10 @@ pub mod stream {
     pub const FALLBACK_DIRECTION: u32 = 7;
     /// One draw for a flipbook's first frame (`render.texture.random_start`).
     pub const FLIPBOOK: u32 = 10;
+    /// One draw for a sprite's starting angle (`render.rotation.angle`).
+    pub const ROTATION_ANGLE: u32 = 11;
+    /// One draw for a sprite's spin (`render.rotation.spin`).
+    pub const ROTATION_SPIN: u32 = 12;
     /// `rand(k)` in custom expressions draws from stream CUSTOM + k (k <= 255).
     pub const CUSTOM: u32 = 64;
 }

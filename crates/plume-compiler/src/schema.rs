@@ -21,7 +21,7 @@ impl Vec3 {
 }
 
 /// A `(min, max)` interval; values are drawn uniformly from it.
-#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
 pub struct Range(pub f64, pub f64);
 
 /// Three counts written `(nx, ny, nz)`.
@@ -154,6 +154,22 @@ pub struct Render {
     /// A sprite texture (optionally a flipbook atlas) instead of the soft round dot.
     #[serde(default)]
     pub texture: Option<Texture>,
+    /// Each sprite turned in its plane by a random starting angle and spin.
+    #[serde(default)]
+    pub rotation: Option<Rotation>,
+}
+
+/// Sprite rotation (`render.rotation`): each particle draws a starting angle and a spin from
+/// its id, uniform in the ranges.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Rotation {
+    /// Starting angle range (degrees, counter-clockwise).
+    #[serde(default)]
+    pub angle: Range,
+    /// Spin range (degrees per second, counter-clockwise).
+    #[serde(default)]
+    pub spin: Range,
 }
 
 impl Default for Render {
@@ -165,6 +181,7 @@ impl Default for Render {
             background: default_background(),
             orient: Orient::Camera,
             texture: None,
+            rotation: None,
         }
     }
 }

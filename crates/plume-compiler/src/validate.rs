@@ -355,4 +355,15 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
             crate::schema::Play::OverLife => {}
         }
     }
+    if let Some(rotation) = &r.rotation {
+        let p = path.field("rotation");
+        c.range(&p.field("angle"), rotation.angle);
+        c.range(&p.field("spin"), rotation.spin);
+        if let Orient::Velocity { .. } = r.orient {
+            c.error(
+                &p,
+                "cannot turn a sprite whose direction render.orient: Velocity sets; use Camera or Fixed orientation, or leave rotation out",
+            );
+        }
+    }
 }

@@ -7,6 +7,7 @@
 use glam::{DVec3, Mat4};
 use plume_compiler::ir::{EffectIr, RenderIr};
 use plume_compiler::reference::ParticleRecord;
+use plume_compiler::rotation::RotationIr;
 
 use crate::camera::Camera;
 use crate::draw::blend_state;
@@ -34,7 +35,8 @@ pub struct Sprite {
 
 /// Builds sprites from particle records: colour and size at each particle's life fraction
 /// (age / lifetime; 0 for particles that never die), the quad oriented as `render.orient` says
-/// for a camera with view matrix `view`, the flipbook frame for its age; back to front from the
+/// for a camera with view matrix `view` and turned as `render.rotation` says, the flipbook
+/// frame for its age; back to front from the
 /// effect's camera when `sort`. Non-finite particles are skipped.
 pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool) -> Vec<Sprite> {
     let (render, camera) = (&ir.render, &ir.camera);
@@ -57,9 +59,16 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
                 render
                     .orient
                     .half_axes(render.size_at(t), r.velocity, camera_right, camera_up);
+            // Whole steps, as the records' ages and lifetimes are.
+            let steps = |seconds: f64| (seconds / ir.dt).round() as u64;
+            let (half_x, half_y) = match &render.rotation {
+                Some(rotation) => {
+                    let angle = rotation.angle(r.id, ir.seed_mix, steps(r.age), ir.dt);
+                    RotationIr::turn(half_x, half_y, angle)
+                }
+                None => (half_x, half_y),
+            };
             let texels = render.texture.as_ref().map_or([0.0; 4], |texture| {
-                // Whole steps, as the records' ages and lifetimes are.
-                let steps = |seconds: f64| (seconds / ir.dt).round() as u64;
                 let life = r.lifetime.map_or(0, steps);
                 let frame = texture.frame(r.id, ir.seed_mix, steps(r.age), life, ir.dt);
                 texture.frame_texels(frame).map(|x| x as f32)

@@ -168,14 +168,15 @@ pub fn shared_lifetime(ir: &EffectIr) -> Option<crate::lifetime::LifetimeSteps> 
 /// Whether a stateful particle stores its spawn step (`born`): only when the draw needs a life
 /// fraction (gradients, a flipbook played over life) and cannot derive the spawn step from
 /// `die_at` and the shared lifetime draw, or needs every particle's age (a flipbook played at
-/// a rate) and some particles never die.
+/// a rate, a spin) and some particles never die.
 pub fn needs_spawn_step(ir: &EffectIr) -> bool {
     if ir.stateless.is_some() {
         return false;
     }
     let flipbook = ir.render.texture.as_ref().filter(|t| t.animated());
     let life = (ir.render.varies_over_life() || flipbook.is_some()) && ir.has_lifetimes();
-    let age = flipbook.is_some_and(|t| t.needs_age_of_immortals());
+    let age = flipbook.is_some_and(|t| t.needs_age_of_immortals())
+        || ir.render.rotation.is_some_and(|r| r.spins());
     let all_mortal = ir.emitters.iter().all(|e| e.lifetime.is_some());
     let shared = shared_lifetime(ir).is_some();
     (life && !shared) || (age && !(all_mortal && shared))

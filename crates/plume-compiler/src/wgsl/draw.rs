@@ -16,7 +16,6 @@
 use crate::integrators::emit_advance;
 use crate::ir::EffectIr;
 use crate::lifetime::LifetimeSteps;
-use crate::orient::OrientIr;
 use crate::passes::layout::{self, Attribute, Layout};
 use crate::rng;
 use crate::wgsl::writer::{f32_lit, u32_lit, Writer};
@@ -112,10 +111,13 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     let shared = layout::shared_lifetime(ir);
     let texture = ir.render.texture.as_ref();
     let flipbook = texture.filter(|t| t.animated());
+    let rotation = ir.render.rotation;
+    let spins = rotation.is_some_and(|r| r.spins());
     // Random draws: a stateless effect redraws its spawns; a stateful one its lifetimes.
     let draws = stateless
+        || rotation.is_some()
         || flipbook.is_some_and(|t| t.draws_random())
-        || ((life || flipbook.is_some())
+        || ((life || flipbook.is_some() || spins)
             && ir.has_lifetimes()
             && !layout.has(Attribute::SpawnStep)
             && shared.is_some());
@@ -196,7 +198,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
             w.blank();
             emit_life_fraction(&mut w, layout, shared);
         }
-        if flipbook.is_some() {
+        if flipbook.is_some() || spins {
             w.blank();
             emit_age_steps(&mut w, layout, shared);
         }
@@ -205,17 +207,16 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         w.blank();
         t.emit_frame_fn(&mut w, ir.dt);
     }
+    if let Some(r) = rotation {
+        w.blank();
+        r.emit_angle_fn(&mut w, ir.dt);
+    }
     w.blank();
     emit_gradients(&mut w, ir);
     w.blank();
     emit_sprite_at(&mut w, ir, layout, shape, life);
     w.blank();
-    emit_vertex(
-        &mut w,
-        shape,
-        ir.render.orient != OrientIr::Camera,
-        texture.is_some(),
-    );
+    emit_vertex(&mut w, shape, ir.render.turns_quad(), texture.is_some());
     w.blank();
     emit_fragment(&mut w, texture);
     if shape.splat {
@@ -288,12 +289,14 @@ fn emit_life_fraction(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSt
 }
 
 /// `age_steps(p)`: (whole steps lived, whole steps of life; 0 for a particle that never dies),
-/// for choosing a flipbook frame. From the stored spawn step when there is one; otherwise from
+/// for choosing a flipbook frame or a spin's angle. From the stored spawn step when there is one; otherwise from
 /// `die_at` and the shared lifetime draw (`needs_spawn_step` stores `born` whenever a particle
 /// that never dies needs its age); (0, 0) when no particle ever dies and none needs its age.
 fn emit_age_steps(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSteps>) {
     let dies = layout.has(Attribute::DeathStep);
-    w.comment("Whole steps lived and whole steps of life (0: never dies), for the flipbook.");
+    w.comment(
+        "Whole steps lived and whole steps of life (0: never dies), for the flipbook or the spin.",
+    );
     w.block("fn age_steps(p: Particle) -> vec2<u32>", |w| {
         if layout.has(Attribute::SpawnStep) {
             w.line("let lived = draw.steps - p.born;");
@@ -392,7 +395,7 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
     w.comment(
         "A particle as a sprite: whether it shows, its centre in view space, colour and size.",
     );
-    let oriented = ir.render.orient != OrientIr::Camera;
+    let oriented = ir.render.turns_quad();
     w.block("struct SpriteAt", |w| {
         w.line("visible: bool,");
         w.line("center: vec4<f32>,");
@@ -403,7 +406,7 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
             w.line("frame: u32,");
         }
         if oriented {
-            w.comment("The quad's half axes in view space (render.orient).");
+            w.comment("The quad's half axes in view space (render.orient, render.rotation).");
             w.line("half_x: vec3<f32>,");
             w.line("half_y: vec3<f32>,");
         }
@@ -479,6 +482,18 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
                 }
             }
             ir.render.orient.emit_half_axes(w);
+            if ir.render.rotation.is_some() {
+                match (stateless, ir.render.rotation.is_some_and(|r| r.spins())) {
+                    (_, false) => w.line("let lived = 0u;"),
+                    (true, true) => w.line("let lived = e.age;"),
+                    (false, true) => w.line("let lived = age_steps(p).x;"),
+                }
+                w.line(format!(
+                    "let angle = sprite_angle({}, lived);",
+                    if stateless { "e.id" } else { "p.id" }
+                ));
+                crate::rotation::RotationIr::emit_turn(w);
+            }
         }
         w.line("s.visible = true;");
         w.line("return s;");
