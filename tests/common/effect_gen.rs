@@ -445,15 +445,16 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
         prop::sample::select(vec!["Alpha", "Additive"]),
         vec3(f, 0.0, 1.0),
         orient,
-        (texture, rotation),
+        (texture, rotation, prop::option::of(num(f, 0.01, 2.0))),
     )
-        .prop_map(|(c, s, b, bg, o, (t, r))| {
+        .prop_map(|(c, s, b, bg, o, (t, r, soft))| {
+            let soft = soft.map_or("None".to_string(), |d| format!("Some({d})"));
             let r = match r {
                 Some(r) if !o.starts_with("Velocity") => r,
                 _ => "None".to_string(),
             };
             format!(
-                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}),",
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}),",
                 c.join(", "),
                 s.join(", ")
             )

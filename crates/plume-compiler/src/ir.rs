@@ -74,6 +74,8 @@ pub struct RenderIr {
     pub texture: Option<crate::texture::TextureIr>,
     /// Each sprite's turn in its plane, when the effect asks for one.
     pub rotation: Option<crate::rotation::RotationIr>,
+    /// The soft-particle fade distance (m), used where a host's depth buffer is bound.
+    pub soft: Option<f64>,
 }
 
 /// Piecewise-linear interpolation through stops (t increasing), constant beyond the ends.
@@ -489,6 +491,9 @@ impl fmt::Display for EffectIr {
         }
         if let Some(r) = &self.render.rotation {
             writeln!(f, "  rotation {r:?}")?;
+        }
+        if let Some(d) = self.render.soft {
+            writeln!(f, "  soft {d} m")?;
         }
         writeln!(
             f,

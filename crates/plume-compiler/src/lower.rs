@@ -84,6 +84,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 // Loaded by `compile_effect`, which can report a file it cannot read.
                 texture: None,
                 rotation: r.rotation.as_ref().map(crate::rotation::RotationIr::lower),
+                soft: r.soft,
             }
         },
         camera: CameraIr {

@@ -157,6 +157,10 @@ pub struct Render {
     /// Each sprite turned in its plane by a random starting angle and spin.
     #[serde(default)]
     pub rotation: Option<Rotation>,
+    /// Soft particles: where a host's depth buffer is bound, a sprite fades out over this many
+    /// metres in front of the scene's surfaces instead of cutting into them.
+    #[serde(default)]
+    pub soft: Option<f64>,
 }
 
 /// Sprite rotation (`render.rotation`): each particle draws a starting angle and a spin from
@@ -182,6 +186,7 @@ impl Default for Render {
             orient: Orient::Camera,
             texture: None,
             rotation: None,
+            soft: None,
         }
     }
 }

@@ -355,6 +355,9 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
             crate::schema::Play::OverLife => {}
         }
     }
+    if let Some(d) = r.soft {
+        c.positive(&path.field("soft"), d);
+    }
     if let Some(rotation) = &r.rotation {
         let p = path.field("rotation");
         c.range(&p.field("angle"), rotation.angle);

@@ -18,7 +18,9 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use plume_compiler::schema::Blend;
 use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
-use plume_compiler::wgsl::draw::{DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
+use plume_compiler::wgsl::draw::{
+    DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING, SCENE_DEPTH_BINDING,
+};
 use plume_compiler::CompiledEffect;
 
 use crate::camera::Camera;
@@ -149,6 +151,11 @@ pub struct EffectRenderer {
     pipeline: wgpu::RenderPipeline,
     view: wgpu::Buffer,
     group: wgpu::BindGroup,
+    /// What bind group 0 holds besides the scene depth, to rebuild it with another one.
+    buffers: Vec<(u32, wgpu::Buffer)>,
+    texture: Option<SpriteTexture>,
+    /// Whether the draw module fades sprites near the scene depth (`render.soft`).
+    soft: bool,
     instances: Instances,
     /// Vertices per sprite (4: a quad strip; 3: a triangle).
     vertices: u32,
@@ -180,9 +187,17 @@ impl EffectRenderer {
             true => Some(LiveList::new(gpu, res, effect, options.primitive)?),
             false => None,
         };
+        let soft = effect.ir.render.soft.is_some() && target.depth.is_some();
+        if soft && target.sample_count != 1 {
+            return Err(RuntimeError::Unsupported(format!(
+                "soft particles (render.soft) read the depth buffer as a single-sample texture; draw {:?} into a pass with one sample per pixel, or leave render.soft out",
+                effect.ir.name
+            )));
+        }
         let shape = DrawShape {
             through_list: effect.ir.sort || compacted,
             primitive: options.primitive,
+            soft,
             ..draw_shape(effect, res)
         };
         let (module, mut entries) =
@@ -240,28 +255,17 @@ impl EffectRenderer {
             Some(t) => Some(SpriteTexture::new(gpu, t)?),
             None => None,
         };
-        let mut bindings: Vec<wgpu::BindGroupEntry<'_>> = entries
-            .iter()
-            .map(|(binding, buffer)| wgpu::BindGroupEntry {
-                binding: *binding,
-                resource: buffer.as_entire_binding(),
-            })
-            .collect();
-        if let Some(t) = &texture {
-            bindings.push(wgpu::BindGroupEntry {
-                binding: TEXTURE_BINDING,
-                resource: wgpu::BindingResource::TextureView(&t.view),
-            });
-            bindings.push(wgpu::BindGroupEntry {
-                binding: SAMPLER_BINDING,
-                resource: wgpu::BindingResource::Sampler(&t.sampler),
-            });
-        }
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("draw"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &bindings,
-        });
+        let placeholder = match (soft, &target.depth) {
+            (true, Some(test)) => Some(crate::scene_depth::far_placeholder(gpu, test)?),
+            _ => None,
+        };
+        let group = draw_group(
+            gpu,
+            &pipeline,
+            &entries,
+            texture.as_ref(),
+            placeholder.as_ref(),
+        );
         let instances = if let Some(live) = live {
             Instances::Compacted(Box::new(live))
         } else if stateless {
@@ -276,11 +280,40 @@ impl EffectRenderer {
             pipeline,
             view,
             group,
+            buffers: entries,
+            texture,
+            soft,
             instances,
             vertices: options.primitive.vertices(),
             size_scale: 1.0,
             gpu: gpu.clone(),
         })
+    }
+
+    /// Whether this draw fades sprites near the scene's depth (the effect has `render.soft` and
+    /// the target a depth buffer): then bind the host's depth with [`Self::set_scene_depth`].
+    pub fn is_soft(&self) -> bool {
+        self.soft
+    }
+
+    /// Binds the host's depth buffer for soft particles: a depth-only view (of a texture
+    /// created with `TEXTURE_BINDING`, single-sampled, of a depth format) holding the scene's
+    /// depth, read as an unfilterable float texture. It may be the very texture the render pass
+    /// tests against if that pass keeps its depth attachment read-only (`depth_ops: None`) and
+    /// the adapter offers `DownlevelFlags::READ_ONLY_DEPTH_STENCIL` (Vulkan does; GL does not:
+    /// there, write the scene's depth into a second texture as well and bind that one).
+    /// Call it again when the texture changes (a resize); until the first call sprites are not
+    /// faded. Does nothing for a draw that is not soft.
+    pub fn set_scene_depth(&mut self, depth: &wgpu::TextureView) {
+        if self.soft {
+            self.group = draw_group(
+                &self.gpu,
+                &self.pipeline,
+                &self.buffers,
+                self.texture.as_ref(),
+                Some(depth),
+            );
+        }
     }
 
     /// Scales every sprite's size (1: the effect's own sizes).
@@ -353,6 +386,45 @@ impl EffectRenderer {
             Instances::Compacted(live) => pass.draw_indirect(&live.args, 0),
         }
     }
+}
+
+/// Bind group 0 of a draw: its buffers, the sprite texture and sampler when it has one, and
+/// the scene depth when it is soft.
+fn draw_group(
+    gpu: &Gpu,
+    pipeline: &wgpu::RenderPipeline,
+    buffers: &[(u32, wgpu::Buffer)],
+    texture: Option<&SpriteTexture>,
+    scene_depth: Option<&wgpu::TextureView>,
+) -> wgpu::BindGroup {
+    let mut bindings: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    if let Some(t) = texture {
+        bindings.push(wgpu::BindGroupEntry {
+            binding: TEXTURE_BINDING,
+            resource: wgpu::BindingResource::TextureView(&t.view),
+        });
+        bindings.push(wgpu::BindGroupEntry {
+            binding: SAMPLER_BINDING,
+            resource: wgpu::BindingResource::Sampler(&t.sampler),
+        });
+    }
+    if let Some(depth) = scene_depth {
+        bindings.push(wgpu::BindGroupEntry {
+            binding: SCENE_DEPTH_BINDING,
+            resource: wgpu::BindingResource::TextureView(depth),
+        });
+    }
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("draw"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &bindings,
+    })
 }
 
 /// An indirect draw of the live particles (a sorted stateful effect: they come first in the

@@ -38,6 +38,7 @@ pub mod plot;
 pub mod readback;
 pub mod reference_draw;
 pub mod resources;
+pub mod scene_depth;
 pub mod sort;
 pub mod sort_bench;
 pub mod splat;

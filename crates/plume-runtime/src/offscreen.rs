@@ -74,8 +74,9 @@ impl Offscreen {
         )
     }
 
-    /// The colour attachment, cleared to `background`.
-    pub(crate) fn attachment(&self, background: DVec3) -> wgpu::RenderPassColorAttachment<'_> {
+    /// The colour attachment, cleared to `background`, for a render pass of the caller's (one
+    /// with its own depth attachment, say).
+    pub fn attachment(&self, background: DVec3) -> wgpu::RenderPassColorAttachment<'_> {
         wgpu::RenderPassColorAttachment {
             view: &self.view,
             depth_slice: None,

@@ -39,7 +39,13 @@ pub struct DrawShape {
     /// Whether the module also holds `project`, the compute splat's first kernel (the
     /// runtime's `splat.rs` draws `plume render`'s images with it).
     pub splat: bool,
+    /// Whether the fragment shader fades sprites near the host's depth buffer, bound at
+    /// [`SCENE_DEPTH_BINDING`] (an effect with `render.soft`, drawn into a pass with depth).
+    pub soft: bool,
 }
+
+/// Binding of the host's depth texture in a soft draw module.
+pub const SCENE_DEPTH_BINDING: u32 = 32;
 
 /// The geometry a sprite is drawn with.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -80,6 +86,7 @@ impl DrawShape {
             through_list: ir.sort,
             primitive: Primitive::Quad,
             splat: false,
+            soft: false,
         }
     }
 }
@@ -182,6 +189,11 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         w.blank();
         emit_splat_declarations(&mut w);
     }
+    let soft = ir.render.soft.filter(|_| shape.soft);
+    if let Some(distance) = soft {
+        w.blank();
+        emit_soft(&mut w, distance);
+    }
     w.blank();
     if draws {
         rng::emit_wgsl(&mut w);
@@ -218,7 +230,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.blank();
     emit_vertex(&mut w, shape, ir.render.turns_quad(), texture.is_some());
     w.blank();
-    emit_fragment(&mut w, texture);
+    emit_fragment(&mut w, texture, soft.is_some());
     if shape.splat {
         w.blank();
         emit_project(&mut w);
@@ -630,17 +642,65 @@ fn emit_project(w: &mut Writer) {
 
 /// The fragment shader `fs`: the texture's frame times the colour ([`crate::texture`]), or a
 /// soft round sprite, alpha a (1 − r²)², nothing at r >= 1.
-fn emit_fragment(w: &mut Writer, texture: Option<&crate::texture::TextureIr>) {
-    w.line("@fragment");
-    w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
-        if let Some(t) = texture {
-            t.emit_fragment_body(w);
-            return;
-        }
-        w.line("let r2 = dot(in.uv, in.uv);");
-        w.block("if (r2 >= 1.0)", |w| w.line("discard;"));
-        w.comment("Soft round falloff: full at the centre, zero at the rim.");
-        w.line("let falloff = (1.0 - r2) * (1.0 - r2);");
-        w.line("return vec4<f32>(in.color.rgb, in.color.a * falloff);");
+/// With `soft`, that colour comes from `shade` and `fs` fades its alpha by `soft_fade`.
+fn emit_fragment(w: &mut Writer, texture: Option<&crate::texture::TextureIr>, soft: bool) {
+    if soft {
+        w.block("fn shade(in: Sprite) -> vec4<f32>", |w| {
+            emit_shade(w, texture)
+        });
+        w.blank();
+        w.line("@fragment");
+        w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
+            w.line("let c = shade(in);");
+            w.line("return vec4<f32>(c.rgb, c.a * soft_fade(in.clip));");
+        });
+    } else {
+        w.line("@fragment");
+        w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
+            emit_shade(w, texture)
+        });
+    }
+}
+
+/// The sprite's colour at a fragment: the texture's frame times the colour, or the soft disc.
+fn emit_shade(w: &mut Writer, texture: Option<&crate::texture::TextureIr>) {
+    if let Some(t) = texture {
+        t.emit_fragment_body(w);
+        return;
+    }
+    w.line("let r2 = dot(in.uv, in.uv);");
+    w.block("if (r2 >= 1.0)", |w| w.line("discard;"));
+    w.comment("Soft round falloff: full at the centre, zero at the rim.");
+    w.line("let falloff = (1.0 - r2) * (1.0 - r2);");
+    w.line("return vec4<f32>(in.color.rgb, in.color.a * falloff);");
+}
+
+/// The host's depth texture and `soft_fade(frag)`: how far (in metres along the view axis) the
+/// scene's surface lies behind the fragment, over the fade distance, clamped to [0, 1]. Depths
+/// are linearised with the projection's own terms: for a perspective projection (standard or
+/// reversed Z, finite or infinite far plane) NDC depth z and view distance d satisfy
+/// d = B / (z + A), A = proj[2][2], B = proj[3][2].
+fn emit_soft(w: &mut Writer, distance: f64) {
+    w.comment("Soft particles: the host's depth buffer (render.soft).");
+    w.line(format!(
+        "@group(0) @binding({SCENE_DEPTH_BINDING}) var scene_depth: texture_2d<f32>;"
+    ));
+    w.line(format!("const SOFT_DISTANCE: f32 = {};", f32_lit(distance)));
+    w.blank();
+    w.comment(
+        "Distance in front of the camera of NDC depth z (a far plane at infinity: a huge one).",
+    );
+    w.block("fn view_distance(z: f32) -> f32", |w| {
+        w.line("let den = z + draw.proj[2][2];");
+        w.block("if (abs(den) < 1e-30)", |w| w.line("return 3.0e38;"));
+        w.line("return min(draw.proj[3][2] / den, 3.0e38);");
+    });
+    w.blank();
+    w.block("fn soft_fade(frag: vec4<f32>) -> f32", |w| {
+        w.comment("Clamped to the texture: a smaller one (the placeholder before the host binds its own) stays in bounds.");
+        w.line("let pixel = min(vec2<u32>(frag.xy), textureDimensions(scene_depth) - vec2<u32>(1u));");
+        w.line("let scene = textureLoad(scene_depth, pixel, 0).r;");
+        w.line("let gap = view_distance(scene) - view_distance(frag.z);");
+        w.line("return clamp(gap / SOFT_DISTANCE, 0.0, 1.0);");
     });
 }
