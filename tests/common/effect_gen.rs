@@ -445,16 +445,24 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
         prop::sample::select(vec!["Alpha", "Additive"]),
         vec3(f, 0.0, 1.0),
         orient,
-        (texture, rotation, prop::option::of(num(f, 0.01, 2.0))),
+        (
+            texture,
+            rotation,
+            prop::option::of(num(f, 0.01, 2.0)),
+            prop::option::of((num(f, 0.0, 2.0), num(f, 0.0, 3.0), num(f, 0.001, 0.05))),
+        ),
     )
-        .prop_map(|(c, s, b, bg, o, (t, r, soft))| {
+        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow))| {
             let soft = soft.map_or("None".to_string(), |d| format!("Some({d})"));
+            let glow = glow.map_or("None".to_string(), |(t, s, r)| {
+                format!("Some(Glow(threshold: {t}, strength: {s}, radius: {r}))")
+            });
             let r = match r {
                 Some(r) if !o.starts_with("Velocity") => r,
                 _ => "None".to_string(),
             };
             format!(
-                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}),",
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}),",
                 c.join(", "),
                 s.join(", ")
             )

@@ -283,7 +283,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                     println!("      stages (ms)     {}", stages.join(", "));
                 }
                 None => println!(
-                    "    compute splat     - (it draws round camera-facing sprites only; this effect's are oriented)"
+                    "    compute splat     - (it draws untextured camera-facing sprites without glow only; not this effect's)"
                 ),
             }
             if let Some(p) = d.prepare {

@@ -84,7 +84,8 @@ fn render_frames(
     })?;
     eprintln!("adapter: {}", gpu.describe());
     let (w, h) = args.size;
-    let target = Offscreen::new(&gpu, w, h)?;
+    // An effect that glows is drawn into an HDR image and bloomed (render.glow).
+    let target = Offscreen::with_glow(&gpu, w, h, effect.ir.render.glow.as_ref())?;
     let mut sim = EffectInstance::new(&gpu, effect)?;
     let renderer = sim.renderer(&target.target())?;
     let mut splat = match args.draw {

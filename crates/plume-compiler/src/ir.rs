@@ -76,6 +76,8 @@ pub struct RenderIr {
     pub rotation: Option<crate::rotation::RotationIr>,
     /// The soft-particle fade distance (m), used where a host's depth buffer is bound.
     pub soft: Option<f64>,
+    /// Bloom in `plume render`'s images.
+    pub glow: Option<crate::schema::Glow>,
 }
 
 /// Piecewise-linear interpolation through stops (t increasing), constant beyond the ends.
@@ -494,6 +496,9 @@ impl fmt::Display for EffectIr {
         }
         if let Some(d) = self.render.soft {
             writeln!(f, "  soft {d} m")?;
+        }
+        if let Some(g) = self.render.glow {
+            writeln!(f, "  glow {g:?}")?;
         }
         writeln!(
             f,

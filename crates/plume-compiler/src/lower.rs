@@ -85,6 +85,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 texture: None,
                 rotation: r.rotation.as_ref().map(crate::rotation::RotationIr::lower),
                 soft: r.soft,
+                glow: r.glow,
             }
         },
         camera: CameraIr {

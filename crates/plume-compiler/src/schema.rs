@@ -161,6 +161,38 @@ pub struct Render {
     /// metres in front of the scene's surfaces instead of cutting into them.
     #[serde(default)]
     pub soft: Option<f64>,
+    /// Glow: `plume render` draws into an HDR image and adds a blurred copy of what is brighter
+    /// than a threshold (bloom), so that bright, dense additive sprites look like light.
+    #[serde(default)]
+    pub glow: Option<Glow>,
+}
+
+/// Bloom in `plume render`'s images (`render.glow`); an embedding host does its own
+/// post-processing.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Glow {
+    /// Light above this level (per channel, in the HDR image) glows.
+    #[serde(default = "default_glow_threshold")]
+    pub threshold: f64,
+    /// How much of the blurred light is added back.
+    #[serde(default = "default_glow_strength")]
+    pub strength: f64,
+    /// The blur's standard deviation, as a fraction of the image height.
+    #[serde(default = "default_glow_radius")]
+    pub radius: f64,
+}
+
+fn default_glow_threshold() -> f64 {
+    0.8
+}
+
+fn default_glow_strength() -> f64 {
+    1.0
+}
+
+fn default_glow_radius() -> f64 {
+    0.01
 }
 
 /// Sprite rotation (`render.rotation`): each particle draws a starting angle and a spin from
@@ -187,6 +219,7 @@ impl Default for Render {
             texture: None,
             rotation: None,
             soft: None,
+            glow: None,
         }
     }
 }

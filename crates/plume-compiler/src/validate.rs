@@ -358,6 +358,13 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
     if let Some(d) = r.soft {
         c.positive(&path.field("soft"), d);
     }
+    if let Some(g) = r.glow {
+        let p = path.field("glow");
+        c.non_negative(&p.field("threshold"), g.threshold);
+        c.non_negative(&p.field("strength"), g.strength);
+        // A wider blur costs 6 σ texel reads per pixel in each direction.
+        c.within(&p.field("radius"), g.radius, 1e-4, 0.05);
+    }
     if let Some(rotation) = &r.rotation {
         let p = path.field("rotation");
         c.range(&p.field("angle"), rotation.angle);

@@ -29,6 +29,7 @@ pub mod draw;
 pub mod error;
 pub mod export;
 pub mod flock_pass;
+pub mod glow;
 pub mod gpu;
 pub mod images;
 pub mod instance;

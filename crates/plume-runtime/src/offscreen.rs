@@ -8,8 +8,10 @@ use glam::DVec3;
 use crate::camera::Camera;
 use crate::draw::{DrawTarget, EffectRenderer};
 use crate::error::RuntimeError;
+use crate::glow::{GlowPasses, HDR_FORMAT};
 use crate::gpu::Gpu;
 use crate::instance::EffectInstance;
+use plume_compiler::schema::Glow;
 
 /// The image format: 8-bit RGBA, no sRGB conversion (what the images encode as is).
 pub const FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
@@ -21,11 +23,24 @@ pub struct Offscreen {
     height: u32,
     texture: wgpu::Texture,
     view: wgpu::TextureView,
+    /// With glow: the HDR image drawn into and the bloom passes that turn it into `texture`.
+    glow: Option<(wgpu::TextureView, GlowPasses)>,
 }
 
 impl Offscreen {
     /// A `width` x `height` target on `gpu`.
     pub fn new(gpu: &Gpu, width: u32, height: u32) -> Result<Self, RuntimeError> {
+        Self::with_glow(gpu, width, height, None)
+    }
+
+    /// A `width` x `height` target on `gpu` that, given a `glow`, draws into an HDR image and
+    /// blooms it into the RGBA8 one ([`crate::glow`]).
+    pub fn with_glow(
+        gpu: &Gpu,
+        width: u32,
+        height: u32,
+        glow: Option<&Glow>,
+    ) -> Result<Self, RuntimeError> {
         let max = gpu.limits.max_texture_dimension_2d;
         if width == 0 || height == 0 || width > max || height > max {
             return Err(RuntimeError::Output(format!(
@@ -43,22 +58,59 @@ impl Offscreen {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                | wgpu::TextureUsages::COPY_SRC
+                | if glow.is_some() {
+                    wgpu::TextureUsages::STORAGE_BINDING
+                } else {
+                    wgpu::TextureUsages::empty()
+                },
             view_formats: &[],
         });
         let view = texture.create_view(&Default::default());
+        let glow = match glow {
+            Some(g) => {
+                let hdr = gpu
+                    .device
+                    .create_texture(&wgpu::TextureDescriptor {
+                        label: Some("frame, HDR"),
+                        size: wgpu::Extent3d {
+                            width,
+                            height,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: HDR_FORMAT,
+                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                            | wgpu::TextureUsages::TEXTURE_BINDING,
+                        view_formats: &[],
+                    })
+                    .create_view(&Default::default());
+                let passes = GlowPasses::new(gpu, g, &hdr, &view, width, height)?;
+                Some((hdr, passes))
+            }
+            None => None,
+        };
+        gpu.take_error()?;
         Ok(Self {
             gpu: gpu.clone(),
             width,
             height,
             texture,
             view,
+            glow,
         })
     }
 
-    /// What a renderer for this target must match.
+    /// What a renderer for this target must match: the RGBA8 image, or the HDR one when it
+    /// glows.
     pub fn target(&self) -> DrawTarget {
-        DrawTarget::new(FORMAT)
+        DrawTarget::new(match self.glow {
+            Some(_) => HDR_FORMAT,
+            None => FORMAT,
+        })
     }
 
     /// The image's width and height.
@@ -76,9 +128,10 @@ impl Offscreen {
 
     /// The colour attachment, cleared to `background`, for a render pass of the caller's (one
     /// with its own depth attachment, say).
+    /// With glow this is the HDR image, bloomed into the RGBA8 one by [`Self::finish`].
     pub fn attachment(&self, background: DVec3) -> wgpu::RenderPassColorAttachment<'_> {
         wgpu::RenderPassColorAttachment {
-            view: &self.view,
+            view: self.glow.as_ref().map_or(&self.view, |(hdr, _)| hdr),
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations {
@@ -115,7 +168,18 @@ impl Offscreen {
             multiview_mask: None,
         });
         renderer.draw(&mut pass);
+        drop(pass);
+        self.finish(encoder);
         Ok(())
+    }
+
+    /// Records what turns the drawn attachment into the image read back: the bloom passes
+    /// when it glows, nothing otherwise (after a render pass of the caller's into
+    /// [`Self::attachment`]).
+    pub fn finish(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some((_, passes)) = &self.glow {
+            passes.record(encoder);
+        }
     }
 
     /// Draws `instance` from `camera` and returns the image as RGBA8 rows, top row first.

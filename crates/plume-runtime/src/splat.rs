@@ -87,10 +87,12 @@ const TILE_BINDINGS: [(u32, bool, bool); 10] = [
 ];
 
 impl Splat {
-    /// Whether the splat can draw `ir`'s sprites: round (no `texture`) and camera-facing
-    /// (`orient: Camera`).
+    /// Whether the splat can draw `ir`'s sprites: round (no `texture`), camera-facing
+    /// (`orient: Camera`) and into an 8-bit image (no `glow`).
     pub fn draws(ir: &plume_compiler::EffectIr) -> bool {
-        ir.render.orient == OrientIr::Camera && ir.render.texture.is_none()
+        ir.render.orient == OrientIr::Camera
+            && ir.render.texture.is_none()
+            && ir.render.glow.is_none()
     }
 
     /// A splat of `instance` into `width` x `height` images; an error for sprites it cannot
@@ -106,16 +108,16 @@ impl Splat {
             )));
         }
         if !Self::draws(&effect.ir) {
-            let why = match &effect.ir.render.texture {
-                Some(t) => format!("textured (render.texture: {:?})", t.file),
-                None => format!(
-                    "oriented (render.orient: {})",
-                    effect.ir.render.orient.name()
-                ),
+            let render = &effect.ir.render;
+            let why = match (&render.texture, render.glow) {
+                (_, Some(_)) => "drawn into an HDR image to glow (render.glow)".to_string(),
+                (Some(t), None) => format!("textured (render.texture: {:?})", t.file),
+                (None, None) => format!("oriented (render.orient: {})", render.orient.name()),
             };
             return Err(RuntimeError::Output(format!(
-                "the compute splat draws round camera-facing sprites only; this effect's sprites \
-                 are {why}: draw it with the raster pipeline (plume render --draw raster)"
+                "the compute splat draws round camera-facing sprites into an 8-bit image only; \
+                 this effect's sprites are {why}: draw it with the raster pipeline \
+                 (plume render --draw raster)"
             )));
         }
         let count = effect.ir.capacity;

@@ -1,0 +1,59 @@
+// Bloom for `plume render` (render.glow): the light above a threshold, blurred with a separable
+// Gaussian, added back to the HDR image, clamped to an RGBA8 image. Not generated: this shader
+// is the same for every effect (the effect kernels are generated).
+
+struct Params {
+    threshold: f32,
+    strength: f32,
+    // Taps on each side of the centre (about 3 sigma).
+    taps: i32,
+    // -1 / (2 sigma^2), in texels.
+    falloff: f32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var source: texture_2d<f32>;
+
+// Pass 1: the bright part of the HDR image, blurred along x.
+@group(0) @binding(2) var blurred_x: texture_storage_2d<rgba16float, write>;
+
+@compute @workgroup_size(8, 8)
+fn blur_x(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = vec2<i32>(textureDimensions(source));
+    let p = vec2<i32>(gid.xy);
+    if (p.x >= size.x || p.y >= size.y) {
+        return;
+    }
+    var sum = vec3<f32>(0.0);
+    var weights = 0.0;
+    for (var k = -params.taps; k <= params.taps; k++) {
+        let w = exp(f32(k * k) * params.falloff);
+        let c = textureLoad(source, vec2<i32>(clamp(p.x + k, 0, size.x - 1), p.y), 0).rgb;
+        sum += w * max(c - vec3<f32>(params.threshold), vec3<f32>(0.0));
+        weights += w;
+    }
+    textureStore(blurred_x, p, vec4<f32>(sum / weights, 1.0));
+}
+
+// Pass 2: pass 1 blurred along y, added to the HDR image, clamped to [0, 1].
+@group(0) @binding(3) var hdr: texture_2d<f32>;
+@group(0) @binding(4) var image: texture_storage_2d<rgba8unorm, write>;
+
+@compute @workgroup_size(8, 8)
+fn blur_y_and_add(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let size = vec2<i32>(textureDimensions(source));
+    let p = vec2<i32>(gid.xy);
+    if (p.x >= size.x || p.y >= size.y) {
+        return;
+    }
+    var sum = vec3<f32>(0.0);
+    var weights = 0.0;
+    for (var k = -params.taps; k <= params.taps; k++) {
+        let w = exp(f32(k * k) * params.falloff);
+        sum += w * textureLoad(source, vec2<i32>(p.x, clamp(p.y + k, 0, size.y - 1)), 0).rgb;
+        weights += w;
+    }
+    let c = textureLoad(hdr, p, 0);
+    let lit = c.rgb + params.strength * sum / weights;
+    textureStore(image, p, clamp(vec4<f32>(lit, c.a), vec4<f32>(0.0), vec4<f32>(1.0)));
+}

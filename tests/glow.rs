@@ -1,0 +1,124 @@
+//! Glow (`render.glow`) in `plume render`'s images, on llvmpipe: light above the threshold
+//! spreads into a halo that fades with distance and stops where the blur's kernel ends, an
+//! image with nothing above the threshold is the plain image, and the compute splat refuses
+//! glowing effects.
+
+mod common;
+
+use common::*;
+use plume::runtime::offscreen::Offscreen;
+use plume::runtime::splat::Splat;
+use plume::runtime::{EffectInstance, Gpu};
+
+const W: u32 = 160;
+const H: u32 = 100;
+
+/// `count` additive white particles stacked at the origin (each of alpha `alpha`), a 1 m
+/// sprite 10 m away, with the glow `glow` (RON, or "None").
+fn stack(gpu: &Gpu, count: u32, alpha: f64, glow: &str) -> EffectInstance {
+    let src = format!(
+        r#"Effect(
+    name: "glow-probe",
+    capacity: {count},
+    emitters: [Emitter(burst: {count}, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, {alpha}))], size: [(0.0, 1.0)], blend: Additive,
+                   background: (0.0, 0.0, 0.0), glow: {glow}),
+)"#
+    );
+    let mut sim = EffectInstance::new(gpu, compile(&src)).unwrap();
+    sim.run(1, |_| {}).unwrap();
+    sim
+}
+
+/// The image of `sim` as `plume render` draws it (with its glow), and without the glow.
+fn draw(sim: &EffectInstance) -> (Vec<u8>, Vec<u8>) {
+    let gpu = sim.gpu();
+    let glow = sim.effect().ir.render.glow;
+    let glowing = Offscreen::with_glow(gpu, W, H, glow.as_ref()).unwrap();
+    let plain = Offscreen::new(gpu, W, H).unwrap();
+    let camera = plain.effect_camera(sim);
+    let a = glowing
+        .render(sim, &sim.renderer(&glowing.target()).unwrap(), &camera)
+        .unwrap();
+    let b = plain
+        .render(sim, &sim.renderer(&plain.target()).unwrap(), &camera)
+        .unwrap();
+    (a, b)
+}
+
+/// The red value at `dx` pixels right of the image centre, on its middle row.
+fn red(img: &[u8], dx: u32) -> u8 {
+    img[4 * ((H / 2) * W + W / 2 + dx) as usize]
+}
+
+#[test]
+fn bright_light_spreads_into_a_halo_that_fades_and_ends_with_the_kernel() {
+    let gpu = gpu();
+    // 40 sprites of alpha 0.1 add up to 4 at the centre: far above the threshold 0.5.
+    let sim = stack(
+        &gpu,
+        40,
+        0.1,
+        "Some(Glow(threshold: 0.5, strength: 1.0, radius: 0.03))",
+    );
+    let (glowing, plain) = draw(&sim);
+    // The 1 m sprite is 1 / (2 · 10 · tan 20°) of the 100-pixel height across: a 13.7-pixel
+    // disc, radius 6.9. Outside it the plain image is background.
+    let rim = 7;
+    for dx in rim..W / 2 {
+        assert_eq!(red(&plain, dx), 0, "plain image outside the disc at +{dx}");
+    }
+    // With glow, the halo lights the pixels past the rim, less and less further out...
+    let halo: Vec<u8> = (rim..rim + 8).map(|dx| red(&glowing, dx)).collect();
+    assert!(halo[0] > 20, "the halo starts bright at the rim: {halo:?}");
+    assert!(
+        halo.windows(2).all(|w| w[1] <= w[0]) && halo[7] < halo[0],
+        "and fades with distance: {halo:?}"
+    );
+    // ... and stops where the kernel does: sigma 3 pixels (0.03 of 100), 9 taps, so nothing
+    // lights past the rim's 6.9 pixels plus 9 pixels of blur.
+    for dx in rim + 10..W / 2 {
+        assert_eq!(red(&glowing, dx), 0, "past the kernel at +{dx}");
+    }
+    // Inside the disc both are saturated.
+    assert_eq!((red(&glowing, 0), red(&plain, 0)), (255, 255));
+}
+
+#[test]
+fn light_below_the_threshold_leaves_the_image_as_it_is() {
+    let gpu = gpu();
+    // One sprite of alpha 0.4: at most 0.4, below the threshold 0.5: nothing glows.
+    let sim = stack(
+        &gpu,
+        1,
+        0.4,
+        "Some(Glow(threshold: 0.5, strength: 2.0, radius: 0.03))",
+    );
+    let (glowing, plain) = draw(&sim);
+    // The HDR image blends in half floats, the plain one in 8 bits: a step apart at most.
+    let max = glowing
+        .iter()
+        .zip(&plain)
+        .map(|(a, b)| a.abs_diff(*b))
+        .max()
+        .unwrap();
+    assert!(max <= 1, "images differ by up to {max}");
+    assert!(
+        red(&plain, 0) > 90,
+        "the sprite is drawn: {}",
+        red(&plain, 0)
+    );
+}
+
+#[test]
+fn the_compute_splat_refuses_glowing_effects() {
+    let gpu = gpu();
+    let sim = stack(&gpu, 1, 1.0, "Some(Glow())");
+    assert!(!Splat::draws(&sim.effect().ir));
+    let message = Splat::new(&sim, 64, 64).err().expect("refused").to_string();
+    assert!(
+        message.contains("render.glow") && message.contains("--draw raster"),
+        "{message}"
+    );
+}
