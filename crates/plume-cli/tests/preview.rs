@@ -91,3 +91,87 @@ fn a_file_with_errors_fails_to_open_with_located_diagnostics() {
     assert!(stderr.contains("bad.ron:1:"), "located: {stderr}");
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+#[test]
+fn a_glowing_effect_glows_in_the_preview_as_in_plume_render() {
+    // sparks.ron has render.glow: after 24 steps the preview's screenshot (one step a frame)
+    // and plume render's frame of step 24 are the same bloomed image.
+    let dir = std::env::temp_dir().join(format!("plume-preview-glow-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (shot, still) = (dir.join("preview.png"), dir.join("render.png"));
+    let out = xvfb_run()
+        .arg(env!("CARGO_BIN_EXE_plume"))
+        .arg("preview")
+        .arg(effect("sparks.ron"))
+        .args(["--size", "480x270", "--frames", "24", "--screenshot"])
+        .arg(&shot)
+        .output()
+        .expect("xvfb-run runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = plume()
+        .arg("render")
+        .arg(effect("sparks.ron"))
+        .args([
+            "--frames", "1", "--every", "24", "--size", "480x270", "--out",
+        ])
+        .arg(&still)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // The same sparks without their glow, for comparison.
+    let source = std::fs::read_to_string(effect("sparks.ron")).unwrap();
+    let plain_source: String = source
+        .lines()
+        .filter(|l| !l.contains("glow: Some"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    assert_ne!(plain_source.len(), source.len(), "sparks.ron glows");
+    let (plain_file, plain) = (dir.join("plain.ron"), dir.join("plain.png"));
+    std::fs::write(&plain_file, plain_source).unwrap();
+    let out = plume()
+        .arg("render")
+        .arg(&plain_file)
+        .args([
+            "--frames", "1", "--every", "24", "--size", "480x270", "--out",
+        ])
+        .arg(&plain)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let a = image::open(&shot).unwrap().to_rgba8();
+    let b = image::open(&still).unwrap().to_rgba8();
+    let c = image::open(&plain).unwrap().to_rgba8();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(a.dimensions(), b.dimensions());
+    let max = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap();
+    assert!(max <= 1, "preview and render differ by up to {max}");
+    // And the glow is there: light spills past the sparks onto pixels the plain draw leaves
+    // dark, and the image is brighter overall.
+    let lit = |img: &image::RgbaImage| img.pixels().filter(|p| p[0] > 8).count();
+    let sum = |img: &image::RgbaImage| img.as_raw().iter().map(|&x| u64::from(x)).sum::<u64>();
+    assert!(
+        lit(&a) > lit(&c) * 11 / 10,
+        "lit pixels: {} glowing, {} plain",
+        lit(&a),
+        lit(&c)
+    );
+    assert!(sum(&a) > sum(&c), "the glowing image is brighter");
+}

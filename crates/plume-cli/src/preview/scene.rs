@@ -1,9 +1,13 @@
 //! The preview's frame target: the effect is drawn into an RGBA8 texture, the format
 //! `plume render` writes, so the window shows the same colours and a screenshot is exactly the
 //! effect's image; a fullscreen triangle then copies it onto the window's surface, pixel for
-//! pixel, and the on-screen text goes over that.
+//! pixel, and the on-screen text goes over that. An effect with `render.glow` is drawn into an
+//! HDR texture and bloomed into the frame, as `plume render` does.
 
+use plume_compiler::schema::Glow;
+use plume_runtime::glow::{GlowPasses, HDR_FORMAT};
 use plume_runtime::offscreen::FORMAT;
+use plume_runtime::Gpu;
 
 const BLIT_WGSL: &str = r#"
 @group(0) @binding(0) var scene: texture_2d<f32>;
@@ -28,6 +32,10 @@ pub struct Scene {
     size: (u32, u32),
     blit: wgpu::RenderPipeline,
     group: wgpu::BindGroup,
+    /// The loaded effect's glow, and while it has one the HDR texture drawn into and the bloom
+    /// passes into the frame.
+    glow: Option<Glow>,
+    bloom: Option<(wgpu::TextureView, GlowPasses)>,
 }
 
 impl Scene {
@@ -69,6 +77,60 @@ impl Scene {
             size,
             blit,
             group,
+            glow: None,
+            bloom: None,
+        }
+    }
+
+    /// Uses `glow` from now on (a newly loaded effect's); on an error nothing changes.
+    pub fn set_glow(&mut self, gpu: &Gpu, glow: Option<Glow>) -> Result<(), String> {
+        let old = std::mem::replace(&mut self.glow, glow);
+        self.rebuild_bloom(gpu).inspect_err(|_| self.glow = old)
+    }
+
+    fn rebuild_bloom(&mut self, gpu: &Gpu) -> Result<(), String> {
+        self.bloom = match &self.glow {
+            Some(g) => {
+                let (width, height) = (self.size.0.max(1), self.size.1.max(1));
+                let hdr = gpu
+                    .device
+                    .create_texture(&wgpu::TextureDescriptor {
+                        label: Some("preview frame, HDR"),
+                        size: wgpu::Extent3d {
+                            width,
+                            height,
+                            depth_or_array_layers: 1,
+                        },
+                        mip_level_count: 1,
+                        sample_count: 1,
+                        dimension: wgpu::TextureDimension::D2,
+                        format: HDR_FORMAT,
+                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
+                            | wgpu::TextureUsages::TEXTURE_BINDING,
+                        view_formats: &[],
+                    })
+                    .create_view(&Default::default());
+                let passes = GlowPasses::new(gpu, g, &hdr, &self.view, width, height)
+                    .map_err(|e| e.to_string())?;
+                Some((hdr, passes))
+            }
+            None => None,
+        };
+        Ok(())
+    }
+
+    /// The format an effect with `glow` is drawn in: the frame's, or the HDR one.
+    pub fn draw_format(glow: Option<&Glow>) -> wgpu::TextureFormat {
+        match glow {
+            Some(_) => HDR_FORMAT,
+            None => FORMAT,
+        }
+    }
+
+    /// Records what turns the drawn texture into the frame: the bloom, while it glows.
+    pub fn finish(&self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some((_, passes)) = &self.bloom {
+            passes.record(encoder);
         }
     }
 
@@ -90,6 +152,7 @@ impl Scene {
             format: FORMAT,
             usage: wgpu::TextureUsages::RENDER_ATTACHMENT
                 | wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
                 | wgpu::TextureUsages::COPY_SRC,
             view_formats: &[],
         });
@@ -106,16 +169,19 @@ impl Scene {
     }
 
     /// A new size (the window was resized).
-    pub fn resize(&mut self, device: &wgpu::Device, size: (u32, u32)) {
+    pub fn resize(&mut self, gpu: &Gpu, size: (u32, u32)) -> Result<(), String> {
         if size != self.size {
-            (self.texture, self.view, self.group) = Self::target(device, &self.blit, size);
+            (self.texture, self.view, self.group) = Self::target(&gpu.device, &self.blit, size);
             self.size = size;
+            self.rebuild_bloom(gpu)?;
         }
+        Ok(())
     }
 
-    /// The frame, to draw the effect into.
+    /// The texture to draw the effect into: the frame, or the HDR one while it glows (then
+    /// [`Self::finish`] blooms it into the frame).
     pub fn view(&self) -> &wgpu::TextureView {
-        &self.view
+        self.bloom.as_ref().map_or(&self.view, |(hdr, _)| hdr)
     }
 
     /// The frame texture, to read a screenshot back.

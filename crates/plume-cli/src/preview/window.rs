@@ -235,10 +235,14 @@ impl Running {
         );
         let dt = compiled.ir.dt;
         let camera = compiled.ir.camera;
+        let glow = compiled.ir.render.glow;
         let instance = EffectInstance::new(&self.gpu, compiled).map_err(|e| e.to_string())?;
         let renderer = instance
-            .renderer(&DrawTarget::new(plume_runtime::offscreen::FORMAT))
+            .renderer(&DrawTarget::new(Scene::draw_format(glow.as_ref())))
             .map_err(|e| e.to_string())?;
+        // Last, and all or nothing: the old effect keeps drawing into a matching scene if this
+        // fails.
+        self.scene.set_glow(&self.gpu, glow)?;
         self.effect = Some(Loaded {
             instance,
             renderer,
@@ -271,7 +275,7 @@ impl Running {
             None => self.clock.steps_due(elapsed),
         };
         let (w, h) = (self.config.width, self.config.height);
-        self.scene.resize(&self.gpu.device, (w, h));
+        self.scene.resize(&self.gpu, (w, h))?;
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         let mut stepped = None;
         let mut drawn = false;
@@ -314,6 +318,8 @@ impl Running {
                 multiview_mask: None,
             });
             loaded.renderer.draw(&mut pass);
+            drop(pass);
+            self.scene.finish(&mut encoder);
             drawn = true;
             counters = loaded.instance.counters().map(|c| {
                 (
