@@ -7,10 +7,8 @@ mod common;
 
 use common::*;
 use plume::compiler::schema::State;
-use plume::runtime::offscreen::Offscreen;
-use plume::runtime::reference_draw::{sprites, ReferenceRenderer};
 use plume::runtime::splat::Splat;
-use plume::runtime::{Camera, EffectInstance, Gpu};
+use plume::runtime::{EffectInstance, Gpu};
 use plume::{compile_str, CompileOptions, Integrator};
 
 /// Image side (square, so a pixel is the same size in x and y).
@@ -49,23 +47,9 @@ fn probe(
     sim
 }
 
-/// The GPU draw of `sim` from its camera, and the CPU-fed reference drawing of the same
-/// particles (half axes in f64).
+/// The GPU draw of `sim` and the CPU-fed reference drawing, `SIDE` pixels square.
 fn draw_both(sim: &EffectInstance) -> (Vec<u8>, Vec<u8>) {
-    let target = Offscreen::new(sim.gpu(), SIDE, SIDE).unwrap();
-    let camera = target.effect_camera(sim);
-    let gpu_img = target
-        .render(sim, &sim.renderer(&target.target()).unwrap(), &camera)
-        .unwrap();
-    let ir = &sim.effect().ir;
-    let reference = ReferenceRenderer::new(sim.gpu(), SIDE, SIDE, &ir.render).unwrap();
-    let cpu_img = reference
-        .draw(
-            &sprites(&sim.records().unwrap(), ir, camera.view, false),
-            &Camera::from_effect(&ir.camera, 1.0),
-        )
-        .unwrap();
-    (gpu_img, cpu_img)
+    draw_and_reference(sim, SIDE)
 }
 
 /// The red channel's second moments: (long axis / short axis, the long axis's angle in degrees

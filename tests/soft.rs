@@ -86,38 +86,10 @@ fn centre(gpu: &Gpu, sim: &EffectInstance, wall: Option<f32>, bind: bool) -> u8 
         None => 1.0,
     };
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-        label: Some("host geometry"),
-        color_attachments: &[],
-        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-            view: &view,
-            depth_ops: Some(wgpu::Operations {
-                load: wgpu::LoadOp::Clear(ndc),
-                store: wgpu::StoreOp::Store,
-            }),
-            stencil_ops: None,
-        }),
-        timestamp_writes: None,
-        occlusion_query_set: None,
-        multiview_mask: None,
-    });
+    // The host's geometry: a wall filling the depth buffer (and its second copy, if any).
+    clear_depth(&mut encoder, &view, ndc);
     if let Some(c) = &second {
-        let cv = c.create_view(&Default::default());
-        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-            label: Some("host geometry, second depth"),
-            color_attachments: &[],
-            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
-                view: &cv,
-                depth_ops: Some(wgpu::Operations {
-                    load: wgpu::LoadOp::Clear(ndc),
-                    store: wgpu::StoreOp::Store,
-                }),
-                stencil_ops: None,
-            }),
-            timestamp_writes: None,
-            occlusion_query_set: None,
-            multiview_mask: None,
-        });
+        clear_depth(&mut encoder, &c.create_view(&Default::default()), ndc);
     }
     sim.prepare_draw(&mut encoder, &renderer, &camera).unwrap();
     {
@@ -140,6 +112,25 @@ fn centre(gpu: &Gpu, sim: &EffectInstance, wall: Option<f32>, bind: bool) -> u8 
     gpu.take_error().unwrap();
     let img = target.read().unwrap();
     img[4 * ((SIDE / 2) * SIDE + SIDE / 2) as usize]
+}
+
+/// Records a pass that clears the depth `view` to `ndc`.
+fn clear_depth(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, ndc: f32) {
+    encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+        label: Some("host geometry"),
+        color_attachments: &[],
+        depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(ndc),
+                store: wgpu::StoreOp::Store,
+            }),
+            stencil_ops: None,
+        }),
+        timestamp_writes: None,
+        occlusion_query_set: None,
+        multiview_mask: None,
+    });
 }
 
 #[test]

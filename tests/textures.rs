@@ -10,10 +10,8 @@ use std::path::{Path, PathBuf};
 
 use common::*;
 use plume::compiler::schema::State;
-use plume::runtime::offscreen::Offscreen;
-use plume::runtime::reference_draw::{sprites, ReferenceRenderer};
 use plume::runtime::splat::Splat;
-use plume::runtime::{Camera, EffectInstance, Gpu};
+use plume::runtime::{EffectInstance, Gpu};
 use plume::{compile_str, CompileOptions};
 
 /// Image side (square).
@@ -73,23 +71,9 @@ fn probe(
     EffectInstance::new(gpu, effect).unwrap()
 }
 
-/// The GPU draw of `sim` from its camera, and the CPU-fed reference drawing of the same
-/// particles (frame chosen in f64 from the records' ages).
+/// The GPU draw of `sim` and the CPU-fed reference drawing, `SIDE` pixels square.
 fn draw_both(sim: &EffectInstance) -> (Vec<u8>, Vec<u8>) {
-    let target = Offscreen::new(sim.gpu(), SIDE, SIDE).unwrap();
-    let camera = target.effect_camera(sim);
-    let gpu_img = target
-        .render(sim, &sim.renderer(&target.target()).unwrap(), &camera)
-        .unwrap();
-    let ir = &sim.effect().ir;
-    let reference = ReferenceRenderer::new(sim.gpu(), SIDE, SIDE, &ir.render).unwrap();
-    let cpu_img = reference
-        .draw(
-            &sprites(&sim.records().unwrap(), ir, camera.view, false),
-            &Camera::from_effect(&ir.camera, 1.0),
-        )
-        .unwrap();
-    (gpu_img, cpu_img)
+    draw_and_reference(sim, SIDE)
 }
 
 fn pixel(img: &[u8], x: u32, y: u32) -> [u8; 3] {

@@ -32,7 +32,6 @@ pub fn compile(source: &str) -> CompiledEffect {
 
 /// Reads and compiles the effect file at `path` (its texture resolved from its directory), or
 /// fails the test with the rendered diagnostics.
-#[allow(dead_code)]
 pub fn compile_file(path: &std::path::Path) -> CompiledEffect {
     let source = std::fs::read_to_string(path).unwrap();
     let options = CompileOptions {
@@ -41,6 +40,27 @@ pub fn compile_file(path: &std::path::Path) -> CompiledEffect {
     };
     compile_str(&source, &options)
         .unwrap_or_else(|e| panic!("{}", e.render(&path.display().to_string(), &source)))
+}
+
+/// The GPU draw of `sim` from its camera into a `side` x `side` image, and the CPU-fed
+/// reference drawing of the same particles (colour, size, half axes and frames in f64).
+pub fn draw_and_reference(sim: &EffectInstance, side: u32) -> (Vec<u8>, Vec<u8>) {
+    use plume::runtime::offscreen::Offscreen;
+    use plume::runtime::reference_draw::{sprites, ReferenceRenderer};
+    let target = Offscreen::new(sim.gpu(), side, side).unwrap();
+    let camera = target.effect_camera(sim);
+    let gpu_img = target
+        .render(sim, &sim.renderer(&target.target()).unwrap(), &camera)
+        .unwrap();
+    let ir = &sim.effect().ir;
+    let reference = ReferenceRenderer::new(sim.gpu(), side, side, &ir.render).unwrap();
+    let cpu_img = reference
+        .draw(
+            &sprites(&sim.records().unwrap(), ir, camera.view, false),
+            &plume::runtime::Camera::from_effect(&ir.camera, 1.0),
+        )
+        .unwrap();
+    (gpu_img, cpu_img)
 }
 
 /// Runs `steps` on the GPU; returns totals and live particles.

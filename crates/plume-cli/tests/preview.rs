@@ -92,6 +92,21 @@ fn a_file_with_errors_fails_to_open_with_located_diagnostics() {
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
 
+/// `plume render`'s 480x270 frame of step 24 of `file`, written to `out`.
+fn render_step_24(file: &Path, out: &Path) {
+    let run = plume()
+        .arg("render")
+        .arg(file)
+        .args([
+            "--frames", "1", "--every", "24", "--size", "480x270", "--out",
+        ])
+        .arg(out)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "{stderr}");
+}
+
 #[test]
 fn a_glowing_effect_glows_in_the_preview_as_in_plume_render() {
     // sparks.ron has render.glow: after 24 steps the preview's screenshot (one step a frame)
@@ -112,20 +127,7 @@ fn a_glowing_effect_glows_in_the_preview_as_in_plume_render() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let out = plume()
-        .arg("render")
-        .arg(effect("sparks.ron"))
-        .args([
-            "--frames", "1", "--every", "24", "--size", "480x270", "--out",
-        ])
-        .arg(&still)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    render_step_24(&effect("sparks.ron"), &still);
     // The same sparks without their glow, for comparison.
     let source = std::fs::read_to_string(effect("sparks.ron")).unwrap();
     let plain_source: String = source
@@ -136,20 +138,7 @@ fn a_glowing_effect_glows_in_the_preview_as_in_plume_render() {
     assert_ne!(plain_source.len(), source.len(), "sparks.ron glows");
     let (plain_file, plain) = (dir.join("plain.ron"), dir.join("plain.png"));
     std::fs::write(&plain_file, plain_source).unwrap();
-    let out = plume()
-        .arg("render")
-        .arg(&plain_file)
-        .args([
-            "--frames", "1", "--every", "24", "--size", "480x270", "--out",
-        ])
-        .arg(&plain)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    render_step_24(&plain_file, &plain);
     let a = image::open(&shot).unwrap().to_rgba8();
     let b = image::open(&still).unwrap().to_rgba8();
     let c = image::open(&plain).unwrap().to_rgba8();

@@ -12,8 +12,9 @@ use crate::gpu::Gpu;
 /// The format the effect is drawn into when it glows: additive sprites can add up past 1.
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 
-/// The bloom passes for one image size, bound to its HDR and RGBA8 images.
+/// The HDR image to draw into and the bloom passes into an RGBA8 image, for one image size.
 pub struct GlowPasses {
+    hdr: wgpu::TextureView,
     blur_x: (wgpu::ComputePipeline, wgpu::BindGroup),
     blur_y: (wgpu::ComputePipeline, wgpu::BindGroup),
     groups: (u32, u32),
@@ -30,12 +31,11 @@ pub fn kernel(radius: f64, height: u32) -> (i32, f32) {
 }
 
 impl GlowPasses {
-    /// The passes that read `hdr` (a [`HDR_FORMAT`] image of `width` x `height`, drawn into)
-    /// and write `image` (RGBA8, with `STORAGE_BINDING`).
+    /// A [`HDR_FORMAT`] image of `width` x `height` (see [`Self::hdr`]) and the passes that
+    /// bloom it into `image` (RGBA8, the same size, with `STORAGE_BINDING`).
     pub fn new(
         gpu: &Gpu,
         glow: &Glow,
-        hdr: &wgpu::TextureView,
         image: &wgpu::TextureView,
         width: u32,
         height: u32,
@@ -54,22 +54,17 @@ impl GlowPasses {
             wgpu::BufferUsages::UNIFORM,
             |b| b.copy_from_slice(&bytes),
         )?;
-        let blurred = device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("glow blurred along x"),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: HDR_FORMAT,
-                usage: wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            })
-            .create_view(&Default::default());
+        let hdr_image = |label, usage| {
+            gpu.texture_2d(
+                label,
+                (width, height),
+                HDR_FORMAT,
+                usage | wgpu::TextureUsages::TEXTURE_BINDING,
+            )
+            .create_view(&Default::default())
+        };
+        let hdr = hdr_image("frame, HDR", wgpu::TextureUsages::RENDER_ATTACHMENT);
+        let blurred = hdr_image("glow blurred along x", wgpu::TextureUsages::STORAGE_BINDING);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("glow"),
             source: wgpu::ShaderSource::Wgsl(include_str!("glow.wgsl").into()),
@@ -91,14 +86,20 @@ impl GlowPasses {
             });
             (pipeline, group)
         };
-        let blur_x = pass("blur_x", &[(1, hdr), (2, &blurred)]);
-        let blur_y = pass("blur_y_and_add", &[(1, &blurred), (3, hdr), (4, image)]);
+        let blur_x = pass("blur_x", &[(1, &hdr), (2, &blurred)]);
+        let blur_y = pass("blur_y_and_add", &[(1, &blurred), (3, &hdr), (4, image)]);
         gpu.take_error()?;
         Ok(Self {
+            hdr,
             blur_x,
             blur_y,
             groups: (width.div_ceil(8), height.div_ceil(8)),
         })
+    }
+
+    /// The HDR image to draw the effect into (a colour attachment of [`HDR_FORMAT`]).
+    pub fn hdr(&self) -> &wgpu::TextureView {
+        &self.hdr
     }
 
     /// Records both passes (after the effect's draw into the HDR image).

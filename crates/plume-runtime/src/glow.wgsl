@@ -14,46 +14,45 @@ struct Params {
 @group(0) @binding(0) var<uniform> params: Params;
 @group(0) @binding(1) var source: texture_2d<f32>;
 
+// The light above `threshold` around `p`, blurred along `step` (one texel in x or in y), the
+// taps clamped to the image.
+fn blur(p: vec2<i32>, step: vec2<i32>, threshold: f32) -> vec3<f32> {
+    let last = vec2<i32>(textureDimensions(source)) - vec2<i32>(1);
+    var sum = vec3<f32>(0.0);
+    var weights = 0.0;
+    for (var k = -params.taps; k <= params.taps; k++) {
+        let w = exp(f32(k * k) * params.falloff);
+        let c = textureLoad(source, clamp(p + k * step, vec2<i32>(0), last), 0).rgb;
+        sum += w * max(c - vec3<f32>(threshold), vec3<f32>(0.0));
+        weights += w;
+    }
+    return sum / weights;
+}
+
 // Pass 1: the bright part of the HDR image, blurred along x.
 @group(0) @binding(2) var blurred_x: texture_storage_2d<rgba16float, write>;
 
 @compute @workgroup_size(8, 8)
 fn blur_x(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let size = vec2<i32>(textureDimensions(source));
     let p = vec2<i32>(gid.xy);
-    if (p.x >= size.x || p.y >= size.y) {
+    if (any(p >= vec2<i32>(textureDimensions(source)))) {
         return;
     }
-    var sum = vec3<f32>(0.0);
-    var weights = 0.0;
-    for (var k = -params.taps; k <= params.taps; k++) {
-        let w = exp(f32(k * k) * params.falloff);
-        let c = textureLoad(source, vec2<i32>(clamp(p.x + k, 0, size.x - 1), p.y), 0).rgb;
-        sum += w * max(c - vec3<f32>(params.threshold), vec3<f32>(0.0));
-        weights += w;
-    }
-    textureStore(blurred_x, p, vec4<f32>(sum / weights, 1.0));
+    textureStore(blurred_x, p, vec4<f32>(blur(p, vec2<i32>(1, 0), params.threshold), 1.0));
 }
 
-// Pass 2: pass 1 blurred along y, added to the HDR image, clamped to [0, 1].
+// Pass 2: pass 1 blurred along y (it is never negative: no threshold), added to the HDR
+// image, clamped to [0, 1].
 @group(0) @binding(3) var hdr: texture_2d<f32>;
 @group(0) @binding(4) var image: texture_storage_2d<rgba8unorm, write>;
 
 @compute @workgroup_size(8, 8)
 fn blur_y_and_add(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let size = vec2<i32>(textureDimensions(source));
     let p = vec2<i32>(gid.xy);
-    if (p.x >= size.x || p.y >= size.y) {
+    if (any(p >= vec2<i32>(textureDimensions(source)))) {
         return;
     }
-    var sum = vec3<f32>(0.0);
-    var weights = 0.0;
-    for (var k = -params.taps; k <= params.taps; k++) {
-        let w = exp(f32(k * k) * params.falloff);
-        sum += w * textureLoad(source, vec2<i32>(p.x, clamp(p.y + k, 0, size.y - 1)), 0).rgb;
-        weights += w;
-    }
     let c = textureLoad(hdr, p, 0);
-    let lit = c.rgb + params.strength * sum / weights;
+    let lit = c.rgb + params.strength * blur(p, vec2<i32>(0, 1), 0.0);
     textureStore(image, p, clamp(vec4<f32>(lit, c.a), vec4<f32>(0.0), vec4<f32>(1.0)));
 }

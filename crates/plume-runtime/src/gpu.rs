@@ -228,6 +228,23 @@ impl Gpu {
         })
     }
 
+    /// A `width` x `height` 2D texture of `format` with one mip level and one sample (every
+    /// image, frame and lookup texture the runtime makes).
+    pub fn texture_2d(
+        &self,
+        label: &str,
+        (width, height): (u32, u32),
+        format: wgpu::TextureFormat,
+        usage: wgpu::TextureUsages,
+    ) -> wgpu::Texture {
+        self.device.create_texture(&texture_2d_descriptor(
+            label,
+            (width, height),
+            format,
+            usage,
+        ))
+    }
+
     /// The compute pipeline of `module`'s entry point `entry` (also its label), on `layout`, or
     /// on the layout derived from the bindings the entry point uses when `None`.
     ///
@@ -307,5 +324,28 @@ impl Gpu {
             .poll(wgpu::PollType::wait_indefinitely())
             .map_err(|e| RuntimeError::Gpu(e.to_string()))?;
         self.take_error()
+    }
+}
+
+/// The descriptor [`Gpu::texture_2d`] creates a texture from (for `create_texture_with_data`).
+pub fn texture_2d_descriptor(
+    label: &str,
+    (width, height): (u32, u32),
+    format: wgpu::TextureFormat,
+    usage: wgpu::TextureUsages,
+) -> wgpu::TextureDescriptor<'_> {
+    wgpu::TextureDescriptor {
+        label: Some(label),
+        size: wgpu::Extent3d {
+            width,
+            height,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage,
+        view_formats: &[],
     }
 }

@@ -24,7 +24,7 @@ pub struct Offscreen {
     texture: wgpu::Texture,
     view: wgpu::TextureView,
     /// With glow: the HDR image drawn into and the bloom passes that turn it into `texture`.
-    glow: Option<(wgpu::TextureView, GlowPasses)>,
+    glow: Option<GlowPasses>,
 }
 
 impl Offscreen {
@@ -47,50 +47,20 @@ impl Offscreen {
                 "image size {width}x{height} must be between 1x1 and {max}x{max} on this adapter"
             )));
         }
-        let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-            label: Some("frame"),
-            size: wgpu::Extent3d {
-                width,
-                height,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: FORMAT,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                | wgpu::TextureUsages::COPY_SRC
-                | if glow.is_some() {
-                    wgpu::TextureUsages::STORAGE_BINDING
-                } else {
-                    wgpu::TextureUsages::empty()
-                },
-            view_formats: &[],
-        });
+        // The bloom passes write the image when it glows.
+        let storage = match glow {
+            Some(_) => wgpu::TextureUsages::STORAGE_BINDING,
+            None => wgpu::TextureUsages::empty(),
+        };
+        let texture = gpu.texture_2d(
+            "frame",
+            (width, height),
+            FORMAT,
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC | storage,
+        );
         let view = texture.create_view(&Default::default());
         let glow = match glow {
-            Some(g) => {
-                let hdr = gpu
-                    .device
-                    .create_texture(&wgpu::TextureDescriptor {
-                        label: Some("frame, HDR"),
-                        size: wgpu::Extent3d {
-                            width,
-                            height,
-                            depth_or_array_layers: 1,
-                        },
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format: HDR_FORMAT,
-                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                            | wgpu::TextureUsages::TEXTURE_BINDING,
-                        view_formats: &[],
-                    })
-                    .create_view(&Default::default());
-                let passes = GlowPasses::new(gpu, g, &hdr, &view, width, height)?;
-                Some((hdr, passes))
-            }
+            Some(g) => Some(GlowPasses::new(gpu, g, &view, width, height)?),
             None => None,
         };
         gpu.take_error()?;
@@ -131,7 +101,7 @@ impl Offscreen {
     /// With glow this is the HDR image, bloomed into the RGBA8 one by [`Self::finish`].
     pub fn attachment(&self, background: DVec3) -> wgpu::RenderPassColorAttachment<'_> {
         wgpu::RenderPassColorAttachment {
-            view: self.glow.as_ref().map_or(&self.view, |(hdr, _)| hdr),
+            view: self.glow.as_ref().map_or(&self.view, GlowPasses::hdr),
             depth_slice: None,
             resolve_target: None,
             ops: wgpu::Operations {
@@ -177,7 +147,7 @@ impl Offscreen {
     /// when it glows, nothing otherwise (after a render pass of the caller's into
     /// [`Self::attachment`]).
     pub fn finish(&self, encoder: &mut wgpu::CommandEncoder) {
-        if let Some((_, passes)) = &self.glow {
+        if let Some(passes) = &self.glow {
             passes.record(encoder);
         }
     }

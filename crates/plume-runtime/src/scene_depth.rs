@@ -13,20 +13,12 @@ pub(crate) fn far_placeholder(
     gpu: &Gpu,
     test: &DepthTest,
 ) -> Result<wgpu::TextureView, RuntimeError> {
-    let texture = gpu.device.create_texture(&wgpu::TextureDescriptor {
-        label: Some("scene depth placeholder"),
-        size: wgpu::Extent3d {
-            width: 1,
-            height: 1,
-            depth_or_array_layers: 1,
-        },
-        mip_level_count: 1,
-        sample_count: 1,
-        dimension: wgpu::TextureDimension::D2,
-        format: test.format,
-        usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-        view_formats: &[],
-    });
+    let texture = gpu.texture_2d(
+        "scene depth placeholder",
+        (1, 1),
+        test.format,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+    );
     let far = match test.compare {
         wgpu::CompareFunction::Greater | wgpu::CompareFunction::GreaterEqual => 0.0,
         _ => 1.0,

@@ -5,7 +5,7 @@ use plume_compiler::texture::TextureIr;
 use wgpu::util::DeviceExt;
 
 use crate::error::RuntimeError;
-use crate::gpu::Gpu;
+use crate::gpu::{texture_2d_descriptor, Gpu};
 
 /// The texture's view and its sampler, ready to bind.
 pub struct SpriteTexture {
@@ -38,20 +38,12 @@ impl SpriteTexture {
         }
         let texture = gpu.device.create_texture_with_data(
             &gpu.queue,
-            &wgpu::TextureDescriptor {
-                label: Some("sprite texture"),
-                size: wgpu::Extent3d {
-                    width,
-                    height,
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: wgpu::TextureFormat::Rgba8Unorm,
-                usage: wgpu::TextureUsages::TEXTURE_BINDING,
-                view_formats: &[],
-            },
+            &texture_2d_descriptor(
+                "sprite texture",
+                (width, height),
+                wgpu::TextureFormat::Rgba8Unorm,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            ),
             wgpu::util::TextureDataOrder::LayerMajor,
             rgba,
         );

@@ -35,7 +35,7 @@ pub struct Scene {
     /// The loaded effect's glow, and while it has one the HDR texture drawn into and the bloom
     /// passes into the frame.
     glow: Option<Glow>,
-    bloom: Option<(wgpu::TextureView, GlowPasses)>,
+    bloom: Option<GlowPasses>,
 }
 
 impl Scene {
@@ -92,27 +92,8 @@ impl Scene {
         self.bloom = match &self.glow {
             Some(g) => {
                 let (width, height) = (self.size.0.max(1), self.size.1.max(1));
-                let hdr = gpu
-                    .device
-                    .create_texture(&wgpu::TextureDescriptor {
-                        label: Some("preview frame, HDR"),
-                        size: wgpu::Extent3d {
-                            width,
-                            height,
-                            depth_or_array_layers: 1,
-                        },
-                        mip_level_count: 1,
-                        sample_count: 1,
-                        dimension: wgpu::TextureDimension::D2,
-                        format: HDR_FORMAT,
-                        usage: wgpu::TextureUsages::RENDER_ATTACHMENT
-                            | wgpu::TextureUsages::TEXTURE_BINDING,
-                        view_formats: &[],
-                    })
-                    .create_view(&Default::default());
-                let passes = GlowPasses::new(gpu, g, &hdr, &self.view, width, height)
-                    .map_err(|e| e.to_string())?;
-                Some((hdr, passes))
+                let passes = GlowPasses::new(gpu, g, &self.view, width, height);
+                Some(passes.map_err(|e| e.to_string())?)
             }
             None => None,
         };
@@ -129,7 +110,7 @@ impl Scene {
 
     /// Records what turns the drawn texture into the frame: the bloom, while it glows.
     pub fn finish(&self, encoder: &mut wgpu::CommandEncoder) {
-        if let Some((_, passes)) = &self.bloom {
+        if let Some(passes) = &self.bloom {
             passes.record(encoder);
         }
     }
@@ -181,7 +162,7 @@ impl Scene {
     /// The texture to draw the effect into: the frame, or the HDR one while it glows (then
     /// [`Self::finish`] blooms it into the frame).
     pub fn view(&self) -> &wgpu::TextureView {
-        self.bloom.as_ref().map_or(&self.view, |(hdr, _)| hdr)
+        self.bloom.as_ref().map_or(&self.view, GlowPasses::hdr)
     }
 
     /// The frame texture, to read a screenshot back.
