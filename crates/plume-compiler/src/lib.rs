@@ -64,7 +64,25 @@ pub use schema::{Effect, Integrator};
 
 use locate::SourceMap;
 
-/// Overrides applied on top of the effect file (as `plume run --dt` etc. do).
+/// Overrides applied on top of the effect file (as `plume run --dt` etc. do), and where the
+/// files it names are.
+///
+/// ```
+/// let source = r#"Effect(name: "flakes", capacity: 10,
+///     emitters: [Emitter(burst: 10, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+///     render: Render(texture: Some(Texture(file: "textures/snowflake.png"))))"#;
+/// // The texture is named relative to the effect file, which lies in effects/.
+/// let options = plume_compiler::CompileOptions {
+///     base_dir: Some("../../effects".into()),
+///     ..Default::default()
+/// };
+/// let effect = plume_compiler::compile_str(source, &options).unwrap();
+/// let texture = effect.ir.render.texture.as_ref().unwrap();
+/// assert_eq!((texture.width, texture.height, texture.frames()), (64, 64, 1));
+/// // Looked for elsewhere, it is not found: an error located at the file's name.
+/// let error = plume_compiler::compile_str(source, &Default::default()).unwrap_err();
+/// assert!(error.render("flakes.ron", source).contains("render.texture.file: cannot open texture"));
+/// ```
 #[derive(Clone, Debug, Default)]
 pub struct CompileOptions {
     /// Replaces the file's `dt`.

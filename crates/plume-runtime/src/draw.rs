@@ -304,6 +304,26 @@ impl EffectRenderer {
     /// there, write the scene's depth into a second texture as well and bind that one).
     /// Call it again when the texture changes (a resize); until the first call sprites are not
     /// faded. Does nothing for a draw that is not soft.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{DrawTarget, EffectInstance, Gpu};
+    /// let source = r#"Effect(name: "mist", capacity: 8,
+    ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    ///     render: Render(soft: Some(0.5)))"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let mist = EffectInstance::new(&gpu, plume_compiler::compile_str(source, &Default::default())?)?;
+    /// let depth_format = wgpu::TextureFormat::Depth32Float;
+    /// let target = DrawTarget::new(wgpu::TextureFormat::Rgba8Unorm).with_depth(depth_format);
+    /// let mut particles = mist.renderer(&target)?;
+    /// assert!(particles.is_soft());
+    /// // The host's depth buffer, made bindable.
+    /// let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    /// let depth = gpu.texture_2d("host depth", (640, 360), depth_format, usage);
+    /// particles.set_scene_depth(&depth.create_view(&Default::default()));
+    /// # Ok(())
+    /// # }
+    /// ```
     pub fn set_scene_depth(&mut self, depth: &wgpu::TextureView) {
         if self.soft {
             self.group = draw_group(

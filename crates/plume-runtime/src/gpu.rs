@@ -230,6 +230,16 @@ impl Gpu {
 
     /// A `width` x `height` 2D texture of `format` with one mip level and one sample (every
     /// image, frame and lookup texture the runtime makes).
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// let gpu = plume_runtime::Gpu::new(&Default::default())?;
+    /// let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC;
+    /// let frame = gpu.texture_2d("frame", (64, 32), wgpu::TextureFormat::Rgba8Unorm, usage);
+    /// assert_eq!((frame.width(), frame.height(), frame.mip_level_count()), (64, 32, 1));
+    /// # Ok(())
+    /// # }
+    /// ```
     pub fn texture_2d(
         &self,
         label: &str,

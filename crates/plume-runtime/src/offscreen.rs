@@ -35,6 +35,26 @@ impl Offscreen {
 
     /// A `width` x `height` target on `gpu` that, given a `glow`, draws into an HDR image and
     /// blooms it into the RGBA8 one ([`crate::glow`]).
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::offscreen::Offscreen;
+    /// use plume_runtime::{glow::HDR_FORMAT, EffectInstance, Gpu};
+    /// let source = r#"Effect(name: "spark", capacity: 8,
+    ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    ///     render: Render(color: [(0.0, (1.0, 0.8, 0.4, 0.5))], size: [(0.0, 1.0)], blend: Additive,
+    ///                    glow: Some(Glow(threshold: 0.5, strength: 2.0, radius: 0.05))))"#;
+    /// let effect = plume_compiler::compile_str(source, &Default::default())?;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let target = Offscreen::with_glow(&gpu, 64, 64, effect.ir.render.glow.as_ref())?;
+    /// assert_eq!(target.target().color_format, HDR_FORMAT); // the effect draws into HDR
+    /// let mut spark = EffectInstance::new(&gpu, effect)?;
+    /// spark.run(1, |_| {})?;
+    /// let image = target.render(&spark, &spark.renderer(&target.target())?, &target.effect_camera(&spark))?;
+    /// assert_eq!(image.len(), 64 * 64 * 4); // bloomed, clamped, RGBA8
+    /// # Ok(())
+    /// # }
+    /// ```
     pub fn with_glow(
         gpu: &Gpu,
         width: u32,
