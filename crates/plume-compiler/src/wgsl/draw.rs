@@ -301,9 +301,10 @@ fn emit_life_fraction(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSt
 }
 
 /// `age_steps(p)`: (whole steps lived, whole steps of life; 0 for a particle that never dies),
-/// for choosing a flipbook frame or a spin's angle. From the stored spawn step when there is one; otherwise from
-/// `die_at` and the shared lifetime draw (`needs_spawn_step` stores `born` whenever a particle
-/// that never dies needs its age); (0, 0) when no particle ever dies and none needs its age.
+/// for choosing a flipbook frame or a spin's angle. From the stored spawn step when there is
+/// one; otherwise from `die_at` and the shared lifetime draw (`needs_spawn_step` stores `born`
+/// whenever a particle that never dies needs its age); (0, 0) when no particle ever dies and
+/// none needs its age.
 fn emit_age_steps(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSteps>) {
     let dies = layout.has(Attribute::DeathStep);
     w.comment(
