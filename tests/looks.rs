@@ -94,13 +94,7 @@ fn assert_matches_reference(gpu_img: &[u8], cpu_img: &[u8], what: &str) {
     // The same quad, its corners computed in f32 (view space) on the GPU and in f64 (world
     // space, rounded to f32) on the CPU: they differ by far less than a pixel, which moves a
     // rim pixel's coverage by a step or two.
-    let (mut sum, mut max) = (0u64, 0u8);
-    for (a, b) in gpu_img.iter().zip(cpu_img) {
-        let d = a.abs_diff(*b);
-        sum += u64::from(d);
-        max = max.max(d);
-    }
-    let mean = sum as f64 / gpu_img.len() as f64;
+    let (mean, max, _) = differences(gpu_img, cpu_img, 4);
     assert!(
         mean < 0.01 && max <= 4,
         "{what}: GPU and CPU-fed draws differ: mean {mean}, max {max}"

@@ -84,20 +84,6 @@ fn pixel(img: &[u8], w: u32, x: u32, y: u32) -> [u8; 4] {
     [img[i], img[i + 1], img[i + 2], img[i + 3]]
 }
 
-/// Per-channel absolute differences of two images: (mean, largest, how many exceed `over`).
-fn differences(a: &[u8], b: &[u8], over: u8) -> (f64, u8, usize) {
-    assert_eq!(a.len(), b.len());
-    let mut sum = 0u64;
-    let (mut max, mut count) = (0u8, 0usize);
-    for (x, y) in a.iter().zip(b) {
-        let d = x.abs_diff(*y);
-        sum += u64::from(d);
-        max = max.max(d);
-        count += usize::from(d > over);
-    }
-    (sum as f64 / a.len() as f64, max, count)
-}
-
 /// Still particles at the given points, white and opaque, on black.
 fn still_points(points: &[DVec3], extra: &str) -> String {
     let list: Vec<String> = points

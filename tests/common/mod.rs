@@ -63,6 +63,20 @@ pub fn draw_and_reference(sim: &EffectInstance, side: u32) -> (Vec<u8>, Vec<u8>)
     (gpu_img, cpu_img)
 }
 
+/// Per-channel absolute differences of two images: (mean, largest, how many exceed `over`).
+pub fn differences(a: &[u8], b: &[u8], over: u8) -> (f64, u8, usize) {
+    assert_eq!(a.len(), b.len());
+    let mut sum = 0u64;
+    let (mut max, mut count) = (0u8, 0usize);
+    for (x, y) in a.iter().zip(b) {
+        let d = x.abs_diff(*y);
+        sum += u64::from(d);
+        max = max.max(d);
+        count += usize::from(d > over);
+    }
+    (sum as f64 / a.len() as f64, max, count)
+}
+
 /// Runs `steps` on the GPU; returns totals and live particles.
 pub fn run_gpu(effect: &CompiledEffect, steps: u64) -> (Totals, Vec<ParticleRecord>) {
     let gpu = gpu();
