@@ -22,6 +22,10 @@ fn every_example_compiles_without_warnings_and_matches_its_snapshots() {
         );
         insta::assert_snapshot!("wgsl", compiled.wgsl);
         insta::assert_snapshot!("draw", compiled.draw_wgsl);
+        // Only effects with trails have a trail module (and a snapshot of it).
+        if let Some(trail) = &compiled.trail_wgsl {
+            insta::assert_snapshot!("trail", trail);
+        }
         insta::assert_snapshot!(
             "ir_and_layout",
             format!("{}\n{}", compiled.ir, compiled.layout)

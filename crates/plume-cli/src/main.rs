@@ -69,6 +69,9 @@ enum Emit {
     /// The WGSL draw module (the vertex shader that reads particles from the GPU buffers, and
     /// the sprite's fragment shader).
     Draw,
+    /// The WGSL trail draw module (effects with `render.trail`: the ribbons' vertex and
+    /// fragment shaders).
+    Trail,
     /// The IR after the passes.
     Ir,
     /// The particle struct, bytes of state per particle and the bindings.
@@ -206,6 +209,15 @@ fn compile(file: &Path, output: Option<&Path>, emit: Emit, options: &CompileOpti
     let text = match emit {
         Emit::Wgsl => compiled.wgsl,
         Emit::Draw => compiled.draw_wgsl,
+        Emit::Trail => match compiled.trail_wgsl {
+            Some(text) => text,
+            None => {
+                eprintln!(
+                    "{name}: error: --emit trail: the effect has no render.trail, so it has no trail draw module"
+                );
+                return ExitCode::FAILURE;
+            }
+        },
         Emit::Ir => compiled.ir.to_string(),
         Emit::Layout => compiled.layout.to_string(),
     };

@@ -78,10 +78,12 @@ pub struct RenderIr {
     pub soft: Option<f64>,
     /// Bloom in `plume render`'s images.
     pub glow: Option<crate::schema::Glow>,
+    /// Ribbons through each particle's recent positions, when the effect asks for them.
+    pub trail: Option<crate::trail::TrailIr>,
 }
 
 /// Piecewise-linear interpolation through stops (t increasing), constant beyond the ends.
-fn interpolate<const N: usize>(stops: &[(f64, [f64; N])], t: f64) -> [f64; N] {
+pub(crate) fn interpolate<const N: usize>(stops: &[(f64, [f64; N])], t: f64) -> [f64; N] {
     let Some(first) = stops.first() else {
         return [0.0; N];
     };

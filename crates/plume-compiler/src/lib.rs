@@ -54,6 +54,7 @@ pub mod rotation;
 pub mod schedule;
 pub mod schema;
 pub mod texture;
+pub mod trail;
 pub mod validate;
 pub mod wgsl;
 
@@ -114,6 +115,9 @@ pub struct CompiledEffect {
     /// The naga-validated WGSL draw module (vertex and fragment shaders) for one particle
     /// buffer: see [`wgsl::draw`]. The runtime emits another shape when it needs one.
     pub draw_wgsl: String,
+    /// The naga-validated WGSL trail draw module (`render.trail`; see [`wgsl::trail`]), for
+    /// one particle buffer; None for an effect without trails.
+    pub trail_wgsl: Option<String>,
     /// Warnings from the stability analysis and other checks, located in the source.
     pub warnings: Diagnostics,
 }
@@ -234,11 +238,21 @@ pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, C
     naga_check::validate(&wgsl)?;
     let draw_wgsl = wgsl::draw::emit(&ir, &layout, &wgsl::draw::DrawShape::single(&ir));
     naga_check::validate(&draw_wgsl)?;
+    let trail_wgsl = match ir.render.trail {
+        Some(_) => {
+            let shape = wgsl::draw::DrawShape::single(&ir);
+            let source = wgsl::trail::emit(&ir, &layout, &shape);
+            naga_check::validate(&source)?;
+            Some(source)
+        }
+        None => None,
+    };
     Ok(CompiledEffect {
         ir,
         layout,
         wgsl,
         draw_wgsl,
+        trail_wgsl,
         warnings: located(warnings),
     })
 }

@@ -86,6 +86,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 rotation: r.rotation.as_ref().map(crate::rotation::RotationIr::lower),
                 soft: r.soft,
                 glow: r.glow,
+                trail: r.trail.as_ref().map(crate::trail::TrailIr::lower),
             }
         },
         camera: CameraIr {

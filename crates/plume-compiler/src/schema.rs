@@ -165,6 +165,42 @@ pub struct Render {
     /// than a threshold (bloom), so that bright, dense additive sprites look like light.
     #[serde(default)]
     pub glow: Option<Glow>,
+    /// Trails: a ribbon behind each particle through its recent positions.
+    #[serde(default)]
+    pub trail: Option<Trail>,
+}
+
+/// Trails (`render.trail`): a camera-facing ribbon through each particle's position now and
+/// its `points - 1` most recent samples, taken every `every` steps. The samples live in a ring
+/// buffer the update writes, so an effect with a trail keeps 16 bytes per past position per
+/// particle more state, and is stateful.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Trail {
+    /// Positions the ribbon joins, the particle's own included (2 to 64).
+    #[serde(default = "default_trail_points")]
+    pub points: u32,
+    /// Steps between two samples (1: every step).
+    #[serde(default = "default_trail_every")]
+    pub every: u32,
+    /// Ribbon width (m) along the trail, `(t, width)`: t = 0 at the particle, 1 at the tail.
+    #[serde(default = "default_trail_width")]
+    pub width: Vec<SizeStop>,
+    /// Colour along the trail, `(t, (r, g, b, a))`, multiplying the particle's own colour.
+    #[serde(default = "default_colors")]
+    pub color: Vec<ColorStop>,
+}
+
+fn default_trail_points() -> u32 {
+    16
+}
+
+fn default_trail_every() -> u32 {
+    1
+}
+
+fn default_trail_width() -> Vec<SizeStop> {
+    vec![SizeStop(0.0, 0.05), SizeStop(1.0, 0.0)]
 }
 
 /// Bloom in `plume render`'s images (`render.glow`); an embedding host does its own
@@ -220,6 +256,7 @@ impl Default for Render {
             rotation: None,
             soft: None,
             glow: None,
+            trail: None,
         }
     }
 }

@@ -286,10 +286,9 @@ fn check_stop_times(c: &mut Checker, path: &ValuePath, times: &[f64]) {
     }
 }
 
-fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
-    let colors = path.field("color");
-    check_stop_times(c, &colors, &r.color.iter().map(|s| s.0).collect::<Vec<_>>());
-    for (i, s) in r.color.iter().enumerate() {
+fn check_colors(c: &mut Checker, colors: &ValuePath, stops: &[crate::schema::ColorStop]) {
+    check_stop_times(c, colors, &stops.iter().map(|s| s.0).collect::<Vec<_>>());
+    for (i, s) in stops.iter().enumerate() {
         let p = colors.index(i).component(1, "color");
         for (j, (name, x)) in [("r", s.1 .0), ("g", s.1 .1), ("b", s.1 .2), ("a", s.1 .3)]
             .into_iter()
@@ -298,10 +297,38 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
             c.within(&p.component(j, name), x, 0.0, 1.0);
         }
     }
-    let sizes = path.field("size");
-    check_stop_times(c, &sizes, &r.size.iter().map(|s| s.0).collect::<Vec<_>>());
-    for (i, s) in r.size.iter().enumerate() {
-        c.non_negative(&sizes.index(i).component(1, "size"), s.1);
+}
+
+fn check_sizes(c: &mut Checker, sizes: &ValuePath, stops: &[crate::schema::SizeStop], name: &str) {
+    check_stop_times(c, sizes, &stops.iter().map(|s| s.0).collect::<Vec<_>>());
+    for (i, s) in stops.iter().enumerate() {
+        c.non_negative(&sizes.index(i).component(1, name), s.1);
+    }
+}
+
+fn check_trail(c: &mut Checker, path: &ValuePath, t: &crate::schema::Trail) {
+    // 64 points keep a ribbon's vertex count (128) and its history (1 KiB) bounded.
+    if !(2..=64).contains(&t.points) {
+        c.error(
+            &path.field("points"),
+            format!(
+                "must be 2 to 64 (the particle and up to 63 past positions), got {}",
+                t.points
+            ),
+        );
+    }
+    if t.every == 0 {
+        c.error(&path.field("every"), "must be at least 1 step");
+    }
+    check_sizes(c, &path.field("width"), &t.width, "width");
+    check_colors(c, &path.field("color"), &t.color);
+}
+
+fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
+    check_colors(c, &path.field("color"), &r.color);
+    check_sizes(c, &path.field("size"), &r.size, "size");
+    if let Some(t) = &r.trail {
+        check_trail(c, &path.field("trail"), t);
     }
     let bg = path.field("background");
     for (j, (name, x)) in [

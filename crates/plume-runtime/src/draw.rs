@@ -17,77 +17,19 @@
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use plume_compiler::schema::Blend;
-use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
-use plume_compiler::wgsl::draw::{
-    DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING, SCENE_DEPTH_BINDING,
-};
+use plume_compiler::wgsl::draw::{DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
 use plume_compiler::CompiledEffect;
 
 use crate::camera::Camera;
+use crate::draw_pipeline::{draw_group, render_pipeline};
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
 use crate::live_list::LiveList;
 use crate::resources::{staging, Resources, STORAGE};
 use crate::sprite_texture::SpriteTexture;
+use crate::trail_draw::TrailDraw;
 
-/// The depth test against a host's depth buffer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct DepthTest {
-    /// The depth attachment's format.
-    pub format: wgpu::TextureFormat,
-    /// Which fragments pass: `Less` for a standard depth buffer, `Greater` for reversed Z.
-    pub compare: wgpu::CompareFunction,
-}
-
-/// What a draw renders into: the colour attachment's format and sample count, and the depth
-/// attachment when the render pass has one (tested, never written). A pass with a depth
-/// attachment needs a pipeline of that depth format: to draw over everything in such a pass,
-/// use `with_depth_compare(format, CompareFunction::Always)`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct DrawTarget {
-    /// The colour attachment's format.
-    pub color_format: wgpu::TextureFormat,
-    /// The depth test, when the render pass has a depth attachment.
-    pub depth: Option<DepthTest>,
-    /// Samples per pixel of the attachments (1: no multisampling).
-    pub sample_count: u32,
-}
-
-impl DrawTarget {
-    /// A colour attachment of `format`, no depth buffer, one sample.
-    pub fn new(color_format: wgpu::TextureFormat) -> Self {
-        Self {
-            color_format,
-            depth: None,
-            sample_count: 1,
-        }
-    }
-
-    /// Tests against a depth attachment of `format` with `Less` (a standard depth buffer).
-    pub fn with_depth(self, format: wgpu::TextureFormat) -> Self {
-        self.with_depth_compare(format, wgpu::CompareFunction::Less)
-    }
-
-    /// Tests against a depth attachment of `format` with `compare`.
-    pub fn with_depth_compare(
-        self,
-        format: wgpu::TextureFormat,
-        compare: wgpu::CompareFunction,
-    ) -> Self {
-        Self {
-            depth: Some(DepthTest { format, compare }),
-            ..self
-        }
-    }
-
-    /// With `count` samples per pixel.
-    pub fn with_samples(self, count: u32) -> Self {
-        Self {
-            sample_count: count,
-            ..self
-        }
-    }
-}
+pub use crate::draw_target::{DepthTest, DrawTarget};
 
 /// How a stateful, unsorted draw skips the free slots (a sorted draw and a stateless draw
 /// already issue only the live instances). The default is the compacted list: on an H100 it
@@ -156,6 +98,8 @@ pub struct EffectRenderer {
     texture: Option<SpriteTexture>,
     /// Whether the draw module fades sprites near the scene depth (`render.soft`).
     soft: bool,
+    /// The ribbons (`render.trail`), drawn before the sprites.
+    trail: Option<TrailDraw>,
     instances: Instances,
     /// Vertices per sprite (4: a quad strip; 3: a triangle).
     vertices: u32,
@@ -203,47 +147,11 @@ impl EffectRenderer {
         let (module, mut entries) =
             draw_module(gpu, effect, res, &shape, live.as_ref().map(|l| &l.list))?;
         let blend = options.blend.unwrap_or(blend_state(effect.ir.render.blend));
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("draw"),
-            // Derived from the module: only the bindings this effect's shaders use.
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs"),
-                compilation_options: Default::default(),
-                buffers: &[],
-            },
-            primitive: wgpu::PrimitiveState {
-                topology: match options.primitive {
-                    Primitive::Quad => wgpu::PrimitiveTopology::TriangleStrip,
-                    Primitive::Triangle => wgpu::PrimitiveTopology::TriangleList,
-                },
-                ..Default::default()
-            },
-            depth_stencil: target.depth.map(|d| wgpu::DepthStencilState {
-                format: d.format,
-                depth_write_enabled: Some(false),
-                depth_compare: Some(d.compare),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: wgpu::MultisampleState {
-                count: target.sample_count,
-                ..Default::default()
-            },
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: target.color_format,
-                    blend: Some(blend),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let topology = match options.primitive {
+            Primitive::Quad => wgpu::PrimitiveTopology::TriangleStrip,
+            Primitive::Triangle => wgpu::PrimitiveTopology::TriangleList,
+        };
+        let pipeline = render_pipeline(gpu, &module, ("vs", "fs"), topology, target, blend);
         let view = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("draw view"),
             size: DRAW_VIEW_BYTES,
@@ -266,6 +174,25 @@ impl EffectRenderer {
             texture.as_ref(),
             placeholder.as_ref(),
         );
+        let trail = match &effect.ir.render.trail {
+            Some(_) if !stateless => Some(TrailDraw::new(
+                gpu,
+                effect,
+                res,
+                DrawShape {
+                    // Every slot, in the depth order when there is one: the compacted list
+                    // would need its own indirect count.
+                    through_list: effect.ir.sort,
+                    primitive: Primitive::Quad,
+                    ..shape
+                },
+                target,
+                blend,
+                &view,
+                placeholder.as_ref(),
+            )?),
+            _ => None,
+        };
         let instances = if let Some(live) = live {
             Instances::Compacted(Box::new(live))
         } else if stateless {
@@ -283,6 +210,7 @@ impl EffectRenderer {
             buffers: entries,
             texture,
             soft,
+            trail,
             instances,
             vertices: options.primitive.vertices(),
             size_scale: 1.0,
@@ -333,6 +261,9 @@ impl EffectRenderer {
                 self.texture.as_ref(),
                 Some(depth),
             );
+            if let Some(trail) = &mut self.trail {
+                trail.set_scene_depth(&self.gpu, depth);
+            }
         }
     }
 
@@ -391,6 +322,9 @@ impl EffectRenderer {
     /// [`crate::instance::EffectInstance::prepare_draw`] in the same or an earlier
     /// submission). Sets its own pipeline and bind group 0.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        if let Some(trail) = &self.trail {
+            trail.draw(pass);
+        }
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.group, &[]);
         let vertices = 0..self.vertices;
@@ -406,45 +340,6 @@ impl EffectRenderer {
             Instances::Compacted(live) => pass.draw_indirect(&live.args, 0),
         }
     }
-}
-
-/// Bind group 0 of a draw: its buffers, the sprite texture and sampler when it has one, and
-/// the scene depth when it is soft.
-fn draw_group(
-    gpu: &Gpu,
-    pipeline: &wgpu::RenderPipeline,
-    buffers: &[(u32, wgpu::Buffer)],
-    texture: Option<&SpriteTexture>,
-    scene_depth: Option<&wgpu::TextureView>,
-) -> wgpu::BindGroup {
-    let mut bindings: Vec<wgpu::BindGroupEntry<'_>> = buffers
-        .iter()
-        .map(|(binding, buffer)| wgpu::BindGroupEntry {
-            binding: *binding,
-            resource: buffer.as_entire_binding(),
-        })
-        .collect();
-    if let Some(t) = texture {
-        bindings.push(wgpu::BindGroupEntry {
-            binding: TEXTURE_BINDING,
-            resource: wgpu::BindingResource::TextureView(&t.view),
-        });
-        bindings.push(wgpu::BindGroupEntry {
-            binding: SAMPLER_BINDING,
-            resource: wgpu::BindingResource::Sampler(&t.sampler),
-        });
-    }
-    if let Some(depth) = scene_depth {
-        bindings.push(wgpu::BindGroupEntry {
-            binding: SCENE_DEPTH_BINDING,
-            resource: wgpu::BindingResource::TextureView(depth),
-        });
-    }
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("draw"),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &bindings,
-    })
 }
 
 /// An indirect draw of the live particles (a sorted stateful effect: they come first in the

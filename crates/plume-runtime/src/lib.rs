@@ -26,6 +26,8 @@ pub mod camera;
 pub mod depth_quantise;
 pub mod depth_sort;
 pub mod draw;
+pub mod draw_pipeline;
+pub mod draw_target;
 pub mod error;
 pub mod export;
 pub mod flock_pass;
@@ -46,6 +48,8 @@ pub mod splat;
 pub mod sprite_texture;
 pub mod steps;
 pub mod timer;
+pub mod trail_draw;
+pub mod trail_readback;
 
 pub use camera::Camera;
 pub use draw::{DeadSlots, DepthTest, DrawOptions, DrawTarget, EffectRenderer};

@@ -29,6 +29,8 @@ pub struct Chunk {
     pub len: u64,
     /// The particles (or, stateless, the view).
     pub buffer: wgpu::Buffer,
+    /// The chunk's trail ring (`render.trail`): entry r of chunk slot i at r · len + i.
+    pub trail: Option<wgpu::Buffer>,
     /// Group 0 of the compute module, for this chunk.
     pub bind_group: wgpu::BindGroup,
 }
@@ -133,7 +135,9 @@ impl Resources {
                 max_capacity: limit / 4,
             });
         }
-        let chunk_slots = (limit / bpp)
+        // A trail's ring is split with the particles, so both must fit a binding.
+        let trail_bpp = u64::from(effect.layout.trail_bytes_per_particle);
+        let chunk_slots = (limit / bpp.max(trail_bpp))
             .min(max_chunk_slots.unwrap_or(u64::MAX))
             .max(1);
         let chunk_count = cap.div_ceil(chunk_slots);
@@ -229,7 +233,7 @@ impl Resources {
             .layout
             .bindings
             .iter()
-            .filter(|b| b.binding >= 7 && b.name != "depth_axis")
+            .filter(|b| b.binding >= 7 && b.name != "depth_axis" && b.name != "trail")
             .map(|b| {
                 let size = b.bytes.max(16);
                 let buffer = if b.name == "collider_data" {
@@ -360,33 +364,54 @@ impl Resources {
                 usage: STORAGE,
                 mapped_at_creation: false,
             });
-            let bind_group = self.bind_group(effect, &buffer, k);
+            // Zeroed by wgpu: id + 1 = 0 marks an entry no particle has written.
+            let trail_bpp = u64::from(effect.layout.trail_bytes_per_particle);
+            let trail = (trail_bpp > 0).then(|| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("trail"),
+                    size: len * trail_bpp,
+                    usage: STORAGE,
+                    mapped_at_creation: false,
+                })
+            });
+            let bind_group = self.bind_group(effect, &buffer, trail.as_ref(), k);
             chunks.push(Chunk {
                 base,
                 len,
                 buffer,
+                trail,
                 bind_group,
             });
         }
         if let Some(e) = pollster::block_on(out_of_memory.pop()) {
+            let trail_bpp = u64::from(effect.layout.trail_bytes_per_particle);
             return Err(RuntimeError::OutOfMemory {
                 what: format!(
-                    "{} particle buffer(s) of up to {} bytes ({e})",
+                    "{} particle buffer(s) of up to {} bytes{} ({e})",
                     self.chunk_count,
-                    self.chunk_slots * bpp
+                    self.chunk_slots * bpp,
+                    if trail_bpp > 0 {
+                        format!(
+                            " and as many trail rings of up to {} bytes",
+                            self.chunk_slots * trail_bpp
+                        )
+                    } else {
+                        String::new()
+                    }
                 ),
-                bytes: cap * bpp,
+                bytes: cap * (bpp + trail_bpp),
                 bytes_per_particle: effect.layout.bytes_per_particle,
             });
         }
         Ok(chunks)
     }
 
-    /// Group 0 of the compute module with `particles` bound to chunk `k`'s buffer.
+    /// Group 0 of the compute module with `particles` (and `trail`) bound to chunk `k`'s.
     fn bind_group(
         &self,
         effect: &CompiledEffect,
         particles: &wgpu::Buffer,
+        trail: Option<&wgpu::Buffer>,
         k: u64,
     ) -> wgpu::BindGroup {
         let sort = self.sort.as_ref();
@@ -398,6 +423,9 @@ impl Resources {
                 binding: b.binding,
                 resource: match b.name {
                     "particles" => particles.as_entire_binding(),
+                    "trail" => trail
+                        .expect("a layout with a trail gets trail rings")
+                        .as_entire_binding(),
                     "free_list" => self
                         .free_list
                         .as_ref()

@@ -88,11 +88,12 @@ const TILE_BINDINGS: [(u32, bool, bool); 10] = [
 
 impl Splat {
     /// Whether the splat can draw `ir`'s sprites: round (no `texture`), camera-facing
-    /// (`orient: Camera`) and into an 8-bit image (no `glow`).
+    /// (`orient: Camera`), into an 8-bit image (no `glow`), with no ribbons (no `trail`).
     pub fn draws(ir: &plume_compiler::EffectIr) -> bool {
         ir.render.orient == OrientIr::Camera
             && ir.render.texture.is_none()
             && ir.render.glow.is_none()
+            && ir.render.trail.is_none()
     }
 
     /// A splat of `instance` into `width` x `height` images; an error for sprites it cannot
@@ -109,10 +110,13 @@ impl Splat {
         }
         if !Self::draws(&effect.ir) {
             let render = &effect.ir.render;
-            let why = match (&render.texture, render.glow) {
-                (_, Some(_)) => "drawn into an HDR image to glow (render.glow)".to_string(),
-                (Some(t), None) => format!("textured (render.texture: {:?})", t.file),
-                (None, None) => format!("oriented (render.orient: {})", render.orient.name()),
+            let why = match (&render.texture, render.glow, &render.trail) {
+                (_, _, Some(_)) => "followed by ribbons (render.trail)".to_string(),
+                (_, Some(_), None) => "drawn into an HDR image to glow (render.glow)".to_string(),
+                (Some(t), None, None) => format!("textured (render.texture: {:?})", t.file),
+                (None, None, None) => {
+                    format!("oriented (render.orient: {})", render.orient.name())
+                }
             };
             return Err(RuntimeError::Output(format!(
                 "the compute splat draws round camera-facing sprites into an 8-bit image only; \

@@ -86,6 +86,9 @@ pub struct Layout {
     pub bindings: Vec<Binding>,
     /// Number of emitter entries in the step parameters (at least 1).
     pub emitter_slots: u32,
+    /// Bytes of trail history per particle (`render.trail`; 0 without one), held in the
+    /// `trail` binding beside the particle struct.
+    pub trail_bytes_per_particle: u32,
 }
 
 impl Layout {
@@ -212,6 +215,11 @@ pub fn decide(ir: &EffectIr) -> Layout {
         bytes_per_particle,
         bindings: Vec::new(),
         emitter_slots,
+        trail_bytes_per_particle: ir
+            .render
+            .trail
+            .as_ref()
+            .map_or(0, |t| t.bytes_per_particle()),
     };
     // Binding 0 holds the particles: their state, or for a stateless effect the view that
     // `evaluate` writes; binding 4 names the slots of this dispatch's buffer.
@@ -275,6 +283,15 @@ pub fn decide(ir: &EffectIr) -> Layout {
         bytes: 16,
         meaning: chunk,
     });
+    if let Some(trail) = &ir.render.trail {
+        layout.bindings.push(Binding {
+            binding: 16,
+            name: "trail",
+            space: "storage, read_write",
+            bytes: cap * u64::from(trail.bytes_per_particle()),
+            meaning: "trail ring, entry-major (entry r of slot i at r * slots + i; split into chunks with the particles): the position's f32 bits and id + 1 (0: never written)",
+        });
+    }
     if let Some(field) = &ir.field {
         layout.bindings.push(Binding {
             binding: 13,
@@ -388,8 +405,17 @@ impl fmt::Display for Layout {
             writeln!(
                 f,
                 "state: {} bytes per particle",
-                self.state_bytes_per_particle()
+                self.state_bytes_per_particle() + self.trail_bytes_per_particle
             )?;
+            if self.trail_bytes_per_particle > 0 {
+                writeln!(
+                    f,
+                    "  of which trail history: {} bytes ({} past positions x {} bytes, binding 16)",
+                    self.trail_bytes_per_particle,
+                    self.trail_bytes_per_particle / crate::trail::ENTRY_BYTES,
+                    crate::trail::ENTRY_BYTES
+                )?;
+            }
             writeln!(
                 f,
                 "struct Particle ({} bytes per particle)",

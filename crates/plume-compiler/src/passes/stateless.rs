@@ -90,6 +90,12 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("integrator"),
         ));
     }
+    if ir.render.trail.is_some() {
+        return Err((
+            "render.trail keeps each particle's past positions".into(),
+            ValuePath::root().field("render").field("trail"),
+        ));
+    }
     if !ir.kills.is_empty() {
         return Err((
             "kill[0] decides deaths from every earlier position".into(),

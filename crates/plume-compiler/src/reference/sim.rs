@@ -13,14 +13,17 @@ use crate::integrators::ExactStep;
 use crate::ir::EffectIr;
 use crate::schedule::Schedule;
 use crate::schema::Integrator;
+use crate::trail::History;
 
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Debug)]
 struct Particle {
     id: u32,
     x: DVec3,
     /// Velocity, or Verlet's displacement over one substep.
     v: DVec3,
     die_at: u32,
+    /// Past positions for `render.trail` (empty without one).
+    history: History,
 }
 
 /// The lifetime (s) of a particle born at step `born` that dies at the update of `die_at`
@@ -107,6 +110,7 @@ impl ReferenceSim {
                     x: s.x,
                     v,
                     die_at: s.die_at,
+                    history: History::default(),
                 });
             }
             id += count;
@@ -143,6 +147,9 @@ impl ReferenceSim {
                 t0: plan.time,
                 life: lifetime_of(born, p.die_at, ir.dt),
             };
+            if let Some(trail) = &ir.render.trail {
+                p.history.record(trail, plan.step, p.x);
+            }
             for s in 0..ir.substeps {
                 let t = plan.time + f64::from(s) * h;
                 let x0 = p.x;
@@ -176,6 +183,19 @@ impl ReferenceSim {
                 age: self.schedule.age(p.id),
                 lifetime: self.schedule.lifetime(p.id, p.die_at),
             })
+            .collect()
+    }
+
+    /// Each live particle's trail (`render.trail`) in id order: its id and the ribbon's
+    /// points, its position now and then its recorded samples newest first. Empty without a
+    /// trail.
+    pub fn trails(&self) -> Vec<(u32, Vec<DVec3>)> {
+        if self.ir.render.trail.is_none() {
+            return Vec::new();
+        }
+        self.particles
+            .iter()
+            .map(|p| (p.id, p.history.ribbon(p.x)))
             .collect()
     }
 

@@ -143,15 +143,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.comment("Where a hidden sprite goes: all four corners at one point outside the clip volume.");
     w.line("const HIDDEN: vec4<f32> = vec4<f32>(2.0, 2.0, 2.0, 1.0);");
     w.blank();
-    w.comment("The camera and the frame, written by the runtime before each draw.");
-    w.block("struct DrawView", |w| {
-        w.line("view: mat4x4<f32>,");
-        w.line("proj: mat4x4<f32>,");
-        w.line("steps: u32,");
-        w.line("size_scale: f32,");
-        w.line("pad0: u32,");
-        w.line("pad1: u32,");
-    });
+    emit_draw_view(&mut w);
     w.blank();
     if stateless {
         w.block("struct Spawned", |w| {
@@ -238,8 +230,30 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.finish()
 }
 
+/// `finite3(x)`: whether no component is Inf or NaN, tested on the bits.
+pub(crate) fn emit_finite3(w: &mut Writer) {
+    w.comment("Integer test for Inf/NaN: WGSL may assume floats are finite.");
+    w.block("fn finite3(x: vec3<f32>) -> bool", |w| {
+        w.line("let e = bitcast<vec3<u32>>(x) & vec3<u32>(0x7f800000u);");
+        w.line("return all(e != vec3<u32>(0x7f800000u));");
+    });
+}
+
+/// The `DrawView` uniform's struct (binding 0, [`DRAW_VIEW_BYTES`]).
+pub(crate) fn emit_draw_view(w: &mut Writer) {
+    w.comment("The camera and the frame, written by the runtime before each draw.");
+    w.block("struct DrawView", |w| {
+        w.line("view: mat4x4<f32>,");
+        w.line("proj: mat4x4<f32>,");
+        w.line("steps: u32,");
+        w.line("size_scale: f32,");
+        w.line("pad0: u32,");
+        w.line("pad1: u32,");
+    });
+}
+
 /// `load_particle(slot)`: the particle in global slot `slot`, from whichever buffer holds it.
-fn emit_load(w: &mut Writer, layout: &Layout, shape: &DrawShape) {
+pub(crate) fn emit_load(w: &mut Writer, layout: &Layout, shape: &DrawShape) {
     let n = layout.vec4s();
     w.block("fn load_particle(slot: u32) -> Particle", |w| {
         if shape.chunks <= 1 {
@@ -275,7 +289,7 @@ fn emit_load(w: &mut Writer, layout: &Layout, shape: &DrawShape) {
 /// `age / lifetime` (0 for a particle that never dies). With a stored spawn step it is
 /// (steps − born) / (die_at − born + 1); otherwise the lifetime n comes from the shared
 /// lifetime draw of the id, and n − (die_at + 1 − steps) steps have been lived.
-fn emit_life_fraction(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSteps>) {
+pub(crate) fn emit_life_fraction(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSteps>) {
     w.comment("Life fraction: whole steps lived over whole steps of life (lifetime.rs).");
     w.block("fn life_fraction(p: Particle) -> f32", |w| {
         w.block("if (p.die_at == DEAD)", |w| w.line("return 0.0;"));
@@ -337,7 +351,7 @@ fn emit_age_steps(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSteps>
 /// `color_at(f)` and `size_at(f)`: the render section's piecewise-linear gradients with their
 /// stops baked in, as `RenderIr::color_at` and `size_at` (constant beyond the end stops; a
 /// jump where two stops share a time).
-fn emit_gradients(w: &mut Writer, ir: &EffectIr) {
+pub(crate) fn emit_gradients(w: &mut Writer, ir: &EffectIr) {
     let rgba = |c: [f64; 4]| {
         format!(
             "vec4<f32>({}, {}, {}, {})",
@@ -369,7 +383,13 @@ fn emit_gradients(w: &mut Writer, ir: &EffectIr) {
     emit_gradient(w, "size_at", "f32", &size, f32_lit(0.0));
 }
 
-fn emit_gradient(w: &mut Writer, name: &str, ty: &str, stops: &[(f64, String)], empty: String) {
+pub(crate) fn emit_gradient(
+    w: &mut Writer,
+    name: &str,
+    ty: &str,
+    stops: &[(f64, String)],
+    empty: String,
+) {
     w.block(format!("fn {name}(f: f32) -> {ty}"), |w| {
         let Some((t0, first)) = stops.first() else {
             w.line(format!("return {empty};"));
@@ -425,11 +445,7 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
         }
     });
     w.blank();
-    w.comment("Integer test for Inf/NaN: WGSL may assume floats are finite.");
-    w.block("fn finite3(x: vec3<f32>) -> bool", |w| {
-        w.line("let e = bitcast<vec3<u32>>(x) & vec3<u32>(0x7f800000u);");
-        w.line("return all(e != vec3<u32>(0x7f800000u));");
-    });
+    emit_finite3(w);
     w.blank();
     w.block("fn sprite_at(instance: u32) -> SpriteAt", |w| {
         w.line("var s: SpriteAt;");
@@ -681,7 +697,7 @@ fn emit_shade(w: &mut Writer, texture: Option<&crate::texture::TextureIr>) {
 /// are linearised with the projection's own terms: for a perspective projection (standard or
 /// reversed Z, finite or infinite far plane) NDC depth z and view distance d satisfy
 /// d = B / (z + A), A = proj[2][2], B = proj[3][2].
-fn emit_soft(w: &mut Writer, distance: f64) {
+pub(crate) fn emit_soft(w: &mut Writer, distance: f64) {
     w.comment("Soft particles: the host's depth buffer (render.soft).");
     w.line(format!(
         "@group(0) @binding({SCENE_DEPTH_BINDING}) var scene_depth: texture_2d<f32>;"

@@ -6,6 +6,7 @@
 pub mod draw;
 pub mod spawn;
 pub mod stateless;
+pub mod trail;
 pub mod update;
 pub mod writer;
 
@@ -102,7 +103,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     }
     for b in &layout.bindings {
         let ty = match b.name {
-            "particles" => "array<vec4<u32>>",
+            "particles" | "trail" => "array<vec4<u32>>",
             "free_list" => "array<u32>",
             "counters" => "Counters",
             "chunk" => "Chunk",

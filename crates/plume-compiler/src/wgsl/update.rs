@@ -88,6 +88,9 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     } else {
         w.line("var v = vec3<f32>(p.vx, p.vy, p.vz);");
     }
+    if let Some(trail) = &ir.render.trail {
+        trail.emit_record(w);
+    }
     let body = |w: &mut Writer| {
         if !ir.colliders.is_empty() {
             w.line("let x_start = x;");
