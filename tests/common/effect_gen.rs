@@ -439,6 +439,18 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
                 "Some(Rotation(angle: ({a0}, {a1}), spin: ({s0}, {s1})))"
             ))),
     ];
+    // Trail: none, or a ribbon of 2 to 64 points with its own width and colour stops.
+    let widths = (1..3usize).prop_flat_map(move |n| (0..n).map(size).collect::<Vec<_>>());
+    let tints = (1..3usize).prop_flat_map(move |n| (0..n).map(stop).collect::<Vec<_>>());
+    let trail =
+        prop::option::of((count(f, 2, 64), count(f, 1, 5), widths, tints)).prop_map(|t| match t {
+            None => "None".to_string(),
+            Some((points, every, w, c)) => format!(
+                "Some(Trail(points: {points}, every: {every}, width: [{}], color: [{}]))",
+                w.join(", "),
+                c.join(", ")
+            ),
+        });
     (
         stops,
         sizes,
@@ -450,9 +462,10 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
             rotation,
             prop::option::of(num(f, 0.01, 2.0)),
             prop::option::of((num(f, 0.0, 2.0), num(f, 0.0, 3.0), num(f, 0.001, 0.05))),
+            trail,
         ),
     )
-        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow))| {
+        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow, trail))| {
             let soft = soft.map_or("None".to_string(), |d| format!("Some({d})"));
             let glow = glow.map_or("None".to_string(), |(t, s, r)| {
                 format!("Some(Glow(threshold: {t}, strength: {s}, radius: {r}))")
@@ -462,7 +475,7 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
                 _ => "None".to_string(),
             };
             format!(
-                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}),",
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}, trail: {trail}),",
                 c.join(", "),
                 s.join(", ")
             )

@@ -5,12 +5,16 @@
 //!
 //! The update of step `s` records the particle's position at the step's start (time s · dt)
 //! when `s` is a multiple of `every`: sample k = s / every goes to ring entry k mod R, where
-//! R = points − 1, with the particle's id + 1 beside it. Entries are laid out ring-major
-//! (entry r of slot i at r · slots + i), so one step's samples are consecutive words: the
-//! writes coalesce as the update's own stores do. The draw joins the particle's position now
-//! and its samples newest first; an entry whose id is not the particle's (a slot's earlier
-//! occupant, or never written: 0) is not part of its trail, so a young particle's ribbon
-//! is shorter and no spawn has to clear the ring.
+//! R = points − 1, with the particle's id + 1 beside it. A slot's R entries are consecutive
+//! (entry r of slot i at i · R + r), so the draw reads one ribbon's points from a cache line or
+//! two, while the update's stores land 16 · R bytes apart. Laid out entry-major instead (one
+//! step's samples consecutive, the stores coalesced), the update was cheaper by 0.02 ms per
+//! million particles but the draw's vertex stage slower by up to 27 ms per million on an H100
+//! (docs/performance.md, "Trails").
+//!
+//! The draw joins the particle's position now and its samples newest first; an entry whose id
+//! is not the particle's (a slot's earlier occupant, or never written: 0) is not part of its
+//! trail, so a young particle's ribbon is shorter and no spawn has to clear the ring.
 
 use glam::DVec3;
 
@@ -97,7 +101,7 @@ impl TrailIr {
         w.comment("Trail: the position at this step's start into the ring (render.trail).");
         let store = |w: &mut Writer, sample: &str| {
             w.line(format!(
-                "trail[({sample} % {ring}) * chunk.len + i] = vec4<u32>(bitcast<vec3<u32>>(x), p.id + 1u);"
+                "trail[i * {ring} + {sample} % {ring}] = vec4<u32>(bitcast<vec3<u32>>(x), p.id + 1u);"
             ));
         };
         if self.every == 1 {

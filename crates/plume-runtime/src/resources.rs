@@ -29,7 +29,7 @@ pub struct Chunk {
     pub len: u64,
     /// The particles (or, stateless, the view).
     pub buffer: wgpu::Buffer,
-    /// The chunk's trail ring (`render.trail`): entry r of chunk slot i at r · len + i.
+    /// The chunk's trail ring (`render.trail`): entry r of chunk slot i at i · (points − 1) + r.
     pub trail: Option<wgpu::Buffer>,
     /// Group 0 of the compute module, for this chunk.
     pub bind_group: wgpu::BindGroup,

@@ -35,7 +35,7 @@ pub fn read_trails(instance: &EffectInstance) -> Result<Vec<(u32, Vec<DVec3>)>, 
             let mut points = vec![record.position];
             // The particle's samples are the newest ones: stop at the first it does not own.
             for &(_, entry) in &window {
-                let at = ((entry * chunk.len + i) * 16) as usize;
+                let at = ((i * u64::from(trail.ring()) + entry) * 16) as usize;
                 if word(at + 12) != record.id.wrapping_add(1) {
                     break;
                 }

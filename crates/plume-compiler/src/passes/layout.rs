@@ -289,7 +289,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
             name: "trail",
             space: "storage, read_write",
             bytes: cap * u64::from(trail.bytes_per_particle()),
-            meaning: "trail ring, entry-major (entry r of slot i at r * slots + i; split into chunks with the particles): the position's f32 bits and id + 1 (0: never written)",
+            meaning: "trail ring, points - 1 entries per slot (entry r of slot i at i * (points - 1) + r; split into chunks with the particles): the position's f32 bits and id + 1 (0: never written)",
         });
     }
     if let Some(field) = &ir.field {

@@ -163,7 +163,7 @@ pub fn decide(ir: &mut EffectIr) -> Result<(), Checker> {
             c.error(
                 &ValuePath::root().field("state"),
                 format!(
-                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes and a capacity no spawn can overflow (use Auto)"
+                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes, no render.trail and a capacity no spawn can overflow (use Auto)"
                 ),
             );
             return Err(c);

@@ -150,29 +150,26 @@ fn emit_trail_gradients(w: &mut Writer, trail: &TrailIr) {
 }
 
 /// `trail_entry(slot, r)`: ring entry `r` of global slot `slot`, from its chunk's ring (entry
-/// r of chunk slot i at r · len + i, len the chunk's slots).
+/// r of chunk slot i at i · RING + r).
 fn emit_entry(w: &mut Writer, shape: &DrawShape) {
     let chunks = shape.chunks.max(1);
     w.block("fn trail_entry(slot: u32, r: u32) -> vec4<u32>", |w| {
         if chunks == 1 {
-            w.line("return trail_0[r * CAPACITY + slot];");
+            w.line("return trail_0[slot * RING + r];");
             return;
         }
         w.line("let c = slot / CHUNK_SLOTS;");
         w.line("let i = slot - c * CHUNK_SLOTS;");
         w.block("switch c", |w| {
             for c in 0..chunks {
-                if c + 1 == chunks {
-                    w.block(format!("case {c}u, default"), |w| {
-                        w.line(format!(
-                            "return trail_{c}[r * (CAPACITY - {c}u * CHUNK_SLOTS) + i];"
-                        ));
-                    });
+                let label = if c + 1 == chunks {
+                    format!("case {c}u, default")
                 } else {
-                    w.block(format!("case {c}u"), |w| {
-                        w.line(format!("return trail_{c}[r * CHUNK_SLOTS + i];"));
-                    });
-                }
+                    format!("case {c}u")
+                };
+                w.block(label, |w| {
+                    w.line(format!("return trail_{c}[i * RING + r];"));
+                });
             }
         });
     });
@@ -227,16 +224,19 @@ fn emit_vertex(w: &mut Writer, shape: &DrawShape, life: bool) {
             w.block("if (!finite3(x))", |w| w.line("return out;"));
             w.comment("The newest sample: taken at the start of the last step that was a multiple of EVERY.");
             w.line("let newest = (draw.steps - 1u) / EVERY;");
-            w.comment("How many samples are this particle's: the entries it owns are the newest ones, so search for where they end.");
-            w.line("var lo = 0u;");
-            w.line("var hi = min(RING, newest + 1u);");
-            w.block("while (lo < hi)", |w| {
-                w.line("let mid = (lo + hi + 1u) / 2u;");
-                w.block(
-                    "if (sample_entry(slot, newest, mid).w == p.id + 1u)",
-                    |w| w.line("lo = mid;"),
-                );
-                w.block("else", |w| w.line("hi = mid - 1u;"));
+            w.comment("How many samples are this particle's: the entries it owns are the newest ones. A grown trail owns the oldest one in the window too; a young one's end is searched for.");
+            w.line("var lo = min(RING, newest + 1u);");
+            w.block("if (sample_entry(slot, newest, lo).w != p.id + 1u)", |w| {
+                w.line("var hi = lo - 1u;");
+                w.line("lo = 0u;");
+                w.block("while (lo < hi)", |w| {
+                    w.line("let mid = (lo + hi + 1u) / 2u;");
+                    w.block(
+                        "if (sample_entry(slot, newest, mid).w == p.id + 1u)",
+                        |w| w.line("lo = mid;"),
+                    );
+                    w.block("else", |w| w.line("hi = mid - 1u;"));
+                });
             });
             w.block("if (lo == 0u)", |w| w.line("return out;"));
             w.line("let j = min(vertex >> 1u, lo);");
