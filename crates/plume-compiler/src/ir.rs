@@ -502,6 +502,13 @@ impl fmt::Display for EffectIr {
         if let Some(g) = self.render.glow {
             writeln!(f, "  glow {g:?}")?;
         }
+        if let Some(t) = &self.render.trail {
+            writeln!(
+                f,
+                "  trail {} points, a sample every {} steps, width {:?} colour {:?}",
+                t.points, t.every, t.width, t.color
+            )?;
+        }
         writeln!(
             f,
             "  sort {}  camera eye {} target {} fov_y {}",

@@ -352,6 +352,18 @@ fn emit_age_steps(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSteps>
 /// stops baked in, as `RenderIr::color_at` and `size_at` (constant beyond the end stops; a
 /// jump where two stops share a time).
 pub(crate) fn emit_gradients(w: &mut Writer, ir: &EffectIr) {
+    emit_color_gradient(w, "color_at", &ir.render.color);
+    let size: Vec<(f64, String)> = ir
+        .render
+        .size
+        .iter()
+        .map(|(t, s)| (*t, f32_lit(*s)))
+        .collect();
+    emit_gradient(w, "size_at", "f32", &size, f32_lit(0.0));
+}
+
+/// `name(f)`: a colour gradient through `stops` (white where there are none).
+pub(crate) fn emit_color_gradient(w: &mut Writer, name: &str, stops: &[(f64, [f64; 4])]) {
     let rgba = |c: [f64; 4]| {
         format!(
             "vec4<f32>({}, {}, {}, {})",
@@ -361,26 +373,8 @@ pub(crate) fn emit_gradients(w: &mut Writer, ir: &EffectIr) {
             f32_lit(c[3])
         )
     };
-    let colour: Vec<(f64, String)> = ir
-        .render
-        .color
-        .iter()
-        .map(|(t, c)| (*t, rgba(*c)))
-        .collect();
-    emit_gradient(
-        w,
-        "color_at",
-        "vec4<f32>",
-        &colour,
-        rgba([1.0, 1.0, 1.0, 1.0]),
-    );
-    let size: Vec<(f64, String)> = ir
-        .render
-        .size
-        .iter()
-        .map(|(t, s)| (*t, f32_lit(*s)))
-        .collect();
-    emit_gradient(w, "size_at", "f32", &size, f32_lit(0.0));
+    let colour: Vec<(f64, String)> = stops.iter().map(|(t, c)| (*t, rgba(*c))).collect();
+    emit_gradient(w, name, "vec4<f32>", &colour, rgba([1.0, 1.0, 1.0, 1.0]));
 }
 
 pub(crate) fn emit_gradient(

@@ -99,7 +99,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         draw::emit_life_fraction(&mut w, layout, shared);
     }
     w.blank();
-    draw::emit_gradients(&mut w, ir);
+    draw::emit_color_gradient(&mut w, "color_at", &ir.render.color);
     w.blank();
     emit_trail_gradients(&mut w, trail);
     w.blank();
@@ -130,23 +130,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
 fn emit_trail_gradients(w: &mut Writer, trail: &TrailIr) {
     let width: Vec<(f64, String)> = trail.width.iter().map(|(t, x)| (*t, f32_lit(*x))).collect();
     draw::emit_gradient(w, "trail_width", "f32", &width, f32_lit(0.0));
-    let rgba = |c: &[f64; 4]| {
-        format!(
-            "vec4<f32>({}, {}, {}, {})",
-            f32_lit(c[0]),
-            f32_lit(c[1]),
-            f32_lit(c[2]),
-            f32_lit(c[3])
-        )
-    };
-    let color: Vec<(f64, String)> = trail.color.iter().map(|(t, c)| (*t, rgba(c))).collect();
-    draw::emit_gradient(
-        w,
-        "trail_color",
-        "vec4<f32>",
-        &color,
-        rgba(&[1.0, 1.0, 1.0, 1.0]),
-    );
+    draw::emit_color_gradient(w, "trail_color", &trail.color);
 }
 
 /// `trail_entry(slot, r)`: ring entry `r` of global slot `slot`, from its chunk's ring (entry
