@@ -64,7 +64,7 @@ impl TrailIr {
 
     /// Whether the update of step `step` records the position at its start.
     pub fn samples_at(&self, step: u64) -> bool {
-        step % u64::from(self.every) == 0
+        step.is_multiple_of(u64::from(self.every))
     }
 
     /// The ring entry of sample `k`.

@@ -11,6 +11,29 @@ use crate::readback::read_buffer;
 /// Each live particle's trail in id order: its id and the ribbon's points, its position now
 /// and then the samples the ring holds for it, newest first. Empty for an effect without a
 /// trail.
+///
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use plume_compiler::reference::ReferenceSim;
+/// use plume_runtime::{trail_readback::read_trails, EffectInstance, Gpu};
+/// let source = r#"Effect(name: "comet", capacity: 1,
+///     emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((1.0, 0.0, 0.0)))],
+///     render: Render(trail: Some(Trail(points: 4))))"#;
+/// let effect = plume_compiler::compile_str(source, &Default::default())?;
+/// let gpu = Gpu::new(&Default::default())?;
+/// let mut comet = EffectInstance::new(&gpu, effect.clone())?;
+/// comet.run(10, |_| {})?;
+/// let mut reference = ReferenceSim::new(&effect.ir);
+/// reference.run(10);
+/// let (gpu_trail, cpu_trail) = (read_trails(&comet)?, reference.trails());
+/// // Now, and the positions 1, 2 and 3 steps ago.
+/// assert_eq!(gpu_trail[0].1.len(), 4);
+/// for (g, c) in gpu_trail[0].1.iter().zip(&cpu_trail[0].1) {
+///     assert!((*g - *c).length() < 1e-5);
+/// }
+/// # Ok(())
+/// # }
+/// ```
 pub fn read_trails(instance: &EffectInstance) -> Result<Vec<(u32, Vec<DVec3>)>, RuntimeError> {
     let effect = instance.effect();
     let Some(trail) = &effect.ir.render.trail else {
