@@ -139,6 +139,70 @@ fn a_velocity_aligned_sprite_is_elongated_along_its_projected_velocity() {
 }
 
 #[test]
+fn a_height_curve_of_its_own_makes_the_sprite_that_tall() {
+    // Width 0.3 m (`size`), height `size_y`: for Camera and a Fixed plane facing the camera the
+    // height runs up the image; for Velocity it is the length before stretching (0.6 + 0.5).
+    let gpu = gpu();
+    let cases = [
+        (
+            "Camera, size_y: Some([(0.0, 0.9)])",
+            (1.0, 0.0, 0.0),
+            3.0,
+            90.0,
+        ),
+        (
+            "Fixed((0.0, 0.0, 1.0)), size_y: Some([(0.0, 0.6)])",
+            (1.0, 0.0, 0.0),
+            2.0,
+            90.0,
+        ),
+        (
+            "Velocity(stretch: 0.1, max_length: 2.0), size_y: Some([(0.0, 0.6)])",
+            (3.0, 4.0, 0.0),
+            1.1 / 0.3,
+            53.130_102,
+        ),
+    ];
+    for (state, integrator) in [
+        (State::Stateful, Integrator::Euler),
+        (State::Stateless, Integrator::Exact),
+    ] {
+        for (orient, v, ratio, angle) in cases {
+            let what = format!("{state:?} {orient}");
+            let sim = probe(&gpu, v, (0.0, 0.0, 10.0), orient, state, integrator);
+            let (gpu_img, cpu_img) = draw_both(&sim);
+            let (got_ratio, got_angle) = shape(&gpu_img);
+            assert!(
+                (got_ratio / ratio - 1.0).abs() < 0.01,
+                "{what}: long / short {got_ratio:.3}, want {ratio:.3}"
+            );
+            assert_angle(got_angle, angle, &what);
+            assert_matches_reference(&gpu_img, &cpu_img, &what);
+        }
+    }
+}
+
+#[test]
+fn an_alpha_curve_of_its_own_replaces_the_colour_stops_alpha() {
+    // White, opaque colour stops; alpha 0.5 from its own curve: the centre of the soft disc
+    // (falloff 1 there) blends half of white over black.
+    let gpu = gpu();
+    let sim = probe(
+        &gpu,
+        (0.0, 0.0, 0.0),
+        (0.0, 0.0, 10.0),
+        "Camera, alpha: Some([(0.0, 0.5)])",
+        State::Stateful,
+        Integrator::Euler,
+    );
+    let (gpu_img, cpu_img) = draw_both(&sim);
+    let centre = 4 * ((SIDE / 2) * SIDE + SIDE / 2) as usize;
+    let v = gpu_img[centre];
+    assert!((126..=129).contains(&v), "centre {v}, want 0.5 of 255");
+    assert_matches_reference(&gpu_img, &cpu_img, "alpha curve");
+}
+
+#[test]
 fn a_sprite_in_a_fixed_plane_is_foreshortened_as_the_plane_is() {
     // A disc lying on the ground (normal +Y) seen from 36.87 deg above the horizon (eye at
     // (0, 6, 8)): its depth extent shrinks by sin 36.87 = 0.6, its width does not, so it is an

@@ -442,6 +442,14 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
     // Trail: none, or a ribbon of 2 to 64 points with its own width and colour stops.
     let widths = (1..3usize).prop_flat_map(move |n| (0..n).map(size).collect::<Vec<_>>());
     let tints = (1..3usize).prop_flat_map(move |n| (0..n).map(stop).collect::<Vec<_>>());
+    // A height and an alpha curve of their own, or none.
+    let heights =
+        prop::option::of((1..3usize).prop_flat_map(move |n| (0..n).map(size).collect::<Vec<_>>()));
+    let alphas = prop::option::of((1..3usize).prop_flat_map(move |n| {
+        (0..n)
+            .map(|i| (at(i), num(f, 0.0, 1.0)).prop_map(|(t, a)| format!("({t}, {a})")))
+            .collect::<Vec<_>>()
+    }));
     let trail =
         prop::option::of((count(f, 2, 64), count(f, 1, 5), widths, tints)).prop_map(|t| match t {
             None => "None".to_string(),
@@ -463,9 +471,15 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
             prop::option::of(num(f, 0.01, 2.0)),
             prop::option::of((num(f, 0.0, 2.0), num(f, 0.0, 3.0), num(f, 0.001, 0.05))),
             trail,
+            heights,
+            alphas,
         ),
     )
-        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow, trail))| {
+        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow, trail, heights, alphas))| {
+            let list = |stops: Option<Vec<String>>| {
+                stops.map_or("None".to_string(), |s| format!("Some([{}])", s.join(", ")))
+            };
+            let (heights, alphas) = (list(heights), list(alphas));
             let soft = soft.map_or("None".to_string(), |d| format!("Some({d})"));
             let glow = glow.map_or("None".to_string(), |(t, s, r)| {
                 format!("Some(Glow(threshold: {t}, strength: {s}, radius: {r}))")
@@ -475,7 +489,7 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
                 _ => "None".to_string(),
             };
             format!(
-                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}, trail: {trail}),",
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}, trail: {trail}, size_y: {heights}, alpha: {alphas}),",
                 c.join(", "),
                 s.join(", ")
             )

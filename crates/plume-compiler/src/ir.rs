@@ -64,6 +64,11 @@ pub struct RenderIr {
     pub color: Vec<(f64, [f64; 4])>,
     /// Size stops (t, diameter in m), t increasing.
     pub size: Vec<(f64, f64)>,
+    /// Height stops (t, m), when the sprite's height has a curve of its own (`size` is then
+    /// its width).
+    pub size_y: Option<Vec<(f64, f64)>>,
+    /// Alpha stops (t, alpha), when opacity has a curve of its own.
+    pub alpha: Option<Vec<(f64, f64)>>,
     /// Blending.
     pub blend: crate::schema::Blend,
     /// Background colour.
@@ -83,6 +88,12 @@ pub struct RenderIr {
 }
 
 /// Piecewise-linear interpolation through stops (t increasing), constant beyond the ends.
+/// [`interpolate`] of scalar stops.
+fn scalar_at(stops: &[(f64, f64)], t: f64) -> f64 {
+    let stops: Vec<(f64, [f64; 1])> = stops.iter().map(|&(t, s)| (t, [s])).collect();
+    interpolate(&stops, t)[0]
+}
+
 pub(crate) fn interpolate<const N: usize>(stops: &[(f64, [f64; N])], t: f64) -> [f64; N] {
     let Some(first) = stops.first() else {
         return [0.0; N];
@@ -101,29 +112,42 @@ pub(crate) fn interpolate<const N: usize>(stops: &[(f64, [f64; N])], t: f64) -> 
 }
 
 impl RenderIr {
-    /// The colour at life fraction `t`.
+    /// The colour at life fraction `t` (its alpha from `alpha` when there is one).
     pub fn color_at(&self, t: f64) -> [f64; 4] {
-        interpolate(&self.color, t)
+        let mut c = interpolate(&self.color, t);
+        if let Some(alpha) = &self.alpha {
+            c[3] = scalar_at(alpha, t);
+        }
+        c
     }
 
-    /// The sprite diameter (m) at life fraction `t`.
+    /// The sprite diameter (m) at life fraction `t`: its width when it has a height curve.
     pub fn size_at(&self, t: f64) -> f64 {
-        let stops: Vec<(f64, [f64; 1])> = self.size.iter().map(|&(t, s)| (t, [s])).collect();
-        interpolate(&stops, t)[0]
+        scalar_at(&self.size, t)
+    }
+
+    /// The sprite's height (m) at life fraction `t`: `size_y`'s, else the size.
+    pub fn height_at(&self, t: f64) -> f64 {
+        scalar_at(self.size_y.as_ref().unwrap_or(&self.size), t)
     }
 
     /// Whether the quad's half axes are computed (oriented or rotated) rather than the upright
     /// camera-facing square.
     pub fn turns_quad(&self) -> bool {
-        self.orient != crate::orient::OrientIr::Camera || self.rotation.is_some()
+        self.orient != crate::orient::OrientIr::Camera
+            || self.rotation.is_some()
+            || self.size_y.is_some()
     }
 
     /// Whether colour or size change over a particle's life (some stop differs from the first);
     /// if not, the draw needs no life fraction at all.
     pub fn varies_over_life(&self) -> bool {
         let colour = self.color.iter().any(|(_, c)| *c != self.color[0].1);
-        let size = self.size.iter().any(|(_, s)| *s != self.size[0].1);
-        colour || size
+        let varies = |stops: &[(f64, f64)]| stops.iter().any(|(_, s)| *s != stops[0].1);
+        let size = varies(&self.size);
+        let height = self.size_y.as_deref().is_some_and(varies);
+        let alpha = self.alpha.as_deref().is_some_and(varies);
+        colour || size || height || alpha
     }
 }
 
@@ -487,6 +511,12 @@ impl fmt::Display for EffectIr {
             self.render.color,
             self.render.size
         )?;
+        if let Some(h) = &self.render.size_y {
+            writeln!(f, "  size_y {h:?}")?;
+        }
+        if let Some(a) = &self.render.alpha {
+            writeln!(f, "  alpha {a:?}")?;
+        }
         if self.render.orient != crate::orient::OrientIr::Camera {
             writeln!(f, "  orient {:?}", self.render.orient)?;
         }

@@ -78,6 +78,14 @@ pub fn lower(effect: &Effect) -> EffectIr {
                     .map(|s| (s.0, [s.1 .0, s.1 .1, s.1 .2, s.1 .3]))
                     .collect(),
                 size: r.size.iter().map(|s| (s.0, s.1)).collect(),
+                size_y: r
+                    .size_y
+                    .as_ref()
+                    .map(|stops| stops.iter().map(|s| (s.0, s.1)).collect()),
+                alpha: r
+                    .alpha
+                    .as_ref()
+                    .map(|stops| stops.iter().map(|s| (s.0, s.1)).collect()),
                 blend: r.blend,
                 background: r.background.d(),
                 orient: crate::orient::OrientIr::lower(&r.orient),

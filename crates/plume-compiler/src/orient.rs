@@ -81,18 +81,20 @@ impl OrientIr {
     }
 
     /// The f64 twin of [`Self::emit_half_axes`]: the world-space half axes of a sprite of
-    /// diameter `size` moving at `velocity`, for a camera whose unit right and up vectors (in
-    /// world space) are `camera_right` and `camera_up`.
+    /// width `size` and height `height` (for `Velocity`: its length before stretching) moving
+    /// at `velocity`, for a camera whose unit right and up vectors (in world space) are
+    /// `camera_right` and `camera_up`.
     pub fn half_axes(
         &self,
         size: f64,
+        height: f64,
         velocity: DVec3,
         camera_right: DVec3,
         camera_up: DVec3,
     ) -> (DVec3, DVec3) {
         let half = 0.5 * size;
         match *self {
-            OrientIr::Camera => (camera_right * half, camera_up * half),
+            OrientIr::Camera => (camera_right * half, camera_up * (0.5 * height)),
             OrientIr::Velocity {
                 stretch,
                 max_length,
@@ -105,22 +107,23 @@ impl OrientIr {
                 } else {
                     (0.0, (0.0, 1.0))
                 };
-                let length = velocity_length(size, speed, stretch, max_length);
+                let length = velocity_length(height, speed, stretch, max_length);
                 let x = camera_right * along.1 - camera_up * along.0;
                 let y = camera_right * along.0 + camera_up * along.1;
                 (x * half, y * (0.5 * length))
             }
-            OrientIr::Fixed { right, up } => (right * half, up * half),
+            OrientIr::Fixed { right, up } => (right * half, up * (0.5 * height)),
         }
     }
 
-    /// WGSL lines that set `s.half_x` and `s.half_y` (view space, vec3) from `s.size` and, for
-    /// `Velocity`, a world-space `vel: vec3<f32>` in scope.
-    pub fn emit_half_axes(&self, w: &mut Writer) {
+    /// WGSL lines that set `s.half_x` and `s.half_y` (view space, vec3) from `s.size` (the
+    /// width), the WGSL expression `height` and, for `Velocity`, a world-space
+    /// `vel: vec3<f32>` in scope.
+    pub fn emit_half_axes(&self, w: &mut Writer, height: &str) {
         match *self {
             OrientIr::Camera => {
                 w.line("s.half_x = vec3<f32>(0.5 * s.size, 0.0, 0.0);");
-                w.line("s.half_y = vec3<f32>(0.0, 0.5 * s.size, 0.0);");
+                w.line(format!("s.half_y = vec3<f32>(0.0, 0.5 * {height}, 0.0);"));
             }
             OrientIr::Velocity {
                 stretch,
@@ -136,7 +139,7 @@ impl OrientIr {
                     w.line("along = vv / speed;");
                 });
                 w.line(format!(
-                    "let len = max(s.size, min(s.size + {} * speed, {}));",
+                    "let len = max({height}, min({height} + {} * speed, {}));",
                     f32_lit(stretch),
                     f32_lit(max_length)
                 ));
@@ -158,7 +161,7 @@ impl OrientIr {
                     v(right)
                 ));
                 w.line(format!(
-                    "s.half_y = (draw.view * {}).xyz * (0.5 * s.size);",
+                    "s.half_y = (draw.view * {}).xyz * (0.5 * {height});",
                     v(up)
                 ));
             }
@@ -202,18 +205,35 @@ mod tests {
         });
         let (right, up) = (DVec3::X, DVec3::Y);
         // Moving right at 4 m/s: 0.2 + 0.4 = 0.6 long along x, 0.2 wide along y.
-        let (x, y) = o.half_axes(0.2, DVec3::new(4.0, 0.0, -7.0), right, up);
+        let (x, y) = o.half_axes(0.2, 0.2, DVec3::new(4.0, 0.0, -7.0), right, up);
         assert!((y - DVec3::new(0.3, 0.0, 0.0)).length() < 1e-12, "{y}");
         assert!((x - DVec3::new(0.0, -0.1, 0.0)).length() < 1e-12, "{x}");
         // Fast: capped at max_length; towards the camera only: no direction, no stretch.
-        let (_, y) = o.half_axes(0.2, DVec3::new(0.0, 100.0, 0.0), right, up);
+        let (_, y) = o.half_axes(0.2, 0.2, DVec3::new(0.0, 100.0, 0.0), right, up);
         assert!((y.length() - 0.5).abs() < 1e-12);
-        let (x, y) = o.half_axes(0.2, DVec3::new(0.0, 0.0, 5.0), right, up);
+        let (x, y) = o.half_axes(0.2, 0.2, DVec3::new(0.0, 0.0, 5.0), right, up);
         assert_eq!(
             (x, y),
             (DVec3::new(0.1, 0.0, 0.0), DVec3::new(0.0, 0.1, 0.0))
         );
         // A cap below the size never shrinks the sprite.
         assert_eq!(velocity_length(0.5, 10.0, 1.0, 0.1), 0.5);
+        // A height of its own is the length before stretching; the width stays the size.
+        let (x, y) = o.half_axes(0.2, 0.4, DVec3::new(4.0, 0.0, -7.0), right, up);
+        assert!((y - DVec3::new(0.4, 0.0, 0.0)).length() < 1e-12, "{y}");
+        assert!((x - DVec3::new(0.0, -0.1, 0.0)).length() < 1e-12, "{x}");
+    }
+
+    #[test]
+    fn width_and_height_span_the_two_axes() {
+        let n = Vec3(0.0, 1.0, 0.0);
+        for o in [OrientIr::Camera, OrientIr::lower(&Orient::Fixed(n))] {
+            let (right, up) = match o {
+                OrientIr::Fixed { right, up } => (right, up),
+                _ => (DVec3::X, DVec3::Y),
+            };
+            let (x, y) = o.half_axes(0.2, 0.6, DVec3::ZERO, DVec3::X, DVec3::Y);
+            assert!((x - right * 0.1).length() < 1e-12 && (y - up * 0.3).length() < 1e-12);
+        }
     }
 }

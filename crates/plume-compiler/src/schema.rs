@@ -142,6 +142,14 @@ pub struct Render {
     /// Sprite diameter (m) over the life fraction.
     #[serde(default = "default_sizes")]
     pub size: Vec<SizeStop>,
+    /// The sprite's height (its y axis) over the life fraction, when it differs from its
+    /// width: then `size` is the width. For `Velocity` sprites, the length before stretching.
+    #[serde(default)]
+    pub size_y: Option<Vec<SizeStop>>,
+    /// Opacity over the life fraction with stops of its own, `(t, alpha)`: replaces the colour
+    /// stops' alpha.
+    #[serde(default)]
+    pub alpha: Option<Vec<SizeStop>>,
     /// Alpha or Additive.
     #[serde(default)]
     pub blend: Blend,
@@ -249,6 +257,8 @@ impl Default for Render {
         Self {
             color: default_colors(),
             size: default_sizes(),
+            size_y: None,
+            alpha: None,
             blend: Blend::Alpha,
             background: default_background(),
             orient: Orient::Camera,

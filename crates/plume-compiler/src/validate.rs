@@ -327,6 +327,16 @@ fn check_trail(c: &mut Checker, path: &ValuePath, t: &crate::schema::Trail) {
 fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
     check_colors(c, &path.field("color"), &r.color);
     check_sizes(c, &path.field("size"), &r.size, "size");
+    if let Some(heights) = &r.size_y {
+        check_sizes(c, &path.field("size_y"), heights, "size");
+    }
+    if let Some(alpha) = &r.alpha {
+        let p = path.field("alpha");
+        check_stop_times(c, &p, &alpha.iter().map(|s| s.0).collect::<Vec<_>>());
+        for (i, s) in alpha.iter().enumerate() {
+            c.within(&p.index(i).component(1, "alpha"), s.1, 0.0, 1.0);
+        }
+    }
     if let Some(t) = &r.trail {
         check_trail(c, &path.field("trail"), t);
     }

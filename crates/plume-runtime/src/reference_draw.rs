@@ -55,10 +55,13 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
             };
             let c = render.color_at(t);
             let p = r.position;
-            let (half_x, half_y) =
-                render
-                    .orient
-                    .half_axes(render.size_at(t), r.velocity, camera_right, camera_up);
+            let (half_x, half_y) = render.orient.half_axes(
+                render.size_at(t),
+                render.height_at(t),
+                r.velocity,
+                camera_right,
+                camera_up,
+            );
             // Whole steps, as the records' ages and lifetimes are.
             let steps = |seconds: f64| (seconds / ir.dt).round() as u64;
             let (half_x, half_y) = match &render.rotation {

@@ -88,12 +88,14 @@ const TILE_BINDINGS: [(u32, bool, bool); 10] = [
 
 impl Splat {
     /// Whether the splat can draw `ir`'s sprites: round (no `texture`), camera-facing
-    /// (`orient: Camera`), into an 8-bit image (no `glow`), with no ribbons (no `trail`).
+    /// (`orient: Camera`) and square (no `size_y`), into an 8-bit image (no `glow`), with no
+    /// ribbons (no `trail`).
     pub fn draws(ir: &plume_compiler::EffectIr) -> bool {
         ir.render.orient == OrientIr::Camera
             && ir.render.texture.is_none()
             && ir.render.glow.is_none()
             && ir.render.trail.is_none()
+            && ir.render.size_y.is_none()
     }
 
     /// A splat of `instance` into `width` x `height` images; an error for sprites it cannot
@@ -114,6 +116,9 @@ impl Splat {
                 (_, _, Some(_)) => "followed by ribbons (render.trail)".to_string(),
                 (_, Some(_), None) => "drawn into an HDR image to glow (render.glow)".to_string(),
                 (Some(t), None, None) => format!("textured (render.texture: {:?})", t.file),
+                (None, None, None) if render.size_y.is_some() => {
+                    "of their own height (render.size_y)".to_string()
+                }
                 (None, None, None) => {
                     format!("oriented (render.orient: {})", render.orient.name())
                 }

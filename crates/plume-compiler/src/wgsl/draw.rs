@@ -352,14 +352,32 @@ fn emit_age_steps(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSteps>
 /// stops baked in, as `RenderIr::color_at` and `size_at` (constant beyond the end stops; a
 /// jump where two stops share a time).
 pub(crate) fn emit_gradients(w: &mut Writer, ir: &EffectIr) {
-    emit_color_gradient(w, "color_at", &ir.render.color);
-    let size: Vec<(f64, String)> = ir
-        .render
-        .size
-        .iter()
-        .map(|(t, s)| (*t, f32_lit(*s)))
-        .collect();
-    emit_gradient(w, "size_at", "f32", &size, f32_lit(0.0));
+    emit_particle_color(w, ir);
+    emit_scalar_gradient(w, "size_at", &ir.render.size);
+    if let Some(heights) = &ir.render.size_y {
+        emit_scalar_gradient(w, "height_at", heights);
+    }
+}
+
+/// `color_at(f)`: the particle's colour at life fraction `f`, its alpha from `render.alpha`'s
+/// own stops when there are some (as `RenderIr::color_at`).
+pub(crate) fn emit_particle_color(w: &mut Writer, ir: &EffectIr) {
+    match &ir.render.alpha {
+        None => emit_color_gradient(w, "color_at", &ir.render.color),
+        Some(alpha) => {
+            emit_color_gradient(w, "color_stops_at", &ir.render.color);
+            emit_scalar_gradient(w, "alpha_at", alpha);
+            w.block("fn color_at(f: f32) -> vec4<f32>", |w| {
+                w.line("return vec4<f32>(color_stops_at(f).rgb, alpha_at(f));");
+            });
+        }
+    }
+}
+
+/// `name(f)`: a scalar gradient through `stops` (0 where there are none).
+pub(crate) fn emit_scalar_gradient(w: &mut Writer, name: &str, stops: &[(f64, f64)]) {
+    let values: Vec<(f64, String)> = stops.iter().map(|(t, s)| (*t, f32_lit(*s))).collect();
+    emit_gradient(w, name, "f32", &values, f32_lit(0.0));
 }
 
 /// `name(f)`: a colour gradient through `stops` (white where there are none).
@@ -428,6 +446,10 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
         w.line("center: vec4<f32>,");
         w.line("color: vec4<f32>,");
         w.line("size: f32,");
+        if ir.render.size_y.is_some() {
+            w.comment("The height, when it has a curve of its own (render.size_y).");
+            w.line("size_y: f32,");
+        }
         if ir.render.texture.is_some() {
             w.comment("The flipbook frame shown.");
             w.line("frame: u32,");
@@ -485,10 +507,22 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
         }
         w.line("s.color = color_at(f);");
         w.line("s.size = size_at(f) * draw.size_scale;");
+        let height = if ir.render.size_y.is_some() {
+            w.line("s.size_y = height_at(f) * draw.size_scale;");
+            "s.size_y"
+        } else {
+            "s.size"
+        };
         w.comment("Nothing to see: blending a zero alpha or a zero-size quad changes no pixel.");
-        w.block("if (s.color.a <= 0.0 || s.size <= 0.0)", |w| {
-            w.line("return s;")
-        });
+        let height_hidden = if ir.render.size_y.is_some() {
+            " || s.size_y <= 0.0"
+        } else {
+            ""
+        };
+        w.block(
+            format!("if (s.color.a <= 0.0 || s.size <= 0.0{height_hidden})"),
+            |w| w.line("return s;"),
+        );
         w.line("s.center = draw.view * vec4<f32>(x, 1.0);");
         if oriented {
             if ir.render.orient.needs_velocity() {
@@ -504,7 +538,7 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
                     ));
                 }
             }
-            ir.render.orient.emit_half_axes(w);
+            ir.render.orient.emit_half_axes(w, height);
             if ir.render.rotation.is_some() {
                 match (stateless, ir.render.rotation.is_some_and(|r| r.spins())) {
                     (_, false) => w.line("let lived = 0u;"),

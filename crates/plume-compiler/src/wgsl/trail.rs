@@ -17,7 +17,7 @@ use crate::rng;
 use crate::trail::TrailIr;
 use crate::wgsl::draw::{self, DrawShape, FIRST_DATA_BINDING};
 use crate::wgsl::emit_particle_struct;
-use crate::wgsl::writer::{f32_lit, u32_lit, Writer};
+use crate::wgsl::writer::{u32_lit, Writer};
 
 /// Binding of chunk 0's trail ring in the trail draw module (chunk c at this + c).
 pub const FIRST_TRAIL_BINDING: u32 = 40;
@@ -99,7 +99,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         draw::emit_life_fraction(&mut w, layout, shared);
     }
     w.blank();
-    draw::emit_color_gradient(&mut w, "color_at", &ir.render.color);
+    draw::emit_particle_color(&mut w, ir);
     w.blank();
     emit_trail_gradients(&mut w, trail);
     w.blank();
@@ -128,8 +128,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
 /// `trail_width(t)` and `trail_color(t)`: the trail's stops baked in, as
 /// [`TrailIr::width_at`] and [`TrailIr::color_at`].
 fn emit_trail_gradients(w: &mut Writer, trail: &TrailIr) {
-    let width: Vec<(f64, String)> = trail.width.iter().map(|(t, x)| (*t, f32_lit(*x))).collect();
-    draw::emit_gradient(w, "trail_width", "f32", &width, f32_lit(0.0));
+    draw::emit_scalar_gradient(w, "trail_width", &trail.width);
     draw::emit_color_gradient(w, "trail_color", &trail.color);
 }
 
