@@ -39,8 +39,19 @@ fn probe(gpu: &Gpu, state: State) -> EffectInstance {
 /// from the camera (None: the far plane), the sprite drawn in a pass that tests against it
 /// read-only; `bind` says whether the host's depth is bound for the fade.
 fn centre(gpu: &Gpu, sim: &EffectInstance, wall: Option<f32>, bind: bool) -> u8 {
-    let target = Offscreen::new(gpu, SIDE, SIDE).unwrap();
     let camera = Camera::from_effect(&sim.effect().ir.camera, 1.0);
+    centre_from(gpu, sim, &camera, wall, bind)
+}
+
+/// [`centre`] seen through `camera` (the host's matrices).
+fn centre_from(
+    gpu: &Gpu,
+    sim: &EffectInstance,
+    camera: &Camera,
+    wall: Option<f32>,
+    bind: bool,
+) -> u8 {
+    let target = Offscreen::new(gpu, SIDE, SIDE).unwrap();
     let mut renderer = sim
         .renderer(&DrawTarget::new(plume::runtime::offscreen::FORMAT).with_depth(DEPTH))
         .unwrap();
@@ -91,7 +102,7 @@ fn centre(gpu: &Gpu, sim: &EffectInstance, wall: Option<f32>, bind: bool) -> u8 
     if let Some(c) = &second {
         clear_depth(&mut encoder, &c.create_view(&Default::default()), ndc);
     }
-    sim.prepare_draw(&mut encoder, &renderer, &camera).unwrap();
+    sim.prepare_draw(&mut encoder, &renderer, camera).unwrap();
     {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("particles"),
@@ -163,6 +174,30 @@ fn a_wall_behind_a_soft_sprite_fades_it_by_its_distance_over_the_fade_distance()
             "{state:?}: unbound"
         );
     }
+}
+
+#[test]
+fn an_orthographic_host_camera_fades_by_the_same_distances() {
+    // The same eye and sprite through an orthographic projection 4 m across: depth is linear
+    // in distance there, and the fade must be too.
+    let gpu = gpu();
+    let sim = probe(&gpu, State::Stateful);
+    let perspective = Camera::from_effect(&sim.effect().ir.camera, 1.0);
+    let camera = Camera {
+        view: perspective.view,
+        proj: glam::Mat4::orthographic_rh(-2.0, 2.0, -2.0, 2.0, 0.1, 100.0),
+    };
+    let full = centre_from(&gpu, &sim, &camera, None, true);
+    assert!(full > 200, "the unfaded centre is bright: {full}");
+    for (wall, fade) in [(10.25, 0.25), (10.5, 0.5), (10.75, 0.75), (12.0, 1.0)] {
+        let got = centre_from(&gpu, &sim, &camera, Some(wall), true);
+        let want = f64::from(full) * fade;
+        assert!(
+            (f64::from(got) - want).abs() <= 2.0,
+            "wall at {wall} m: centre {got}, want {want:.1} ({fade} of {full})"
+        );
+    }
+    assert_eq!(centre_from(&gpu, &sim, &camera, Some(9.5), true), 0, "hidden");
 }
 
 #[test]

@@ -722,9 +722,10 @@ fn emit_shade(w: &mut Writer, texture: Option<&crate::texture::TextureIr>) {
 
 /// The host's depth texture and `soft_fade(frag)`: how far (in metres along the view axis) the
 /// scene's surface lies behind the fragment, over the fade distance, clamped to [0, 1]. Depths
-/// are linearised with the projection's own terms: for a perspective projection (standard or
-/// reversed Z, finite or infinite far plane) NDC depth z and view distance d satisfy
-/// d = B / (z + A), A = proj[2][2], B = proj[3][2].
+/// are linearised with the projection's own terms, A = proj[2][2], B = proj[3][2]: for a
+/// perspective projection (standard or reversed Z, finite or infinite far plane; proj[3][3] = 0)
+/// NDC depth z and view distance d satisfy d = B / (z + A); for an orthographic one
+/// (proj[3][3] = 1, w = 1) z = −A d + B, so d = (B − z) / A.
 pub(crate) fn emit_soft(w: &mut Writer, distance: f64) {
     w.comment("Soft particles: the host's depth buffer (render.soft).");
     w.line(format!(
@@ -736,6 +737,11 @@ pub(crate) fn emit_soft(w: &mut Writer, distance: f64) {
         "Distance in front of the camera of NDC depth z (a far plane at infinity: a huge one).",
     );
     w.block("fn view_distance(z: f32) -> f32", |w| {
+        w.block("if (draw.proj[3][3] > 0.5)", |w| {
+            w.comment("Orthographic: depth is linear in distance.");
+            w.block("if (abs(draw.proj[2][2]) < 1e-30)", |w| w.line("return 0.0;"));
+            w.line("return (draw.proj[3][2] - z) / draw.proj[2][2];");
+        });
         w.line("let den = z + draw.proj[2][2];");
         w.block("if (abs(den) < 1e-30)", |w| w.line("return 3.0e38;"));
         w.line("return min(draw.proj[3][2] / den, 3.0e38);");
