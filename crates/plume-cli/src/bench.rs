@@ -62,6 +62,8 @@ fn draw_json(d: &plume_runtime::bench::DrawTimes) -> serde_json::Value {
         "splat_stages_ms": d.splat_stages.iter().map(|(n, s)| (n.to_string(), s * 1e3)).collect::<std::collections::BTreeMap<_, _>>(),
         "compacted_ms": d.compacted.map(|(_, s)| s * 1e3),
         "stateless_ms": d.stateless.map(|s| s * 1e3),
+        "glow_draw_ms": d.glow.map(|g| g.0 * 1e3),
+        "glow_blur_ms": d.glow.map(|g| g.1 * 1e3),
     })
 }
 
@@ -285,6 +287,14 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 None => println!(
                     "    compute splat     - (it draws untextured camera-facing sprites without glow only; not this effect's)"
                 ),
+            }
+            if let Some((draw, blur)) = d.glow {
+                println!(
+                    "    glow              {:.3} ms: the draw into the HDR image {:.3} ms + the bloom's two blur passes {:.3} ms",
+                    (draw + blur) * 1e3,
+                    draw * 1e3,
+                    blur * 1e3
+                );
             }
             if let Some(p) = d.prepare {
                 println!(

@@ -131,6 +131,9 @@ pub struct DrawTimes {
     /// The same N particles of a stateless copy of the effect, drawn from the closed form in
     /// the vertex shader, when the effect can be stateless.
     pub stateless: Option<f64>,
+    /// For a glowing effect (`render.glow`): (the same draw into the HDR image instead of
+    /// RGBA8, the two blur passes that bloom it).
+    pub glow: Option<(f64, f64)>,
 }
 
 /// Frames timed per draw figure (the median is reported).
@@ -606,6 +609,27 @@ fn time_draws(
         }
         false => None,
     };
+    let glow = match &sim.effect().ir.render.glow {
+        Some(g) => {
+            let glowing = Offscreen::with_glow(gpu, width, height, Some(g))?;
+            let renderer = sim.renderer_with(&glowing.target(), &hidden_slots)?;
+            glowing.render(sim, &renderer, &camera)?;
+            let mut draws = Vec::with_capacity(DRAW_REPEATS);
+            let mut blurs = Vec::with_capacity(DRAW_REPEATS);
+            let passes = glowing.glow().expect("a glowing target has its passes");
+            for _ in 0..DRAW_REPEATS {
+                draws.push(timer.time_render(|encoder, timestamps| {
+                    glowing.record(encoder, sim, &renderer, &camera, timestamps)
+                })?);
+                blurs.push(timer.time(|pass| {
+                    passes.record_into(pass);
+                    Ok(())
+                })?);
+            }
+            Some((median(&mut draws), median(&mut blurs)))
+        }
+        None => None,
+    };
     let stateless = match compile(State::Auto)? {
         c if c.ir.stateless.is_some() => {
             let mut s = EffectInstance::new(gpu, c)?;
@@ -628,6 +652,7 @@ fn time_draws(
         splat,
         splat_stages,
         stateless,
+        glow,
     })
 }
 

@@ -108,6 +108,12 @@ impl GlowPasses {
             label: Some("glow"),
             timestamp_writes: None,
         });
+        self.record_into(&mut pass);
+    }
+
+    /// Records both passes' dispatches into the caller's compute pass (the benchmark times
+    /// them so).
+    pub fn record_into(&self, pass: &mut wgpu::ComputePass<'_>) {
         for (pipeline, group) in [&self.blur_x, &self.blur_y] {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, group, &[]);

@@ -103,6 +103,11 @@ impl Offscreen {
         })
     }
 
+    /// The bloom passes, when the target glows.
+    pub fn glow(&self) -> Option<&GlowPasses> {
+        self.glow.as_ref()
+    }
+
     /// The image's width and height.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)
