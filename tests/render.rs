@@ -26,8 +26,9 @@ fn draw_gpu(sim: &EffectInstance, w: u32, h: u32) -> Vec<u8> {
         .unwrap()
 }
 
-/// Draws `sim` with the reference path: particles read back, coloured and sized on the CPU in
-/// f64, in the order the GPU draw follows (the depth order when sorted, else slot order).
+/// Draws `sim` with the reference path: particles (and trails) read back, coloured, sized and
+/// placed on the CPU in f64, in the order the GPU draw follows (the depth order when sorted,
+/// else slot order), ribbons first as the GPU draws them.
 fn draw_reference(sim: &EffectInstance, w: u32, h: u32) -> Vec<u8> {
     let ir = &sim.effect().ir;
     let records = if ir.sort {
@@ -41,8 +42,14 @@ fn draw_reference(sim: &EffectInstance, w: u32, h: u32) -> Vec<u8> {
     };
     let r = ReferenceRenderer::new(sim.gpu(), w, h, &ir.render).unwrap();
     let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
-    r.draw(&sprites(&records, ir, camera.view, false), &camera)
-        .unwrap()
+    let trails = plume::runtime::trail_readback::read_trails(sim).unwrap();
+    let ribbons = plume::runtime::reference_ribbons::ribbons(&records, &trails, ir);
+    r.draw_with_ribbons(
+        &ribbons,
+        &sprites(&records, ir, camera.view, false),
+        &camera,
+    )
+    .unwrap()
 }
 
 /// Every example effect file, in name order.
@@ -77,6 +84,27 @@ fn simulate(gpu: &Gpu, effect: CompiledEffect, steps: u64) -> EffectInstance {
     let mut sim = EffectInstance::new(gpu, effect).unwrap();
     sim.run(steps, |_| {}).unwrap();
     sim
+}
+
+/// Whether every pixel of `a` and `b` (`w` wide) that differs by more than `over` in some
+/// channel has no such neighbour among its eight.
+fn lone_pixels(a: &[u8], b: &[u8], w: u32, over: u8) -> bool {
+    let (w, h) = (w as i64, (a.len() / 4) as i64 / w as i64);
+    let differs = |x: i64, y: i64| {
+        (0..w).contains(&x)
+            && (0..h).contains(&y)
+            && (0..3).any(|c| {
+                let k = (4 * (y * w + x) + c) as usize;
+                a[k].abs_diff(b[k]) > over
+            })
+    };
+    (0..h).all(|y| {
+        (0..w).all(|x| {
+            !differs(x, y)
+                || !(-1..=1)
+                    .any(|dy| (-1..=1).any(|dx| (dx, dy) != (0, 0) && differs(x + dx, y + dy)))
+        })
+    })
 }
 
 fn pixel(img: &[u8], w: u32, x: u32, y: u32) -> [u8; 4] {
@@ -182,8 +210,18 @@ fn the_gpu_draw_matches_the_cpu_fed_drawing_for_every_example() {
             "{name}: mean {:.5}, max {}, {} channels over 2",
             d.0, d.1, d.2
         );
+        // A textured sprite samples the mip level its size on screen calls for. Where a pixel
+        // centre lies on a sprite's edge (the GPU places corners in view space, the reference
+        // in world space, each in f32), one draw covers it and the other does not; at level 0
+        // the frame's rim is transparent and nothing shows, but a coarse level's rim texel
+        // averages in the opaque texels inside it. Such pixels stand alone: a sprite drawn
+        // differently changes a block of neighbouring pixels, which this still refuses.
+        let textured = sim.effect().ir.render.texture.is_some();
+        let rim_only = |(mean, _, over): (f64, u8, usize)| {
+            mean < 0.01 && over * 2000 < gpu_img.len() && lone_pixels(&gpu_img, &cpu_img, w, 4)
+        };
         assert!(
-            within(d, gpu_img.len()),
+            within(d, gpu_img.len()) || (textured && rim_only(d)),
             "{name}: GPU and CPU-fed draws differ: {d:?}"
         );
         if sim.effect().ir.sort {

@@ -197,7 +197,11 @@ fn an_orthographic_host_camera_fades_by_the_same_distances() {
             "wall at {wall} m: centre {got}, want {want:.1} ({fade} of {full})"
         );
     }
-    assert_eq!(centre_from(&gpu, &sim, &camera, Some(9.5), true), 0, "hidden");
+    assert_eq!(
+        centre_from(&gpu, &sim, &camera, Some(9.5), true),
+        0,
+        "hidden"
+    );
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! Trails (`render.trail`) on the GPU (llvmpipe in CI): the ring the update writes holds each
 //! particle's past positions as the f64 reference records them (slots reused, the ring split
 //! across particle buffers), the drawn ribbon passes through those positions within a pixel
-//! and nowhere the particle has not been, an effect without a trail stores no history, and the
+//! and nowhere the particle has not been, and matches the CPU-fed drawing (vertices in f64), an effect without a trail stores no history, and the
 //! compute splat refuses ribbons.
 
 mod common;
@@ -11,6 +11,8 @@ use glam::DVec3;
 use plume::compiler::reference::ReferenceSim;
 use plume::runtime::camera::Camera;
 use plume::runtime::offscreen::Offscreen;
+use plume::runtime::reference_draw::ReferenceRenderer;
+use plume::runtime::reference_ribbons;
 use plume::runtime::splat::Splat;
 use plume::runtime::trail_readback::read_trails;
 use plume::runtime::EffectInstance;
@@ -192,6 +194,18 @@ fn a_ribbon_passes_through_the_particles_previous_positions() {
     // A pixel off the path, 10 px beside the ribbon's middle, stays dark.
     let (x, y) = camera.project(SIDE, SIDE, ribbon[8]).unwrap();
     assert_eq!(near(&img, (x, y + 10.0)), 0);
+    // The CPU-fed drawing of the same points (vertices placed in f64) draws the same ribbon:
+    // corners that differ by f32 roundings move an edge pixel's coverage by a step or two.
+    let reference = ReferenceRenderer::new(&gpu, SIDE, SIDE, &effect.ir.render).unwrap();
+    let records = sim.records().unwrap();
+    let ribbons = reference_ribbons::ribbons(&records, &read_trails(&sim).unwrap(), &effect.ir);
+    assert_eq!(ribbons.len(), 15 * 6, "15 segments of two triangles");
+    let cpu = reference.draw_with_ribbons(&ribbons, &[], &camera).unwrap();
+    let (mean, max, _) = differences(&img, &cpu, 4);
+    assert!(
+        mean < 0.01 && max <= 4,
+        "GPU and CPU-fed ribbons differ: mean {mean}, max {max}"
+    );
 }
 
 #[test]

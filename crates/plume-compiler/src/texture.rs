@@ -245,19 +245,31 @@ impl TextureIr {
     /// Emits the fragment shader's body for a textured sprite: the frame's texel at the
     /// fragment's corner coordinates `in.uv`, times the colour.
     pub fn emit_fragment_body(&self, w: &mut Writer) {
+        w.line(
+            "let cell = vec2<f32>(f32(in.frame % FRAME_COLUMNS), f32(in.frame / FRAME_COLUMNS));",
+        );
+        w.line("let quad = vec2<f32>(in.uv.x + 1.0, 1.0 - in.uv.y) * 0.5;");
+        w.comment("The mip level's derivatives, taken before any discard (uniform control flow) and before the half-texel clamp (which would flatten them at the frame's edge).");
+        w.line("let unclamped = (cell + quad) * FRAME_SIZE;");
+        w.line("let gx = dpdxFine(unclamped);");
+        w.line("let gy = dpdyFine(unclamped);");
         w.comment(
             "Only the triangle primitive reaches outside the quad: nothing of the frame there.",
         );
         w.block("if (any(abs(in.uv) > vec2<f32>(1.0)))", |w| {
             w.line("discard;")
         });
-        w.line("let local = clamp(vec2<f32>(in.uv.x + 1.0, 1.0 - in.uv.y) * 0.5, HALF_TEXEL, vec2<f32>(1.0) - HALF_TEXEL);");
-        w.line(
-            "let cell = vec2<f32>(f32(in.frame % FRAME_COLUMNS), f32(in.frame / FRAME_COLUMNS));",
-        );
-        w.comment("Level 0: no mipmaps, and no derivatives needed in non-uniform control flow.");
-        w.line("let texel = textureSampleLevel(sprite_texture, sprite_sampler, (cell + local) * FRAME_SIZE, 0.0);");
+        w.line("let local = clamp(quad, HALF_TEXEL, vec2<f32>(1.0) - HALF_TEXEL);");
+        w.line("let texel = textureSampleGrad(sprite_texture, sprite_sampler, (cell + local) * FRAME_SIZE, gx, gy);");
         w.line("return in.color * texel;");
+    }
+
+    /// Mip levels the atlas keeps: it halves while every frame's width and height stay whole
+    /// texels, so that no texel of any level spans two frames (a 64x64 frame: 7 levels, down
+    /// to 1x1; a 60x60 one: 3, down to 15x15).
+    pub fn mip_levels(&self) -> u32 {
+        let (frame_w, frame_h) = (self.width / self.columns, self.height / self.rows);
+        1 + frame_w.trailing_zeros().min(frame_h.trailing_zeros())
     }
 }
 

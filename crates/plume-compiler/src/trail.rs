@@ -94,6 +94,38 @@ impl TrailIr {
         crate::ir::interpolate(&self.color, t)
     }
 
+    /// The f64 twin of the trail module's vertex placement: for each of a ribbon's `points`
+    /// (the particle now, then its samples newest first), its two vertices (side −1, then
+    /// +1), half the width at its trail fraction (times `size_scale`) to either side across
+    /// the trail's direction there and the line of sight from `eye`; a point with no direction
+    /// gets both vertices on it.
+    pub fn ribbon_vertices(
+        &self,
+        points: &[DVec3],
+        eye: DVec3,
+        size_scale: f64,
+    ) -> Vec<[DVec3; 2]> {
+        let last = points.len().saturating_sub(1);
+        (0..points.len())
+            .map(|j| {
+                let here = points[j];
+                let along = points[j.saturating_sub(1)] - points[(j + 1).min(last)];
+                // In view space the GPU crosses the direction with the point's position from the
+                // eye; a rotation keeps cross products, so world space gives the same axis.
+                let side = along.cross(here - eye);
+                let len2 = side.length_squared();
+                let t = j as f64 / f64::from(self.ring());
+                let half = 0.5 * self.width_at(t) * size_scale;
+                let offset = if len2 > 1e-30 {
+                    side * (half / len2.sqrt())
+                } else {
+                    DVec3::ZERO
+                };
+                [here - offset, here + offset]
+            })
+            .collect()
+    }
+
     /// Emits the update's record of the position `x` at the step's start into the ring
     /// (`trail`, binding 16) for particle `p` in chunk slot `i`.
     pub fn emit_record(&self, w: &mut Writer) {
@@ -178,6 +210,23 @@ mod tests {
         );
         // The history and the window agree on how many samples there are.
         assert_eq!(t.window(7).count(), 2);
+    }
+
+    #[test]
+    fn ribbon_vertices_lie_across_the_trail_and_the_line_of_sight() {
+        let t = trail(3, 1);
+        // A trail along +x seen from +z: the ribbon spans y, 0.1 m wide at every point.
+        let eye = DVec3::new(0.0, 0.0, 10.0);
+        let points = [DVec3::new(2.0, 0.0, 0.0), DVec3::X, DVec3::ZERO];
+        let v = t.ribbon_vertices(&points, eye, 1.0);
+        for (j, [a, b]) in v.iter().enumerate() {
+            assert!(((*a - *b).length() - 0.1).abs() < 1e-12, "point {j}");
+            assert!(((*a + *b) * 0.5 - points[j]).length() < 1e-12);
+            assert!((*a - *b).normalize().abs().y > 1.0 - 1e-12);
+        }
+        // A trail that has not moved draws nothing.
+        let still = t.ribbon_vertices(&[DVec3::ONE; 3], eye, 1.0);
+        assert!(still.iter().all(|[a, b]| a == b));
     }
 
     #[test]

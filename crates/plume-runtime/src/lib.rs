@@ -40,6 +40,7 @@ pub mod offscreen;
 pub mod plot;
 pub mod readback;
 pub mod reference_draw;
+pub mod reference_ribbons;
 pub mod resources;
 pub mod scene_depth;
 pub mod sort;

@@ -14,6 +14,7 @@ use crate::draw::blend_state;
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
 use crate::offscreen::{Offscreen, FORMAT};
+use crate::reference_ribbons::{RibbonPipeline, RibbonVertex};
 use crate::sprite_texture::SpriteTexture;
 
 /// One sprite: centre (m), the quad's half axes (m), colour (RGBA in [0, 1]). Corner
@@ -106,6 +107,7 @@ pub struct ReferenceRenderer {
     pipeline: wgpu::RenderPipeline,
     camera: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
+    ribbons: RibbonPipeline,
     background: DVec3,
 }
 
@@ -134,7 +136,7 @@ impl ReferenceRenderer {
         let texture = match &render.texture {
             Some(t) => SpriteTexture::new(gpu, t)?,
             // Bound but never sampled: the sprites' texel rectangles are empty.
-            None => SpriteTexture::from_rgba(gpu, 1, 1, &[255; 4])?,
+            None => SpriteTexture::from_rgba(gpu, 1, 1, &[255; 4], 1)?,
         };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("camera"),
@@ -220,6 +222,7 @@ impl ReferenceRenderer {
             multiview_mask: None,
             cache: None,
         });
+        let ribbons = RibbonPipeline::new(gpu, blend, &camera);
         gpu.take_error()?;
         Ok(Self {
             gpu: gpu.clone(),
@@ -227,12 +230,24 @@ impl ReferenceRenderer {
             pipeline,
             camera,
             bind_group,
+            ribbons,
             background,
         })
     }
 
     /// Draws `sprites` in order over the background as seen from `camera`; returns RGBA8 rows.
     pub fn draw(&self, sprites: &[Sprite], camera: &Camera) -> Result<Vec<u8>, RuntimeError> {
+        self.draw_with_ribbons(&[], sprites, camera)
+    }
+
+    /// Draws the `ribbons` (triangles, [`crate::reference_ribbons::ribbons`]), then `sprites`
+    /// in order, as the GPU draw records an effect with trails; returns RGBA8 rows.
+    pub fn draw_with_ribbons(
+        &self,
+        ribbons: &[RibbonVertex],
+        sprites: &[Sprite],
+        camera: &Camera,
+    ) -> Result<Vec<u8>, RuntimeError> {
         let device = &self.gpu.device;
         let mut cam = Vec::with_capacity(128);
         for m in [camera.view, camera.proj] {
@@ -264,6 +279,7 @@ impl ReferenceRenderer {
             self.gpu.queue.write_buffer(&b, 0, &instances);
             b
         });
+        let ribbon_buffer = RibbonPipeline::upload(&self.gpu, ribbons);
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -274,6 +290,9 @@ impl ReferenceRenderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
+            if let Some(b) = &ribbon_buffer {
+                self.ribbons.record(&mut pass, b, ribbons.len() as u32);
+            }
             if let Some(b) = &instance_buffer {
                 pass.set_pipeline(&self.pipeline);
                 pass.set_bind_group(0, &self.bind_group, &[]);

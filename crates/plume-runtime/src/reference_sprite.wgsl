@@ -28,9 +28,11 @@ fn vs(
     @location(3) color: vec4<f32>,
     @location(4) texels: vec4<f32>,
 ) -> Out {
+    // Split along the same diagonal as the draw module's 4-vertex strip, so that both
+    // rasterise the same two triangles (and take the same derivatives for mip levels).
     var corners = array<vec2<f32>, 6>(
-        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
-        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(-1.0, 1.0),
+        vec2<f32>(-1.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(-1.0, 1.0),
+        vec2<f32>(-1.0, 1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
     );
     let uv = corners[vi % 6u];
     // The corner in world space, from the half axes the CPU computed in f64.
@@ -45,14 +47,18 @@ fn vs(
 
 @fragment
 fn fs(in: Out) -> @location(0) vec4<f32> {
+    // Corner (-1, 1) is the frame's top-left texel corner.
+    let local = vec2<f32>(in.uv.x + 1.0, 1.0 - in.uv.y) * 0.5 * in.texels.zw;
+    let size = vec2<f32>(textureDimensions(sprite_texture));
+    // The mip level's derivatives, in uniform control flow, before the clamp.
+    let gx = dpdxFine((in.texels.xy + local) / size);
+    let gy = dpdyFine((in.texels.xy + local) / size);
     // A frame's texel rectangle (x0, y0, width, height); zero width: no texture.
     if (in.texels.z > 0.0) {
-        // Corner (-1, 1) is the frame's top-left texel corner; sample no nearer the frame's
-        // edge than a texel's centre, so no neighbouring frame blends in.
-        let local = vec2<f32>(in.uv.x + 1.0, 1.0 - in.uv.y) * 0.5 * in.texels.zw;
+        // Sample no nearer the frame's edge than a texel's centre, so no neighbouring frame
+        // blends in.
         let at = in.texels.xy + clamp(local, vec2<f32>(0.5), in.texels.zw - 0.5);
-        let size = vec2<f32>(textureDimensions(sprite_texture));
-        return in.color * textureSampleLevel(sprite_texture, sprite_sampler, at / size, 0.0);
+        return in.color * textureSampleGrad(sprite_texture, sprite_sampler, at / size, gx, gy);
     }
     let r2 = dot(in.uv, in.uv);
     if (r2 >= 1.0) {

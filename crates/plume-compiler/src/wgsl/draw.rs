@@ -739,7 +739,9 @@ pub(crate) fn emit_soft(w: &mut Writer, distance: f64) {
     w.block("fn view_distance(z: f32) -> f32", |w| {
         w.block("if (draw.proj[3][3] > 0.5)", |w| {
             w.comment("Orthographic: depth is linear in distance.");
-            w.block("if (abs(draw.proj[2][2]) < 1e-30)", |w| w.line("return 0.0;"));
+            w.block("if (abs(draw.proj[2][2]) < 1e-30)", |w| {
+                w.line("return 0.0;")
+            });
             w.line("return (draw.proj[3][2] - z) / draw.proj[2][2];");
         });
         w.line("let den = z + draw.proj[2][2];");
