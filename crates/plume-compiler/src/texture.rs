@@ -183,18 +183,21 @@ impl TextureIr {
             "const FRAME_COLUMNS: u32 = {};",
             u32_lit(self.columns)
         ));
-        w.comment(
-            "A frame's extent in texture coordinates, and half a texel in frame coordinates.",
-        );
+        w.comment("A frame's extent in texture coordinates, the atlas's and a frame's in texels.");
         w.line(format!(
             "const FRAME_SIZE: vec2<f32> = vec2<f32>({}, {});",
             f32_lit(1.0 / f64::from(self.columns)),
             f32_lit(1.0 / f64::from(self.rows))
         ));
         w.line(format!(
-            "const HALF_TEXEL: vec2<f32> = vec2<f32>({}, {});",
-            f32_lit(0.5 * f64::from(self.columns) / f64::from(self.width)),
-            f32_lit(0.5 * f64::from(self.rows) / f64::from(self.height))
+            "const ATLAS_TEXELS: vec2<f32> = vec2<f32>({}, {});",
+            f32_lit(f64::from(self.width)),
+            f32_lit(f64::from(self.height))
+        ));
+        w.line(format!(
+            "const FRAME_TEXELS: vec2<f32> = vec2<f32>({}, {});",
+            f32_lit(f64::from(self.width / self.columns)),
+            f32_lit(f64::from(self.height / self.rows))
         ));
     }
 
@@ -259,7 +262,11 @@ impl TextureIr {
         w.block("if (any(abs(in.uv) > vec2<f32>(1.0)))", |w| {
             w.line("discard;")
         });
-        w.line("let local = clamp(quad, HALF_TEXEL, vec2<f32>(1.0) - HALF_TEXEL);");
+        w.comment("Sample no nearer the frame's edge than half a texel of the coarser mip level in use, so no neighbouring frame blends in.");
+        w.line("let rho = max(length(gx * ATLAS_TEXELS), length(gy * ATLAS_TEXELS));");
+        w.line("let level = ceil(log2(max(rho, 1.0)));");
+        w.line("let half_texel = min(vec2<f32>(0.5), 0.5 * exp2(level) / FRAME_TEXELS);");
+        w.line("let local = clamp(quad, half_texel, vec2<f32>(1.0) - half_texel);");
         w.line("let texel = textureSampleGrad(sprite_texture, sprite_sampler, (cell + local) * FRAME_SIZE, gx, gy);");
         w.line("return in.color * texel;");
     }

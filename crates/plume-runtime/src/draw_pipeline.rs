@@ -13,20 +13,36 @@ use crate::sprite_texture::SpriteTexture;
 pub(crate) fn render_pipeline(
     gpu: &Gpu,
     module: &wgpu::ShaderModule,
-    (vs, fs): (&str, &str),
+    entries: (&str, &str),
     topology: wgpu::PrimitiveTopology,
     target: &DrawTarget,
     blend: wgpu::BlendState,
 ) -> wgpu::RenderPipeline {
+    vertex_pipeline(gpu, module, entries, topology, target, blend, None, &[])
+}
+
+/// [`render_pipeline`] with a pipeline layout of the caller's (None: derived) and vertex
+/// buffers (the reference drawing feeds its quads and ribbons so).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn vertex_pipeline(
+    gpu: &Gpu,
+    module: &wgpu::ShaderModule,
+    (vs, fs): (&str, &str),
+    topology: wgpu::PrimitiveTopology,
+    target: &DrawTarget,
+    blend: wgpu::BlendState,
+    layout: Option<&wgpu::PipelineLayout>,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+) -> wgpu::RenderPipeline {
     gpu.device
         .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some(vs),
-            layout: None,
+            layout,
             vertex: wgpu::VertexState {
                 module,
                 entry_point: Some(vs),
                 compilation_options: Default::default(),
-                buffers: &[],
+                buffers,
             },
             primitive: wgpu::PrimitiveState {
                 topology,

@@ -11,6 +11,7 @@ use plume_compiler::rotation::RotationIr;
 
 use crate::camera::Camera;
 use crate::draw::blend_state;
+use crate::draw_pipeline::vertex_pipeline;
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
 use crate::offscreen::{Offscreen, FORMAT};
@@ -192,36 +193,20 @@ impl ReferenceRenderer {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let blend_state = blend_state(blend);
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("sprites"),
-            layout: Some(&pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: SPRITE_BYTES,
-                    step_mode: wgpu::VertexStepMode::Instance,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x4, 4 => Float32x4],
-                })],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: FORMAT,
-                    blend: Some(blend_state),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = vertex_pipeline(
+            gpu,
+            &module,
+            ("vs", "fs"),
+            wgpu::PrimitiveTopology::TriangleList,
+            &crate::draw_target::DrawTarget::new(FORMAT),
+            blend_state(blend),
+            Some(&pipeline_layout),
+            &[Some(wgpu::VertexBufferLayout {
+                array_stride: SPRITE_BYTES,
+                step_mode: wgpu::VertexStepMode::Instance,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x4, 4 => Float32x4],
+            })],
+        );
         let ribbons = RibbonPipeline::new(gpu, blend, &camera);
         gpu.take_error()?;
         Ok(Self {

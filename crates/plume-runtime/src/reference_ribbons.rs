@@ -10,6 +10,8 @@ use plume_compiler::ir::EffectIr;
 use plume_compiler::reference::ParticleRecord;
 
 use crate::draw::blend_state;
+use crate::draw_pipeline::vertex_pipeline;
+use crate::draw_target::DrawTarget;
 use crate::gpu::Gpu;
 use crate::offscreen::FORMAT;
 
@@ -93,35 +95,20 @@ impl RibbonPipeline {
             label: Some("reference ribbons"),
             source: wgpu::ShaderSource::Wgsl(include_str!("reference_ribbon.wgsl").into()),
         });
-        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("reference ribbons"),
-            layout: None,
-            vertex: wgpu::VertexState {
-                module: &module,
-                entry_point: Some("vs"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: RIBBON_VERTEX_BYTES,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x4],
-                })],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: None,
-            multisample: wgpu::MultisampleState::default(),
-            fragment: Some(wgpu::FragmentState {
-                module: &module,
-                entry_point: Some("fs"),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: FORMAT,
-                    blend: Some(blend_state(blend)),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        let pipeline = vertex_pipeline(
+            gpu,
+            &module,
+            ("vs", "fs"),
+            wgpu::PrimitiveTopology::TriangleList,
+            &DrawTarget::new(FORMAT),
+            blend_state(blend),
+            None,
+            &[Some(wgpu::VertexBufferLayout {
+                array_stride: RIBBON_VERTEX_BYTES,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x4],
+            })],
+        );
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("reference ribbons"),
             layout: &pipeline.get_bind_group_layout(0),

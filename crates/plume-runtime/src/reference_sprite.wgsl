@@ -55,9 +55,11 @@ fn fs(in: Out) -> @location(0) vec4<f32> {
     let gy = dpdyFine((in.texels.xy + local) / size);
     // A frame's texel rectangle (x0, y0, width, height); zero width: no texture.
     if (in.texels.z > 0.0) {
-        // Sample no nearer the frame's edge than a texel's centre, so no neighbouring frame
-        // blends in.
-        let at = in.texels.xy + clamp(local, vec2<f32>(0.5), in.texels.zw - 0.5);
+        // Sample no nearer the frame's edge than half a texel of the coarser mip level in use,
+        // so no neighbouring frame blends in.
+        let rho = max(length(gx * size), length(gy * size));
+        let half_texel = min(0.5 * in.texels.zw, vec2<f32>(0.5 * exp2(ceil(log2(max(rho, 1.0))))));
+        let at = in.texels.xy + clamp(local, half_texel, in.texels.zw - half_texel);
         return in.color * textureSampleGrad(sprite_texture, sprite_sampler, at / size, gx, gy);
     }
     let r2 = dot(in.uv, in.uv);
