@@ -43,7 +43,7 @@ fn draw_reference(sim: &EffectInstance, w: u32, h: u32) -> Vec<u8> {
     let r = ReferenceRenderer::new(sim.gpu(), w, h, &ir.render).unwrap();
     let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
     let trails = plume::runtime::trail_readback::read_trails(sim).unwrap();
-    let ribbons = plume::runtime::reference_ribbons::ribbons(&records, &trails, ir);
+    let ribbons = plume::runtime::reference_ribbons::ribbons(&records, &trails, ir, camera.view);
     r.draw_with_ribbons(
         &ribbons,
         &sprites(&records, ir, camera.view, false),

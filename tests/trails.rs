@@ -198,7 +198,12 @@ fn a_ribbon_passes_through_the_particles_previous_positions() {
     // corners that differ by f32 roundings move an edge pixel's coverage by a step or two.
     let reference = ReferenceRenderer::new(&gpu, SIDE, SIDE, &effect.ir.render).unwrap();
     let records = sim.records().unwrap();
-    let ribbons = reference_ribbons::ribbons(&records, &read_trails(&sim).unwrap(), &effect.ir);
+    let ribbons = reference_ribbons::ribbons(
+        &records,
+        &read_trails(&sim).unwrap(),
+        &effect.ir,
+        camera.view,
+    );
     assert_eq!(ribbons.len(), 15 * 6, "15 segments of two triangles");
     let cpu = reference.draw_with_ribbons(&ribbons, &[], &camera).unwrap();
     let (mean, max, _) = differences(&img, &cpu, 4);

@@ -5,7 +5,7 @@
 
 use std::collections::HashMap;
 
-use glam::DVec3;
+use glam::{DVec3, Mat4};
 use plume_compiler::ir::EffectIr;
 use plume_compiler::reference::ParticleRecord;
 
@@ -29,17 +29,21 @@ pub struct RibbonVertex {
 /// Bytes of one vertex: a vec3, a float and a vec4 of f32.
 pub const RIBBON_VERTEX_BYTES: u64 = 32;
 
-/// The ribbons of `records` (in draw order) whose points `trails` holds by id, as a triangle
-/// list: each segment the two triangles the GPU's strip makes of it. Colours are the
-/// particle's at its life fraction times the trail's at each point's fraction.
+/// The ribbons of `records` (in draw order) whose points `trails` holds by id, facing a camera
+/// with view matrix `view`, as a triangle list: each segment the two triangles the GPU's strip
+/// makes of it. Colours are the particle's at its life fraction times the trail's at each
+/// point's fraction.
 pub fn ribbons(
     records: &[ParticleRecord],
     trails: &[(u32, Vec<DVec3>)],
     ir: &EffectIr,
+    view: Mat4,
 ) -> Vec<RibbonVertex> {
     let Some(trail) = &ir.render.trail else {
         return Vec::new();
     };
+    // The eye: where the view matrix takes the origin from.
+    let eye = view.as_dmat4().inverse().transform_point3(DVec3::ZERO);
     let by_id: HashMap<u32, &Vec<DVec3>> = trails.iter().map(|(id, p)| (*id, p)).collect();
     let f32s = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
     let mut out = Vec::new();
@@ -55,7 +59,7 @@ pub fn ribbons(
             _ => 0.0,
         };
         let particle = ir.render.color_at(life);
-        let sides = trail.ribbon_vertices(points, ir.camera.eye, 1.0);
+        let sides = trail.ribbon_vertices(points, eye, 1.0);
         let vertex = |j: usize, side: usize| {
             let tint = trail.color_at(j as f64 / f64::from(trail.ring()));
             RibbonVertex {
