@@ -14,6 +14,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 
 use common::effect_gen::{self, effect, mutate, Flavor};
 use glam::DVec3;
+use plume::compiler::graph::compile_graph_str;
 use plume::{compile_str, CompileError, CompileOptions};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
@@ -54,13 +55,16 @@ fn runner() -> TestRunner {
 
 /// Compiles `source` and checks the contract; returns whether it was accepted.
 fn check(source: &str) -> Result<bool, TestCaseError> {
-    match compile_str(source, &CompileOptions::default()) {
-        Ok(c) => {
-            prop_assert!(!c.wgsl.is_empty());
+    match compile_graph_str(source, &CompileOptions::default()) {
+        Ok(graph) => {
             // Warnings must render (their spans point into the source).
-            let _ = c.warnings.render("fuzz.ron", source);
-            prop_assert!(c.ir.dt.is_finite() && c.ir.dt > 0.0, "dt {}", c.ir.dt);
-            prop_assert!(c.layout.bytes_per_particle > 0);
+            let _ = graph.all_warnings().render("fuzz.ron", source);
+            for group in &graph.groups {
+                let c = &group.effect;
+                prop_assert!(!c.wgsl.is_empty());
+                prop_assert!(c.ir.dt.is_finite() && c.ir.dt > 0.0, "dt {}", c.ir.dt);
+                prop_assert!(c.layout.bytes_per_particle > 0);
+            }
             Ok(true)
         }
         Err(CompileError::Invalid(d)) => {
@@ -133,6 +137,30 @@ fn wild_structured_effects_are_rejected_cleanly_or_give_valid_wgsl() {
     // kill volumes, Exact), so that many files reach the passes and naga.
     let strategy = prop_oneof![2 => effect(Flavor::Wild), 1 => effect(Flavor::Valid)];
     fuzz("structured", strategy, |text| text);
+}
+
+#[test]
+fn wild_groups_and_events_are_rejected_cleanly_or_give_valid_wgsl() {
+    // Effects of three groups with events between them: wild ones aim at unknown groups,
+    // themselves and back up the chain, and carry edge values anywhere.
+    let strategy = prop_oneof![
+        2 => effect_gen::graph_effect(Flavor::Wild),
+        1 => effect_gen::graph_effect(Flavor::Valid),
+        1 => effect_gen::graph_effect(Flavor::Tame),
+    ];
+    fuzz("groups and events", strategy, |text| text);
+}
+
+#[test]
+fn tame_graphs_are_all_accepted() {
+    let mut runner = runner();
+    runner
+        .run(&effect_gen::graph_effect(Flavor::Tame), |text| {
+            let accepted = check(&text)?;
+            prop_assert!(accepted, "tame graph rejected:\n{text}");
+            Ok(())
+        })
+        .unwrap();
 }
 
 #[test]

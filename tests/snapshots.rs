@@ -1,7 +1,8 @@
 //! Snapshot tests: the WGSL (compute and draw modules), IR and layout of every example effect,
 //! and the diagnostics of every bad input in tests/bad. One glob each, so a new file gets its snapshot with no new code.
 
-use plume::{compile_str, CompileError, CompileOptions};
+use plume::compiler::graph::compile_graph_str;
+use plume::{CompileError, CompileOptions};
 
 #[test]
 fn every_example_compiles_without_warnings_and_matches_its_snapshots() {
@@ -11,25 +12,32 @@ fn every_example_compiles_without_warnings_and_matches_its_snapshots() {
             base_dir: path.parent().map(|p| p.to_path_buf()),
             ..Default::default()
         };
-        let compiled = compile_str(&source, &options)
+        let graph = compile_graph_str(&source, &options)
             .unwrap_or_else(|e| panic!("{}", e.render(&path.display().to_string(), &source)));
+        let warnings = graph.all_warnings();
         assert!(
-            compiled.warnings.is_empty(),
+            warnings.is_empty(),
             "examples must compile without warnings:\n{}",
-            compiled
-                .warnings
-                .render(&path.display().to_string(), &source)
+            warnings.render(&path.display().to_string(), &source)
         );
-        insta::assert_snapshot!("wgsl", compiled.wgsl);
-        insta::assert_snapshot!("draw", compiled.draw_wgsl);
-        // Only effects with trails have a trail module (and a snapshot of it).
-        if let Some(trail) = &compiled.trail_wgsl {
-            insta::assert_snapshot!("trail", trail);
+        // The top-level group's snapshots keep their names; other groups' add theirs.
+        for (g, group) in graph.groups.iter().enumerate() {
+            let name = |kind: &str| match g {
+                0 => kind.to_string(),
+                _ => format!("{kind}_{}", group.name),
+            };
+            let compiled = &group.effect;
+            insta::assert_snapshot!(name("wgsl"), compiled.wgsl);
+            insta::assert_snapshot!(name("draw"), compiled.draw_wgsl);
+            // Only effects with trails have a trail module (and a snapshot of it).
+            if let Some(trail) = &compiled.trail_wgsl {
+                insta::assert_snapshot!(name("trail"), trail);
+            }
+            insta::assert_snapshot!(
+                name("ir_and_layout"),
+                format!("{}\n{}", compiled.ir, compiled.layout)
+            );
         }
-        insta::assert_snapshot!(
-            "ir_and_layout",
-            format!("{}\n{}", compiled.ir, compiled.layout)
-        );
     });
 }
 
@@ -38,7 +46,7 @@ fn every_bad_input_gets_a_located_error_and_matches_its_snapshot() {
     insta::glob!("bad", "*.ron", |path| {
         let source = std::fs::read_to_string(path).unwrap();
         let name = format!("tests/bad/{}", path.file_name().unwrap().to_string_lossy());
-        let err = match compile_str(&source, &CompileOptions::default()) {
+        let err = match compile_graph_str(&source, &CompileOptions::default()) {
             Ok(_) => panic!("{name} compiled, but it is in tests/bad"),
             Err(e) => e,
         };

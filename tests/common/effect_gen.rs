@@ -601,6 +601,100 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
         .boxed()
 }
 
+/// An event: a trigger, a target among `targets` (or, wild, any name), a count and a spawn
+/// rule.
+fn event(flavor: Flavor, targets: Vec<&'static str>) -> BoxedStrategy<String> {
+    let f = flavor;
+    let on = prop_oneof![
+        Just("Death".to_string()),
+        Just("Collide".to_string()),
+        num(f, 0.005, 0.5).prop_map(|s| format!("Every({s})")),
+    ];
+    (
+        on,
+        prop::sample::select(targets),
+        count(f, 1, 8),
+        shape(f),
+        velocity(f),
+        range(f, 0.05, 1.0),
+        num(f, 0.0, 1.0),
+    )
+        .prop_map(|(on, target, count, shape, vel, life, inherit)| {
+            format!(
+                "Event(on: {on}, target: \"{target}\", count: {count}, shape: {shape}, velocity: {vel}, lifetime: Some({life}), inherit_velocity: {inherit})"
+            )
+        })
+        .boxed()
+}
+
+/// A group fed by events (no emitters of its own), with forces, colliders, kill volumes and
+/// events of its own aimed at `targets`.
+fn group(flavor: Flavor, name: &'static str, targets: Vec<&'static str>) -> BoxedStrategy<String> {
+    let events = if targets.is_empty() {
+        Just(Vec::new()).boxed()
+    } else {
+        prop::collection::vec(event(flavor, targets), 0..2).boxed()
+    };
+    let f = flavor;
+    let tame = f == Flavor::Tame;
+    let integrators: Vec<&'static str> = INTEGRATORS
+        .iter()
+        .copied()
+        .filter(|i| !tame || *i != "Exact")
+        .collect();
+    (
+        count(f, 8, 300),
+        prop::collection::vec(force(f), 0..3),
+        prop::collection::vec(plane(f), 0..2),
+        prop::collection::vec(kill(f), 0..2),
+        prop::sample::select(integrators),
+        prop_oneof![Just(String::new()), render(f)],
+        events,
+    )
+        .prop_map(move |(cap, forces, planes, kills, integ, render, events)| {
+            let forces: Vec<String> = forces
+                .into_iter()
+                .filter(|force| !(tame && force.starts_with("Flock")))
+                .collect();
+            format!(
+                "Group(name: \"{name}\", capacity: {cap}, forces: [{}], collide: [{}], kill: [{}], integrator: {integ}, {render} events: [{}])",
+                forces.join(", "),
+                planes.join(", "),
+                kills.join(", "),
+                events.join(", ")
+            )
+        })
+        .boxed()
+}
+
+/// An effect with groups and events: `effect`'s top level firing into two more groups (the
+/// second fed by the first). Wild ones also aim at unknown groups, themselves and back up
+/// the chain (loops the compiler must refuse).
+pub fn graph_effect(flavor: Flavor) -> BoxedStrategy<String> {
+    let f = flavor;
+    let (top, middle, last): (Vec<&'static str>, Vec<&'static str>, Vec<&'static str>) =
+        if f == Flavor::Wild {
+            let all = vec!["fuzz", "a", "b", "nowhere"];
+            (all.clone(), all.clone(), all)
+        } else {
+            (vec!["a"], vec!["b"], Vec::new())
+        };
+    (
+        effect(f),
+        prop::collection::vec(event(f, top), 1..3),
+        group(f, "a", middle),
+        group(f, "b", last),
+    )
+        .prop_map(move |(effect, events, a, b)| {
+            let body = effect.trim_end().trim_end_matches(')');
+            format!(
+                "{body}\n    events: [{}],\n    groups: [{a}, {b}],\n)\n",
+                events.join(", ")
+            )
+        })
+        .boxed()
+}
+
 /// A random effect the stateless kernel must run (`state: Stateless`): one to three emitters,
 /// each mortal or a burst that never dies, under gravity, drag and wind (the closed form's
 /// forces), with room for every spawn.

@@ -2,6 +2,7 @@
 //! llvmpipe where there is no GPU), and runners for the GPU and the CPU reference.
 #![allow(dead_code)]
 
+pub mod compare;
 pub mod effect_gen;
 
 use std::sync::{Mutex, MutexGuard, OnceLock};
@@ -39,6 +40,25 @@ pub fn compile_file(path: &std::path::Path) -> CompiledEffect {
         ..Default::default()
     };
     compile_str(&source, &options)
+        .unwrap_or_else(|e| panic!("{}", e.render(&path.display().to_string(), &source)))
+}
+
+/// Whether the effect file at `path` has groups or events (an effect graph).
+pub fn is_graph_file(path: &std::path::Path) -> bool {
+    let source = std::fs::read_to_string(path).unwrap();
+    plume::parse(&source)
+        .map(|e| plume::compiler::graph::graph_field(&e).is_some())
+        .unwrap_or(false)
+}
+
+/// Reads and compiles the effect graph at `path`, or fails the test with the diagnostics.
+pub fn compile_graph_file(path: &std::path::Path) -> plume::compiler::graph::CompiledGraph {
+    let source = std::fs::read_to_string(path).unwrap();
+    let options = CompileOptions {
+        base_dir: path.parent().map(|p| p.to_path_buf()),
+        ..Default::default()
+    };
+    plume::compiler::graph::compile_graph_str(&source, &options)
         .unwrap_or_else(|e| panic!("{}", e.render(&path.display().to_string(), &source)))
 }
 

@@ -4,7 +4,8 @@
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
-use plume_compiler::{compile_effect, compile_str, parse, CompileOptions, CompiledEffect, Effect};
+use plume_compiler::graph::{compile_graph_str, CompiledGraph};
+use plume_compiler::{compile_effect, parse, CompileOptions, Effect};
 use plume_runtime::{Gpu, GpuChoice};
 
 /// An effect file's display name and text.
@@ -40,24 +41,31 @@ pub fn options_for(file: &Path, options: &CompileOptions) -> CompileOptions {
     }
 }
 
-/// Reads and compiles `file` with `options`; prints warnings.
-pub fn compiled(
+/// Reads and compiles `file` with `options` as a graph of one or more groups; prints every
+/// warning.
+pub fn compiled_graph(
     file: &Path,
     options: &CompileOptions,
-) -> Result<(Source, CompiledEffect), ExitCode> {
+) -> Result<(Source, CompiledGraph), ExitCode> {
     let src = read(file)?;
-    match compile_str(&src.text, &options_for(file, options)) {
-        Ok(c) => {
-            if !c.warnings.is_empty() {
-                eprintln!("{}", c.warnings.render(&src.name, &src.text));
+    match compile_graph_str(&src.text, &options_for(file, options)) {
+        Ok(g) => {
+            let warnings = g.all_warnings();
+            if !warnings.is_empty() {
+                eprintln!("{}", warnings.render(&src.name, &src.text));
             }
-            Ok((src, c))
+            Ok((src, g))
         }
         Err(e) => {
             eprintln!("{}", e.render(&src.name, &src.text));
             Err(ExitCode::FAILURE)
         }
     }
+}
+
+/// Whether a compiled graph is a plain effect (one group, no events).
+pub fn single(graph: &CompiledGraph) -> bool {
+    graph.groups.len() == 1 && graph.streams.is_empty()
 }
 
 /// Reads and parses `file`, and checks it compiles as written (so errors point at the file),
@@ -72,6 +80,13 @@ pub fn checked(file: &Path) -> Result<(Source, Effect), ExitCode> {
         }
     };
     effect.base_dir = base_dir(file);
+    if plume_compiler::graph::graph_field(&effect).is_some() {
+        eprintln!(
+            "{}: error: this command does not run effects with groups or events yet (plume check, compile, run and render do)",
+            src.name
+        );
+        return Err(ExitCode::FAILURE);
+    }
     if let Err(e) = compile_effect(&effect, &src.text) {
         eprintln!("{}", e.render(&src.name, &src.text));
         return Err(ExitCode::FAILURE);

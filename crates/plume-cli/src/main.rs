@@ -6,13 +6,15 @@ mod load;
 mod preview;
 mod render;
 mod run;
+mod run_graph;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
+use plume_compiler::graph::compile_graph_str;
 use plume_compiler::schema::State;
-use plume_compiler::{compile_str, CompileOptions, Integrator};
+use plume_compiler::{CompileOptions, Integrator};
 
 /// Plume compiles declarative particle effects (RON) into fused, validated WGSL compute kernels.
 #[derive(Parser, Debug)]
@@ -40,6 +42,9 @@ enum Command {
         /// What to print.
         #[arg(long, value_enum, default_value_t = Emit::Wgsl)]
         emit: Emit,
+        /// For an effect with groups: the group to print (default: the top-level one).
+        #[arg(long)]
+        group: Option<String>,
         #[command(flatten)]
         overrides: Overrides,
     },
@@ -131,8 +136,15 @@ fn main() -> ExitCode {
             file,
             output,
             emit,
+            group,
             overrides,
-        } => compile(&file, output.as_deref(), emit, &overrides.options()),
+        } => compile(
+            &file,
+            output.as_deref(),
+            emit,
+            group.as_deref(),
+            &overrides.options(),
+        ),
         Command::Run(args) => run::run(&args),
         Command::Render(args) => render::render(&args),
         Command::Preview(args) => preview::preview(&args),
@@ -159,14 +171,15 @@ fn check(files: &[PathBuf]) -> ExitCode {
             failed += 1;
             continue;
         };
-        match compile_str(
+        match compile_graph_str(
             &source,
             &load::options_for(file, &CompileOptions::default()),
         ) {
             Ok(compiled) => {
-                warnings += compiled.warnings.items.len();
-                if !compiled.warnings.is_empty() {
-                    eprintln!("{}", compiled.warnings.render(&name, &source));
+                let found = compiled.all_warnings();
+                warnings += found.items.len();
+                if !found.is_empty() {
+                    eprintln!("{}", found.render(&name, &source));
                 }
             }
             Err(e) => {
@@ -187,11 +200,40 @@ fn check(files: &[PathBuf]) -> ExitCode {
     }
 }
 
-fn compile(file: &Path, output: Option<&Path>, emit: Emit, options: &CompileOptions) -> ExitCode {
-    let (load::Source { name, .. }, compiled) = match load::compiled(file, options) {
+fn compile(
+    file: &Path,
+    output: Option<&Path>,
+    emit: Emit,
+    group: Option<&str>,
+    options: &CompileOptions,
+) -> ExitCode {
+    let (load::Source { name, .. }, graph) = match load::compiled_graph(file, options) {
         Ok(x) => x,
         Err(code) => return code,
     };
+    let names: Vec<&str> = graph.groups.iter().map(|g| g.name.as_str()).collect();
+    let index = match group {
+        None => 0,
+        Some(wanted) => match names.iter().position(|n| *n == wanted) {
+            Some(i) => i,
+            None => {
+                eprintln!(
+                    "{name}: error: --group {wanted:?}: no such group (the groups are {})",
+                    names.join(", ")
+                );
+                return ExitCode::FAILURE;
+            }
+        },
+    };
+    if names.len() > 1 {
+        eprintln!(
+            "{name}: note: group {:?} of {} ({}; --group picks another)",
+            names[index],
+            names.len(),
+            names.join(", ")
+        );
+    }
+    let compiled = graph.groups[index].effect.clone();
     eprintln!(
         "{name}: note: integrator {} ({})",
         compiled.ir.integrator.name(),

@@ -10,7 +10,7 @@ use plume_runtime::export::write_atomically;
 use plume_runtime::images::{contact_sheet, gif, png, Frame8};
 use plume_runtime::offscreen::Offscreen;
 use plume_runtime::splat::Splat;
-use plume_runtime::{EffectInstance, Gpu, GpuChoice, RuntimeError};
+use plume_runtime::{EffectInstance, Gpu, GpuChoice, GraphInstance, RuntimeError};
 
 use crate::{load, Overrides};
 
@@ -93,12 +93,7 @@ fn render_frames(
         DrawMethod::Raster => None,
     };
     let camera = target.effect_camera(&sim);
-    let bar = ProgressBar::new(u64::from(args.frames));
-    bar.set_style(
-        ProgressStyle::with_template("rendering [{bar:30}] {pos}/{len} frames ({eta})")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
-    );
+    let bar = frames_bar(args.frames);
     let mut frames = Vec::with_capacity(args.frames as usize);
     for _ in 0..args.frames {
         sim.run(u64::from(args.every), |_| {})?;
@@ -117,6 +112,58 @@ fn render_frames(
     }
     bar.finish_and_clear();
     Ok(frames)
+}
+
+/// Renders an effect with groups: every group drawn in one pass each frame, in group order,
+/// from the top-level group's camera, over its background (and its glow, if any).
+fn render_graph_frames(
+    args: &RenderArgs,
+    graph: plume_compiler::graph::CompiledGraph,
+) -> Result<Vec<Frame8>, RuntimeError> {
+    if args.draw == DrawMethod::Splat {
+        return Err(RuntimeError::Output(
+            "--draw splat draws one group; an effect with groups is drawn with --draw raster"
+                .into(),
+        ));
+    }
+    let gpu = Gpu::new(&GpuChoice {
+        backend: args.backend.clone(),
+    })?;
+    eprintln!("adapter: {}", gpu.describe());
+    let (w, h) = args.size;
+    let glow = graph.groups[0].effect.ir.render.glow;
+    let target = Offscreen::with_glow(&gpu, w, h, glow.as_ref())?;
+    let mut sim = GraphInstance::new(&gpu, graph)?;
+    let renderers = sim
+        .groups()
+        .iter()
+        .map(|g| g.renderer(&target.target()))
+        .collect::<Result<Vec<_>, _>>()?;
+    let camera = target.effect_camera(&sim.groups()[0]);
+    let bar = frames_bar(args.frames);
+    let mut frames = Vec::with_capacity(args.frames as usize);
+    for _ in 0..args.frames {
+        sim.run(u64::from(args.every), |_| {})?;
+        let instances: Vec<&EffectInstance> = sim.groups().iter().collect();
+        frames.push(Frame8 {
+            width: w,
+            height: h,
+            pixels: target.render_all(&instances, &renderers, &camera)?,
+        });
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(frames)
+}
+
+fn frames_bar(frames: u32) -> ProgressBar {
+    let bar = ProgressBar::new(u64::from(frames));
+    bar.set_style(
+        ProgressStyle::with_template("rendering [{bar:30}] {pos}/{len} frames ({eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar
 }
 
 /// Runs `plume render`.
@@ -143,12 +190,18 @@ pub fn render(args: &RenderArgs) -> ExitCode {
         eprintln!("error: --frames and --every must be at least 1");
         return ExitCode::FAILURE;
     }
-    let (_, effect) = match load::compiled(&args.file, &args.overrides.options()) {
+    let (_, mut graph) = match load::compiled_graph(&args.file, &args.overrides.options()) {
         Ok(x) => x,
         Err(code) => return code,
     };
-    let delay_ms = ((f64::from(args.every) * effect.ir.dt * 1000.0).round() as u32).max(20);
-    let encoded = render_frames(args, effect).and_then(|frames| match format {
+    let dt = graph.groups[0].effect.ir.dt;
+    let delay_ms = ((f64::from(args.every) * dt * 1000.0).round() as u32).max(20);
+    let frames = if load::single(&graph) {
+        render_frames(args, graph.groups.remove(0).effect)
+    } else {
+        render_graph_frames(args, graph)
+    };
+    let encoded = frames.and_then(|frames| match format {
         Format::Png if args.sheet => png(&contact_sheet(&frames)?),
         Format::Png => png(frames.last().expect("at least one frame")),
         Format::Gif => gif(&frames, delay_ms),

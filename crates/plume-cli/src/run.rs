@@ -17,28 +17,28 @@ use crate::{load, Overrides};
 #[derive(clap::Args, Debug)]
 pub struct RunArgs {
     /// The effect file (.ron).
-    file: PathBuf,
+    pub(crate) file: PathBuf,
     /// Steps to simulate.
     #[arg(long, default_value_t = 600)]
-    steps: u64,
+    pub(crate) steps: u64,
     #[command(flatten)]
-    overrides: Overrides,
+    pub(crate) overrides: Overrides,
     /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
     #[arg(long)]
-    backend: Option<String>,
+    pub(crate) backend: Option<String>,
     /// Write the live particles (sorted by id) to a .csv or .ply file.
     #[arg(long)]
-    export: Option<PathBuf>,
+    pub(crate) export: Option<PathBuf>,
     /// Export order: `id` (spawn order) or `draw` (back to front from the camera, sorted on
     /// the GPU; equal depths by id).
     #[arg(long, value_enum, default_value_t = Order::Id)]
-    order: Order,
+    pub(crate) order: Order,
     /// Print one JSON object instead of the summary.
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
     /// Run the CPU f64 reference simulator instead of the GPU.
     #[arg(long)]
-    cpu_reference: bool,
+    pub(crate) cpu_reference: bool,
 }
 
 /// The order of exported particles.
@@ -57,7 +57,7 @@ struct Outcome {
     seconds: f64,
 }
 
-fn progress_bar(steps: u64, quiet: bool) -> ProgressBar {
+pub(crate) fn progress_bar(steps: u64, quiet: bool) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
     }
@@ -125,10 +125,14 @@ pub fn run(args: &RunArgs) -> ExitCode {
     if args.order == Order::Draw {
         options.sort = Some(true);
     }
-    let (load::Source { name, .. }, effect) = match load::compiled(&args.file, &options) {
+    let (load::Source { name, .. }, mut graph) = match load::compiled_graph(&args.file, &options) {
         Ok(x) => x,
         Err(code) => return code,
     };
+    if !load::single(&graph) {
+        return crate::run_graph::run_graph(args, &name, graph);
+    }
+    let effect = graph.groups.remove(0).effect;
     let dt = effect.ir.dt;
     let state = match (&effect.ir.stateless, args.cpu_reference) {
         (Some(_), false) => {

@@ -55,6 +55,10 @@ pub struct EffectIr {
     pub camera: CameraIr,
     /// How particles look when rendered.
     pub render: RenderIr,
+    /// The events this group fires (empty outside an effect with groups).
+    pub events: Vec<crate::events::EventIr>,
+    /// The events this group is fed by; each one's spawn rule is one of `emitters`.
+    pub event_inputs: Vec<crate::events::EventInputIr>,
 }
 
 /// The render section in the IR, with gradients ready to evaluate.
@@ -537,6 +541,20 @@ impl fmt::Display for EffectIr {
                 f,
                 "  trail {} points, a sample every {} steps, width {:?} colour {:?}",
                 t.points, t.every, t.width, t.color
+            )?;
+        }
+        for e in &self.events {
+            writeln!(
+                f,
+                "  fires event {} on {:?} into group {}",
+                e.stream, e.trigger, e.target
+            )?;
+        }
+        for e in &self.event_inputs {
+            writeln!(
+                f,
+                "  fed by event {}: {} per firing from emitters[{}], inherit_velocity {}, up to {} firings a step",
+                e.stream, e.count, e.emitter, e.inherit_velocity, e.parent_capacity
             )?;
         }
         writeln!(

@@ -36,9 +36,11 @@
 pub mod check;
 pub mod colliders;
 pub mod diagnostics;
+pub mod events;
 pub mod expr;
 pub mod field;
 pub mod forces;
+pub mod graph;
 pub mod integrators;
 pub mod ir;
 pub mod lifetime;
@@ -169,6 +171,12 @@ pub fn parse(source: &str) -> Result<Effect, Diagnostics> {
 
 /// Compiles effect source text: parse, check, lower, run the passes, emit and validate WGSL.
 pub fn compile_str(source: &str, options: &CompileOptions) -> Result<CompiledEffect, CompileError> {
+    let effect = parse_with(source, options)?;
+    compile_effect(&effect, source)
+}
+
+/// Parses `source` and applies `options`' overrides (to every group of a graph).
+pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, CompileError> {
     let mut effect = parse(source).map_err(CompileError::Invalid)?;
     if let Some(dt) = options.dt {
         effect.dt = dt;
@@ -189,13 +197,48 @@ pub fn compile_str(source: &str, options: &CompileOptions) -> Result<CompiledEff
         effect.state = s;
     }
     effect.base_dir.clone_from(&options.base_dir);
-    compile_effect(&effect, source)
+    for group in &mut effect.groups {
+        if let Some(i) = options.integrator {
+            group.integrator = i;
+        }
+        if let Some(s) = options.substeps {
+            group.substeps = s;
+        }
+        if let Some(s) = options.sort {
+            group.sort = s;
+        }
+        if let Some(s) = options.state {
+            group.state = s;
+        }
+    }
+    Ok(effect)
 }
 
-/// Compiles an already-parsed effect; `source` (may be empty) is used only to locate diagnostics.
+/// Compiles an already-parsed effect of one group; `source` (may be empty) is used only to
+/// locate diagnostics. An effect with `groups` or `events` is a graph: compile it with
+/// [`graph::compile_graph`].
 pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, CompileError> {
     let map = SourceMap::build(source);
-    let located = |items: Vec<(Diagnostic, String)>| Diagnostics {
+    let locate = |items: Vec<(Diagnostic, String)>| locate_items(&map, source, items);
+    if let Some(path) = graph::graph_field(effect) {
+        return Err(CompileError::Invalid(locate(vec![(
+            Diagnostic::error(
+                path.display,
+                "this effect has groups or events: it runs as a graph (plume_compiler::graph::compile_graph); this entry point compiles a single group",
+            ),
+            path.lookup,
+        )])));
+    }
+    compile_group(effect, &graph::GroupLinks::default(), "", &locate)
+}
+
+/// Gives each diagnostic the span of its lookup path in `source`.
+pub(crate) fn locate_items(
+    map: &SourceMap,
+    source: &str,
+    items: Vec<(Diagnostic, String)>,
+) -> Diagnostics {
+    Diagnostics {
         items: items
             .into_iter()
             .map(|(mut d, lookup)| {
@@ -211,12 +254,30 @@ pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, C
                 d
             })
             .collect(),
-    };
+    }
+}
+
+/// Compiles one group: `effect` holds its fields (and the file's shared ones), `links` its
+/// events, and `prefix` (`groups[1].`, or empty for the top level) is put before every path
+/// its diagnostics name.
+pub(crate) fn compile_group(
+    effect: &Effect,
+    links: &graph::GroupLinks,
+    prefix: &str,
+    located: &dyn Fn(Vec<(Diagnostic, String)>) -> Diagnostics,
+) -> Result<CompiledEffect, CompileError> {
+    let prefixed = |items: Vec<(Diagnostic, String)>| located(graph::prefixed(items, prefix));
     let checker = validate::check_effect(effect);
     if !checker.errors.is_empty() {
-        return Err(CompileError::Invalid(located(checker.errors)));
+        return Err(CompileError::Invalid(prefixed(checker.errors)));
     }
-    let mut ir = lower::lower(effect);
+    let mut with_inputs = effect.clone();
+    with_inputs
+        .emitters
+        .extend(links.input_emitters.iter().cloned());
+    let mut ir = lower::lower(&with_inputs);
+    ir.events.clone_from(&links.events);
+    ir.event_inputs.clone_from(&links.inputs);
     if let Some(spec) = &effect.render.texture {
         let texture =
             texture::TextureIr::load(spec, effect.base_dir.as_deref()).map_err(|message| {
@@ -224,7 +285,7 @@ pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, C
                     .field("render")
                     .field("texture")
                     .field("file");
-                CompileError::Invalid(located(vec![(
+                CompileError::Invalid(prefixed(vec![(
                     Diagnostic::error(path.display, message),
                     path.lookup,
                 )]))
@@ -233,7 +294,7 @@ pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, C
     }
     let names: Vec<&'static str> = effect.forces.iter().map(|f| f.name()).collect();
     let (layout, warnings) =
-        passes::run(&mut ir, &names).map_err(|c| CompileError::Invalid(located(c.errors)))?;
+        passes::run(&mut ir, &names).map_err(|c| CompileError::Invalid(prefixed(c.errors)))?;
     let wgsl = wgsl::emit_module(&ir, &layout);
     naga_check::validate(&wgsl)?;
     let draw_wgsl = wgsl::draw::emit(&ir, &layout, &wgsl::draw::DrawShape::single(&ir));
@@ -253,6 +314,6 @@ pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, C
         wgsl,
         draw_wgsl,
         trail_wgsl,
-        warnings: located(warnings),
+        warnings: prefixed(warnings),
     })
 }

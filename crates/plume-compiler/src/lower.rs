@@ -102,6 +102,9 @@ pub fn lower(effect: &Effect) -> EffectIr {
             target: effect.camera.target.d(),
             fov_y: effect.camera.fov_y,
         },
+        // Filled in by `crate::graph`, which knows the other groups.
+        events: Vec::new(),
+        event_inputs: Vec::new(),
     };
     // Custom terms estimate their stiffness over the emitters' region, now that it is known.
     let h = ir.h();

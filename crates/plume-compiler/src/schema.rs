@@ -28,11 +28,11 @@ pub struct Range(pub f64, pub f64);
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
 pub struct Counts(pub u32, pub u32, pub u32);
 
-fn default_dt() -> f64 {
+pub(crate) fn default_dt() -> f64 {
     1.0 / 60.0
 }
 
-fn default_substeps() -> u32 {
+pub(crate) fn default_substeps() -> u32 {
     1
 }
 
@@ -89,6 +89,13 @@ pub struct Effect {
     /// How particles look when rendered (an extension of v1; defaults when absent).
     #[serde(default)]
     pub render: Render,
+    /// Events this (top-level) group's particles fire into other groups.
+    #[serde(default)]
+    pub events: Vec<crate::events::Event>,
+    /// More particle groups, each with its own capacity, emitters, forces and look; the
+    /// top-level fields are the first group, named `name` (see [`crate::graph`]).
+    #[serde(default)]
+    pub groups: Vec<crate::graph::Group>,
     /// The directory files the effect names (`render.texture.file`) are resolved against: the
     /// effect file's directory, set by whoever read the file; the current directory when None.
     #[serde(skip)]

@@ -172,7 +172,7 @@ fn check_params(c: &mut Checker, path: &ValuePath, effect: &Effect) {
     }
 }
 
-fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: f64) {
+pub(crate) fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: f64) {
     c.non_negative(&path.field("rate"), e.rate);
     let shape = path.field("shape");
     match &e.shape {

@@ -84,7 +84,18 @@ impl EffectInstance {
         effect: CompiledEffect,
         max_chunk_slots: Option<u64>,
     ) -> Result<Self, RuntimeError> {
-        let res = Resources::new(gpu, &effect, max_chunk_slots)?;
+        Self::with_shared(gpu, effect, max_chunk_slots, &[])
+    }
+
+    /// Like [`Self::with_chunk_slots`], binding the given buffers (by binding index) instead
+    /// of allocating them: how an effect graph's groups share their event buffers.
+    pub(crate) fn with_shared(
+        gpu: &Gpu,
+        effect: CompiledEffect,
+        max_chunk_slots: Option<u64>,
+        shared: &[(u32, wgpu::Buffer)],
+    ) -> Result<Self, RuntimeError> {
+        let res = Resources::new(gpu, &effect, max_chunk_slots, shared)?;
         let steps = Steps::new(gpu, &res, &effect)?;
         let depth = match effect.layout.sorts() {
             true => Some(DepthSort::new(gpu, &res, &effect)?),
@@ -164,19 +175,7 @@ impl EffectInstance {
         let Steps::Stateful(stateful) = &self.steps else {
             return Ok(());
         };
-        let params = self
-            .res
-            .params
-            .as_ref()
-            .expect("a stateful effect has params");
-        let bytes = params_bytes(
-            plans,
-            self.effect.layout.emitter_slots,
-            self.res.params_stride,
-            self.effect.ir.wraps_kernel_time(),
-        );
-        let src = staging(&self.gpu, "step params", &bytes)?;
-        encoder.copy_buffer_to_buffer(&src, 0, params, 0, bytes.len() as u64);
+        self.copy_params(encoder, plans)?;
         let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
             label: Some("steps"),
             timestamp_writes,
@@ -188,6 +187,81 @@ impl EffectInstance {
             plans,
             self.res.params_stride,
         )
+    }
+
+    /// Records the copy of `plans`' parameters (at most 256 steps) into the params buffer.
+    fn copy_params(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        plans: &[StepPlan],
+    ) -> Result<(), RuntimeError> {
+        let Some(params) = self.res.params.as_ref() else {
+            return Ok(());
+        };
+        let bytes = params_bytes(
+            plans,
+            self.effect.layout.emitter_slots,
+            self.res.params_stride,
+            self.effect.ir.wraps_kernel_time(),
+        );
+        let src = staging(&self.gpu, "step params", &bytes)?;
+        encoder.copy_buffer_to_buffer(&src, 0, params, 0, bytes.len() as u64);
+        Ok(())
+    }
+
+    /// An effect graph's step batch (at most [`STEPS_PER_SUBMIT`] steps): plans the next `n`
+    /// steps and records their parameters' copy into `encoder`. A stateless group only
+    /// advances its bookkeeping and returns no plans.
+    pub(crate) fn plan_graph_batch(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        n: u64,
+    ) -> Result<Vec<StepPlan>, RuntimeError> {
+        if let Steps::Stateless(stateless) = &mut self.steps {
+            stateless.advance(&mut self.schedule, n, |_| {});
+            return Ok(Vec::new());
+        }
+        let plans: Vec<StepPlan> = (0..n).map(|_| self.schedule.next_plan()).collect();
+        self.copy_params(encoder, &plans)?;
+        Ok(plans)
+    }
+
+    /// Records step `j` of a batch planned by [`Self::plan_graph_batch`] (nothing for a
+    /// stateless group).
+    pub(crate) fn record_graph_step(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        plans: &[StepPlan],
+        j: usize,
+    ) -> Result<(), RuntimeError> {
+        let (Steps::Stateful(stateful), Some(plan)) = (&self.steps, plans.get(j)) else {
+            return Ok(());
+        };
+        let offset = (j as u64 * self.res.params_stride) as u32;
+        stateful.record_step(&self.gpu, pass, self.chunks()?, plan, offset)
+    }
+
+    /// Records the spawn of the `input`-th event this group is fed by at step `j` of the batch.
+    pub(crate) fn record_event_spawn(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        input: usize,
+        j: usize,
+    ) -> Result<(), RuntimeError> {
+        let Steps::Stateful(stateful) = &self.steps else {
+            return Err(RuntimeError::Gpu(
+                "a group fed by events is stateful (a bug in the compiler)".into(),
+            ));
+        };
+        let dispatch = self
+            .res
+            .extra_named(&self.effect, "event_dispatch")
+            .ok_or_else(|| {
+                RuntimeError::Gpu("a group fed by events has no dispatch buffer".into())
+            })?;
+        let offset = (j as u64 * self.res.params_stride) as u32;
+        stateful.record_event_spawn(pass, self.chunks()?, input, dispatch, offset);
+        Ok(())
     }
 
     /// Runs `steps` steps in submissions of [`STEPS_PER_SUBMIT`], calling `progress(done)`

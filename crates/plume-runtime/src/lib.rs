@@ -33,6 +33,7 @@ pub mod export;
 pub mod flock_pass;
 pub mod glow;
 pub mod gpu;
+pub mod graph_instance;
 pub mod images;
 pub mod instance;
 pub mod live_list;
@@ -56,6 +57,7 @@ pub use camera::Camera;
 pub use draw::{DeadSlots, DepthTest, DrawOptions, DrawTarget, EffectRenderer};
 pub use error::RuntimeError;
 pub use gpu::{Gpu, GpuChoice};
+pub use graph_instance::GraphInstance;
 pub use instance::EffectInstance;
 pub use resources::STEPS_PER_SUBMIT;
 /// The wgpu this crate is built against: a host must use the same version.

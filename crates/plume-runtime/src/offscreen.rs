@@ -168,6 +168,40 @@ impl Offscreen {
         Ok(())
     }
 
+    /// Draws several instances (an effect graph's groups, in order) from `camera` in one
+    /// render pass over the first one's background, and returns the image as RGBA8 rows.
+    pub fn render_all(
+        &self,
+        instances: &[&EffectInstance],
+        renderers: &[EffectRenderer],
+        camera: &Camera,
+    ) -> Result<Vec<u8>, RuntimeError> {
+        let Some(first) = instances.first() else {
+            return Err(RuntimeError::Output("nothing to draw".into()));
+        };
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        for (instance, renderer) in instances.iter().zip(renderers) {
+            instance.prepare_draw(&mut encoder, renderer, camera)?;
+        }
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("particles"),
+                color_attachments: &[Some(self.attachment(first.effect().ir.render.background))],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            for renderer in renderers {
+                renderer.draw(&mut pass);
+            }
+        }
+        self.finish(&mut encoder);
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()?;
+        self.read()
+    }
+
     /// Records what turns the drawn attachment into the image read back: the bloom passes
     /// when it glows, nothing otherwise (after a render pass of the caller's into
     /// [`Self::attachment`]).

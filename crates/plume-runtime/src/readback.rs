@@ -99,6 +99,11 @@ pub fn decode_slots(
         ),
     };
     let die_at = layout.word_offset(Attribute::DeathStep);
+    // A particle that stores its spawn step ages from it (a group fed by events has no other
+    // record of it); the others from the schedule, which gives the same for them.
+    let born_at = layout.word_offset(Attribute::SpawnStep);
+    let done = schedule.steps_done() as u32;
+    let dt = effect.ir.dt;
     let mut out = Vec::with_capacity(bytes.len() / stride.max(1));
     for slot in bytes.chunks_exact(stride) {
         let u = |w: usize| {
@@ -119,8 +124,15 @@ pub fn decode_slots(
             id,
             position: DVec3::new(f(pos_at), f(pos_at + 1), f(pos_at + 2)),
             velocity: DVec3::new(f(vel_at), f(vel_at + 1), f(vel_at + 2)) * scale,
-            age: schedule.age(id),
-            lifetime: die_at.and_then(|w| schedule.lifetime(id, u(w))),
+            age: match born_at {
+                Some(b) => f64::from(done.wrapping_sub(u(b))) * dt,
+                None => schedule.age(id),
+            },
+            lifetime: die_at.and_then(|w| match born_at {
+                Some(_) if u(w) == DEAD => None,
+                Some(b) => Some(f64::from(u(w).wrapping_sub(u(b)).wrapping_add(1)) * dt),
+                None => schedule.lifetime(id, u(w)),
+            }),
         }));
     }
     Ok(out)

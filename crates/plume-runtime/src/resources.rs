@@ -111,11 +111,14 @@ pub const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
 
 impl Resources {
     /// Allocates `effect`'s buffers on `gpu`, with at most `max_chunk_slots` particles per
-    /// buffer when given (tests use it to exercise the split on small effects).
+    /// buffer when given (tests use it to exercise the split on small effects). `shared` holds
+    /// buffers made elsewhere for some bindings (an effect graph's event buffers, which two
+    /// groups bind); the others are allocated here.
     pub fn new(
         gpu: &Gpu,
         effect: &CompiledEffect,
         max_chunk_slots: Option<u64>,
+        shared: &[(u32, wgpu::Buffer)],
     ) -> Result<Self, RuntimeError> {
         let device = &gpu.device;
         let cap = u64::from(effect.ir.capacity);
@@ -236,6 +239,9 @@ impl Resources {
             .filter(|b| b.binding >= 7 && b.name != "depth_axis" && b.name != "trail")
             .map(|b| {
                 let size = b.bytes.max(16);
+                if let Some((_, buffer)) = shared.iter().find(|(at, _)| *at == b.binding) {
+                    return Ok((b.binding, buffer.clone()));
+                }
                 let buffer = if b.name == "collider_data" {
                     // The height fields' samples, written once here.
                     let data = plume_compiler::colliders::data(&effect.ir.colliders);
@@ -245,10 +251,15 @@ impl Resources {
                         }
                     })?
                 } else {
+                    // The event spawn's workgroup counts are read by an indirect dispatch.
+                    let usage = match b.name {
+                        "event_dispatch" => STORAGE | wgpu::BufferUsages::INDIRECT,
+                        _ => STORAGE,
+                    };
                     device.create_buffer(&wgpu::BufferDescriptor {
                         label: Some(b.name),
                         size,
-                        usage: STORAGE,
+                        usage,
                         mapped_at_creation: false,
                     })
                 };
@@ -267,6 +278,7 @@ impl Resources {
                 .layout
                 .bindings
                 .iter()
+                .filter(|b| b.name != EVENT_DISPATCH)
                 .map(|b| match b.name {
                     "params" => buffer_entry(
                         b.binding,
@@ -419,6 +431,7 @@ impl Resources {
             .layout
             .bindings
             .iter()
+            .filter(|b| b.name != EVENT_DISPATCH)
             .map(|b| wgpu::BindGroupEntry {
                 binding: b.binding,
                 resource: match b.name {
@@ -517,6 +530,51 @@ impl Resources {
         (pipeline, group)
     }
 }
+
+impl Resources {
+    /// The `event_prepare_{input}` kernel of a group fed by events, with a bind group of only
+    /// what it uses (counters, the parent's records, the dispatch arguments): the arguments
+    /// are read by the indirect dispatch of `event_spawn`, and a buffer may not be both
+    /// storage and indirect in one dispatch, so the shared bind group leaves them out.
+    pub fn event_prepare(
+        &self,
+        effect: &CompiledEffect,
+        input: usize,
+    ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroup), RuntimeError> {
+        let entry = format!("event_prepare_{input}");
+        let records = format!("event_in_{input}");
+        let missing = |what: &str| RuntimeError::Gpu(format!("{entry}: no {what} buffer"));
+        let pipeline = self.gpu.compute_pipeline(&self.module, &entry, None);
+        let mut entries = Vec::new();
+        for b in &effect.layout.bindings {
+            let buffer = if b.name == "counters" {
+                self.counters.as_ref().ok_or_else(|| missing("counters"))?
+            } else if b.name == records || b.name == EVENT_DISPATCH {
+                self.extra_buffer(b.binding)
+                    .ok_or_else(|| missing(b.name))?
+            } else {
+                continue;
+            };
+            entries.push(wgpu::BindGroupEntry {
+                binding: b.binding,
+                resource: buffer.as_entire_binding(),
+            });
+        }
+        let group = self
+            .gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&entry),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            });
+        Ok((pipeline, group))
+    }
+}
+
+/// The binding an event-fed group's spawn dispatch arguments are in (bound only by
+/// [`Resources::event_prepare`]).
+const EVENT_DISPATCH: &str = "event_dispatch";
 
 /// A buffer created mapped and filled by `fill`. Fails (rather than panics) when the device
 /// cannot map it, as after a device loss, which it then reports.

@@ -34,6 +34,12 @@ pub struct StatefulSteps {
     flock: Option<FlockPass>,
     /// The baked field's `bake` kernel, its node count, and whether it runs every step.
     bake: Option<(wgpu::ComputePipeline, u64, bool)>,
+    /// Per event the group is fed by: its `event_prepare` kernel with its own bind group,
+    /// and its `event_spawn` kernel.
+    events: Vec<(
+        (wgpu::ComputePipeline, wgpu::BindGroup),
+        wgpu::ComputePipeline,
+    )>,
 }
 
 /// A stateless effect's `evaluate` kernel and its bookkeeping: steps only advance the live
@@ -81,6 +87,14 @@ impl Steps {
                     f.refresh == plume_compiler::field::Refresh::EveryStep,
                 )
             }),
+            events: (0..effect.ir.event_inputs.len())
+                .map(|j| {
+                    Ok((
+                        res.event_prepare(effect, j)?,
+                        res.pipeline(&format!("event_spawn_{j}")),
+                    ))
+                })
+                .collect::<Result<_, RuntimeError>>()?,
         }))
     }
 }
@@ -122,37 +136,72 @@ impl StatefulSteps {
         stride: u64,
     ) -> Result<(), RuntimeError> {
         for (j, plan) in plans.iter().enumerate() {
-            let offset = (j as u64 * stride) as u32;
-            // A field baked every step is baked first: the spawn (Verlet's start) samples it too.
-            if let Some((bake, nodes, true)) = &self.bake {
-                let (x, y) = groups(gpu, *nodes)?;
-                pass.set_bind_group(0, &chunks[0].bind_group, &[offset]);
-                pass.set_pipeline(bake);
-                pass.dispatch_workgroups(x, y, 1);
-            }
-            if plan.requested() > 0 {
-                pass.set_bind_group(0, &chunks[0].bind_group, &[offset]);
-                pass.set_pipeline(&self.prepare);
-                pass.dispatch_workgroups(1, 1, 1);
-                // Every chunk sees every spawn; each writes only the slots it holds.
-                let (x, y) = groups(gpu, u64::from(plan.requested()))?;
-                pass.set_pipeline(&self.spawn);
-                for chunk in chunks {
-                    pass.set_bind_group(0, &chunk.bind_group, &[offset]);
-                    pass.dispatch_workgroups(x, y, 1);
-                }
-            }
-            if let Some(flock) = &self.flock {
-                flock.record(gpu, pass, &chunks[0], offset)?;
-            }
-            pass.set_pipeline(&self.update);
+            self.record_step(gpu, pass, chunks, plan, (j as u64 * stride) as u32)?;
+        }
+        Ok(())
+    }
+
+    /// Records one step (see [`Self::record`]) whose parameters are at `offset`.
+    pub fn record_step(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunks: &[Chunk],
+        plan: &StepPlan,
+        offset: u32,
+    ) -> Result<(), RuntimeError> {
+        // A field baked every step is baked first: the spawn (Verlet's start) samples it too.
+        if let Some((bake, nodes, true)) = &self.bake {
+            let (x, y) = groups(gpu, *nodes)?;
+            pass.set_bind_group(0, &chunks[0].bind_group, &[offset]);
+            pass.set_pipeline(bake);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        if plan.requested() > 0 {
+            pass.set_bind_group(0, &chunks[0].bind_group, &[offset]);
+            pass.set_pipeline(&self.prepare);
+            pass.dispatch_workgroups(1, 1, 1);
+            // Every chunk sees every spawn; each writes only the slots it holds.
+            let (x, y) = groups(gpu, u64::from(plan.requested()))?;
+            pass.set_pipeline(&self.spawn);
             for chunk in chunks {
-                let (x, y) = groups(gpu, chunk.len)?;
                 pass.set_bind_group(0, &chunk.bind_group, &[offset]);
                 pass.dispatch_workgroups(x, y, 1);
             }
         }
+        if let Some(flock) = &self.flock {
+            flock.record(gpu, pass, &chunks[0], offset)?;
+        }
+        pass.set_pipeline(&self.update);
+        for chunk in chunks {
+            let (x, y) = groups(gpu, chunk.len)?;
+            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+            pass.dispatch_workgroups(x, y, 1);
+        }
         Ok(())
+    }
+
+    /// Records the spawn of the `input`-th event this group is fed by, from the parent's
+    /// sorted records, with the step's parameters at `offset`: `event_prepare` counts the
+    /// firings and pops slots, then `event_spawn` runs per chunk over as many workgroups as it
+    /// wrote to `dispatch`.
+    pub fn record_event_spawn(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunks: &[Chunk],
+        input: usize,
+        dispatch: &wgpu::Buffer,
+        offset: u32,
+    ) {
+        let ((prepare, prepare_group), spawn) = &self.events[input];
+        pass.set_bind_group(0, prepare_group, &[]);
+        pass.set_pipeline(prepare);
+        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipeline(spawn);
+        for chunk in chunks {
+            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+            pass.dispatch_workgroups_indirect(dispatch, 0);
+        }
     }
 }
 

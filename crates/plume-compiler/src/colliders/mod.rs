@@ -386,6 +386,7 @@ fn push_out_all(colliders: &[ColliderIr], mut x: DVec3, scale: f64) -> DVec3 {
 
 /// The f64 reference of the swept resolution (see the module doc): the particle moved from
 /// `x0` to `x` this substep of length `h`; `v` is its velocity (Verlet: its displacement).
+/// Returns whether it touched a collider.
 pub fn resolve(
     colliders: &[ColliderIr],
     rest_speed: f64,
@@ -394,9 +395,9 @@ pub fn resolve(
     v: &mut DVec3,
     verlet: bool,
     h: f64,
-) {
+) -> bool {
     if colliders.is_empty() {
-        return;
+        return false;
     }
     let scale = scale(colliders);
     let mut x_from = push_out_all(colliders, x0, scale);
@@ -429,6 +430,7 @@ pub fn resolve(
     if touched {
         *v = if verlet { vel * h } else { vel };
     }
+    touched
 }
 
 /// Emits each collider's functions and, when a height field needs them, nothing else: the
@@ -458,13 +460,15 @@ pub fn data(colliders: &[ColliderIr]) -> Vec<f32> {
 }
 
 /// Emits the swept resolution in the update kernel's substep, with `x_start` (where the
-/// substep began), `x` and `v` (or Verlet's `d`) in scope. Mirrors [`resolve`].
+/// substep began), `x` and `v` (or Verlet's `d`) in scope. Mirrors [`resolve`]; sets the
+/// variable `touched_flag` names to true after a contact, when one is given.
 pub fn emit_resolve(
     w: &mut Writer,
     colliders: &[ColliderIr],
     rest_speed: f64,
     h: f64,
     verlet: bool,
+    touched_flag: Option<&str>,
 ) {
     let scale = f32_lit(scale(colliders));
     let push_all = |w: &mut Writer, var: &str| {
@@ -525,6 +529,9 @@ pub fn emit_resolve(
         });
         push_all(w, "x");
         w.block("if (touched)", |w| {
+            if let Some(flag) = touched_flag {
+                w.line(format!("{flag} = true;"));
+            }
             if verlet {
                 w.line(format!("d = vel * {};", f32_lit(h)));
             } else {

@@ -54,7 +54,7 @@ impl Attribute {
             Attribute::DeathStep => "step whose update kills it (0xffffffff: never)",
             Attribute::Id => "global spawn index; 0xffffffff marks a free slot",
             Attribute::SpawnStep => {
-                "spawn step, for a custom force's age, the draw's life fraction or a flipbook's frame"
+                "spawn step, for a custom force's age, the draw's life fraction, a flipbook's frame or events"
             }
         }
     }
@@ -157,6 +157,8 @@ impl Layout {
 }
 
 /// Bytes of the counters struct (free count, spawn base, spawn count, spawned, dropped, died).
+/// A group fed by events adds two words (its next id, the first id of the current event
+/// spawn), which the buffer's padding to 32 bytes already holds.
 pub const COUNTERS_BYTES: u64 = 24;
 
 /// The one lifetime draw that every emitter with a lifetime shares, when there is one: then a
@@ -197,7 +199,16 @@ pub fn decide(ir: &EffectIr) -> Layout {
         attributes.push(Attribute::DeathStep);
     }
     attributes.push(Attribute::Id);
-    if needs_spawn_step(ir) || ir.custom_terms().any(|c| c.reads_age_or_life()) {
+    // A group fed by events cannot derive ages from ids (only the GPU knows when each id
+    // spawned), and `Every` events count from each particle's spawn.
+    let every = ir
+        .events
+        .iter()
+        .any(|e| matches!(e.trigger, crate::events::TriggerIr::Every(_)));
+    if needs_spawn_step(ir)
+        || ir.custom_terms().any(|c| c.reads_age_or_life())
+        || (ir.stateless.is_none() && (every || !ir.event_inputs.is_empty()))
+    {
         attributes.push(Attribute::SpawnStep);
     }
     // Padded to a multiple of 16 bytes so kernels move the state as whole vec4 words: scalar
@@ -260,7 +271,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
                 binding: 2,
                 name: "counters",
                 space: "storage, read_write",
-                bytes: COUNTERS_BYTES,
+                bytes: COUNTERS_BYTES + if ir.event_inputs.is_empty() { 0 } else { 8 },
                 meaning: "free count, this step's spawn base and count, totals spawned, dropped, died",
             },
             Binding {
@@ -384,6 +395,13 @@ pub fn decide(ir: &EffectIr) -> Layout {
             bytes: 16,
             meaning: "the camera's forward axis and offset: depth = dot(axis.xyz, x) + axis.w, written before each sort",
         });
+    }
+    if ir.stateless.is_none() {
+        layout.bindings.extend(crate::events::bindings(
+            &ir.events,
+            &ir.event_inputs,
+            ir.capacity,
+        ));
     }
     layout.bindings.sort_by_key(|b| b.binding);
     layout

@@ -96,6 +96,18 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("render").field("trail"),
         ));
     }
+    if !ir.events.is_empty() {
+        return Err((
+            "events[0] fires from each particle's state, step by step".into(),
+            ValuePath::root().field("events").index(0),
+        ));
+    }
+    if !ir.event_inputs.is_empty() {
+        return Err((
+            "the group is fed by events, whose spawns only the GPU counts".into(),
+            ValuePath::root().field("state"),
+        ));
+    }
     if !ir.kills.is_empty() {
         return Err((
             "kill[0] decides deaths from every earlier position".into(),
@@ -163,7 +175,7 @@ pub fn decide(ir: &mut EffectIr) -> Result<(), Checker> {
             c.error(
                 &ValuePath::root().field("state"),
                 format!(
-                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes, no render.trail and a capacity no spawn can overflow (use Auto)"
+                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes, no render.trail, no events and a capacity no spawn can overflow (use Auto)"
                 ),
             );
             return Err(c);

@@ -3,11 +3,13 @@
 //! Written for clarity, not speed; it is the oracle of every numeric test.
 
 pub mod closed_form;
+pub mod graph;
 pub mod sim;
 pub mod spawn;
 pub mod step;
 
-pub use sim::ReferenceSim;
+pub use graph::ReferenceGraph;
+pub use sim::{Fired, ReferenceSim};
 
 use glam::DVec3;
 

@@ -7,6 +7,7 @@ use super::spawn::spawn;
 use super::step::{accel, substep};
 use super::{ParticleRecord, Totals};
 use crate::colliders::resolve;
+use crate::events::TriggerIr;
 use crate::forces::flock::Frozen;
 use crate::forces::ParticleCtx;
 use crate::integrators::ExactStep;
@@ -22,8 +23,22 @@ struct Particle {
     /// Velocity, or Verlet's displacement over one substep.
     v: DVec3,
     die_at: u32,
+    /// The step that spawned it.
+    born: u64,
     /// Past positions for `render.trail` (empty without one).
     history: History,
+}
+
+/// An event fired by a particle in the last step: its id, and its position and velocity at
+/// the end of the step.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Fired {
+    /// The firing particle's id.
+    pub id: u32,
+    /// Its position (m).
+    pub x: DVec3,
+    /// Its velocity (m/s).
+    pub v: DVec3,
 }
 
 /// The lifetime (s) of a particle born at step `born` that dies at the update of `die_at`
@@ -47,6 +62,10 @@ pub struct ReferenceSim {
     /// The baked field's nodes (baked at time 0, or at each step's start), when there is one.
     baked: Option<Vec<DVec3>>,
     totals: Totals,
+    /// Per event the group fires, the firings of the last step.
+    fired: Vec<Vec<Fired>>,
+    /// The next id an event spawn hands out (a group fed by events counts its own ids).
+    next_event_id: u32,
 }
 
 impl ReferenceSim {
@@ -59,7 +78,66 @@ impl ReferenceSim {
             particles: Vec::new(),
             baked: ir.field.as_ref().map(|f| f.bake(&ir.terms, 0.0)),
             totals: Totals::default(),
+            fired: vec![Vec::new(); ir.events.len()],
+            next_event_id: 0,
         }
+    }
+
+    /// Spawns the children of the `input`-th event this group is fed by, from the parent's
+    /// firings of the last step, at the start of the next step (before [`Self::step`]): in
+    /// parent id order, `count` each, ids consecutive, the last ones dropped when there is no
+    /// room (their ids consumed all the same), as the GPU's event spawn does.
+    pub fn spawn_events(&mut self, input: usize, fired: &[Fired]) {
+        let inp = self.ir.event_inputs[input].clone();
+        let mut order: Vec<&Fired> = fired.iter().collect();
+        order.sort_by_key(|f| f.id);
+        let requested = order.len() as u64 * u64::from(inp.count);
+        let free = u64::from(self.ir.capacity) - self.particles.len() as u64;
+        let n = requested.min(free);
+        self.totals.spawned += n;
+        self.totals.dropped += requested - n;
+        let first = self.next_event_id;
+        self.next_event_id = first.wrapping_add(requested as u32);
+        let step = self.schedule.steps_done();
+        let time = step as f64 * self.ir.dt;
+        for i in 0..n {
+            let parent = order[(i / u64::from(inp.count)) as usize];
+            let c = (i % u64::from(inp.count)) as u32;
+            let id = first.wrapping_add(i as u32);
+            let mut s = spawn(&self.ir, inp.emitter, id, c, step);
+            s.x += parent.x;
+            s.v += inp.inherit_velocity * parent.v;
+            let v = self.initial_v(id, step, time, s.x, s.v, s.die_at);
+            self.particles.push(Particle {
+                id,
+                x: s.x,
+                v,
+                die_at: s.die_at,
+                born: step,
+                history: History::default(),
+            });
+        }
+    }
+
+    /// The firings of the last step of the `j`-th event this group fires.
+    pub fn fired(&self, j: usize) -> &[Fired] {
+        &self.fired[j]
+    }
+
+    /// What the state stores as velocity for a particle spawned at `step` with velocity `v`:
+    /// `v` itself, or Verlet's first displacement.
+    fn initial_v(&self, id: u32, step: u64, time: f64, x: DVec3, v: DVec3, die_at: u32) -> DVec3 {
+        if self.ir.integrator != Integrator::Verlet {
+            return v;
+        }
+        let h = self.ir.h();
+        let ctx = ParticleCtx {
+            id,
+            age0: 0.0,
+            t0: time,
+            life: lifetime_of(step, die_at, self.ir.dt),
+        };
+        v * h - accel(&self.ir, self.baked.as_deref(), &ctx, x, v, time) * (0.5 * h * h)
     }
 
     /// Runs `n` steps.
@@ -79,6 +157,9 @@ impl ReferenceSim {
         }
         let verlet = self.ir.integrator == Integrator::Verlet;
         let h = self.ir.h();
+        for f in &mut self.fired {
+            f.clear();
+        }
         // Spawn: the first `free` requested ids get slots, the rest are dropped.
         let free = u64::from(self.ir.capacity) - self.particles.len() as u64;
         let mut budget = free.min(u64::from(plan.requested()));
@@ -92,24 +173,13 @@ impl ReferenceSim {
                 }
                 budget -= 1;
                 let s = spawn(&self.ir, e, id + local, k0 + local, plan.step);
-                let v = if verlet {
-                    let ctx = ParticleCtx {
-                        id: id + local,
-                        age0: 0.0,
-                        t0: plan.time,
-                        life: lifetime_of(plan.step, s.die_at, self.ir.dt),
-                    };
-                    s.v * h
-                        - accel(&self.ir, self.baked.as_deref(), &ctx, s.x, s.v, plan.time)
-                            * (0.5 * h * h)
-                } else {
-                    s.v
-                };
+                let v = self.initial_v(id + local, plan.step, plan.time, s.x, s.v, s.die_at);
                 self.particles.push(Particle {
                     id: id + local,
                     x: s.x,
                     v,
                     die_at: s.die_at,
+                    born: plan.step,
                     history: History::default(),
                 });
             }
@@ -135,12 +205,12 @@ impl ReferenceSim {
             None => Vec::new(),
         };
         let mut index = 0;
-        let schedule = &self.schedule;
         let rest_speed = ir.rest_speed();
+        let fired = &mut self.fired;
         self.particles.retain_mut(|p| {
             let flock = frozen.get(index);
             index += 1;
-            let born = schedule.spawn_step(p.id);
+            let born = p.born;
             let ctx = ParticleCtx {
                 id: p.id,
                 age0: plan.step.saturating_sub(born) as f64 * ir.dt,
@@ -150,14 +220,30 @@ impl ReferenceSim {
             if let Some(trail) = &ir.render.trail {
                 p.history.record(trail, plan.step, p.x);
             }
+            let mut collided = false;
             for s in 0..ir.substeps {
                 let t = plan.time + f64::from(s) * h;
                 let x0 = p.x;
                 substep(ir, exact, baked, flock, &ctx, &mut p.x, &mut p.v, t);
-                resolve(&ir.colliders, rest_speed, x0, &mut p.x, &mut p.v, verlet, h);
+                collided |= resolve(&ir.colliders, rest_speed, x0, &mut p.x, &mut p.v, verlet, h);
             }
             let dies =
                 (has_lifetimes && step_index >= p.die_at) || ir.kills.iter().any(|k| k.kills(p.x));
+            let firing = Fired {
+                id: p.id,
+                x: p.x,
+                v: if verlet { p.v / h } else { p.v },
+            };
+            for (j, e) in ir.events.iter().enumerate() {
+                let fires = match e.trigger {
+                    TriggerIr::Death => dies,
+                    TriggerIr::Collide => collided,
+                    TriggerIr::Every(period) => TriggerIr::every_fires(period, born, plan.step),
+                };
+                if fires {
+                    fired[j].push(firing);
+                }
+            }
             !dies
         });
         self.totals.died += (before - self.particles.len()) as u64;
@@ -180,8 +266,9 @@ impl ReferenceSim {
                 id: p.id,
                 position: p.x,
                 velocity: if verlet { p.v / h } else { p.v },
-                age: self.schedule.age(p.id),
-                lifetime: self.schedule.lifetime(p.id, p.die_at),
+                age: (self.schedule.steps_done() - p.born) as f64 * self.ir.dt,
+                lifetime: (p.die_at != crate::lifetime::NEVER)
+                    .then(|| lifetime_of(p.born, p.die_at, self.ir.dt)),
             })
             .collect()
     }

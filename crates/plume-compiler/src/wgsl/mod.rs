@@ -62,6 +62,10 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             w.line("spawned: u32,");
             w.line("dropped: u32,");
             w.line("died: atomic<u32>,");
+            if !ir.event_inputs.is_empty() {
+                w.line("next_id: u32,");
+                w.line("event_first_id: u32,");
+            }
         });
         w.blank();
         w.comment(
@@ -101,8 +105,15 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         emit_depth_axis_struct(&mut w);
         w.blank();
     }
+    if !ir.events.is_empty() || !ir.event_inputs.is_empty() {
+        crate::events::emit_declarations(&mut w);
+        w.blank();
+    }
     for b in &layout.bindings {
         let ty = match b.name {
+            name if crate::events::binding_type(name).is_some() => {
+                crate::events::binding_type(name).unwrap_or_default()
+            }
             "particles" | "trail" => "array<vec4<u32>>",
             "free_list" => "array<u32>",
             "counters" => "Counters",

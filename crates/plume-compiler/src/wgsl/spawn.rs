@@ -61,39 +61,53 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                         });
                     }
                 });
-                let mut fields = vec!["s.x.x", "s.x.y", "s.x.z"];
-                if layout.has(Attribute::Displacement) {
-                    // Verlet: store the displacement that makes step one x0 + v0 h + a h²/2.
-                    let h = ir.h();
-                    if ir.custom_terms().any(|c| c.needs_context()) {
-                        crate::forces::custom::emit_set_context(
-                            w,
-                            ir.dt,
-                            "id",
-                            layout.has(Attribute::SpawnStep).then_some("params.step"),
-                            layout.has(Attribute::DeathStep).then_some("s.die_at"),
-                        );
-                    }
-                    w.line(format!(
-                        "let d = s.v * {} - accel(s.x, s.v, params.time) * {};",
-                        f32_lit(h),
-                        f32_lit(0.5 * h * h)
-                    ));
-                    fields.extend(["d.x", "d.y", "d.z"]);
-                } else {
-                    fields.extend(["s.v.x", "s.v.y", "s.v.z"]);
-                }
-                if layout.has(Attribute::DeathStep) {
-                    fields.push("s.die_at");
-                }
-                fields.push("id");
-                if layout.has(Attribute::SpawnStep) {
-                    fields.push("params.step");
-                }
-                w.line(format!("store_particle(slot - chunk.base, Particle({}));", fields.join(", ")));
+                emit_store_spawned(w, ir, layout);
             }
         },
     );
+    if !ir.event_inputs.is_empty() {
+        w.blank();
+        crate::events::emit_kernels(w, &ir.event_inputs, &|w| emit_store_spawned(w, ir, layout));
+    }
+}
+
+/// Emits the store of the spawned particle `s` (a `Spawned`) with id `id` into `slot` (a
+/// global slot this chunk holds), as every spawn kernel ends: Verlet's first displacement,
+/// the lifetime, the id and the spawn step as the layout has them.
+pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+    let mut fields = vec!["s.x.x", "s.x.y", "s.x.z"];
+    if layout.has(Attribute::Displacement) {
+        // Verlet: store the displacement that makes step one x0 + v0 h + a h²/2.
+        let h = ir.h();
+        if ir.custom_terms().any(|c| c.needs_context()) {
+            crate::forces::custom::emit_set_context(
+                w,
+                ir.dt,
+                "id",
+                layout.has(Attribute::SpawnStep).then_some("params.step"),
+                layout.has(Attribute::DeathStep).then_some("s.die_at"),
+            );
+        }
+        w.line(format!(
+            "let d = s.v * {} - accel(s.x, s.v, params.time) * {};",
+            f32_lit(h),
+            f32_lit(0.5 * h * h)
+        ));
+        fields.extend(["d.x", "d.y", "d.z"]);
+    } else {
+        fields.extend(["s.v.x", "s.v.y", "s.v.z"]);
+    }
+    if layout.has(Attribute::DeathStep) {
+        fields.push("s.die_at");
+    }
+    fields.push("id");
+    if layout.has(Attribute::SpawnStep) {
+        fields.push("params.step");
+    }
+    w.line(format!(
+        "store_particle(slot - chunk.base, Particle({}));",
+        fields.join(", ")
+    ));
 }
 
 /// Emits `emit_E(id, k, step) -> Spawned` for every emitter (shared by `spawn` and the

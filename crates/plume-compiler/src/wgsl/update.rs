@@ -9,6 +9,7 @@
 //! warp's load touched every other 16 bytes of a 1 KiB span: 0.86 of the copy kernel from 10M
 //! particles up on an H100, 0.88 staged (docs/performance.md, "The update at large sizes").
 
+use crate::events::TriggerIr;
 use crate::integrators;
 use crate::ir::{EffectIr, KillIr};
 use crate::passes::layout::{Attribute, Layout};
@@ -34,6 +35,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.comment("One particle's update on its staged words; true when they changed.");
     w.block("fn update_particle(i: u32, lane: u32) -> bool", |w| {
         w.block("if (i >= chunk.len)", |w| w.line("return false;"));
+        crate::events::emit_update_reset(w, &ir.events);
         w.line("var p = load_staged(lane);");
         emit_body(w, ir, layout);
     });
@@ -91,13 +93,24 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     if let Some(trail) = &ir.render.trail {
         trail.emit_record(w);
     }
+    let collide_events = ir.events.iter().any(|e| e.trigger == TriggerIr::Collide);
+    if collide_events && !ir.colliders.is_empty() {
+        w.line("var collided = false;");
+    }
     let body = |w: &mut Writer| {
         if !ir.colliders.is_empty() {
             w.line("let x_start = x;");
         }
         integrators::emit_step(w, ir);
         if !ir.colliders.is_empty() {
-            crate::colliders::emit_resolve(w, &ir.colliders, ir.rest_speed(), ir.h(), verlet);
+            crate::colliders::emit_resolve(
+                w,
+                &ir.colliders,
+                ir.rest_speed(),
+                ir.h(),
+                verlet,
+                collide_events.then_some("collided"),
+            );
         }
     };
     if ir.substeps == 1 {
@@ -115,6 +128,18 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             },
         );
     }
+    // Events fire with the position and velocity the step leaves.
+    let vel = if verlet {
+        format!("d * {}", f32_lit(1.0 / ir.h()))
+    } else {
+        "v".to_string()
+    };
+    if collide_events && !ir.colliders.is_empty() {
+        w.block("if (collided)", |w| {
+            crate::events::emit_fire(w, &ir.events, TriggerIr::Collide, "x", &vel)
+        });
+    }
+    crate::events::emit_fire(w, &ir.events, TriggerIr::Every(1), "x", &vel);
     // Only effects with lifetimes or kill volumes get the death code.
     if lifetimes || !ir.kills.is_empty() {
         w.line("var dies = false;");
@@ -125,6 +150,7 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             emit_kill(w, k);
         }
         w.block("if (dies)", |w| {
+            crate::events::emit_fire(w, &ir.events, TriggerIr::Death, "x", &vel);
             w.line("mark_staged_free(lane);");
             w.line("let top = atomicAdd(&counters.free_count, 1u);");
             w.line("free_list[top] = chunk.base + i;");

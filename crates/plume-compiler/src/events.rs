@@ -1,0 +1,379 @@
+//! Events: particles of one group spawning particles of another (sub-emitters). This module
+//! owns the event's schema, its IR, the WGSL that records events in the parent's update and
+//! spawns them in the child, and the f64 twin of when an event fires.
+//!
+//! The contract (docs/effect-format.md, "Groups and events"): the parent's update of step k
+//! decides, per particle, whether an event fires (death, a collision during the step, or the
+//! end of every `Every` period of its life) and records the particle's position and velocity
+//! at the end of the step, in the parent's slot. At the start of step k + 1, before any group
+//! updates, the records are ordered by parent id (a stable radix sort of one key per parent
+//! slot), and the child group spawns `count` particles per record in that order: child ids
+//! are handed out consecutively (first id + rank · count + c), and when the child group lacks
+//! room, the last ones in that order are dropped and counted. Nothing depends on which slots
+//! the GPU had free, so two runs give the same particles.
+
+use serde::Deserialize;
+
+use crate::passes::layout::{Binding, Layout};
+use crate::schema::{Range, Shape, Vec3, Velocity};
+use crate::wgsl::writer::{f32_lit, u32_lit, Writer};
+
+/// The most events a group may fire, and the most it may be fed by: each takes bindings of the
+/// compute module (three per event fired, two per event received).
+pub const MAX_EVENTS: usize = 4;
+
+/// The most particles one event may spawn per firing particle.
+pub const MAX_COUNT: u32 = 65_536;
+
+/// Key of a parent slot that fired nothing this step: sorts after every id.
+pub const NO_EVENT: u32 = u32::MAX;
+
+/// When a particle fires an event.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub enum Trigger {
+    /// When it dies (end of its lifetime or a kill volume), where it died.
+    Death,
+    /// When it hits a collider during a step, where the step leaves it.
+    Collide,
+    /// At the end of every period of this many seconds of its life (rounded to whole steps,
+    /// at least one), wherever it is.
+    Every(f64),
+}
+
+/// An event: `count` particles spawned in group `target` each time a particle fires it, placed
+/// by `shape` around the parent's position, moving by `velocity` plus `inherit_velocity` times
+/// the parent's velocity, and living `lifetime`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Event {
+    /// What fires it.
+    pub on: Trigger,
+    /// The name of the group the new particles join.
+    pub target: String,
+    /// Particles spawned per firing.
+    pub count: u32,
+    /// Where they start, relative to the parent's position.
+    #[serde(default = "origin")]
+    pub shape: Shape,
+    /// How they start moving (before the parent's share is added).
+    #[serde(default = "at_rest")]
+    pub velocity: Velocity,
+    /// Lifetime range in seconds; `None` lives forever.
+    #[serde(default)]
+    pub lifetime: Option<Range>,
+    /// Fraction of the parent's velocity added to theirs.
+    #[serde(default)]
+    pub inherit_velocity: f64,
+}
+
+fn origin() -> Shape {
+    Shape::Point(Vec3(0.0, 0.0, 0.0))
+}
+
+fn at_rest() -> Velocity {
+    Velocity::Constant(Vec3(0.0, 0.0, 0.0))
+}
+
+impl Event {
+    /// The spawn rule as an emitter of the target group that never spawns on its own.
+    pub fn as_emitter(&self) -> crate::schema::Emitter {
+        crate::schema::Emitter {
+            burst: 0,
+            rate: 0.0,
+            shape: self.shape.clone(),
+            velocity: self.velocity.clone(),
+            lifetime: self.lifetime,
+        }
+    }
+}
+
+/// When an event fires, in the IR.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TriggerIr {
+    /// At death.
+    Death,
+    /// After a step with a collision.
+    Collide,
+    /// At the end of step k when (k + 1 − born) is a multiple of this many steps.
+    Every(u32),
+}
+
+impl TriggerIr {
+    /// Whether an `Every(period)` event fires at the end of step `step` for a particle born at
+    /// `born` (the f64 reference and the kernel use the same u32 arithmetic).
+    pub fn every_fires(period: u32, born: u64, step: u64) -> bool {
+        (step as u32)
+            .wrapping_add(1)
+            .wrapping_sub(born as u32)
+            .is_multiple_of(period)
+    }
+}
+
+/// An event this group fires.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EventIr {
+    /// What fires it.
+    pub trigger: TriggerIr,
+    /// The index of the target group.
+    pub target: usize,
+    /// The event's index among every event of the effect (the order children are spawned in).
+    pub stream: usize,
+}
+
+/// An event this group receives: its spawns come from another group's records.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EventInputIr {
+    /// The event's index among every event of the effect.
+    pub stream: usize,
+    /// The emitter (of this group's IR) that holds the event's spawn rule.
+    pub emitter: usize,
+    /// Particles per firing.
+    pub count: u32,
+    /// Fraction of the parent's velocity added.
+    pub inherit_velocity: f64,
+    /// The parent group's capacity (how many records there can be).
+    pub parent_capacity: u32,
+}
+
+const OUT_KEYS: [&str; MAX_EVENTS] = [
+    "event_keys_0",
+    "event_keys_1",
+    "event_keys_2",
+    "event_keys_3",
+];
+const OUT_VALS: [&str; MAX_EVENTS] = [
+    "event_vals_0",
+    "event_vals_1",
+    "event_vals_2",
+    "event_vals_3",
+];
+const OUT_RECORDS: [&str; MAX_EVENTS] =
+    ["event_out_0", "event_out_1", "event_out_2", "event_out_3"];
+const IN_ORDER: [&str; MAX_EVENTS] = [
+    "event_order_0",
+    "event_order_1",
+    "event_order_2",
+    "event_order_3",
+];
+const IN_RECORDS: [&str; MAX_EVENTS] = ["event_in_0", "event_in_1", "event_in_2", "event_in_3"];
+
+/// Bytes of one event record: position and velocity, each padded to a vec4.
+pub const RECORD_BYTES: u64 = 32;
+/// Bytes before the records: the count of records this step, padded to 16.
+pub const RECORDS_HEADER_BYTES: u64 = 16;
+
+/// Binding of the keys (parent id or [`NO_EVENT`], one per parent slot) of the `j`-th event a
+/// group fires; the values (parent slots) and the records follow it.
+pub fn out_binding(j: usize) -> u32 {
+    48 + 3 * j as u32
+}
+
+/// Binding of the sorted parent slots of the `j`-th event a group receives; the records follow.
+pub fn in_binding(j: usize) -> u32 {
+    64 + 2 * j as u32
+}
+
+/// Binding of the indirect dispatch arguments of an event-fed group's spawn.
+pub const DISPATCH_BINDING: u32 = 17;
+
+/// The bindings events add to a group's compute module.
+pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> Vec<Binding> {
+    let cap = u64::from(capacity);
+    let mut out = Vec::new();
+    for j in 0..events.len() {
+        out.extend([
+            Binding {
+                binding: out_binding(j),
+                name: OUT_KEYS[j],
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: "per slot: the particle's id if it fired this event in the last update, else 0xffffffff (the sort key)",
+            },
+            Binding {
+                binding: out_binding(j) + 1,
+                name: OUT_VALS[j],
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: "per slot: the slot itself (the sort's values: after it, the firing slots in id order)",
+            },
+            Binding {
+                binding: out_binding(j) + 2,
+                name: OUT_RECORDS[j],
+                space: "storage, read_write",
+                bytes: RECORDS_HEADER_BYTES + cap * RECORD_BYTES,
+                meaning: "the number of firings, then per slot the position and velocity it fired with",
+            },
+        ]);
+    }
+    for (j, input) in inputs.iter().enumerate() {
+        let parent = u64::from(input.parent_capacity);
+        out.extend([
+            Binding {
+                binding: in_binding(j),
+                name: IN_ORDER[j],
+                space: "storage, read_write",
+                bytes: parent * 4,
+                meaning:
+                    "the parent group's firing slots in parent id order (its sorted event values)",
+            },
+            Binding {
+                binding: in_binding(j) + 1,
+                name: IN_RECORDS[j],
+                space: "storage, read_write",
+                bytes: RECORDS_HEADER_BYTES + parent * RECORD_BYTES,
+                meaning: "the parent group's event records (count, then per parent slot)",
+            },
+        ]);
+    }
+    if !inputs.is_empty() {
+        out.push(Binding {
+            binding: DISPATCH_BINDING,
+            name: "event_dispatch",
+            space: "storage, read_write",
+            bytes: 16,
+            meaning:
+                "the workgroups of the event spawn, written by event_prepare (indirect dispatch)",
+        });
+    }
+    out
+}
+
+/// The WGSL type of an event binding, by name; None for other bindings.
+pub fn binding_type(name: &str) -> Option<&'static str> {
+    if OUT_KEYS.contains(&name) || OUT_VALS.contains(&name) || IN_ORDER.contains(&name) {
+        Some("array<u32>")
+    } else if OUT_RECORDS.contains(&name) || IN_RECORDS.contains(&name) {
+        Some("EventRecords")
+    } else if name == "event_dispatch" {
+        Some("array<u32, 4>")
+    } else {
+        None
+    }
+}
+
+/// Emits the record structs (when the group fires or receives events).
+pub fn emit_declarations(w: &mut Writer) {
+    w.comment("An event's record: the firing particle's position and velocity.");
+    w.block("struct EventRecord", |w| {
+        w.line("x: vec4<f32>,");
+        w.line("v: vec4<f32>,");
+    });
+    w.block("struct EventRecords", |w| {
+        w.line("count: atomic<u32>,");
+        w.line("pad0: u32,");
+        w.line("pad1: u32,");
+        w.line("pad2: u32,");
+        w.line("records: array<EventRecord>,");
+    });
+}
+
+/// Emits, at the top of the update of slot `chunk.base + i`, the reset of each event's key and
+/// value (every slot, live or free, so the sort sees only this step's firings).
+pub fn emit_update_reset(w: &mut Writer, events: &[EventIr]) {
+    for j in 0..events.len() {
+        w.line(format!(
+            "{}[chunk.base + i] = {};",
+            OUT_KEYS[j],
+            u32_lit(NO_EVENT)
+        ));
+        w.line(format!("{}[chunk.base + i] = chunk.base + i;", OUT_VALS[j]));
+    }
+}
+
+/// Emits the firing of every event with trigger `which` by the particle being updated, with
+/// its position `x` and velocity `vel` (WGSL expressions).
+pub fn emit_fire(w: &mut Writer, events: &[EventIr], which: TriggerIr, x: &str, vel: &str) {
+    for (j, e) in events.iter().enumerate() {
+        let same = match (e.trigger, which) {
+            (TriggerIr::Every(_), TriggerIr::Every(_)) => true,
+            (a, b) => a == b,
+        };
+        if !same {
+            continue;
+        }
+        let body = |w: &mut Writer| {
+            w.line(format!("{}[chunk.base + i] = p.id;", OUT_KEYS[j]));
+            w.line(format!(
+                "{}.records[chunk.base + i] = EventRecord(vec4<f32>({x}, 0.0), vec4<f32>({vel}, 0.0));",
+                OUT_RECORDS[j]
+            ));
+            w.line(format!("atomicAdd(&{}.count, 1u);", OUT_RECORDS[j]));
+        };
+        match e.trigger {
+            TriggerIr::Every(period) => w.block(
+                format!(
+                    "if ((params.step + 1u - p.born) % {} == 0u)",
+                    u32_lit(period)
+                ),
+                body,
+            ),
+            _ => body(w),
+        }
+    }
+}
+
+/// Emits `event_prepare_J` and `event_spawn_J` for every event the group receives.
+/// `store` emits the store of the spawned particle `s` with id `id` in `slot` (the same code
+/// as the group's own spawn).
+pub fn emit_kernels(w: &mut Writer, inputs: &[EventInputIr], store: &dyn Fn(&mut Writer)) {
+    for (j, input) in inputs.iter().enumerate() {
+        let records = IN_RECORDS[j];
+        w.comment(format!(
+            "Event {}: takes the parent's firings of the last step ({} particles each); pops slots for as many as fit, in parent id order, the rest dropped and counted; ids consumed either way.",
+            input.stream, input.count
+        ));
+        w.line("@compute @workgroup_size(1)");
+        w.block(format!("fn event_prepare_{j}()"), |w| {
+            w.line(format!("let fired = atomicLoad(&{records}.count);"));
+            w.line(format!("atomicStore(&{records}.count, 0u);"));
+            w.line(format!("let requested = fired * {};", u32_lit(input.count)));
+            w.line("let free = atomicLoad(&counters.free_count);");
+            w.line("let n = min(requested, free);");
+            w.line("atomicStore(&counters.free_count, free - n);");
+            w.line("counters.spawn_base = free - n;");
+            w.line("counters.spawn_count = n;");
+            w.line("counters.spawned = counters.spawned + n;");
+            w.line("counters.dropped = counters.dropped + (requested - n);");
+            w.line("counters.event_first_id = counters.next_id;");
+            w.line("counters.next_id = counters.next_id + requested;");
+            w.line("let workgroups = (n + WORKGROUP - 1u) / WORKGROUP;");
+            w.line("event_dispatch[0] = min(workgroups, 65535u);");
+            w.line("event_dispatch[1] = (workgroups + 65534u) / 65535u;");
+            w.line("event_dispatch[2] = 1u;");
+        });
+        w.blank();
+        w.line("@compute @workgroup_size(WORKGROUP)");
+        w.block(
+            format!("fn event_spawn_{j}(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)"),
+            |w| {
+                crate::wgsl::emit_thread_index(w, "i", Some("counters.spawn_count"));
+                w.line("let slot = free_list[counters.spawn_base + i];");
+                w.block("if (slot < chunk.base || slot - chunk.base >= chunk.len)", |w| {
+                    w.line("return;")
+                });
+                w.line(format!("let rank = i / {};", u32_lit(input.count)));
+                w.line(format!("let c = i % {};", u32_lit(input.count)));
+                w.line(format!(
+                    "let r = {records}.records[{}[rank]];",
+                    IN_ORDER[j]
+                ));
+                w.line("let id = counters.event_first_id + i;");
+                w.line(format!("var s = emit_{}(id, c, params.step);", input.emitter));
+                w.line("s.x = s.x + r.x.xyz;");
+                if input.inherit_velocity != 0.0 {
+                    w.line(format!(
+                        "s.v = s.v + {} * r.v.xyz;",
+                        f32_lit(input.inherit_velocity)
+                    ));
+                }
+                store(w);
+            },
+        );
+        w.blank();
+    }
+}
+
+/// Whether the layout needs the counters' event fields (next id, first id of the spawn).
+pub fn counts_ids_on_gpu(layout: &Layout) -> bool {
+    layout.bindings.iter().any(|b| b.name == "event_dispatch")
+}

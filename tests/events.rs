@@ -1,0 +1,293 @@
+//! Effect graphs: groups connected by events (docs/effect-format.md, "Groups and events"), on
+//! the GPU against the f64 reference graph, run against run, and drawn.
+//!
+//! Tolerance: tests/gpu_vs_reference.rs's bound of a few f32 roundings a step, taken over the
+//! steps since step 0 whatever the group: a child starts where its parent's f32 state put it
+//! (off by the parent's error so far) and adds its own roundings from then on, so its error
+//! is bounded by the same sum over the whole run, with the largest per-step count of any group.
+
+mod common;
+
+use common::compare::{compare_at, curved_colliders, roundings_per_step};
+use common::*;
+use plume::compiler::graph::{compile_graph_str, CompiledGraph};
+use plume::compiler::reference::{ParticleRecord, ReferenceGraph};
+use plume::runtime::export::csv_groups;
+use plume::runtime::GraphInstance;
+use plume::CompileOptions;
+
+fn graph(source: &str) -> CompiledGraph {
+    compile_graph_str(source, &CompileOptions::default())
+        .unwrap_or_else(|e| panic!("{}", e.render("test.ron", source)))
+}
+
+/// The effect graphs among the examples.
+fn graph_examples() -> Vec<std::path::PathBuf> {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/effects");
+    let mut paths: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "ron") && is_graph_file(p))
+        .collect();
+    paths.sort();
+    paths
+}
+
+/// Runs the GPU graph and the reference side by side, comparing every group at each of
+/// `checkpoints` (steps since the start); returns the GPU instance.
+fn compare_runs(name: &str, graph: &CompiledGraph, checkpoints: &[u64]) -> GraphInstance {
+    let gpu = gpu();
+    let mut gsim = GraphInstance::new(&gpu, graph.clone()).expect("GPU graph");
+    let mut csim = ReferenceGraph::new(graph);
+    let roundings = graph
+        .groups
+        .iter()
+        .map(|g| roundings_per_step(&g.effect.ir))
+        .fold(0.0, f64::max);
+    let mut done = 0;
+    for &at in checkpoints {
+        gsim.run(at - done, |_| {}).unwrap();
+        csim.run(at - done);
+        done = at;
+        for (g, group) in graph.groups.iter().enumerate() {
+            let label = format!("{name} group {}", group.name);
+            assert_eq!(
+                gsim.totals(g).unwrap(),
+                csim.totals(g),
+                "{label}: totals differ after {at} steps"
+            );
+            compare_at(
+                &label,
+                at,
+                false,
+                curved_colliders(&group.effect.ir),
+                roundings,
+                &gsim.records(g).unwrap(),
+                &csim.records(g),
+            );
+        }
+    }
+    gsim
+}
+
+#[test]
+fn every_example_with_events_matches_the_reference_in_every_group() {
+    let examples = graph_examples();
+    assert!(
+        examples.len() >= 2,
+        "fireworks.ron and rain.ron have groups"
+    );
+    for path in examples {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let graph = compile_graph_file(&path);
+        // Past the first bursts and splashes (fireworks' rockets live 1.1 to 1.5 s).
+        let sim = compare_runs(&name, &graph, &[60, 110]);
+        for g in 1..graph.groups.len() {
+            let t = sim.totals(g).unwrap();
+            assert!(t.spawned > 0, "{name}: group {g} was never fed: {t:?}");
+        }
+    }
+}
+
+/// A small fireworks: rockets burst on death into sparks that leave embers every 3 steps.
+const SMALL_FIREWORKS: &str = r#"Effect(
+    name: "rockets",
+    capacity: 16,
+    seed: 3,
+    emitters: [Emitter(burst: 4, rate: 20.0, shape: Disc(center: (0.0, 0.0, 0.0), normal: (0.0, 1.0, 0.0), radius: 2.0),
+                       velocity: Cone(axis: (0.0, 1.0, 0.0), angle: 15.0, speed: (8.0, 10.0)), lifetime: Some((0.2, 0.4)))],
+    forces: [Gravity((0.0, -9.81, 0.0)), Drag(k: 0.2)],
+    events: [Event(on: Death, target: "sparks", count: 12, velocity: Radial(speed: (2.0, 4.0)),
+                   lifetime: Some((0.3, 0.6)), inherit_velocity: 0.5)],
+    groups: [
+        Group(name: "sparks", capacity: 400, forces: [Gravity((0.0, -9.81, 0.0)), Drag(k: 1.0)], integrator: Verlet,
+              events: [Event(on: Every(0.05), target: "embers", count: 2, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 0.05),
+                             lifetime: Some((0.2, 0.3)), inherit_velocity: 0.2)]),
+        Group(name: "embers", capacity: 3000, forces: [Gravity((0.0, -1.0, 0.0))], integrator: Midpoint),
+    ],
+)"#;
+
+#[test]
+fn verlet_and_midpoint_children_and_every_events_match_the_reference() {
+    let g = graph(SMALL_FIREWORKS);
+    let sim = compare_runs("small fireworks", &g, &[20, 45]);
+    assert!(sim.totals(2).unwrap().spawned > 0, "embers were spawned");
+}
+
+#[test]
+fn exports_are_the_same_bytes_run_after_run() {
+    let g = graph(SMALL_FIREWORKS);
+    let export = || {
+        let gpu = gpu();
+        let mut sim = GraphInstance::new(&gpu, g.clone()).unwrap();
+        sim.run(40, |_| {}).unwrap();
+        let records: Vec<Vec<ParticleRecord>> = (0..3).map(|k| sim.records(k).unwrap()).collect();
+        let parts: Vec<(&str, &[ParticleRecord])> = g
+            .groups
+            .iter()
+            .zip(&records)
+            .map(|(group, r)| (group.name.as_str(), r.as_slice()))
+            .collect();
+        csv_groups(&parts)
+    };
+    let (first, second) = (export(), export());
+    let text = String::from_utf8(first.clone()).unwrap();
+    assert!(text.starts_with("group,id,x,y,z,vx,vy,vz,age\n"), "{text}");
+    for name in ["rockets,", "sparks,", "embers,"] {
+        assert!(
+            text.lines().any(|l| l.starts_with(name)),
+            "no {name} line in the export"
+        );
+    }
+    assert_eq!(first, second, "two runs exported different bytes");
+}
+
+#[test]
+fn a_full_target_drops_the_same_children_every_run_and_counts_them() {
+    // Twenty parents die together at step 9 (lifetime 10 steps) and ask for 10 children each:
+    // 200 children for a group of 50. The first five parents by id get theirs (ids 0..50);
+    // the rest are dropped, counted, and their ids used up.
+    let src = r#"Effect(
+        name: "parents",
+        capacity: 20,
+        dt: 0.01,
+        emitters: [Emitter(burst: 20, shape: Box(min: (-1.0, 0.0, -1.0), max: (1.0, 1.0, 1.0)),
+                           velocity: Constant((0.0, 1.0, 0.0)), lifetime: Some((0.1, 0.1)))],
+        events: [Event(on: Death, target: "children", count: 10, velocity: Radial(speed: (1.0, 2.0)), lifetime: Some((1.0, 1.0)))],
+        groups: [Group(name: "children", capacity: 50)],
+    )"#;
+    let g = graph(src);
+    assert!(
+        g.warnings
+            .items
+            .iter()
+            .any(|w| w.message.contains("capacity 50")),
+        "the overflow is predicted: {:?}",
+        g.warnings
+    );
+    let run = || {
+        let gpu = gpu();
+        let mut sim = GraphInstance::new(&gpu, g.clone()).unwrap();
+        sim.run(15, |_| {}).unwrap();
+        (sim.totals(1).unwrap(), sim.records(1).unwrap())
+    };
+    let (totals, records) = run();
+    assert_eq!((totals.spawned, totals.dropped), (50, 150));
+    let ids: Vec<u32> = records.iter().map(|r| r.id).collect();
+    assert_eq!(ids, (0..50).collect::<Vec<u32>>());
+    let mut reference = ReferenceGraph::new(&g);
+    reference.run(15);
+    assert_eq!(reference.totals(1), totals);
+    let again = run();
+    assert_eq!(again.0, totals);
+    assert_eq!(again.1, records, "the second run kept other children");
+    // The children of parent k (by id) start where it died: the parents' positions before
+    // their last step (9), plus that step's 0.01 m, plus the children's first step (at most
+    // 2 m/s for 0.01 s).
+    let mut reference = ReferenceGraph::new(&g);
+    reference.run(9);
+    let parents = reference.records(0);
+    assert_eq!(parents.len(), 20);
+    let gpu = gpu();
+    let mut sim = GraphInstance::new(&gpu, g.clone()).unwrap();
+    sim.run(11, |_| {}).unwrap();
+    let children = sim.records(1).unwrap();
+    assert_eq!(children.len(), 50);
+    for c in &children {
+        let parent = &parents[(c.id / 10) as usize];
+        let d = (c.position - parent.position).length();
+        assert!(
+            d <= 0.03 + 1e-5,
+            "child {} is {d} m from parent {}",
+            c.id,
+            parent.id
+        );
+    }
+}
+
+#[test]
+fn collisions_fire_events_where_the_particle_hits() {
+    // Drops fall on a plane at y = 0 and stop; each contact spawns 3 droplets at the drop.
+    let src = r#"Effect(
+        name: "drops",
+        capacity: 300,
+        dt: 0.01,
+        emitters: [Emitter(rate: 400.0, shape: Box(min: (-2.0, 1.0, -2.0), max: (2.0, 2.0, 2.0)),
+                           velocity: Constant((0.3, -3.0, 0.0)), lifetime: Some((2.0, 2.0)))],
+        forces: [Gravity((0.0, -9.81, 0.0))],
+        collide: [Plane(point: (0.0, 0.0, 0.0), normal: (0.0, 1.0, 0.0), restitution: 0.0, friction: 1.0)],
+        kill: [InsideBox(min: (-9.0, -1.0, -9.0), max: (9.0, 0.001, 9.0))],
+        events: [Event(on: Collide, target: "droplets", count: 3, velocity: Cone(axis: (0.0, 1.0, 0.0), angle: 40.0, speed: (0.5, 1.0)),
+                       lifetime: Some((0.05, 0.05)), inherit_velocity: 0.0)],
+        groups: [Group(name: "droplets", capacity: 2000, forces: [Gravity((0.0, -9.81, 0.0))], integrator: SemiImplicitEuler)],
+    )"#;
+    let g = graph(src);
+    let sim = compare_runs("drops", &g, &[40, 70]);
+    let droplets = sim.records(1).unwrap();
+    assert!(!droplets.is_empty());
+    // A droplet lives 5 steps at under 1.1 m/s from where its drop touched the plane.
+    for d in &droplets {
+        assert!(d.position.y > -1e-3 && d.position.y < 0.06, "{d:?}");
+    }
+}
+
+#[test]
+fn events_that_cannot_fire_are_warned_about() {
+    let src = r#"Effect(
+        name: "immortal",
+        capacity: 10,
+        emitters: [Emitter(burst: 10, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 1.0, 0.0)))],
+        events: [
+            Event(on: Death, target: "a", count: 1, lifetime: Some((1.0, 1.0))),
+            Event(on: Collide, target: "a", count: 1, lifetime: Some((1.0, 1.0))),
+        ],
+        groups: [Group(name: "a", capacity: 100)],
+    )"#;
+    let g = graph(src);
+    let text = g.all_warnings().render("immortal.ron", src);
+    assert!(
+        text.contains("events[0].on: fires on death, but the group's particles never die"),
+        "{text}"
+    );
+    assert!(
+        text.contains("events[1].on: fires on collision, but the group has no colliders"),
+        "{text}"
+    );
+    assert!(text.contains("immortal.ron:6:"), "located: {text}");
+}
+
+#[test]
+fn every_example_group_draws_like_its_cpu_fed_drawing() {
+    // Each group's draw against the reference drawing of the same particles (the criterion of
+    // tests/render.rs's every-example test: within a few 8-bit steps).
+    for path in graph_examples() {
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        let gpu = gpu();
+        let mut sim = GraphInstance::new(&gpu, compile_graph_file(&path)).unwrap();
+        sim.run(100, |_| {}).unwrap();
+        let mut lit_groups = 0;
+        for (g, group) in sim.groups().iter().enumerate() {
+            let (gpu_img, cpu_img) = draw_and_reference(group, 160);
+            // Pixels brighter than the background's darkest corner by 20 levels.
+            let bg = &gpu_img[..4];
+            let lit = gpu_img
+                .chunks(4)
+                .filter(|p| p.iter().zip(bg).any(|(a, b)| a.abs_diff(*b) > 20))
+                .count();
+            lit_groups += usize::from(lit > 20);
+            let (mean, max, over) = differences(&gpu_img, &cpu_img, 2);
+            eprintln!(
+                "{name} group {}: mean {mean:.5}, max {max}, {over} over 2, {lit} pixels lit",
+                sim.names()[g]
+            );
+            assert!(
+                mean < 0.01 && max <= 4 && over * 2000 < gpu_img.len(),
+                "{name} group {g}: GPU and CPU-fed draws differ"
+            );
+        }
+        assert!(
+            lit_groups >= 2,
+            "{name}: only {lit_groups} groups show on screen"
+        );
+    }
+}
