@@ -30,6 +30,10 @@ pub struct BenchArgs {
     /// ranking the adapter runs (subgroup ballots, portable), on 32-bit and 16-bit keys.
     #[arg(long)]
     sort_keys: Option<u32>,
+    /// For an effect with groups and events: steps run before timing (to reach a steady
+    /// state).
+    #[arg(long, default_value_t = 240)]
+    warm_steps: u64,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -83,8 +87,90 @@ fn sort_json(s: &plume_runtime::sort_bench::SortBench) -> serde_json::Value {
     serde_json::Value::Array(times.collect())
 }
 
+/// `plume bench` of an effect with groups and events: its steps with and without events.
+fn bench_graph_command(args: &BenchArgs, name: &str, effect: &plume_compiler::Effect) -> ExitCode {
+    let gpu = match load::gpu(&args.backend) {
+        Ok(g) => g,
+        Err(code) => return code,
+    };
+    if !args.json {
+        eprintln!(
+            "benchmarking {name} scaled to {} slots on {} ...",
+            args.particles,
+            gpu.describe()
+        );
+    }
+    let r = match plume_runtime::graph_bench::bench_graph(
+        &gpu,
+        effect,
+        args.particles,
+        args.warm_steps,
+        args.steps,
+    ) {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("{name}: error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let timing = match r.timing {
+        TimingSource::Timestamps => "gpu timestamps",
+        TimingSource::WallClock => "wall clock (no timestamp queries on this adapter)",
+    };
+    if args.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "effect": name, "adapter": r.adapter, "scale": r.scale, "slots": args.particles,
+                "warm_steps": r.warm_steps, "steps": r.steps, "timing": timing,
+                "groups": r.groups.iter().map(|(n, c, a)| serde_json::json!({"name": n, "capacity": c, "alive": a})).collect::<Vec<_>>(),
+                "ms_per_step": r.seconds_per_step * 1e3,
+                "plain_ms_per_step": r.plain_seconds_per_step * 1e3,
+                "event_ms_per_step": r.event_seconds_per_step() * 1e3,
+                "firings_per_step": r.firings_per_step,
+                "children_per_step": r.children_per_step,
+                "firings_per_second": r.firings_per_second(),
+                "sort_ms": r.sort_seconds.iter().map(|s| s * 1e3).collect::<Vec<_>>(),
+            })
+        );
+        return ExitCode::SUCCESS;
+    }
+    println!("{name}");
+    println!("  adapter             {}", r.adapter);
+    println!("  timing              {timing}");
+    println!(
+        "  scaled              x{:.3} (capacities, bursts and rates), {} warm-up steps",
+        r.scale, r.warm_steps
+    );
+    for (n, cap, alive) in &r.groups {
+        println!("  group {n:<13} {alive} alive of {cap}");
+    }
+    println!("  step with events    {:.4} ms", r.seconds_per_step * 1e3);
+    println!(
+        "  step without        {:.4} ms (the same groups and live particles, no events)",
+        r.plain_seconds_per_step * 1e3
+    );
+    println!(
+        "  events              {:.4} ms/step for {:.1} firings and {:.1} children a step ({:.3e} firings/s)",
+        r.event_seconds_per_step() * 1e3,
+        r.firings_per_step,
+        r.children_per_step,
+        r.firings_per_second()
+    );
+    for (k, s) in r.sort_seconds.iter().enumerate() {
+        println!("  sort of event {k}     {:.4} ms (one per step)", s * 1e3);
+    }
+    ExitCode::SUCCESS
+}
+
 /// Runs `plume bench`.
 pub fn bench_command(args: &BenchArgs) -> ExitCode {
+    if let Some((name, effect)) = load::graph_effect(&args.file) {
+        return match effect {
+            Ok(effect) => bench_graph_command(args, &name, &effect),
+            Err(code) => code,
+        };
+    }
     let (load::Source { name, .. }, effect) = match load::checked(&args.file) {
         Ok(x) => x,
         Err(code) => return code,

@@ -63,6 +63,24 @@ pub fn compiled_graph(
     }
 }
 
+/// For a file with groups or events: its name and the parsed effect, checked to compile as
+/// written (errors printed; Err holds the exit code). None for a file of one group, or one
+/// that does not parse (the single-group path reports that).
+pub fn graph_effect(file: &Path) -> Option<(String, Result<Effect, ExitCode>)> {
+    let src = read(file).ok()?;
+    let mut effect = parse(&src.text).ok()?;
+    plume_compiler::graph::graph_field(&effect)?;
+    effect.base_dir = base_dir(file);
+    let checked = match plume_compiler::graph::compile_graph(&effect, &src.text) {
+        Ok(_) => Ok(effect),
+        Err(e) => {
+            eprintln!("{}", e.render(&src.name, &src.text));
+            Err(ExitCode::FAILURE)
+        }
+    };
+    Some((src.name, checked))
+}
+
 /// Whether a compiled graph is a plain effect (one group, no events).
 pub fn single(graph: &CompiledGraph) -> bool {
     graph.groups.len() == 1 && graph.streams.is_empty()
@@ -82,7 +100,7 @@ pub fn checked(file: &Path) -> Result<(Source, Effect), ExitCode> {
     effect.base_dir = base_dir(file);
     if plume_compiler::graph::graph_field(&effect).is_some() {
         eprintln!(
-            "{}: error: this command does not run effects with groups or events yet (plume check, compile, run and render do)",
+            "{}: error: this command does not run effects with groups or events yet (plume check, compile, run, render, preview and bench do)",
             src.name
         );
         return Err(ExitCode::FAILURE);

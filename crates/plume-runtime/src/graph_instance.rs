@@ -16,6 +16,7 @@ use crate::gpu::Gpu;
 use crate::instance::EffectInstance;
 use crate::resources::{STEPS_PER_SUBMIT, STORAGE};
 use crate::sort::{GpuSorter, SortProgram};
+use crate::timer::{median_after_warmup, PassTimer};
 
 /// One event stream's sort of the parent's keys (parent ids, or none, per parent slot).
 struct StreamSort {
@@ -136,20 +137,28 @@ impl GraphInstance {
                 label: Some("graph steps"),
                 timestamp_writes: None,
             });
-            for j in 0..n as usize {
-                for s in &self.sorts {
-                    s.program.record(&mut pass);
-                    self.groups[s.stream.child].record_event_spawn(
-                        &mut pass,
-                        s.stream.in_slot,
-                        j,
-                    )?;
-                }
-                for (g, group) in self.groups.iter().enumerate() {
-                    group.record_graph_step(&mut pass, &plans[g], j)?;
-                }
-            }
+            self.record_batch(&mut pass, &plans)?;
             done += n;
+        }
+        Ok(())
+    }
+
+    /// Records a planned batch (each group's plans, from `plan_graph_batch`): per step, each
+    /// stream's sort and its child's event spawn, in stream order, then each group's own step.
+    fn record_batch(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        plans: &[Vec<plume_compiler::schedule::StepPlan>],
+    ) -> Result<(), RuntimeError> {
+        let steps = plans.iter().map(Vec::len).max().unwrap_or(0);
+        for j in 0..steps {
+            for s in &self.sorts {
+                s.program.record(pass);
+                self.groups[s.stream.child].record_event_spawn(pass, s.stream.in_slot, j)?;
+            }
+            for (g, group) in self.groups.iter().enumerate() {
+                group.record_graph_step(pass, &plans[g], j)?;
+            }
         }
         Ok(())
     }
@@ -203,5 +212,41 @@ impl GraphInstance {
     /// Steps done so far.
     pub fn steps_done(&self) -> u64 {
         self.groups[0].steps_done()
+    }
+
+    /// Runs `steps` steps (at most [`STEPS_PER_SUBMIT`]) in one timed compute pass; returns
+    /// seconds. The steps' parameters are copied in a submission of their own first.
+    pub fn time_steps(&mut self, timer: &PassTimer<'_>, steps: u32) -> Result<f64, RuntimeError> {
+        let n = u64::from(steps.min(STEPS_PER_SUBMIT));
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let plans = self
+            .groups
+            .iter_mut()
+            .map(|g| g.plan_graph_batch(&mut encoder, n))
+            .collect::<Result<Vec<_>, _>>()?;
+        self.gpu.queue.submit([encoder.finish()]);
+        let seconds = timer.time(|pass| self.record_batch(pass, &plans))?;
+        self.gpu.take_error()?;
+        Ok(seconds)
+    }
+
+    /// Times each stream's sort of its parent's keys alone, in stream order (seconds each,
+    /// the median of `repeats`). The state does not change: the keys are already in order.
+    pub fn time_sorts(
+        &self,
+        timer: &PassTimer<'_>,
+        repeats: u32,
+    ) -> Result<Vec<f64>, RuntimeError> {
+        self.sorts
+            .iter()
+            .map(|s| {
+                median_after_warmup(repeats, || {
+                    timer.time(|pass| {
+                        s.program.record(pass);
+                        Ok(())
+                    })
+                })
+            })
+            .collect()
     }
 }

@@ -33,6 +33,7 @@ pub mod export;
 pub mod flock_pass;
 pub mod glow;
 pub mod gpu;
+pub mod graph_bench;
 pub mod graph_instance;
 pub mod images;
 pub mod instance;

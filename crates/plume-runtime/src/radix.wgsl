@@ -131,6 +131,22 @@ fn rs_scan(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_inde
     }
 }
 
+// The same scan for few partitions, in one workgroup: each thread scans its digit's row
+// alone, with no barrier (on a CPU adapter the 256 workgroups of rs_scan cost more than the
+// whole sort of a few thousand keys).
+@compute @workgroup_size(256)
+fn rs_scan_small(@builtin(local_invocation_index) d: u32) {
+    let parts = params.partitions;
+    let row = d * parts;
+    var run = 0u;
+    for (var p = 0u; p < parts; p++) {
+        let c = pass_hist[row + p];
+        pass_hist[row + p] = run;
+        run += c;
+    }
+    digit_totals[d] = run;
+}
+
 // How many keys partition `part` holds (0 past the last).
 fn partition_len(part: u32) -> u32 {
     if (part >= params.partitions) {

@@ -51,6 +51,7 @@ pub struct GpuSorter {
     ranking: Ranking,
     upsweep: wgpu::ComputePipeline,
     digit_scan: wgpu::ComputePipeline,
+    digit_scan_small: wgpu::ComputePipeline,
     downsweep: wgpu::ComputePipeline,
     scan_blocks: wgpu::ComputePipeline,
     add_sums: wgpu::ComputePipeline,
@@ -62,6 +63,10 @@ const TILE: u64 = 256;
 
 /// Keys per radix partition (radix.wgsl's PART).
 const PARTITION: u64 = 2560;
+
+/// The most partitions whose digit counts one workgroup scans (`rs_scan_small`, a thread a
+/// digit walking its row) instead of one workgroup a digit (`rs_scan`): 81,920 keys.
+const SMALL_SCAN_PARTITIONS: u64 = 32;
 
 /// One recorded dispatch of a sort.
 struct Dispatch {
@@ -152,6 +157,7 @@ impl GpuSorter {
             ranking,
             upsweep: pipeline(&radix, "rs_upsweep"),
             digit_scan: pipeline(&radix, "rs_scan"),
+            digit_scan_small: pipeline(&radix, "rs_scan_small"),
             downsweep: pipeline(&radix, "rs_downsweep"),
             scan_blocks: pipeline(&sort, "scan_blocks"),
             add_sums: pipeline(&sort, "add_sums"),
@@ -293,12 +299,21 @@ impl GpuSorter {
                 &[(0, ki), (4, &counts), (5, &p)],
                 partitions,
             )?;
-            self.dispatch(
-                pass,
-                &self.digit_scan,
-                &[(4, &counts), (5, &p), (6, &totals)],
-                256,
-            )?;
+            if partitions <= SMALL_SCAN_PARTITIONS {
+                self.dispatch(
+                    pass,
+                    &self.digit_scan_small,
+                    &[(4, &counts), (5, &p), (6, &totals)],
+                    1,
+                )?;
+            } else {
+                self.dispatch(
+                    pass,
+                    &self.digit_scan,
+                    &[(4, &counts), (5, &p), (6, &totals)],
+                    256,
+                )?;
+            }
             self.dispatch(
                 pass,
                 &self.downsweep,
