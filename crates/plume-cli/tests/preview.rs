@@ -164,3 +164,57 @@ fn a_glowing_effect_glows_in_the_preview_as_in_plume_render() {
     );
     assert!(sum(&a) > sum(&c), "the glowing image is brighter");
 }
+
+#[test]
+fn an_effect_with_groups_previews_as_plume_render_draws_it() {
+    // Shells that burst into sparks: after 24 steps both groups are on screen, and the
+    // preview's screenshot (one step a frame) is plume render's frame of step 24.
+    let dir = std::env::temp_dir().join(format!("plume-preview-groups-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("shells.ron");
+    std::fs::write(
+        &file,
+        r#"Effect(
+    name: "shells",
+    capacity: 64,
+    emitters: [Emitter(burst: 3, rate: 30.0, shape: Sphere(center: (0.0, 0.5, 0.0), radius: 1.0),
+                       velocity: Constant((0.0, 3.0, 0.0)), lifetime: Some((0.15, 0.25)))],
+    forces: [Gravity((0.0, -9.81, 0.0))],
+    camera: Camera(eye: (0.0, 1.0, 6.0), target: (0.0, 1.0, 0.0), fov_y: 50.0),
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 0.15)], blend: Additive),
+    events: [Event(on: Death, target: "sparks", count: 40, velocity: Radial(speed: (1.0, 2.0)),
+                   lifetime: Some((0.5, 0.8)))],
+    groups: [Group(name: "sparks", capacity: 4000, forces: [Gravity((0.0, -9.81, 0.0))],
+                   render: Render(color: [(0.0, (1.0, 0.6, 0.2, 1.0))], size: [(0.0, 0.06)], blend: Additive))],
+)"#,
+    )
+    .unwrap();
+    let (shot, still) = (dir.join("preview.png"), dir.join("render.png"));
+    let out = xvfb_run()
+        .arg(env!("CARGO_BIN_EXE_plume"))
+        .arg("preview")
+        .arg(&file)
+        .args(["--size", "480x270", "--frames", "24", "--screenshot"])
+        .arg(&shot)
+        .output()
+        .expect("xvfb-run runs");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    render_step_24(&file, &still);
+    let a = image::open(&shot).unwrap().to_rgba8();
+    let b = image::open(&still).unwrap().to_rgba8();
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(a.dimensions(), b.dimensions());
+    let max = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap();
+    assert!(max <= 1, "preview and render differ by up to {max}");
+    // Both groups show: white shells and orange sparks.
+    let white = a.pixels().filter(|p| p[0] > 200 && p[2] > 200).count();
+    let orange = a.pixels().filter(|p| p[0] > 100 && p[2] < p[0] / 2).count();
+    assert!(white > 10 && orange > 10, "white {white}, orange {orange}");
+}

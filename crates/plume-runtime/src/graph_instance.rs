@@ -125,6 +125,20 @@ impl GraphInstance {
         encoder: &mut wgpu::CommandEncoder,
         steps: u64,
     ) -> Result<(), RuntimeError> {
+        self.advance_timed(encoder, steps, None).map(|_| ())
+    }
+
+    /// Like [`Self::advance`], with GPU timestamps: `query_set` gets one at index `first` when
+    /// the steps' first compute pass begins and one at `first + 1` when the last one ends.
+    /// Returns whether any pass was recorded (none when every group is stateless, or for 0
+    /// steps), as [`EffectInstance::advance_timed`] does.
+    pub fn advance_timed(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        steps: u64,
+        timestamps: Option<(&wgpu::QuerySet, u32)>,
+    ) -> Result<bool, RuntimeError> {
+        let gpu_work = self.groups.iter().any(|g| !g.is_stateless());
         let mut done = 0;
         while done < steps {
             let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
@@ -133,14 +147,21 @@ impl GraphInstance {
                 .iter_mut()
                 .map(|g| g.plan_graph_batch(encoder, n))
                 .collect::<Result<Vec<_>, _>>()?;
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("graph steps"),
-                timestamp_writes: None,
-            });
-            self.record_batch(&mut pass, &plans)?;
+            if gpu_work {
+                let writes = timestamps.map(|(set, first)| wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: (done == 0).then_some(first),
+                    end_of_pass_write_index: (done + n == steps).then_some(first + 1),
+                });
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("graph steps"),
+                    timestamp_writes: writes,
+                });
+                self.record_batch(&mut pass, &plans)?;
+            }
             done += n;
         }
-        Ok(())
+        Ok(gpu_work && steps > 0)
     }
 
     /// Records a planned batch (each group's plans, from `plan_graph_batch`): per step, each

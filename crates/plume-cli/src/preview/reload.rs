@@ -11,7 +11,8 @@ use std::time::{Duration, Instant};
 
 use notify_debouncer_mini::notify::{RecommendedWatcher, RecursiveMode};
 use notify_debouncer_mini::{new_debouncer, DebounceEventResult, Debouncer};
-use plume_compiler::{compile_str, CompileOptions, CompiledEffect};
+use plume_compiler::graph::{compile_graph_str, CompiledGraph};
+use plume_compiler::CompileOptions;
 
 /// How long a burst of file events must settle before the file is read (editors write, rename
 /// and touch in quick succession).
@@ -20,8 +21,9 @@ pub const DEBOUNCE: Duration = Duration::from_millis(100);
 /// What a reload found.
 #[derive(Debug)]
 pub enum Outcome {
-    /// The file compiled: this effect now runs, from t = 0. Its warnings come rendered.
-    Replaced(Box<CompiledEffect>, String),
+    /// The file compiled: this effect (its groups) now runs, from t = 0. Its warnings come
+    /// rendered.
+    Replaced(Box<CompiledGraph>, String),
     /// The file has errors, rendered rustc-style; the last good effect keeps running.
     Invalid(String),
     /// The file could not be read; the last good effect keeps running.
@@ -35,7 +37,7 @@ pub struct EffectFile {
     path: PathBuf,
     options: CompileOptions,
     last_text: Option<String>,
-    good: Option<CompiledEffect>,
+    good: Option<CompiledGraph>,
 }
 
 impl EffectFile {
@@ -70,11 +72,12 @@ impl EffectFile {
             return Outcome::Unchanged;
         }
         self.last_text = Some(text.clone());
-        match compile_str(&text, &self.options) {
+        match compile_graph_str(&text, &self.options) {
             Ok(compiled) => {
-                let warnings = match compiled.warnings.is_empty() {
+                let found = compiled.all_warnings();
+                let warnings = match found.is_empty() {
                     true => String::new(),
-                    false => compiled.warnings.render(&self.name(), &text),
+                    false => found.render(&self.name(), &text),
                 };
                 self.good = Some(compiled.clone());
                 Outcome::Replaced(Box::new(compiled), warnings)
@@ -92,7 +95,7 @@ impl EffectFile {
     }
 
     /// The last effect that compiled, if any did.
-    pub fn good(&self) -> Option<&CompiledEffect> {
+    pub fn good(&self) -> Option<&CompiledGraph> {
         self.good.as_ref()
     }
 }
@@ -170,7 +173,7 @@ mod tests {
         std::fs::write(&path, VALID).unwrap();
         let mut file = EffectFile::new(&path, CompileOptions::default());
         assert!(matches!(file.reload(), Outcome::Replaced(..)));
-        assert_eq!(file.good().unwrap().ir.capacity, 100);
+        assert_eq!(file.good().unwrap().groups[0].effect.ir.capacity, 100);
 
         // A touch without a change does nothing.
         assert!(matches!(file.reload(), Outcome::Unchanged));
@@ -178,7 +181,7 @@ mod tests {
         // A valid change replaces the effect.
         std::fs::write(&path, VALID.replace("capacity: 100", "capacity: 200")).unwrap();
         assert!(matches!(file.reload(), Outcome::Replaced(..)));
-        assert_eq!(file.good().unwrap().ir.capacity, 200);
+        assert_eq!(file.good().unwrap().groups[0].effect.ir.capacity, 200);
 
         // An invalid one keeps the last good effect and reports where the error is.
         std::fs::write(&path, VALID.replace("capacity: 100", "capacity: -5")).unwrap();
@@ -189,7 +192,7 @@ mod tests {
             }
             other => panic!("expected errors, got {other:?}"),
         }
-        assert_eq!(file.good().unwrap().ir.capacity, 200);
+        assert_eq!(file.good().unwrap().groups[0].effect.ir.capacity, 200);
 
         // A syntax error too, at its line and column.
         std::fs::write(&path, "Effect(name: \"x\" capacity: 1)").unwrap();
@@ -204,7 +207,7 @@ mod tests {
             Outcome::Unreadable(m) => assert!(m.contains("cannot read"), "{m}"),
             other => panic!("expected a read error, got {other:?}"),
         }
-        assert_eq!(file.good().unwrap().ir.capacity, 200);
+        assert_eq!(file.good().unwrap().groups[0].effect.ir.capacity, 200);
 
         // Written back, it compiles again.
         std::fs::write(&path, VALID).unwrap();

@@ -1,14 +1,15 @@
 //! The preview window: a winit application that owns a wgpu surface and runs the effect through
-//! the embedding API (`EffectInstance::advance_timed`, `prepare_draw`, `EffectRenderer::draw`),
-//! stepping it in real time, reloading it when its file changes, and showing its figures.
+//! the embedding API (`GraphInstance::advance_timed`, each group's `prepare_draw` and
+//! `EffectRenderer::draw`), stepping it in real time, reloading it when its file changes, and
+//! showing its figures.
 
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::time::Instant;
 
-use plume_compiler::CompiledEffect;
+use plume_compiler::graph::CompiledGraph;
 use plume_runtime::offscreen::read_texture;
-use plume_runtime::{DrawTarget, EffectInstance, EffectRenderer, Gpu};
+use plume_runtime::{DrawTarget, EffectInstance, EffectRenderer, Gpu, GraphInstance};
 use winit::application::ApplicationHandler;
 use winit::dpi::{PhysicalPosition, PhysicalSize};
 use winit::event::{ElementState, KeyEvent, MouseButton, MouseScrollDelta, WindowEvent};
@@ -33,10 +34,10 @@ const GREEN: [f32; 4] = [0.5, 0.9, 0.55, 1.0];
 /// The keys, as `--help` and the window list them.
 pub const KEYS: &str = "drag: orbit   right or middle drag: pan   wheel: zoom   space: pause   .: one step   r: restart   [ ]: half / double speed   s: screenshot   h: hide help   esc: quit";
 
-/// The effect running now.
+/// The effect running now: its groups (one for an effect without groups) and their draws.
 struct Loaded {
-    instance: EffectInstance,
-    renderer: EffectRenderer,
+    graph: GraphInstance,
+    renderers: Vec<EffectRenderer>,
     /// What the compiler chose, for the figures.
     about: String,
     /// Its warnings, rendered.
@@ -187,6 +188,13 @@ impl App {
     }
 }
 
+impl Loaded {
+    /// The top-level group: its clock, counters and background are the effect's.
+    fn instance(&self) -> &EffectInstance {
+        &self.graph.groups()[0]
+    }
+}
+
 impl Running {
     /// Reloads the file (`noticed`: when a change was seen; None for the first load).
     fn reload(&mut self, noticed: Option<Instant>) {
@@ -222,30 +230,46 @@ impl Running {
 
     /// Replaces the running effect by `compiled`, from t = 0; the camera stays where the user
     /// put it (it starts as the effect's own).
-    fn load(&mut self, compiled: CompiledEffect, warnings: String) -> Result<(), String> {
-        let about = format!(
+    fn load(&mut self, compiled: CompiledGraph, warnings: String) -> Result<(), String> {
+        let top = &compiled.groups[0].effect.ir;
+        let mut about = format!(
             "{}: integrator {}; {}",
-            compiled.ir.name,
-            compiled.ir.integrator.name(),
-            if compiled.ir.stateless.is_some() {
+            top.name,
+            top.integrator.name(),
+            if top.stateless.is_some() {
                 "stateless (0 bytes of state)"
             } else {
                 "stateful"
             }
         );
-        let dt = compiled.ir.dt;
-        let camera = compiled.ir.camera;
-        let glow = compiled.ir.render.glow;
-        let instance = EffectInstance::new(&self.gpu, compiled).map_err(|e| e.to_string())?;
-        let renderer = instance
-            .renderer(&DrawTarget::new(Scene::draw_format(glow.as_ref())))
+        if compiled.groups.len() > 1 {
+            let names: Vec<&str> = compiled.groups[1..]
+                .iter()
+                .map(|g| g.name.as_str())
+                .collect();
+            about.push_str(&format!(
+                "; groups {} ({} events)",
+                names.join(", "),
+                compiled.streams.len()
+            ));
+        }
+        let dt = top.dt;
+        let camera = top.camera;
+        let glow = top.render.glow;
+        let graph = GraphInstance::new(&self.gpu, compiled).map_err(|e| e.to_string())?;
+        let target = DrawTarget::new(Scene::draw_format(glow.as_ref()));
+        let renderers = graph
+            .groups()
+            .iter()
+            .map(|g| g.renderer(&target))
+            .collect::<Result<Vec<_>, _>>()
             .map_err(|e| e.to_string())?;
         // Last, and all or nothing: the old effect keeps drawing into a matching scene if this
         // fails.
         self.scene.set_glow(&self.gpu, glow)?;
         self.effect = Some(Loaded {
-            instance,
-            renderer,
+            graph,
+            renderers,
             about,
             warnings,
         });
@@ -282,7 +306,7 @@ impl Running {
         let mut counters = None;
         if let Some(loaded) = &mut self.effect {
             let recorded = loaded
-                .instance
+                .graph
                 .advance_timed(&mut encoder, steps, self.probe.step_writes())
                 .map_err(|e| e.to_string())?;
             stepped = recorded.then_some(steps);
@@ -291,11 +315,12 @@ impl Running {
                 .as_ref()
                 .expect("an orbit exists once an effect is loaded")
                 .camera(w as f32 / h.max(1) as f32);
-            loaded
-                .instance
-                .prepare_draw(&mut encoder, &loaded.renderer, &camera)
-                .map_err(|e| e.to_string())?;
-            let bg = loaded.instance.effect().ir.render.background;
+            for (group, renderer) in loaded.graph.groups().iter().zip(&loaded.renderers) {
+                group
+                    .prepare_draw(&mut encoder, renderer, &camera)
+                    .map_err(|e| e.to_string())?;
+            }
+            let bg = loaded.instance().effect().ir.render.background;
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("effect"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
@@ -317,17 +342,16 @@ impl Running {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            loaded.renderer.draw(&mut pass);
+            for renderer in &loaded.renderers {
+                renderer.draw(&mut pass);
+            }
             drop(pass);
             self.scene.finish(&mut encoder);
             drawn = true;
-            counters = loaded.instance.counters().map(|c| {
-                (
-                    c,
-                    loaded.instance.steps_done(),
-                    loaded.instance.effect().ir.capacity,
-                )
-            });
+            let top = loaded.instance();
+            counters = top
+                .counters()
+                .map(|c| (c, top.steps_done(), top.effect().ir.capacity));
         }
         self.probe.record(&mut encoder, stepped, drawn, counters);
         let surface_texture = match self.surface.get_current_texture() {
@@ -424,7 +448,7 @@ impl Running {
     fn panels(&mut self) -> Vec<Panel> {
         let mut lines: Vec<(String, [f32; 4])> = Vec::new();
         if let Some(loaded) = &mut self.effect {
-            let i = &loaded.instance;
+            let i = loaded.instance();
             let state = if self.clock.paused { "  paused" } else { "" };
             lines.push((
                 format!(
@@ -444,9 +468,17 @@ impl Running {
                 None => i.totals().ok(),
             };
             if let Some(t) = totals {
-                lines.push((format!("live {}   dropped {}", t.alive, t.dropped), WHITE));
+                let whose = match loaded.graph.groups().len() {
+                    1 => String::new(),
+                    _ => format!(" ({})", loaded.graph.names()[0]),
+                };
+                lines.push((
+                    format!("live {}   dropped {}{whose}", t.alive, t.dropped),
+                    WHITE,
+                ));
             }
-            let steps = match (i.is_stateless(), self.probe.step_ms) {
+            let stateless = loaded.graph.groups().iter().all(|g| g.is_stateless());
+            let steps = match (stateless, self.probe.step_ms) {
                 (true, _) => "steps: bookkeeping only (stateless: no GPU work)".to_string(),
                 (false, Some(ms)) => format!(
                     "steps {ms:.3} ms GPU ({} in that frame)",
@@ -523,20 +555,16 @@ impl Running {
         let Some(loaded) = &self.effect else {
             return;
         };
-        let one_shot = loaded
-            .instance
-            .effect()
-            .ir
-            .emitters
-            .iter()
-            .all(|e| e.rate <= 0.0);
-        let totals = match loaded.instance.counters() {
+        // With groups, the top group's end is not the effect's (its children live on).
+        let top = loaded.instance();
+        let one_shot = loaded.graph.groups().len() == 1
+            && top.effect().ir.emitters.iter().all(|e| e.rate <= 0.0);
+        let totals = match top.counters() {
             Some(_) => self.probe.totals,
-            None => loaded.instance.totals().ok(),
+            None => top.totals().ok(),
         };
-        let done = one_shot
-            && loaded.instance.steps_done() > 0
-            && totals.is_some_and(|t| t.alive == 0 && t.steps > 0);
+        let done =
+            one_shot && top.steps_done() > 0 && totals.is_some_and(|t| t.alive == 0 && t.steps > 0);
         if !done {
             self.finished_at = None;
             return;
@@ -584,7 +612,7 @@ fn screenshot_path(file: &str, loaded: Option<&Loaded>) -> PathBuf {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "effect".into());
-    let step = loaded.map_or(0, |l| l.instance.steps_done());
+    let step = loaded.map_or(0, |l| l.instance().steps_done());
     PathBuf::from(format!("{stem}-{step:06}.png"))
 }
 
