@@ -280,15 +280,18 @@ pub fn emit_update_reset(w: &mut Writer, events: &[EventIr]) {
     }
 }
 
-/// Emits the firing of every event with trigger `which` by the particle being updated, with
-/// its position `x` and velocity `vel` (WGSL expressions).
-pub fn emit_fire(w: &mut Writer, events: &[EventIr], which: TriggerIr, x: &str, vel: &str) {
+/// Emits the firing of every event whose trigger `fires_here` accepts, by the particle being
+/// updated, with its position `x` and velocity `vel` (WGSL expressions). An `Every` event's
+/// firing is guarded by its period.
+pub fn emit_fire(
+    w: &mut Writer,
+    events: &[EventIr],
+    fires_here: impl Fn(TriggerIr) -> bool,
+    x: &str,
+    vel: &str,
+) {
     for (j, e) in events.iter().enumerate() {
-        let same = match (e.trigger, which) {
-            (TriggerIr::Every(_), TriggerIr::Every(_)) => true,
-            (a, b) => a == b,
-        };
-        if !same {
+        if !fires_here(e.trigger) {
             continue;
         }
         let body = |w: &mut Writer| {

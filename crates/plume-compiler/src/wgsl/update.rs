@@ -136,10 +136,16 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     };
     if collide_events && !ir.colliders.is_empty() {
         w.block("if (collided)", |w| {
-            crate::events::emit_fire(w, &ir.events, TriggerIr::Collide, "x", &vel)
+            crate::events::emit_fire(w, &ir.events, |t| t == TriggerIr::Collide, "x", &vel)
         });
     }
-    crate::events::emit_fire(w, &ir.events, TriggerIr::Every(1), "x", &vel);
+    crate::events::emit_fire(
+        w,
+        &ir.events,
+        |t| matches!(t, TriggerIr::Every(_)),
+        "x",
+        &vel,
+    );
     // Only effects with lifetimes or kill volumes get the death code.
     if lifetimes || !ir.kills.is_empty() {
         w.line("var dies = false;");
@@ -150,7 +156,7 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             emit_kill(w, k);
         }
         w.block("if (dies)", |w| {
-            crate::events::emit_fire(w, &ir.events, TriggerIr::Death, "x", &vel);
+            crate::events::emit_fire(w, &ir.events, |t| t == TriggerIr::Death, "x", &vel);
             w.line("mark_staged_free(lane);");
             w.line("let top = atomicAdd(&counters.free_count, 1u);");
             w.line("free_list[top] = chunk.base + i;");
