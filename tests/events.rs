@@ -291,3 +291,30 @@ fn every_example_group_draws_like_its_cpu_fed_drawing() {
         );
     }
 }
+
+#[test]
+fn groups_split_into_chunks_run_as_one_buffer_does() {
+    // Every group's particles split into buffers of 37 slots: the parents' records are indexed
+    // by global slot and each chunk spawns only the children whose slots it holds.
+    let g = graph(SMALL_FIREWORKS);
+    let gpu = gpu();
+    let run = |chunk: Option<u64>| {
+        let mut sim = GraphInstance::with_chunk_slots(&gpu, g.clone(), chunk).unwrap();
+        sim.run(40, |_| {}).unwrap();
+        assert_eq!(sim.groups()[2].chunk_count() > 1, chunk.is_some());
+        (0..3)
+            .map(|k| (sim.totals(k).unwrap(), sim.records(k).unwrap()))
+            .collect::<Vec<_>>()
+    };
+    let (whole, split) = (run(None), run(Some(37)));
+    for (k, (a, b)) in whole.iter().zip(&split).enumerate() {
+        assert_eq!(a.0, b.0, "group {k}: totals differ");
+        let ids = |r: &[ParticleRecord]| r.iter().map(|p| p.id).collect::<Vec<_>>();
+        assert_eq!(ids(&a.1), ids(&b.1), "group {k}: live ids differ");
+        for (p, q) in a.1.iter().zip(&b.1) {
+            // The same kernels on the same values: the same f32 results.
+            assert_eq!(p.position, q.position, "group {k} particle {}", p.id);
+        }
+    }
+    assert!(whole[2].1.len() > 37, "embers fill more than one chunk");
+}

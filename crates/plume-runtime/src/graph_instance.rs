@@ -65,11 +65,35 @@ pub struct GraphInstance {
 impl GraphInstance {
     /// Allocates every group's buffers and the event streams' on `gpu`, and builds the kernels.
     pub fn new(gpu: &Gpu, graph: CompiledGraph) -> Result<Self, RuntimeError> {
+        Self::with_chunk_slots(gpu, graph, None)
+    }
+
+    /// Like [`Self::new`] with at most `max_chunk_slots` particles per buffer in every group
+    /// (tests use it to exercise the split on small effects).
+    pub fn with_chunk_slots(
+        gpu: &Gpu,
+        graph: CompiledGraph,
+        max_chunk_slots: Option<u64>,
+    ) -> Result<Self, RuntimeError> {
         let mut shared: Vec<Vec<(u32, wgpu::Buffer)>> = vec![Vec::new(); graph.groups.len()];
         let sorter = GpuSorter::new(gpu);
         let mut sorts = Vec::new();
+        let limit = gpu
+            .limits
+            .max_storage_buffer_binding_size
+            .min(gpu.limits.max_buffer_size);
         for s in &graph.streams {
             let parent = u64::from(graph.groups[s.parent].effect.ir.capacity);
+            // A stream's records are one binding of 32 bytes a parent slot (not split into
+            // chunks as particles are): that bounds a firing group's capacity.
+            let bytes = RECORDS_HEADER_BYTES + parent * RECORD_BYTES;
+            if bytes > limit {
+                return Err(RuntimeError::Output(format!(
+                    "group {:?} fires events: their records take {bytes} bytes, more than the adapter's {limit}-byte binding; a group that fires events holds at most {} particles here",
+                    graph.groups[s.parent].name,
+                    (limit - RECORDS_HEADER_BYTES) / RECORD_BYTES
+                )));
+            }
             let buffer = |label: &str, size: u64| {
                 gpu.device.create_buffer(&wgpu::BufferDescriptor {
                     label: Some(label),
@@ -104,7 +128,7 @@ impl GraphInstance {
             groups.push(EffectInstance::with_shared(
                 gpu,
                 group.effect,
-                None,
+                max_chunk_slots,
                 &shared[g],
             )?);
         }
