@@ -318,3 +318,30 @@ fn groups_split_into_chunks_run_as_one_buffer_does() {
     }
     assert!(whole[2].1.len() > 37, "embers fill more than one chunk");
 }
+
+#[test]
+fn many_firings_at_once_are_sorted_and_few_are_counted_in_the_same_order() {
+    // 10,000 parents (more than event_order::RANK_MAX = 8,192 slots, so their firings are
+    // ranked or sorted as each step's count decides): at step 9 all die at once (10,000
+    // firings: the radix sort), and a stream of 200 a second dies a few a step (counted).
+    // Both give the reference's children.
+    let src = r#"Effect(
+        name: "crowd",
+        capacity: 10000,
+        dt: 0.01,
+        emitters: [
+            Emitter(burst: 9000, shape: Box(min: (-5.0, 0.0, -5.0), max: (5.0, 1.0, 5.0)),
+                    velocity: Cone(axis: (0.0, 1.0, 0.0), angle: 30.0, speed: (1.0, 2.0)), lifetime: Some((0.1, 0.1))),
+            Emitter(rate: 200.0, shape: Sphere(center: (0.0, 3.0, 0.0), radius: 1.0),
+                    velocity: Radial(speed: (0.5, 1.0)), lifetime: Some((0.05, 0.2))),
+        ],
+        forces: [Gravity((0.0, -9.81, 0.0))],
+        events: [Event(on: Death, target: "children", count: 1, velocity: Radial(speed: (0.5, 1.0)), lifetime: Some((0.3, 0.3)))],
+        groups: [Group(name: "children", capacity: 12000, forces: [Gravity((0.0, -9.81, 0.0))])],
+    )"#;
+    assert!(plume::runtime::event_order::RANK_MAX < 9000);
+    let g = graph(src);
+    let sim = compare_runs("crowd", &g, &[9, 11, 30]);
+    let t = sim.totals(1).unwrap();
+    assert!(t.spawned > 9000, "the burst's children: {t:?}");
+}

@@ -4,10 +4,10 @@
 //!
 //! The contract (docs/effect-format.md, "Groups and events"): the parent's update of step k
 //! decides, per particle, whether an event fires (death, a collision during the step, or the
-//! end of every `Every` period of its life) and records the particle's position and velocity
-//! at the end of the step, in the parent's slot. At the start of step k + 1, before any group
-//! updates, the records are ordered by parent id (a stable radix sort of one key per parent
-//! slot), and the child group spawns `count` particles per record in that order: child ids
+//! end of every `Every` period of its life), appends its (id, slot) and records its position
+//! and velocity at the end of the step in its slot. At the start of step k + 1, before any
+//! group updates, the runtime puts the firing slots in id order (the order is the ids', not
+//! the threads'), and the child group spawns `count` particles per firing in that order: child ids
 //! are handed out consecutively (first id + rank · count + c), and when the child group lacks
 //! room, the last ones in that order are dropped and counted. Nothing depends on which slots
 //! the GPU had free, so two runs give the same particles.
@@ -24,9 +24,6 @@ pub const MAX_EVENTS: usize = 4;
 
 /// The most particles one event may spawn per firing particle.
 pub const MAX_COUNT: u32 = 65_536;
-
-/// Key of a parent slot that fired nothing this step: sorts after every id.
-pub const NO_EVENT: u32 = u32::MAX;
 
 /// When a particle fires an event.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -162,8 +159,8 @@ pub const RECORD_BYTES: u64 = 32;
 /// Bytes before the records: the count of records this step, padded to 16.
 pub const RECORDS_HEADER_BYTES: u64 = 16;
 
-/// Binding of the keys (parent id or [`NO_EVENT`], one per parent slot) of the `j`-th event a
-/// group fires; the values (parent slots) and the records follow it.
+/// Binding of the keys (the firing particles' ids, appended) of the `j`-th event a group fires;
+/// the values (their slots) and the records follow it.
 pub fn out_binding(j: usize) -> u32 {
     48 + 3 * j as u32
 }
@@ -187,14 +184,14 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
                 name: OUT_KEYS[j],
                 space: "storage, read_write",
                 bytes: cap * 4,
-                meaning: "per slot: the particle's id if it fired this event in the last update, else 0xffffffff (the sort key)",
+                meaning: "the ids of the particles that fired this event in the last update, appended (the first `count`)",
             },
             Binding {
                 binding: out_binding(j) + 1,
                 name: OUT_VALS[j],
                 space: "storage, read_write",
                 bytes: cap * 4,
-                meaning: "per slot: the slot itself (the sort's values: after it, the firing slots in id order)",
+                meaning: "the slot of each id in event_keys, appended with it",
             },
             Binding {
                 binding: out_binding(j) + 2,
@@ -214,7 +211,7 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
                 space: "storage, read_write",
                 bytes: parent * 4,
                 meaning:
-                    "the parent group's firing slots in parent id order (its sorted event values)",
+                    "the parent group's firing slots in parent id order (ordered by the runtime at the step's start)",
             },
             Binding {
                 binding: in_binding(j) + 1,
@@ -267,19 +264,6 @@ pub fn emit_declarations(w: &mut Writer) {
     });
 }
 
-/// Emits, at the top of the update of slot `chunk.base + i`, the reset of each event's key and
-/// value (every slot, live or free, so the sort sees only this step's firings).
-pub fn emit_update_reset(w: &mut Writer, events: &[EventIr]) {
-    for j in 0..events.len() {
-        w.line(format!(
-            "{}[chunk.base + i] = {};",
-            OUT_KEYS[j],
-            u32_lit(NO_EVENT)
-        ));
-        w.line(format!("{}[chunk.base + i] = chunk.base + i;", OUT_VALS[j]));
-    }
-}
-
 /// Emits the firing of every event whose trigger `fires_here` accepts, by the particle being
 /// updated, with its position `x` and velocity `vel` (WGSL expressions). An `Every` event's
 /// firing is guarded by its period.
@@ -294,13 +278,18 @@ pub fn emit_fire(
         if !fires_here(e.trigger) {
             continue;
         }
+        // Appended in whatever order threads run: the runtime puts them in id order.
         let body = |w: &mut Writer| {
-            w.line(format!("{}[chunk.base + i] = p.id;", OUT_KEYS[j]));
+            w.line(format!(
+                "let at_{j} = atomicAdd(&{}.count, 1u);",
+                OUT_RECORDS[j]
+            ));
+            w.line(format!("{}[at_{j}] = p.id;", OUT_KEYS[j]));
+            w.line(format!("{}[at_{j}] = chunk.base + i;", OUT_VALS[j]));
             w.line(format!(
                 "{}.records[chunk.base + i] = EventRecord(vec4<f32>({x}, 0.0), vec4<f32>({vel}, 0.0));",
                 OUT_RECORDS[j]
             ));
-            w.line(format!("atomicAdd(&{}.count, 1u);", OUT_RECORDS[j]));
         };
         match e.trigger {
             TriggerIr::Every(period) => w.block(

@@ -35,8 +35,9 @@ pub struct GraphBench {
     pub firings_per_step: f64,
     /// Children requested per step (spawned or dropped).
     pub children_per_step: f64,
-    /// Seconds of each stream's sort alone, in stream order.
-    pub sort_seconds: Vec<f64>,
+    /// Seconds of each stream's ordering of its firings alone (the last step's), in stream
+    /// order.
+    pub order_seconds: Vec<f64>,
     /// Timestamps or wall clock.
     pub timing: TimingSource,
 }
@@ -140,7 +141,7 @@ pub fn bench_graph(
         children += n;
         firings += n / (per_firing[g].0 as f64 / per_firing[g].1 as f64);
     }
-    let sort_seconds = sim.time_sorts(&timer, repeats)?;
+    let order_seconds = sim.time_orders(&timer, repeats)?;
     let mut groups = Vec::new();
     for (g, name) in names.iter().enumerate() {
         let cap = sim.groups()[g].effect().ir.capacity;
@@ -169,7 +170,7 @@ pub fn bench_graph(
         plain_seconds_per_step,
         firings_per_step: firings / timed_steps,
         children_per_step: children / timed_steps,
-        sort_seconds,
+        order_seconds,
         timing: timer.source(),
     })
 }

@@ -12,16 +12,17 @@ use plume_compiler::graph::{CompiledGraph, Stream};
 use plume_compiler::reference::{ParticleRecord, Totals};
 
 use crate::error::RuntimeError;
+use crate::event_order::EventOrder;
 use crate::gpu::Gpu;
 use crate::instance::EffectInstance;
 use crate::resources::{STEPS_PER_SUBMIT, STORAGE};
-use crate::sort::{GpuSorter, SortProgram};
+use crate::sort::GpuSorter;
 use crate::timer::{median_after_warmup, PassTimer};
 
-/// One event stream's sort of the parent's keys (parent ids, or none, per parent slot).
-struct StreamSort {
+/// One event stream and the ordering of its firings.
+struct StreamOrder {
     stream: Stream,
-    program: SortProgram,
+    order: EventOrder,
 }
 
 /// An effect of one or more groups running on a GPU.
@@ -59,7 +60,7 @@ pub struct GraphInstance {
     gpu: Gpu,
     names: Vec<String>,
     groups: Vec<EffectInstance>,
-    sorts: Vec<StreamSort>,
+    sorts: Vec<StreamOrder>,
 }
 
 impl GraphInstance {
@@ -104,6 +105,7 @@ impl GraphInstance {
             };
             let keys = buffer("event keys", parent * 4);
             let vals = buffer("event slots", parent * 4);
+            let order = buffer("event order", parent * 4);
             let records = buffer(
                 "event records",
                 RECORDS_HEADER_BYTES + parent * RECORD_BYTES,
@@ -115,10 +117,10 @@ impl GraphInstance {
                 (at + 2, records.clone()),
             ]);
             let at = in_binding(s.in_slot);
-            shared[s.child].extend([(at, vals.clone()), (at + 1, records)]);
-            sorts.push(StreamSort {
+            shared[s.child].extend([(at, order.clone()), (at + 1, records.clone())]);
+            sorts.push(StreamOrder {
                 stream: s.clone(),
-                program: sorter.radix_program(&keys, &vals, parent, 32)?,
+                order: EventOrder::new(gpu, &sorter, parent, &keys, &vals, &records, &order)?,
             });
         }
         let mut names = Vec::new();
@@ -198,7 +200,7 @@ impl GraphInstance {
         let steps = plans.iter().map(Vec::len).max().unwrap_or(0);
         for j in 0..steps {
             for s in &self.sorts {
-                s.program.record(pass);
+                s.order.record(pass);
                 self.groups[s.stream.child].record_event_spawn(pass, s.stream.in_slot, j)?;
             }
             for (g, group) in self.groups.iter().enumerate() {
@@ -275,9 +277,10 @@ impl GraphInstance {
         Ok(seconds)
     }
 
-    /// Times each stream's sort of its parent's keys alone, in stream order (seconds each,
-    /// the median of `repeats`). The state does not change: the keys are already in order.
-    pub fn time_sorts(
+    /// Times each stream's ordering of the last step's firings alone, in stream order
+    /// (seconds each, the median of `repeats`). The state does not change: it orders the
+    /// same firings again.
+    pub fn time_orders(
         &self,
         timer: &PassTimer<'_>,
         repeats: u32,
@@ -287,7 +290,7 @@ impl GraphInstance {
             .map(|s| {
                 median_after_warmup(repeats, || {
                     timer.time(|pass| {
-                        s.program.record(pass);
+                        s.order.record(pass);
                         Ok(())
                     })
                 })

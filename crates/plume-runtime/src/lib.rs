@@ -29,6 +29,7 @@ pub mod draw;
 pub mod draw_pipeline;
 pub mod draw_target;
 pub mod error;
+pub mod event_order;
 pub mod export;
 pub mod flock_pass;
 pub mod glow;
