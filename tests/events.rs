@@ -320,17 +320,24 @@ fn groups_split_into_chunks_run_as_one_buffer_does() {
 }
 
 #[test]
-fn many_firings_at_once_are_sorted_and_few_are_counted_in_the_same_order() {
-    // 10,000 parents (more than event_order::RANK_MAX = 8,192 slots, so their firings are
-    // ranked or sorted as each step's count decides): at step 9 all die at once (10,000
-    // firings: the radix sort), and a stream of 200 a second dies a few a step (counted).
-    // Both give the reference's children.
-    let src = r#"Effect(
+fn firings_counted_or_sorted_spawn_the_reference_children_when_thousands_fire_at_once() {
+    // A group of up to COUNTED_MAX slots has its firings counted into order; a larger one sorts
+    // a key per slot. Each here fires thousands at once (a burst whose lifetimes all end at
+    // step 9: counting's worst case, every slot firing) and a few a step after (a stream of
+    // 200 a second), and gives the reference's children.
+    use plume::compiler::events::{Ordering, COUNTED_MAX};
+    for (capacity, ordering) in [
+        (COUNTED_MAX, Ordering::Counted),
+        (COUNTED_MAX + 2000, Ordering::Sorted),
+    ] {
+        let burst = capacity - 200;
+        let src = format!(
+            r#"Effect(
         name: "crowd",
-        capacity: 10000,
+        capacity: {capacity},
         dt: 0.01,
         emitters: [
-            Emitter(burst: 9000, shape: Box(min: (-5.0, 0.0, -5.0), max: (5.0, 1.0, 5.0)),
+            Emitter(burst: {burst}, shape: Box(min: (-5.0, 0.0, -5.0), max: (5.0, 1.0, 5.0)),
                     velocity: Cone(axis: (0.0, 1.0, 0.0), angle: 30.0, speed: (1.0, 2.0)), lifetime: Some((0.1, 0.1))),
             Emitter(rate: 200.0, shape: Sphere(center: (0.0, 3.0, 0.0), radius: 1.0),
                     velocity: Radial(speed: (0.5, 1.0)), lifetime: Some((0.05, 0.2))),
@@ -338,10 +345,15 @@ fn many_firings_at_once_are_sorted_and_few_are_counted_in_the_same_order() {
         forces: [Gravity((0.0, -9.81, 0.0))],
         events: [Event(on: Death, target: "children", count: 1, velocity: Radial(speed: (0.5, 1.0)), lifetime: Some((0.3, 0.3)))],
         groups: [Group(name: "children", capacity: 12000, forces: [Gravity((0.0, -9.81, 0.0))])],
-    )"#;
-    const { assert!(plume::runtime::event_order::RANK_MAX < 9000) };
-    let g = graph(src);
-    let sim = compare_runs("crowd", &g, &[9, 11, 30]);
-    let t = sim.totals(1).unwrap();
-    assert!(t.spawned > 9000, "the burst's children: {t:?}");
+    )"#
+        );
+        let g = graph(&src);
+        assert_eq!(g.streams[0].ordering, ordering);
+        let sim = compare_runs(&format!("{ordering:?}"), &g, &[9, 11, 30]);
+        let t = sim.totals(1).unwrap();
+        assert!(
+            u64::from(burst) < t.spawned,
+            "{ordering:?}: the burst's children: {t:?}"
+        );
+    }
 }

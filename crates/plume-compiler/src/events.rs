@@ -4,10 +4,11 @@
 //!
 //! The contract (docs/effect-format.md, "Groups and events"): the parent's update of step k
 //! decides, per particle, whether an event fires (death, a collision during the step, or the
-//! end of every `Every` period of its life), appends its (id, slot) and records its position
-//! and velocity at the end of the step in its slot. At the start of step k + 1, before any
-//! group updates, the runtime puts the firing slots in id order (the order is the ids', not
-//! the threads'), and the child group spawns `count` particles per firing in that order: child ids
+//! end of every `Every` period of its life), notes its id and slot ([`Ordering`]: appended,
+//! or a key per slot) and records its position and velocity at the end of the step in its
+//! slot. At the start of step k + 1, before any group updates, the runtime puts the firing
+//! slots in id order (the order is the ids', not the threads'), and the child group spawns
+//! `count` particles per firing in that order: child ids
 //! are handed out consecutively (first id + rank · count + c), and when the child group lacks
 //! room, the last ones in that order are dropped and counted. Nothing depends on which slots
 //! the GPU had free, so two runs give the same particles.
@@ -106,11 +107,43 @@ impl TriggerIr {
     }
 }
 
+/// The most slots a firing group may have for its firings to be put in order by counting: each
+/// firing counts the firings with smaller ids, one dispatch, at most 8,192² comparisons a step.
+/// Larger groups sort one key per slot with the radix sort, whose dozen dispatches cost more
+/// than counting a few thousand firings (docs/performance.md, "Events").
+pub const COUNTED_MAX: u32 = 8192;
+
+/// How a stream's firings are put in parent id order at the step's start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ordering {
+    /// The update appends (id, slot) per firing; the runtime ranks them by counting.
+    Counted,
+    /// The update writes a key (the id, or none) and a value (the slot) for every slot; the
+    /// runtime radix-sorts them, which leaves the firing slots first, in id order.
+    Sorted,
+}
+
+impl Ordering {
+    /// The ordering of the events of a firing group of `capacity` slots.
+    pub fn for_capacity(capacity: u32) -> Self {
+        if capacity <= COUNTED_MAX {
+            Ordering::Counted
+        } else {
+            Ordering::Sorted
+        }
+    }
+}
+
+/// The key of a slot that fired nothing this step ([`Ordering::Sorted`]): sorts after every id.
+pub const NO_EVENT: u32 = u32::MAX;
+
 /// An event this group fires.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EventIr {
     /// What fires it.
     pub trigger: TriggerIr,
+    /// How its firings are put in order.
+    pub ordering: Ordering,
     /// The index of the target group.
     pub target: usize,
     /// The event's index among every event of the effect (the order children are spawned in).
@@ -184,14 +217,20 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
                 name: OUT_KEYS[j],
                 space: "storage, read_write",
                 bytes: cap * 4,
-                meaning: "the ids of the particles that fired this event in the last update, appended (the first `count`)",
+                meaning: match events[j].ordering {
+                    Ordering::Counted => "the ids of the particles that fired this event in the last update, appended (the first `count`)",
+                    Ordering::Sorted => "per slot: the particle's id if it fired this event in the last update, else 0xffffffff (the sort key)",
+                },
             },
             Binding {
                 binding: out_binding(j) + 1,
                 name: OUT_VALS[j],
                 space: "storage, read_write",
                 bytes: cap * 4,
-                meaning: "the slot of each id in event_keys, appended with it",
+                meaning: match events[j].ordering {
+                    Ordering::Counted => "the slot of each id in event_keys, appended with it",
+                    Ordering::Sorted => "per slot: the slot itself (the sort's values: after it, the firing slots in id order)",
+                },
             },
             Binding {
                 binding: out_binding(j) + 2,
@@ -264,6 +303,22 @@ pub fn emit_declarations(w: &mut Writer) {
     });
 }
 
+/// Emits, at the top of the update of slot `chunk.base + i`, the reset of the key and value of
+/// each [`Ordering::Sorted`] event (every slot, live or free, so the sort sees only this step's
+/// firings).
+pub fn emit_update_reset(w: &mut Writer, events: &[EventIr]) {
+    for (j, e) in events.iter().enumerate() {
+        if e.ordering == Ordering::Sorted {
+            w.line(format!(
+                "{}[chunk.base + i] = {};",
+                OUT_KEYS[j],
+                u32_lit(NO_EVENT)
+            ));
+            w.line(format!("{}[chunk.base + i] = chunk.base + i;", OUT_VALS[j]));
+        }
+    }
+}
+
 /// Emits the firing of every event whose trigger `fires_here` accepts, by the particle being
 /// updated, with its position `x` and velocity `vel` (WGSL expressions). An `Every` event's
 /// firing is guarded by its period.
@@ -278,14 +333,24 @@ pub fn emit_fire(
         if !fires_here(e.trigger) {
             continue;
         }
-        // Appended in whatever order threads run: the runtime puts them in id order.
+        let ordering = e.ordering;
         let body = |w: &mut Writer| {
-            w.line(format!(
-                "let at_{j} = atomicAdd(&{}.count, 1u);",
-                OUT_RECORDS[j]
-            ));
-            w.line(format!("{}[at_{j}] = p.id;", OUT_KEYS[j]));
-            w.line(format!("{}[at_{j}] = chunk.base + i;", OUT_VALS[j]));
+            match ordering {
+                // Appended in whatever order threads run: the runtime counts them into order.
+                Ordering::Counted => {
+                    w.line(format!(
+                        "let at_{j} = atomicAdd(&{}.count, 1u);",
+                        OUT_RECORDS[j]
+                    ));
+                    w.line(format!("{}[at_{j}] = p.id;", OUT_KEYS[j]));
+                    w.line(format!("{}[at_{j}] = chunk.base + i;", OUT_VALS[j]));
+                }
+                // The slot's key (reset at the update's start) becomes the id.
+                Ordering::Sorted => {
+                    w.line(format!("{}[chunk.base + i] = p.id;", OUT_KEYS[j]));
+                    w.line(format!("atomicAdd(&{}.count, 1u);", OUT_RECORDS[j]));
+                }
+            }
             w.line(format!(
                 "{}.records[chunk.base + i] = EventRecord(vec4<f32>({x}, 0.0), vec4<f32>({vel}, 0.0));",
                 OUT_RECORDS[j]

@@ -9,7 +9,9 @@ use serde::Deserialize;
 
 use crate::check::Checker;
 use crate::diagnostics::{Diagnostic, Diagnostics};
-use crate::events::{Event, EventInputIr, EventIr, Trigger, TriggerIr, MAX_COUNT, MAX_EVENTS};
+use crate::events::{
+    Event, EventInputIr, EventIr, Ordering, Trigger, TriggerIr, MAX_COUNT, MAX_EVENTS,
+};
 use crate::forces::Force;
 use crate::locate::SourceMap;
 use crate::path::ValuePath;
@@ -66,6 +68,8 @@ pub struct Group {
 /// One event stream between two groups.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Stream {
+    /// How its firings are put in order (by the firing group's capacity).
+    pub ordering: Ordering,
     /// The firing group.
     pub parent: usize,
     /// The event's index among the parent's events (its bindings there).
@@ -258,6 +262,7 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
         };
         links[stream.parent].events.push(EventIr {
             trigger,
+            ordering: Ordering::for_capacity(effects[stream.parent].capacity),
             target: stream.child,
             stream: s,
         });
@@ -380,6 +385,7 @@ fn check_graph(effects: &[Effect]) -> (Vec<Stream>, Checker, Vec<(Diagnostic, St
             }
             warnings.extend(never_fires(&path, ev, e));
             streams.push(Stream {
+                ordering: Ordering::for_capacity(e.capacity),
                 parent: g,
                 out_slot: j,
                 child: target,
@@ -583,6 +589,7 @@ mod tests {
 
     fn stream(parent: usize, child: usize) -> Stream {
         Stream {
+            ordering: Ordering::Counted,
             parent,
             out_slot: 0,
             child,

@@ -546,8 +546,8 @@ impl fmt::Display for EffectIr {
         for e in &self.events {
             writeln!(
                 f,
-                "  fires event {} on {:?} into group {}",
-                e.stream, e.trigger, e.target
+                "  fires event {} on {:?} into group {} (firings {:?})",
+                e.stream, e.trigger, e.target, e.ordering
             )?;
         }
         for e in &self.event_inputs {

@@ -49,6 +49,8 @@ pub struct Gpu {
 pub fn instance(backends: wgpu::Backends) -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = backends;
+    // wgpu's own switches (WGPU_VALIDATION, WGPU_VALIDATION_INDIRECT_CALL, ...) apply.
+    desc.flags = desc.flags.with_env();
     wgpu::Instance::new(desc)
 }
 

@@ -7,7 +7,9 @@
 //! stream is recorded into one compute pass per batch of steps: nothing is read back between
 //! steps.
 
-use plume_compiler::events::{in_binding, out_binding, RECORDS_HEADER_BYTES, RECORD_BYTES};
+use plume_compiler::events::{
+    in_binding, out_binding, Ordering, RECORDS_HEADER_BYTES, RECORD_BYTES,
+};
 use plume_compiler::graph::{CompiledGraph, Stream};
 use plume_compiler::reference::{ParticleRecord, Totals};
 
@@ -105,7 +107,12 @@ impl GraphInstance {
             };
             let keys = buffer("event keys", parent * 4);
             let vals = buffer("event slots", parent * 4);
-            let order = buffer("event order", parent * 4);
+            // Where the child reads the firing slots in id order: counted into a buffer of
+            // their own, or first in the sorted values.
+            let order = match s.ordering {
+                Ordering::Counted => buffer("event order", parent * 4),
+                Ordering::Sorted => vals.clone(),
+            };
             let records = buffer(
                 "event records",
                 RECORDS_HEADER_BYTES + parent * RECORD_BYTES,
@@ -120,7 +127,14 @@ impl GraphInstance {
             shared[s.child].extend([(at, order.clone()), (at + 1, records.clone())]);
             sorts.push(StreamOrder {
                 stream: s.clone(),
-                order: EventOrder::new(gpu, &sorter, parent, &keys, &vals, &records, &order)?,
+                order: EventOrder::new(
+                    gpu,
+                    &sorter,
+                    s.ordering,
+                    parent,
+                    (&keys, &vals, &records),
+                    &order,
+                )?,
             });
         }
         let mut names = Vec::new();

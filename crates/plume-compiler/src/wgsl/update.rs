@@ -35,6 +35,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.comment("One particle's update on its staged words; true when they changed.");
     w.block("fn update_particle(i: u32, lane: u32) -> bool", |w| {
         w.block("if (i >= chunk.len)", |w| w.line("return false;"));
+        crate::events::emit_update_reset(w, &ir.events);
         w.line("var p = load_staged(lane);");
         emit_body(w, ir, layout);
     });
