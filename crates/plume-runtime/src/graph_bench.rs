@@ -2,8 +2,8 @@
 //! to about N slots (every group's capacity and the spawning groups' bursts and rates by the
 //! same factor), run to its steady state, and its steps timed; then the same groups with the
 //! same live particles and no events (each filled by one burst that never dies) are timed in
-//! the same run. The difference is the events' cost: the parents' records, the sorts, the
-//! children's spawns. Each stream's sort is also timed alone.
+//! the same run. The difference is the events' cost: the parents' records, the ordering of
+//! their firings, the children's spawns. Each stream's ordering is also timed alone.
 
 use plume_compiler::graph::{compile_graph, group_effects, CompiledGraph, CompiledGroup};
 use plume_compiler::schema::{Effect, Emitter, Shape, Vec3, Velocity};
@@ -31,7 +31,7 @@ pub struct GraphBench {
     pub seconds_per_step: f64,
     /// Seconds per step of the same groups with the same live particles and no events.
     pub plain_seconds_per_step: f64,
-    /// Firings per step during the timed steps (records sorted and turned into children).
+    /// Firings per step during the timed steps (records put in order and turned into children).
     pub firings_per_step: f64,
     /// Children requested per step (spawned or dropped).
     pub children_per_step: f64,

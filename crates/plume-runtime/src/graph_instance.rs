@@ -1,11 +1,10 @@
 //! An effect graph running on a device: one [`EffectInstance`] per group, and the event
-//! streams between them (plume_compiler::events has the contract). Each stream owns three
-//! buffers that both groups bind: the parent writes a key (its id, or none) and a value (its
-//! slot) per slot and a record per firing; at the start of the next step the keys are sorted
-//! with the radix sort (crate::sort), and the child's `event_prepare` and `event_spawn` turn
-//! the firings, in parent id order, into particles. Every step of every group and every
-//! stream is recorded into one compute pass per batch of steps: nothing is read back between
-//! steps.
+//! streams between them (plume_compiler::events has the contract). Each stream owns buffers
+//! that both groups bind: the firing group notes each firing's id and slot and writes its
+//! record in the slot; at the start of the next step crate::event_order puts the firing slots
+//! in id order, and the child's `event_prepare` and `event_spawn` turn them, in that order,
+//! into particles. Every step of every group and every stream is recorded into one compute
+//! pass per batch of steps: nothing is read back between steps.
 
 use plume_compiler::events::{
     in_binding, out_binding, Ordering, RECORDS_HEADER_BYTES, RECORD_BYTES,
@@ -62,7 +61,7 @@ pub struct GraphInstance {
     gpu: Gpu,
     names: Vec<String>,
     groups: Vec<EffectInstance>,
-    sorts: Vec<StreamOrder>,
+    orders: Vec<StreamOrder>,
 }
 
 impl GraphInstance {
@@ -80,7 +79,7 @@ impl GraphInstance {
     ) -> Result<Self, RuntimeError> {
         let mut shared: Vec<Vec<(u32, wgpu::Buffer)>> = vec![Vec::new(); graph.groups.len()];
         let sorter = GpuSorter::new(gpu);
-        let mut sorts = Vec::new();
+        let mut orders = Vec::new();
         let limit = gpu
             .limits
             .max_storage_buffer_binding_size
@@ -125,7 +124,7 @@ impl GraphInstance {
             ]);
             let at = in_binding(s.in_slot);
             shared[s.child].extend([(at, order.clone()), (at + 1, records.clone())]);
-            sorts.push(StreamOrder {
+            orders.push(StreamOrder {
                 stream: s.clone(),
                 order: EventOrder::new(
                     gpu,
@@ -153,12 +152,12 @@ impl GraphInstance {
             gpu: gpu.clone(),
             names,
             groups,
-            sorts,
+            orders,
         })
     }
 
     /// Records `steps` steps of every group into `encoder` (a compute pass per
-    /// [`STEPS_PER_SUBMIT`] steps). Per step: each stream's sort and its child's event spawn,
+    /// [`STEPS_PER_SUBMIT`] steps). Per step: each stream's ordering and its child's event spawn,
     /// in stream order, then each group's own step (spawn, update), in group order.
     pub fn advance(
         &mut self,
@@ -205,7 +204,7 @@ impl GraphInstance {
     }
 
     /// Records a planned batch (each group's plans, from `plan_graph_batch`): per step, each
-    /// stream's sort and its child's event spawn, in stream order, then each group's own step.
+    /// stream's ordering and its child's event spawn, in stream order, then each group's own step.
     fn record_batch(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
@@ -213,7 +212,7 @@ impl GraphInstance {
     ) -> Result<(), RuntimeError> {
         let steps = plans.iter().map(Vec::len).max().unwrap_or(0);
         for j in 0..steps {
-            for s in &self.sorts {
+            for s in &self.orders {
                 s.order.record(pass);
                 self.groups[s.stream.child].record_event_spawn(pass, s.stream.in_slot, j)?;
             }
@@ -299,7 +298,7 @@ impl GraphInstance {
         timer: &PassTimer<'_>,
         repeats: u32,
     ) -> Result<Vec<f64>, RuntimeError> {
-        self.sorts
+        self.orders
             .iter()
             .map(|s| {
                 median_after_warmup(repeats, || {
