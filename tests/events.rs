@@ -206,6 +206,99 @@ fn a_full_target_drops_the_same_children_every_run_and_counts_them() {
 }
 
 #[test]
+fn children_take_on_their_parents_colour_and_pass_it_on() {
+    // Eight rockets of a three-colour palette die together at step 9; each bursts into five
+    // sparks that inherit its colour, and every spark sheds an ember every 2 steps that inherits
+    // the spark's, times the embers' own one-colour palette (half grey). Spark s is the
+    // (s mod 5)-th child of rocket s / 5 (children follow their parents' ids).
+    let src = r#"Effect(
+        name: "rockets",
+        capacity: 8,
+        dt: 0.01,
+        seed: 21,
+        emitters: [Emitter(burst: 8, shape: Box(min: (-1.0, 0.0, -1.0), max: (1.0, 1.0, 1.0)),
+                           velocity: Constant((0.0, 1.0, 0.0)), lifetime: Some((0.1, 0.1)))],
+        render: Render(palette: Some([(1.0, 0.2, 0.1), (0.2, 0.6, 1.0), (0.3, 1.0, 0.4)])),
+        events: [Event(on: Death, target: "sparks", count: 5, velocity: Radial(speed: (1.0, 2.0)),
+                       lifetime: Some((1.0, 1.0)), inherit_color: true)],
+        groups: [
+            Group(name: "sparks", capacity: 40,
+                  events: [Event(on: Every(0.02), target: "embers", count: 1, lifetime: Some((1.0, 1.0)), inherit_color: true)]),
+            Group(name: "embers", capacity: 2000, render: Render(palette: Some([(0.5, 0.5, 0.5)]))),
+        ],
+    )"#;
+    let g = graph(src);
+    assert!(g.warnings.items.is_empty(), "{:?}", g.warnings);
+    for (k, stores) in [(0, false), (1, true), (2, true)] {
+        assert_eq!(
+            g.groups[k]
+                .effect
+                .layout
+                .has(plume::compiler::passes::layout::Attribute::Tint),
+            stores,
+            "group {k} stores a tint: {stores}"
+        );
+    }
+    let palette = g.groups[0].effect.ir.render.palette.clone().unwrap();
+    let rocket_colour =
+        |id: u32| plume::compiler::tint::pick(&palette, g.groups[0].effect.ir.seed_mix, id);
+    let sim = compare_runs("colours", &g, &[12, 20]);
+    let sparks = sim.records(1).unwrap();
+    assert_eq!(sparks.len(), 40);
+    // One 8-bit step of slack: a channel exactly between two steps (0.3 · 255 = 76.5) may round
+    // either way on the GPU (llvmpipe rounds half to even, the reference half up).
+    for s in &sparks {
+        let expected = plume::compiler::tint::stored(rocket_colour(s.id / 5));
+        assert!(
+            (s.tint - expected).abs().max_element() <= 1.0 / 255.0 + 1e-9,
+            "spark {}: tint {:?}, its rocket's colour {expected:?}",
+            s.id,
+            s.tint
+        );
+    }
+    let distinct: std::collections::BTreeSet<u32> = sparks
+        .iter()
+        .map(|s| plume::compiler::tint::pack(s.tint))
+        .collect();
+    assert!(distinct.len() >= 2, "the rockets picked one colour only");
+    let embers = sim.records(2).unwrap();
+    assert!(embers.len() >= 40, "{} embers", embers.len());
+    for e in &embers {
+        assert!(
+            sparks.iter().any(|s| {
+                let half = plume::compiler::tint::stored(0.5 * s.tint);
+                (e.tint - half).abs().max_element() <= 1.0 / 255.0 + 1e-9
+            }),
+            "ember {} has a tint {:?} no spark passes on",
+            e.id,
+            e.tint
+        );
+    }
+}
+
+#[test]
+fn passing_on_a_colour_a_group_does_not_have_is_warned_about() {
+    let src = SMALL_FIREWORKS.replace(
+        "lifetime: Some((0.3, 0.6)), inherit_velocity: 0.5)",
+        "lifetime: Some((0.3, 0.6)), inherit_velocity: 0.5, inherit_color: true)",
+    );
+    let g = graph(&src);
+    let warning = g
+        .warnings
+        .items
+        .iter()
+        .find(|w| w.path == "events[0].inherit_color")
+        .unwrap_or_else(|| panic!("no warning at events[0].inherit_color: {:?}", g.warnings));
+    assert!(
+        warning
+            .message
+            .contains("\"rockets\"'s particles, which have none"),
+        "{}",
+        warning.message
+    );
+}
+
+#[test]
 fn collisions_fire_events_where_the_particle_hits() {
     // Drops fall on a plane at y = 0 and stop; each contact spawns 3 droplets at the drop.
     let src = r#"Effect(

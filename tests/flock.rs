@@ -12,9 +12,15 @@ use plume::Integrator;
 /// A cloud of boids with some slots left free (burst < capacity), so that dead slots are
 /// skipped, and capacities that are not multiples of the 256-boid tile.
 fn cloud(capacity: u32, burst: u32, scope: &str, neighbors: &str) -> String {
+    cloud_in(capacity, burst, scope, neighbors, 1.0)
+}
+
+/// [`cloud`] in a box `scale` times as large.
+fn cloud_in(capacity: u32, burst: u32, scope: &str, neighbors: &str, scale: f64) -> String {
+    let (a, b, c, d) = (2.0 * scale, scale, 1.5 * scale, 2.5 * scale);
     format!(
         r#"Effect(name: "cloud", capacity: {capacity}, seed: 9,
-    emitters: [Emitter(burst: {burst}, shape: Box(min: (-2.0, -1.0, -1.5), max: (2.5, 1.0, 1.5)), velocity: Radial(speed: (0.2, 1.0)))],
+    emitters: [Emitter(burst: {burst}, shape: Box(min: (-{a:?}, -{b:?}, -{c:?}), max: ({d:?}, {b:?}, {c:?})), velocity: Radial(speed: (0.2, 1.0)))],
     forces: [Flock(radius: 0.5, separation: 3.0, avoidance: 1.0, cohesion: 0.5, alignment: 0.8, scope: {scope}, neighbors: {neighbors})],
     integrator: SemiImplicitEuler,
 )"#
@@ -42,18 +48,26 @@ fn flock_out(src: &str) -> Vec<[f32; 12]> {
 
 #[test]
 fn grid_and_all_pairs_find_the_same_neighbours_and_forces() {
-    // The last capacity is past GRID_SPLIT_SEARCH_BELOW: one search thread a boid instead of nine
-    // (few of its slots alive, so that llvmpipe runs it quickly).
-    let one_thread = plume::compiler::forces::flock::GRID_SPLIT_SEARCH_BELOW;
-    for (capacity, burst) in [(1000u32, 937u32), (3001, 3001), (one_thread, 900)] {
-        let pairs = flock_out(&cloud(capacity, burst, "Local", "AllPairs"));
+    // Dense clouds (4 to 30 boids a cell here) and a sparse one (under one boid a 0.5 m cell);
+    // the last capacity is past GRID_SPLIT_BELOW: one search thread a boid instead of nine (few
+    // of its slots alive, so that llvmpipe runs it quickly). All must find exactly what all
+    // pairs finds.
+    let one_thread = plume::compiler::forces::flock::GRID_SPLIT_BELOW;
+    for (capacity, burst, scale) in [
+        (1000u32, 937u32, 1.0),
+        (3001, 3001, 1.0),
+        (1500, 1300, 2.0),
+        (one_thread, 900, 1.0),
+    ] {
+        let pairs = flock_out(&cloud_in(capacity, burst, "Local", "AllPairs", scale));
         // A cell exactly the radius, and one twice as big: both must be exact.
         for cell in ["0.5", "1.0"] {
-            let grid = flock_out(&cloud(
+            let grid = flock_out(&cloud_in(
                 capacity,
                 burst,
                 "Local",
                 &format!("Grid(cell: {cell})"),
+                scale,
             ));
             assert_eq!(pairs.len(), grid.len());
             let mut neighbours = 0.0;

@@ -203,6 +203,36 @@ fn an_alpha_curve_of_its_own_replaces_the_colour_stops_alpha() {
 }
 
 #[test]
+fn a_palette_tints_each_sprite_with_the_colour_its_id_picks() {
+    // A white opaque dot: its centre shows its palette colour (the pixel centre sits a little
+    // off the disc's, where its alpha falls short of 1 by a few steps), stateful and stateless.
+    let gpu = gpu();
+    for state in [State::Stateful, State::Stateless] {
+        let sim = probe(
+            &gpu,
+            (0.0, 0.0, 0.0),
+            (0.0, 0.0, 10.0),
+            "Camera, palette: Some([(1.0, 0.0, 0.0), (0.0, 0.0, 1.0), (0.0, 1.0, 0.0)])",
+            state,
+            Integrator::Exact,
+        );
+        let ir = &sim.effect().ir;
+        let pick =
+            plume::compiler::tint::pick(ir.render.palette.as_deref().unwrap(), ir.seed_mix, 0);
+        let (gpu_img, cpu_img) = draw_both(&sim);
+        let centre = 4 * ((SIDE / 2) * SIDE + SIDE / 2) as usize;
+        let got = &gpu_img[centre..centre + 3];
+        for (c, want) in got.iter().zip([pick.x, pick.y, pick.z]) {
+            assert!(
+                if want == 0.0 { *c == 0 } else { *c >= 245 },
+                "{state:?}: the centre {got:?} is not the palette's colour {pick:?}"
+            );
+        }
+        assert_matches_reference(&gpu_img, &cpu_img, &format!("palette, {state:?}"));
+    }
+}
+
+#[test]
 fn a_sprite_in_a_fixed_plane_is_foreshortened_as_the_plane_is() {
     // A disc lying on the ground (normal +Y) seen from 36.87 deg above the horizon (eye at
     // (0, 6, 8)): its depth extent shrinks by sin 36.87 = 0.6, its width does not, so it is an

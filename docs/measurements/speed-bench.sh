@@ -6,10 +6,13 @@
 #                 of fountain.ron (`sort: true`)
 #   torch.txt     torch.sort (CUB's radix sort) of the same counts of f32 keys and of int16
 #                 keys, stable, with indices, on the same GPU (skipped where python3 has no CUDA torch)
-#   flock.jsonl   effects/boids.ron at 16k to 1M boids: the step, and each stage of the flocking
-#                 pass
+#   flock.jsonl   effects/boids.ron at 256 boids (the pipeline's launch floor) and at 16k to 1M
+#                 boids: the step, and each stage of the flocking pass
 #   update.jsonl  fountain.ron's update, and update-floor.ron's (an update that does almost
 #                 nothing), at 1M to 100M against the copy kernel and an in-place copy
+#   layouts.txt   examples/update_layouts (when its binary is beside PLUME): the same update on
+#                 particle-major and word-major words, staged or not, against the copy, and
+#                 whether the copy's speed depends on the data, the buffers or the time
 set -euo pipefail
 plume=$1
 out=$2
@@ -40,7 +43,7 @@ for n in [1 << 20, 16 << 20]:
     t = median_ms(torch.randint(-32768, 32767, (n,), device="cuda", dtype=torch.int16))
     print(f"torch.sort n={n} int16 keys + int64 indices, stable: {t:.3f} ms, {n / t / 1e6:.2f} G keys/s")
 PY
-for n in 16384 65536 262144 1048576; do
+for n in 256 16384 65536 262144 1048576; do
     "$plume" bench effects/boids.ron --particles "$n" --steps 50 --json
 done >"$out/flock.jsonl"
 for e in docs/measurements/update-floor.ron effects/fountain.ron; do
@@ -48,3 +51,7 @@ for e in docs/measurements/update-floor.ron effects/fountain.ron; do
         "$plume" bench "$e" --particles "$n" --steps 50 --json
     done
 done >"$out/update.jsonl"
+layouts=$(dirname "$plume")/examples/update_layouts
+if [ -x "$layouts" ]; then
+    "$layouts" 1048576,10000000,16777216,60000000 >"$out/layouts.txt" 2>&1
+fi

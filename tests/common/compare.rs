@@ -43,6 +43,17 @@ pub fn compare_at(
     let mut outside = 0;
     for (g, c) in gpu.iter().zip(cpu) {
         assert_eq!(g.age, c.age);
+        // Tints (tint.rs): a palette pick is the same integer draw on both sides; a stored
+        // tint is 8-bit on both, and the f32 and f64 products it rounds may fall either side
+        // of a half step, or on it (rounded half to even on the GPU, half up here): one step
+        // apart at most.
+        assert!(
+            (g.tint - c.tint).abs().max_element() <= 1.0 / 255.0 + 1e-9,
+            "{name}: particle {} tint: gpu {:?} cpu {:?}",
+            g.id,
+            g.tint,
+            c.tint
+        );
         let dx = (g.position - c.position).length();
         let dv = (g.velocity - c.velocity).length();
         if curved {

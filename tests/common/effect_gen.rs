@@ -450,6 +450,12 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
             .map(|i| (at(i), num(f, 0.0, 1.0)).prop_map(|(t, a)| format!("({t}, {a})")))
             .collect::<Vec<_>>()
     }));
+    // A palette of 1 to 4 colours, or none (wild: out of range or empty).
+    let palette = prop::option::of(
+        (usize::from(f != Flavor::Wild)..5usize)
+            .prop_flat_map(move |n| (0..n).map(|_| vec3(f, 0.0, 1.0)).collect::<Vec<_>>()),
+    )
+    .prop_map(|p| p.map_or("None".to_string(), |c| format!("Some([{}])", c.join(", "))));
     let trail =
         prop::option::of((count(f, 2, 64), count(f, 1, 5), widths, tints)).prop_map(|t| match t {
             None => "None".to_string(),
@@ -473,9 +479,10 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
             trail,
             heights,
             alphas,
+            palette,
         ),
     )
-        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow, trail, heights, alphas))| {
+        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow, trail, heights, alphas, palette))| {
             let list = |stops: Option<Vec<String>>| {
                 stops.map_or("None".to_string(), |s| format!("Some([{}])", s.join(", ")))
             };
@@ -489,7 +496,7 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
                 _ => "None".to_string(),
             };
             format!(
-                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}, trail: {trail}, size_y: {heights}, alpha: {alphas}),",
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}, trail: {trail}, size_y: {heights}, alpha: {alphas}, palette: {palette}),",
                 c.join(", "),
                 s.join(", ")
             )
@@ -618,10 +625,11 @@ fn event(flavor: Flavor, targets: Vec<&'static str>) -> BoxedStrategy<String> {
         velocity(f),
         range(f, 0.05, 1.0),
         num(f, 0.0, 1.0),
+        any::<bool>(),
     )
-        .prop_map(|(on, target, count, shape, vel, life, inherit)| {
+        .prop_map(|(on, target, count, shape, vel, life, inherit, colour)| {
             format!(
-                "Event(on: {on}, target: \"{target}\", count: {count}, shape: {shape}, velocity: {vel}, lifetime: Some({life}), inherit_velocity: {inherit})"
+                "Event(on: {on}, target: \"{target}\", count: {count}, shape: {shape}, velocity: {vel}, lifetime: Some({life}), inherit_velocity: {inherit}, inherit_color: {colour})"
             )
         })
         .boxed()

@@ -62,6 +62,9 @@ pub struct Event {
     /// Fraction of the parent's velocity added to theirs.
     #[serde(default)]
     pub inherit_velocity: f64,
+    /// Whether they take on the parent's colour (its tint: `tint.rs`).
+    #[serde(default)]
+    pub inherit_color: bool,
 }
 
 fn origin() -> Shape {
@@ -161,6 +164,8 @@ pub struct EventInputIr {
     pub count: u32,
     /// Fraction of the parent's velocity added.
     pub inherit_velocity: f64,
+    /// Whether the children's tint includes the parent's.
+    pub inherit_color: bool,
     /// The parent group's capacity (how many records there can be).
     pub parent_capacity: u32,
 }
@@ -289,9 +294,10 @@ pub fn binding_type(name: &str) -> Option<&'static str> {
 
 /// Emits the record structs (when the group fires or receives events).
 pub fn emit_declarations(w: &mut Writer) {
-    w.comment("An event's record: the firing particle's position and velocity.");
+    w.comment("An event's record: the firing particle's position, its tint (tint.rs, packed) and velocity.");
     w.block("struct EventRecord", |w| {
-        w.line("x: vec4<f32>,");
+        w.line("x: vec3<f32>,");
+        w.line("tint: u32,");
         w.line("v: vec4<f32>,");
     });
     w.block("struct EventRecords", |w| {
@@ -320,14 +326,15 @@ pub fn emit_update_reset(w: &mut Writer, events: &[EventIr]) {
 }
 
 /// Emits the firing of every event whose trigger `fires_here` accepts, by the particle being
-/// updated, with its position `x` and velocity `vel` (WGSL expressions). An `Every` event's
-/// firing is guarded by its period.
+/// updated, with its position `x`, velocity `vel` and packed tint `tint` (WGSL expressions).
+/// An `Every` event's firing is guarded by its period.
 pub fn emit_fire(
     w: &mut Writer,
     events: &[EventIr],
     fires_here: impl Fn(TriggerIr) -> bool,
     x: &str,
     vel: &str,
+    tint: &str,
 ) {
     for (j, e) in events.iter().enumerate() {
         if !fires_here(e.trigger) {
@@ -352,7 +359,7 @@ pub fn emit_fire(
                 }
             }
             w.line(format!(
-                "{}.records[chunk.base + i] = EventRecord(vec4<f32>({x}, 0.0), vec4<f32>({vel}, 0.0));",
+                "{}.records[chunk.base + i] = EventRecord({x}, {tint}, vec4<f32>({vel}, 0.0));",
                 OUT_RECORDS[j]
             ));
         };
@@ -370,9 +377,15 @@ pub fn emit_fire(
 }
 
 /// Emits `event_prepare_J` and `event_spawn_J` for every event the group receives.
-/// `store` emits the store of the spawned particle `s` with id `id` in `slot` (the same code
-/// as the group's own spawn).
-pub fn emit_kernels(w: &mut Writer, inputs: &[EventInputIr], store: &dyn Fn(&mut Writer)) {
+/// `store` emits the store of the spawned particle `s` with id `id` (and packed tint `tint`,
+/// when the group stores tints) in `slot`: the same code as the group's own spawn. `own` is
+/// the WGSL of the group's own tint for the particle `id` when it stores tints (`tint.rs`).
+pub fn emit_kernels(
+    w: &mut Writer,
+    inputs: &[EventInputIr],
+    own: Option<&str>,
+    store: &dyn Fn(&mut Writer),
+) {
     for (j, input) in inputs.iter().enumerate() {
         let records = IN_RECORDS[j];
         w.comment(format!(
@@ -416,12 +429,19 @@ pub fn emit_kernels(w: &mut Writer, inputs: &[EventInputIr], store: &dyn Fn(&mut
                 ));
                 w.line("let id = counters.event_first_id + i;");
                 w.line(format!("var s = emit_{}(id, c, params.step);", input.emitter));
-                w.line("s.x = s.x + r.x.xyz;");
+                w.line("s.x = s.x + r.x;");
                 if input.inherit_velocity != 0.0 {
                     w.line(format!(
                         "s.v = s.v + {} * r.v.xyz;",
                         f32_lit(input.inherit_velocity)
                     ));
+                }
+                match own {
+                    Some(own) if input.inherit_color => w.line(format!(
+                        "let tint = pack4x8unorm(vec4<f32>({own} * unpack4x8unorm(r.tint).rgb, 1.0));"
+                    )),
+                    Some(own) => w.line(format!("let tint = pack4x8unorm(vec4<f32>({own}, 1.0));")),
+                    None => {}
                 }
                 store(w);
             },

@@ -272,6 +272,7 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
             emitter: effects[stream.child].emitters.len() + child.input_emitters.len(),
             count: event.count,
             inherit_velocity: event.inherit_velocity,
+            inherit_color: event.inherit_color,
             parent_capacity: effects[stream.parent].capacity,
         });
         child.input_emitters.push(event.as_emitter());
@@ -431,6 +432,7 @@ fn check_graph(effects: &[Effect]) -> (Vec<Stream>, Checker, Vec<(Diagnostic, St
     }
     if c.errors.is_empty() {
         warnings.extend(overflow_warnings(effects, &streams));
+        warnings.extend(colourless_inheritance(effects, &streams));
     }
     (streams, c, warnings)
 }
@@ -544,6 +546,45 @@ fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic,
         }
     }
     out
+}
+
+/// Warnings for events that pass on the colour of particles that have none: no palette, and no
+/// colour inherited from a group that has one.
+fn colourless_inheritance(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic, String)> {
+    let passes = |s: &Stream| effects[s.parent].events[s.out_slot].inherit_color;
+    let mut tinted: Vec<bool> = effects.iter().map(|e| e.render.palette.is_some()).collect();
+    // The graph is acyclic: as many passes as groups settle it.
+    for _ in 0..effects.len() {
+        for s in streams.iter().filter(|s| passes(s)) {
+            tinted[s.child] |= tinted[s.parent];
+        }
+    }
+    streams
+        .iter()
+        .filter(|s| passes(s) && !tinted[s.parent])
+        .map(|s| {
+            let root = ValuePath::root();
+            let group = if s.parent == 0 {
+                root
+            } else {
+                root.field("groups").index(s.parent - 1)
+            };
+            let at = group
+                .field("events")
+                .index(s.out_slot)
+                .field("inherit_color");
+            (
+                Diagnostic::warning(
+                    at.display,
+                    format!(
+                        "passes on the colour of {:?}'s particles, which have none (no render.palette, and none inherited): {:?}'s particles keep their own",
+                        effects[s.parent].name, effects[s.child].name
+                    ),
+                ),
+                at.lookup,
+            )
+        })
+        .collect()
 }
 
 /// The first stream that closes a cycle of groups, and the cycle's groups (first repeated).

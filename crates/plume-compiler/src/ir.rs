@@ -89,6 +89,8 @@ pub struct RenderIr {
     pub glow: Option<crate::schema::Glow>,
     /// Ribbons through each particle's recent positions, when the effect asks for them.
     pub trail: Option<crate::trail::TrailIr>,
+    /// The colours particles pick their tint from (`tint.rs`).
+    pub palette: Option<Vec<DVec3>>,
 }
 
 /// Piecewise-linear interpolation through stops (t increasing), constant beyond the ends.
@@ -553,8 +555,8 @@ impl fmt::Display for EffectIr {
         for e in &self.event_inputs {
             writeln!(
                 f,
-                "  fed by event {}: {} per firing from emitters[{}], inherit_velocity {}, up to {} firings a step",
-                e.stream, e.count, e.emitter, e.inherit_velocity, e.parent_capacity
+                "  fed by event {}: {} per firing from emitters[{}], inherit_velocity {}, inherit_color {}, up to {} firings a step",
+                e.stream, e.count, e.emitter, e.inherit_velocity, e.inherit_color, e.parent_capacity
             )?;
         }
         writeln!(

@@ -56,6 +56,7 @@ pub mod rotation;
 pub mod schedule;
 pub mod schema;
 pub mod texture;
+pub mod tint;
 pub mod trail;
 pub mod validate;
 pub mod wgsl;

@@ -95,6 +95,10 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 soft: r.soft,
                 glow: r.glow,
                 trail: r.trail.as_ref().map(crate::trail::TrailIr::lower),
+                palette: r
+                    .palette
+                    .as_ref()
+                    .map(|p| p.iter().map(|c| c.d()).collect()),
             }
         },
         camera: CameraIr {

@@ -47,6 +47,8 @@ pub mod stream {
     pub const ROTATION_ANGLE: u32 = 11;
     /// One draw for a sprite's spin (`render.rotation.spin`).
     pub const ROTATION_SPIN: u32 = 12;
+    /// One draw for a particle's palette colour (`render.palette`).
+    pub const PALETTE: u32 = 13;
     /// `rand(k)` in custom expressions draws from stream CUSTOM + k (k <= 255).
     pub const CUSTOM: u32 = 64;
 }

@@ -183,6 +183,10 @@ pub struct Render {
     /// Trails: a ribbon behind each particle through its recent positions.
     #[serde(default)]
     pub trail: Option<Trail>,
+    /// A colour per particle, picked from these by its id, that its colour over life is
+    /// multiplied by (and that children of events with `inherit_color` take on).
+    #[serde(default)]
+    pub palette: Option<Vec<Vec3>>,
 }
 
 /// Trails (`render.trail`): a camera-facing ribbon through each particle's position now and
@@ -274,6 +278,7 @@ impl Default for Render {
             soft: None,
             glow: None,
             trail: None,
+            palette: None,
         }
     }
 }

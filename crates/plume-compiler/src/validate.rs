@@ -340,6 +340,9 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::schema::Render) {
     if let Some(t) = &r.trail {
         check_trail(c, &path.field("trail"), t);
     }
+    if let Some(palette) = &r.palette {
+        crate::tint::check_palette(c, &path.field("palette"), palette);
+    }
     let bg = path.field("background");
     for (j, (name, x)) in [
         ("r", r.background.0),

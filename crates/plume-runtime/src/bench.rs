@@ -393,10 +393,21 @@ pub fn bench(
     let spawn_step = sim.time_steps(&timer, 1)?;
     sim.run(3, |_| {})?;
     let live = sim.totals()?.alive;
-    let update = sim.time_steps(&timer, steps)? / f64::from(steps);
     let bytes = u64::from(particles) * u64::from(bpp);
-    let copy = time_copy(gpu, &timer, bytes, steps, "copy")? / f64::from(steps);
-    let copy_in_place = time_copy(gpu, &timer, bytes, steps, "copy_in_place")? / f64::from(steps);
+    let copy_kernel = CopyKernel::new(gpu, bytes, "copy")?;
+    let copy_in_place_kernel = CopyKernel::new(gpu, bytes, "copy_in_place")?;
+    // The update and the copies in turn, the steps split into ROUNDS rounds (so the effect
+    // advances by `steps` in all, as a flock's neighbours, which its cost follows, are taken
+    // over them); each kernel keeps its fastest round.
+    let per_round = (steps / ROUNDS).max(1);
+    let (mut update, mut copy, mut copy_in_place) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+    for _ in 0..ROUNDS.min(steps) {
+        update = update.min(sim.time_steps(&timer, per_round)? / f64::from(per_round));
+        copy = copy.min(copy_kernel.time(&timer, per_round)? / f64::from(per_round));
+        copy_in_place =
+            copy_in_place.min(copy_in_place_kernel.time(&timer, per_round)? / f64::from(per_round));
+    }
+    drop((copy_kernel, copy_in_place_kernel));
     let sort = if sim.effect().layout.sorts() {
         // Warm up both, then time them.
         sim.time_sort(&timer, SortAlgorithm::Radix)?;
@@ -468,13 +479,9 @@ pub fn bench(
         field_error,
         fill_seconds: match stateless {
             Ok(_) => Some(
-                time_copy(
-                    gpu,
-                    &timer,
-                    u64::from(particles) * u64::from(bpp),
-                    steps,
-                    "fill",
-                )? / f64::from(steps),
+                CopyKernel::new(gpu, u64::from(particles) * u64::from(bpp), "fill")?
+                    .time(&timer, steps)?
+                    / f64::from(steps),
             ),
             Err(_) => None,
         },
@@ -710,72 +717,93 @@ fn time_stateless(
     Ok(Ok(sim.time_steps(timer, steps)? / f64::from(steps)))
 }
 
-/// Times `repeats` passes of `entry` (`copy`: read and write `bytes`, rounded up to 16;
-/// `copy_in_place`: the same, reading and writing one buffer; `fill`: write them only), split into buffers of at most one binding each, in one pass.
-fn time_copy(
-    gpu: &Gpu,
-    timer: &PassTimer<'_>,
-    bytes: u64,
-    repeats: u32,
-    entry: &str,
-) -> Result<f64, RuntimeError> {
-    let device = &gpu.device;
-    let limit = gpu
-        .limits
-        .max_storage_buffer_binding_size
-        .min(gpu.limits.max_buffer_size)
-        / 16
-        * 16;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("copy"),
-        source: wgpu::ShaderSource::Wgsl(COPY_WGSL.into()),
-    });
-    let pipeline = gpu.compute_pipeline(&module, entry, None);
-    let layout = pipeline.get_bind_group_layout(0);
-    let mut parts = Vec::new();
-    let mut left = bytes.next_multiple_of(16).max(16);
-    while left > 0 {
-        let size = left.min(limit);
-        left -= size;
-        let make = |label| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::STORAGE,
-                mapped_at_creation: false,
-            })
-        };
-        let (src, dst) = (make("copy src"), make("copy dst"));
-        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+/// Rounds in which `plume bench` times the update and the copy kernels in turn, keeping each
+/// one's fastest: on the lent H100 the memory bandwidth every kernel gets switches between two
+/// levels (about 3.0 and 1.7 TB/s for the copy) for seconds at a time, whatever the buffers
+/// (docs/performance.md, "The update at large sizes"), so a single timing of each can compare
+/// kernels measured at different levels.
+pub const ROUNDS: u32 = 5;
+
+/// A pass of `entry` (`copy`: read and write `bytes`, rounded up to 16; `copy_in_place`: the
+/// same, reading and writing one buffer; `fill`: write them only) over buffers of its own,
+/// split into buffers of at most one binding each.
+struct CopyKernel {
+    pipeline: wgpu::ComputePipeline,
+    /// Per buffer: its bind group, the dispatch size, and the buffers it binds.
+    parts: Vec<(wgpu::BindGroup, u32, u32, wgpu::Buffer, wgpu::Buffer)>,
+    gpu: Gpu,
+}
+
+impl CopyKernel {
+    fn new(gpu: &Gpu, bytes: u64, entry: &str) -> Result<Self, RuntimeError> {
+        let device = &gpu.device;
+        let limit = gpu
+            .limits
+            .max_storage_buffer_binding_size
+            .min(gpu.limits.max_buffer_size)
+            / 16
+            * 16;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("copy"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: src.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: dst.as_entire_binding(),
-                },
-            ],
+            source: wgpu::ShaderSource::Wgsl(COPY_WGSL.into()),
         });
-        let (x, y) = gpu.grid(size / 16, 256)?;
-        parts.push((group, x, y, src, dst));
-    }
-    let record = |pass: &mut wgpu::ComputePass<'_>, n: u32| {
-        pass.set_pipeline(&pipeline);
-        for _ in 0..n {
-            for (group, x, y, _, _) in &parts {
-                pass.set_bind_group(0, group, &[]);
-                pass.dispatch_workgroups(*x, *y, 1);
-            }
+        let pipeline = gpu.compute_pipeline(&module, entry, None);
+        let layout = pipeline.get_bind_group_layout(0);
+        let mut parts = Vec::new();
+        let mut left = bytes.next_multiple_of(16).max(16);
+        while left > 0 {
+            let size = left.min(limit);
+            left -= size;
+            let make = |label| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage: wgpu::BufferUsages::STORAGE,
+                    mapped_at_creation: false,
+                })
+            };
+            let (src, dst) = (make("copy src"), make("copy dst"));
+            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("copy"),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: src.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: dst.as_entire_binding(),
+                    },
+                ],
+            });
+            let (x, y) = gpu.grid(size / 16, 256)?;
+            parts.push((group, x, y, src, dst));
         }
-        Ok(())
-    };
-    // Warm up once, then time.
-    timer.time(|pass| record(pass, 1))?;
-    let seconds = timer.time(|pass| record(pass, repeats))?;
-    gpu.take_error()?;
-    Ok(seconds)
+        let kernel = Self {
+            pipeline,
+            parts,
+            gpu: gpu.clone(),
+        };
+        gpu.take_error()?;
+        Ok(kernel)
+    }
+
+    /// Seconds for `repeats` passes, in one compute pass (after one untimed pass).
+    fn time(&self, timer: &PassTimer<'_>, repeats: u32) -> Result<f64, RuntimeError> {
+        let record = |pass: &mut wgpu::ComputePass<'_>, n: u32| {
+            pass.set_pipeline(&self.pipeline);
+            for _ in 0..n {
+                for (group, x, y, _, _) in &self.parts {
+                    pass.set_bind_group(0, group, &[]);
+                    pass.dispatch_workgroups(*x, *y, 1);
+                }
+            }
+            Ok(())
+        };
+        timer.time(|pass| record(pass, 1))?;
+        let seconds = timer.time(|pass| record(pass, repeats))?;
+        self.gpu.take_error()?;
+        Ok(seconds)
+    }
 }

@@ -1,24 +1,25 @@
 //! The per-step flocking pass of an effect with a Flock force, recorded between the spawn and
-//! the update: snapshot (+ partial sums), global means, then all pairs or the grid (bucket
-//! keys and counts, their radix sort, the counts' scan into run starts, the snapshot reordered
-//! by bucket, search). The kernels are the compiler's
-//! (`forces/flock.rs`); this module only dispatches them.
+//! the update: the snapshot (+ partial sums) where all pairs or the global means need it, the
+//! global means, then all pairs or the grid (bucket counts, their scan into run starts, the
+//! scatter of the boids into their runs, each run put in slot order with the snapshot, the
+//! search by tiles). The kernels are the compiler's (`forces/flock.rs`); this module only
+//! dispatches them.
 
-use plume_compiler::forces::flock::{FlockIr, Neighbors, Scope};
+use plume_compiler::forces::flock::{FlockIr, Neighbors, Scope, GRID_TILE};
 use plume_compiler::CompiledEffect;
 
 use crate::error::RuntimeError;
 use crate::gpu::Gpu;
 use crate::resources::{Chunk, Resources};
-use crate::sort::{GpuSorter, SortAlgorithm, SortProgram};
+use crate::sort::{GpuSorter, SortProgram};
 
-/// The uniform grid's extra kernels and its (bucket, slot) sort.
+/// The uniform grid's extra kernels and its scan.
 struct GridPass {
-    bucket: wgpu::ComputePipeline,
-    reorder: wgpu::ComputePipeline,
     clear: wgpu::ComputePipeline,
+    bucket: wgpu::ComputePipeline,
+    scatter: wgpu::ComputePipeline,
+    rank: wgpu::ComputePipeline,
     buckets: u64,
-    sort: SortProgram,
     /// The exclusive scan of the bucket counts into run starts.
     scan: SortProgram,
     /// Whether the search runs nine threads a boid (`FlockIr::split_search`).
@@ -27,7 +28,7 @@ struct GridPass {
 
 /// The flocking kernels of one effect.
 pub struct FlockPass {
-    snapshot: wgpu::ComputePipeline,
+    snapshot: Option<wgpu::ComputePipeline>,
     reduce: Option<wgpu::ComputePipeline>,
     neighbours: wgpu::ComputePipeline,
     grid: Option<GridPass>,
@@ -43,24 +44,18 @@ impl FlockPass {
     ) -> Result<Self, RuntimeError> {
         let grid = match flock.neighbors {
             Neighbors::Grid { .. } => {
-                let sorter = GpuSorter::new(gpu);
                 let find = |name: &str| {
                     res.extra_named(effect, name)
                         .expect("the layout binds the grid's buffers")
                 };
                 Some(GridPass {
-                    bucket: res.pipeline("grid_bucket"),
-                    reorder: res.pipeline("grid_reorder"),
                     clear: res.pipeline("grid_clear"),
-                    split_search: FlockIr::split_search(effect.ir.capacity),
+                    bucket: res.pipeline("grid_bucket"),
+                    scatter: res.pipeline("grid_scatter"),
+                    rank: res.pipeline("grid_rank"),
                     buckets: FlockIr::grid_buckets(effect.ir.capacity),
-                    sort: sorter.program(
-                        SortAlgorithm::Radix,
-                        find("grid_keys"),
-                        find("grid_vals"),
-                        u64::from(effect.ir.capacity),
-                    )?,
-                    scan: sorter.scan_program(
+                    split_search: FlockIr::split_search(effect.ir.capacity),
+                    scan: GpuSorter::new(gpu).scan_program(
                         find("cell_start"),
                         FlockIr::grid_buckets(effect.ir.capacity) + 1,
                     )?,
@@ -68,8 +63,10 @@ impl FlockPass {
             }
             Neighbors::AllPairs => None,
         };
+        // The grid reads the particles itself; the snapshot is for all pairs and the sums.
+        let snapshot = grid.is_none() || flock.scope == Scope::Global;
         Ok(Self {
-            snapshot: res.pipeline("flock_snapshot"),
+            snapshot: snapshot.then(|| res.pipeline("flock_snapshot")),
             reduce: (flock.scope == Scope::Global).then(|| res.pipeline("flock_reduce")),
             neighbours: res.pipeline(if grid.is_some() {
                 "flock_grid"
@@ -83,20 +80,13 @@ impl FlockPass {
     /// The pass's stages in recording order, for timing them one by one.
     pub fn stage_names(&self) -> &'static [&'static str] {
         match (&self.grid, &self.reduce) {
-            (Some(_), None) => &[
-                "snapshot",
-                "bucket keys",
-                "sort",
-                "scan",
-                "reorder",
-                "search",
-            ],
+            (Some(_), None) => &["bucket counts", "scan", "scatter", "rank", "search"],
             (Some(_), Some(_)) => &[
                 "snapshot and sums",
-                "bucket keys",
-                "sort",
+                "bucket counts",
                 "scan",
-                "reorder",
+                "scatter",
+                "rank",
                 "search",
             ],
             (None, None) => &["snapshot", "all pairs"],
@@ -135,14 +125,16 @@ impl FlockPass {
             stage += 1;
             stage <= stages
         };
-        if !next() {
-            return Ok(());
-        }
-        pass.set_pipeline(&self.snapshot);
-        pass.dispatch_workgroups(x, y, 1);
-        if let Some(reduce) = &self.reduce {
-            pass.set_pipeline(reduce);
-            pass.dispatch_workgroups(1, 1, 1);
+        if let Some(snapshot) = &self.snapshot {
+            if !next() {
+                return Ok(());
+            }
+            pass.set_pipeline(snapshot);
+            pass.dispatch_workgroups(x, y, 1);
+            if let Some(reduce) = &self.reduce {
+                pass.set_pipeline(reduce);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
         }
         if let Some(grid) = &self.grid {
             if !next() {
@@ -157,27 +149,25 @@ impl FlockPass {
             if !next() {
                 return Ok(());
             }
-            grid.sort.record(pass);
-            if !next() {
-                return Ok(());
-            }
             grid.scan.record(pass);
             pass.set_bind_group(0, &chunk.bind_group, &[offset]);
             if !next() {
                 return Ok(());
             }
-            pass.set_pipeline(&grid.reorder);
+            pass.set_pipeline(&grid.scatter);
+            pass.dispatch_workgroups(x, y, 1);
+            if !next() {
+                return Ok(());
+            }
+            pass.set_pipeline(&grid.rank);
             pass.dispatch_workgroups(x, y, 1);
         }
         if !next() {
             return Ok(());
         }
-        // The grid's split search runs nine threads a boid, a fixed number of boids a group.
+        // The grid's split search runs nine threads a boid, a tile of boids a workgroup.
         let (x, y) = match &self.grid {
-            Some(grid) if grid.split_search => gpu.grid(
-                chunk.len,
-                u64::from(plume_compiler::forces::flock::GRID_BOIDS_PER_GROUP),
-            )?,
+            Some(grid) if grid.split_search => gpu.grid(chunk.len, u64::from(GRID_TILE))?,
             _ => (x, y),
         };
         pass.set_pipeline(&self.neighbours);

@@ -610,7 +610,7 @@ impl EffectInstance {
         self.evaluate_view()?;
         let mut bytes = Vec::new();
         for chunk in self.chunks()? {
-            bytes.extend(read_buffer(&self.gpu, &chunk.buffer)?);
+            bytes.push(read_buffer(&self.gpu, &chunk.buffer)?);
         }
         decode_slots(&self.effect, &self.schedule, &bytes)
     }

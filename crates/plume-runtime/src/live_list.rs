@@ -16,11 +16,11 @@ use crate::resources::{filled_buffer, Resources, STORAGE};
 use crate::sort::{GpuSorter, SortProgram};
 
 const LIVE_LIST_WGSL: &str = r#"
-// One particle buffer's slots: global slots base .. base + len, `stride` words per particle,
-// the id at word `id_word`.
+// One particle buffer's slots: global slots base .. base + len, stored word-major (16-byte
+// word k of slot i at k * len + i); the id in lane `id_lane` of word `id_vec4`.
 struct Part {
-    stride: u32,
-    id_word: u32,
+    id_vec4: u32,
+    id_lane: u32,
     base: u32,
     len: u32,
     last: u32,
@@ -36,7 +36,7 @@ struct Part {
 @group(0) @binding(4) var<uniform> part: Part;
 
 fn alive(i: u32) -> bool {
-    return particles[i * part.stride + part.id_word] != 0xffffffffu;
+    return particles[4u * (part.id_vec4 * part.len + i) + part.id_lane] != 0xffffffffu;
 }
 
 @compute @workgroup_size(256)
@@ -117,12 +117,11 @@ impl LiveList {
             .word_offset(Attribute::Id)
             .ok_or_else(|| RuntimeError::Gpu("the layout has no id".into()))?
             as u32;
-        let stride = effect.layout.bytes_per_particle / 4;
         let mut parts = Vec::new();
         for chunk in res.chunks(effect)? {
             let words: [u32; 8] = [
-                stride,
-                id_word,
+                id_word / 4,
+                id_word % 4,
                 chunk.base as u32,
                 chunk.len as u32,
                 effect.ir.capacity - 1,

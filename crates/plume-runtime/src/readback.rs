@@ -71,13 +71,15 @@ pub fn decode_totals(counters: &[u8], capacity: u32, steps: u64) -> Totals {
     }
 }
 
-/// Every slot's particle in the particle buffers' bytes (None for a free slot), with velocity
-/// as the integrator knows it (Verlet's displacement divided by h) and age and lifetime from
-/// the schedule.
+/// Every slot's particle in the particle buffers' bytes, one entry of `buffers` per buffer in
+/// slot order (None for a free slot), with velocity as the integrator knows it (Verlet's
+/// displacement divided by h) and age and lifetime from the schedule. Each buffer holds its
+/// slots word-major ([`plume_compiler::wgsl::word_index`]): 16-byte word k of its slot i at
+/// k · slots + i.
 pub fn decode_slots(
     effect: &CompiledEffect,
     schedule: &Schedule,
-    bytes: &[u8],
+    buffers: &[Vec<u8>],
 ) -> Result<Vec<Option<ParticleRecord>>, RuntimeError> {
     let layout = &effect.layout;
     let stride = layout.bytes_per_particle as usize;
@@ -102,17 +104,20 @@ pub fn decode_slots(
     // A particle that stores its spawn step ages from it (a group fed by events has no other
     // record of it); the others from the schedule, which gives the same for them.
     let born_at = layout.word_offset(Attribute::SpawnStep);
+    let tint_at = layout.word_offset(Attribute::Tint);
     let done = schedule.steps_done() as u32;
     let dt = effect.ir.dt;
-    let mut out = Vec::with_capacity(bytes.len() / stride.max(1));
-    for slot in bytes.chunks_exact(stride) {
+    let total: usize = buffers.iter().map(|b| b.len()).sum();
+    let mut out = Vec::with_capacity(total / stride.max(1));
+    for (bytes, i) in buffers
+        .iter()
+        .flat_map(|b| (0..b.len() / stride.max(1)).map(move |i| (b, i)))
+    {
+        let slots = bytes.len() / stride;
+        // The 4-byte field w of slot i: lane w % 4 of 16-byte word w / 4.
         let u = |w: usize| {
-            u32::from_le_bytes([
-                slot[4 * w],
-                slot[4 * w + 1],
-                slot[4 * w + 2],
-                slot[4 * w + 3],
-            ])
+            let at = 16 * ((w / 4) * slots + i) + 4 * (w % 4);
+            u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
         };
         let f = |w: usize| f64::from(f32::from_bits(u(w)));
         let id = u(id_at);
@@ -133,6 +138,11 @@ pub fn decode_slots(
                 Some(b) => Some(f64::from(u(w).wrapping_sub(u(b)).wrapping_add(1)) * dt),
                 None => schedule.lifetime(id, u(w)),
             }),
+            // A stored tint, or the one the draw derives from the id.
+            tint: match tint_at {
+                Some(t) => plume_compiler::tint::unpack(u(t)),
+                None => plume_compiler::tint::own(&effect.ir, id),
+            },
         }));
     }
     Ok(out)

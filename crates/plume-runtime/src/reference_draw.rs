@@ -56,6 +56,7 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
                 _ => 0.0,
             };
             let c = render.color_at(t);
+            let c = [c[0] * r.tint.x, c[1] * r.tint.y, c[2] * r.tint.z, c[3]];
             let p = r.position;
             let (half_x, half_y) = render.orient.half_axes(
                 render.size_at(t),

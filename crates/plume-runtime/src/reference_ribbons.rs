@@ -58,7 +58,8 @@ pub fn ribbons(
             Some(l) if l > 0.0 => (r.age / l).clamp(0.0, 1.0),
             _ => 0.0,
         };
-        let particle = ir.render.color_at(life);
+        let c = ir.render.color_at(life);
+        let particle = [c[0] * r.tint.x, c[1] * r.tint.y, c[2] * r.tint.z, c[3]];
         let sides = trail.ribbon_vertices(points, eye, 1.0);
         let vertex = |j: usize, side: usize| {
             let tint = trail.color_at(j as f64 / f64::from(trail.ring()));

@@ -61,11 +61,7 @@ impl Steps {
     pub fn new(gpu: &Gpu, res: &Resources, effect: &CompiledEffect) -> Result<Self, RuntimeError> {
         if let Some(plan) = &effect.ir.stateless {
             return Ok(Steps::Stateless(StatelessSteps {
-                evaluate: res.pipeline(if stateless_stores_staged(gpu) {
-                    "evaluate"
-                } else {
-                    "evaluate_direct"
-                }),
+                evaluate: res.pipeline("evaluate"),
                 segments: LiveSegments::new(plan.lives.clone()),
                 evaluated_at: AtomicU64::new(u64::MAX),
             }));
@@ -324,17 +320,5 @@ impl StatelessSteps {
     pub fn mark_view_current(&self) {
         self.evaluated_at
             .store(self.segments.steps_done(), Ordering::Relaxed);
-    }
-}
-
-/// Whether the stateless view is written through workgroup memory (`evaluate`, coalesced
-/// stores) or by each thread (`evaluate_direct`): staged on GPUs, direct on CPU adapters, where
-/// a workgroup barrier costs more than the stores. `PLUME_STATELESS_STORES=staged|direct`
-/// overrides the choice, for measuring both.
-pub fn stateless_stores_staged(gpu: &Gpu) -> bool {
-    match std::env::var("PLUME_STATELESS_STORES").as_deref() {
-        Ok("staged") => true,
-        Ok("direct") => false,
-        _ => !gpu.is_cpu(),
     }
 }

@@ -168,16 +168,24 @@ pub struct Frozen {
 /// docs/performance.md).
 pub const GRID_FASTER_FROM: u32 = 4096;
 
-/// Boids per workgroup of the grid's split search (9 threads each, one per run of 3 cells).
-pub const GRID_BOIDS_PER_GROUP: u32 = 32;
+/// Below this capacity the grid's search splits each boid over nine threads, one row of 3
+/// cells each, [`GRID_TILE`] boids a workgroup; from it on, one thread a boid walks all nine
+/// rows. Measured on the H100 with effects/boids.ron (docs/performance.md, "Flocking"):
+/// split 0.064 against 0.124 ms a step at 16k boids (each thread's walk is the latency there),
+/// the same at 64k (0.169 and 0.172), one thread 0.48 against 0.55 ms at 256k and 1.75
+/// against 2.39 ms at 1M, where the GPU is full and nine threads' partial sums cost more than
+/// they hide.
+pub const GRID_SPLIT_BELOW: u32 = 65_536;
 
-/// Below this capacity the grid's search splits each boid over 9 threads (one per run of 3
-/// cells); from it on, one thread walks all 9 runs. Measured on the H100 with
-/// effects/boids.ron (docs/performance.md): split 0.089 against 0.260 ms at 16k boids and 0.285
-/// against 0.330 at 64k, but 1.05 against 0.81 at 256k and 4.76 against 2.92 at 1M, where the
-/// GPU is full anyway and one thread a boid lets a warp's 32 neighbouring boids read the same
-/// candidates together.
-pub const GRID_SPLIT_SEARCH_BELOW: u32 = 131_072;
+/// Boids per workgroup of the split search. Its threads are laid out row by row (thread t:
+/// row t / TILE of boid t % TILE), so that a warp of 32 walks two rows for 16 consecutive
+/// sorted boids, which lie in one or two cells and read the same candidates. 9 x 16 = 144
+/// threads, under WebGPU's default limit of 256 a workgroup.
+pub const GRID_TILE: u32 = 16;
+
+/// Candidates the grid's search loads before testing any of them (more loads in flight per
+/// thread: 16k boids 0.068 against 0.064 ms a step, 1M 1.82 against 1.75 ms on the H100).
+pub const GRID_ROW_UNROLL: u32 = 4;
 
 /// Below this speed (m/s) a boid has no heading, so no avoidance.
 pub const MIN_HEADING_SPEED: f64 = 1e-6;
@@ -196,17 +204,17 @@ impl FlockIr {
         )
     }
 
+    /// Whether the grid's search of `capacity` boids runs nine threads a boid
+    /// ([`GRID_SPLIT_BELOW`]).
+    pub fn split_search(capacity: u32) -> bool {
+        capacity < GRID_SPLIT_BELOW
+    }
+
     /// Hash-table buckets of the grid for `capacity` boids: a power of two >= capacity, at
     /// most 2^31 (so that the count fits the shaders' u32).
     pub fn grid_buckets(capacity: u32) -> u64 {
         // In u64: a capacity above 2^31 would overflow u32.
         u64::from(capacity.max(1)).next_power_of_two().min(1 << 31)
-    }
-
-    /// Whether the grid's search of `capacity` boids runs 9 threads a boid
-    /// ([`GRID_SPLIT_SEARCH_BELOW`]).
-    pub fn split_search(capacity: u32) -> bool {
-        capacity < GRID_SPLIT_SEARCH_BELOW
     }
 
     /// The f64 reference of the per-step pass: all pairs, in id order.
@@ -418,43 +426,56 @@ impl FlockIr {
     }
 
     fn emit_pair_fn(&self, w: &mut Writer) {
+        let core = self.core().max(f64::from(f32::MIN_POSITIVE));
         w.line(format!(
-            "const FLOCK_RADIUS: f32 = {};",
-            f32_lit(self.radius)
+            "const FLOCK_R2: f32 = {}; // radius²: neighbours are closer",
+            f32_lit(self.radius * self.radius)
         ));
-        w.comment("Separation and avoidance on a boid at (x, v) from a neighbour at xj.");
+        w.line(format!(
+            "const FLOCK_INV_RADIUS: f32 = {};",
+            f32_lit(1.0 / self.radius)
+        ));
+        w.line(format!(
+            "const FLOCK_INV_CORE: f32 = {}; // 1 / (radius / 10)",
+            f32_lit(1.0 / core)
+        ));
+        w.comment("A boid's heading (unit velocity), or zero when it is too slow to have one (no avoidance).");
+        w.block("fn flock_heading(v: vec3<f32>) -> vec3<f32>", |w| {
+            w.line("let s2 = dot(v, v);");
+            w.block(
+                format!(
+                    "if (s2 <= {})",
+                    f32_lit(MIN_HEADING_SPEED * MIN_HEADING_SPEED)
+                ),
+                |w| w.line("return vec3<f32>(0.0);"),
+            );
+            w.line("return v * inverseSqrt(s2);");
+        });
+        w.comment("Separation and avoidance on a boid with `heading` from a neighbour at offset d = x - xj, r2 = |d|² < radius², and the neighbour's weight w = 1 - r / radius. 1 / max(r, core) is min(1 / r, 1 / core): no division, and finite at r = 0, where d = 0 pushes nothing.");
         w.block(
-            "fn flock_pair(x: vec3<f32>, v: vec3<f32>, xj: vec3<f32>) -> vec4<f32>",
+            "fn flock_pair(d: vec3<f32>, r2: f32, heading: vec3<f32>) -> vec4<f32>",
             |w| {
-                w.line("let d = x - xj;");
-                w.line("let r = length(d);");
-                w.block("if (r >= FLOCK_RADIUS)", |w| {
-                    w.line("return vec4<f32>(0.0);");
-                });
-                w.line(format!("let w = 1.0 - r * {};", f32_lit(1.0 / self.radius)));
+                w.line("let inv_r = inverseSqrt(max(r2, 1e-30));");
+                w.line("let w = max(1.0 - r2 * inv_r * FLOCK_INV_RADIUS, 0.0);");
+                w.line("let near = min(inv_r, FLOCK_INV_CORE);");
                 w.line("var a = vec3<f32>(0.0);");
-                let core = f32_lit(self.core().max(f64::from(f32::MIN_POSITIVE)));
                 if self.separation != 0.0 {
                     w.line(format!(
-                        "a += {} * w * (d / max(r, {core}));",
+                        "a += ({} * w * near) * d;",
                         f32_lit(self.separation)
                     ));
                 }
                 if self.avoidance != 0.0 {
-                    w.line("let speed = length(v);");
-                    w.block(format!("if (speed > {})", f32_lit(MIN_HEADING_SPEED)), |w| {
-                        w.line("let heading = v / speed;");
-                        w.line("let along = dot(d, heading);");
-                        w.comment("How directly ahead the neighbour is: 0 beside or behind, so no jump.");
-                        w.line(format!("let ahead = max(-along, 0.0) / max(r, {core});"));
-                        w.line("let side = d - along * heading;");
-                        w.line(format!(
-                            "a += {} * w * ahead * (side / max(length(side), {core}));",
-                            f32_lit(self.avoidance)
-                        ));
-                    });
+                    w.line("let along = dot(d, heading);");
+                    w.comment("How directly ahead the neighbour is: 0 beside or behind, so no jump.");
+                    w.line("let ahead = max(-along, 0.0) * near;");
+                    w.line("let side = d - along * heading;");
+                    w.line("let to_side = min(inverseSqrt(max(dot(side, side), 1e-30)), FLOCK_INV_CORE);");
+                    w.line(format!(
+                        "a += ({} * w * ahead * to_side) * side;",
+                        f32_lit(self.avoidance)
+                    ));
                 }
-                w.comment("w > 0 marks a neighbour and weighs it in the local means.");
                 w.line("return vec4<f32>(a, w);");
             },
         );
@@ -520,17 +541,24 @@ fn emit_store_out(w: &mut Writer, slot: &str) {
     ));
 }
 
-/// Adds a neighbour (snapshot `ox`, `ov`) to the running sums, unless `is_self` holds.
+/// Adds a neighbour (snapshot `ox`, `ov`) to the running sums of the boid at (`me`,
+/// `heading`), unless `is_self` holds or the slot is free (all pairs: `ox.w` 0).
 fn emit_accumulate(w: &mut Writer, is_self: &str, ox: &str, ov: &str) {
-    w.block(format!("if ({ox}.w > 0.0 && !({is_self}))"), |w| {
-        w.line(format!("let f = flock_pair(me.xyz, me_v.xyz, {ox}.xyz);"));
-        w.block("if (f.w > 0.0)", |w| {
-            w.line("push += f.xyz;");
-            w.line(format!("sum_x += f.w * {ox}.xyz;"));
-            w.line(format!("sum_v += f.w * {ov}.xyz;"));
-            w.line("sum_w += f.w;");
-            w.line("count += 1.0;");
-        });
+    emit_accumulate_if(w, &format!("{ox}.w > 0.0 && !({is_self})"), ox, ov);
+}
+
+/// Adds the candidate (snapshot `ox`, `ov`) where `counts` holds and it is closer than the
+/// radius.
+fn emit_accumulate_if(w: &mut Writer, counts: &str, ox: &str, ov: &str) {
+    w.line(format!("let d = me.xyz - {ox}.xyz;"));
+    w.line("let r2 = dot(d, d);");
+    w.block(format!("if ({counts} && r2 < FLOCK_R2)"), |w| {
+        w.line("let f = flock_pair(d, r2, heading);");
+        w.line("push += f.xyz;");
+        w.line(format!("sum_x += f.w * {ox}.xyz;"));
+        w.line(format!("sum_v += f.w * {ov}.xyz;"));
+        w.line("sum_w += f.w;");
+        w.line("count += 1.0;");
     });
 }
 
@@ -551,6 +579,7 @@ fn emit_all_pairs(w: &mut Writer) {
                 w.line("me = boids[2u * i];");
                 w.line("me_v = boids[2u * i + 1u];");
             });
+            w.line("let heading = flock_heading(me_v.xyz);");
             emit_accumulators(w);
             w.block("for (var t = 0u; t < FLOCK_TILES; t++)", |w| {
                 w.line("let src = t * WORKGROUP + lid;");
@@ -578,25 +607,27 @@ fn emit_all_pairs(w: &mut Writer) {
     );
 }
 
-/// The grid: `grid_clear` zeroes the bucket counts; `grid_bucket` gives each live boid its
-/// cell's bucket (free slots the largest key) and counts it; the runtime sorts (bucket, slot)
-/// pairs with the stable radix sort and scans the counts into `cell_start` (where each bucket's
-/// run starts among the sorted boids); `grid_reorder` rewrites `boids` in the sorted order, so
-/// that a bucket's boids are contiguous and the boids of one workgroup search the same cells
-/// (their reads coalesce and hit the cache). The bucket hash keeps x-neighbouring cells in
-/// consecutive buckets. Below [`GRID_SPLIT_SEARCH_BELOW`] boids `flock_grid` (writing to each
-/// boid's slot) visits the 27 cells around a boid as 9 runs of 3 buckets, one thread a run
-/// (nine threads a boid: more loads in flight than one thread walking ~400 candidates in
-/// turn); the boid's first thread adds the nine partial sums in run order. From there on the
-/// cells are half as big and one thread a boid walks the rows of them the radius reaches
-/// ([`emit_search`]). Either way only entries whose own cell is a visited one count (other
-/// cells may share a bucket), and within a run the boids stay in slot order (the sort is
-/// stable), so every boid sums its neighbours in the same order every run.
+/// The grid, a counting sort of the boids by cell, and a search by tiles of boids:
+///
+/// - `grid_clear` zeroes the bucket counts; `grid_bucket` gives each live boid its cell's
+///   bucket and counts it (`atomicAdd`, which also hands it a place among its bucket's boids,
+///   in whatever order the threads ran); the runtime scans the counts into `cell_start`, where
+///   each bucket's run starts; `grid_scatter` puts each boid's slot at its run's start plus
+///   that place.
+/// - `grid_rank` makes the order the same every run: each boid's rank in its run is the number
+///   of the run's slots below its own, so a run ends up in slot order, and the boid's snapshot
+///   is written there (`boids` in sorted order: a bucket's boids contiguous).
+/// - `flock_grid`: a workgroup takes [`GRID_TILE`] consecutive sorted boids; nine threads a
+///   boid each walk one row of 3 cells around the boid's own (27 cells in all), and the boid's
+///   first thread adds the nine partial sums in row order.
+///
+/// The bucket hash keeps x-neighbouring cells in consecutive buckets, so a row of 3 cells is
+/// one run of sorted boids (two where the buckets wrap). Only candidates whose own cell is a
+/// visited one count (other cells may share a bucket). A boid adds its neighbours in (row, x,
+/// slot) order, the same every run.
 fn emit_grid(w: &mut Writer, cell: f64, split_search: bool) {
-    // The one-thread search clips its rows to the radius sphere, which pays on finer cells:
-    // half the given cell (still >= radius / 2, so 2 half cells reach the radius).
-    let hashed = if split_search { cell } else { cell / 2.0 };
-    w.line(format!("const INV_CELL: f32 = {};", f32_lit(1.0 / hashed)));
+    w.line(format!("const INV_CELL: f32 = {};", f32_lit(1.0 / cell)));
+    w.line("const NO_BUCKET: u32 = 0xffffffffu;");
     w.block("fn cell_of(x: vec3<f32>) -> vec3<i32>", |w| {
         w.comment(
             "Clamped so that far-away boids share the outermost cells instead of overflowing.",
@@ -604,6 +635,10 @@ fn emit_grid(w: &mut Writer, cell: f64, split_search: bool) {
         w.line(
             "return vec3<i32>(clamp(floor(x * INV_CELL), vec3<f32>(-1.0e6), vec3<f32>(1.0e6)));",
         );
+    });
+    w.comment("A cell's row (y, z) modulo 4 each way, as a small whole f32: rows of one boid's 27 cells differ in it, and a row farther away that shares buckets with them lies beyond the radius.");
+    w.block("fn row_key(c: vec3<i32>) -> f32", |w| {
+        w.line("return f32((c.y & 3) | ((c.z & 3) << 2u));");
     });
     w.comment("The (y, z) hash plus x: cells x - 1, x, x + 1 fall in consecutive buckets.");
     w.block("fn bucket_of(c: vec3<i32>) -> u32", |w| {
@@ -620,30 +655,58 @@ fn emit_grid(w: &mut Writer, cell: f64, split_search: bool) {
             });
         },
     );
+    w.comment("Each live boid's bucket, counted; grid_vals holds its place among its bucket's boids until the scatter.");
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
         "fn grid_bucket(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
             crate::wgsl::emit_thread_index(w, "i", Some("chunk.len"));
-            w.line("let b = boids[2u * i];");
-            w.line("var key = 0xffffffffu;");
+            w.line("let b = boid_of(i)[0];");
+            w.line("var key = NO_BUCKET;");
+            w.line("var place = 0u;");
             w.block("if (b.w > 0.0)", |w| {
                 w.line("key = bucket_of(cell_of(b.xyz));");
-                w.line("atomicAdd(&cell_start[key], 1u);");
+                w.line("place = atomicAdd(&cell_start[key], 1u);");
             });
             w.line("grid_keys[i] = key;");
-            w.line("grid_vals[i] = i;");
+            w.line("grid_vals[i] = place;");
         },
     );
-    w.comment("The snapshot again, in sorted order: boids[k] is the boid of slot grid_vals[k].");
+    w.comment("After the scan: each live boid's slot at its run's start plus its place (in thread order).");
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
-        "fn grid_reorder(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        "fn grid_scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            crate::wgsl::emit_thread_index(w, "k", Some("chunk.len"));
-            w.line("let b = boid_of(grid_vals[k]);");
-            w.line("boids[2u * k] = b[0];");
-            w.line("boids[2u * k + 1u] = b[1];");
+            crate::wgsl::emit_thread_index(w, "i", Some("chunk.len"));
+            w.line("let key = grid_keys[i];");
+            w.block("if (key != NO_BUCKET)", |w| {
+                w.line("grid_placed[atomicLoad(&cell_start[key]) + grid_vals[i]] = i;");
+            });
+        },
+    );
+    w.comment("Each run in slot order (a boid's rank: the run's slots below its own), and the snapshot in that order: boids[k] is the boid of slot grid_vals[k].");
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn grid_rank(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            crate::wgsl::emit_thread_index(w, "k", None);
+            w.block("if (k >= atomicLoad(&cell_start[GRID_BUCKETS]))", |w| {
+                w.line("return;")
+            });
+            w.line("let s = grid_placed[k];");
+            w.line("let b = grid_keys[s];");
+            w.line("let first = atomicLoad(&cell_start[b]);");
+            w.line("let last = atomicLoad(&cell_start[b + 1u]);");
+            w.line("var at = first;");
+            w.block("for (var m = first; m < last; m++)", |w| {
+                w.line("at += select(0u, 1u, grid_placed[m] < s);");
+            });
+            w.line("grid_vals[at] = s;");
+            w.line("let bo = boid_of(s);");
+            w.comment("The w words hold the boid's cell: its x, and its row's key.");
+            w.line("let c = cell_of(bo[0].xyz);");
+            w.line("boids[2u * at] = vec4<f32>(bo[0].xyz, f32(c.x));");
+            w.line("boids[2u * at + 1u] = vec4<f32>(bo[1].xyz, row_key(c));");
         },
     );
     if split_search {
@@ -653,133 +716,112 @@ fn emit_grid(w: &mut Writer, cell: f64, split_search: bool) {
     }
 }
 
-/// The walk over one run of 3 buckets around cell `c` (x - 1 to x + 1), for boid `k` at
-/// (`me`, `me_v`), adding to the running sums.
-fn emit_run_walk(w: &mut Writer) {
-    w.line("let b0 = bucket_of(c - vec3<i32>(1, 0, 0));");
-    emit_bucket_run(w, "3u", "abs(co.x - c.x) > 1");
-}
-
-/// The candidates in buckets `b0 .. b0 + len - 1` (mod buckets): one run of sorted boids, or
-/// two where the buckets wrap. A candidate counts only if its own cell is in row `c` and not
-/// `outside` in x (another cell may share the buckets).
-fn emit_bucket_run(w: &mut Writer, len: &str, outside: &str) {
-    w.comment("Buckets b0 .. b0 + len - 1 (mod buckets): one run, or two where they wrap.");
-    w.line(format!(
-        "let wrapped = max(b0 + {len}, GRID_BUCKETS) - GRID_BUCKETS;"
-    ));
+/// Candidates loaded before any of them is tested, in the walk along a row: more loads in
+/// flight per thread.
+/// The candidates of the row of 3 cells from cell `c` along x: the sorted boids in buckets
+/// `bucket_of(c) .. + 2` (mod the buckets: one run, or two where they wrap), of which those
+/// whose own cell is one of the row's (another cell may share the buckets) are tested against
+/// boid `k` at (`me`, `heading`), in run order, [`GRID_ROW_UNROLL`] loaded at a time.
+fn emit_row(w: &mut Writer) {
+    w.line("let b0 = bucket_of(c);");
+    w.line("let lo = f32(c.x);");
+    w.line("let hi = f32(c.x + 2);");
+    w.line("let key = row_key(c);");
+    w.line("let wrapped = max(b0 + 3u, GRID_BUCKETS) - GRID_BUCKETS;");
     w.block("for (var r = 0u; r < 2u; r++)", |w| {
         w.line("let first = atomicLoad(&cell_start[select(0u, b0, r == 0u)]);");
-        w.line(format!(
-            "let last = atomicLoad(&cell_start[select(wrapped, min(b0 + {len}, GRID_BUCKETS), r == 0u)]);"
-        ));
-        w.block("for (var m = first; m < last; m++)", |w| {
-            w.line("let ox = boids[2u * m];");
-            w.line("let co = cell_of(ox.xyz);");
-            w.comment("Another cell hashed to these buckets: not a neighbour from here.");
-            w.block(format!("if (co.y != c.y || co.z != c.z || {outside})"), |w| {
-                w.line("continue;");
-            });
-            w.line("let ov = boids[2u * m + 1u];");
-            emit_accumulate(w, "m == k", "ox", "ov");
-        });
+        w.line(
+            "let last = atomicLoad(&cell_start[select(wrapped, min(b0 + 3u, GRID_BUCKETS), r == 0u)]);",
+        );
+        w.block(
+            format!("for (var m = first; m < last; m += {GRID_ROW_UNROLL}u)"),
+            |w| {
+                for j in 0..GRID_ROW_UNROLL {
+                    w.line(format!("let m{j} = min(m + {j}u, last - 1u);"));
+                    w.line(format!("let x{j} = boids[2u * m{j}];"));
+                    w.line(format!("let v{j} = boids[2u * m{j} + 1u];"));
+                }
+                for j in 0..GRID_ROW_UNROLL {
+                    w.block(format!("if (m + {j}u < last)"), |w| {
+                        emit_accumulate_if(
+                            w,
+                            &format!("x{j}.w >= lo && x{j}.w <= hi && v{j}.w == key && m{j} != k"),
+                            &format!("x{j}"),
+                            &format!("v{j}"),
+                        );
+                    });
+                }
+            },
+        );
     });
 }
 
-/// `flock_grid`, one thread a boid, on half cells (`cell_of` uses cell / 2 here, see
-/// [`emit_grid`]): the boid walks the 25 rows of half cells within 2 of its own in y and z,
-/// skips those whose nearest point is farther than the radius, and in each of the others reads
-/// only the x cells the radius sphere's chord reaches. A neighbour is closer than the radius in
-/// (y, z), so its row is walked, and in x, so its cell lies in the chord's range: the same
-/// neighbours as all pairs. The reach is widened by 1e-5 of itself plus 1e-6 of the boid's
-/// coordinate in cells, far more than the f32 rounding of the cell arithmetic, so that a pair at
-/// the radius is never lost to it. Against the 27 whole cells this reads about half as many
-/// candidates (docs/performance.md).
+/// `flock_grid`, one thread a boid: its nine rows of 3 cells in turn.
 fn emit_search(w: &mut Writer) {
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
         "fn flock_grid(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            crate::wgsl::emit_thread_index(w, "k", Some("chunk.len"));
+            crate::wgsl::emit_thread_index(w, "k", None);
+            w.block("if (k >= atomicLoad(&cell_start[GRID_BUCKETS]))", |w| {
+                w.line("return;")
+            });
             w.line("let me = boids[2u * k];");
             w.line("let me_v = boids[2u * k + 1u];");
+            w.line("let heading = flock_heading(me_v.xyz);");
             emit_accumulators(w);
-            w.block("if (me.w > 0.0)", |w| {
-                w.line("let home = cell_of(me.xyz);");
-                w.comment("The boid in cells, and where it sits in its own cell (0 to 1 a side).");
-                w.line("let pc = me.xyz * INV_CELL;");
-                w.line("let f = clamp(pc - vec3<f32>(home), vec3<f32>(0.0), vec3<f32>(1.0));");
-                w.line("let reach = FLOCK_RADIUS * INV_CELL * 1.00001 + 1e-6 * abs(pc.x);");
-                w.block("for (var n = 0; n < 25; n++)", |w| {
-                    w.line("let dy = n % 5 - 2;");
-                    w.line("let dz = n / 5 - 2;");
-                    w.comment("Distance (cells) from the boid to the row's nearest y and z.");
-                    w.line("let gy = select(select(0.0, f.y + f32(-dy - 1), dy < 0), f32(dy) - f.y, dy > 0);");
-                    w.line("let gz = select(select(0.0, f.z + f32(-dz - 1), dz < 0), f32(dz) - f.z, dz > 0);");
-                    w.line("let left = reach * reach - gy * gy - gz * gz;");
-                    w.block("if (left < 0.0)", |w| w.line("continue;"));
-                    w.line("let chord = sqrt(left);");
-                    w.line("let lo = i32(clamp(floor(pc.x - chord), -1.0e6, 1.0e6));");
-                    w.line("let hi = i32(clamp(floor(pc.x + chord), -1.0e6, 1.0e6));");
-                    w.line("let c = vec3<i32>(lo, home.y + dy, home.z + dz);");
-                    w.line("let b0 = bucket_of(c);");
-                    w.line("let len = u32(hi - lo + 1);");
-                    emit_bucket_run(w, "len", "co.x < lo || co.x > hi");
-                });
+            w.line("let home = cell_of(me.xyz);");
+            w.block("for (var n = 0; n < 9; n++)", |w| {
+                w.line("let c = home + vec3<i32>(-1, n % 3 - 1, n / 3 - 1);");
+                emit_row(w);
             });
             emit_store_out(w, "grid_vals[k]");
         },
     );
 }
 
-/// `flock_grid`, nine threads a boid (one a run); the boid's first thread adds the nine partial
-/// sums in run order (the same order every run).
+/// `flock_grid`, nine threads a boid, one row each ([`GRID_TILE`] boids a workgroup); the
+/// boid's first thread adds the nine partial sums in row order.
 fn emit_split_search(w: &mut Writer) {
-    w.line(format!(
-        "const GRID_BOIDS_PER_GROUP: u32 = {};",
-        u32_lit(GRID_BOIDS_PER_GROUP)
-    ));
-    w.comment("Per thread: its run's (push, Σw), (Σw x, count), (Σw v, 0).");
-    w.line(format!(
-        "var<workgroup> grid_partial: array<vec4<f32>, {}>;",
-        27 * GRID_BOIDS_PER_GROUP
-    ));
-    w.line(format!(
-        "@compute @workgroup_size({})",
-        9 * GRID_BOIDS_PER_GROUP
-    ));
+    w.line(format!("const GRID_TILE: u32 = {};", u32_lit(GRID_TILE)));
+    w.comment("Per thread: its row's (push, Σw), (Σw x, count), (Σw v, 0).");
+    w.line("var<workgroup> grid_partial: array<vec4<f32>, 27u * GRID_TILE>;");
+    w.line("@compute @workgroup_size(9u * GRID_TILE)");
     w.block(
         "fn flock_grid(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32)",
         |w| {
-            w.line("let n = i32(lid % 9u);");
-            w.line("let k = (wid.x + wid.y * groups.x) * GRID_BOIDS_PER_GROUP + lid / 9u;");
+            w.comment("Row n of boid b: a warp's threads search consecutive boids.");
+            w.line("let n = lid / GRID_TILE;");
+            w.line("let b = lid % GRID_TILE;");
+            w.line("let k = (wid.x + wid.y * groups.x) * GRID_TILE + b;");
+            w.line("let live = atomicLoad(&cell_start[GRID_BUCKETS]);");
             emit_accumulators(w);
             w.comment("No early return: every thread reaches the barrier.");
-            w.block("if (k < chunk.len)", |w| {
+            w.block("if (k < live)", |w| {
                 w.line("let me = boids[2u * k];");
                 w.line("let me_v = boids[2u * k + 1u];");
-                w.block("if (me.w > 0.0)", |w| {
-                    w.line("let c = cell_of(me.xyz) + vec3<i32>(0, n % 3 - 1, n / 3 - 1);");
-                    emit_run_walk(w);
-                });
+                w.line("let heading = flock_heading(me_v.xyz);");
+                w.line("let c = cell_of(me.xyz) + vec3<i32>(-1, i32(n % 3u) - 1, i32(n / 3u) - 1);");
+                emit_row(w);
             });
-            w.line("grid_partial[3u * lid] = vec4<f32>(push, sum_w);");
-            w.line("grid_partial[3u * lid + 1u] = vec4<f32>(sum_x, count);");
-            w.line("grid_partial[3u * lid + 2u] = vec4<f32>(sum_v, 0.0);");
+            w.line("let at = 3u * (b * 9u + n);");
+            w.line("grid_partial[at] = vec4<f32>(push, sum_w);");
+            w.line("grid_partial[at + 1u] = vec4<f32>(sum_x, count);");
+            w.line("grid_partial[at + 2u] = vec4<f32>(sum_v, 0.0);");
             w.line("workgroupBarrier();");
-            w.block("if (n == 0 && k < chunk.len)", |w| {
+            w.block("if (n == 0u && k < live)", |w| {
                 w.line("var a = vec4<f32>(0.0);");
-                w.line("var b = vec4<f32>(0.0);");
+                w.line("var s = vec4<f32>(0.0);");
                 w.line("var d = vec4<f32>(0.0);");
                 w.block("for (var r = 0u; r < 9u; r++)", |w| {
-                    w.line("a += grid_partial[3u * (lid + r)];");
-                    w.line("b += grid_partial[3u * (lid + r) + 1u];");
-                    w.line("d += grid_partial[3u * (lid + r) + 2u];");
+                    w.line("a += grid_partial[3u * (b * 9u + r)];");
+                    w.line("s += grid_partial[3u * (b * 9u + r) + 1u];");
+                    w.line("d += grid_partial[3u * (b * 9u + r) + 2u];");
                 });
                 w.line("push = a.xyz;");
                 w.line("sum_w = a.w;");
-                w.line("sum_x = b.xyz;");
-                w.line("count = b.w;");
+                w.line("sum_x = s.xyz;");
+                w.line("count = s.w;");
                 w.line("sum_v = d.xyz;");
                 emit_store_out(w, "grid_vals[k]");
             });

@@ -25,6 +25,9 @@ pub enum Attribute {
     /// the emitters with lifetimes draw them from different ranges, so that the draw cannot
     /// re-derive a particle's lifetime from its id alone (see [`needs_spawn_step`]).
     SpawnStep,
+    /// The particle's tint, packed 8 bits a channel: `tint`. Only in a group fed by an event
+    /// that passes the parent's colour on ([`crate::tint::stores_tint`]).
+    Tint,
 }
 
 impl Attribute {
@@ -37,6 +40,7 @@ impl Attribute {
             Attribute::DeathStep => (&["die_at"], "u32"),
             Attribute::Id => (&["id"], "u32"),
             Attribute::SpawnStep => (&["born"], "u32"),
+            Attribute::Tint => (&["tint"], "u32"),
         }
     }
 
@@ -55,6 +59,9 @@ impl Attribute {
             Attribute::Id => "global spawn index; 0xffffffff marks a free slot",
             Attribute::SpawnStep => {
                 "spawn step, for a custom force's age, the draw's life fraction, a flipbook's frame or events"
+            }
+            Attribute::Tint => {
+                "colour (8 bits a channel) multiplying the colour over life: the parent's tint times the palette's"
             }
         }
     }
@@ -211,6 +218,9 @@ pub fn decide(ir: &EffectIr) -> Layout {
     {
         attributes.push(Attribute::SpawnStep);
     }
+    if crate::tint::stores_tint(ir) {
+        attributes.push(Attribute::Tint);
+    }
     // Padded to a multiple of 16 bytes so kernels move the state as whole vec4 words: scalar
     // accesses at a 28- or 32-byte stride reached under half the copy kernel's bandwidth on an
     // H100 (docs/performance.md).
@@ -328,7 +338,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
             name: "boids",
             space: "storage, read_write",
             bytes: cap * 32,
-            meaning: "flock snapshot at the step's start: (x, alive), (v, 0) per slot",
+            meaning: "flock snapshot at the step's start: (x, alive), (v, 0) per slot; the grid's: per boid in bucket order, (x, cell x), (v, row key)",
         });
         layout.bindings.push(Binding {
             binding: 8,
@@ -353,14 +363,21 @@ pub fn decide(ir: &EffectIr) -> Layout {
                 name: "grid_keys",
                 space: "storage, read_write",
                 bytes: cap * 4,
-                meaning: "each slot's grid bucket (free slots: 0xffffffff), sorted each step",
+                meaning: "each slot's grid bucket (free slots: 0xffffffff)",
             });
             layout.bindings.push(Binding {
                 binding: 11,
                 name: "grid_vals",
                 space: "storage, read_write",
                 bytes: cap * 4,
-                meaning: "slot indices, sorted by bucket",
+                meaning: "the live boids' slots sorted by bucket, then by slot (before the scatter: each slot's place among its bucket's boids)",
+            });
+            layout.bindings.push(Binding {
+                binding: 18,
+                name: "grid_placed",
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: "the live boids' slots by bucket, in the order their threads counted them (ranked into grid_vals)",
             });
             layout.bindings.push(Binding {
                 binding: 12,
@@ -440,6 +457,10 @@ impl fmt::Display for Layout {
                 self.bytes_per_particle
             )?;
         }
+        writeln!(
+            f,
+            "  (offsets within the struct; stored word-major: its 16-byte word k of slot i at k * slots + i of the slot's particle buffer)"
+        )?;
         let mut offset = 0;
         for a in &self.attributes {
             let (names, ty) = a.fields();

@@ -85,6 +85,7 @@ pub fn records(
                     velocity: v,
                     age: tau,
                     lifetime: schedule.lifetime(id, s.die_at),
+                    tint: crate::tint::own(ir, id),
                 },
                 closed.term_scale(s.x.length().max(extent), s.v),
             ));

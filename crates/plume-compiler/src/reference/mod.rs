@@ -27,6 +27,8 @@ pub struct ParticleRecord {
     pub age: f64,
     /// Seconds it lives in all (whole steps), or None when it never dies of age.
     pub lifetime: Option<f64>,
+    /// The colour its colour over life is multiplied by (`tint.rs`; white for none).
+    pub tint: DVec3,
 }
 
 /// Totals of a run so far.

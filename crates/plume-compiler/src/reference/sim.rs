@@ -27,6 +27,8 @@ struct Particle {
     born: u64,
     /// Past positions for `render.trail` (empty without one).
     history: History,
+    /// Its tint (`tint.rs`), as its group stores or derives it.
+    tint: DVec3,
 }
 
 /// An event fired by a particle in the last step: its id, and its position and velocity at
@@ -39,6 +41,8 @@ pub struct Fired {
     pub x: DVec3,
     /// Its velocity (m/s).
     pub v: DVec3,
+    /// Its tint, as its children may inherit it.
+    pub tint: DVec3,
 }
 
 /// The lifetime (s) of a particle born at step `born` that dies at the update of `die_at`
@@ -107,6 +111,12 @@ impl ReferenceSim {
             let mut s = spawn(&self.ir, inp.emitter, id, c, step);
             s.x += parent.x;
             s.v += inp.inherit_velocity * parent.v;
+            let inherited = if inp.inherit_color {
+                parent.tint
+            } else {
+                DVec3::ONE
+            };
+            let tint = crate::tint::spawned(&self.ir, id, inherited);
             let v = self.initial_v(id, step, time, s.x, s.v, s.die_at);
             self.particles.push(Particle {
                 id,
@@ -115,6 +125,7 @@ impl ReferenceSim {
                 die_at: s.die_at,
                 born: step,
                 history: History::default(),
+                tint,
             });
         }
     }
@@ -181,6 +192,7 @@ impl ReferenceSim {
                     die_at: s.die_at,
                     born: plan.step,
                     history: History::default(),
+                    tint: crate::tint::spawned(&self.ir, id + local, DVec3::ONE),
                 });
             }
             id += count;
@@ -233,6 +245,7 @@ impl ReferenceSim {
                 id: p.id,
                 x: p.x,
                 v: if verlet { p.v / h } else { p.v },
+                tint: p.tint,
             };
             for (j, e) in ir.events.iter().enumerate() {
                 let fires = match e.trigger {
@@ -269,6 +282,7 @@ impl ReferenceSim {
                 age: (self.schedule.steps_done() - p.born) as f64 * self.ir.dt,
                 lifetime: (p.die_at != crate::lifetime::NEVER)
                     .then(|| lifetime_of(p.born, p.die_at, self.ir.dt)),
+                tint: p.tint,
             })
             .collect()
     }

@@ -122,6 +122,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     let spins = rotation.is_some_and(|r| r.spins());
     // Random draws: a stateless effect redraws its spawns; a stateful one its lifetimes.
     let draws = stateless
+        || ir.render.palette.is_some()
         || rotation.is_some()
         || flipbook.is_some_and(|t| t.draws_random())
         || ((life || flipbook.is_some() || spins)
@@ -191,6 +192,10 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         rng::emit_wgsl(&mut w);
         w.blank();
     }
+    if ir.render.palette.is_some() {
+        crate::tint::emit_palette_fn(&mut w, ir);
+        w.blank();
+    }
     if stateless {
         spawn::emit_emitter_fns(&mut w, ir);
         emit_advance(&mut w, ir);
@@ -252,13 +257,20 @@ pub(crate) fn emit_draw_view(w: &mut Writer) {
     });
 }
 
-/// `load_particle(slot)`: the particle in global slot `slot`, from whichever buffer holds it.
+/// `load_particle(slot)`: the particle in global slot `slot`, from whichever buffer holds it
+/// (each buffer word-major over its own slots: [`crate::wgsl::word_index`]).
 pub(crate) fn emit_load(w: &mut Writer, layout: &Layout, shape: &DrawShape) {
     let n = layout.vec4s();
     w.block("fn load_particle(slot: u32) -> Particle", |w| {
         if shape.chunks <= 1 {
+            if n > 1 {
+                w.line("let slots = arrayLength(&particles_0) / VEC4S;");
+            }
             for k in 0..n {
-                w.line(format!("let w{k} = particles_0[slot * VEC4S + {k}u];"));
+                w.line(format!(
+                    "let w{k} = particles_0[{}];",
+                    crate::wgsl::word_index(k, "slot", "slots")
+                ));
             }
         } else {
             w.line("let c = slot / CHUNK_SLOTS;");
@@ -274,8 +286,14 @@ pub(crate) fn emit_load(w: &mut Writer, layout: &Layout, shape: &DrawShape) {
                         format!("case {c}u")
                     };
                     w.block(label, |w| {
+                        if n > 1 {
+                            w.line(format!("let slots = arrayLength(&particles_{c}) / VEC4S;"));
+                        }
                         for k in 0..n {
-                            w.line(format!("w{k} = particles_{c}[i * VEC4S + {k}u];"));
+                            w.line(format!(
+                                "w{k} = particles_{c}[{}];",
+                                crate::wgsl::word_index(k, "i", "slots")
+                            ));
                         }
                     });
                 }
@@ -505,7 +523,15 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
                 w.line("s.frame = sprite_frame(p.id, age.x, age.y);");
             }
         }
-        w.line("s.color = color_at(f);");
+        let tint = if stateless {
+            crate::tint::particle_wgsl(ir, "e", "e.id")
+        } else {
+            crate::tint::particle_wgsl(ir, "p", "p.id")
+        };
+        match tint {
+            Some(tint) => w.line(format!("s.color = color_at(f) * vec4<f32>({tint}, 1.0);")),
+            None => w.line("s.color = color_at(f);"),
+        }
         w.line("s.size = size_at(f) * draw.size_scale;");
         let height = if ir.render.size_y.is_some() {
             w.line("s.size_y = height_at(f) * draw.size_scale;");

@@ -118,7 +118,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "free_list" => "array<u32>",
             "counters" => "Counters",
             "chunk" => "Chunk",
-            "sort_keys" | "sort_vals" | "grid_keys" | "grid_vals" => "array<u32>",
+            "sort_keys" | "sort_vals" | "grid_keys" | "grid_vals" | "grid_placed" => "array<u32>",
             "boids" | "flock_out" | "flock_sums" => "array<vec4<f32>>",
             "cell_start" => "array<atomic<u32>>",
             "field" => "array<vec4<f32>>",
@@ -137,6 +137,10 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     w.blank();
     rng::emit_wgsl(&mut w);
     w.blank();
+    if ir.render.palette.is_some() {
+        crate::tint::emit_palette_fn(&mut w, ir);
+        w.blank();
+    }
     if let Some(flock) = &ir.flock {
         flock.emit_declarations(&mut w, ir.capacity, WORKGROUP);
         w.blank();
@@ -250,22 +254,43 @@ fn emit_init(w: &mut Writer) {
 /// The component of a vec4 word a field sits in.
 const LANES: [&str; 4] = ["x", "y", "z", "w"];
 
-/// `load_particle`, `store_particle` and `mark_free`: the state is stored as whole vec4<u32>
-/// words (the struct's byte layout, padded to 16 bytes) so every access is a full 16-byte load
-/// or store, as coalesced as a copy kernel's.
+/// The index, in a buffer of `slots` particles, of 16-byte word `k` of local slot `i`. The
+/// state is stored **word-major**: word k of every slot of a buffer, then word k + 1 (a
+/// buffer's words are `slots` vec4<u32> per struct word). A thread that loads its own
+/// particle's words then reads, across a warp, 512 contiguous bytes per load, as a copy kernel
+/// does, with no exchange through workgroup memory and no barrier; particle-major words
+/// (slot i's at i · VEC4S + k) left every load half-coalesced, and staging them through
+/// workgroup memory cost the barriers (docs/performance.md, "The update at large sizes").
+pub fn word_index(k: u32, i: &str, slots: &str) -> String {
+    match k {
+        0 => i.to_string(),
+        1 => format!("{slots} + {i}"),
+        _ => format!("{k}u * {slots} + {i}"),
+    }
+}
+
+/// `load_particle`, `store_particle` and `mark_free` on this dispatch's buffer (`chunk.len`
+/// slots, word-major: [`word_index`]): every access is a full 16-byte load or store, as
+/// coalesced as a copy kernel's.
 fn emit_particle_access(w: &mut Writer, layout: &Layout) {
     let words = layout.words();
     let n = layout.vec4s();
     w.line(format!("const VEC4S: u32 = {n}u;"));
     w.block("fn load_particle(i: u32) -> Particle", |w| {
         for k in 0..n {
-            w.line(format!("let w{k} = particles[i * VEC4S + {k}u];"));
+            w.line(format!(
+                "let w{k} = particles[{}];",
+                word_index(k, "i", "chunk.len")
+            ));
         }
         w.line(format!("return {};", particle_from_words(layout)));
     });
     w.block("fn store_particle(i: u32, p: Particle)", |w| {
         for (k, word) in packed_words(layout).iter().enumerate() {
-            w.line(format!("particles[i * VEC4S + {k}u] = {word};"));
+            w.line(format!(
+                "particles[{}] = {word};",
+                word_index(k as u32, "i", "chunk.len")
+            ));
         }
     });
     let id = words
@@ -275,37 +300,8 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
     w.comment("Frees a slot by writing only its id word.");
     w.block("fn mark_free(i: u32)", |w| {
         w.line(format!(
-            "particles[i * VEC4S + {}u].{} = DEAD;",
-            id / 4,
-            LANES[id % 4]
-        ));
-    });
-}
-
-/// The same three accessors on the update's workgroup copy of its particles (`staged`, see
-/// `update.rs`), addressed by the particle's lane in the workgroup.
-pub fn emit_staged_access(w: &mut Writer, layout: &Layout) {
-    let n = layout.vec4s();
-    w.block("fn load_staged(lane: u32) -> Particle", |w| {
-        for k in 0..n {
-            w.line(format!("let w{k} = staged[lane * VEC4S + {k}u];"));
-        }
-        w.line(format!("return {};", particle_from_words(layout)));
-    });
-    w.block("fn store_staged(lane: u32, p: Particle)", |w| {
-        for (k, word) in packed_words(layout).iter().enumerate() {
-            w.line(format!("staged[lane * VEC4S + {k}u] = {word};"));
-        }
-    });
-    let id = layout
-        .words()
-        .iter()
-        .position(|(name, _)| *name == "id")
-        .unwrap_or(0);
-    w.block("fn mark_staged_free(lane: u32)", |w| {
-        w.line(format!(
-            "staged[lane * VEC4S + {}u].{} = DEAD;",
-            id / 4,
+            "particles[{}].{} = DEAD;",
+            word_index(id as u32 / 4, "i", "chunk.len"),
             LANES[id % 4]
         ));
     });

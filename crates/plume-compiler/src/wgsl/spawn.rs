@@ -61,13 +61,25 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                         });
                     }
                 });
+                if layout.has(Attribute::Tint) {
+                    w.line(format!(
+                        "let tint = pack4x8unorm(vec4<f32>({}, 1.0));",
+                        crate::tint::own_wgsl(ir, "id")
+                    ));
+                }
                 emit_store_spawned(w, ir, layout);
             }
         },
     );
     if !ir.event_inputs.is_empty() {
         w.blank();
-        crate::events::emit_kernels(w, &ir.event_inputs, &|w| emit_store_spawned(w, ir, layout));
+        let own = crate::tint::own_wgsl(ir, "id");
+        crate::events::emit_kernels(
+            w,
+            &ir.event_inputs,
+            layout.has(Attribute::Tint).then_some(own.as_str()),
+            &|w| emit_store_spawned(w, ir, layout),
+        );
     }
 }
 
@@ -103,6 +115,9 @@ pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     fields.push("id");
     if layout.has(Attribute::SpawnStep) {
         fields.push("params.step");
+    }
+    if layout.has(Attribute::Tint) {
+        fields.push("tint");
     }
     w.line(format!(
         "store_particle(slot - chunk.base, Particle({}));",

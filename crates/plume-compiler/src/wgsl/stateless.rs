@@ -92,15 +92,13 @@ pub fn emit_evaluate_at(w: &mut Writer, ir: &EffectIr) {
     });
 }
 
-/// Emits `evaluate_slot` (one particle of the view) and two kernels that write the view:
-/// - `evaluate` stages a workgroup's particles in workgroup memory so that consecutive threads
-///   store consecutive 16-byte words. A thread storing its own 32-byte particle as two words
-///   leaves every store instruction half-coalesced, which reached 66% of a write-only
-///   kernel's bandwidth on an H100 (docs/performance.md).
-/// - `evaluate_direct` stores each particle from its own thread, with no barrier: for CPU
-///   adapters (llvmpipe), where a workgroup barrier costs more than the stores.
+/// Emits `evaluate_slot` (one particle of the view) and `evaluate`, which writes the view: each
+/// thread stores its own particle's words, which the word-major layout puts where a warp's
+/// stores cover contiguous memory ([`crate::wgsl::word_index`]). (With particle-major words,
+/// a thread storing its own particle left every store half-coalesced, 66% of a write-only
+/// kernel's bandwidth on an H100, and staging them through workgroup memory cost a barrier
+/// that CPU adapters pay dearly for: docs/performance.md.)
 pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
-    let words = layout.vec4s();
     let dead_fields: Vec<&str> = layout
         .words()
         .iter()
@@ -133,39 +131,9 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         w.line(format!("return Particle({});", fields.join(", ")));
     });
     w.blank();
-    w.line(format!(
-        "var<workgroup> staged: array<vec4<u32>, {}>;",
-        words * crate::wgsl::WORKGROUP
-    ));
-    w.blank();
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
-        "fn evaluate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32)",
-        |w| {
-            crate::wgsl::emit_thread_index(w, "local", None);
-            w.line(format!("var p = Particle({});", dead_fields.join(", ")));
-            w.block("if (local < chunk.len)", |w| {
-                w.line("p = evaluate_slot(chunk.base + local);");
-            });
-            for (k, word) in crate::wgsl::packed_words(layout).iter().enumerate() {
-                w.line(format!("staged[lid * VEC4S + {k}u] = {word};"));
-            }
-            w.comment("No early return above: every thread reaches the barrier.");
-            w.line("workgroupBarrier();");
-            w.comment("Thread lid stores words lid, lid + WORKGROUP, ... of the group's block.");
-            w.line("let first = (local - lid) * VEC4S;");
-            w.block(format!("for (var k = 0u; k < {words}u; k++)"), |w| {
-                w.line("let word = lid + k * WORKGROUP;");
-                w.block("if (first + word < chunk.len * VEC4S)", |w| {
-                    w.line("particles[first + word] = staged[word];");
-                });
-            });
-        },
-    );
-    w.blank();
-    w.line("@compute @workgroup_size(WORKGROUP)");
-    w.block(
-        "fn evaluate_direct(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        "fn evaluate(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
             crate::wgsl::emit_thread_index(w, "local", Some("chunk.len"));
             w.line("store_particle(local, evaluate_slot(chunk.base + local));");

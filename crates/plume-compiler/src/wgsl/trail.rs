@@ -59,7 +59,8 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     let life = ir.render.varies_over_life() && ir.has_lifetimes();
     let shared = layout::shared_lifetime(ir);
     let draws_lifetime = life && !layout.has(Attribute::SpawnStep) && shared.is_some();
-    if draws_lifetime {
+    let draws = draws_lifetime || ir.render.palette.is_some();
+    if draws {
         w.line(format!("const SEED_MIX: u32 = {};", u32_lit(ir.seed_mix)));
     }
     w.blank();
@@ -89,8 +90,12 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         draw::emit_soft(&mut w, distance);
     }
     w.blank();
-    if draws_lifetime {
+    if draws {
         rng::emit_wgsl(&mut w);
+        w.blank();
+    }
+    if ir.render.palette.is_some() {
+        crate::tint::emit_palette_fn(&mut w, ir);
         w.blank();
     }
     draw::emit_load(&mut w, layout, shape);
@@ -107,7 +112,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.blank();
     emit_entry(&mut w, shape);
     w.blank();
-    emit_vertex(&mut w, shape, life);
+    emit_vertex(&mut w, ir, shape, life);
     w.blank();
     w.line("@fragment");
     w.block(
@@ -159,7 +164,7 @@ fn emit_entry(w: &mut Writer, shape: &DrawShape) {
 }
 
 /// The vertex shader `vs_trail` and its helpers (see the module doc).
-fn emit_vertex(w: &mut Writer, shape: &DrawShape, life: bool) {
+fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
     w.comment("Ribbon point j >= 1 of the particle in `slot`: its sample newest - (j - 1).");
     w.block(
         "fn sample_entry(slot: u32, newest: u32, j: u32) -> vec4<u32>",
@@ -243,7 +248,12 @@ fn emit_vertex(w: &mut Writer, shape: &DrawShape, life: bool) {
             } else {
                 w.line("let f = 0.0;");
             }
-            w.line("out.color = color_at(f) * trail_color(t);");
+            match crate::tint::particle_wgsl(ir, "p", "p.id") {
+                Some(tint) => w.line(format!(
+                    "out.color = color_at(f) * trail_color(t) * vec4<f32>({tint}, 1.0);"
+                )),
+                None => w.line("out.color = color_at(f) * trail_color(t);"),
+            }
             w.line("return out;");
         },
     );

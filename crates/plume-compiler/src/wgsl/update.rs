@@ -2,12 +2,12 @@
 //! max speed + swept collisions, then ageing, lifetime and kill volumes, in one pass. A dying
 //! particle frees its slot by pushing it on the free list.
 //!
-//! The update is *staged*: the workgroup first copies its particles' words into workgroup
-//! memory with consecutive lanes reading consecutive 16-byte words (the copy kernel's
-//! access pattern), each lane updates its particle there, and the words of the particles that
-//! changed are written back the same way. Before, each lane read its own particle's words, so a
-//! warp's load touched every other 16 bytes of a 1 KiB span: 0.86 of the copy kernel from 10M
-//! particles up on an H100, 0.88 staged (docs/performance.md, "The update at large sizes").
+//! Each thread updates the particle of its slot, loading and storing its 16-byte words where
+//! the word-major layout puts them ([`crate::wgsl::word_index`]): across a warp every access
+//! covers contiguous memory, as in a copy kernel, and no thread waits for another. The update
+//! of an earlier version staged a workgroup's particle-major words through workgroup memory
+//! to coalesce them: 0.88 of the copy kernel from 10M particles up on an H100, with a barrier
+//! on each side of the arithmetic (docs/performance.md, "The update at large sizes").
 
 use crate::events::TriggerIr;
 use crate::integrators;
@@ -15,54 +15,21 @@ use crate::ir::{EffectIr, KillIr};
 use crate::passes::layout::{Attribute, Layout};
 use crate::wgsl::writer::{f32_lit, vec3_lit, Writer};
 
-/// The largest particle (in 16-byte words) the staged update holds: 256 lanes x 4 words x 16
-/// bytes is WebGPU's default limit of 16 KiB of workgroup memory. Every layout fits today (the
-/// largest has 9 four-byte fields, 3 words); `layout_fits_the_staged_update` checks it.
-pub const MAX_STAGED_VEC4S: u32 = 4;
-
 /// Emits `update` (see the module doc).
 pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
-    assert!(
-        layout.vec4s() <= MAX_STAGED_VEC4S,
-        "a particle of {} words does not fit the staged update",
-        layout.vec4s()
-    );
-    w.comment("The workgroup's particles, as the update reads and writes them.");
-    w.line("var<workgroup> staged: array<vec4<u32>, WORKGROUP * VEC4S>;");
-    w.line("var<workgroup> staged_dirty: array<u32, WORKGROUP>;");
-    crate::wgsl::emit_staged_access(w, layout);
-    w.blank();
-    w.comment("One particle's update on its staged words; true when they changed.");
-    w.block("fn update_particle(i: u32, lane: u32) -> bool", |w| {
-        w.block("if (i >= chunk.len)", |w| w.line("return false;"));
+    w.comment("One particle's update: loaded, advanced, stored (or freed) in place.");
+    w.block("fn update_particle(i: u32)", |w| {
         crate::events::emit_update_reset(w, &ir.events);
-        w.line("var p = load_staged(lane);");
+        w.line("var p = load_particle(i);");
         emit_body(w, ir, layout);
     });
     w.blank();
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
-        "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lane: u32)",
+        "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            crate::wgsl::emit_thread_index(w, "i", None);
-            w.line("let words = chunk.len * VEC4S;");
-            w.line("let first = (i - lane) * VEC4S;");
-            w.comment("Consecutive lanes move consecutive words, as the copy kernel does.");
-            w.block("for (var r = 0u; r < VEC4S; r++)", |w| {
-                w.line("let k = r * WORKGROUP + lane;");
-                w.block("if (first + k < words)", |w| {
-                    w.line("staged[k] = particles[first + k];")
-                });
-            });
-            w.line("workgroupBarrier();");
-            w.line("staged_dirty[lane] = select(0u, 1u, update_particle(i, lane));");
-            w.line("workgroupBarrier();");
-            w.block("for (var r = 0u; r < VEC4S; r++)", |w| {
-                w.line("let k = r * WORKGROUP + lane;");
-                w.block("if (first + k < words && staged_dirty[k / VEC4S] != 0u)", |w| {
-                    w.line("particles[first + k] = staged[k];")
-                });
-            });
+            crate::wgsl::emit_thread_index(w, "i", Some("chunk.len"));
+            w.line("update_particle(i);");
         },
     );
 }
@@ -71,7 +38,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
 fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     let verlet = layout.has(Attribute::Displacement);
     let lifetimes = layout.has(Attribute::DeathStep);
-    w.block("if (p.id == DEAD)", |w| w.line("return false;"));
+    w.block("if (p.id == DEAD)", |w| w.line("return;"));
     if let Some(flock) = &ir.flock {
         flock.emit_update_prologue(w);
     }
@@ -134,9 +101,11 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     } else {
         "v".to_string()
     };
+    // ...and the tint their children may inherit.
+    let tint = crate::tint::packed_wgsl(ir, "p");
     if collide_events && !ir.colliders.is_empty() {
         w.block("if (collided)", |w| {
-            crate::events::emit_fire(w, &ir.events, |t| t == TriggerIr::Collide, "x", &vel)
+            crate::events::emit_fire(w, &ir.events, |t| t == TriggerIr::Collide, "x", &vel, &tint)
         });
     }
     crate::events::emit_fire(
@@ -145,6 +114,7 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         |t| matches!(t, TriggerIr::Every(_)),
         "x",
         &vel,
+        &tint,
     );
     // Only effects with lifetimes or kill volumes get the death code.
     if lifetimes || !ir.kills.is_empty() {
@@ -156,12 +126,12 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             emit_kill(w, k);
         }
         w.block("if (dies)", |w| {
-            crate::events::emit_fire(w, &ir.events, |t| t == TriggerIr::Death, "x", &vel);
-            w.line("mark_staged_free(lane);");
+            crate::events::emit_fire(w, &ir.events, |t| t == TriggerIr::Death, "x", &vel, &tint);
+            w.line("mark_free(i);");
             w.line("let top = atomicAdd(&counters.free_count, 1u);");
             w.line("free_list[top] = chunk.base + i;");
             w.line("atomicAdd(&counters.died, 1u);");
-            w.line("return true;");
+            w.line("return;");
         });
     }
     w.line("p.px = x.x;");
@@ -176,8 +146,7 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         w.line("p.vy = v.y;");
         w.line("p.vz = v.z;");
     }
-    w.line("store_staged(lane, p);");
-    w.line("return true;");
+    w.line("store_particle(i, p);");
 }
 
 fn emit_kill(w: &mut Writer, k: &KillIr) {
@@ -202,25 +171,5 @@ fn emit_kill(w: &mut Writer, k: &KillIr) {
             f32_lit(r * r),
             c = vec3_lit(c)
         )),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::MAX_STAGED_VEC4S;
-    use crate::passes::layout::Attribute;
-
-    #[test]
-    fn layout_fits_the_staged_update() {
-        let every = [
-            Attribute::Position,
-            Attribute::Velocity,
-            Attribute::Displacement,
-            Attribute::DeathStep,
-            Attribute::Id,
-            Attribute::SpawnStep,
-        ];
-        let bytes: u32 = every.iter().map(|a| a.bytes()).sum();
-        assert!(bytes.div_ceil(16) <= MAX_STAGED_VEC4S, "{bytes} bytes");
     }
 }
