@@ -299,6 +299,80 @@ fn passing_on_a_colour_a_group_does_not_have_is_warned_about() {
 }
 
 #[test]
+fn a_stateless_group_fires_on_death_and_every_period_as_its_stateful_twin_does() {
+    // Exact shells with a lifetime and no kill volume: stateless, firing from their closed form
+    // (a stream of them, so segments spawn and expire within a batch of steps). Each sheds a
+    // puff every 3 steps and bursts on death. The same file with the shells `state: Stateful`
+    // must spawn the same children, and both match the reference.
+    let src = |state: &str| {
+        format!(
+            r#"Effect(
+        name: "shells",
+        capacity: 200,
+        seed: 4,
+        state: {state},
+        emitters: [Emitter(burst: 5, rate: 40.0, shape: Sphere(center: (0.0, 1.0, 0.0), radius: 0.5),
+                           velocity: Cone(axis: (0.0, 1.0, 0.0), angle: 20.0, speed: (4.0, 6.0)), lifetime: Some((0.3, 0.5)))],
+        forces: [Gravity((0.0, -9.81, 0.0)), Drag(k: 0.5)],
+        integrator: Exact,
+        events: [
+            Event(on: Every(0.05), target: "puffs", count: 1, lifetime: Some((0.2, 0.3)), inherit_velocity: 0.5),
+            Event(on: Death, target: "bursts", count: 6, velocity: Radial(speed: (1.0, 2.0)), lifetime: Some((0.3, 0.4))),
+        ],
+        groups: [
+            Group(name: "puffs", capacity: 2000, forces: [Gravity((0.0, -1.0, 0.0))]),
+            Group(name: "bursts", capacity: 3000, forces: [Gravity((0.0, -9.81, 0.0))]),
+        ],
+    )"#
+        )
+    };
+    let stateless = graph(&src("Auto"));
+    let stateful = graph(&src("Stateful"));
+    assert!(
+        stateless.groups[0].effect.layout.stateless(),
+        "{}",
+        stateless.groups[0].effect.ir.state_reason
+    );
+    assert!(!stateful.groups[0].effect.layout.stateless());
+    // Past 256 steps: more than one batch (each batch has a table of its own).
+    let a = compare_runs("stateless shells", &stateless, &[40, 300]);
+    let b = compare_runs("stateful shells", &stateful, &[40, 300]);
+    for g in 1..3 {
+        let (ta, tb) = (a.totals(g).unwrap(), b.totals(g).unwrap());
+        assert_eq!(ta, tb, "group {g}: the children differ");
+        assert!(ta.spawned > 100, "group {g} was barely fed: {ta:?}");
+        let (ra, rb) = (a.records(g).unwrap(), b.records(g).unwrap());
+        assert_eq!(
+            ra.iter().map(|r| r.id).collect::<Vec<_>>(),
+            rb.iter().map(|r| r.id).collect::<Vec<_>>()
+        );
+        for (x, y) in ra.iter().zip(&rb) {
+            // Both within compare_runs' bound of the reference (the closed form against f32
+            // steps): within twice that of each other; 1e-4 of the scale is far wider.
+            assert!(
+                (x.position - y.position).length() <= 1e-4 * (1.0 + y.position.length()),
+                "group {g} particle {}: {:?} against {:?}",
+                x.id,
+                x.position,
+                y.position
+            );
+        }
+    }
+    // A firing group too large to count its firings keeps its state, and says why.
+    let large = graph(&src("Auto").replace("capacity: 200,", "capacity: 9000,"));
+    assert!(!large.groups[0].effect.layout.stateless());
+    assert!(
+        large.groups[0]
+            .effect
+            .ir
+            .state_reason
+            .contains("events[0] fires from a group of 9000 slots"),
+        "{}",
+        large.groups[0].effect.ir.state_reason
+    );
+}
+
+#[test]
 fn collisions_fire_events_where_the_particle_hits() {
     // Drops fall on a plane at y = 0 and stop; each contact spawns 3 droplets at the drop.
     let src = r#"Effect(

@@ -376,6 +376,41 @@ pub fn emit_fire(
     }
 }
 
+/// Emits, in a stateless group's `fire` kernel, the firing of every event by particle `id`
+/// at the end of the step in `fire_state`: `dies` (WGSL bool) whether it dies in it, `lived`
+/// (u32) its whole steps lived at its end, `x`, `vel` and `tint` (packed) as for
+/// [`emit_fire`]. The firings are appended with their records (every stateless firing group
+/// is [`Ordering::Counted`]): the record's index is the firing's slot.
+pub fn emit_fire_appended(
+    w: &mut Writer,
+    events: &[EventIr],
+    id: &str,
+    x: &str,
+    vel: &str,
+    tint: &str,
+) {
+    for (j, e) in events.iter().enumerate() {
+        let fires = match e.trigger {
+            TriggerIr::Death => "dies".to_string(),
+            TriggerIr::Every(period) => format!("lived % {} == 0u", u32_lit(period)),
+            // Colliders rule out the closed form a stateless group needs.
+            TriggerIr::Collide => continue,
+        };
+        w.block(format!("if ({fires})"), |w| {
+            w.line(format!(
+                "let at_{j} = atomicAdd(&{}.count, 1u);",
+                OUT_RECORDS[j]
+            ));
+            w.line(format!("{}[at_{j}] = {id};", OUT_KEYS[j]));
+            w.line(format!("{}[at_{j}] = at_{j};", OUT_VALS[j]));
+            w.line(format!(
+                "{}.records[at_{j}] = EventRecord({x}, {tint}, vec4<f32>({vel}, 0.0));",
+                OUT_RECORDS[j]
+            ));
+        });
+    }
+}
+
 /// Emits `event_prepare_J` and `event_spawn_J` for every event the group receives.
 /// `store` emits the store of the spawned particle `s` with id `id` (and packed tint `tint`,
 /// when the group stores tints) in `slot`: the same code as the group's own spawn. `own` is

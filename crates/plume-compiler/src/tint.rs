@@ -150,6 +150,16 @@ pub fn particle_wgsl(ir: &EffectIr, p: &str, id: &str) -> Option<String> {
     }
 }
 
+/// The WGSL of a stateless particle's tint packed for an event record (u32), from its `id`: a
+/// stateless group stores no tint (nothing feeds it).
+pub fn packed_wgsl_of_id(ir: &EffectIr, id: &str) -> String {
+    if ir.render.palette.is_some() {
+        format!("pack4x8unorm(vec4<f32>(palette_tint({id}), 1.0))")
+    } else {
+        format!("{WHITE}u")
+    }
+}
+
 /// The WGSL of particle `p`'s tint packed for an event record (u32): what its children inherit.
 pub fn packed_wgsl(ir: &EffectIr, p: &str) -> String {
     if stores_tint(ir) {

@@ -177,7 +177,7 @@ impl GraphInstance {
         steps: u64,
         timestamps: Option<(&wgpu::QuerySet, u32)>,
     ) -> Result<bool, RuntimeError> {
-        let gpu_work = self.groups.iter().any(|g| !g.is_stateless());
+        let gpu_work = self.groups.iter().any(EffectInstance::steps_on_gpu);
         let mut done = 0;
         while done < steps {
             let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
@@ -196,22 +196,23 @@ impl GraphInstance {
                     label: Some("graph steps"),
                     timestamp_writes: writes,
                 });
-                self.record_batch(&mut pass, &plans)?;
+                self.record_batch(&mut pass, &plans, n)?;
             }
             done += n;
         }
         Ok(gpu_work && steps > 0)
     }
 
-    /// Records a planned batch (each group's plans, from `plan_graph_batch`): per step, each
-    /// stream's ordering and its child's event spawn, in stream order, then each group's own step.
+    /// Records a planned batch of `steps` steps (each group's plans, from `plan_graph_batch`):
+    /// per step, each stream's ordering and its child's event spawn, in stream order, then each
+    /// group's own step.
     fn record_batch(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         plans: &[Vec<plume_compiler::schedule::StepPlan>],
+        steps: u64,
     ) -> Result<(), RuntimeError> {
-        let steps = plans.iter().map(Vec::len).max().unwrap_or(0);
-        for j in 0..steps {
+        for j in 0..steps as usize {
             for s in &self.orders {
                 s.order.record(pass);
                 self.groups[s.stream.child].record_event_spawn(pass, s.stream.in_slot, j)?;
@@ -285,7 +286,7 @@ impl GraphInstance {
             .map(|g| g.plan_graph_batch(&mut encoder, n))
             .collect::<Result<Vec<_>, _>>()?;
         self.gpu.queue.submit([encoder.finish()]);
-        let seconds = timer.time(|pass| self.record_batch(pass, &plans))?;
+        let seconds = timer.time(|pass| self.record_batch(pass, &plans, n))?;
         self.gpu.take_error()?;
         Ok(seconds)
     }

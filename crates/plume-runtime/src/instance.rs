@@ -218,7 +218,45 @@ impl EffectInstance {
         n: u64,
     ) -> Result<Vec<StepPlan>, RuntimeError> {
         if let Steps::Stateless(stateless) = &mut self.steps {
-            stateless.advance(&mut self.schedule, n, |_| {});
+            let first_step = stateless.segments.steps_done();
+            if stateless.firing.is_none() {
+                stateless.advance(&mut self.schedule, n, |_| {});
+            } else {
+                // The batch's table and its first step, for `fire` (see wgsl/stateless.rs).
+                if n > plume_compiler::passes::stateless::FIRE_BATCH_STEPS {
+                    return Err(RuntimeError::Gpu(format!(
+                        "a batch of {n} steps is longer than a firing stateless group's table covers"
+                    )));
+                }
+                // Every segment live at some step of the batch, one spawned and gone within
+                // it included.
+                let mut seen: Vec<plume_compiler::schedule::Segment> =
+                    stateless.segments.iter().copied().collect();
+                for _ in 0..n {
+                    stateless.advance(&mut self.schedule, 1, |_| {});
+                    for seg in stateless.segments.iter() {
+                        if !seen
+                            .iter()
+                            .any(|s| s.step == seg.step && s.emitter == seg.emitter)
+                        {
+                            seen.push(*seg);
+                        }
+                    }
+                }
+                let (table, threads) = StatelessSteps::fire_table(&self.effect, &seen);
+                stateless.set_fire_threads(threads);
+                let mut state = [0u8; 16];
+                state[..4].copy_from_slice(&(first_step as u32).to_le_bytes());
+                for (name, bytes) in [("fire_frame", table.as_slice()), ("fire_state", &state)] {
+                    let dst = self.res.extra_named(&self.effect, name).ok_or_else(|| {
+                        RuntimeError::Gpu(format!("a firing stateless group has no {name}"))
+                    })?;
+                    let src = staging(&self.gpu, name, bytes)?;
+                    encoder.copy_buffer_to_buffer(&src, 0, dst, 0, bytes.len() as u64);
+                }
+                // Its kernels bind the view's buffers: allocate them now.
+                self.chunks()?;
+            }
             return Ok(Vec::new());
         }
         let plans: Vec<StepPlan> = (0..n).map(|_| self.schedule.next_plan()).collect();
@@ -226,14 +264,17 @@ impl EffectInstance {
         Ok(plans)
     }
 
-    /// Records step `j` of a batch planned by [`Self::plan_graph_batch`] (nothing for a
-    /// stateless group).
+    /// Records step `j` of a batch planned by [`Self::plan_graph_batch`] (for a stateless
+    /// group, its firings if it fires events, else nothing).
     pub(crate) fn record_graph_step(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         plans: &[StepPlan],
         j: usize,
     ) -> Result<(), RuntimeError> {
+        if let Steps::Stateless(stateless) = &self.steps {
+            return stateless.record_fire(&self.gpu, pass, &self.chunks()?[0]);
+        }
         let (Steps::Stateful(stateful), Some(plan)) = (&self.steps, plans.get(j)) else {
             return Ok(());
         };
@@ -655,6 +696,15 @@ impl EffectInstance {
             .zip(prefix.windows(2))
             .map(|(name, w)| (*name, w[1] - w[0]))
             .collect())
+    }
+
+    /// Whether its steps record GPU work: a stateful effect's, or a stateless group's that fires
+    /// events.
+    pub fn steps_on_gpu(&self) -> bool {
+        match &self.steps {
+            Steps::Stateful(_) => true,
+            Steps::Stateless(s) => s.firing.is_some(),
+        }
     }
 
     /// Whether the effect runs stateless (no state kept; computed when read or drawn).

@@ -289,7 +289,7 @@ impl Resources {
                     "chunk" | "depth_axis" => {
                         buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
                     }
-                    "frame" | "collider_data" => buffer_entry(
+                    "frame" | "fire_frame" | "collider_data" => buffer_entry(
                         b.binding,
                         wgpu::BufferBindingType::Storage { read_only: true },
                         false,

@@ -8,7 +8,7 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use plume_compiler::passes::stateless::{FRAME_HEADER_BYTES, SEGMENT_BYTES};
-use plume_compiler::schedule::{LiveSegments, Schedule, StepPlan};
+use plume_compiler::schedule::{LiveSegments, Schedule, Segment, StepPlan};
 use plume_compiler::wgsl::WORKGROUP;
 use plume_compiler::CompiledEffect;
 
@@ -42,10 +42,22 @@ pub struct StatefulSteps {
     )>,
 }
 
+/// A stateless group's events: its `fire` kernel (a step's firings from the closed form, over
+/// the batch's segment table) and `fire_next` (on to the next step), and how many threads the
+/// current batch's table has.
+pub struct Firing {
+    fire: wgpu::ComputePipeline,
+    next: wgpu::ComputePipeline,
+    threads: u64,
+}
+
 /// A stateless effect's `evaluate` kernel and its bookkeeping: steps only advance the live
-/// segments; the view is computed when it is read.
+/// segments; the view is computed when it is read. A group that fires events also runs its
+/// `fire` kernel every step ([`Firing`]).
 pub struct StatelessSteps {
     evaluate: wgpu::ComputePipeline,
+    /// The `fire` kernels of a group that fires events.
+    pub firing: Option<Firing>,
     /// The live spawn segments of the steps done.
     pub segments: LiveSegments,
     /// Steps done when the view was last evaluated (u64::MAX: never).
@@ -62,6 +74,11 @@ impl Steps {
         if let Some(plan) = &effect.ir.stateless {
             return Ok(Steps::Stateless(StatelessSteps {
                 evaluate: res.pipeline("evaluate"),
+                firing: (!effect.ir.events.is_empty()).then(|| Firing {
+                    fire: res.pipeline("fire"),
+                    next: res.pipeline("fire_next"),
+                    threads: 0,
+                }),
                 segments: LiveSegments::new(plan.lives.clone()),
                 evaluated_at: AtomicU64::new(u64::MAX),
             }));
@@ -293,6 +310,68 @@ impl StatelessSteps {
             words.iter().flat_map(|w| w.to_le_bytes()).collect(),
             threads as u32,
         ))
+    }
+
+    /// The `fire_frame` table of `segments` (every segment live at some step of a batch), with
+    /// each one's first thread, and the threads in all. Only the spawn steps and ids matter to
+    /// `fire`, which computes each particle's age at its step.
+    pub fn fire_table(effect: &CompiledEffect, segments: &[Segment]) -> (Vec<u8>, u64) {
+        let mut words: Vec<u32> = vec![0, segments.len() as u32, 0, 0];
+        let mut threads = 0u64;
+        for seg in segments {
+            words.extend([
+                threads as u32,
+                seg.first_id,
+                seg.k_base,
+                seg.emitter as u32,
+                0,
+                seg.step as u32,
+                0,
+                0,
+            ]);
+            threads += u64::from(seg.count);
+        }
+        words[0] = threads as u32;
+        debug_assert!(
+            (words.len() as u64) * 4
+                <= effect
+                    .ir
+                    .stateless
+                    .as_ref()
+                    .map_or(0, |p| p.fire_table_bytes())
+        );
+        (
+            words.iter().flat_map(|w| w.to_le_bytes()).collect(),
+            threads,
+        )
+    }
+
+    /// Sets the current batch's table size ([`Self::fire_table`]'s threads).
+    pub fn set_fire_threads(&mut self, threads: u64) {
+        if let Some(f) = &mut self.firing {
+            f.threads = threads;
+        }
+    }
+
+    /// Records one step's firings (the step in `fire_state`) and the move to the next step.
+    pub fn record_fire(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunk: &Chunk,
+    ) -> Result<(), RuntimeError> {
+        let Some(f) = &self.firing else {
+            return Ok(());
+        };
+        pass.set_bind_group(0, &chunk.bind_group, &[]);
+        if f.threads > 0 {
+            let (x, y) = groups(gpu, f.threads)?;
+            pass.set_pipeline(&f.fire);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        pass.set_pipeline(&f.next);
+        pass.dispatch_workgroups(1, 1, 1);
+        Ok(())
     }
 
     /// Records one evaluation of the whole view into `pass`.

@@ -413,12 +413,29 @@ pub fn decide(ir: &EffectIr) -> Layout {
             meaning: "the camera's forward axis and offset: depth = dot(axis.xyz, x) + axis.w, written before each sort",
         });
     }
-    if ir.stateless.is_none() {
-        layout.bindings.extend(crate::events::bindings(
-            &ir.events,
-            &ir.event_inputs,
-            ir.capacity,
-        ));
+    layout.bindings.extend(crate::events::bindings(
+        &ir.events,
+        &ir.event_inputs,
+        ir.capacity,
+    ));
+    if let (Some(plan), false) = (&ir.stateless, ir.events.is_empty()) {
+        // A stateless group that fires events: its `fire` kernel's table and step.
+        layout.bindings.extend([
+            Binding {
+                binding: 19,
+                name: "fire_frame",
+                space: "storage, read",
+                bytes: plan.fire_table_bytes(),
+                meaning: "written by the CPU per batch of steps: the segments that may hold live particles at any of its steps (as `frame`), for the `fire` kernel",
+            },
+            Binding {
+                binding: 20,
+                name: "fire_state",
+                space: "storage, read_write",
+                bytes: 16,
+                meaning: "the step `fire` fires for (the batch's first from the CPU, then one more after each step)",
+            },
+        ]);
     }
     layout.bindings.sort_by_key(|b| b.binding);
     layout

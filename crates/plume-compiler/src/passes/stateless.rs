@@ -47,7 +47,18 @@ impl StatelessIr {
     pub fn table_bytes(&self) -> u64 {
         FRAME_HEADER_BYTES + SEGMENT_BYTES * self.max_segments.max(1)
     }
+
+    /// Bytes of a firing group's `fire_frame`: the segments that may hold live particles at any
+    /// step of a batch of up to [`FIRE_BATCH_STEPS`] steps (those live at its start, and those
+    /// its steps spawn: one an emitter a step).
+    pub fn fire_table_bytes(&self) -> u64 {
+        self.table_bytes() + SEGMENT_BYTES * FIRE_BATCH_STEPS * self.lives.len().max(1) as u64
+    }
 }
+
+/// The most steps a firing stateless group's batch (one `fire_frame`) covers: the runtime
+/// records steps in batches of at most this many.
+pub const FIRE_BATCH_STEPS: u64 = 256;
 
 /// The bounds of emitter `e`: (most alive at once, most live segments, its longest life in
 /// steps), or why it has none.
@@ -96,10 +107,21 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("render").field("trail"),
         ));
     }
-    if !ir.events.is_empty() {
+    // A stateless group fires from its closed form, a `fire` kernel a step over the spawn
+    // segments that may hold live particles; it appends its firings, so they are put in order
+    // by counting, which takes at most COUNTED_MAX slots.
+    if let Some(j) = ir
+        .events
+        .iter()
+        .position(|e| e.ordering != crate::events::Ordering::Counted)
+    {
         return Err((
-            "events[0] fires from each particle's state, step by step".into(),
-            ValuePath::root().field("events").index(0),
+            format!(
+                "events[{j}] fires from a group of {} slots: a stateless group's firings are counted into order, which takes at most {} (a larger group sorts a key per slot of its state)",
+                ir.capacity,
+                crate::events::COUNTED_MAX
+            ),
+            ValuePath::root().field("events").index(j),
         ));
     }
     if !ir.event_inputs.is_empty() {
@@ -175,7 +197,7 @@ pub fn decide(ir: &mut EffectIr) -> Result<(), Checker> {
             c.error(
                 &ValuePath::root().field("state"),
                 format!(
-                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes, no render.trail, no events and a capacity no spawn can overflow (use Auto)"
+                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes, no render.trail, no events fed in, at most 8192 slots to fire events from, and a capacity no spawn can overflow (use Auto)"
                 ),
             );
             return Err(c);

@@ -122,7 +122,8 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "boids" | "flock_out" | "flock_sums" => "array<vec4<f32>>",
             "cell_start" => "array<atomic<u32>>",
             "field" => "array<vec4<f32>>",
-            "frame" => "Frame",
+            "frame" | "fire_frame" => "Frame",
+            "fire_state" => "array<u32, 4>",
             "depth_axis" => "DepthAxis",
             "collider_data" => "array<f32>",
             _ => "StepParams",
@@ -203,6 +204,8 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         integrators::emit_advance(&mut w, ir);
         w.blank();
         stateless::emit(&mut w, ir, layout);
+        w.blank();
+        stateless::emit_fire(&mut w, ir);
     } else {
         spawn::emit(&mut w, ir, layout);
         w.blank();

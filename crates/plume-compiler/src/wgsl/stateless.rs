@@ -47,38 +47,13 @@ pub fn emit_evaluate_at(w: &mut Writer, ir: &EffectIr) {
         w.block("if (slot >= frame.threads)", |w| {
             w.line("return e;");
         });
-        w.comment("The last segment starting at or before this slot (offsets increase).");
-        w.line("var lo = 0u;");
-        w.line("var hi = frame.count;");
-        w.block("while (hi - lo > 1u)", |w| {
-            w.line("let mid = (lo + hi) / 2u;");
-            w.block("if (frame.segments[mid].a.x <= slot)", |w| {
-                w.line("lo = mid;")
-            });
-            w.block("else", |w| w.line("hi = mid;"));
-        });
-        w.line("let seg = frame.segments[lo];");
+        emit_segment_of(w, "frame", "slot");
         w.line("let j = slot - seg.a.x;");
         w.line("e.id = seg.a.y + j;");
         w.line("e.born = seg.b.y;");
         w.line("e.age = seg.b.x;");
         w.line("let k = seg.a.z + j;");
-        w.line("var s: Spawned;");
-        w.block("switch seg.a.w", |w| {
-            if ir.emitters.is_empty() {
-                w.block("default", |w| w.line("return e;"));
-            }
-            for e in 0..ir.emitters.len() {
-                let label = if e + 1 == ir.emitters.len() {
-                    format!("case {e}u, default")
-                } else {
-                    format!("case {e}u")
-                };
-                w.block(label, |w| {
-                    w.line(format!("s = emit_{e}(e.id, k, seg.b.y);"))
-                });
-            }
-        });
+        emit_spawn_draws(w, ir, "e.id", "seg.b.y", "return e;");
         if ir.has_lifetimes() {
             w.comment("Dead once it has lived its whole steps: die_at - spawn step + 1.");
             w.block(
@@ -89,6 +64,42 @@ pub fn emit_evaluate_at(w: &mut Writer, ir: &EffectIr) {
         w.line("e.now = advance(s, bitcast<f32>(seg.b.z));");
         w.line("e.alive = true;");
         w.line("return e;");
+    });
+}
+
+/// Emits `let seg`: the segment of `table` (a `Frame`) that holds thread `thread`, the last one
+/// starting at or before it (their first threads increase), by binary search.
+fn emit_segment_of(w: &mut Writer, table: &str, thread: &str) {
+    w.comment("The last segment starting at or before this slot (offsets increase).");
+    w.line("var lo = 0u;");
+    w.line(format!("var hi = {table}.count;"));
+    w.block("while (hi - lo > 1u)", |w| {
+        w.line("let mid = (lo + hi) / 2u;");
+        w.block(format!("if ({table}.segments[mid].a.x <= {thread})"), |w| {
+            w.line("lo = mid;")
+        });
+        w.block("else", |w| w.line("hi = mid;"));
+    });
+    w.line(format!("let seg = {table}.segments[lo];"));
+}
+
+/// Emits `var s: Spawned`: particle `id`'s spawn draws from its segment's emitter (`seg`, the
+/// emitter's counter `k`) at spawn step `born`, the same as the stateful `spawn` kernel's;
+/// `none` ends the function when the effect has no emitter.
+fn emit_spawn_draws(w: &mut Writer, ir: &EffectIr, id: &str, born: &str, none: &str) {
+    w.line("var s: Spawned;");
+    w.block("switch seg.a.w", |w| {
+        if ir.emitters.is_empty() {
+            w.block("default", |w| w.line(none));
+        }
+        for e in 0..ir.emitters.len() {
+            let label = if e + 1 == ir.emitters.len() {
+                format!("case {e}u, default")
+            } else {
+                format!("case {e}u")
+            };
+            w.block(label, |w| w.line(format!("s = emit_{e}({id}, k, {born});")));
+        }
     });
 }
 
@@ -139,4 +150,57 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             w.line("store_particle(local, evaluate_slot(chunk.base + local));");
         },
     );
+}
+
+/// Emits a firing stateless group's `fire` kernel and `fire_next`. `fire` runs once a step over
+/// `fire_frame`, the segments that may hold live particles at any step of the batch: a
+/// particle spawned by the step in `fire_state` and not dead before it fires, at the end of
+/// the step, what its events' triggers say (`Death` in the step its lifetime ends, `Every(P)`
+/// after every P steps lived), with its closed form at that moment. `fire_next` then moves
+/// `fire_state` to the next step. The same contract as the stateful update's firings
+/// (`events.rs`): the f64 reference steps the same particles.
+pub fn emit_fire(w: &mut Writer, ir: &EffectIr) {
+    if ir.events.is_empty() {
+        return;
+    }
+    w.comment("Fires this step's events of the particles in fire_frame (see wgsl/stateless.rs).");
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn fire(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            crate::wgsl::emit_thread_index(w, "t", Some("fire_frame.threads"));
+            emit_segment_of(w, "fire_frame", "t");
+            w.line("let step = fire_state[0];");
+            w.line("let born = seg.b.y;");
+            w.comment("Spawned by a later step of the batch: nothing yet.");
+            w.block("if (born > step)", |w| w.line("return;"));
+            w.line("let j = t - seg.a.x;");
+            w.line("let id = seg.a.y + j;");
+            w.line("let k = seg.a.z + j;");
+            emit_spawn_draws(w, ir, "id", "born", "return;");
+            w.comment("It dies in the update of step die_at (the stateful update's `step >= die_at`).");
+            w.block("if (s.die_at != DEAD && step > s.die_at)", |w| {
+                w.line("return;")
+            });
+            w.line("let dies = s.die_at != DEAD && step == s.die_at;");
+            w.line("let lived = step + 1u - born;");
+            w.line(format!(
+                "let now = advance(s, f32(lived) * {});",
+                crate::wgsl::writer::f32_lit(ir.dt)
+            ));
+            crate::events::emit_fire_appended(
+                w,
+                &ir.events,
+                "id",
+                "now.x",
+                "now.v",
+                &crate::tint::packed_wgsl_of_id(ir, "id"),
+            );
+        },
+    );
+    w.blank();
+    w.line("@compute @workgroup_size(1)");
+    w.block("fn fire_next()", |w| {
+        w.line("fire_state[0] = fire_state[0] + 1u;");
+    });
 }
