@@ -181,16 +181,23 @@ impl LiveSegments {
     /// Records one step's spawns (plans must come in order), then drops the segments whose
     /// particles have all died by its end: those `lives` or more steps old.
     pub fn record(&mut self, plan: &StepPlan) {
+        self.record_noting(plan, &mut Vec::new());
+    }
+
+    /// [`Self::record`], also pushing the step's new segments onto `noted`.
+    fn record_noting(&mut self, plan: &StepPlan, noted: &mut Vec<Segment>) {
         let mut id = plan.first_id;
         for (e, &(count, k_base)) in plan.emitters.iter().enumerate() {
             if count > 0 {
-                self.per_emitter[e].push_back(Segment {
+                let segment = Segment {
                     step: plan.step,
                     emitter: e,
                     first_id: id,
                     count,
                     k_base,
-                });
+                };
+                self.per_emitter[e].push_back(segment);
+                noted.push(segment);
             }
             id += count;
         }
@@ -200,12 +207,23 @@ impl LiveSegments {
     /// Plans `steps` more steps of `schedule` and records them, skipping in O(1) steps that can
     /// spawn nothing ([`Schedule::skip_idle`]).
     pub fn advance(&mut self, schedule: &mut Schedule, steps: u64) {
+        self.advance_noting(schedule, steps, &mut Vec::new());
+    }
+
+    /// [`Self::advance`], also pushing every segment the steps spawn onto `noted` (those
+    /// that die within them too).
+    pub fn advance_noting(
+        &mut self,
+        schedule: &mut Schedule,
+        steps: u64,
+        noted: &mut Vec<Segment>,
+    ) {
         for left in (1..=steps).rev() {
             if schedule.skip_idle(left) {
                 self.advance_to(schedule.steps_done());
                 return;
             }
-            self.record(&schedule.next_plan());
+            self.record_noting(&schedule.next_plan(), noted);
         }
     }
 

@@ -228,21 +228,13 @@ impl EffectInstance {
                         "a batch of {n} steps is longer than a firing stateless group's table covers"
                     )));
                 }
-                // Every segment live at some step of the batch, one spawned and gone within
-                // it included.
+                // Every segment live at some step of the batch: those live at its start, and
+                // every one its steps spawn (one spawned and gone within it included).
                 let mut seen: Vec<plume_compiler::schedule::Segment> =
                     stateless.segments.iter().copied().collect();
-                for _ in 0..n {
-                    stateless.advance(&mut self.schedule, 1, |_| {});
-                    for seg in stateless.segments.iter() {
-                        if !seen
-                            .iter()
-                            .any(|s| s.step == seg.step && s.emitter == seg.emitter)
-                        {
-                            seen.push(*seg);
-                        }
-                    }
-                }
+                stateless
+                    .segments
+                    .advance_noting(&mut self.schedule, n, &mut seen);
                 let (table, threads) = StatelessSteps::fire_table(&self.effect, &seen);
                 stateless.set_fire_threads(threads);
                 let mut state = [0u8; 16];
