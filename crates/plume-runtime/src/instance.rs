@@ -235,7 +235,7 @@ impl EffectInstance {
                 stateless
                     .segments
                     .advance_noting(&mut self.schedule, n, &mut seen);
-                let (table, threads) = StatelessSteps::fire_table(&self.effect, &seen);
+                let (table, threads) = StatelessSteps::fire_table(&self.effect, &seen)?;
                 stateless.set_fire_threads(threads);
                 let mut state = [0u8; 16];
                 state[..4].copy_from_slice(&(first_step as u32).to_le_bytes());

@@ -315,7 +315,10 @@ impl StatelessSteps {
     /// The `fire_frame` table of `segments` (every segment live at some step of a batch), with
     /// each one's first thread, and the threads in all. Only the spawn steps and ids matter to
     /// `fire`, which computes each particle's age at its step.
-    pub fn fire_table(effect: &CompiledEffect, segments: &[Segment]) -> (Vec<u8>, u64) {
+    pub fn fire_table(
+        effect: &CompiledEffect,
+        segments: &[Segment],
+    ) -> Result<(Vec<u8>, u64), RuntimeError> {
         let mut words: Vec<u32> = vec![0, segments.len() as u32, 0, 0];
         let mut threads = 0u64;
         for seg in segments {
@@ -332,18 +335,21 @@ impl StatelessSteps {
             threads += u64::from(seg.count);
         }
         words[0] = threads as u32;
-        debug_assert!(
-            (words.len() as u64) * 4
-                <= effect
-                    .ir
-                    .stateless
-                    .as_ref()
-                    .map_or(0, |p| p.fire_table_bytes())
-        );
-        (
+        let room = effect
+            .ir
+            .stateless
+            .as_ref()
+            .map_or(0, |p| p.fire_table_bytes());
+        if words.len() as u64 * 4 > room {
+            return Err(RuntimeError::Gpu(format!(
+                "{} spawn segments overflow the firing table of {room} bytes (a bug in the compiler's bound)",
+                segments.len()
+            )));
+        }
+        Ok((
             words.iter().flat_map(|w| w.to_le_bytes()).collect(),
             threads,
-        )
+        ))
     }
 
     /// Sets the current batch's table size ([`Self::fire_table`]'s threads).
