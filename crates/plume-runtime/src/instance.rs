@@ -265,7 +265,11 @@ impl EffectInstance {
         j: usize,
     ) -> Result<(), RuntimeError> {
         if let Steps::Stateless(stateless) = &self.steps {
-            return stateless.record_fire(&self.gpu, pass, &self.chunks()?[0]);
+            // A group that does not fire has no step work (and its view may not exist yet).
+            return match stateless.firing {
+                Some(_) => stateless.record_fire(&self.gpu, pass, &self.chunks()?[0]),
+                None => Ok(()),
+            };
         }
         let (Steps::Stateful(stateful), Some(plan)) = (&self.steps, plans.get(j)) else {
             return Ok(());
