@@ -373,6 +373,35 @@ fn a_stateless_group_fires_on_death_and_every_period_as_its_stateful_twin_does()
 }
 
 #[test]
+fn a_group_outside_the_events_keeps_its_own_state_decision() {
+    // Stars that neither fire nor are fed by events: Exact, a burst, no lifetime; stateless
+    // beside a stateful fed group and a stateless firing one, and all match the reference.
+    let src = r#"Effect(
+        name: "rockets",
+        capacity: 64,
+        emitters: [Emitter(burst: 3, rate: 10.0, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 12.0, 0.0)),
+                           lifetime: Some((0.3, 0.5)))],
+        forces: [Gravity((0.0, -9.81, 0.0))],
+        events: [Event(on: Death, target: "sparks", count: 10, velocity: Radial(speed: (2.0, 4.0)), lifetime: Some((0.5, 1.0)))],
+        groups: [
+            Group(name: "sparks", capacity: 2000),
+            Group(name: "stars", capacity: 100, emitters: [Emitter(burst: 100, shape: Sphere(center: (0.0, 20.0, 0.0), radius: 10.0),
+                                                                  velocity: Constant((0.0, 0.0, 0.0)))]),
+        ],
+    )"#;
+    let g = graph(src);
+    let stateless: Vec<bool> = g
+        .groups
+        .iter()
+        .map(|k| k.effect.layout.stateless())
+        .collect();
+    assert_eq!(stateless, [true, false, true], "rockets, sparks, stars");
+    let sim = compare_runs("stars", &g, &[30, 60]);
+    assert_eq!(sim.totals(2).unwrap().alive, 100);
+    assert!(sim.totals(1).unwrap().spawned > 0);
+}
+
+#[test]
 fn collisions_fire_events_where_the_particle_hits() {
     // Drops fall on a plane at y = 0 and stop; each contact spawns 3 droplets at the drop.
     let src = r#"Effect(
