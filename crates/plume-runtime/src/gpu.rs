@@ -186,12 +186,6 @@ impl Gpu {
             && self.info.subgroup_max_size == size
     }
 
-    /// Whether this is a CPU adapter (llvmpipe, lavapipe), where some kernels take another
-    /// variant (a workgroup barrier there costs more than it saves).
-    pub fn is_cpu(&self) -> bool {
-        self.info.device_type == wgpu::DeviceType::Cpu
-    }
-
     /// A 2D grid of workgroups of `workgroup` threads covering `threads` (2D because one
     /// dimension holds at most `max_compute_workgroups_per_dimension` groups); at least one.
     pub fn grid(&self, threads: u64, workgroup: u64) -> Result<(u32, u32), RuntimeError> {

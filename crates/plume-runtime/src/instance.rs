@@ -696,7 +696,7 @@ impl EffectInstance {
 
     /// Whether its steps record GPU work: a stateful effect's, or a stateless group's that fires
     /// events.
-    pub fn steps_on_gpu(&self) -> bool {
+    pub(crate) fn steps_on_gpu(&self) -> bool {
         match &self.steps {
             Steps::Stateful(_) => true,
             Steps::Stateless(s) => s.firing.is_some(),
