@@ -1,4 +1,4 @@
-//! Snapshot tests: the WGSL (compute and draw modules), IR and layout of every example effect,
+//! Snapshot tests: the WGSL (compute, draw, trail and flock search modules), IR and layout of every example effect,
 //! and the diagnostics of every bad input in tests/bad. One glob each, so a new file gets its snapshot with no new code.
 
 use plume::compiler::graph::compile_graph_str;
@@ -32,6 +32,10 @@ fn every_example_compiles_without_warnings_and_matches_its_snapshots() {
             // Only effects with trails have a trail module (and a snapshot of it).
             if let Some(trail) = &compiled.trail_wgsl {
                 insta::assert_snapshot!(name("trail"), trail);
+            }
+            // Only grid flocks have a search module.
+            if let Some(search) = &compiled.flock_search_wgsl {
+                insta::assert_snapshot!(name("flock_search"), search);
             }
             insta::assert_snapshot!(
                 name("ir_and_layout"),

@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # The speed issue's figures (docs/performance.md: "Depth sort", "Flocking", "The update at
-# large sizes"), all from one device call. Usage: speed-bench.sh PLUME OUT_DIR
+# large sizes"), all from one device call. Usage: speed-bench.sh PLUME OUT_DIR [PARTS]
+# PARTS: a comma-separated choice of sort, flock, update (default: all three)
 #   sort.jsonl    the radix sort alone on 1M and 16M random pairs (`--sort-keys`: every ranking
 #                 the adapter runs, 32- and 16-bit keys, per-stage times) and with the depth keys
 #                 of fountain.ron (`sort: true`)
 #   torch.txt     torch.sort (CUB's radix sort) of the same counts of f32 keys and of int16
 #                 keys, stable, with indices, on the same GPU (skipped where python3 has no CUDA torch)
-#   flock.jsonl   effects/boids.ron at 256 boids (the pipeline's launch floor) and at 16k to 1M
+#   flock.jsonl   effects/boids.ron at 256 and 4,096 boids (the pipeline's launch floor) and at 16k to 1M
 #                 boids: the step, and each stage of the flocking pass
 #   update.jsonl  fountain.ron's update, and update-floor.ron's (an update that does almost
 #                 nothing), at 1M to 100M against the copy kernel and an in-place copy
@@ -16,7 +17,9 @@
 set -euo pipefail
 plume=$1
 out=$2
+parts=",${3:-sort,flock,update},"
 mkdir -p "$out"
+if [[ $parts == *,sort,* ]]; then
 for n in 1048576 16777216; do
     "$plume" bench effects/fountain.ron --particles "$n" --steps 20 --sort-keys "$n" --json
 done >"$out/sort.jsonl"
@@ -43,9 +46,13 @@ for n in [1 << 20, 16 << 20]:
     t = median_ms(torch.randint(-32768, 32767, (n,), device="cuda", dtype=torch.int16))
     print(f"torch.sort n={n} int16 keys + int64 indices, stable: {t:.3f} ms, {n / t / 1e6:.2f} G keys/s")
 PY
-for n in 256 16384 65536 262144 1048576; do
+fi
+if [[ $parts == *,flock,* ]]; then
+for n in 256 4096 16384 65536 131072 262144 1048576; do
     "$plume" bench effects/boids.ron --particles "$n" --steps 50 --json
 done >"$out/flock.jsonl"
+fi
+if [[ $parts == *,update,* ]]; then
 for e in docs/measurements/update-floor.ron effects/fountain.ron; do
     for n in 1000000 10000000 16777216 100000000; do
         "$plume" bench "$e" --particles "$n" --steps 50 --json
@@ -54,4 +61,5 @@ done >"$out/update.jsonl"
 layouts=$(dirname "$plume")/examples/update_layouts
 if [ -x "$layouts" ]; then
     "$layouts" 1048576,10000000,16777216,60000000 >"$out/layouts.txt" 2>&1
+fi
 fi

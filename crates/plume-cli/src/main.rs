@@ -77,6 +77,8 @@ enum Emit {
     /// The WGSL trail draw module (effects with `render.trail`: the ribbons' vertex and
     /// fragment shaders).
     Trail,
+    /// The WGSL module of the flock's grid search (effects with `Flock(neighbors: Grid(..))`).
+    FlockSearch,
     /// The IR after the passes.
     Ir,
     /// The particle struct, bytes of state per particle and the bindings.
@@ -256,6 +258,15 @@ fn compile(
             None => {
                 eprintln!(
                     "{name}: error: --emit trail: the effect has no render.trail, so it has no trail draw module"
+                );
+                return ExitCode::FAILURE;
+            }
+        },
+        Emit::FlockSearch => match compiled.flock_search_wgsl {
+            Some(text) => text,
+            None => {
+                eprintln!(
+                    "{name}: error: --emit flock-search: the effect has no Flock force with a Grid search, so it has no search module"
                 );
                 return ExitCode::FAILURE;
             }

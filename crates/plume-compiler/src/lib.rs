@@ -121,6 +121,9 @@ pub struct CompiledEffect {
     /// The naga-validated WGSL trail draw module (`render.trail`; see [`wgsl::trail`]), for
     /// one particle buffer; None for an effect without trails.
     pub trail_wgsl: Option<String>,
+    /// The naga-validated WGSL module of the flock's grid search (`Flock(neighbors: Grid)`;
+    /// see [`forces::flock::FlockIr::emit_search_module`]); None for any other effect.
+    pub flock_search_wgsl: Option<String>,
     /// Warnings from the stability analysis and other checks, located in the source.
     pub warnings: Diagnostics,
 }
@@ -309,12 +312,20 @@ pub(crate) fn compile_group(
         }
         None => None,
     };
+    let flock_search_wgsl = match &ir.flock {
+        Some(flock) => flock.emit_search_module(&ir.name, ir.capacity, &layout),
+        None => None,
+    };
+    if let Some(source) = &flock_search_wgsl {
+        naga_check::validate(source)?;
+    }
     Ok(CompiledEffect {
         ir,
         layout,
         wgsl,
         draw_wgsl,
         trail_wgsl,
+        flock_search_wgsl,
         warnings: prefixed(warnings),
     })
 }

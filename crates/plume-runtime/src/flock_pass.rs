@@ -24,13 +24,18 @@ struct GridPass {
     scan: SortProgram,
     /// Whether the search runs nine threads a boid (`FlockIr::split_search`).
     split_search: bool,
+    /// The search, from its own module (`CompiledEffect::flock_search_wgsl`), and its bind
+    /// group: the grid's buffers, read-only but for the results.
+    search: wgpu::ComputePipeline,
+    search_group: wgpu::BindGroup,
 }
 
 /// The flocking kernels of one effect.
 pub struct FlockPass {
     snapshot: Option<wgpu::ComputePipeline>,
     reduce: Option<wgpu::ComputePipeline>,
-    neighbours: wgpu::ComputePipeline,
+    /// All pairs (None with the grid, whose search is its own).
+    pairs: Option<wgpu::ComputePipeline>,
     grid: Option<GridPass>,
 }
 
@@ -48,7 +53,30 @@ impl FlockPass {
                     res.extra_named(effect, name)
                         .expect("the layout binds the grid's buffers")
                 };
+                let source = effect
+                    .flock_search_wgsl
+                    .as_deref()
+                    .expect("the compiler emits a grid flock's search module");
+                let module = gpu
+                    .device
+                    .create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some("flock search"),
+                        source: wgpu::ShaderSource::Wgsl(source.into()),
+                    });
+                let search = gpu.compute_pipeline(&module, "flock_grid", None);
+                let entries: Vec<(u32, &wgpu::Buffer)> =
+                    ["boids", "flock_out", "grid_vals", "cell_start"]
+                        .iter()
+                        .map(|name| {
+                            let binding = effect.layout.bindings.iter().find(|b| b.name == *name);
+                            (binding.expect("bound").binding, find(name))
+                        })
+                        .collect();
+                let search_group =
+                    gpu.bind_buffers("flock search", &search.get_bind_group_layout(0), &entries);
                 Some(GridPass {
+                    search,
+                    search_group,
                     clear: res.pipeline("grid_clear"),
                     bucket: res.pipeline("grid_bucket"),
                     scatter: res.pipeline("grid_scatter"),
@@ -68,11 +96,7 @@ impl FlockPass {
         Ok(Self {
             snapshot: snapshot.then(|| res.pipeline("flock_snapshot")),
             reduce: (flock.scope == Scope::Global).then(|| res.pipeline("flock_reduce")),
-            neighbours: res.pipeline(if grid.is_some() {
-                "flock_grid"
-            } else {
-                "flock_pairs"
-            }),
+            pairs: grid.is_none().then(|| res.pipeline("flock_pairs")),
             grid,
         })
     }
@@ -165,13 +189,21 @@ impl FlockPass {
         if !next() {
             return Ok(());
         }
-        // The grid's split search runs nine threads a boid, a tile of boids a workgroup.
-        let (x, y) = match &self.grid {
-            Some(grid) if grid.split_search => gpu.grid(chunk.len, u64::from(GRID_TILE))?,
-            _ => (x, y),
-        };
-        pass.set_pipeline(&self.neighbours);
-        pass.dispatch_workgroups(x, y, 1);
+        if let Some(grid) = &self.grid {
+            // The split search runs nine threads a boid, a tile of boids a workgroup.
+            let (x, y) = match grid.split_search {
+                true => gpu.grid(chunk.len, u64::from(GRID_TILE))?,
+                false => (x, y),
+            };
+            pass.set_pipeline(&grid.search);
+            pass.set_bind_group(0, &grid.search_group, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+            // What the caller records next runs on the effect's own bind group.
+            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+        } else if let Some(pairs) = &self.pairs {
+            pass.set_pipeline(pairs);
+            pass.dispatch_workgroups(x, y, 1);
+        }
         Ok(())
     }
 }
