@@ -256,19 +256,21 @@ fn compile(
         Emit::Trail => match compiled.trail_wgsl {
             Some(text) => text,
             None => {
-                eprintln!(
-                    "{name}: error: --emit trail: the effect has no render.trail, so it has no trail draw module"
-                );
-                return ExitCode::FAILURE;
+                return no_module(
+                    &name,
+                    "trail",
+                    "no render.trail, so it has no trail draw module",
+                )
             }
         },
         Emit::FlockSearch => match compiled.flock_search_wgsl {
             Some(text) => text,
             None => {
-                eprintln!(
-                    "{name}: error: --emit flock-search: the effect has no Flock force with a Grid search, so it has no search module"
-                );
-                return ExitCode::FAILURE;
+                return no_module(
+                    &name,
+                    "flock-search",
+                    "no Flock force with a Grid search, so it has no search module",
+                )
             }
         },
         Emit::Ir => compiled.ir.to_string(),
@@ -287,4 +289,10 @@ fn compile(
             }
         },
     }
+}
+
+/// `--emit KIND` of an effect without that module: says why, and fails.
+fn no_module(name: &str, kind: &str, why: &str) -> ExitCode {
+    eprintln!("{name}: error: --emit {kind}: the effect has {why}");
+    ExitCode::FAILURE
 }

@@ -817,10 +817,7 @@ fn emit_row(w: &mut Writer) {
     w.line("let lo = f32(c.x);");
     w.line("let hi = f32(c.x + 2);");
     w.line("let key = row_key(c);");
-    w.line("let wrapped = max(b0 + 3u, GRID_BUCKETS) - GRID_BUCKETS;");
-    w.block("for (var r = 0u; r < 2u; r++)", |w| {
-        w.line("let first = cell_start[select(0u, b0, r == 0u)];");
-        w.line("let last = cell_start[select(wrapped, min(b0 + 3u, GRID_BUCKETS), r == 0u)];");
+    emit_row_runs(w, |w| {
         w.block(
             format!("for (var m = first; m < last; m += {GRID_ROW_UNROLL}u)"),
             |w| {
@@ -844,6 +841,17 @@ fn emit_row(w: &mut Writer) {
     });
 }
 
+/// The one or two runs of the row's 3 buckets from `b0` (two where the buckets wrap), each
+/// as `first .. last` for `body`.
+fn emit_row_runs(w: &mut Writer, body: impl Fn(&mut Writer)) {
+    w.line("let wrapped = max(b0 + 3u, GRID_BUCKETS) - GRID_BUCKETS;");
+    w.block("for (var r = 0u; r < 2u; r++)", |w| {
+        w.line("let first = cell_start[select(0u, b0, r == 0u)];");
+        w.line("let last = cell_start[select(wrapped, min(b0 + 3u, GRID_BUCKETS), r == 0u)];");
+        body(w);
+    });
+}
+
 /// The split search's walk of the same row: 32 candidates at a time, tested by their
 /// positions alone (tag and distance; [`GRID_ROW_UNROLL`] loaded at a time), the neighbours
 /// marked in a bit mask, then the pair function run on the marked ones in run order. In a
@@ -853,10 +861,7 @@ fn emit_row(w: &mut Writer) {
 fn emit_row_masked(w: &mut Writer) {
     w.line("let b0 = bucket_of(c);");
     w.line("let tag = cell_tag(c + vec3<i32>(1, 0, 0)); // the row's middle cell");
-    w.line("let wrapped = max(b0 + 3u, GRID_BUCKETS) - GRID_BUCKETS;");
-    w.block("for (var r = 0u; r < 2u; r++)", |w| {
-        w.line("let first = cell_start[select(0u, b0, r == 0u)];");
-        w.line("let last = cell_start[select(wrapped, min(b0 + 3u, GRID_BUCKETS), r == 0u)];");
+    emit_row_runs(w, |w| {
         w.block("for (var base = first; base < last; base += 32u)", |w| {
             w.line("let end = min(base + 32u, last);");
             w.line("var hits = 0u;");
