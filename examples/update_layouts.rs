@@ -367,24 +367,7 @@ fn main() {
             // One pair of buffers for every variant, so that they all stream the same memory.
             let (src, dst) = (make("src"), make("dst"));
             let bind = |src: &wgpu::Buffer, dst: &wgpu::Buffer| {
-                device.create_bind_group(&wgpu::BindGroupDescriptor {
-                    label: None,
-                    layout: &bind_layout,
-                    entries: &[
-                        wgpu::BindGroupEntry {
-                            binding: 0,
-                            resource: src.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 1,
-                            resource: dst.as_entire_binding(),
-                        },
-                        wgpu::BindGroupEntry {
-                            binding: 2,
-                            resource: params.as_entire_binding(),
-                        },
-                    ],
-                })
+                gpu.bind_buffers("layouts", &bind_layout, &[(0, src), (1, dst), (2, &params)])
             };
             let group = bind(&src, &dst);
             let time = |pipeline: &wgpu::ComputePipeline, group: &wgpu::BindGroup, threads: u64| {

@@ -763,20 +763,7 @@ impl CopyKernel {
                 })
             };
             let (src, dst) = (make("copy src"), make("copy dst"));
-            let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some("copy"),
-                layout: &layout,
-                entries: &[
-                    wgpu::BindGroupEntry {
-                        binding: 0,
-                        resource: src.as_entire_binding(),
-                    },
-                    wgpu::BindGroupEntry {
-                        binding: 1,
-                        resource: dst.as_entire_binding(),
-                    },
-                ],
-            });
+            let group = gpu.bind_buffers("copy", &layout, &[(0, &src), (1, &dst)]);
             let (x, y) = gpu.grid(size / 16, 256)?;
             parts.push((group, x, y, src, dst));
         }

@@ -5,7 +5,7 @@
 //! search by tiles). The kernels are the compiler's (`forces/flock.rs`); this module only
 //! dispatches them.
 
-use plume_compiler::forces::flock::{FlockIr, Neighbors, Scope, GRID_TILE};
+use plume_compiler::forces::flock::{FlockIr, Neighbors, Scope, GRID_TILE, SEARCH_BUFFERS};
 use plume_compiler::CompiledEffect;
 
 use crate::error::RuntimeError;
@@ -64,14 +64,13 @@ impl FlockPass {
                         source: wgpu::ShaderSource::Wgsl(source.into()),
                     });
                 let search = gpu.compute_pipeline(&module, "flock_grid", None);
-                let entries: Vec<(u32, &wgpu::Buffer)> =
-                    ["boids", "flock_out", "grid_vals", "cell_start"]
-                        .iter()
-                        .map(|name| {
-                            let binding = effect.layout.bindings.iter().find(|b| b.name == *name);
-                            (binding.expect("bound").binding, find(name))
-                        })
-                        .collect();
+                let entries: Vec<(u32, &wgpu::Buffer)> = effect
+                    .layout
+                    .bindings
+                    .iter()
+                    .filter(|b| SEARCH_BUFFERS.contains(&b.name))
+                    .map(|b| (b.binding, find(b.name)))
+                    .collect();
                 let search_group =
                     gpu.bind_buffers("flock search", &search.get_bind_group_layout(0), &entries);
                 Some(GridPass {

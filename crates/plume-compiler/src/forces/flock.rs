@@ -188,6 +188,10 @@ pub const GRID_TILE: u32 = 16;
 /// thread: 16k boids 0.068 against 0.064 ms a step, 1M 1.82 against 1.75 ms on the H100).
 pub const GRID_ROW_UNROLL: u32 = 4;
 
+/// The main module's buffers that the grid's search module binds (at the layout's binding
+/// numbers): the sorted snapshot, the results, the sorted order and the run starts.
+pub const SEARCH_BUFFERS: [&str; 4] = ["boids", "flock_out", "grid_vals", "cell_start"];
+
 /// Below this speed (m/s) a boid has no heading, so no avoidance.
 pub const MIN_HEADING_SPEED: f64 = 1e-6;
 
@@ -398,12 +402,12 @@ impl FlockIr {
             u32_lit(Self::grid_buckets(capacity) as u32)
         ));
         w.comment("The main module's buffers, read-only here but for the results.");
-        for (buffer, access, ty) in [
-            ("boids", "read", "vec4<f32>"),
-            ("flock_out", "read_write", "vec4<f32>"),
-            ("grid_vals", "read", "u32"),
-            ("cell_start", "read", "u32"),
-        ] {
+        for (buffer, (access, ty)) in SEARCH_BUFFERS.into_iter().zip([
+            ("read", "vec4<f32>"),
+            ("read_write", "vec4<f32>"),
+            ("read", "u32"),
+            ("read", "u32"),
+        ]) {
             w.line(format!(
                 "@group(0) @binding({}) var<storage, {access}> {buffer}: array<{ty}>;",
                 binding(buffer)
