@@ -53,14 +53,20 @@ pub mod stream {
     pub const CUSTOM: u32 = 64;
 }
 
-/// Emits the WGSL twins of [`pcg`], [`rand_u32`] and [`unit`].
-pub fn emit_wgsl(w: &mut Writer) {
-    w.comment("PCG hash (integer, bit-identical to the CPU reference).");
-    w.block("fn pcg(x: u32) -> u32", |w| {
+/// Emits the WGSL twin of [`pcg`] as a function called `name` (a module that needs the hash
+/// for two purposes, e.g. draws and the flock's grid, names each its own).
+pub fn emit_pcg(w: &mut Writer, name: &str) {
+    w.block(format!("fn {name}(x: u32) -> u32"), |w| {
         w.line("let state = x * 747796405u + 2891336453u;");
         w.line("let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;");
         w.line("return (word >> 22u) ^ word;");
     });
+}
+
+/// Emits the WGSL twins of [`pcg`], [`rand_u32`] and [`unit`].
+pub fn emit_wgsl(w: &mut Writer) {
+    w.comment("PCG hash (integer, bit-identical to the CPU reference).");
+    emit_pcg(w, "pcg");
     w.block("fn rand_u32(id: u32, stream: u32) -> u32", |w| {
         w.line(format!(
             "return pcg(pcg(id ^ SEED_MIX) + stream * {}u);",

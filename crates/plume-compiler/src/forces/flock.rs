@@ -174,8 +174,9 @@ pub const GRID_FASTER_FROM: u32 = 4096;
 /// the pair function on them; from it on, one thread a boid walks all nine rows and runs the
 /// pair function inline. Measured on the H100 with effects/boids.ron (docs/performance.md,
 /// "Flocking"), ms a step split against one thread: 0.055 against 0.059 at 16k, 0.129 against
-/// 0.155 at 64k, 0.234 against 0.263 at 128k; 0.446 against 0.433 at 256k and 1.82 against
-/// 1.55 at 1M, where the GPU is full and nine threads' partial sums cost more than they hide.
+/// 0.155 at 64k, 0.234 against 0.263 at 128k (before the PCG bucket hash); with it, 0.355
+/// against 0.359 at 256k (a tie), 0.728 against 0.703 at 512k and 1.54 against 1.37 at 1M,
+/// where the GPU is full and nine threads' partial sums cost more than they hide.
 pub const GRID_SPLIT_BELOW: u32 = 262_144;
 
 /// Boids per workgroup of the split search. Its threads are laid out row by row (thread t:
@@ -184,9 +185,15 @@ pub const GRID_SPLIT_BELOW: u32 = 262_144;
 /// threads, under WebGPU's default limit of 256 a workgroup.
 pub const GRID_TILE: u32 = 16;
 
-/// Candidates the grid's search loads before testing any of them (more loads in flight per
+/// Candidates the one-thread search loads before testing any of them (more loads in flight per
 /// thread: 16k boids 0.068 against 0.064 ms a step, 1M 1.82 against 1.75 ms on the H100).
 pub const GRID_ROW_UNROLL: u32 = 4;
+
+/// Candidates the split search loads and tests a round (one bit each in the round's mask):
+/// 16k boids 0.0457 ms a step, against 0.0457 with 8 and 0.0478 with 32 (H100). The sorted
+/// snapshot has this many spare entries past its last boid, for the last round's loads past
+/// the run.
+pub const GRID_ROUND: u32 = 16;
 
 /// The main module's buffers that the grid's search module binds (at the layout's binding
 /// numbers): the sorted snapshot, the results, the sorted order and the run starts.
@@ -416,7 +423,7 @@ impl FlockIr {
         w.blank();
         self.emit_pair_fn(&mut w);
         w.blank();
-        emit_cell_fns(&mut w, cell, Self::split_search(capacity));
+        emit_cell_fns(&mut w, cell);
         w.blank();
         if Self::split_search(capacity) {
             emit_split_search(&mut w);
@@ -429,7 +436,7 @@ impl FlockIr {
     /// The per-step kernels: `flock_snapshot` (+ the partial sums), `flock_reduce` (Global),
     /// and the neighbour pass (`flock_pairs`, or the grid's build kernels; its search is
     /// [`Self::emit_search_module`]).
-    pub fn emit_kernels(&self, w: &mut Writer, verlet_h: Option<f64>, capacity: u32) {
+    pub fn emit_kernels(&self, w: &mut Writer, verlet_h: Option<f64>) {
         self.emit_snapshot(w, verlet_h);
         if self.scope == Scope::Global {
             w.blank();
@@ -442,7 +449,7 @@ impl FlockIr {
                 w.blank();
                 emit_all_pairs(w);
             }
-            Neighbors::Grid { cell } => emit_grid(w, cell, Self::split_search(capacity)),
+            Neighbors::Grid { cell } => emit_grid(w, cell),
         }
     }
 
@@ -702,11 +709,17 @@ fn emit_all_pairs(w: &mut Writer) {
 ///   boid walks the nine rows.
 ///
 /// The bucket hash keeps x-neighbouring cells in consecutive buckets, so a row of 3 cells is
-/// one run of sorted boids (two where the buckets wrap). Only candidates whose own cell is a
-/// visited one count (other cells may share a bucket). A boid adds its neighbours in (row, x,
-/// slot) order, the same every run.
-fn emit_grid(w: &mut Writer, cell: f64, split_search: bool) {
-    emit_cell_fns(w, cell, split_search);
+/// one run of sorted boids (two where the buckets wrap), and scatters the rows over the table
+/// (a PCG hash of (y, z): the multiply-xor hash before it put 2,164 occupied cells of a 16k
+/// flock in 1,677 of 32,768 buckets, and a boid walked 401 candidates for the 268 in its 27
+/// cells; with PCG, 286). Other cells may share a row's buckets; a candidate counts only if its
+/// row key (the snapshot's spare word) is the row's: a sorted boid in the row's buckets with
+/// that key is either in the row's 3 cells, or in a row at least 4 cells away in y or z (the
+/// key is (y, z) modulo 4), or in the same row at least `GRID_BUCKETS - 2` cells away in x, and
+/// both lie beyond the radius (cell >= radius), so the distance test drops them. A boid adds
+/// its neighbours in (row, x, slot) order, the same every run.
+fn emit_grid(w: &mut Writer, cell: f64) {
+    emit_cell_fns(w, cell);
     w.line("const NO_BUCKET: u32 = 0xffffffffu;");
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
@@ -766,24 +779,18 @@ fn emit_grid(w: &mut Writer, cell: f64, split_search: bool) {
             });
             w.line("grid_vals[at] = s;");
             w.line("let bo = boid_of(s);");
-            w.line("let c = cell_of(bo[0].xyz);");
-            if split_search {
-                w.comment("The position's w word holds the boid's cell tag.");
-                w.line("boids[2u * at] = vec4<f32>(bo[0].xyz, cell_tag(c));");
-                w.line("boids[2u * at + 1u] = vec4<f32>(bo[1].xyz, 0.0);");
-            } else {
-                w.comment("The w words hold the boid's cell: its x, and its row's key.");
-                w.line("boids[2u * at] = vec4<f32>(bo[0].xyz, f32(c.x));");
-                w.line("boids[2u * at + 1u] = vec4<f32>(bo[1].xyz, row_key(c));");
-            }
+            w.line("let bo_cell = cell_of(bo[0].xyz);");
+            w.comment("The position's w word holds the key of the boid's row of cells.");
+            w.line("boids[2u * at] = vec4<f32>(bo[0].xyz, row_key(bo_cell));");
+            w.line("boids[2u * at + 1u] = vec4<f32>(bo[1].xyz, 0.0);");
         },
     );
 }
 
 /// The grid's cell arithmetic, shared by the build kernels (main module) and the search (its
-/// own module): `cell_of`, `bucket_of`, and how the sorted snapshot's spare words name a
-/// boid's cell: `cell_tag` for the split search, `row_key` for one thread a boid.
-fn emit_cell_fns(w: &mut Writer, cell: f64, split_search: bool) {
+/// own module): `cell_of`, `row_key` (what the sorted snapshot's spare word holds) and
+/// `bucket_of`.
+fn emit_cell_fns(w: &mut Writer, cell: f64) {
     w.line(format!("const INV_CELL: f32 = {};", f32_lit(1.0 / cell)));
     w.block("fn cell_of(x: vec3<f32>) -> vec3<i32>", |w| {
         w.comment(
@@ -793,33 +800,27 @@ fn emit_cell_fns(w: &mut Writer, cell: f64, split_search: bool) {
             "return vec3<i32>(clamp(floor(x * INV_CELL), vec3<f32>(-1.0e6), vec3<f32>(1.0e6)));",
         );
     });
-    if split_search {
-        w.comment("A cell's x and its row's key ((y, z) modulo 4 each way) as one whole f32, 16 x + key (exact: |16 x + key| < 2^24): a boid in the row of 3 cells around cell c has a tag 0 or 16 away from c's, and a row farther away that shares buckets with a boid's rows lies beyond the radius.");
-        w.block("fn cell_tag(c: vec3<i32>) -> f32", |w| {
-            w.line("return f32(c.x * 16 + ((c.y & 3) | ((c.z & 3) << 2u)));");
-        });
-    } else {
-        w.comment("A cell's row (y, z) modulo 4 each way, as a small whole f32: rows of one boid's 27 cells differ in it, and a row farther away that shares buckets with them lies beyond the radius.");
-        w.block("fn row_key(c: vec3<i32>) -> f32", |w| {
-            w.line("return f32((c.y & 3) | ((c.z & 3) << 2u));");
-        });
-    }
-    w.comment("The (y, z) hash plus x: cells x - 1, x, x + 1 fall in consecutive buckets.");
+    w.comment("A cell's row (y, z) modulo 4 each way, as a small whole f32: rows of one boid's 27 cells differ in it, and a row farther away that shares buckets with them lies beyond the radius.");
+    w.block("fn row_key(c: vec3<i32>) -> f32", |w| {
+        w.line("return f32((c.y & 3) | ((c.z & 3) << 2u));");
+    });
+    w.comment("The PCG hash, for the buckets.");
+    crate::rng::emit_pcg(w, "grid_pcg");
+    w.comment("A row's hash (PCG of y, then of that plus z) plus x: cells x - 1, x, x + 1 fall in consecutive buckets, and rows scatter over the whole table.");
     w.block("fn bucket_of(c: vec3<i32>) -> u32", |w| {
         w.line("let u = bitcast<vec3<u32>>(c);");
-        w.line("return (((u.y * 19349663u) ^ (u.z * 83492791u)) * 73856093u + u.x) & (GRID_BUCKETS - 1u);");
+        w.line("return (grid_pcg(grid_pcg(u.y) + u.z) + u.x) & (GRID_BUCKETS - 1u);");
     });
 }
 
 /// The candidates of the row of 3 cells from cell `c` along x: the sorted boids in buckets
 /// `bucket_of(c) .. + 2` (mod the buckets: one run, or two where they wrap), of which those
-/// whose own cell is one of the row's (another cell may share the buckets) are tested against
-/// boid `k` at (`me`, `heading`), in run order, [`GRID_ROW_UNROLL`] loaded at a time (more
-/// loads in flight per thread). One thread a boid: see [`emit_row_masked`] for the split search.
+/// with the row's key (another row may share the buckets; see [`emit_grid`]) are tested
+/// against boid `k` at (`me`, `heading`), in run order, [`GRID_ROW_UNROLL`] loaded at a time
+/// (more loads in flight per thread). One thread a boid: see [`emit_row_masked`] for the split
+/// search.
 fn emit_row(w: &mut Writer) {
     w.line("let b0 = bucket_of(c);");
-    w.line("let lo = f32(c.x);");
-    w.line("let hi = f32(c.x + 2);");
     w.line("let key = row_key(c);");
     emit_row_runs(w, |w| {
         w.block(
@@ -834,7 +835,7 @@ fn emit_row(w: &mut Writer) {
                     w.block(format!("if (m + {j}u < last)"), |w| {
                         emit_accumulate_if(
                             w,
-                            &format!("x{j}.w >= lo && x{j}.w <= hi && v{j}.w == key && m{j} != k"),
+                            &format!("x{j}.w == key && m{j} != k"),
                             &format!("x{j}"),
                             &format!("v{j}"),
                         );
@@ -856,45 +857,50 @@ fn emit_row_runs(w: &mut Writer, body: impl Fn(&mut Writer)) {
     });
 }
 
-/// The split search's walk of the same row: 32 candidates at a time, tested by their
-/// positions alone (tag and distance; [`GRID_ROW_UNROLL`] loaded at a time), the neighbours
-/// marked in a bit mask, then the pair function run on the marked ones in run order. In a
-/// warp, inline pair code runs for every candidate that any of its threads accepts, nearly
+/// The split search's walk of the same row, [`GRID_ROUND`] candidates a round: all of the
+/// round's loaded at once, tested by position alone (the row's key and the distance), the
+/// neighbours marked in a bit mask, then the pair function run on the marked ones in run order.
+/// In a warp, inline pair code runs for every candidate that any of its threads accepts, nearly
 /// all of them; with the masks it runs as often as the warp's busiest thread has neighbours
-/// among the 32. (With one thread a boid the masks were slower: 1.66 against 1.55 ms at 1M.)
+/// among the round's. (With one thread a boid the masks were slower: 1.66 against 1.55 ms at
+/// 1M.) The last round reads up to `GRID_ROUND - 1` boids past the run (the snapshot has that
+/// many spare entries) and masks them off; the boid itself is masked off by its index.
 fn emit_row_masked(w: &mut Writer) {
     w.line("let b0 = bucket_of(c);");
-    w.line("let tag = cell_tag(c + vec3<i32>(1, 0, 0)); // the row's middle cell");
+    w.line("let key = row_key(c);");
     emit_row_runs(w, |w| {
-        w.block("for (var base = first; base < last; base += 32u)", |w| {
-            w.line("let end = min(base + 32u, last);");
-            w.line("var hits = 0u;");
-            w.block(
-                format!("for (var m = base; m < end; m += {GRID_ROW_UNROLL}u)"),
-                |w| {
-                    for j in 0..GRID_ROW_UNROLL {
-                        w.line(format!("let x{j} = boids[2u * min(m + {j}u, end - 1u)];"));
-                    }
-                    for j in 0..GRID_ROW_UNROLL {
-                        w.line(format!("let d{j} = me.xyz - x{j}.xyz;"));
-                        w.line(format!("let e{j} = abs(x{j}.w - tag);"));
-                        w.line(format!(
-                            "let hit{j} = m + {j}u < end && (e{j} == 0.0 || e{j} == 16.0) && m + {j}u != k && dot(d{j}, d{j}) < FLOCK_R2;"
-                        ));
-                        w.line(format!("hits |= select(0u, 1u << (m + {j}u - base), hit{j});"));
-                    }
-                },
-            );
-            w.block("while (hits != 0u)", |w| {
-                w.line("let m = base + firstTrailingBit(hits);");
-                w.line("hits &= hits - 1u;");
-                w.line("let xm = boids[2u * m];");
-                w.line("let vm = boids[2u * m + 1u];");
-                w.line("let d = me.xyz - xm.xyz;");
-                w.line("let f = flock_pair(d, dot(d, d), heading);");
-                emit_add_neighbour(w, "xm", "vm");
-            });
-        });
+        w.block(
+            format!("for (var base = first; base < last; base += {GRID_ROUND}u)"),
+            |w| {
+                for j in 0..GRID_ROUND {
+                    w.line(format!("let x{j} = boids[2u * (base + {j}u)];"));
+                }
+                w.line("var hits = 0u;");
+                for j in 0..GRID_ROUND {
+                    w.line(format!("let d{j} = me.xyz - x{j}.xyz;"));
+                    w.line(format!(
+                        "hits |= select(0u, {}u, x{j}.w == key && dot(d{j}, d{j}) < FLOCK_R2);",
+                        1u32 << j
+                    ));
+                }
+                w.comment("Only the run's candidates, and not the boid itself.");
+                w.line(format!(
+                    "hits &= (2u << (min(last - base, {GRID_ROUND}u) - 1u)) - 1u;"
+                ));
+                w.line(format!(
+                    "hits &= select(0xffffffffu, ~(1u << (k - base)), k - base < {GRID_ROUND}u);"
+                ));
+                w.block("while (hits != 0u)", |w| {
+                    w.line("let m = base + firstTrailingBit(hits);");
+                    w.line("hits &= hits - 1u;");
+                    w.line("let xm = boids[2u * m];");
+                    w.line("let vm = boids[2u * m + 1u];");
+                    w.line("let d = me.xyz - xm.xyz;");
+                    w.line("let f = flock_pair(d, dot(d, d), heading);");
+                    emit_add_neighbour(w, "xm", "vm");
+                });
+            },
+        );
     });
 }
 

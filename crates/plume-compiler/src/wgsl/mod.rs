@@ -220,7 +220,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     if let Some(flock) = &ir.flock {
         w.blank();
         let verlet = layout.has(crate::passes::layout::Attribute::Displacement);
-        flock.emit_kernels(&mut w, verlet.then(|| ir.h()), ir.capacity);
+        flock.emit_kernels(&mut w, verlet.then(|| ir.h()));
     }
     w.finish()
 }
