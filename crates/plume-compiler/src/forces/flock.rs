@@ -820,8 +820,6 @@ fn emit_cell_fns(w: &mut Writer, cell: f64) {
 /// (more loads in flight per thread). One thread a boid: see [`emit_row_masked`] for the split
 /// search.
 fn emit_row(w: &mut Writer) {
-    w.line("let b0 = bucket_of(c);");
-    w.line("let key = row_key(c);");
     emit_row_runs(w, |w| {
         w.block(
             format!("for (var m = first; m < last; m += {GRID_ROW_UNROLL}u)"),
@@ -846,9 +844,11 @@ fn emit_row(w: &mut Writer) {
     });
 }
 
-/// The one or two runs of the row's 3 buckets from `b0` (two where the buckets wrap), each
-/// as `first .. last` for `body`.
+/// The row from cell `c`: its first bucket `b0` and its `key`, then the one or two runs of its
+/// 3 buckets (two where the buckets wrap), each as `first .. last` for `body`.
 fn emit_row_runs(w: &mut Writer, body: impl Fn(&mut Writer)) {
+    w.line("let b0 = bucket_of(c);");
+    w.line("let key = row_key(c);");
     w.line("let wrapped = max(b0 + 3u, GRID_BUCKETS) - GRID_BUCKETS;");
     w.block("for (var r = 0u; r < 2u; r++)", |w| {
         w.line("let first = cell_start[select(0u, b0, r == 0u)];");
@@ -866,8 +866,6 @@ fn emit_row_runs(w: &mut Writer, body: impl Fn(&mut Writer)) {
 /// 1M.) The last round reads up to `GRID_ROUND - 1` boids past the run (the snapshot has that
 /// many spare entries) and masks them off; the boid itself is masked off by its index.
 fn emit_row_masked(w: &mut Writer) {
-    w.line("let b0 = bucket_of(c);");
-    w.line("let key = row_key(c);");
     emit_row_runs(w, |w| {
         w.block(
             format!("for (var base = first; base < last; base += {GRID_ROUND}u)"),
