@@ -1,69 +1,20 @@
 //! The effect graph: several particle groups in one effect, connected by events
-//! ([`crate::events`]). The top-level fields of an effect are its first group (named by the
+//! ([`crate::features::events`]). The top-level fields of an effect are its first group (named by the
 //! effect's `name`); `groups` adds more, each with its own capacity, emitters, forces,
 //! integrator, collisions, kills and look, sharing the file's `dt`, `seed`, `params` and
 //! `camera`. Each group compiles to a [`CompiledEffect`] of its own, with the bindings its
 //! events need; [`CompiledGraph`] ties them together with the event streams.
 
-use serde::Deserialize;
-
-use crate::check::Checker;
-use crate::diagnostics::{Diagnostic, Diagnostics};
-use crate::events::{
+use crate::base::check::Checker;
+use crate::base::diagnostics::{Diagnostic, Diagnostics};
+use crate::base::locate::SourceMap;
+use crate::base::path::ValuePath;
+pub use crate::compile::graph_field;
+use crate::compile::{CompileError, CompileOptions, CompiledEffect, GroupLinks};
+use crate::features::events::{
     Event, EventInputIr, EventIr, Ordering, Trigger, TriggerIr, MAX_COUNT, MAX_EVENTS,
 };
-use crate::forces::Force;
-use crate::locate::SourceMap;
-use crate::path::ValuePath;
-use crate::schema::{Collider, Effect, Emitter, Integrator, KillVolume, Render, State};
-use crate::{CompileError, CompileOptions, CompiledEffect};
-
-/// A particle group beside the top-level one: the fields of an effect that belong to one
-/// particle system.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Group {
-    /// The name events target it by (unique in the file).
-    pub name: String,
-    /// Most live particles of this group at once.
-    pub capacity: u32,
-    /// Its own emitters (a group fed by events has none).
-    #[serde(default)]
-    pub emitters: Vec<Emitter>,
-    /// Accelerations, summed.
-    #[serde(default)]
-    pub forces: Vec<Force>,
-    /// Speed limit applied after every velocity update.
-    #[serde(default)]
-    pub max_speed: Option<f64>,
-    /// How positions and velocities advance.
-    #[serde(default)]
-    pub integrator: Integrator,
-    /// Integration substeps per step.
-    #[serde(default = "crate::schema::default_substeps")]
-    pub substeps: u32,
-    /// Surfaces its particles bounce off.
-    #[serde(default)]
-    pub collide: Vec<Collider>,
-    /// Volumes that kill its particles at the end of a step.
-    #[serde(default)]
-    pub kill: Vec<KillVolume>,
-    /// Draw back to front.
-    #[serde(default)]
-    pub sort: bool,
-    /// Evaluate position-dependent forces per particle or bake them into a grid.
-    #[serde(default)]
-    pub field: crate::field::Field,
-    /// Keep per-particle state or not.
-    #[serde(default)]
-    pub state: State,
-    /// How its particles look.
-    #[serde(default)]
-    pub render: Render,
-    /// Events its particles fire.
-    #[serde(default)]
-    pub events: Vec<Event>,
-}
+use crate::stages::schema::Effect;
 
 /// One event stream between two groups.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -123,50 +74,6 @@ impl CompiledGraph {
             streams: Vec::new(),
             warnings: Diagnostics::default(),
         }
-    }
-}
-
-/// What the compiler adds to one group for its events.
-#[derive(Clone, Debug, Default)]
-pub struct GroupLinks {
-    /// Events the group fires.
-    pub events: Vec<EventIr>,
-    /// Events the group is fed by.
-    pub inputs: Vec<EventInputIr>,
-    /// Their spawn rules, appended to the group's emitters.
-    pub input_emitters: Vec<Emitter>,
-}
-
-/// The path of the first graph field an effect uses (`groups` or `events`), if any.
-pub fn graph_field(effect: &Effect) -> Option<ValuePath> {
-    if !effect.groups.is_empty() {
-        Some(ValuePath::root().field("groups"))
-    } else if !effect.events.is_empty() {
-        Some(ValuePath::root().field("events"))
-    } else {
-        None
-    }
-}
-
-/// Puts `prefix` (`groups[0].`) before every path of `items`.
-pub fn prefixed(items: Vec<(Diagnostic, String)>, prefix: &str) -> Vec<(Diagnostic, String)> {
-    if prefix.is_empty() {
-        return items;
-    }
-    items
-        .into_iter()
-        .map(|(mut d, lookup)| {
-            d.path = join(prefix, &d.path);
-            (d, join(prefix, &lookup))
-        })
-        .collect()
-}
-
-fn join(prefix: &str, path: &str) -> String {
-    if path.is_empty() {
-        prefix.trim_end_matches('.').to_string()
-    } else {
-        format!("{prefix}{path}")
     }
 }
 
@@ -239,14 +146,15 @@ pub fn compile_graph_str(
     source: &str,
     options: &CompileOptions,
 ) -> Result<CompiledGraph, CompileError> {
-    let effect = crate::parse_with(source, options)?;
+    let effect = crate::compile::parse_with(source, options)?;
     compile_graph(&effect, source)
 }
 
 /// Compiles a parsed effect of any number of groups; `source` locates diagnostics.
 pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, CompileError> {
     let map = SourceMap::build(source);
-    let locate = |items: Vec<(Diagnostic, String)>| crate::locate_items(&map, source, items);
+    let locate =
+        |items: Vec<(Diagnostic, String)>| crate::compile::locate_items(&map, source, items);
     let effects = group_effects(effect);
     let (streams, checker, warnings) = check_graph(&effects);
     if !checker.errors.is_empty() {
@@ -280,7 +188,7 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
     let mut groups = Vec::with_capacity(effects.len());
     let mut errors = Vec::new();
     for (g, (e, l)) in effects.iter().zip(&links).enumerate() {
-        match crate::compile_group(e, l, &group_prefix(g), &locate) {
+        match crate::compile::compile_group(e, l, &group_prefix(g), &locate) {
             Ok(effect) => groups.push(CompiledGroup {
                 name: e.name.clone(),
                 effect,
@@ -448,7 +356,7 @@ fn check_event(c: &mut Checker, path: &ValuePath, ev: &Event, group: &Effect) {
         c.positive(&path.field("on").variant("Every").inner(), seconds);
     }
     c.finite(&path.field("inherit_velocity"), ev.inherit_velocity);
-    crate::validate::check_emitter(c, path, &ev.as_emitter(), group.dt);
+    crate::stages::validate::check_emitter(c, path, &ev.as_emitter(), group.dt);
 }
 
 /// A warning when `ev` can never fire in `group`.
@@ -475,7 +383,7 @@ fn never_fires(path: &ValuePath, ev: &Event, group: &Effect) -> Option<(Diagnost
 /// bursts plus its rate over that lifetime (a fed parent: all of it at once); every period,
 /// each live parent once per period.
 fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic, String)> {
-    let longest = |life: Option<crate::schema::Range>| life.map_or(f64::INFINITY, |r| r.1);
+    let longest = |life: Option<crate::stages::schema::Range>| life.map_or(f64::INFINITY, |r| r.1);
     let fed: Vec<bool> = (0..effects.len())
         .map(|g| streams.iter().any(|s| s.child == g))
         .collect();

@@ -141,7 +141,7 @@ pub fn decode_slots(
             // A stored tint, or the one the draw derives from the id.
             tint: match tint_at {
                 Some(t) => plume_compiler::tint::unpack(u(t)),
-                None => plume_compiler::tint::own(&effect.ir, id),
+                None => plume_compiler::tint::own(effect.ir.tint(), id),
             },
         }));
     }

@@ -138,10 +138,10 @@ pub fn eval(e: &Expr, inp: &Inputs) -> Value {
             Var::Age => Value::S(inp.age),
             Var::Life => Value::S(inp.life),
         },
-        Node::Rand(k) => Value::S(crate::rng::unit(crate::rng::rand_u32(
+        Node::Rand(k) => Value::S(crate::base::rng::unit(crate::base::rng::rand_u32(
             inp.seed_mix,
             inp.id,
-            crate::rng::stream::CUSTOM + k,
+            crate::base::rng::stream::CUSTOM + k,
         ))),
         Node::Unary(op, a) => {
             let a = eval(a, inp);

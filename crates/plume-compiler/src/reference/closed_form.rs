@@ -6,10 +6,10 @@ use glam::DVec3;
 
 use super::spawn::spawn;
 use super::ParticleRecord;
-use crate::integrators::{merged_drag, ExactStep};
+use crate::base::lifetime::NEVER;
 use crate::ir::EffectIr;
-use crate::lifetime::NEVER;
-use crate::schedule::{LiveSegments, Schedule};
+use crate::stages::integrators::{merged_drag, ExactStep};
+use crate::stages::schedule::{LiveSegments, Schedule};
 
 /// The closed form at one age τ (s) under the Exact integrator's forces: the exact step of
 /// length τ, and the sizes of its terms.
@@ -85,7 +85,7 @@ pub fn records(
                     velocity: v,
                     age: tau,
                     lifetime: schedule.lifetime(id, s.die_at),
-                    tint: crate::tint::own(ir, id),
+                    tint: crate::features::looks::tint::own(ir.tint(), id),
                 },
                 closed.term_scale(s.x.length().max(extent), s.v),
             ));

@@ -1,5 +1,5 @@
 //! The reference run of an effect graph: every group's [`ReferenceSim`], and the events between
-//! them delivered as the GPU delivers them (crate::events): at the start of each step, every
+//! them delivered as the GPU delivers them (crate::features::events): at the start of each step, every
 //! stream in order spawns the children of the last step's firings, then every group steps.
 
 use super::{ParticleRecord, ReferenceSim, Totals};

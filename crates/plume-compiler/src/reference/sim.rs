@@ -6,15 +6,15 @@ use glam::DVec3;
 use super::spawn::spawn;
 use super::step::{accel, substep};
 use super::{ParticleRecord, Totals};
-use crate::colliders::resolve;
-use crate::events::TriggerIr;
-use crate::forces::flock::Frozen;
-use crate::forces::ParticleCtx;
-use crate::integrators::ExactStep;
+use crate::features::colliders::resolve;
+use crate::features::events::TriggerIr;
+use crate::features::forces::flock::Frozen;
+use crate::features::forces::ParticleCtx;
+use crate::features::looks::trail::History;
 use crate::ir::EffectIr;
-use crate::schedule::Schedule;
-use crate::schema::Integrator;
-use crate::trail::History;
+use crate::stages::integrators::ExactStep;
+use crate::stages::schedule::Schedule;
+use crate::stages::schema::Integrator;
 
 #[derive(Clone, Debug)]
 struct Particle {
@@ -48,7 +48,7 @@ pub struct Fired {
 /// The lifetime (s) of a particle born at step `born` that dies at the update of `die_at`
 /// (0 for one that never dies), as the kernels compute it: (die_at − born + 1) dt in u32 steps.
 fn lifetime_of(born: u64, die_at: u32, dt: f64) -> f64 {
-    if die_at == crate::lifetime::NEVER {
+    if die_at == crate::base::lifetime::NEVER {
         0.0
     } else {
         f64::from(die_at.wrapping_sub(born as u32).wrapping_add(1)) * dt
@@ -116,7 +116,7 @@ impl ReferenceSim {
             } else {
                 DVec3::ONE
             };
-            let tint = crate::tint::spawned(&self.ir, id, inherited);
+            let tint = crate::features::looks::tint::spawned(self.ir.tint(), id, inherited);
             let v = self.initial_v(id, step, time, s.x, s.v, s.die_at);
             self.particles.push(Particle {
                 id,
@@ -162,7 +162,7 @@ impl ReferenceSim {
     pub fn step(&mut self) {
         let plan = self.schedule.next_plan();
         if let Some(field) = &self.ir.field {
-            if field.refresh == crate::field::Refresh::EveryStep {
+            if field.refresh == crate::features::field::Refresh::EveryStep {
                 self.baked = Some(field.bake(&self.ir.terms, plan.time));
             }
         }
@@ -192,7 +192,11 @@ impl ReferenceSim {
                     die_at: s.die_at,
                     born: plan.step,
                     history: History::default(),
-                    tint: crate::tint::spawned(&self.ir, id + local, DVec3::ONE),
+                    tint: crate::features::looks::tint::spawned(
+                        self.ir.tint(),
+                        id + local,
+                        DVec3::ONE,
+                    ),
                 });
             }
             id += count;
@@ -280,7 +284,7 @@ impl ReferenceSim {
                 position: p.x,
                 velocity: if verlet { p.v / h } else { p.v },
                 age: (self.schedule.steps_done() - p.born) as f64 * self.ir.dt,
-                lifetime: (p.die_at != crate::lifetime::NEVER)
+                lifetime: (p.die_at != crate::base::lifetime::NEVER)
                     .then(|| lifetime_of(p.born, p.die_at, self.ir.dt)),
                 tint: p.tint,
             })

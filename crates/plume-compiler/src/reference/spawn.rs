@@ -5,9 +5,9 @@ use std::f64::consts::PI;
 
 use glam::DVec3;
 
+use crate::base::lifetime::NEVER;
+use crate::base::rng::{rand_u32, stream, unit};
 use crate::ir::{EffectIr, ShapeIr, VelocityIr};
-use crate::lifetime::NEVER;
-use crate::rng::{rand_u32, stream, unit};
 
 /// A particle's starting state: position, velocity and the step whose update kills it.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,13 +1,13 @@
 //! f64 twins of the update kernel's pieces (integrators.rs, wgsl/update.rs): one substep of each
-//! integrator and the speed clamp (collisions: crate::colliders::resolve).
+//! integrator and the speed clamp (collisions: crate::features::colliders::resolve).
 
 use glam::DVec3;
 
-use crate::forces::flock::Frozen;
-use crate::forces::ParticleCtx;
-use crate::integrators::ExactStep;
+use crate::features::forces::flock::Frozen;
+use crate::features::forces::ParticleCtx;
 use crate::ir::EffectIr;
-use crate::schema::Integrator;
+use crate::stages::integrators::ExactStep;
+use crate::stages::schema::Integrator;
 
 /// Sum of the force terms at (x, v, t) for particle `p`. With a baked field, `baked` holds its
 /// nodes (baked at the step's time) and the bakeable terms are sampled from them instead of
@@ -30,7 +30,7 @@ pub fn accel(
                 .sum();
             rest + field
                 .sample(nodes, x)
-                .unwrap_or_else(|| crate::field::baked_sum(&ir.terms, x, t))
+                .unwrap_or_else(|| crate::features::field::baked_sum(&ir.terms, x, t))
         }
         _ => ir
             .terms

@@ -1,0 +1,17 @@
+//! The leaves everything shares: diagnostics and spans, value paths and the checker, value
+//! types, the WGSL text writer and kernel helpers, the PCG hash, lifetimes in steps, the
+//! particle layout's types and naga validation.
+//!
+//! Architecture invariant: nothing here imports anything of the crate outside `base`.
+
+pub mod check;
+pub mod diagnostics;
+pub mod kernel;
+pub mod layout;
+pub mod lifetime;
+pub mod locate;
+pub mod naga_check;
+pub mod path;
+pub mod rng;
+pub mod values;
+pub mod writer;

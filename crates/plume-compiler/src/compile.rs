@@ -1,0 +1,320 @@
+//! The single-group driver: parse (with overrides), then check, lower, run the passes, emit
+//! the WGSL modules and validate them with naga. Effect graphs call [`compile_group`] once
+//! per group (`crate::graph`), handing each its event links ([`GroupLinks`]).
+
+use crate::base::diagnostics::{self, Diagnostic, Diagnostics, Severity};
+use crate::base::locate::SourceMap;
+use crate::base::naga_check;
+use crate::base::path::ValuePath;
+use crate::features::events::{EventInputIr, EventIr};
+use crate::features::looks::texture;
+use crate::ir::EffectIr;
+use crate::stages::passes::layout::Layout;
+use crate::stages::schema::{Effect, Emitter, Integrator};
+use crate::stages::{lower, passes, validate, wgsl};
+
+/// Overrides applied on top of the effect file (as `plume run --dt` etc. do), and where the
+/// files it names are.
+///
+/// ```
+/// let source = r#"Effect(name: "flakes", capacity: 10,
+///     emitters: [Emitter(burst: 10, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+///     render: Render(texture: Some(Texture(file: "textures/snowflake.png"))))"#;
+/// // The texture is named relative to the effect file, which lies in effects/.
+/// let options = plume_compiler::CompileOptions {
+///     base_dir: Some("../../effects".into()),
+///     ..Default::default()
+/// };
+/// let effect = plume_compiler::compile_str(source, &options).unwrap();
+/// let texture = effect.ir.render.texture.as_ref().unwrap();
+/// assert_eq!((texture.width, texture.height, texture.frames()), (64, 64, 1));
+/// // Looked for elsewhere, it is not found: an error located at the file's name.
+/// let error = plume_compiler::compile_str(source, &Default::default()).unwrap_err();
+/// assert!(error.render("flakes.ron", source).contains("render.texture.file: cannot open texture"));
+/// ```
+#[derive(Clone, Debug, Default)]
+pub struct CompileOptions {
+    /// Replaces the file's `dt`.
+    pub dt: Option<f64>,
+    /// Replaces the file's `seed`.
+    pub seed: Option<u32>,
+    /// Replaces the file's `integrator`.
+    pub integrator: Option<Integrator>,
+    /// Replaces the file's `substeps`.
+    pub substeps: Option<u32>,
+    /// Replaces the file's `sort` (as `plume run --order draw` does).
+    pub sort: Option<bool>,
+    /// Replaces the file's `state`.
+    pub state: Option<crate::stages::schema::State>,
+    /// The directory the effect's files (`render.texture.file`) are relative to: the effect
+    /// file's directory. None: the current directory.
+    pub base_dir: Option<std::path::PathBuf>,
+}
+
+/// A compiled effect: the IR after the passes, its layout, the WGSL and any warnings.
+#[derive(Clone, Debug)]
+pub struct CompiledEffect {
+    /// The IR after all passes (integrator resolved).
+    pub ir: EffectIr,
+    /// Particle struct and bindings.
+    pub layout: Layout,
+    /// The naga-validated WGSL compute module.
+    pub wgsl: String,
+    /// The naga-validated WGSL draw module (vertex and fragment shaders) for one particle
+    /// buffer: see [`wgsl::draw`]. The runtime emits another shape when it needs one.
+    pub draw_wgsl: String,
+    /// The naga-validated WGSL trail draw module (`render.trail`; see [`wgsl::trail`]), for
+    /// one particle buffer; None for an effect without trails.
+    pub trail_wgsl: Option<String>,
+    /// The naga-validated WGSL module of the flock's grid search (`Flock(neighbors: Grid)`;
+    /// see [`forces::flock::FlockIr::emit_search_module`]); None for any other effect.
+    pub flock_search_wgsl: Option<String>,
+    /// Warnings from the stability analysis and other checks, located in the source.
+    pub warnings: Diagnostics,
+}
+
+/// Why compilation failed.
+#[derive(Debug, thiserror::Error)]
+pub enum CompileError {
+    /// The effect has errors: syntax, unknown fields, or invalid values.
+    #[error("{0}")]
+    Invalid(Diagnostics),
+    /// The compiler emitted WGSL that naga rejects: a bug in Plume, never the user's fault.
+    #[error(transparent)]
+    Internal(#[from] naga_check::NagaRejection),
+}
+
+impl CompileError {
+    /// Renders the error for a terminal: rustc-style diagnostics, or the internal error text.
+    pub fn render(&self, file_name: &str, source: &str) -> String {
+        match self {
+            CompileError::Invalid(d) => d.render(file_name, source),
+            CompileError::Internal(e) => format!("{file_name}: {e}\n"),
+        }
+    }
+}
+
+/// Parses RON text into the effect schema, with syntax errors located.
+pub fn parse(source: &str) -> Result<Effect, Diagnostics> {
+    ron::Options::default()
+        .from_str::<Effect>(source)
+        .map_err(|e| {
+            let start = diagnostics::Pos {
+                line: e.span.start.line.max(1),
+                col: e.span.start.col.max(1),
+            };
+            let end = diagnostics::Pos {
+                line: e.span.end.line.max(1),
+                col: e.span.end.col.max(1),
+            };
+            Diagnostics {
+                items: vec![Diagnostic {
+                    severity: Severity::Error,
+                    path: String::new(),
+                    message: e.code.to_string(),
+                    span: Some(diagnostics::Span { start, end }),
+                }],
+            }
+        })
+}
+
+/// Compiles effect source text: parse, check, lower, run the passes, emit and validate WGSL.
+pub fn compile_str(source: &str, options: &CompileOptions) -> Result<CompiledEffect, CompileError> {
+    let effect = parse_with(source, options)?;
+    compile_effect(&effect, source)
+}
+
+/// Parses `source` and applies `options`' overrides (to every group of a graph).
+pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, CompileError> {
+    let mut effect = parse(source).map_err(CompileError::Invalid)?;
+    if let Some(dt) = options.dt {
+        effect.dt = dt;
+    }
+    if let Some(seed) = options.seed {
+        effect.seed = seed;
+    }
+    if let Some(i) = options.integrator {
+        effect.integrator = i;
+    }
+    if let Some(s) = options.substeps {
+        effect.substeps = s;
+    }
+    if let Some(s) = options.sort {
+        effect.sort = s;
+    }
+    if let Some(s) = options.state {
+        effect.state = s;
+    }
+    effect.base_dir.clone_from(&options.base_dir);
+    for group in &mut effect.groups {
+        if let Some(i) = options.integrator {
+            group.integrator = i;
+        }
+        if let Some(s) = options.substeps {
+            group.substeps = s;
+        }
+        if let Some(s) = options.sort {
+            group.sort = s;
+        }
+        if let Some(s) = options.state {
+            group.state = s;
+        }
+    }
+    Ok(effect)
+}
+
+/// Compiles an already-parsed effect of one group; `source` (may be empty) is used only to
+/// locate diagnostics. An effect with `groups` or `events` is a graph: compile it with
+/// [`graph::compile_graph`].
+pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, CompileError> {
+    let map = SourceMap::build(source);
+    let locate = |items: Vec<(Diagnostic, String)>| locate_items(&map, source, items);
+    if let Some(path) = graph_field(effect) {
+        return Err(CompileError::Invalid(locate(vec![(
+            Diagnostic::error(
+                path.display,
+                "this effect has groups or events: it runs as a graph (plume_compiler::graph::compile_graph); this entry point compiles a single group",
+            ),
+            path.lookup,
+        )])));
+    }
+    compile_group(effect, &GroupLinks::default(), "", &locate)
+}
+
+/// Gives each diagnostic the span of its lookup path in `source`.
+pub(crate) fn locate_items(
+    map: &SourceMap,
+    source: &str,
+    items: Vec<(Diagnostic, String)>,
+) -> Diagnostics {
+    Diagnostics {
+        items: items
+            .into_iter()
+            .map(|(mut d, lookup)| {
+                d.span = match lookup.split_once('@') {
+                    // `path@start..end`: characters of an expression string (Checker::error_in_string).
+                    Some((path, range)) => range
+                        .split_once("..")
+                        .and_then(|(s, e)| Some((s.parse().ok()?, e.parse().ok()?)))
+                        .and_then(|(s, e)| map.find_in_string(source, path, s, e))
+                        .or_else(|| map.find(path)),
+                    None => map.find(&lookup),
+                };
+                d
+            })
+            .collect(),
+    }
+}
+
+/// Compiles one group: `effect` holds its fields (and the file's shared ones), `links` its
+/// events, and `prefix` (`groups[1].`, or empty for the top level) is put before every path
+/// its diagnostics name.
+pub(crate) fn compile_group(
+    effect: &Effect,
+    links: &GroupLinks,
+    prefix: &str,
+    located: &dyn Fn(Vec<(Diagnostic, String)>) -> Diagnostics,
+) -> Result<CompiledEffect, CompileError> {
+    let prefixed = |items: Vec<(Diagnostic, String)>| located(prefixed(items, prefix));
+    let checker = validate::check_effect(effect);
+    if !checker.errors.is_empty() {
+        return Err(CompileError::Invalid(prefixed(checker.errors)));
+    }
+    let mut with_inputs = effect.clone();
+    with_inputs
+        .emitters
+        .extend(links.input_emitters.iter().cloned());
+    let mut ir = lower::lower(&with_inputs);
+    ir.events.clone_from(&links.events);
+    ir.event_inputs.clone_from(&links.inputs);
+    if let Some(spec) = &effect.render.texture {
+        let texture =
+            texture::TextureIr::load(spec, effect.base_dir.as_deref()).map_err(|message| {
+                let path = ValuePath::root()
+                    .field("render")
+                    .field("texture")
+                    .field("file");
+                CompileError::Invalid(prefixed(vec![(
+                    Diagnostic::error(path.display, message),
+                    path.lookup,
+                )]))
+            })?;
+        ir.render.texture = Some(texture);
+    }
+    let names: Vec<&'static str> = effect.forces.iter().map(|f| f.name()).collect();
+    let (layout, warnings) =
+        passes::run(&mut ir, &names).map_err(|c| CompileError::Invalid(prefixed(c.errors)))?;
+    let wgsl = wgsl::emit_module(&ir, &layout);
+    naga_check::validate(&wgsl)?;
+    let draw_wgsl = wgsl::draw::emit(&ir, &layout, &wgsl::draw::DrawShape::single(&ir));
+    naga_check::validate(&draw_wgsl)?;
+    let trail_wgsl = match ir.render.trail {
+        Some(_) => {
+            let shape = wgsl::draw::DrawShape::single(&ir);
+            let source = wgsl::trail::emit(&ir, &layout, &shape);
+            naga_check::validate(&source)?;
+            Some(source)
+        }
+        None => None,
+    };
+    let flock_search_wgsl = match &ir.flock {
+        Some(flock) => flock.emit_search_module(&ir.name, ir.capacity, &layout),
+        None => None,
+    };
+    if let Some(source) = &flock_search_wgsl {
+        naga_check::validate(source)?;
+    }
+    Ok(CompiledEffect {
+        ir,
+        layout,
+        wgsl,
+        draw_wgsl,
+        trail_wgsl,
+        flock_search_wgsl,
+        warnings: prefixed(warnings),
+    })
+}
+
+/// What the compiler adds to one group for its events.
+#[derive(Clone, Debug, Default)]
+pub struct GroupLinks {
+    /// Events the group fires.
+    pub events: Vec<EventIr>,
+    /// Events the group is fed by.
+    pub inputs: Vec<EventInputIr>,
+    /// Their spawn rules, appended to the group's emitters.
+    pub input_emitters: Vec<Emitter>,
+}
+
+/// The path of the first graph field an effect uses (`groups` or `events`), if any.
+pub fn graph_field(effect: &Effect) -> Option<ValuePath> {
+    if !effect.groups.is_empty() {
+        Some(ValuePath::root().field("groups"))
+    } else if !effect.events.is_empty() {
+        Some(ValuePath::root().field("events"))
+    } else {
+        None
+    }
+}
+
+/// Puts `prefix` (`groups[0].`) before every path of `items`.
+pub fn prefixed(items: Vec<(Diagnostic, String)>, prefix: &str) -> Vec<(Diagnostic, String)> {
+    if prefix.is_empty() {
+        return items;
+    }
+    items
+        .into_iter()
+        .map(|(mut d, lookup)| {
+            d.path = join(prefix, &d.path);
+            (d, join(prefix, &lookup))
+        })
+        .collect()
+}
+
+fn join(prefix: &str, path: &str) -> String {
+    if path.is_empty() {
+        prefix.trim_end_matches('.').to_string()
+    } else {
+        format!("{prefix}{path}")
+    }
+}

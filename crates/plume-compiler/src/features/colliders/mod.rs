@@ -1,0 +1,550 @@
+//! Colliders: each module owns one surface's schema checks, lowering, swept test in f64 (the
+//! reference) and its WGSL twin. This module owns what they share: the schema enum, the IR,
+//! the response and the swept resolution loop that both the update kernel and the reference
+//! run.
+//!
+//! **Swept, not sampled.** Each substep tests the segment from the particle's old to its new
+//! position against every collider, takes the first contact, puts the particle there (a few
+//! f32 ulps outside), applies Latta's response (normal speed reflected by restitution,
+//! tangential speed reduced by friction) and moves it the rest of the substep with its new
+//! velocity, testing that segment again. At most [`MAX_CONTACTS`] contacts are resolved per
+//! substep; a particle that would need more stays at its last contact for the rest of the
+//! substep (it keeps its new velocity), so nothing passes through. A particle that starts a
+//! substep inside a solid (spawned there, or rounding) is first pushed out to the nearest
+//! surface, and every particle is pushed out once more after the loop.
+
+pub mod aabb;
+pub mod height_field;
+pub mod plane;
+pub mod sphere;
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+use crate::base::values::Vec3;
+use crate::base::writer::{f32_lit, Writer};
+
+/// Contacts resolved per substep; past that the particle stops at its last contact.
+pub const MAX_CONTACTS: u32 = 4;
+
+/// The contact margin, relative to the larger of |x| and the colliders' own coordinates:
+/// 16 f32 ulps, so that rounding cannot leave a particle on the wrong side of a surface.
+pub const MARGIN: f64 = 1.9e-6;
+
+/// A collider as written in an effect file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Collider {
+    /// A half-space boundary: particles live on the side the normal points to.
+    Plane {
+        /// Any point on the plane.
+        point: Vec3,
+        /// Points into the allowed side (any length but zero).
+        normal: Vec3,
+        /// Fraction of normal speed kept on a bounce, in [0, 1].
+        restitution: f64,
+        /// Fraction of tangential speed lost on a bounce, in [0, 1].
+        friction: f64,
+    },
+    /// A ball: particles stay outside it, or inside it with `inside: true`.
+    Sphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius (m), > 0.
+        radius: f64,
+        /// Fraction of normal speed kept on a bounce, in [0, 1].
+        restitution: f64,
+        /// Fraction of tangential speed lost on a bounce, in [0, 1].
+        friction: f64,
+        /// Keep particles inside (a container) instead of outside.
+        #[serde(default)]
+        inside: bool,
+    },
+    /// An axis-aligned box: particles stay outside it, or inside it with `inside: true`.
+    Box {
+        /// Lower corner.
+        min: Vec3,
+        /// Upper corner (greater than `min` on every axis).
+        max: Vec3,
+        /// Fraction of normal speed kept on a bounce, in [0, 1].
+        restitution: f64,
+        /// Fraction of tangential speed lost on a bounce, in [0, 1].
+        friction: f64,
+        /// Keep particles inside (a container) instead of outside.
+        #[serde(default)]
+        inside: bool,
+    },
+    /// Terrain: heights on a regular grid over an x-z rectangle, bilinear between samples;
+    /// particles over the rectangle are kept above it.
+    HeightField {
+        /// The rectangle's (x, z) corner where the first row's first height sits.
+        min: (f64, f64),
+        /// The opposite (x, z) corner.
+        max: (f64, f64),
+        /// Heights (y, in metres): one row per z sample from min to max, each row one height
+        /// per x sample from min to max; at least 2 x 2, every row the same length.
+        heights: Vec<Vec<f64>>,
+        /// Fraction of normal speed kept on a bounce, in [0, 1].
+        restitution: f64,
+        /// Fraction of tangential speed lost on a bounce, in [0, 1].
+        friction: f64,
+    },
+}
+
+impl Collider {
+    /// The variant's name as written in effect files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Collider::Plane { .. } => "Plane",
+            Collider::Sphere { .. } => "Sphere",
+            Collider::Box { .. } => "Box",
+            Collider::HeightField { .. } => "HeightField",
+        }
+    }
+
+    /// Checks the collider's parameters; `path` names the variant.
+    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+        let (restitution, friction) = match self {
+            Collider::Plane {
+                point,
+                normal,
+                restitution,
+                friction,
+            } => {
+                c.vec3(&path.field("point"), *point);
+                c.direction(&path.field("normal"), *normal);
+                (restitution, friction)
+            }
+            Collider::Sphere {
+                center,
+                radius,
+                restitution,
+                friction,
+                ..
+            } => {
+                sphere::check(path, c, *center, *radius);
+                (restitution, friction)
+            }
+            Collider::Box {
+                min,
+                max,
+                restitution,
+                friction,
+                ..
+            } => {
+                aabb::check(path, c, *min, *max);
+                (restitution, friction)
+            }
+            Collider::HeightField {
+                min,
+                max,
+                heights,
+                restitution,
+                friction,
+            } => {
+                height_field::check(path, c, *min, *max, heights);
+                (restitution, friction)
+            }
+        };
+        c.within(&path.field("restitution"), *restitution, 0.0, 1.0);
+        c.within(&path.field("friction"), *friction, 0.0, 1.0);
+    }
+
+    /// Lowers a checked collider to the IR.
+    pub fn lower(&self) -> ColliderIr {
+        let (surface, restitution, friction) = match self {
+            Collider::Plane {
+                point,
+                normal,
+                restitution,
+                friction,
+            } => (
+                Surface::Plane(plane::PlaneIr {
+                    point: point.d(),
+                    normal: crate::features::forces::safe_normalize(normal.d()),
+                }),
+                restitution,
+                friction,
+            ),
+            Collider::Sphere {
+                center,
+                radius,
+                restitution,
+                friction,
+                inside,
+            } => (
+                Surface::Sphere(sphere::SphereIr {
+                    center: center.d(),
+                    radius: *radius,
+                    inside: *inside,
+                }),
+                restitution,
+                friction,
+            ),
+            Collider::Box {
+                min,
+                max,
+                restitution,
+                friction,
+                inside,
+            } => (
+                Surface::Box(aabb::BoxIr {
+                    min: min.d(),
+                    max: max.d(),
+                    inside: *inside,
+                }),
+                restitution,
+                friction,
+            ),
+            Collider::HeightField {
+                min,
+                max,
+                heights,
+                restitution,
+                friction,
+            } => (
+                Surface::HeightField(height_field::HeightFieldIr::new(*min, *max, heights)),
+                restitution,
+                friction,
+            ),
+        };
+        ColliderIr {
+            surface,
+            restitution: *restitution,
+            friction: *friction,
+        }
+    }
+}
+
+/// The first contact along a segment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Where along the segment, in [0, 1].
+    pub s: f64,
+    /// Unit normal at the contact, pointing to the allowed side.
+    pub normal: DVec3,
+}
+
+/// A surface in the IR.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Surface {
+    /// A half-space.
+    Plane(plane::PlaneIr),
+    /// A ball, solid or a container.
+    Sphere(sphere::SphereIr),
+    /// An axis-aligned box, solid or a container.
+    Box(aabb::BoxIr),
+    /// A height field.
+    HeightField(height_field::HeightFieldIr),
+}
+
+/// A collider in the IR: a surface and how particles bounce off it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ColliderIr {
+    /// The surface.
+    pub surface: Surface,
+    /// Restitution in [0, 1].
+    pub restitution: f64,
+    /// Friction in [0, 1].
+    pub friction: f64,
+}
+
+impl Surface {
+    /// The variant's name as written in effect files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Surface::Plane(_) => "Plane",
+            Surface::Sphere(_) => "Sphere",
+            Surface::Box(_) => "Box",
+            Surface::HeightField(_) => "HeightField",
+        }
+    }
+
+    /// The first contact of the segment `a` -> `b` with the surface, entering the forbidden
+    /// side from the allowed one.
+    pub fn hit(&self, a: DVec3, b: DVec3) -> Option<Hit> {
+        match self {
+            Surface::Plane(p) => p.hit(a, b),
+            Surface::Sphere(s) => s.hit(a, b),
+            Surface::Box(s) => s.hit(a, b),
+            Surface::HeightField(s) => s.hit(a, b),
+        }
+    }
+
+    /// `x` moved to the allowed side (plus `margin`) when it is on the forbidden one.
+    pub fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
+        match self {
+            Surface::Plane(p) => p.push_out(x, margin),
+            Surface::Sphere(s) => s.push_out(x, margin),
+            Surface::Box(s) => s.push_out(x, margin),
+            Surface::HeightField(s) => s.push_out(x, margin),
+        }
+    }
+
+    /// Whether `x` is on the allowed side (the tests' check; no margin).
+    pub fn allows(&self, x: DVec3) -> bool {
+        match self {
+            Surface::Plane(p) => (x - p.point).dot(p.normal) >= 0.0,
+            Surface::Sphere(s) => s.allows(x),
+            Surface::Box(s) => s.allows(x),
+            Surface::HeightField(s) => s.allows(x),
+        }
+    }
+
+    /// The largest coordinate magnitude the surface is built from (for the margin).
+    pub fn scale(&self) -> f64 {
+        match self {
+            Surface::Plane(p) => p.point.abs().max_element(),
+            Surface::Sphere(s) => s.center.abs().max_element() + s.radius,
+            Surface::Box(s) => s.min.abs().max(s.max.abs()).max_element(),
+            Surface::HeightField(s) => s.scale(),
+        }
+    }
+
+    /// The thinnest feature the surface has, for the f32 resolution warning (None: unbounded).
+    pub fn thinnest(&self) -> Option<f64> {
+        match self {
+            Surface::Plane(_) | Surface::HeightField(_) => None,
+            Surface::Sphere(s) => Some(s.radius),
+            Surface::Box(s) => Some((s.max - s.min).min_element()),
+        }
+    }
+
+    /// One line for `--emit ir`.
+    pub fn describe(&self) -> String {
+        let v = |v: DVec3| format!("({}, {}, {})", v.x, v.y, v.z);
+        match self {
+            Surface::Plane(p) => format!("Plane point {} normal {}", v(p.point), v(p.normal)),
+            Surface::Sphere(s) => format!(
+                "Sphere center {} radius {}{}",
+                v(s.center),
+                s.radius,
+                if s.inside { " inside" } else { "" }
+            ),
+            Surface::Box(s) => format!(
+                "Box min {} max {}{}",
+                v(s.min),
+                v(s.max),
+                if s.inside { " inside" } else { "" }
+            ),
+            Surface::HeightField(s) => s.describe(),
+        }
+    }
+
+    /// Emits `fn collider_hit_{i}(a, b) -> vec4<f32>` ((s, normal), s = 2 for no contact) and
+    /// `fn collider_push_{i}(x, margin) -> vec3<f32>`.
+    fn emit_fns(&self, w: &mut Writer, i: usize, data_offset: u32) {
+        match self {
+            Surface::Plane(p) => p.emit(w, i),
+            Surface::Sphere(s) => s.emit(w, i),
+            Surface::Box(s) => s.emit(w, i),
+            Surface::HeightField(s) => s.emit(w, i, data_offset),
+        }
+    }
+}
+
+impl ColliderIr {
+    /// Latta's response to a contact with normal `n`: v' = (1 - mu) v_t - e v_n when moving
+    /// into the surface; a contact slower than `rest_speed` does not bounce (e = 0) so that
+    /// resting particles stay put instead of hopping by e·g·h² every step.
+    pub fn respond(&self, v: DVec3, n: DVec3, rest_speed: f64) -> DVec3 {
+        let vn = v.dot(n);
+        if vn >= 0.0 {
+            return v;
+        }
+        let v_n = vn * n;
+        let e = if -vn < rest_speed {
+            0.0
+        } else {
+            self.restitution
+        };
+        (1.0 - self.friction) * (v - v_n) - e * v_n
+    }
+}
+
+/// The largest coordinate any collider is built from, at least 1 (for the margin).
+pub fn scale(colliders: &[ColliderIr]) -> f64 {
+    colliders
+        .iter()
+        .map(|c| c.surface.scale())
+        .fold(1.0, f64::max)
+}
+
+/// The contact margin at `x`.
+pub fn margin(x: DVec3, scale: f64) -> f64 {
+    MARGIN * x.abs().max_element().max(scale)
+}
+
+fn push_out_all(colliders: &[ColliderIr], mut x: DVec3, scale: f64) -> DVec3 {
+    for c in colliders {
+        x = c.surface.push_out(x, margin(x, scale));
+    }
+    x
+}
+
+/// The f64 reference of the swept resolution (see the module doc): the particle moved from
+/// `x0` to `x` this substep of length `h`; `v` is its velocity (Verlet: its displacement).
+/// Returns whether it touched a collider.
+pub fn resolve(
+    colliders: &[ColliderIr],
+    rest_speed: f64,
+    x0: DVec3,
+    x: &mut DVec3,
+    v: &mut DVec3,
+    verlet: bool,
+    h: f64,
+) -> bool {
+    if colliders.is_empty() {
+        return false;
+    }
+    let scale = scale(colliders);
+    let mut x_from = push_out_all(colliders, x0, scale);
+    let mut vel = if verlet { *v / h } else { *v };
+    let mut rest = 1.0;
+    let mut touched = false;
+    for k in 0..MAX_CONTACTS {
+        let mut best: Option<(Hit, &ColliderIr)> = None;
+        for c in colliders {
+            if let Some(hit) = c.surface.hit(x_from, *x) {
+                if best.is_none_or(|(b, _)| hit.s < b.s) {
+                    best = Some((hit, c));
+                }
+            }
+        }
+        let Some((hit, c)) = best else { break };
+        let on = x_from + (*x - x_from) * hit.s;
+        let contact = on + hit.normal * margin(on, scale);
+        vel = c.respond(vel, hit.normal, rest_speed);
+        rest *= 1.0 - hit.s;
+        x_from = contact;
+        *x = if k + 1 == MAX_CONTACTS {
+            contact
+        } else {
+            contact + vel * (rest * h)
+        };
+        touched = true;
+    }
+    *x = push_out_all(colliders, *x, scale);
+    if touched {
+        *v = if verlet { vel * h } else { vel };
+    }
+    touched
+}
+
+/// Emits each collider's functions and, when a height field needs them, nothing else: the
+/// heights live in the `collider_data` binding.
+pub fn emit_helpers(w: &mut Writer, colliders: &[ColliderIr]) {
+    let mut offset = 0;
+    for (i, c) in colliders.iter().enumerate() {
+        w.comment(format!("collide[{i}]: {}", c.surface.name()));
+        c.surface.emit_fns(w, i, offset);
+        if let Surface::HeightField(f) = &c.surface {
+            offset += f.heights.len() as u32;
+        }
+        w.blank();
+    }
+}
+
+/// The heights of every height field, in collider order (the `collider_data` binding).
+pub fn data(colliders: &[ColliderIr]) -> Vec<f32> {
+    colliders
+        .iter()
+        .filter_map(|c| match &c.surface {
+            Surface::HeightField(f) => Some(f.heights.iter().map(|&h| h as f32)),
+            _ => None,
+        })
+        .flatten()
+        .collect()
+}
+
+/// Emits the swept resolution in the update kernel's substep, with `x_start` (where the
+/// substep began), `x` and `v` (or Verlet's `d`) in scope. Mirrors [`resolve`]; sets the
+/// variable `touched_flag` names to true after a contact, when one is given.
+pub fn emit_resolve(
+    w: &mut Writer,
+    colliders: &[ColliderIr],
+    rest_speed: f64,
+    h: f64,
+    verlet: bool,
+    touched_flag: Option<&str>,
+) {
+    let scale = f32_lit(scale(colliders));
+    let push_all = |w: &mut Writer, var: &str| {
+        for i in 0..colliders.len() {
+            w.line(format!(
+                "{var} = collider_push_{i}({var}, {} * max(max(abs({var}.x), abs({var}.y)), max(abs({var}.z), {scale})));",
+                f32_lit(MARGIN)
+            ));
+        }
+    };
+    w.block("", |w| {
+        w.line("var x_from = x_start;");
+        push_all(w, "x_from");
+        if verlet {
+            w.line(format!("var vel = d * {};", f32_lit(1.0 / h)));
+        } else {
+            w.line("var vel = v;");
+        }
+        w.line("var rest = 1.0;");
+        w.line("var touched = false;");
+        w.block(format!("for (var k = 0u; k < {MAX_CONTACTS}u; k++)"), |w| {
+            w.line("var hit = vec4<f32>(2.0, 0.0, 0.0, 0.0);");
+            w.line("var bounce = vec2<f32>(0.0, 1.0);");
+            for (i, c) in colliders.iter().enumerate() {
+                w.line(format!("let h{i} = collider_hit_{i}(x_from, x);"));
+                w.block(format!("if (h{i}.x < hit.x)"), |w| {
+                    w.line(format!("hit = h{i};"));
+                    w.line(format!(
+                        "bounce = vec2<f32>({}, {});",
+                        f32_lit(c.restitution),
+                        f32_lit(1.0 - c.friction)
+                    ));
+                });
+            }
+            w.block("if (hit.x > 1.0)", |w| w.line("break;"));
+            w.line("let n = hit.yzw;");
+            w.line("let x_on = x_from + (x - x_from) * hit.x;");
+            w.line(format!(
+                "let contact = x_on + n * ({} * max(max(abs(x_on.x), abs(x_on.y)), max(abs(x_on.z), {scale})));",
+                f32_lit(MARGIN)
+            ));
+            w.line("let vn = dot(vel, n);");
+            w.block("if (vn < 0.0)", |w| {
+                w.line("let v_n = vn * n;");
+                w.line(format!(
+                    "let e = select(bounce.x, 0.0, -vn < {});",
+                    f32_lit(rest_speed)
+                ));
+                w.line("vel = bounce.y * (vel - v_n) - e * v_n;");
+            });
+            w.line("rest = rest * (1.0 - hit.x);");
+            w.line("x_from = contact;");
+            w.line(format!(
+                "x = select(contact + vel * (rest * {}), contact, k + 1u == {MAX_CONTACTS}u);",
+                f32_lit(h)
+            ));
+            w.line("touched = true;");
+        });
+        push_all(w, "x");
+        w.block("if (touched)", |w| {
+            if let Some(flag) = touched_flag {
+                w.line(format!("{flag} = true;"));
+            }
+            if verlet {
+                w.line(format!("d = vel * {};", f32_lit(h)));
+            } else {
+                w.line("v = vel;");
+            }
+        });
+    });
+}
+
+/// Path of the `i`-th collider, with its variant named.
+pub fn collider_path(i: usize, c: &Collider) -> ValuePath {
+    ValuePath::root()
+        .field("collide")
+        .index(i)
+        .variant(c.name())
+}

@@ -1,0 +1,492 @@
+//! Events: particles of one group spawning particles of another (sub-emitters). This module
+//! owns the event's schema, its IR, the WGSL that records events in the parent's update and
+//! spawns them in the child, and the f64 twin of when an event fires.
+//!
+//! The contract (docs/effect-format.md, "Groups and events"): the parent's update of step k
+//! decides, per particle, whether an event fires (death, a collision during the step, or the
+//! end of every `Every` period of its life), notes its id and slot ([`Ordering`]: appended,
+//! or a key per slot) and records its position and velocity at the end of the step in its
+//! slot. At the start of step k + 1, before any group updates, the runtime puts the firing
+//! slots in id order (the order is the ids', not the threads'), and the child group spawns
+//! `count` particles per firing in that order: child ids
+//! are handed out consecutively (first id + rank · count + c), and when the child group lacks
+//! room, the last ones in that order are dropped and counted. Nothing depends on which slots
+//! the GPU had free, so two runs give the same particles.
+
+use serde::Deserialize;
+
+use crate::base::layout::{Binding, Layout};
+use crate::base::values::{Range, Vec3};
+use crate::base::writer::{f32_lit, u32_lit, Writer};
+use crate::features::emitter::{Shape, Velocity};
+
+/// The most events a group may fire, and the most it may be fed by: each takes bindings of the
+/// compute module (three per event fired, two per event received).
+pub const MAX_EVENTS: usize = 4;
+
+/// The most particles one event may spawn per firing particle.
+pub const MAX_COUNT: u32 = 65_536;
+
+/// When a particle fires an event.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+pub enum Trigger {
+    /// When it dies (end of its lifetime or a kill volume), where it died.
+    Death,
+    /// When it hits a collider during a step, where the step leaves it.
+    Collide,
+    /// At the end of every period of this many seconds of its life (rounded to whole steps,
+    /// at least one), wherever it is.
+    Every(f64),
+}
+
+/// An event: `count` particles spawned in group `target` each time a particle fires it, placed
+/// by `shape` around the parent's position, moving by `velocity` plus `inherit_velocity` times
+/// the parent's velocity, and living `lifetime`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Event {
+    /// What fires it.
+    pub on: Trigger,
+    /// The name of the group the new particles join.
+    pub target: String,
+    /// Particles spawned per firing.
+    pub count: u32,
+    /// Where they start, relative to the parent's position.
+    #[serde(default = "origin")]
+    pub shape: Shape,
+    /// How they start moving (before the parent's share is added).
+    #[serde(default = "at_rest")]
+    pub velocity: Velocity,
+    /// Lifetime range in seconds; `None` lives forever.
+    #[serde(default)]
+    pub lifetime: Option<Range>,
+    /// Fraction of the parent's velocity added to theirs.
+    #[serde(default)]
+    pub inherit_velocity: f64,
+    /// Whether they take on the parent's colour (its tint: `tint.rs`).
+    #[serde(default)]
+    pub inherit_color: bool,
+}
+
+fn origin() -> Shape {
+    Shape::Point(Vec3(0.0, 0.0, 0.0))
+}
+
+fn at_rest() -> Velocity {
+    Velocity::Constant(Vec3(0.0, 0.0, 0.0))
+}
+
+impl Event {
+    /// The spawn rule as an emitter of the target group that never spawns on its own.
+    pub fn as_emitter(&self) -> crate::features::emitter::Emitter {
+        crate::features::emitter::Emitter {
+            burst: 0,
+            rate: 0.0,
+            shape: self.shape.clone(),
+            velocity: self.velocity.clone(),
+            lifetime: self.lifetime,
+        }
+    }
+}
+
+/// When an event fires, in the IR.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum TriggerIr {
+    /// At death.
+    Death,
+    /// After a step with a collision.
+    Collide,
+    /// At the end of step k when (k + 1 − born) is a multiple of this many steps.
+    Every(u32),
+}
+
+impl TriggerIr {
+    /// Whether an `Every(period)` event fires at the end of step `step` for a particle born at
+    /// `born` (the f64 reference and the kernel use the same u32 arithmetic).
+    pub fn every_fires(period: u32, born: u64, step: u64) -> bool {
+        (step as u32)
+            .wrapping_add(1)
+            .wrapping_sub(born as u32)
+            .is_multiple_of(period)
+    }
+}
+
+/// The most slots a firing group may have for its firings to be put in order by counting: each
+/// firing counts the firings with smaller ids, one dispatch, at most 8,192² comparisons a step.
+/// Larger groups sort one key per slot with the radix sort, whose dozen dispatches cost more
+/// than counting a few thousand firings (docs/performance.md, "Events").
+pub const COUNTED_MAX: u32 = 8192;
+
+/// How a stream's firings are put in parent id order at the step's start.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ordering {
+    /// The update appends (id, slot) per firing; the runtime ranks them by counting.
+    Counted,
+    /// The update writes a key (the id, or none) and a value (the slot) for every slot; the
+    /// runtime radix-sorts them, which leaves the firing slots first, in id order.
+    Sorted,
+}
+
+impl Ordering {
+    /// The ordering of the events of a firing group of `capacity` slots.
+    pub fn for_capacity(capacity: u32) -> Self {
+        if capacity <= COUNTED_MAX {
+            Ordering::Counted
+        } else {
+            Ordering::Sorted
+        }
+    }
+}
+
+/// The key of a slot that fired nothing this step ([`Ordering::Sorted`]): sorts after every id.
+pub const NO_EVENT: u32 = u32::MAX;
+
+/// An event this group fires.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EventIr {
+    /// What fires it.
+    pub trigger: TriggerIr,
+    /// How its firings are put in order.
+    pub ordering: Ordering,
+    /// The index of the target group.
+    pub target: usize,
+    /// The event's index among every event of the effect (the order children are spawned in).
+    pub stream: usize,
+}
+
+/// An event this group receives: its spawns come from another group's records.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EventInputIr {
+    /// The event's index among every event of the effect.
+    pub stream: usize,
+    /// The emitter (of this group's IR) that holds the event's spawn rule.
+    pub emitter: usize,
+    /// Particles per firing.
+    pub count: u32,
+    /// Fraction of the parent's velocity added.
+    pub inherit_velocity: f64,
+    /// Whether the children's tint includes the parent's.
+    pub inherit_color: bool,
+    /// The parent group's capacity (how many records there can be).
+    pub parent_capacity: u32,
+}
+
+const OUT_KEYS: [&str; MAX_EVENTS] = [
+    "event_keys_0",
+    "event_keys_1",
+    "event_keys_2",
+    "event_keys_3",
+];
+const OUT_VALS: [&str; MAX_EVENTS] = [
+    "event_vals_0",
+    "event_vals_1",
+    "event_vals_2",
+    "event_vals_3",
+];
+const OUT_RECORDS: [&str; MAX_EVENTS] =
+    ["event_out_0", "event_out_1", "event_out_2", "event_out_3"];
+const IN_ORDER: [&str; MAX_EVENTS] = [
+    "event_order_0",
+    "event_order_1",
+    "event_order_2",
+    "event_order_3",
+];
+const IN_RECORDS: [&str; MAX_EVENTS] = ["event_in_0", "event_in_1", "event_in_2", "event_in_3"];
+
+/// Bytes of one event record: position and velocity, each padded to a vec4.
+pub const RECORD_BYTES: u64 = 32;
+/// Bytes before the records: the count of records this step, padded to 16.
+pub const RECORDS_HEADER_BYTES: u64 = 16;
+
+/// Binding of the keys (the firing particles' ids, appended) of the `j`-th event a group fires;
+/// the values (their slots) and the records follow it.
+pub fn out_binding(j: usize) -> u32 {
+    48 + 3 * j as u32
+}
+
+/// Binding of the sorted parent slots of the `j`-th event a group receives; the records follow.
+pub fn in_binding(j: usize) -> u32 {
+    64 + 2 * j as u32
+}
+
+/// Binding of the indirect dispatch arguments of an event-fed group's spawn.
+pub const DISPATCH_BINDING: u32 = 17;
+
+/// The bindings events add to a group's compute module.
+pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> Vec<Binding> {
+    let cap = u64::from(capacity);
+    let mut out = Vec::new();
+    for j in 0..events.len() {
+        out.extend([
+            Binding {
+                binding: out_binding(j),
+                name: OUT_KEYS[j],
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: match events[j].ordering {
+                    Ordering::Counted => "the ids of the particles that fired this event in the last update, appended (the first `count`)",
+                    Ordering::Sorted => "per slot: the particle's id if it fired this event in the last update, else 0xffffffff (the sort key)",
+                },
+            },
+            Binding {
+                binding: out_binding(j) + 1,
+                name: OUT_VALS[j],
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: match events[j].ordering {
+                    Ordering::Counted => "the slot of each id in event_keys, appended with it",
+                    Ordering::Sorted => "per slot: the slot itself (the sort's values: after it, the firing slots in id order)",
+                },
+            },
+            Binding {
+                binding: out_binding(j) + 2,
+                name: OUT_RECORDS[j],
+                space: "storage, read_write",
+                bytes: RECORDS_HEADER_BYTES + cap * RECORD_BYTES,
+                meaning: "the number of firings, then per slot the position and velocity it fired with",
+            },
+        ]);
+    }
+    for (j, input) in inputs.iter().enumerate() {
+        let parent = u64::from(input.parent_capacity);
+        out.extend([
+            Binding {
+                binding: in_binding(j),
+                name: IN_ORDER[j],
+                space: "storage, read_write",
+                bytes: parent * 4,
+                meaning:
+                    "the parent group's firing slots in parent id order (ordered by the runtime at the step's start)",
+            },
+            Binding {
+                binding: in_binding(j) + 1,
+                name: IN_RECORDS[j],
+                space: "storage, read_write",
+                bytes: RECORDS_HEADER_BYTES + parent * RECORD_BYTES,
+                meaning: "the parent group's event records (count, then per parent slot)",
+            },
+        ]);
+    }
+    if !inputs.is_empty() {
+        out.push(Binding {
+            binding: DISPATCH_BINDING,
+            name: "event_dispatch",
+            space: "storage, read_write",
+            bytes: 16,
+            meaning:
+                "the workgroups of the event spawn, written by event_prepare (indirect dispatch)",
+        });
+    }
+    out
+}
+
+/// The WGSL type of an event binding, by name; None for other bindings.
+pub fn binding_type(name: &str) -> Option<&'static str> {
+    if OUT_KEYS.contains(&name) || OUT_VALS.contains(&name) || IN_ORDER.contains(&name) {
+        Some("array<u32>")
+    } else if OUT_RECORDS.contains(&name) || IN_RECORDS.contains(&name) {
+        Some("EventRecords")
+    } else if name == "event_dispatch" {
+        Some("array<u32, 4>")
+    } else {
+        None
+    }
+}
+
+/// Emits the record structs (when the group fires or receives events).
+pub fn emit_declarations(w: &mut Writer) {
+    w.comment("An event's record: the firing particle's position, its tint (tint.rs, packed) and velocity.");
+    w.block("struct EventRecord", |w| {
+        w.line("x: vec3<f32>,");
+        w.line("tint: u32,");
+        w.line("v: vec4<f32>,");
+    });
+    w.block("struct EventRecords", |w| {
+        w.line("count: atomic<u32>,");
+        w.line("pad0: u32,");
+        w.line("pad1: u32,");
+        w.line("pad2: u32,");
+        w.line("records: array<EventRecord>,");
+    });
+}
+
+/// Emits, at the top of the update of slot `chunk.base + i`, the reset of the key and value of
+/// each [`Ordering::Sorted`] event (every slot, live or free, so the sort sees only this step's
+/// firings).
+pub fn emit_update_reset(w: &mut Writer, events: &[EventIr]) {
+    for (j, e) in events.iter().enumerate() {
+        if e.ordering == Ordering::Sorted {
+            w.line(format!(
+                "{}[chunk.base + i] = {};",
+                OUT_KEYS[j],
+                u32_lit(NO_EVENT)
+            ));
+            w.line(format!("{}[chunk.base + i] = chunk.base + i;", OUT_VALS[j]));
+        }
+    }
+}
+
+/// Emits the firing of every event whose trigger `fires_here` accepts, by the particle being
+/// updated, with its position `x`, velocity `vel` and packed tint `tint` (WGSL expressions).
+/// An `Every` event's firing is guarded by its period.
+pub fn emit_fire(
+    w: &mut Writer,
+    events: &[EventIr],
+    fires_here: impl Fn(TriggerIr) -> bool,
+    x: &str,
+    vel: &str,
+    tint: &str,
+) {
+    for (j, e) in events.iter().enumerate() {
+        if !fires_here(e.trigger) {
+            continue;
+        }
+        let ordering = e.ordering;
+        let body = |w: &mut Writer| {
+            match ordering {
+                // Appended in whatever order threads run: the runtime counts them into order.
+                Ordering::Counted => {
+                    w.line(format!(
+                        "let at_{j} = atomicAdd(&{}.count, 1u);",
+                        OUT_RECORDS[j]
+                    ));
+                    w.line(format!("{}[at_{j}] = p.id;", OUT_KEYS[j]));
+                    w.line(format!("{}[at_{j}] = chunk.base + i;", OUT_VALS[j]));
+                }
+                // The slot's key (reset at the update's start) becomes the id.
+                Ordering::Sorted => {
+                    w.line(format!("{}[chunk.base + i] = p.id;", OUT_KEYS[j]));
+                    w.line(format!("atomicAdd(&{}.count, 1u);", OUT_RECORDS[j]));
+                }
+            }
+            w.line(format!(
+                "{}.records[chunk.base + i] = EventRecord({x}, {tint}, vec4<f32>({vel}, 0.0));",
+                OUT_RECORDS[j]
+            ));
+        };
+        match e.trigger {
+            TriggerIr::Every(period) => w.block(
+                format!(
+                    "if ((params.step + 1u - p.born) % {} == 0u)",
+                    u32_lit(period)
+                ),
+                body,
+            ),
+            _ => body(w),
+        }
+    }
+}
+
+/// Emits, in a stateless group's `fire` kernel, the firing of every event by particle `id`
+/// at the end of the step in `fire_state`: `dies` (WGSL bool) whether it dies in it, `lived`
+/// (u32) its whole steps lived at its end, `x`, `vel` and `tint` (packed) as for
+/// [`emit_fire`]. The firings are appended with their records (every stateless firing group
+/// is [`Ordering::Counted`]): the record's index is the firing's slot.
+pub fn emit_fire_appended(
+    w: &mut Writer,
+    events: &[EventIr],
+    id: &str,
+    x: &str,
+    vel: &str,
+    tint: &str,
+) {
+    for (j, e) in events.iter().enumerate() {
+        let fires = match e.trigger {
+            TriggerIr::Death => "dies".to_string(),
+            TriggerIr::Every(period) => format!("lived % {} == 0u", u32_lit(period)),
+            // Colliders rule out the closed form a stateless group needs.
+            TriggerIr::Collide => continue,
+        };
+        w.block(format!("if ({fires})"), |w| {
+            w.line(format!(
+                "let at_{j} = atomicAdd(&{}.count, 1u);",
+                OUT_RECORDS[j]
+            ));
+            w.line(format!("{}[at_{j}] = {id};", OUT_KEYS[j]));
+            w.line(format!("{}[at_{j}] = at_{j};", OUT_VALS[j]));
+            w.line(format!(
+                "{}.records[at_{j}] = EventRecord({x}, {tint}, vec4<f32>({vel}, 0.0));",
+                OUT_RECORDS[j]
+            ));
+        });
+    }
+}
+
+/// Emits `event_prepare_J` and `event_spawn_J` for every event the group receives.
+/// `store` emits the store of the spawned particle `s` with id `id` (and packed tint `tint`,
+/// when the group stores tints) in `slot`: the same code as the group's own spawn. `own` is
+/// the WGSL of the group's own tint for the particle `id` when it stores tints (`tint.rs`).
+pub fn emit_kernels(
+    w: &mut Writer,
+    inputs: &[EventInputIr],
+    own: Option<&str>,
+    store: &dyn Fn(&mut Writer),
+) {
+    for (j, input) in inputs.iter().enumerate() {
+        let records = IN_RECORDS[j];
+        w.comment(format!(
+            "Event {}: takes the parent's firings of the last step ({} particles each); pops slots for as many as fit, in parent id order, the rest dropped and counted; ids consumed either way.",
+            input.stream, input.count
+        ));
+        w.line("@compute @workgroup_size(1)");
+        w.block(format!("fn event_prepare_{j}()"), |w| {
+            w.line(format!("let fired = atomicLoad(&{records}.count);"));
+            w.line(format!("atomicStore(&{records}.count, 0u);"));
+            w.line(format!("let requested = fired * {};", u32_lit(input.count)));
+            w.line("let free = atomicLoad(&counters.free_count);");
+            w.line("let n = min(requested, free);");
+            w.line("atomicStore(&counters.free_count, free - n);");
+            w.line("counters.spawn_base = free - n;");
+            w.line("counters.spawn_count = n;");
+            w.line("counters.spawned = counters.spawned + n;");
+            w.line("counters.dropped = counters.dropped + (requested - n);");
+            w.line("counters.event_first_id = counters.next_id;");
+            w.line("counters.next_id = counters.next_id + requested;");
+            w.line("let workgroups = (n + WORKGROUP - 1u) / WORKGROUP;");
+            w.line("event_dispatch[0] = min(workgroups, 65535u);");
+            w.line("event_dispatch[1] = (workgroups + 65534u) / 65535u;");
+            w.line("event_dispatch[2] = 1u;");
+        });
+        w.blank();
+        w.line("@compute @workgroup_size(WORKGROUP)");
+        w.block(
+            format!("fn event_spawn_{j}(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)"),
+            |w| {
+                crate::base::kernel::emit_thread_index(w, "i", Some("counters.spawn_count"));
+                w.line("let slot = free_list[counters.spawn_base + i];");
+                w.block("if (slot < chunk.base || slot - chunk.base >= chunk.len)", |w| {
+                    w.line("return;")
+                });
+                w.line(format!("let rank = i / {};", u32_lit(input.count)));
+                w.line(format!("let c = i % {};", u32_lit(input.count)));
+                w.line(format!(
+                    "let r = {records}.records[{}[rank]];",
+                    IN_ORDER[j]
+                ));
+                w.line("let id = counters.event_first_id + i;");
+                w.line(format!("var s = emit_{}(id, c, params.step);", input.emitter));
+                w.line("s.x = s.x + r.x;");
+                if input.inherit_velocity != 0.0 {
+                    w.line(format!(
+                        "s.v = s.v + {} * r.v.xyz;",
+                        f32_lit(input.inherit_velocity)
+                    ));
+                }
+                match own {
+                    Some(own) if input.inherit_color => w.line(format!(
+                        "let tint = pack4x8unorm(vec4<f32>({own} * unpack4x8unorm(r.tint).rgb, 1.0));"
+                    )),
+                    Some(own) => w.line(format!("let tint = pack4x8unorm(vec4<f32>({own}, 1.0));")),
+                    None => {}
+                }
+                store(w);
+            },
+        );
+        w.blank();
+    }
+}
+
+/// Whether the layout needs the counters' event fields (next id, first id of the spawn).
+pub fn counts_ids_on_gpu(layout: &Layout) -> bool {
+    layout.bindings.iter().any(|b| b.name == "event_dispatch")
+}

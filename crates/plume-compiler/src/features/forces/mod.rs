@@ -1,0 +1,339 @@
+//! Forces: each module owns one force's schema, checks, lowering to IR terms, WGSL and f64
+//! reference. Adding a force means adding a module here and a variant to [`Force`] and [`Term`].
+//!
+//! Forces are accelerations `a(x, v, t)`, summed. Schemas are what users write; terms are what
+//! the IR keeps after lowering (Gravity and noiseless Wind both lower to a [`constant`] term).
+
+pub mod attractor;
+pub mod constant;
+pub mod custom;
+pub mod drag;
+pub mod flock;
+pub mod noise;
+pub mod turbulence;
+pub mod vortex;
+pub mod wind;
+
+use glam::DVec3;
+use std::marker::PhantomData;
+
+use serde::de::{
+    self, value::MapAccessDeserializer, Deserialize, Deserializer, EnumAccess, VariantAccess,
+};
+
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+use crate::base::values::Vec3;
+use crate::base::writer::Writer;
+
+/// A force as written in an effect file.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Force {
+    /// Constant acceleration `a = g`.
+    Gravity(Vec3),
+    /// Linear drag toward a fluid velocity.
+    Drag(drag::Drag),
+    /// Constant push plus optional smooth noise.
+    Wind(wind::Wind),
+    /// The thesis's gravity point.
+    Attractor(attractor::Attractor),
+    /// The thesis's vortex, with its bugs fixed.
+    Vortex(vortex::Vortex),
+    /// Flocking: forces between particles (at most one per effect).
+    Flock(flock::Flock),
+    /// An acceleration written as an expression.
+    Custom(custom::Custom),
+    /// Divergence-free curl noise.
+    Turbulence(turbulence::Turbulence),
+}
+
+impl Force {
+    /// The variant's name as written in effect files.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Force::Gravity(_) => "Gravity",
+            Force::Drag(_) => "Drag",
+            Force::Wind(_) => "Wind",
+            Force::Attractor(_) => "Attractor",
+            Force::Vortex(_) => "Vortex",
+            Force::Flock(_) => "Flock",
+            Force::Custom(_) => "Custom",
+            Force::Turbulence(_) => "Turbulence",
+        }
+    }
+
+    /// Checks the force's parameters; `path` already names the variant, `scope` holds what
+    /// expressions may name besides their variables.
+    pub fn check(&self, path: &ValuePath, c: &mut Checker, scope: custom::Scope) {
+        match self {
+            Force::Gravity(g) => {
+                c.vec3(&path.inner(), *g);
+            }
+            Force::Drag(f) => f.check(path, c),
+            Force::Wind(f) => f.check(path, c),
+            Force::Attractor(f) => f.check(path, c),
+            Force::Vortex(f) => f.check(path, c),
+            Force::Flock(f) => f.check(path, c),
+            Force::Custom(f) => f.check(path, c, scope),
+            Force::Turbulence(f) => f.check(path, c),
+        }
+    }
+
+    /// Lowers to IR terms; `origin` is the force's index in the file, `seed` the effect's seed.
+    /// A Flock lowers to no term: it couples particles, so it is `EffectIr::flock` instead.
+    pub fn lower(&self, origin: usize, seed: u32, scope: custom::Scope) -> Vec<Term> {
+        match self {
+            Force::Gravity(g) => vec![Term::Constant(constant::ConstantTerm {
+                accel: g.d(),
+                origins: vec![origin],
+            })],
+            Force::Drag(f) => vec![Term::Drag(f.lower(origin))],
+            Force::Wind(f) => f.lower(origin, seed),
+            Force::Attractor(f) => vec![Term::Attractor(f.lower(origin))],
+            Force::Vortex(f) => vec![Term::Vortex(f.lower(origin))],
+            Force::Flock(_) => Vec::new(),
+            Force::Custom(f) => vec![f.lower(origin, crate::base::rng::seed_mix(seed), scope)],
+            Force::Turbulence(f) => vec![Term::Turbulence(f.lower(origin, seed))],
+        }
+    }
+}
+
+/// Variant names, as written in effect files.
+pub const VARIANTS: &[&str] = &[
+    "Gravity",
+    "Drag",
+    "Wind",
+    "Attractor",
+    "Vortex",
+    "Flock",
+    "Custom",
+    "Turbulence",
+];
+
+/// Reads `Name(field: value, ...)` into the force module's own struct, so each force's
+/// schema lives with the rest of the force (serde's derive would need struct variants here).
+struct StructVariant<T>(PhantomData<T>);
+
+impl<'de, T: Deserialize<'de>> de::Visitor<'de> for StructVariant<T> {
+    type Value = T;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("named fields")
+    }
+    fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
+        T::deserialize(MapAccessDeserializer::new(map))
+    }
+}
+
+/// The variant names (serde reports unknown ones with the list of expected names).
+#[derive(serde::Deserialize)]
+#[serde(variant_identifier)]
+enum Kind {
+    Gravity,
+    Drag,
+    Wind,
+    Attractor,
+    Vortex,
+    Flock,
+    Custom,
+    Turbulence,
+}
+
+struct ForceVisitor;
+
+impl<'de> de::Visitor<'de> for ForceVisitor {
+    type Value = Force;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a force: Gravity, Drag, Wind, Attractor, Vortex, Flock, Custom or Turbulence")
+    }
+    fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<Force, A::Error> {
+        let (kind, variant): (Kind, _) = data.variant()?;
+        Ok(match kind {
+            Kind::Gravity => Force::Gravity(variant.newtype_variant()?),
+            Kind::Drag => {
+                Force::Drag(variant.struct_variant(drag::FIELDS, StructVariant(PhantomData))?)
+            }
+            Kind::Wind => {
+                Force::Wind(variant.struct_variant(wind::FIELDS, StructVariant(PhantomData))?)
+            }
+            Kind::Attractor => Force::Attractor(
+                variant.struct_variant(attractor::FIELDS, StructVariant(PhantomData))?,
+            ),
+            Kind::Vortex => {
+                Force::Vortex(variant.struct_variant(vortex::FIELDS, StructVariant(PhantomData))?)
+            }
+            Kind::Flock => {
+                Force::Flock(variant.struct_variant(flock::FIELDS, StructVariant(PhantomData))?)
+            }
+            Kind::Custom => {
+                Force::Custom(variant.struct_variant(custom::FIELDS, StructVariant(PhantomData))?)
+            }
+            Kind::Turbulence => Force::Turbulence(
+                variant.struct_variant(turbulence::FIELDS, StructVariant(PhantomData))?,
+            ),
+        })
+    }
+}
+
+impl<'de> Deserialize<'de> for Force {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        d.deserialize_enum("Force", VARIANTS, ForceVisitor)
+    }
+}
+
+/// Reads an optional number written plainly (`core: 1.0`, not `core: Some(1.0)`); a missing
+/// field is `None` through `#[serde(default)]`.
+fn plain_some<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    f64::deserialize(d).map(Some)
+}
+
+/// How a term limits the step size, for the stability analysis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Stiffness {
+    /// No step-size limit from this term.
+    None,
+    /// Linear damping rate k (1/s): the limit is on k*h.
+    Damping(f64),
+    /// Oscillation frequency omega (rad/s): the limit is on omega*h.
+    Oscillation(f64),
+}
+
+/// A pull toward a centre (or an axis) with a soft core, for the core-transit check: a particle
+/// that falls in from the edge crosses the core at about `fall_speed`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoreWell {
+    /// Speed (m/s) gained falling from the range's edge to the centre, from rest.
+    pub fall_speed: f64,
+    /// Core radius (m).
+    pub core: f64,
+}
+
+impl CoreWell {
+    /// The well of a pull `strength` · clamp(1 − r/range) · min(r, core)/core, whose depth is
+    /// ∫₀^range of it = strength (range/2 − core/2 + core²/(6 range)).
+    pub fn of(strength: f64, core: f64, range: f64) -> Self {
+        let depth = strength * (0.5 * range - 0.5 * core + core * core / (6.0 * range));
+        CoreWell {
+            fall_speed: (2.0 * depth.max(0.0)).sqrt(),
+            core,
+        }
+    }
+}
+
+/// What a force may read about the particle besides x, v and t (custom expressions read it).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ParticleCtx {
+    /// The particle's id (for its random numbers).
+    pub id: u32,
+    /// Its age (s) at time `t0`.
+    pub age0: f64,
+    /// The time (s) `age0` was taken at: the age at time t is age0 + (t - t0).
+    pub t0: f64,
+    /// Its lifetime (s), 0 when it never dies.
+    pub life: f64,
+}
+
+/// What every IR force term provides: WGSL, the f64 reference, and facts for the passes.
+pub trait ForceTerm {
+    /// Indices in the file's `forces` list that this term came from.
+    fn origins(&self) -> &[usize];
+    /// One line for `--emit ir`.
+    fn describe(&self) -> String;
+    /// False when the term is zero everywhere (the prune pass drops it).
+    fn can_act(&self) -> bool;
+    /// Whether the acceleration depends on velocity.
+    fn uses_velocity(&self) -> bool {
+        false
+    }
+    /// Whether the acceleration depends on time.
+    fn uses_time(&self) -> bool {
+        false
+    }
+    /// Whether the term needs the whole simulation time in kernels rather than time modulo
+    /// the noise period.
+    fn reads_whole_time(&self) -> bool {
+        false
+    }
+    /// Whether a baked field may hold this term: it depends on position (and time) only, and
+    /// is worth a grid (not a constant).
+    fn bakeable(&self) -> bool {
+        false
+    }
+    /// Why the Exact integrator cannot integrate this term (after "forces[i] (Name) ").
+    fn closed_form_blocker(&self) -> String {
+        "has no closed form".into()
+    }
+    /// Whether [`ForceTerm::stiffness`] is an estimate (sampled) rather than derived.
+    fn stiffness_is_estimate(&self) -> bool {
+        false
+    }
+    /// The field a stiffness warning points at.
+    fn stiffness_field(&self) -> &'static str {
+        "strength"
+    }
+    /// The step-size limit this term imposes.
+    fn stiffness(&self) -> Stiffness {
+        Stiffness::None
+    }
+    /// The soft-cored well particles can fall through, if the term has one.
+    fn core_well(&self) -> Option<CoreWell> {
+        None
+    }
+    /// WGSL statements that add this term's acceleration to `a`, with `x`, `v` (vec3<f32>) and
+    /// `t` (f32, seconds mod the noise period) in scope. Locals go in a `{ }` block.
+    fn emit_wgsl(&self, w: &mut Writer);
+    /// The same acceleration in f64: the CPU reference.
+    fn accel(&self, x: DVec3, v: DVec3, t: f64) -> DVec3;
+    /// The acceleration of one particle, for terms that read more than x, v and t.
+    fn accel_at(&self, x: DVec3, v: DVec3, t: f64, _particle: &ParticleCtx) -> DVec3 {
+        self.accel(x, v, t)
+    }
+}
+
+/// A force term in the IR.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Term {
+    /// Constant acceleration (gravity, noiseless wind; folded into one).
+    Constant(constant::ConstantTerm),
+    /// Linear drag (merged into one).
+    Drag(drag::DragTerm),
+    /// Smooth noise acceleration from Wind.
+    Noise(noise::NoiseTerm),
+    /// Gravity point.
+    Attractor(attractor::AttractorTerm),
+    /// Vortex.
+    Vortex(vortex::VortexTerm),
+    /// A custom expression.
+    Custom(custom::CustomTerm),
+    /// Curl-noise turbulence.
+    Turbulence(turbulence::TurbulenceTerm),
+}
+
+impl Term {
+    /// The term behind the common interface.
+    pub fn as_dyn(&self) -> &dyn ForceTerm {
+        match self {
+            Term::Constant(t) => t,
+            Term::Drag(t) => t,
+            Term::Noise(t) => t,
+            Term::Attractor(t) => t,
+            Term::Vortex(t) => t,
+            Term::Custom(t) => t,
+            Term::Turbulence(t) => t,
+        }
+    }
+}
+
+/// `v / |v|`, or zero when `v` is too short to normalise (mirrors the WGSL guard).
+pub fn safe_normalize(v: DVec3) -> DVec3 {
+    let l2 = v.length_squared();
+    if l2 > 1e-20 {
+        v / l2.sqrt()
+    } else {
+        DVec3::ZERO
+    }
+}
+
+/// Path of the `i`-th force, with its variant named.
+pub fn force_path(i: usize, f: &Force) -> ValuePath {
+    ValuePath::root().field("forces").index(i).variant(f.name())
+}

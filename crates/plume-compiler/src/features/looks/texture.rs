@@ -1,0 +1,391 @@
+//! Sprite textures and flipbooks (`render.texture`). This module owns the option end to end:
+//! loading the PNG (with errors located at `render.texture.file`), its lowered form, which
+//! frame a particle shows (the WGSL of the draw module and its f64 twin for the reference
+//! drawing), and how the fragment shader samples the frame.
+//!
+//! The texture is decoded to RGBA8 and used as stored: a texel multiplies the sprite's colour
+//! component by component (no sRGB decoding, as the colour stops are written straight to the
+//! image). The sprite's corner coordinates (cx, cy) in [-1, 1]² (see [`crate::features::looks::orient`]) map to
+//! the frame's (u, v) = ((cx + 1) / 2, (1 − cy) / 2): the image's top row at the quad's +y
+//! side, its left column at −x. Texels are filtered linearly, clamped half a texel inside the
+//! frame so that no neighbouring frame of the atlas bleeds in; there are no mipmaps.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use crate::base::rng::{rand_u32, stream};
+use crate::base::writer::{f32_lit, u32_lit, Writer};
+use serde::Deserialize;
+
+/// A sprite texture (`render.texture`): a PNG whose texels multiply the sprite's colour, or an
+/// atlas of flipbook frames played over each particle's life or at a fixed rate.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Texture {
+    /// The PNG file, relative to the effect file's directory.
+    pub file: String,
+    /// The atlas grid `(columns, rows)`: frames read left to right, top to bottom.
+    #[serde(default = "one_frame")]
+    pub frames: (u32, u32),
+    /// How the frames play.
+    #[serde(default)]
+    pub play: Play,
+    /// With `Rate`: each particle starts the loop at a frame drawn from its id, so particles
+    /// born together do not play in step (a flock's wing beats).
+    #[serde(default)]
+    pub random_start: bool,
+}
+
+fn one_frame() -> (u32, u32) {
+    (1, 1)
+}
+
+/// How a flipbook's frames play (`render.texture.play`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
+pub enum Play {
+    /// Once over each particle's life: frame k of n from life fraction k/n (frame 0 for a
+    /// particle that never dies).
+    #[default]
+    OverLife,
+    /// At this many frames per second of the particle's age, looping.
+    Rate(f64),
+}
+
+/// Largest texture side accepted (texels): ample for a sprite atlas, and within wgpu's default
+/// limits (8192) with room to spare.
+pub const MAX_SIDE: u32 = 4096;
+
+/// Binding of the texture in the draw module.
+pub const TEXTURE_BINDING: u32 = 30;
+
+/// Binding of its sampler.
+pub const SAMPLER_BINDING: u32 = 31;
+
+/// Added to the frame clock before taking its floor (in frames), so that a frame starting
+/// exactly on a step starts on that step in f32 (GPU) and f64 (reference) alike.
+pub const FRAME_EPSILON: f64 = 1.0 / 1024.0;
+
+/// The texture, loaded and lowered.
+#[derive(Clone, PartialEq)]
+pub struct TextureIr {
+    /// The file as the effect names it.
+    pub file: String,
+    /// Width in texels.
+    pub width: u32,
+    /// Height in texels.
+    pub height: u32,
+    /// RGBA8 texels, rows top to bottom.
+    pub rgba: Arc<[u8]>,
+    /// Atlas columns.
+    pub columns: u32,
+    /// Atlas rows.
+    pub rows: u32,
+    /// How the frames play.
+    pub play: Play,
+    /// Whether each particle's loop starts at a frame drawn from its id (with `Rate`).
+    pub random_start: bool,
+}
+
+impl std::fmt::Debug for TextureIr {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{:?} {}x{} frames {}x{} {:?}{}",
+            self.file,
+            self.width,
+            self.height,
+            self.columns,
+            self.rows,
+            self.play,
+            if self.random_start {
+                " random start"
+            } else {
+                ""
+            }
+        )
+    }
+}
+
+/// Where `file` lies: relative to `base_dir` (the effect file's directory) when given.
+pub fn resolve(file: &str, base_dir: Option<&Path>) -> PathBuf {
+    match base_dir {
+        Some(dir) => dir.join(file),
+        None => PathBuf::from(file),
+    }
+}
+
+impl TextureIr {
+    /// Loads the texture `spec` names (already checked: frames at least 1x1, a positive rate).
+    /// The error says what is wrong with the file, for `render.texture.file`.
+    pub fn load(spec: &Texture, base_dir: Option<&Path>) -> Result<Self, String> {
+        let path = resolve(&spec.file, base_dir);
+        let image = image::ImageReader::open(&path)
+            .map_err(|e| format!("cannot open texture {}: {e}", path.display()))?
+            .with_guessed_format()
+            .map_err(|e| format!("cannot read texture {}: {e}", path.display()))?
+            .decode()
+            .map_err(|e| format!("cannot decode texture {}: {e}", path.display()))?
+            .to_rgba8();
+        let (width, height) = image.dimensions();
+        let (columns, rows) = spec.frames;
+        if width > MAX_SIDE || height > MAX_SIDE {
+            return Err(format!(
+                "texture {} is {width}x{height} texels; at most {MAX_SIDE} on a side is supported",
+                path.display()
+            ));
+        }
+        if width % columns != 0 || height % rows != 0 {
+            return Err(format!(
+                "texture {} is {width}x{height} texels, which a grid of {columns} x {rows} frames does not divide evenly",
+                path.display()
+            ));
+        }
+        Ok(Self {
+            file: spec.file.clone(),
+            width,
+            height,
+            rgba: image.into_raw().into(),
+            columns,
+            rows,
+            play: spec.play,
+            random_start: spec.random_start,
+        })
+    }
+
+    /// Frames in the atlas.
+    pub fn frames(&self) -> u32 {
+        self.columns * self.rows
+    }
+
+    /// Whether the frame shown depends on a particle's age (a flipbook of several frames).
+    pub fn animated(&self) -> bool {
+        self.frames() > 1
+    }
+
+    /// Whether choosing the frame needs the age of particles that never die (a rate).
+    pub fn needs_age_of_immortals(&self) -> bool {
+        self.animated() && matches!(self.play, Play::Rate(_))
+    }
+
+    /// Whether choosing the frame draws a random number (a random first frame).
+    pub fn draws_random(&self) -> bool {
+        self.animated() && self.random_start
+    }
+
+    /// The frame shown by particle `id` (of an effect whose seed mixes to `seed_mix`) that has
+    /// lived `lived` whole steps of `life` (0: it never dies) with steps of `dt` seconds: the
+    /// f64 twin of `sprite_frame` in the draw module.
+    pub fn frame(&self, id: u32, seed_mix: u32, lived: u64, life: u64, dt: f64) -> u32 {
+        let n = u64::from(self.frames());
+        if n <= 1 {
+            return 0;
+        }
+        match self.play {
+            Play::OverLife if life == 0 => 0,
+            // Integer arithmetic, so that the GPU and the CPU agree at every boundary.
+            Play::OverLife => ((lived.min(life) * n / life).min(n - 1)) as u32,
+            Play::Rate(fps) => {
+                let clock = (lived as f64 * (dt * fps) + FRAME_EPSILON).floor() as u64;
+                let start = match self.random_start {
+                    true => u64::from(rand_u32(seed_mix, id, stream::FLIPBOOK)) % n,
+                    false => 0,
+                };
+                ((clock % n + start) % n) as u32
+            }
+        }
+    }
+
+    /// Frame `k`'s texel rectangle `(x0, y0, width, height)` in the image.
+    pub fn frame_texels(&self, k: u32) -> [u32; 4] {
+        let (w, h) = (self.width / self.columns, self.height / self.rows);
+        [(k % self.columns) * w, (k / self.columns) * h, w, h]
+    }
+
+    /// Emits the texture's bindings and constants.
+    pub fn emit_declarations(&self, w: &mut Writer) {
+        w.comment(format!(
+            "render.texture {:?}: {}x{} texels, {} x {} frames.",
+            self.file, self.width, self.height, self.columns, self.rows
+        ));
+        w.line(format!(
+            "@group(0) @binding({TEXTURE_BINDING}) var sprite_texture: texture_2d<f32>;"
+        ));
+        w.line(format!(
+            "@group(0) @binding({SAMPLER_BINDING}) var sprite_sampler: sampler;"
+        ));
+        w.line(format!(
+            "const FRAME_COLUMNS: u32 = {};",
+            u32_lit(self.columns)
+        ));
+        w.comment("A frame's extent in texture coordinates, the atlas's and a frame's in texels.");
+        w.line(format!(
+            "const FRAME_SIZE: vec2<f32> = vec2<f32>({}, {});",
+            f32_lit(1.0 / f64::from(self.columns)),
+            f32_lit(1.0 / f64::from(self.rows))
+        ));
+        w.line(format!(
+            "const ATLAS_TEXELS: vec2<f32> = vec2<f32>({}, {});",
+            f32_lit(f64::from(self.width)),
+            f32_lit(f64::from(self.height))
+        ));
+        w.line(format!(
+            "const FRAME_TEXELS: vec2<f32> = vec2<f32>({}, {});",
+            f32_lit(f64::from(self.width / self.columns)),
+            f32_lit(f64::from(self.height / self.rows))
+        ));
+    }
+
+    /// Emits `sprite_frame(id, lived, life)` for an animated texture: the frame of particle
+    /// `id` that has lived `lived` whole steps of `life` (0: it never dies), as [`Self::frame`].
+    pub fn emit_frame_fn(&self, w: &mut Writer, dt: f64) {
+        let n = self.frames();
+        w.block(
+            "fn sprite_frame(id: u32, lived: u32, life: u32) -> u32",
+            |w| match self.play {
+                Play::OverLife => {
+                    w.comment(
+                        "Frame k of n from life fraction k / n, in integers (as the reference).",
+                    );
+                    w.block("if (life == 0u)", |w| w.line("return 0u;"));
+                    w.line(format!(
+                        "return min(min(lived, life) * {} / life, {});",
+                        u32_lit(n),
+                        u32_lit(n - 1)
+                    ));
+                }
+                Play::Rate(fps) => {
+                    w.comment("Frames played by this age (whole steps), looping.");
+                    w.line(format!(
+                        "let clock = floor(f32(lived) * {} + {});",
+                        f32_lit(dt * fps),
+                        f32_lit(FRAME_EPSILON)
+                    ));
+                    if self.random_start {
+                        w.comment("Each particle's loop starts at a frame drawn from its id.");
+                        w.line(format!(
+                            "let start = rand_u32(id, {}u) % {};",
+                            stream::FLIPBOOK,
+                            u32_lit(n)
+                        ));
+                        w.line(format!(
+                            "return (u32(clock) % {n} + start) % {n};",
+                            n = u32_lit(n)
+                        ));
+                    } else {
+                        w.line(format!("return u32(clock) % {};", u32_lit(n)));
+                    }
+                }
+            },
+        );
+    }
+
+    /// Emits the fragment shader's body for a textured sprite: the frame's texel at the
+    /// fragment's corner coordinates `in.uv`, times the colour.
+    pub fn emit_fragment_body(&self, w: &mut Writer) {
+        w.line(
+            "let cell = vec2<f32>(f32(in.frame % FRAME_COLUMNS), f32(in.frame / FRAME_COLUMNS));",
+        );
+        w.line("let quad = vec2<f32>(in.uv.x + 1.0, 1.0 - in.uv.y) * 0.5;");
+        w.comment("The mip level's derivatives, taken before any discard (uniform control flow) and before the half-texel clamp (which would flatten them at the frame's edge).");
+        w.line("let unclamped = (cell + quad) * FRAME_SIZE;");
+        w.line("let gx = dpdxFine(unclamped);");
+        w.line("let gy = dpdyFine(unclamped);");
+        w.comment(
+            "Only the triangle primitive reaches outside the quad: nothing of the frame there.",
+        );
+        w.block("if (any(abs(in.uv) > vec2<f32>(1.0)))", |w| {
+            w.line("discard;")
+        });
+        w.comment("Sample no nearer the frame's edge than half a texel of the coarser mip level in use, so no neighbouring frame blends in.");
+        w.line("let rho = max(length(gx * ATLAS_TEXELS), length(gy * ATLAS_TEXELS));");
+        w.line("let level = ceil(log2(max(rho, 1.0)));");
+        w.line("let half_texel = min(vec2<f32>(0.5), 0.5 * exp2(level) / FRAME_TEXELS);");
+        w.line("let local = clamp(quad, half_texel, vec2<f32>(1.0) - half_texel);");
+        w.line("let texel = textureSampleGrad(sprite_texture, sprite_sampler, (cell + local) * FRAME_SIZE, gx, gy);");
+        w.line("return in.color * texel;");
+    }
+
+    /// Mip levels the atlas keeps: it halves while every frame's width and height stay whole
+    /// texels, so that no texel of any level spans two frames (a 64x64 frame: 7 levels, down
+    /// to 1x1; a 60x60 one: 3, down to 15x15).
+    pub fn mip_levels(&self) -> u32 {
+        let (frame_w, frame_h) = (self.width / self.columns, self.height / self.rows);
+        1 + frame_w.trailing_zeros().min(frame_h.trailing_zeros())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn atlas(columns: u32, rows: u32, play: Play) -> TextureIr {
+        TextureIr {
+            file: "t.png".into(),
+            width: 4 * columns,
+            height: 4 * rows,
+            rgba: vec![0; (16 * columns * rows * 4) as usize].into(),
+            columns,
+            rows,
+            play,
+            random_start: false,
+        }
+    }
+
+    #[test]
+    fn over_life_frames_split_the_life_evenly() {
+        let t = atlas(2, 2, Play::OverLife);
+        // 8 steps of life, 4 frames: 2 steps each; the last frame holds at the end.
+        let frames: Vec<u32> = (0..=9).map(|lived| t.frame(0, 0, lived, 8, 0.1)).collect();
+        assert_eq!(frames, [0, 0, 1, 1, 2, 2, 3, 3, 3, 3]);
+        assert_eq!(
+            t.frame(0, 0, 5, 0, 0.1),
+            0,
+            "a particle that never dies shows frame 0"
+        );
+    }
+
+    #[test]
+    fn rate_frames_loop_and_start_on_their_step() {
+        // 0.1 s steps at 5 frames per second: a frame every 2 steps; 0.1 * 5 is not exact in
+        // binary, and the epsilon keeps step 2 on frame 1.
+        let t = atlas(3, 1, Play::Rate(5.0));
+        let frames: Vec<u32> = (0..8).map(|lived| t.frame(0, 0, lived, 0, 0.1)).collect();
+        assert_eq!(frames, [0, 0, 1, 1, 2, 2, 0, 0]);
+    }
+
+    #[test]
+    fn a_random_start_shifts_each_loop_by_its_own_frame() {
+        let t = TextureIr {
+            random_start: true,
+            ..atlas(4, 1, Play::Rate(10.0))
+        };
+        let mut starts = [0; 4];
+        for id in 0..400 {
+            let start = t.frame(id, 7, 0, 0, 0.1);
+            starts[start as usize] += 1;
+            // Still one frame per step at 10 frames per second, in order, wrapping.
+            for lived in 1..6 {
+                assert_eq!(t.frame(id, 7, lived, 0, 0.1), (start + lived as u32) % 4);
+            }
+        }
+        assert!(
+            starts.iter().all(|&n| n > 60),
+            "starts spread over the frames: {starts:?}"
+        );
+    }
+
+    #[test]
+    fn frame_rectangles_read_left_to_right_top_to_bottom() {
+        let t = atlas(3, 2, Play::OverLife);
+        assert_eq!(t.frame_texels(0), [0, 0, 4, 4]);
+        assert_eq!(t.frame_texels(2), [8, 0, 4, 4]);
+        assert_eq!(t.frame_texels(4), [4, 4, 4, 4]);
+    }
+
+    #[test]
+    fn a_single_image_never_animates() {
+        let t = atlas(1, 1, Play::Rate(30.0));
+        assert!(!t.animated() && !t.needs_age_of_immortals());
+        assert_eq!(t.frame(0, 0, 1000, 0, 0.1), 0);
+    }
+}

@@ -1,0 +1,402 @@
+//! The typed IR: an effect after checking, with vectors in f64, directions normalised, spawn
+//! bases precomputed and forces lowered to terms. Passes rewrite it; the WGSL writer and the
+//! CPU reference both read it.
+
+use std::fmt;
+
+use glam::DVec3;
+
+use crate::features::forces::Term;
+pub mod stateless;
+
+use crate::base::values::{interpolate, scalar_at, Integrator, State};
+pub use crate::features::emitter::{Basis, EmitterIr, ShapeIr, VelocityIr};
+use crate::features::looks::glow::Glow;
+use crate::features::looks::tint::TintSource;
+use crate::features::looks::Blend;
+
+/// An effect in the IR.
+#[derive(Clone, Debug, PartialEq)]
+pub struct EffectIr {
+    /// The effect's name.
+    pub name: String,
+    /// Most live particles at once.
+    pub capacity: u32,
+    /// The file's seed.
+    pub seed: u32,
+    /// `rng::seed_mix(seed)`, baked into the kernels.
+    pub seed_mix: u32,
+    /// Seconds per step.
+    pub dt: f64,
+    /// Substeps per step.
+    pub substeps: u32,
+    /// Particle sources, in id order.
+    pub emitters: Vec<EmitterIr>,
+    /// Force terms (after the passes: folded, merged, pruned).
+    pub terms: Vec<Term>,
+    /// The baked force field, when the effect bakes one.
+    pub field: Option<crate::features::field::FieldIr>,
+    /// Flocking, when the effect has a Flock force.
+    pub flock: Option<crate::features::forces::flock::FlockIr>,
+    /// Speed limit after every velocity update.
+    pub max_speed: Option<f64>,
+    /// The integrator; concrete (never Auto) after the integrator pass.
+    pub integrator: Integrator,
+    /// Why this integrator: the file chose it, or what Auto decided and why.
+    pub integrator_reason: String,
+    /// Colliders, in file order.
+    pub colliders: Vec<crate::features::colliders::ColliderIr>,
+    /// Kill volumes.
+    pub kills: Vec<KillIr>,
+    /// Whether a depth sort is requested.
+    pub sort: bool,
+    /// The state the file asks for (Auto, Stateful or Stateless).
+    pub state: State,
+    /// The stateless plan, when particles are computed from (id, age) with no state kept.
+    pub stateless: Option<stateless::StatelessIr>,
+    /// Why the effect is stateless or stateful (what the state pass decided).
+    pub state_reason: String,
+    /// The camera.
+    pub camera: CameraIr,
+    /// How particles look when rendered.
+    pub render: RenderIr,
+    /// The events this group fires (empty outside an effect with groups).
+    pub events: Vec<crate::features::events::EventIr>,
+    /// The events this group is fed by; each one's spawn rule is one of `emitters`.
+    pub event_inputs: Vec<crate::features::events::EventInputIr>,
+}
+
+/// The render section in the IR, with gradients ready to evaluate.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderIr {
+    /// Colour stops (t, rgba), t increasing.
+    pub color: Vec<(f64, [f64; 4])>,
+    /// Size stops (t, diameter in m), t increasing.
+    pub size: Vec<(f64, f64)>,
+    /// Height stops (t, m), when the sprite's height has a curve of its own (`size` is then
+    /// its width).
+    pub size_y: Option<Vec<(f64, f64)>>,
+    /// Alpha stops (t, alpha), when opacity has a curve of its own.
+    pub alpha: Option<Vec<(f64, f64)>>,
+    /// Blending.
+    pub blend: Blend,
+    /// Background colour.
+    pub background: DVec3,
+    /// Which way sprites face.
+    pub orient: crate::features::looks::orient::OrientIr,
+    /// The sprite texture, loaded; None draws the soft round dot.
+    pub texture: Option<crate::features::looks::texture::TextureIr>,
+    /// Each sprite's turn in its plane, when the effect asks for one.
+    pub rotation: Option<crate::features::looks::rotation::RotationIr>,
+    /// The soft-particle fade distance (m), used where a host's depth buffer is bound.
+    pub soft: Option<f64>,
+    /// Bloom in `plume render`'s images.
+    pub glow: Option<Glow>,
+    /// Ribbons through each particle's recent positions, when the effect asks for them.
+    pub trail: Option<crate::features::looks::trail::TrailIr>,
+    /// The colours particles pick their tint from (`tint.rs`).
+    pub palette: Option<Vec<DVec3>>,
+}
+
+impl RenderIr {
+    /// The colour at life fraction `t` (its alpha from `alpha` when there is one).
+    pub fn color_at(&self, t: f64) -> [f64; 4] {
+        let mut c = interpolate(&self.color, t);
+        if let Some(alpha) = &self.alpha {
+            c[3] = scalar_at(alpha, t);
+        }
+        c
+    }
+
+    /// The sprite diameter (m) at life fraction `t`: its width when it has a height curve.
+    pub fn size_at(&self, t: f64) -> f64 {
+        scalar_at(&self.size, t)
+    }
+
+    /// The sprite's height (m) at life fraction `t`: `size_y`'s, else the size.
+    pub fn height_at(&self, t: f64) -> f64 {
+        scalar_at(self.size_y.as_ref().unwrap_or(&self.size), t)
+    }
+
+    /// Whether the quad's half axes are computed (oriented or rotated) rather than the upright
+    /// camera-facing square.
+    pub fn turns_quad(&self) -> bool {
+        self.orient != crate::features::looks::orient::OrientIr::Camera
+            || self.rotation.is_some()
+            || self.size_y.is_some()
+    }
+
+    /// Whether colour or size change over a particle's life (some stop differs from the first);
+    /// if not, the draw needs no life fraction at all.
+    pub fn varies_over_life(&self) -> bool {
+        let colour = self.color.iter().any(|(_, c)| *c != self.color[0].1);
+        let varies = |stops: &[(f64, f64)]| stops.iter().any(|(_, s)| *s != stops[0].1);
+        let size = varies(&self.size);
+        let height = self.size_y.as_deref().is_some_and(varies);
+        let alpha = self.alpha.as_deref().is_some_and(varies);
+        colour || size || height || alpha
+    }
+}
+
+impl EffectIr {
+    /// What the group's tint depends on ([`crate::features::looks::tint`]).
+    pub fn tint(&self) -> TintSource<'_> {
+        TintSource {
+            palette: self.render.palette.as_deref(),
+            seed_mix: self.seed_mix,
+            stored: self.stores_tint(),
+        }
+    }
+
+    /// Whether the group's particles store their tint: a stateful group fed by an event that
+    /// passes the parent's colour on (the GPU cannot derive it from the child's id).
+    pub fn stores_tint(&self) -> bool {
+        self.stateless.is_none() && self.event_inputs.iter().any(|e| e.inherit_color)
+    }
+
+    /// Integration step: `dt / substeps`.
+    pub fn h(&self) -> f64 {
+        self.dt / f64::from(self.substeps)
+    }
+
+    /// True when any emitter gives its particles a lifetime.
+    pub fn has_lifetimes(&self) -> bool {
+        self.emitters.iter().any(|e| e.lifetime.is_some())
+    }
+
+    /// True when any force term reads the velocity.
+    pub fn forces_use_velocity(&self) -> bool {
+        self.terms.iter().any(|t| t.as_dyn().uses_velocity())
+    }
+
+    /// True when any force term reads the time.
+    pub fn forces_use_time(&self) -> bool {
+        self.terms.iter().any(|t| t.as_dyn().uses_time())
+    }
+
+    /// The custom expression terms.
+    pub fn custom_terms(
+        &self,
+    ) -> impl Iterator<Item = &crate::features::forces::custom::CustomTerm> {
+        self.terms.iter().filter_map(|t| match t {
+            crate::features::forces::Term::Custom(c) => Some(c),
+            _ => None,
+        })
+    }
+
+    /// The normal speed below which a contact does not bounce: twice what the effect's constant
+    /// acceleration adds in one substep, so a particle resting on a collider stays at rest.
+    pub fn rest_speed(&self) -> f64 {
+        let g: glam::DVec3 = self
+            .terms
+            .iter()
+            .filter_map(|t| match t {
+                Term::Constant(c) => Some(c.accel),
+                _ => None,
+            })
+            .sum();
+        2.0 * g.length() * self.h()
+    }
+
+    /// Whether any collider needs the `collider_data` binding (a height field's samples).
+    pub fn has_collider_data(&self) -> bool {
+        self.colliders.iter().any(|c| {
+            matches!(
+                c.surface,
+                crate::features::colliders::Surface::HeightField(_)
+            )
+        })
+    }
+
+    /// Whether kernels get the time modulo the noise period (the default: noise repeats
+    /// then, and f32 keeps its sub-millisecond precision) or the whole simulation time, which a
+    /// custom expression reading `t` or evolving turbulence needs (f32 then, so 1 ms steps at
+    /// 2.3 hours).
+    pub fn wraps_kernel_time(&self) -> bool {
+        !self.terms.iter().any(|t| t.as_dyn().reads_whole_time())
+    }
+}
+
+/// A kill volume.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum KillIr {
+    /// Inside an axis-aligned box.
+    InsideBox(DVec3, DVec3),
+    /// Outside an axis-aligned box.
+    OutsideBox(DVec3, DVec3),
+    /// Inside a ball (centre, radius).
+    InsideSphere(DVec3, f64),
+    /// Outside a ball (centre, radius).
+    OutsideSphere(DVec3, f64),
+}
+
+impl KillIr {
+    /// Whether a particle at `x` dies (the f64 twin of the WGSL test).
+    pub fn kills(&self, x: DVec3) -> bool {
+        match *self {
+            KillIr::InsideBox(min, max) => x.cmpge(min).all() && x.cmple(max).all(),
+            KillIr::OutsideBox(min, max) => !(x.cmpge(min).all() && x.cmple(max).all()),
+            KillIr::InsideSphere(c, r) => (x - c).length_squared() < r * r,
+            KillIr::OutsideSphere(c, r) => (x - c).length_squared() > r * r,
+        }
+    }
+
+    /// The thinnest a particle must cross to pass through an Inside volume (None for Outside).
+    pub fn thickness(&self) -> Option<f64> {
+        match *self {
+            KillIr::InsideBox(min, max) => Some((max - min).min_element()),
+            KillIr::InsideSphere(_, r) => Some(2.0 * r),
+            _ => None,
+        }
+    }
+}
+
+/// The camera, for sorting and rendering.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraIr {
+    /// Eye position.
+    pub eye: DVec3,
+    /// Look-at point.
+    pub target: DVec3,
+    /// Vertical field of view, degrees.
+    pub fov_y: f64,
+}
+
+impl fmt::Display for EffectIr {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v = |v: DVec3| format!("({}, {}, {})", v.x, v.y, v.z);
+        writeln!(f, "effect {:?}", self.name)?;
+        writeln!(
+            f,
+            "  capacity {}  seed {} (mix {:#010x})",
+            self.capacity, self.seed, self.seed_mix
+        )?;
+        writeln!(
+            f,
+            "  dt {} s  substeps {}  h {} s",
+            self.dt,
+            self.substeps,
+            self.h()
+        )?;
+        writeln!(
+            f,
+            "  integrator {} ({})",
+            self.integrator.name(),
+            self.integrator_reason
+        )?;
+        match self.max_speed {
+            Some(s) => writeln!(f, "  max_speed {s} m/s")?,
+            None => writeln!(f, "  max_speed none")?,
+        }
+        writeln!(
+            f,
+            "  state {} ({})",
+            if self.stateless.is_some() {
+                "stateless"
+            } else {
+                "stateful"
+            },
+            self.state_reason
+        )?;
+        writeln!(f, "  emitters")?;
+        for (i, e) in self.emitters.iter().enumerate() {
+            writeln!(
+                f,
+                "    [{i}] burst {} rate {}/s lifetime {:?} steps {:?}",
+                e.burst, e.rate, e.lifetime, e.lifetime_steps
+            )?;
+            writeln!(f, "        shape {:?}", e.shape)?;
+            writeln!(f, "        velocity {:?}", e.velocity)?;
+        }
+        writeln!(f, "  forces")?;
+        if self.terms.is_empty() && self.flock.is_none() {
+            writeln!(f, "    (none)")?;
+        }
+        for t in &self.terms {
+            let t = t.as_dyn();
+            writeln!(f, "    {}  <- forces{:?}", t.describe(), t.origins())?;
+        }
+        if let Some(flock) = &self.flock {
+            writeln!(f, "    {}  <- forces[{}]", flock.describe(), flock.origin)?;
+        }
+        if let Some(field) = &self.field {
+            writeln!(
+                f,
+                "    {}: Attractor, Vortex and noise terms sampled from it",
+                field.describe()
+            )?;
+        }
+        writeln!(f, "  collide")?;
+        for c in &self.colliders {
+            writeln!(
+                f,
+                "    {} restitution {} friction {}",
+                c.surface.describe(),
+                c.restitution,
+                c.friction
+            )?;
+        }
+        writeln!(f, "  kill")?;
+        for k in &self.kills {
+            writeln!(f, "    {k:?}")?;
+        }
+        writeln!(
+            f,
+            "  render {:?} background {} colour {:?} size {:?}",
+            self.render.blend,
+            v(self.render.background),
+            self.render.color,
+            self.render.size
+        )?;
+        if let Some(h) = &self.render.size_y {
+            writeln!(f, "  size_y {h:?}")?;
+        }
+        if let Some(a) = &self.render.alpha {
+            writeln!(f, "  alpha {a:?}")?;
+        }
+        if self.render.orient != crate::features::looks::orient::OrientIr::Camera {
+            writeln!(f, "  orient {:?}", self.render.orient)?;
+        }
+        if let Some(t) = &self.render.texture {
+            writeln!(f, "  texture {t:?}")?;
+        }
+        if let Some(r) = &self.render.rotation {
+            writeln!(f, "  rotation {r:?}")?;
+        }
+        if let Some(d) = self.render.soft {
+            writeln!(f, "  soft {d} m")?;
+        }
+        if let Some(g) = self.render.glow {
+            writeln!(f, "  glow {g:?}")?;
+        }
+        if let Some(t) = &self.render.trail {
+            writeln!(
+                f,
+                "  trail {} points, a sample every {} steps, width {:?} colour {:?}",
+                t.points, t.every, t.width, t.color
+            )?;
+        }
+        for e in &self.events {
+            writeln!(
+                f,
+                "  fires event {} on {:?} into group {} (firings {:?})",
+                e.stream, e.trigger, e.target, e.ordering
+            )?;
+        }
+        for e in &self.event_inputs {
+            writeln!(
+                f,
+                "  fed by event {}: {} per firing from emitters[{}], inherit_velocity {}, inherit_color {}, up to {} firings a step",
+                e.stream, e.count, e.emitter, e.inherit_velocity, e.inherit_color, e.parent_capacity
+            )?;
+        }
+        writeln!(
+            f,
+            "  sort {}  camera eye {} target {} fov_y {}",
+            self.sort,
+            v(self.camera.eye),
+            v(self.camera.target),
+            self.camera.fov_y
+        )
+    }
+}

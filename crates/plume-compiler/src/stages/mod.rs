@@ -1,0 +1,13 @@
+//! The stages that gather features: the effect schema, the checks, lowering to the IR, the
+//! passes, the integrators, the WGSL kernel assembly and the step schedule.
+//!
+//! Architecture invariant: a stage imports features, the IR and `base`, never a driver
+//! (`compile`, `graph`) or the reference simulator; features never import a stage.
+
+pub mod integrators;
+pub mod lower;
+pub mod passes;
+pub mod schedule;
+pub mod schema;
+pub mod validate;
+pub mod wgsl;

@@ -1,0 +1,352 @@
+//! The layout pass: the particle struct holds only the attributes this effect needs, as scalar
+//! f32/u32 fields (no vec3 padding), so bytes per particle are the fewest the kernels read and
+//! write. The types live in [`crate::base::layout`], below the features that read them.
+
+use std::fmt;
+
+pub use crate::base::layout::{Attribute, Binding, Layout, COUNTERS_BYTES};
+use crate::ir::EffectIr;
+use crate::stages::schema::Integrator;
+
+/// The one lifetime draw that every emitter with a lifetime shares, when there is one: then a
+/// particle's whole-step lifetime is a function of its id alone (the draw of stream
+/// [`crate::base::rng::stream::LIFETIME`]), and with `die_at` it gives the spawn step.
+pub fn shared_lifetime(ir: &EffectIr) -> Option<crate::base::lifetime::LifetimeSteps> {
+    let mut draws = ir.emitters.iter().filter_map(|e| e.lifetime_steps);
+    let first = draws.next()?;
+    draws.all(|d| d == first).then_some(first)
+}
+
+/// Whether a stateful particle stores its spawn step (`born`): only when the draw needs a life
+/// fraction (gradients, a flipbook played over life) and cannot derive the spawn step from
+/// `die_at` and the shared lifetime draw, or needs every particle's age (a flipbook played at
+/// a rate, a spin) and some particles never die.
+pub fn needs_spawn_step(ir: &EffectIr) -> bool {
+    if ir.stateless.is_some() {
+        return false;
+    }
+    let flipbook = ir.render.texture.as_ref().filter(|t| t.animated());
+    let life = (ir.render.varies_over_life() || flipbook.is_some()) && ir.has_lifetimes();
+    let age = flipbook.is_some_and(|t| t.needs_age_of_immortals())
+        || ir.render.rotation.is_some_and(|r| r.spins());
+    let all_mortal = ir.emitters.iter().all(|e| e.lifetime.is_some());
+    let shared = shared_lifetime(ir).is_some();
+    (life && !shared) || (age && !(all_mortal && shared))
+}
+
+/// Decides the layout for a resolved IR.
+pub fn decide(ir: &EffectIr) -> Layout {
+    let mut attributes = vec![Attribute::Position];
+    attributes.push(if ir.integrator == Integrator::Verlet {
+        Attribute::Displacement
+    } else {
+        Attribute::Velocity
+    });
+    if ir.has_lifetimes() {
+        attributes.push(Attribute::DeathStep);
+    }
+    attributes.push(Attribute::Id);
+    // A group fed by events cannot derive ages from ids (only the GPU knows when each id
+    // spawned), and `Every` events count from each particle's spawn.
+    let every = ir
+        .events
+        .iter()
+        .any(|e| matches!(e.trigger, crate::features::events::TriggerIr::Every(_)));
+    if needs_spawn_step(ir)
+        || ir.custom_terms().any(|c| c.reads_age_or_life())
+        || (ir.stateless.is_none() && (every || !ir.event_inputs.is_empty()))
+    {
+        attributes.push(Attribute::SpawnStep);
+    }
+    if ir.stores_tint() {
+        attributes.push(Attribute::Tint);
+    }
+    // Padded to a multiple of 16 bytes so kernels move the state as whole vec4 words: scalar
+    // accesses at a 28- or 32-byte stride reached under half the copy kernel's bandwidth on an
+    // H100 (docs/performance.md).
+    let bytes_per_particle = attributes
+        .iter()
+        .map(|a| a.bytes())
+        .sum::<u32>()
+        .next_multiple_of(16);
+    let cap = u64::from(ir.capacity);
+    let emitter_slots = ir.emitters.len().max(1) as u32;
+    let mut layout = Layout {
+        attributes,
+        bytes_per_particle,
+        bindings: Vec::new(),
+        emitter_slots,
+        trail_bytes_per_particle: ir
+            .render
+            .trail
+            .as_ref()
+            .map_or(0, |t| t.bytes_per_particle()),
+    };
+    // Binding 0 holds the particles: their state, or for a stateless effect the view that
+    // `evaluate` writes; binding 4 names the slots of this dispatch's buffer.
+    let (particles, chunk) = match ir.stateless {
+        Some(_) => (
+            "the view: array<Particle> written afresh by `evaluate` for each frame read or drawn; no kernel reads it back, so it is not state",
+            "the slots this dispatch's view buffer holds: first global slot, count",
+        ),
+        None => (
+            "array<Particle>, one slot per capacity (split into chunks past the binding limit)",
+            "the slots this dispatch's particle buffer holds: first global slot, count",
+        ),
+    };
+    layout.bindings.push(Binding {
+        binding: 0,
+        name: "particles",
+        space: "storage, read_write",
+        bytes: cap * u64::from(bytes_per_particle),
+        meaning: particles,
+    });
+    match &ir.stateless {
+        Some(plan) => layout.bindings.push(Binding {
+            binding: 1,
+            name: "frame",
+            space: "storage, read",
+            bytes: plan.table_bytes(),
+            meaning: "bookkeeping, written by the CPU per frame: threads, segment count, steps done; per spawning (step, emitter) with live particles: first thread, first id, emitter counter, emitter, age in steps, spawn step, age in s",
+        }),
+        None => layout.bindings.extend([
+            Binding {
+                binding: 1,
+                name: "free_list",
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: "stack of free slot indices (pushed on death, popped on spawn)",
+            },
+            Binding {
+                binding: 2,
+                name: "counters",
+                space: "storage, read_write",
+                bytes: COUNTERS_BYTES + if ir.event_inputs.is_empty() { 0 } else { 8 },
+                meaning: "free count, this step's spawn base and count, totals spawned, dropped, died",
+            },
+            Binding {
+                binding: 3,
+                name: "params",
+                space: "uniform",
+                bytes: layout.params_bytes(),
+                meaning: if ir.wraps_kernel_time() {
+                    "per step: first id, spawns requested, time mod 256 s, step index, per-emitter counts"
+                } else {
+                    "per step: first id, spawns requested, whole time (s: a force reads it unwrapped), step index, per-emitter counts"
+                },
+            },
+        ]),
+    }
+    layout.bindings.push(Binding {
+        binding: 4,
+        name: "chunk",
+        space: "uniform",
+        bytes: 16,
+        meaning: chunk,
+    });
+    if let Some(trail) = &ir.render.trail {
+        layout.bindings.push(Binding {
+            binding: 16,
+            name: "trail",
+            space: "storage, read_write",
+            bytes: cap * u64::from(trail.bytes_per_particle()),
+            meaning: "trail ring, points - 1 entries per slot (entry r of slot i at i * (points - 1) + r; split into chunks with the particles): the position's f32 bits and id + 1 (0: never written)",
+        });
+    }
+    if let Some(field) = &ir.field {
+        layout.bindings.push(Binding {
+            binding: 13,
+            name: "field",
+            space: "storage, read_write",
+            bytes: field.nodes() * 16,
+            meaning: "the baked force field: one (a, 0) per node, x fastest",
+        });
+    }
+    if ir.has_collider_data() {
+        layout.bindings.push(Binding {
+            binding: 15,
+            name: "collider_data",
+            space: "storage, read",
+            bytes: crate::features::colliders::data(&ir.colliders).len() as u64 * 4,
+            meaning: "the height fields' samples, row by row, x fastest",
+        });
+    }
+    if let Some(flock) = &ir.flock {
+        let groups = u64::from(ir.capacity.div_ceil(crate::base::kernel::WORKGROUP));
+        layout.bindings.push(Binding {
+            binding: 7,
+            name: "boids",
+            space: "storage, read_write",
+            bytes: (cap + u64::from(crate::features::forces::flock::GRID_ROUND)) * 32,
+            meaning: "flock snapshot at the step's start: (x, alive), (v, 0) per slot; the grid's: per boid in bucket order, (x, row key), (v, 0), then spare entries that the split search's last round reads past its run",
+        });
+        layout.bindings.push(Binding {
+            binding: 8,
+            name: "flock_out",
+            space: "storage, read_write",
+            bytes: cap * 48,
+            meaning: "per slot: (separation + avoidance, total weight), (weighted position sum, neighbours), (weighted velocity sum, 0)",
+        });
+        if flock.scope == crate::features::forces::flock::Scope::Global {
+            layout.bindings.push(Binding {
+                binding: 9,
+                name: "flock_sums",
+                space: "storage, read_write",
+                bytes: (2 * groups + 2) * 16,
+                meaning: "per-workgroup sums of x and v, then the global means",
+            });
+        }
+        if let crate::features::forces::flock::Neighbors::Grid { .. } = flock.neighbors {
+            let buckets = crate::features::forces::flock::FlockIr::grid_buckets(ir.capacity);
+            layout.bindings.push(Binding {
+                binding: 10,
+                name: "grid_keys",
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: "each slot's grid bucket (free slots: 0xffffffff)",
+            });
+            layout.bindings.push(Binding {
+                binding: 11,
+                name: "grid_vals",
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: "the live boids' slots sorted by bucket, then by slot (before the scatter: each slot's place among its bucket's boids)",
+            });
+            layout.bindings.push(Binding {
+                binding: 18,
+                name: "grid_placed",
+                space: "storage, read_write",
+                bytes: cap * 4,
+                meaning: "the live boids' slots by bucket, in the order their threads counted them (ranked into grid_vals)",
+            });
+            layout.bindings.push(Binding {
+                binding: 12,
+                name: "cell_start",
+                space: "storage, read_write",
+                bytes: (buckets + 1) * 4,
+                meaning: "per bucket: its boids' count, then (scanned) where its run starts in the sorted slots; one past the last: the live boids",
+            });
+        }
+    }
+    if ir.sort {
+        // Room for a power-of-two padded sort (the bitonic baseline needs it).
+        let padded = cap.next_power_of_two() * 4;
+        layout.bindings.push(Binding {
+            binding: 5,
+            name: "sort_keys",
+            space: "storage, read_write",
+            bytes: padded,
+            meaning: "depth keys, farthest first; free slots sort last",
+        });
+        layout.bindings.push(Binding {
+            binding: 6,
+            name: "sort_vals",
+            space: "storage, read_write",
+            bytes: padded,
+            meaning: "slot indices, in draw order after the sort",
+        });
+        layout.bindings.push(Binding {
+            binding: 14,
+            name: "depth_axis",
+            space: "uniform",
+            bytes: 16,
+            meaning: "the camera's forward axis and offset: depth = dot(axis.xyz, x) + axis.w, written before each sort",
+        });
+    }
+    layout.bindings.extend(crate::features::events::bindings(
+        &ir.events,
+        &ir.event_inputs,
+        ir.capacity,
+    ));
+    if let (Some(plan), false) = (&ir.stateless, ir.events.is_empty()) {
+        // A stateless group that fires events: its `fire` kernel's table and step.
+        layout.bindings.extend([
+            Binding {
+                binding: 19,
+                name: "fire_frame",
+                space: "storage, read",
+                bytes: plan.fire_table_bytes(),
+                meaning: "written by the CPU per batch of steps: the segments that may hold live particles at any of its steps (as `frame`), for the `fire` kernel",
+            },
+            Binding {
+                binding: 20,
+                name: "fire_state",
+                space: "storage, read_write",
+                bytes: 16,
+                meaning: "the step `fire` fires for (the batch's first from the CPU, then one more after each step)",
+            },
+        ]);
+    }
+    layout.bindings.sort_by_key(|b| b.binding);
+    layout
+}
+
+impl fmt::Display for Layout {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.stateless() {
+            writeln!(
+                f,
+                "state: none, 0 bytes per particle (stateless: `evaluate` computes each particle from its id and age)"
+            )?;
+            writeln!(
+                f,
+                "struct Particle (the evaluated view, {} bytes per slot; written, never read back)",
+                self.bytes_per_particle
+            )?;
+        } else {
+            writeln!(
+                f,
+                "state: {} bytes per particle",
+                self.state_bytes_per_particle() + self.trail_bytes_per_particle
+            )?;
+            if self.trail_bytes_per_particle > 0 {
+                writeln!(
+                    f,
+                    "  of which trail history: {} bytes ({} past positions x {} bytes, binding 16)",
+                    self.trail_bytes_per_particle,
+                    self.trail_bytes_per_particle / crate::features::looks::trail::ENTRY_BYTES,
+                    crate::features::looks::trail::ENTRY_BYTES
+                )?;
+            }
+            writeln!(
+                f,
+                "struct Particle ({} bytes per particle)",
+                self.bytes_per_particle
+            )?;
+        }
+        writeln!(
+            f,
+            "  (offsets within the struct; stored word-major: its 16-byte word k of slot i at k * slots + i of the slot's particle buffer)"
+        )?;
+        let mut offset = 0;
+        for a in &self.attributes {
+            let (names, ty) = a.fields();
+            writeln!(
+                f,
+                "  {:<14} {:<4} offset {:>2}  {}",
+                names.join(", "),
+                ty,
+                offset,
+                a.meaning()
+            )?;
+            offset += a.bytes();
+        }
+        let pad = self.bytes_per_particle - 4 * self.words().len() as u32;
+        if pad > 0 {
+            writeln!(
+                f,
+                "  {:<14} {:<4} offset {:>2}  padding to whole 16-byte words",
+                "(pad)", "", offset
+            )?;
+        }
+        writeln!(f, "bindings (group 0)")?;
+        for b in &self.bindings {
+            writeln!(
+                f,
+                "  @binding({}) {:<10} var<{}>  {} bytes  {}",
+                b.binding, b.name, b.space, b.bytes, b.meaning
+            )?;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,43 @@
+//! Passes over the IR, run in this order: fold constant terms and merge drags, prune terms that
+//! cannot act, resolve the integrator (Auto, and Exact's preconditions), analyse stability,
+//! decide whether particles need state at all, and decide the particle layout.
+
+pub mod fold;
+pub mod integrator;
+pub mod layout;
+pub mod prune;
+pub mod stability;
+pub mod stateless;
+
+use crate::base::check::Checker;
+use crate::base::diagnostics::Diagnostic;
+use crate::ir::EffectIr;
+use layout::Layout;
+
+/// Runs every pass. Errors come back in a [`Checker`] (with lookup paths); on success the
+/// layout and the warnings (each with its lookup path) come back.
+pub fn run(
+    ir: &mut EffectIr,
+    force_names: &[&'static str],
+) -> Result<(Layout, Vec<(Diagnostic, String)>), Checker> {
+    fold::fold(ir);
+    prune::prune(ir);
+    integrator::resolve(ir, force_names)?;
+    let mut warnings = stability::analyse(ir, force_names);
+    // A baked field with nothing to hold (no attractor, vortex or noise left) is dropped, so
+    // the effect pays for no grid.
+    if ir.field.is_some() && !ir.terms.iter().any(|t| t.as_dyn().bakeable()) {
+        ir.field = None;
+        let path = crate::base::path::ValuePath::root().field("field");
+        warnings.push((
+            Diagnostic::warning(
+                path.display,
+                "nothing to bake: no Attractor, Vortex or noisy Wind acts, so forces are evaluated and no grid is made",
+            ),
+            path.lookup,
+        ));
+    }
+    stateless::decide(ir)?;
+    let layout = layout::decide(ir);
+    Ok((layout, warnings))
+}

@@ -1,0 +1,171 @@
+//! The state pass: decides whether particles need state at all. With the Exact integrator a
+//! particle's position and velocity are closed-form functions of its spawn draws and its age
+//! (the stateless particle system; Latta's closed-form particles), so when nothing else needs
+//! memory between steps the compiler emits one `evaluate` kernel that computes every live
+//! particle from (id, spawn step, steps done) and keeps 0 bytes of state per particle.
+//!
+//! Spawning becomes bookkeeping: the CPU's schedule already knows which ids were requested at
+//! which step, so it hands the kernel a table of *segments* (one per step and emitter that
+//! spawned something and may still have live particles), and each thread finds its segment.
+//!
+//! What needs state, and so keeps the stateful kernels:
+//! - any integrator but Exact (their result depends on every earlier step);
+//! - kill volumes (whether a particle died depends on every earlier position);
+//! - a capacity that could drop spawns (which ids got a slot depends on the past);
+//! - a window of live spawning steps too long for the segment table.
+//!
+//! Planes, max_speed and Flock already rule out Exact. A depth sort works on the evaluated view.
+
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+pub use crate::ir::stateless::{
+    StatelessIr, FIRE_BATCH_STEPS, FRAME_HEADER_BYTES, MAX_SEGMENTS, SEGMENT_BYTES,
+};
+use crate::ir::EffectIr;
+use crate::stages::schema::{Integrator, State};
+
+/// The bounds of emitter `e`: (most alive at once, most live segments, its longest life in
+/// steps), or why it has none.
+fn emitter_bounds(ir: &EffectIr, e: usize) -> Result<(u64, u64, Option<u32>), String> {
+    let em = &ir.emitters[e];
+    let lives = em.lifetime_steps.map(|l| l.first + l.span - 1);
+    let burst = u64::from(em.burst);
+    if em.rate <= 0.0 {
+        return Ok((burst, u64::from(burst > 0), lives));
+    }
+    let Some(window) = lives else {
+        return Err(format!(
+            "emitters[{e}] spawns at a rate and its particles never die, so they would outgrow any capacity and be dropped"
+        ));
+    };
+    // Spawns in any `window` consecutive steps: at most ceil(rate dt window), plus one for the
+    // f64 rounding of the carried fraction.
+    let per_window = (em.rate * ir.dt * f64::from(window)).floor();
+    if !per_window.is_finite() || per_window >= 1e18 {
+        return Err(format!(
+            "emitters[{e}] spawns more particles over a lifetime than can be counted"
+        ));
+    }
+    let spawns = per_window as u64 + 2;
+    Ok((
+        burst.saturating_add(spawns),
+        u64::from(window).min(spawns),
+        lives,
+    ))
+}
+
+/// Why the effect needs state, naming the cause and its path, or the stateless plan.
+pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
+    if ir.integrator != Integrator::Exact {
+        return Err((
+            format!(
+                "the {} integrator carries each particle's state from step to step (only Exact has a closed form)",
+                ir.integrator.name()
+            ),
+            ValuePath::root().field("integrator"),
+        ));
+    }
+    if ir.render.trail.is_some() {
+        return Err((
+            "render.trail keeps each particle's past positions".into(),
+            ValuePath::root().field("render").field("trail"),
+        ));
+    }
+    // A stateless group fires from its closed form, a `fire` kernel a step over the spawn
+    // segments that may hold live particles; it appends its firings, so they are put in order
+    // by counting, which takes at most COUNTED_MAX slots.
+    if let Some(j) = ir
+        .events
+        .iter()
+        .position(|e| e.ordering != crate::features::events::Ordering::Counted)
+    {
+        return Err((
+            format!(
+                "events[{j}] fires from a group of {} slots: a stateless group's firings are counted into order, which takes at most {} (a larger group sorts a key per slot of its state)",
+                ir.capacity,
+                crate::features::events::COUNTED_MAX
+            ),
+            ValuePath::root().field("events").index(j),
+        ));
+    }
+    if !ir.event_inputs.is_empty() {
+        return Err((
+            "the group is fed by events, whose spawns only the GPU counts".into(),
+            ValuePath::root().field("state"),
+        ));
+    }
+    if !ir.kills.is_empty() {
+        return Err((
+            "kill[0] decides deaths from every earlier position".into(),
+            ValuePath::root().field("kill").index(0),
+        ));
+    }
+    let (mut peak, mut segments, mut lives) = (0u64, 0u64, Vec::new());
+    for e in 0..ir.emitters.len() {
+        let path = ValuePath::root().field("emitters").index(e);
+        let (alive, segs, life) = emitter_bounds(ir, e).map_err(|why| (why, path.field("rate")))?;
+        peak = peak.saturating_add(alive);
+        segments = segments.saturating_add(segs);
+        lives.push(life);
+    }
+    if peak > u64::from(ir.capacity) {
+        return Err((
+            format!(
+                "capacity {} may drop spawns (up to {peak} alive at once), and which spawns get a slot depends on the past",
+                ir.capacity
+            ),
+            ValuePath::root().field("capacity"),
+        ));
+    }
+    if segments > MAX_SEGMENTS {
+        return Err((
+            format!(
+                "particles stay alive over {segments} spawning steps, more than the {MAX_SEGMENTS} the segment table holds"
+            ),
+            ValuePath::root().field("emitters"),
+        ));
+    }
+    Ok(StatelessIr {
+        lives,
+        max_segments: segments,
+        peak,
+    })
+}
+
+/// Decides `ir.stateless` from the file's `state` and records why.
+pub fn decide(ir: &mut EffectIr) -> Result<(), Checker> {
+    match (ir.state, plan(ir)) {
+        (State::Stateful, _) => {
+            ir.stateless = None;
+            ir.state_reason = "state: Stateful in the file".into();
+        }
+        (State::Auto | State::Stateless, Ok(p)) => {
+            ir.state_reason = format!(
+                "{}: the closed form of (id, age); at most {} alive, spawned at up to {} (step, emitter) pairs still tracked",
+                if ir.state == State::Auto {
+                    "Auto"
+                } else {
+                    "chosen in the file"
+                },
+                p.peak,
+                p.max_segments
+            );
+            ir.stateless = Some(p);
+        }
+        (State::Auto, Err((why, _))) => {
+            ir.stateless = None;
+            ir.state_reason = format!("Auto: {why}");
+        }
+        (State::Stateless, Err((why, _))) => {
+            let mut c = Checker::default();
+            c.error(
+                &ValuePath::root().field("state"),
+                format!(
+                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes, no render.trail, no events fed in, at most 8192 slots to fire events from, and a capacity no spawn can overflow (use Auto)"
+                ),
+            );
+            return Err(c);
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,294 @@
+//! The step contract's bookkeeping, shared by the GPU runtime and the CPU reference so both
+//! spawn exactly the same ids at the same steps.
+//!
+//! At step k (time t = k dt): each emitter spawns its burst (k = 0 only) plus the whole part of
+//! its accumulated `rate * dt`, the fractional remainder carried to the next step. Ids are handed
+//! out across emitters in the order they are listed, step by step; spawns dropped for lack of
+//! capacity still consume their ids, so ids never depend on what the GPU had free.
+
+use crate::features::forces::noise::TIME_PERIOD;
+use crate::ir::EffectIr;
+
+/// What one step spawns.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepPlan {
+    /// Step index k.
+    pub step: u64,
+    /// Simulation time at the start of the step, k dt (f64, never accumulated).
+    pub time: f64,
+    /// Id of the first particle requested this step.
+    pub first_id: u32,
+    /// Per emitter: (spawns this step, the emitter's own spawn counter before them).
+    pub emitters: Vec<(u32, u32)>,
+}
+
+impl StepPlan {
+    /// Total spawns requested this step.
+    pub fn requested(&self) -> u32 {
+        self.emitters.iter().map(|e| e.0).sum()
+    }
+
+    /// Time passed to kernels, as f32: t mod the noise period when `wrap`
+    /// ([`crate::ir::EffectIr::wraps_kernel_time`]), else t itself.
+    pub fn kernel_time(&self, wrap: bool) -> f32 {
+        if wrap {
+            self.time.rem_euclid(TIME_PERIOD) as f32
+        } else {
+            self.time as f32
+        }
+    }
+}
+
+/// Produces the [`StepPlan`] of each step in turn and remembers which step each id was
+/// requested at (for ages).
+#[derive(Clone, Debug)]
+pub struct Schedule {
+    dt: f64,
+    bursts: Vec<u32>,
+    rates: Vec<f64>,
+    carried: Vec<f64>,
+    emitted: Vec<u32>,
+    next_step: u64,
+    next_id: u32,
+    /// (first id, step) for every step that requested at least one spawn, in order.
+    first_ids: Vec<(u32, u64)>,
+}
+
+impl Schedule {
+    /// A schedule at step 0 for `ir`.
+    pub fn new(ir: &EffectIr) -> Self {
+        Self {
+            dt: ir.dt,
+            bursts: ir.emitters.iter().map(|e| e.burst).collect(),
+            rates: ir.emitters.iter().map(|e| e.rate).collect(),
+            carried: vec![0.0; ir.emitters.len()],
+            emitted: vec![0; ir.emitters.len()],
+            next_step: 0,
+            next_id: 0,
+            first_ids: Vec::new(),
+        }
+    }
+
+    /// Steps planned so far.
+    pub fn steps_done(&self) -> u64 {
+        self.next_step
+    }
+
+    /// Ids requested so far (the next id to hand out).
+    pub fn ids_requested(&self) -> u32 {
+        self.next_id
+    }
+
+    /// Plans the next step.
+    pub fn next_plan(&mut self) -> StepPlan {
+        let step = self.next_step;
+        let first_id = self.next_id;
+        let mut emitters = Vec::with_capacity(self.rates.len());
+        for e in 0..self.rates.len() {
+            let mut count = if step == 0 {
+                u64::from(self.bursts[e])
+            } else {
+                0
+            };
+            self.carried[e] += self.rates[e] * self.dt;
+            let whole = self.carried[e].floor();
+            self.carried[e] -= whole;
+            count = count.saturating_add(whole as u64);
+            let count = count.min(u64::from(u32::MAX - self.next_id)) as u32;
+            emitters.push((count, self.emitted[e]));
+            self.emitted[e] = self.emitted[e].wrapping_add(count);
+            self.next_id += count;
+        }
+        if self.next_id > first_id {
+            self.first_ids.push((first_id, step));
+        }
+        self.next_step += 1;
+        StepPlan {
+            step,
+            time: step as f64 * self.dt,
+            first_id,
+            emitters,
+        }
+    }
+
+    /// Skips `n` steps at once when they can spawn nothing (every rate is 0 and step 0's bursts
+    /// are done), as stepping them would; returns false, skipping nothing, otherwise.
+    pub fn skip_idle(&mut self, n: u64) -> bool {
+        if self.next_step == 0 || self.rates.iter().any(|&r| r > 0.0) {
+            return false;
+        }
+        self.next_step = self.next_step.saturating_add(n);
+        true
+    }
+
+    /// The step at which particle `id` was spawned.
+    pub fn spawn_step(&self, id: u32) -> u64 {
+        let i = self.first_ids.partition_point(|&(first, _)| first <= id);
+        self.first_ids[i.saturating_sub(1)].1
+    }
+
+    /// Lifetime in seconds of particle `id` that dies at the update of step `die_at`
+    /// (None for [`crate::base::lifetime::NEVER`]).
+    pub fn lifetime(&self, id: u32, die_at: u32) -> Option<f64> {
+        if die_at == crate::base::lifetime::NEVER {
+            return None;
+        }
+        let lived = u64::from(die_at).wrapping_sub(self.spawn_step(id) & 0xffff_ffff) + 1;
+        Some((lived & 0xffff_ffff) as f64 * self.dt)
+    }
+
+    /// Age in seconds of particle `id` after the steps done so far: (done - spawn step) dt.
+    pub fn age(&self, id: u32) -> f64 {
+        (self.next_step - self.spawn_step(id)) as f64 * self.dt
+    }
+}
+
+/// A run of consecutive ids that one emitter spawned at one step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Segment {
+    /// The step that spawned them.
+    pub step: u64,
+    /// The emitter.
+    pub emitter: usize,
+    /// The first id.
+    pub first_id: u32,
+    /// How many ids.
+    pub count: u32,
+    /// The emitter's own spawn counter at the first id.
+    pub k_base: u32,
+}
+
+/// The spawn bookkeeping of a stateless effect: the segments that may still hold live
+/// particles, per emitter in step order, each dropped once every particle in it has died.
+#[derive(Clone, Debug)]
+pub struct LiveSegments {
+    /// Per emitter, the most steps one of its particles lives (None: forever).
+    lives: Vec<Option<u32>>,
+    per_emitter: Vec<std::collections::VecDeque<Segment>>,
+    steps_done: u64,
+}
+
+impl LiveSegments {
+    /// No segments yet, for emitters whose particles live at most `lives` steps.
+    pub fn new(lives: Vec<Option<u32>>) -> Self {
+        Self {
+            per_emitter: vec![Default::default(); lives.len()],
+            lives,
+            steps_done: 0,
+        }
+    }
+
+    /// Records one step's spawns (plans must come in order), then drops the segments whose
+    /// particles have all died by its end: those `lives` or more steps old.
+    pub fn record(&mut self, plan: &StepPlan) {
+        self.record_noting(plan, &mut Vec::new());
+    }
+
+    /// [`Self::record`], also pushing the step's new segments onto `noted`.
+    fn record_noting(&mut self, plan: &StepPlan, noted: &mut Vec<Segment>) {
+        let mut id = plan.first_id;
+        for (e, &(count, k_base)) in plan.emitters.iter().enumerate() {
+            if count > 0 {
+                let segment = Segment {
+                    step: plan.step,
+                    emitter: e,
+                    first_id: id,
+                    count,
+                    k_base,
+                };
+                self.per_emitter[e].push_back(segment);
+                noted.push(segment);
+            }
+            id += count;
+        }
+        self.advance_to(plan.step + 1);
+    }
+
+    /// Plans `steps` more steps of `schedule` and records them, skipping in O(1) steps that can
+    /// spawn nothing ([`Schedule::skip_idle`]).
+    pub fn advance(&mut self, schedule: &mut Schedule, steps: u64) {
+        self.advance_noting(schedule, steps, &mut Vec::new());
+    }
+
+    /// [`Self::advance`], also pushing every segment the steps spawn onto `noted` (those
+    /// that die within them too).
+    pub fn advance_noting(
+        &mut self,
+        schedule: &mut Schedule,
+        steps: u64,
+        noted: &mut Vec<Segment>,
+    ) {
+        for left in (1..=steps).rev() {
+            if schedule.skip_idle(left) {
+                self.advance_to(schedule.steps_done());
+                return;
+            }
+            self.record_noting(&schedule.next_plan(), noted);
+        }
+    }
+
+    /// Moves to `steps_done` steps with no spawns since the last recorded step (after
+    /// [`Schedule::skip_idle`]), dropping the segments whose particles have all died.
+    pub fn advance_to(&mut self, steps_done: u64) {
+        self.steps_done = steps_done;
+        for (segments, life) in self.per_emitter.iter_mut().zip(&self.lives) {
+            if let Some(life) = life {
+                while segments
+                    .front()
+                    .is_some_and(|s| self.steps_done - s.step >= u64::from(*life))
+                {
+                    segments.pop_front();
+                }
+            }
+        }
+    }
+
+    /// Steps recorded so far.
+    pub fn steps_done(&self) -> u64 {
+        self.steps_done
+    }
+
+    /// The segments that may hold live particles, emitter by emitter, each in step order.
+    pub fn iter(&self) -> impl Iterator<Item = &Segment> {
+        self.per_emitter.iter().flatten()
+    }
+
+    /// Particles alive now: per segment, those whose drawn lifetime (the same integer draw as
+    /// the kernels', see [`crate::base::lifetime`]) exceeds the segment's age in steps.
+    pub fn alive(&self, ir: &EffectIr) -> u64 {
+        let mut alive = 0;
+        for seg in self.iter() {
+            let age = self.steps_done - seg.step;
+            let Some(l) = ir.emitters[seg.emitter].lifetime_steps else {
+                alive += u64::from(seg.count);
+                continue;
+            };
+            if age < u64::from(l.first) {
+                alive += u64::from(seg.count);
+            } else if age < u64::from(l.first) + u64::from(l.span) - 1 {
+                // Within the lifetimes' spread: draw each one.
+                alive += (0..seg.count)
+                    .filter(|j| {
+                        let u = crate::base::rng::rand_u32(
+                            ir.seed_mix,
+                            seg.first_id + j,
+                            crate::base::rng::stream::LIFETIME,
+                        );
+                        u64::from(l.draw(u)) > age
+                    })
+                    .count() as u64;
+            }
+        }
+        alive
+    }
+
+    /// Number of segments held.
+    pub fn len(&self) -> usize {
+        self.per_emitter.iter().map(|s| s.len()).sum()
+    }
+
+    /// Whether no segment is held.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+}

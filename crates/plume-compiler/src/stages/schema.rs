@@ -1,0 +1,280 @@
+//! The effect file format, v1: serde types that mirror the RON document one to one.
+//!
+//! Field and variant names are a contract with users' files and other tools: extend, never rename.
+//! Unknown fields and variants are rejected. Semantic checks live in [`crate::stages::validate`];
+//! force schemas live with the rest of each force in [`crate::features::forces`].
+
+use serde::Deserialize;
+
+use crate::base::values::default_colors;
+pub use crate::base::values::{ColorStop, Counts, Integrator, Range, Rgba, SizeStop, State, Vec3};
+pub use crate::features::colliders::Collider;
+pub use crate::features::emitter::{Emitter, Shape, Velocity};
+pub use crate::features::events::Event;
+use crate::features::forces::Force;
+pub use crate::features::looks::glow::Glow;
+pub use crate::features::looks::orient::Orient;
+pub use crate::features::looks::rotation::Rotation;
+pub use crate::features::looks::texture::{Play, Texture};
+pub use crate::features::looks::trail::Trail;
+pub use crate::features::looks::Blend;
+
+pub(crate) fn default_dt() -> f64 {
+    1.0 / 60.0
+}
+
+pub(crate) fn default_substeps() -> u32 {
+    1
+}
+
+/// A whole effect file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Effect {
+    /// A name for messages and outputs.
+    pub name: String,
+    /// Most live particles at once.
+    pub capacity: u32,
+    /// Seed of every random draw.
+    #[serde(default)]
+    pub seed: u32,
+    /// Seconds per step.
+    #[serde(default = "default_dt")]
+    pub dt: f64,
+    /// Integration substeps per step.
+    #[serde(default = "default_substeps")]
+    pub substeps: u32,
+    /// Where particles come from, in id order.
+    #[serde(default)]
+    pub emitters: Vec<Emitter>,
+    /// Accelerations, summed.
+    #[serde(default)]
+    pub forces: Vec<Force>,
+    /// Named constants that custom expressions may use: `params: {"k": 0.4}`.
+    #[serde(default)]
+    pub params: std::collections::BTreeMap<String, f64>,
+    /// Speed limit applied after every velocity update.
+    #[serde(default)]
+    pub max_speed: Option<f64>,
+    /// How positions and velocities advance.
+    #[serde(default)]
+    pub integrator: Integrator,
+    /// Surfaces particles bounce off.
+    #[serde(default)]
+    pub collide: Vec<Collider>,
+    /// Volumes that kill particles at the end of a step.
+    #[serde(default)]
+    pub kill: Vec<KillVolume>,
+    /// Draw back to front as seen from `camera`.
+    #[serde(default)]
+    pub sort: bool,
+    /// Evaluate position-dependent forces per particle (default) or bake them into a grid.
+    #[serde(default)]
+    pub field: crate::features::field::Field,
+    /// Keep per-particle state, or compute each particle from its id and age (see [`State`]).
+    #[serde(default)]
+    pub state: State,
+    /// The viewpoint for sorting and rendering.
+    #[serde(default)]
+    pub camera: Camera,
+    /// How particles look when rendered (an extension of v1; defaults when absent).
+    #[serde(default)]
+    pub render: Render,
+    /// Events this (top-level) group's particles fire into other groups.
+    #[serde(default)]
+    pub events: Vec<crate::features::events::Event>,
+    /// More particle groups, each with its own capacity, emitters, forces and look; the
+    /// top-level fields are the first group, named `name` (see [`crate::graph`]).
+    #[serde(default)]
+    pub groups: Vec<Group>,
+    /// The directory files the effect names (`render.texture.file`) are resolved against: the
+    /// effect file's directory, set by whoever read the file; the current directory when None.
+    #[serde(skip)]
+    pub base_dir: Option<std::path::PathBuf>,
+}
+
+fn default_sizes() -> Vec<SizeStop> {
+    vec![SizeStop(0.0, 0.1)]
+}
+
+fn default_background() -> Vec3 {
+    Vec3(0.02, 0.02, 0.04)
+}
+
+/// The `render:` section: colour and size over life, blending and background.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Render {
+    /// Colour gradient over the life fraction age / lifetime (0 for immortal particles).
+    #[serde(default = "default_colors")]
+    pub color: Vec<ColorStop>,
+    /// Sprite diameter (m) over the life fraction.
+    #[serde(default = "default_sizes")]
+    pub size: Vec<SizeStop>,
+    /// The sprite's height (its y axis) over the life fraction, when it differs from its
+    /// width: then `size` is the width. For `Velocity` sprites, the length before stretching.
+    #[serde(default)]
+    pub size_y: Option<Vec<SizeStop>>,
+    /// Opacity over the life fraction with stops of its own, `(t, alpha)`: replaces the colour
+    /// stops' alpha.
+    #[serde(default)]
+    pub alpha: Option<Vec<SizeStop>>,
+    /// Alpha or Additive.
+    #[serde(default)]
+    pub blend: Blend,
+    /// Background colour `(r, g, b)`.
+    #[serde(default = "default_background")]
+    pub background: Vec3,
+    /// Which way each sprite faces: the camera, stretched along the velocity, or a fixed plane.
+    #[serde(default)]
+    pub orient: Orient,
+    /// A sprite texture (optionally a flipbook atlas) instead of the soft round dot.
+    #[serde(default)]
+    pub texture: Option<Texture>,
+    /// Each sprite turned in its plane by a random starting angle and spin.
+    #[serde(default)]
+    pub rotation: Option<Rotation>,
+    /// Soft particles: where a host's depth buffer is bound, a sprite fades out over this many
+    /// metres in front of the scene's surfaces instead of cutting into them.
+    #[serde(default)]
+    pub soft: Option<f64>,
+    /// Glow: `plume render` draws into an HDR image and adds a blurred copy of what is brighter
+    /// than a threshold (bloom), so that bright, dense additive sprites look like light.
+    #[serde(default)]
+    pub glow: Option<Glow>,
+    /// Trails: a ribbon behind each particle through its recent positions.
+    #[serde(default)]
+    pub trail: Option<Trail>,
+    /// A colour per particle, picked from these by its id, that its colour over life is
+    /// multiplied by (and that children of events with `inherit_color` take on).
+    #[serde(default)]
+    pub palette: Option<Vec<Vec3>>,
+}
+
+impl Default for Render {
+    fn default() -> Self {
+        Self {
+            color: default_colors(),
+            size: default_sizes(),
+            size_y: None,
+            alpha: None,
+            blend: Blend::Alpha,
+            background: default_background(),
+            orient: Orient::Camera,
+            texture: None,
+            rotation: None,
+            soft: None,
+            glow: None,
+            trail: None,
+            palette: None,
+        }
+    }
+}
+
+/// Volumes that kill particles at the end of a step.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum KillVolume {
+    /// Kills particles inside the box.
+    InsideBox {
+        /// Lower corner.
+        min: Vec3,
+        /// Upper corner.
+        max: Vec3,
+    },
+    /// Kills particles outside the box.
+    OutsideBox {
+        /// Lower corner.
+        min: Vec3,
+        /// Upper corner.
+        max: Vec3,
+    },
+    /// Kills particles inside the ball.
+    InsideSphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius (> 0).
+        radius: f64,
+    },
+    /// Kills particles outside the ball.
+    OutsideSphere {
+        /// Centre.
+        center: Vec3,
+        /// Radius (> 0).
+        radius: f64,
+    },
+}
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Camera {
+    /// Where the camera is.
+    pub eye: Vec3,
+    /// What it looks at.
+    pub target: Vec3,
+    /// Vertical field of view in degrees, in (0, 180).
+    #[serde(default = "default_fov")]
+    pub fov_y: f64,
+}
+
+fn default_fov() -> f64 {
+    45.0
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Self {
+            eye: Vec3(0.0, 2.0, 10.0),
+            target: Vec3(0.0, 1.0, 0.0),
+            fov_y: default_fov(),
+        }
+    }
+}
+
+/// A particle group beside the top-level one: the fields of an effect that belong to one
+/// particle system.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Group {
+    /// The name events target it by (unique in the file).
+    pub name: String,
+    /// Most live particles of this group at once.
+    pub capacity: u32,
+    /// Its own emitters (a group fed by events has none).
+    #[serde(default)]
+    pub emitters: Vec<Emitter>,
+    /// Accelerations, summed.
+    #[serde(default)]
+    pub forces: Vec<Force>,
+    /// Speed limit applied after every velocity update.
+    #[serde(default)]
+    pub max_speed: Option<f64>,
+    /// How positions and velocities advance.
+    #[serde(default)]
+    pub integrator: Integrator,
+    /// Integration substeps per step.
+    #[serde(default = "default_substeps")]
+    pub substeps: u32,
+    /// Surfaces its particles bounce off.
+    #[serde(default)]
+    pub collide: Vec<Collider>,
+    /// Volumes that kill its particles at the end of a step.
+    #[serde(default)]
+    pub kill: Vec<KillVolume>,
+    /// Draw back to front.
+    #[serde(default)]
+    pub sort: bool,
+    /// Evaluate position-dependent forces per particle or bake them into a grid.
+    #[serde(default)]
+    pub field: crate::features::field::Field,
+    /// Keep per-particle state or not.
+    #[serde(default)]
+    pub state: State,
+    /// How its particles look.
+    #[serde(default)]
+    pub render: Render,
+    /// Events its particles fire.
+    #[serde(default)]
+    pub events: Vec<Event>,
+}

@@ -1,0 +1,428 @@
+//! Semantic checks of a parsed effect: every value that would make the IR meaningless
+//! (non-finite numbers, zero directions, empty lists, inverted ranges, ...) is an error here,
+//! named by its path, so lowering and code generation never see bad input.
+
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+use crate::features::forces::force_path;
+use crate::stages::schema::{Effect, Emitter, KillVolume, Orient, Shape, Velocity};
+
+/// The most emitters an effect may have: each takes 16 bytes of the per-step uniform, and
+/// 16 + 16 x 1023 bytes is the 16 KiB every WebGPU adapter must allow in a uniform binding.
+pub const MAX_EMITTERS: usize = 1023;
+/// The most forces (before folding): each can add a block to the fused update kernel, and the
+/// largest kernels tested run on llvmpipe (400 terms, tests/extremes.rs). Past this, shader
+/// compilers slow down sharply and drivers may refuse the kernel.
+pub const MAX_FORCES: usize = 512;
+/// The most colliders, and separately the most kill volumes (same reason as forces).
+pub const MAX_VOLUMES: usize = 256;
+
+/// Checks the whole effect; returns the checker holding every error found.
+pub fn check_effect(effect: &Effect) -> Checker {
+    let mut c = Checker::default();
+    let root = ValuePath::root();
+    for (field, len, max, why) in [
+        (
+            "emitters",
+            effect.emitters.len(),
+            MAX_EMITTERS,
+            "each takes 16 bytes of the 16 KiB per-step uniform every adapter allows",
+        ),
+        (
+            "forces",
+            effect.forces.len(),
+            MAX_FORCES,
+            "larger fused kernels are untested and may be refused by drivers",
+        ),
+        (
+            "collide",
+            effect.collide.len(),
+            MAX_VOLUMES,
+            "larger fused kernels are untested and may be refused by drivers",
+        ),
+        (
+            "kill",
+            effect.kill.len(),
+            MAX_VOLUMES,
+            "larger fused kernels are untested and may be refused by drivers",
+        ),
+    ] {
+        if len > max {
+            c.error(
+                &root.field(field),
+                format!("has {len} entries, more than the {max} one kernel can hold ({why})"),
+            );
+        }
+    }
+    if effect.capacity == 0 {
+        c.error(&root.field("capacity"), "must be >= 1, got 0");
+    }
+    c.positive(&root.field("dt"), effect.dt);
+    if effect.substeps == 0 {
+        c.error(&root.field("substeps"), "must be >= 1, got 0");
+    }
+    for (i, e) in effect.emitters.iter().enumerate() {
+        check_emitter(&mut c, &root.field("emitters").index(i), e, effect.dt);
+    }
+    let noisy = effect
+        .forces
+        .iter()
+        .position(|f| matches!(f, crate::features::forces::Force::Wind(w) if w.noise != 0.0));
+    effect.field.check(&root.field("field"), &mut c, noisy);
+    check_params(&mut c, &root.field("params"), effect);
+    let scope = crate::features::forces::custom::Scope {
+        params: &effect.params,
+        dt: effect.dt,
+    };
+    let mut flocks = 0;
+    for (i, f) in effect.forces.iter().enumerate() {
+        f.check(&force_path(i, f), &mut c, scope);
+        if matches!(f, crate::features::forces::Force::Flock(_)) {
+            flocks += 1;
+            if flocks == 2 {
+                c.error(
+                    &force_path(i, f),
+                    "a second Flock: an effect has one flock (merge their strengths into one)",
+                );
+            }
+        }
+    }
+    if let Some(s) = effect.max_speed {
+        c.positive(&root.field("max_speed"), s);
+    }
+    for (i, collider) in effect.collide.iter().enumerate() {
+        collider.check(
+            &crate::features::colliders::collider_path(i, collider),
+            &mut c,
+        );
+    }
+    for (i, k) in effect.kill.iter().enumerate() {
+        let p = root.field("kill").index(i);
+        match k {
+            KillVolume::InsideBox { min, max } => {
+                c.box_corners(&p.variant("InsideBox"), *min, *max)
+            }
+            KillVolume::OutsideBox { min, max } => {
+                c.box_corners(&p.variant("OutsideBox"), *min, *max)
+            }
+            KillVolume::InsideSphere { center, radius } => {
+                let p = p.variant("InsideSphere");
+                c.vec3(&p.field("center"), *center);
+                c.positive(&p.field("radius"), *radius);
+            }
+            KillVolume::OutsideSphere { center, radius } => {
+                let p = p.variant("OutsideSphere");
+                c.vec3(&p.field("center"), *center);
+                c.positive(&p.field("radius"), *radius);
+            }
+        }
+    }
+    check_render(&mut c, &root.field("render"), &effect.render);
+    let cam = root.field("camera");
+    let eye_ok = c.vec3(&cam.field("eye"), effect.camera.eye);
+    let target_ok = c.vec3(&cam.field("target"), effect.camera.target);
+    if eye_ok
+        && target_ok
+        && (effect.camera.eye.d() - effect.camera.target.d()).length_squared() <= 1e-20
+    {
+        c.error(&cam.field("target"), "must differ from camera.eye");
+    }
+    if c.finite(&cam.field("fov_y"), effect.camera.fov_y)
+        && !(effect.camera.fov_y > 0.0 && effect.camera.fov_y < 180.0)
+    {
+        c.error(
+            &cam.field("fov_y"),
+            format!("must be in (0, 180) degrees, got {}", effect.camera.fov_y),
+        );
+    }
+    c
+}
+
+/// Params: names that expressions can use (identifiers that hide no variable or function),
+/// values within the range expressions compute in.
+fn check_params(c: &mut Checker, path: &ValuePath, effect: &Effect) {
+    use crate::expr::typed::{FUNCTIONS, VARIABLES};
+    for (name, &value) in &effect.params {
+        let p = path.field(name);
+        let mut chars = name.chars();
+        let identifier = chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
+            && chars.all(|c| c.is_alphanumeric() || c == '_');
+        if !identifier {
+            c.error(
+                &p,
+                format!("`{name}` is not a name an expression can use: start with a letter, then letters, digits or _"),
+            );
+        } else if name == "dt"
+            || VARIABLES.iter().any(|v| v.name() == name)
+            || FUNCTIONS.iter().any(|(f, _)| f == name)
+        {
+            c.error(
+                &p,
+                format!(
+                    "`{name}` is already a variable or function in expressions: pick another name"
+                ),
+            );
+        }
+        if c.finite(&p, value) && value.abs() > crate::expr::VALUE_BOUND {
+            c.error(
+                &p,
+                format!(
+                    "must be within ±{:e} (the range expressions compute in), got {value:e}",
+                    crate::expr::VALUE_BOUND
+                ),
+            );
+        }
+    }
+}
+
+pub(crate) fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: f64) {
+    c.non_negative(&path.field("rate"), e.rate);
+    let shape = path.field("shape");
+    match &e.shape {
+        Shape::Point(p) => {
+            c.vec3(&shape.variant("Point").inner(), *p);
+        }
+        Shape::Sphere { center, radius } => {
+            let s = shape.variant("Sphere");
+            c.vec3(&s.field("center"), *center);
+            c.non_negative(&s.field("radius"), *radius);
+        }
+        Shape::Box { min, max } => c.box_corners(&shape.variant("Box"), *min, *max),
+        Shape::Disc {
+            center,
+            normal,
+            radius,
+        } => {
+            let s = shape.variant("Disc");
+            c.vec3(&s.field("center"), *center);
+            c.direction(&s.field("normal"), *normal);
+            c.non_negative(&s.field("radius"), *radius);
+        }
+        Shape::Grid { min, max, counts } => {
+            let s = shape.variant("Grid");
+            c.box_corners(&s, *min, *max);
+            let n = [counts.0, counts.1, counts.2];
+            if n.contains(&0) {
+                c.error(
+                    &s.field("counts"),
+                    format!(
+                        "every count must be >= 1, got ({}, {}, {})",
+                        n[0], n[1], n[2]
+                    ),
+                );
+            } else if n
+                .iter()
+                .try_fold(1u64, |acc, &k| acc.checked_mul(u64::from(k)))
+                .is_none_or(|total| total > u64::from(u32::MAX))
+            {
+                c.error(&s.field("counts"), "holds more than 4294967295 points");
+            }
+        }
+        Shape::Points(ps) => {
+            let s = shape.variant("Points");
+            if ps.is_empty() {
+                c.error(&s, "must list at least one point");
+            }
+            for (i, p) in ps.iter().enumerate() {
+                c.vec3(&s.inner().index(i), *p);
+            }
+        }
+    }
+    let vel = path.field("velocity");
+    match &e.velocity {
+        Velocity::Constant(v) => {
+            c.vec3(&vel.variant("Constant").inner(), *v);
+        }
+        Velocity::Cone { axis, angle, speed } => {
+            let v = vel.variant("Cone");
+            c.direction(&v.field("axis"), *axis);
+            c.within(&v.field("angle"), *angle, 0.0, 180.0);
+            check_speed(c, &v.field("speed"), *speed);
+        }
+        Velocity::Radial { speed } => {
+            check_speed(c, &vel.variant("Radial").field("speed"), *speed);
+        }
+    }
+    if let Some(life) = e.lifetime {
+        let p = path.field("lifetime");
+        if c.range(&p, life) {
+            if life.0 <= 0.0 {
+                c.error(
+                    &p.component(0, "min"),
+                    format!("must be > 0 seconds, got {}", life.0),
+                );
+            } else if dt > 0.0
+                && crate::base::lifetime::LifetimeSteps::new(life.0, life.1, dt).is_none()
+            {
+                c.error(
+                    &p.component(1, "max"),
+                    format!("is more than 2^31 steps of dt = {dt} s, got {}", life.1),
+                );
+            }
+        }
+    }
+}
+
+fn check_speed(c: &mut Checker, path: &ValuePath, speed: crate::stages::schema::Range) {
+    if c.range(path, speed) && speed.0 < 0.0 {
+        c.error(
+            &path.component(0, "min"),
+            format!("must be >= 0 m/s, got {}", speed.0),
+        );
+    }
+}
+
+fn check_stop_times(c: &mut Checker, path: &ValuePath, times: &[f64]) {
+    if times.is_empty() {
+        c.error(path, "must list at least one stop");
+    }
+    for (i, &t) in times.iter().enumerate() {
+        c.within(&path.index(i).component(0, "t"), t, 0.0, 1.0);
+        if i > 0 && t < times[i - 1] {
+            c.error(
+                &path.index(i).component(0, "t"),
+                format!(
+                    "stops must be in increasing t, got {t} after {}",
+                    times[i - 1]
+                ),
+            );
+        }
+    }
+}
+
+fn check_colors(c: &mut Checker, colors: &ValuePath, stops: &[crate::stages::schema::ColorStop]) {
+    check_stop_times(c, colors, &stops.iter().map(|s| s.0).collect::<Vec<_>>());
+    for (i, s) in stops.iter().enumerate() {
+        let p = colors.index(i).component(1, "color");
+        for (j, (name, x)) in [("r", s.1 .0), ("g", s.1 .1), ("b", s.1 .2), ("a", s.1 .3)]
+            .into_iter()
+            .enumerate()
+        {
+            c.within(&p.component(j, name), x, 0.0, 1.0);
+        }
+    }
+}
+
+fn check_sizes(
+    c: &mut Checker,
+    sizes: &ValuePath,
+    stops: &[crate::stages::schema::SizeStop],
+    name: &str,
+) {
+    check_stop_times(c, sizes, &stops.iter().map(|s| s.0).collect::<Vec<_>>());
+    for (i, s) in stops.iter().enumerate() {
+        c.non_negative(&sizes.index(i).component(1, name), s.1);
+    }
+}
+
+fn check_trail(c: &mut Checker, path: &ValuePath, t: &crate::stages::schema::Trail) {
+    // 64 points keep a ribbon's vertex count (128) and its history (1 KiB) bounded.
+    if !(2..=64).contains(&t.points) {
+        c.error(
+            &path.field("points"),
+            format!(
+                "must be 2 to 64 (the particle and up to 63 past positions), got {}",
+                t.points
+            ),
+        );
+    }
+    if t.every == 0 {
+        c.error(&path.field("every"), "must be at least 1 step");
+    }
+    check_sizes(c, &path.field("width"), &t.width, "width");
+    check_colors(c, &path.field("color"), &t.color);
+}
+
+fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Render) {
+    check_colors(c, &path.field("color"), &r.color);
+    check_sizes(c, &path.field("size"), &r.size, "size");
+    if let Some(heights) = &r.size_y {
+        check_sizes(c, &path.field("size_y"), heights, "size");
+    }
+    if let Some(alpha) = &r.alpha {
+        let p = path.field("alpha");
+        check_stop_times(c, &p, &alpha.iter().map(|s| s.0).collect::<Vec<_>>());
+        for (i, s) in alpha.iter().enumerate() {
+            c.within(&p.index(i).component(1, "alpha"), s.1, 0.0, 1.0);
+        }
+    }
+    if let Some(t) = &r.trail {
+        check_trail(c, &path.field("trail"), t);
+    }
+    if let Some(palette) = &r.palette {
+        crate::features::looks::tint::check_palette(c, &path.field("palette"), palette);
+    }
+    let bg = path.field("background");
+    for (j, (name, x)) in [
+        ("r", r.background.0),
+        ("g", r.background.1),
+        ("b", r.background.2),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        c.within(&bg.component(j, name), x, 0.0, 1.0);
+    }
+    let orient = path.field("orient");
+    match r.orient {
+        Orient::Camera => {}
+        Orient::Velocity {
+            stretch,
+            max_length,
+        } => {
+            let v = orient.variant("Velocity");
+            c.non_negative(&v.field("stretch"), stretch);
+            c.positive(&v.field("max_length"), max_length);
+        }
+        Orient::Fixed(normal) => c.direction(&orient.variant("Fixed").inner(), normal),
+    }
+    if let Some(t) = &r.texture {
+        let texture = path.field("texture");
+        if t.file.trim().is_empty() {
+            c.error(
+                &texture.field("file"),
+                "names no file; give a PNG's path relative to the effect file",
+            );
+        }
+        let frames = texture.field("frames");
+        for (i, (name, n)) in [("columns", t.frames.0), ("rows", t.frames.1)]
+            .into_iter()
+            .enumerate()
+        {
+            if n == 0 {
+                c.error(&frames.component(i, name), "must be at least 1");
+            }
+        }
+        match t.play {
+            crate::stages::schema::Play::Rate(fps) => {
+                c.positive(&texture.field("play").variant("Rate").inner(), fps)
+            }
+            crate::stages::schema::Play::OverLife if t.random_start => c.error(
+                &texture.field("random_start"),
+                "applies to frames played at a rate (play: Rate(fps)); a flipbook played over life starts at frame 0",
+            ),
+            crate::stages::schema::Play::OverLife => {}
+        }
+    }
+    if let Some(d) = r.soft {
+        c.positive(&path.field("soft"), d);
+    }
+    if let Some(g) = r.glow {
+        let p = path.field("glow");
+        c.non_negative(&p.field("threshold"), g.threshold);
+        c.non_negative(&p.field("strength"), g.strength);
+        // A wider blur costs 6 σ texel reads per pixel in each direction.
+        c.within(&p.field("radius"), g.radius, 1e-4, 0.05);
+    }
+    if let Some(rotation) = &r.rotation {
+        let p = path.field("rotation");
+        c.range(&p.field("angle"), rotation.angle);
+        c.range(&p.field("spin"), rotation.spin);
+        if let Orient::Velocity { .. } = r.orient {
+            c.error(
+                &p,
+                "cannot turn a sprite whose direction render.orient: Velocity sets; use Camera or Fixed orientation, or leave rotation out",
+            );
+        }
+    }
+}

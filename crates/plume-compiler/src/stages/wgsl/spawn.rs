@@ -1,0 +1,320 @@
+//! The spawn kernels. `spawn_prepare` (one thread) pops this step's slots off the free list:
+//! n = min(requested, free), the rest counted as dropped (live particles are never
+//! overwritten). `spawn` then initialises particle `first_id + i` in slot
+//! `free_list[spawn_base + i]`: its emitter, position, velocity and lifetime come from the
+//! IR and the integer hash of (seed, id, stream), so the CPU reference draws the same.
+
+use std::f64::consts::PI;
+
+use crate::base::rng::stream;
+use crate::base::writer::{f32_lit, u32_lit, vec3_lit, Writer};
+use crate::ir::{EffectIr, EmitterIr, ShapeIr, VelocityIr};
+use crate::stages::passes::layout::{Attribute, Layout};
+
+/// Emits `spawn_prepare` and `spawn`.
+pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+    w.comment(
+        "Pops this step's slots: never more than are free; the rest are dropped and counted.",
+    );
+    w.line("@compute @workgroup_size(1)");
+    w.block("fn spawn_prepare()", |w| {
+        w.line("let free = atomicLoad(&counters.free_count);");
+        w.line("let n = min(params.requested, free);");
+        w.line("atomicStore(&counters.free_count, free - n);");
+        w.line("counters.spawn_base = free - n;");
+        w.line("counters.spawn_count = n;");
+        w.line("counters.spawned = counters.spawned + n;");
+        w.line("counters.dropped = counters.dropped + (params.requested - n);");
+    });
+    w.blank();
+    emit_emitter_fns(w, ir);
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn spawn(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            crate::base::kernel::emit_thread_index(w, "i", Some("counters.spawn_count"));
+            w.line("let slot = free_list[counters.spawn_base + i];");
+            w.comment("Dispatched once per chunk: only the chunk that holds the slot writes it.");
+            w.block("if (slot < chunk.base || slot - chunk.base >= chunk.len)", |w| w.line("return;"));
+            w.line("let id = params.first_id + i;");
+            w.comment("Find the emitter: ids are handed out to emitters in the order they are listed.");
+            w.line("var e = 0u;");
+            w.line("var local = i;");
+            w.block(format!("for (; e < {}u; e++)", layout.emitter_slots), |w| {
+                w.block("if (local < params.emitters[e].x)", |w| w.line("break;"));
+                w.line("local = local - params.emitters[e].x;");
+            });
+            w.line("let k = params.emitters[e].y + local;");
+            w.line("var s: Spawned;");
+            if ir.emitters.is_empty() {
+                w.line("return;");
+            } else {
+                w.block("switch e", |w| {
+                    for e in 0..ir.emitters.len() {
+                        let label = if e + 1 == ir.emitters.len() {
+                            format!("case {e}u, default")
+                        } else {
+                            format!("case {e}u")
+                        };
+                        w.block(label, |w| {
+                            w.line(format!("s = emit_{e}(id, k, params.step);"))
+                        });
+                    }
+                });
+                if layout.has(Attribute::Tint) {
+                    w.line(format!(
+                        "let tint = pack4x8unorm(vec4<f32>({}, 1.0));",
+                        crate::features::looks::tint::own_wgsl(ir.tint(), "id")
+                    ));
+                }
+                emit_store_spawned(w, ir, layout);
+            }
+        },
+    );
+    if !ir.event_inputs.is_empty() {
+        w.blank();
+        let own = crate::features::looks::tint::own_wgsl(ir.tint(), "id");
+        crate::features::events::emit_kernels(
+            w,
+            &ir.event_inputs,
+            layout.has(Attribute::Tint).then_some(own.as_str()),
+            &|w| emit_store_spawned(w, ir, layout),
+        );
+    }
+}
+
+/// Emits the store of the spawned particle `s` (a `Spawned`) with id `id` into `slot` (a
+/// global slot this chunk holds), as every spawn kernel ends: Verlet's first displacement,
+/// the lifetime, the id and the spawn step as the layout has them.
+pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+    let mut fields = vec!["s.x.x", "s.x.y", "s.x.z"];
+    if layout.has(Attribute::Displacement) {
+        // Verlet: store the displacement that makes step one x0 + v0 h + a h²/2.
+        let h = ir.h();
+        if ir.custom_terms().any(|c| c.needs_context()) {
+            crate::features::forces::custom::emit_set_context(
+                w,
+                ir.dt,
+                "id",
+                layout.has(Attribute::SpawnStep).then_some("params.step"),
+                layout.has(Attribute::DeathStep).then_some("s.die_at"),
+            );
+        }
+        w.line(format!(
+            "let d = s.v * {} - accel(s.x, s.v, params.time) * {};",
+            f32_lit(h),
+            f32_lit(0.5 * h * h)
+        ));
+        fields.extend(["d.x", "d.y", "d.z"]);
+    } else {
+        fields.extend(["s.v.x", "s.v.y", "s.v.z"]);
+    }
+    if layout.has(Attribute::DeathStep) {
+        fields.push("s.die_at");
+    }
+    fields.push("id");
+    if layout.has(Attribute::SpawnStep) {
+        fields.push("params.step");
+    }
+    if layout.has(Attribute::Tint) {
+        fields.push("tint");
+    }
+    w.line(format!(
+        "store_particle(slot - chunk.base, Particle({}));",
+        fields.join(", ")
+    ));
+}
+
+/// Emits `emit_E(id, k, step) -> Spawned` for every emitter (shared by `spawn` and the
+/// stateless `evaluate`), each followed by a blank line.
+pub fn emit_emitter_fns(w: &mut Writer, ir: &EffectIr) {
+    for (e, em) in ir.emitters.iter().enumerate() {
+        emit_emitter_fn(w, ir, e, em);
+        w.blank();
+    }
+}
+
+/// A function per emitter: `emit_E(id, k, step) -> Spawned`, k the emitter's own spawn counter
+/// and `step` the step it spawns at.
+fn emit_emitter_fn(w: &mut Writer, ir: &EffectIr, e: usize, em: &EmitterIr) {
+    if let ShapeIr::Points(ps) = &em.shape {
+        let items: Vec<String> = ps.iter().map(|p| vec3_lit(*p)).collect();
+        w.line(format!(
+            "const POINTS_{e} = array<vec3<f32>, {}>({});",
+            ps.len(),
+            items.join(", ")
+        ));
+    }
+    w.block(
+        format!("fn emit_{e}(id: u32, k: u32, step: u32) -> Spawned"),
+        |w| {
+            w.line("var s: Spawned;");
+            emit_shape(w, e, &em.shape);
+            emit_velocity(w, &em.shape, &em.velocity);
+            match em.lifetime_steps {
+                Some(steps) => {
+                    w.comment(
+                        "Whole steps lived, drawn with integer arithmetic (see lifetime.rs).",
+                    );
+                    w.line(format!("let lu = rand_u32(id, {}u);", stream::LIFETIME));
+                    w.line(format!("s.die_at = step + ({}) - 1u;", steps.wgsl()));
+                }
+                None if ir.has_lifetimes() => {
+                    w.comment("Lives forever.");
+                    w.line("s.die_at = DEAD;");
+                }
+                None => {}
+            }
+            w.line("return s;");
+        },
+    );
+}
+
+fn unit3(base: u32) -> String {
+    format!(
+        "vec3<f32>(rand_unit(id, {}u), rand_unit(id, {}u), rand_unit(id, {}u))",
+        base,
+        base + 1,
+        base + 2
+    )
+}
+
+fn emit_shape(w: &mut Writer, e: usize, shape: &ShapeIr) {
+    let two_pi = f32_lit(2.0 * PI);
+    let pi = f32_lit(PI);
+    match shape {
+        ShapeIr::Point(p) => w.line(format!("s.x = {};", vec3_lit(*p))),
+        ShapeIr::Sphere { center, radius } => {
+            w.comment("Uniform in the ball: cos(polar) uniform, radius ~ cube root.");
+            w.line(format!("let u = {};", unit3(stream::POSITION)));
+            w.line("let cz = 1.0 - 2.0 * u.x;");
+            w.line(format!("let phi = {two_pi} * u.y - {pi};"));
+            w.line("let sz = sqrt(max(0.0, 1.0 - cz * cz));");
+            w.line(format!(
+                "let r = {} * pow(max(u.z, 1e-30), {});",
+                f32_lit(*radius),
+                f32_lit(1.0 / 3.0)
+            ));
+            w.line(format!(
+                "s.x = {} + r * vec3<f32>(sz * cos(phi), sz * sin(phi), cz);",
+                vec3_lit(*center)
+            ));
+        }
+        ShapeIr::Box { min, max } => {
+            w.line(format!(
+                "s.x = {} + {} * {};",
+                vec3_lit(*min),
+                vec3_lit(*max - *min),
+                unit3(stream::POSITION)
+            ));
+        }
+        ShapeIr::Disc {
+            center,
+            radius,
+            basis,
+        } => {
+            w.comment("Uniform in the disc: radius ~ sqrt(u).");
+            w.line(format!("let u = {};", unit3(stream::POSITION)));
+            w.line(format!("let r = {} * sqrt(u.x);", f32_lit(*radius)));
+            w.line(format!("let phi = {two_pi} * u.y - {pi};"));
+            w.line(format!(
+                "s.x = {} + r * (cos(phi) * {} + sin(phi) * {});",
+                vec3_lit(*center),
+                vec3_lit(basis.t1),
+                vec3_lit(basis.t2)
+            ));
+        }
+        ShapeIr::Grid {
+            origin,
+            step,
+            counts,
+        } => {
+            let [nx, ny, nz] = *counts;
+            w.comment("Lattice point k (mod the lattice size): x fastest, then y, then z.");
+            w.line(format!(
+                "let g = k % {};",
+                u32_lit(nx.wrapping_mul(ny).wrapping_mul(nz))
+            ));
+            w.line(format!(
+                "let gi = vec3<u32>(g % {nx}u, (g / {nx}u) % {ny}u, g / {});",
+                u32_lit(nx * ny)
+            ));
+            w.line(format!(
+                "s.x = {} + vec3<f32>(gi) * {};",
+                vec3_lit(*origin),
+                vec3_lit(*step)
+            ));
+        }
+        ShapeIr::Points(ps) => {
+            w.line(format!("s.x = POINTS_{e}[k % {}u];", ps.len()));
+        }
+    }
+}
+
+fn emit_speed(w: &mut Writer, speed: (f64, f64)) {
+    w.line(format!(
+        "let speed = {} + {} * rand_unit(id, {}u);",
+        f32_lit(speed.0),
+        f32_lit(speed.1 - speed.0),
+        stream::VELOCITY + 2
+    ));
+}
+
+fn emit_velocity(w: &mut Writer, shape: &ShapeIr, vel: &VelocityIr) {
+    let two_pi = f32_lit(2.0 * PI);
+    let pi = f32_lit(PI);
+    match vel {
+        VelocityIr::Constant(v) => w.line(format!("s.v = {};", vec3_lit(*v))),
+        VelocityIr::Cone {
+            axis,
+            basis,
+            cos_angle,
+            speed,
+        } => {
+            w.comment("Uniform on the spherical cap: cos(theta) = 1 - w, w uniform in [0, 1 - cos(angle)];");
+            w.comment("sin(theta) = sqrt(w (2 - w)) avoids the cancellation of 1 - cos².");
+            w.line(format!(
+                "let w = rand_unit(id, {}u) * {};",
+                stream::VELOCITY,
+                f32_lit(1.0 - cos_angle)
+            ));
+            w.line("let cos_t = 1.0 - w;");
+            w.line("let sin_t = sqrt(max(0.0, w * (2.0 - w)));");
+            w.line(format!(
+                "let psi = {two_pi} * rand_unit(id, {}u) - {pi};",
+                stream::VELOCITY + 1
+            ));
+            emit_speed(w, *speed);
+            w.line(format!(
+                "s.v = speed * (cos_t * {} + sin_t * (cos(psi) * {} + sin(psi) * {}));",
+                vec3_lit(*axis),
+                vec3_lit(basis.t1),
+                vec3_lit(basis.t2)
+            ));
+        }
+        VelocityIr::Radial { speed } => {
+            emit_speed(w, *speed);
+            w.line(format!("let out = s.x - {};", vec3_lit(shape.center())));
+            w.line("let out2 = dot(out, out);");
+            w.line("var dir: vec3<f32>;");
+            w.block(
+                format!("if (out2 > {})", f32_lit(shape.radial_center_eps2())),
+                |w| w.line("dir = out * inverseSqrt(out2);"),
+            );
+            w.block("else", |w| {
+                w.comment("At the centre itself: a uniformly random direction instead.");
+                w.line(format!(
+                    "let cz = 1.0 - 2.0 * rand_unit(id, {}u);",
+                    stream::FALLBACK_DIRECTION
+                ));
+                w.line(format!(
+                    "let phi = {two_pi} * rand_unit(id, {}u) - {pi};",
+                    stream::FALLBACK_DIRECTION + 1
+                ));
+                w.line("let sz = sqrt(max(0.0, 1.0 - cz * cz));");
+                w.line("dir = vec3<f32>(sz * cos(phi), sz * sin(phi), cz);");
+            });
+            w.line("s.v = speed * dir;");
+        }
+    }
+}
