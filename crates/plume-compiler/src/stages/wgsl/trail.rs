@@ -16,7 +16,8 @@ use crate::base::writer::{u32_lit, Writer};
 use crate::features::looks::trail::TrailIr;
 use crate::ir::EffectIr;
 use crate::stages::passes::layout::{self, Attribute, Layout};
-use crate::stages::wgsl::draw::{self, DrawShape, FIRST_DATA_BINDING};
+use crate::stages::wgsl::draw::common as draw;
+use crate::stages::wgsl::draw::{DrawShape, FIRST_DATA_BINDING};
 use crate::stages::wgsl::emit_particle_struct;
 
 /// Binding of chunk 0's trail ring in the trail draw module (chunk c at this + c).

@@ -13,13 +13,20 @@
 //! flipbook frame when the effect has one ([`crate::features::looks::texture`]; the vertex shader picks the
 //! frame from the particle's age).
 
-use crate::base::lifetime::LifetimeSteps;
+pub(crate) mod common;
+mod splat;
+
 use crate::base::rng;
 use crate::base::writer::{f32_lit, u32_lit, Writer};
 use crate::ir::EffectIr;
 use crate::stages::integrators::emit_advance;
 use crate::stages::passes::layout::{self, Attribute, Layout};
-use crate::stages::wgsl::{emit_particle_struct, particle_from_words, spawn, stateless};
+use crate::stages::wgsl::{emit_particle_struct, spawn, stateless};
+use common::{
+    emit_age_steps, emit_draw_view, emit_finite3, emit_gradients, emit_life_fraction, emit_load,
+    emit_soft,
+};
+use splat::{emit_project, emit_splat_declarations};
 
 /// How the runtime binds the particles for drawing. The compiled effect's own draw module is
 /// [`DrawShape::single`]; the runtime asks for another shape when its device splits the state
@@ -235,221 +242,6 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.finish()
 }
 
-/// `finite3(x)`: whether no component is Inf or NaN, tested on the bits.
-pub(crate) fn emit_finite3(w: &mut Writer) {
-    w.comment("Integer test for Inf/NaN: WGSL may assume floats are finite.");
-    w.block("fn finite3(x: vec3<f32>) -> bool", |w| {
-        w.line("let e = bitcast<vec3<u32>>(x) & vec3<u32>(0x7f800000u);");
-        w.line("return all(e != vec3<u32>(0x7f800000u));");
-    });
-}
-
-/// The `DrawView` uniform's struct (binding 0, [`DRAW_VIEW_BYTES`]).
-pub(crate) fn emit_draw_view(w: &mut Writer) {
-    w.comment("The camera and the frame, written by the runtime before each draw.");
-    w.block("struct DrawView", |w| {
-        w.line("view: mat4x4<f32>,");
-        w.line("proj: mat4x4<f32>,");
-        w.line("steps: u32,");
-        w.line("size_scale: f32,");
-        w.line("pad0: u32,");
-        w.line("pad1: u32,");
-    });
-}
-
-/// `load_particle(slot)`: the particle in global slot `slot`, from whichever buffer holds it
-/// (each buffer word-major over its own slots: [`crate::base::kernel::word_index`]).
-pub(crate) fn emit_load(w: &mut Writer, layout: &Layout, shape: &DrawShape) {
-    let n = layout.vec4s();
-    w.block("fn load_particle(slot: u32) -> Particle", |w| {
-        if shape.chunks <= 1 {
-            if n > 1 {
-                w.line("let slots = arrayLength(&particles_0) / VEC4S;");
-            }
-            for k in 0..n {
-                w.line(format!(
-                    "let w{k} = particles_0[{}];",
-                    crate::base::kernel::word_index(k, "slot", "slots")
-                ));
-            }
-        } else {
-            w.line("let c = slot / CHUNK_SLOTS;");
-            w.line("let i = slot - c * CHUNK_SLOTS;");
-            for k in 0..n {
-                w.line(format!("var w{k}: vec4<u32>;"));
-            }
-            w.block("switch c", |w| {
-                for c in 0..shape.chunks {
-                    let label = if c + 1 == shape.chunks {
-                        format!("case {c}u, default")
-                    } else {
-                        format!("case {c}u")
-                    };
-                    w.block(label, |w| {
-                        if n > 1 {
-                            w.line(format!("let slots = arrayLength(&particles_{c}) / VEC4S;"));
-                        }
-                        for k in 0..n {
-                            w.line(format!(
-                                "w{k} = particles_{c}[{}];",
-                                crate::base::kernel::word_index(k, "i", "slots")
-                            ));
-                        }
-                    });
-                }
-            });
-        }
-        w.line(format!("return {};", particle_from_words(layout)));
-    });
-}
-
-/// `life_fraction(p)`: steps lived over whole steps of life, as the CPU's
-/// `age / lifetime` (0 for a particle that never dies). With a stored spawn step it is
-/// (steps − born) / (die_at − born + 1); otherwise the lifetime n comes from the shared
-/// lifetime draw of the id, and n − (die_at + 1 − steps) steps have been lived.
-pub(crate) fn emit_life_fraction(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSteps>) {
-    w.comment("Life fraction: whole steps lived over whole steps of life (lifetime.rs).");
-    w.block("fn life_fraction(p: Particle) -> f32", |w| {
-        w.block("if (p.die_at == DEAD)", |w| w.line("return 0.0;"));
-        if layout.has(Attribute::SpawnStep) {
-            w.line("let lived = draw.steps - p.born;");
-            w.line("let life = p.die_at - p.born + 1u;");
-        } else if let Some(draw) = shared {
-            w.line(format!(
-                "let lu = rand_u32(p.id, {}u);",
-                rng::stream::LIFETIME
-            ));
-            w.line(format!("let life = {};", draw.wgsl()));
-            w.comment("Steps still to live, this one's update included; wraps like die_at.");
-            w.line("let left = p.die_at + 1u - draw.steps;");
-            w.line("let lived = life - min(left, life);");
-        } else {
-            // needs_spawn_step() stores `born` whenever the draws differ.
-            w.line("return 0.0;");
-            return;
-        }
-        w.line("return clamp(f32(lived) / f32(life), 0.0, 1.0);");
-    });
-}
-
-/// `age_steps(p)`: (whole steps lived, whole steps of life; 0 for a particle that never dies),
-/// for choosing a flipbook frame or a spin's angle. From the stored spawn step when there is
-/// one; otherwise from `die_at` and the shared lifetime draw (`needs_spawn_step` stores `born`
-/// whenever a particle that never dies needs its age); (0, 0) when no particle ever dies and
-/// none needs its age.
-fn emit_age_steps(w: &mut Writer, layout: &Layout, shared: Option<LifetimeSteps>) {
-    let dies = layout.has(Attribute::DeathStep);
-    w.comment(
-        "Whole steps lived and whole steps of life (0: never dies), for the flipbook or the spin.",
-    );
-    w.block("fn age_steps(p: Particle) -> vec2<u32>", |w| {
-        if layout.has(Attribute::SpawnStep) {
-            w.line("let lived = draw.steps - p.born;");
-            if dies {
-                w.block("if (p.die_at != DEAD)", |w| {
-                    w.line("return vec2<u32>(lived, p.die_at - p.born + 1u);");
-                });
-            }
-            w.line("return vec2<u32>(lived, 0u);");
-        } else if let (true, Some(draw)) = (dies, shared) {
-            w.block("if (p.die_at == DEAD)", |w| w.line("return vec2<u32>(0u);"));
-            w.line(format!(
-                "let lu = rand_u32(p.id, {}u);",
-                rng::stream::LIFETIME
-            ));
-            w.line(format!("let life = {};", draw.wgsl()));
-            w.line("let left = p.die_at + 1u - draw.steps;");
-            w.line("return vec2<u32>(life - min(left, life), life);");
-        } else {
-            w.line("return vec2<u32>(0u);");
-        }
-    });
-}
-
-/// `color_at(f)` and `size_at(f)`: the render section's piecewise-linear gradients with their
-/// stops baked in, as `RenderIr::color_at` and `size_at` (constant beyond the end stops; a
-/// jump where two stops share a time).
-pub(crate) fn emit_gradients(w: &mut Writer, ir: &EffectIr) {
-    emit_particle_color(w, ir);
-    emit_scalar_gradient(w, "size_at", &ir.render.size);
-    if let Some(heights) = &ir.render.size_y {
-        emit_scalar_gradient(w, "height_at", heights);
-    }
-}
-
-/// `color_at(f)`: the particle's colour at life fraction `f`, its alpha from `render.alpha`'s
-/// own stops when there are some (as `RenderIr::color_at`).
-pub(crate) fn emit_particle_color(w: &mut Writer, ir: &EffectIr) {
-    match &ir.render.alpha {
-        None => emit_color_gradient(w, "color_at", &ir.render.color),
-        Some(alpha) => {
-            emit_color_gradient(w, "color_stops_at", &ir.render.color);
-            emit_scalar_gradient(w, "alpha_at", alpha);
-            w.block("fn color_at(f: f32) -> vec4<f32>", |w| {
-                w.line("return vec4<f32>(color_stops_at(f).rgb, alpha_at(f));");
-            });
-        }
-    }
-}
-
-/// `name(f)`: a scalar gradient through `stops` (0 where there are none).
-pub(crate) fn emit_scalar_gradient(w: &mut Writer, name: &str, stops: &[(f64, f64)]) {
-    let values: Vec<(f64, String)> = stops.iter().map(|(t, s)| (*t, f32_lit(*s))).collect();
-    emit_gradient(w, name, "f32", &values, f32_lit(0.0));
-}
-
-/// `name(f)`: a colour gradient through `stops` (white where there are none).
-pub(crate) fn emit_color_gradient(w: &mut Writer, name: &str, stops: &[(f64, [f64; 4])]) {
-    let rgba = |c: [f64; 4]| {
-        format!(
-            "vec4<f32>({}, {}, {}, {})",
-            f32_lit(c[0]),
-            f32_lit(c[1]),
-            f32_lit(c[2]),
-            f32_lit(c[3])
-        )
-    };
-    let colour: Vec<(f64, String)> = stops.iter().map(|(t, c)| (*t, rgba(*c))).collect();
-    emit_gradient(w, name, "vec4<f32>", &colour, rgba([1.0, 1.0, 1.0, 1.0]));
-}
-
-pub(crate) fn emit_gradient(
-    w: &mut Writer,
-    name: &str,
-    ty: &str,
-    stops: &[(f64, String)],
-    empty: String,
-) {
-    w.block(format!("fn {name}(f: f32) -> {ty}"), |w| {
-        let Some((t0, first)) = stops.first() else {
-            w.line(format!("return {empty};"));
-            return;
-        };
-        if stops.iter().all(|(_, v)| v == first) {
-            w.line(format!("return {first};"));
-            return;
-        }
-        w.block(format!("if (f <= {})", f32_lit(*t0)), |w| {
-            w.line(format!("return {first};"));
-        });
-        for pair in stops.windows(2) {
-            let ((a_t, a), (b_t, b)) = (&pair[0], &pair[1]);
-            w.block(format!("if (f <= {})", f32_lit(*b_t)), |w| {
-                if b_t > a_t {
-                    w.line(format!(
-                        "return {a} + ({b} - {a}) * ((f - {}) / {});",
-                        f32_lit(*a_t),
-                        f32_lit(b_t - a_t)
-                    ));
-                } else {
-                    w.line(format!("return {b};"));
-                }
-            });
-        }
-        w.line(format!("return {};", stops[stops.len() - 1].1));
-    });
-}
-
 /// `sprite_at(instance)`: instance → slot (through `order` when there is one) → particle →
 /// whether it shows, its centre in view space, its colour and size. Shared by the vertex shader
 /// and the splat's `project`, so both draw the same sprites.
@@ -636,81 +428,6 @@ fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool, textured: bool
     );
 }
 
-/// The splat's declarations: its view and output buffers (bindings [`SPLAT_BINDINGS`]).
-fn emit_splat_declarations(w: &mut Writer) {
-    w.comment("The compute splat's image: size in pixels, tiles, and the instances to project.");
-    w.block("struct SplatView", |w| {
-        w.line("width: u32,");
-        w.line("height: u32,");
-        w.line("tiles_x: u32,");
-        w.line("count: u32,");
-    });
-    let [view, splats, counts, offsets, boxes] = SPLAT_BINDINGS;
-    w.line(format!(
-        "@group(0) @binding({view}) var<uniform> splat_view: SplatView;"
-    ));
-    w.line(format!(
-        "@group(0) @binding({splats}) var<storage, read_write> splats: array<vec4<u32>>;"
-    ));
-    w.line(format!(
-        "@group(0) @binding({counts}) var<storage, read_write> tile_counts: array<u32>;"
-    ));
-    w.line(format!(
-        "@group(0) @binding({offsets}) var<storage, read_write> tile_offsets: array<u32>;"
-    ));
-    w.line(format!(
-        "@group(0) @binding({boxes}) var<storage, read_write> tile_boxes: array<vec2<u32>>;"
-    ));
-}
-
-/// `project`: the splat's first kernel. Instance k's sprite as the rasteriser would place it,
-/// in 16 bytes: its centre in pixels (two f32), its half extent in pixels and its alpha (two
-/// f16), its RGB (three 10-bit unorms); and how many screen tiles its pixels touch (0 when
-/// hidden, clipped, or covering no pixel centre). Pixels are square (the projection's aspect is
-/// the image's), so one extent serves both axes.
-fn emit_project(w: &mut Writer) {
-    w.line("@compute @workgroup_size(256)");
-    w.block(
-        "fn project(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
-        |w| {
-            w.line("let k = gid.x + gid.y * groups.x * 256u;");
-            w.block("if (k >= splat_view.count)", |w| w.line("return;"));
-            w.line("var tiles = 0u;");
-            w.line("let s = sprite_at(k);");
-            w.block("if (s.visible)", |w| {
-                w.line("let clip = draw.proj * s.center;");
-                w.comment("All corners share z and w: the rasteriser clips the whole sprite or none of it.");
-                w.block("if (clip.w > 0.0 && clip.z >= 0.0 && clip.z <= clip.w)", |w| {
-                    w.line("let h = 0.5 * s.size;");
-                    w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
-                    w.line("let extent = abs((draw.proj * vec4<f32>(h, 0.0, 0.0, 0.0)).x / clip.w) * 0.5 * size.x;");
-                    w.comment("The extent as stored (f16), as the tile kernels see it.");
-                    w.line("let packed = pack2x16float(vec2<f32>(extent, s.color.a));");
-                    w.line("let e = unpack2x16float(packed).x;");
-                    w.line("let c = vec2<f32>(clip.x / clip.w * 0.5 + 0.5, 0.5 - clip.y / clip.w * 0.5) * size;");
-                    w.comment("Pixels whose centres (i + 0.5) lie strictly inside the sprite.");
-                    w.line("let lo = max(ceil(c - e - 0.5), vec2<f32>(0.0));");
-                    w.line("let hi = min(floor(c + e - 0.5), size - 1.0);");
-                    w.block("if (all(lo <= hi))", |w| {
-                        w.line(format!(
-                            "let t0 = vec2<u32>(lo) / {SPLAT_TILE}u;"
-                        ));
-                        w.line(format!(
-                            "let t1 = vec2<u32>(hi) / {SPLAT_TILE}u;"
-                        ));
-                        w.line("tiles = (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
-                        w.line("tile_boxes[k] = vec2<u32>(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u));");
-                        w.line("let rgb = vec3<u32>(round(clamp(s.color.rgb, vec3<f32>(0.0), vec3<f32>(1.0)) * 1023.0));");
-                        w.line("splats[k] = vec4<u32>(bitcast<vec2<u32>>(c), packed, rgb.x | (rgb.y << 10u) | (rgb.z << 20u));");
-                    });
-                });
-            });
-            w.line("tile_counts[k] = tiles;");
-            w.line("tile_offsets[k] = tiles;");
-        },
-    );
-}
-
 /// The fragment shader `fs`: the texture's frame times the colour ([`crate::features::looks::texture`]), or a
 /// soft round sprite, alpha a (1 − r²)², nothing at r >= 1.
 /// With `soft`, that colour comes from `shade` and `fs` fades its alpha by `soft_fade`.
@@ -748,42 +465,4 @@ fn emit_shade(w: &mut Writer, texture: Option<&crate::features::looks::texture::
     w.comment("Soft round falloff: full at the centre, zero at the rim.");
     w.line("let falloff = (1.0 - r2) * (1.0 - r2);");
     w.line("return vec4<f32>(in.color.rgb, in.color.a * falloff);");
-}
-
-/// The host's depth texture and `soft_fade(frag)`: how far (in metres along the view axis) the
-/// scene's surface lies behind the fragment, over the fade distance, clamped to [0, 1]. Depths
-/// are linearised with the projection's own terms, A = proj[2][2], B = proj[3][2]: for a
-/// perspective projection (standard or reversed Z, finite or infinite far plane; proj[3][3] = 0)
-/// NDC depth z and view distance d satisfy d = B / (z + A); for an orthographic one
-/// (proj[3][3] = 1, w = 1) z = −A d + B, so d = (B − z) / A.
-pub(crate) fn emit_soft(w: &mut Writer, distance: f64) {
-    w.comment("Soft particles: the host's depth buffer (render.soft).");
-    w.line(format!(
-        "@group(0) @binding({SCENE_DEPTH_BINDING}) var scene_depth: texture_2d<f32>;"
-    ));
-    w.line(format!("const SOFT_DISTANCE: f32 = {};", f32_lit(distance)));
-    w.blank();
-    w.comment(
-        "Distance in front of the camera of NDC depth z (a far plane at infinity: a huge one).",
-    );
-    w.block("fn view_distance(z: f32) -> f32", |w| {
-        w.block("if (draw.proj[3][3] > 0.5)", |w| {
-            w.comment("Orthographic: depth is linear in distance.");
-            w.block("if (abs(draw.proj[2][2]) < 1e-30)", |w| {
-                w.line("return 0.0;")
-            });
-            w.line("return (draw.proj[3][2] - z) / draw.proj[2][2];");
-        });
-        w.line("let den = z + draw.proj[2][2];");
-        w.block("if (abs(den) < 1e-30)", |w| w.line("return 3.0e38;"));
-        w.line("return min(draw.proj[3][2] / den, 3.0e38);");
-    });
-    w.blank();
-    w.block("fn soft_fade(frag: vec4<f32>) -> f32", |w| {
-        w.comment("Clamped to the texture: a smaller one (the placeholder before the host binds its own) stays in bounds.");
-        w.line("let pixel = min(vec2<u32>(frag.xy), textureDimensions(scene_depth) - vec2<u32>(1u));");
-        w.line("let scene = textureLoad(scene_depth, pixel, 0).r;");
-        w.line("let gap = view_distance(scene) - view_distance(frag.z);");
-        w.line("return clamp(gap / SOFT_DISTANCE, 0.0, 1.0);");
-    });
 }
