@@ -1,23 +1,42 @@
 //! # plume-runtime
 //!
 //! Runs compiled Plume effects on wgpu, on a device of its own or inside a host application's
-//! renderer.
+//! renderer. The whole embedding API is at the crate root:
+//!
+//! - [`Gpu`] (with [`GpuChoice`]): the device, Plume's own ([`Gpu::new`]) or a host's
+//!   ([`Gpu::from_device`]);
+//! - [`Effect`]: any effect file running on it, a single system or a graph of groups and
+//!   events ([`Effect::from_file`], [`Effect::from_source`], [`Effect::new`] from a compiled
+//!   effect, [`Effect::from_graph`]); it steps into the host's encoder ([`Effect::advance`]) or
+//!   runs on its own ([`Effect::run`]), and reads back ([`Effect::totals`], [`Effect::records`]);
+//! - [`EffectRenderer`]: its draw, every group and its trails, into targets like one
+//!   [`DrawTarget`] (with an optional [`DepthTest`] against the host's depth buffer), made by
+//!   [`Effect::renderer`], prepared each frame by [`Effect::prepare_draw`] from a [`Camera`],
+//!   and recorded into the host's render pass by [`EffectRenderer::draw`];
+//! - [`RuntimeError`]: what went wrong, and where it can, what to do.
+//!
+//! Three named modules serve the `plume` command, the tools and the tests, not an embedding
+//! application: [`outputs`] (headless images, GIF, contact sheets, exports), [`bench`]
+//! (benchmarks and measurements) and [`oracle`] (the CPU reference drawing and the readbacks
+//! the tests compare). Everything else is private to the crate, in folders by job: `device`,
+//! `sort`, `sim`, `draw` (see docs/ARCHITECTURE.md, "Runtime and outputs").
+//!
+//! The CPU f64 reference simulator lives in `plume_compiler::reference`.
 
 pub mod bench;
-pub(crate) mod device;
-pub(crate) mod draw;
+mod device;
+mod draw;
 mod error;
 pub mod oracle;
 pub mod outputs;
-pub(crate) mod sim;
-pub(crate) mod sort;
+mod sim;
+mod sort;
 
 pub use device::gpu::{Gpu, GpuChoice};
 pub use draw::camera::Camera;
-pub use draw::raster::{DeadSlots, DrawOptions, EffectRenderer};
+pub use draw::renderer::EffectRenderer;
 pub use draw::target::{DepthTest, DrawTarget};
 pub use error::RuntimeError;
-pub use sim::graph::GraphInstance;
-pub use sim::group::EffectInstance;
+pub use sim::effect::Effect;
 /// The wgpu this crate is built against: a host must use the same version.
 pub use wgpu;

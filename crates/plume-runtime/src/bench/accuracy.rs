@@ -15,9 +15,9 @@ use plume_compiler::passes::integrator::exact_blocker;
 use plume_compiler::reference::ReferenceSim;
 use plume_compiler::{compile_effect, CompileError, Effect, Integrator};
 
-use crate::error::RuntimeError;
 use crate::device::gpu::Gpu;
-use crate::sim::group::EffectInstance;
+use crate::error::RuntimeError;
+use crate::sim::effect::Effect as RunningEffect;
 
 /// What to measure.
 #[derive(Clone, Debug)]
@@ -158,8 +158,8 @@ fn timed_run(
     Ok(match engine {
         Engine::Gpu(gpu) => {
             // Warm up: drivers compile shaders on first dispatch; keep that out of the timing.
-            EffectInstance::new(gpu, c.clone())?.run(1, |_| {})?;
-            let mut sim = EffectInstance::new(gpu, c)?;
+            RunningEffect::new(gpu, c.clone())?.run(1, |_| {})?;
+            let mut sim = RunningEffect::new(gpu, c)?;
             let start = Instant::now();
             sim.run(steps, |_| {})?;
             let s = start.elapsed().as_secs_f64();

@@ -9,10 +9,11 @@ use plume_compiler::graph::{compile_graph, group_effects, CompiledGraph, Compile
 use plume_compiler::schema::{Effect, Emitter, Shape, Vec3, Velocity};
 use plume_compiler::{compile_effect, CompileError};
 
-use crate::error::RuntimeError;
-use crate::device::gpu::Gpu;
-use crate::sim::graph::GraphInstance;
 use crate::bench::timer::{median_after_warmup, PassTimer, TimingSource};
+use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
+// The running effect; `Effect` here is the file's schema.
+use crate::sim::effect::Effect as RunningEffect;
 
 /// What was measured.
 #[derive(Clone, Debug, PartialEq)]
@@ -81,7 +82,7 @@ pub fn scaled(effect: &Effect, scale: f64) -> Effect {
 /// Times `steps` steps `repeats` times (after one untimed batch) and returns the median
 /// seconds per step.
 fn per_step(
-    sim: &mut GraphInstance,
+    sim: &mut RunningEffect,
     timer: &PassTimer<'_>,
     steps: u32,
     repeats: u32,
@@ -91,10 +92,10 @@ fn per_step(
 
 /// Events requested per fed group so far (spawned and dropped: a fed group spawns only from
 /// its events).
-fn requested(sim: &GraphInstance, fed: &[bool]) -> Result<Vec<u64>, RuntimeError> {
+fn requested(sim: &RunningEffect, fed: &[bool]) -> Result<Vec<u64>, RuntimeError> {
     (0..fed.len())
         .map(|g| {
-            let t = sim.totals(g)?;
+            let t = sim.group_totals(g)?;
             Ok(if fed[g] { t.spawned + t.dropped } else { 0 })
         })
         .collect()
@@ -127,7 +128,7 @@ pub fn bench_graph(
     }
     let fed: Vec<bool> = per_firing.iter().map(|p| p.1 > 0).collect();
     let timer = PassTimer::new(gpu);
-    let mut sim = GraphInstance::new(gpu, graph)?;
+    let mut sim = RunningEffect::from_graph(gpu, graph)?;
     sim.run(warm_steps, |_| {})?;
     let repeats = 3;
     let before = requested(&sim, &fed)?;
@@ -144,16 +145,16 @@ pub fn bench_graph(
     let order_seconds = sim.time_orders(&timer, repeats)?;
     let mut groups = Vec::new();
     for (g, name) in names.iter().enumerate() {
-        let cap = sim.groups()[g].effect().ir.capacity;
-        groups.push((name.clone(), cap, sim.totals(g)?.alive));
+        let cap = sim.group_compiled(g)?.ir.capacity;
+        groups.push((name.clone(), cap, sim.group_totals(g)?.alive));
     }
     // The same groups, the same live particles, no events.
     let plain = plain_graph(&big, &groups)?;
-    let mut plain_sim = GraphInstance::new(gpu, plain)?;
+    let mut plain_sim = RunningEffect::from_graph(gpu, plain)?;
     plain_sim.run(1, |_| {})?;
     let plain_seconds_per_step = per_step(&mut plain_sim, &timer, steps, repeats)?;
     for (g, (name, _, alive)) in groups.iter().enumerate() {
-        let left = plain_sim.totals(g)?.alive;
+        let left = plain_sim.group_totals(g)?.alive;
         if left != *alive {
             return Err(RuntimeError::Output(format!(
                 "the event-free copy of group {name} kept {left} of its {alive} particles alive (a kill volume reached them)"

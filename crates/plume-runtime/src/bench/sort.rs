@@ -6,11 +6,11 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::error::RuntimeError;
+use crate::bench::timer::{median_after_warmup, PassTimer};
 use crate::device::gpu::Gpu;
 use crate::device::readback::read_buffer;
+use crate::error::RuntimeError;
 use crate::sort::radix::{GpuSorter, Ranking};
-use crate::bench::timer::{median_after_warmup, PassTimer};
 
 /// One sort configuration's time.
 #[derive(Clone, Debug)]

@@ -3,8 +3,8 @@
 
 use std::time::Instant;
 
-use crate::error::RuntimeError;
 use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
 
 /// Measures one compute pass at a time.
 pub struct PassTimer<'g> {

@@ -22,6 +22,32 @@ impl GpuChoice {
             None => wgpu::Backends::from_env().unwrap_or(wgpu::Backends::all()),
         }
     }
+
+    /// Every adapter wgpu sees for this choice, as (name, backend, device type, driver)
+    /// lines (`plume adapters`).
+    pub fn list_adapters(&self) -> Vec<String> {
+        let backends = self.backends();
+        let adapters = pollster::block_on(instance(backends).enumerate_adapters(backends));
+        adapters
+            .iter()
+            .map(|a| {
+                let i = a.get_info();
+                let compute = a
+                    .get_downlevel_capabilities()
+                    .flags
+                    .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS);
+                format!(
+                    "{} ({:?}, {:?}, driver {} {}){}",
+                    i.name,
+                    i.backend,
+                    i.device_type,
+                    i.driver,
+                    i.driver_info,
+                    if compute { "" } else { " [no compute shaders]" }
+                )
+            })
+            .collect()
+    }
 }
 
 /// An open device, its queue and what it is. Cloning is cheap (wgpu's handles are shared), so
@@ -46,37 +72,12 @@ pub struct Gpu {
 }
 
 /// An instance searching `backends`, with no display (headless work).
-pub fn instance(backends: wgpu::Backends) -> wgpu::Instance {
+pub(crate) fn instance(backends: wgpu::Backends) -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = backends;
     // wgpu's own switches (WGPU_VALIDATION, WGPU_VALIDATION_INDIRECT_CALL, ...) apply.
     desc.flags = desc.flags.with_env();
     wgpu::Instance::new(desc)
-}
-
-/// Every adapter wgpu sees for `choice`, as (name, backend, device type, driver) lines.
-pub fn list_adapters(choice: &GpuChoice) -> Vec<String> {
-    let backends = choice.backends();
-    let adapters = pollster::block_on(instance(backends).enumerate_adapters(backends));
-    adapters
-        .iter()
-        .map(|a| {
-            let i = a.get_info();
-            let compute = a
-                .get_downlevel_capabilities()
-                .flags
-                .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS);
-            format!(
-                "{} ({:?}, {:?}, driver {} {}){}",
-                i.name,
-                i.backend,
-                i.device_type,
-                i.driver,
-                i.driver_info,
-                if compute { "" } else { " [no compute shaders]" }
-            )
-        })
-        .collect()
 }
 
 impl Gpu {
@@ -188,7 +189,7 @@ impl Gpu {
 
     /// A 2D grid of workgroups of `workgroup` threads covering `threads` (2D because one
     /// dimension holds at most `max_compute_workgroups_per_dimension` groups); at least one.
-    pub fn grid(&self, threads: u64, workgroup: u64) -> Result<(u32, u32), RuntimeError> {
+    pub(crate) fn grid(&self, threads: u64, workgroup: u64) -> Result<(u32, u32), RuntimeError> {
         let per_dim = u64::from(self.limits.max_compute_workgroups_per_dimension);
         let groups = threads.div_ceil(workgroup).max(1);
         // As few rows as fit, of equal length: 65,536 groups are 2 x 32,768, not 65,535 + 1
@@ -204,7 +205,7 @@ impl Gpu {
     }
 
     /// A bind group of `layout` whose entries are whole buffers, by binding.
-    pub fn bind_buffers(
+    pub(crate) fn bind_buffers(
         &self,
         label: &str,
         layout: &wgpu::BindGroupLayout,
@@ -272,7 +273,7 @@ impl Gpu {
     /// # Ok(())
     /// # }
     /// ```
-    pub fn compute_pipeline(
+    pub(crate) fn compute_pipeline(
         &self,
         module: &wgpu::ShaderModule,
         entry: &str,
@@ -334,7 +335,7 @@ impl Gpu {
 }
 
 /// The descriptor [`Gpu::texture_2d`] creates a texture from (for `create_texture_with_data`).
-pub fn texture_2d_descriptor(
+pub(crate) fn texture_2d_descriptor(
     label: &str,
     (width, height): (u32, u32),
     format: wgpu::TextureFormat,

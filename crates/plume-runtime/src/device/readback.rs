@@ -8,8 +8,8 @@ use plume_compiler::reference::{ParticleRecord, Totals};
 use plume_compiler::schedule::Schedule;
 use plume_compiler::CompiledEffect;
 
-use crate::error::RuntimeError;
 use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
 
 /// Marks a free slot (the `id` field) and a particle that never dies.
 pub const DEAD: u32 = u32::MAX;

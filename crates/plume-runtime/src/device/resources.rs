@@ -13,8 +13,9 @@ use std::sync::OnceLock;
 use plume_compiler::passes::layout::COUNTERS_BYTES;
 use plume_compiler::CompiledEffect;
 
-use crate::error::RuntimeError;
+use crate::device::buffers::{filled_buffer, STORAGE};
 use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
 
 /// Steps recorded per submission: bounds the parameter buffer (256 B a step) and how long
 /// one submission keeps the GPU busy.
@@ -102,12 +103,6 @@ fn sized(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BindingResource
         size: wgpu::BufferSize::new(size),
     })
 }
-
-/// Usage of every storage buffer the runtime makes: kernels read and write it, readback copies
-/// from it, and the draw's vertex shader reads it as read-only storage.
-pub const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
-    .union(wgpu::BufferUsages::COPY_SRC)
-    .union(wgpu::BufferUsages::COPY_DST);
 
 impl Resources {
     /// Allocates `effect`'s buffers on `gpu`, with at most `max_chunk_slots` particles per
@@ -575,48 +570,3 @@ impl Resources {
 /// The binding an event-fed group's spawn dispatch arguments are in (bound only by
 /// [`Resources::event_prepare`]).
 const EVENT_DISPATCH: &str = "event_dispatch";
-
-/// A buffer created mapped and filled by `fill`. Fails (rather than panics) when the device
-/// cannot map it, as after a device loss, which it then reports.
-pub fn filled_buffer(
-    gpu: &Gpu,
-    label: &str,
-    size: u64,
-    usage: wgpu::BufferUsages,
-    fill: impl FnOnce(&mut [u8]),
-) -> Result<wgpu::Buffer, RuntimeError> {
-    let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some(label),
-        size,
-        usage,
-        mapped_at_creation: true,
-    });
-    let mut bytes = vec![0u8; size as usize];
-    fill(&mut bytes);
-    match buffer.slice(..).get_mapped_range_mut() {
-        Ok(mut range) => range.copy_from_slice(&bytes),
-        Err(e) => {
-            // A lost device is only reported once polled: poll, so the error says so.
-            let _ = gpu.device.poll(wgpu::PollType::Poll);
-            gpu.take_error()?;
-            return Err(RuntimeError::Gpu(format!(
-                "cannot fill the {label} buffer: {e}"
-            )));
-        }
-    }
-    buffer.unmap();
-    Ok(buffer)
-}
-
-/// A small buffer holding `bytes`, to copy from inside an encoder: per-call parameters are
-/// copied in the caller's encoder, in order, rather than written with `Queue::write_buffer`
-/// (which would apply every write before any of the submission's commands run).
-pub fn staging(gpu: &Gpu, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, RuntimeError> {
-    filled_buffer(
-        gpu,
-        label,
-        (bytes.len() as u64).next_multiple_of(4).max(4),
-        wgpu::BufferUsages::COPY_SRC,
-        |b| b[..bytes.len()].copy_from_slice(bytes),
-    )
-}

@@ -5,11 +5,6 @@
 use glam::{DVec3, Mat4, Vec3};
 use plume_compiler::ir::CameraIr;
 
-/// Near and far planes of the effect camera's projection (m).
-pub const NEAR: f32 = 0.05;
-/// See [`NEAR`].
-pub const FAR: f32 = 10_000.0;
-
 /// View and projection matrices (column-major, right-handed view space looking down −z; the
 /// projection maps into wgpu's clip space).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -21,6 +16,11 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// Near plane of the effect camera's projection (m).
+    pub const NEAR: f32 = 0.05;
+    /// Far plane of the effect camera's projection (m).
+    pub const FAR: f32 = 10_000.0;
+
     /// A camera from a host's matrices.
     pub fn new(view: Mat4, proj: Mat4) -> Self {
         Self { view, proj }
@@ -64,8 +64,8 @@ impl Camera {
 
 /// View and projection matrices of the effect's camera for an image of `aspect` = width /
 /// height: a look-at from `eye` to `target` with +Y up (+Z up when looking along ±Y), and a
-/// perspective with vertical `fov_y` between [`NEAR`] and [`FAR`].
-pub fn camera_matrices(camera: &CameraIr, aspect: f32) -> (Mat4, Mat4) {
+/// perspective with vertical `fov_y` between [`Camera::NEAR`] and [`Camera::FAR`].
+pub(crate) fn camera_matrices(camera: &CameraIr, aspect: f32) -> (Mat4, Mat4) {
     let eye = camera.eye.as_vec3();
     let target = camera.target.as_vec3();
     let forward = (target - eye).normalize_or_zero();
@@ -76,12 +76,11 @@ pub fn camera_matrices(camera: &CameraIr, aspect: f32) -> (Mat4, Mat4) {
         Vec3::Y
     };
     let view = Mat4::look_at_rh(eye, target, up);
-    let proj = Mat4::perspective_rh(camera.fov_y.to_radians() as f32, aspect, NEAR, FAR);
+    let proj = Mat4::perspective_rh(
+        camera.fov_y.to_radians() as f32,
+        aspect,
+        Camera::NEAR,
+        Camera::FAR,
+    );
     (view, proj)
-}
-
-/// Where a world point lands in an image of `width` x `height` seen from the effect's camera
-/// (pixels, origin top left), or None when it is behind the camera.
-pub fn project(camera: &CameraIr, width: u32, height: u32, p: DVec3) -> Option<(f32, f32)> {
-    Camera::from_effect(camera, width as f32 / height as f32).project(width, height, p)
 }

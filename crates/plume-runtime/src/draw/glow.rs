@@ -2,12 +2,12 @@
 //! ([`HDR_FORMAT`]); two compute passes ([`glow.wgsl`](glow.wgsl)) blur the light above the
 //! threshold with a separable Gaussian and add it back, clamped, into the RGBA8 image that is
 //! read back. The embedding API leaves post-processing to the host: this is
-//! [`crate::outputs::offscreen::Offscreen`]'s alone.
+//! [`crate::outputs::Offscreen`]'s alone.
 
 use plume_compiler::schema::Glow;
 
-use crate::error::RuntimeError;
 use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
 
 /// The format the effect is drawn into when it glows: additive sprites can add up past 1.
 pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
@@ -47,7 +47,7 @@ impl GlowPasses {
         bytes.extend_from_slice(&(glow.strength as f32).to_le_bytes());
         bytes.extend_from_slice(&taps.to_le_bytes());
         bytes.extend_from_slice(&falloff.to_le_bytes());
-        let params = crate::device::resources::filled_buffer(
+        let params = crate::device::buffers::filled_buffer(
             gpu,
             "glow params",
             16,

@@ -10,9 +10,10 @@ use plume_compiler::passes::layout::Attribute;
 use plume_compiler::wgsl::draw::Primitive;
 use plume_compiler::CompiledEffect;
 
-use crate::error::RuntimeError;
+use crate::device::buffers::{filled_buffer, STORAGE};
 use crate::device::gpu::Gpu;
-use crate::device::resources::{filled_buffer, Resources, STORAGE};
+use crate::device::resources::Resources;
+use crate::error::RuntimeError;
 use crate::sort::radix::{GpuSorter, SortProgram};
 
 const LIVE_LIST_WGSL: &str = r#"

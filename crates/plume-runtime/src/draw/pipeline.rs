@@ -4,8 +4,8 @@
 use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
 use plume_compiler::wgsl::draw::SCENE_DEPTH_BINDING;
 
-use crate::draw::target::DrawTarget;
 use crate::device::gpu::Gpu;
+use crate::draw::target::DrawTarget;
 use crate::draw::texture::SpriteTexture;
 
 /// A render pipeline of `module`'s (vertex, fragment) entry points into `target`, with its

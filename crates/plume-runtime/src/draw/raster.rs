@@ -20,14 +20,15 @@ use plume_compiler::schema::Blend;
 use plume_compiler::wgsl::draw::{DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
 use plume_compiler::CompiledEffect;
 
-use crate::draw::camera::Camera;
-use crate::draw::pipeline::{draw_group, render_pipeline};
-use crate::error::RuntimeError;
+use crate::device::buffers::{filled_buffer, staging, STORAGE};
 use crate::device::gpu::Gpu;
+use crate::device::resources::Resources;
+use crate::draw::camera::Camera;
 use crate::draw::live_list::LiveList;
-use crate::device::resources::{staging, Resources, STORAGE};
+use crate::draw::pipeline::{draw_group, render_pipeline};
 use crate::draw::texture::SpriteTexture;
 use crate::draw::trail::TrailDraw;
+use crate::error::RuntimeError;
 
 use crate::draw::target::DrawTarget;
 
@@ -85,11 +86,9 @@ fn draw_args() {
 }
 "#;
 
-/// An effect's draw into one kind of target: created by
-/// [`crate::sim::group::EffectInstance::renderer`], prepared each frame by
-/// [`crate::sim::group::EffectInstance::prepare_draw`], recorded into a render pass by
-/// [`EffectRenderer::draw`].
-pub struct EffectRenderer {
+/// One group's draw into one kind of target (its ribbons, then its sprites): a part of the
+/// public [`crate::EffectRenderer`], prepared each frame by [`crate::Effect::prepare_draw`].
+pub(crate) struct GroupDraw {
     pipeline: wgpu::RenderPipeline,
     view: wgpu::Buffer,
     group: wgpu::BindGroup,
@@ -107,7 +106,7 @@ pub struct EffectRenderer {
     gpu: Gpu,
 }
 
-impl EffectRenderer {
+impl GroupDraw {
     /// The draw of `effect`, whose buffers `res` holds, into `target`.
     pub(crate) fn new(
         gpu: &Gpu,
@@ -220,39 +219,13 @@ impl EffectRenderer {
 
     /// Whether this draw fades sprites near the scene's depth (the effect has `render.soft` and
     /// the target a depth buffer): then bind the host's depth with [`Self::set_scene_depth`].
-    pub fn is_soft(&self) -> bool {
+    pub(crate) fn is_soft(&self) -> bool {
         self.soft
     }
 
-    /// Binds the host's depth buffer for soft particles: a depth-only view (of a texture
-    /// created with `TEXTURE_BINDING`, single-sampled, of a depth format) holding the scene's
-    /// depth, read as an unfilterable float texture. It may be the very texture the render pass
-    /// tests against if that pass keeps its depth attachment read-only (`depth_ops: None`) and
-    /// the adapter offers `DownlevelFlags::READ_ONLY_DEPTH_STENCIL` (Vulkan does; GL does not:
-    /// there, write the scene's depth into a second texture as well and bind that one).
-    /// Call it again when the texture changes (a resize); until the first call sprites are not
-    /// faded. Does nothing for a draw that is not soft.
-    ///
-    /// ```
-    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
-    /// use plume_runtime::{DrawTarget, EffectInstance, Gpu};
-    /// let source = r#"Effect(name: "mist", capacity: 8,
-    ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
-    ///     render: Render(soft: Some(0.5)))"#;
-    /// let gpu = Gpu::new(&Default::default())?;
-    /// let mist = EffectInstance::new(&gpu, plume_compiler::compile_str(source, &Default::default())?)?;
-    /// let depth_format = wgpu::TextureFormat::Depth32Float;
-    /// let target = DrawTarget::new(wgpu::TextureFormat::Rgba8Unorm).with_depth(depth_format);
-    /// let mut particles = mist.renderer(&target)?;
-    /// assert!(particles.is_soft());
-    /// // The host's depth buffer, made bindable.
-    /// let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
-    /// let depth = gpu.texture_2d("host depth", (640, 360), depth_format, usage);
-    /// particles.set_scene_depth(&depth.create_view(&Default::default()));
-    /// # Ok(())
-    /// # }
-    /// ```
-    pub fn set_scene_depth(&mut self, depth: &wgpu::TextureView) {
+    /// Binds the host's depth buffer for soft particles (see
+    /// [`crate::EffectRenderer::set_scene_depth`]); does nothing for a draw that is not soft.
+    pub(crate) fn set_scene_depth(&mut self, depth: &wgpu::TextureView) {
         if self.soft {
             self.group = draw_group(
                 &self.gpu,
@@ -268,7 +241,7 @@ impl EffectRenderer {
     }
 
     /// Scales every sprite's size (1: the effect's own sizes).
-    pub fn set_size_scale(&mut self, scale: f32) {
+    pub(crate) fn set_size_scale(&mut self, scale: f32) {
         self.size_scale = scale;
     }
 
@@ -318,10 +291,9 @@ impl EffectRenderer {
         }
     }
 
-    /// Records the draw into the caller's render pass (after
-    /// [`crate::sim::group::EffectInstance::prepare_draw`] in the same or an earlier
-    /// submission). Sets its own pipeline and bind group 0.
-    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+    /// Records the draw into the caller's render pass (after its preparation in the same or an
+    /// earlier submission). Sets its own pipeline and bind group 0.
+    pub(crate) fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
         if let Some(trail) = &self.trail {
             trail.draw(pass);
         }
@@ -351,7 +323,7 @@ fn alive_instances(
     primitive: Primitive,
 ) -> Result<Instances, RuntimeError> {
     let device = &gpu.device;
-    let args = crate::device::resources::filled_buffer(
+    let args = filled_buffer(
         gpu,
         "draw args",
         32,
@@ -393,7 +365,7 @@ fn alive_instances(
 
 /// The blend state of an effect's `Blend`: non-premultiplied "over" for `Alpha`; for
 /// `Additive`, src · α added to the target (alpha composited over, so it stays 1).
-pub fn blend_state(blend: Blend) -> wgpu::BlendState {
+pub(crate) fn blend_state(blend: Blend) -> wgpu::BlendState {
     match blend {
         Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
         Blend::Additive => wgpu::BlendState {

@@ -3,9 +3,9 @@
 //! to the far plane, so that sprites are not faded (the draw module clamps its reads to the
 //! texture's size).
 
+use crate::device::gpu::Gpu;
 use crate::draw::target::DepthTest;
 use crate::error::RuntimeError;
-use crate::device::gpu::Gpu;
 
 /// A 1x1 depth texture of the test's format holding the far plane's depth (0 for a reversed-Z
 /// test, `Greater` or `GreaterEqual`; 1 otherwise); its depth-only view.

@@ -15,12 +15,13 @@
 use plume_compiler::orient::OrientIr;
 use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_TILE};
 
+use crate::device::buffers::{filled_buffer, staging, STORAGE};
+use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
 use crate::draw::raster::{draw_module, draw_shape, draw_view_bytes};
 use crate::error::RuntimeError;
-use crate::device::gpu::Gpu;
-use crate::sim::group::EffectInstance;
-use crate::device::resources::{filled_buffer, staging, STORAGE};
+use crate::sim::effect::Effect;
+use crate::sim::group::Group;
 use crate::sort::radix::{GpuSorter, SortProgram};
 
 /// The tile kernels (`splat.wgsl`), their shared layout, and the buffers whose size does not
@@ -49,7 +50,7 @@ struct Entries {
     group: wgpu::BindGroup,
 }
 
-/// A compute splat of one effect instance into `width` x `height` images.
+/// A compute splat of one effect (of one group) into `width` x `height` images.
 pub struct Splat {
     gpu: Gpu,
     width: u32,
@@ -66,6 +67,16 @@ pub struct Splat {
     entries: Entries,
     additive: bool,
     background: u32,
+}
+
+/// The one group the splat draws: the effect's, or the error of an effect with groups.
+fn splat_group(effect: &Effect) -> Result<&Group, RuntimeError> {
+    match effect.groups() {
+        [group] => Ok(group),
+        _ => Err(RuntimeError::Output(
+            "the compute splat draws one group; an effect with groups is drawn with the raster pipeline (plume render --draw raster)".into(),
+        )),
+    }
 }
 
 /// The splat's stages, in order.
@@ -98,12 +109,12 @@ impl Splat {
             && ir.render.size_y.is_none()
     }
 
-    /// A splat of `instance` into `width` x `height` images; an error for sprites it cannot
-    /// draw (see [`Self::draws`]).
-    pub fn new(instance: &EffectInstance, width: u32, height: u32) -> Result<Self, RuntimeError> {
-        let gpu = instance.gpu().clone();
-        let effect = instance.effect();
-        let res = instance.resources();
+    /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
+    /// draw (see [`Self::draws`]) and for an effect with groups (it draws one).
+    pub fn new(effect: &Effect, width: u32, height: u32) -> Result<Self, RuntimeError> {
+        let group = splat_group(effect)?;
+        let gpu = group.gpu.clone();
+        let (res, effect) = (&group.res, &group.effect);
         let device = &gpu.device;
         if width == 0 || height == 0 {
             return Err(RuntimeError::Output(format!(
@@ -266,15 +277,15 @@ impl Splat {
         Ok(())
     }
 
-    /// Records what the frame needs before the splat's pass into `encoder`: the instance's
+    /// Records what the frame needs before the splat's pass into `encoder`: the effect's
     /// frame preparation (frame table, depth sort) and the camera.
     pub fn prepare(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        instance: &EffectInstance,
+        effect: &Effect,
         camera: &Camera,
     ) -> Result<(), RuntimeError> {
-        let frame = instance.prepare_frame(encoder, camera)?;
+        let frame = splat_group(effect)?.prepare_frame(encoder, camera)?;
         let src = staging(
             &self.gpu,
             "splat draw view",
@@ -341,7 +352,8 @@ impl Splat {
     /// Whether the entry list held every entry the last frame needed (read after it ran); if
     /// not, it is grown to a quarter more than needed, and the frame must be drawn again.
     pub fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
-        let needed = u64::from(crate::device::readback::read_words(&self.gpu, &self.tiles.status, 1)?[0]);
+        let needed =
+            u64::from(crate::device::readback::read_words(&self.gpu, &self.tiles.status, 1)?[0]);
         if needed <= self.entries.len {
             return Ok(true);
         }
@@ -349,15 +361,11 @@ impl Splat {
         Ok(false)
     }
 
-    /// Draws `instance` from `camera` and returns the image as RGBA8 rows, top row first.
-    pub fn render(
-        &mut self,
-        instance: &EffectInstance,
-        camera: &Camera,
-    ) -> Result<Vec<u8>, RuntimeError> {
+    /// Draws `effect` from `camera` and returns the image as RGBA8 rows, top row first.
+    pub fn render(&mut self, effect: &Effect, camera: &Camera) -> Result<Vec<u8>, RuntimeError> {
         loop {
             let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-            self.prepare(&mut encoder, instance, camera)?;
+            self.prepare(&mut encoder, effect, camera)?;
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
                     label: Some("splat"),

@@ -7,8 +7,8 @@
 use plume_compiler::texture::TextureIr;
 use wgpu::util::DeviceExt;
 
-use crate::error::RuntimeError;
 use crate::device::gpu::{texture_2d_descriptor, Gpu};
+use crate::error::RuntimeError;
 
 /// The texture's view and its sampler, ready to bind.
 pub struct SpriteTexture {

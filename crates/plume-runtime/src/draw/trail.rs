@@ -7,11 +7,11 @@ use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES, FIRST_DATA_BINDING}
 use plume_compiler::wgsl::trail::{self, FIRST_TRAIL_BINDING};
 use plume_compiler::CompiledEffect;
 
+use crate::device::gpu::Gpu;
+use crate::device::resources::Resources;
 use crate::draw::pipeline::{draw_group, render_pipeline};
 use crate::draw::target::DrawTarget;
 use crate::error::RuntimeError;
-use crate::device::gpu::Gpu;
-use crate::device::resources::Resources;
 
 /// The trail draw of one effect into one kind of target.
 pub(crate) struct TrailDraw {

@@ -9,10 +9,10 @@ use glam::{DVec3, Mat4};
 use plume_compiler::ir::EffectIr;
 use plume_compiler::reference::ParticleRecord;
 
-use crate::draw::raster::blend_state;
-use crate::draw::pipeline::vertex_pipeline;
-use crate::draw::target::DrawTarget;
 use crate::device::gpu::Gpu;
+use crate::draw::pipeline::vertex_pipeline;
+use crate::draw::raster::blend_state;
+use crate::draw::target::DrawTarget;
 use crate::outputs::offscreen::FORMAT;
 
 /// One ribbon vertex: world position, side (−1 or +1 across the strip), colour.

@@ -9,14 +9,14 @@ use plume_compiler::ir::{EffectIr, RenderIr};
 use plume_compiler::reference::ParticleRecord;
 use plume_compiler::rotation::RotationIr;
 
-use crate::draw::camera::Camera;
-use crate::draw::raster::blend_state;
-use crate::draw::pipeline::vertex_pipeline;
-use crate::error::RuntimeError;
 use crate::device::gpu::Gpu;
-use crate::outputs::offscreen::{Offscreen, FORMAT};
-use crate::oracle::ribbons::{RibbonPipeline, RibbonVertex};
+use crate::draw::camera::Camera;
+use crate::draw::pipeline::vertex_pipeline;
+use crate::draw::raster::blend_state;
 use crate::draw::texture::SpriteTexture;
+use crate::error::RuntimeError;
+use crate::oracle::ribbons::{RibbonPipeline, RibbonVertex};
+use crate::outputs::offscreen::{Offscreen, FORMAT};
 
 /// One sprite: centre (m), the quad's half axes (m), colour (RGBA in [0, 1]). Corner
 /// (cx, cy) in [-1, 1]² lies at centre + cx · half_x + cy · half_y.

@@ -4,24 +4,24 @@
 
 use glam::DVec3;
 
-use crate::error::RuntimeError;
-use crate::sim::group::EffectInstance;
 use crate::device::readback::read_buffer;
+use crate::error::RuntimeError;
+use crate::sim::effect::Effect;
 
-/// Each live particle's trail in id order: its id and the ribbon's points, its position now
+/// Each live particle's trail in id order (of the top-level group): its id and the ribbon's points, its position now
 /// and then the samples the ring holds for it, newest first. Empty for an effect without a
 /// trail.
 ///
 /// ```
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
 /// use plume_compiler::reference::ReferenceSim;
-/// use plume_runtime::{trail_readback::read_trails, EffectInstance, Gpu};
+/// use plume_runtime::{oracle::read_trails, Effect, Gpu};
 /// let source = r#"Effect(name: "comet", capacity: 1,
 ///     emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((1.0, 0.0, 0.0)))],
 ///     render: Render(trail: Some(Trail(points: 4))))"#;
 /// let effect = plume_compiler::compile_str(source, &Default::default())?;
 /// let gpu = Gpu::new(&Default::default())?;
-/// let mut comet = EffectInstance::new(&gpu, effect.clone())?;
+/// let mut comet = Effect::new(&gpu, effect.clone())?;
 /// comet.run(10, |_| {})?;
 /// let mut reference = ReferenceSim::new(&effect.ir);
 /// reference.run(10);
@@ -34,20 +34,21 @@ use crate::device::readback::read_buffer;
 /// # Ok(())
 /// # }
 /// ```
-pub fn read_trails(instance: &EffectInstance) -> Result<Vec<(u32, Vec<DVec3>)>, RuntimeError> {
-    let effect = instance.effect();
+pub fn read_trails(effect: &Effect) -> Result<Vec<(u32, Vec<DVec3>)>, RuntimeError> {
+    let group = &effect.groups()[0];
+    let effect = &group.effect;
     let Some(trail) = &effect.ir.render.trail else {
         return Ok(Vec::new());
     };
-    let slots = instance.records_by_slot()?;
-    let window: Vec<(u64, u64)> = trail.window(instance.steps_done()).collect();
+    let slots = group.records_by_slot()?;
+    let window: Vec<(u64, u64)> = trail.window(group.steps_done()).collect();
     let mut out = Vec::new();
-    for chunk in instance.resources().chunks(effect)? {
+    for chunk in group.chunks()? {
         let ring = chunk
             .trail
             .as_ref()
             .expect("the chunks of an effect with a trail hold rings");
-        let bytes = read_buffer(instance.gpu(), ring)?;
+        let bytes = read_buffer(&group.gpu, ring)?;
         let word = |at: usize| {
             u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
         };

@@ -5,13 +5,13 @@
 
 use glam::DVec3;
 
+use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
-use crate::draw::raster::EffectRenderer;
+use crate::draw::glow::{GlowPasses, HDR_FORMAT};
+use crate::draw::renderer::EffectRenderer;
 use crate::draw::target::DrawTarget;
 use crate::error::RuntimeError;
-use crate::draw::glow::{GlowPasses, HDR_FORMAT};
-use crate::device::gpu::Gpu;
-use crate::sim::group::EffectInstance;
+use crate::sim::effect::Effect;
 use plume_compiler::schema::Glow;
 
 /// The image format: 8-bit RGBA, no sRGB conversion (what the images encode as is).
@@ -39,8 +39,8 @@ impl Offscreen {
     ///
     /// ```
     /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
-    /// use plume_runtime::offscreen::Offscreen;
-    /// use plume_runtime::{glow::HDR_FORMAT, EffectInstance, Gpu};
+    /// use plume_runtime::outputs::{Offscreen, HDR_FORMAT};
+    /// use plume_runtime::{Effect, Gpu};
     /// let source = r#"Effect(name: "spark", capacity: 8,
     ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
     ///     render: Render(color: [(0.0, (1.0, 0.8, 0.4, 0.5))], size: [(0.0, 1.0)], blend: Additive,
@@ -49,7 +49,7 @@ impl Offscreen {
     /// let gpu = Gpu::new(&Default::default())?;
     /// let target = Offscreen::with_glow(&gpu, 64, 64, effect.ir.render.glow.as_ref())?;
     /// assert_eq!(target.target().color_format, HDR_FORMAT); // the effect draws into HDR
-    /// let mut spark = EffectInstance::new(&gpu, effect)?;
+    /// let mut spark = Effect::new(&gpu, effect)?;
     /// spark.run(1, |_| {})?;
     /// let image = target.render(&spark, &spark.renderer(&target.target())?, &target.effect_camera(&spark))?;
     /// assert_eq!(image.len(), 64 * 64 * 4); // bloomed, clamped, RGBA8
@@ -115,11 +115,8 @@ impl Offscreen {
     }
 
     /// The effect's own camera at this image's aspect.
-    pub fn effect_camera(&self, instance: &EffectInstance) -> Camera {
-        Camera::from_effect(
-            &instance.effect().ir.camera,
-            self.width as f32 / self.height as f32,
-        )
+    pub fn effect_camera(&self, effect: &Effect) -> Camera {
+        effect.camera(self.width as f32 / self.height as f32)
     }
 
     /// The colour attachment, cleared to `background`, for a render pass of the caller's (one
@@ -142,21 +139,22 @@ impl Offscreen {
         }
     }
 
-    /// Records the draw of `instance` from `camera` over its background into `encoder`, with
-    /// the render pass's time written to `timestamps` when given.
+    /// Records the draw of `effect` (every group `renderer` draws) from `camera` over its
+    /// background into `encoder`, with the render pass's time written to `timestamps` when
+    /// given.
     pub fn record(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        instance: &EffectInstance,
+        effect: &Effect,
         renderer: &EffectRenderer,
         camera: &Camera,
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> Result<(), RuntimeError> {
-        instance.prepare_draw(encoder, renderer, camera)?;
+        effect.prepare_draw(encoder, renderer, camera)?;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("particles"),
             color_attachments: &[Some(
-                self.attachment(instance.effect().ir.render.background),
+                self.attachment(effect.compiled().ir.render.background),
             )],
             depth_stencil_attachment: None,
             timestamp_writes: timestamps,
@@ -169,40 +167,6 @@ impl Offscreen {
         Ok(())
     }
 
-    /// Draws several instances (an effect graph's groups, in order) from `camera` in one
-    /// render pass over the first one's background, and returns the image as RGBA8 rows.
-    pub fn render_all(
-        &self,
-        instances: &[&EffectInstance],
-        renderers: &[EffectRenderer],
-        camera: &Camera,
-    ) -> Result<Vec<u8>, RuntimeError> {
-        let Some(first) = instances.first() else {
-            return Err(RuntimeError::Output("nothing to draw".into()));
-        };
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        for (instance, renderer) in instances.iter().zip(renderers) {
-            instance.prepare_draw(&mut encoder, renderer, camera)?;
-        }
-        {
-            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("particles"),
-                color_attachments: &[Some(self.attachment(first.effect().ir.render.background))],
-                depth_stencil_attachment: None,
-                timestamp_writes: None,
-                occlusion_query_set: None,
-                multiview_mask: None,
-            });
-            for renderer in renderers {
-                renderer.draw(&mut pass);
-            }
-        }
-        self.finish(&mut encoder);
-        self.gpu.queue.submit([encoder.finish()]);
-        self.gpu.take_error()?;
-        self.read()
-    }
-
     /// Records what turns the drawn attachment into the image read back: the bloom passes
     /// when it glows, nothing otherwise (after a render pass of the caller's into
     /// [`Self::attachment`]).
@@ -212,15 +176,16 @@ impl Offscreen {
         }
     }
 
-    /// Draws `instance` from `camera` and returns the image as RGBA8 rows, top row first.
+    /// Draws `effect` (every group `renderer` draws, in group order, over the top-level
+    /// group's background) from `camera` and returns the image as RGBA8 rows, top row first.
     pub fn render(
         &self,
-        instance: &EffectInstance,
+        effect: &Effect,
         renderer: &EffectRenderer,
         camera: &Camera,
     ) -> Result<Vec<u8>, RuntimeError> {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        self.record(&mut encoder, instance, renderer, camera, None)?;
+        self.record(&mut encoder, effect, renderer, camera, None)?;
         self.gpu.queue.submit([encoder.finish()]);
         self.gpu.take_error()?;
         self.read()

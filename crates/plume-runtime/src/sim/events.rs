@@ -12,8 +12,8 @@
 
 use plume_compiler::events::Ordering;
 
-use crate::error::RuntimeError;
 use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
 use crate::sort::radix::{GpuSorter, SortProgram};
 
 /// One stream's ordering.

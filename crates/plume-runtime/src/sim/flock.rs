@@ -8,9 +8,9 @@
 use plume_compiler::forces::flock::{FlockIr, Neighbors, Scope, GRID_TILE, SEARCH_BUFFERS};
 use plume_compiler::CompiledEffect;
 
-use crate::error::RuntimeError;
 use crate::device::gpu::Gpu;
 use crate::device::resources::{Chunk, Resources};
+use crate::error::RuntimeError;
 use crate::sort::radix::{GpuSorter, SortProgram};
 
 /// The uniform grid's extra kernels and its scan.

@@ -1,83 +1,47 @@
-//! An effect graph running on a device: one [`EffectInstance`] per group, and the event
-//! streams between them (plume_compiler::events has the contract). Each stream owns buffers
-//! that both groups bind: the firing group notes each firing's id and slot and writes its
-//! record in the slot; at the start of the next step crate::sim::events puts the firing slots
-//! in id order, and the child's `event_prepare` and `event_spawn` turn them, in that order,
-//! into particles. Every step of every group and every stream is recorded into one compute
-//! pass per batch of steps: nothing is read back between steps.
+//! An effect graph's event streams (plume_compiler::events has the contract), and the steps
+//! of several groups recorded together. Each stream owns buffers that both groups bind: the
+//! firing group notes each firing's id and slot and writes its record in the slot; at the
+//! start of the next step [`crate::sim::events`] puts the firing slots in id order, and the
+//! child's `event_prepare` and `event_spawn` turn them, in that order, into particles. Every
+//! step of every group and every stream is recorded into one compute pass per batch of
+//! steps: nothing is read back between steps.
 
 use plume_compiler::events::{
     in_binding, out_binding, Ordering, RECORDS_HEADER_BYTES, RECORD_BYTES,
 };
 use plume_compiler::graph::{CompiledGraph, Stream};
-use plume_compiler::reference::{ParticleRecord, Totals};
+use plume_compiler::schedule::StepPlan;
 
+use crate::device::buffers::STORAGE;
+use crate::device::gpu::Gpu;
+use crate::device::resources::STEPS_PER_SUBMIT;
 use crate::error::RuntimeError;
 use crate::sim::events::EventOrder;
-use crate::device::gpu::Gpu;
-use crate::sim::group::EffectInstance;
-use crate::device::resources::{STEPS_PER_SUBMIT, STORAGE};
+use crate::sim::group::Group;
 use crate::sort::radix::GpuSorter;
-use crate::bench::timer::{median_after_warmup, PassTimer};
 
 /// One event stream and the ordering of its firings.
-struct StreamOrder {
-    stream: Stream,
-    order: EventOrder,
+pub(crate) struct StreamOrder {
+    pub(crate) stream: Stream,
+    pub(crate) order: EventOrder,
 }
 
-/// An effect of one or more groups running on a GPU.
-///
-/// ```
-/// // Shells that burst when their fuse (0.2 s) runs out, 30 sparks each.
-/// let source = r#"Effect(
-///     name: "shells",
-///     capacity: 8,
-///     emitters: [Emitter(burst: 8, shape: Sphere(center: (0.0, 5.0, 0.0), radius: 1.0),
-///                        velocity: Constant((0.0, 4.0, 0.0)), lifetime: Some((0.2, 0.2)))],
-///     forces: [Gravity((0.0, -9.81, 0.0))],
-///     events: [Event(on: Death, target: "sparks", count: 30, velocity: Radial(speed: (2.0, 3.0)),
-///                    lifetime: Some((1.0, 1.0)), inherit_velocity: 0.5)],
-///     groups: [Group(name: "sparks", capacity: 1000, forces: [Gravity((0.0, -9.81, 0.0))])],
-/// )"#;
-/// let graph = plume_compiler::graph::compile_graph_str(source, &Default::default()).unwrap();
-/// let gpu = plume_runtime::Gpu::new(&Default::default()).unwrap();
-/// let mut shells = plume_runtime::GraphInstance::new(&gpu, graph.clone()).unwrap();
-/// shells.run(20, |_| {}).unwrap();
-/// // The shells died at step 11 (12 steps of 1/60 s); their sparks spawned at step 12.
-/// assert_eq!(shells.totals(0).unwrap().alive, 0);
-/// assert_eq!(shells.totals(1).unwrap().spawned, 240);
-/// // The f64 reference runs the same graph: the same particles in every group.
-/// let mut reference = plume_compiler::reference::ReferenceGraph::new(&graph);
-/// reference.run(20);
-/// for g in 0..2 {
-///     let ids = |records: Vec<plume_compiler::reference::ParticleRecord>| {
-///         records.iter().map(|r| r.id).collect::<Vec<_>>()
-///     };
-///     assert_eq!(ids(shells.records(g).unwrap()), ids(reference.records(g)));
-/// }
-/// ```
-pub struct GraphInstance {
-    gpu: Gpu,
-    names: Vec<String>,
-    groups: Vec<EffectInstance>,
-    orders: Vec<StreamOrder>,
+/// Buffers a group binds instead of allocating them, by binding index.
+pub(crate) type SharedBuffers = Vec<(u32, wgpu::Buffer)>;
+
+/// The event streams of an effect graph, in the order children are spawned each step.
+pub(crate) struct Events {
+    pub(crate) orders: Vec<StreamOrder>,
 }
 
-impl GraphInstance {
-    /// Allocates every group's buffers and the event streams' on `gpu`, and builds the kernels.
-    pub fn new(gpu: &Gpu, graph: CompiledGraph) -> Result<Self, RuntimeError> {
-        Self::with_chunk_slots(gpu, graph, None)
-    }
-
-    /// Like [`Self::new`] with at most `max_chunk_slots` particles per buffer in every group
-    /// (tests use it to exercise the split on small effects).
-    pub fn with_chunk_slots(
+impl Events {
+    /// Allocates every stream's buffers on `gpu` and builds its ordering; returns the streams
+    /// and, per group, the buffers it binds (by binding index) instead of allocating them.
+    pub(crate) fn new(
         gpu: &Gpu,
-        graph: CompiledGraph,
-        max_chunk_slots: Option<u64>,
-    ) -> Result<Self, RuntimeError> {
-        let mut shared: Vec<Vec<(u32, wgpu::Buffer)>> = vec![Vec::new(); graph.groups.len()];
+        graph: &CompiledGraph,
+    ) -> Result<(Self, Vec<SharedBuffers>), RuntimeError> {
+        let mut shared: Vec<SharedBuffers> = vec![Vec::new(); graph.groups.len()];
         let sorter = GpuSorter::new(gpu);
         let mut orders = Vec::new();
         let limit = gpu
@@ -136,53 +100,26 @@ impl GraphInstance {
                 )?,
             });
         }
-        let mut names = Vec::new();
-        let mut groups = Vec::new();
-        for (g, group) in graph.groups.into_iter().enumerate() {
-            names.push(group.name);
-            groups.push(EffectInstance::with_shared(
-                gpu,
-                group.effect,
-                max_chunk_slots,
-                &shared[g],
-            )?);
-        }
-        gpu.take_error()?;
-        Ok(Self {
-            gpu: gpu.clone(),
-            names,
-            groups,
-            orders,
-        })
+        Ok((Self { orders }, shared))
     }
 
     /// Records `steps` steps of every group into `encoder` (a compute pass per
-    /// [`STEPS_PER_SUBMIT`] steps). Per step: each stream's ordering and its child's event spawn,
-    /// in stream order, then each group's own step (spawn, update), in group order.
-    pub fn advance(
-        &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        steps: u64,
-    ) -> Result<(), RuntimeError> {
-        self.advance_timed(encoder, steps, None).map(|_| ())
-    }
-
-    /// Like [`Self::advance`], with GPU timestamps: `query_set` gets one at index `first` when
-    /// the steps' first compute pass begins and one at `first + 1` when the last one ends.
-    /// Returns whether any pass was recorded (none when every group is stateless, or for 0
-    /// steps), as [`EffectInstance::advance_timed`] does.
-    pub fn advance_timed(
-        &mut self,
+    /// [`STEPS_PER_SUBMIT`] steps), with GPU timestamps when given (as
+    /// [`Group::advance_timed`]). Per step: each stream's ordering and its child's event spawn,
+    /// in stream order, then each group's own step (spawn, update), in group order. Returns
+    /// whether any pass was recorded (none when every group is stateless, or for 0 steps).
+    pub(crate) fn advance_timed(
+        &self,
+        groups: &mut [Group],
         encoder: &mut wgpu::CommandEncoder,
         steps: u64,
         timestamps: Option<(&wgpu::QuerySet, u32)>,
     ) -> Result<bool, RuntimeError> {
-        let gpu_work = self.groups.iter().any(EffectInstance::steps_on_gpu);
+        let gpu_work = groups.iter().any(Group::steps_on_gpu);
         let mut done = 0;
         while done < steps {
             let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
-            let plans = self
-                .groups
+            let plans = groups
                 .iter_mut()
                 .map(|g| g.plan_graph_batch(encoder, n))
                 .collect::<Result<Vec<_>, _>>()?;
@@ -196,7 +133,7 @@ impl GraphInstance {
                     label: Some("graph steps"),
                     timestamp_writes: writes,
                 });
-                self.record_batch(&mut pass, &plans, n)?;
+                self.record_batch(groups, &mut pass, &plans, n)?;
             }
             done += n;
         }
@@ -206,109 +143,22 @@ impl GraphInstance {
     /// Records a planned batch of `steps` steps (each group's plans, from `plan_graph_batch`):
     /// per step, each stream's ordering and its child's event spawn, in stream order, then each
     /// group's own step.
-    fn record_batch(
+    pub(crate) fn record_batch(
         &self,
+        groups: &[Group],
         pass: &mut wgpu::ComputePass<'_>,
-        plans: &[Vec<plume_compiler::schedule::StepPlan>],
+        plans: &[Vec<StepPlan>],
         steps: u64,
     ) -> Result<(), RuntimeError> {
         for j in 0..steps as usize {
             for s in &self.orders {
                 s.order.record(pass);
-                self.groups[s.stream.child].record_event_spawn(pass, s.stream.in_slot, j)?;
+                groups[s.stream.child].record_event_spawn(pass, s.stream.in_slot, j)?;
             }
-            for (g, group) in self.groups.iter().enumerate() {
+            for (g, group) in groups.iter().enumerate() {
                 group.record_graph_step(pass, &plans[g], j)?;
             }
         }
         Ok(())
-    }
-
-    /// Runs `steps` steps in submissions of [`STEPS_PER_SUBMIT`], calling `progress(done)`
-    /// after each; returns when the GPU has finished.
-    pub fn run(&mut self, steps: u64, mut progress: impl FnMut(u64)) -> Result<(), RuntimeError> {
-        let mut done = 0;
-        while done < steps {
-            let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
-            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-            self.advance(&mut encoder, n)?;
-            self.gpu.queue.submit([encoder.finish()]);
-            self.gpu.take_error()?;
-            done += n;
-            progress(done);
-        }
-        self.gpu.wait()
-    }
-
-    /// The groups' names, the top-level group first.
-    pub fn names(&self) -> &[String] {
-        &self.names
-    }
-
-    /// The groups' instances (to draw or read each one).
-    pub fn groups(&self) -> &[EffectInstance] {
-        &self.groups
-    }
-
-    /// Group `g`'s live particles in id order.
-    pub fn records(&self, g: usize) -> Result<Vec<ParticleRecord>, RuntimeError> {
-        self.group(g)?.records()
-    }
-
-    /// Group `g`'s totals (spawned and dropped count its event spawns).
-    pub fn totals(&self, g: usize) -> Result<Totals, RuntimeError> {
-        self.group(g)?.totals()
-    }
-
-    fn group(&self, g: usize) -> Result<&EffectInstance, RuntimeError> {
-        self.groups.get(g).ok_or_else(|| {
-            RuntimeError::Output(format!(
-                "the effect has {} groups, not {}",
-                self.groups.len(),
-                g + 1
-            ))
-        })
-    }
-
-    /// Steps done so far.
-    pub fn steps_done(&self) -> u64 {
-        self.groups[0].steps_done()
-    }
-
-    /// Runs `steps` steps (at most [`STEPS_PER_SUBMIT`]) in one timed compute pass; returns
-    /// seconds. The steps' parameters are copied in a submission of their own first.
-    pub fn time_steps(&mut self, timer: &PassTimer<'_>, steps: u32) -> Result<f64, RuntimeError> {
-        let n = u64::from(steps.min(STEPS_PER_SUBMIT));
-        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        let plans = self
-            .groups
-            .iter_mut()
-            .map(|g| g.plan_graph_batch(&mut encoder, n))
-            .collect::<Result<Vec<_>, _>>()?;
-        self.gpu.queue.submit([encoder.finish()]);
-        let seconds = timer.time(|pass| self.record_batch(pass, &plans, n))?;
-        self.gpu.take_error()?;
-        Ok(seconds)
-    }
-
-    /// Times each stream's ordering of the last step's firings alone, in stream order
-    /// (seconds each, the median of `repeats`). The state does not change: it orders the
-    /// same firings again.
-    pub fn time_orders(
-        &self,
-        timer: &PassTimer<'_>,
-        repeats: u32,
-    ) -> Result<Vec<f64>, RuntimeError> {
-        self.orders
-            .iter()
-            .map(|s| {
-                median_after_warmup(repeats, || {
-                    timer.time(|pass| {
-                        s.order.record(pass);
-                        Ok(())
-                    })
-                })
-            })
-            .collect()
     }
 }

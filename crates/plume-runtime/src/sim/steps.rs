@@ -12,10 +12,10 @@ use plume_compiler::schedule::{LiveSegments, Schedule, Segment, StepPlan};
 use plume_compiler::wgsl::WORKGROUP;
 use plume_compiler::CompiledEffect;
 
-use crate::error::RuntimeError;
-use crate::sim::flock::FlockPass;
 use crate::device::gpu::Gpu;
 use crate::device::resources::{Chunk, Resources};
+use crate::error::RuntimeError;
+use crate::sim::flock::FlockPass;
 
 /// The kernels that advance an effect.
 pub enum Steps {

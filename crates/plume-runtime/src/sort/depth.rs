@@ -8,10 +8,10 @@
 use plume_compiler::wgsl::WORKGROUP;
 use plume_compiler::CompiledEffect;
 
-use crate::sort::quantise::{DepthQuantise, KEY_BITS};
-use crate::error::RuntimeError;
 use crate::device::gpu::Gpu;
 use crate::device::resources::{Chunk, Resources, SortBuffers};
+use crate::error::RuntimeError;
+use crate::sort::quantise::{DepthQuantise, KEY_BITS};
 use crate::sort::radix::{GpuSorter, SortAlgorithm, SortProgram};
 
 /// How the keys kernel reads the particles.

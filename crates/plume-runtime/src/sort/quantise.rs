@@ -13,8 +13,8 @@
 //! Three kernels (depth_quantise.wgsl) between the effect's `depth_keys` and the sort: reset
 //! the range, reduce it over the live keys (one atomic per workgroup), map every key in place.
 
-use crate::error::RuntimeError;
 use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
 
 /// The quantising kernels of one sort buffer, built once.
 pub struct DepthQuantise {

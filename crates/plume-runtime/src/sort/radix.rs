@@ -11,8 +11,8 @@
 
 use wgpu::util::DeviceExt;
 
-use crate::error::RuntimeError;
 use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
 
 /// Which sort.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
