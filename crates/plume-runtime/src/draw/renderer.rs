@@ -76,6 +76,12 @@ impl EffectRenderer {
         }
     }
 
+    /// The first group this renderer draws (the top-level one, unless it draws one group
+    /// alone): whose background a headless image is cleared to.
+    pub(crate) fn first_group(&self) -> usize {
+        self.parts.first().map_or(0, |(g, _)| *g)
+    }
+
     /// Records what decides every part's instances on the GPU (the live count, or the
     /// compacted list), as [`Effect::prepare_draw`] does (the benchmark times it alone).
     pub(crate) fn record_instance_counts(

@@ -139,8 +139,8 @@ impl Offscreen {
         }
     }
 
-    /// Records the draw of `effect` (every group `renderer` draws) from `camera` over its
-    /// background into `encoder`, with the render pass's time written to `timestamps` when
+    /// Records the draw of `effect` (every group `renderer` draws) from `camera` over the
+    /// background of the first group it draws (the top-level one's) into `encoder`, with the render pass's time written to `timestamps` when
     /// given.
     pub fn record(
         &self,
@@ -151,11 +151,14 @@ impl Offscreen {
         timestamps: Option<wgpu::RenderPassTimestampWrites<'_>>,
     ) -> Result<(), RuntimeError> {
         effect.prepare_draw(encoder, renderer, camera)?;
+        let background = effect
+            .group_compiled(renderer.first_group())?
+            .ir
+            .render
+            .background;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("particles"),
-            color_attachments: &[Some(
-                self.attachment(effect.compiled().ir.render.background),
-            )],
+            color_attachments: &[Some(self.attachment(background))],
             depth_stencil_attachment: None,
             timestamp_writes: timestamps,
             occlusion_query_set: None,
@@ -176,8 +179,8 @@ impl Offscreen {
         }
     }
 
-    /// Draws `effect` (every group `renderer` draws, in group order, over the top-level
-    /// group's background) from `camera` and returns the image as RGBA8 rows, top row first.
+    /// Draws `effect` (every group `renderer` draws, in group order, over the first one's
+    /// background) from `camera` and returns the image as RGBA8 rows, top row first.
     pub fn render(
         &self,
         effect: &Effect,
