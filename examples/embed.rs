@@ -24,7 +24,7 @@ use std::time::Instant;
 
 use glam::{Mat4, Vec3};
 use plume::runtime::wgpu;
-use plume::runtime::{Camera, DrawTarget, EffectInstance, EffectRenderer, Gpu};
+use plume::runtime::{Camera, DrawTarget, Effect, EffectRenderer, Gpu};
 
 /// The host's depth buffer format.
 pub const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -229,14 +229,14 @@ pub struct Host {
     device: wgpu::Device,
     queue: wgpu::Queue,
     scene: HostScene,
-    effect: EffectInstance,
+    effect: Effect,
     particles: EffectRenderer,
     background: wgpu::Color,
 }
 
 impl Host {
-    /// Loads and compiles `path` and embeds it on the host's `device` and `queue`, drawing
-    /// into `color_format` targets.
+    /// Loads `path` (any effect file, with or without groups) and embeds it on the host's
+    /// `device` and `queue`, drawing into `color_format` targets.
     pub fn new(
         device: &wgpu::Device,
         queue: &wgpu::Queue,
@@ -244,21 +244,14 @@ impl Host {
         color_format: wgpu::TextureFormat,
         layers: Layers,
     ) -> Result<Self, Box<dyn Error>> {
-        let source = std::fs::read_to_string(path)
-            .map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-        // A texture the effect names is relative to the effect file.
-        let options = plume::CompileOptions {
-            base_dir: path.parent().map(Path::to_path_buf),
-            ..Default::default()
-        };
-        let compiled = plume::compile_str(&source, &options)
-            .map_err(|e| e.render(&path.display().to_string(), &source))?;
-        let ir = &compiled.ir;
+        // Plume on the host's device: the host keeps its own error handling. Errors in the
+        // file come back located in it.
+        let effect =
+            Effect::from_file(&Gpu::from_device(device, queue), path, &Default::default())?;
+        let ir = &effect.compiled().ir;
         let (eye, target) = (ir.camera.eye.as_vec3(), ir.camera.target.as_vec3());
         let bg = ir.render.background;
         let scene = HostScene::new(device, color_format, cube_for(eye, target), target);
-        // Plume on the host's device: the host keeps its own error handling.
-        let effect = EffectInstance::new(&Gpu::from_device(device, queue), compiled)?;
         // The pass has the host's depth attachment, so the particles' pipeline names its
         // format; `Always` (for the test's comparison) draws over everything.
         let draw_target = match layers.depth_test {
@@ -284,7 +277,7 @@ impl Host {
 
     /// The effect's camera at `aspect`: the host could use any view and projection.
     pub fn camera(&self, aspect: f32) -> Camera {
-        Camera::from_effect(&self.effect.effect().ir.camera, aspect)
+        self.effect.camera(aspect)
     }
 
     /// One frame: `steps` simulation steps, then one render pass with the host's geometry
@@ -354,7 +347,7 @@ impl Host {
 
     /// The embedded effect's dt (s).
     pub fn dt(&self) -> f64 {
-        self.effect.effect().ir.dt
+        self.effect.compiled().ir.dt
     }
 }
 
@@ -408,27 +401,16 @@ pub fn render_headless(path: &Path, options: &Headless) -> Result<Vec<u8>, Box<d
     let (_, device, queue) = host_device(&instance, None)?;
     let (w, h) = options.size;
     let format = wgpu::TextureFormat::Rgba8Unorm;
-    let texture = |format, usage| {
-        device.create_texture(&wgpu::TextureDescriptor {
-            label: None,
-            size: wgpu::Extent3d {
-                width: w,
-                height: h,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format,
-            usage,
-            view_formats: &[],
-        })
-    };
-    let color = texture(
+    // Plume's handle on the host's device also makes plain 2D textures.
+    let gpu = Gpu::from_device(&device, &queue);
+    let attachment = wgpu::TextureUsages::RENDER_ATTACHMENT;
+    let color = gpu.texture_2d(
+        "color",
+        (w, h),
         format,
-        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_SRC,
+        attachment | wgpu::TextureUsages::COPY_SRC,
     );
-    let depth = texture(DEPTH, wgpu::TextureUsages::RENDER_ATTACHMENT);
+    let depth = gpu.texture_2d("depth", (w, h), DEPTH, attachment);
     let (color_view, depth_view) = (
         color.create_view(&Default::default()),
         depth.create_view(&Default::default()),
@@ -444,193 +426,12 @@ pub fn render_headless(path: &Path, options: &Headless) -> Result<Vec<u8>, Box<d
             options.layers,
         )?;
     }
-    Ok(plume::runtime::offscreen::read_texture(
-        &Gpu::from_device(&device, &queue),
-        &color,
-        w,
-        h,
-    )?)
+    Ok(plume::runtime::outputs::read_texture(&gpu, &color, w, h)?)
 }
 
 /// The window: the host's surface, depth buffer and real-time loop.
-mod window {
-    use super::*;
-    use winit::application::ApplicationHandler;
-    use winit::event::{ElementState, KeyEvent, WindowEvent};
-    use winit::event_loop::{ActiveEventLoop, EventLoop};
-    use winit::keyboard::{Key, NamedKey};
-    use winit::window::{Window, WindowId};
-
-    struct Open {
-        window: Arc<Window>,
-        surface: wgpu::Surface<'static>,
-        config: wgpu::SurfaceConfiguration,
-        device: wgpu::Device,
-        depth: wgpu::TextureView,
-        host: Host,
-        start: Instant,
-        steps: u64,
-    }
-
-    struct App {
-        path: PathBuf,
-        open: Option<Open>,
-        error: Option<Box<dyn Error>>,
-    }
-
-    fn depth_view(device: &wgpu::Device, w: u32, h: u32) -> wgpu::TextureView {
-        device
-            .create_texture(&wgpu::TextureDescriptor {
-                label: Some("host depth"),
-                size: wgpu::Extent3d {
-                    width: w.max(1),
-                    height: h.max(1),
-                    depth_or_array_layers: 1,
-                },
-                mip_level_count: 1,
-                sample_count: 1,
-                dimension: wgpu::TextureDimension::D2,
-                format: DEPTH,
-                usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
-                view_formats: &[],
-            })
-            .create_view(&Default::default())
-    }
-
-    impl App {
-        fn open(&self, event_loop: &ActiveEventLoop) -> Result<Open, Box<dyn Error>> {
-            let window = Arc::new(
-                event_loop.create_window(
-                    Window::default_attributes()
-                        .with_title(format!("Plume embedded: {}", self.path.display())),
-                )?,
-            );
-            let instance =
-                wgpu::Instance::new(wgpu::InstanceDescriptor::new_with_display_handle_from_env(
-                    Box::new(event_loop.owned_display_handle()),
-                ));
-            let surface = instance.create_surface(window.clone())?;
-            let (adapter, device, queue) = host_device(&instance, Some(&surface))?;
-            let size = window.inner_size();
-            let mut config = surface
-                .get_default_config(&adapter, size.width.max(1), size.height.max(1))
-                .ok_or("the window's surface is not supported by the adapter")?;
-            // Effect colours are plain 8-bit values (as in `plume render`'s images): prefer a
-            // surface format without sRGB encoding, so the window looks like the renders.
-            if let Some(linear) = surface
-                .get_capabilities(&adapter)
-                .formats
-                .into_iter()
-                .find(|f| !f.is_srgb())
-            {
-                config.format = linear;
-            }
-            surface.configure(&device, &config);
-            let host = Host::new(
-                &device,
-                &queue,
-                &self.path,
-                config.format,
-                Layers::default(),
-            )?;
-            Ok(Open {
-                depth: depth_view(&device, config.width, config.height),
-                window,
-                surface,
-                config,
-                device,
-                host,
-                start: Instant::now(),
-                steps: 0,
-            })
-        }
-    }
-
-    impl ApplicationHandler for App {
-        fn resumed(&mut self, event_loop: &ActiveEventLoop) {
-            if self.open.is_none() {
-                match self.open(event_loop) {
-                    Ok(open) => self.open = Some(open),
-                    Err(e) => {
-                        self.error = Some(e);
-                        event_loop.exit();
-                    }
-                }
-            }
-        }
-
-        fn window_event(&mut self, event_loop: &ActiveEventLoop, _: WindowId, event: WindowEvent) {
-            let Some(open) = &mut self.open else {
-                return;
-            };
-            match event {
-                WindowEvent::CloseRequested
-                | WindowEvent::KeyboardInput {
-                    event:
-                        KeyEvent {
-                            logical_key: Key::Named(NamedKey::Escape),
-                            state: ElementState::Pressed,
-                            ..
-                        },
-                    ..
-                } => event_loop.exit(),
-                WindowEvent::Resized(size) => {
-                    open.config.width = size.width.max(1);
-                    open.config.height = size.height.max(1);
-                    open.surface.configure(&open.device, &open.config);
-                    open.depth = depth_view(&open.device, open.config.width, open.config.height);
-                }
-                WindowEvent::RedrawRequested => {
-                    // Fixed steps of the effect's dt, as many as the wall clock has passed.
-                    // Past 8 behind, the rest are dropped (slow motion, never a spiral).
-                    let due = (open.start.elapsed().as_secs_f64() / open.host.dt()) as u64;
-                    let steps = due.saturating_sub(open.steps).min(8);
-                    open.steps = due;
-                    let frame = match open.surface.get_current_texture() {
-                        wgpu::CurrentSurfaceTexture::Success(f)
-                        | wgpu::CurrentSurfaceTexture::Suboptimal(f) => f,
-                        _ => {
-                            open.surface.configure(&open.device, &open.config);
-                            open.window.request_redraw();
-                            return;
-                        }
-                    };
-                    let view = frame.texture.create_view(&Default::default());
-                    let aspect = open.config.width as f32 / open.config.height as f32;
-                    let camera = open.host.camera(aspect);
-                    if let Err(e) =
-                        open.host
-                            .frame(&view, &open.depth, &camera, steps, Layers::default())
-                    {
-                        self.error = Some(e);
-                        event_loop.exit();
-                        return;
-                    }
-                    open.host.present(frame);
-                    open.window.request_redraw();
-                }
-                _ => {}
-            }
-        }
-    }
-
-    /// Opens the window and runs until it is closed.
-    pub fn run(path: PathBuf) -> Result<(), Box<dyn Error>> {
-        let event_loop = EventLoop::new().map_err(|e| {
-            format!("cannot open a window ({e}): no display? Use --headless OUT.png, or run under xvfb-run")
-        })?;
-        let mut app = App {
-            path,
-            open: None,
-            error: None,
-        };
-        event_loop.run_app(&mut app)?;
-        match app.error {
-            Some(e) => Err(e),
-            None => Ok(()),
-        }
-    }
-}
+#[path = "embed/window.rs"]
+mod window;
 
 fn parse_args() -> Result<(PathBuf, Option<(PathBuf, Headless)>), String> {
     let usage =

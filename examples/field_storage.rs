@@ -10,7 +10,7 @@
 //!
 //! `cargo run --release --example field_storage` (docs/performance.md, "Baked fields").
 
-use plume::runtime::timer::PassTimer;
+use plume::runtime::bench::{read_buffer, PassTimer};
 use plume::runtime::{Gpu, GpuChoice};
 use wgpu::util::DeviceExt;
 
@@ -224,7 +224,7 @@ fn main() {
                 timer.time(pass).unwrap(); // warm-up
                 let seconds = timer.time(pass).unwrap() / f64::from(repeats);
                 results.push(seconds);
-                let bytes = plume::runtime::readback::read_buffer(&gpu, &out).unwrap();
+                let bytes = read_buffer(&gpu, &out).unwrap();
                 outputs.push(
                     bytes
                         .chunks_exact(4)

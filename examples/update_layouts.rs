@@ -24,7 +24,7 @@
 //! against the CPU's. `cargo run --release --example update_layouts [N,N,...]`
 //! (docs/performance.md, "The update at large sizes").
 
-use plume::runtime::timer::PassTimer;
+use plume::runtime::bench::{self, read_buffer, PassTimer};
 use plume::runtime::{Gpu, GpuChoice};
 use wgpu::util::DeviceExt;
 
@@ -367,11 +367,16 @@ fn main() {
             // One pair of buffers for every variant, so that they all stream the same memory.
             let (src, dst) = (make("src"), make("dst"));
             let bind = |src: &wgpu::Buffer, dst: &wgpu::Buffer| {
-                gpu.bind_buffers("layouts", &bind_layout, &[(0, src), (1, dst), (2, &params)])
+                bench::bind_buffers(
+                    &gpu,
+                    "layouts",
+                    &bind_layout,
+                    &[(0, src), (1, dst), (2, &params)],
+                )
             };
             let group = bind(&src, &dst);
             let time = |pipeline: &wgpu::ComputePipeline, group: &wgpu::BindGroup, threads: u64| {
-                let (x, y) = gpu.grid(threads, u64::from(wg)).expect("grid");
+                let (x, y) = bench::grid(&gpu, threads, u64::from(wg)).expect("grid");
                 let record = |pass: &mut wgpu::ComputePass<'_>, k: u32| {
                     pass.set_pipeline(pipeline);
                     pass.set_bind_group(0, group, &[]);
@@ -410,7 +415,8 @@ fn main() {
                     .collect();
                 gpu.queue.write_buffer(&src, 0, &init);
                 gpu.queue.write_buffer(&dst, 0, &init);
-                let pipeline = gpu.compute_pipeline(&module, v.entry, Some(&pipeline_layout));
+                let pipeline =
+                    bench::compute_pipeline(&gpu, &module, v.entry, Some(&pipeline_layout));
                 let threads = u64::from(n) * u64::from(v.threads_per_particle);
                 let (seconds, median, slowest) = time(&pipeline, &group, threads);
                 if v.name == "copy" {
@@ -434,7 +440,7 @@ fn main() {
             }
             // Does where a buffer lands change its bandwidth? The copy on three more pairs of
             // buffers, alternating with the first pair.
-            let copy = gpu.compute_pipeline(&module, "copy", Some(&pipeline_layout));
+            let copy = bench::compute_pipeline(&gpu, &module, "copy", Some(&pipeline_layout));
             let pairs: Vec<(wgpu::Buffer, wgpu::Buffer)> =
                 (0..3).map(|_| (make("src"), make("dst"))).collect();
             let groups: Vec<wgpu::BindGroup> = std::iter::once(group)
@@ -452,7 +458,7 @@ fn main() {
 
 /// Reads particles back and compares a sample with the CPU's result: "" when they agree.
 fn check(gpu: &Gpu, buffer: &wgpu::Buffer, n: u32, steps: u32, word_major: bool) -> String {
-    let bytes = plume::runtime::readback::read_buffer(gpu, buffer).expect("readback");
+    let bytes = read_buffer(gpu, buffer).expect("readback");
     let word = |k: usize| -> [u32; 4] {
         let b = &bytes[16 * k..16 * k + 16];
         std::array::from_fn(|j| u32::from_le_bytes(b[4 * j..4 * j + 4].try_into().unwrap()))

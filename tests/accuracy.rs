@@ -14,7 +14,7 @@ mod common;
 
 use common::*;
 use plume::compiler::passes::stability::{drag_limit, growth_per_step, oscillation_limit};
-use plume::runtime::accuracy::{measure, AccuracyPlan, Engine};
+use plume::runtime::bench::{measure, AccuracyPlan, Engine};
 use plume::{parse, Integrator};
 
 const PROJECTILE: &str = r#"Effect(name: "projectile", capacity: 16,
@@ -224,7 +224,7 @@ fn velocity_history(integrator: Integrator, k: f64, dt: f64, steps: u64) -> Vec<
     let src = drag_effect(integrator, k, dt);
     let e = compile(&src);
     let gpu = gpu();
-    let mut sim = plume::runtime::EffectInstance::new(&gpu, e).unwrap();
+    let mut sim = plume::runtime::Effect::new(&gpu, e).unwrap();
     (0..steps)
         .map(|_| {
             sim.run(1, |_| {}).unwrap();
@@ -352,7 +352,7 @@ fn trajectory(src: &str, steps: u64) -> (Vec<(glam::DVec3, glam::DVec3)>, bool) 
         .iter()
         .any(|w| w.path.ends_with(".strength") || w.path.ends_with(".pull"));
     let gpu = gpu();
-    let mut sim = plume::runtime::EffectInstance::new(&gpu, e).unwrap();
+    let mut sim = plume::runtime::Effect::new(&gpu, e).unwrap();
     let states = (0..steps)
         .map(|_| {
             sim.run(1, |_| {}).unwrap();

@@ -7,7 +7,7 @@ mod common;
 use common::*;
 use plume::compiler::colliders::Surface;
 use plume::compiler::reference::ReferenceSim;
-use plume::runtime::EffectInstance;
+use plume::runtime::Effect;
 
 const INTEGRATORS: &[&str] = &["Euler", "SemiImplicitEuler", "Verlet", "Midpoint", "Rk4"];
 
@@ -39,7 +39,7 @@ fn every_step(
 ) {
     let e = compile(src);
     let gpu = gpu();
-    let mut sim = EffectInstance::new(&gpu, e.clone()).unwrap();
+    let mut sim = Effect::new(&gpu, e.clone()).unwrap();
     let mut cpu = ReferenceSim::new(&e.ir);
     for step in 1..=steps {
         sim.run(1, |_| {}).unwrap();

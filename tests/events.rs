@@ -12,8 +12,8 @@ use common::compare::{compare_at, curved_colliders, roundings_per_step};
 use common::*;
 use plume::compiler::graph::{compile_graph_str, CompiledGraph};
 use plume::compiler::reference::{ParticleRecord, ReferenceGraph};
-use plume::runtime::export::csv_groups;
-use plume::runtime::GraphInstance;
+use plume::runtime::outputs::csv_groups;
+use plume::runtime::{oracle, Effect};
 use plume::CompileOptions;
 
 fn graph(source: &str) -> CompiledGraph {
@@ -35,9 +35,9 @@ fn graph_examples() -> Vec<std::path::PathBuf> {
 
 /// Runs the GPU graph and the reference side by side, comparing every group at each of
 /// `checkpoints` (steps since the start); returns the GPU instance.
-fn compare_runs(name: &str, graph: &CompiledGraph, checkpoints: &[u64]) -> GraphInstance {
+fn compare_runs(name: &str, graph: &CompiledGraph, checkpoints: &[u64]) -> Effect {
     let gpu = gpu();
-    let mut gsim = GraphInstance::new(&gpu, graph.clone()).expect("GPU graph");
+    let mut gsim = Effect::from_graph(&gpu, graph.clone()).expect("GPU graph");
     let mut csim = ReferenceGraph::new(graph);
     let roundings = graph
         .groups
@@ -52,7 +52,7 @@ fn compare_runs(name: &str, graph: &CompiledGraph, checkpoints: &[u64]) -> Graph
         for (g, group) in graph.groups.iter().enumerate() {
             let label = format!("{name} group {}", group.name);
             assert_eq!(
-                gsim.totals(g).unwrap(),
+                gsim.group_totals(g).unwrap(),
                 csim.totals(g),
                 "{label}: totals differ after {at} steps"
             );
@@ -62,7 +62,7 @@ fn compare_runs(name: &str, graph: &CompiledGraph, checkpoints: &[u64]) -> Graph
                 false,
                 curved_colliders(&group.effect.ir),
                 roundings,
-                &gsim.records(g).unwrap(),
+                &gsim.group_records(g).unwrap(),
                 &csim.records(g),
             );
         }
@@ -83,7 +83,7 @@ fn every_example_with_events_matches_the_reference_in_every_group() {
         // Past the first bursts and splashes (fireworks' rockets live 1.1 to 1.5 s).
         let sim = compare_runs(&name, &graph, &[60, 110]);
         for g in 1..graph.groups.len() {
-            let t = sim.totals(g).unwrap();
+            let t = sim.group_totals(g).unwrap();
             assert!(t.spawned > 0, "{name}: group {g} was never fed: {t:?}");
         }
     }
@@ -111,7 +111,10 @@ const SMALL_FIREWORKS: &str = r#"Effect(
 fn verlet_and_midpoint_children_and_every_events_match_the_reference() {
     let g = graph(SMALL_FIREWORKS);
     let sim = compare_runs("small fireworks", &g, &[20, 45]);
-    assert!(sim.totals(2).unwrap().spawned > 0, "embers were spawned");
+    assert!(
+        sim.group_totals(2).unwrap().spawned > 0,
+        "embers were spawned"
+    );
 }
 
 #[test]
@@ -119,9 +122,10 @@ fn exports_are_the_same_bytes_run_after_run() {
     let g = graph(SMALL_FIREWORKS);
     let export = || {
         let gpu = gpu();
-        let mut sim = GraphInstance::new(&gpu, g.clone()).unwrap();
+        let mut sim = Effect::from_graph(&gpu, g.clone()).unwrap();
         sim.run(40, |_| {}).unwrap();
-        let records: Vec<Vec<ParticleRecord>> = (0..3).map(|k| sim.records(k).unwrap()).collect();
+        let records: Vec<Vec<ParticleRecord>> =
+            (0..3).map(|k| sim.group_records(k).unwrap()).collect();
         let parts: Vec<(&str, &[ParticleRecord])> = g
             .groups
             .iter()
@@ -167,9 +171,9 @@ fn a_full_target_drops_the_same_children_every_run_and_counts_them() {
     );
     let run = || {
         let gpu = gpu();
-        let mut sim = GraphInstance::new(&gpu, g.clone()).unwrap();
+        let mut sim = Effect::from_graph(&gpu, g.clone()).unwrap();
         sim.run(15, |_| {}).unwrap();
-        (sim.totals(1).unwrap(), sim.records(1).unwrap())
+        (sim.group_totals(1).unwrap(), sim.group_records(1).unwrap())
     };
     let (totals, records) = run();
     assert_eq!((totals.spawned, totals.dropped), (50, 150));
@@ -189,9 +193,9 @@ fn a_full_target_drops_the_same_children_every_run_and_counts_them() {
     let parents = reference.records(0);
     assert_eq!(parents.len(), 20);
     let gpu = gpu();
-    let mut sim = GraphInstance::new(&gpu, g.clone()).unwrap();
+    let mut sim = Effect::from_graph(&gpu, g.clone()).unwrap();
     sim.run(11, |_| {}).unwrap();
-    let children = sim.records(1).unwrap();
+    let children = sim.group_records(1).unwrap();
     assert_eq!(children.len(), 50);
     for c in &children {
         let parent = &parents[(c.id / 10) as usize];
@@ -243,7 +247,7 @@ fn children_take_on_their_parents_colour_and_pass_it_on() {
     let rocket_colour =
         |id: u32| plume::compiler::tint::pick(&palette, g.groups[0].effect.ir.seed_mix, id);
     let sim = compare_runs("colours", &g, &[12, 20]);
-    let sparks = sim.records(1).unwrap();
+    let sparks = sim.group_records(1).unwrap();
     assert_eq!(sparks.len(), 40);
     // One 8-bit step of slack: a channel exactly between two steps (0.3 · 255 = 76.5) may round
     // either way on the GPU (llvmpipe rounds half to even, the reference half up).
@@ -261,7 +265,7 @@ fn children_take_on_their_parents_colour_and_pass_it_on() {
         .map(|s| plume::compiler::tint::pack(s.tint))
         .collect();
     assert!(distinct.len() >= 2, "the rockets picked one colour only");
-    let embers = sim.records(2).unwrap();
+    let embers = sim.group_records(2).unwrap();
     assert!(embers.len() >= 40, "{} embers", embers.len());
     for e in &embers {
         assert!(
@@ -338,10 +342,10 @@ fn a_stateless_group_fires_on_death_and_every_period_as_its_stateful_twin_does()
     let a = compare_runs("stateless shells", &stateless, &[40, 300]);
     let b = compare_runs("stateful shells", &stateful, &[40, 300]);
     for g in 1..3 {
-        let (ta, tb) = (a.totals(g).unwrap(), b.totals(g).unwrap());
+        let (ta, tb) = (a.group_totals(g).unwrap(), b.group_totals(g).unwrap());
         assert_eq!(ta, tb, "group {g}: the children differ");
         assert!(ta.spawned > 100, "group {g} was barely fed: {ta:?}");
-        let (ra, rb) = (a.records(g).unwrap(), b.records(g).unwrap());
+        let (ra, rb) = (a.group_records(g).unwrap(), b.group_records(g).unwrap());
         assert_eq!(
             ra.iter().map(|r| r.id).collect::<Vec<_>>(),
             rb.iter().map(|r| r.id).collect::<Vec<_>>()
@@ -397,8 +401,8 @@ fn a_group_outside_the_events_keeps_its_own_state_decision() {
         .collect();
     assert_eq!(stateless, [true, false, true], "rockets, sparks, stars");
     let sim = compare_runs("stars", &g, &[30, 60]);
-    assert_eq!(sim.totals(2).unwrap().alive, 100);
-    assert!(sim.totals(1).unwrap().spawned > 0);
+    assert_eq!(sim.group_totals(2).unwrap().alive, 100);
+    assert!(sim.group_totals(1).unwrap().spawned > 0);
 }
 
 #[test]
@@ -419,7 +423,7 @@ fn collisions_fire_events_where_the_particle_hits() {
     )"#;
     let g = graph(src);
     let sim = compare_runs("drops", &g, &[40, 70]);
-    let droplets = sim.records(1).unwrap();
+    let droplets = sim.group_records(1).unwrap();
     assert!(!droplets.is_empty());
     // A droplet lives 5 steps at under 1.1 m/s from where its drop touched the plane.
     for d in &droplets {
@@ -459,11 +463,11 @@ fn every_example_group_draws_like_its_cpu_fed_drawing() {
     for path in graph_examples() {
         let name = path.file_name().unwrap().to_string_lossy().to_string();
         let gpu = gpu();
-        let mut sim = GraphInstance::new(&gpu, compile_graph_file(&path)).unwrap();
+        let mut sim = Effect::from_graph(&gpu, compile_graph_file(&path)).unwrap();
         sim.run(100, |_| {}).unwrap();
         let mut lit_groups = 0;
-        for (g, group) in sim.groups().iter().enumerate() {
-            let (gpu_img, cpu_img) = draw_and_reference(group, 160);
+        for g in 0..sim.group_names().len() {
+            let (gpu_img, cpu_img) = draw_group_and_reference(&sim, g, 160);
             // Pixels brighter than the background's darkest corner by 20 levels.
             let bg = &gpu_img[..4];
             let lit = gpu_img
@@ -474,7 +478,7 @@ fn every_example_group_draws_like_its_cpu_fed_drawing() {
             let (mean, max, over) = differences(&gpu_img, &cpu_img, 2);
             eprintln!(
                 "{name} group {}: mean {mean:.5}, max {max}, {over} over 2, {lit} pixels lit",
-                sim.names()[g]
+                sim.group_names()[g]
             );
             assert!(
                 mean < 0.01 && max <= 4 && over * 2000 < gpu_img.len(),
@@ -495,11 +499,11 @@ fn groups_split_into_chunks_run_as_one_buffer_does() {
     let g = graph(SMALL_FIREWORKS);
     let gpu = gpu();
     let run = |chunk: Option<u64>| {
-        let mut sim = GraphInstance::with_chunk_slots(&gpu, g.clone(), chunk).unwrap();
+        let mut sim = Effect::with_chunk_slots(&gpu, g.clone(), chunk).unwrap();
         sim.run(40, |_| {}).unwrap();
-        assert_eq!(sim.groups()[2].chunk_count() > 1, chunk.is_some());
+        assert_eq!(oracle::chunk_count(&sim, 2).unwrap() > 1, chunk.is_some());
         (0..3)
-            .map(|k| (sim.totals(k).unwrap(), sim.records(k).unwrap()))
+            .map(|k| (sim.group_totals(k).unwrap(), sim.group_records(k).unwrap()))
             .collect::<Vec<_>>()
     };
     let (whole, split) = (run(None), run(Some(37)));
@@ -546,7 +550,7 @@ fn firings_counted_or_sorted_spawn_the_reference_children_when_thousands_fire_at
         let g = graph(&src);
         assert_eq!(g.streams[0].ordering, ordering);
         let sim = compare_runs(&format!("{ordering:?}"), &g, &[9, 11, 30]);
-        let t = sim.totals(1).unwrap();
+        let t = sim.group_totals(1).unwrap();
         assert!(
             u64::from(burst) < t.spawned,
             "{ordering:?}: the burst's children: {t:?}"

@@ -6,7 +6,8 @@ mod common;
 
 use common::*;
 use plume::compiler::passes::stability::{drag_limit, oscillation_limit};
-use plume::runtime::EffectInstance;
+use plume::runtime::oracle;
+use plume::runtime::Effect;
 use plume::Integrator;
 
 /// A cloud of boids with some slots left free (burst < capacity), so that dead slots are
@@ -31,9 +32,9 @@ fn cloud_in(capacity: u32, burst: u32, scope: &str, neighbors: &str, scale: f64)
 fn flock_out(src: &str) -> Vec<[f32; 12]> {
     let e = compile(src);
     let g = gpu();
-    let mut sim = EffectInstance::new(&g, e).unwrap();
+    let mut sim = Effect::new(&g, e).unwrap();
     sim.run(1, |_| {}).unwrap();
-    let bytes = sim.read_flock_buffer("flock_out").unwrap();
+    let bytes = oracle::read_flock_buffer(&sim, "flock_out").unwrap();
     bytes
         .chunks_exact(48)
         .map(|c| {
@@ -132,7 +133,7 @@ fn a_flock_stays_together_and_apart_for_1000_steps() {
         "Box(min: (-5.0, -3.0, -4.0), max: (5.0, 3.0, 4.0))",
     ));
     let g = gpu();
-    let mut sim = EffectInstance::new(&g, e).unwrap();
+    let mut sim = Effect::new(&g, e).unwrap();
     let spread = |r: &[plume::compiler::reference::ParticleRecord]| {
         let n = r.len() as f64;
         let c = r.iter().map(|p| p.position).sum::<glam::DVec3>() / n;
@@ -191,7 +192,7 @@ fn max_after(
     let e = compile(src);
     let warned = e.warnings.items.iter().any(|w| w.path.contains("(Flock)"));
     let g = gpu();
-    let mut sim = EffectInstance::new(&g, e).unwrap();
+    let mut sim = Effect::new(&g, e).unwrap();
     let mut worst: f64 = 0.0;
     for _ in 0..steps {
         sim.run(1, |_| {}).unwrap();
@@ -256,7 +257,7 @@ fn flocking_runs_are_deterministic() {
     let src = cloud(700, 650, "Local", "Grid(cell: 0.5)");
     let run = || {
         let (_, r) = run_gpu(&compile(&src), 40);
-        plume::runtime::export::csv(&r)
+        plume::runtime::outputs::csv(&r)
     };
     assert_eq!(run(), run());
 }

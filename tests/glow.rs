@@ -6,16 +6,16 @@
 mod common;
 
 use common::*;
-use plume::runtime::offscreen::Offscreen;
-use plume::runtime::splat::Splat;
-use plume::runtime::{EffectInstance, Gpu};
+use plume::runtime::outputs::Offscreen;
+use plume::runtime::outputs::Splat;
+use plume::runtime::{Effect, Gpu};
 
 const W: u32 = 160;
 const H: u32 = 100;
 
 /// `count` additive white particles stacked at the origin (each of alpha `alpha`), a 1 m
 /// sprite 10 m away, with the glow `glow` (RON, or "None").
-fn stack(gpu: &Gpu, count: u32, alpha: f64, glow: &str) -> EffectInstance {
+fn stack(gpu: &Gpu, count: u32, alpha: f64, glow: &str) -> Effect {
     let src = format!(
         r#"Effect(
     name: "glow-probe",
@@ -26,15 +26,15 @@ fn stack(gpu: &Gpu, count: u32, alpha: f64, glow: &str) -> EffectInstance {
                    background: (0.0, 0.0, 0.0), glow: {glow}),
 )"#
     );
-    let mut sim = EffectInstance::new(gpu, compile(&src)).unwrap();
+    let mut sim = Effect::new(gpu, compile(&src)).unwrap();
     sim.run(1, |_| {}).unwrap();
     sim
 }
 
 /// The image of `sim` as `plume render` draws it (with its glow), and without the glow.
-fn draw(sim: &EffectInstance) -> (Vec<u8>, Vec<u8>) {
+fn draw(sim: &Effect) -> (Vec<u8>, Vec<u8>) {
     let gpu = sim.gpu();
-    let glow = sim.effect().ir.render.glow;
+    let glow = sim.compiled().ir.render.glow;
     let glowing = Offscreen::with_glow(gpu, W, H, glow.as_ref()).unwrap();
     let plain = Offscreen::new(gpu, W, H).unwrap();
     let camera = plain.effect_camera(sim);
@@ -115,7 +115,7 @@ fn light_below_the_threshold_leaves_the_image_as_it_is() {
 fn the_compute_splat_refuses_glowing_effects() {
     let gpu = gpu();
     let sim = stack(&gpu, 1, 1.0, "Some(Glow())");
-    assert!(!Splat::draws(&sim.effect().ir));
+    assert!(!Splat::draws(&sim.compiled().ir));
     let message = Splat::new(&sim, 64, 64).err().expect("refused").to_string();
     assert!(
         message.contains("render.glow") && message.contains("--draw raster"),

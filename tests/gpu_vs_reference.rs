@@ -15,7 +15,7 @@ mod common;
 use common::compare::{compare_at, curved_colliders, roundings_per_step};
 use common::*;
 use plume::compiler::reference::ReferenceSim;
-use plume::runtime::EffectInstance;
+use plume::runtime::Effect;
 
 #[test]
 fn every_example_matches_the_reference_after_50_and_100_steps() {
@@ -32,7 +32,7 @@ fn every_example_matches_the_reference_after_50_and_100_steps() {
         }
         let effect = compile_file(&path);
         let gpu = gpu();
-        let mut gsim = EffectInstance::new(&gpu, effect.clone()).expect("GPU sim");
+        let mut gsim = Effect::new(&gpu, effect.clone()).expect("GPU sim");
         let mut csim = ReferenceSim::new(&effect.ir);
         let mut seen_alive = false;
         for steps in [50u64, 100] {

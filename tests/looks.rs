@@ -7,8 +7,8 @@ mod common;
 
 use common::*;
 use plume::compiler::schema::State;
-use plume::runtime::splat::Splat;
-use plume::runtime::{EffectInstance, Gpu};
+use plume::runtime::outputs::Splat;
+use plume::runtime::{Effect, Gpu};
 use plume::{compile_str, CompileOptions, Integrator};
 
 /// Image side (square, so a pixel is the same size in x and y).
@@ -24,7 +24,7 @@ fn probe(
     orient: &str,
     state: State,
     integrator: Integrator,
-) -> EffectInstance {
+) -> Effect {
     let src = format!(
         r#"Effect(
     name: "orient-probe",
@@ -42,13 +42,13 @@ fn probe(
     };
     let effect =
         compile_str(&src, &options).unwrap_or_else(|e| panic!("{}", e.render("probe.ron", &src)));
-    let mut sim = EffectInstance::new(gpu, effect).unwrap();
+    let mut sim = Effect::new(gpu, effect).unwrap();
     sim.run(1, |_| {}).unwrap();
     sim
 }
 
 /// The GPU draw of `sim` and the CPU-fed reference drawing, `SIDE` pixels square.
-fn draw_both(sim: &EffectInstance) -> (Vec<u8>, Vec<u8>) {
+fn draw_both(sim: &Effect) -> (Vec<u8>, Vec<u8>) {
     draw_and_reference(sim, SIDE)
 }
 
@@ -216,7 +216,7 @@ fn a_palette_tints_each_sprite_with_the_colour_its_id_picks() {
             state,
             Integrator::Exact,
         );
-        let ir = &sim.effect().ir;
+        let ir = &sim.compiled().ir;
         let pick =
             plume::compiler::tint::pick(ir.render.palette.as_deref().unwrap(), ir.seed_mix, 0);
         let (gpu_img, cpu_img) = draw_both(&sim);

@@ -10,14 +10,16 @@ mod common;
 use common::*;
 use glam::DVec3;
 use plume::compiler::schema::State;
-use plume::runtime::offscreen::Offscreen;
-use plume::runtime::reference_draw::{sprites, ReferenceRenderer};
-use plume::runtime::splat::Splat;
-use plume::runtime::{Camera, DeadSlots, DrawOptions, EffectInstance, Gpu};
+use plume::runtime::bench::{renderer_with, DeadSlots, DrawOptions};
+use plume::runtime::oracle;
+use plume::runtime::oracle::{sprites, ReferenceRenderer};
+use plume::runtime::outputs::Offscreen;
+use plume::runtime::outputs::Splat;
+use plume::runtime::{Camera, Effect, Gpu};
 use plume::{compile_str, CompileOptions, CompiledEffect};
 
 /// Draws `sim` from the effect's camera at `w` x `h` on the GPU path.
-fn draw_gpu(sim: &EffectInstance, w: u32, h: u32) -> Vec<u8> {
+fn draw_gpu(sim: &Effect, w: u32, h: u32) -> Vec<u8> {
     let gpu = sim.gpu().clone();
     let target = Offscreen::new(&gpu, w, h).unwrap();
     let renderer = sim.renderer(&target.target()).unwrap();
@@ -29,12 +31,12 @@ fn draw_gpu(sim: &EffectInstance, w: u32, h: u32) -> Vec<u8> {
 /// Draws `sim` with the reference path: particles (and trails) read back, coloured, sized and
 /// placed on the CPU in f64, in the order the GPU draw follows (the depth order when sorted,
 /// else slot order), ribbons first as the GPU draws them.
-fn draw_reference(sim: &EffectInstance, w: u32, h: u32) -> Vec<u8> {
-    let ir = &sim.effect().ir;
+fn draw_reference(sim: &Effect, w: u32, h: u32) -> Vec<u8> {
+    let ir = &sim.compiled().ir;
     let records = if ir.sort {
         sim.records_in_draw_order().unwrap()
     } else {
-        sim.records_by_slot()
+        oracle::records_by_slot(sim)
             .unwrap()
             .into_iter()
             .flatten()
@@ -42,8 +44,8 @@ fn draw_reference(sim: &EffectInstance, w: u32, h: u32) -> Vec<u8> {
     };
     let r = ReferenceRenderer::new(sim.gpu(), w, h, &ir.render).unwrap();
     let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
-    let trails = plume::runtime::trail_readback::read_trails(sim).unwrap();
-    let ribbons = plume::runtime::reference_ribbons::ribbons(&records, &trails, ir, camera.view);
+    let trails = plume::runtime::oracle::read_trails(sim).unwrap();
+    let ribbons = plume::runtime::oracle::ribbons(&records, &trails, ir, camera.view);
     r.draw_with_ribbons(
         &ribbons,
         &sprites(&records, ir, camera.view, false),
@@ -67,8 +69,8 @@ fn examples() -> Vec<std::path::PathBuf> {
 
 /// Runs `sim` 90 steps (1.5 s), or half its longest lifetime when that is shorter (sparks), so
 /// that many particles are on screen and overlap.
-fn advance_to_show(mut sim: EffectInstance) -> EffectInstance {
-    let ir = &sim.effect().ir;
+fn advance_to_show(mut sim: Effect) -> Effect {
+    let ir = &sim.compiled().ir;
     let longest = ir
         .emitters
         .iter()
@@ -81,8 +83,8 @@ fn advance_to_show(mut sim: EffectInstance) -> EffectInstance {
 }
 
 /// Runs `effect` for `steps` on a fresh instance.
-fn simulate(gpu: &Gpu, effect: CompiledEffect, steps: u64) -> EffectInstance {
-    let mut sim = EffectInstance::new(gpu, effect).unwrap();
+fn simulate(gpu: &Gpu, effect: CompiledEffect, steps: u64) -> Effect {
+    let mut sim = Effect::new(gpu, effect).unwrap();
     sim.run(steps, |_| {}).unwrap();
     sim
 }
@@ -152,7 +154,7 @@ fn a_particle_lands_on_the_pixel_the_camera_projection_gives() {
         );
         let sim = simulate(&gpu, compile(&src), 1);
         let img = draw_gpu(&sim, w, h);
-        let camera = Camera::from_effect(&sim.effect().ir.camera, w as f32 / h as f32);
+        let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
         let (x, y) = camera.project(w, h, p).expect("in front of the camera");
         // The sprite is symmetric about its centre, so the intensity-weighted mean of its
         // pixel centres (at half-integers) is the projected point, up to rasterisation.
@@ -217,7 +219,7 @@ fn the_gpu_draw_matches_the_cpu_fed_drawing_for_every_example() {
         // the frame's rim is transparent and nothing shows, but a coarse level's rim texel
         // averages in the opaque texels inside it. Such pixels stand alone: a sprite drawn
         // differently changes a block of neighbouring pixels, which this still refuses.
-        let textured = sim.effect().ir.render.texture.is_some();
+        let textured = sim.compiled().ir.render.texture.is_some();
         let rim_only = |(mean, _, over): (f64, u8, usize)| {
             mean < 0.01 && over * 2000 < gpu_img.len() && lone_pixels(&gpu_img, &cpu_img, w, 4)
         };
@@ -225,9 +227,9 @@ fn the_gpu_draw_matches_the_cpu_fed_drawing_for_every_example() {
             within(d, gpu_img.len()) || (textured && rim_only(d)),
             "{name}: GPU and CPU-fed draws differ: {d:?}"
         );
-        if sim.effect().ir.sort {
+        if sim.compiled().ir.sort {
             // The comparison sees the order: the same particles drawn in id order fall outside.
-            let ir = &sim.effect().ir;
+            let ir = &sim.compiled().ir;
             let r = ReferenceRenderer::new(sim.gpu(), w, h, &ir.render).unwrap();
             let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
             let ids = sprites(&sim.records().unwrap(), ir, camera.view, false);
@@ -274,7 +276,7 @@ fn a_stateless_effect_drawn_from_its_closed_form_matches_its_evaluated_state() {
         let (w, h) = (240, 135);
         let closed_form = draw_gpu(&stateless, w, h);
         // Drawing allocated no view: the vertex shader computed every particle.
-        assert_eq!(stateless.particle_buffer_bytes(), 0);
+        assert_eq!(oracle::particle_buffer_bytes(&stateless), 0);
         // The same particles, evaluated into the view by the `evaluate` kernel, read back and
         // drawn by the reference path: the same f32 closed form, so the same pixels up to the
         // colour's f32/f64 rounding (see the every-example test).
@@ -310,9 +312,9 @@ fn the_draw_is_the_same_when_the_state_is_split_across_buffers() {
         );
         let split = u64::from(e.ir.capacity).div_ceil(3);
         let whole = simulate(&gpu, e.clone(), 40);
-        let mut parts = EffectInstance::with_chunk_slots(&gpu, e, Some(split)).unwrap();
+        let mut parts = common::split(&gpu, e, Some(split));
         parts.run(40, |_| {}).unwrap();
-        assert_eq!(parts.chunk_count(), 3);
+        assert_eq!(oracle::chunk_count(&parts, 0).unwrap(), 3);
         let (a, b) = (draw_gpu(&whole, 200, 120), draw_gpu(&parts, 200, 120));
         assert_eq!(a, b, "{name}: one buffer and three draw differently");
     }
@@ -422,15 +424,15 @@ fn a_compacted_list_of_live_slots_draws_what_hidden_free_slots_draw() {
     let hidden = target
         .render(&sim, &sim.renderer(&target.target()).unwrap(), &camera)
         .unwrap();
-    let compacted = sim
-        .renderer_with(
-            &target.target(),
-            &DrawOptions {
-                dead_slots: DeadSlots::Compacted,
-                ..Default::default()
-            },
-        )
-        .unwrap();
+    let compacted = renderer_with(
+        &sim,
+        &target.target(),
+        &DrawOptions {
+            dead_slots: DeadSlots::Compacted,
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert_eq!(hidden, target.render(&sim, &compacted, &camera).unwrap());
 }
 
@@ -449,7 +451,7 @@ fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
     for path in examples() {
         let sim = advance_to_show(simulate(&gpu, compile_file(&path), 0));
         let name = path.file_name().unwrap().to_string_lossy();
-        if !Splat::draws(&sim.effect().ir) {
+        if !Splat::draws(&sim.compiled().ir) {
             eprintln!("{name}: oriented sprites, not for the splat");
             continue;
         }
@@ -464,7 +466,7 @@ fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
         for &(w, h) in sizes {
             let raster = draw_gpu(&sim, w, h);
             let mut splat = Splat::new(&sim, w, h).unwrap();
-            let camera = Camera::from_effect(&sim.effect().ir.camera, w as f32 / h as f32);
+            let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
             let img = splat.render(&sim, &camera).unwrap();
             // Every sprite reached each tile it touches: no entry lost or overwritten.
             assert!(
@@ -507,7 +509,7 @@ fn the_splat_grows_its_entry_list_when_a_frame_needs_more() {
     let (w, h) = (480, 270);
     let mut splat = Splat::new(&sim, w, h).unwrap();
     let first = splat.entries();
-    let camera = Camera::from_effect(&sim.effect().ir.camera, w as f32 / h as f32);
+    let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
     let img = splat.render(&sim, &camera).unwrap();
     assert!(splat.entries() > first, "the list grew from {first}");
     assert!(splat.entries_are_complete().unwrap());

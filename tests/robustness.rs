@@ -5,8 +5,8 @@ mod common;
 
 use common::effect_gen::{effect, Flavor};
 use common::*;
-use plume::runtime::export::csv;
-use plume::runtime::EffectInstance;
+use plume::runtime::outputs::csv;
+use plume::runtime::Effect;
 use proptest::strategy::{Strategy, ValueTree};
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};
 
@@ -33,7 +33,7 @@ fn random_valid_effects_stay_finite_and_match_the_reference_for_200_steps() {
             .current();
         let e = compile(&text);
         let g = gpu();
-        let mut gpu_sim = EffectInstance::new(&g, e.clone()).unwrap();
+        let mut gpu_sim = Effect::new(&g, e.clone()).unwrap();
         let mut cpu_sim = plume::compiler::reference::ReferenceSim::new(&e.ir);
         let ids = |r: &[plume::compiler::reference::ParticleRecord]| {
             r.iter().map(|p| p.id).collect::<Vec<_>>()
@@ -102,7 +102,7 @@ const BUSY: &str = r#"Effect(name: "busy", capacity: 3000, seed: 11, sort: true,
 fn busy_csv(seed: u32, steps: u64, chunk_slots: Option<u64>) -> Vec<u8> {
     let e = compile(&BUSY.replace("seed: 11", &format!("seed: {seed}")));
     let g = gpu();
-    let mut sim = EffectInstance::with_chunk_slots(&g, e, chunk_slots).unwrap();
+    let mut sim = common::split(&g, e, chunk_slots);
     sim.run(steps, |_| {}).unwrap();
     csv(&sim.records().unwrap())
 }
@@ -130,7 +130,7 @@ fn the_same_file_and_seed_give_identical_export_bytes() {
 
 #[test]
 fn outputs_are_written_atomically_and_never_over_the_input() {
-    use plume::runtime::export::write_atomically;
+    use plume::runtime::outputs::write_atomically;
     let dir = std::env::temp_dir().join(format!("plume-robustness-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let input = dir.join("effect.ron");
@@ -196,7 +196,7 @@ fn a_lost_device_is_a_clear_error_not_a_panic_or_a_hang() {
     // a driver reset would.
     let g = plume::runtime::Gpu::new(&Default::default()).unwrap();
     let e = compile(BUSY);
-    let mut sim = EffectInstance::new(&g, e).unwrap();
+    let mut sim = Effect::new(&g, e).unwrap();
     sim.run(5, |_| {}).unwrap();
     g.device.destroy();
     let run = sim.run(5, |_| {});

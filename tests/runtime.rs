@@ -4,8 +4,9 @@
 mod common;
 
 use common::*;
-use plume::runtime::export::csv;
-use plume::runtime::EffectInstance;
+use plume::runtime::oracle;
+use plume::runtime::outputs::csv;
+use plume::runtime::Effect;
 
 /// One point emitter shooting along +y at 5 m/s, with the given extra fields.
 fn effect(capacity: u32, emitter: &str, extra: &str) -> String {
@@ -133,7 +134,7 @@ fn no_particle_ever_ends_a_step_behind_a_plane() {
                 })
                 .collect();
         let gpu = gpu();
-        let mut sim = EffectInstance::new(&gpu, e.clone()).unwrap();
+        let mut sim = Effect::new(&gpu, e.clone()).unwrap();
         let mut cpu = plume::compiler::reference::ReferenceSim::new(&e.ir);
         for step in 1..=12 {
             sim.run(1, |_| {}).unwrap();
@@ -188,7 +189,7 @@ fn a_capacity_beyond_the_free_list_binding_is_refused_with_the_limit_named() {
         "rate: 10.0, lifetime: Some((1.0, 2.0))",
         "state: Stateful,",
     ));
-    match EffectInstance::new(&gpu, e) {
+    match Effect::new(&gpu, e) {
         Err(err) => {
             let msg = err.to_string();
             assert!(msg.contains("max_storage_buffer_binding_size"), "{msg}");
@@ -217,8 +218,8 @@ fn particle_state_split_across_many_buffers_matches_the_reference() {
         .unwrap();
     let e = compile(&src);
     let gpu = gpu();
-    let mut sim = EffectInstance::with_chunk_slots(&gpu, e.clone(), Some(7_000)).unwrap();
-    assert_eq!(sim.chunk_count(), 29);
+    let mut sim = common::split(&gpu, e.clone(), Some(7_000));
+    assert_eq!(oracle::chunk_count(&sim, 0).unwrap(), 29);
     sim.run(100, |_| {}).unwrap();
     let mut cpu = plume::compiler::reference::ReferenceSim::new(&e.ir);
     cpu.run(100);

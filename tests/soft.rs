@@ -7,15 +7,15 @@ mod common;
 use common::*;
 use glam::Vec4;
 use plume::compiler::schema::State;
-use plume::runtime::offscreen::Offscreen;
-use plume::runtime::{Camera, DrawTarget, EffectInstance, Gpu};
+use plume::runtime::outputs::Offscreen;
+use plume::runtime::{Camera, DrawTarget, Effect, Gpu};
 use plume::{compile_str, CompileOptions};
 
 const SIDE: u32 = 64;
 const DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// One white opaque 0.5 m sprite at the origin, 10 m from the camera, fading over 1 m.
-fn probe(gpu: &Gpu, state: State) -> EffectInstance {
+fn probe(gpu: &Gpu, state: State) -> Effect {
     let src = r#"Effect(
     name: "soft-probe",
     capacity: 1,
@@ -30,7 +30,7 @@ fn probe(gpu: &Gpu, state: State) -> EffectInstance {
     };
     let effect =
         compile_str(src, &options).unwrap_or_else(|e| panic!("{}", e.render("s.ron", src)));
-    let mut sim = EffectInstance::new(gpu, effect).unwrap();
+    let mut sim = Effect::new(gpu, effect).unwrap();
     sim.run(1, |_| {}).unwrap();
     sim
 }
@@ -38,22 +38,16 @@ fn probe(gpu: &Gpu, state: State) -> EffectInstance {
 /// The centre pixel's red value with the host's depth buffer cleared to a wall `wall` metres
 /// from the camera (None: the far plane), the sprite drawn in a pass that tests against it
 /// read-only; `bind` says whether the host's depth is bound for the fade.
-fn centre(gpu: &Gpu, sim: &EffectInstance, wall: Option<f32>, bind: bool) -> u8 {
-    let camera = Camera::from_effect(&sim.effect().ir.camera, 1.0);
+fn centre(gpu: &Gpu, sim: &Effect, wall: Option<f32>, bind: bool) -> u8 {
+    let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
     centre_from(gpu, sim, &camera, wall, bind)
 }
 
 /// [`centre`] seen through `camera` (the host's matrices).
-fn centre_from(
-    gpu: &Gpu,
-    sim: &EffectInstance,
-    camera: &Camera,
-    wall: Option<f32>,
-    bind: bool,
-) -> u8 {
+fn centre_from(gpu: &Gpu, sim: &Effect, camera: &Camera, wall: Option<f32>, bind: bool) -> u8 {
     let target = Offscreen::new(gpu, SIDE, SIDE).unwrap();
     let mut renderer = sim
-        .renderer(&DrawTarget::new(plume::runtime::offscreen::FORMAT).with_depth(DEPTH))
+        .renderer(&DrawTarget::new(plume::runtime::outputs::FORMAT).with_depth(DEPTH))
         .unwrap();
     assert!(renderer.is_soft());
     let depth_texture = |label| {
@@ -182,7 +176,7 @@ fn an_orthographic_host_camera_fades_by_the_same_distances() {
     // in distance there, and the fade must be too.
     let gpu = gpu();
     let sim = probe(&gpu, State::Stateful);
-    let perspective = Camera::from_effect(&sim.effect().ir.camera, 1.0);
+    let perspective = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
     let camera = Camera {
         view: perspective.view,
         proj: glam::Mat4::orthographic_rh(-2.0, 2.0, -2.0, 2.0, 0.1, 100.0),
@@ -208,7 +202,7 @@ fn an_orthographic_host_camera_fades_by_the_same_distances() {
 fn a_soft_draw_needs_a_single_sample_depth_buffer() {
     let gpu = gpu();
     let sim = probe(&gpu, State::Stateful);
-    let target = DrawTarget::new(plume::runtime::offscreen::FORMAT)
+    let target = DrawTarget::new(plume::runtime::outputs::FORMAT)
         .with_depth(DEPTH)
         .with_samples(4);
     let message = sim.renderer(&target).err().expect("refused").to_string();
@@ -218,7 +212,7 @@ fn a_soft_draw_needs_a_single_sample_depth_buffer() {
     );
     // Without a depth buffer there is nothing to fade against: an ordinary draw.
     let plain = sim
-        .renderer(&DrawTarget::new(plume::runtime::offscreen::FORMAT))
+        .renderer(&DrawTarget::new(plume::runtime::outputs::FORMAT))
         .unwrap();
     assert!(!plain.is_soft());
 }

@@ -5,7 +5,8 @@ mod common;
 
 use common::*;
 use plume::compiler::rng::pcg;
-use plume::runtime::sort::{GpuSorter, Ranking, SortAlgorithm};
+use plume::runtime::bench::{GpuSorter, Ranking, SortAlgorithm};
+use plume::runtime::oracle;
 
 /// Deterministic keys; `distinct` bounds how many different keys there are (ties test stability).
 fn keys(n: usize, distinct: u32) -> Vec<u32> {
@@ -105,7 +106,7 @@ fn draw_order_is_back_to_front_with_ties_by_id_and_covers_every_live_particle() 
     let e = compile(&src);
     assert!(e.ir.sort);
     let gpu = gpu();
-    let mut sim = plume::runtime::EffectInstance::new(&gpu, e.clone()).unwrap();
+    let mut sim = plume::runtime::Effect::new(&gpu, e.clone()).unwrap();
     sim.run(150, |_| {}).unwrap();
     let by_id = sim.records().unwrap();
     let drawn = sim.records_in_draw_order().unwrap();
@@ -121,7 +122,7 @@ fn draw_order_is_back_to_front_with_ties_by_id_and_covers_every_live_particle() 
     // one step of the quantised keys.
     assert_back_to_front(&e, &drawn);
     // The keys the sort ordered: 16 bits, live ones at most 65,533, in order.
-    let order = sim.draw_order(SortAlgorithm::Radix).unwrap();
+    let order = oracle::draw_order(&sim, SortAlgorithm::Radix).unwrap();
     assert!(order.windows(2).all(|w| w[0].1 <= w[1].1));
     assert!(
         order.iter().all(|&(_, key)| key <= 65533),
@@ -143,9 +144,9 @@ fn particles_at_one_depth_share_key_zero_and_keep_slot_order() {
         )"#,
     );
     let gpu = gpu();
-    let mut sim = plume::runtime::EffectInstance::new(&gpu, e.clone()).unwrap();
+    let mut sim = plume::runtime::Effect::new(&gpu, e.clone()).unwrap();
     sim.run(2, |_| {}).unwrap();
-    let order = sim.draw_order(SortAlgorithm::Radix).unwrap();
+    let order = oracle::draw_order(&sim, SortAlgorithm::Radix).unwrap();
     assert_eq!(order.len(), 40);
     assert!(order.iter().all(|&(_, key)| key == 0), "{order:?}");
     let slots: Vec<u32> = order.iter().map(|&(slot, _)| slot).collect();

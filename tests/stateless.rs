@@ -17,7 +17,8 @@ use plume::compiler::reference::closed_form;
 use plume::compiler::reference::{ParticleRecord, ReferenceSim};
 use plume::compiler::schedule::{LiveSegments, Schedule};
 use plume::compiler::CompiledEffect;
-use plume::runtime::EffectInstance;
+use plume::runtime::oracle;
+use plume::runtime::Effect;
 
 /// The closed form's records after `steps`, from the same bookkeeping the runtime keeps.
 fn closed_form_at(e: &CompiledEffect, steps: u64) -> Vec<(ParticleRecord, f64)> {
@@ -72,12 +73,14 @@ fn stateless_gives_the_particles_of_the_stateful_kernels_and_the_reference() {
     .unwrap();
     assert!(stateful.ir.stateless.is_none() && stateful.wgsl.contains("fn update"));
     let gpu = gpu();
-    let mut sim = EffectInstance::new(&gpu, e.clone()).unwrap();
+    let mut sim = Effect::new(&gpu, e.clone()).unwrap();
     // A view split into buffers of 1,000 slots must give the same particles.
-    let mut split = EffectInstance::with_chunk_slots(&gpu, e.clone(), Some(1000)).unwrap();
-    let mut kept = EffectInstance::new(&gpu, stateful).unwrap();
+    let mut split = common::split(&gpu, e.clone(), Some(1000));
+    let mut kept = Effect::new(&gpu, stateful).unwrap();
     let mut reference = ReferenceSim::new(&e.ir);
-    assert!(sim.is_stateless() && split.chunk_count() == 6 && !kept.is_stateless());
+    assert!(
+        sim.is_stateless() && oracle::chunk_count(&split, 0).unwrap() == 6 && !kept.is_stateless()
+    );
     let mut done = 0;
     // Step 1, mid-stream, and past every lifetime of the first spawns (segments dropped).
     for at in [1u64, 37, 200] {
@@ -149,7 +152,7 @@ fn stateless_equals_the_closed_form_at_a_million_seconds() {
         let e = compile(&immortal(k));
         assert!(e.ir.stateless.is_some(), "k = {k}");
         let gpu = gpu();
-        let mut sim = EffectInstance::new(&gpu, e.clone()).unwrap();
+        let mut sim = Effect::new(&gpu, e.clone()).unwrap();
         sim.run(steps, |_| {}).unwrap();
         let records = sim.records().unwrap();
         assert_eq!(records.len(), 300);
@@ -182,7 +185,7 @@ fn streams_stay_exact_a_million_seconds_in() {
     let e = compile(src);
     assert!(e.ir.stateless.is_some());
     let gpu = gpu();
-    let mut sim = EffectInstance::new(&gpu, e.clone()).unwrap();
+    let mut sim = Effect::new(&gpu, e.clone()).unwrap();
     let steps = 1_000_000;
     sim.run(steps, |_| {}).unwrap();
     let records = sim.records().unwrap();
@@ -226,7 +229,7 @@ fn random_stateless_effects_match_the_reference_and_the_closed_form() {
         let e = compile(&text);
         assert!(e.ir.stateless.is_some(), "case {case}\n{text}");
         let g = gpu();
-        let mut sim = EffectInstance::new(&g, e.clone()).unwrap();
+        let mut sim = Effect::new(&g, e.clone()).unwrap();
         let mut reference = ReferenceSim::new(&e.ir);
         let mut done = 0;
         for at in [1u64, 60, 150] {
@@ -262,7 +265,7 @@ fn a_sorted_stateless_effect_draws_back_to_front() {
     );
     assert!(e.ir.stateless.is_some() && e.layout.sorts());
     let gpu = gpu();
-    let mut sim = EffectInstance::new(&gpu, e.clone()).unwrap();
+    let mut sim = Effect::new(&gpu, e.clone()).unwrap();
     sim.run(30, |_| {}).unwrap();
     let ordered = sim.records_in_draw_order().unwrap();
     let mut by_id = ordered.clone();

@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 
 use common::*;
 use plume::compiler::schema::State;
-use plume::runtime::splat::Splat;
-use plume::runtime::{EffectInstance, Gpu};
+use plume::runtime::outputs::Splat;
+use plume::runtime::{Effect, Gpu};
 use plume::{compile_str, CompileOptions};
 
 /// Image side (square).
@@ -43,7 +43,7 @@ fn probe(
     lifetime: Option<f64>,
     render_extra: &str,
     state: State,
-) -> EffectInstance {
+) -> Effect {
     let lifetime = match lifetime {
         Some(l) => format!("Some(({l}, {l}))"),
         None => "None".into(),
@@ -68,11 +68,11 @@ fn probe(
     let effect =
         compile_str(&src, &options).unwrap_or_else(|e| panic!("{}", e.render("probe.ron", &src)));
     assert_eq!(effect.ir.stateless.is_some(), state == State::Stateless);
-    EffectInstance::new(gpu, effect).unwrap()
+    Effect::new(gpu, effect).unwrap()
 }
 
 /// The GPU draw of `sim` and the CPU-fed reference drawing, `SIDE` pixels square.
-fn draw_both(sim: &EffectInstance) -> (Vec<u8>, Vec<u8>) {
+fn draw_both(sim: &Effect) -> (Vec<u8>, Vec<u8>) {
     draw_and_reference(sim, SIDE)
 }
 
@@ -226,7 +226,7 @@ fn a_rotated_sprite_turns_its_texture_by_its_angle_and_spin() {
 
 /// The colour of the drawn sprite's centre after each step of `steps`, with the particle's
 /// age and lifetime (seconds) from the records.
-fn centre_over_time(sim: &mut EffectInstance, steps: u64) -> Vec<([u8; 3], f64, Option<f64>)> {
+fn centre_over_time(sim: &mut Effect, steps: u64) -> Vec<([u8; 3], f64, Option<f64>)> {
     let mut seen = Vec::new();
     for _ in 0..steps {
         sim.run(1, |_| {}).unwrap();
@@ -305,7 +305,7 @@ fn a_random_start_gives_particles_born_together_different_frames() {
     };
     let effect =
         compile_str(src, &options).unwrap_or_else(|e| panic!("{}", e.render("r.ron", src)));
-    let mut sim = EffectInstance::new(&gpu, effect).unwrap();
+    let mut sim = Effect::new(&gpu, effect).unwrap();
     sim.run(1, |_| {}).unwrap();
     let (gpu_img, cpu_img) = draw_both(&sim);
     assert_matches_reference(&gpu_img, &cpu_img, "random start");
@@ -328,7 +328,7 @@ fn the_compute_splat_refuses_textured_sprites_and_says_what_to_use() {
     write_blocks(&dir.join("q.png"), 1, 1, 4, &[RED]);
     let texture = r#"texture: Some(Texture(file: "q.png"))"#;
     let sim = probe(&gpu, &dir, (0.0, 0.0, 0.0), None, texture, State::Stateful);
-    assert!(!Splat::draws(&sim.effect().ir));
+    assert!(!Splat::draws(&sim.compiled().ir));
     let message = Splat::new(&sim, 64, 64).err().expect("refused").to_string();
     assert!(
         message.contains("render.texture") && message.contains("--draw raster"),

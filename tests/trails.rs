@@ -9,13 +9,13 @@ mod common;
 use common::*;
 use glam::DVec3;
 use plume::compiler::reference::ReferenceSim;
-use plume::runtime::camera::Camera;
-use plume::runtime::offscreen::Offscreen;
-use plume::runtime::reference_draw::ReferenceRenderer;
-use plume::runtime::reference_ribbons;
-use plume::runtime::splat::Splat;
-use plume::runtime::trail_readback::read_trails;
-use plume::runtime::EffectInstance;
+use plume::runtime::oracle;
+use plume::runtime::oracle::read_trails;
+use plume::runtime::oracle::ReferenceRenderer;
+use plume::runtime::outputs::Offscreen;
+use plume::runtime::outputs::Splat;
+use plume::runtime::Camera;
+use plume::runtime::Effect;
 use plume::CompiledEffect;
 
 /// Short-lived sparks under gravity and drag, spawned at a rate, so that slots are freed and
@@ -38,11 +38,11 @@ const RECYCLED: &str = r#"Effect(
 /// tolerance for `steps` steps (4 roundings of 2^-24 a step for Euler, relative to 1 + |x|: a
 /// sample was taken at an earlier step, so its error is no larger than the position's now).
 /// Returns (particles, how many have a full trail, how many a shorter one).
-fn compare_trails(gpu: &EffectInstance, cpu: &ReferenceSim, steps: u64) -> (usize, usize, usize) {
+fn compare_trails(gpu: &Effect, cpu: &ReferenceSim, steps: u64) -> (usize, usize, usize) {
     let (g, c) = (read_trails(gpu).unwrap(), cpu.trails());
     let ids = |t: &[(u32, Vec<DVec3>)]| t.iter().map(|(id, _)| *id).collect::<Vec<_>>();
     assert_eq!(ids(&g), ids(&c), "live ids differ after {steps} steps");
-    let points = gpu.effect().ir.render.trail.as_ref().unwrap().points as usize;
+    let points = gpu.compiled().ir.render.trail.as_ref().unwrap().points as usize;
     let tol = 4.0 * steps as f64 * U32;
     let (mut full, mut short) = (0, 0);
     for ((id, gp), (_, cp)) in g.iter().zip(&c) {
@@ -74,7 +74,7 @@ fn the_ring_holds_the_reference_positions_as_slots_are_reused() {
     let gpu = gpu();
     // One particle buffer, and the same state split into buffers of 7 slots (a ring each).
     for chunk_slots in [None, Some(7)] {
-        let mut gsim = EffectInstance::with_chunk_slots(&gpu, effect.clone(), chunk_slots).unwrap();
+        let mut gsim = common::split(&gpu, effect.clone(), chunk_slots);
         let mut csim = ReferenceSim::new(&effect.ir);
         let (mut full, mut short) = (0, 0);
         // Steps chosen to end at every phase of the 3-step sampling.
@@ -104,7 +104,7 @@ fn the_orbit_example_keeps_its_trails_with_the_reference() {
     let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/orbit.ron"));
     let effect = compile_file(path);
     let gpu = gpu();
-    let mut gsim = EffectInstance::new(&gpu, effect.clone()).unwrap();
+    let mut gsim = Effect::new(&gpu, effect.clone()).unwrap();
     let mut csim = ReferenceSim::new(&effect.ir);
     gsim.run(60, |_| {}).unwrap();
     csim.run(60);
@@ -115,7 +115,7 @@ fn the_orbit_example_keeps_its_trails_with_the_reference() {
 
 /// One particle thrown up and to the right under gravity, seen side on; its sprite has no size,
 /// so only its white ribbon (0.15 m wide, 16 points, a sample every 2 steps) is drawn.
-fn thrown(gpu: &plume::runtime::Gpu) -> (CompiledEffect, EffectInstance) {
+fn thrown(gpu: &plume::runtime::Gpu) -> (CompiledEffect, Effect) {
     let effect = compile(
         r#"Effect(
     name: "trail-thrown",
@@ -130,7 +130,7 @@ fn thrown(gpu: &plume::runtime::Gpu) -> (CompiledEffect, EffectInstance) {
                                      color: [(0.0, (1.0, 1.0, 1.0, 1.0))]))),
 )"#,
     );
-    let sim = EffectInstance::new(gpu, effect.clone()).unwrap();
+    let sim = Effect::new(gpu, effect.clone()).unwrap();
     (effect, sim)
 }
 
@@ -198,7 +198,7 @@ fn a_ribbon_passes_through_the_particles_previous_positions() {
     // corners that differ by f32 roundings move an edge pixel's coverage by a step or two.
     let reference = ReferenceRenderer::new(&gpu, SIDE, SIDE, &effect.ir.render).unwrap();
     let records = sim.records().unwrap();
-    let ribbons = reference_ribbons::ribbons(
+    let ribbons = oracle::ribbons(
         &records,
         &read_trails(&sim).unwrap(),
         &effect.ir,
@@ -217,19 +217,23 @@ fn a_ribbon_passes_through_the_particles_previous_positions() {
 fn a_ribbon_reads_the_same_from_split_buffers() {
     let gpu = gpu();
     let (effect, mut one) = thrown(&gpu);
-    let mut split = EffectInstance::with_chunk_slots(&gpu, effect, Some(1)).unwrap();
-    assert_eq!(split.chunk_count(), 1, "one particle, one buffer");
+    let mut split = common::split(&gpu, effect, Some(1));
+    assert_eq!(
+        oracle::chunk_count(&split, 0).unwrap(),
+        1,
+        "one particle, one buffer"
+    );
     // A capacity of several chunks with the particle in the last: the recycled effect.
     let recycled = compile(RECYCLED);
-    let mut chunked = EffectInstance::with_chunk_slots(&gpu, recycled.clone(), Some(16)).unwrap();
-    let mut whole = EffectInstance::new(&gpu, recycled).unwrap();
-    assert!(chunked.chunk_count() > 1);
+    let mut chunked = common::split(&gpu, recycled.clone(), Some(16));
+    let mut whole = Effect::new(&gpu, recycled).unwrap();
+    assert!(oracle::chunk_count(&chunked, 0).unwrap() > 1);
     for sim in [&mut one, &mut split, &mut chunked, &mut whole] {
         sim.run(40, |_| {}).unwrap();
     }
-    let draw = |sim: &EffectInstance| {
+    let draw = |sim: &Effect| {
         let target = Offscreen::new(&gpu, SIDE, SIDE).unwrap();
-        let camera = Camera::from_effect(&sim.effect().ir.camera, 1.0);
+        let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
         target
             .render(sim, &sim.renderer(&target.target()).unwrap(), &camera)
             .unwrap()
@@ -274,7 +278,7 @@ fn only_an_effect_with_a_trail_stores_history() {
 #[test]
 fn the_splat_refuses_ribbons() {
     let gpu = gpu();
-    let sim = EffectInstance::new(&gpu, compile(RECYCLED)).unwrap();
+    let sim = Effect::new(&gpu, compile(RECYCLED)).unwrap();
     let err = Splat::new(&sim, 64, 64)
         .err()
         .expect("the splat drew a trail")

@@ -8,7 +8,7 @@ pub mod effect_gen;
 use std::sync::{Mutex, MutexGuard, OnceLock};
 
 use plume::compiler::reference::{ParticleRecord, ReferenceSim, Totals};
-use plume::runtime::{EffectInstance, Gpu, GpuChoice};
+use plume::runtime::{Effect, Gpu, GpuChoice};
 use plume::{compile_str, CompileOptions, CompiledEffect};
 
 /// The test binary's GPU. Tests never skip: with no adapter they fail with the runtime's
@@ -62,22 +62,35 @@ pub fn compile_graph_file(path: &std::path::Path) -> plume::compiler::graph::Com
         .unwrap_or_else(|e| panic!("{}", e.render(&path.display().to_string(), &source)))
 }
 
+/// `effect` on `gpu` with at most `chunk_slots` particles per buffer (to exercise the split
+/// on small effects).
+pub fn split(gpu: &Gpu, effect: CompiledEffect, chunk_slots: Option<u64>) -> Effect {
+    let name = effect.ir.name.clone();
+    let graph = plume::compiler::graph::CompiledGraph::single(&name, effect);
+    Effect::with_chunk_slots(gpu, graph, chunk_slots).expect("GPU sim")
+}
+
 /// The GPU draw of `sim` from its camera into a `side` x `side` image, and the CPU-fed
 /// reference drawing of the same particles (colour, size, half axes and frames in f64).
-pub fn draw_and_reference(sim: &EffectInstance, side: u32) -> (Vec<u8>, Vec<u8>) {
-    use plume::runtime::offscreen::Offscreen;
-    use plume::runtime::reference_draw::{sprites, ReferenceRenderer};
+pub fn draw_and_reference(sim: &Effect, side: u32) -> (Vec<u8>, Vec<u8>) {
+    draw_group_and_reference(sim, 0, side)
+}
+
+/// [`draw_and_reference`] of group `g` of `sim` alone, from the effect's camera.
+pub fn draw_group_and_reference(sim: &Effect, g: usize, side: u32) -> (Vec<u8>, Vec<u8>) {
+    use plume::runtime::oracle::{group_renderer, sprites, ReferenceRenderer};
+    use plume::runtime::outputs::Offscreen;
+    let ir = &sim.group_compiled(g).unwrap().ir;
+    // The group's own camera (the top-level one's, for group 0) on a square image.
+    let camera = plume::runtime::Camera::from_effect(&ir.camera, 1.0);
     let target = Offscreen::new(sim.gpu(), side, side).unwrap();
-    let camera = target.effect_camera(sim);
-    let gpu_img = target
-        .render(sim, &sim.renderer(&target.target()).unwrap(), &camera)
-        .unwrap();
-    let ir = &sim.effect().ir;
+    let renderer = group_renderer(sim, g, &target.target()).unwrap();
+    let gpu_img = target.render(sim, &renderer, &camera).unwrap();
     let reference = ReferenceRenderer::new(sim.gpu(), side, side, &ir.render).unwrap();
     let cpu_img = reference
         .draw(
-            &sprites(&sim.records().unwrap(), ir, camera.view, false),
-            &plume::runtime::Camera::from_effect(&ir.camera, 1.0),
+            &sprites(&sim.group_records(g).unwrap(), ir, camera.view, false),
+            &camera,
         )
         .unwrap();
     (gpu_img, cpu_img)
@@ -100,7 +113,7 @@ pub fn differences(a: &[u8], b: &[u8], over: u8) -> (f64, u8, usize) {
 /// Runs `steps` on the GPU; returns totals and live particles.
 pub fn run_gpu(effect: &CompiledEffect, steps: u64) -> (Totals, Vec<ParticleRecord>) {
     let gpu = gpu();
-    let mut sim = EffectInstance::new(&gpu, effect.clone()).expect("GPU sim");
+    let mut sim = Effect::new(&gpu, effect.clone()).expect("GPU sim");
     sim.run(steps, |_| {}).expect("GPU run");
     (
         sim.totals().expect("totals"),

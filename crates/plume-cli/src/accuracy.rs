@@ -7,11 +7,10 @@ use std::process::ExitCode;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use plume_compiler::Integrator;
-use plume_runtime::accuracy::{
-    field_sweep, measure, pareto_front, AccuracyPlan, Engine, ReferenceKind,
+use plume_runtime::bench::{
+    accuracy_svg, field_sweep, measure, pareto_front, AccuracyPlan, Engine, ReferenceKind,
 };
-use plume_runtime::export::write_atomically;
-use plume_runtime::plot::accuracy_svg;
+use plume_runtime::outputs::write_atomically;
 
 use crate::load;
 

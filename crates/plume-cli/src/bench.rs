@@ -3,8 +3,7 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use plume_runtime::bench::{bench, BenchOptions};
-use plume_runtime::timer::TimingSource;
+use plume_runtime::bench::{bench, bench_graph, bench_sort, BenchOptions, TimingSource};
 
 use crate::load;
 
@@ -72,7 +71,7 @@ fn draw_json(d: &plume_runtime::bench::DrawTimes) -> serde_json::Value {
 }
 
 /// The sort benchmark's figures as JSON (the `sort_alone` array of `plume bench --json`).
-fn sort_json(s: &plume_runtime::sort_bench::SortBench) -> serde_json::Value {
+fn sort_json(s: &plume_runtime::bench::SortBench) -> serde_json::Value {
     let times = s.times.iter().map(|t| {
         serde_json::json!({
             "keys": s.keys, "ranking": format!("{:?}", t.ranking), "key_bits": t.key_bits,
@@ -100,13 +99,7 @@ fn bench_graph_command(args: &BenchArgs, name: &str, effect: &plume_compiler::Ef
             gpu.describe()
         );
     }
-    let r = match plume_runtime::graph_bench::bench_graph(
-        &gpu,
-        effect,
-        args.particles,
-        args.warm_steps,
-        args.steps,
-    ) {
+    let r = match bench_graph(&gpu, effect, args.particles, args.warm_steps, args.steps) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("{name}: error: {e}");
@@ -203,7 +196,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
         }
     };
     let sort_alone = match args.sort_keys {
-        Some(n) => match plume_runtime::sort_bench::bench_sort(&gpu, u64::from(n), 9) {
+        Some(n) => match bench_sort(&gpu, u64::from(n), 9) {
             Ok(s) => Some(s),
             Err(e) => {
                 eprintln!("{name}: error in the sort benchmark: {e}");

@@ -6,7 +6,6 @@ mod load;
 mod preview;
 mod render;
 mod run;
-mod run_graph;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -153,7 +152,7 @@ fn main() -> ExitCode {
         Command::Accuracy(args) => accuracy::accuracy(&args),
         Command::Bench(args) => bench::bench_command(&args),
         Command::Adapters { backend } => {
-            let adapters = plume_runtime::gpu::list_adapters(&plume_runtime::GpuChoice { backend });
+            let adapters = plume_runtime::GpuChoice { backend }.list_adapters();
             if adapters.is_empty() {
                 eprintln!("no adapters found; without a GPU install Mesa (Debian: `apt-get install mesa-vulkan-drivers` or `libegl1 libgl1-mesa-dri`)");
                 return ExitCode::FAILURE;
@@ -281,13 +280,15 @@ fn compile(
             print!("{text}");
             ExitCode::SUCCESS
         }
-        Some(out) => match plume_runtime::export::write_atomically(out, text.as_bytes(), &[file]) {
-            Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::FAILURE
+        Some(out) => {
+            match plume_runtime::outputs::write_atomically(out, text.as_bytes(), &[file]) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::FAILURE
+                }
             }
-        },
+        }
     }
 }
 

@@ -6,11 +6,9 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use plume_runtime::export::write_atomically;
-use plume_runtime::images::{contact_sheet, gif, png, Frame8};
-use plume_runtime::offscreen::Offscreen;
-use plume_runtime::splat::Splat;
-use plume_runtime::{EffectInstance, Gpu, GpuChoice, GraphInstance, RuntimeError};
+use plume_compiler::graph::CompiledGraph;
+use plume_runtime::outputs::{contact_sheet, gif, png, write_atomically, Frame8, Offscreen, Splat};
+use plume_runtime::{Effect, Gpu, GpuChoice, RuntimeError};
 
 use crate::{load, Overrides};
 
@@ -75,18 +73,24 @@ enum Format {
     Gif,
 }
 
-fn render_frames(
-    args: &RenderArgs,
-    effect: plume_compiler::CompiledEffect,
-) -> Result<Vec<Frame8>, RuntimeError> {
+/// Simulates `graph` and draws its frames: every group in one pass each frame, in group
+/// order, from the top-level group's camera, over its background (and its glow, if any).
+fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>, RuntimeError> {
+    if args.draw == DrawMethod::Splat && graph.groups.len() > 1 {
+        return Err(RuntimeError::Output(
+            "--draw splat draws one group; an effect with groups is drawn with --draw raster"
+                .into(),
+        ));
+    }
     let gpu = Gpu::new(&GpuChoice {
         backend: args.backend.clone(),
     })?;
     eprintln!("adapter: {}", gpu.describe());
     let (w, h) = args.size;
     // An effect that glows is drawn into an HDR image and bloomed (render.glow).
-    let target = Offscreen::with_glow(&gpu, w, h, effect.ir.render.glow.as_ref())?;
-    let mut sim = EffectInstance::new(&gpu, effect)?;
+    let glow = graph.groups[0].effect.ir.render.glow;
+    let target = Offscreen::with_glow(&gpu, w, h, glow.as_ref())?;
+    let mut sim = Effect::from_graph(&gpu, graph)?;
     let renderer = sim.renderer(&target.target())?;
     let mut splat = match args.draw {
         DrawMethod::Splat => Some(Splat::new(&sim, w, h)?),
@@ -107,48 +111,6 @@ fn render_frames(
             width: w,
             height: h,
             pixels,
-        });
-        bar.inc(1);
-    }
-    bar.finish_and_clear();
-    Ok(frames)
-}
-
-/// Renders an effect with groups: every group drawn in one pass each frame, in group order,
-/// from the top-level group's camera, over its background (and its glow, if any).
-fn render_graph_frames(
-    args: &RenderArgs,
-    graph: plume_compiler::graph::CompiledGraph,
-) -> Result<Vec<Frame8>, RuntimeError> {
-    if args.draw == DrawMethod::Splat {
-        return Err(RuntimeError::Output(
-            "--draw splat draws one group; an effect with groups is drawn with --draw raster"
-                .into(),
-        ));
-    }
-    let gpu = Gpu::new(&GpuChoice {
-        backend: args.backend.clone(),
-    })?;
-    eprintln!("adapter: {}", gpu.describe());
-    let (w, h) = args.size;
-    let glow = graph.groups[0].effect.ir.render.glow;
-    let target = Offscreen::with_glow(&gpu, w, h, glow.as_ref())?;
-    let mut sim = GraphInstance::new(&gpu, graph)?;
-    let renderers = sim
-        .groups()
-        .iter()
-        .map(|g| g.renderer(&target.target()))
-        .collect::<Result<Vec<_>, _>>()?;
-    let camera = target.effect_camera(&sim.groups()[0]);
-    let bar = frames_bar(args.frames);
-    let mut frames = Vec::with_capacity(args.frames as usize);
-    for _ in 0..args.frames {
-        sim.run(u64::from(args.every), |_| {})?;
-        let instances: Vec<&EffectInstance> = sim.groups().iter().collect();
-        frames.push(Frame8 {
-            width: w,
-            height: h,
-            pixels: target.render_all(&instances, &renderers, &camera)?,
         });
         bar.inc(1);
     }
@@ -190,17 +152,13 @@ pub fn render(args: &RenderArgs) -> ExitCode {
         eprintln!("error: --frames and --every must be at least 1");
         return ExitCode::FAILURE;
     }
-    let (_, mut graph) = match load::compiled_graph(&args.file, &args.overrides.options()) {
+    let (_, graph) = match load::compiled_graph(&args.file, &args.overrides.options()) {
         Ok(x) => x,
         Err(code) => return code,
     };
     let dt = graph.groups[0].effect.ir.dt;
     let delay_ms = ((f64::from(args.every) * dt * 1000.0).round() as u32).max(20);
-    let frames = if load::single(&graph) {
-        render_frames(args, graph.groups.remove(0).effect)
-    } else {
-        render_graph_frames(args, graph)
-    };
+    let frames = render_frames(args, graph);
     let encoded = frames.and_then(|frames| match format {
         Format::Png if args.sheet => png(&contact_sheet(&frames)?),
         Format::Png => png(frames.last().expect("at least one frame")),

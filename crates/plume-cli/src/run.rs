@@ -1,15 +1,17 @@
 //! `plume run`: simulate an effect on the GPU (or with `--cpu-reference`, the CPU f64
-//! reference), print a summary or JSON, and optionally export the live particles.
+//! reference), print a summary or JSON, and optionally export the live particles. An effect
+//! with groups and events runs the same way: every group simulated together, a summary per
+//! group, and an export that names each particle's group.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
-use plume_compiler::reference::{ParticleRecord, ReferenceSim, Totals};
-use plume_compiler::CompiledEffect;
-use plume_runtime::export::{export, summarize};
-use plume_runtime::{EffectInstance, Gpu, GpuChoice, RuntimeError};
+use plume_compiler::graph::CompiledGraph;
+use plume_compiler::reference::{ParticleRecord, ReferenceGraph, ReferenceSim, Totals};
+use plume_runtime::outputs::{export, export_groups, summarize};
+use plume_runtime::{Effect, Gpu, GpuChoice, RuntimeError};
 
 use crate::{load, Overrides};
 
@@ -50,10 +52,17 @@ pub enum Order {
     Draw,
 }
 
-struct Outcome {
-    engine: String,
+/// One group's results.
+struct GroupOutcome {
+    name: String,
     totals: Totals,
     records: Vec<ParticleRecord>,
+}
+
+/// A run's results: the engine, every group's, and the wall time of the steps.
+struct Outcome {
+    engine: String,
+    groups: Vec<GroupOutcome>,
     seconds: f64,
 }
 
@@ -70,17 +79,18 @@ pub(crate) fn progress_bar(steps: u64, quiet: bool) -> ProgressBar {
     bar
 }
 
-fn simulate(args: &RunArgs, effect: CompiledEffect) -> Result<Outcome, RuntimeError> {
-    let bar = progress_bar(args.steps, args.json);
-    if args.cpu_reference {
-        bar.set_message("cpu reference");
-        let start = Instant::now();
+/// Runs `graph` on the CPU f64 reference: the single-system simulator for an effect without
+/// groups (sorted back to front for `--order draw`), the reference graph otherwise.
+fn simulate_cpu(args: &RunArgs, graph: &CompiledGraph, bar: &ProgressBar) -> Outcome {
+    bar.set_message("cpu reference");
+    let start = Instant::now();
+    let groups = if load::single(graph) {
+        let effect = &graph.groups[0].effect;
         let mut sim = ReferenceSim::new(&effect.ir);
         for _ in 0..args.steps {
             sim.step();
             bar.inc(1);
         }
-        bar.finish_and_clear();
         let mut records = sim.records();
         if args.order == Order::Draw {
             // The reference sorts in f64 on the CPU: farthest first, equal depths by id.
@@ -92,29 +102,61 @@ fn simulate(args: &RunArgs, effect: CompiledEffect) -> Result<Outcome, RuntimeEr
                 db.total_cmp(&da).then(a.id.cmp(&b.id))
             });
         }
-        return Ok(Outcome {
-            engine: "cpu reference (f64)".into(),
+        vec![GroupOutcome {
+            name: graph.groups[0].name.clone(),
             totals: sim.totals(),
             records,
-            seconds: start.elapsed().as_secs_f64(),
-        });
+        }]
+    } else {
+        let mut sim = ReferenceGraph::new(graph);
+        for _ in 0..args.steps {
+            sim.step();
+            bar.inc(1);
+        }
+        (0..graph.groups.len())
+            .map(|g| GroupOutcome {
+                name: graph.groups[g].name.clone(),
+                totals: sim.totals(g),
+                records: sim.records(g),
+            })
+            .collect()
+    };
+    bar.finish_and_clear();
+    Outcome {
+        engine: "cpu reference (f64)".into(),
+        groups,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+fn simulate(args: &RunArgs, graph: CompiledGraph) -> Result<Outcome, RuntimeError> {
+    let bar = progress_bar(args.steps, args.json);
+    if args.cpu_reference {
+        return Ok(simulate_cpu(args, &graph, &bar));
     }
     let gpu = Gpu::new(&GpuChoice {
         backend: args.backend.clone(),
     })?;
     bar.set_message("gpu");
-    let mut sim = EffectInstance::new(&gpu, effect)?;
+    let mut sim = Effect::from_graph(&gpu, graph)?;
     let start = Instant::now();
     sim.run(args.steps, |done| bar.set_position(done))?;
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
+    let mut groups = Vec::new();
+    for (g, name) in sim.group_names().iter().enumerate() {
+        groups.push(GroupOutcome {
+            name: name.clone(),
+            totals: sim.group_totals(g)?,
+            records: match args.order {
+                Order::Id => sim.group_records(g)?,
+                Order::Draw => sim.records_in_draw_order()?,
+            },
+        });
+    }
     Ok(Outcome {
         engine: gpu.describe(),
-        totals: sim.totals()?,
-        records: match args.order {
-            Order::Id => sim.records()?,
-            Order::Draw => sim.records_in_draw_order()?,
-        },
+        groups,
         seconds,
     })
 }
@@ -125,23 +167,25 @@ pub fn run(args: &RunArgs) -> ExitCode {
     if args.order == Order::Draw {
         options.sort = Some(true);
     }
-    let (load::Source { name, .. }, mut graph) = match load::compiled_graph(&args.file, &options) {
+    let (load::Source { name, .. }, graph) = match load::compiled_graph(&args.file, &options) {
         Ok(x) => x,
         Err(code) => return code,
     };
-    if !load::single(&graph) {
-        return crate::run_graph::run_graph(args, &name, graph);
+    let single = load::single(&graph);
+    if !single && args.order == Order::Draw {
+        eprintln!("{name}: error: --order draw: an effect with groups exports by group and id (each group sorts its own draw)");
+        return ExitCode::FAILURE;
     }
-    let effect = graph.groups.remove(0).effect;
-    let dt = effect.ir.dt;
-    let state = match (&effect.ir.stateless, args.cpu_reference) {
+    let top = &graph.groups[0].effect.ir;
+    let dt = top.dt;
+    let state = match (&top.stateless, args.cpu_reference) {
         (Some(_), false) => {
             "stateless (each step is bookkeeping; positions are computed once, when read)"
         }
         (Some(_), true) => "stateless on the GPU; the CPU reference steps it",
         (None, _) => "stateful",
     };
-    let outcome = match simulate(args, effect) {
+    let outcome = match simulate(args, graph) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("{name}: error: {e}");
@@ -149,55 +193,139 @@ pub fn run(args: &RunArgs) -> ExitCode {
         }
     };
     if let Some(path) = &args.export {
-        if let Err(e) = export(path, &outcome.records, &[args.file.as_path()]) {
+        let written = match single {
+            true => export(path, &outcome.groups[0].records, &[args.file.as_path()]),
+            false => {
+                let parts: Vec<(&str, &[ParticleRecord])> = outcome
+                    .groups
+                    .iter()
+                    .map(|g| (g.name.as_str(), g.records.as_slice()))
+                    .collect();
+                export_groups(path, &parts, &[args.file.as_path()])
+            }
+        };
+        if let Err(e) = written {
             eprintln!("error: {e}");
             return ExitCode::FAILURE;
         }
     }
-    let s = summarize(&outcome.records);
-    let t = outcome.totals;
-    if args.json {
-        let v = serde_json::json!({
-            "steps": t.steps,
-            "alive": t.alive,
-            "spawned": t.spawned,
-            "died": t.died,
-            "dropped": t.dropped,
-            "nonfinite": s.nonfinite,
-            "bbox_min": [s.bbox_min.x, s.bbox_min.y, s.bbox_min.z],
-            "bbox_max": [s.bbox_max.x, s.bbox_max.y, s.bbox_max.z],
-            "mean_speed": s.mean_speed,
-            "seconds": outcome.seconds,
-            "adapter": outcome.engine,
-            "stateless": state.starts_with("stateless ("),
-        });
-        println!("{v}");
-    } else {
-        let v = |v: glam::DVec3| format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z);
-        println!("{name}");
-        println!("  adapter     {}", outcome.engine);
-        println!("  state       {state}");
-        println!(
-            "  steps       {} ({:.3} s simulated, dt {} s)",
-            t.steps,
-            t.steps as f64 * dt,
-            dt
-        );
-        println!("  alive       {}", t.alive);
-        println!("  spawned     {}", t.spawned);
-        println!("  died        {}", t.died);
-        println!("  dropped     {}", t.dropped);
-        println!("  nonfinite   {}", s.nonfinite);
-        println!("  bbox        {} .. {}", v(s.bbox_min), v(s.bbox_max));
-        println!("  mean speed  {:.4} m/s", s.mean_speed);
-        println!("  wall time   {:.3} s", outcome.seconds);
-        if let Some(path) = &args.export {
-            println!(
-                "  exported    {} particles to {}",
-                outcome.records.len(),
-                path.display()
-            );
-        }
+    match (single, args.json) {
+        (true, true) => print_json(&outcome, state),
+        (true, false) => print_summary(args, &name, &outcome, state, dt),
+        (false, true) => print_groups_json(&outcome),
+        (false, false) => print_groups(args, &name, &outcome, dt),
     }
     ExitCode::SUCCESS
+}
+
+/// One JSON object for an effect without groups.
+fn print_json(outcome: &Outcome, state: &str) {
+    let g = &outcome.groups[0];
+    let s = summarize(&g.records);
+    let t = g.totals;
+    let v = serde_json::json!({
+        "steps": t.steps,
+        "alive": t.alive,
+        "spawned": t.spawned,
+        "died": t.died,
+        "dropped": t.dropped,
+        "nonfinite": s.nonfinite,
+        "bbox_min": [s.bbox_min.x, s.bbox_min.y, s.bbox_min.z],
+        "bbox_max": [s.bbox_max.x, s.bbox_max.y, s.bbox_max.z],
+        "mean_speed": s.mean_speed,
+        "seconds": outcome.seconds,
+        "adapter": outcome.engine,
+        "stateless": state.starts_with("stateless ("),
+    });
+    println!("{v}");
+}
+
+/// The summary of an effect without groups.
+fn print_summary(args: &RunArgs, name: &str, outcome: &Outcome, state: &str, dt: f64) {
+    let g = &outcome.groups[0];
+    let s = summarize(&g.records);
+    let t = g.totals;
+    let v = |v: glam::DVec3| format!("({:.3}, {:.3}, {:.3})", v.x, v.y, v.z);
+    println!("{name}");
+    println!("  adapter     {}", outcome.engine);
+    println!("  state       {state}");
+    println!(
+        "  steps       {} ({:.3} s simulated, dt {} s)",
+        t.steps,
+        t.steps as f64 * dt,
+        dt
+    );
+    println!("  alive       {}", t.alive);
+    println!("  spawned     {}", t.spawned);
+    println!("  died        {}", t.died);
+    println!("  dropped     {}", t.dropped);
+    println!("  nonfinite   {}", s.nonfinite);
+    println!("  bbox        {} .. {}", v(s.bbox_min), v(s.bbox_max));
+    println!("  mean speed  {:.4} m/s", s.mean_speed);
+    println!("  wall time   {:.3} s", outcome.seconds);
+    if let Some(path) = &args.export {
+        println!(
+            "  exported    {} particles to {}",
+            g.records.len(),
+            path.display()
+        );
+    }
+}
+
+/// One JSON object for an effect with groups, a summary per group.
+fn print_groups_json(outcome: &Outcome) {
+    let per_group: Vec<serde_json::Value> = outcome
+        .groups
+        .iter()
+        .map(|g| {
+            let s = summarize(&g.records);
+            let t = g.totals;
+            serde_json::json!({
+                "name": g.name,
+                "alive": t.alive,
+                "spawned": t.spawned,
+                "died": t.died,
+                "dropped": t.dropped,
+                "nonfinite": s.nonfinite,
+                "bbox_min": [s.bbox_min.x, s.bbox_min.y, s.bbox_min.z],
+                "bbox_max": [s.bbox_max.x, s.bbox_max.y, s.bbox_max.z],
+                "mean_speed": s.mean_speed,
+            })
+        })
+        .collect();
+    let v = serde_json::json!({
+        "steps": outcome.groups[0].totals.steps,
+        "groups": per_group,
+        "seconds": outcome.seconds,
+        "adapter": outcome.engine,
+    });
+    println!("{v}");
+}
+
+/// The summary of an effect with groups: a table, a row per group.
+fn print_groups(args: &RunArgs, name: &str, outcome: &Outcome, dt: f64) {
+    let steps = outcome.groups[0].totals.steps;
+    println!("{name}");
+    println!("  adapter     {}", outcome.engine);
+    println!(
+        "  steps       {steps} ({:.3} s simulated, dt {dt} s)",
+        steps as f64 * dt
+    );
+    println!(
+        "  {:<12} {:>9} {:>9} {:>9} {:>9} {:>9}  mean speed",
+        "group", "alive", "spawned", "died", "dropped", "nonfinite"
+    );
+    for g in &outcome.groups {
+        let s = summarize(&g.records);
+        let t = g.totals;
+        println!(
+            "  {:<12} {:>9} {:>9} {:>9} {:>9} {:>9}  {:.4} m/s",
+            g.name, t.alive, t.spawned, t.died, t.dropped, s.nonfinite, s.mean_speed
+        );
+    }
+    println!("  wall time   {:.3} s", outcome.seconds);
+    if let Some(path) = &args.export {
+        let total: usize = outcome.groups.iter().map(|g| g.records.len()).sum();
+        println!("  exported    {total} particles to {}", path.display());
+    }
 }

@@ -3,6 +3,18 @@
 /// Why running an effect failed.
 #[derive(Debug, thiserror::Error)]
 pub enum RuntimeError {
+    /// An effect file could not be read ([`crate::Effect::from_file`]).
+    #[error("{path}: error: cannot read file: {message}")]
+    Read {
+        /// The path as given.
+        path: String,
+        /// The system's message.
+        message: String,
+    },
+    /// The effect does not compile: its diagnostics, rendered against the file or source
+    /// ([`crate::Effect::from_file`], [`crate::Effect::from_source`]).
+    #[error("{0}")]
+    Compile(String),
     /// No adapter with compute shaders was found.
     #[error("no GPU adapter with compute shaders found (backends tried: {backends}).\n  \
              Without a GPU, install a software driver: Debian/Ubuntu `apt-get install mesa-vulkan-drivers` \

@@ -1,66 +1,42 @@
 //! # plume-runtime
 //!
 //! Runs compiled Plume effects on wgpu, on a device of its own or inside a host application's
-//! renderer. The modules follow the pipeline, data flowing one way:
+//! renderer. The whole embedding API is at the crate root:
 //!
-//! - [`gpu`]: the device (Plume's own adapter choice, or a host's device and queue);
-//! - [`resources`]: an effect's buffers and the compute module's bind groups, from its layout;
-//! - [`steps`] (with [`flock_pass`]): the simulation passes, many steps per submission with
-//!   no CPU round trip, or a stateless effect's bookkeeping;
-//! - [`depth_sort`] (with [`depth_quantise`] and the generic [`sort`]): depth keys, quantised
-//!   to 16 bits, and their GPU radix sort;
-//! - [`draw`] (with [`live_list`]): the effect's generated draw module on a render pipeline,
-//!   drawing straight from the particle buffers into the caller's render pass;
-//! - [`readback`]: particles and counters back to the CPU (exports, tests, measurements);
-//! - [`instance`]: [`EffectInstance`], the public object that ties them together;
-//! - outputs: [`offscreen`] (headless images, drawn by the raster pipeline or by [`splat`], a
-//!   compute-shader splat of the same image), [`images`], [`export`], [`bench`],
-//!   [`accuracy`] and [`plot`]; [`reference_draw`] is the CPU-fed drawing the GPU draw is
-//!   tested against.
+//! - [`Gpu`] (with [`GpuChoice`]): the device, Plume's own ([`Gpu::new`]) or a host's
+//!   ([`Gpu::from_device`]);
+//! - [`Effect`]: any effect file running on it, a single system or a graph of groups and
+//!   events ([`Effect::from_file`], [`Effect::from_source`], [`Effect::new`] from a compiled
+//!   effect, [`Effect::from_graph`]); it steps into the host's encoder ([`Effect::advance`]) or
+//!   runs on its own ([`Effect::run`]), and reads back ([`Effect::totals`], [`Effect::records`]);
+//! - [`EffectRenderer`]: its draw, every group and its trails, into targets like one
+//!   [`DrawTarget`] (with an optional [`DepthTest`] against the host's depth buffer), made by
+//!   [`Effect::renderer`], prepared each frame by [`Effect::prepare_draw`] from a [`Camera`],
+//!   and recorded into the host's render pass by [`EffectRenderer::draw`];
+//! - [`RuntimeError`]: what went wrong, and where it can, what to do.
+//!
+//! Three named modules serve the `plume` command, the tools and the tests, not an embedding
+//! application: [`outputs`] (headless images, GIF, contact sheets, exports), [`bench`]
+//! (benchmarks and measurements) and [`oracle`] (the CPU reference drawing and the readbacks
+//! the tests compare). Everything else is private to the crate, in folders by job: `device`,
+//! `sort`, `sim`, `draw` (see docs/ARCHITECTURE.md, "Runtime and outputs").
 //!
 //! The CPU f64 reference simulator lives in `plume_compiler::reference`.
 
-pub mod accuracy;
 pub mod bench;
-pub mod camera;
-pub mod depth_quantise;
-pub mod depth_sort;
-pub mod draw;
-pub mod draw_pipeline;
-pub mod draw_target;
-pub mod error;
-pub mod event_order;
-pub mod export;
-pub mod flock_pass;
-pub mod glow;
-pub mod gpu;
-pub mod graph_bench;
-pub mod graph_instance;
-pub mod images;
-pub mod instance;
-pub mod live_list;
-pub mod offscreen;
-pub mod plot;
-pub mod readback;
-pub mod reference_draw;
-pub mod reference_ribbons;
-pub mod resources;
-pub mod scene_depth;
-pub mod sort;
-pub mod sort_bench;
-pub mod splat;
-pub mod sprite_texture;
-pub mod steps;
-pub mod timer;
-pub mod trail_draw;
-pub mod trail_readback;
+mod device;
+mod draw;
+mod error;
+pub mod oracle;
+pub mod outputs;
+mod sim;
+mod sort;
 
-pub use camera::Camera;
-pub use draw::{DeadSlots, DepthTest, DrawOptions, DrawTarget, EffectRenderer};
+pub use device::gpu::{Gpu, GpuChoice};
+pub use draw::camera::Camera;
+pub use draw::renderer::EffectRenderer;
+pub use draw::target::{DepthTest, DrawTarget};
 pub use error::RuntimeError;
-pub use gpu::{Gpu, GpuChoice};
-pub use graph_instance::GraphInstance;
-pub use instance::EffectInstance;
-pub use resources::STEPS_PER_SUBMIT;
+pub use sim::effect::Effect;
 /// The wgpu this crate is built against: a host must use the same version.
 pub use wgpu;

@@ -6,15 +6,21 @@
 //!
 //! One module per job: `clock` (real time to fixed steps), `orbit` (the camera), `reload`
 //! (watching and recompiling), `scene` (the frame texture and its copy to the window),
-//! `overlay` (on-screen text), `probe` (GPU figures read without waiting) and `window` (the
-//! winit application that ties them together).
+//! `overlay` (on-screen text), `probe` (GPU figures read without waiting), and the winit
+//! application that ties them together: `state` (what exists once the window is open),
+//! `window` (opening it and its events), `live` (loading, reloading and restarting the
+//! effect), `frame` (one frame's steps and draw, screenshots) and `figures` (the text shown).
 
 mod clock;
+mod figures;
+mod frame;
+mod live;
 mod orbit;
 mod overlay;
 mod probe;
 mod reload;
 mod scene;
+mod state;
 mod window;
 
 use std::path::PathBuf;

@@ -3,7 +3,7 @@
 
 use glam::{DVec3, Mat4, Vec3};
 use plume_compiler::ir::CameraIr;
-use plume_runtime::camera::{Camera, FAR, NEAR};
+use plume_runtime::Camera;
 
 /// Radians of orbit per pixel dragged.
 const ORBIT_PER_PIXEL: f64 = 0.005;
@@ -72,7 +72,12 @@ impl Orbit {
     /// View and projection for a window of `aspect` = width / height.
     pub fn camera(&self, aspect: f32) -> Camera {
         let view = Mat4::look_at_rh(self.eye().as_vec3(), self.target.as_vec3(), Vec3::Y);
-        let proj = Mat4::perspective_rh(self.fov_y.to_radians() as f32, aspect, NEAR, FAR);
+        let proj = Mat4::perspective_rh(
+            self.fov_y.to_radians() as f32,
+            aspect,
+            Camera::NEAR,
+            Camera::FAR,
+        );
         Camera::new(view, proj)
     }
 }

@@ -7,7 +7,7 @@ use std::sync::atomic::{AtomicU8, Ordering};
 use std::sync::Arc;
 
 use plume_compiler::reference::Totals;
-use plume_runtime::readback::decode_totals;
+use plume_runtime::Effect;
 
 /// Bytes of the staging buffer: 4 timestamps (u64), then the 6 counters (u32, padded).
 const TIMESTAMPS: u64 = 32;
@@ -187,7 +187,7 @@ impl Probe {
                 self.draw_ms = Some(ms(2));
             }
             if p.counters {
-                self.totals = Some(decode_totals(
+                self.totals = Some(Effect::decode_counters(
                     &data[TIMESTAMPS as usize..],
                     p.capacity,
                     p.steps,

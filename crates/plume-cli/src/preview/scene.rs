@@ -5,8 +5,7 @@
 //! HDR texture and bloomed into the frame, as `plume render` does.
 
 use plume_compiler::schema::Glow;
-use plume_runtime::glow::{GlowPasses, HDR_FORMAT};
-use plume_runtime::offscreen::FORMAT;
+use plume_runtime::outputs::{GlowPasses, FORMAT, HDR_FORMAT};
 use plume_runtime::Gpu;
 
 const BLIT_WGSL: &str = r#"

@@ -1,0 +1,144 @@
+//! The effect running in the preview: (re)loading it from its file, replacing it all or
+//! nothing, restarting it, and looping a one-shot effect whose particles have all died.
+
+use std::time::Instant;
+
+use plume_compiler::graph::CompiledGraph;
+use plume_runtime::{DrawTarget, Effect};
+
+use super::clock::StepClock;
+use super::orbit::Orbit;
+use super::reload::Outcome;
+use super::scene::Scene;
+use super::state::{Loaded, Running};
+use super::Options;
+
+impl Running {
+    /// Reloads the file (`noticed`: when a change was seen; None for the first load).
+    pub(super) fn reload(&mut self, noticed: Option<Instant>) {
+        match self.file.reload() {
+            Outcome::Unchanged => {}
+            Outcome::Replaced(compiled, warnings) => {
+                if !warnings.is_empty() {
+                    eprintln!("{warnings}");
+                }
+                match self.load(*compiled, warnings) {
+                    Ok(()) => {
+                        eprintln!("{}: loaded", self.file.name());
+                        self.problem = None;
+                        // Timed from the save itself (the file's modification time), which
+                        // includes the watcher's debounce and the frame in progress.
+                        self.reload_started = noticed.and(self.file.saved_at());
+                    }
+                    Err(e) => {
+                        eprintln!("{}: error: {e}", self.file.name());
+                        self.problem = Some(e);
+                    }
+                }
+            }
+            Outcome::Invalid(diagnostics) | Outcome::Unreadable(diagnostics) => {
+                eprintln!("{diagnostics}");
+                if self.effect.is_some() {
+                    eprintln!("{}: the last good effect keeps running", self.file.name());
+                }
+                self.problem = Some(diagnostics);
+            }
+        }
+    }
+
+    /// Replaces the running effect by `compiled`, from t = 0; the camera stays where the user
+    /// put it (it starts as the effect's own).
+    pub(super) fn load(&mut self, compiled: CompiledGraph, warnings: String) -> Result<(), String> {
+        let top = &compiled.groups[0].effect.ir;
+        let mut about = format!(
+            "{}: integrator {}; {}",
+            top.name,
+            top.integrator.name(),
+            if top.stateless.is_some() {
+                "stateless (0 bytes of state)"
+            } else {
+                "stateful"
+            }
+        );
+        if compiled.groups.len() > 1 {
+            let names: Vec<&str> = compiled.groups[1..]
+                .iter()
+                .map(|g| g.name.as_str())
+                .collect();
+            about.push_str(&format!(
+                "; groups {} ({} events)",
+                names.join(", "),
+                compiled.streams.len()
+            ));
+        }
+        let dt = top.dt;
+        let camera = top.camera;
+        let glow = top.render.glow;
+        let effect = Effect::from_graph(&self.gpu, compiled).map_err(|e| e.to_string())?;
+        let target = DrawTarget::new(Scene::draw_format(glow.as_ref()));
+        let renderer = effect.renderer(&target).map_err(|e| e.to_string())?;
+        // Last, and all or nothing: the old effect keeps drawing into a matching scene if this
+        // fails.
+        self.scene.set_glow(&self.gpu, glow)?;
+        self.effect = Some(Loaded {
+            effect,
+            renderer,
+            about,
+            warnings,
+        });
+        // Counters read from the old effect mean nothing for the new one.
+        self.probe.totals = None;
+        let mut clock = StepClock::new(dt);
+        clock.scale = self.clock.scale;
+        clock.paused = self.clock.paused;
+        self.clock = clock;
+        self.orbit
+            .get_or_insert_with(|| Orbit::from_effect(&camera));
+        Ok(())
+    }
+
+    /// Restarts the last good effect from t = 0 (the camera stays).
+    pub(super) fn restart(&mut self) {
+        if let Some(good) = self.file.good().cloned() {
+            let warnings = self
+                .effect
+                .as_ref()
+                .map(|l| l.warnings.clone())
+                .unwrap_or_default();
+            if let Err(e) = self.load(good, warnings) {
+                self.problem = Some(e);
+            }
+            self.clock.restart();
+        }
+        self.finished_at = None;
+    }
+
+    /// A one-shot effect (bursts only) whose particles have all died starts again half a
+    /// second later, so the window never sits empty. Not in scripted runs.
+    pub(super) fn loop_if_finished(&mut self, options: &Options) {
+        if options.frames.is_some() || self.clock.paused {
+            return;
+        }
+        let Some(loaded) = &self.effect else {
+            return;
+        };
+        // With groups, the top group's end is not the effect's (its children live on).
+        let top = &loaded.effect;
+        let one_shot = top.group_names().len() == 1
+            && top.compiled().ir.emitters.iter().all(|e| e.rate <= 0.0);
+        let totals = match top.counters() {
+            Some(_) => self.probe.totals,
+            None => top.group_totals(0).ok(),
+        };
+        let done =
+            one_shot && top.steps_done() > 0 && totals.is_some_and(|t| t.alive == 0 && t.steps > 0);
+        if !done {
+            self.finished_at = None;
+            return;
+        }
+        let since = *self.finished_at.get_or_insert_with(Instant::now);
+        if since.elapsed().as_secs_f64() > 0.5 {
+            self.restart();
+        }
+    }
+}

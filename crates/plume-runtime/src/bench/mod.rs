@@ -1,0 +1,78 @@
+//! Benchmarks and measurements, for `plume bench`, `plume accuracy` and the tools in
+//! `examples/`: the update against a copy kernel ([`bench`]), the draw ([`DrawTimes`]), the
+//! events' cost ([`bench_graph`]), the radix sort alone ([`bench_sort`], with the sorter
+//! itself, [`GpuSorter`]), the integrators' error against time per step ([`measure`], plotted
+//! by [`accuracy_svg`]), and the GPU pass timer they share ([`PassTimer`]). Also the knobs the
+//! measurements turn: a renderer with other [`DrawOptions`] ([`renderer_with`]), a GPU buffer
+//! read back ([`read_buffer`]), and the dispatch helpers the layout experiments in `examples/`
+//! share with Plume's kernels ([`grid`], [`bind_buffers`], [`compute_pipeline`]).
+//!
+//! Imports every other folder; nothing imports it.
+
+pub(crate) mod accuracy;
+pub(crate) mod copy;
+pub(crate) mod draw;
+pub(crate) mod graph;
+pub(crate) mod plot;
+pub(crate) mod scene;
+pub(crate) mod sort;
+pub(crate) mod timer;
+pub(crate) mod timing;
+pub(crate) mod update;
+
+pub use crate::device::readback::read_buffer;
+pub use crate::draw::raster::{DeadSlots, DrawOptions};
+pub use crate::sort::radix::{GpuSorter, Ranking, SortAlgorithm};
+pub use accuracy::{
+    field_sweep, measure, measured_effect, pareto_front, reference, AccuracyPlan, AccuracyRow,
+    Engine, FieldRow, ReferenceKind,
+};
+pub use draw::{DrawTimes, DRAW_REPEATS};
+pub use graph::{bench_graph, scaled, GraphBench};
+pub use plot::accuracy_svg;
+pub use scene::{bench_effect, bench_effect_occupied, compile_bench, draw_scene};
+pub use sort::{bench_sort, SortBench, SortTime};
+pub use timer::{median_after_warmup, PassTimer, TimingSource};
+pub use update::{bench, BenchOptions, BenchResult, FIELD_ERROR_SAMPLES, ROUNDS};
+
+use crate::device::gpu::Gpu;
+use crate::draw::renderer::EffectRenderer;
+use crate::draw::target::DrawTarget;
+use crate::error::RuntimeError;
+use crate::sim::effect::Effect;
+
+/// A renderer of `effect` into targets like `target` with other choices than the default
+/// ([`DrawOptions`]: another blend, hidden free slots, triangles).
+pub fn renderer_with(
+    effect: &Effect,
+    target: &DrawTarget,
+    options: &DrawOptions,
+) -> Result<EffectRenderer, RuntimeError> {
+    effect.renderer_with(target, options)
+}
+
+/// A 2D dispatch of `threads` threads in workgroups of `workgroup` (x capped at the adapter's
+/// per-dimension limit), as Plume's kernels are dispatched.
+pub fn grid(gpu: &Gpu, threads: u64, workgroup: u64) -> Result<(u32, u32), RuntimeError> {
+    gpu.grid(threads, workgroup)
+}
+
+/// A bind group of `layout` binding whole buffers (by binding index).
+pub fn bind_buffers(
+    gpu: &Gpu,
+    label: &str,
+    layout: &wgpu::BindGroupLayout,
+    entries: &[(u32, &wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    gpu.bind_buffers(label, layout, entries)
+}
+
+/// A compute pipeline of `module`'s `entry` (its layout derived when None).
+pub fn compute_pipeline(
+    gpu: &Gpu,
+    module: &wgpu::ShaderModule,
+    entry: &str,
+    layout: Option<&wgpu::PipelineLayout>,
+) -> wgpu::ComputePipeline {
+    gpu.compute_pipeline(module, entry, layout)
+}

@@ -1,0 +1,11 @@
+//! Device and resources: the GPU handle ([`gpu::Gpu`]: Plume's own device or a host's), a
+//! group's buffers and compute module sized from its layout ([`resources`]), the small
+//! buffers every stage makes ([`buffers`]: filled, staging), and copying buffers back to the
+//! CPU with the decoding of particles and counters ([`readback`]).
+//!
+//! Imports nothing of the crate but [`crate::error`]: every other folder builds on it.
+
+pub(crate) mod buffers;
+pub(crate) mod gpu;
+pub(crate) mod readback;
+pub(crate) mod resources;

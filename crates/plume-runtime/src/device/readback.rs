@@ -1,0 +1,149 @@
+//! Readback: copying GPU buffers to host memory, and decoding the particle buffers' bytes into
+//! [`ParticleRecord`]s and the counters into [`Totals`]. Only `plume run --export`, the tests and
+//! the measurements read particles back; drawing never does.
+
+use glam::DVec3;
+use plume_compiler::passes::layout::Attribute;
+use plume_compiler::reference::{ParticleRecord, Totals};
+use plume_compiler::schedule::Schedule;
+use plume_compiler::CompiledEffect;
+
+use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
+
+/// Marks a free slot (the `id` field) and a particle that never dies.
+pub const DEAD: u32 = u32::MAX;
+
+/// Copies a GPU buffer to host memory (waits for the GPU).
+pub fn read_buffer(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RuntimeError> {
+    let size = buffer.size();
+    let staging = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    gpu.queue.submit([encoder.finish()]);
+    let (tx, rx) = std::sync::mpsc::channel();
+    staging.map_async(wgpu::MapMode::Read, .., move |r| {
+        let _ = tx.send(r);
+    });
+    gpu.wait()?;
+    rx.recv()
+        .map_err(|e| RuntimeError::Readback(e.to_string()))?
+        .map_err(|e| RuntimeError::Readback(e.to_string()))?;
+    let data = staging
+        .get_mapped_range(..)
+        .map_err(|e| RuntimeError::Readback(e.to_string()))?
+        .to_vec();
+    staging.unmap();
+    Ok(data)
+}
+
+/// Reads a buffer of u32 words and returns the first `n`.
+pub fn read_words(gpu: &Gpu, buffer: &wgpu::Buffer, n: usize) -> Result<Vec<u32>, RuntimeError> {
+    Ok(read_buffer(gpu, buffer)?
+        .chunks_exact(4)
+        .take(n)
+        .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+        .collect())
+}
+
+/// The totals from the counters' bytes (free count, spawn base, spawn count, spawned,
+/// dropped, died): alive is the capacity less the free count.
+pub fn decode_totals(counters: &[u8], capacity: u32, steps: u64) -> Totals {
+    let word = |i: usize| {
+        u64::from(u32::from_le_bytes([
+            counters[4 * i],
+            counters[4 * i + 1],
+            counters[4 * i + 2],
+            counters[4 * i + 3],
+        ]))
+    };
+    Totals {
+        steps,
+        alive: u64::from(capacity) - word(0),
+        spawned: word(3),
+        dropped: word(4),
+        died: word(5),
+    }
+}
+
+/// Every slot's particle in the particle buffers' bytes, one entry of `buffers` per buffer in
+/// slot order (None for a free slot), with velocity as the integrator knows it (Verlet's
+/// displacement divided by h) and age and lifetime from the schedule. Each buffer holds its
+/// slots word-major ([`plume_compiler::wgsl::word_index`]): 16-byte word k of its slot i at
+/// k · slots + i.
+pub fn decode_slots(
+    effect: &CompiledEffect,
+    schedule: &Schedule,
+    buffers: &[Vec<u8>],
+) -> Result<Vec<Option<ParticleRecord>>, RuntimeError> {
+    let layout = &effect.layout;
+    let stride = layout.bytes_per_particle as usize;
+    let missing = |what| RuntimeError::Readback(format!("layout has no {what}"));
+    let id_at = layout
+        .word_offset(Attribute::Id)
+        .ok_or_else(|| missing("id"))?;
+    let pos_at = layout
+        .word_offset(Attribute::Position)
+        .ok_or_else(|| missing("position"))?;
+    // Verlet stores the displacement over one substep: velocity is displacement / h.
+    let (vel_at, scale) = match layout.word_offset(Attribute::Velocity) {
+        Some(at) => (at, 1.0),
+        None => (
+            layout
+                .word_offset(Attribute::Displacement)
+                .ok_or_else(|| missing("velocity"))?,
+            1.0 / effect.ir.h(),
+        ),
+    };
+    let die_at = layout.word_offset(Attribute::DeathStep);
+    // A particle that stores its spawn step ages from it (a group fed by events has no other
+    // record of it); the others from the schedule, which gives the same for them.
+    let born_at = layout.word_offset(Attribute::SpawnStep);
+    let tint_at = layout.word_offset(Attribute::Tint);
+    let done = schedule.steps_done() as u32;
+    let dt = effect.ir.dt;
+    let total: usize = buffers.iter().map(|b| b.len()).sum();
+    let mut out = Vec::with_capacity(total / stride.max(1));
+    for (bytes, i) in buffers
+        .iter()
+        .flat_map(|b| (0..b.len() / stride.max(1)).map(move |i| (b, i)))
+    {
+        let slots = bytes.len() / stride;
+        // The 4-byte field w of slot i: lane w % 4 of 16-byte word w / 4.
+        let u = |w: usize| {
+            let at = 16 * ((w / 4) * slots + i) + 4 * (w % 4);
+            u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
+        };
+        let f = |w: usize| f64::from(f32::from_bits(u(w)));
+        let id = u(id_at);
+        if id == DEAD {
+            out.push(None);
+            continue;
+        }
+        out.push(Some(ParticleRecord {
+            id,
+            position: DVec3::new(f(pos_at), f(pos_at + 1), f(pos_at + 2)),
+            velocity: DVec3::new(f(vel_at), f(vel_at + 1), f(vel_at + 2)) * scale,
+            age: match born_at {
+                Some(b) => f64::from(done.wrapping_sub(u(b))) * dt,
+                None => schedule.age(id),
+            },
+            lifetime: die_at.and_then(|w| match born_at {
+                Some(_) if u(w) == DEAD => None,
+                Some(b) => Some(f64::from(u(w).wrapping_sub(u(b)).wrapping_add(1)) * dt),
+                None => schedule.lifetime(id, u(w)),
+            }),
+            // A stored tint, or the one the draw derives from the id.
+            tint: match tint_at {
+                Some(t) => plume_compiler::tint::unpack(u(t)),
+                None => plume_compiler::tint::own(effect.ir.tint(), id),
+            },
+        }));
+    }
+    Ok(out)
+}

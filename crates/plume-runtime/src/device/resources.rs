@@ -1,0 +1,572 @@
+//! An effect's GPU resources: the buffers its compiled layout names, the compute module, and
+//! one bind group per particle buffer. Particle state is split into chunks of at most one
+//! storage binding each, so capacities past the binding limit (2 GiB on Vulkan) run; the free
+//! list, counters and the other buffers are shared by every chunk.
+//!
+//! A stateless effect keeps no particle state: its `particles` binding is a *view* that only a
+//! readback needs, so the view is allocated the first time something reads particles back, and
+//! never for an effect that is only drawn.
+
+use std::borrow::Cow;
+use std::sync::OnceLock;
+
+use plume_compiler::passes::layout::COUNTERS_BYTES;
+use plume_compiler::CompiledEffect;
+
+use crate::device::buffers::{filled_buffer, STORAGE};
+use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
+
+/// Steps recorded per submission: bounds the parameter buffer (256 B a step) and how long
+/// one submission keeps the GPU busy.
+pub const STEPS_PER_SUBMIT: u32 = 256;
+
+/// One particle buffer: global slots `base .. base + len`, and the compute bind group that
+/// binds it (with every shared buffer).
+pub struct Chunk {
+    /// First global slot.
+    pub base: u64,
+    /// Slots held.
+    pub len: u64,
+    /// The particles (or, stateless, the view).
+    pub buffer: wgpu::Buffer,
+    /// The chunk's trail ring (`render.trail`): entry r of chunk slot i at i · (points − 1) + r.
+    pub trail: Option<wgpu::Buffer>,
+    /// Group 0 of the compute module, for this chunk.
+    pub bind_group: wgpu::BindGroup,
+}
+
+/// The depth sort's buffers (for `sort: true`): one key and one slot per padded slot, and the
+/// depth axis uniform the keys are measured along.
+pub struct SortBuffers {
+    /// Depth keys, farthest first after the sort; padding holds the largest key.
+    pub keys: wgpu::Buffer,
+    /// Slots, in draw order after the sort.
+    pub vals: wgpu::Buffer,
+    /// `DepthAxis` (16 bytes).
+    pub depth_axis: wgpu::Buffer,
+}
+
+/// The buffers and bind groups of one effect on one device.
+pub struct Resources {
+    gpu: Gpu,
+    /// Slots per particle buffer (all but the last).
+    pub chunk_slots: u64,
+    chunk_count: u64,
+    chunks: OnceLock<Vec<Chunk>>,
+    /// The stack of free slots (stateful effects).
+    pub free_list: Option<wgpu::Buffer>,
+    /// The counters (stateful effects).
+    pub counters: Option<wgpu::Buffer>,
+    /// The per-step parameters, [`STEPS_PER_SUBMIT`] slots of `params_stride` bytes (stateful).
+    pub params: Option<wgpu::Buffer>,
+    /// Bytes between two steps' parameters (the uniform offset alignment).
+    pub params_stride: u64,
+    /// Each chunk's `Chunk` uniform (base, len), one aligned entry per chunk.
+    chunk_params: wgpu::Buffer,
+    uniform_align: u64,
+    /// The segment table of a stateless effect.
+    pub frame: Option<wgpu::Buffer>,
+    /// The depth sort's buffers.
+    pub sort: Option<SortBuffers>,
+    /// Buffers past the core bindings (7 up: flocking's and the baked field's), by binding.
+    pub extra: Vec<(u32, wgpu::Buffer)>,
+    /// The compiled compute module.
+    pub module: wgpu::ShaderModule,
+    layout: wgpu::BindGroupLayout,
+    /// The layout every compute pipeline of the module shares.
+    pub pipeline_layout: wgpu::PipelineLayout,
+}
+
+fn buffer_entry(
+    binding: u32,
+    ty: wgpu::BufferBindingType,
+    dynamic: bool,
+    min: Option<u64>,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: dynamic,
+            min_binding_size: min.and_then(wgpu::BufferSize::new),
+        },
+        count: None,
+    }
+}
+
+fn sized(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BindingResource<'_> {
+    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+        buffer,
+        offset,
+        size: wgpu::BufferSize::new(size),
+    })
+}
+
+impl Resources {
+    /// Allocates `effect`'s buffers on `gpu`, with at most `max_chunk_slots` particles per
+    /// buffer when given (tests use it to exercise the split on small effects). `shared` holds
+    /// buffers made elsewhere for some bindings (an effect graph's event buffers, which two
+    /// groups bind); the others are allocated here.
+    pub fn new(
+        gpu: &Gpu,
+        effect: &CompiledEffect,
+        max_chunk_slots: Option<u64>,
+        shared: &[(u32, wgpu::Buffer)],
+    ) -> Result<Self, RuntimeError> {
+        let device = &gpu.device;
+        let cap = u64::from(effect.ir.capacity);
+        let bpp = u64::from(effect.layout.bytes_per_particle);
+        let limit = gpu
+            .limits
+            .max_storage_buffer_binding_size
+            .min(gpu.limits.max_buffer_size);
+        let stateless = effect.layout.stateless();
+        // The free list is one binding of 4 bytes a slot: that bounds the capacity.
+        if !stateless && cap * 4 > limit {
+            return Err(RuntimeError::CapacityTooLarge {
+                capacity: effect.ir.capacity,
+                bytes_per_particle: 4,
+                bytes: cap * 4,
+                limit,
+                max_capacity: limit / 4,
+            });
+        }
+        // A trail's ring is split with the particles, so both must fit a binding.
+        let trail_bpp = u64::from(effect.layout.trail_bytes_per_particle);
+        let chunk_slots = (limit / bpp.max(trail_bpp))
+            .min(max_chunk_slots.unwrap_or(u64::MAX))
+            .max(1);
+        let chunk_count = cap.div_ceil(chunk_slots);
+        if effect.ir.flock.is_some() && chunk_count > 1 {
+            return Err(RuntimeError::FlockTooLarge {
+                capacity: effect.ir.capacity,
+                max_capacity: chunk_slots,
+            });
+        }
+        // Allocation failures (the driver's out-of-memory) are caught here and reported with
+        // the sizes, instead of surfacing later as an invalid-buffer error.
+        let out_of_memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let frame = effect.ir.stateless.as_ref().map(|plan| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("frame"),
+                size: plan.table_bytes(),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        let free_list = (!stateless).then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("free_list"),
+                size: cap * 4,
+                usage: STORAGE,
+                mapped_at_creation: false,
+            })
+        });
+        let counters = (!stateless)
+            .then(|| {
+                filled_buffer(
+                    gpu,
+                    "counters",
+                    COUNTERS_BYTES.next_multiple_of(16),
+                    STORAGE,
+                    |bytes| {
+                        bytes.fill(0);
+                        bytes[..4].copy_from_slice(&effect.ir.capacity.to_le_bytes());
+                    },
+                )
+            })
+            .transpose()?;
+        let uniform_align = u64::from(gpu.limits.min_uniform_buffer_offset_alignment).max(16);
+        let params_stride = effect.layout.params_bytes().next_multiple_of(uniform_align);
+        let params = (!stateless).then(|| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("params"),
+                size: params_stride * u64::from(STEPS_PER_SUBMIT),
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            })
+        });
+        let chunk_params = filled_buffer(
+            gpu,
+            "chunks",
+            uniform_align * chunk_count,
+            wgpu::BufferUsages::UNIFORM,
+            |bytes| {
+                for k in 0..chunk_count {
+                    let (base, len) = (k * chunk_slots, chunk_slots.min(cap - k * chunk_slots));
+                    let at = (k * uniform_align) as usize;
+                    bytes[at..at + 4].copy_from_slice(&(base as u32).to_le_bytes());
+                    bytes[at + 4..at + 8].copy_from_slice(&(len as u32).to_le_bytes());
+                }
+            },
+        )?;
+        // Sort keys and slots, padded to a power of two for the bitonic baseline; the padding
+        // holds the largest key so it always sorts last.
+        let sort = match effect.layout.sorts() {
+            true => {
+                let padded = cap.next_power_of_two();
+                Some(SortBuffers {
+                    keys: filled_buffer(gpu, "sort_keys", padded * 4, STORAGE, |b| b.fill(0xff))?,
+                    vals: filled_buffer(gpu, "sort_vals", padded * 4, STORAGE, |b| {
+                        for (j, w) in b.chunks_exact_mut(4).enumerate() {
+                            w.copy_from_slice(&(j as u32).to_le_bytes());
+                        }
+                    })?,
+                    depth_axis: device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("depth_axis"),
+                        size: 16,
+                        usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    }),
+                })
+            }
+            false => None,
+        };
+        // The buffers past the core bindings (7 up, 14 excepted: flocking's and the baked
+        // field's), sized by the layout and shared by every chunk. Boids index slots
+        // globally, so a flocking effect must fit in one particle buffer.
+        let extra: Vec<(u32, wgpu::Buffer)> = effect
+            .layout
+            .bindings
+            .iter()
+            .filter(|b| b.binding >= 7 && b.name != "depth_axis" && b.name != "trail")
+            .map(|b| {
+                let size = b.bytes.max(16);
+                if let Some((_, buffer)) = shared.iter().find(|(at, _)| *at == b.binding) {
+                    return Ok((b.binding, buffer.clone()));
+                }
+                let buffer = if b.name == "collider_data" {
+                    // The height fields' samples, written once here.
+                    let data = plume_compiler::colliders::data(&effect.ir.colliders);
+                    filled_buffer(gpu, b.name, size, STORAGE, |bytes| {
+                        for (dst, h) in bytes.chunks_exact_mut(4).zip(&data) {
+                            dst.copy_from_slice(&h.to_le_bytes());
+                        }
+                    })?
+                } else {
+                    // The event spawn's workgroup counts are read by an indirect dispatch.
+                    let usage = match b.name {
+                        "event_dispatch" => STORAGE | wgpu::BufferUsages::INDIRECT,
+                        _ => STORAGE,
+                    };
+                    device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(b.name),
+                        size,
+                        usage,
+                        mapped_at_creation: false,
+                    })
+                };
+                Ok((b.binding, buffer))
+            })
+            .collect::<Result<_, RuntimeError>>()?;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(&effect.ir.name),
+            source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(&effect.wgsl)),
+        });
+        let rw = wgpu::BufferBindingType::Storage { read_only: false };
+        // One entry per binding of the compiled layout, typed by what it holds.
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("plume"),
+            entries: &effect
+                .layout
+                .bindings
+                .iter()
+                .filter(|b| b.name != EVENT_DISPATCH)
+                .map(|b| match b.name {
+                    "params" => buffer_entry(
+                        b.binding,
+                        wgpu::BufferBindingType::Uniform,
+                        true,
+                        Some(effect.layout.params_bytes()),
+                    ),
+                    "chunk" | "depth_axis" => {
+                        buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
+                    }
+                    "frame" | "fire_frame" | "collider_data" => buffer_entry(
+                        b.binding,
+                        wgpu::BufferBindingType::Storage { read_only: true },
+                        false,
+                        None,
+                    ),
+                    _ => buffer_entry(b.binding, rw, false, None),
+                })
+                .collect::<Vec<_>>(),
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("plume"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let resources = Self {
+            gpu: gpu.clone(),
+            chunk_slots,
+            chunk_count,
+            chunks: OnceLock::new(),
+            free_list,
+            counters,
+            params,
+            params_stride,
+            chunk_params,
+            uniform_align,
+            frame,
+            sort,
+            extra,
+            module,
+            layout,
+            pipeline_layout,
+        };
+        // A stateful effect's particles are its state: allocate them now, so an out-of-memory
+        // is reported when the effect is created.
+        if !stateless {
+            resources.chunks(effect)?;
+        }
+        if let Some(e) = pollster::block_on(out_of_memory.pop()) {
+            let free_list_bytes = resources.free_list.as_ref().map_or(0, |b| b.size());
+            return Err(RuntimeError::OutOfMemory {
+                what: format!(
+                    "{chunk_count} particle buffer(s) of up to {} bytes and a {free_list_bytes}-byte free list ({e})",
+                    chunk_slots * bpp,
+                ),
+                bytes: cap * bpp + free_list_bytes,
+                bytes_per_particle: effect.layout.bytes_per_particle,
+            });
+        }
+        Ok(resources)
+    }
+
+    /// Number of particle buffers the state (or the stateless view) is split into.
+    pub fn chunk_count(&self) -> usize {
+        self.chunk_count as usize
+    }
+
+    /// Whether the particle buffers exist yet (always for a stateful effect; for a stateless
+    /// one, once something has read particles back).
+    pub fn has_chunks(&self) -> bool {
+        self.chunks.get().is_some()
+    }
+
+    /// The particle buffers with their bind groups, allocated on first use.
+    pub fn chunks(&self, effect: &CompiledEffect) -> Result<&[Chunk], RuntimeError> {
+        if let Some(c) = self.chunks.get() {
+            return Ok(c);
+        }
+        let chunks = self.allocate_chunks(effect)?;
+        Ok(self.chunks.get_or_init(|| chunks))
+    }
+
+    fn allocate_chunks(&self, effect: &CompiledEffect) -> Result<Vec<Chunk>, RuntimeError> {
+        let device = &self.gpu.device;
+        let cap = u64::from(effect.ir.capacity);
+        let bpp = u64::from(effect.layout.bytes_per_particle);
+        let out_of_memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let mut chunks = Vec::new();
+        for k in 0..self.chunk_count {
+            let base = k * self.chunk_slots;
+            let len = self.chunk_slots.min(cap - base);
+            let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("particles"),
+                size: len * bpp,
+                usage: STORAGE,
+                mapped_at_creation: false,
+            });
+            // Zeroed by wgpu: id + 1 = 0 marks an entry no particle has written.
+            let trail_bpp = u64::from(effect.layout.trail_bytes_per_particle);
+            let trail = (trail_bpp > 0).then(|| {
+                device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("trail"),
+                    size: len * trail_bpp,
+                    usage: STORAGE,
+                    mapped_at_creation: false,
+                })
+            });
+            let bind_group = self.bind_group(effect, &buffer, trail.as_ref(), k);
+            chunks.push(Chunk {
+                base,
+                len,
+                buffer,
+                trail,
+                bind_group,
+            });
+        }
+        if let Some(e) = pollster::block_on(out_of_memory.pop()) {
+            let trail_bpp = u64::from(effect.layout.trail_bytes_per_particle);
+            return Err(RuntimeError::OutOfMemory {
+                what: format!(
+                    "{} particle buffer(s) of up to {} bytes{} ({e})",
+                    self.chunk_count,
+                    self.chunk_slots * bpp,
+                    if trail_bpp > 0 {
+                        format!(
+                            " and as many trail rings of up to {} bytes",
+                            self.chunk_slots * trail_bpp
+                        )
+                    } else {
+                        String::new()
+                    }
+                ),
+                bytes: cap * (bpp + trail_bpp),
+                bytes_per_particle: effect.layout.bytes_per_particle,
+            });
+        }
+        Ok(chunks)
+    }
+
+    /// Group 0 of the compute module with `particles` (and `trail`) bound to chunk `k`'s.
+    fn bind_group(
+        &self,
+        effect: &CompiledEffect,
+        particles: &wgpu::Buffer,
+        trail: Option<&wgpu::Buffer>,
+        k: u64,
+    ) -> wgpu::BindGroup {
+        let sort = self.sort.as_ref();
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = effect
+            .layout
+            .bindings
+            .iter()
+            .filter(|b| b.name != EVENT_DISPATCH)
+            .map(|b| wgpu::BindGroupEntry {
+                binding: b.binding,
+                resource: match b.name {
+                    "particles" => particles.as_entire_binding(),
+                    "trail" => trail
+                        .expect("a layout with a trail gets trail rings")
+                        .as_entire_binding(),
+                    "free_list" => self
+                        .free_list
+                        .as_ref()
+                        .expect("stateful")
+                        .as_entire_binding(),
+                    "counters" => self
+                        .counters
+                        .as_ref()
+                        .expect("stateful")
+                        .as_entire_binding(),
+                    "params" => sized(
+                        self.params.as_ref().expect("stateful"),
+                        0,
+                        effect.layout.params_bytes(),
+                    ),
+                    "chunk" => sized(&self.chunk_params, k * self.uniform_align, 16),
+                    "frame" => self.frame.as_ref().expect("stateless").as_entire_binding(),
+                    "sort_keys" => sort.expect("sorts").keys.as_entire_binding(),
+                    "sort_vals" => sort.expect("sorts").vals.as_entire_binding(),
+                    "depth_axis" => sort.expect("sorts").depth_axis.as_entire_binding(),
+                    _ => self
+                        .extra_buffer(b.binding)
+                        .expect("every other binding is an extra buffer")
+                        .as_entire_binding(),
+                },
+            })
+            .collect();
+        self.gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("plume"),
+                layout: &self.layout,
+                entries: &entries,
+            })
+    }
+
+    /// The extra buffer at `binding` (flocking's or the baked field's).
+    pub fn extra_buffer(&self, binding: u32) -> Option<&wgpu::Buffer> {
+        self.extra
+            .iter()
+            .find(|(b, _)| *b == binding)
+            .map(|(_, buffer)| buffer)
+    }
+
+    /// The extra buffer the layout calls `name`.
+    pub fn extra_named(&self, effect: &CompiledEffect, name: &str) -> Option<&wgpu::Buffer> {
+        let binding = effect.layout.bindings.iter().find(|b| b.name == name)?;
+        self.extra_buffer(binding.binding)
+    }
+
+    /// A compute pipeline of the module's entry point `entry`, on the shared layout.
+    pub fn pipeline(&self, entry: &str) -> wgpu::ComputePipeline {
+        self.gpu
+            .compute_pipeline(&self.module, entry, Some(&self.pipeline_layout))
+    }
+
+    /// A compute pipeline of `entry` with a layout of only the bindings it uses, and a bind
+    /// group for it from this effect's buffers: for kernels that run with no particle buffer
+    /// bound (a stateless effect's depth keys).
+    pub fn standalone(
+        &self,
+        effect: &CompiledEffect,
+        entry: &str,
+    ) -> (wgpu::ComputePipeline, wgpu::BindGroup) {
+        let device = &self.gpu.device;
+        let pipeline = self.gpu.compute_pipeline(&self.module, entry, None);
+        let sort = self.sort.as_ref();
+        let used = ["frame", "sort_keys", "sort_vals", "depth_axis"];
+        let entries: Vec<wgpu::BindGroupEntry<'_>> = effect
+            .layout
+            .bindings
+            .iter()
+            .filter(|b| used.contains(&b.name))
+            .map(|b| wgpu::BindGroupEntry {
+                binding: b.binding,
+                resource: match b.name {
+                    "frame" => self.frame.as_ref().expect("stateless").as_entire_binding(),
+                    "sort_keys" => sort.expect("sorts").keys.as_entire_binding(),
+                    "sort_vals" => sort.expect("sorts").vals.as_entire_binding(),
+                    _ => sort.expect("sorts").depth_axis.as_entire_binding(),
+                },
+            })
+            .collect();
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some(entry),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &entries,
+        });
+        (pipeline, group)
+    }
+}
+
+impl Resources {
+    /// The `event_prepare_{input}` kernel of a group fed by events, with a bind group of only
+    /// what it uses (counters, the parent's records, the dispatch arguments): the arguments
+    /// are read by the indirect dispatch of `event_spawn`, and a buffer may not be both
+    /// storage and indirect in one dispatch, so the shared bind group leaves them out.
+    pub fn event_prepare(
+        &self,
+        effect: &CompiledEffect,
+        input: usize,
+    ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroup), RuntimeError> {
+        let entry = format!("event_prepare_{input}");
+        let records = format!("event_in_{input}");
+        let missing = |what: &str| RuntimeError::Gpu(format!("{entry}: no {what} buffer"));
+        let pipeline = self.gpu.compute_pipeline(&self.module, &entry, None);
+        let mut entries = Vec::new();
+        for b in &effect.layout.bindings {
+            let buffer = if b.name == "counters" {
+                self.counters.as_ref().ok_or_else(|| missing("counters"))?
+            } else if b.name == records || b.name == EVENT_DISPATCH {
+                self.extra_buffer(b.binding)
+                    .ok_or_else(|| missing(b.name))?
+            } else {
+                continue;
+            };
+            entries.push(wgpu::BindGroupEntry {
+                binding: b.binding,
+                resource: buffer.as_entire_binding(),
+            });
+        }
+        let group = self
+            .gpu
+            .device
+            .create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some(&entry),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            });
+        Ok((pipeline, group))
+    }
+}
+
+/// The binding an event-fed group's spawn dispatch arguments are in (bound only by
+/// [`Resources::event_prepare`]).
+const EVENT_DISPATCH: &str = "event_dispatch";

@@ -1,0 +1,114 @@
+//! What the sprite and trail draws share: a render pipeline of a draw module's entry points
+//! into a target, and bind group 0 of the buffers, texture and scene depth it binds.
+
+use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
+use plume_compiler::wgsl::draw::SCENE_DEPTH_BINDING;
+
+use crate::device::gpu::Gpu;
+use crate::draw::target::DrawTarget;
+use crate::draw::texture::SpriteTexture;
+
+/// A render pipeline of `module`'s (vertex, fragment) entry points into `target`, with its
+/// layout derived from the module (only the bindings the shaders use) and no depth writes.
+pub(crate) fn render_pipeline(
+    gpu: &Gpu,
+    module: &wgpu::ShaderModule,
+    entries: (&str, &str),
+    topology: wgpu::PrimitiveTopology,
+    target: &DrawTarget,
+    blend: wgpu::BlendState,
+) -> wgpu::RenderPipeline {
+    vertex_pipeline(gpu, module, entries, topology, target, blend, None, &[])
+}
+
+/// [`render_pipeline`] with a pipeline layout of the caller's (None: derived) and vertex
+/// buffers (the reference drawing feeds its quads and ribbons so).
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn vertex_pipeline(
+    gpu: &Gpu,
+    module: &wgpu::ShaderModule,
+    (vs, fs): (&str, &str),
+    topology: wgpu::PrimitiveTopology,
+    target: &DrawTarget,
+    blend: wgpu::BlendState,
+    layout: Option<&wgpu::PipelineLayout>,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+) -> wgpu::RenderPipeline {
+    gpu.device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some(vs),
+            layout,
+            vertex: wgpu::VertexState {
+                module,
+                entry_point: Some(vs),
+                compilation_options: Default::default(),
+                buffers,
+            },
+            primitive: wgpu::PrimitiveState {
+                topology,
+                ..Default::default()
+            },
+            depth_stencil: target.depth.map(|d| wgpu::DepthStencilState {
+                format: d.format,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(d.compare),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: wgpu::MultisampleState {
+                count: target.sample_count,
+                ..Default::default()
+            },
+            fragment: Some(wgpu::FragmentState {
+                module,
+                entry_point: Some(fs),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: target.color_format,
+                    blend: Some(blend),
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        })
+}
+
+/// Bind group 0 of a draw: its buffers, the sprite texture and sampler when it has one, and
+/// the scene depth when it is soft.
+pub(crate) fn draw_group(
+    gpu: &Gpu,
+    pipeline: &wgpu::RenderPipeline,
+    buffers: &[(u32, wgpu::Buffer)],
+    texture: Option<&SpriteTexture>,
+    scene_depth: Option<&wgpu::TextureView>,
+) -> wgpu::BindGroup {
+    let mut bindings: Vec<wgpu::BindGroupEntry<'_>> = buffers
+        .iter()
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    if let Some(t) = texture {
+        bindings.push(wgpu::BindGroupEntry {
+            binding: TEXTURE_BINDING,
+            resource: wgpu::BindingResource::TextureView(&t.view),
+        });
+        bindings.push(wgpu::BindGroupEntry {
+            binding: SAMPLER_BINDING,
+            resource: wgpu::BindingResource::Sampler(&t.sampler),
+        });
+    }
+    if let Some(depth) = scene_depth {
+        bindings.push(wgpu::BindGroupEntry {
+            binding: SCENE_DEPTH_BINDING,
+            resource: wgpu::BindingResource::TextureView(depth),
+        });
+    }
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("draw"),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &bindings,
+    })
+}

@@ -1,0 +1,453 @@
+//! Drawing particles straight from the GPU buffers: the render pipeline of an effect's
+//! generated draw module (`plume_compiler::wgsl::draw`) for one render target, its per-frame
+//! `DrawView` uniform, and how many instances a draw issues.
+//!
+//! - A stateful effect draws its live slots: by default through a compacted list of them
+//!   (order kept), or one instance per slot with free slots as degenerate quads
+//!   ([`DeadSlots`]). With `sort: true` it draws through the sorted slots, and only as many
+//!   instances as are alive: a one-thread kernel writes the indirect draw's instance count
+//!   (capacity − free count) on the GPU, so nothing is read back.
+//! - A stateless effect draws the slots of its segment table (a count the CPU knows); each
+//!   vertex computes its particle from the closed form, so no compute pass runs (a sorted one
+//!   still computes keys and sorts them).
+//!
+//! The draw tests depth against the host's depth buffer when the target has one, and never
+//! writes it: particles are translucent.
+
+use std::sync::atomic::{AtomicU32, Ordering};
+
+use plume_compiler::schema::Blend;
+use plume_compiler::wgsl::draw::{DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
+use plume_compiler::CompiledEffect;
+
+use crate::device::buffers::{filled_buffer, staging, STORAGE};
+use crate::device::gpu::Gpu;
+use crate::device::resources::Resources;
+use crate::draw::camera::Camera;
+use crate::draw::live_list::LiveList;
+use crate::draw::pipeline::{draw_group, render_pipeline};
+use crate::draw::texture::SpriteTexture;
+use crate::draw::trail::TrailDraw;
+use crate::error::RuntimeError;
+
+use crate::draw::target::DrawTarget;
+
+/// How a stateful, unsorted draw skips the free slots (a sorted draw and a stateless draw
+/// already issue only the live instances). The default is the compacted list: on an H100 it
+/// was faster at every occupancy measured, 1% to 75% alive (docs/performance.md), because a
+/// hidden quad still costs its vertices while listing 10M slots costs 0.4 ms.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DeadSlots {
+    /// One instance per slot; the vertex shader turns a free slot into a degenerate quad.
+    Hidden,
+    /// A compacted list of the live slots first (three compute passes, [`crate::draw::live_list`]),
+    /// then an indirect draw of exactly those.
+    #[default]
+    Compacted,
+}
+
+/// Choices of a draw beyond its target.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DrawOptions {
+    /// Another blend state than the effect's (the benchmark measures blending's cost with
+    /// `REPLACE`).
+    pub blend: Option<wgpu::BlendState>,
+    /// How free slots are skipped.
+    pub dead_slots: DeadSlots,
+    /// The sprite's geometry: a quad (the default) or one triangle around the disc.
+    pub primitive: Primitive,
+}
+
+/// How many instances a draw issues.
+enum Instances {
+    /// One per slot of the capacity.
+    Slots(u32),
+    /// The stateless frame's threads, set when the frame is prepared.
+    Frame(AtomicU32),
+    /// The compacted live slots, drawn indirectly.
+    Compacted(Box<LiveList>),
+    /// Written on the GPU: an indirect draw whose instance count is capacity − free count.
+    Alive {
+        args: wgpu::Buffer,
+        kernel: wgpu::ComputePipeline,
+        group: wgpu::BindGroup,
+    },
+}
+
+/// Writes the indirect draw's instance count from the counters: capacity − free count (word
+/// 4 of `args` holds the capacity and word 0 the vertices per sprite, written once).
+const DRAW_ARGS_WGSL: &str = r#"
+@group(0) @binding(0) var<storage, read> counters: array<u32>;
+@group(0) @binding(1) var<storage, read_write> args: array<u32>;
+
+@compute @workgroup_size(1)
+fn draw_args() {
+    args[1] = args[4] - min(counters[0], args[4]);
+}
+"#;
+
+/// One group's draw into one kind of target (its ribbons, then its sprites): a part of the
+/// public [`crate::EffectRenderer`], prepared each frame by [`crate::Effect::prepare_draw`].
+pub(crate) struct GroupDraw {
+    pipeline: wgpu::RenderPipeline,
+    view: wgpu::Buffer,
+    group: wgpu::BindGroup,
+    /// What bind group 0 holds besides the scene depth, to rebuild it with another one.
+    buffers: Vec<(u32, wgpu::Buffer)>,
+    texture: Option<SpriteTexture>,
+    /// Whether the draw module fades sprites near the scene depth (`render.soft`).
+    soft: bool,
+    /// The ribbons (`render.trail`), drawn before the sprites.
+    trail: Option<TrailDraw>,
+    instances: Instances,
+    /// Vertices per sprite (4: a quad strip; 3: a triangle).
+    vertices: u32,
+    size_scale: f32,
+    gpu: Gpu,
+}
+
+impl GroupDraw {
+    /// The draw of `effect`, whose buffers `res` holds, into `target`.
+    pub(crate) fn new(
+        gpu: &Gpu,
+        effect: &CompiledEffect,
+        res: &Resources,
+        target: &DrawTarget,
+        options: &DrawOptions,
+    ) -> Result<Self, RuntimeError> {
+        if let Some(flags) = gpu.downlevel {
+            if !flags.contains(wgpu::DownlevelFlags::VERTEX_STORAGE) {
+                return Err(RuntimeError::Unsupported(format!(
+                    "{} cannot read storage buffers in vertex shaders, which drawing from the GPU buffers needs; use a Vulkan adapter (without a GPU: Debian's mesa-vulkan-drivers gives lavapipe)",
+                    gpu.info.name
+                )));
+            }
+        }
+        let device = &gpu.device;
+        let stateless = effect.layout.stateless();
+        let compacted = options.dead_slots == DeadSlots::Compacted && !stateless && !effect.ir.sort;
+        let live = match compacted {
+            true => Some(LiveList::new(gpu, res, effect, options.primitive)?),
+            false => None,
+        };
+        let soft = effect.ir.render.soft.is_some() && target.depth.is_some();
+        if soft && target.sample_count != 1 {
+            return Err(RuntimeError::Unsupported(format!(
+                "soft particles (render.soft) read the depth buffer as a single-sample texture; draw {:?} into a pass with one sample per pixel, or leave render.soft out",
+                effect.ir.name
+            )));
+        }
+        let shape = DrawShape {
+            through_list: effect.ir.sort || compacted,
+            primitive: options.primitive,
+            soft,
+            ..draw_shape(effect, res)
+        };
+        let (module, mut entries) =
+            draw_module(gpu, effect, res, &shape, live.as_ref().map(|l| &l.list))?;
+        let blend = options.blend.unwrap_or(blend_state(effect.ir.render.blend));
+        let topology = match options.primitive {
+            Primitive::Quad => wgpu::PrimitiveTopology::TriangleStrip,
+            Primitive::Triangle => wgpu::PrimitiveTopology::TriangleList,
+        };
+        let pipeline = render_pipeline(gpu, &module, ("vs", "fs"), topology, target, blend);
+        let view = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("draw view"),
+            size: DRAW_VIEW_BYTES,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        entries.push((0, view.clone()));
+        let texture = match &effect.ir.render.texture {
+            Some(t) => Some(SpriteTexture::new(gpu, t)?),
+            None => None,
+        };
+        let placeholder = match (soft, &target.depth) {
+            (true, Some(test)) => Some(crate::draw::scene_depth::far_placeholder(gpu, test)?),
+            _ => None,
+        };
+        let group = draw_group(
+            gpu,
+            &pipeline,
+            &entries,
+            texture.as_ref(),
+            placeholder.as_ref(),
+        );
+        let trail = match &effect.ir.render.trail {
+            Some(_) if !stateless => Some(TrailDraw::new(
+                gpu,
+                effect,
+                res,
+                DrawShape {
+                    // Every slot, in the depth order when there is one: the compacted list
+                    // would need its own indirect count.
+                    through_list: effect.ir.sort,
+                    primitive: Primitive::Quad,
+                    ..shape
+                },
+                target,
+                blend,
+                &view,
+                placeholder.as_ref(),
+            )?),
+            _ => None,
+        };
+        let instances = if let Some(live) = live {
+            Instances::Compacted(Box::new(live))
+        } else if stateless {
+            Instances::Frame(AtomicU32::new(0))
+        } else if effect.ir.sort {
+            alive_instances(gpu, res, effect.ir.capacity, options.primitive)?
+        } else {
+            Instances::Slots(effect.ir.capacity)
+        };
+        gpu.take_error()?;
+        Ok(Self {
+            pipeline,
+            view,
+            group,
+            buffers: entries,
+            texture,
+            soft,
+            trail,
+            instances,
+            vertices: options.primitive.vertices(),
+            size_scale: 1.0,
+            gpu: gpu.clone(),
+        })
+    }
+
+    /// Whether this draw fades sprites near the scene's depth (the effect has `render.soft` and
+    /// the target a depth buffer): then bind the host's depth with [`Self::set_scene_depth`].
+    pub(crate) fn is_soft(&self) -> bool {
+        self.soft
+    }
+
+    /// Binds the host's depth buffer for soft particles (see
+    /// [`crate::EffectRenderer::set_scene_depth`]); does nothing for a draw that is not soft.
+    pub(crate) fn set_scene_depth(&mut self, depth: &wgpu::TextureView) {
+        if self.soft {
+            self.group = draw_group(
+                &self.gpu,
+                &self.pipeline,
+                &self.buffers,
+                self.texture.as_ref(),
+                Some(depth),
+            );
+            if let Some(trail) = &mut self.trail {
+                trail.set_scene_depth(&self.gpu, depth);
+            }
+        }
+    }
+
+    /// Scales every sprite's size (1: the effect's own sizes).
+    pub(crate) fn set_size_scale(&mut self, scale: f32) {
+        self.size_scale = scale;
+    }
+
+    /// Records the frame's `DrawView` (camera and steps done) into `encoder`, as a copy, so
+    /// that several prepares in one submission each draw with their own.
+    pub(crate) fn write_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+        steps: u64,
+    ) -> Result<(), RuntimeError> {
+        let bytes = draw_view_bytes(camera, steps, self.size_scale);
+        let src = staging(&self.gpu, "draw view", &bytes)?;
+        encoder.copy_buffer_to_buffer(&src, 0, &self.view, 0, DRAW_VIEW_BYTES);
+        Ok(())
+    }
+
+    /// Records what decides the instances on the GPU: the live count, or the compacted list.
+    pub(crate) fn record_instance_count(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+    ) -> Result<(), RuntimeError> {
+        match &self.instances {
+            Instances::Alive { kernel, group, .. } => {
+                pass.set_pipeline(kernel);
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+            Instances::Compacted(live) => live.record(pass)?,
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// Whether the draw needs [`Self::record_instance_count`] each frame.
+    pub(crate) fn counts_on_gpu(&self) -> bool {
+        matches!(
+            self.instances,
+            Instances::Alive { .. } | Instances::Compacted(_)
+        )
+    }
+
+    /// Sets a stateless draw's instances (the frame's threads).
+    pub(crate) fn set_frame_instances(&self, threads: u32) {
+        if let Instances::Frame(n) = &self.instances {
+            n.store(threads, Ordering::Relaxed);
+        }
+    }
+
+    /// Records the draw into the caller's render pass (after its preparation in the same or an
+    /// earlier submission). Sets its own pipeline and bind group 0.
+    pub(crate) fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        if let Some(trail) = &self.trail {
+            trail.draw(pass);
+        }
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.group, &[]);
+        let vertices = 0..self.vertices;
+        match &self.instances {
+            Instances::Slots(n) => pass.draw(vertices, 0..*n),
+            Instances::Frame(n) => {
+                let n = n.load(Ordering::Relaxed);
+                if n > 0 {
+                    pass.draw(vertices, 0..n);
+                }
+            }
+            Instances::Alive { args, .. } => pass.draw_indirect(args, 0),
+            Instances::Compacted(live) => pass.draw_indirect(&live.args, 0),
+        }
+    }
+}
+
+/// An indirect draw of the live particles (a sorted stateful effect: they come first in the
+/// depth order) and the kernel that writes its count.
+fn alive_instances(
+    gpu: &Gpu,
+    res: &Resources,
+    capacity: u32,
+    primitive: Primitive,
+) -> Result<Instances, RuntimeError> {
+    let device = &gpu.device;
+    let args = filled_buffer(
+        gpu,
+        "draw args",
+        32,
+        STORAGE | wgpu::BufferUsages::INDIRECT,
+        |b| {
+            b[..4].copy_from_slice(&primitive.vertices().to_le_bytes());
+            b[16..20].copy_from_slice(&capacity.to_le_bytes());
+        },
+    )?;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("draw args"),
+        source: wgpu::ShaderSource::Wgsl(DRAW_ARGS_WGSL.into()),
+    });
+    let kernel = gpu.compute_pipeline(&module, "draw_args", None);
+    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("draw args"),
+        layout: &kernel.get_bind_group_layout(0),
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: res
+                    .counters
+                    .as_ref()
+                    .expect("a stateful effect has counters")
+                    .as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: args.as_entire_binding(),
+            },
+        ],
+    });
+    Ok(Instances::Alive {
+        args,
+        kernel,
+        group,
+    })
+}
+
+/// The blend state of an effect's `Blend`: non-premultiplied "over" for `Alpha`; for
+/// `Additive`, src · α added to the target (alpha composited over, so it stays 1).
+pub(crate) fn blend_state(blend: Blend) -> wgpu::BlendState {
+    match blend {
+        Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
+        Blend::Additive => wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::SrcAlpha,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent::OVER,
+        },
+    }
+}
+
+/// The draw module's shape on this device: how many particle buffers it binds (a stateless
+/// effect binds none), through the depth order when the effect sorts, quads, no splat.
+pub(crate) fn draw_shape(effect: &CompiledEffect, res: &Resources) -> DrawShape {
+    DrawShape {
+        chunks: if effect.layout.stateless() {
+            1
+        } else {
+            res.chunk_count() as u32
+        },
+        chunk_slots: res.chunk_slots.min(u64::from(u32::MAX)) as u32,
+        ..DrawShape::single(&effect.ir)
+    }
+}
+
+/// The draw module of `shape` (the compiled one when it matches) and the buffers its bindings
+/// 1 and up hold: the slot list (`list`, else the depth order), then the particle buffers or
+/// the frame table. Binding 0, the `DrawView`, is the caller's.
+pub(crate) fn draw_module(
+    gpu: &Gpu,
+    effect: &CompiledEffect,
+    res: &Resources,
+    shape: &DrawShape,
+    list: Option<&wgpu::Buffer>,
+) -> Result<(wgpu::ShaderModule, Vec<(u32, wgpu::Buffer)>), RuntimeError> {
+    // The compiled effect carries the one-buffer module; other shapes are emitted here.
+    let source = if *shape == DrawShape::single(&effect.ir) {
+        effect.draw_wgsl.clone()
+    } else {
+        plume_compiler::wgsl::draw::emit(&effect.ir, &effect.layout, shape)
+    };
+    let module = gpu
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("draw"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+    let mut entries = Vec::new();
+    if shape.through_list {
+        let order = match list {
+            Some(list) => list.clone(),
+            None => crate::sort::depth::sort_buffers(res)?.vals.clone(),
+        };
+        entries.push((1, order));
+    }
+    if effect.layout.stateless() {
+        let frame = res
+            .frame
+            .as_ref()
+            .expect("a stateless effect has a frame table");
+        entries.push((FIRST_DATA_BINDING, frame.clone()));
+    } else {
+        for (k, chunk) in res.chunks(effect)?.iter().enumerate() {
+            entries.push((FIRST_DATA_BINDING + k as u32, chunk.buffer.clone()));
+        }
+    }
+    Ok((module, entries))
+}
+
+/// The `DrawView` uniform's bytes: view and projection matrices, steps done (mod 2^32, as the
+/// kernels' step index and die_at wrap), the size scale.
+pub(crate) fn draw_view_bytes(camera: &Camera, steps: u64, size_scale: f32) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(DRAW_VIEW_BYTES as usize);
+    for m in [camera.view, camera.proj] {
+        for x in m.to_cols_array() {
+            bytes.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    bytes.extend_from_slice(&(steps as u32).to_le_bytes());
+    bytes.extend_from_slice(&size_scale.to_le_bytes());
+    bytes.extend_from_slice(&[0; 8]);
+    bytes
+}

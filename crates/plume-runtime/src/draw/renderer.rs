@@ -1,0 +1,183 @@
+//! The public draw of an effect: [`EffectRenderer`], every group's draw (ribbons, then sprites)
+//! into one kind of target, and the [`Effect`] methods that make one and prepare it each frame.
+//! The draw is recorded into the caller's render pass; everything it needs first is recorded
+//! into the caller's encoder, outside any pass.
+
+use plume_compiler::reference::ParticleRecord;
+
+use crate::draw::camera::Camera;
+use crate::draw::raster::{DrawOptions, GroupDraw};
+use crate::draw::target::DrawTarget;
+use crate::error::RuntimeError;
+use crate::sim::effect::Effect;
+
+/// An effect's draw into render targets like one [`DrawTarget`]: each group's draw module on
+/// a render pipeline for that target, trails included. Made by [`Effect::renderer`], prepared
+/// each frame by [`Effect::prepare_draw`], recorded into a render pass by [`Self::draw`].
+pub struct EffectRenderer {
+    /// (group index, its draw), in group order.
+    parts: Vec<(usize, GroupDraw)>,
+}
+
+impl EffectRenderer {
+    /// Records the draw of every group, in group order, into the caller's render pass (after
+    /// [`Effect::prepare_draw`] in the same or an earlier submission). Sets its own pipelines
+    /// and bind group 0.
+    pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        for (_, part) in &self.parts {
+            part.draw(pass);
+        }
+    }
+
+    /// Whether this draw fades sprites near the scene's depth (a group has `render.soft` and
+    /// the target a depth buffer): then bind the host's depth with [`Self::set_scene_depth`].
+    pub fn is_soft(&self) -> bool {
+        self.parts.iter().any(|(_, part)| part.is_soft())
+    }
+
+    /// Binds the host's depth buffer for soft particles: a depth-only view (of a texture
+    /// created with `TEXTURE_BINDING`, single-sampled, of a depth format) holding the scene's
+    /// depth, read as an unfilterable float texture. It may be the very texture the render pass
+    /// tests against if that pass keeps its depth attachment read-only (`depth_ops: None`) and
+    /// the adapter offers `DownlevelFlags::READ_ONLY_DEPTH_STENCIL` (Vulkan does; GL does not:
+    /// there, write the scene's depth into a second texture as well and bind that one).
+    /// Call it again when the texture changes (a resize); until the first call sprites are not
+    /// faded. Does nothing for a draw that is not soft.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{DrawTarget, Effect, Gpu};
+    /// let source = r#"Effect(name: "mist", capacity: 8,
+    ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    ///     render: Render(soft: Some(0.5)))"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let mist = Effect::from_source(&gpu, source, &Default::default())?;
+    /// let depth_format = wgpu::TextureFormat::Depth32Float;
+    /// let target = DrawTarget::new(wgpu::TextureFormat::Rgba8Unorm).with_depth(depth_format);
+    /// let mut particles = mist.renderer(&target)?;
+    /// assert!(particles.is_soft());
+    /// // The host's depth buffer, made bindable.
+    /// let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    /// let depth = gpu.texture_2d("host depth", (640, 360), depth_format, usage);
+    /// particles.set_scene_depth(&depth.create_view(&Default::default()));
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn set_scene_depth(&mut self, depth: &wgpu::TextureView) {
+        for (_, part) in &mut self.parts {
+            part.set_scene_depth(depth);
+        }
+    }
+
+    /// Scales every sprite's size (1: the effect's own sizes).
+    pub fn set_size_scale(&mut self, scale: f32) {
+        for (_, part) in &mut self.parts {
+            part.set_size_scale(scale);
+        }
+    }
+
+    /// The first group this renderer draws (the top-level one, unless it draws one group
+    /// alone): whose background a headless image is cleared to.
+    pub(crate) fn first_group(&self) -> usize {
+        self.parts.first().map_or(0, |(g, _)| *g)
+    }
+
+    /// Records what decides every part's instances on the GPU (the live count, or the
+    /// compacted list), as [`Effect::prepare_draw`] does (the benchmark times it alone).
+    pub(crate) fn record_instance_counts(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+    ) -> Result<(), RuntimeError> {
+        for (_, part) in &self.parts {
+            part.record_instance_count(pass)?;
+        }
+        Ok(())
+    }
+}
+
+impl Effect {
+    /// A draw of this effect, every group, into render targets like `target`. Create one per
+    /// kind of target; reuse it every frame.
+    pub fn renderer(&self, target: &DrawTarget) -> Result<EffectRenderer, RuntimeError> {
+        self.renderer_with(target, &DrawOptions::default())
+    }
+
+    /// Like [`Self::renderer`] with other choices ([`DrawOptions`]: the benchmarks' and the
+    /// tests').
+    pub(crate) fn renderer_with(
+        &self,
+        target: &DrawTarget,
+        options: &DrawOptions,
+    ) -> Result<EffectRenderer, RuntimeError> {
+        let parts = (0..self.groups().len())
+            .map(|g| Ok((g, self.group_draw(g, target, options)?)))
+            .collect::<Result<_, RuntimeError>>()?;
+        Ok(EffectRenderer { parts })
+    }
+
+    /// A renderer that draws group `g` alone (the tests compare each group's draw).
+    pub(crate) fn group_renderer(
+        &self,
+        g: usize,
+        target: &DrawTarget,
+    ) -> Result<EffectRenderer, RuntimeError> {
+        let part = self.group_draw(g, target, &DrawOptions::default())?;
+        Ok(EffectRenderer {
+            parts: vec![(g, part)],
+        })
+    }
+
+    fn group_draw(
+        &self,
+        g: usize,
+        target: &DrawTarget,
+        options: &DrawOptions,
+    ) -> Result<GroupDraw, RuntimeError> {
+        let group = self.group(g)?;
+        GroupDraw::new(&group.gpu, &group.effect, &group.res, target, options)
+    }
+
+    /// Records what a draw from `camera` needs this frame into the caller's `encoder`, outside
+    /// any render pass, for every group `renderer` draws: the camera and the steps done; for a
+    /// stateless group its segment table; for `sort: true` the depth keys and their sort along
+    /// the camera's axis, and the live count of the indirect draw. Then call
+    /// [`EffectRenderer::draw`] in a render pass. An unsorted stateless effect records no
+    /// compute pass at all.
+    pub fn prepare_draw(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        renderer: &EffectRenderer,
+        camera: &Camera,
+    ) -> Result<(), RuntimeError> {
+        for (g, part) in &renderer.parts {
+            let frame = self.group(*g)?.prepare_frame(encoder, camera)?;
+            part.write_view(encoder, camera, frame.steps)?;
+            part.set_frame_instances(frame.threads);
+            if part.counts_on_gpu() {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("draw count"),
+                    timestamp_writes: None,
+                });
+                part.record_instance_count(&mut pass)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// The effect's own camera (the top-level group's `camera`) for an image of `aspect` =
+    /// width / height. A host may draw from any [`Camera`] of its own instead.
+    pub fn camera(&self, aspect: f32) -> Camera {
+        Camera::from_effect(&self.compiled().ir.camera, aspect)
+    }
+
+    /// The live particles of every group in draw order, group by group: each sorted by its
+    /// 16-bit depth keys on the GPU from the effect's camera, farthest first; equal keys by
+    /// id, so the order is the same run after run. An error for a group with `sort: false`.
+    pub fn records_in_draw_order(&self) -> Result<Vec<ParticleRecord>, RuntimeError> {
+        let mut out = Vec::new();
+        for group in self.groups() {
+            out.extend(group.records_in_draw_order()?);
+        }
+        Ok(out)
+    }
+}

@@ -1,0 +1,485 @@
+//! The compute splat: another way to draw `plume render`'s images, in compute shaders only, for
+//! GPUs whose raster units are few (an H100 has graphics units in only a small part of the chip,
+//! and the raster draw of 10M sprites is bound by their vertex and primitive rate; see
+//! docs/performance.md). It gives the raster draw's image: the same sprites (the draw module's
+//! `sprite_at`, through its `project` kernel), coverage tested at pixel centres, the same alpha
+//! falloff and blend, the 8-bit rounding after every blend, in the same order.
+//!
+//! One compute pass: `project` (each sprite's pixel extent, colour and tile count), an exclusive
+//! scan of the counts, one (tile, sprite) entry per tile touched, a stable radix sort of the
+//! entries by tile (so each tile's sprites stay in draw order), each tile's run, then a
+//! workgroup per 16x16 tile composites its sprites in order. Entries are sized from the sprites'
+//! count and grown when a frame needs more (the frame is then drawn again). The embedding API
+//! always draws with the raster pipeline, into the host's render pass.
+
+use plume_compiler::orient::OrientIr;
+use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_TILE};
+
+use crate::device::buffers::{filled_buffer, staging, STORAGE};
+use crate::device::gpu::Gpu;
+use crate::draw::camera::Camera;
+use crate::draw::raster::{draw_module, draw_shape, draw_view_bytes};
+use crate::error::RuntimeError;
+use crate::sim::effect::Effect;
+use crate::sim::group::Group;
+use crate::sort::radix::{GpuSorter, SortProgram};
+
+/// The tile kernels (`splat.wgsl`), their shared layout, and the buffers whose size does not
+/// depend on the number of entries.
+struct Tiles {
+    layout: wgpu::BindGroupLayout,
+    /// clear, emit, find_ranges, raster.
+    kernels: [wgpu::ComputePipeline; 4],
+    params: wgpu::Buffer,
+    splats: wgpu::Buffer,
+    offsets: wgpu::Buffer,
+    counts: wgpu::Buffer,
+    ranges: wgpu::Buffer,
+    image: wgpu::Buffer,
+    status: wgpu::Buffer,
+    boxes: wgpu::Buffer,
+}
+
+/// The entry list of one length: its keys and values, their sort, and the tile kernels'
+/// bind group.
+struct Entries {
+    len: u64,
+    /// The sprites of the entries, sorted by tile (kept for [`Splat::entries_are_complete`]).
+    vals: wgpu::Buffer,
+    sort: SortProgram,
+    group: wgpu::BindGroup,
+}
+
+/// A compute splat of one effect (of one group) into `width` x `height` images.
+pub struct Splat {
+    gpu: Gpu,
+    width: u32,
+    height: u32,
+    tiles_x: u32,
+    tiles_y: u32,
+    /// Sprites projected: one per slot of the capacity (hidden ones touch no tile).
+    count: u32,
+    draw_view: wgpu::Buffer,
+    project: wgpu::ComputePipeline,
+    project_group: wgpu::BindGroup,
+    scan: SortProgram,
+    tiles: Tiles,
+    entries: Entries,
+    additive: bool,
+    background: u32,
+}
+
+/// The one group the splat draws: the effect's, or the error of an effect with groups.
+fn splat_group(effect: &Effect) -> Result<&Group, RuntimeError> {
+    match effect.groups() {
+        [group] => Ok(group),
+        _ => Err(RuntimeError::Output(
+            "the compute splat draws one group; an effect with groups is drawn with the raster pipeline (plume render --draw raster)".into(),
+        )),
+    }
+}
+
+/// The splat's stages, in order.
+pub const STAGES: [&str; 6] = ["project", "scan", "emit", "sort", "ranges", "raster"];
+
+/// The tile kernels' bindings: (binding, read-only storage?, uniform?), as `splat.wgsl`
+/// declares them.
+const TILE_BINDINGS: [(u32, bool, bool); 10] = [
+    (0, true, true),
+    (1, true, false),
+    (2, true, false),
+    (3, true, false),
+    (4, false, false),
+    (5, false, false),
+    (6, false, false),
+    (7, false, false),
+    (8, false, false),
+    (9, true, false),
+];
+
+impl Splat {
+    /// Whether the splat can draw `ir`'s sprites: round (no `texture`), camera-facing
+    /// (`orient: Camera`) and square (no `size_y`), into an 8-bit image (no `glow`), with no
+    /// ribbons (no `trail`).
+    pub fn draws(ir: &plume_compiler::EffectIr) -> bool {
+        ir.render.orient == OrientIr::Camera
+            && ir.render.texture.is_none()
+            && ir.render.glow.is_none()
+            && ir.render.trail.is_none()
+            && ir.render.size_y.is_none()
+    }
+
+    /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
+    /// draw (see [`Self::draws`]) and for an effect with groups (it draws one).
+    pub fn new(effect: &Effect, width: u32, height: u32) -> Result<Self, RuntimeError> {
+        let group = splat_group(effect)?;
+        let gpu = group.gpu.clone();
+        let (res, effect) = (&group.res, &group.effect);
+        let device = &gpu.device;
+        if width == 0 || height == 0 {
+            return Err(RuntimeError::Output(format!(
+                "image size {width}x{height} must be at least 1x1"
+            )));
+        }
+        if !Self::draws(&effect.ir) {
+            let render = &effect.ir.render;
+            let why = match (&render.texture, render.glow, &render.trail) {
+                (_, _, Some(_)) => "followed by ribbons (render.trail)".to_string(),
+                (_, Some(_), None) => "drawn into an HDR image to glow (render.glow)".to_string(),
+                (Some(t), None, None) => format!("textured (render.texture: {:?})", t.file),
+                (None, None, None) if render.size_y.is_some() => {
+                    "of their own height (render.size_y)".to_string()
+                }
+                (None, None, None) => {
+                    format!("oriented (render.orient: {})", render.orient.name())
+                }
+            };
+            return Err(RuntimeError::Output(format!(
+                "the compute splat draws round camera-facing sprites into an 8-bit image only; \
+                 this effect's sprites are {why}: draw it with the raster pipeline \
+                 (plume render --draw raster)"
+            )));
+        }
+        let count = effect.ir.capacity;
+        let shape = DrawShape {
+            splat: true,
+            ..draw_shape(effect, res)
+        };
+        let (module, mut entries) = draw_module(&gpu, effect, res, &shape, None)?;
+        let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
+        let words = |label, n: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: n.max(1) * 4,
+                usage: STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        let draw_view = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("splat draw view"),
+            size: DRAW_VIEW_BYTES,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let layout = tile_layout(&gpu);
+        let tiles = Tiles {
+            kernels: tile_kernels(&gpu, &layout)?,
+            layout,
+            params: device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("splat params"),
+                size: 32,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
+            splats: words("splats", 4 * u64::from(count)),
+            offsets: words("tile offsets", u64::from(count)),
+            counts: words("tile counts", u64::from(count)),
+            ranges: words("tile ranges", 2 * u64::from(tiles_x) * u64::from(tiles_y)),
+            image: words("image", u64::from(width) * u64::from(height)),
+            status: words("splat status", 4),
+            boxes: words("tile boxes", 2 * u64::from(count)),
+        };
+        let [b_view, b_splats, b_counts, b_offsets, b_boxes] = SPLAT_BINDINGS;
+        entries.extend([
+            (0, draw_view.clone()),
+            (
+                b_view,
+                uniform(&gpu, "splat view", &[width, height, tiles_x, count])?,
+            ),
+            (b_splats, tiles.splats.clone()),
+            (b_counts, tiles.counts.clone()),
+            (b_offsets, tiles.offsets.clone()),
+            (b_boxes, tiles.boxes.clone()),
+        ]);
+        let project = gpu.compute_pipeline(&module, "project", None);
+        // `project` uses every binding of its module, so its derived layout holds them all.
+        let project_group = bind(&gpu, &project.get_bind_group_layout(0), &entries);
+        let bg = effect.ir.render.background;
+        // As a clear colour reaches an 8-bit target: each channel rounded to the nearest step.
+        let byte = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u32;
+        let background = byte(bg.x) | byte(bg.y) << 8 | byte(bg.z) << 16 | 255 << 24;
+        let additive = effect.ir.render.blend == plume_compiler::schema::Blend::Additive;
+        // A first guess at the entries: a quarter more than the sprites (most touch one tile).
+        let first = u64::from(count) + u64::from(count) / 4 + 4096;
+        let scan = GpuSorter::new(&gpu).scan_program(&tiles.offsets, u64::from(count))?;
+        let mut splat = Self {
+            entries: Entries {
+                len: 0,
+                vals: tiles.counts.clone(),
+                sort: GpuSorter::new(&gpu).radix_program(&tiles.counts, &tiles.offsets, 0, 8)?,
+                group: project_group.clone(),
+            },
+            gpu,
+            width,
+            height,
+            tiles_x,
+            tiles_y,
+            count,
+            draw_view,
+            project,
+            project_group,
+            scan,
+            tiles,
+            additive,
+            background,
+        };
+        splat.resize(first)?;
+        Ok(splat)
+    }
+
+    /// (Re)builds the entry list for `len` entries: its buffers, its sort (only the bits a
+    /// tile index needs) and the tile kernels' bind group.
+    fn resize(&mut self, len: u64) -> Result<(), RuntimeError> {
+        let device = &self.gpu.device;
+        let make = |label| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: len * 4,
+                usage: STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        let (keys, vals) = (make("splat keys"), make("splat vals"));
+        let tiles = self.tiles_x * self.tiles_y;
+        // Unused entries keep the largest key, whose low bits (all ones) sort after every tile.
+        let key_bits = 32 - tiles.leading_zeros();
+        let words = [
+            self.width,
+            self.height,
+            self.tiles_x,
+            tiles,
+            self.count,
+            len.min(u64::from(u32::MAX)) as u32,
+            u32::from(self.additive),
+            self.background,
+        ];
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        self.gpu.queue.write_buffer(&self.tiles.params, 0, &bytes);
+        let t = &self.tiles;
+        let all = [
+            (0, t.params.clone()),
+            (1, t.splats.clone()),
+            (2, t.offsets.clone()),
+            (3, t.counts.clone()),
+            (4, keys.clone()),
+            (5, vals.clone()),
+            (6, t.ranges.clone()),
+            (7, t.image.clone()),
+            (8, t.status.clone()),
+            (9, t.boxes.clone()),
+        ];
+        self.entries = Entries {
+            len,
+            vals: vals.clone(),
+            sort: GpuSorter::new(&self.gpu).radix_program(&keys, &vals, len, key_bits)?,
+            group: bind(&self.gpu, &t.layout, &all),
+        };
+        Ok(())
+    }
+
+    /// Records what the frame needs before the splat's pass into `encoder`: the effect's
+    /// frame preparation (frame table, depth sort) and the camera.
+    pub fn prepare(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        effect: &Effect,
+        camera: &Camera,
+    ) -> Result<(), RuntimeError> {
+        let frame = splat_group(effect)?.prepare_frame(encoder, camera)?;
+        let src = staging(
+            &self.gpu,
+            "splat draw view",
+            &draw_view_bytes(camera, frame.steps, 1.0),
+        )?;
+        encoder.copy_buffer_to_buffer(&src, 0, &self.draw_view, 0, DRAW_VIEW_BYTES);
+        Ok(())
+    }
+
+    /// Records the splat itself into `pass`: project, scan, entries, sort, ranges, raster.
+    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
+        for stage in STAGES {
+            self.record_stage(pass, stage)?;
+        }
+        Ok(())
+    }
+
+    /// Records one stage of the splat into `pass` (the benchmark times them one by one).
+    pub fn record_stage(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        stage: &str,
+    ) -> Result<(), RuntimeError> {
+        let [clear, emit, ranges, raster] = &self.tiles.kernels;
+        let e = &self.entries;
+        let (x, y) = self.gpu.grid(u64::from(self.count), 256)?;
+        let tiles = u64::from(self.tiles_x) * u64::from(self.tiles_y);
+        match stage {
+            "project" => {
+                pass.set_pipeline(&self.project);
+                pass.set_bind_group(0, &self.project_group, &[]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            "scan" => self.scan.record(pass),
+            "emit" => {
+                let (cx, cy) = self.gpu.grid(e.len.max(tiles), 256)?;
+                pass.set_bind_group(0, &e.group, &[]);
+                pass.set_pipeline(clear);
+                pass.dispatch_workgroups(cx, cy, 1);
+                pass.set_pipeline(emit);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            "sort" => e.sort.record(pass),
+            "ranges" => {
+                let (rx, ry) = self.gpu.grid(e.len, 256)?;
+                pass.set_bind_group(0, &e.group, &[]);
+                pass.set_pipeline(ranges);
+                pass.dispatch_workgroups(rx, ry, 1);
+            }
+            "raster" => {
+                pass.set_bind_group(0, &e.group, &[]);
+                pass.set_pipeline(raster);
+                pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
+            }
+            _ => {
+                return Err(RuntimeError::Output(format!(
+                    "the splat has no stage {stage}"
+                )))
+            }
+        }
+        Ok(())
+    }
+
+    /// Whether the entry list held every entry the last frame needed (read after it ran); if
+    /// not, it is grown to a quarter more than needed, and the frame must be drawn again.
+    pub fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
+        let needed =
+            u64::from(crate::device::readback::read_words(&self.gpu, &self.tiles.status, 1)?[0]);
+        if needed <= self.entries.len {
+            return Ok(true);
+        }
+        self.resize(needed + needed / 4 + 4096)?;
+        Ok(false)
+    }
+
+    /// Draws `effect` from `camera` and returns the image as RGBA8 rows, top row first.
+    pub fn render(&mut self, effect: &Effect, camera: &Camera) -> Result<Vec<u8>, RuntimeError> {
+        loop {
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            self.prepare(&mut encoder, effect, camera)?;
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("splat"),
+                    timestamp_writes: None,
+                });
+                self.record(&mut pass)?;
+            }
+            self.gpu.queue.submit([encoder.finish()]);
+            self.gpu.take_error()?;
+            if self.fits_or_grow()? {
+                return crate::device::readback::read_buffer(&self.gpu, &self.tiles.image);
+            }
+        }
+    }
+
+    /// Whether the last frame's sorted entries hold every sprite exactly as many times as
+    /// `project` counted tiles for it (reads the buffers back; for tests).
+    pub fn entries_are_complete(&self) -> Result<bool, RuntimeError> {
+        let read = |b: &wgpu::Buffer| crate::device::readback::read_words(&self.gpu, b, usize::MAX);
+        let needed = read(&self.tiles.status)?[0] as usize;
+        let counts = read(&self.tiles.counts)?;
+        let sprites = read(&self.entries.vals)?;
+        let mut seen = vec![0u32; counts.len()];
+        for &k in sprites.iter().take(needed) {
+            match seen.get_mut(k as usize) {
+                Some(n) => *n += 1,
+                None => return Ok(false),
+            }
+        }
+        Ok(needed <= sprites.len() && seen == counts[..seen.len()])
+    }
+
+    /// The image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Entries the list holds now.
+    pub fn entries(&self) -> u64 {
+        self.entries.len
+    }
+}
+
+/// The layout every tile kernel shares (each uses a subset).
+fn tile_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = TILE_BINDINGS
+        .iter()
+        .map(
+            |&(binding, read_only, is_uniform)| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: if is_uniform {
+                        wgpu::BufferBindingType::Uniform
+                    } else {
+                        wgpu::BufferBindingType::Storage { read_only }
+                    },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+        )
+        .collect();
+    gpu.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("splat tiles"),
+            entries: &entries,
+        })
+}
+
+/// The four tile kernels of `splat.wgsl` on the shared layout.
+fn tile_kernels(
+    gpu: &Gpu,
+    layout: &wgpu::BindGroupLayout,
+) -> Result<[wgpu::ComputePipeline; 4], RuntimeError> {
+    let device = &gpu.device;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("splat"),
+        source: wgpu::ShaderSource::Wgsl(include_str!("splat.wgsl").into()),
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("splat tiles"),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    let kernel = |entry| gpu.compute_pipeline(&module, entry, Some(&pipeline_layout));
+    let kernels = [
+        kernel("clear"),
+        kernel("emit"),
+        kernel("find_ranges"),
+        kernel("raster"),
+    ];
+    gpu.take_error()?;
+    Ok(kernels)
+}
+
+/// A uniform buffer of `words`.
+fn uniform(gpu: &Gpu, label: &str, words: &[u32]) -> Result<wgpu::Buffer, RuntimeError> {
+    filled_buffer(
+        gpu,
+        label,
+        (words.len() as u64 * 4).next_multiple_of(16),
+        wgpu::BufferUsages::UNIFORM,
+        |b| {
+            for (w, out) in words.iter().zip(b.chunks_exact_mut(4)) {
+                out.copy_from_slice(&w.to_le_bytes());
+            }
+        },
+    )
+}
+
+/// A bind group of `layout` from (binding, buffer) pairs.
+fn bind(gpu: &Gpu, layout: &wgpu::BindGroupLayout, all: &[(u32, wgpu::Buffer)]) -> wgpu::BindGroup {
+    let entries: Vec<(u32, &wgpu::Buffer)> = all.iter().map(|(b, buffer)| (*b, buffer)).collect();
+    gpu.bind_buffers("splat", layout, &entries)
+}

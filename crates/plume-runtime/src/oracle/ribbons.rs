@@ -1,0 +1,162 @@
+//! The reference drawing of trails (`render.trail`), beside [`crate::oracle::sprites`]'s
+//! sprites: each particle's ribbon points (read back from the GPU's rings, or the f64
+//! reference's), their vertices placed on the CPU in f64 by `TrailIr::ribbon_vertices` and
+//! coloured there, drawn as triangles by a fixed shader before the sprites.
+
+use std::collections::HashMap;
+
+use glam::{DVec3, Mat4};
+use plume_compiler::ir::EffectIr;
+use plume_compiler::reference::ParticleRecord;
+
+use crate::device::gpu::Gpu;
+use crate::draw::pipeline::vertex_pipeline;
+use crate::draw::raster::blend_state;
+use crate::draw::target::DrawTarget;
+use crate::outputs::offscreen::FORMAT;
+
+/// One ribbon vertex: world position, side (−1 or +1 across the strip), colour.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RibbonVertex {
+    /// Position in world space.
+    pub position: [f32; 3],
+    /// −1 or +1: which edge of the strip.
+    pub across: f32,
+    /// Colour and opacity.
+    pub color: [f32; 4],
+}
+
+/// Bytes of one vertex: a vec3, a float and a vec4 of f32.
+pub const RIBBON_VERTEX_BYTES: u64 = 32;
+
+/// The ribbons of `records` (in draw order) whose points `trails` holds by id, facing a camera
+/// with view matrix `view`, as a triangle list: each segment the two triangles the GPU's strip
+/// makes of it. Colours are the particle's at its life fraction times the trail's at each
+/// point's fraction.
+pub fn ribbons(
+    records: &[ParticleRecord],
+    trails: &[(u32, Vec<DVec3>)],
+    ir: &EffectIr,
+    view: Mat4,
+) -> Vec<RibbonVertex> {
+    let Some(trail) = &ir.render.trail else {
+        return Vec::new();
+    };
+    // The eye: where the view matrix takes the origin from.
+    let eye = view.as_dmat4().inverse().transform_point3(DVec3::ZERO);
+    let by_id: HashMap<u32, &Vec<DVec3>> = trails.iter().map(|(id, p)| (*id, p)).collect();
+    let f32s = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+    let mut out = Vec::new();
+    for r in records {
+        let Some(points) = by_id.get(&r.id) else {
+            continue;
+        };
+        if points.len() < 2 || !r.position.is_finite() {
+            continue;
+        }
+        let life = match r.lifetime {
+            Some(l) if l > 0.0 => (r.age / l).clamp(0.0, 1.0),
+            _ => 0.0,
+        };
+        let c = ir.render.color_at(life);
+        let particle = [c[0] * r.tint.x, c[1] * r.tint.y, c[2] * r.tint.z, c[3]];
+        let sides = trail.ribbon_vertices(points, eye, 1.0);
+        let vertex = |j: usize, side: usize| {
+            let tint = trail.color_at(j as f64 / f64::from(trail.ring()));
+            RibbonVertex {
+                position: f32s(sides[j][side]),
+                across: if side == 0 { -1.0 } else { 1.0 },
+                color: std::array::from_fn(|c| (particle[c] * tint[c]) as f32),
+            }
+        };
+        for j in 0..points.len() - 1 {
+            let (a, b, c, d) = (
+                vertex(j, 0),
+                vertex(j, 1),
+                vertex(j + 1, 0),
+                vertex(j + 1, 1),
+            );
+            out.extend([a, b, c, b, c, d]);
+        }
+    }
+    out
+}
+
+/// The reference ribbon pipeline, drawing into [`FORMAT`] with one blend mode.
+pub(crate) struct RibbonPipeline {
+    pipeline: wgpu::RenderPipeline,
+    group: wgpu::BindGroup,
+}
+
+impl RibbonPipeline {
+    /// The pipeline, reading the reference renderer's `camera` uniform (view, projection).
+    pub(crate) fn new(
+        gpu: &Gpu,
+        blend: plume_compiler::schema::Blend,
+        camera: &wgpu::Buffer,
+    ) -> Self {
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("reference ribbons"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("reference_ribbon.wgsl").into()),
+        });
+        let pipeline = vertex_pipeline(
+            gpu,
+            &module,
+            ("vs", "fs"),
+            wgpu::PrimitiveTopology::TriangleList,
+            &DrawTarget::new(FORMAT),
+            blend_state(blend),
+            None,
+            &[Some(wgpu::VertexBufferLayout {
+                array_stride: RIBBON_VERTEX_BYTES,
+                step_mode: wgpu::VertexStepMode::Vertex,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x4],
+            })],
+        );
+        let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("reference ribbons"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: camera.as_entire_binding(),
+            }],
+        });
+        Self { pipeline, group }
+    }
+
+    /// A vertex buffer of `vertices` (None when there are none).
+    pub(crate) fn upload(gpu: &Gpu, vertices: &[RibbonVertex]) -> Option<wgpu::Buffer> {
+        if vertices.is_empty() {
+            return None;
+        }
+        let mut bytes = Vec::with_capacity(vertices.len() * RIBBON_VERTEX_BYTES as usize);
+        for v in vertices {
+            let fields = [&v.position[..], &[v.across][..], &v.color[..]];
+            for x in fields.into_iter().flatten() {
+                bytes.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("reference ribbons"),
+            size: bytes.len() as u64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        gpu.queue.write_buffer(&buffer, 0, &bytes);
+        Some(buffer)
+    }
+
+    /// Records the draw of `count` vertices from `buffer` into `pass`.
+    pub(crate) fn record(
+        &self,
+        pass: &mut wgpu::RenderPass<'_>,
+        buffer: &wgpu::Buffer,
+        count: u32,
+    ) {
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.group, &[]);
+        pass.set_vertex_buffer(0, buffer.slice(..));
+        pass.draw(0..count, 0..1);
+    }
+}

@@ -1,0 +1,293 @@
+//! The reference drawing, the oracle the GPU draw ([`crate::draw::raster`]) is tested against: particles
+//! read back to the CPU, coloured and sized there in f64 from the effect's `render:` section at
+//! each particle's life fraction ([`sprites`]), uploaded as one instance per sprite and drawn by
+//! a fixed sprite shader. This was Plume's only drawing path before the GPU draw; it now serves
+//! the tests (as the f64 reference serves the simulation), never `plume render`.
+
+use glam::{DVec3, Mat4};
+use plume_compiler::ir::{EffectIr, RenderIr};
+use plume_compiler::reference::ParticleRecord;
+use plume_compiler::rotation::RotationIr;
+
+use crate::device::gpu::Gpu;
+use crate::draw::camera::Camera;
+use crate::draw::pipeline::vertex_pipeline;
+use crate::draw::raster::blend_state;
+use crate::draw::texture::SpriteTexture;
+use crate::error::RuntimeError;
+use crate::oracle::ribbons::{RibbonPipeline, RibbonVertex};
+use crate::outputs::offscreen::{Offscreen, FORMAT};
+
+/// One sprite: centre (m), the quad's half axes (m), colour (RGBA in [0, 1]). Corner
+/// (cx, cy) in [-1, 1]² lies at centre + cx · half_x + cy · half_y.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sprite {
+    /// Centre in world space.
+    pub center: [f32; 3],
+    /// Half of the quad's first side, in world space.
+    pub half_x: [f32; 3],
+    /// Half of the quad's second side, in world space.
+    pub half_y: [f32; 3],
+    /// Colour and opacity.
+    pub color: [f32; 4],
+    /// The texel rectangle `(x0, y0, width, height)` of the texture frame it shows; all zero
+    /// for the soft round dot of an effect without a texture.
+    pub texels: [f32; 4],
+}
+
+/// Builds sprites from particle records: colour and size at each particle's life fraction
+/// (age / lifetime; 0 for particles that never die), the quad oriented as `render.orient` says
+/// for a camera with view matrix `view` and turned as `render.rotation` says, the flipbook
+/// frame for its age; back to front from the
+/// effect's camera when `sort`. Non-finite particles are skipped.
+pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool) -> Vec<Sprite> {
+    let (render, camera) = (&ir.render, &ir.camera);
+    // The camera's right and up in world space: rows 0 and 1 of the view rotation.
+    let view = view.as_dmat4();
+    let camera_right = DVec3::new(view.x_axis.x, view.y_axis.x, view.z_axis.x);
+    let camera_up = DVec3::new(view.x_axis.y, view.y_axis.y, view.z_axis.y);
+    let f32s = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+    let mut keyed: Vec<(f64, Sprite)> = records
+        .iter()
+        .filter(|r| r.position.is_finite())
+        .map(|r| {
+            let t = match r.lifetime {
+                Some(l) if l > 0.0 => (r.age / l).clamp(0.0, 1.0),
+                _ => 0.0,
+            };
+            let c = render.color_at(t);
+            let c = [c[0] * r.tint.x, c[1] * r.tint.y, c[2] * r.tint.z, c[3]];
+            let p = r.position;
+            let (half_x, half_y) = render.orient.half_axes(
+                render.size_at(t),
+                render.height_at(t),
+                r.velocity,
+                camera_right,
+                camera_up,
+            );
+            // Whole steps, as the records' ages and lifetimes are.
+            let steps = |seconds: f64| (seconds / ir.dt).round() as u64;
+            let (half_x, half_y) = match &render.rotation {
+                Some(rotation) => {
+                    let angle = rotation.angle(r.id, ir.seed_mix, steps(r.age), ir.dt);
+                    RotationIr::turn(half_x, half_y, angle)
+                }
+                None => (half_x, half_y),
+            };
+            let texels = render.texture.as_ref().map_or([0.0; 4], |texture| {
+                let life = r.lifetime.map_or(0, steps);
+                let frame = texture.frame(r.id, ir.seed_mix, steps(r.age), life, ir.dt);
+                texture.frame_texels(frame).map(|x| x as f32)
+            });
+            let depth = (p - camera.eye).dot((camera.target - camera.eye).normalize_or_zero());
+            (
+                depth,
+                Sprite {
+                    center: f32s(p),
+                    half_x: f32s(half_x),
+                    half_y: f32s(half_y),
+                    color: [c[0] as f32, c[1] as f32, c[2] as f32, c[3] as f32],
+                    texels,
+                },
+            )
+        })
+        .collect();
+    if sort {
+        // Farthest first; equal depths keep id order (a stable sort).
+        keyed.sort_by(|a, b| b.0.total_cmp(&a.0));
+    }
+    keyed.into_iter().map(|(_, s)| s).collect()
+}
+
+/// Bytes of one sprite instance: three vec3 and two vec4 of f32.
+const SPRITE_BYTES: u64 = 68;
+
+/// A render target and the reference sprite pipeline for one image size and blend mode.
+pub struct ReferenceRenderer {
+    gpu: Gpu,
+    target: Offscreen,
+    pipeline: wgpu::RenderPipeline,
+    camera: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    ribbons: RibbonPipeline,
+    background: DVec3,
+}
+
+impl ReferenceRenderer {
+    /// A renderer of `width` x `height` images with the blending, background and texture of
+    /// `render`.
+    pub fn new(
+        gpu: &Gpu,
+        width: u32,
+        height: u32,
+        render: &RenderIr,
+    ) -> Result<Self, RuntimeError> {
+        let (blend, background) = (render.blend, render.background);
+        let target = Offscreen::new(gpu, width, height)?;
+        let device = &gpu.device;
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("sprites"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("reference_sprite.wgsl").into()),
+        });
+        let camera = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("camera"),
+            size: 128,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let texture = match &render.texture {
+            Some(t) => SpriteTexture::new(gpu, t)?,
+            // Bound but never sampled: the sprites' texel rectangles are empty.
+            None => SpriteTexture::from_rgba(gpu, 1, 1, &[255; 4], 1)?,
+        };
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("camera"),
+            entries: &[
+                wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(128),
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 1,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 2,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Filtering),
+                    count: None,
+                },
+            ],
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("camera"),
+            layout: &layout,
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: camera.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: wgpu::BindingResource::TextureView(&texture.view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 2,
+                    resource: wgpu::BindingResource::Sampler(&texture.sampler),
+                },
+            ],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("sprites"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = vertex_pipeline(
+            gpu,
+            &module,
+            ("vs", "fs"),
+            wgpu::PrimitiveTopology::TriangleList,
+            &crate::draw::target::DrawTarget::new(FORMAT),
+            blend_state(blend),
+            Some(&pipeline_layout),
+            &[Some(wgpu::VertexBufferLayout {
+                array_stride: SPRITE_BYTES,
+                step_mode: wgpu::VertexStepMode::Instance,
+                attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x4, 4 => Float32x4],
+            })],
+        );
+        let ribbons = RibbonPipeline::new(gpu, blend, &camera);
+        gpu.take_error()?;
+        Ok(Self {
+            gpu: gpu.clone(),
+            target,
+            pipeline,
+            camera,
+            bind_group,
+            ribbons,
+            background,
+        })
+    }
+
+    /// Draws `sprites` in order over the background as seen from `camera`; returns RGBA8 rows.
+    pub fn draw(&self, sprites: &[Sprite], camera: &Camera) -> Result<Vec<u8>, RuntimeError> {
+        self.draw_with_ribbons(&[], sprites, camera)
+    }
+
+    /// Draws the `ribbons` (triangles, [`crate::oracle::ribbons::ribbons`]), then `sprites`
+    /// in order, as the GPU draw records an effect with trails; returns RGBA8 rows.
+    pub fn draw_with_ribbons(
+        &self,
+        ribbons: &[RibbonVertex],
+        sprites: &[Sprite],
+        camera: &Camera,
+    ) -> Result<Vec<u8>, RuntimeError> {
+        let device = &self.gpu.device;
+        let mut cam = Vec::with_capacity(128);
+        for m in [camera.view, camera.proj] {
+            for x in m.to_cols_array() {
+                cam.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        self.gpu.queue.write_buffer(&self.camera, 0, &cam);
+        let mut instances = Vec::with_capacity(sprites.len() * SPRITE_BYTES as usize);
+        for s in sprites {
+            let fields = [
+                &s.center[..],
+                &s.half_x[..],
+                &s.half_y[..],
+                &s.color[..],
+                &s.texels[..],
+            ];
+            for x in fields.into_iter().flatten() {
+                instances.extend_from_slice(&x.to_le_bytes());
+            }
+        }
+        let instance_buffer = (!sprites.is_empty()).then(|| {
+            let b = device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("sprites"),
+                size: instances.len() as u64,
+                usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            self.gpu.queue.write_buffer(&b, 0, &instances);
+            b
+        });
+        let ribbon_buffer = RibbonPipeline::upload(&self.gpu, ribbons);
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("sprites"),
+                color_attachments: &[Some(self.target.attachment(self.background))],
+                depth_stencil_attachment: None,
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            if let Some(b) = &ribbon_buffer {
+                self.ribbons.record(&mut pass, b, ribbons.len() as u32);
+            }
+            if let Some(b) = &instance_buffer {
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, &self.bind_group, &[]);
+                pass.set_vertex_buffer(0, b.slice(..));
+                pass.draw(0..6, 0..sprites.len() as u32);
+            }
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()?;
+        self.target.read()
+    }
+}

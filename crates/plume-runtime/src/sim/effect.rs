@@ -1,0 +1,353 @@
+//! [`Effect`], the public object: any effect file running on a device, a single system (one
+//! group) or a graph of groups and the events between them. One group without events steps
+//! alone, exactly as it always has ([`Group::advance_timed`]); a graph steps every group and
+//! stream in one pass per batch ([`Events::advance_timed`]). Drawing an effect is
+//! [`crate::draw::renderer`]'s (`Effect::renderer`, `Effect::prepare_draw`).
+
+use std::path::Path;
+
+use plume_compiler::graph::{compile_graph_str, CompiledGraph};
+use plume_compiler::reference::{ParticleRecord, Totals};
+use plume_compiler::{CompileOptions, CompiledEffect, Diagnostics};
+
+use crate::device::gpu::Gpu;
+use crate::device::readback::decode_totals;
+use crate::device::resources::STEPS_PER_SUBMIT;
+use crate::error::RuntimeError;
+use crate::sim::graph::Events;
+use crate::sim::group::Group;
+
+/// A compiled effect running on a GPU: every group's buffers, kernels and spawn schedule, and
+/// the event streams between them. One type for any effect file, with or without groups.
+///
+/// ```no_run
+/// # fn frame(device: &wgpu::Device, queue: &wgpu::Queue, view: &wgpu::TextureView)
+/// #     -> Result<(), Box<dyn std::error::Error>> {
+/// use plume_runtime::{DrawTarget, Effect, Gpu};
+/// // On the host's own device and queue:
+/// let gpu = Gpu::from_device(device, queue);
+/// let mut fountain = Effect::from_file(&gpu, "effects/fountain.ron", &Default::default())?;
+/// let renderer = fountain.renderer(&DrawTarget::new(wgpu::TextureFormat::Rgba8Unorm))?;
+/// let camera = fountain.camera(16.0 / 9.0); // or the host's own view and projection
+/// // Each frame: steps and the draw's preparation go into the host's encoder ...
+/// let mut encoder = device.create_command_encoder(&Default::default());
+/// fountain.advance(&mut encoder, 1)?;
+/// fountain.prepare_draw(&mut encoder, &renderer, &camera)?;
+/// {
+///     // ... and the draw into the host's render pass, beside its own geometry.
+///     let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+///         color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+///             view,
+///             depth_slice: None,
+///             resolve_target: None,
+///             ops: wgpu::Operations::default(),
+///         })],
+///         ..Default::default()
+///     });
+///     renderer.draw(&mut pass);
+/// }
+/// queue.submit([encoder.finish()]);
+/// # Ok(()) }
+/// ```
+///
+/// An effect with groups and events runs through the same calls:
+///
+/// ```
+/// // Shells that burst when their fuse (0.2 s) runs out, 30 sparks each.
+/// let source = r#"Effect(
+///     name: "shells",
+///     capacity: 8,
+///     emitters: [Emitter(burst: 8, shape: Sphere(center: (0.0, 5.0, 0.0), radius: 1.0),
+///                        velocity: Constant((0.0, 4.0, 0.0)), lifetime: Some((0.2, 0.2)))],
+///     forces: [Gravity((0.0, -9.81, 0.0))],
+///     events: [Event(on: Death, target: "sparks", count: 30, velocity: Radial(speed: (2.0, 3.0)),
+///                    lifetime: Some((1.0, 1.0)), inherit_velocity: 0.5)],
+///     groups: [Group(name: "sparks", capacity: 1000, forces: [Gravity((0.0, -9.81, 0.0))])],
+/// )"#;
+/// let graph = plume_compiler::graph::compile_graph_str(source, &Default::default()).unwrap();
+/// let gpu = plume_runtime::Gpu::new(&Default::default()).unwrap();
+/// let mut shells = plume_runtime::Effect::from_graph(&gpu, graph.clone()).unwrap();
+/// shells.run(20, |_| {}).unwrap();
+/// // The shells died at step 11 (12 steps of 1/60 s); their sparks spawned at step 12.
+/// assert_eq!(shells.group_names(), ["shells", "sparks"]);
+/// assert_eq!(shells.group_totals(0).unwrap().alive, 0);
+/// assert_eq!(shells.group_totals(1).unwrap().spawned, 240);
+/// // The f64 reference runs the same graph: the same particles in every group.
+/// let mut reference = plume_compiler::reference::ReferenceGraph::new(&graph);
+/// reference.run(20);
+/// for g in 0..2 {
+///     let ids = |records: Vec<plume_compiler::reference::ParticleRecord>| {
+///         records.iter().map(|r| r.id).collect::<Vec<_>>()
+///     };
+///     assert_eq!(ids(shells.group_records(g).unwrap()), ids(reference.records(g)));
+/// }
+/// ```
+pub struct Effect {
+    gpu: Gpu,
+    names: Vec<String>,
+    groups: Vec<Group>,
+    /// The event streams; None for one group without events, which steps alone.
+    events: Option<Events>,
+    warnings: Diagnostics,
+}
+
+impl Effect {
+    /// Allocates a single-system effect's buffers and builds its kernels on `gpu` (Plume's own
+    /// device, or a host's through [`Gpu::from_device`]).
+    pub fn new(gpu: &Gpu, effect: CompiledEffect) -> Result<Self, RuntimeError> {
+        let name = effect.ir.name.clone();
+        Self::from_graph(gpu, CompiledGraph::single(&name, effect))
+    }
+
+    /// Allocates every group's buffers and the event streams' on `gpu`, and builds the
+    /// kernels: any compiled effect file (`plume_compiler::graph::compile_graph_str`).
+    pub fn from_graph(gpu: &Gpu, graph: CompiledGraph) -> Result<Self, RuntimeError> {
+        Self::with_chunk_slots(gpu, graph, None)
+    }
+
+    /// Compiles `source` (an effect file's text, with or without groups) with `options` and
+    /// runs it on `gpu`. A compile error is [`RuntimeError::Compile`], its diagnostics rendered
+    /// against `<source>`; the warnings are kept ([`Self::warnings`]).
+    pub fn from_source(
+        gpu: &Gpu,
+        source: &str,
+        options: &CompileOptions,
+    ) -> Result<Self, RuntimeError> {
+        Self::compile(gpu, "<source>", source, options)
+    }
+
+    /// Reads and compiles the effect file at `path` (files it names, a texture, resolved from
+    /// its directory unless `options` names another) and runs it on `gpu`. Errors say which
+    /// file and where ([`RuntimeError::Read`], [`RuntimeError::Compile`]).
+    pub fn from_file(
+        gpu: &Gpu,
+        path: impl AsRef<Path>,
+        options: &CompileOptions,
+    ) -> Result<Self, RuntimeError> {
+        let path = path.as_ref();
+        let name = path.display().to_string();
+        let source = std::fs::read_to_string(path).map_err(|e| RuntimeError::Read {
+            path: name.clone(),
+            message: e.to_string(),
+        })?;
+        let options = CompileOptions {
+            base_dir: options
+                .base_dir
+                .clone()
+                .or_else(|| path.parent().map(Path::to_path_buf)),
+            ..options.clone()
+        };
+        Self::compile(gpu, &name, &source, &options)
+    }
+
+    fn compile(
+        gpu: &Gpu,
+        name: &str,
+        source: &str,
+        options: &CompileOptions,
+    ) -> Result<Self, RuntimeError> {
+        let graph = compile_graph_str(source, options)
+            .map_err(|e| RuntimeError::Compile(e.render(name, source)))?;
+        Self::from_graph(gpu, graph)
+    }
+
+    /// Like [`Self::from_graph`] with at most `max_chunk_slots` particles per buffer in every
+    /// group (tests use it to exercise the split on small effects; a single system is
+    /// `CompiledGraph::single(name, effect)`).
+    pub fn with_chunk_slots(
+        gpu: &Gpu,
+        graph: CompiledGraph,
+        max_chunk_slots: Option<u64>,
+    ) -> Result<Self, RuntimeError> {
+        let warnings = graph.all_warnings();
+        let alone = graph.groups.len() == 1 && graph.streams.is_empty();
+        let (events, shared) = match alone {
+            true => (None, vec![Vec::new()]),
+            false => {
+                let (events, shared) = Events::new(gpu, &graph)?;
+                (Some(events), shared)
+            }
+        };
+        let mut names = Vec::new();
+        let mut groups = Vec::new();
+        for (group, shared) in graph.groups.into_iter().zip(&shared) {
+            names.push(group.name);
+            groups.push(Group::new(gpu, group.effect, max_chunk_slots, shared)?);
+        }
+        gpu.take_error()?;
+        Ok(Self {
+            gpu: gpu.clone(),
+            names,
+            groups,
+            events,
+            warnings,
+        })
+    }
+
+    /// Records `steps` steps into the caller's `encoder` (a compute pass per
+    /// [`STEPS_PER_SUBMIT`] steps, each preceded by the copy of its steps' parameters; with
+    /// groups, per step each stream's ordering and its child's spawn, then each group's own
+    /// step). The schedule advances now: submit the encoder before reading the effect back. A
+    /// stateless effect only advances its bookkeeping and records nothing.
+    pub fn advance(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        steps: u64,
+    ) -> Result<(), RuntimeError> {
+        self.advance_timed(encoder, steps, None).map(|_| ())
+    }
+
+    /// Like [`Self::advance`], with GPU timestamps: `query_set` gets one at index `first` when
+    /// the steps' first compute pass begins and one at `first + 1` when the last one ends.
+    /// Returns whether any pass was recorded (a stateless effect, or 0 steps, records none).
+    pub fn advance_timed(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        steps: u64,
+        timestamps: Option<(&wgpu::QuerySet, u32)>,
+    ) -> Result<bool, RuntimeError> {
+        match &self.events {
+            None => self.groups[0].advance_timed(encoder, steps, timestamps),
+            Some(events) => events.advance_timed(&mut self.groups, encoder, steps, timestamps),
+        }
+    }
+
+    /// Runs `steps` steps in submissions of [`STEPS_PER_SUBMIT`], calling `progress(done)`
+    /// after each is submitted. Returns when the GPU has finished.
+    pub fn run(&mut self, steps: u64, mut progress: impl FnMut(u64)) -> Result<(), RuntimeError> {
+        if self.events.is_none() {
+            return self.groups[0].run(steps, progress);
+        }
+        let mut done = 0;
+        while done < steps {
+            let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            self.advance(&mut encoder, n)?;
+            self.gpu.queue.submit([encoder.finish()]);
+            self.gpu.take_error()?;
+            done += n;
+            progress(done);
+        }
+        self.gpu.wait()
+    }
+
+    /// Steps done and the counters of every group added up: alive, spawned, died, dropped
+    /// (waits for the GPU). A stateless group counts from its bookkeeping.
+    pub fn totals(&self) -> Result<Totals, RuntimeError> {
+        let mut sum = Totals {
+            steps: self.steps_done(),
+            alive: 0,
+            spawned: 0,
+            died: 0,
+            dropped: 0,
+        };
+        for group in &self.groups {
+            let t = group.totals()?;
+            sum.alive += t.alive;
+            sum.spawned += t.spawned;
+            sum.died += t.died;
+            sum.dropped += t.dropped;
+        }
+        Ok(sum)
+    }
+
+    /// The live particles of every group, group by group, each in id order (velocity as the
+    /// integrator knows it: Verlet's derived). Reads them back and waits.
+    pub fn records(&self) -> Result<Vec<ParticleRecord>, RuntimeError> {
+        let mut out = Vec::new();
+        for group in &self.groups {
+            out.extend(group.records()?);
+        }
+        Ok(out)
+    }
+
+    /// The groups' names, the top-level group first (one name for an effect without groups).
+    pub fn group_names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Group `g`'s totals (its spawned and dropped count its event spawns).
+    pub fn group_totals(&self, g: usize) -> Result<Totals, RuntimeError> {
+        self.group(g)?.totals()
+    }
+
+    /// Group `g`'s live particles in id order.
+    pub fn group_records(&self, g: usize) -> Result<Vec<ParticleRecord>, RuntimeError> {
+        self.group(g)?.records()
+    }
+
+    /// The top-level group's compiled effect (its IR: camera, render section, dt, ...).
+    pub fn compiled(&self) -> &CompiledEffect {
+        &self.groups[0].effect
+    }
+
+    /// Group `g`'s compiled effect.
+    pub fn group_compiled(&self, g: usize) -> Result<&CompiledEffect, RuntimeError> {
+        Ok(&self.group(g)?.effect)
+    }
+
+    /// The compiler's warnings about the effect (its groups' and its events').
+    pub fn warnings(&self) -> &Diagnostics {
+        &self.warnings
+    }
+
+    /// Steps done so far.
+    pub fn steps_done(&self) -> u64 {
+        self.groups[0].steps_done()
+    }
+
+    /// Simulation time of the steps done, k · dt (s, f64).
+    pub fn time(&self) -> f64 {
+        self.steps_done() as f64 * self.compiled().ir.dt
+    }
+
+    /// Whether every group runs stateless (no state kept; computed when read or drawn, so its
+    /// steps record no GPU work).
+    pub fn is_stateless(&self) -> bool {
+        self.groups.iter().all(Group::is_stateless)
+    }
+
+    /// The top-level group's counters, for a host that reads totals without waiting: copy
+    /// them in its encoder, map the copy, and decode it with [`Self::decode_counters`]. None
+    /// for a stateless group, whose totals need no GPU.
+    pub fn counters(&self) -> Option<&wgpu::Buffer> {
+        self.groups[0].counters()
+    }
+
+    /// Decodes a copy of [`Self::counters`], made when `steps` steps were done, of a group
+    /// of `capacity` slots, into totals.
+    pub fn decode_counters(bytes: &[u8], capacity: u32, steps: u64) -> Totals {
+        decode_totals(bytes, capacity, steps)
+    }
+
+    /// The device this effect runs on.
+    pub fn gpu(&self) -> &Gpu {
+        &self.gpu
+    }
+
+    /// Group `g`, or the error of asking for one the effect does not have.
+    pub(crate) fn group(&self, g: usize) -> Result<&Group, RuntimeError> {
+        self.groups.get(g).ok_or_else(|| {
+            RuntimeError::Output(format!(
+                "the effect has {} groups, not {}",
+                self.groups.len(),
+                g + 1
+            ))
+        })
+    }
+
+    /// Every group, the top-level one first.
+    pub(crate) fn groups(&self) -> &[Group] {
+        &self.groups
+    }
+
+    /// Every group, mutably (the benchmarks time their steps).
+    pub(crate) fn groups_mut(&mut self) -> &mut [Group] {
+        &mut self.groups
+    }
+
+    /// The event streams (None: one group that steps alone).
+    pub(crate) fn events(&self) -> Option<&Events> {
+        self.events.as_ref()
+    }
+}

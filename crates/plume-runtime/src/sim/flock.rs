@@ -1,0 +1,208 @@
+//! The per-step flocking pass of an effect with a Flock force, recorded between the spawn and
+//! the update: the snapshot (+ partial sums) where all pairs or the global means need it, the
+//! global means, then all pairs or the grid (bucket counts, their scan into run starts, the
+//! scatter of the boids into their runs, each run put in slot order with the snapshot, the
+//! search by tiles). The kernels are the compiler's (`forces/flock.rs`); this module only
+//! dispatches them.
+
+use plume_compiler::forces::flock::{FlockIr, Neighbors, Scope, GRID_TILE, SEARCH_BUFFERS};
+use plume_compiler::CompiledEffect;
+
+use crate::device::gpu::Gpu;
+use crate::device::resources::{Chunk, Resources};
+use crate::error::RuntimeError;
+use crate::sort::radix::{GpuSorter, SortProgram};
+
+/// The uniform grid's extra kernels and its scan.
+struct GridPass {
+    clear: wgpu::ComputePipeline,
+    bucket: wgpu::ComputePipeline,
+    scatter: wgpu::ComputePipeline,
+    rank: wgpu::ComputePipeline,
+    buckets: u64,
+    /// The exclusive scan of the bucket counts into run starts.
+    scan: SortProgram,
+    /// Whether the search runs nine threads a boid (`FlockIr::split_search`).
+    split_search: bool,
+    /// The search, from its own module (`CompiledEffect::flock_search_wgsl`), and its bind
+    /// group: the grid's buffers, read-only but for the results.
+    search: wgpu::ComputePipeline,
+    search_group: wgpu::BindGroup,
+}
+
+/// The flocking kernels of one effect.
+pub struct FlockPass {
+    snapshot: Option<wgpu::ComputePipeline>,
+    reduce: Option<wgpu::ComputePipeline>,
+    /// All pairs (None with the grid, whose search is its own).
+    pairs: Option<wgpu::ComputePipeline>,
+    grid: Option<GridPass>,
+}
+
+impl FlockPass {
+    /// The pass for `flock` of `effect`, whose buffers `res` holds.
+    pub fn new(
+        gpu: &Gpu,
+        res: &Resources,
+        effect: &CompiledEffect,
+        flock: &FlockIr,
+    ) -> Result<Self, RuntimeError> {
+        let grid = match flock.neighbors {
+            Neighbors::Grid { .. } => {
+                let find = |name: &str| {
+                    res.extra_named(effect, name)
+                        .expect("the layout binds the grid's buffers")
+                };
+                let source = effect
+                    .flock_search_wgsl
+                    .as_deref()
+                    .expect("the compiler emits a grid flock's search module");
+                let module = gpu
+                    .device
+                    .create_shader_module(wgpu::ShaderModuleDescriptor {
+                        label: Some("flock search"),
+                        source: wgpu::ShaderSource::Wgsl(source.into()),
+                    });
+                let search = gpu.compute_pipeline(&module, "flock_grid", None);
+                let entries: Vec<(u32, &wgpu::Buffer)> = effect
+                    .layout
+                    .bindings
+                    .iter()
+                    .filter(|b| SEARCH_BUFFERS.contains(&b.name))
+                    .map(|b| (b.binding, find(b.name)))
+                    .collect();
+                let search_group =
+                    gpu.bind_buffers("flock search", &search.get_bind_group_layout(0), &entries);
+                Some(GridPass {
+                    search,
+                    search_group,
+                    clear: res.pipeline("grid_clear"),
+                    bucket: res.pipeline("grid_bucket"),
+                    scatter: res.pipeline("grid_scatter"),
+                    rank: res.pipeline("grid_rank"),
+                    buckets: FlockIr::grid_buckets(effect.ir.capacity),
+                    split_search: FlockIr::split_search(effect.ir.capacity),
+                    scan: GpuSorter::new(gpu).scan_program(
+                        find("cell_start"),
+                        FlockIr::grid_buckets(effect.ir.capacity) + 1,
+                    )?,
+                })
+            }
+            Neighbors::AllPairs => None,
+        };
+        // The grid reads the particles itself; the snapshot is for all pairs and the sums.
+        let snapshot = grid.is_none() || flock.scope == Scope::Global;
+        Ok(Self {
+            snapshot: snapshot.then(|| res.pipeline("flock_snapshot")),
+            reduce: (flock.scope == Scope::Global).then(|| res.pipeline("flock_reduce")),
+            pairs: grid.is_none().then(|| res.pipeline("flock_pairs")),
+            grid,
+        })
+    }
+
+    /// The pass's stages in recording order, for timing them one by one.
+    pub fn stage_names(&self) -> &'static [&'static str] {
+        match (&self.grid, &self.reduce) {
+            (Some(_), None) => &["bucket counts", "scan", "scatter", "rank", "search"],
+            (Some(_), Some(_)) => &[
+                "snapshot and sums",
+                "bucket counts",
+                "scan",
+                "scatter",
+                "rank",
+                "search",
+            ],
+            (None, None) => &["snapshot", "all pairs"],
+            (None, Some(_)) => &["snapshot and sums", "all pairs"],
+        }
+    }
+
+    /// Records one step's flocking pass (one chunk: boids index slots globally) with the
+    /// step's parameters at `offset`: snapshot, means, neighbour search.
+    pub fn record(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunk: &Chunk,
+        offset: u32,
+    ) -> Result<(), RuntimeError> {
+        self.record_stages(gpu, pass, chunk, offset, usize::MAX)
+    }
+
+    /// Records only the first `stages` stages of [`FlockPass::stage_names`] (the benchmark
+    /// times each stage by difference; the pass writes only its own buffers, so it can be
+    /// recorded again without changing the simulation).
+    pub fn record_stages(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunk: &Chunk,
+        offset: u32,
+        stages: usize,
+    ) -> Result<(), RuntimeError> {
+        let (x, y) = gpu.grid(chunk.len, u64::from(plume_compiler::wgsl::WORKGROUP))?;
+        pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+        let mut stage = 0;
+        // Whether stage `stage` is recorded; counts it.
+        let mut next = || {
+            stage += 1;
+            stage <= stages
+        };
+        if let Some(snapshot) = &self.snapshot {
+            if !next() {
+                return Ok(());
+            }
+            pass.set_pipeline(snapshot);
+            pass.dispatch_workgroups(x, y, 1);
+            if let Some(reduce) = &self.reduce {
+                pass.set_pipeline(reduce);
+                pass.dispatch_workgroups(1, 1, 1);
+            }
+        }
+        if let Some(grid) = &self.grid {
+            if !next() {
+                return Ok(());
+            }
+            let (bx, by) =
+                gpu.grid(grid.buckets + 1, u64::from(plume_compiler::wgsl::WORKGROUP))?;
+            pass.set_pipeline(&grid.clear);
+            pass.dispatch_workgroups(bx, by, 1);
+            pass.set_pipeline(&grid.bucket);
+            pass.dispatch_workgroups(x, y, 1);
+            if !next() {
+                return Ok(());
+            }
+            grid.scan.record(pass);
+            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+            if !next() {
+                return Ok(());
+            }
+            pass.set_pipeline(&grid.scatter);
+            pass.dispatch_workgroups(x, y, 1);
+            if !next() {
+                return Ok(());
+            }
+            pass.set_pipeline(&grid.rank);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        if !next() {
+            return Ok(());
+        }
+        if let Some(grid) = &self.grid {
+            // The split search runs nine threads a boid, a tile of boids a workgroup.
+            let (x, y) = match grid.split_search {
+                true => gpu.grid(chunk.len, u64::from(GRID_TILE))?,
+                false => (x, y),
+            };
+            pass.set_pipeline(&grid.search);
+            pass.set_bind_group(0, &grid.search_group, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+            // What the caller records next runs on the effect's own bind group.
+            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+        } else if let Some(pairs) = &self.pairs {
+            pass.set_pipeline(pairs);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,164 @@
+//! An effect graph's event streams (plume_compiler::events has the contract), and the steps
+//! of several groups recorded together. Each stream owns buffers that both groups bind: the
+//! firing group notes each firing's id and slot and writes its record in the slot; at the
+//! start of the next step [`crate::sim::events`] puts the firing slots in id order, and the
+//! child's `event_prepare` and `event_spawn` turn them, in that order, into particles. Every
+//! step of every group and every stream is recorded into one compute pass per batch of
+//! steps: nothing is read back between steps.
+
+use plume_compiler::events::{
+    in_binding, out_binding, Ordering, RECORDS_HEADER_BYTES, RECORD_BYTES,
+};
+use plume_compiler::graph::{CompiledGraph, Stream};
+use plume_compiler::schedule::StepPlan;
+
+use crate::device::buffers::STORAGE;
+use crate::device::gpu::Gpu;
+use crate::device::resources::STEPS_PER_SUBMIT;
+use crate::error::RuntimeError;
+use crate::sim::events::EventOrder;
+use crate::sim::group::Group;
+use crate::sort::radix::GpuSorter;
+
+/// One event stream and the ordering of its firings.
+pub(crate) struct StreamOrder {
+    pub(crate) stream: Stream,
+    pub(crate) order: EventOrder,
+}
+
+/// Buffers a group binds instead of allocating them, by binding index.
+pub(crate) type SharedBuffers = Vec<(u32, wgpu::Buffer)>;
+
+/// The event streams of an effect graph, in the order children are spawned each step.
+pub(crate) struct Events {
+    pub(crate) orders: Vec<StreamOrder>,
+}
+
+impl Events {
+    /// Allocates every stream's buffers on `gpu` and builds its ordering; returns the streams
+    /// and, per group, the buffers it binds (by binding index) instead of allocating them.
+    pub(crate) fn new(
+        gpu: &Gpu,
+        graph: &CompiledGraph,
+    ) -> Result<(Self, Vec<SharedBuffers>), RuntimeError> {
+        let mut shared: Vec<SharedBuffers> = vec![Vec::new(); graph.groups.len()];
+        let sorter = GpuSorter::new(gpu);
+        let mut orders = Vec::new();
+        let limit = gpu
+            .limits
+            .max_storage_buffer_binding_size
+            .min(gpu.limits.max_buffer_size);
+        for s in &graph.streams {
+            let parent = u64::from(graph.groups[s.parent].effect.ir.capacity);
+            // A stream's records are one binding of 32 bytes a parent slot (not split into
+            // chunks as particles are): that bounds a firing group's capacity.
+            let bytes = RECORDS_HEADER_BYTES + parent * RECORD_BYTES;
+            if bytes > limit {
+                return Err(RuntimeError::Output(format!(
+                    "group {:?} fires events: their records take {bytes} bytes, more than the adapter's {limit}-byte binding; a group that fires events holds at most {} particles here",
+                    graph.groups[s.parent].name,
+                    (limit - RECORDS_HEADER_BYTES) / RECORD_BYTES
+                )));
+            }
+            let buffer = |label: &str, size: u64| {
+                gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some(label),
+                    size,
+                    usage: STORAGE,
+                    mapped_at_creation: false,
+                })
+            };
+            let keys = buffer("event keys", parent * 4);
+            let vals = buffer("event slots", parent * 4);
+            // Where the child reads the firing slots in id order: counted into a buffer of
+            // their own, or first in the sorted values.
+            let order = match s.ordering {
+                Ordering::Counted => buffer("event order", parent * 4),
+                Ordering::Sorted => vals.clone(),
+            };
+            let records = buffer(
+                "event records",
+                RECORDS_HEADER_BYTES + parent * RECORD_BYTES,
+            );
+            let at = out_binding(s.out_slot);
+            shared[s.parent].extend([
+                (at, keys.clone()),
+                (at + 1, vals.clone()),
+                (at + 2, records.clone()),
+            ]);
+            let at = in_binding(s.in_slot);
+            shared[s.child].extend([(at, order.clone()), (at + 1, records.clone())]);
+            orders.push(StreamOrder {
+                stream: s.clone(),
+                order: EventOrder::new(
+                    gpu,
+                    &sorter,
+                    s.ordering,
+                    parent,
+                    (&keys, &vals, &records),
+                    &order,
+                )?,
+            });
+        }
+        Ok((Self { orders }, shared))
+    }
+
+    /// Records `steps` steps of every group into `encoder` (a compute pass per
+    /// [`STEPS_PER_SUBMIT`] steps), with GPU timestamps when given (as
+    /// [`Group::advance_timed`]). Per step: each stream's ordering and its child's event spawn,
+    /// in stream order, then each group's own step (spawn, update), in group order. Returns
+    /// whether any pass was recorded (none when every group is stateless, or for 0 steps).
+    pub(crate) fn advance_timed(
+        &self,
+        groups: &mut [Group],
+        encoder: &mut wgpu::CommandEncoder,
+        steps: u64,
+        timestamps: Option<(&wgpu::QuerySet, u32)>,
+    ) -> Result<bool, RuntimeError> {
+        let gpu_work = groups.iter().any(Group::steps_on_gpu);
+        let mut done = 0;
+        while done < steps {
+            let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
+            let plans = groups
+                .iter_mut()
+                .map(|g| g.plan_graph_batch(encoder, n))
+                .collect::<Result<Vec<_>, _>>()?;
+            if gpu_work {
+                let writes = timestamps.map(|(set, first)| wgpu::ComputePassTimestampWrites {
+                    query_set: set,
+                    beginning_of_pass_write_index: (done == 0).then_some(first),
+                    end_of_pass_write_index: (done + n == steps).then_some(first + 1),
+                });
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("graph steps"),
+                    timestamp_writes: writes,
+                });
+                self.record_batch(groups, &mut pass, &plans, n)?;
+            }
+            done += n;
+        }
+        Ok(gpu_work && steps > 0)
+    }
+
+    /// Records a planned batch of `steps` steps (each group's plans, from `plan_graph_batch`):
+    /// per step, each stream's ordering and its child's event spawn, in stream order, then each
+    /// group's own step.
+    pub(crate) fn record_batch(
+        &self,
+        groups: &[Group],
+        pass: &mut wgpu::ComputePass<'_>,
+        plans: &[Vec<StepPlan>],
+        steps: u64,
+    ) -> Result<(), RuntimeError> {
+        for j in 0..steps as usize {
+            for s in &self.orders {
+                s.order.record(pass);
+                groups[s.stream.child].record_event_spawn(pass, s.stream.in_slot, j)?;
+            }
+            for (g, group) in groups.iter().enumerate() {
+                group.record_graph_step(pass, &plans[g], j)?;
+            }
+        }
+        Ok(())
+    }
+}

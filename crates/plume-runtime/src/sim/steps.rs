@@ -1,0 +1,409 @@
+//! The simulation passes: what advances an effect by steps. A stateful effect records, per step,
+//! the spawn kernels (when something spawns), a field bake (when it bakes every step), the
+//! flocking pass and the fused update, with each step's parameters selected by a dynamic
+//! uniform offset, so nothing is read back between steps. A stateless effect only advances
+//! its bookkeeping (the live spawn segments); its particles are computed when they are read
+//! or drawn, from the segment table this module writes.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use plume_compiler::passes::stateless::{FRAME_HEADER_BYTES, SEGMENT_BYTES};
+use plume_compiler::schedule::{LiveSegments, Schedule, Segment, StepPlan};
+use plume_compiler::wgsl::WORKGROUP;
+use plume_compiler::CompiledEffect;
+
+use crate::device::gpu::Gpu;
+use crate::device::resources::{Chunk, Resources};
+use crate::error::RuntimeError;
+use crate::sim::flock::FlockPass;
+
+/// The kernels that advance an effect.
+pub enum Steps {
+    /// Spawn and update kernels over the particle state.
+    Stateful(StatefulSteps),
+    /// Bookkeeping, and the `evaluate` kernel that writes the view when it is read back.
+    Stateless(StatelessSteps),
+}
+
+/// A stateful effect's kernels.
+pub struct StatefulSteps {
+    init: wgpu::ComputePipeline,
+    prepare: wgpu::ComputePipeline,
+    spawn: wgpu::ComputePipeline,
+    update: wgpu::ComputePipeline,
+    flock: Option<FlockPass>,
+    /// The baked field's `bake` kernel, its node count, and whether it runs every step.
+    bake: Option<(wgpu::ComputePipeline, u64, bool)>,
+    /// Per event the group is fed by: its `event_prepare` kernel with its own bind group,
+    /// and its `event_spawn` kernel.
+    events: Vec<(
+        (wgpu::ComputePipeline, wgpu::BindGroup),
+        wgpu::ComputePipeline,
+    )>,
+}
+
+/// A stateless group's events: its `fire` kernel (a step's firings from the closed form, over
+/// the batch's segment table) and `fire_next` (on to the next step), and how many threads the
+/// current batch's table has.
+pub struct Firing {
+    fire: wgpu::ComputePipeline,
+    next: wgpu::ComputePipeline,
+    threads: u64,
+}
+
+/// A stateless effect's `evaluate` kernel and its bookkeeping: steps only advance the live
+/// segments; the view is computed when it is read. A group that fires events also runs its
+/// `fire` kernel every step ([`Firing`]).
+pub struct StatelessSteps {
+    evaluate: wgpu::ComputePipeline,
+    /// The `fire` kernels of a group that fires events.
+    pub firing: Option<Firing>,
+    /// The live spawn segments of the steps done.
+    pub segments: LiveSegments,
+    /// Steps done when the view was last evaluated (u64::MAX: never).
+    evaluated_at: AtomicU64,
+}
+
+fn groups(gpu: &Gpu, threads: u64) -> Result<(u32, u32), RuntimeError> {
+    gpu.grid(threads, u64::from(WORKGROUP))
+}
+
+impl Steps {
+    /// The kernels of `effect`, whose buffers `res` holds.
+    pub fn new(gpu: &Gpu, res: &Resources, effect: &CompiledEffect) -> Result<Self, RuntimeError> {
+        if let Some(plan) = &effect.ir.stateless {
+            return Ok(Steps::Stateless(StatelessSteps {
+                evaluate: res.pipeline("evaluate"),
+                firing: (!effect.ir.events.is_empty()).then(|| Firing {
+                    fire: res.pipeline("fire"),
+                    next: res.pipeline("fire_next"),
+                    threads: 0,
+                }),
+                segments: LiveSegments::new(plan.lives.clone()),
+                evaluated_at: AtomicU64::new(u64::MAX),
+            }));
+        }
+        let flock = match &effect.ir.flock {
+            Some(f) => Some(FlockPass::new(gpu, res, effect, f)?),
+            None => None,
+        };
+        Ok(Steps::Stateful(StatefulSteps {
+            init: res.pipeline("init"),
+            prepare: res.pipeline("spawn_prepare"),
+            spawn: res.pipeline("spawn"),
+            update: res.pipeline("update"),
+            flock,
+            bake: effect.ir.field.as_ref().map(|f| {
+                (
+                    res.pipeline("bake"),
+                    f.nodes(),
+                    f.refresh == plume_compiler::field::Refresh::EveryStep,
+                )
+            }),
+            events: (0..effect.ir.event_inputs.len())
+                .map(|j| {
+                    Ok((
+                        res.event_prepare(effect, j)?,
+                        res.pipeline(&format!("event_spawn_{j}")),
+                    ))
+                })
+                .collect::<Result<_, RuntimeError>>()?,
+        }))
+    }
+}
+
+impl StatefulSteps {
+    /// Records the initial state: every slot free and the free list full (on the GPU: no host
+    /// copy of the state), and a field baked once at time 0 (the params buffer starts zeroed).
+    pub fn record_init(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunks: &[Chunk],
+    ) -> Result<(), RuntimeError> {
+        pass.set_pipeline(&self.init);
+        for chunk in chunks {
+            let (x, y) = groups(gpu, chunk.len)?;
+            pass.set_bind_group(0, &chunk.bind_group, &[0]);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        if let Some((bake, nodes, false)) = &self.bake {
+            let (x, y) = groups(gpu, *nodes)?;
+            pass.set_bind_group(0, &chunks[0].bind_group, &[0]);
+            pass.set_pipeline(bake);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        Ok(())
+    }
+
+    /// Records the steps' dispatches into `pass`, step j's parameters at offset j · `stride`:
+    /// per step, a field bake when it bakes every step, the spawn kernels when something spawns
+    /// (a step that requests nothing changes no counter), the flocking pass, then the update
+    /// per chunk.
+    pub fn record(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunks: &[Chunk],
+        plans: &[StepPlan],
+        stride: u64,
+    ) -> Result<(), RuntimeError> {
+        for (j, plan) in plans.iter().enumerate() {
+            self.record_step(gpu, pass, chunks, plan, (j as u64 * stride) as u32)?;
+        }
+        Ok(())
+    }
+
+    /// Records one step (see [`Self::record`]) whose parameters are at `offset`.
+    pub fn record_step(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunks: &[Chunk],
+        plan: &StepPlan,
+        offset: u32,
+    ) -> Result<(), RuntimeError> {
+        // A field baked every step is baked first: the spawn (Verlet's start) samples it too.
+        if let Some((bake, nodes, true)) = &self.bake {
+            let (x, y) = groups(gpu, *nodes)?;
+            pass.set_bind_group(0, &chunks[0].bind_group, &[offset]);
+            pass.set_pipeline(bake);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        if plan.requested() > 0 {
+            pass.set_bind_group(0, &chunks[0].bind_group, &[offset]);
+            pass.set_pipeline(&self.prepare);
+            pass.dispatch_workgroups(1, 1, 1);
+            // Every chunk sees every spawn; each writes only the slots it holds.
+            let (x, y) = groups(gpu, u64::from(plan.requested()))?;
+            pass.set_pipeline(&self.spawn);
+            for chunk in chunks {
+                pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+        if let Some(flock) = &self.flock {
+            flock.record(gpu, pass, &chunks[0], offset)?;
+        }
+        pass.set_pipeline(&self.update);
+        for chunk in chunks {
+            let (x, y) = groups(gpu, chunk.len)?;
+            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        Ok(())
+    }
+
+    /// Records the spawn of the `input`-th event this group is fed by, from the parent's
+    /// sorted records, with the step's parameters at `offset`: `event_prepare` counts the
+    /// firings and pops slots, then `event_spawn` runs per chunk over as many workgroups as it
+    /// wrote to `dispatch`.
+    pub fn record_event_spawn(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunks: &[Chunk],
+        input: usize,
+        dispatch: &wgpu::Buffer,
+        offset: u32,
+    ) {
+        let ((prepare, prepare_group), spawn) = &self.events[input];
+        pass.set_bind_group(0, prepare_group, &[]);
+        pass.set_pipeline(prepare);
+        pass.dispatch_workgroups(1, 1, 1);
+        pass.set_pipeline(spawn);
+        for chunk in chunks {
+            pass.set_bind_group(0, &chunk.bind_group, &[offset]);
+            pass.dispatch_workgroups_indirect(dispatch, 0);
+        }
+    }
+}
+
+impl StatefulSteps {
+    /// The flocking pass, when the effect flocks.
+    pub fn flock(&self) -> Option<&FlockPass> {
+        self.flock.as_ref()
+    }
+}
+
+/// The steps' parameters as the uniform buffer holds them, step j at j · `stride`: first id,
+/// requested, kernel time (wrapped when `wrap_time`, see `EffectIr::wraps_kernel_time`), step
+/// index, then (count, counter before, 0, 0) per emitter slot.
+pub fn params_bytes(
+    plans: &[StepPlan],
+    emitter_slots: u32,
+    stride: u64,
+    wrap_time: bool,
+) -> Vec<u8> {
+    let mut bytes = vec![0u8; stride as usize * plans.len()];
+    for (j, plan) in plans.iter().enumerate() {
+        let at = j * stride as usize;
+        let mut words: Vec<u32> = vec![
+            plan.first_id,
+            plan.requested(),
+            plan.kernel_time(wrap_time).to_bits(),
+            plan.step as u32,
+        ];
+        for e in 0..emitter_slots as usize {
+            let (count, k0) = plan.emitters.get(e).copied().unwrap_or((0, 0));
+            words.extend([count, k0, 0, 0]);
+        }
+        for (w, chunk) in words.iter().zip(bytes[at..].chunks_exact_mut(4)) {
+            chunk.copy_from_slice(&w.to_le_bytes());
+        }
+    }
+    bytes
+}
+
+impl StatelessSteps {
+    /// Advances the bookkeeping by `steps`, calling `progress(done)` every 2^16 steps.
+    pub fn advance(&mut self, schedule: &mut Schedule, steps: u64, mut progress: impl FnMut(u64)) {
+        let mut done = 0;
+        while done < steps {
+            let n = (steps - done).min(1 << 16);
+            self.segments.advance(schedule, n);
+            done += n;
+            progress(done);
+        }
+    }
+
+    /// The segment table of the steps done, as the `frame` binding holds it, and the number of
+    /// slots it covers (the threads, which is also how many instances a draw needs).
+    pub fn frame_bytes(
+        &self,
+        effect: &CompiledEffect,
+        table_bytes: u64,
+    ) -> Result<(Vec<u8>, u32), RuntimeError> {
+        let done = self.segments.steps_done();
+        let count = self.segments.len() as u64;
+        if FRAME_HEADER_BYTES + count * SEGMENT_BYTES > table_bytes {
+            return Err(RuntimeError::Gpu(format!(
+                "{count} live spawn segments overflow the stateless table (a bug in the compiler's bound)"
+            )));
+        }
+        let mut words: Vec<u32> = vec![0, count as u32, done as u32, 0];
+        let mut threads = 0u64;
+        let dt = effect.ir.dt;
+        for seg in self.segments.iter() {
+            let age = done - seg.step;
+            // The age in f64 steps, rounded to f32 seconds once: no drift at any t.
+            let tau = (age as f64 * dt) as f32;
+            words.extend([
+                threads as u32,
+                seg.first_id,
+                seg.k_base,
+                seg.emitter as u32,
+                age.min(u64::from(u32::MAX)) as u32,
+                seg.step as u32,
+                tau.to_bits(),
+                0,
+            ]);
+            threads += u64::from(seg.count);
+        }
+        if threads > u64::from(effect.ir.capacity) {
+            return Err(RuntimeError::Gpu(format!(
+                "{threads} stateless particles exceed the capacity {} (a bug in the compiler's bound)",
+                effect.ir.capacity
+            )));
+        }
+        words[0] = threads as u32;
+        Ok((
+            words.iter().flat_map(|w| w.to_le_bytes()).collect(),
+            threads as u32,
+        ))
+    }
+
+    /// The `fire_frame` table of `segments` (every segment live at some step of a batch), with
+    /// each one's first thread, and the threads in all. Only the spawn steps and ids matter to
+    /// `fire`, which computes each particle's age at its step.
+    pub fn fire_table(
+        effect: &CompiledEffect,
+        segments: &[Segment],
+    ) -> Result<(Vec<u8>, u64), RuntimeError> {
+        let mut words: Vec<u32> = vec![0, segments.len() as u32, 0, 0];
+        let mut threads = 0u64;
+        for seg in segments {
+            words.extend([
+                threads as u32,
+                seg.first_id,
+                seg.k_base,
+                seg.emitter as u32,
+                0,
+                seg.step as u32,
+                0,
+                0,
+            ]);
+            threads += u64::from(seg.count);
+        }
+        words[0] = threads as u32;
+        let room = effect
+            .ir
+            .stateless
+            .as_ref()
+            .map_or(0, |p| p.fire_table_bytes());
+        if words.len() as u64 * 4 > room {
+            return Err(RuntimeError::Gpu(format!(
+                "{} spawn segments overflow the firing table of {room} bytes (a bug in the compiler's bound)",
+                segments.len()
+            )));
+        }
+        Ok((
+            words.iter().flat_map(|w| w.to_le_bytes()).collect(),
+            threads,
+        ))
+    }
+
+    /// Sets the current batch's table size ([`Self::fire_table`]'s threads).
+    pub fn set_fire_threads(&mut self, threads: u64) {
+        if let Some(f) = &mut self.firing {
+            f.threads = threads;
+        }
+    }
+
+    /// Records one step's firings (the step in `fire_state`) and the move to the next step.
+    pub fn record_fire(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunk: &Chunk,
+    ) -> Result<(), RuntimeError> {
+        let Some(f) = &self.firing else {
+            return Ok(());
+        };
+        pass.set_bind_group(0, &chunk.bind_group, &[]);
+        if f.threads > 0 {
+            let (x, y) = groups(gpu, f.threads)?;
+            pass.set_pipeline(&f.fire);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        pass.set_pipeline(&f.next);
+        pass.dispatch_workgroups(1, 1, 1);
+        Ok(())
+    }
+
+    /// Records one evaluation of the whole view into `pass`.
+    pub fn record_evaluate(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        chunks: &[Chunk],
+    ) -> Result<(), RuntimeError> {
+        pass.set_pipeline(&self.evaluate);
+        for chunk in chunks {
+            let (x, y) = groups(gpu, chunk.len)?;
+            pass.set_bind_group(0, &chunk.bind_group, &[]);
+            pass.dispatch_workgroups(x, y, 1);
+        }
+        Ok(())
+    }
+
+    /// Whether the view already holds the steps done.
+    pub fn view_is_current(&self) -> bool {
+        self.evaluated_at.load(Ordering::Relaxed) == self.segments.steps_done()
+    }
+
+    /// Records that the view now holds the steps done.
+    pub fn mark_view_current(&self) {
+        self.evaluated_at
+            .store(self.segments.steps_done(), Ordering::Relaxed);
+    }
+}

@@ -1,0 +1,105 @@
+//! The depth sort of an effect with `sort: true`: the compute module's `depth_keys` kernel gives
+//! every slot a key (farthest first along the camera's depth axis; free slots last),
+//! [`DepthQuantise`] maps the keys to 16 bits over the live depth range, then the radix sort
+//! orders (key, slot) pairs in two passes. The sorted slots are the draw order the vertex shader
+//! follows. A stateless effect's keys come from its closed form evaluated in place, so sorting
+//! costs 8 bytes a slot of per-frame scratch and no state.
+
+use plume_compiler::wgsl::WORKGROUP;
+use plume_compiler::CompiledEffect;
+
+use crate::device::gpu::Gpu;
+use crate::device::resources::{Chunk, Resources, SortBuffers};
+use crate::error::RuntimeError;
+use crate::sort::quantise::{DepthQuantise, KEY_BITS};
+use crate::sort::radix::{GpuSorter, SortAlgorithm, SortProgram};
+
+/// How the keys kernel reads the particles.
+enum Keys {
+    /// One dispatch per particle buffer, on the compute module's shared bind groups.
+    PerChunk(wgpu::ComputePipeline),
+    /// A stateless effect: one dispatch over the capacity, evaluating the closed form, with a
+    /// bind group of only the frame table and the sort's buffers.
+    Evaluated(wgpu::ComputePipeline, wgpu::BindGroup),
+}
+
+/// The depth keys and sorts of one effect.
+pub struct DepthSort {
+    keys: Keys,
+    /// The keys to 16 bits, built once.
+    quantise: DepthQuantise,
+    /// The radix sort of every slot's 16-bit key, built once: scratch buffers and bind groups
+    /// reused.
+    radix: SortProgram,
+    sorter: GpuSorter,
+    capacity: u64,
+}
+
+impl DepthSort {
+    /// The sort stage of `effect`, whose buffers `res` holds.
+    pub fn new(gpu: &Gpu, res: &Resources, effect: &CompiledEffect) -> Result<Self, RuntimeError> {
+        let buffers = sort_buffers(res)?;
+        let keys = if effect.layout.stateless() {
+            let (pipeline, group) = res.standalone(effect, "depth_keys");
+            Keys::Evaluated(pipeline, group)
+        } else {
+            Keys::PerChunk(res.pipeline("depth_keys"))
+        };
+        let sorter = GpuSorter::new(gpu);
+        let capacity = u64::from(effect.ir.capacity);
+        Ok(Self {
+            quantise: DepthQuantise::new(gpu, &buffers.keys, capacity)?,
+            radix: sorter.radix_program(&buffers.keys, &buffers.vals, capacity, KEY_BITS)?,
+            keys,
+            sorter,
+            capacity,
+        })
+    }
+
+    /// Records the keys of every slot and their sort into `pass`. `chunks` are the particle
+    /// buffers (unused by a stateless effect, which evaluates its particles in place).
+    pub fn record(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        res: &Resources,
+        chunks: &[Chunk],
+        algorithm: SortAlgorithm,
+    ) -> Result<(), RuntimeError> {
+        match &self.keys {
+            Keys::PerChunk(pipeline) => {
+                pass.set_pipeline(pipeline);
+                for chunk in chunks {
+                    let (x, y) = gpu.grid(chunk.len, u64::from(WORKGROUP))?;
+                    // Stateful bind groups carry the step parameters' dynamic offset.
+                    let offsets: &[u32] = if res.params.is_some() { &[0] } else { &[] };
+                    pass.set_bind_group(0, &chunk.bind_group, offsets);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+            }
+            Keys::Evaluated(pipeline, group) => {
+                let (x, y) = gpu.grid(self.capacity, u64::from(WORKGROUP))?;
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+        }
+        self.quantise.record(pass);
+        match algorithm {
+            SortAlgorithm::Radix => self.radix.record(pass),
+            SortAlgorithm::Bitonic => {
+                let buffers = sort_buffers(res)?;
+                self.sorter
+                    .record(pass, algorithm, &buffers.keys, &buffers.vals, self.capacity)?
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The effect's sort buffers, or the error of asking a `sort: false` effect for its order.
+pub fn sort_buffers(res: &Resources) -> Result<&SortBuffers, RuntimeError> {
+    res.sort
+        .as_ref()
+        .ok_or_else(|| RuntimeError::Output("this effect has no sort stage (sort: false)".into()))
+}

@@ -1,0 +1,499 @@
+//! GPU sorts of (key, value) pairs, ascending by key: a stable LSD radix sort (8-bit digits,
+//! one pass each; the default) and a bitonic sort (the baseline it is measured against). Keys
+//! are u32; equal keys keep their input order (radix) or are ordered by value (bitonic): the
+//! same result when values start as 0, 1, 2, ... as they do for depth sorting.
+//!
+//! The radix sort is reduce-then-scan (radix.wgsl: count digits per partition, scan the counts,
+//! rank and scatter), with two ways to rank keys within a partition ([`Ranking`]): subgroup
+//! ballots where the adapter's subgroups are exactly 32 wide (NVIDIA, AMD RDNA in wave32), and
+//! a workgroup-memory sorting network everywhere else (llvmpipe included). Both give the same
+//! output, bit for bit: the sort is stable, so its result is fully determined by its input.
+
+use wgpu::util::DeviceExt;
+
+use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
+
+/// Which sort.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SortAlgorithm {
+    /// Stable LSD radix sort, 4 passes of 8 bits.
+    Radix,
+    /// Bitonic sorting network on the power-of-two padded array.
+    Bitonic,
+}
+
+/// How the radix sort ranks keys within a partition.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ranking {
+    /// Subgroup ballots (8 per 32 keys) and per-subgroup digit counters; needs
+    /// `wgpu::Features::SUBGROUP` and subgroups of exactly 32 invocations.
+    Subgroup,
+    /// Tiles of 256 keys ranked by a bitonic network over (digit, lane) in workgroup memory; no
+    /// subgroup operations, so every adapter runs it.
+    Portable,
+}
+
+impl Ranking {
+    /// The fastest ranking `gpu` can run.
+    pub fn best_for(gpu: &Gpu) -> Self {
+        if gpu.has_subgroups_of(32) {
+            Ranking::Subgroup
+        } else {
+            Ranking::Portable
+        }
+    }
+}
+
+/// The sort kernels.
+pub struct GpuSorter {
+    gpu: Gpu,
+    ranking: Ranking,
+    upsweep: wgpu::ComputePipeline,
+    digit_scan: wgpu::ComputePipeline,
+    digit_scan_small: wgpu::ComputePipeline,
+    downsweep: wgpu::ComputePipeline,
+    scan_blocks: wgpu::ComputePipeline,
+    add_sums: wgpu::ComputePipeline,
+    bitonic: wgpu::ComputePipeline,
+}
+
+/// Block length of the exclusive scan (`scan_program`) and threads of the bitonic kernel.
+const TILE: u64 = 256;
+
+/// Keys per radix partition (radix.wgsl's PART).
+const PARTITION: u64 = 2560;
+
+/// The most partitions whose digit counts one workgroup scans (`rs_scan_small`, a thread a
+/// digit walking its row) instead of one workgroup a digit (`rs_scan`): 81,920 keys.
+const SMALL_SCAN_PARTITIONS: u64 = 32;
+
+/// One recorded dispatch of a sort.
+struct Dispatch {
+    pipeline: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+    x: u32,
+    y: u32,
+}
+
+/// A sort of fixed buffers and length, built once and recorded any number of times.
+pub struct SortProgram {
+    dispatches: Vec<Dispatch>,
+}
+
+impl SortProgram {
+    /// Records the sort's dispatches into `pass`.
+    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
+        self.record_first(pass, self.dispatches.len());
+    }
+
+    /// Each dispatch's workgroup counts (x, y, 1), in order: the indirect arguments that
+    /// [`Self::record_indirect`] runs the program with.
+    pub fn dispatch_args(&self) -> Vec<[u32; 3]> {
+        self.dispatches.iter().map(|d| [d.x, d.y, 1]).collect()
+    }
+
+    /// Records the program with each dispatch's workgroup counts read from `args` (12 bytes a
+    /// dispatch, from byte `offset`): arguments written on the GPU can then skip the sort (all
+    /// zero) or run it ([`Self::dispatch_args`]).
+    pub fn record_indirect(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        args: &wgpu::Buffer,
+        offset: u64,
+    ) {
+        for (k, d) in self.dispatches.iter().enumerate() {
+            pass.set_pipeline(&d.pipeline);
+            pass.set_bind_group(0, &d.group, &[]);
+            pass.dispatch_workgroups_indirect(args, offset + 12 * k as u64);
+        }
+    }
+
+    /// Records only the first `count` dispatches (the benchmark times the radix sort's
+    /// stages by difference: a pass is upsweep, digit scan, downsweep).
+    pub fn record_first(&self, pass: &mut wgpu::ComputePass<'_>, count: usize) {
+        for d in self.dispatches.iter().take(count) {
+            pass.set_pipeline(&d.pipeline);
+            pass.set_bind_group(0, &d.group, &[]);
+            pass.dispatch_workgroups(d.x, d.y, 1);
+        }
+    }
+}
+
+impl GpuSorter {
+    /// Builds the kernels on `gpu`, ranking the fastest way it can ([`Ranking::best_for`]).
+    pub fn new(gpu: &Gpu) -> Self {
+        Self::build(gpu, Ranking::best_for(gpu))
+    }
+
+    /// Builds the kernels with the given ranking; an error when `gpu` cannot run it.
+    pub fn with_ranking(gpu: &Gpu, ranking: Ranking) -> Result<Self, RuntimeError> {
+        if ranking == Ranking::Subgroup && !gpu.has_subgroups_of(32) {
+            return Err(RuntimeError::Gpu(format!(
+                "{} has no subgroups of exactly 32 invocations (subgroup ranking)",
+                gpu.info.name
+            )));
+        }
+        Ok(Self::build(gpu, ranking))
+    }
+
+    /// The ranking this sorter's radix sort uses.
+    pub fn ranking(&self) -> Ranking {
+        self.ranking
+    }
+
+    fn build(gpu: &Gpu, ranking: Ranking) -> Self {
+        let module = |label: &str, source: String| {
+            gpu.device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(label),
+                    source: wgpu::ShaderSource::Wgsl(source.into()),
+                })
+        };
+        let sort = module("sort", include_str!("sort.wgsl").to_owned());
+        // The shared kernels and one downsweep: a subgroup module only on adapters with them.
+        let radix = match ranking {
+            Ranking::Subgroup => module(
+                "radix (subgroup ranking)",
+                // naga 30 takes subgroup builtins without WGSL's `enable subgroups;` (it refuses
+                // the directive); the device's SUBGROUP feature is what allows them.
+                format!(
+                    "{}\n{}",
+                    include_str!("radix.wgsl"),
+                    include_str!("radix_subgroup.wgsl")
+                ),
+            ),
+            Ranking::Portable => module(
+                "radix (portable ranking)",
+                format!(
+                    "{}\n{}",
+                    include_str!("radix.wgsl"),
+                    include_str!("radix_portable.wgsl")
+                ),
+            ),
+        };
+        let pipeline =
+            |module: &wgpu::ShaderModule, entry: &str| gpu.compute_pipeline(module, entry, None);
+        Self {
+            gpu: gpu.clone(),
+            ranking,
+            upsweep: pipeline(&radix, "rs_upsweep"),
+            digit_scan: pipeline(&radix, "rs_scan"),
+            digit_scan_small: pipeline(&radix, "rs_scan_small"),
+            downsweep: pipeline(&radix, "rs_downsweep"),
+            scan_blocks: pipeline(&sort, "scan_blocks"),
+            add_sums: pipeline(&sort, "add_sums"),
+            bitonic: pipeline(&sort, "bitonic_step"),
+        }
+    }
+
+    fn params(&self, n: u64, shift: u32, tiles: u64, j: u64, k: u64) -> wgpu::Buffer {
+        self.uniform(&[n as u32, shift, tiles as u32, j as u32, k as u32, 0, 0, 0])
+    }
+
+    fn uniform(&self, words: &[u32]) -> wgpu::Buffer {
+        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
+        self.gpu
+            .device
+            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some("sort params"),
+                contents: &bytes,
+                usage: wgpu::BufferUsages::UNIFORM,
+            })
+    }
+
+    fn buffer(&self, label: &str, words: u64) -> wgpu::Buffer {
+        self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size: words.max(1) * 4,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Dispatches `pipeline` over `groups` workgroups (2D past the per-dimension limit) with the
+    /// given (binding, buffer) entries.
+    fn dispatch(
+        &self,
+        program: &mut SortProgram,
+        pipeline: &wgpu::ComputePipeline,
+        entries: &[(u32, &wgpu::Buffer)],
+        groups: u64,
+    ) -> Result<(), RuntimeError> {
+        let group = self
+            .gpu
+            .bind_buffers("sort", &pipeline.get_bind_group_layout(0), entries);
+        let (x, y) = self.gpu.grid(groups, 1)?;
+        program.dispatches.push(Dispatch {
+            pipeline: pipeline.clone(),
+            group,
+            x,
+            y,
+        });
+        Ok(())
+    }
+
+    /// Exclusive scan of the first `len` words of `data`, in place, level by level.
+    fn scan(
+        &self,
+        pass: &mut SortProgram,
+        data: &wgpu::Buffer,
+        len: u64,
+    ) -> Result<(), RuntimeError> {
+        let blocks = len.div_ceil(TILE);
+        let sums = self.buffer("scan sums", blocks);
+        let p = self.params(len, 0, blocks, 0, 0);
+        self.dispatch(
+            pass,
+            &self.scan_blocks,
+            &[(4, data), (2, &sums), (5, &p)],
+            blocks,
+        )?;
+        if blocks > 1 {
+            self.scan(pass, &sums, blocks)?;
+            self.dispatch(
+                pass,
+                &self.add_sums,
+                &[(4, data), (2, &sums), (5, &p)],
+                blocks,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// A program that replaces the first `len` words of `data` by their exclusive prefix sum
+    /// (the scan the radix sort uses for its digit counts).
+    pub fn scan_program(&self, data: &wgpu::Buffer, len: u64) -> Result<SortProgram, RuntimeError> {
+        let mut program = SortProgram {
+            dispatches: Vec::new(),
+        };
+        if len > 0 {
+            self.scan(&mut program, data, len)?;
+        }
+        Ok(program)
+    }
+
+    /// A stable LSD radix sort of the first `n` pairs ordering only the low `key_bits` bits of
+    /// the keys (8 bits a pass, an even number of passes so the result ends in `keys`/`vals`).
+    pub fn radix_program(
+        &self,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+        key_bits: u32,
+    ) -> Result<SortProgram, RuntimeError> {
+        let mut program = SortProgram {
+            dispatches: Vec::new(),
+        };
+        if n >= 2 {
+            let passes = key_bits.clamp(1, 32).div_ceil(8).next_multiple_of(2);
+            self.radix_passes(&mut program, keys, vals, n, passes)?;
+        }
+        Ok(program)
+    }
+
+    /// Records `passes` 8-bit digit passes of the radix sort, from the lowest digit up: per
+    /// pass, the digit counts of each partition, their scan, and the ranked scatter.
+    fn radix_passes(
+        &self,
+        pass: &mut SortProgram,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+        passes: u32,
+    ) -> Result<(), RuntimeError> {
+        let partitions = n.div_ceil(PARTITION);
+        let (keys2, vals2) = (self.buffer("keys tmp", n), self.buffer("vals tmp", n));
+        let counts = self.buffer("partition digit counts", 256 * partitions);
+        let totals = self.buffer("digit totals", 256);
+        for pass_index in 0..passes {
+            let (ki, vi, ko, vo) = if pass_index % 2 == 0 {
+                (keys, vals, &keys2, &vals2)
+            } else {
+                (&keys2, &vals2, keys, vals)
+            };
+            let p = self.uniform(&[n as u32, 8 * pass_index, partitions as u32, 0]);
+            self.dispatch(
+                pass,
+                &self.upsweep,
+                &[(0, ki), (4, &counts), (5, &p)],
+                partitions,
+            )?;
+            if partitions <= SMALL_SCAN_PARTITIONS {
+                self.dispatch(
+                    pass,
+                    &self.digit_scan_small,
+                    &[(4, &counts), (5, &p), (6, &totals)],
+                    1,
+                )?;
+            } else {
+                self.dispatch(
+                    pass,
+                    &self.digit_scan,
+                    &[(4, &counts), (5, &p), (6, &totals)],
+                    256,
+                )?;
+            }
+            self.dispatch(
+                pass,
+                &self.downsweep,
+                &[
+                    (0, ki),
+                    (1, vi),
+                    (2, ko),
+                    (3, vo),
+                    (4, &counts),
+                    (5, &p),
+                    (6, &totals),
+                ],
+                partitions,
+            )?;
+        }
+        Ok(())
+    }
+
+    /// Records a sort of the first `n` pairs of `keys`/`vals` into `pass`.
+    pub fn record(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        algorithm: SortAlgorithm,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+    ) -> Result<(), RuntimeError> {
+        self.program(algorithm, keys, vals, n)?.record(pass);
+        Ok(())
+    }
+
+    /// Builds the dispatches (with their scratch buffers and bind groups) that sort the first
+    /// `n` pairs of `keys`/`vals`, to be recorded as often as needed without new allocations.
+    pub fn program(
+        &self,
+        algorithm: SortAlgorithm,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+    ) -> Result<SortProgram, RuntimeError> {
+        let mut program = SortProgram {
+            dispatches: Vec::new(),
+        };
+        let pass = &mut program;
+        if n < 2 {
+            return Ok(program);
+        }
+        match algorithm {
+            SortAlgorithm::Radix => self.radix_passes(pass, keys, vals, n, 4)?,
+            SortAlgorithm::Bitonic => {
+                // The network needs a power-of-two length: the caller's buffers are padded.
+                let len = n.next_power_of_two();
+                if keys.size() < len * 4 || vals.size() < len * 4 {
+                    return Err(RuntimeError::Gpu(format!(
+                        "bitonic sort needs buffers of {len} pairs"
+                    )));
+                }
+                let mut k = 2;
+                while k <= len {
+                    let mut j = k / 2;
+                    while j > 0 {
+                        let p = self.params(len, 0, 0, j, k);
+                        self.dispatch(
+                            pass,
+                            &self.bitonic,
+                            &[(0, keys), (1, vals), (5, &p)],
+                            len.div_ceil(TILE),
+                        )?;
+                        j /= 2;
+                    }
+                    k *= 2;
+                }
+            }
+        }
+        Ok(program)
+    }
+
+    /// Sorts `pairs` on the GPU and returns them sorted (for tests and the CPU side).
+    pub fn sort_pairs(
+        &self,
+        algorithm: SortAlgorithm,
+        keys: &[u32],
+        vals: &[u32],
+    ) -> Result<(Vec<u32>, Vec<u32>), RuntimeError> {
+        let n = keys.len() as u64;
+        let len = if algorithm == SortAlgorithm::Bitonic {
+            n.next_power_of_two()
+        } else {
+            n
+        };
+        let mut k = keys.to_vec();
+        let mut v = vals.to_vec();
+        // Padding sorts last: the largest key, and values past every real one.
+        k.resize(len as usize, u32::MAX);
+        v.extend((n..len).map(|i| i as u32));
+        let upload = |label, data: &[u32]| {
+            let bytes: Vec<u8> = data.iter().flat_map(|w| w.to_le_bytes()).collect();
+            self.gpu
+                .device
+                .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                    label: Some(label),
+                    contents: if bytes.is_empty() { &[0; 4] } else { &bytes },
+                    usage: wgpu::BufferUsages::STORAGE
+                        | wgpu::BufferUsages::COPY_SRC
+                        | wgpu::BufferUsages::COPY_DST,
+                })
+        };
+        let (kb, vb) = (upload("keys", &k), upload("vals", &v));
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            self.record(&mut pass, algorithm, &kb, &vb, n)?;
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()?;
+        let read = |b: &wgpu::Buffer| -> Result<Vec<u32>, RuntimeError> {
+            let bytes = crate::device::readback::read_buffer(&self.gpu, b)?;
+            Ok(bytes
+                .chunks_exact(4)
+                .take(n as usize)
+                .map(|c| u32::from_le_bytes([c[0], c[1], c[2], c[3]]))
+                .collect())
+        };
+        Ok((read(&kb)?, read(&vb)?))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use naga::valid::{Capabilities, ValidationFlags, Validator};
+
+    /// Parses and validates `source` with naga, allowing subgroup operations; panics with
+    /// naga's located message otherwise.
+    fn validate(source: &str) {
+        let module = naga::front::wgsl::parse_str(source)
+            .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+        Validator::new(
+            ValidationFlags::all(),
+            Capabilities::SUBGROUP | Capabilities::SUBGROUP_BARRIER,
+        )
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
+    }
+
+    // Both radix modules validate here, on any machine: CI's adapter (llvmpipe) has no
+    // subgroups, so it runs only the portable ranking, and this catches a broken subgroup
+    // module before an adapter with subgroups does.
+    #[test]
+    fn both_radix_modules_validate() {
+        validate(&format!(
+            "{}\n{}",
+            include_str!("radix.wgsl"),
+            include_str!("radix_portable.wgsl")
+        ));
+        validate(&format!(
+            "{}\n{}",
+            include_str!("radix.wgsl"),
+            include_str!("radix_subgroup.wgsl")
+        ));
+    }
+}
