@@ -1,8 +1,9 @@
 //! # plume
 //!
 //! The facade of Plume, a compiler from declarative particle effects (RON files) to fused,
-//! naga-validated WGSL compute kernels. It re-exports the compiler crate; the integration
-//! tests of the whole project live in this package's `tests/`.
+//! naga-validated WGSL compute kernels. It re-exports the compiler crate and the runtime
+//! (`plume::runtime`: `Effect`, `EffectRenderer`, `Gpu`, ...); the integration tests of the
+//! whole project live in this package's `tests/`.
 //!
 //! ```
 //! let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/sparks.ron")).unwrap();

@@ -16,7 +16,7 @@
 //! - [`RuntimeError`]: what went wrong, and where it can, what to do.
 //!
 //! Three named modules serve the `plume` command, the tools and the tests, not an embedding
-//! application: [`outputs`] (headless images, GIF, contact sheets, exports), [`bench`]
+//! application: [`outputs`] (headless images, GIF, contact sheets, exports), [`bench`](mod@bench)
 //! (benchmarks and measurements) and [`oracle`] (the CPU reference drawing and the readbacks
 //! the tests compare). Everything else is private to the crate, in folders by job: `device`,
 //! `sort`, `sim`, `draw` (see docs/ARCHITECTURE.md, "Runtime and outputs").

@@ -1,5 +1,5 @@
 //! Benchmarks and measurements, for `plume bench`, `plume accuracy` and the tools in
-//! `examples/`: the update against a copy kernel ([`bench`]), the draw ([`DrawTimes`]), the
+//! `examples/`: the update against a copy kernel ([`bench`](fn@bench)), the draw ([`DrawTimes`]), the
 //! events' cost ([`bench_graph`]), the radix sort alone ([`bench_sort`], with the sorter
 //! itself, [`GpuSorter`]), the integrators' error against time per step ([`measure`], plotted
 //! by [`accuracy_svg`]), and the GPU pass timer they share ([`PassTimer`]). Also the knobs the
@@ -67,7 +67,27 @@ pub fn bind_buffers(
     gpu.bind_buffers(label, layout, entries)
 }
 
-/// A compute pipeline of `module`'s `entry` (its layout derived when None).
+/// The compute pipeline of `module`'s entry point `entry` (also its label), on `layout`, or
+/// on the layout derived from the bindings the entry point uses when `None`.
+///
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// let gpu = plume_runtime::Gpu::new(&Default::default())?;
+/// let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
+///     label: Some("double"),
+///     source: wgpu::ShaderSource::Wgsl(
+///         "@group(0) @binding(0) var<storage, read_write> xs: array<f32>;
+///          @compute @workgroup_size(64)
+///          fn double(@builtin(global_invocation_id) id: vec3<u32>) { xs[id.x] *= 2.0; }"
+///             .into(),
+///     ),
+/// });
+/// let pipeline = plume_runtime::bench::compute_pipeline(&gpu, &module, "double", None);
+/// let _layout = pipeline.get_bind_group_layout(0); // derived: binding 0 only
+/// gpu.take_error()?;
+/// # Ok(())
+/// # }
+/// ```
 pub fn compute_pipeline(
     gpu: &Gpu,
     module: &wgpu::ShaderModule,

@@ -90,7 +90,7 @@ impl BenchResult {
 pub struct BenchOptions {
     /// Particle slots (the capacity N).
     pub particles: u32,
-    /// Timed steps (at most [`STEPS_PER_SUBMIT`]).
+    /// Timed steps (at most 256, one submission).
     pub steps: u32,
     /// Also time the draw at this image size.
     pub render: Option<(u32, u32)>,

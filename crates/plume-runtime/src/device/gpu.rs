@@ -254,25 +254,6 @@ impl Gpu {
 
     /// The compute pipeline of `module`'s entry point `entry` (also its label), on `layout`, or
     /// on the layout derived from the bindings the entry point uses when `None`.
-    ///
-    /// ```
-    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
-    /// let gpu = plume_runtime::Gpu::new(&Default::default())?;
-    /// let module = gpu.device.create_shader_module(wgpu::ShaderModuleDescriptor {
-    ///     label: Some("double"),
-    ///     source: wgpu::ShaderSource::Wgsl(
-    ///         "@group(0) @binding(0) var<storage, read_write> xs: array<f32>;
-    ///          @compute @workgroup_size(64)
-    ///          fn double(@builtin(global_invocation_id) id: vec3<u32>) { xs[id.x] *= 2.0; }"
-    ///             .into(),
-    ///     ),
-    /// });
-    /// let pipeline = gpu.compute_pipeline(&module, "double", None);
-    /// let _layout = pipeline.get_bind_group_layout(0); // derived: binding 0 only
-    /// gpu.take_error()?;
-    /// # Ok(())
-    /// # }
-    /// ```
     pub(crate) fn compute_pipeline(
         &self,
         module: &wgpu::ShaderModule,

@@ -40,7 +40,7 @@ use crate::draw::target::DrawTarget;
 pub enum DeadSlots {
     /// One instance per slot; the vertex shader turns a free slot into a degenerate quad.
     Hidden,
-    /// A compacted list of the live slots first (three compute passes, [`crate::draw::live_list`]),
+    /// A compacted list of the live slots first (three compute passes),
     /// then an indirect draw of exactly those.
     #[default]
     Compacted,

@@ -35,7 +35,7 @@ impl Offscreen {
     }
 
     /// A `width` x `height` target on `gpu` that, given a `glow`, draws into an HDR image and
-    /// blooms it into the RGBA8 one ([`crate::draw::glow`]).
+    /// blooms it into the RGBA8 one ([`crate::outputs::GlowPasses`]).
     ///
     /// ```
     /// # fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -185,7 +185,7 @@ impl Effect {
     }
 
     /// Records `steps` steps into the caller's `encoder` (a compute pass per
-    /// [`STEPS_PER_SUBMIT`] steps, each preceded by the copy of its steps' parameters; with
+    /// 256 steps, each preceded by the copy of its steps' parameters; with
     /// groups, per step each stream's ordering and its child's spawn, then each group's own
     /// step). The schedule advances now: submit the encoder before reading the effect back. A
     /// stateless effect only advances its bookkeeping and records nothing.
@@ -212,7 +212,7 @@ impl Effect {
         }
     }
 
-    /// Runs `steps` steps in submissions of [`STEPS_PER_SUBMIT`], calling `progress(done)`
+    /// Runs `steps` steps in submissions of 256 steps, calling `progress(done)`
     /// after each is submitted. Returns when the GPU has finished.
     pub fn run(&mut self, steps: u64, mut progress: impl FnMut(u64)) -> Result<(), RuntimeError> {
         if self.events.is_none() {
