@@ -19,29 +19,66 @@ use std::path::{Path, PathBuf};
 /// lower, never higher; the crate root (`lib.rs`/`main.rs`) sits above every rank. Every
 /// top-level module of a listed crate must be here, so a new module is placed on purpose.
 /// Crates not listed are checked for circles only.
-const LAYERS: &[(&str, &[(&str, u32)])] = &[(
-    "plume-compiler",
-    &[
-        // 0: leaves that know no effect: diagnostics, spans, value types, the WGSL text
-        //    writer, rng.
-        ("base", 0),
-        // 1: the expression language of custom forces.
-        ("expr", 1),
-        // 2: the features an effect is made of: forces, colliders, fields, events, looks.
-        ("features", 2),
-        // 3: the effect IR that gathers the features' lowered forms.
-        ("ir", 3),
-        // 4: the stages: schema, checks, lowering, passes, integrators, WGSL kernel assembly,
-        //    schedule.
-        ("stages", 4),
-        // 5: the single-group compile driver.
-        ("compile", 5),
-        // 6: effects with groups and the events between them.
-        ("graph", 6),
-        // 7: the f64 reference simulator, which nothing but the crate root imports.
-        ("reference", 7),
-    ],
-)];
+const LAYERS: &[(&str, &[(&str, u32)])] = &[
+    (
+        "plume-compiler",
+        &[
+            // 0: leaves that know no effect: diagnostics, spans, value types, the WGSL text
+            //    writer, rng.
+            ("base", 0),
+            // 1: the expression language of custom forces.
+            ("expr", 1),
+            // 2: the features an effect is made of: forces, colliders, fields, events, looks.
+            ("features", 2),
+            // 3: the effect IR that gathers the features' lowered forms.
+            ("ir", 3),
+            // 4: the stages: schema, checks, lowering, passes, integrators, WGSL kernel assembly,
+            //    schedule.
+            ("stages", 4),
+            // 5: the single-group compile driver.
+            ("compile", 5),
+            // 6: effects with groups and the events between them.
+            ("graph", 6),
+            // 7: the f64 reference simulator, which nothing but the crate root imports.
+            ("reference", 7),
+        ],
+    ),
+    (
+        "plume-runtime",
+        &[
+            // 0: the error type every folder returns.
+            ("error", 0),
+            // 1: the device, a group's buffers and reading them back.
+            ("device", 1),
+            // 2: the GPU radix sort and the depth keys it orders.
+            ("sort", 2),
+            // 3: simulation: a group's steps, the event streams, `Effect`.
+            ("sim", 3),
+            // 4: drawing: the renderer, the raster pipelines, trails, splat, glow.
+            ("draw", 4),
+            // 5: headless images and exports.
+            ("outputs", 5),
+            // 6: what the tests and the `plume` command measure and compare against: the CPU-fed
+            //    drawing and readbacks, and the benchmarks.
+            ("oracle", 6),
+            ("bench", 6),
+        ],
+    ),
+    (
+        "plume-cli",
+        &[
+            // 0: reading and compiling an effect file, with located errors.
+            ("load", 0),
+            // 1: the commands that only load and run.
+            ("run", 1),
+            ("render", 1),
+            ("accuracy", 1),
+            // 2: the commands that reuse `render`'s frame loop.
+            ("bench", 2),
+            ("preview", 2),
+        ],
+    ),
+];
 
 /// The longest a source file may be, counting the lines before its unit-test module.
 const MAX_LINES: usize = 600;
