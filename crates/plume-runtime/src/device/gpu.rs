@@ -51,7 +51,7 @@ impl GpuChoice {
 }
 
 /// An open device, its queue and what it is. Cloning is cheap (wgpu's handles are shared), so
-/// every effect instance keeps its own clone.
+/// every effect keeps its own clone.
 #[derive(Clone, Debug)]
 pub struct Gpu {
     /// The device.

@@ -40,7 +40,7 @@ impl Camera {
     }
 
     /// [`Self::depth_axis`] as the `DepthAxis` uniform's bytes.
-    pub fn depth_axis_bytes(&self) -> Vec<u8> {
+    pub(crate) fn depth_axis_bytes(&self) -> Vec<u8> {
         self.depth_axis()
             .iter()
             .flat_map(|x| x.to_le_bytes())
