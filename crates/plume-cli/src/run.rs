@@ -221,10 +221,19 @@ pub fn run(args: &RunArgs) -> ExitCode {
 /// One JSON object for an effect without groups.
 fn print_json(outcome: &Outcome, state: &str) {
     let g = &outcome.groups[0];
+    let mut v = group_json(g);
+    v.insert("steps".into(), g.totals.steps.into());
+    v.insert("seconds".into(), outcome.seconds.into());
+    v.insert("adapter".into(), outcome.engine.clone().into());
+    v.insert("stateless".into(), state.starts_with("stateless (").into());
+    println!("{}", serde_json::Value::Object(v));
+}
+
+/// A group's counts and the summary of its particles, as JSON fields.
+fn group_json(g: &GroupOutcome) -> serde_json::Map<String, serde_json::Value> {
     let s = summarize(&g.records);
     let t = g.totals;
-    let v = serde_json::json!({
-        "steps": t.steps,
+    let serde_json::Value::Object(fields) = serde_json::json!({
         "alive": t.alive,
         "spawned": t.spawned,
         "died": t.died,
@@ -233,11 +242,10 @@ fn print_json(outcome: &Outcome, state: &str) {
         "bbox_min": [s.bbox_min.x, s.bbox_min.y, s.bbox_min.z],
         "bbox_max": [s.bbox_max.x, s.bbox_max.y, s.bbox_max.z],
         "mean_speed": s.mean_speed,
-        "seconds": outcome.seconds,
-        "adapter": outcome.engine,
-        "stateless": state.starts_with("stateless ("),
-    });
-    println!("{v}");
+    }) else {
+        unreachable!("json! of an object literal is an object")
+    };
+    fields
 }
 
 /// The summary of an effect without groups.
@@ -278,19 +286,9 @@ fn print_groups_json(outcome: &Outcome) {
         .groups
         .iter()
         .map(|g| {
-            let s = summarize(&g.records);
-            let t = g.totals;
-            serde_json::json!({
-                "name": g.name,
-                "alive": t.alive,
-                "spawned": t.spawned,
-                "died": t.died,
-                "dropped": t.dropped,
-                "nonfinite": s.nonfinite,
-                "bbox_min": [s.bbox_min.x, s.bbox_min.y, s.bbox_min.z],
-                "bbox_max": [s.bbox_max.x, s.bbox_max.y, s.bbox_max.z],
-                "mean_speed": s.mean_speed,
-            })
+            let mut fields = group_json(g);
+            fields.insert("name".into(), g.name.clone().into());
+            serde_json::Value::Object(fields)
         })
         .collect();
     let v = serde_json::json!({
