@@ -101,22 +101,7 @@ pub fn export(
     records: &[ParticleRecord],
     inputs: &[&Path],
 ) -> Result<(), RuntimeError> {
-    let bytes = match path
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .as_deref()
-    {
-        Some("csv") => csv(records),
-        Some("ply") => ply(records),
-        _ => {
-            return Err(RuntimeError::Output(format!(
-                "{}: unknown export format; use a .csv or .ply file name",
-                path.display()
-            )))
-        }
-    };
-    write_atomically(path, &bytes, inputs).map_err(RuntimeError::Output)
+    write_export(path, inputs, || csv(records), || ply(records))
 }
 
 /// The CSV export of an effect with groups: header `group,id,x,y,z,vx,vy,vz,age`, each
@@ -180,14 +165,24 @@ pub fn export_groups(
     groups: &[(&str, &[ParticleRecord])],
     inputs: &[&Path],
 ) -> Result<(), RuntimeError> {
+    write_export(path, inputs, || csv_groups(groups), || ply_groups(groups))
+}
+
+/// Writes the CSV or the PLY bytes (by `path`'s extension) atomically, never over an input.
+fn write_export(
+    path: &Path,
+    inputs: &[&Path],
+    csv: impl FnOnce() -> Vec<u8>,
+    ply: impl FnOnce() -> Vec<u8>,
+) -> Result<(), RuntimeError> {
     let bytes = match path
         .extension()
         .and_then(|e| e.to_str())
         .map(str::to_ascii_lowercase)
         .as_deref()
     {
-        Some("csv") => csv_groups(groups),
-        Some("ply") => ply_groups(groups),
+        Some("csv") => csv(),
+        Some("ply") => ply(),
         _ => {
             return Err(RuntimeError::Output(format!(
                 "{}: unknown export format; use a .csv or .ply file name",
