@@ -130,10 +130,10 @@ impl GroupDraw {
             true => Some(LiveList::new(gpu, res, effect, options.primitive)?),
             false => None,
         };
-        let soft = effect.ir.render.soft.is_some() && target.depth.is_some();
+        let soft = effect.ir.render.soft.is_some() && target.depth.is_some() && target.soft;
         if soft && target.sample_count != 1 {
             return Err(RuntimeError::Unsupported(format!(
-                "soft particles (render.soft) read the depth buffer as a single-sample texture; draw {:?} into a pass with one sample per pixel, or leave render.soft out",
+                "soft particles (render.soft) read the depth buffer as a single-sample texture; draw {:?} into a pass with one sample per pixel, or hard (DrawTarget::with_soft(false)), or leave render.soft out",
                 effect.ir.name
             )));
         }

@@ -21,6 +21,10 @@ pub struct DrawTarget {
     pub depth: Option<DepthTest>,
     /// Samples per pixel of the attachments (1: no multisampling).
     pub sample_count: u32,
+    /// Whether `render.soft` effects fade against the scene's depth (needs a depth test and one
+    /// sample). False draws them hard: a host whose depth is multisampled, or not bindable,
+    /// draws them that way rather than not at all.
+    pub soft: bool,
 }
 
 impl DrawTarget {
@@ -30,6 +34,7 @@ impl DrawTarget {
             color_format,
             depth: None,
             sample_count: 1,
+            soft: true,
         }
     }
 
@@ -48,6 +53,11 @@ impl DrawTarget {
             depth: Some(DepthTest { format, compare }),
             ..self
         }
+    }
+
+    /// With soft particles faded against the scene's depth (`true`, the default) or drawn hard.
+    pub fn with_soft(self, soft: bool) -> Self {
+        Self { soft, ..self }
     }
 
     /// With `count` samples per pixel.

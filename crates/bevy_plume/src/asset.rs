@@ -1,0 +1,136 @@
+//! Effect files as Bevy assets: [`PlumeEffectAsset`] and its loader. The loader compiles the
+//! file with Plume's compiler, so an error is reported where the file is (Plume's located
+//! diagnostic, file:line:col with a caret) and no broken effect ever reaches the GPU; on a
+//! failed hot reload Bevy keeps the last good asset, so the effect keeps running.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use bevy::asset::io::Reader;
+use bevy::asset::{AssetLoader, LoadContext};
+use bevy::prelude::*;
+use bevy::reflect::TypePath;
+use plume_compiler::graph::{compile_graph_str, CompiledGraph};
+use plume_compiler::CompileOptions;
+
+/// A compiled Plume effect file (a single system or a graph of groups and events).
+#[derive(Asset, TypePath, Clone, Debug)]
+pub struct PlumeEffectAsset {
+    /// The asset path it was loaded from (for messages).
+    pub path: Arc<str>,
+    /// The file's text (compiled again for an instance with its own seed).
+    pub source: Arc<str>,
+    /// The directory the effect's own files (a texture) are read from.
+    pub base_dir: Option<Arc<Path>>,
+    /// The compiled effect, shared with the render world (cloning the asset is cheap).
+    pub graph: Arc<CompiledGraph>,
+}
+
+impl PlumeEffectAsset {
+    /// Compiles `source` (read from `path`, whose files, a texture, are resolved from
+    /// `base_dir`), or returns the located diagnostic as text.
+    pub fn compile(path: &str, source: &str, base_dir: Option<PathBuf>) -> Result<Self, String> {
+        let base_dir: Option<Arc<Path>> = base_dir.map(Arc::from);
+        let graph = compile_source(path, source, base_dir.as_deref(), None)?;
+        Ok(Self {
+            path: path.into(),
+            source: source.into(),
+            base_dir,
+            graph: Arc::new(graph),
+        })
+    }
+
+    /// The file compiled again with `seed` in place of its own (None: as written), or the
+    /// located diagnostic as text.
+    pub fn compile_with(&self, seed: Option<u32>) -> Result<CompiledGraph, String> {
+        compile_source(&self.path, &self.source, self.base_dir.as_deref(), seed)
+    }
+
+    /// The step of the top-level group, in seconds.
+    pub fn dt(&self) -> f64 {
+        self.graph.groups[0].effect.ir.dt
+    }
+}
+
+/// Compiles an effect file's text, its diagnostic rendered against `path` when it fails.
+fn compile_source(
+    path: &str,
+    source: &str,
+    base_dir: Option<&Path>,
+    seed: Option<u32>,
+) -> Result<CompiledGraph, String> {
+    let options = CompileOptions {
+        base_dir: base_dir.map(Path::to_path_buf),
+        seed,
+        ..Default::default()
+    };
+    compile_graph_str(source, &options).map_err(|e| e.render(path, source))
+}
+
+/// Why an effect file did not load. The compile error carries Plume's whole diagnostic.
+#[derive(Debug, thiserror::Error)]
+pub enum PlumeLoadError {
+    /// The file could not be read.
+    #[error("could not read {path}: {source}")]
+    Read {
+        /// The asset path.
+        path: String,
+        /// The reader's error.
+        source: std::io::Error,
+    },
+    /// The file is not UTF-8.
+    #[error("{path} is not UTF-8 text")]
+    NotText {
+        /// The asset path.
+        path: String,
+    },
+    /// The compiler refused the file; the text is its located diagnostic.
+    #[error("{0}")]
+    Compile(String),
+}
+
+/// Loads `*.plume.ron` and `*.plume` files (and any file loaded with the type
+/// `PlumeEffectAsset`, whatever its extension, such as the examples' `effects/*.ron`).
+#[derive(Default, TypePath)]
+pub struct PlumeEffectLoader {
+    /// The directory asset paths are relative to, for an effect's own files (a texture).
+    pub(crate) root: Option<PathBuf>,
+}
+
+impl AssetLoader for PlumeEffectLoader {
+    type Asset = PlumeEffectAsset;
+    type Settings = ();
+    type Error = PlumeLoadError;
+
+    async fn load(
+        &self,
+        reader: &mut dyn Reader,
+        _settings: &(),
+        load_context: &mut LoadContext<'_>,
+    ) -> Result<Self::Asset, Self::Error> {
+        let asset_path = load_context.path().path().to_path_buf();
+        let path = asset_path.display().to_string();
+        let mut bytes = Vec::new();
+        reader
+            .read_to_end(&mut bytes)
+            .await
+            .map_err(|source| PlumeLoadError::Read {
+                path: path.clone(),
+                source,
+            })?;
+        let source =
+            String::from_utf8(bytes).map_err(|_| PlumeLoadError::NotText { path: path.clone() })?;
+        let base_dir = self.root.as_deref().map(|root| {
+            root.join(asset_path.parent().unwrap_or(Path::new("")))
+        });
+        PlumeEffectAsset::compile(&path, &source, base_dir).map_err(|diagnostic| {
+            // Bevy logs the error too, on one line; this is the readable, located one.
+            error!("{diagnostic}");
+            PlumeLoadError::Compile(diagnostic)
+        })
+    }
+
+    fn extensions(&self) -> &[&str] {
+        &["plume.ron", "plume"]
+    }
+}

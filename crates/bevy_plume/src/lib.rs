@@ -1,0 +1,60 @@
+//! # bevy_plume
+//!
+//! Plume particle effects in Bevy. Effect files (any file `plume check` accepts: a single
+//! system, or a graph of groups and events) are assets ([`PlumeEffectAsset`], hot-reloaded);
+//! an effect is an entity with a [`PlumeEffect`]; it simulates on Bevy's own render device,
+//! before the cameras draw, and is drawn in Bevy's transparent 3D phase by every camera that
+//! sees it, depth-tested against the scene.
+//!
+//! ```no_run
+//! use bevy::prelude::*;
+//! use bevy_plume::{PlumeEffect, PlumePlugin};
+//!
+//! fn main() {
+//!     App::new()
+//!         .add_plugins((DefaultPlugins, PlumePlugin))
+//!         .add_systems(Startup, |mut commands: Commands, assets: Res<AssetServer>| {
+//!             commands.spawn((Camera3d::default(), Transform::from_xyz(0.0, 2.0, 8.0)));
+//!             commands.spawn(PlumeEffect::new(assets.load("fountain.plume.ron")));
+//!         })
+//!         .run();
+//! }
+//! ```
+//!
+//! See docs/bevy.md in the Plume repository for what is supported and what is measured.
+
+mod asset;
+mod effect;
+pub mod headless;
+mod render;
+
+pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
+pub use effect::{PlumeEffect, SimulationSpace};
+pub use plume_runtime;
+
+use bevy::asset::io::file::FileAssetReader;
+use bevy::prelude::*;
+
+/// Adds Plume to an app: the effect asset and its loader (`*.plume.ron`, `*.plume`), and the
+/// render-world systems that step and draw every [`PlumeEffect`]. Add it after
+/// `DefaultPlugins` (it needs the asset, render and core pipeline plugins).
+#[derive(Default)]
+pub struct PlumePlugin;
+
+impl Plugin for PlumePlugin {
+    fn build(&self, app: &mut App) {
+        // Effects' own files (a texture) are read from the file system next to the effect.
+        let file_path = app
+            .get_added_plugins::<AssetPlugin>()
+            .first()
+            .map_or_else(|| "assets".to_string(), |plugin| plugin.file_path.clone());
+        let root = FileAssetReader::get_base_path().join(file_path);
+        app.init_asset::<PlumeEffectAsset>()
+            .register_asset_loader(PlumeEffectLoader { root: Some(root) });
+        render::build(app);
+    }
+
+    fn finish(&self, app: &mut App) {
+        render::finish(app);
+    }
+}

@@ -1,0 +1,108 @@
+//! Drawing instances in Bevy's transparent 3D phase: each camera that sees an effect gets one
+//! phase item for it, sorted with the rest of the transparent phase by the effect's distance
+//! (the particles within it in Plume's own order, back to front when the file says `sort`),
+//! and drawn with Plume's pipelines straight into Bevy's render pass.
+
+use bevy::core_pipeline::core_3d::{Transparent3d, TransparentSortingInfo3d, CORE_3D_DEPTH_FORMAT};
+use bevy::prelude::*;
+use bevy::render::render_phase::{
+    Draw, DrawError, DrawFunctions, PhaseItemExtraIndex, TrackedRenderPass,
+    ViewSortedRenderPhases,
+};
+use bevy::render::render_resource::CachedRenderPipelineId;
+use bevy::render::view::{ExtractedView, RenderVisibleEntities};
+use plume_runtime::DrawTarget;
+
+use crate::effect::PlumeEffect;
+use crate::render::instances::PlumeInstances;
+
+/// The target a camera's transparent pass draws into: its colour format and samples, Bevy's
+/// reversed-Z depth buffer tested (nearer is greater) and never written. Soft particles fade
+/// against the depth prepass, which they can read only single-sampled: with MSAA they are
+/// drawn hard.
+pub(crate) fn view_target(view: &ExtractedView, msaa: &Msaa, depth_prepass: bool) -> DrawTarget {
+    let samples = msaa.samples();
+    DrawTarget::new(view.target_format)
+        .with_depth_compare(CORE_3D_DEPTH_FORMAT, wgpu::CompareFunction::GreaterEqual)
+        .with_samples(samples)
+        .with_soft(samples == 1 && depth_prepass)
+}
+
+/// Queues one transparent item per visible effect per camera, making each camera's draw of
+/// it first where there is none yet.
+pub(crate) fn queue_effects(
+    draw_functions: Res<DrawFunctions<Transparent3d>>,
+    mut phases: ResMut<ViewSortedRenderPhases<Transparent3d>>,
+    views: Query<(
+        Entity,
+        &ExtractedView,
+        &Msaa,
+        &RenderVisibleEntities,
+        Has<bevy::core_pipeline::prepass::DepthPrepass>,
+    )>,
+    mut store: ResMut<PlumeInstances>,
+) {
+    let Some(draw_function) = draw_functions.read().get_id::<DrawPlume>() else {
+        return;
+    };
+    let store = &mut *store;
+    let frame = store.frame;
+    for (view_entity, view, msaa, visible, depth_prepass) in &views {
+        let Some(phase) = phases.get_mut(&view.retained_view_entity) else {
+            continue;
+        };
+        let Some(visible) = visible.get::<PlumeEffect>() else {
+            continue;
+        };
+        let target = view_target(view, msaa, depth_prepass);
+        for &(render_entity, main_entity) in &visible.entities_cpu_culling {
+            let Some(instance) = store.instances.get_mut(&main_entity.id()) else {
+                continue;
+            };
+            if instance.view_draw(view_entity, target, frame).is_none() {
+                continue;
+            }
+            phase.add_transient(Transparent3d {
+                sorting_info: TransparentSortingInfo3d::Sorted {
+                    mesh_center: instance.world_from_local.w_axis.truncate(),
+                    depth_bias: 0.0,
+                },
+                distance: 0.0,
+                pipeline: CachedRenderPipelineId::INVALID,
+                entity: (render_entity, main_entity),
+                draw_function,
+                batch_range: 0..1,
+                extra_index: PhaseItemExtraIndex::None,
+                indexed: false,
+            });
+        }
+    }
+    // A camera that no longer sees an effect (or is gone) drops its draw of it.
+    for instance in store.instances.values_mut() {
+        instance.views.retain(|_, draw| draw.frame == frame);
+    }
+}
+
+/// Records an effect's draw for one camera into Bevy's transparent pass, with Plume's own
+/// pipelines and bind groups on the pass's raw wgpu encoder.
+pub(crate) struct DrawPlume;
+
+impl Draw<Transparent3d> for DrawPlume {
+    fn draw<'w>(
+        &mut self,
+        world: &'w World,
+        pass: &mut TrackedRenderPass<'w>,
+        view: Entity,
+        item: &Transparent3d,
+    ) -> Result<(), DrawError> {
+        let store = world.resource::<PlumeInstances>();
+        let draw = store
+            .instances
+            .get(&item.entity.1.id())
+            .and_then(|instance| instance.views.get(&view));
+        if let Some(draw) = draw {
+            draw.renderer.draw(pass.wgpu_pass());
+        }
+        Ok(())
+    }
+}

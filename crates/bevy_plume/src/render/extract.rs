@@ -1,0 +1,57 @@
+//! What the render world copies from the main world each frame: every effect entity with its
+//! compiled effect, transform and controls, and the frame's time step.
+
+use bevy::prelude::*;
+use bevy::render::sync_world::RenderEntity;
+use bevy::render::Extract;
+
+use crate::asset::PlumeEffectAsset;
+use crate::effect::PlumeEffect;
+
+/// One effect entity as the render world sees it this frame.
+#[derive(Clone)]
+pub(crate) struct ExtractedEffect {
+    /// The entity in the main world (the key of its instance).
+    pub main: Entity,
+    /// Its twin in the render world (what phase items name).
+    pub render: Entity,
+    /// The effect file's current version (a new `graph` after a hot reload; cheap to clone).
+    pub asset: PlumeEffectAsset,
+    /// The entity's world transform.
+    pub world_from_local: Mat4,
+    /// The component's controls.
+    pub control: PlumeEffect,
+}
+
+/// Every effect entity whose file has loaded, and the app's time step, this frame.
+#[derive(Resource, Default)]
+pub(crate) struct ExtractedEffects {
+    /// The effects, in no particular order.
+    pub effects: Vec<ExtractedEffect>,
+    /// Seconds of app time since the last frame.
+    pub delta: f64,
+}
+
+/// Copies the effect entities and the time step into [`ExtractedEffects`]. Entities whose
+/// file has not loaded (or never compiled) are left out: they simulate nothing yet.
+pub(crate) fn extract_effects(
+    mut extracted: ResMut<ExtractedEffects>,
+    effects: Extract<Query<(Entity, RenderEntity, &PlumeEffect, &GlobalTransform)>>,
+    assets: Extract<Res<Assets<PlumeEffectAsset>>>,
+    time: Extract<Res<Time>>,
+) {
+    extracted.effects.clear();
+    extracted.delta = time.delta_secs_f64();
+    for (main, render, control, transform) in &effects {
+        let Some(asset) = assets.get(&control.handle) else {
+            continue;
+        };
+        extracted.effects.push(ExtractedEffect {
+            main,
+            render,
+            asset: asset.clone(),
+            world_from_local: transform.to_matrix(),
+            control: control.clone(),
+        });
+    }
+}

@@ -1,0 +1,191 @@
+//! The render world's effect instances: one Plume [`Effect`] per effect entity, made on Bevy's
+//! render device, rebuilt when its file changes (hot reload), its seed or its generation
+//! (restart), and dropped (with its GPU buffers) when the entity goes. Each instance keeps one
+//! [`EffectRenderer`] per camera that draws it.
+
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use bevy::prelude::*;
+use bevy::render::renderer::{RenderDevice, RenderQueue};
+use plume_compiler::graph::CompiledGraph;
+use plume_runtime::{DrawTarget, Effect, EffectRenderer, Gpu};
+
+use crate::render::extract::{ExtractedEffect, ExtractedEffects};
+
+/// At most this much effect time is stepped in one frame; a longer frame (a stall, a
+/// breakpoint) drops the rest rather than stepping ever more to catch up.
+const MAX_CATCH_UP_SECONDS: f64 = 0.25;
+
+/// What an instance was built from: a change of any part rebuilds it.
+#[derive(Clone)]
+struct BuildKey {
+    /// The file's compiled version (compared by address: a hot reload makes a new one).
+    graph: Arc<CompiledGraph>,
+    seed: Option<u32>,
+    generation: u32,
+}
+
+impl BuildKey {
+    fn of(effect: &ExtractedEffect) -> Self {
+        Self {
+            graph: effect.asset.graph.clone(),
+            seed: effect.control.seed,
+            generation: effect.control.generation,
+        }
+    }
+
+    fn same(&self, other: &Self) -> bool {
+        Arc::ptr_eq(&self.graph, &other.graph)
+            && self.seed == other.seed
+            && self.generation == other.generation
+    }
+}
+
+/// One camera's draw of an instance.
+pub(crate) struct ViewDraw {
+    /// The target the renderer was made for (the camera's format, samples and depth).
+    pub target: DrawTarget,
+    /// The draw.
+    pub renderer: EffectRenderer,
+    /// The frame it was last queued in (a camera that stops seeing it drops it).
+    pub frame: u64,
+}
+
+/// One effect entity's simulation and draws.
+pub(crate) struct Instance {
+    key: BuildKey,
+    /// The effect on Bevy's device.
+    pub effect: Effect,
+    /// Seconds per step.
+    dt: f64,
+    /// Effect time not yet stepped.
+    pending_time: f64,
+    /// Steps to record this frame.
+    pub steps: u64,
+    /// The entity's world transform (local space: every draw is seen through it).
+    pub world_from_local: Mat4,
+    /// The entity's render-world twin.
+    pub render_entity: Entity,
+    /// Its draws, by the camera's render-world entity.
+    pub views: HashMap<Entity, ViewDraw>,
+}
+
+/// Every instance, by main-world entity, and the device they run on.
+#[derive(Resource, Default)]
+pub(crate) struct PlumeInstances {
+    /// Bevy's render device as Plume's [`Gpu`] (made on first use).
+    pub gpu: Option<Gpu>,
+    /// The instances.
+    pub instances: HashMap<Entity, Instance>,
+    /// Builds that failed, by entity, so an error is logged once, not every frame.
+    failed: HashMap<Entity, BuildKey>,
+    /// Frames seen (ages views' draws).
+    pub frame: u64,
+}
+
+/// Brings the instances in line with this frame's effect entities: new ones built, changed
+/// ones rebuilt (a failed rebuild logs why and keeps the last good one running), gone ones
+/// dropped; then how many steps each records this frame.
+pub(crate) fn sync_instances(
+    mut store: ResMut<PlumeInstances>,
+    extracted: Res<ExtractedEffects>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
+) {
+    let store = &mut *store;
+    store.frame += 1;
+    let gpu = store
+        .gpu
+        .get_or_insert_with(|| Gpu::from_device(device.wgpu_device(), &queue))
+        .clone();
+    let mut alive = std::collections::HashSet::with_capacity(extracted.effects.len());
+    for e in &extracted.effects {
+        alive.insert(e.main);
+        let key = BuildKey::of(e);
+        let current = store.instances.get(&e.main).is_some_and(|i| i.key.same(&key));
+        let known_bad = store.failed.get(&e.main).is_some_and(|k| k.same(&key));
+        if !current && !known_bad {
+            match build(&gpu, e, key.clone()) {
+                Ok(instance) => {
+                    store.failed.remove(&e.main);
+                    store.instances.insert(e.main, instance);
+                }
+                Err(message) => {
+                    error!("{message}");
+                    store.failed.insert(e.main, key);
+                }
+            }
+        }
+        if let Some(instance) = store.instances.get_mut(&e.main) {
+            instance.world_from_local = e.world_from_local;
+            instance.render_entity = e.render;
+            if e.control.playing {
+                let scale = f64::from(e.control.time_scale.max(0.0));
+                instance.advance_time(extracted.delta * scale);
+            }
+        }
+    }
+    store.instances.retain(|entity, _| alive.contains(entity));
+    store.failed.retain(|entity, _| alive.contains(entity));
+}
+
+/// A new instance of `e`'s effect on `gpu`, with its warm-up steps due this frame.
+fn build(gpu: &Gpu, e: &ExtractedEffect, key: BuildKey) -> Result<Instance, String> {
+    let graph = match e.control.seed {
+        None => (*e.asset.graph).clone(),
+        Some(seed) => e.asset.compile_with(Some(seed))?,
+    };
+    let effect = Effect::from_graph(gpu, graph)
+        .map_err(|err| format!("{}: the effect could not start: {err}", e.asset.path))?;
+    let dt = e.asset.dt();
+    let warm_up = f64::from(e.control.warm_up.max(0.0));
+    Ok(Instance {
+        key,
+        effect,
+        dt,
+        pending_time: 0.0,
+        steps: (warm_up / dt).round() as u64,
+        world_from_local: e.world_from_local,
+        render_entity: e.render,
+        views: HashMap::new(),
+    })
+}
+
+impl Instance {
+    /// Adds `seconds` of effect time; whole steps of it are recorded this frame.
+    fn advance_time(&mut self, seconds: f64) {
+        let max_steps = (MAX_CATCH_UP_SECONDS / self.dt).ceil().max(1.0);
+        self.pending_time += seconds.max(0.0);
+        let steps = (self.pending_time / self.dt).floor().min(max_steps);
+        self.pending_time = (self.pending_time - steps * self.dt).clamp(0.0, self.dt);
+        self.steps += steps as u64;
+    }
+
+    /// The draw for the camera `view` into `target`, made (or remade, when the camera's
+    /// format or samples changed) as needed; None, with the reason logged once, when the
+    /// effect cannot be drawn there.
+    pub fn view_draw(&mut self, view: Entity, target: DrawTarget, frame: u64) -> Option<()> {
+        if self.views.get(&view).is_some_and(|d| d.target == target) {
+            self.views.get_mut(&view)?.frame = frame;
+            return Some(());
+        }
+        match self.effect.renderer(&target) {
+            Ok(renderer) => {
+                self.views.insert(
+                    view,
+                    ViewDraw {
+                        target,
+                        renderer,
+                        frame,
+                    },
+                );
+                Some(())
+            }
+            Err(err) => {
+                error!("{}: cannot be drawn: {err}", self.effect.compiled().ir.name);
+                None
+            }
+        }
+    }
+}

@@ -1,0 +1,55 @@
+//! The render app's side of the plugin: extraction ([`extract`]), the instances on Bevy's
+//! device ([`instances`]), the compute work before the cameras ([`simulate`]) and the draw in
+//! the transparent phase ([`draw`]).
+
+pub(crate) mod draw;
+pub(crate) mod extract;
+pub(crate) mod instances;
+pub(crate) mod simulate;
+
+use bevy::core_pipeline::core_3d::Transparent3d;
+use bevy::core_pipeline::schedule::camera_driver;
+use bevy::prelude::*;
+use bevy::render::render_phase::DrawFunctions;
+use bevy::render::renderer::{RenderGraph, RenderGraphSystems};
+use bevy::render::{ExtractSchedule, Render, RenderApp, RenderSystems};
+
+/// Adds the render world's resources and systems (from [`crate::PlumePlugin::build`]).
+pub(crate) fn build(app: &mut App) {
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        warn!("bevy_plume: no render app (RenderPlugin missing): effects will not run");
+        return;
+    };
+    render_app
+        .init_resource::<extract::ExtractedEffects>()
+        .init_resource::<instances::PlumeInstances>()
+        .add_systems(ExtractSchedule, extract::extract_effects)
+        .add_systems(
+            Render,
+            (instances::sync_instances, draw::queue_effects)
+                .chain()
+                .in_set(RenderSystems::Queue),
+        )
+        .add_systems(
+            RenderGraph,
+            simulate::simulate_and_prepare
+                .in_set(RenderGraphSystems::Render)
+                .before(camera_driver),
+        );
+}
+
+/// Registers the draw function (from [`crate::PlumePlugin::finish`], once the core pipeline
+/// has made the transparent phase's draw functions).
+pub(crate) fn finish(app: &mut App) {
+    let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
+        return;
+    };
+    let Some(functions) = render_app
+        .world()
+        .get_resource::<DrawFunctions<Transparent3d>>()
+    else {
+        warn!("bevy_plume: no 3D transparent phase (Core3dPlugin missing): effects will not be drawn");
+        return;
+    };
+    functions.write().add(draw::DrawPlume);
+}

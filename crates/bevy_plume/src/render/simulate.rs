@@ -1,0 +1,61 @@
+//! The frame's GPU work before Bevy's cameras draw: every instance's steps, then what each of
+//! its draws needs from its camera (the view, and for `sort` the depth order), recorded into
+//! one command encoder that Bevy submits ahead of the cameras' passes.
+
+use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::prelude::*;
+use bevy::render::renderer::RenderContext;
+use bevy::render::view::ExtractedView;
+use plume_runtime::Camera;
+
+use crate::render::instances::PlumeInstances;
+
+/// Steps every instance and prepares every draw queued this frame.
+pub(crate) fn simulate_and_prepare(
+    mut context: RenderContext,
+    mut store: ResMut<PlumeInstances>,
+    views: Query<(&ExtractedView, Option<&ViewPrepassTextures>)>,
+) {
+    let encoder = context.command_encoder();
+    for instance in store.instances.values_mut() {
+        let steps = std::mem::take(&mut instance.steps);
+        if steps > 0 {
+            if let Err(err) = instance.effect.advance(encoder, steps) {
+                error!("{}: {err}", instance.effect.compiled().ir.name);
+            }
+        }
+        let world_from_local = instance.world_from_local;
+        for (view_entity, draw) in &mut instance.views {
+            let Ok((view, prepass)) = views.get(*view_entity) else {
+                continue;
+            };
+            if draw.renderer.is_soft() {
+                if let Some(depth) = prepass.and_then(|p| p.depth_only_view()) {
+                    draw.renderer.set_scene_depth(depth);
+                }
+            }
+            let camera = view_camera(view, world_from_local);
+            if let Err(err) = instance.effect.prepare_draw(encoder, &draw.renderer, &camera) {
+                error!("{}: {err}", instance.effect.compiled().ir.name);
+            }
+        }
+    }
+}
+
+/// Plume's camera for drawing an effect whose space is `world_from_local` from Bevy's view:
+/// the view matrix takes the effect's own space to the camera's, and the projection is Bevy's
+/// (reversed Z, an infinite far plane; Plume's soft particles read depth through it).
+pub(crate) fn view_camera(view: &ExtractedView, world_from_local: Mat4) -> Camera {
+    let view_from_world = view.world_from_view.to_matrix().inverse();
+    let clip_from_view = view.clip_from_view;
+    Camera::new(
+        plume_mat4(view_from_world * world_from_local),
+        plume_mat4(clip_from_view),
+    )
+}
+
+/// Bevy's matrix as Plume's (the two crates may use different glam versions; the layout,
+/// column-major f32, is the same).
+fn plume_mat4(m: Mat4) -> plume_runtime::glam::Mat4 {
+    plume_runtime::glam::Mat4::from_cols_array(&m.to_cols_array())
+}
