@@ -78,6 +78,17 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
             ("preview", 2),
         ],
     ),
+    (
+        "bevy_plume",
+        &[
+            // 0: the main world's types: the asset and the component.
+            ("asset", 0),
+            ("effect", 0),
+            // 1: the render world, which reads them; the headless runner, which waits on them.
+            ("render", 1),
+            ("headless", 1),
+        ],
+    ),
 ];
 
 /// The longest a source file may be, counting the lines before its unit-test module.

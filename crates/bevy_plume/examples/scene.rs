@@ -5,9 +5,9 @@
 //! Headless: `... --example scene -- --headless scene.png --frames 120`.
 //! The effect files are the repository's `effects/` (edit one while it runs: it reloads).
 
+use bevy::camera::Hdr;
 use bevy::post_process::bloom::Bloom;
 use bevy::prelude::*;
-use bevy::camera::Hdr;
 use bevy_plume::headless::{default_plugins, Headless, HeadlessPlugin};
 use bevy_plume::{PlumeEffect, PlumePlugin};
 
@@ -18,7 +18,9 @@ fn main() -> AppExit {
     let headless = match Headless::from_args() {
         Ok(h) => h,
         Err(message) => {
-            eprintln!("error: {message}\nusage: scene [--headless OUT.png [--frames N] [--size WxH]]");
+            eprintln!(
+                "error: {message}\nusage: scene [--headless OUT.png [--frames N] [--size WxH]]"
+            );
             return AppExit::from_code(2);
         }
     };
@@ -26,7 +28,7 @@ fn main() -> AppExit {
     app.add_plugins(default_plugins(headless.as_ref(), EFFECTS))
         .add_plugins(PlumePlugin)
         .add_systems(Startup, setup)
-        .add_systems(Update, (orbit_camera, move_cart));
+        .add_systems(Update, (orbit_camera, move_cart, relight_sparks));
     if let Some(headless) = headless {
         app.add_plugins(HeadlessPlugin(headless));
     }
@@ -79,9 +81,25 @@ fn setup(
             Transform::from_xyz(4.0, 0.3, 3.0),
         ))
         .with_child((
+            Sparks,
             PlumeEffect::new(assets.load("sparks.ron")),
             Transform::from_xyz(0.0, 0.3, 0.0),
         ));
+}
+
+/// Marks the sparks, which game code bursts again every two seconds.
+#[derive(Component)]
+struct Sparks;
+
+/// Restarts the sparks' one burst every two seconds (control from game code).
+fn relight_sparks(time: Res<Time>, mut sparks: Query<&mut PlumeEffect, With<Sparks>>) {
+    let period = 2.0;
+    let now = time.elapsed_secs_f64();
+    if (now / period).floor() != ((now - time.delta_secs_f64()) / period).floor() {
+        for mut effect in &mut sparks {
+            effect.restart();
+        }
+    }
 }
 
 /// Circles the camera slowly round the scene.

@@ -120,14 +120,13 @@ impl AssetLoader for PlumeEffectLoader {
             })?;
         let source =
             String::from_utf8(bytes).map_err(|_| PlumeLoadError::NotText { path: path.clone() })?;
-        let base_dir = self.root.as_deref().map(|root| {
-            root.join(asset_path.parent().unwrap_or(Path::new("")))
-        });
-        PlumeEffectAsset::compile(&path, &source, base_dir).map_err(|diagnostic| {
-            // Bevy logs the error too, on one line; this is the readable, located one.
-            error!("{diagnostic}");
-            PlumeLoadError::Compile(diagnostic)
-        })
+        let base_dir = self
+            .root
+            .as_deref()
+            .map(|root| root.join(asset_path.parent().unwrap_or(Path::new(""))));
+        // Bevy's asset server logs the error, the located diagnostic whole, and keeps the last
+        // good version of the asset (on a hot reload) in use.
+        PlumeEffectAsset::compile(&path, &source, base_dir).map_err(PlumeLoadError::Compile)
     }
 
     fn extensions(&self) -> &[&str] {

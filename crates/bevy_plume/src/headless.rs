@@ -194,8 +194,10 @@ fn count_frames(
     commands
         .spawn(Screenshot::image(image))
         .observe(save_to_disk(out.clone()))
-        .observe(move |_: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
-            info!("headless: wrote {}", out.display());
-            exit.write(AppExit::Success);
-        });
+        .observe(
+            move |_: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
+                info!("headless: wrote {}", out.display());
+                exit.write(AppExit::Success);
+            },
+        );
 }

@@ -37,9 +37,9 @@ pub use draw::camera::Camera;
 pub use draw::renderer::EffectRenderer;
 pub use draw::target::{DepthTest, DrawTarget};
 pub use error::RuntimeError;
-pub use sim::effect::Effect;
 /// The glam of [`Camera`]'s matrices (a host on another glam converts through
 /// `Mat4::from_cols_array`).
 pub use glam;
+pub use sim::effect::Effect;
 /// The wgpu this crate is built against: a host must use the same version.
 pub use wgpu;

@@ -6,8 +6,7 @@
 use bevy::core_pipeline::core_3d::{Transparent3d, TransparentSortingInfo3d, CORE_3D_DEPTH_FORMAT};
 use bevy::prelude::*;
 use bevy::render::render_phase::{
-    Draw, DrawError, DrawFunctions, PhaseItemExtraIndex, TrackedRenderPass,
-    ViewSortedRenderPhases,
+    Draw, DrawError, DrawFunctions, PhaseItemExtraIndex, TrackedRenderPass, ViewSortedRenderPhases,
 };
 use bevy::render::render_resource::CachedRenderPipelineId;
 use bevy::render::view::{ExtractedView, RenderVisibleEntities};

@@ -103,7 +103,10 @@ pub(crate) fn sync_instances(
     for e in &extracted.effects {
         alive.insert(e.main);
         let key = BuildKey::of(e);
-        let current = store.instances.get(&e.main).is_some_and(|i| i.key.same(&key));
+        let current = store
+            .instances
+            .get(&e.main)
+            .is_some_and(|i| i.key.same(&key));
         let known_bad = store.failed.get(&e.main).is_some_and(|k| k.same(&key));
         if !current && !known_bad {
             match build(&gpu, e, key.clone()) {

@@ -48,7 +48,9 @@ pub(crate) fn finish(app: &mut App) {
         .world()
         .get_resource::<DrawFunctions<Transparent3d>>()
     else {
-        warn!("bevy_plume: no 3D transparent phase (Core3dPlugin missing): effects will not be drawn");
+        warn!(
+            "bevy_plume: no 3D transparent phase (Core3dPlugin missing): effects will not be drawn"
+        );
         return;
     };
     functions.write().add(draw::DrawPlume);

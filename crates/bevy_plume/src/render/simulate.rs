@@ -35,7 +35,10 @@ pub(crate) fn simulate_and_prepare(
                 }
             }
             let camera = view_camera(view, world_from_local);
-            if let Err(err) = instance.effect.prepare_draw(encoder, &draw.renderer, &camera) {
+            if let Err(err) = instance
+                .effect
+                .prepare_draw(encoder, &draw.renderer, &camera)
+            {
                 error!("{}: {err}", instance.effect.compiled().ir.name);
             }
         }

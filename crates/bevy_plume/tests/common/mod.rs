@@ -1,0 +1,184 @@
+//! A Bevy app for the plugin's tests: no window, Plume's plugin, one camera drawing into an
+//! image over a black background, frames stepped by hand at a fixed 1/60 s, and the image
+//! read back as RGBA8.
+
+#![allow(dead_code)] // each test file uses its own part of the harness
+
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+use bevy::asset::AssetLoadFailedEvent;
+use bevy::camera::RenderTarget;
+use bevy::prelude::*;
+use bevy::render::render_resource::TextureFormat;
+use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
+use bevy::time::TimeUpdateStrategy;
+use bevy_plume::headless::{default_plugins, Headless};
+use bevy_plume::{PlumeEffectAsset, PlumePlugin};
+
+/// Image size of every test.
+pub const WIDTH: u32 = 160;
+/// Image size of every test.
+pub const HEIGHT: u32 = 90;
+/// The camera's distance from the origin, on +z looking down −z.
+pub const CAMERA_DISTANCE: f32 = 10.0;
+
+/// The test app and its target image.
+pub struct Harness {
+    pub app: App,
+    image: Handle<Image>,
+    /// Compile errors the asset server reported, as text.
+    pub load_errors: Arc<Mutex<Vec<String>>>,
+}
+
+impl Harness {
+    /// An app reading assets from `asset_dir`, with a camera at (0, 0, 10) looking at the
+    /// origin (Bevy's default perspective, 45° vertical), MSAA off.
+    pub fn new(asset_dir: &Path) -> Self {
+        let headless = Headless {
+            out: "unused.png".into(),
+            frames: 0,
+            size: UVec2::new(WIDTH, HEIGHT),
+        };
+        let mut app = App::new();
+        app.add_plugins(default_plugins(
+            Some(&headless),
+            asset_dir.to_str().expect("a UTF-8 path"),
+        ))
+        .add_plugins(PlumePlugin)
+        .insert_resource(ClearColor(Color::BLACK))
+        .insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f64(
+            1.0 / 60.0,
+        )));
+        let load_errors = Arc::new(Mutex::new(Vec::new()));
+        let errors = load_errors.clone();
+        app.add_systems(
+            Update,
+            move |mut failed: MessageReader<AssetLoadFailedEvent<PlumeEffectAsset>>| {
+                for event in failed.read() {
+                    errors.lock().unwrap().push(event.error.to_string());
+                }
+            },
+        );
+        app.finish();
+        app.cleanup();
+        let image = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba8UnormSrgb, None);
+        let image = app.world_mut().resource_mut::<Assets<Image>>().add(image);
+        app.world_mut().spawn((
+            Camera3d::default(),
+            Msaa::Off,
+            RenderTarget::Image(image.clone().into()),
+            Transform::from_xyz(0.0, 0.0, CAMERA_DISTANCE).looking_at(Vec3::ZERO, Vec3::Y),
+        ));
+        Self {
+            app,
+            image,
+            load_errors,
+        }
+    }
+
+    /// Runs `frames` frames.
+    pub fn update(&mut self, frames: u32) {
+        for _ in 0..frames {
+            self.app.update();
+        }
+    }
+
+    /// Runs frames until `done` holds (at most `limit` frames, sleeping `pause` between
+    /// them: file watching needs real time); whether it held.
+    pub fn update_until(
+        &mut self,
+        limit: u32,
+        pause: Duration,
+        mut done: impl FnMut(&mut Self) -> bool,
+    ) -> bool {
+        for _ in 0..limit {
+            self.app.update();
+            if done(self) {
+                return true;
+            }
+            std::thread::sleep(pause);
+        }
+        false
+    }
+
+    /// Loads the effect file at `path` (relative to the asset folder).
+    pub fn load(&mut self, path: &str) -> Handle<PlumeEffectAsset> {
+        self.app
+            .world()
+            .resource::<AssetServer>()
+            .load(path.to_string())
+    }
+
+    /// The next frame's image (runs frames until the capture comes back).
+    pub fn capture(&mut self) -> image::RgbaImage {
+        let slot: Arc<Mutex<Option<Image>>> = Arc::default();
+        let sink = slot.clone();
+        self.app
+            .world_mut()
+            .spawn(Screenshot::image(self.image.clone()))
+            .observe(move |captured: On<ScreenshotCaptured>| {
+                *sink.lock().unwrap() = Some(captured.image.clone());
+            });
+        for _ in 0..60 {
+            self.app.update();
+            if let Some(image) = slot.lock().unwrap().take() {
+                let dynamic = image.try_into_dynamic().expect("an RGBA8 image");
+                return dynamic.to_rgba8();
+            }
+        }
+        panic!("the screenshot did not come back within 60 frames");
+    }
+}
+
+/// Pixels whose red or green or blue channel exceeds `threshold`: (count, mean x, mean y).
+pub fn lit_pixels(image: &image::RgbaImage, threshold: u8) -> (u32, f32, f32) {
+    let (mut n, mut sx, mut sy) = (0u32, 0f64, 0f64);
+    for (x, y, p) in image.enumerate_pixels() {
+        if p.0[..3].iter().any(|&c| c > threshold) {
+            n += 1;
+            sx += f64::from(x) + 0.5;
+            sy += f64::from(y) + 0.5;
+        }
+    }
+    match n {
+        0 => (0, f32::NAN, f32::NAN),
+        _ => (n, (sx / f64::from(n)) as f32, (sy / f64::from(n)) as f32),
+    }
+}
+
+/// Where a world point (x, y, 0) lands in the image, in pixels, for the harness's camera.
+pub fn project(x: f32, y: f32) -> (f32, f32) {
+    let half_height = CAMERA_DISTANCE * (std::f32::consts::FRAC_PI_4 / 2.0).tan();
+    let half_width = half_height * WIDTH as f32 / HEIGHT as f32;
+    (
+        (0.5 + 0.5 * x / half_width) * WIDTH as f32,
+        (0.5 - 0.5 * y / half_height) * HEIGHT as f32,
+    )
+}
+
+/// A fresh asset folder under the system's temporary directory.
+pub fn asset_dir(name: &str) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("bevy_plume-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).expect("a temporary folder");
+    dir
+}
+
+/// A small effect: `count` particles in one burst at the origin, barely moving (drag stops
+/// them within 0.13 m), living `life` seconds, of colour `rgb`, 0.15 m across.
+pub fn dots(count: u32, life: f64, rgb: (f64, f64, f64)) -> String {
+    let (r, g, b) = rgb;
+    format!(
+        r#"Effect(name: "dots", capacity: {count}, seed: 7,
+    emitters: [Emitter(burst: {count}, shape: Point((0.0, 0.0, 0.0)),
+        velocity: Radial(speed: (0.0, 0.5)), lifetime: Some(({life:?}, {life:?})))],
+    forces: [Drag(k: 4.0)],
+    render: Render(
+        color: [(0.0, ({r:?}, {g:?}, {b:?}, 1.0)), (1.0, ({r:?}, {g:?}, {b:?}, 1.0))],
+        size: [(0.0, 0.15), (1.0, 0.15)],
+        blend: Additive))
+"#
+    )
+}

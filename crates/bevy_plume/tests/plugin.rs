@@ -1,0 +1,194 @@
+//! The plugin in a headless Bevy app on llvmpipe (lavapipe): effects drawn where the scene
+//! puts them, a graph effect, hot reload and its errors, local space, restart, and instances
+//! coming and going. One app at a time (the tests share two CPU cores and one driver).
+
+mod common;
+
+use std::sync::Mutex;
+use std::time::Duration;
+
+use bevy::prelude::*;
+use bevy_plume::PlumeEffect;
+use common::{asset_dir, dots, lit_pixels, project, Harness};
+
+/// Runs the tests one at a time.
+static ONE_APP: Mutex<()> = Mutex::new(());
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    ONE_APP.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// Pixels further than this from where the effect's centre projects fail the placement
+/// checks: the burst spreads at most 0.13 m (about 1.3 px at 10 m with this camera), so
+/// 4 px is that plus sprite size and rounding.
+const PLACE_TOLERANCE_PX: f32 = 4.0;
+
+#[test]
+fn an_effect_is_drawn_where_its_entity_is() {
+    let _one = serial();
+    let dir = asset_dir("place");
+    std::fs::write(
+        dir.join("dots.plume.ron"),
+        dots(300, 100.0, (1.0, 0.2, 0.1)),
+    )
+    .unwrap();
+    let mut h = Harness::new(&dir);
+    let handle = h.load("dots.plume.ron");
+    h.app
+        .world_mut()
+        .spawn((PlumeEffect::new(handle), Transform::from_xyz(2.0, 1.0, 0.0)));
+    h.update(10);
+    let image = h.capture();
+    let (n, x, y) = lit_pixels(&image, 40);
+    let (ex, ey) = project(2.0, 1.0);
+    assert!(n >= 4, "only {n} lit pixels");
+    assert!(
+        (x - ex).abs() < PLACE_TOLERANCE_PX && (y - ey).abs() < PLACE_TOLERANCE_PX,
+        "particles centred at ({x:.1}, {y:.1}), the entity projects to ({ex:.1}, {ey:.1})"
+    );
+    // Red, as the file says: additive red over black (where many overlap, white).
+    let reddest = image.pixels().map(|p| p.0[0]).max().unwrap();
+    let greener = image.pixels().filter(|p| p.0[1] > p.0[0]).count();
+    assert!(
+        reddest > 150 && greener == 0,
+        "colour off: max r {reddest}, {greener} greener pixels"
+    );
+}
+
+#[test]
+fn a_graph_effect_runs_its_groups_and_events() {
+    let _one = serial();
+    // Rockets rise and burst into sparks by events: after a second both groups are drawn.
+    let effects = concat!(env!("CARGO_MANIFEST_DIR"), "/../../effects");
+    let mut h = Harness::new(std::path::Path::new(effects));
+    let handle = h.load("fireworks.ron");
+    h.app.world_mut().spawn((
+        PlumeEffect::new(handle).with_warm_up(2.5),
+        Transform::from_xyz(0.0, -4.0, -8.0),
+    ));
+    h.update(30);
+    let image = h.capture();
+    let (n, _, y) = lit_pixels(&image, 60);
+    assert!(n > 20, "only {n} lit pixels: the fireworks did not draw");
+    // Everything drawn is above the launch point (the entity at y = -4 m).
+    let (_, launch_y) = project(0.0, -4.0 * 10.0 / 18.0);
+    assert!(
+        y < launch_y,
+        "light centred at y {y:.1}, below the launch point {launch_y:.1}"
+    );
+}
+
+#[test]
+fn a_broken_file_keeps_the_last_good_effect_and_a_fix_reloads() {
+    let _one = serial();
+    let dir = asset_dir("reload");
+    let file = dir.join("dots.plume.ron");
+    std::fs::write(&file, dots(300, 100.0, (1.0, 0.2, 0.1))).unwrap();
+    let mut h = Harness::new(&dir);
+    let handle = h.load("dots.plume.ron");
+    h.app.world_mut().spawn(PlumeEffect::new(handle));
+    h.update(10);
+    let red = h.capture();
+    assert!(
+        lit_pixels(&red, 40).0 >= 4,
+        "the first version did not draw"
+    );
+
+    // A typo in a field name: the loader's error names the file, line and column.
+    let broken = dots(300, 100.0, (1.0, 0.2, 0.1)).replace("capacity:", "capacty:");
+    std::fs::write(&file, broken).unwrap();
+    let reported = h.update_until(200, Duration::from_millis(50), |h| {
+        !h.load_errors.lock().unwrap().is_empty()
+    });
+    assert!(reported, "no load error after the file broke");
+    let message = h.load_errors.lock().unwrap().join("\n");
+    assert!(
+        message.contains("dots.plume.ron:1:") && message.contains("capacty"),
+        "the error does not locate the typo: {message}"
+    );
+    h.update(5);
+    let (n, _, _) = lit_pixels(&h.capture(), 40);
+    assert!(
+        n >= 4,
+        "the last good effect stopped drawing after a broken reload"
+    );
+
+    // Fixed, and now green: the new version replaces the old one.
+    std::fs::write(&file, dots(300, 100.0, (0.1, 1.0, 0.2))).unwrap();
+    let green = h.update_until(200, Duration::from_millis(50), |h| {
+        let image = h.capture();
+        image.pixels().any(|p| p.0[1] > 150 && p.0[0] < 120)
+    });
+    assert!(green, "the fixed file never replaced the running effect");
+}
+
+#[test]
+fn a_local_space_effect_moves_with_its_parent() {
+    let _one = serial();
+    let dir = asset_dir("parent");
+    std::fs::write(
+        dir.join("dots.plume.ron"),
+        dots(300, 100.0, (1.0, 1.0, 1.0)),
+    )
+    .unwrap();
+    let mut h = Harness::new(&dir);
+    let handle = h.load("dots.plume.ron");
+    let parent = h
+        .app
+        .world_mut()
+        .spawn((Transform::from_xyz(-3.0, 0.0, 0.0), Visibility::default()))
+        .with_child(PlumeEffect::new(handle))
+        .id();
+    h.update(10);
+    let (_, before, _) = lit_pixels(&h.capture(), 40);
+    h.app
+        .world_mut()
+        .entity_mut(parent)
+        .insert(Transform::from_xyz(3.0, 0.0, 0.0));
+    h.update(2);
+    let (_, after, _) = lit_pixels(&h.capture(), 40);
+    let (left, right) = (project(-3.0, 0.0).0, project(3.0, 0.0).0);
+    assert!(
+        (before - left).abs() < PLACE_TOLERANCE_PX,
+        "at {before:.1}, expected {left:.1}"
+    );
+    assert!(
+        (after - right).abs() < PLACE_TOLERANCE_PX,
+        "at {after:.1}, expected {right:.1}"
+    );
+}
+
+#[test]
+fn restart_and_pause_control_an_instance() {
+    let _one = serial();
+    let dir = asset_dir("control");
+    // Dots that live 0.5 s: after a second they are gone unless restarted.
+    std::fs::write(dir.join("dots.plume.ron"), dots(300, 0.5, (1.0, 1.0, 1.0))).unwrap();
+    let mut h = Harness::new(&dir);
+    let handle = h.load("dots.plume.ron");
+    let fx = h.app.world_mut().spawn(PlumeEffect::new(handle)).id();
+    h.update(70);
+    assert_eq!(
+        lit_pixels(&h.capture(), 40).0,
+        0,
+        "the dots outlived their 0.5 s"
+    );
+    h.app
+        .world_mut()
+        .get_mut::<PlumeEffect>(fx)
+        .unwrap()
+        .restart();
+    h.update(2);
+    assert!(
+        lit_pixels(&h.capture(), 40).0 >= 4,
+        "restart did not burst again"
+    );
+    // Paused, time stands still: a second later they are still there.
+    h.app
+        .world_mut()
+        .get_mut::<PlumeEffect>(fx)
+        .unwrap()
+        .playing = false;
+    h.update(70);
+    assert!(lit_pixels(&h.capture(), 40).0 >= 4, "paused dots died");
+}
