@@ -307,12 +307,19 @@ fn overrides_replace_file_values() {
             sort: Some(true),
             state: None,
             base_dir: None,
+            placed: true,
         },
     )
     .unwrap();
     assert_eq!(
-        (c.ir.dt, c.ir.seed, c.ir.substeps, c.ir.integrator),
-        (0.01, 9, 2, Integrator::Rk4)
+        (
+            c.ir.dt,
+            c.ir.seed,
+            c.ir.substeps,
+            c.ir.integrator,
+            c.ir.placed
+        ),
+        (0.01, 9, 2, Integrator::Rk4, true)
     );
     assert!(c.ir.sort && c.wgsl.contains("fn depth_keys"));
     let bad = compile_str(

@@ -114,6 +114,7 @@ impl Overrides {
             sort: None,
             state: self.state,
             base_dir: None,
+            placed: false,
         }
     }
 }

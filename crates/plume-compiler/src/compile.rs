@@ -49,6 +49,10 @@ pub struct CompileOptions {
     /// The directory the effect's files (`render.texture.file`) are relative to: the effect
     /// file's directory. None: the current directory.
     pub base_dir: Option<std::path::PathBuf>,
+    /// Compiles the effect to be placed in a host's world by a transform set at run time
+    /// (world space: emitters spawn through it, particles stay where they were emitted;
+    /// `features::placement`). The effect is then stateful.
+    pub placed: bool,
 }
 
 /// A compiled effect: the IR after the passes, its layout, the WGSL and any warnings.
@@ -146,6 +150,7 @@ pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, Comp
         effect.state = s;
     }
     effect.base_dir.clone_from(&options.base_dir);
+    effect.placed = options.placed;
     for group in &mut effect.groups {
         if let Some(i) = options.integrator {
             group.integrator = i;

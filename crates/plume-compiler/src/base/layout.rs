@@ -90,6 +90,9 @@ pub struct Layout {
     pub bindings: Vec<Binding>,
     /// Number of emitter entries in the step parameters (at least 1).
     pub emitter_slots: u32,
+    /// Whether the step parameters carry the placement's rows after their header
+    /// (`features::placement`).
+    pub placed: bool,
     /// Bytes of trail history per particle (`render.trail`; 0 without one), held in the
     /// `trail` binding beside the particle struct.
     pub trail_bytes_per_particle: u32,
@@ -154,9 +157,11 @@ impl Layout {
         self.attributes.contains(&a)
     }
 
-    /// Bytes of the uniform step parameters: 16 of header, 16 per emitter slot.
+    /// Bytes of the uniform step parameters: 16 of header, 48 of placement when placed, 16 per
+    /// emitter slot.
     pub fn params_bytes(&self) -> u64 {
-        16 + 16 * u64::from(self.emitter_slots)
+        let placement = if self.placed { 48 } else { 0 };
+        16 + placement + 16 * u64::from(self.emitter_slots)
     }
 }
 

@@ -11,3 +11,4 @@ pub mod events;
 pub mod field;
 pub mod forces;
 pub mod looks;
+pub mod placement;

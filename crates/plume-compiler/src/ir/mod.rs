@@ -56,6 +56,8 @@ pub struct EffectIr {
     pub stateless: Option<stateless::StatelessIr>,
     /// Why the effect is stateless or stateful (what the state pass decided).
     pub state_reason: String,
+    /// Whether a transform set at run time places its emitters (`features::placement`).
+    pub placed: bool,
     /// The camera.
     pub camera: CameraIr,
     /// How particles look when rendered.

@@ -36,6 +36,13 @@ impl ReferenceGraph {
         }
     }
 
+    /// Places every group's emitters by `placement` from the next step on (a placed effect).
+    pub fn set_placement(&mut self, placement: crate::features::placement::Placement) {
+        for g in &mut self.groups {
+            g.set_placement(placement);
+        }
+    }
+
     /// Runs `n` steps.
     pub fn run(&mut self, n: u64) {
         for _ in 0..n {

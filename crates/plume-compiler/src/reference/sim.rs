@@ -11,6 +11,7 @@ use crate::features::events::TriggerIr;
 use crate::features::forces::flock::Frozen;
 use crate::features::forces::ParticleCtx;
 use crate::features::looks::trail::History;
+use crate::features::placement::Placement;
 use crate::ir::EffectIr;
 use crate::stages::integrators::ExactStep;
 use crate::stages::schedule::Schedule;
@@ -70,6 +71,8 @@ pub struct ReferenceSim {
     fired: Vec<Vec<Fired>>,
     /// The next id an event spawn hands out (a group fed by events counts its own ids).
     next_event_id: u32,
+    /// Where emitters spawn in the world, for a placed effect (identity otherwise).
+    placement: Placement,
 }
 
 impl ReferenceSim {
@@ -84,7 +87,14 @@ impl ReferenceSim {
             totals: Totals::default(),
             fired: vec![Vec::new(); ir.events.len()],
             next_event_id: 0,
+            placement: Placement::IDENTITY,
         }
+    }
+
+    /// Places the emitters' next spawns in the world by `placement` (a placed effect's f64
+    /// twin of `Effect::set_placement`; it moves nothing already spawned).
+    pub fn set_placement(&mut self, placement: Placement) {
+        self.placement = placement;
     }
 
     /// Spawns the children of the `input`-th event this group is fed by, from the parent's
@@ -183,7 +193,11 @@ impl ReferenceSim {
                     break;
                 }
                 budget -= 1;
-                let s = spawn(&self.ir, e, id + local, k0 + local, plan.step);
+                let mut s = spawn(&self.ir, e, id + local, k0 + local, plan.step);
+                if self.ir.placed {
+                    s.x = self.placement.point(s.x);
+                    s.v = self.placement.vector(s.v);
+                }
                 let v = self.initial_v(id + local, plan.step, plan.time, s.x, s.v, s.die_at);
                 self.particles.push(Particle {
                     id: id + local,

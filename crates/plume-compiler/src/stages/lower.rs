@@ -69,6 +69,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
         state: effect.state,
         stateless: None,
         state_reason: String::from("not decided yet"),
+        placed: effect.placed,
         render: {
             let r = &effect.render;
             RenderIr {

@@ -91,6 +91,10 @@ pub struct Effect {
     /// effect file's directory, set by whoever read the file; the current directory when None.
     #[serde(skip)]
     pub base_dir: Option<std::path::PathBuf>,
+    /// Placed in a host's world by a transform set at run time (world space; see
+    /// `features::placement`): set by `CompileOptions::placed`, never by the file.
+    #[serde(skip)]
+    pub placed: bool,
 }
 
 fn default_sizes() -> Vec<SizeStop> {

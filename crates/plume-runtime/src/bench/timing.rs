@@ -69,9 +69,10 @@ impl Group {
         let plans: Vec<StepPlan> = (0..steps).map(|_| self.schedule.next_plan()).collect();
         let bytes = params_bytes(
             &plans,
-            self.effect.layout.emitter_slots,
+            &self.effect.layout,
             self.res.params_stride,
             self.effect.ir.wraps_kernel_time(),
+            &self.placement,
         );
         let params = self
             .res

@@ -7,6 +7,7 @@
 use std::path::Path;
 
 use plume_compiler::graph::{compile_graph_str, CompiledGraph};
+use plume_compiler::placement::Placement;
 use plume_compiler::reference::{ParticleRecord, Totals};
 use plume_compiler::{CompileOptions, CompiledEffect, Diagnostics};
 
@@ -209,6 +210,17 @@ impl Effect {
         match &self.events {
             None => self.groups[0].advance_timed(encoder, steps, timestamps),
             Some(events) => events.advance_timed(&mut self.groups, encoder, steps, timestamps),
+        }
+    }
+
+    /// Places the effect in the world by `placement` for the steps recorded from now on: an
+    /// effect compiled with `CompileOptions::placed` (world space) spawns through it, so its
+    /// particles stay where they were emitted while the host moves the emitter (every group's
+    /// emitters; children of events spawn at their parents). Ignored by an effect that is not
+    /// placed. Steps recorded by one [`Self::advance`] all use the placement set before it.
+    pub fn set_placement(&mut self, placement: Placement) {
+        for group in &mut self.groups {
+            group.placement = placement;
         }
     }
 

@@ -7,6 +7,7 @@
 //! several steps, prepares and draws can share one submission. The draw of a group, and its
 //! frame's preparation, are [`crate::draw`]'s; its timings, [`crate::bench`]'s.
 
+use plume_compiler::placement::Placement;
 use plume_compiler::reference::{ParticleRecord, Totals};
 use plume_compiler::schedule::{Schedule, StepPlan};
 use plume_compiler::CompiledEffect;
@@ -28,6 +29,8 @@ pub(crate) struct Group {
     pub(crate) res: Resources,
     pub(crate) steps: Steps,
     pub(crate) depth: Option<DepthSort>,
+    /// Where a placed effect's emitters spawn (`features::placement`; identity until set).
+    pub(crate) placement: Placement,
 }
 
 impl Group {
@@ -55,6 +58,7 @@ impl Group {
             res,
             steps,
             depth,
+            placement: Placement::IDENTITY,
         };
         if let Steps::Stateful(stateful) = &instance.steps {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -139,9 +143,10 @@ impl Group {
         };
         let bytes = params_bytes(
             plans,
-            self.effect.layout.emitter_slots,
+            &self.effect.layout,
             self.res.params_stride,
             self.effect.ir.wraps_kernel_time(),
+            &self.placement,
         );
         let src = staging(&self.gpu, "step params", &bytes)?;
         encoder.copy_buffer_to_buffer(&src, 0, params, 0, bytes.len() as u64);

@@ -8,9 +8,11 @@
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use plume_compiler::passes::stateless::{FRAME_HEADER_BYTES, SEGMENT_BYTES};
+use plume_compiler::placement::Placement;
 use plume_compiler::schedule::{LiveSegments, Schedule, Segment, StepPlan};
 use plume_compiler::wgsl::WORKGROUP;
 use plume_compiler::CompiledEffect;
+use plume_compiler::Layout;
 
 use crate::device::gpu::Gpu;
 use crate::device::resources::{Chunk, Resources};
@@ -227,12 +229,14 @@ impl StatefulSteps {
 
 /// The steps' parameters as the uniform buffer holds them, step j at j · `stride`: first id,
 /// requested, kernel time (wrapped when `wrap_time`, see `EffectIr::wraps_kernel_time`), step
-/// index, then (count, counter before, 0, 0) per emitter slot.
+/// index, then for a placed effect the `placement`'s rows (`features::placement`), then
+/// (count, counter before, 0, 0) per emitter slot.
 pub fn params_bytes(
     plans: &[StepPlan],
-    emitter_slots: u32,
+    layout: &Layout,
     stride: u64,
     wrap_time: bool,
+    placement: &Placement,
 ) -> Vec<u8> {
     let mut bytes = vec![0u8; stride as usize * plans.len()];
     for (j, plan) in plans.iter().enumerate() {
@@ -243,7 +247,10 @@ pub fn params_bytes(
             plan.kernel_time(wrap_time).to_bits(),
             plan.step as u32,
         ];
-        for e in 0..emitter_slots as usize {
+        if layout.placed {
+            words.extend(placement.words());
+        }
+        for e in 0..layout.emitter_slots as usize {
             let (count, k0) = plan.emitters.get(e).copied().unwrap_or((0, 0));
             words.extend([count, k0, 0, 0]);
         }

@@ -76,6 +76,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
         bytes_per_particle,
         bindings: Vec::new(),
         emitter_slots,
+        placed: ir.placed,
         trail_bytes_per_particle: ir
             .render
             .trail

@@ -100,6 +100,12 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("kill").index(0),
         ));
     }
+    if ir.placed {
+        return Err((
+            "it is placed in a host's world at run time (world space): where particles start depends on where the emitter was".into(),
+            ValuePath::root().field("state"),
+        ));
+    }
     let (mut peak, mut segments, mut lives) = (0u64, 0u64, Vec::new());
     for e in 0..ir.emitters.len() {
         let path = ValuePath::root().field("emitters").index(e);

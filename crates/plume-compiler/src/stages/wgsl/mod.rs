@@ -63,6 +63,9 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             w.line("requested: u32,");
             w.line("time: f32,");
             w.line("step: u32,");
+            if layout.placed {
+                crate::features::placement::emit_params_field(w);
+            }
             w.line(format!(
                 "emitters: array<vec4<u32>, {}>,",
                 layout.emitter_slots

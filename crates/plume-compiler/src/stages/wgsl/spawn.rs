@@ -61,6 +61,9 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                         });
                     }
                 });
+                if ir.placed {
+                    crate::features::placement::emit_apply(w);
+                }
                 if layout.has(Attribute::Tint) {
                     w.line(format!(
                         "let tint = pack4x8unorm(vec4<f32>({}, 1.0));",
