@@ -22,7 +22,9 @@ pub struct PlumeEffectAsset {
     pub source: Arc<str>,
     /// The directory the effect's own files (a texture) are read from.
     pub base_dir: Option<Arc<Path>>,
-    /// The compiled effect, shared with the render world (cloning the asset is cheap).
+    /// The compiled effect as written (local space, the file's seed), shared with the render
+    /// world (cloning the asset is cheap). Instances in world space or with their own seed
+    /// run a variant compiled from `source` once per distinct (seed, space).
     pub graph: Arc<CompiledGraph>,
 }
 
@@ -31,7 +33,7 @@ impl PlumeEffectAsset {
     /// `base_dir`), or returns the located diagnostic as text.
     pub fn compile(path: &str, source: &str, base_dir: Option<PathBuf>) -> Result<Self, String> {
         let base_dir: Option<Arc<Path>> = base_dir.map(Arc::from);
-        let graph = compile_source(path, source, base_dir.as_deref(), None)?;
+        let graph = compile_source(path, source, base_dir.as_deref(), None, false)?;
         Ok(Self {
             path: path.into(),
             source: source.into(),
@@ -40,10 +42,17 @@ impl PlumeEffectAsset {
         })
     }
 
-    /// The file compiled again with `seed` in place of its own (None: as written), or the
-    /// located diagnostic as text.
-    pub fn compile_with(&self, seed: Option<u32>) -> Result<CompiledGraph, String> {
-        compile_source(&self.path, &self.source, self.base_dir.as_deref(), seed)
+    /// The file compiled again with `seed` in place of its own (None: as written) and, when
+    /// `placed`, to be placed in the world at run time (world space), or the located
+    /// diagnostic as text.
+    pub fn compile_with(&self, seed: Option<u32>, placed: bool) -> Result<CompiledGraph, String> {
+        compile_source(
+            &self.path,
+            &self.source,
+            self.base_dir.as_deref(),
+            seed,
+            placed,
+        )
     }
 
     /// The step of the top-level group, in seconds.
@@ -58,10 +67,12 @@ fn compile_source(
     source: &str,
     base_dir: Option<&Path>,
     seed: Option<u32>,
+    placed: bool,
 ) -> Result<CompiledGraph, String> {
     let options = CompileOptions {
         base_dir: base_dir.map(Path::to_path_buf),
         seed,
+        placed,
         ..Default::default()
     };
     compile_graph_str(source, &options).map_err(|e| e.render(path, source))

@@ -8,11 +8,16 @@ use bevy::render::sync_world::SyncToRenderWorld;
 use crate::asset::PlumeEffectAsset;
 
 /// Where an effect's particles live.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Reflect)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect)]
 pub enum SimulationSpace {
+    /// In the world: each particle starts where the entity was when it was emitted, then
+    /// moves on its own, so a moving emitter leaves its particles behind (a rocket's smoke, a
+    /// running character's dust). The effect's forces, colliders and kill volumes are in world
+    /// coordinates. Such an effect is always stateful.
+    #[default]
+    World,
     /// In the entity's own space: the particles move, turn and scale with the entity (a
     /// flame on a torch that is carried, a trail of sparks on a spinning wheel's rim).
-    #[default]
     Local,
 }
 
@@ -35,7 +40,7 @@ pub enum SimulationSpace {
 pub struct PlumeEffect {
     /// The effect file.
     pub handle: Handle<PlumeEffectAsset>,
-    /// Where the particles live (default: the entity's space).
+    /// Where the particles live (default: the world, left behind by a moving entity).
     pub space: SimulationSpace,
     /// Whether time runs for this effect (false: it freezes, still drawn).
     pub playing: bool,
@@ -56,13 +61,18 @@ impl PlumeEffect {
     pub fn new(handle: Handle<PlumeEffectAsset>) -> Self {
         Self {
             handle,
-            space: SimulationSpace::Local,
+            space: SimulationSpace::World,
             playing: true,
             time_scale: 1.0,
             seed: None,
             warm_up: 0.0,
             generation: 0,
         }
+    }
+
+    /// With its particles in `space`.
+    pub fn with_space(self, space: SimulationSpace) -> Self {
+        Self { space, ..self }
     }
 
     /// With `seed` instead of the file's.

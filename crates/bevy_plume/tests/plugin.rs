@@ -8,7 +8,7 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 use bevy::prelude::*;
-use bevy_plume::PlumeEffect;
+use bevy_plume::{PlumeEffect, SimulationSpace};
 use common::{asset_dir, dots, lit_pixels, project, Harness};
 
 /// Runs the tests one at a time.
@@ -137,7 +137,7 @@ fn a_local_space_effect_moves_with_its_parent() {
         .app
         .world_mut()
         .spawn((Transform::from_xyz(-3.0, 0.0, 0.0), Visibility::default()))
-        .with_child(PlumeEffect::new(handle))
+        .with_child(PlumeEffect::new(handle).with_space(SimulationSpace::Local))
         .id();
     h.update(10);
     let (_, before, _) = lit_pixels(&h.capture(), 40);
@@ -155,6 +155,44 @@ fn a_local_space_effect_moves_with_its_parent() {
     assert!(
         (after - right).abs() < PLACE_TOLERANCE_PX,
         "at {after:.1}, expected {right:.1}"
+    );
+}
+
+#[test]
+fn a_world_space_effect_leaves_its_particles_behind() {
+    let _one = serial();
+    let dir = asset_dir("world");
+    // One burst at the start, living 100 s: wherever the parent goes, they stay put.
+    std::fs::write(
+        dir.join("dots.plume.ron"),
+        dots(300, 100.0, (1.0, 1.0, 1.0)),
+    )
+    .unwrap();
+    let mut h = Harness::new(&dir);
+    let handle = h.load("dots.plume.ron");
+    let parent = h
+        .app
+        .world_mut()
+        .spawn((Transform::from_xyz(-3.0, 0.0, 0.0), Visibility::default()))
+        .with_child(PlumeEffect::new(handle))
+        .id();
+    h.update(10);
+    let (n, before, _) = lit_pixels(&h.capture(), 40);
+    h.app
+        .world_mut()
+        .entity_mut(parent)
+        .insert(Transform::from_xyz(3.0, 0.0, 0.0));
+    h.update(5);
+    let (m, after, _) = lit_pixels(&h.capture(), 40);
+    let left = project(-3.0, 0.0).0;
+    assert!(n >= 4 && m >= 4, "{n} then {m} lit pixels");
+    assert!(
+        (before - left).abs() < PLACE_TOLERANCE_PX,
+        "at {before:.1}, expected {left:.1}"
+    );
+    assert!(
+        (after - left).abs() < PLACE_TOLERANCE_PX,
+        "moved with the parent to {after:.1}"
     );
 }
 

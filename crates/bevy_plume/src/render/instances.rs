@@ -11,6 +11,7 @@ use bevy::render::renderer::{RenderDevice, RenderQueue};
 use plume_compiler::graph::CompiledGraph;
 use plume_runtime::{DrawTarget, Effect, EffectRenderer, Gpu};
 
+use crate::effect::SimulationSpace;
 use crate::render::extract::{ExtractedEffect, ExtractedEffects};
 
 /// At most this much effect time is stepped in one frame; a longer frame (a stall, a
@@ -23,6 +24,7 @@ struct BuildKey {
     /// The file's compiled version (compared by address: a hot reload makes a new one).
     graph: Arc<CompiledGraph>,
     seed: Option<u32>,
+    space: SimulationSpace,
     generation: u32,
 }
 
@@ -31,6 +33,7 @@ impl BuildKey {
         Self {
             graph: effect.asset.graph.clone(),
             seed: effect.control.seed,
+            space: effect.control.space,
             generation: effect.control.generation,
         }
     }
@@ -38,6 +41,7 @@ impl BuildKey {
     fn same(&self, other: &Self) -> bool {
         Arc::ptr_eq(&self.graph, &other.graph)
             && self.seed == other.seed
+            && self.space == other.space
             && self.generation == other.generation
     }
 }
@@ -63,8 +67,11 @@ pub(crate) struct Instance {
     pending_time: f64,
     /// Steps to record this frame.
     pub steps: u64,
-    /// The entity's world transform (local space: every draw is seen through it).
+    /// The entity's world transform: where a world-space effect's emitters spawn, or what
+    /// every draw of a local-space one is seen through.
     pub world_from_local: Mat4,
+    /// Where its particles live.
+    pub space: SimulationSpace,
     /// The entity's render-world twin.
     pub render_entity: Entity,
     /// Its draws, by the camera's render-world entity.
@@ -80,6 +87,10 @@ pub(crate) struct PlumeInstances {
     pub instances: HashMap<Entity, Instance>,
     /// Builds that failed, by entity, so an error is logged once, not every frame.
     failed: HashMap<Entity, BuildKey>,
+    /// The files' variants compiled for a seed or for world space, so that a thousand
+    /// instances of one file compile it once: by (the file version's address, seed, placed),
+    /// with that version kept alive beside it (dropped once no instance uses it).
+    variants: HashMap<(usize, Option<u32>, bool), (Arc<CompiledGraph>, Arc<CompiledGraph>)>,
     /// Frames seen (ages views' draws).
     pub frame: u64,
 }
@@ -109,7 +120,7 @@ pub(crate) fn sync_instances(
             .is_some_and(|i| i.key.same(&key));
         let known_bad = store.failed.get(&e.main).is_some_and(|k| k.same(&key));
         if !current && !known_bad {
-            match build(&gpu, e, key.clone()) {
+            match build(&gpu, e, key.clone(), &mut store.variants) {
                 Ok(instance) => {
                     store.failed.remove(&e.main);
                     store.instances.insert(e.main, instance);
@@ -122,6 +133,7 @@ pub(crate) fn sync_instances(
         }
         if let Some(instance) = store.instances.get_mut(&e.main) {
             instance.world_from_local = e.world_from_local;
+            instance.space = e.control.space;
             instance.render_entity = e.render;
             if e.control.playing {
                 let scale = f64::from(e.control.time_scale.max(0.0));
@@ -131,13 +143,35 @@ pub(crate) fn sync_instances(
     }
     store.instances.retain(|entity, _| alive.contains(entity));
     store.failed.retain(|entity, _| alive.contains(entity));
+    // A variant whose file version no asset or instance holds any more goes.
+    store
+        .variants
+        .retain(|_, (source, _)| Arc::strong_count(source) > 1);
 }
 
-/// A new instance of `e`'s effect on `gpu`, with its warm-up steps due this frame.
-fn build(gpu: &Gpu, e: &ExtractedEffect, key: BuildKey) -> Result<Instance, String> {
-    let graph = match e.control.seed {
-        None => (*e.asset.graph).clone(),
-        Some(seed) => e.asset.compile_with(Some(seed))?,
+/// A new instance of `e`'s effect on `gpu`, with its warm-up steps due this frame: the file as
+/// written, or its variant for the instance's seed and space (compiled once, then shared).
+fn build(
+    gpu: &Gpu,
+    e: &ExtractedEffect,
+    key: BuildKey,
+    variants: &mut HashMap<(usize, Option<u32>, bool), (Arc<CompiledGraph>, Arc<CompiledGraph>)>,
+) -> Result<Instance, String> {
+    let placed = e.control.space == SimulationSpace::World;
+    let graph = match (e.control.seed, placed) {
+        (None, false) => (*e.asset.graph).clone(),
+        (seed, placed) => {
+            let id = (Arc::as_ptr(&e.asset.graph) as usize, seed, placed);
+            let variant = match variants.get(&id) {
+                Some((_, variant)) => variant.clone(),
+                None => {
+                    let variant = Arc::new(e.asset.compile_with(seed, placed)?);
+                    variants.insert(id, (e.asset.graph.clone(), variant.clone()));
+                    variant
+                }
+            };
+            (*variant).clone()
+        }
     };
     let effect = Effect::from_graph(gpu, graph)
         .map_err(|err| format!("{}: the effect could not start: {err}", e.asset.path))?;
@@ -150,6 +184,7 @@ fn build(gpu: &Gpu, e: &ExtractedEffect, key: BuildKey) -> Result<Instance, Stri
         pending_time: 0.0,
         steps: (warm_up / dt).round() as u64,
         world_from_local: e.world_from_local,
+        space: e.control.space,
         render_entity: e.render,
         views: HashMap::new(),
     })

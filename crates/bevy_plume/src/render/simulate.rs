@@ -6,8 +6,10 @@ use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::prelude::*;
 use bevy::render::renderer::RenderContext;
 use bevy::render::view::ExtractedView;
+use plume_compiler::placement::Placement;
 use plume_runtime::Camera;
 
+use crate::effect::SimulationSpace;
 use crate::render::instances::PlumeInstances;
 
 /// Steps every instance and prepares every draw queued this frame.
@@ -19,12 +21,28 @@ pub(crate) fn simulate_and_prepare(
     let encoder = context.command_encoder();
     for instance in store.instances.values_mut() {
         let steps = std::mem::take(&mut instance.steps);
+        // World space: this frame's spawns start where the entity is now.
+        let in_world = instance.space == SimulationSpace::World;
+        if in_world {
+            let cols = instance.world_from_local.to_cols_array();
+            match Placement::from_cols(cols) {
+                Some(placement) => instance.effect.set_placement(placement),
+                None => warn!(
+                    "{}: the entity's transform is not finite; its emitters stay where they were",
+                    instance.effect.compiled().ir.name
+                ),
+            }
+        }
         if steps > 0 {
             if let Err(err) = instance.effect.advance(encoder, steps) {
                 error!("{}: {err}", instance.effect.compiled().ir.name);
             }
         }
-        let world_from_local = instance.world_from_local;
+        // Drawn through the entity's transform only in local space.
+        let world_from_local = match in_world {
+            true => Mat4::IDENTITY,
+            false => instance.world_from_local,
+        };
         for (view_entity, draw) in &mut instance.views {
             let Ok((view, prepass)) = views.get(*view_entity) else {
                 continue;
