@@ -31,6 +31,7 @@ mod render;
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
 pub use effect::{PlumeEffect, SimulationSpace};
 pub use plume_runtime;
+pub use render::instances::PlumeRenderStats;
 
 use bevy::asset::io::file::FileAssetReader;
 use bevy::prelude::*;

@@ -8,8 +8,8 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 use bevy::prelude::*;
-use bevy_plume::{PlumeEffect, SimulationSpace};
-use common::{asset_dir, dots, lit_pixels, project, Harness};
+use bevy_plume::{PlumeEffect, PlumeRenderStats, SimulationSpace};
+use common::{asset_dir, dots, lit_pixels, project, Harness, WIDTH};
 
 /// Runs the tests one at a time.
 static ONE_APP: Mutex<()> = Mutex::new(());
@@ -229,4 +229,107 @@ fn restart_and_pause_control_an_instance() {
         .playing = false;
     h.update(70);
     assert!(lit_pixels(&h.capture(), 40).0 >= 4, "paused dots died");
+}
+
+#[test]
+fn churn_never_leaks_loses_or_draws_the_gone() {
+    let _one = serial();
+    let dir = asset_dir("churn");
+    // Three files of capacities 64 to 20,000 particles: instances come and go with buffers
+    // of very different sizes.
+    let files = [
+        (64, (1.0, 0.2, 0.2)),
+        (2_000, (0.2, 1.0, 0.2)),
+        (20_000, (0.2, 0.2, 1.0)),
+    ];
+    for (i, (count, rgb)) in files.iter().enumerate() {
+        std::fs::write(
+            dir.join(format!("c{i}.plume.ron")),
+            dots(*count, 100.0, *rgb),
+        )
+        .unwrap();
+    }
+    let mut h = Harness::new(&dir);
+    let handles: Vec<_> = (0..files.len())
+        .map(|i| h.load(&format!("c{i}.plume.ron")))
+        .collect();
+    let stats = |h: &Harness| {
+        *h.app
+            .sub_app(bevy::render::RenderApp)
+            .world()
+            .resource::<PlumeRenderStats>()
+    };
+    h.update(3);
+    let empty = stats(&h);
+    assert_eq!((empty.instances, empty.particle_bytes), (0, 0));
+    // One survivor that lives through the whole churn, on the right.
+    let survivor = h
+        .app
+        .world_mut()
+        .spawn((
+            PlumeEffect::new(handles[0].clone()),
+            Transform::from_xyz(4.0, 0.0, 0.0),
+        ))
+        .id();
+    // A fixed pseudo-random sequence (a 32-bit LCG), so the run is the same every time.
+    let mut state = 12_345u32;
+    let mut next = move |n: u32| {
+        state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (state >> 8) % n
+    };
+    let mut alive: Vec<Entity> = Vec::new();
+    let mut peak = 0;
+    for frame in 0..240u32 {
+        if frame % 3 == 0 {
+            // Churners stand on the left, where nothing else is.
+            let x = -2.0 - next(40) as f32 * 0.1;
+            let file = next(files.len() as u32) as usize;
+            let id = h
+                .app
+                .world_mut()
+                .spawn((
+                    PlumeEffect::new(handles[file].clone()),
+                    Transform::from_xyz(x, next(20) as f32 * 0.1 - 1.0, 0.0),
+                ))
+                .id();
+            alive.push(id);
+        }
+        while alive.len() > 12 || (!alive.is_empty() && next(4) == 0) {
+            let gone = alive.swap_remove(next(alive.len() as u32) as usize);
+            h.app.world_mut().despawn(gone);
+        }
+        h.update(1);
+        let now = stats(&h);
+        // Every live effect entity (and no other) has its instance, the frame it exists.
+        assert_eq!(now.instances, alive.len() + 1, "frame {frame}: instances");
+        peak = peak.max(now.particle_bytes);
+    }
+    assert!(
+        peak > 20_000 * 16,
+        "the churn never held a large effect ({peak} bytes)"
+    );
+    for gone in alive.drain(..) {
+        h.app.world_mut().despawn(gone);
+    }
+    h.update(2);
+    let image = h.capture();
+    // The survivor is still drawn, where it stands; nothing is left on the left.
+    let (n, x, _) = lit_pixels(&image, 40);
+    let right = project(4.0, 0.0).0;
+    assert!(
+        n >= 4 && (x - right).abs() < PLACE_TOLERANCE_PX,
+        "{n} lit pixels centred at {x:.1}, the survivor at {right:.1}"
+    );
+    let leftover = image
+        .enumerate_pixels()
+        .filter(|(px, _, p)| (*px as f32) < WIDTH as f32 * 0.45 && p.0[..3].iter().any(|&c| c > 40))
+        .count();
+    assert_eq!(leftover, 0, "despawned effects still drawn");
+    h.app.world_mut().despawn(survivor);
+    h.update(2);
+    assert_eq!(
+        stats(&h),
+        empty,
+        "the plugin holds GPU state after every effect went"
+    );
 }

@@ -76,6 +76,23 @@ pub(crate) struct Instance {
     pub render_entity: Entity,
     /// Its draws, by the camera's render-world entity.
     pub views: HashMap<Entity, ViewDraw>,
+    /// Bytes of particle state it holds on the GPU.
+    particle_bytes: u64,
+}
+
+/// Compiled variants of effect files, by (the file version's address, seed, placed): the
+/// file version (kept alive so the address stays its own) and the variant.
+type Variants = HashMap<(usize, Option<u32>, bool), (Arc<CompiledGraph>, Arc<CompiledGraph>)>;
+
+/// What the plugin holds in the render world, for a game's diagnostics and the tests: read it
+/// with `app.sub_app(RenderApp).world().resource::<PlumeRenderStats>()`.
+#[derive(Resource, Default, Clone, Copy, Debug, PartialEq, Eq)]
+pub struct PlumeRenderStats {
+    /// Effect instances running (one per effect entity whose file has loaded).
+    pub instances: usize,
+    /// Bytes of particle state they hold on the GPU (capacity times bytes per particle, trail
+    /// history included, over every group of every instance).
+    pub particle_bytes: u64,
 }
 
 /// Every instance, by main-world entity, and the device they run on.
@@ -90,7 +107,7 @@ pub(crate) struct PlumeInstances {
     /// The files' variants compiled for a seed or for world space, so that a thousand
     /// instances of one file compile it once: by (the file version's address, seed, placed),
     /// with that version kept alive beside it (dropped once no instance uses it).
-    variants: HashMap<(usize, Option<u32>, bool), (Arc<CompiledGraph>, Arc<CompiledGraph>)>,
+    variants: Variants,
     /// Frames seen (ages views' draws).
     pub frame: u64,
 }
@@ -100,6 +117,7 @@ pub(crate) struct PlumeInstances {
 /// dropped; then how many steps each records this frame.
 pub(crate) fn sync_instances(
     mut store: ResMut<PlumeInstances>,
+    mut stats: ResMut<PlumeRenderStats>,
     extracted: Res<ExtractedEffects>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
@@ -147,6 +165,10 @@ pub(crate) fn sync_instances(
     store
         .variants
         .retain(|_, (source, _)| Arc::strong_count(source) > 1);
+    *stats = PlumeRenderStats {
+        instances: store.instances.len(),
+        particle_bytes: store.instances.values().map(|i| i.particle_bytes).sum(),
+    };
 }
 
 /// A new instance of `e`'s effect on `gpu`, with its warm-up steps due this frame: the file as
@@ -155,7 +177,7 @@ fn build(
     gpu: &Gpu,
     e: &ExtractedEffect,
     key: BuildKey,
-    variants: &mut HashMap<(usize, Option<u32>, bool), (Arc<CompiledGraph>, Arc<CompiledGraph>)>,
+    variants: &mut Variants,
 ) -> Result<Instance, String> {
     let placed = e.control.space == SimulationSpace::World;
     let graph = match (e.control.seed, placed) {
@@ -173,6 +195,15 @@ fn build(
             (*variant).clone()
         }
     };
+    let particle_bytes = graph
+        .groups
+        .iter()
+        .map(|g| {
+            let layout = &g.effect.layout;
+            let per_particle = layout.state_bytes_per_particle() + layout.trail_bytes_per_particle;
+            u64::from(g.effect.ir.capacity) * u64::from(per_particle)
+        })
+        .sum();
     let effect = Effect::from_graph(gpu, graph)
         .map_err(|err| format!("{}: the effect could not start: {err}", e.asset.path))?;
     let dt = e.asset.dt();
@@ -187,6 +218,7 @@ fn build(
         space: e.control.space,
         render_entity: e.render,
         views: HashMap::new(),
+        particle_bytes,
     })
 }
 

@@ -23,6 +23,7 @@ pub(crate) fn build(app: &mut App) {
     render_app
         .init_resource::<extract::ExtractedEffects>()
         .init_resource::<instances::PlumeInstances>()
+        .init_resource::<instances::PlumeRenderStats>()
         .add_systems(ExtractSchedule, extract::extract_effects)
         .add_systems(
             Render,
