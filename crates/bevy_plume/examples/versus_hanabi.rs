@@ -220,14 +220,22 @@ fn spawn_plume(app: &mut App, args: &Args, rate: f64, spread: f32) {
     let source = plume_source(args.live, rate);
     let asset = PlumeEffectAsset::compile("fountain.plume.ron", &source, None)
         .unwrap_or_else(|e| panic!("the benchmark's fountain does not compile:\n{e}"));
-    let handle = app
-        .world_mut()
-        .resource_mut::<Assets<PlumeEffectAsset>>()
-        .add(asset);
-    for i in 0..args.effects {
+    spawn_grid(app, args.effects, spread, asset, PlumeEffect::new);
+}
+
+/// Adds `asset` and spawns `n` effects of it on the grid, each made by `effect`.
+fn spawn_grid<A: Asset, C: Component>(
+    app: &mut App,
+    n: u32,
+    spread: f32,
+    asset: A,
+    effect: impl Fn(Handle<A>) -> C,
+) {
+    let handle = app.world_mut().resource_mut::<Assets<A>>().add(asset);
+    for i in 0..n {
         app.world_mut().spawn((
-            PlumeEffect::new(handle.clone()),
-            Transform::from_translation(grid_position(i, args.effects, spread)),
+            effect(handle.clone()),
+            Transform::from_translation(grid_position(i, n, spread)),
         ));
     }
 }
@@ -268,14 +276,5 @@ fn spawn_hanabi(app: &mut App, args: &Args, rate: f64, spread: f32) {
         screen_space_size: false,
     })
     .render(OrientModifier::new(OrientMode::FaceCameraPosition));
-    let handle = app
-        .world_mut()
-        .resource_mut::<Assets<EffectAsset>>()
-        .add(asset);
-    for i in 0..args.effects {
-        app.world_mut().spawn((
-            ParticleEffect::new(handle.clone()),
-            Transform::from_translation(grid_position(i, args.effects, spread)),
-        ));
-    }
+    spawn_grid(app, args.effects, spread, asset, ParticleEffect::new);
 }

@@ -122,10 +122,10 @@ fn a_broken_file_keeps_the_last_good_effect_and_a_fix_reloads() {
     assert!(green, "the fixed file never replaced the running effect");
 }
 
-#[test]
-fn a_local_space_effect_moves_with_its_parent() {
-    let _one = serial();
-    let dir = asset_dir("parent");
+/// A burst of long-lived dots under a parent at x = -3 m, in `space`; the parent then moves
+/// to x = +3 m. Returns (lit pixels, their mean x) before and after the move.
+fn move_parent(name: &str, space: SimulationSpace) -> ((u32, f32), (u32, f32)) {
+    let dir = asset_dir(name);
     std::fs::write(
         dir.join("dots.plume.ron"),
         dots(300, 100.0, (1.0, 1.0, 1.0)),
@@ -137,17 +137,25 @@ fn a_local_space_effect_moves_with_its_parent() {
         .app
         .world_mut()
         .spawn((Transform::from_xyz(-3.0, 0.0, 0.0), Visibility::default()))
-        .with_child(PlumeEffect::new(handle).with_space(SimulationSpace::Local))
+        .with_child(PlumeEffect::new(handle).with_space(space))
         .id();
     h.update(10);
-    let (_, before, _) = lit_pixels(&h.capture(), 40);
+    let (n, before, _) = lit_pixels(&h.capture(), 40);
     h.app
         .world_mut()
         .entity_mut(parent)
         .insert(Transform::from_xyz(3.0, 0.0, 0.0));
-    h.update(2);
-    let (_, after, _) = lit_pixels(&h.capture(), 40);
+    h.update(3);
+    let (m, after, _) = lit_pixels(&h.capture(), 40);
+    ((n, before), (m, after))
+}
+
+#[test]
+fn a_local_space_effect_moves_with_its_parent() {
+    let _one = serial();
+    let ((n, before), (m, after)) = move_parent("local", SimulationSpace::Local);
     let (left, right) = (project(-3.0, 0.0).0, project(3.0, 0.0).0);
+    assert!(n >= 4 && m >= 4, "{n} then {m} lit pixels");
     assert!(
         (before - left).abs() < PLACE_TOLERANCE_PX,
         "at {before:.1}, expected {left:.1}"
@@ -161,29 +169,8 @@ fn a_local_space_effect_moves_with_its_parent() {
 #[test]
 fn a_world_space_effect_leaves_its_particles_behind() {
     let _one = serial();
-    let dir = asset_dir("world");
     // One burst at the start, living 100 s: wherever the parent goes, they stay put.
-    std::fs::write(
-        dir.join("dots.plume.ron"),
-        dots(300, 100.0, (1.0, 1.0, 1.0)),
-    )
-    .unwrap();
-    let mut h = Harness::new(&dir);
-    let handle = h.load("dots.plume.ron");
-    let parent = h
-        .app
-        .world_mut()
-        .spawn((Transform::from_xyz(-3.0, 0.0, 0.0), Visibility::default()))
-        .with_child(PlumeEffect::new(handle))
-        .id();
-    h.update(10);
-    let (n, before, _) = lit_pixels(&h.capture(), 40);
-    h.app
-        .world_mut()
-        .entity_mut(parent)
-        .insert(Transform::from_xyz(3.0, 0.0, 0.0));
-    h.update(5);
-    let (m, after, _) = lit_pixels(&h.capture(), 40);
+    let ((n, before), (m, after)) = move_parent("world", SimulationSpace::World);
     let left = project(-3.0, 0.0).0;
     assert!(n >= 4 && m >= 4, "{n} then {m} lit pixels");
     assert!(
