@@ -6,6 +6,7 @@
 //! The effect files are the repository's `effects/` (edit one while it runs: it reloads).
 
 use bevy::camera::Hdr;
+use bevy::core_pipeline::prepass::DepthPrepass;
 use bevy::post_process::bloom::Bloom;
 use bevy::prelude::*;
 use bevy_plume::headless::{default_plugins, Headless, HeadlessPlugin};
@@ -57,10 +58,14 @@ fn setup(
         },
         Transform::from_xyz(4.0, 10.0, 6.0).looking_at(Vec3::ZERO, Vec3::Y),
     ));
+    // The depth prepass, single-sampled, lets soft particles (the smoke) fade where they meet
+    // the ground instead of cutting into it.
     commands.spawn((
         Camera3d::default(),
         Hdr,
         Bloom::NATURAL,
+        Msaa::Off,
+        DepthPrepass,
         Transform::from_xyz(0.0, 5.0, 20.0).looking_at(Vec3::new(0.0, 4.0, 0.0), Vec3::Y),
     ));
     // Fireworks far back, smoke on the left.
