@@ -93,6 +93,7 @@ fn main() {
         out: "unused.png".into(),
         frames: 0,
         size: UVec2::new(1280, 720),
+        window: false,
     };
     let mut app = App::new();
     app.add_plugins(default_plugins(Some(&headless), "assets"))

@@ -1,7 +1,8 @@
 //! Running an app without a window: the examples' `--headless OUT.png --frames N`, which CI
 //! and benchmarks use. Every 3D camera draws into an image instead of a window; after the
 //! effects have loaded (or failed to), N frames run at a fixed 1/60 s each, then the image is
-//! written as a PNG and the app exits.
+//! written as a PNG and the app exits. `--window-shot OUT.png --frames N` does the same in a
+//! window: its N-th frame, as the window shows it.
 
 use std::path::PathBuf;
 use std::time::Duration;
@@ -32,6 +33,8 @@ pub struct Headless {
     pub frames: u32,
     /// The image's size in pixels.
     pub size: UVec2,
+    /// Whether the app keeps its window and the shot is of the window (`--window-shot`).
+    pub window: bool,
 }
 
 impl Headless {
@@ -44,6 +47,7 @@ impl Headless {
     /// [`Self::from_args`] on any argument list (without the program name).
     pub fn parse(args: impl IntoIterator<Item = String>) -> Result<Option<Self>, String> {
         let mut out = None;
+        let mut window = false;
         let mut frames = 120;
         let mut size = UVec2::new(1280, 720);
         let mut args = args.into_iter();
@@ -51,6 +55,10 @@ impl Headless {
             let mut value = |name: &str| args.next().ok_or(format!("{name} needs a value"));
             match arg.as_str() {
                 "--headless" => out = Some(PathBuf::from(value("--headless")?)),
+                "--window-shot" => {
+                    out = Some(PathBuf::from(value("--window-shot")?));
+                    window = true;
+                }
                 "--frames" => {
                     let v = value("--frames")?;
                     frames = v
@@ -69,7 +77,12 @@ impl Headless {
                 other => return Err(format!("unknown argument {other:?}")),
             }
         }
-        Ok(out.map(|out| Self { out, frames, size }))
+        Ok(out.map(|out| Self {
+            out,
+            frames,
+            size,
+            window,
+        }))
     }
 }
 
@@ -84,6 +97,7 @@ pub fn default_plugins(headless: Option<&Headless>, asset_dir: &str) -> PluginGr
     });
     match headless {
         None => plugins,
+        Some(h) if h.window => plugins.disable::<PipelinedRenderingPlugin>(),
         Some(_) => plugins
             .set(WindowPlugin {
                 primary_window: None,
@@ -100,14 +114,17 @@ pub struct HeadlessPlugin(pub Headless);
 
 impl Plugin for HeadlessPlugin {
     fn build(&self, app: &mut App) {
-        app.add_plugins(ScheduleRunnerPlugin::run_loop(Duration::ZERO))
-            .insert_resource(self.0.clone())
+        if !self.0.window {
+            app.add_plugins(ScheduleRunnerPlugin::run_loop(Duration::ZERO))
+                .add_systems(PostStartup, draw_into_image)
+                .add_systems(Update, redirect_new_cameras.before(count_frames));
+        }
+        app.insert_resource(self.0.clone())
             .insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f64(
                 1.0 / 60.0,
             )))
             .init_resource::<Progress>()
-            .add_systems(PostStartup, draw_into_image)
-            .add_systems(Update, (redirect_new_cameras, count_frames).chain());
+            .add_systems(Update, count_frames);
     }
 }
 
@@ -186,17 +203,19 @@ fn count_frames(
     if progress.frames < headless.frames {
         return;
     }
-    let Some(image) = progress.image.clone() else {
-        return;
+    let shot = match (&progress.image, headless.window) {
+        (_, true) => Screenshot::primary_window(),
+        (Some(image), false) => Screenshot::image(image.clone()),
+        (None, false) => return,
     };
     progress.waiting = Some(0);
     let out = headless.out.clone();
     commands
-        .spawn(Screenshot::image(image))
+        .spawn(shot)
         .observe(save_to_disk(out.clone()))
         .observe(
             move |_: On<ScreenshotCaptured>, mut exit: MessageWriter<AppExit>| {
-                info!("headless: wrote {}", out.display());
+                info!("wrote {}", out.display());
                 exit.write(AppExit::Success);
             },
         );

@@ -40,6 +40,7 @@ impl Harness {
             out: "unused.png".into(),
             frames: 0,
             size: UVec2::new(WIDTH, HEIGHT),
+            window: false,
         };
         let mut app = App::new();
         app.add_plugins(default_plugins(
