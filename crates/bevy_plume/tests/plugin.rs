@@ -320,3 +320,53 @@ fn churn_never_leaks_loses_or_draws_the_gone() {
         "the plugin holds GPU state after every effect went"
     );
 }
+
+#[test]
+fn a_fast_world_space_emitter_spawns_along_its_way_within_a_frame() {
+    let _one = serial();
+    let dir = asset_dir("streak");
+    // Four steps a frame (dt = 1/240 s at 60 frames a second), ten particles a step, still.
+    let source = r#"Effect(name: "streak", capacity: 4000, seed: 3, dt: 0.004166666666666667,
+    emitters: [Emitter(rate: 2400.0, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)),
+        lifetime: Some((100.0, 100.0)))],
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 0.15)], blend: Additive))"#;
+    std::fs::write(dir.join("streak.plume.ron"), source).unwrap();
+    let mut h = Harness::new(&dir);
+    let handle = h.load("streak.plume.ron");
+    let fx = h
+        .app
+        .world_mut()
+        .spawn((
+            PlumeEffect::new(handle),
+            Transform::from_xyz(-3.0, 0.0, 0.0),
+        ))
+        .id();
+    h.update(3);
+    // One frame's jump of 6 m: its four steps spawn at -1.5, 0, 1.5 and 3 m.
+    h.app
+        .world_mut()
+        .entity_mut(fx)
+        .insert(Transform::from_xyz(3.0, 0.0, 0.0));
+    h.update(1);
+    let image = h.capture();
+    let lit_near = |x: f32| {
+        let (cx, cy) = project(x, 0.0);
+        image
+            .enumerate_pixels()
+            .filter(|(px, py, p)| {
+                (*px as f32 + 0.5 - cx).abs() < 2.0
+                    && (*py as f32 + 0.5 - cy).abs() < 2.0
+                    && p.0[..3].iter().any(|&c| c > 40)
+            })
+            .count()
+    };
+    for x in [-3.0, -1.5, 0.0, 1.5, 3.0] {
+        assert!(lit_near(x) > 0, "nothing spawned at x = {x} m");
+    }
+    // Between the steps' places, nothing: the parts are where the motion puts them.
+    assert_eq!(
+        lit_near(-0.75) + lit_near(0.75),
+        0,
+        "particles between the steps' places"
+    );
+}

@@ -72,6 +72,8 @@ pub(crate) struct Instance {
     pub world_from_local: Mat4,
     /// Where its particles live.
     pub space: SimulationSpace,
+    /// The transform its last world-space steps spawned at (None before the first).
+    pub placed_at: Option<Mat4>,
     /// The entity's render-world twin.
     pub render_entity: Entity,
     /// Its draws, by the camera's render-world entity.
@@ -216,6 +218,7 @@ fn build(
         steps: (warm_up / dt).round() as u64,
         world_from_local: e.world_from_local,
         space: e.control.space,
+        placed_at: None,
         render_entity: e.render,
         views: HashMap::new(),
         particle_bytes,

@@ -1,10 +1,12 @@
 //! The render app's side of the plugin: extraction ([`extract`]), the instances on Bevy's
-//! device ([`instances`]), the compute work before the cameras ([`simulate`]) and the draw in
+//! device ([`instances`]), the compute work before the cameras ([`simulate`], world-space
+//! steps along the entity's motion in [`motion`]) and the draw in
 //! the transparent phase ([`draw`]).
 
 pub(crate) mod draw;
 pub(crate) mod extract;
 pub(crate) mod instances;
+pub(crate) mod motion;
 pub(crate) mod simulate;
 
 use bevy::core_pipeline::core_3d::Transparent3d;

@@ -11,6 +11,7 @@ use plume_runtime::Camera;
 
 use crate::effect::SimulationSpace;
 use crate::render::instances::PlumeInstances;
+use crate::render::motion;
 
 /// Steps every instance and prepares every draw queued this frame.
 pub(crate) fn simulate_and_prepare(
@@ -21,22 +22,34 @@ pub(crate) fn simulate_and_prepare(
     let encoder = context.command_encoder();
     for instance in store.instances.values_mut() {
         let steps = std::mem::take(&mut instance.steps);
-        // World space: this frame's spawns start where the entity is now.
         let in_world = instance.space == SimulationSpace::World;
-        if in_world {
-            let cols = instance.world_from_local.to_cols_array();
-            match Placement::from_cols(cols) {
-                Some(placement) => instance.effect.set_placement(placement),
-                None => warn!(
-                    "{}: the entity's transform is not finite; its emitters stay where they were",
-                    instance.effect.compiled().ir.name
-                ),
+        let name = &instance.effect.compiled().ir.name;
+        let finite = instance.world_from_local.is_finite();
+        if in_world && !finite {
+            warn!(
+                "{name}: the entity's transform is not finite; its emitters stay where they were"
+            );
+        }
+        // World space: the frame's steps spawn along the entity's way from where it was.
+        let to = instance.world_from_local;
+        let parts = match (in_world && finite, steps) {
+            (_, 0) => Vec::new(),
+            (true, _) => motion::parts(steps, instance.placed_at.unwrap_or(to), to),
+            (false, _) => vec![(steps, to)],
+        };
+        for (n, at) in parts {
+            if in_world && finite {
+                if let Some(placement) = Placement::from_cols(at.to_cols_array()) {
+                    instance.effect.set_placement(placement);
+                }
+            }
+            if let Err(err) = instance.effect.advance(encoder, n) {
+                error!("{}: {err}", instance.effect.compiled().ir.name);
+                break;
             }
         }
-        if steps > 0 {
-            if let Err(err) = instance.effect.advance(encoder, steps) {
-                error!("{}: {err}", instance.effect.compiled().ir.name);
-            }
+        if finite {
+            instance.placed_at = Some(to);
         }
         // Drawn through the entity's transform only in local space.
         let world_from_local = match in_world {
