@@ -104,12 +104,25 @@ impl Harness {
         false
     }
 
-    /// Loads the effect file at `path` (relative to the asset folder).
+    /// Loads the effect file at `path` (relative to the asset folder) and runs frames until it
+    /// has loaded or failed (at most 10 s: loading runs on other threads, slower on a busy
+    /// machine), so that a test's frame counts start from a loaded effect.
     pub fn load(&mut self, path: &str) -> Handle<PlumeEffectAsset> {
-        self.app
+        let handle: Handle<PlumeEffectAsset> = self
+            .app
             .world()
             .resource::<AssetServer>()
-            .load(path.to_string())
+            .load(path.to_string());
+        let settled = self.update_until(2_000, Duration::from_millis(5), |h| {
+            let server = h.app.world().resource::<AssetServer>();
+            server.is_loaded_with_dependencies(&handle)
+                || matches!(
+                    server.load_state(&handle),
+                    bevy::asset::LoadState::Failed(_)
+                )
+        });
+        assert!(settled, "{path} did not load within 10 s");
+        handle
     }
 
     /// The next frame's image (runs frames until the capture comes back).
