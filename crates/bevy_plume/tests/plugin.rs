@@ -38,7 +38,7 @@ fn an_effect_is_drawn_where_its_entity_is() {
         .world_mut()
         .spawn((PlumeEffect::new(handle), Transform::from_xyz(2.0, 1.0, 0.0)));
     h.update(10);
-    let image = h.capture();
+    let image = h.capture_lit();
     let (n, x, y) = lit_pixels(&image, 40);
     let (ex, ey) = project(2.0, 1.0);
     assert!(n >= 4, "only {n} lit pixels");
@@ -67,7 +67,7 @@ fn a_graph_effect_runs_its_groups_and_events() {
         Transform::from_xyz(0.0, -4.0, -8.0),
     ));
     h.update(30);
-    let image = h.capture();
+    let image = h.capture_lit();
     let (n, _, y) = lit_pixels(&image, 60);
     assert!(n > 20, "only {n} lit pixels: the fireworks did not draw");
     // Everything drawn is above the launch point (the entity at y = -4 m).
@@ -84,11 +84,11 @@ fn a_broken_file_keeps_the_last_good_effect_and_a_fix_reloads() {
     let dir = asset_dir("reload");
     let file = dir.join("dots.plume.ron");
     std::fs::write(&file, dots(300, 100.0, (1.0, 0.2, 0.1))).unwrap();
-    let mut h = Harness::new(&dir);
+    let mut h = Harness::with_watching(&dir, true);
     let handle = h.load("dots.plume.ron");
     h.app.world_mut().spawn(PlumeEffect::new(handle));
     h.update(10);
-    let red = h.capture();
+    let red = h.capture_lit();
     assert!(
         lit_pixels(&red, 40).0 >= 4,
         "the first version did not draw"
@@ -140,13 +140,13 @@ fn move_parent(name: &str, space: SimulationSpace) -> ((u32, f32), (u32, f32)) {
         .with_child(PlumeEffect::new(handle).with_space(space))
         .id();
     h.update(10);
-    let (n, before, _) = lit_pixels(&h.capture(), 40);
+    let (n, before, _) = lit_pixels(&h.capture_lit(), 40);
     h.app
         .world_mut()
         .entity_mut(parent)
         .insert(Transform::from_xyz(3.0, 0.0, 0.0));
     h.update(3);
-    let (m, after, _) = lit_pixels(&h.capture(), 40);
+    let (m, after, _) = lit_pixels(&h.capture_lit(), 40);
     ((n, before), (m, after))
 }
 
@@ -215,7 +215,7 @@ fn restart_and_pause_control_an_instance() {
         .unwrap()
         .playing = false;
     h.update(70);
-    assert!(lit_pixels(&h.capture(), 40).0 >= 4, "paused dots died");
+    assert!(lit_pixels(&h.capture_lit(), 40).0 >= 4, "paused dots died");
 }
 
 #[test]
@@ -299,7 +299,7 @@ fn churn_never_leaks_loses_or_draws_the_gone() {
         h.app.world_mut().despawn(gone);
     }
     h.update(2);
-    let image = h.capture();
+    let image = h.capture_lit();
     // The survivor is still drawn, where it stands; nothing is left on the left.
     let (n, x, _) = lit_pixels(&image, 40);
     let right = project(4.0, 0.0).0;
@@ -348,7 +348,7 @@ fn a_fast_world_space_emitter_spawns_along_its_way_within_a_frame() {
         .entity_mut(fx)
         .insert(Transform::from_xyz(3.0, 0.0, 0.0));
     h.update(1);
-    let image = h.capture();
+    let image = h.capture_lit();
     let lit_near = |x: f32| {
         let (cx, cy) = project(x, 0.0);
         image

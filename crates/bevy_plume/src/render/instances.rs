@@ -18,6 +18,10 @@ use crate::render::extract::{ExtractedEffect, ExtractedEffects};
 /// breakpoint) drops the rest rather than stepping ever more to catch up.
 const MAX_CATCH_UP_SECONDS: f64 = 0.25;
 
+/// Steps are counted from the pending time over `dt` plus this fraction of a step, so that
+/// rounding never holds back a step that a frame's time covers.
+const STEP_SLACK: f64 = 1e-6;
+
 /// What an instance was built from: a change of any part rebuilds it.
 #[derive(Clone)]
 struct BuildKey {
@@ -230,7 +234,11 @@ impl Instance {
     fn advance_time(&mut self, seconds: f64) {
         let max_steps = (MAX_CATCH_UP_SECONDS / self.dt).ceil().max(1.0);
         self.pending_time += seconds.max(0.0);
-        let steps = (self.pending_time / self.dt).floor().min(max_steps);
+        // A frame of exactly `dt` is one step: without the slack, 1/60 s over a dt of 1/60 s
+        // can round to 0.99999, and a 60 Hz app would step 0, 2, 0, 2 ... times a frame.
+        let steps = (self.pending_time / self.dt + STEP_SLACK)
+            .floor()
+            .min(max_steps);
         self.pending_time = (self.pending_time - steps * self.dt).clamp(0.0, self.dt);
         self.steps += steps as u64;
     }
