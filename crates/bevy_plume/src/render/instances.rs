@@ -84,6 +84,8 @@ pub(crate) struct Instance {
     pub views: HashMap<Entity, ViewDraw>,
     /// Bytes of particle state it holds on the GPU.
     particle_bytes: u64,
+    /// Targets its draw could not be made for (the error was logged).
+    undrawable: Vec<DrawTarget>,
 }
 
 /// Compiled variants of effect files, by (the file version's address, seed, placed): the
@@ -226,6 +228,7 @@ fn build(
         render_entity: e.render,
         views: HashMap::new(),
         particle_bytes,
+        undrawable: Vec::new(),
     })
 }
 
@@ -247,6 +250,9 @@ impl Instance {
     /// format or samples changed) as needed; None, with the reason logged once, when the
     /// effect cannot be drawn there.
     pub fn view_draw(&mut self, view: Entity, target: DrawTarget, frame: u64) -> Option<()> {
+        if self.undrawable.contains(&target) {
+            return None;
+        }
         if self.views.get(&view).is_some_and(|d| d.target == target) {
             self.views.get_mut(&view)?.frame = frame;
             return Some(());
@@ -264,7 +270,11 @@ impl Instance {
                 Some(())
             }
             Err(err) => {
-                error!("{}: cannot be drawn: {err}", self.effect.compiled().ir.name);
+                // Said once per kind of target, not every frame.
+                if !self.undrawable.contains(&target) {
+                    error!("{}: cannot be drawn: {err}", self.effect.compiled().ir.name);
+                    self.undrawable.push(target);
+                }
                 None
             }
         }

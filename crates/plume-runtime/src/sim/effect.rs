@@ -218,6 +218,29 @@ impl Effect {
     /// particles stay where they were emitted while the host moves the emitter (every group's
     /// emitters; children of events spawn at their parents). Ignored by an effect that is not
     /// placed. Steps recorded by one [`Self::advance`] all use the placement set before it.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_compiler::placement::Placement;
+    /// use plume_compiler::CompileOptions;
+    /// use plume_runtime::{Effect, Gpu};
+    /// let source = r#"Effect(name: "puff", capacity: 64,
+    ///     emitters: [Emitter(rate: 600.0, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))])"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let world_space = CompileOptions { placed: true, ..Default::default() };
+    /// let mut puff = Effect::from_source(&gpu, source, &world_space)?;
+    /// // The host's model matrix, column-major: here a move to (5, 0, 0).
+    /// let mut model = glam::Mat4::from_translation(glam::Vec3::new(5.0, 0.0, 0.0));
+    /// puff.set_placement(Placement::from_cols(model.to_cols_array()).expect("finite"));
+    /// puff.run(3, |_| {})?;
+    /// model = glam::Mat4::IDENTITY; // the emitter moves on; what it emitted stays
+    /// puff.set_placement(Placement::from_cols(model.to_cols_array()).expect("finite"));
+    /// puff.run(3, |_| {})?;
+    /// let xs: Vec<f64> = puff.records()?.iter().map(|r| r.position.x).collect();
+    /// assert!(xs.iter().any(|&x| x == 5.0) && xs.iter().any(|&x| x == 0.0));
+    /// # Ok(())
+    /// # }
+    /// ```
     pub fn set_placement(&mut self, placement: Placement) {
         for group in &mut self.groups {
             group.placement = placement;
