@@ -308,6 +308,8 @@ fn overrides_replace_file_values() {
             state: None,
             base_dir: None,
             placed: true,
+            bursts: true,
+            live_params: true,
         },
     )
     .unwrap();
@@ -317,9 +319,10 @@ fn overrides_replace_file_values() {
             c.ir.seed,
             c.ir.substeps,
             c.ir.integrator,
-            c.ir.placed
+            c.ir.placed,
+            c.ir.bursts
         ),
-        (0.01, 9, 2, Integrator::Rk4, true)
+        (0.01, 9, 2, Integrator::Rk4, true, true)
     );
     assert!(c.ir.sort && c.wgsl.contains("fn depth_keys"));
     let bad = compile_str(

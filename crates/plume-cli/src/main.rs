@@ -115,6 +115,8 @@ impl Overrides {
             state: self.state,
             base_dir: None,
             placed: false,
+            bursts: false,
+            live_params: false,
         }
     }
 }

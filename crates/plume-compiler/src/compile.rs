@@ -53,6 +53,14 @@ pub struct CompileOptions {
     /// (world space: emitters spawn through it, particles stay where they were emitted;
     /// `features::placement`). The effect is then stateful.
     pub placed: bool,
+    /// Compiles the effect to take bursts fired from code at run time (`features::bursts`):
+    /// its step parameters carry up to `bursts::SLOTS` per step. The effect is then stateful.
+    pub bursts: bool,
+    /// Compiles `params` to be read at run time from the step parameters, so that a host can
+    /// change them without recompiling (`Effect::set_param`); otherwise they are folded as
+    /// constants. The compile-time analyses (stiffness, the integrator `Auto` picks) see the
+    /// file's values.
+    pub live_params: bool,
 }
 
 /// A compiled effect: the IR after the passes, its layout, the WGSL and any warnings.
@@ -151,6 +159,8 @@ pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, Comp
     }
     effect.base_dir.clone_from(&options.base_dir);
     effect.placed = options.placed;
+    effect.bursts = options.bursts;
+    effect.live_params = options.live_params;
     for group in &mut effect.groups {
         if let Some(i) = options.integrator {
             group.integrator = i;

@@ -82,6 +82,10 @@ pub enum RuntimeError {
     /// Reading results back from the GPU failed.
     #[error("reading back from the GPU failed: {0}")]
     Readback(String),
+    /// A control from the host was refused (a burst or a parameter the effect cannot take,
+    /// [`crate::Effect::burst`]); the message says why and what the effect offers.
+    #[error("{0}")]
+    Control(String),
     /// Writing an output file failed.
     #[error("{0}")]
     Output(String),

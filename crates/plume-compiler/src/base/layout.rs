@@ -93,6 +93,12 @@ pub struct Layout {
     /// Whether the step parameters carry the placement's rows after their header
     /// (`features::placement`).
     pub placed: bool,
+    /// Whether the step parameters carry the bursts' slots after the emitters'
+    /// (`features::bursts`).
+    pub bursts: bool,
+    /// Params read at run time (`CompileOptions::live_params`): the step parameters end with
+    /// them, four to a vec4, in name order.
+    pub live_params: u32,
     /// Bytes of trail history per particle (`render.trail`; 0 without one), held in the
     /// `trail` binding beside the particle struct.
     pub trail_bytes_per_particle: u32,
@@ -158,10 +164,17 @@ impl Layout {
     }
 
     /// Bytes of the uniform step parameters: 16 of header, 48 of placement when placed, 16 per
-    /// emitter slot.
+    /// emitter slot, the bursts' slots when it takes bursts (384), then 16 per four live
+    /// params.
     pub fn params_bytes(&self) -> u64 {
         let placement = if self.placed { 48 } else { 0 };
-        16 + placement + 16 * u64::from(self.emitter_slots)
+        let bursts = if self.bursts { 384 } else { 0 };
+        16 + placement + 16 * u64::from(self.emitter_slots) + bursts + 16 * self.user_vec4s()
+    }
+
+    /// The vec4s the live params take in the step parameters.
+    pub fn user_vec4s(&self) -> u64 {
+        u64::from(self.live_params).div_ceil(4)
     }
 }
 

@@ -70,6 +70,8 @@ impl<'w> Emitter<'w> {
         let ty = e.ty;
         match &e.node {
             Node::Scalar(x) => f32_lit(*x),
+            // Live params ride in the step parameters, four to a vec4.
+            Node::Param { index, .. } => format!("params.user[{}u][{}u]", index / 4, index % 4),
             Node::Vector(v) => vec3_lit(*v),
             Node::Var(var) => match var {
                 Var::X => "cx".into(),

@@ -124,6 +124,7 @@ pub fn smoothstep(e0: f64, e1: f64, a: f64) -> f64 {
 pub fn eval(e: &Expr, inp: &Inputs) -> Value {
     match &e.node {
         Node::Scalar(x) => Value::S(*x),
+        Node::Param { value, .. } => Value::S(*value),
         Node::Vector(v) => Value::V(*v),
         Node::Var(var) => match var {
             Var::X => Value::V(

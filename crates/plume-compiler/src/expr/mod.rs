@@ -68,6 +68,19 @@ pub fn compile(
     params: &BTreeMap<String, f64>,
     dt: f64,
 ) -> Result<Expr, ExprError> {
+    compile_in(
+        text,
+        want,
+        &typed::Scope {
+            params,
+            dt,
+            live: false,
+        },
+    )
+}
+
+/// [`compile`] in `scope`: with `scope.live`, params are read at run time and never folded.
+pub fn compile_in(text: &str, want: Ty, scope: &typed::Scope) -> Result<Expr, ExprError> {
     let tokens = lex::tokenize(text)?;
     if tokens.len() > MAX_TOKENS {
         let t = &tokens[MAX_TOKENS];
@@ -78,7 +91,7 @@ pub fn compile(
         ));
     }
     let ast = parse::parse(&tokens)?;
-    let expr = typed::check(&ast, &typed::Scope { params, dt })?;
+    let expr = typed::check(&ast, scope)?;
     if expr.ty != want {
         return Err(ExprError::new(
             format!(

@@ -150,6 +150,15 @@ pub enum Node {
     Var(Var),
     /// `rand(k)`: the particle's k-th uniform number in [0, 1).
     Rand(u32),
+    /// A parameter that the host may change at run time (compiled with live params): the
+    /// `index`-th of the effect's `params` in name order, and its value now (f64 of the f32
+    /// the GPU reads, which the reference evaluates).
+    Param {
+        /// Its place among the effect's params, in name order.
+        index: u32,
+        /// Its current value.
+        value: f64,
+    },
     /// One operand.
     Unary(Op1, Box<Expr>),
     /// Two operands.
@@ -192,6 +201,24 @@ impl Expr {
     /// True when it draws random numbers.
     pub fn draws_random(&self) -> bool {
         matches!(self.node, Node::Rand(_)) || self.children().iter().any(|c| c.draws_random())
+    }
+
+    /// Sets every [`Node::Param`] of index `index` to `value`.
+    pub fn set_param(&mut self, index: u32, value: f64) {
+        match &mut self.node {
+            Node::Param { index: i, value: v } if *i == index => *v = value,
+            Node::Unary(_, a) => a.set_param(index, value),
+            Node::Binary(_, a, b) => {
+                a.set_param(index, value);
+                b.set_param(index, value);
+            }
+            Node::Ternary(_, a, b, c) => {
+                a.set_param(index, value);
+                b.set_param(index, value);
+                c.set_param(index, value);
+            }
+            _ => {}
+        }
     }
 
     /// Number of nodes.
@@ -239,6 +266,8 @@ pub struct Scope<'a> {
     pub params: &'a BTreeMap<String, f64>,
     /// The effect's dt (s).
     pub dt: f64,
+    /// Params are read at run time ([`Node::Param`]) instead of folded as constants.
+    pub live: bool,
 }
 
 /// Type-checks a syntax tree into a typed tree.
@@ -262,6 +291,12 @@ pub fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
                 return Ok(Expr::new(Node::Scalar(scope.dt), Ty::Scalar));
             }
             if let Some(value) = scope.params.get(name) {
+                if scope.live {
+                    let index = scope.params.keys().position(|k| k == name).unwrap_or(0);
+                    let value = f64::from(*value as f32);
+                    let index = index as u32;
+                    return Ok(Expr::new(Node::Param { index, value }, Ty::Scalar));
+                }
                 return Ok(Expr::new(Node::Scalar(*value), Ty::Scalar));
             }
             if FUNCTIONS.iter().any(|(f, _)| f == name) {

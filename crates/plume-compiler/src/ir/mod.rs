@@ -58,6 +58,11 @@ pub struct EffectIr {
     pub state_reason: String,
     /// Whether a transform set at run time places its emitters (`features::placement`).
     pub placed: bool,
+    /// Whether the step parameters carry bursts fired from code (`features::bursts`).
+    pub bursts: bool,
+    /// With `CompileOptions::live_params`: every param's name and value in name order, as the
+    /// step parameters carry them (read by custom forces at run time); empty otherwise.
+    pub live_params: Vec<(String, f64)>,
     /// The camera.
     pub camera: CameraIr,
     /// How particles look when rendered.
@@ -177,6 +182,19 @@ impl EffectIr {
     }
 
     /// The custom expression terms.
+    /// Sets live param `index` to `value` in every custom term (the reference's twin of the
+    /// host changing it on the GPU; the value is the f32 the GPU reads).
+    pub fn set_live_param(&mut self, index: usize, value: f32) {
+        if let Some(p) = self.live_params.get_mut(index) {
+            p.1 = f64::from(value);
+        }
+        for t in &mut self.terms {
+            if let crate::features::forces::Term::Custom(c) = t {
+                c.expr.set_param(index as u32, f64::from(value));
+            }
+        }
+    }
+
     pub fn custom_terms(
         &self,
     ) -> impl Iterator<Item = &crate::features::forces::custom::CustomTerm> {

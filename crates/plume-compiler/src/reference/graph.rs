@@ -43,6 +43,27 @@ impl ReferenceGraph {
         }
     }
 
+    /// Sets live param `name` in every group (see [`ReferenceSim::set_param`]).
+    pub fn set_param(&mut self, name: &str, value: f32) -> Result<(), String> {
+        for g in &mut self.groups {
+            g.set_param(name, value)?;
+        }
+        Ok(())
+    }
+
+    /// Queues a burst fired from code in group `group` (see [`ReferenceSim::burst`]).
+    pub fn burst(
+        &mut self,
+        group: usize,
+        burst: crate::features::bursts::Burst,
+    ) -> Result<(), String> {
+        let count = self.groups.len();
+        self.groups
+            .get_mut(group)
+            .ok_or_else(|| format!("a burst in group {group}, but the effect has {count}"))?
+            .burst(burst)
+    }
+
     /// Runs `n` steps.
     pub fn run(&mut self, n: u64) {
         for _ in 0..n {

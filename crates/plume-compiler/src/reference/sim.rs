@@ -97,6 +97,27 @@ impl ReferenceSim {
         self.placement = placement;
     }
 
+    /// Sets live param `name` to `value` for the next steps (the f64 twin of
+    /// `Effect::set_param`: custom forces then read the f32 `value`, as the GPU does); refused
+    /// for a name the effect does not read at run time.
+    pub fn set_param(&mut self, name: &str, value: f32) -> Result<(), String> {
+        let index = self
+            .ir
+            .live_params
+            .iter()
+            .position(|p| p.0 == name)
+            .ok_or_else(|| format!("the effect reads no live param `{name}`"))?;
+        self.ir.set_live_param(index, value);
+        Ok(())
+    }
+
+    /// Queues a burst fired from code for the next steps (the f64 twin of `Effect::burst`; an
+    /// effect compiled with `CompileOptions::bursts`); refused, with why, for a missing
+    /// emitter or a coordinate that is not finite.
+    pub fn burst(&mut self, burst: crate::features::bursts::Burst) -> Result<(), String> {
+        self.schedule.queue_burst(burst)
+    }
+
     /// Spawns the children of the `input`-th event this group is fed by, from the parent's
     /// firings of the last step, at the start of the next step (before [`Self::step`]): in
     /// parent id order, `count` each, ids consecutive, the last ones dropped when there is no
@@ -187,13 +208,27 @@ impl ReferenceSim {
         self.totals.spawned += budget;
         self.totals.dropped += u64::from(plan.requested()) - budget;
         let mut id = plan.first_id;
-        for (e, &(count, k0)) in plan.emitters.iter().enumerate() {
+        // The emitters' spawns, then the bursts fired from code (`features::bursts`).
+        let sources = plan
+            .emitters
+            .iter()
+            .enumerate()
+            .map(|(e, &(count, k0))| (e, count, k0, None))
+            .chain(
+                plan.bursts
+                    .iter()
+                    .map(|b| (b.burst.emitter as usize, b.burst.count, b.k0, Some(b.burst))),
+            );
+        for (e, count, k0, burst) in sources {
             for local in 0..count {
                 if budget == 0 {
                     break;
                 }
                 budget -= 1;
-                let mut s = spawn(&self.ir, e, id + local, k0 + local, plan.step);
+                let mut s = spawn(&self.ir, e, id + local, k0.wrapping_add(local), plan.step);
+                if let Some(burst) = burst {
+                    (s.x, s.v) = burst.apply(s.x, s.v);
+                }
                 if self.ir.placed {
                     s.x = self.placement.point(s.x);
                     s.v = self.placement.vector(s.v);

@@ -14,6 +14,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
     let scope = crate::features::forces::custom::Scope {
         params: &effect.params,
         dt: effect.dt,
+        live: effect.live_params,
     };
     let mut ir = EffectIr {
         name: effect.name.clone(),
@@ -70,6 +71,16 @@ pub fn lower(effect: &Effect) -> EffectIr {
         stateless: None,
         state_reason: String::from("not decided yet"),
         placed: effect.placed,
+        bursts: effect.bursts,
+        live_params: if effect.live_params {
+            effect
+                .params
+                .iter()
+                .map(|(k, v)| (k.clone(), f64::from(*v as f32)))
+                .collect()
+        } else {
+            Vec::new()
+        },
         render: {
             let r = &effect.render;
             RenderIr {

@@ -4,8 +4,13 @@
 //! At step k (time t = k dt): each emitter spawns its burst (k = 0 only) plus the whole part of
 //! its accumulated `rate * dt`, the fractional remainder carried to the next step. Ids are handed
 //! out across emitters in the order they are listed, step by step; spawns dropped for lack of
-//! capacity still consume their ids, so ids never depend on what the GPU had free.
+//! capacity still consume their ids, so ids never depend on what the GPU had free. Bursts
+//! fired from code (`features::bursts`) take the ids after the emitters', up to
+//! `bursts::SLOTS` per step in the order they were fired.
 
+use std::collections::VecDeque;
+
+use crate::features::bursts::{Burst, PlannedBurst, SLOTS};
 use crate::features::forces::noise::TIME_PERIOD;
 use crate::ir::EffectIr;
 
@@ -20,12 +25,15 @@ pub struct StepPlan {
     pub first_id: u32,
     /// Per emitter: (spawns this step, the emitter's own spawn counter before them).
     pub emitters: Vec<(u32, u32)>,
+    /// Bursts fired from code that spawn this step, after every emitter's spawns.
+    pub bursts: Vec<PlannedBurst>,
 }
 
 impl StepPlan {
     /// Total spawns requested this step.
     pub fn requested(&self) -> u32 {
-        self.emitters.iter().map(|e| e.0).sum()
+        self.emitters.iter().map(|e| e.0).sum::<u32>()
+            + self.bursts.iter().map(|b| b.burst.count).sum::<u32>()
     }
 
     /// Time passed to kernels, as f32: t mod the noise period when `wrap`
@@ -52,6 +60,8 @@ pub struct Schedule {
     next_id: u32,
     /// (first id, step) for every step that requested at least one spawn, in order.
     first_ids: Vec<(u32, u64)>,
+    /// Bursts fired from code that no step has spawned yet, oldest first.
+    pending: VecDeque<Burst>,
 }
 
 impl Schedule {
@@ -66,7 +76,34 @@ impl Schedule {
             next_step: 0,
             next_id: 0,
             first_ids: Vec::new(),
+            pending: VecDeque::new(),
         }
+    }
+
+    /// Queues `burst` for the next step that has a burst slot free (the next step, unless
+    /// [`SLOTS`] bursts are already waiting); refused, with why, when its emitter does not
+    /// exist or a coordinate is not finite.
+    pub fn queue_burst(&mut self, burst: Burst) -> Result<(), String> {
+        if burst.emitter as usize >= self.rates.len() {
+            return Err(format!(
+                "a burst from emitter {}, but the effect has {} emitter(s)",
+                burst.emitter,
+                self.rates.len()
+            ));
+        }
+        if !burst.is_finite() {
+            return Err(format!(
+                "a burst's offset {:?} and velocity {:?} must be finite",
+                burst.offset, burst.velocity
+            ));
+        }
+        self.pending.push_back(burst);
+        Ok(())
+    }
+
+    /// Bursts queued and not yet spawned.
+    pub fn bursts_pending(&self) -> usize {
+        self.pending.len()
     }
 
     /// Steps planned so far.
@@ -99,6 +136,20 @@ impl Schedule {
             self.emitted[e] = self.emitted[e].wrapping_add(count);
             self.next_id += count;
         }
+        let mut bursts = Vec::new();
+        while bursts.len() < SLOTS as usize {
+            let Some(mut burst) = self.pending.pop_front() else {
+                break;
+            };
+            let e = burst.emitter as usize;
+            burst.count = burst.count.min(u32::MAX - self.next_id);
+            bursts.push(PlannedBurst {
+                burst,
+                k0: self.emitted[e],
+            });
+            self.emitted[e] = self.emitted[e].wrapping_add(burst.count);
+            self.next_id += burst.count;
+        }
         if self.next_id > first_id {
             self.first_ids.push((first_id, step));
         }
@@ -108,13 +159,14 @@ impl Schedule {
             time: step as f64 * self.dt,
             first_id,
             emitters,
+            bursts,
         }
     }
 
     /// Skips `n` steps at once when they can spawn nothing (every rate is 0 and step 0's bursts
     /// are done), as stepping them would; returns false, skipping nothing, otherwise.
     pub fn skip_idle(&mut self, n: u64) -> bool {
-        if self.next_step == 0 || self.rates.iter().any(|&r| r > 0.0) {
+        if self.next_step == 0 || !self.pending.is_empty() || self.rates.iter().any(|&r| r > 0.0) {
             return false;
         }
         self.next_step = self.next_step.saturating_add(n);

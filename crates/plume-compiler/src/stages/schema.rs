@@ -95,6 +95,14 @@ pub struct Effect {
     /// `features::placement`): set by `CompileOptions::placed`, never by the file.
     #[serde(skip)]
     pub placed: bool,
+    /// Takes bursts fired from code at run time (see `features::bursts`): set by
+    /// `CompileOptions::bursts`, never by the file.
+    #[serde(skip)]
+    pub bursts: bool,
+    /// Reads `params` at run time, so a host can change them without recompiling: set by
+    /// `CompileOptions::live_params`, never by the file.
+    #[serde(skip)]
+    pub live_params: bool,
 }
 
 fn default_sizes() -> Vec<SizeStop> {

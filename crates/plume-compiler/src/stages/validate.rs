@@ -73,6 +73,7 @@ pub fn check_effect(effect: &Effect) -> Checker {
     let scope = crate::features::forces::custom::Scope {
         params: &effect.params,
         dt: effect.dt,
+        live: effect.live_params,
     };
     let mut flocks = 0;
     for (i, f) in effect.forces.iter().enumerate() {

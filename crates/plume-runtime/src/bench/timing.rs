@@ -73,6 +73,7 @@ impl Group {
             self.res.params_stride,
             self.effect.ir.wraps_kernel_time(),
             &self.placement,
+            &self.live_params,
         );
         let params = self
             .res

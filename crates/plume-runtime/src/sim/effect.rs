@@ -6,6 +6,7 @@
 
 use std::path::Path;
 
+use plume_compiler::bursts::Burst;
 use plume_compiler::graph::{compile_graph_str, CompiledGraph};
 use plume_compiler::placement::Placement;
 use plume_compiler::reference::{ParticleRecord, Totals};
@@ -245,6 +246,106 @@ impl Effect {
         for group in &mut self.groups {
             group.placement = placement;
         }
+    }
+
+    /// Fires a burst from code in group `group` (0 for an effect without groups): `burst.count`
+    /// particles of emitter `burst.emitter`, spawned at the next step recorded (after the
+    /// emitters' own spawns, up to `bursts::SLOTS` bursts a step; more wait, in order), moved
+    /// by `burst.offset` and given `burst.velocity` more, in the effect's space. The effect
+    /// must be compiled with `CompileOptions::bursts`. Like every spawn, particles that find
+    /// no free slot are dropped and counted.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_compiler::bursts::Burst;
+    /// use plume_compiler::CompileOptions;
+    /// use plume_runtime::{Effect, Gpu};
+    /// let source = r#"Effect(name: "impact", capacity: 256,
+    ///     emitters: [Emitter(shape: Sphere(center: (0.0, 0.0, 0.0), radius: 0.1),
+    ///                        velocity: Radial(speed: (1.0, 2.0)), lifetime: Some((0.5, 0.5)))])"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let takes_bursts = CompileOptions { bursts: true, ..Default::default() };
+    /// let mut impact = Effect::from_source(&gpu, source, &takes_bursts)?;
+    /// impact.burst(0, Burst::new(0, 40).at([3.0, 0.0, 0.0]).with_velocity([0.0, 5.0, 0.0]))?;
+    /// impact.run(1, |_| {})?;
+    /// let records = impact.records()?;
+    /// assert_eq!(records.len(), 40);
+    /// assert!(records.iter().all(|r| (r.position.x - 3.0).abs() < 0.2));
+    /// // An emitter the effect does not have is refused, with why.
+    /// assert!(impact.burst(0, Burst::new(3, 1)).unwrap_err().to_string().contains("1 emitter"));
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn burst(&mut self, group: usize, burst: Burst) -> Result<(), RuntimeError> {
+        let names = self.names.len();
+        let target = self.groups.get_mut(group).ok_or_else(|| {
+            RuntimeError::Control(format!(
+                "a burst in group {group}, but the effect has {names} group(s)"
+            ))
+        })?;
+        if !target.effect.ir.bursts {
+            return Err(RuntimeError::Control(
+                "this effect does not take bursts from code: compile it with CompileOptions { bursts: true, .. }".into(),
+            ));
+        }
+        target
+            .schedule
+            .queue_burst(burst)
+            .map_err(RuntimeError::Control)
+    }
+
+    /// Sets the effect's param `name` to `value` for the steps recorded from now on, in every
+    /// group: custom forces read it at run time, with no recompiling. The effect must be
+    /// compiled with `CompileOptions::live_params`; an unknown name is refused with the
+    /// names there are, a value that is not finite or beyond ±1e18 (the range expressions
+    /// compute in) with why.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_compiler::CompileOptions;
+    /// use plume_runtime::{Effect, Gpu};
+    /// let source = r#"Effect(name: "lift", capacity: 16, params: {"up": 0.0},
+    ///     emitters: [Emitter(burst: 16, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    ///     forces: [Custom(accel: "vec3(0, up, 0)")])"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let live = CompileOptions { live_params: true, ..Default::default() };
+    /// let mut lift = Effect::from_source(&gpu, source, &live)?;
+    /// lift.run(10, |_| {})?;
+    /// assert!(lift.records()?.iter().all(|r| r.position.y == 0.0));
+    /// lift.set_param("up", 20.0)?;
+    /// lift.run(10, |_| {})?;
+    /// assert!(lift.records()?.iter().all(|r| r.position.y > 0.0));
+    /// assert!(lift.set_param("down", 1.0).unwrap_err().to_string().contains("up"));
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn set_param(&mut self, name: &str, value: f32) -> Result<(), RuntimeError> {
+        if !(value.is_finite() && f64::from(value.abs()) <= plume_compiler::expr::VALUE_BOUND) {
+            return Err(RuntimeError::Control(format!(
+                "param `{name}` = {value}: a param must be finite and within ±1e18"
+            )));
+        }
+        let names: Vec<&str> = self.groups[0]
+            .effect
+            .ir
+            .live_params
+            .iter()
+            .map(|p| p.0.as_str())
+            .collect();
+        let Some(index) = names.iter().position(|n| *n == name) else {
+            return Err(RuntimeError::Control(if names.is_empty() {
+                format!("param `{name}`: this effect reads no params at run time; compile it with CompileOptions {{ live_params: true, .. }} (and give the file `params`)")
+            } else {
+                format!(
+                    "unknown param `{name}`: the effect's params are {}",
+                    names.join(", ")
+                )
+            }));
+        };
+        for group in &mut self.groups {
+            group.live_params[index] = value;
+        }
+        Ok(())
     }
 
     /// Runs `steps` steps in submissions of 256 steps, calling `progress(done)`

@@ -31,6 +31,9 @@ pub(crate) struct Group {
     pub(crate) depth: Option<DepthSort>,
     /// Where a placed effect's emitters spawn (`features::placement`; identity until set).
     pub(crate) placement: Placement,
+    /// The live params' values now, in name order (`CompileOptions::live_params`; empty
+    /// otherwise).
+    pub(crate) live_params: Vec<f32>,
 }
 
 impl Group {
@@ -51,6 +54,7 @@ impl Group {
             true => Some(DepthSort::new(gpu, &res, &effect)?),
             false => None,
         };
+        let live_params = effect.ir.live_params.iter().map(|p| p.1 as f32).collect();
         let instance = Self {
             gpu: gpu.clone(),
             schedule: Schedule::new(&effect.ir),
@@ -59,6 +63,7 @@ impl Group {
             steps,
             depth,
             placement: Placement::IDENTITY,
+            live_params,
         };
         if let Steps::Stateful(stateful) = &instance.steps {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
@@ -147,6 +152,7 @@ impl Group {
             self.res.params_stride,
             self.effect.ir.wraps_kernel_time(),
             &self.placement,
+            &self.live_params,
         );
         let src = staging(&self.gpu, "step params", &bytes)?;
         encoder.copy_buffer_to_buffer(&src, 0, params, 0, bytes.len() as u64);

@@ -230,13 +230,15 @@ impl StatefulSteps {
 /// The steps' parameters as the uniform buffer holds them, step j at j · `stride`: first id,
 /// requested, kernel time (wrapped when `wrap_time`, see `EffectIr::wraps_kernel_time`), step
 /// index, then for a placed effect the `placement`'s rows (`features::placement`), then
-/// (count, counter before, 0, 0) per emitter slot.
+/// (count, counter before, 0, 0) per emitter slot, then for an effect that takes bursts their
+/// slots (`features::bursts`), then the `live_params` (`CompileOptions::live_params`).
 pub fn params_bytes(
     plans: &[StepPlan],
     layout: &Layout,
     stride: u64,
     wrap_time: bool,
     placement: &Placement,
+    live_params: &[f32],
 ) -> Vec<u8> {
     let mut bytes = vec![0u8; stride as usize * plans.len()];
     for (j, plan) in plans.iter().enumerate() {
@@ -254,6 +256,12 @@ pub fn params_bytes(
             let (count, k0) = plan.emitters.get(e).copied().unwrap_or((0, 0));
             words.extend([count, k0, 0, 0]);
         }
+        if layout.bursts {
+            words.extend(plume_compiler::bursts::words(&plan.bursts));
+        }
+        let mut user: Vec<u32> = live_params.iter().map(|p| p.to_bits()).collect();
+        user.resize(layout.user_vec4s() as usize * 4, 0);
+        words.extend(user);
         for (w, chunk) in words.iter().zip(bytes[at..].chunks_exact_mut(4)) {
             chunk.copy_from_slice(&w.to_le_bytes());
         }

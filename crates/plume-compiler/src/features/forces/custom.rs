@@ -29,6 +29,18 @@ pub struct Scope<'a> {
     pub params: &'a BTreeMap<String, f64>,
     /// The effect's step (s).
     pub dt: f64,
+    /// Params are read at run time (`CompileOptions::live_params`), not folded.
+    pub live: bool,
+}
+
+impl Scope<'_> {
+    fn typed(&self) -> expr::typed::Scope<'_> {
+        expr::typed::Scope {
+            params: self.params,
+            dt: self.dt,
+            live: self.live,
+        }
+    }
 }
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -41,7 +53,7 @@ pub struct Custom {
 impl Custom {
     /// Parses and type-checks the expression; a mistake is an error at its characters.
     pub fn check(&self, path: &ValuePath, c: &mut Checker, scope: Scope) {
-        if let Err(e) = expr::compile(&self.accel, Ty::Vec3, scope.params, scope.dt) {
+        if let Err(e) = expr::compile_in(&self.accel, Ty::Vec3, &scope.typed()) {
             c.error_in_string(&path.field("accel"), e.start, e.end, e.message);
         }
     }
@@ -49,7 +61,7 @@ impl Custom {
     /// Lowers to a term: a constant term when the expression folds to a constant, else a
     /// custom term. Call only after [`Custom::check`] found no error.
     pub fn lower(&self, origin: usize, seed_mix: u32, scope: Scope) -> Term {
-        let expr = expr::compile(&self.accel, Ty::Vec3, scope.params, scope.dt)
+        let expr = expr::compile_in(&self.accel, Ty::Vec3, &scope.typed())
             .expect("checked before lowering");
         if let Node::Vector(accel) = expr.node {
             return Term::Constant(super::constant::ConstantTerm {

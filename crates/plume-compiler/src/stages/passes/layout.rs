@@ -77,6 +77,8 @@ pub fn decide(ir: &EffectIr) -> Layout {
         bindings: Vec::new(),
         emitter_slots,
         placed: ir.placed,
+        bursts: ir.bursts,
+        live_params: ir.live_params.len() as u32,
         trail_bytes_per_particle: ir
             .render
             .trail

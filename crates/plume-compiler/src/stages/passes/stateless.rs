@@ -106,6 +106,12 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("state"),
         ));
     }
+    if ir.bursts {
+        return Err((
+            "it takes bursts fired from code at run time: when they spawn is not a function of (id, age)".into(),
+            ValuePath::root().field("state"),
+        ));
+    }
     let (mut peak, mut segments, mut lives) = (0u64, 0u64, Vec::new());
     for e in 0..ir.emitters.len() {
         let path = ValuePath::root().field("emitters").index(e);

@@ -70,6 +70,15 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
                 "emitters: array<vec4<u32>, {}>,",
                 layout.emitter_slots
             ));
+            if layout.bursts {
+                crate::features::bursts::emit_params_fields(w);
+            }
+            if layout.live_params > 0 {
+                w.line(format!(
+                    "user: array<vec4<f32>, {}>, // live params, in name order",
+                    layout.user_vec4s()
+                ));
+            }
         });
         w.blank();
     }

@@ -44,7 +44,16 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                 w.block("if (local < params.emitters[e].x)", |w| w.line("break;"));
                 w.line("local = local - params.emitters[e].x;");
             });
-            w.line("let k = params.emitters[e].y + local;");
+            if layout.bursts {
+                w.line(format!("var burst = {}u;", crate::features::bursts::SLOTS));
+                w.line("var k = 0u;");
+                w.block(format!("if (e < {}u)", layout.emitter_slots), |w| {
+                    w.line("k = params.emitters[e].y + local;");
+                });
+                w.block("else", crate::features::bursts::emit_find);
+            } else {
+                w.line("let k = params.emitters[e].y + local;");
+            }
             w.line("var s: Spawned;");
             if ir.emitters.is_empty() {
                 w.line("return;");
@@ -61,6 +70,9 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                         });
                     }
                 });
+                if layout.bursts {
+                    crate::features::bursts::emit_apply(w);
+                }
                 if ir.placed {
                     crate::features::placement::emit_apply(w);
                 }
