@@ -483,3 +483,28 @@ fn stateless_only_where_nothing_needs_state() {
         (100, 1, vec![None])
     );
 }
+
+#[test]
+fn bounds_pass_through_and_bad_bounds_are_located() {
+    let base = r#"Effect(name: "b", capacity: 8,
+    emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 1.0, 0.0)))],
+    bounds: Some(Bounds(min: (-1.0, 0.0, -1.0), max: (1.0, MAXY, 1.0))))"#;
+    let ok = compile_str(&base.replace("MAXY", "3.0"), &CompileOptions::default()).unwrap();
+    assert_eq!(
+        ok.ir.bounds,
+        Some((
+            glam::DVec3::new(-1.0, 0.0, -1.0),
+            glam::DVec3::new(1.0, 3.0, 1.0)
+        ))
+    );
+    let bad = base.replace("MAXY", "-2.0");
+    let text = compile_str(&bad, &CompileOptions::default())
+        .unwrap_err()
+        .render("b.ron", &bad);
+    assert!(
+        text.contains("bounds.min")
+            && text.contains("min must be <= max")
+            && text.contains("b.ron:3:"),
+        "{text}"
+    );
+}

@@ -33,7 +33,7 @@ impl PlumeEffectAsset {
     /// `base_dir`), or returns the located diagnostic as text.
     pub fn compile(path: &str, source: &str, base_dir: Option<PathBuf>) -> Result<Self, String> {
         let base_dir: Option<Arc<Path>> = base_dir.map(Arc::from);
-        let graph = compile_source(path, source, base_dir.as_deref(), None, false)?;
+        let graph = compile_source(path, source, base_dir.as_deref(), Variant::default())?;
         Ok(Self {
             path: path.into(),
             source: source.into(),
@@ -42,17 +42,9 @@ impl PlumeEffectAsset {
         })
     }
 
-    /// The file compiled again with `seed` in place of its own (None: as written) and, when
-    /// `placed`, to be placed in the world at run time (world space), or the located
-    /// diagnostic as text.
-    pub fn compile_with(&self, seed: Option<u32>, placed: bool) -> Result<CompiledGraph, String> {
-        compile_source(
-            &self.path,
-            &self.source,
-            self.base_dir.as_deref(),
-            seed,
-            placed,
-        )
+    /// The file compiled again for `variant`, or the located diagnostic as text.
+    pub fn compile_with(&self, variant: Variant) -> Result<CompiledGraph, String> {
+        compile_source(&self.path, &self.source, self.base_dir.as_deref(), variant)
     }
 
     /// The step of the top-level group, in seconds.
@@ -61,18 +53,32 @@ impl PlumeEffectAsset {
     }
 }
 
+/// How an instance needs its file compiled; the default is the file as written.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub struct Variant {
+    /// Replaces the file's seed.
+    pub seed: Option<u32>,
+    /// Placed in the world at run time (world space).
+    pub placed: bool,
+    /// Takes bursts from code.
+    pub bursts: bool,
+    /// Reads its params at run time.
+    pub live_params: bool,
+}
+
 /// Compiles an effect file's text, its diagnostic rendered against `path` when it fails.
 fn compile_source(
     path: &str,
     source: &str,
     base_dir: Option<&Path>,
-    seed: Option<u32>,
-    placed: bool,
+    variant: Variant,
 ) -> Result<CompiledGraph, String> {
     let options = CompileOptions {
         base_dir: base_dir.map(Path::to_path_buf),
-        seed,
-        placed,
+        seed: variant.seed,
+        placed: variant.placed,
+        bursts: variant.bursts,
+        live_params: variant.live_params,
         ..Default::default()
     };
     compile_graph_str(source, &options).map_err(|e| e.render(path, source))

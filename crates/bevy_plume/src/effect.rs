@@ -1,6 +1,9 @@
 //! An effect as an entity: [`PlumeEffect`], the component that names an effect file and says
-//! how this instance of it plays.
+//! how this instance of it plays, and [`PlumeBurst`], particles fired from game code.
 
+use std::collections::BTreeMap;
+
+use bevy::camera::primitives::Aabb;
 use bevy::camera::visibility::{self, VisibilityClass};
 use bevy::prelude::*;
 use bevy::render::sync_world::SyncToRenderWorld;
@@ -54,6 +57,69 @@ pub struct PlumeEffect {
     pub warm_up: f32,
     /// Bumped by [`Self::restart`]: each change starts the effect again from nothing.
     pub generation: u32,
+    /// Values for the file's `params`, read by its custom forces at run time: change one and
+    /// the particles feel it from the next frame, with no recompiling. An instance with any
+    /// value here is compiled to read params at run time (once per file); the first value set
+    /// on an instance that had none rebuilds it (it starts again), so set them at spawn
+    /// ([`Self::with_param`]) when they will change later.
+    pub params: BTreeMap<String, f32>,
+    /// Whether the instance takes bursts from code ([`Self::with_bursts`]). It then is never
+    /// stateless (a closed form cannot know when a burst comes).
+    pub takes_bursts: bool,
+    /// Bursts fired and not yet taken ([`Self::burst`]): the render world takes them all at
+    /// the frame's extraction and spawns them at the effect's next step. Bursts fired before
+    /// the effect's file has loaded are dropped.
+    pub bursts: Vec<PlumeBurst>,
+}
+
+/// Particles fired from game code (an impact, a footstep): `count` particles of one of the
+/// effect's emitters (its shape, speeds, lifetime and looks) spawned at the next step, moved
+/// by `position` and given `velocity` more. Both are in the entity's space: for an entity at
+/// the origin with no rotation or scale, `position` is the world position.
+#[derive(Clone, Copy, Debug, PartialEq, Reflect)]
+pub struct PlumeBurst {
+    /// How many particles.
+    pub count: u32,
+    /// Added to each spawn position (m, in the entity's space).
+    pub position: Vec3,
+    /// Added to each spawn velocity (m/s, in the entity's space).
+    pub velocity: Vec3,
+    /// Which of the group's emitters spawns them (default 0, the first).
+    pub emitter: u32,
+    /// Which group of a graph effect (default 0, the top level).
+    pub group: usize,
+}
+
+impl PlumeBurst {
+    /// `count` particles of the first emitter, where and as fast as it spawns them.
+    pub fn new(count: u32) -> Self {
+        Self {
+            count,
+            position: Vec3::ZERO,
+            velocity: Vec3::ZERO,
+            emitter: 0,
+            group: 0,
+        }
+    }
+
+    /// Moved by `position` (in the entity's space).
+    pub fn at(self, position: Vec3) -> Self {
+        Self { position, ..self }
+    }
+
+    /// With `velocity` added to each particle's.
+    pub fn with_velocity(self, velocity: Vec3) -> Self {
+        Self { velocity, ..self }
+    }
+
+    /// From emitter `emitter` of group `group`.
+    pub fn from_emitter(self, group: usize, emitter: u32) -> Self {
+        Self {
+            group,
+            emitter,
+            ..self
+        }
+    }
 }
 
 impl PlumeEffect {
@@ -67,7 +133,35 @@ impl PlumeEffect {
             seed: None,
             warm_up: 0.0,
             generation: 0,
+            params: BTreeMap::new(),
+            takes_bursts: false,
+            bursts: Vec::new(),
         }
+    }
+
+    /// Taking bursts from code ([`Self::burst`]).
+    pub fn with_bursts(self) -> Self {
+        Self {
+            takes_bursts: true,
+            ..self
+        }
+    }
+
+    /// With the file's param `name` set to `value`, read at run time (see [`Self::params`]).
+    pub fn with_param(mut self, name: impl Into<String>, value: f32) -> Self {
+        self.params.insert(name.into(), value);
+        self
+    }
+
+    /// Sets the file's param `name` to `value` from the next frame on.
+    pub fn set_param(&mut self, name: impl Into<String>, value: f32) {
+        self.params.insert(name.into(), value);
+    }
+
+    /// Fires `burst` at the next frame (the effect must take bursts: [`Self::with_bursts`];
+    /// otherwise the render world says so once).
+    pub fn burst(&mut self, burst: PlumeBurst) {
+        self.bursts.push(burst);
     }
 
     /// With its particles in `space`.
@@ -102,5 +196,44 @@ impl PlumeEffect {
     /// Starts the effect again from nothing (its warm-up included) on the next frame.
     pub fn restart(&mut self) {
         self.generation = self.generation.wrapping_add(1);
+    }
+}
+
+/// Marks an [`Aabb`] that the plugin gave an effect entity from its file's `bounds`: kept in
+/// step with the file (a hot reload may change or remove them). An `Aabb` the game inserted
+/// itself is never touched.
+#[derive(Component)]
+pub(crate) struct BoundsFromFile;
+
+/// Gives each effect entity its file's `bounds` as an [`Aabb`], so that Bevy's frustum
+/// culling skips drawing an effect whose box is out of view (it keeps simulating).
+pub(crate) fn bounds_from_files(
+    mut commands: Commands,
+    effects: Query<(Entity, &PlumeEffect, Option<&Aabb>, Has<BoundsFromFile>)>,
+    assets: Res<Assets<PlumeEffectAsset>>,
+) {
+    for (entity, effect, aabb, ours) in &effects {
+        if aabb.is_some() && !ours {
+            continue;
+        }
+        let Some(asset) = assets.get(&effect.handle) else {
+            continue;
+        };
+        let declared = asset.graph.groups[0].effect.ir.bounds.map(|(min, max)| {
+            Aabb::from_min_max(
+                min.as_vec3().to_array().into(),
+                max.as_vec3().to_array().into(),
+            )
+        });
+        match (declared, aabb) {
+            (Some(want), Some(have)) if *have == want => {}
+            (Some(want), _) => {
+                commands.entity(entity).insert((want, BoundsFromFile));
+            }
+            (None, Some(_)) => {
+                commands.entity(entity).remove::<(Aabb, BoundsFromFile)>();
+            }
+            (None, None) => {}
+        }
     }
 }

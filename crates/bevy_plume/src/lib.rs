@@ -29,11 +29,13 @@ pub mod headless;
 mod render;
 
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
-pub use effect::{PlumeEffect, SimulationSpace};
+pub use effect::{PlumeBurst, PlumeEffect, SimulationSpace};
+pub use plume_compiler;
 pub use plume_runtime;
-pub use render::instances::PlumeRenderStats;
+pub use render::instances::{read_particles, read_totals, PlumeRenderStats};
 
 use bevy::asset::io::file::FileAssetReader;
+use bevy::camera::visibility::VisibilitySystems;
 use bevy::prelude::*;
 
 /// Adds Plume to an app: the effect asset and its loader (`*.plume.ron`, `*.plume`), and the
@@ -51,7 +53,11 @@ impl Plugin for PlumePlugin {
             .map_or_else(|| "assets".to_string(), |plugin| plugin.file_path.clone());
         let root = FileAssetReader::get_base_path().join(file_path);
         app.init_asset::<PlumeEffectAsset>()
-            .register_asset_loader(PlumeEffectLoader { root: Some(root) });
+            .register_asset_loader(PlumeEffectLoader { root: Some(root) })
+            .add_systems(
+                PostUpdate,
+                effect::bounds_from_files.in_set(VisibilitySystems::CalculateBounds),
+            );
         render::build(app);
     }
 

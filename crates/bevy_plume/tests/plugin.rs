@@ -1,6 +1,6 @@
 //! The plugin in a headless Bevy app on llvmpipe (lavapipe): effects drawn where the scene
-//! puts them, a graph effect, hot reload and its errors, local space, restart, and instances
-//! coming and going. One app at a time (the tests share two CPU cores and one driver).
+//! puts them, a graph effect, hot reload and its errors, local space, restart, instances
+//! coming and going, and bursts and params from game code. One app at a time (the tests share two CPU cores and one driver).
 
 mod common;
 
@@ -8,7 +8,8 @@ use std::sync::Mutex;
 use std::time::Duration;
 
 use bevy::prelude::*;
-use bevy_plume::{PlumeEffect, PlumeRenderStats, SimulationSpace};
+use bevy::render::RenderApp;
+use bevy_plume::{PlumeBurst, PlumeEffect, PlumeRenderStats, SimulationSpace};
 use common::{asset_dir, dots, lit_pixels, project, Harness, WIDTH};
 
 /// Runs the tests one at a time.
@@ -369,4 +370,181 @@ fn a_fast_world_space_emitter_spawns_along_its_way_within_a_frame() {
         0,
         "particles between the steps' places"
     );
+}
+
+/// Dots that only bursts from code spawn (the emitter has no rate nor burst of its own),
+/// pushed along +x by the param `push` (m/s², read at run time).
+const PUSHED_DOTS: &str = r#"Effect(name: "pushed", capacity: 2000, seed: 3,
+    params: {"push": 0.0},
+    emitters: [Emitter(shape: Sphere(center: (0.0, 0.0, 0.0), radius: 0.05),
+        velocity: Constant((0.0, 0.0, 0.0)), lifetime: Some((100.0, 100.0)))],
+    forces: [Custom(accel: "vec3(push, 0, 0) - 2.0 * v")],
+    integrator: SemiImplicitEuler,
+    render: Render(color: [(0.0, (0.2, 1.0, 0.2, 1.0)), (1.0, (0.2, 1.0, 0.2, 1.0))],
+        size: [(0.0, 0.15), (1.0, 0.15)], blend: Additive))
+"#;
+
+#[test]
+fn a_burst_from_code_emits_exactly_its_count_where_it_is_fired() {
+    let _one = serial();
+    let dir = asset_dir("burst");
+    std::fs::write(dir.join("pushed.plume.ron"), PUSHED_DOTS).unwrap();
+    let mut h = Harness::new(&dir);
+    let handle = h.load("pushed.plume.ron");
+    let entity = h
+        .app
+        .world_mut()
+        .spawn(PlumeEffect::new(handle).with_bursts())
+        .id();
+    h.update(3);
+    let totals = |h: &Harness| {
+        bevy_plume::read_totals(h.app.sub_app(RenderApp).world(), entity, 0)
+            .expect("an instance")
+            .expect("a readback")
+    };
+    assert_eq!(totals(&h).spawned, 0, "nothing before a burst");
+    h.app
+        .world_mut()
+        .get_mut::<PlumeEffect>(entity)
+        .unwrap()
+        .burst(PlumeBurst::new(137).at(Vec3::new(-2.0, 1.0, 0.0)));
+    h.update(1);
+    let after = totals(&h);
+    assert_eq!((after.spawned, after.alive, after.dropped), (137, 137, 0));
+    // Fired once: the next frames spawn nothing more.
+    h.update(3);
+    assert_eq!(totals(&h).spawned, 137);
+    let particles = bevy_plume::read_particles(h.app.sub_app(RenderApp).world(), entity, 0)
+        .expect("an instance")
+        .expect("a readback");
+    let far = particles
+        .iter()
+        .filter(|r| {
+            (r.position - bevy_plume::plume_runtime::glam::DVec3::new(-2.0, 1.0, 0.0)).length()
+                > 0.06
+        })
+        .count();
+    assert_eq!((particles.len(), far), (137, 0));
+    // Drawn where they were fired.
+    let (n, x, y) = lit_pixels(&h.capture_lit(), 40);
+    let (ex, ey) = project(-2.0, 1.0);
+    assert!(
+        n >= 4 && (x - ex).abs() < PLACE_TOLERANCE_PX && (y - ey).abs() < PLACE_TOLERANCE_PX,
+        "{n} lit pixels centred at ({x:.1}, {y:.1}), the burst at ({ex:.1}, {ey:.1})"
+    );
+}
+
+#[test]
+fn a_param_changed_from_code_acts_on_the_next_frame() {
+    let _one = serial();
+    let dir = asset_dir("param");
+    std::fs::write(dir.join("pushed.plume.ron"), PUSHED_DOTS).unwrap();
+    let mut h = Harness::new(&dir);
+    let handle = h.load("pushed.plume.ron");
+    let entity = h
+        .app
+        .world_mut()
+        .spawn(
+            PlumeEffect::new(handle)
+                .with_bursts()
+                .with_param("push", 0.0),
+        )
+        .id();
+    h.update(2);
+    h.app
+        .world_mut()
+        .get_mut::<PlumeEffect>(entity)
+        .unwrap()
+        .burst(PlumeBurst::new(50));
+    h.update(5);
+    let speeds = |h: &Harness| -> Vec<f64> {
+        bevy_plume::read_particles(h.app.sub_app(RenderApp).world(), entity, 0)
+            .expect("an instance")
+            .expect("a readback")
+            .iter()
+            .map(|r| r.velocity.x)
+            .collect()
+    };
+    assert!(speeds(&h).iter().all(|&v| v == 0.0), "no push yet");
+    h.app
+        .world_mut()
+        .get_mut::<PlumeEffect>(entity)
+        .unwrap()
+        .set_param("push", 30.0);
+    h.update(1);
+    // One step of 1/60 s under 30 m/s² from rest: v = 0.5 m/s (semi-implicit Euler, the
+    // drag reading v before the step).
+    let pushed = speeds(&h);
+    assert_eq!(pushed.len(), 50);
+    assert!(
+        pushed.iter().all(|&v| (v - 0.5).abs() < 1e-4),
+        "after one frame: {:?}",
+        &pushed[..3]
+    );
+    // Still the same instance (no rebuild): the particles were not spawned again.
+    let totals = bevy_plume::read_totals(h.app.sub_app(RenderApp).world(), entity, 0)
+        .expect("an instance")
+        .expect("a readback");
+    assert_eq!(totals.spawned, 50);
+}
+
+#[test]
+fn declared_bounds_cull_an_effect_out_of_view() {
+    let _one = serial();
+    let dir = asset_dir("bounds");
+    let dots_file = dots(300, 100.0, (1.0, 1.0, 1.0));
+    let with_bounds = |min: &str, max: &str| {
+        let close = dots_file
+            .rfind(')')
+            .expect("the effect's closing parenthesis");
+        format!(
+            "{}, bounds: Some(Bounds(min: {min}, max: {max})))\n",
+            &dots_file[..close]
+        )
+    };
+    // Bounds that hold the dots (in view), and bounds that the author got wrong, 100 m to
+    // the side (out of view): Bevy culls by the box, not by the particles.
+    std::fs::write(
+        dir.join("held.plume.ron"),
+        with_bounds("(-0.5, -0.5, -0.5)", "(0.5, 0.5, 0.5)"),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("aside.plume.ron"),
+        with_bounds("(100.0, 0.0, 0.0)", "(101.0, 1.0, 1.0)"),
+    )
+    .unwrap();
+    let mut h = Harness::new(&dir);
+    let held = h.load("held.plume.ron");
+    let aside = h.load("aside.plume.ron");
+    let entity = h.app.world_mut().spawn(PlumeEffect::new(held)).id();
+    h.update(5);
+    let aabb = *h
+        .app
+        .world()
+        .get::<bevy::camera::primitives::Aabb>(entity)
+        .expect("the file's bounds became the entity's Aabb");
+    assert_eq!(aabb.half_extents, Vec3::splat(0.5).into());
+    assert!(lit_pixels(&h.capture_lit(), 40).0 >= 4, "in view: drawn");
+    h.app.world_mut().despawn(entity);
+    let entity = h.app.world_mut().spawn(PlumeEffect::new(aside)).id();
+    h.update(5);
+    let image = h.capture();
+    assert_eq!(
+        lit_pixels(&image, 40).0,
+        0,
+        "the box is out of view: culled"
+    );
+    // It still runs, and it is the culling that hid it: without culling it is drawn.
+    let alive = bevy_plume::read_totals(h.app.sub_app(RenderApp).world(), entity, 0)
+        .expect("an instance")
+        .expect("a readback")
+        .alive;
+    assert_eq!(alive, 300);
+    h.app
+        .world_mut()
+        .entity_mut(entity)
+        .insert(bevy::camera::visibility::NoFrustumCulling);
+    h.update(2);
+    assert!(lit_pixels(&h.capture_lit(), 40).0 >= 4, "unculled: drawn");
 }

@@ -3,10 +3,10 @@
 
 use bevy::prelude::*;
 use bevy::render::sync_world::RenderEntity;
-use bevy::render::Extract;
+use bevy::render::{Extract, MainWorld};
 
 use crate::asset::PlumeEffectAsset;
-use crate::effect::PlumeEffect;
+use crate::effect::{PlumeBurst, PlumeEffect};
 
 /// One effect entity as the render world sees it this frame.
 #[derive(Clone)]
@@ -53,5 +53,22 @@ pub(crate) fn extract_effects(
             world_from_local: transform.to_matrix(),
             control: control.clone(),
         });
+    }
+}
+
+/// The bursts game code fired since the last frame, by main-world entity.
+#[derive(Resource, Default)]
+pub(crate) struct ExtractedBursts(pub Vec<(Entity, Vec<PlumeBurst>)>);
+
+/// Takes every effect's fired bursts out of the main world (so each is spawned once, whenever
+/// in the frame it was fired). Only effects that fired any are touched, so change detection
+/// sees no others.
+pub(crate) fn take_bursts(mut main_world: ResMut<MainWorld>, mut taken: ResMut<ExtractedBursts>) {
+    taken.0.clear();
+    let mut effects = main_world.query::<(Entity, &mut PlumeEffect)>();
+    for (entity, mut effect) in effects.iter_mut(&mut main_world) {
+        if !effect.bursts.is_empty() {
+            taken.0.push((entity, std::mem::take(&mut effect.bursts)));
+        }
     }
 }

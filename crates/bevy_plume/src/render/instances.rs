@@ -3,16 +3,18 @@
 //! (restart), and dropped (with its GPU buffers) when the entity goes. Each instance keeps one
 //! [`EffectRenderer`] per camera that draws it.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use bevy::prelude::*;
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use plume_compiler::graph::CompiledGraph;
-use plume_runtime::{DrawTarget, Effect, EffectRenderer, Gpu};
+use plume_compiler::reference::{ParticleRecord, Totals};
+use plume_runtime::{DrawTarget, Effect, EffectRenderer, Gpu, RuntimeError};
 
-use crate::effect::SimulationSpace;
-use crate::render::extract::{ExtractedEffect, ExtractedEffects};
+use crate::asset::Variant;
+use crate::effect::{PlumeBurst, SimulationSpace};
+use crate::render::extract::{ExtractedBursts, ExtractedEffect, ExtractedEffects};
 
 /// At most this much effect time is stepped in one frame; a longer frame (a stall, a
 /// breakpoint) drops the rest rather than stepping ever more to catch up.
@@ -27,25 +29,28 @@ const STEP_SLACK: f64 = 1e-6;
 struct BuildKey {
     /// The file's compiled version (compared by address: a hot reload makes a new one).
     graph: Arc<CompiledGraph>,
-    seed: Option<u32>,
-    space: SimulationSpace,
+    variant: Variant,
     generation: u32,
 }
 
 impl BuildKey {
     fn of(effect: &ExtractedEffect) -> Self {
+        let control = &effect.control;
         Self {
             graph: effect.asset.graph.clone(),
-            seed: effect.control.seed,
-            space: effect.control.space,
-            generation: effect.control.generation,
+            variant: Variant {
+                seed: control.seed,
+                placed: control.space == SimulationSpace::World,
+                bursts: control.takes_bursts,
+                live_params: !control.params.is_empty(),
+            },
+            generation: control.generation,
         }
     }
 
     fn same(&self, other: &Self) -> bool {
         Arc::ptr_eq(&self.graph, &other.graph)
-            && self.seed == other.seed
-            && self.space == other.space
+            && self.variant == other.variant
             && self.generation == other.generation
     }
 }
@@ -86,11 +91,17 @@ pub(crate) struct Instance {
     particle_bytes: u64,
     /// Targets its draw could not be made for (the error was logged).
     undrawable: Vec<DrawTarget>,
+    /// The params' values the effect holds now (a refused one too, so it is said once).
+    params: BTreeMap<String, f32>,
+    /// Whether a refused burst was reported (said once per instance).
+    burst_refused: bool,
+    /// Whether the entity asked for bursts (for the hint when one is refused).
+    takes_bursts: bool,
 }
 
-/// Compiled variants of effect files, by (the file version's address, seed, placed): the
-/// file version (kept alive so the address stays its own) and the variant.
-type Variants = HashMap<(usize, Option<u32>, bool), (Arc<CompiledGraph>, Arc<CompiledGraph>)>;
+/// Compiled variants of effect files, by (the file version's address, variant): the file
+/// version (kept alive so the address stays its own) and the variant.
+type Variants = HashMap<(usize, Variant), (Arc<CompiledGraph>, Arc<CompiledGraph>)>;
 
 /// What the plugin holds in the render world, for a game's diagnostics and the tests: read it
 /// with `app.sub_app(RenderApp).world().resource::<PlumeRenderStats>()`.
@@ -127,6 +138,7 @@ pub(crate) fn sync_instances(
     mut store: ResMut<PlumeInstances>,
     mut stats: ResMut<PlumeRenderStats>,
     extracted: Res<ExtractedEffects>,
+    bursts: Res<ExtractedBursts>,
     device: Res<RenderDevice>,
     queue: Res<RenderQueue>,
 ) {
@@ -161,10 +173,16 @@ pub(crate) fn sync_instances(
             instance.world_from_local = e.world_from_local;
             instance.space = e.control.space;
             instance.render_entity = e.render;
+            instance.control_from_code(e);
             if e.control.playing {
                 let scale = f64::from(e.control.time_scale.max(0.0));
                 instance.advance_time(extracted.delta * scale);
             }
+        }
+    }
+    for (entity, fired) in &bursts.0 {
+        if let Some(instance) = store.instances.get_mut(entity) {
+            instance.fire(fired);
         }
     }
     store.instances.retain(|entity, _| alive.contains(entity));
@@ -187,15 +205,14 @@ fn build(
     key: BuildKey,
     variants: &mut Variants,
 ) -> Result<Instance, String> {
-    let placed = e.control.space == SimulationSpace::World;
-    let graph = match (e.control.seed, placed) {
-        (None, false) => (*e.asset.graph).clone(),
-        (seed, placed) => {
-            let id = (Arc::as_ptr(&e.asset.graph) as usize, seed, placed);
+    let graph = match key.variant {
+        as_written if as_written == Variant::default() => (*e.asset.graph).clone(),
+        wanted => {
+            let id = (Arc::as_ptr(&e.asset.graph) as usize, wanted);
             let variant = match variants.get(&id) {
                 Some((_, variant)) => variant.clone(),
                 None => {
-                    let variant = Arc::new(e.asset.compile_with(seed, placed)?);
+                    let variant = Arc::new(e.asset.compile_with(wanted)?);
                     variants.insert(id, (e.asset.graph.clone(), variant.clone()));
                     variant
                 }
@@ -229,10 +246,50 @@ fn build(
         views: HashMap::new(),
         particle_bytes,
         undrawable: Vec::new(),
+        params: BTreeMap::new(),
+        burst_refused: false,
+        takes_bursts: e.control.takes_bursts,
     })
 }
 
 impl Instance {
+    /// Applies the params whose value game code changed. What the effect refuses is logged,
+    /// once per value.
+    fn control_from_code(&mut self, e: &ExtractedEffect) {
+        let name = &e.asset.path;
+        self.takes_bursts = e.control.takes_bursts;
+        for (param, &value) in &e.control.params {
+            if self.params.get(param) == Some(&value) {
+                continue;
+            }
+            self.params.insert(param.clone(), value);
+            if let Err(err) = self.effect.set_param(param, value) {
+                warn!("{name}: {err}");
+            }
+        }
+    }
+
+    /// Queues the bursts game code fired for the instance's next step. A refused one is
+    /// logged, once per instance.
+    fn fire(&mut self, bursts: &[PlumeBurst]) {
+        for burst in bursts {
+            let fired = plume_compiler::bursts::Burst::new(burst.emitter, burst.count)
+                .at(burst.position.to_array())
+                .with_velocity(burst.velocity.to_array());
+            if let Err(err) = self.effect.burst(burst.group, fired) {
+                if !self.burst_refused {
+                    self.burst_refused = true;
+                    let fix = match self.takes_bursts {
+                        true => "",
+                        false => " (spawn it with PlumeEffect::with_bursts())",
+                    };
+                    let name = &self.effect.compiled().ir.name;
+                    warn!("{name}: a burst was refused: {err}{fix}");
+                }
+            }
+        }
+    }
+
     /// Adds `seconds` of effect time; whole steps of it are recorded this frame.
     fn advance_time(&mut self, seconds: f64) {
         let max_steps = (MAX_CATCH_UP_SECONDS / self.dt).ceil().max(1.0);
@@ -279,4 +336,35 @@ impl Instance {
             }
         }
     }
+}
+
+/// Reads back the live particles of group `group` of `entity`'s effect (the main-world
+/// entity; group 0 is the top level), in id order, blocking until the GPU has finished: for
+/// tests, tools and debugging, not for every frame. None when the entity has no running
+/// instance. Call it with the render app's world, between frames:
+/// `read_particles(app.sub_app(RenderApp).world(), entity, 0)`.
+pub fn read_particles(
+    render_world: &World,
+    entity: Entity,
+    group: usize,
+) -> Option<Result<Vec<ParticleRecord>, RuntimeError>> {
+    let instance = render_world
+        .get_resource::<PlumeInstances>()?
+        .instances
+        .get(&entity)?;
+    Some(instance.effect.group_records(group))
+}
+
+/// Reads back the counts of group `group` of `entity`'s effect (spawned, alive, dropped,
+/// died), blocking like [`read_particles`]. None when the entity has no running instance.
+pub fn read_totals(
+    render_world: &World,
+    entity: Entity,
+    group: usize,
+) -> Option<Result<Totals, RuntimeError>> {
+    let instance = render_world
+        .get_resource::<PlumeInstances>()?
+        .instances
+        .get(&entity)?;
+    Some(instance.effect.group_totals(group))
 }

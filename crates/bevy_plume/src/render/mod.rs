@@ -24,9 +24,13 @@ pub(crate) fn build(app: &mut App) {
     };
     render_app
         .init_resource::<extract::ExtractedEffects>()
+        .init_resource::<extract::ExtractedBursts>()
         .init_resource::<instances::PlumeInstances>()
         .init_resource::<instances::PlumeRenderStats>()
-        .add_systems(ExtractSchedule, extract::extract_effects)
+        .add_systems(
+            ExtractSchedule,
+            (extract::extract_effects, extract::take_bursts).chain(),
+        )
         .add_systems(
             Render,
             (instances::sync_instances, draw::queue_effects)

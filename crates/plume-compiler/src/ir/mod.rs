@@ -65,6 +65,9 @@ pub struct EffectIr {
     pub live_params: Vec<(String, f64)>,
     /// The camera.
     pub camera: CameraIr,
+    /// The author's box for every live particle, in the effect's space, for a host's culling:
+    /// (min, max).
+    pub bounds: Option<(DVec3, DVec3)>,
     /// How particles look when rendered.
     pub render: RenderIr,
     /// The events this group fires (empty outside an effect with groups).

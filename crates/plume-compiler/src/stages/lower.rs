@@ -119,6 +119,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                     .map(|p| p.iter().map(|c| c.d()).collect()),
             }
         },
+        bounds: effect.bounds.map(|b| (b.min.d(), b.max.d())),
         camera: CameraIr {
             eye: effect.camera.eye.d(),
             target: effect.camera.target.d(),

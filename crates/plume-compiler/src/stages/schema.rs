@@ -80,6 +80,11 @@ pub struct Effect {
     /// How particles look when rendered (an extension of v1; defaults when absent).
     #[serde(default)]
     pub render: Render,
+    /// A box, in the effect's own space, that the author says holds every live particle: a
+    /// host culls the effect when the box is out of view (the Bevy plugin gives the entity
+    /// this `Aabb`). Plume's own simulation and outputs do not read it.
+    #[serde(default)]
+    pub bounds: Option<Bounds>,
     /// Events this (top-level) group's particles fire into other groups.
     #[serde(default)]
     pub events: Vec<crate::features::events::Event>,
@@ -103,6 +108,16 @@ pub struct Effect {
     /// `CompileOptions::live_params`, never by the file.
     #[serde(skip)]
     pub live_params: bool,
+}
+
+/// An axis-aligned box: `bounds: Some(Bounds(min: (-5.0, 0.0, -5.0), max: (5.0, 12.0, 5.0)))`.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Bounds {
+    /// The lower corner.
+    pub min: Vec3,
+    /// The upper corner (>= min on every axis).
+    pub max: Vec3,
 }
 
 fn default_sizes() -> Vec<SizeStop> {

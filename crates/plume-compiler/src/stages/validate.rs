@@ -119,6 +119,9 @@ pub fn check_effect(effect: &Effect) -> Checker {
         }
     }
     check_render(&mut c, &root.field("render"), &effect.render);
+    if let Some(bounds) = &effect.bounds {
+        c.box_corners(&root.field("bounds"), bounds.min, bounds.max);
+    }
     let cam = root.field("camera");
     let eye_ok = c.vec3(&cam.field("eye"), effect.camera.eye);
     let target_ok = c.vec3(&cam.field("target"), effect.camera.target);
