@@ -548,3 +548,47 @@ fn declared_bounds_cull_an_effect_out_of_view() {
     h.update(2);
     assert!(lit_pixels(&h.capture_lit(), 40).0 >= 4, "unculled: drawn");
 }
+
+/// Two opaque discs 1 m apart on the z axis, drawn with `sort: true` and alpha blending: the
+/// one nearer a camera must cover the other there. The front disc (z = +0.5) lives long and
+/// stays red; the back one (z = −0.5) lives 2 s and turns green after 0.2 s.
+const TWO_DISCS: &str = r#"Effect(name: "two discs", capacity: 2, sort: true,
+    emitters: [
+        Emitter(burst: 1, shape: Point((0.0, 0.0, 0.5)), velocity: Constant((0.0, 0.0, 0.0)),
+            lifetime: Some((1000.0, 1000.0))),
+        Emitter(burst: 1, shape: Point((0.0, 0.0, -0.5)), velocity: Constant((0.0, 0.0, 0.0)),
+            lifetime: Some((2.0, 2.0))),
+    ],
+    render: Render(
+        color: [(0.0, (1.0, 0.0, 0.0, 1.0)), (0.05, (1.0, 0.0, 0.0, 1.0)), (0.1, (0.0, 1.0, 0.0, 1.0)), (1.0, (0.0, 1.0, 0.0, 1.0))],
+        size: [(0.0, 1.5), (1.0, 1.5)],
+        blend: Alpha))
+"#;
+
+#[test]
+fn each_camera_sees_a_sorted_effect_in_its_own_depth_order() {
+    let _one = serial();
+    let dir = asset_dir("sort");
+    std::fs::write(dir.join("discs.plume.ron"), TWO_DISCS).unwrap();
+    let mut h = Harness::new(&dir);
+    // The harness's camera looks from +z; a second one looks from −z.
+    let behind = h.add_camera(
+        Transform::from_xyz(0.0, 0.0, -common::CAMERA_DISTANCE).looking_at(Vec3::ZERO, Vec3::Y),
+    );
+    let handle = h.load("discs.plume.ron");
+    h.app.world_mut().spawn(PlumeEffect::new(handle));
+    // 0.3 s: the back disc has turned green (its life at 0.15 of 2 s).
+    h.update(18);
+    let centre = |image: &image::RgbaImage| image.get_pixel(WIDTH / 2, common::HEIGHT / 2).0;
+    let front = centre(&h.capture_lit());
+    let back = centre(&h.capture_of(behind));
+    // From +z the red disc is nearer; from −z the green one.
+    assert!(
+        front[0] > 200 && front[1] < 50,
+        "from +z the centre should be the near red disc: {front:?}"
+    );
+    assert!(
+        back[1] > 200 && back[0] < 50,
+        "from −z the centre should be the near green disc: {back:?}"
+    );
+}

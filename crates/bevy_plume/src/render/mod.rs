@@ -1,7 +1,7 @@
 //! The render app's side of the plugin: extraction ([`extract`]), the instances on Bevy's
-//! device ([`instances`]), the compute work before the cameras ([`simulate`], world-space
-//! steps along the entity's motion in [`motion`]) and the draw in
-//! the transparent phase ([`draw`]).
+//! device ([`instances`]), the compute work: steps before the cameras and each camera's draw
+//! preparation before its main pass ([`simulate`], world-space steps along the entity's
+//! motion in [`motion`]), and the draw in the transparent phase ([`draw`]).
 
 pub(crate) mod draw;
 pub(crate) mod extract;
@@ -11,6 +11,7 @@ pub(crate) mod simulate;
 
 use bevy::core_pipeline::core_3d::Transparent3d;
 use bevy::core_pipeline::schedule::camera_driver;
+use bevy::core_pipeline::{Core3d, Core3dSystems};
 use bevy::prelude::*;
 use bevy::render::render_phase::DrawFunctions;
 use bevy::render::renderer::{RenderGraph, RenderGraphSystems};
@@ -39,9 +40,13 @@ pub(crate) fn build(app: &mut App) {
         )
         .add_systems(
             RenderGraph,
-            simulate::simulate_and_prepare
+            simulate::simulate
                 .in_set(RenderGraphSystems::Render)
                 .before(camera_driver),
+        )
+        .add_systems(
+            Core3d,
+            simulate::prepare_for_view.before(Core3dSystems::MainPass),
         );
 }
 

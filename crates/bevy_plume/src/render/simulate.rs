@@ -1,10 +1,12 @@
-//! The frame's GPU work before Bevy's cameras draw: every instance's steps, then what each of
-//! its draws needs from its camera (the view, and for `sort` the depth order), recorded into
-//! one command encoder that Bevy submits ahead of the cameras' passes.
+//! The frame's GPU work for the effects: every instance's steps, once a frame before Bevy's
+//! cameras draw ([`simulate`]); then, in each camera's own schedule just before its main pass,
+//! what each draw needs from that camera: the view, and for `sort` the depth order
+//! ([`prepare_for_view`]). The depth order lives in the effect's buffers, so preparing it per
+//! camera, right before that camera draws, gives every camera its own back-to-front order.
 
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::prelude::*;
-use bevy::render::renderer::RenderContext;
+use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::view::ExtractedView;
 use plume_compiler::placement::Placement;
 use plume_runtime::Camera;
@@ -13,12 +15,8 @@ use crate::effect::SimulationSpace;
 use crate::render::instances::PlumeInstances;
 use crate::render::motion;
 
-/// Steps every instance and prepares every draw queued this frame.
-pub(crate) fn simulate_and_prepare(
-    mut context: RenderContext,
-    mut store: ResMut<PlumeInstances>,
-    views: Query<(&ExtractedView, Option<&ViewPrepassTextures>)>,
-) {
+/// Steps every instance.
+pub(crate) fn simulate(mut context: RenderContext, mut store: ResMut<PlumeInstances>) {
     let encoder = context.command_encoder();
     for instance in store.instances.values_mut() {
         let steps = std::mem::take(&mut instance.steps);
@@ -51,15 +49,29 @@ pub(crate) fn simulate_and_prepare(
         if finite {
             instance.placed_at = Some(to);
         }
+    }
+}
+
+/// Prepares every draw the current camera queued this frame, in the camera's schedule before
+/// its main pass.
+pub(crate) fn prepare_for_view(
+    view: ViewQuery<(Entity, &ExtractedView, Option<&ViewPrepassTextures>)>,
+    mut context: RenderContext,
+    mut store: ResMut<PlumeInstances>,
+) {
+    let (view_entity, view, prepass) = view.into_inner();
+    let encoder = context.command_encoder();
+    let frame = store.frame;
+    for instance in store.instances.values_mut() {
         // Drawn through the entity's transform only in local space.
-        let world_from_local = match in_world {
-            true => Mat4::IDENTITY,
-            false => instance.world_from_local,
+        let world_from_local = match instance.space {
+            SimulationSpace::World => Mat4::IDENTITY,
+            SimulationSpace::Local => instance.world_from_local,
         };
-        for (view_entity, draw) in &mut instance.views {
-            let Ok((view, prepass)) = views.get(*view_entity) else {
+        if let Some(draw) = instance.views.get_mut(&view_entity) {
+            if draw.frame != frame {
                 continue;
-            };
+            }
             if draw.renderer.is_soft() {
                 if let Some(depth) = prepass.and_then(|p| p.depth_only_view()) {
                     draw.renderer.set_scene_depth(depth);

@@ -135,13 +135,36 @@ impl Harness {
         handle
     }
 
+    /// Another camera at `transform`, MSAA off, drawing into an image of its own (returned,
+    /// for [`Self::capture_of`]) over the same black.
+    pub fn add_camera(&mut self, transform: Transform) -> Handle<Image> {
+        let image = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba8UnormSrgb, None);
+        let image = self
+            .app
+            .world_mut()
+            .resource_mut::<Assets<Image>>()
+            .add(image);
+        self.app.world_mut().spawn((
+            Camera3d::default(),
+            Msaa::Off,
+            RenderTarget::Image(image.clone().into()),
+            transform,
+        ));
+        image
+    }
+
     /// The next frame's image (runs frames until the capture comes back).
     pub fn capture(&mut self) -> image::RgbaImage {
+        self.capture_of(self.image.clone())
+    }
+
+    /// The next frame's image of the camera drawing into `target`.
+    pub fn capture_of(&mut self, target: Handle<Image>) -> image::RgbaImage {
         let slot: Arc<Mutex<Option<Image>>> = Arc::default();
         let sink = slot.clone();
         self.app
             .world_mut()
-            .spawn(Screenshot::image(self.image.clone()))
+            .spawn(Screenshot::image(target))
             .observe(move |captured: On<ScreenshotCaptured>| {
                 *sink.lock().unwrap() = Some(captured.image.clone());
             });
