@@ -231,6 +231,19 @@ pub(crate) fn compile_group(
     located: &dyn Fn(Vec<(Diagnostic, String)>) -> Diagnostics,
 ) -> Result<CompiledEffect, CompileError> {
     let prefixed = |items: Vec<(Diagnostic, String)>| located(prefixed(items, prefix));
+    // Files the effect's colliders name (a height field's image) are read first: the checks
+    // and everything after see their heights.
+    let mut effect = effect.clone();
+    let mut read = crate::base::check::Checker::default();
+    crate::features::colliders::read_height_images(
+        &mut effect.collide,
+        effect.base_dir.as_deref(),
+        &mut read,
+    );
+    if !read.errors.is_empty() {
+        return Err(CompileError::Invalid(prefixed(read.errors)));
+    }
+    let effect = &effect;
     let checker = validate::check_effect(effect);
     if !checker.errors.is_empty() {
         return Err(CompileError::Invalid(prefixed(checker.errors)));

@@ -61,7 +61,7 @@ pub fn check(
         c.error(
             &rows,
             format!(
-                "needs at least 2 rows (z samples) of at least 2 heights, got {} row(s)",
+                "needs at least 2 rows (z samples) of at least 2 heights, got {} row(s) (or give an `image` and its `height`)",
                 heights.len()
             ),
         );

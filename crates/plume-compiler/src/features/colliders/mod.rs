@@ -15,8 +15,11 @@
 
 pub mod aabb;
 pub mod height_field;
+pub mod height_image;
 pub mod plane;
 pub mod sphere;
+
+use std::path::Path;
 
 use glam::DVec3;
 use serde::Deserialize;
@@ -84,8 +87,17 @@ pub enum Collider {
         /// The opposite (x, z) corner.
         max: (f64, f64),
         /// Heights (y, in metres): one row per z sample from min to max, each row one height
-        /// per x sample from min to max; at least 2 x 2, every row the same length.
+        /// per x sample from min to max; at least 2 x 2, every row the same length. Empty
+        /// when `image` gives them.
+        #[serde(default)]
         heights: Vec<Vec<f64>>,
+        /// An 8- or 16-bit greyscale PNG whose pixels are the heights instead (top row first,
+        /// relative to the effect file; see [`height_image`]).
+        #[serde(default)]
+        image: Option<String>,
+        /// With `image`: the heights (m) of black and of white.
+        #[serde(default)]
+        height: Option<(f64, f64)>,
         /// Fraction of normal speed kept on a bounce, in [0, 1].
         restitution: f64,
         /// Fraction of tangential speed lost on a bounce, in [0, 1].
@@ -143,6 +155,7 @@ impl Collider {
                 heights,
                 restitution,
                 friction,
+                ..
             } => {
                 height_field::check(path, c, *min, *max, heights);
                 (restitution, friction)
@@ -204,6 +217,7 @@ impl Collider {
                 heights,
                 restitution,
                 friction,
+                ..
             } => (
                 Surface::HeightField(height_field::HeightFieldIr::new(*min, *max, heights)),
                 restitution,
@@ -214,6 +228,49 @@ impl Collider {
             surface,
             restitution: *restitution,
             friction: *friction,
+        }
+    }
+}
+
+/// Reads every height field's `image` into its `heights` (files relative to `base_dir`),
+/// recording what is wrong, located at the field, in `c`: an unreadable image, `image` and
+/// `heights` both given, or `image` and `height` without each other.
+pub fn read_height_images(collide: &mut [Collider], base_dir: Option<&Path>, c: &mut Checker) {
+    for (i, collider) in collide.iter_mut().enumerate() {
+        let path = collider_path(i, collider);
+        let Collider::HeightField {
+            heights,
+            image,
+            height,
+            ..
+        } = collider
+        else {
+            continue;
+        };
+        match (image.as_deref(), *height) {
+            (None, None) => {}
+            (None, Some(_)) => c.error(
+                &path.field("height"),
+                "`height` gives the heights of black and white in an `image`: give the image too, or drop it",
+            ),
+            (Some(_), None) => c.error(
+                &path.field("image"),
+                "an image needs `height: (black, white)`, the heights (m) its darkest and lightest grey stand for",
+            ),
+            (Some(_), Some(_)) if !heights.is_empty() => c.error(
+                &path.field("image"),
+                "give the heights either as `heights` or as an `image`, not both",
+            ),
+            (Some(file), Some((black, white))) => {
+                if c.finite(&path.field("height").component(0, "black"), black)
+                    & c.finite(&path.field("height").component(1, "white"), white)
+                {
+                    match height_image::read(file, base_dir, (black, white)) {
+                        Ok(rows) => *heights = rows,
+                        Err(message) => c.error(&path.field("image"), message),
+                    }
+                }
+            }
         }
     }
 }
