@@ -76,8 +76,18 @@ pub fn check_effect(effect: &Effect) -> Checker {
         live: effect.live_params,
     };
     let mut flocks = 0;
+    let mut vector_fields = 0;
     for (i, f) in effect.forces.iter().enumerate() {
         f.check(&force_path(i, f), &mut c, scope);
+        if matches!(f, crate::features::forces::Force::VectorField(_)) {
+            vector_fields += 1;
+            if vector_fields == 2 {
+                c.error(
+                    &force_path(i, f),
+                    "a second VectorField: an effect samples one (resample them into one file)",
+                );
+            }
+        }
         if matches!(f, crate::features::forces::Force::Flock(_)) {
             flocks += 1;
             if flocks == 2 {

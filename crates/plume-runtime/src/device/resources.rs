@@ -237,9 +237,14 @@ impl Resources {
                 if let Some((_, buffer)) = shared.iter().find(|(at, _)| *at == b.binding) {
                     return Ok((b.binding, buffer.clone()));
                 }
-                let buffer = if b.name == "collider_data" {
+                let samples = match b.name {
                     // The height fields' samples, written once here.
-                    let data = plume_compiler::colliders::data(&effect.ir.colliders);
+                    "collider_data" => Some(plume_compiler::colliders::data(&effect.ir.colliders)),
+                    // The vector field's, likewise.
+                    "force_data" => plume_compiler::forces::force_data(&effect.ir.terms),
+                    _ => None,
+                };
+                let buffer = if let Some(data) = samples {
                     filled_buffer(gpu, b.name, size, STORAGE, |bytes| {
                         for (dst, h) in bytes.chunks_exact_mut(4).zip(&data) {
                             dst.copy_from_slice(&h.to_le_bytes());
@@ -284,7 +289,7 @@ impl Resources {
                     "chunk" | "depth_axis" => {
                         buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
                     }
-                    "frame" | "fire_frame" | "collider_data" => buffer_entry(
+                    "frame" | "fire_frame" | "collider_data" | "force_data" => buffer_entry(
                         b.binding,
                         wgpu::BufferBindingType::Storage { read_only: true },
                         false,

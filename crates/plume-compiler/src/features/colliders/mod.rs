@@ -19,8 +19,6 @@ pub mod height_image;
 pub mod plane;
 pub mod sphere;
 
-use std::path::Path;
-
 use glam::DVec3;
 use serde::Deserialize;
 
@@ -228,49 +226,6 @@ impl Collider {
             surface,
             restitution: *restitution,
             friction: *friction,
-        }
-    }
-}
-
-/// Reads every height field's `image` into its `heights` (files relative to `base_dir`),
-/// recording what is wrong, located at the field, in `c`: an unreadable image, `image` and
-/// `heights` both given, or `image` and `height` without each other.
-pub fn read_height_images(collide: &mut [Collider], base_dir: Option<&Path>, c: &mut Checker) {
-    for (i, collider) in collide.iter_mut().enumerate() {
-        let path = collider_path(i, collider);
-        let Collider::HeightField {
-            heights,
-            image,
-            height,
-            ..
-        } = collider
-        else {
-            continue;
-        };
-        match (image.as_deref(), *height) {
-            (None, None) => {}
-            (None, Some(_)) => c.error(
-                &path.field("height"),
-                "`height` gives the heights of black and white in an `image`: give the image too, or drop it",
-            ),
-            (Some(_), None) => c.error(
-                &path.field("image"),
-                "an image needs `height: (black, white)`, the heights (m) its darkest and lightest grey stand for",
-            ),
-            (Some(_), Some(_)) if !heights.is_empty() => c.error(
-                &path.field("image"),
-                "give the heights either as `heights` or as an `image`, not both",
-            ),
-            (Some(file), Some((black, white))) => {
-                if c.finite(&path.field("height").component(0, "black"), black)
-                    & c.finite(&path.field("height").component(1, "white"), white)
-                {
-                    match height_image::read(file, base_dir, (black, white)) {
-                        Ok(rows) => *heights = rows,
-                        Err(message) => c.error(&path.field("image"), message),
-                    }
-                }
-            }
         }
     }
 }

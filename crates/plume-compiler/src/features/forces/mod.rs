@@ -11,6 +11,7 @@ pub mod drag;
 pub mod flock;
 pub mod noise;
 pub mod turbulence;
+pub mod vector_field;
 pub mod vortex;
 pub mod wind;
 
@@ -45,6 +46,8 @@ pub enum Force {
     Custom(custom::Custom),
     /// Divergence-free curl noise.
     Turbulence(turbulence::Turbulence),
+    /// An imported vector field (FGA file), trilinear.
+    VectorField(vector_field::VectorField),
 }
 
 impl Force {
@@ -59,6 +62,7 @@ impl Force {
             Force::Flock(_) => "Flock",
             Force::Custom(_) => "Custom",
             Force::Turbulence(_) => "Turbulence",
+            Force::VectorField(_) => "VectorField",
         }
     }
 
@@ -76,6 +80,7 @@ impl Force {
             Force::Flock(f) => f.check(path, c),
             Force::Custom(f) => f.check(path, c, scope),
             Force::Turbulence(f) => f.check(path, c),
+            Force::VectorField(f) => f.check(path, c),
         }
     }
 
@@ -94,6 +99,7 @@ impl Force {
             Force::Flock(_) => Vec::new(),
             Force::Custom(f) => vec![f.lower(origin, crate::base::rng::seed_mix(seed), scope)],
             Force::Turbulence(f) => vec![Term::Turbulence(f.lower(origin, seed))],
+            Force::VectorField(f) => f.lower(origin).map(Term::VectorField).into_iter().collect(),
         }
     }
 }
@@ -108,6 +114,7 @@ pub const VARIANTS: &[&str] = &[
     "Flock",
     "Custom",
     "Turbulence",
+    "VectorField",
 ];
 
 /// Reads `Name(field: value, ...)` into the force module's own struct, so each force's
@@ -136,6 +143,7 @@ enum Kind {
     Flock,
     Custom,
     Turbulence,
+    VectorField,
 }
 
 struct ForceVisitor;
@@ -143,7 +151,9 @@ struct ForceVisitor;
 impl<'de> de::Visitor<'de> for ForceVisitor {
     type Value = Force;
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str("a force: Gravity, Drag, Wind, Attractor, Vortex, Flock, Custom or Turbulence")
+        f.write_str(
+            "a force: Gravity, Drag, Wind, Attractor, Vortex, Flock, Custom, Turbulence or VectorField",
+        )
     }
     fn visit_enum<A: EnumAccess<'de>>(self, data: A) -> Result<Force, A::Error> {
         let (kind, variant): (Kind, _) = data.variant()?;
@@ -169,6 +179,9 @@ impl<'de> de::Visitor<'de> for ForceVisitor {
             }
             Kind::Turbulence => Force::Turbulence(
                 variant.struct_variant(turbulence::FIELDS, StructVariant(PhantomData))?,
+            ),
+            Kind::VectorField => Force::VectorField(
+                variant.struct_variant(vector_field::FIELDS, StructVariant(PhantomData))?,
             ),
         })
     }
@@ -306,6 +319,8 @@ pub enum Term {
     Custom(custom::CustomTerm),
     /// Curl-noise turbulence.
     Turbulence(turbulence::TurbulenceTerm),
+    /// An imported vector field.
+    VectorField(vector_field::VectorFieldTerm),
 }
 
 impl Term {
@@ -319,6 +334,7 @@ impl Term {
             Term::Vortex(t) => t,
             Term::Custom(t) => t,
             Term::Turbulence(t) => t,
+            Term::VectorField(t) => t,
         }
     }
 }
@@ -331,6 +347,15 @@ pub fn safe_normalize(v: DVec3) -> DVec3 {
     } else {
         DVec3::ZERO
     }
+}
+
+/// The samples of the effect's vector field, as the `force_data` binding holds them; None
+/// without one.
+pub fn force_data(terms: &[Term]) -> Option<Vec<f32>> {
+    terms.iter().find_map(|t| match t {
+        Term::VectorField(field) => Some(field.data()),
+        _ => None,
+    })
 }
 
 /// Path of the `i`-th force, with its variant named.

@@ -165,6 +165,15 @@ pub fn decide(ir: &EffectIr) -> Layout {
             meaning: "the baked force field: one (a, 0) per node, x fastest",
         });
     }
+    if let Some(data) = crate::features::forces::force_data(&ir.terms) {
+        layout.bindings.push(Binding {
+            binding: 21,
+            name: "force_data",
+            space: "storage, read",
+            bytes: data.len() as u64 * 4,
+            meaning: "the vector field's samples: x, y, z of each node, x fastest, then y, then z",
+        });
+    }
     if ir.has_collider_data() {
         layout.bindings.push(Binding {
             binding: 15,

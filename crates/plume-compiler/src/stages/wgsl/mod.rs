@@ -124,7 +124,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "frame" | "fire_frame" => "Frame",
             "fire_state" => "array<u32, 4>",
             "depth_axis" => "DepthAxis",
-            "collider_data" => "array<f32>",
+            "collider_data" | "force_data" => "array<f32>",
             _ => "StepParams",
         };
         w.line(format!(
