@@ -84,6 +84,10 @@ fn a_vector_field_acts_on_the_gpu_as_the_reference_interpolates_it() {
 fn bad_vector_fields_are_refused_where_they_are_written() {
     let dir = folder_with("short.fga", "2,2,2, 0,0,0, 1,1,1, 0,0,0");
     std::fs::write(dir.join("huge.fga"), "4096,4096,4096, 0,0,0, 1,1,1").unwrap();
+    // A 4 GiB file, sparse (it takes no disk): refused by its size, before it is read.
+    std::fs::File::create(dir.join("4gb.fga"))
+        .and_then(|f| f.set_len(4 << 30))
+        .unwrap();
     std::fs::write(
         dir.join("ok.fga"),
         format!("2,2,2,0,0,0,1,1,1{}", ",0.5".repeat(24)),
@@ -97,6 +101,7 @@ fn bad_vector_fields_are_refused_where_they_are_written() {
         ("VectorField(file: \"missing.fga\")", "forces[0] (VectorField).file: cannot open vector field"),
         ("VectorField(file: \"short.fga\")", "ends before its vector of node 1"),
         ("VectorField(file: \"huge.fga\")", "68719476736 nodes is more than the 4194304"),
+        ("VectorField(file: \"4gb.fga\")", "is 4294967296 bytes, more than the 268435456 read"),
         ("VectorField(file: \"ok.fga\", scale: 0.0)", "forces[0] (VectorField).scale"),
         (
             "VectorField(file: \"ok.fga\"), Gravity((0.0, -1.0, 0.0)), VectorField(file: \"ok.fga\")",
@@ -113,4 +118,7 @@ fn bad_vector_fields_are_refused_where_they_are_written() {
             "{text}"
         );
     }
+    let _ = std::fs::remove_file(
+        std::env::temp_dir().join(format!("plume-vector-field-{}/4gb.fga", std::process::id())),
+    );
 }
