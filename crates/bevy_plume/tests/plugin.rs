@@ -9,6 +9,7 @@ use std::time::Duration;
 
 use bevy::prelude::*;
 use bevy::render::RenderApp;
+use bevy_plume::plume_compiler::reference::{ParticleRecord, Totals};
 use bevy_plume::{PlumeBurst, PlumeEffect, PlumeRenderStats, SimulationSpace};
 use common::{asset_dir, dots, lit_pixels, project, Harness, WIDTH};
 
@@ -346,9 +347,7 @@ fn churn_never_leaks_loses_or_draws_the_gone() {
     }
     h.update(2);
     // The survivor lost none of its 64 particles through it all.
-    let survivor_totals = bevy_plume::read_totals(h.app.sub_app(RenderApp).world(), survivor, 0)
-        .expect("the survivor's instance")
-        .expect("a readback");
+    let survivor_totals = totals(&h, survivor);
     assert_eq!((survivor_totals.spawned, survivor_totals.alive), (64, 64));
     let image = h.capture_lit();
     // The survivor is still drawn, where it stands; nothing is left on the left.
@@ -468,47 +467,61 @@ const PUSHED_DOTS: &str = r#"Effect(name: "pushed", capacity: 2000, seed: 3,
         size: [(0.0, 0.15), (1.0, 0.15)], blend: Additive))
 "#;
 
-#[test]
-fn a_burst_from_code_emits_exactly_its_count_where_it_is_fired() {
-    let _one = serial();
-    let dir = asset_dir("burst");
+/// A fresh harness (assets in a folder named `name`) with the pushed dots loaded and one
+/// effect of them spawned, as `effect` makes it.
+fn pushed_dots(name: &str, effect: impl FnOnce(PlumeEffect) -> PlumeEffect) -> (Harness, Entity) {
+    let dir = asset_dir(name);
     std::fs::write(dir.join("pushed.plume.ron"), PUSHED_DOTS).unwrap();
     let mut h = Harness::new(&dir);
     let handle = h.load("pushed.plume.ron");
     let entity = h
         .app
         .world_mut()
-        .spawn(PlumeEffect::new(handle).with_bursts())
+        .spawn(effect(PlumeEffect::new(handle)))
         .id();
+    (h, entity)
+}
+
+/// The counts of `entity`'s effect (top-level group), read back from the GPU.
+fn totals(h: &Harness, entity: Entity) -> Totals {
+    bevy_plume::read_totals(h.app.sub_app(RenderApp).world(), entity, 0)
+        .expect("an instance")
+        .expect("a readback")
+}
+
+/// The live particles of `entity`'s effect (top-level group), read back from the GPU.
+fn particles(h: &Harness, entity: Entity) -> Vec<ParticleRecord> {
+    bevy_plume::read_particles(h.app.sub_app(RenderApp).world(), entity, 0)
+        .expect("an instance")
+        .expect("a readback")
+}
+
+#[test]
+fn a_burst_from_code_emits_exactly_its_count_where_it_is_fired() {
+    let _one = serial();
+    let (mut h, entity) = pushed_dots("burst", PlumeEffect::with_bursts);
     h.update(3);
-    let totals = |h: &Harness| {
-        bevy_plume::read_totals(h.app.sub_app(RenderApp).world(), entity, 0)
-            .expect("an instance")
-            .expect("a readback")
-    };
-    assert_eq!(totals(&h).spawned, 0, "nothing before a burst");
+    assert_eq!(totals(&h, entity).spawned, 0, "nothing before a burst");
     h.app
         .world_mut()
         .get_mut::<PlumeEffect>(entity)
         .unwrap()
         .burst(PlumeBurst::new(137).at(Vec3::new(-2.0, 1.0, 0.0)));
     h.update(1);
-    let after = totals(&h);
+    let after = totals(&h, entity);
     assert_eq!((after.spawned, after.alive, after.dropped), (137, 137, 0));
     // Fired once: the next frames spawn nothing more.
     h.update(3);
-    assert_eq!(totals(&h).spawned, 137);
-    let particles = bevy_plume::read_particles(h.app.sub_app(RenderApp).world(), entity, 0)
-        .expect("an instance")
-        .expect("a readback");
-    let far = particles
+    assert_eq!(totals(&h, entity).spawned, 137);
+    let fired = particles(&h, entity);
+    let far = fired
         .iter()
         .filter(|r| {
             (r.position - bevy_plume::plume_runtime::glam::DVec3::new(-2.0, 1.0, 0.0)).length()
                 > 0.06
         })
         .count();
-    assert_eq!((particles.len(), far), (137, 0));
+    assert_eq!((fired.len(), far), (137, 0));
     // Drawn where they were fired.
     let (n, x, y) = lit_pixels(&h.capture_lit(), 40);
     let (ex, ey) = project(-2.0, 1.0);
@@ -521,19 +534,7 @@ fn a_burst_from_code_emits_exactly_its_count_where_it_is_fired() {
 #[test]
 fn a_param_changed_from_code_acts_on_the_next_frame() {
     let _one = serial();
-    let dir = asset_dir("param");
-    std::fs::write(dir.join("pushed.plume.ron"), PUSHED_DOTS).unwrap();
-    let mut h = Harness::new(&dir);
-    let handle = h.load("pushed.plume.ron");
-    let entity = h
-        .app
-        .world_mut()
-        .spawn(
-            PlumeEffect::new(handle)
-                .with_bursts()
-                .with_param("push", 0.0),
-        )
-        .id();
+    let (mut h, entity) = pushed_dots("param", |e| e.with_bursts().with_param("push", 0.0));
     h.update(2);
     h.app
         .world_mut()
@@ -541,14 +542,8 @@ fn a_param_changed_from_code_acts_on_the_next_frame() {
         .unwrap()
         .burst(PlumeBurst::new(50));
     h.update(5);
-    let speeds = |h: &Harness| -> Vec<f64> {
-        bevy_plume::read_particles(h.app.sub_app(RenderApp).world(), entity, 0)
-            .expect("an instance")
-            .expect("a readback")
-            .iter()
-            .map(|r| r.velocity.x)
-            .collect()
-    };
+    let speeds =
+        |h: &Harness| -> Vec<f64> { particles(h, entity).iter().map(|r| r.velocity.x).collect() };
     assert!(speeds(&h).iter().all(|&v| v == 0.0), "no push yet");
     h.app
         .world_mut()
@@ -566,10 +561,7 @@ fn a_param_changed_from_code_acts_on_the_next_frame() {
         &pushed[..3]
     );
     // Still the same instance (no rebuild): the particles were not spawned again.
-    let totals = bevy_plume::read_totals(h.app.sub_app(RenderApp).world(), entity, 0)
-        .expect("an instance")
-        .expect("a readback");
-    assert_eq!(totals.spawned, 50);
+    assert_eq!(totals(&h, entity).spawned, 50);
 }
 
 #[test]
@@ -620,11 +612,7 @@ fn declared_bounds_cull_an_effect_out_of_view() {
         "the box is out of view: culled"
     );
     // It still runs, and it is the culling that hid it: without culling it is drawn.
-    let alive = bevy_plume::read_totals(h.app.sub_app(RenderApp).world(), entity, 0)
-        .expect("an instance")
-        .expect("a readback")
-        .alive;
-    assert_eq!(alive, 300);
+    assert_eq!(totals(&h, entity).alive, 300);
     h.app
         .world_mut()
         .entity_mut(entity)
