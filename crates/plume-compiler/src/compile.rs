@@ -248,16 +248,15 @@ pub(crate) fn compile_group(
     if !read.errors.is_empty() {
         return Err(CompileError::Invalid(prefixed(read.errors)));
     }
-    let effect = &effect;
-    let checker = validate::check_effect(effect);
+    let checker = validate::check_effect(&effect);
     if !checker.errors.is_empty() {
         return Err(CompileError::Invalid(prefixed(checker.errors)));
     }
-    let mut with_inputs = effect.clone();
-    with_inputs
-        .emitters
-        .extend(links.input_emitters.iter().cloned());
-    let mut ir = lower::lower(&with_inputs);
+    // The event inputs' spawn rules join the group's own emitters after the checks (they are
+    // not in the file).
+    effect.emitters.extend(links.input_emitters.iter().cloned());
+    let effect = &effect;
+    let mut ir = lower::lower(effect);
     ir.events.clone_from(&links.events);
     ir.event_inputs.clone_from(&links.inputs);
     if let Some(spec) = &effect.render.texture {

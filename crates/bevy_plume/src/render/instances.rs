@@ -95,8 +95,6 @@ pub(crate) struct Instance {
     params: BTreeMap<String, f32>,
     /// Whether a refused burst was reported (said once per instance).
     burst_refused: bool,
-    /// Whether the entity asked for bursts (for the hint when one is refused).
-    takes_bursts: bool,
 }
 
 /// Compiled variants of effect files, by (the file version's address, variant): the file
@@ -248,7 +246,6 @@ fn build(
         undrawable: Vec::new(),
         params: BTreeMap::new(),
         burst_refused: false,
-        takes_bursts: e.control.takes_bursts,
     })
 }
 
@@ -257,7 +254,6 @@ impl Instance {
     /// once per value.
     fn control_from_code(&mut self, e: &ExtractedEffect) {
         let name = &e.asset.path;
-        self.takes_bursts = e.control.takes_bursts;
         for (param, &value) in &e.control.params {
             if self.params.get(param) == Some(&value) {
                 continue;
@@ -279,7 +275,7 @@ impl Instance {
             if let Err(err) = self.effect.burst(burst.group, fired) {
                 if !self.burst_refused {
                     self.burst_refused = true;
-                    let fix = match self.takes_bursts {
+                    let fix = match self.key.variant.bursts {
                         true => "",
                         false => " (spawn it with PlumeEffect::with_bursts())",
                     };

@@ -75,26 +75,22 @@ pub fn check_effect(effect: &Effect) -> Checker {
         dt: effect.dt,
         live: effect.live_params,
     };
-    let mut flocks = 0;
-    let mut vector_fields = 0;
+    // Forces an effect has at most one of, and what to do instead of a second.
+    let single = [
+        (
+            "Flock",
+            "an effect has one flock (merge their strengths into one)",
+        ),
+        (
+            "VectorField",
+            "an effect samples one (resample them into one file)",
+        ),
+    ];
     for (i, f) in effect.forces.iter().enumerate() {
         f.check(&force_path(i, f), &mut c, scope);
-        if matches!(f, crate::features::forces::Force::VectorField(_)) {
-            vector_fields += 1;
-            if vector_fields == 2 {
-                c.error(
-                    &force_path(i, f),
-                    "a second VectorField: an effect samples one (resample them into one file)",
-                );
-            }
-        }
-        if matches!(f, crate::features::forces::Force::Flock(_)) {
-            flocks += 1;
-            if flocks == 2 {
-                c.error(
-                    &force_path(i, f),
-                    "a second Flock: an effect has one flock (merge their strengths into one)",
-                );
+        if let Some((name, instead)) = single.iter().find(|(name, _)| *name == f.name()) {
+            if effect.forces[..i].iter().any(|e| e.name() == *name) {
+                c.error(&force_path(i, f), format!("a second {name}: {instead}"));
             }
         }
     }

@@ -360,10 +360,6 @@ impl ForceTerm for VectorFieldTerm {
         true
     }
 
-    fn stiffness_field(&self) -> &'static str {
-        "strength"
-    }
-
     /// The steepest change between neighbouring nodes, per metre of the world, times the
     /// strength: |∂a/∂x| bounds ω² of an oscillation the field can drive.
     fn stiffness(&self) -> Stiffness {
