@@ -231,11 +231,16 @@ pub(crate) fn compile_group(
     located: &dyn Fn(Vec<(Diagnostic, String)>) -> Diagnostics,
 ) -> Result<CompiledEffect, CompileError> {
     let prefixed = |items: Vec<(Diagnostic, String)>| located(prefixed(items, prefix));
-    // Files the effect names (a height field's image, a vector field) are read first: the
+    // Files the effect names (a height field's image, a mesh, a vector field) are read first: the
     // checks and everything after see what they hold.
     let mut effect = effect.clone();
     let mut read = crate::base::check::Checker::default();
     crate::features::colliders::height_image::read_height_images(
+        &mut effect.collide,
+        effect.base_dir.as_deref(),
+        &mut read,
+    );
+    crate::features::colliders::mesh::read_meshes(
         &mut effect.collide,
         effect.base_dir.as_deref(),
         &mut read,

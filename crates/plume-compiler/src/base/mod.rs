@@ -10,6 +10,7 @@ pub mod kernel;
 pub mod layout;
 pub mod lifetime;
 pub mod locate;
+pub mod mesh;
 pub mod naga_check;
 pub mod path;
 pub mod rng;

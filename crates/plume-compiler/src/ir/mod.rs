@@ -221,14 +221,10 @@ impl EffectIr {
         2.0 * g.length() * self.h()
     }
 
-    /// Whether any collider needs the `collider_data` binding (a height field's samples).
+    /// Whether any collider needs the `collider_data` binding (a height field's samples, a
+    /// mesh's field).
     pub fn has_collider_data(&self) -> bool {
-        self.colliders.iter().any(|c| {
-            matches!(
-                c.surface,
-                crate::features::colliders::Surface::HeightField(_)
-            )
-        })
+        self.colliders.iter().any(|c| c.surface.data_len() > 0)
     }
 
     /// Whether kernels get the time modulo the noise period (the default: noise repeats

@@ -16,8 +16,12 @@
 pub mod aabb;
 pub mod height_field;
 pub mod height_image;
+pub mod mesh;
 pub mod plane;
+pub mod sdf;
 pub mod sphere;
+
+use std::sync::Arc;
 
 use glam::DVec3;
 use serde::Deserialize;
@@ -101,6 +105,43 @@ pub enum Collider {
         /// Fraction of tangential speed lost on a bounce, in [0, 1].
         friction: f64,
     },
+    /// A closed triangle mesh from an OBJ file, baked into a signed distance field; particles
+    /// stay outside it (see [`mesh`]).
+    Mesh {
+        /// The OBJ file, relative to the effect file.
+        file: String,
+        /// Where the mesh's origin sits in the world (m).
+        #[serde(default = "origin")]
+        offset: Vec3,
+        /// The mesh's size against the world's (> 0).
+        #[serde(default = "one")]
+        scale: f64,
+        /// Degrees about x, then y, then z (the world's axes).
+        #[serde(default = "origin")]
+        rotation: Vec3,
+        /// Field cells along the mesh's longest side (4 to 128).
+        #[serde(default = "default_resolution")]
+        resolution: u32,
+        /// Fraction of normal speed kept on a bounce, in [0, 1].
+        restitution: f64,
+        /// Fraction of tangential speed lost on a bounce, in [0, 1].
+        friction: f64,
+        /// The baked field, made by [`mesh::read_meshes`] before the checks.
+        #[serde(skip)]
+        sdf: Option<Arc<sdf::Sdf>>,
+    },
+}
+
+fn origin() -> Vec3 {
+    Vec3(0.0, 0.0, 0.0)
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn default_resolution() -> u32 {
+    mesh::DEFAULT_RESOLUTION
 }
 
 impl Collider {
@@ -111,6 +152,7 @@ impl Collider {
             Collider::Sphere { .. } => "Sphere",
             Collider::Box { .. } => "Box",
             Collider::HeightField { .. } => "HeightField",
+            Collider::Mesh { .. } => "Mesh",
         }
     }
 
@@ -156,6 +198,24 @@ impl Collider {
                 ..
             } => {
                 height_field::check(path, c, *min, *max, heights);
+                (restitution, friction)
+            }
+            Collider::Mesh {
+                offset,
+                scale,
+                rotation,
+                resolution,
+                restitution,
+                friction,
+                sdf,
+                ..
+            } => {
+                mesh::check(
+                    path,
+                    c,
+                    (*offset, *scale, *rotation, *resolution),
+                    sdf.is_some(),
+                );
                 (restitution, friction)
             }
         };
@@ -221,6 +281,28 @@ impl Collider {
                 restitution,
                 friction,
             ),
+            Collider::Mesh {
+                file,
+                offset,
+                scale,
+                rotation,
+                restitution,
+                friction,
+                sdf,
+                ..
+            } => (
+                Surface::Mesh(mesh::MeshIr {
+                    file: file.clone(),
+                    offset: offset.d(),
+                    scale: *scale,
+                    rotation: mesh::rotation_matrix(*rotation),
+                    sdf: sdf
+                        .clone()
+                        .expect("the checks refuse a mesh collider not read"),
+                }),
+                restitution,
+                friction,
+            ),
         };
         ColliderIr {
             surface,
@@ -250,6 +332,8 @@ pub enum Surface {
     Box(aabb::BoxIr),
     /// A height field.
     HeightField(height_field::HeightFieldIr),
+    /// A mesh's baked signed distance field.
+    Mesh(mesh::MeshIr),
 }
 
 /// A collider in the IR: a surface and how particles bounce off it.
@@ -271,6 +355,7 @@ impl Surface {
             Surface::Sphere(_) => "Sphere",
             Surface::Box(_) => "Box",
             Surface::HeightField(_) => "HeightField",
+            Surface::Mesh(_) => "Mesh",
         }
     }
 
@@ -282,6 +367,7 @@ impl Surface {
             Surface::Sphere(s) => s.hit(a, b),
             Surface::Box(s) => s.hit(a, b),
             Surface::HeightField(s) => s.hit(a, b),
+            Surface::Mesh(s) => s.hit(a, b),
         }
     }
 
@@ -292,6 +378,7 @@ impl Surface {
             Surface::Sphere(s) => s.push_out(x, margin),
             Surface::Box(s) => s.push_out(x, margin),
             Surface::HeightField(s) => s.push_out(x, margin),
+            Surface::Mesh(s) => s.push_out(x, margin),
         }
     }
 
@@ -302,6 +389,7 @@ impl Surface {
             Surface::Sphere(s) => s.allows(x),
             Surface::Box(s) => s.allows(x),
             Surface::HeightField(s) => s.allows(x),
+            Surface::Mesh(s) => s.allows(x),
         }
     }
 
@@ -312,6 +400,7 @@ impl Surface {
             Surface::Sphere(s) => s.center.abs().max_element() + s.radius,
             Surface::Box(s) => s.min.abs().max(s.max.abs()).max_element(),
             Surface::HeightField(s) => s.scale(),
+            Surface::Mesh(s) => s.scale(),
         }
     }
 
@@ -321,6 +410,7 @@ impl Surface {
             Surface::Plane(_) | Surface::HeightField(_) => None,
             Surface::Sphere(s) => Some(s.radius),
             Surface::Box(s) => Some((s.max - s.min).min_element()),
+            Surface::Mesh(s) => Some(s.cell()),
         }
     }
 
@@ -342,6 +432,7 @@ impl Surface {
                 if s.inside { " inside" } else { "" }
             ),
             Surface::HeightField(s) => s.describe(),
+            Surface::Mesh(s) => s.describe(),
         }
     }
 
@@ -353,6 +444,16 @@ impl Surface {
             Surface::Sphere(s) => s.emit(w, i),
             Surface::Box(s) => s.emit(w, i),
             Surface::HeightField(s) => s.emit(w, i, data_offset),
+            Surface::Mesh(s) => s.emit(w, i, data_offset),
+        }
+    }
+
+    /// How many f32 values the surface keeps in the `collider_data` binding.
+    pub fn data_len(&self) -> u32 {
+        match self {
+            Surface::HeightField(f) => f.heights.len() as u32,
+            Surface::Mesh(m) => m.sdf.values.len() as u32,
+            _ => 0,
         }
     }
 }
@@ -445,30 +546,30 @@ pub fn resolve(
     touched
 }
 
-/// Emits each collider's functions and, when a height field needs them, nothing else: the
-/// heights live in the `collider_data` binding.
+/// Emits each collider's functions; a height field's heights and a mesh's field live in the
+/// `collider_data` binding, one after the other in collider order.
 pub fn emit_helpers(w: &mut Writer, colliders: &[ColliderIr]) {
     let mut offset = 0;
     for (i, c) in colliders.iter().enumerate() {
         w.comment(format!("collide[{i}]: {}", c.surface.name()));
         c.surface.emit_fns(w, i, offset);
-        if let Surface::HeightField(f) = &c.surface {
-            offset += f.heights.len() as u32;
-        }
+        offset += c.surface.data_len();
         w.blank();
     }
 }
 
-/// The heights of every height field, in collider order (the `collider_data` binding).
+/// The height fields' heights and the meshes' fields, in collider order (the `collider_data`
+/// binding).
 pub fn data(colliders: &[ColliderIr]) -> Vec<f32> {
-    colliders
-        .iter()
-        .filter_map(|c| match &c.surface {
-            Surface::HeightField(f) => Some(f.heights.iter().map(|&h| h as f32)),
-            _ => None,
-        })
-        .flatten()
-        .collect()
+    let mut out = Vec::new();
+    for c in colliders {
+        match &c.surface {
+            Surface::HeightField(f) => out.extend(f.heights.iter().map(|&h| h as f32)),
+            Surface::Mesh(m) => out.extend_from_slice(&m.sdf.values),
+            _ => {}
+        }
+    }
+    out
 }
 
 /// Emits the swept resolution in the update kernel's substep, with `x_start` (where the

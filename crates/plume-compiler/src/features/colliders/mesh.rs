@@ -1,0 +1,456 @@
+//! `Mesh`: a closed triangle mesh from an OBJ file, placed in the world by `offset`, `scale`
+//! and `rotation`; particles stay outside it. The mesh is baked once into a signed distance
+//! field ([`super::sdf`]) whose f32 values the GPU (the `collider_data` binding) and the f64
+//! reference both interpolate, so both collide with the very same surface: the field's zero
+//! level, which is the mesh to within its resolution (a cell is the mesh's longest side over
+//! `resolution`).
+//!
+//! **Swept.** The test marches the substep's segment through the field's box: a step may not
+//! be longer than the field's value over the largest rate at which the trilinear field can
+//! change along the segment (|dx| + |dy| + |dz| in cells, since neighbouring nodes differ by at
+//! most a cell), so no crossing of the field is stepped over, except that a step is never
+//! shorter than an eighth of a cell (so that a segment grazing the surface ends): a wall two
+//! cells thick, which the field holds, is never passed through at any speed. A crossing is
+//! then bisected (20 halvings) to the last point outside; its normal is the field's gradient
+//! there (central differences half a cell wide).
+//!
+//! **Inside.** A particle found inside (spawned there) is moved out along the gradient by the
+//! field's depth, up to four times.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{DMat3, DVec3, EulerRot};
+
+use super::sdf::{cached_or_baked, Sdf, MAX_RESOLUTION};
+use super::{collider_path, Collider, Hit};
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+use crate::base::values::Vec3;
+use crate::base::writer::{f32_lit, Writer};
+
+/// The resolution when the file gives none.
+pub const DEFAULT_RESOLUTION: u32 = 32;
+
+/// The fewest cells along the mesh's longest side.
+pub const MIN_RESOLUTION: u32 = 4;
+
+/// Bisection halvings of a crossing.
+const BISECTIONS: u32 = 20;
+
+/// The shortest march step, in cells.
+const MIN_STEP_CELLS: f64 = 0.125;
+
+/// Push-out tries for a particle found inside.
+const PUSH_TRIES: u32 = 4;
+
+/// A segment this short (in cells) does not move.
+const TINY: f64 = 1e-30;
+
+/// A mesh collider in the IR: the baked field and where it sits.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshIr {
+    /// The mesh file as the effect names it.
+    pub file: String,
+    /// Where the mesh's origin sits in the world.
+    pub offset: DVec3,
+    /// The mesh's size against the world's.
+    pub scale: f64,
+    /// The mesh's rotation (its axes in world coordinates, as columns).
+    pub rotation: DMat3,
+    /// The baked field, in the mesh's own coordinates.
+    pub sdf: Arc<Sdf>,
+}
+
+/// The rotation `rotation` (degrees about x, then y, then z) stands for.
+pub fn rotation_matrix(rotation: Vec3) -> DMat3 {
+    let r = rotation.d() * (std::f64::consts::PI / 180.0);
+    // Intrinsic ZYX of (z, y, x) is x first, then y, then z about the world's axes.
+    DMat3::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
+}
+
+/// Checks a mesh collider's placement and resolution (its file was read before).
+pub fn check(
+    path: &ValuePath,
+    c: &mut Checker,
+    (offset, scale, rotation, resolution): (Vec3, f64, Vec3, u32),
+    baked: bool,
+) {
+    c.vec3(&path.field("offset"), offset);
+    c.vec3(&path.field("rotation"), rotation);
+    c.positive(&path.field("scale"), scale);
+    if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&resolution) {
+        c.error(
+            &path.field("resolution"),
+            format!(
+                "resolution is the cells along the mesh's longest side, {MIN_RESOLUTION} to {MAX_RESOLUTION}, got {resolution}"
+            ),
+        );
+    } else if !baked {
+        c.error(&path.field("file"), "the mesh was not read");
+    }
+}
+
+/// Reads every `Mesh` collider's file and bakes (or loads from the cache) its field, files
+/// relative to `base_dir`; what is wrong is recorded in `c` at the collider's `file`: an
+/// unreadable or empty mesh, a NaN vertex, a mesh that is not closed.
+pub fn read_meshes(collide: &mut [Collider], base_dir: Option<&Path>, c: &mut Checker) {
+    for (i, collider) in collide.iter_mut().enumerate() {
+        let path = collider_path(i, collider);
+        let Collider::Mesh {
+            file,
+            resolution,
+            sdf,
+            ..
+        } = collider
+        else {
+            continue;
+        };
+        if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(resolution) {
+            continue; // the checks say why
+        }
+        let full = base_dir.map_or_else(|| PathBuf::from(&*file), |dir| dir.join(&*file));
+        match bake_file(&full, *resolution) {
+            Ok(field) => *sdf = Some(Arc::new(field)),
+            Err(message) => c.error(&path.field("file"), message),
+        }
+    }
+}
+
+fn bake_file(path: &Path, resolution: u32) -> Result<Sdf, String> {
+    let (mesh, bytes) = crate::base::mesh::read_obj(path)?;
+    let (open, first) = mesh.open_edges();
+    if let Some((a, b)) = first {
+        return Err(format!(
+            "mesh `{}` is not closed: {open} edge(s) border an odd number of triangles, the first from ({}, {}, {}) to ({}, {}, {}); a collider needs a closed mesh, so that it has an inside (close the holes, or weld the vertices)",
+            path.display(),
+            a.x,
+            a.y,
+            a.z,
+            b.x,
+            b.y,
+            b.z
+        ));
+    }
+    let (lo, hi) = mesh.bounds();
+    if (hi - lo).min_element() <= 0.0 {
+        return Err(format!(
+            "mesh `{}` is flat (its box is {} x {} x {}): a collider needs a volume",
+            path.display(),
+            hi.x - lo.x,
+            hi.y - lo.y,
+            hi.z - lo.z
+        ));
+    }
+    Ok(cached_or_baked(&mesh, path, &bytes, resolution))
+}
+
+impl MeshIr {
+    /// World `x` in grid coordinates (cells from node 0).
+    fn grid(&self, x: DVec3) -> DVec3 {
+        let local = self.rotation.transpose() * (x - self.offset) / self.scale;
+        (local - self.sdf.min) / self.sdf.cell
+    }
+
+    fn in_box(&self, g: DVec3) -> bool {
+        g.cmpge(DVec3::ZERO).all() && g.cmple(self.sdf.last()).all()
+    }
+
+    /// The field's value at grid point `g`, in cells.
+    fn cells(&self, g: DVec3) -> f64 {
+        self.sdf.value(g) / self.sdf.cell
+    }
+
+    /// The world normal at grid point `g` (`fallback` where the gradient vanishes).
+    fn normal(&self, g: DVec3, fallback: DVec3) -> DVec3 {
+        let n = self.rotation * self.sdf.gradient(g);
+        let l = n.length();
+        if l > 1e-12 {
+            n / l
+        } else {
+            fallback
+        }
+    }
+
+    /// The first contact of segment `a` -> `b` (see the module doc).
+    pub fn hit(&self, a: DVec3, b: DVec3) -> Option<Hit> {
+        let ga = self.grid(a);
+        let d = self.grid(b) - ga;
+        let last = self.sdf.last();
+        let (mut s0, mut s1) = (0.0_f64, 1.0_f64);
+        for axis in 0..3 {
+            let (p, dp, hi) = (ga[axis], d[axis], last[axis]);
+            if dp.abs() <= TINY {
+                if p < 0.0 || p > hi {
+                    return None;
+                }
+            } else {
+                let (t1, t2) = (-p / dp, (hi - p) / dp);
+                s0 = s0.max(t1.min(t2));
+                s1 = s1.min(t1.max(t2));
+            }
+        }
+        let rate = d.x.abs() + d.y.abs() + d.z.abs();
+        if s0 > s1 || rate <= TINY {
+            return None;
+        }
+        let min_step = MIN_STEP_CELLS / d.abs().max_element();
+        let mut s = s0;
+        let mut f = self.cells(ga + d * s);
+        if f <= 0.0 {
+            return None; // inside already: the push-out moves it
+        }
+        for _ in 0..self.march_limit() {
+            let next = (s + (f / rate).max(min_step)).min(s1);
+            let f_next = self.cells(ga + d * next);
+            if f_next <= 0.0 {
+                let (mut lo, mut hi) = (s, next);
+                for _ in 0..BISECTIONS {
+                    let mid = 0.5 * (lo + hi);
+                    if self.cells(ga + d * mid) > 0.0 {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                let fallback = crate::features::forces::safe_normalize(a - b);
+                return Some(Hit {
+                    s: lo,
+                    normal: self.normal(ga + d * lo, fallback),
+                });
+            }
+            if next >= s1 {
+                return None;
+            }
+            s = next;
+            f = f_next;
+        }
+        None
+    }
+
+    /// Steps that cover any segment through the box at the shortest step.
+    fn march_limit(&self) -> u32 {
+        (8 * self.sdf.counts.iter().max().copied().unwrap_or(2)) + 2
+    }
+
+    /// A point inside moved out along the gradient, `margin` beyond the surface.
+    pub fn push_out(&self, mut x: DVec3, margin: f64) -> DVec3 {
+        let mut g = self.grid(x);
+        if !self.in_box(g) {
+            return x;
+        }
+        let mut depth = self.sdf.value(g) * self.scale;
+        for _ in 0..PUSH_TRIES {
+            if depth >= 0.0 {
+                break;
+            }
+            x += self.normal(g, DVec3::Y) * (margin - depth);
+            g = self.grid(x);
+            depth = self.sdf.value(g) * self.scale;
+        }
+        x
+    }
+
+    /// Whether `x` is on the allowed side (outside the field's zero level).
+    pub fn allows(&self, x: DVec3) -> bool {
+        let g = self.grid(x);
+        !self.in_box(g) || self.sdf.value(g) >= 0.0
+    }
+
+    /// The largest coordinate magnitude the placed field reaches (for the margin).
+    pub fn scale(&self) -> f64 {
+        let far = self
+            .sdf
+            .min
+            .abs()
+            .max((self.sdf.min + self.sdf.last() * self.sdf.cell).abs())
+            .length();
+        self.offset.abs().max_element() + self.scale * far
+    }
+
+    /// The field's cell in the world, the finest feature it holds.
+    pub fn cell(&self) -> f64 {
+        self.sdf.cell * self.scale
+    }
+
+    /// One line for `--emit ir`.
+    pub fn describe(&self) -> String {
+        let [nx, ny, nz] = self.sdf.counts;
+        format!(
+            "Mesh `{}` offset ({}, {}, {}) scale {}: {nx} x {ny} x {nz} field nodes, cell {} m",
+            self.file,
+            self.offset.x,
+            self.offset.y,
+            self.offset.z,
+            self.scale,
+            self.cell()
+        )
+    }
+
+    /// The WGSL twins of [`MeshIr::hit`] and [`MeshIr::push_out`], reading the field from
+    /// `collider_data` at `offset`.
+    pub fn emit(&self, w: &mut Writer, i: usize, offset: u32) {
+        let [nx, ny, _] = self.sdf.counts;
+        let v3 = |v: DVec3| {
+            format!(
+                "vec3<f32>({}, {}, {})",
+                f32_lit(v.x),
+                f32_lit(v.y),
+                f32_lit(v.z)
+            )
+        };
+        // grid = to_grid · (x − offset) − min / cell; rows of Rᵀ / (scale · cell).
+        let to_grid = self.rotation.transpose() / (self.scale * self.sdf.cell);
+        let last = self.sdf.last();
+        w.block(format!("fn mesh{i}_grid(x: vec3<f32>) -> vec3<f32>"), |w| {
+            w.line(format!("let p = x - {};", v3(self.offset)));
+            w.line(format!(
+                "return vec3<f32>(dot({}, p), dot({}, p), dot({}, p)) - {};",
+                v3(to_grid.row(0)),
+                v3(to_grid.row(1)),
+                v3(to_grid.row(2)),
+                v3(self.sdf.min / self.sdf.cell)
+            ));
+        });
+        w.block(format!("fn mesh{i}_at(c: vec3<u32>) -> f32"), |w| {
+            w.line(format!(
+                "return collider_data[{offset}u + (c.z * {ny}u + c.y) * {nx}u + c.x];"
+            ))
+        });
+        w.comment("The trilinear field at grid point g, clamped to the grid (in mesh units).");
+        w.block(format!("fn mesh{i}_value(g: vec3<f32>) -> f32"), |w| {
+            w.line(format!("let gc = clamp(g, vec3<f32>(0.0), {});", v3(last)));
+            w.line(format!(
+                "let base = min(floor(gc), {});",
+                v3(last - DVec3::ONE)
+            ));
+            w.line("let f = gc - base;");
+            w.line("let c = vec3<u32>(base);");
+            w.line(format!("let a000 = mesh{i}_at(c);"));
+            for (name, off) in [
+                ("a100", "1u, 0u, 0u"),
+                ("a010", "0u, 1u, 0u"),
+                ("a110", "1u, 1u, 0u"),
+                ("a001", "0u, 0u, 1u"),
+                ("a101", "1u, 0u, 1u"),
+                ("a011", "0u, 1u, 1u"),
+                ("a111", "1u, 1u, 1u"),
+            ] {
+                w.line(format!("let {name} = mesh{i}_at(c + vec3<u32>({off}));"));
+            }
+            w.line("let x00 = a000 + (a100 - a000) * f.x;");
+            w.line("let x10 = a010 + (a110 - a010) * f.x;");
+            w.line("let x01 = a001 + (a101 - a001) * f.x;");
+            w.line("let x11 = a011 + (a111 - a011) * f.x;");
+            w.line("let y0 = x00 + (x10 - x00) * f.y;");
+            w.line("let y1 = x01 + (x11 - x01) * f.y;");
+            w.line("return y0 + (y1 - y0) * f.z;");
+        });
+        w.block(
+            format!("fn mesh{i}_normal(g: vec3<f32>, fallback: vec3<f32>) -> vec3<f32>"),
+            |w| {
+                w.line(format!(
+                    "let d = vec3<f32>(mesh{i}_value(g + vec3<f32>(0.5, 0.0, 0.0)) - mesh{i}_value(g - vec3<f32>(0.5, 0.0, 0.0)), mesh{i}_value(g + vec3<f32>(0.0, 0.5, 0.0)) - mesh{i}_value(g - vec3<f32>(0.0, 0.5, 0.0)), mesh{i}_value(g + vec3<f32>(0.0, 0.0, 0.5)) - mesh{i}_value(g - vec3<f32>(0.0, 0.0, 0.5)));"
+                ));
+                let r = self.rotation;
+                w.line(format!(
+                    "let n = d.x * {} + d.y * {} + d.z * {};",
+                    v3(r.x_axis),
+                    v3(r.y_axis),
+                    v3(r.z_axis)
+                ));
+                w.line("let l = length(n);");
+                w.line("return select(fallback, n / l, l > 1e-12);");
+            },
+        );
+        let inv_cell = f32_lit(1.0 / self.sdf.cell);
+        w.block(
+            format!("fn collider_hit_{i}(a: vec3<f32>, b: vec3<f32>) -> vec4<f32>"),
+            |w| {
+                w.line("let none = vec4<f32>(2.0, 0.0, 1.0, 0.0);");
+                w.line(format!("let ga = mesh{i}_grid(a);"));
+                w.line(format!("let d = mesh{i}_grid(b) - ga;"));
+                w.line(format!("let last = {};", v3(last)));
+                w.line("var s0 = 0.0;");
+                w.line("var s1 = 1.0;");
+                for c in ["x", "y", "z"] {
+                    w.block(format!("if (abs(d.{c}) <= {})", f32_lit(TINY)), |w| {
+                        w.block(format!("if (ga.{c} < 0.0 || ga.{c} > last.{c})"), |w| {
+                            w.line("return none;")
+                        });
+                    });
+                    w.block("else", |w| {
+                        w.line(format!("let t1 = -ga.{c} / d.{c};"));
+                        w.line(format!("let t2 = (last.{c} - ga.{c}) / d.{c};"));
+                        w.line("s0 = max(s0, min(t1, t2));");
+                        w.line("s1 = min(s1, max(t1, t2));");
+                    });
+                }
+                w.line("let rate = abs(d.x) + abs(d.y) + abs(d.z);");
+                w.block(format!("if (s0 > s1 || rate <= {})", f32_lit(TINY)), |w| {
+                    w.line("return none;")
+                });
+                w.line(format!(
+                    "let min_step = {} / max(abs(d.x), max(abs(d.y), abs(d.z)));",
+                    f32_lit(MIN_STEP_CELLS)
+                ));
+                w.line("var s = s0;");
+                w.line(format!("var f = mesh{i}_value(ga + d * s) * {inv_cell};"));
+                w.block("if (f <= 0.0)", |w| w.line("return none;"));
+                w.block(
+                    format!("for (var it = 0u; it < {}u; it++)", self.march_limit()),
+                    |w| {
+                        w.line("let next = min(s + max(f / rate, min_step), s1);");
+                        w.line(format!(
+                            "let f_next = mesh{i}_value(ga + d * next) * {inv_cell};"
+                        ));
+                        w.block("if (f_next <= 0.0)", |w| {
+                            w.line("var lo = s;");
+                            w.line("var hi = next;");
+                            w.block(format!("for (var k = 0u; k < {BISECTIONS}u; k++)"), |w| {
+                                w.line("let mid = 0.5 * (lo + hi);");
+                                w.block(
+                                    format!("if (mesh{i}_value(ga + d * mid) * {inv_cell} > 0.0)"),
+                                    |w| w.line("lo = mid;"),
+                                );
+                                w.block("else", |w| w.line("hi = mid;"));
+                            });
+                            w.line("let back = a - b;");
+                            w.line("let bl = length(back);");
+                            w.line("let fallback = select(vec3<f32>(0.0), back / bl, bl > 1e-10);");
+                            w.line(format!(
+                                "return vec4<f32>(lo, mesh{i}_normal(ga + d * lo, fallback));"
+                            ));
+                        });
+                        w.block("if (next >= s1)", |w| w.line("return none;"));
+                        w.line("s = next;");
+                        w.line("f = f_next;");
+                    },
+                );
+                w.line("return none;");
+            },
+        );
+        w.block(
+            format!("fn collider_push_{i}(x_in: vec3<f32>, margin: f32) -> vec3<f32>"),
+            |w| {
+                w.line("var x = x_in;");
+                w.line(format!("var g = mesh{i}_grid(x);"));
+                w.block(
+                    format!("if (any(g < vec3<f32>(0.0)) || any(g > {}))", v3(last)),
+                    |w| w.line("return x;"),
+                );
+                let scale = f32_lit(self.scale);
+                w.line(format!("var depth = mesh{i}_value(g) * {scale};"));
+                w.block(format!("for (var k = 0u; k < {PUSH_TRIES}u; k++)"), |w| {
+                    w.block("if (depth >= 0.0)", |w| w.line("break;"));
+                    w.line(format!(
+                        "x = x + mesh{i}_normal(g, vec3<f32>(0.0, 1.0, 0.0)) * (margin - depth);"
+                    ));
+                    w.line(format!("g = mesh{i}_grid(x);"));
+                    w.line(format!("depth = mesh{i}_value(g) * {scale};"));
+                });
+                w.line("return x;");
+            },
+        );
+    }
+}
