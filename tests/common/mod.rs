@@ -4,6 +4,7 @@
 
 pub mod compare;
 pub mod effect_gen;
+pub mod meshes;
 
 use std::sync::{Mutex, MutexGuard, OnceLock};
 

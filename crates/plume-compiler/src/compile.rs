@@ -240,6 +240,11 @@ pub(crate) fn compile_group(
         effect.base_dir.as_deref(),
         &mut read,
     );
+    crate::features::emitter::read_mesh_shapes(
+        &mut effect.emitters,
+        effect.base_dir.as_deref(),
+        &mut read,
+    );
     crate::features::colliders::mesh::read_meshes(
         &mut effect.collide,
         effect.base_dir.as_deref(),

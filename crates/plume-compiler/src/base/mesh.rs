@@ -10,7 +10,7 @@
 use std::collections::HashMap;
 use std::path::Path;
 
-use glam::DVec3;
+use glam::{DMat3, DVec3, EulerRot};
 
 /// The largest mesh file read.
 pub const MAX_FILE_BYTES: u64 = 256 << 20;
@@ -136,6 +136,14 @@ impl TriMesh {
             .map(|&(a, b)| (self.vertices[a as usize], self.vertices[b as usize]));
         (open.len(), first)
     }
+}
+
+/// The rotation that `degrees` (about x, then y, then z, the world's axes) stands for, as
+/// meshes are placed.
+pub fn rotation_degrees(degrees: DVec3) -> DMat3 {
+    let r = degrees * (std::f64::consts::PI / 180.0);
+    // Intrinsic ZYX of (z, y, x) is x first, then y, then z about the world's axes.
+    DMat3::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
 }
 
 /// FNV-1a, 64 bits: a stable hash of bytes (the standard library's may change between

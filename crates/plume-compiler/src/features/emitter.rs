@@ -2,11 +2,17 @@
 //! and its lowered form (`EmitterIr`, `ShapeIr`, `VelocityIr`), which events reuse for the
 //! particles they spawn and custom forces read for their stiffness estimates.
 
+use std::path::Path;
+use std::sync::Arc;
+
 use glam::DVec3;
 use serde::Deserialize;
 
+use crate::base::check::Checker;
 use crate::base::lifetime::LifetimeSteps;
+use crate::base::path::ValuePath;
 use crate::base::values::{Counts, Range, Vec3};
+use crate::features::mesh_emission::{place, MeshSurface};
 
 /// One particle source.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -67,6 +73,31 @@ pub enum Shape {
     },
     /// Listed points, handed out in order.
     Points(Vec<Vec3>),
+    /// Uniform by area on a mesh's surface (see [`crate::features::mesh_emission`]).
+    Mesh {
+        /// The OBJ file, relative to the effect file.
+        file: String,
+        /// Where the mesh's origin sits in the world (m).
+        #[serde(default = "origin")]
+        offset: Vec3,
+        /// The mesh's size against the world's (> 0).
+        #[serde(default = "one")]
+        scale: f64,
+        /// Degrees about x, then y, then z (the world's axes).
+        #[serde(default = "origin")]
+        rotation: Vec3,
+        /// The placed triangles, read by [`read_mesh_shapes`] before the checks.
+        #[serde(skip)]
+        surface: Option<Arc<MeshSurface>>,
+    },
+}
+
+fn origin() -> Vec3 {
+    Vec3(0.0, 0.0, 0.0)
+}
+
+fn one() -> f64 {
+    1.0
 }
 
 /// Spawn velocities.
@@ -87,6 +118,11 @@ pub enum Velocity {
     /// Away from the shape's centre.
     Radial {
         /// Speed range (m/s).
+        speed: Range,
+    },
+    /// Along the surface's normal where the particle spawns (a `Mesh` shape only).
+    Normal {
+        /// Speed range (m/s); negative goes inward.
         speed: Range,
     },
 }
@@ -166,6 +202,8 @@ pub enum ShapeIr {
     },
     /// Listed points, in order.
     Points(Vec<DVec3>),
+    /// On a mesh's surface.
+    Mesh(Arc<MeshSurface>),
 }
 
 impl ShapeIr {
@@ -188,6 +226,7 @@ impl ShapeIr {
                 *origin + *step * n * 0.5
             }
             ShapeIr::Points(ps) => ps.iter().copied().sum::<DVec3>() / ps.len().max(1) as f64,
+            ShapeIr::Mesh(m) => m.center,
         }
     }
 
@@ -222,6 +261,7 @@ impl ShapeIr {
                 origin.abs().max(last.abs()).max_element()
             }
             ShapeIr::Points(ps) => ps.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max),
+            ShapeIr::Mesh(m) => m.extent,
         }
     }
 }
@@ -247,6 +287,11 @@ pub enum VelocityIr {
         /// Speed range.
         speed: (f64, f64),
     },
+    /// Along the spawn surface's normal.
+    Normal {
+        /// Speed range.
+        speed: (f64, f64),
+    },
 }
 
 impl VelocityIr {
@@ -254,9 +299,72 @@ impl VelocityIr {
     pub fn max_speed(&self) -> f64 {
         match self {
             VelocityIr::Constant(v) => v.length(),
-            VelocityIr::Cone { speed, .. } | VelocityIr::Radial { speed } => {
-                speed.0.abs().max(speed.1.abs())
-            }
+            VelocityIr::Cone { speed, .. }
+            | VelocityIr::Radial { speed }
+            | VelocityIr::Normal { speed } => speed.0.abs().max(speed.1.abs()),
         }
     }
+}
+
+/// Reads every `Mesh` spawn shape's file into its placed surface (files relative to
+/// `base_dir`), recording what is wrong in `c` at the shape's `file`.
+pub fn read_mesh_shapes(emitters: &mut [Emitter], base_dir: Option<&Path>, c: &mut Checker) {
+    for (i, emitter) in emitters.iter_mut().enumerate() {
+        let Shape::Mesh {
+            file,
+            offset,
+            scale,
+            rotation,
+            surface,
+        } = &mut emitter.shape
+        else {
+            continue;
+        };
+        // A bad placement is reported by the checks, at its field.
+        if !(offset.d().is_finite()
+            && rotation.d().is_finite()
+            && scale.is_finite()
+            && *scale > 0.0)
+        {
+            continue;
+        }
+        match place(file, base_dir, (*offset, *scale, *rotation)) {
+            Ok(placed) => *surface = Some(Arc::new(placed)),
+            Err(message) => c.error(
+                &ValuePath::root()
+                    .field("emitters")
+                    .index(i)
+                    .field("shape")
+                    .variant("Mesh")
+                    .field("file"),
+                message,
+            ),
+        }
+    }
+}
+
+/// Where emitter `e`'s mesh surface starts in the `spawn_data` binding (the surfaces of the
+/// emitters before it come first).
+pub fn spawn_data_offset(emitters: &[EmitterIr], e: usize) -> u32 {
+    emitters[..e]
+        .iter()
+        .map(|em| match &em.shape {
+            ShapeIr::Mesh(m) => m.data_len(),
+            _ => 0,
+        })
+        .sum()
+}
+
+/// The `spawn_data` binding's contents: every mesh surface's thresholds and triangles, in
+/// emitter order; None when no emitter spawns on a mesh.
+pub fn spawn_data(emitters: &[EmitterIr]) -> Option<Vec<u32>> {
+    let mut out = Vec::new();
+    let mut any = false;
+    for em in emitters {
+        if let ShapeIr::Mesh(m) = &em.shape {
+            out.extend(m.data());
+            any = true;
+        }
+    }
+    any.then_some(out)
 }

@@ -12,4 +12,5 @@ pub mod events;
 pub mod field;
 pub mod forces;
 pub mod looks;
+pub mod mesh_emission;
 pub mod placement;

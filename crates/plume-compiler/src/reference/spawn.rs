@@ -41,8 +41,8 @@ pub fn spawn(ir: &EffectIr, e: usize, id: u32, k: u32, step: u64) -> Spawned {
         seed_mix: ir.seed_mix,
         id,
     };
-    let x = position(&d, &em.shape, k);
-    let v = velocity(&d, &em.shape, &em.velocity, x);
+    let (x, normal) = position(&d, &em.shape, k);
+    let v = velocity(&d, &em.shape, &em.velocity, x, normal);
     let die_at = match em.lifetime_steps {
         Some(l) => {
             let n = l.draw(rand_u32(ir.seed_mix, id, stream::LIFETIME));
@@ -53,8 +53,16 @@ pub fn spawn(ir: &EffectIr, e: usize, id: u32, k: u32, step: u64) -> Spawned {
     Spawned { x, v, die_at }
 }
 
-fn position(d: &Draw, shape: &ShapeIr, k: u32) -> DVec3 {
-    match shape {
+/// The spawn position and, on a mesh, the surface's normal there (zero elsewhere).
+fn position(d: &Draw, shape: &ShapeIr, k: u32) -> (DVec3, DVec3) {
+    if let ShapeIr::Mesh(m) = shape {
+        return m.sample(
+            rand_u32(d.seed_mix, d.id, stream::POSITION),
+            d.u(stream::POSITION + 1),
+            d.u(stream::POSITION + 2),
+        );
+    }
+    let x = match shape {
         ShapeIr::Point(p) => *p,
         ShapeIr::Sphere { center, radius } => {
             let u = d.u3(stream::POSITION);
@@ -90,10 +98,12 @@ fn position(d: &Draw, shape: &ShapeIr, k: u32) -> DVec3 {
             *origin + gi * *step
         }
         ShapeIr::Points(ps) => ps[(k % ps.len() as u32) as usize],
-    }
+        ShapeIr::Mesh(_) => unreachable!("sampled above"),
+    };
+    (x, DVec3::ZERO)
 }
 
-fn velocity(d: &Draw, shape: &ShapeIr, vel: &VelocityIr, x: DVec3) -> DVec3 {
+fn velocity(d: &Draw, shape: &ShapeIr, vel: &VelocityIr, x: DVec3, normal: DVec3) -> DVec3 {
     let speed = |s: (f64, f64)| s.0 + (s.1 - s.0) * d.u(stream::VELOCITY + 2);
     match vel {
         VelocityIr::Constant(v) => *v,
@@ -122,5 +132,6 @@ fn velocity(d: &Draw, shape: &ShapeIr, vel: &VelocityIr, x: DVec3) -> DVec3 {
             };
             speed(*s) * dir
         }
+        VelocityIr::Normal { speed: s } => speed(*s) * normal,
     }
 }

@@ -180,6 +180,11 @@ fn lower_shape(s: &Shape) -> ShapeIr {
             }
         }
         Shape::Points(ps) => ShapeIr::Points(ps.iter().map(|p| p.d()).collect()),
+        Shape::Mesh { surface, .. } => ShapeIr::Mesh(
+            surface
+                .clone()
+                .expect("the checks refuse a Mesh shape whose file was not read"),
+        ),
     }
 }
 
@@ -196,6 +201,9 @@ fn lower_velocity(v: &Velocity) -> VelocityIr {
             }
         }
         Velocity::Radial { speed } => VelocityIr::Radial {
+            speed: (speed.0, speed.1),
+        },
+        Velocity::Normal { speed } => VelocityIr::Normal {
             speed: (speed.0, speed.1),
         },
     }

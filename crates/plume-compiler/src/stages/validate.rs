@@ -237,6 +237,21 @@ pub(crate) fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: 
                 c.vec3(&s.inner().index(i), *p);
             }
         }
+        Shape::Mesh {
+            offset,
+            scale,
+            rotation,
+            surface,
+            ..
+        } => {
+            let s = shape.variant("Mesh");
+            let placed =
+                c.vec3(&s.field("offset"), *offset) & c.vec3(&s.field("rotation"), *rotation);
+            c.positive(&s.field("scale"), *scale);
+            if placed && *scale > 0.0 && surface.is_none() {
+                c.error(&s.field("file"), "the mesh was not read");
+            }
+        }
     }
     let vel = path.field("velocity");
     match &e.velocity {
@@ -251,6 +266,16 @@ pub(crate) fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: 
         }
         Velocity::Radial { speed } => {
             check_speed(c, &vel.variant("Radial").field("speed"), *speed);
+        }
+        Velocity::Normal { speed } => {
+            let v = vel.variant("Normal");
+            check_speed(c, &v.field("speed"), *speed);
+            if !matches!(e.shape, Shape::Mesh { .. }) {
+                c.error(
+                    &v,
+                    "Normal follows the surface a particle spawns on: it needs a `Mesh` shape (use Radial or Cone for other shapes)",
+                );
+            }
         }
     }
     if let Some(life) = e.lifetime {

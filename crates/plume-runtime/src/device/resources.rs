@@ -237,8 +237,19 @@ impl Resources {
                 if let Some((_, buffer)) = shared.iter().find(|(at, _)| *at == b.binding) {
                     return Ok((b.binding, buffer.clone()));
                 }
+                if b.name == "spawn_data" {
+                    // The mesh emitters' surfaces, written once here.
+                    let data = plume_compiler::emitter::spawn_data(&effect.ir.emitters)
+                        .unwrap_or_default();
+                    let buffer = filled_buffer(gpu, b.name, size, STORAGE, |bytes| {
+                        for (dst, v) in bytes.chunks_exact_mut(4).zip(&data) {
+                            dst.copy_from_slice(&v.to_le_bytes());
+                        }
+                    })?;
+                    return Ok((b.binding, buffer));
+                }
                 let samples = match b.name {
-                    // The height fields' samples, written once here.
+                    // The height fields' samples and the mesh colliders' fields, written once here.
                     "collider_data" => Some(plume_compiler::colliders::data(&effect.ir.colliders)),
                     // The vector field's, likewise.
                     "force_data" => plume_compiler::forces::force_data(&effect.ir.terms),
@@ -289,12 +300,14 @@ impl Resources {
                     "chunk" | "depth_axis" => {
                         buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
                     }
-                    "frame" | "fire_frame" | "collider_data" | "force_data" => buffer_entry(
-                        b.binding,
-                        wgpu::BufferBindingType::Storage { read_only: true },
-                        false,
-                        None,
-                    ),
+                    "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data" => {
+                        buffer_entry(
+                            b.binding,
+                            wgpu::BufferBindingType::Storage { read_only: true },
+                            false,
+                            None,
+                        )
+                    }
                     _ => buffer_entry(b.binding, rw, false, None),
                 })
                 .collect::<Vec<_>>(),

@@ -20,7 +20,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use glam::{DMat3, DVec3, EulerRot};
+use glam::{DMat3, DVec3};
 
 use super::sdf::{cached_or_baked, Sdf, MAX_RESOLUTION};
 use super::{collider_path, Collider, Hit};
@@ -64,9 +64,7 @@ pub struct MeshIr {
 
 /// The rotation `rotation` (degrees about x, then y, then z) stands for.
 pub fn rotation_matrix(rotation: Vec3) -> DMat3 {
-    let r = rotation.d() * (std::f64::consts::PI / 180.0);
-    // Intrinsic ZYX of (z, y, x) is x first, then y, then z about the world's axes.
-    DMat3::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
+    crate::base::mesh::rotation_degrees(rotation.d())
 }
 
 /// Checks a mesh collider's placement and resolution (its file was read before).

@@ -174,13 +174,22 @@ pub fn decide(ir: &EffectIr) -> Layout {
             meaning: "the vector field's samples: x, y, z of each node, x fastest, then y, then z",
         });
     }
+    if let Some(data) = crate::features::emitter::spawn_data(&ir.emitters) {
+        layout.bindings.push(Binding {
+            binding: 22,
+            name: "spawn_data",
+            space: "storage, read",
+            bytes: data.len() as u64 * 4,
+            meaning: "the mesh emitters' surfaces: per emitter, a 32-bit area threshold per triangle, then its a, b - a, c - a and normal (f32 bits)",
+        });
+    }
     if ir.has_collider_data() {
         layout.bindings.push(Binding {
             binding: 15,
             name: "collider_data",
             space: "storage, read",
             bytes: crate::features::colliders::data(&ir.colliders).len() as u64 * 4,
-            meaning: "the height fields' samples, row by row, x fastest",
+            meaning: "the height fields' samples (row by row, x fastest) and the mesh colliders' distance fields (x fastest, then y, then z), in collider order",
         });
     }
     if let Some(flock) = &ir.flock {

@@ -106,6 +106,16 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("state"),
         ));
     }
+    if let Some(e) = ir
+        .emitters
+        .iter()
+        .position(|em| matches!(em.shape, crate::ir::ShapeIr::Mesh(_)))
+    {
+        return Err((
+            format!("emitters[{e}] spawns on a mesh, which stateless effects do not do yet"),
+            ValuePath::root().field("emitters").index(e).field("shape"),
+        ));
+    }
     if ir.bursts {
         return Err((
             "it takes bursts fired from code at run time: when they spawn is not a function of (id, age)".into(),

@@ -125,6 +125,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "fire_state" => "array<u32, 4>",
             "depth_axis" => "DepthAxis",
             "collider_data" | "force_data" => "array<f32>",
+            "spawn_data" => "array<u32>",
             _ => "StepParams",
         };
         w.line(format!(

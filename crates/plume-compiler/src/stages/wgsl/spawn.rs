@@ -152,6 +152,13 @@ pub fn emit_emitter_fns(w: &mut Writer, ir: &EffectIr) {
 /// A function per emitter: `emit_E(id, k, step) -> Spawned`, k the emitter's own spawn counter
 /// and `step` the step it spawns at.
 fn emit_emitter_fn(w: &mut Writer, ir: &EffectIr, e: usize, em: &EmitterIr) {
+    if let ShapeIr::Mesh(m) = &em.shape {
+        m.emit(
+            w,
+            e,
+            crate::features::emitter::spawn_data_offset(&ir.emitters, e),
+        );
+    }
     if let ShapeIr::Points(ps) = &em.shape {
         let items: Vec<String> = ps.iter().map(|p| vec3_lit(*p)).collect();
         w.line(format!(
@@ -263,6 +270,16 @@ fn emit_shape(w: &mut Writer, e: usize, shape: &ShapeIr) {
         ShapeIr::Points(ps) => {
             w.line(format!("s.x = POINTS_{e}[k % {}u];", ps.len()));
         }
+        ShapeIr::Mesh(_) => {
+            w.line(format!(
+                "let on_mesh = mesh_spawn_{e}(rand_u32(id, {}u), rand_unit(id, {}u), rand_unit(id, {}u));",
+                stream::POSITION,
+                stream::POSITION + 1,
+                stream::POSITION + 2
+            ));
+            w.line("s.x = on_mesh[0];");
+            w.line("let surface_normal = on_mesh[1];");
+        }
     }
 }
 
@@ -330,6 +347,10 @@ fn emit_velocity(w: &mut Writer, shape: &ShapeIr, vel: &VelocityIr) {
                 w.line("dir = vec3<f32>(sz * cos(phi), sz * sin(phi), cz);");
             });
             w.line("s.v = speed * dir;");
+        }
+        VelocityIr::Normal { speed } => {
+            emit_speed(w, *speed);
+            w.line("s.v = speed * surface_normal;");
         }
     }
 }

@@ -1,0 +1,68 @@
+#!/usr/bin/env python3
+"""Writes the example meshes next to this script: rock.obj (a lumpy boulder: a sphere of 20
+rings and 40 segments whose radius follows a few fixed waves) and crystal.obj (a hexagonal
+prism with pointed ends). Deterministic: run it again and the files come out the same."""
+
+import math
+import os
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+def write(name, vertices, faces, comment):
+    with open(os.path.join(HERE, name), "w") as f:
+        f.write(f"# {comment}\n# Written by make_meshes.py.\no {name[:-4]}\n")
+        for v in vertices:
+            f.write("v %.6f %.6f %.6f\n" % v)
+        for face in faces:
+            f.write("f " + " ".join(str(i + 1) for i in face) + "\n")
+
+
+def rock(rings=20, segments=40):
+    def radius(theta, phi):
+        return (1.0 + 0.12 * math.sin(3 * phi + 1.0) * math.sin(2 * theta)
+                + 0.08 * math.cos(5 * phi) * math.sin(theta) ** 2
+                + 0.06 * math.sin(4 * theta + 2 * phi))
+
+    vertices = [(0.0, radius(0.0, 0.0) * 0.85, 0.0)]
+    for r in range(1, rings + 1):
+        theta = math.pi * r / (rings + 1)
+        for k in range(segments):
+            phi = 2 * math.pi * k / segments
+            rad = radius(theta, phi)
+            # Flattened a little: a boulder sits, it does not roll.
+            vertices.append((rad * math.sin(theta) * math.cos(phi),
+                             0.85 * rad * math.cos(theta),
+                             rad * math.sin(theta) * math.sin(phi)))
+    vertices.append((0.0, -0.85 * radius(math.pi, 0.0), 0.0))
+    at = lambda r, k: 1 + (r - 1) * segments + k % segments
+    bottom = len(vertices) - 1
+    faces = []
+    for k in range(segments):
+        faces.append((0, at(1, k + 1), at(1, k)))
+        for r in range(1, rings):
+            faces.append((at(r, k), at(r, k + 1), at(r + 1, k + 1), at(r + 1, k)))
+        faces.append((bottom, at(rings, k), at(rings, k + 1)))
+    write("rock.obj", vertices, faces, "A lumpy boulder, about 2 m across, centred on its origin.")
+
+
+def crystal(sides=6, half_length=0.6, radius=0.3, tip=0.35):
+    vertices = [(0.0, half_length + tip, 0.0)]
+    for y in (half_length, -half_length):
+        for k in range(sides):
+            phi = 2 * math.pi * k / sides
+            vertices.append((radius * math.cos(phi), y, radius * math.sin(phi)))
+    vertices.append((0.0, -half_length - tip, 0.0))
+    top = lambda k: 1 + k % sides
+    low = lambda k: 1 + sides + k % sides
+    bottom = len(vertices) - 1
+    faces = []
+    for k in range(sides):
+        faces.append((0, top(k + 1), top(k)))
+        faces.append((top(k), top(k + 1), low(k + 1), low(k)))
+        faces.append((bottom, low(k), low(k + 1)))
+    write("crystal.obj", vertices, faces, "A hexagonal crystal with pointed ends, along y.")
+
+
+rock()
+crystal()
