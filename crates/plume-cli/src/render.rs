@@ -7,7 +7,9 @@ use std::process::ExitCode;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use plume_compiler::graph::CompiledGraph;
-use plume_runtime::outputs::{contact_sheet, gif, png, write_atomically, Frame8, Offscreen, Splat};
+use plume_runtime::outputs::{
+    contact_sheet, gif, png, write_atomically, Frame8, Offscreen, Scene, Splat,
+};
 use plume_runtime::{Effect, Gpu, GpuChoice, RuntimeError};
 
 use crate::{load, Overrides};
@@ -36,6 +38,10 @@ pub struct RenderArgs {
     /// (compute shaders only, the same image; faster where raster units are few, as on an H100).
     #[arg(long, value_enum, default_value_t = DrawMethod::Raster)]
     draw: DrawMethod,
+    /// Leave out the scene: without it, the meshes the effect names (its mesh colliders and
+    /// mesh emitters) are drawn, plain grey, behind and in front of the particles.
+    #[arg(long)]
+    no_scene: bool,
     /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
     #[arg(long)]
     backend: Option<String>,
@@ -90,8 +96,36 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
     // An effect that glows is drawn into an HDR image and bloomed (render.glow).
     let glow = graph.groups[0].effect.ir.render.glow;
     let target = Offscreen::with_glow(&gpu, w, h, glow.as_ref())?;
+    let triangles: Vec<_> = graph
+        .groups
+        .iter()
+        .flat_map(|g| g.effect.ir.scene_triangles())
+        .collect();
+    let scene = match (args.no_scene, args.draw) {
+        (false, DrawMethod::Raster) => {
+            Scene::new(&gpu, &triangles, target.target().color_format, (w, h))?
+        }
+        (false, DrawMethod::Splat) if !triangles.is_empty() => {
+            eprintln!("note: --draw splat does not draw the scene's meshes (--draw raster does)");
+            None
+        }
+        _ => None,
+    };
+    if scene.is_some() {
+        eprintln!(
+            "scene: {} triangles of the meshes the effect names (--no-scene leaves them out)",
+            triangles.len()
+        );
+    }
     let mut sim = Effect::from_graph(&gpu, graph)?;
-    let renderer = sim.renderer(&target.target())?;
+    let mut renderer = match &scene {
+        Some(_) => sim.renderer(&Scene::target(target.target()))?,
+        None => sim.renderer(&target.target())?,
+    };
+    if let Some(scene) = &scene {
+        // Soft particles fade where they meet the meshes.
+        renderer.set_scene_depth(scene.depth_view());
+    }
     let mut splat = match args.draw {
         DrawMethod::Splat => Some(Splat::new(&sim, w, h)?),
         DrawMethod::Raster => None,
@@ -105,7 +139,10 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         // read back.
         let pixels = match &mut splat {
             Some(splat) => splat.render(&sim, &camera)?,
-            None => target.render(&sim, &renderer, &camera)?,
+            None => match &scene {
+                Some(scene) => target.render_over_scene(&sim, &renderer, &camera, scene)?,
+                None => target.render(&sim, &renderer, &camera)?,
+            },
         };
         frames.push(Frame8 {
             width: w,

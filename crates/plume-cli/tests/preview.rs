@@ -218,3 +218,83 @@ fn an_effect_with_groups_previews_as_plume_render_draws_it() {
     let orange = a.pixels().filter(|p| p[0] > 100 && p[2] < p[0] / 2).count();
     assert!(white > 10 && orange > 10, "white {white}, orange {orange}");
 }
+
+#[test]
+fn the_meshes_an_effect_names_are_drawn_in_the_preview_as_in_plume_render() {
+    // crystal.ron names two meshes (a spawn shape and a collider): both draw them around the
+    // particles, the same image, and `plume render --no-scene` leaves them out.
+    let dir = std::env::temp_dir().join(format!("plume-preview-scene-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let (shot, still, bare) = (
+        dir.join("preview.png"),
+        dir.join("render.png"),
+        dir.join("bare.png"),
+    );
+    let out = xvfb_run()
+        .arg(env!("CARGO_BIN_EXE_plume"))
+        .arg("preview")
+        .arg(effect("crystal.ron"))
+        .args(["--size", "480x270", "--frames", "24", "--screenshot"])
+        .arg(&shot)
+        .output()
+        .expect("xvfb-run runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    render_step_24(&effect("crystal.ron"), &still);
+    let run = plume()
+        .arg("render")
+        .arg(effect("crystal.ron"))
+        .args([
+            "--frames",
+            "1",
+            "--every",
+            "24",
+            "--size",
+            "480x270",
+            "--no-scene",
+            "--out",
+        ])
+        .arg(&bare)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    let a = image::open(&shot).unwrap().to_rgba8();
+    let b = image::open(&still).unwrap().to_rgba8();
+    let c = image::open(&bare).unwrap().to_rgba8();
+    std::fs::remove_dir_all(&dir).ok();
+    let max = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap();
+    assert!(max <= 1, "preview and render differ by up to {max}");
+    // The meshes' grey: pixels where red, green and blue are close and mid-bright. The sparks
+    // make some too (white-hot when they leave the crystal, fading over black), but far fewer.
+    let grey = |img: &image::RgbaImage| {
+        img.pixels()
+            .filter(|p| {
+                p[0] > 40 && p[0] < 200 && p[0].abs_diff(p[2]) < 20 && p[1].abs_diff(p[2]) < 20
+            })
+            .count()
+    };
+    assert!(
+        grey(&b) > 3000,
+        "only {} grey pixels with the scene",
+        grey(&b)
+    );
+    assert!(
+        grey(&c) < grey(&b) / 4,
+        "{} grey pixels without the scene, {} with it",
+        grey(&c),
+        grey(&b)
+    );
+}

@@ -48,23 +48,35 @@ impl Running {
                 .prepare_draw(&mut encoder, &loaded.renderer, &camera)
                 .map_err(|e| e.to_string())?;
             let bg = loaded.effect.compiled().ir.render.background;
+            let mut color = wgpu::RenderPassColorAttachment {
+                view: self.scene.view(),
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color {
+                        r: bg.x,
+                        g: bg.y,
+                        b: bg.z,
+                        a: 1.0,
+                    }),
+                    store: wgpu::StoreOp::Store,
+                },
+            };
+            // The meshes the effect names go first, with depth; the particles are tested
+            // against it (and soft ones fade against it).
+            let mut depth = None;
+            if let Some(meshes) = &mut loaded.meshes {
+                if meshes.resize((w, h)) {
+                    loaded.renderer.set_scene_depth(meshes.depth_view());
+                }
+                meshes.record(&mut encoder, color.clone(), &camera);
+                color.ops.load = wgpu::LoadOp::Load;
+                depth = Some(meshes.particle_depth());
+            }
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("effect"),
-                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
-                    view: self.scene.view(),
-                    depth_slice: None,
-                    resolve_target: None,
-                    ops: wgpu::Operations {
-                        load: wgpu::LoadOp::Clear(wgpu::Color {
-                            r: bg.x,
-                            g: bg.y,
-                            b: bg.z,
-                            a: 1.0,
-                        }),
-                        store: wgpu::StoreOp::Store,
-                    },
-                })],
-                depth_stencil_attachment: None,
+                color_attachments: &[Some(color)],
+                depth_stencil_attachment: depth,
                 timestamp_writes: self.probe.draw_writes(),
                 occlusion_query_set: None,
                 multiview_mask: None,

@@ -74,15 +74,32 @@ impl Running {
         let dt = top.dt;
         let camera = top.camera;
         let glow = top.render.glow;
+        let triangles: Vec<_> = compiled
+            .groups
+            .iter()
+            .flat_map(|g| g.effect.ir.scene_triangles())
+            .collect();
+        let format = Scene::draw_format(glow.as_ref());
+        let size = (self.config.width.max(1), self.config.height.max(1));
+        let meshes = plume_runtime::outputs::Scene::new(&self.gpu, &triangles, format, size)
+            .map_err(|e| e.to_string())?;
         let effect = Effect::from_graph(&self.gpu, compiled).map_err(|e| e.to_string())?;
-        let target = DrawTarget::new(Scene::draw_format(glow.as_ref()));
-        let renderer = effect.renderer(&target).map_err(|e| e.to_string())?;
+        let target = DrawTarget::new(format);
+        let mut renderer = match &meshes {
+            Some(_) => effect.renderer(&plume_runtime::outputs::Scene::target(target)),
+            None => effect.renderer(&target),
+        }
+        .map_err(|e| e.to_string())?;
+        if let Some(meshes) = &meshes {
+            renderer.set_scene_depth(meshes.depth_view());
+        }
         // Last, and all or nothing: the old effect keeps drawing into a matching scene if this
         // fails.
         self.scene.set_glow(&self.gpu, glow)?;
         self.effect = Some(Loaded {
             effect,
             renderer,
+            meshes,
             about,
             warnings,
         });

@@ -21,6 +21,8 @@ use super::scene::Scene;
 pub(super) struct Loaded {
     pub(super) effect: Effect,
     pub(super) renderer: EffectRenderer,
+    /// The meshes the effect names, drawn around it (None: it names none).
+    pub(super) meshes: Option<plume_runtime::outputs::Scene>,
     /// What the compiler chose, for the figures.
     pub(super) about: String,
     /// Its warnings, rendered.

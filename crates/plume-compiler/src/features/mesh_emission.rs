@@ -110,6 +110,14 @@ impl MeshSurface {
         (a + s * (1.0 - r2) * e1 + s * r2 * e2, n)
     }
 
+    /// The triangles as placed (from the f32 values the GPU holds).
+    pub fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+        self.triangles.iter().map(|t| {
+            let [a, e1, e2, _] = t.map(|v| DVec3::from_array(v.map(f64::from)));
+            [a, a + e1, a + e2]
+        })
+    }
+
     /// Binary search rounds that always finish the search.
     fn rounds(&self) -> u32 {
         usize::BITS - self.thresholds.len().leading_zeros() + 1

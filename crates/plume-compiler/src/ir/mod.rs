@@ -221,6 +221,23 @@ impl EffectIr {
         2.0 * g.length() * self.h()
     }
 
+    /// The triangles of every mesh the effect names (its mesh colliders', then its mesh
+    /// emitters'), placed in the world: the scene a preview draws around the particles.
+    pub fn scene_triangles(&self) -> Vec<[glam::DVec3; 3]> {
+        let mut out = Vec::new();
+        for c in &self.colliders {
+            if let crate::features::colliders::Surface::Mesh(m) = &c.surface {
+                out.extend(m.world_triangles());
+            }
+        }
+        for e in &self.emitters {
+            if let ShapeIr::Mesh(m) = &e.shape {
+                out.extend(m.world_triangles());
+            }
+        }
+        out
+    }
+
     /// Whether any collider needs the `collider_data` binding (a height field's samples, a
     /// mesh's field).
     pub fn has_collider_data(&self) -> bool {

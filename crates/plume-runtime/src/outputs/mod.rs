@@ -1,7 +1,7 @@
 //! Headless outputs, for the `plume` command and tools: images drawn offscreen ([`Offscreen`],
 //! through the same [`crate::EffectRenderer`] a host records; or the compute [`Splat`]),
 //! bloomed when the effect glows ([`GlowPasses`] into [`HDR_FORMAT`]), encoded as PNG, contact
-//! sheet or GIF ([`Frame8`]); the particle exports (`.csv`, `.ply`) and their [`Summary`].
+//! sheet or GIF ([`Frame8`]), over the meshes the effect names ([`Scene`]); the particle exports (`.csv`, `.ply`) and their [`Summary`].
 //! Every file is written atomically ([`write_atomically`]).
 //!
 //! An embedding application needs none of it: it draws into its own render pass.
@@ -9,6 +9,7 @@
 pub(crate) mod export;
 pub(crate) mod images;
 pub(crate) mod offscreen;
+pub(crate) mod scene;
 
 pub use crate::draw::glow::{GlowPasses, HDR_FORMAT};
 pub use crate::draw::splat::Splat;
@@ -17,3 +18,4 @@ pub use export::{
 };
 pub use images::{contact_sheet, gif, png, Frame8};
 pub use offscreen::{read_texture, Offscreen, FORMAT};
+pub use scene::{Scene, DEPTH_FORMAT};

@@ -11,6 +11,7 @@ use crate::draw::glow::{GlowPasses, HDR_FORMAT};
 use crate::draw::renderer::EffectRenderer;
 use crate::draw::target::DrawTarget;
 use crate::error::RuntimeError;
+use crate::outputs::scene::Scene;
 use crate::sim::effect::Effect;
 use plume_compiler::schema::Glow;
 
@@ -168,6 +169,55 @@ impl Offscreen {
         drop(pass);
         self.finish(encoder);
         Ok(())
+    }
+
+    /// As [`Self::record`], over `scene`: the scene's pass clears the image to the background
+    /// and draws its meshes with depth, then the particles are drawn tested against that depth
+    /// (`renderer` must be made for [`Scene::target`] of this target's).
+    pub fn record_over_scene(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        effect: &Effect,
+        renderer: &EffectRenderer,
+        camera: &Camera,
+        scene: &Scene,
+    ) -> Result<(), RuntimeError> {
+        effect.prepare_draw(encoder, renderer, camera)?;
+        let background = effect
+            .group_compiled(renderer.first_group())?
+            .ir
+            .render
+            .background;
+        scene.record(encoder, self.attachment(background), camera);
+        let mut color = self.attachment(background);
+        color.ops.load = wgpu::LoadOp::Load;
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("particles over the scene"),
+            color_attachments: &[Some(color)],
+            depth_stencil_attachment: Some(scene.particle_depth()),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        renderer.draw(&mut pass);
+        drop(pass);
+        self.finish(encoder);
+        Ok(())
+    }
+
+    /// Draws `effect` over `scene` ([`Self::record_over_scene`]) and returns the image.
+    pub fn render_over_scene(
+        &self,
+        effect: &Effect,
+        renderer: &EffectRenderer,
+        camera: &Camera,
+        scene: &Scene,
+    ) -> Result<Vec<u8>, RuntimeError> {
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        self.record_over_scene(&mut encoder, effect, renderer, camera, scene)?;
+        self.gpu.queue.submit([encoder.finish()]);
+        self.gpu.take_error()?;
+        self.read()
     }
 
     /// Records what turns the drawn attachment into the image read back: the bloom passes

@@ -25,6 +25,7 @@ use glam::{DMat3, DVec3};
 use super::sdf::{cached_or_baked, Sdf, MAX_RESOLUTION};
 use super::{collider_path, Collider, Hit};
 use crate::base::check::Checker;
+use crate::base::mesh::TriMesh;
 use crate::base::path::ValuePath;
 use crate::base::values::Vec3;
 use crate::base::writer::{f32_lit, Writer};
@@ -47,6 +48,15 @@ const PUSH_TRIES: u32 = 4;
 /// A segment this short (in cells) does not move.
 const TINY: f64 = 1e-30;
 
+/// A mesh read from its file and its baked field (both in the mesh's own coordinates).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Baked {
+    /// The signed distance field particles collide with.
+    pub sdf: Sdf,
+    /// The mesh itself, for drawing the scene.
+    pub mesh: TriMesh,
+}
+
 /// A mesh collider in the IR: the baked field and where it sits.
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshIr {
@@ -58,8 +68,8 @@ pub struct MeshIr {
     pub scale: f64,
     /// The mesh's rotation (its axes in world coordinates, as columns).
     pub rotation: DMat3,
-    /// The baked field, in the mesh's own coordinates.
-    pub sdf: Arc<Sdf>,
+    /// The mesh and its baked field, in the mesh's own coordinates.
+    pub baked: Arc<Baked>,
 }
 
 /// The rotation `rotation` (degrees about x, then y, then z) stands for.
@@ -98,7 +108,7 @@ pub fn read_meshes(collide: &mut [Collider], base_dir: Option<&Path>, c: &mut Ch
         let Collider::Mesh {
             file,
             resolution,
-            sdf,
+            baked,
             ..
         } = collider
         else {
@@ -109,13 +119,13 @@ pub fn read_meshes(collide: &mut [Collider], base_dir: Option<&Path>, c: &mut Ch
         }
         let full = base_dir.map_or_else(|| PathBuf::from(&*file), |dir| dir.join(&*file));
         match bake_file(&full, *resolution) {
-            Ok(field) => *sdf = Some(Arc::new(field)),
+            Ok(read) => *baked = Some(Arc::new(read)),
             Err(message) => c.error(&path.field("file"), message),
         }
     }
 }
 
-fn bake_file(path: &Path, resolution: u32) -> Result<Sdf, String> {
+fn bake_file(path: &Path, resolution: u32) -> Result<Baked, String> {
     let (mesh, bytes) = crate::base::mesh::read_obj(path)?;
     let (open, first) = mesh.open_edges();
     if let Some((a, b)) = first {
@@ -140,28 +150,38 @@ fn bake_file(path: &Path, resolution: u32) -> Result<Sdf, String> {
             hi.z - lo.z
         ));
     }
-    Ok(cached_or_baked(&mesh, path, &bytes, resolution))
+    let sdf = cached_or_baked(&mesh, path, &bytes, resolution);
+    Ok(Baked { sdf, mesh })
 }
 
 impl MeshIr {
+    /// The mesh's triangles placed in the world.
+    pub fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+        let mesh = &self.baked.mesh;
+        (0..mesh.triangles.len()).map(move |t| {
+            mesh.corners(t)
+                .map(|p| self.offset + self.scale * (self.rotation * p))
+        })
+    }
+
     /// World `x` in grid coordinates (cells from node 0).
     fn grid(&self, x: DVec3) -> DVec3 {
         let local = self.rotation.transpose() * (x - self.offset) / self.scale;
-        (local - self.sdf.min) / self.sdf.cell
+        (local - self.baked.sdf.min) / self.baked.sdf.cell
     }
 
     fn in_box(&self, g: DVec3) -> bool {
-        g.cmpge(DVec3::ZERO).all() && g.cmple(self.sdf.last()).all()
+        g.cmpge(DVec3::ZERO).all() && g.cmple(self.baked.sdf.last()).all()
     }
 
     /// The field's value at grid point `g`, in cells.
     fn cells(&self, g: DVec3) -> f64 {
-        self.sdf.value(g) / self.sdf.cell
+        self.baked.sdf.value(g) / self.baked.sdf.cell
     }
 
     /// The world normal at grid point `g` (`fallback` where the gradient vanishes).
     fn normal(&self, g: DVec3, fallback: DVec3) -> DVec3 {
-        let n = self.rotation * self.sdf.gradient(g);
+        let n = self.rotation * self.baked.sdf.gradient(g);
         let l = n.length();
         if l > 1e-12 {
             n / l
@@ -174,7 +194,7 @@ impl MeshIr {
     pub fn hit(&self, a: DVec3, b: DVec3) -> Option<Hit> {
         let ga = self.grid(a);
         let d = self.grid(b) - ga;
-        let last = self.sdf.last();
+        let last = self.baked.sdf.last();
         let (mut s0, mut s1) = (0.0_f64, 1.0_f64);
         for axis in 0..3 {
             let (p, dp, hi) = (ga[axis], d[axis], last[axis]);
@@ -228,7 +248,7 @@ impl MeshIr {
 
     /// Steps that cover any segment through the box at the shortest step.
     fn march_limit(&self) -> u32 {
-        (8 * self.sdf.counts.iter().max().copied().unwrap_or(2)) + 2
+        (8 * self.baked.sdf.counts.iter().max().copied().unwrap_or(2)) + 2
     }
 
     /// A point inside moved out along the gradient, `margin` beyond the surface.
@@ -237,14 +257,14 @@ impl MeshIr {
         if !self.in_box(g) {
             return x;
         }
-        let mut depth = self.sdf.value(g) * self.scale;
+        let mut depth = self.baked.sdf.value(g) * self.scale;
         for _ in 0..PUSH_TRIES {
             if depth >= 0.0 {
                 break;
             }
             x += self.normal(g, DVec3::Y) * (margin - depth);
             g = self.grid(x);
-            depth = self.sdf.value(g) * self.scale;
+            depth = self.baked.sdf.value(g) * self.scale;
         }
         x
     }
@@ -252,28 +272,28 @@ impl MeshIr {
     /// Whether `x` is on the allowed side (outside the field's zero level).
     pub fn allows(&self, x: DVec3) -> bool {
         let g = self.grid(x);
-        !self.in_box(g) || self.sdf.value(g) >= 0.0
+        !self.in_box(g) || self.baked.sdf.value(g) >= 0.0
     }
 
     /// The largest coordinate magnitude the placed field reaches (for the margin).
     pub fn scale(&self) -> f64 {
-        let far = self
-            .sdf
+        let sdf = &self.baked.sdf;
+        let far = sdf
             .min
             .abs()
-            .max((self.sdf.min + self.sdf.last() * self.sdf.cell).abs())
+            .max((sdf.min + sdf.last() * sdf.cell).abs())
             .length();
         self.offset.abs().max_element() + self.scale * far
     }
 
     /// The field's cell in the world, the finest feature it holds.
     pub fn cell(&self) -> f64 {
-        self.sdf.cell * self.scale
+        self.baked.sdf.cell * self.scale
     }
 
     /// One line for `--emit ir`.
     pub fn describe(&self) -> String {
-        let [nx, ny, nz] = self.sdf.counts;
+        let [nx, ny, nz] = self.baked.sdf.counts;
         format!(
             "Mesh `{}` offset ({}, {}, {}) scale {}: {nx} x {ny} x {nz} field nodes, cell {} m",
             self.file,
@@ -288,7 +308,7 @@ impl MeshIr {
     /// The WGSL twins of [`MeshIr::hit`] and [`MeshIr::push_out`], reading the field from
     /// `collider_data` at `offset`.
     pub fn emit(&self, w: &mut Writer, i: usize, offset: u32) {
-        let [nx, ny, _] = self.sdf.counts;
+        let [nx, ny, _] = self.baked.sdf.counts;
         let v3 = |v: DVec3| {
             format!(
                 "vec3<f32>({}, {}, {})",
@@ -298,8 +318,8 @@ impl MeshIr {
             )
         };
         // grid = to_grid · (x − offset) − min / cell; rows of Rᵀ / (scale · cell).
-        let to_grid = self.rotation.transpose() / (self.scale * self.sdf.cell);
-        let last = self.sdf.last();
+        let to_grid = self.rotation.transpose() / (self.scale * self.baked.sdf.cell);
+        let last = self.baked.sdf.last();
         w.block(format!("fn mesh{i}_grid(x: vec3<f32>) -> vec3<f32>"), |w| {
             w.line(format!("let p = x - {};", v3(self.offset)));
             w.line(format!(
@@ -307,7 +327,7 @@ impl MeshIr {
                 v3(to_grid.row(0)),
                 v3(to_grid.row(1)),
                 v3(to_grid.row(2)),
-                v3(self.sdf.min / self.sdf.cell)
+                v3(self.baked.sdf.min / self.baked.sdf.cell)
             ));
         });
         w.block(format!("fn mesh{i}_at(c: vec3<u32>) -> f32"), |w| {
@@ -361,7 +381,7 @@ impl MeshIr {
                 w.line("return select(fallback, n / l, l > 1e-12);");
             },
         );
-        let inv_cell = f32_lit(1.0 / self.sdf.cell);
+        let inv_cell = f32_lit(1.0 / self.baked.sdf.cell);
         w.block(
             format!("fn collider_hit_{i}(a: vec3<f32>, b: vec3<f32>) -> vec4<f32>"),
             |w| {

@@ -175,7 +175,7 @@ impl Surface {
     pub fn data_len(&self) -> u32 {
         match self {
             Surface::HeightField(f) => f.heights.len() as u32,
-            Surface::Mesh(m) => m.sdf.values.len() as u32,
+            Surface::Mesh(m) => m.baked.sdf.values.len() as u32,
             _ => 0,
         }
     }
@@ -288,7 +288,7 @@ pub fn data(colliders: &[ColliderIr]) -> Vec<f32> {
     for c in colliders {
         match &c.surface {
             Surface::HeightField(f) => out.extend(f.heights.iter().map(|&h| h as f32)),
-            Surface::Mesh(m) => out.extend_from_slice(&m.sdf.values),
+            Surface::Mesh(m) => out.extend_from_slice(&m.baked.sdf.values),
             _ => {}
         }
     }

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use serde::Deserialize;
 
-use super::{aabb, height_field, mesh, plane, sdf, sphere, ColliderIr, Surface};
+use super::{aabb, height_field, mesh, plane, sphere, ColliderIr, Surface};
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::base::values::Vec3;
@@ -98,9 +98,9 @@ pub enum Collider {
         restitution: f64,
         /// Fraction of tangential speed lost on a bounce, in [0, 1].
         friction: f64,
-        /// The baked field, made by [`mesh::read_meshes`] before the checks.
+        /// The mesh and its baked field, made by [`mesh::read_meshes`] before the checks.
         #[serde(skip)]
-        sdf: Option<Arc<sdf::Sdf>>,
+        baked: Option<Arc<mesh::Baked>>,
     },
 }
 
@@ -179,14 +179,14 @@ impl Collider {
                 resolution,
                 restitution,
                 friction,
-                sdf,
+                baked,
                 ..
             } => {
                 mesh::check(
                     path,
                     c,
                     (*offset, *scale, *rotation, *resolution),
-                    sdf.is_some(),
+                    baked.is_some(),
                 );
                 (restitution, friction)
             }
@@ -260,7 +260,7 @@ impl Collider {
                 rotation,
                 restitution,
                 friction,
-                sdf,
+                baked,
                 ..
             } => (
                 Surface::Mesh(mesh::MeshIr {
@@ -268,7 +268,7 @@ impl Collider {
                     offset: offset.d(),
                     scale: *scale,
                     rotation: mesh::rotation_matrix(*rotation),
-                    sdf: sdf
+                    baked: baked
                         .clone()
                         .expect("the checks refuse a mesh collider not read"),
                 }),

@@ -1,0 +1,235 @@
+//! The scene around an effect in `plume render` and `plume preview`: the meshes the effect
+//! names (its mesh colliders and mesh emitters, [`plume_compiler::EffectIr::scene_triangles`]),
+//! drawn plainly (one grey, flat per triangle, lit by a fixed light from above) into the colour
+//! image and a depth buffer before the particles, so that an author sees what the particles
+//! hit: meshes hide the particles behind them, and soft particles fade against them.
+
+use glam::{DVec3, Mat4, Vec3};
+
+use crate::device::gpu::Gpu;
+use crate::draw::camera::Camera;
+use crate::draw::target::DrawTarget;
+use crate::error::RuntimeError;
+
+/// The scene's depth buffer format.
+pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// The surfaces' grey (linear RGB).
+const GREY: [f32; 3] = [0.42, 0.40, 0.38];
+
+/// Bytes of one vertex: position and normal.
+const VERTEX_BYTES: u64 = 24;
+
+/// Meshes ready to draw, and the depth buffer they are drawn into.
+pub struct Scene {
+    gpu: Gpu,
+    vertices: wgpu::Buffer,
+    count: u32,
+    uniforms: wgpu::Buffer,
+    bind_group: wgpu::BindGroup,
+    pipeline: wgpu::RenderPipeline,
+    depth: wgpu::TextureView,
+    size: (u32, u32),
+}
+
+fn depth_buffer(gpu: &Gpu, (width, height): (u32, u32)) -> wgpu::TextureView {
+    gpu.texture_2d(
+        "scene depth",
+        (width, height),
+        DEPTH_FORMAT,
+        wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+    )
+    .create_view(&Default::default())
+}
+
+impl Scene {
+    /// The scene of `triangles` (world space) for a `width` x `height` image of
+    /// `color_format`; None when there are no triangles.
+    pub fn new(
+        gpu: &Gpu,
+        triangles: &[[DVec3; 3]],
+        color_format: wgpu::TextureFormat,
+        (width, height): (u32, u32),
+    ) -> Result<Option<Self>, RuntimeError> {
+        if triangles.is_empty() {
+            return Ok(None);
+        }
+        let device = &gpu.device;
+        let mut bytes = Vec::with_capacity(triangles.len() * 3 * VERTEX_BYTES as usize);
+        for [a, b, c] in triangles {
+            let n = (*b - *a).cross(*c - *a).normalize_or_zero().as_vec3();
+            for p in [a, b, c] {
+                for x in p.as_vec3().to_array().into_iter().chain(n.to_array()) {
+                    bytes.extend_from_slice(&x.to_le_bytes());
+                }
+            }
+        }
+        let vertices = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scene vertices"),
+            size: bytes.len() as u64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        gpu.queue.write_buffer(&vertices, 0, &bytes);
+        let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scene uniforms"),
+            size: 112,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("scene"),
+            source: wgpu::ShaderSource::Wgsl(include_str!("scene.wgsl").into()),
+        });
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("scene"),
+            entries: &[wgpu::BindGroupLayoutEntry {
+                binding: 0,
+                visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
+                ty: wgpu::BindingType::Buffer {
+                    ty: wgpu::BufferBindingType::Uniform,
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            }],
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout: &layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniforms.as_entire_binding(),
+            }],
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("scene"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("scene"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: VERTEX_BYTES,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3],
+                })],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Less),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: Some(wgpu::FragmentState {
+                module: &module,
+                entry_point: Some("fs"),
+                compilation_options: Default::default(),
+                targets: &[Some(wgpu::ColorTargetState {
+                    format: color_format,
+                    blend: None,
+                    write_mask: wgpu::ColorWrites::ALL,
+                })],
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let depth = depth_buffer(gpu, (width, height));
+        gpu.take_error()?;
+        Ok(Some(Self {
+            gpu: gpu.clone(),
+            vertices,
+            count: (triangles.len() * 3) as u32,
+            uniforms,
+            bind_group,
+            pipeline,
+            depth,
+            size: (width, height),
+        }))
+    }
+
+    /// Makes the depth buffer `size` (a window resized); returns whether it changed, and with
+    /// it [`Self::depth_view`].
+    pub fn resize(&mut self, size: (u32, u32)) -> bool {
+        if size == self.size || size.0 == 0 || size.1 == 0 {
+            return false;
+        }
+        self.depth = depth_buffer(&self.gpu, size);
+        self.size = size;
+        true
+    }
+
+    /// What a particle renderer drawn over this scene must match: `color` with this scene's
+    /// depth test.
+    pub fn target(color: DrawTarget) -> DrawTarget {
+        color.with_depth(DEPTH_FORMAT)
+    }
+
+    /// The depth buffer the scene is drawn into (for soft particles:
+    /// [`crate::EffectRenderer::set_scene_depth`]).
+    pub fn depth_view(&self) -> &wgpu::TextureView {
+        &self.depth
+    }
+
+    /// The depth attachment of a particle pass over the scene: tested, not written, so that
+    /// soft particles may read it in the same pass.
+    pub fn particle_depth(&self) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+        wgpu::RenderPassDepthStencilAttachment {
+            view: &self.depth,
+            depth_ops: None,
+            stencil_ops: None,
+        }
+    }
+
+    /// Records the scene's pass from `camera`: `color` (cleared or loaded as its operations
+    /// say) gets the meshes, and the depth buffer is cleared and written. The camera reaches
+    /// the GPU by a queue write, so record one scene pass per submission.
+    pub fn record(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        color: wgpu::RenderPassColorAttachment<'_>,
+        camera: &Camera,
+    ) {
+        let eye = camera.view.inverse().w_axis.truncate();
+        let light = Vec3::new(0.35, 1.0, 0.5).normalize();
+        let mut uniforms = Vec::with_capacity(112);
+        let view_proj: Mat4 = camera.proj * camera.view;
+        for x in view_proj
+            .to_cols_array()
+            .into_iter()
+            .chain(eye.extend(1.0).to_array())
+            .chain(light.extend(0.0).to_array())
+            .chain(GREY.into_iter().chain([1.0]))
+        {
+            uniforms.extend_from_slice(&x.to_le_bytes());
+        }
+        self.gpu.queue.write_buffer(&self.uniforms, 0, &uniforms);
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("scene"),
+            color_attachments: &[Some(color)],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &self.depth,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(1.0),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&self.pipeline);
+        pass.set_bind_group(0, &self.bind_group, &[]);
+        pass.set_vertex_buffer(0, self.vertices.slice(..));
+        pass.draw(0..self.count, 0..1);
+    }
+}

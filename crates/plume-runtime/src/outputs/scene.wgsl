@@ -1,0 +1,40 @@
+// The scene around an effect (outputs/scene.rs): triangles in world space, one flat grey lit
+// by a fixed light, both sides of each triangle lit as its front.
+
+struct Uniforms {
+    view_proj: mat4x4<f32>,
+    // The camera's position (w unused).
+    eye: vec4<f32>,
+    // Unit direction towards the light (w unused).
+    light: vec4<f32>,
+    // The surfaces' colour (a unused).
+    color: vec4<f32>,
+}
+
+@group(0) @binding(0) var<uniform> u: Uniforms;
+
+struct Out {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    @location(1) world: vec3<f32>,
+}
+
+@vertex
+fn vs(@location(0) position: vec3<f32>, @location(1) normal: vec3<f32>) -> Out {
+    var out: Out;
+    out.clip = u.view_proj * vec4<f32>(position, 1.0);
+    out.normal = normal;
+    out.world = position;
+    return out;
+}
+
+@fragment
+fn fs(in: Out) -> @location(0) vec4<f32> {
+    var n = in.normal;
+    let l = length(n);
+    n = select(vec3<f32>(0.0, 1.0, 0.0), n / l, l > 0.0);
+    // The side the camera sees is lit as the front.
+    n = select(n, -n, dot(n, u.eye.xyz - in.world) < 0.0);
+    let diffuse = max(dot(n, u.light.xyz), 0.0);
+    return vec4<f32>(u.color.rgb * (0.3 + 0.7 * diffuse), 1.0);
+}
