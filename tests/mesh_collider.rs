@@ -223,7 +223,7 @@ fn bad_meshes_are_refused_at_the_collider_file() {
         ),
         (
             format!("Mesh(file: {flat:?}, restitution: 0.5, friction: 0.0)"),
-            "is flat (its box is 1 x 0 x 1): a collider needs a volume",
+            "is flat (its box is 1 x 0 x 1): a solid needs a volume",
         ),
         (
             format!("Mesh(file: {good:?}, resolution: 2, restitution: 0.5, friction: 0.0)"),

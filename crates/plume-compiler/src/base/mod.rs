@@ -14,5 +14,6 @@ pub mod mesh;
 pub mod naga_check;
 pub mod path;
 pub mod rng;
+pub mod sdf;
 pub mod values;
 pub mod writer;

@@ -49,6 +49,8 @@ pub mod stream {
     pub const ROTATION_SPIN: u32 = 12;
     /// One draw for a particle's palette colour (`render.palette`).
     pub const PALETTE: u32 = 13;
+    /// One draw for the triangle (or the field cell) a mesh spawn shape picks.
+    pub const MESH_PICK: u32 = 14;
     /// `rand(k)` in custom expressions draws from stream CUSTOM + k (k <= 255).
     pub const CUSTOM: u32 = 64;
 }

@@ -73,7 +73,8 @@ pub enum Shape {
     },
     /// Listed points, handed out in order.
     Points(Vec<Vec3>),
-    /// Uniform by area on a mesh's surface (see [`crate::features::mesh_emission`]).
+    /// Uniform by area on a mesh's surface, or in its volume (see
+    /// [`crate::features::mesh_emission`]).
     Mesh {
         /// The OBJ file, relative to the effect file.
         file: String,
@@ -86,6 +87,12 @@ pub enum Shape {
         /// Degrees about x, then y, then z (the world's axes).
         #[serde(default = "origin")]
         rotation: Vec3,
+        /// Spawn in the closed mesh's volume instead of on its surface.
+        #[serde(default)]
+        volume: bool,
+        /// With `volume`: field cells along the mesh's longest side (4 to 128).
+        #[serde(default = "default_resolution")]
+        resolution: u32,
         /// The placed triangles, read by [`read_mesh_shapes`] before the checks.
         #[serde(skip)]
         surface: Option<Arc<MeshSurface>>,
@@ -98,6 +105,10 @@ fn origin() -> Vec3 {
 
 fn one() -> f64 {
     1.0
+}
+
+fn default_resolution() -> u32 {
+    32
 }
 
 /// Spawn velocities.
@@ -202,7 +213,7 @@ pub enum ShapeIr {
     },
     /// Listed points, in order.
     Points(Vec<DVec3>),
-    /// On a mesh's surface.
+    /// On a mesh's surface or in its volume.
     Mesh(Arc<MeshSurface>),
 }
 
@@ -315,6 +326,8 @@ pub fn read_mesh_shapes(emitters: &mut [Emitter], base_dir: Option<&Path>, c: &m
             offset,
             scale,
             rotation,
+            volume,
+            resolution,
             surface,
         } = &mut emitter.shape
         else {
@@ -325,10 +338,12 @@ pub fn read_mesh_shapes(emitters: &mut [Emitter], base_dir: Option<&Path>, c: &m
             && rotation.d().is_finite()
             && scale.is_finite()
             && *scale > 0.0)
+            || (*volume && !(4..=crate::base::sdf::MAX_RESOLUTION).contains(resolution))
         {
             continue;
         }
-        match place(file, base_dir, (*offset, *scale, *rotation)) {
+        let volume = volume.then_some(*resolution);
+        match place(file, base_dir, (*offset, *scale, *rotation), volume) {
             Ok(placed) => *surface = Some(Arc::new(placed)),
             Err(message) => c.error(
                 &ValuePath::root()

@@ -56,10 +56,9 @@ pub fn spawn(ir: &EffectIr, e: usize, id: u32, k: u32, step: u64) -> Spawned {
 /// The spawn position and, on a mesh, the surface's normal there (zero elsewhere).
 fn position(d: &Draw, shape: &ShapeIr, k: u32) -> (DVec3, DVec3) {
     if let ShapeIr::Mesh(m) = shape {
-        return m.sample(
-            rand_u32(d.seed_mix, d.id, stream::POSITION),
-            d.u(stream::POSITION + 1),
-            d.u(stream::POSITION + 2),
+        return m.spawn(
+            rand_u32(d.seed_mix, d.id, stream::MESH_PICK),
+            d.u3(stream::POSITION),
         );
     }
     let x = match shape {

@@ -241,6 +241,8 @@ pub(crate) fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: 
             offset,
             scale,
             rotation,
+            volume,
+            resolution,
             surface,
             ..
         } => {
@@ -248,8 +250,20 @@ pub(crate) fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: 
             let placed =
                 c.vec3(&s.field("offset"), *offset) & c.vec3(&s.field("rotation"), *rotation);
             c.positive(&s.field("scale"), *scale);
-            if placed && *scale > 0.0 && surface.is_none() {
+            let max = crate::base::sdf::MAX_RESOLUTION;
+            if *volume && !(4..=max).contains(resolution) {
+                c.error(
+                    &s.field("resolution"),
+                    format!("resolution is the field cells along the mesh's longest side, 4 to {max}, got {resolution}"),
+                );
+            } else if placed && *scale > 0.0 && surface.is_none() {
                 c.error(&s.field("file"), "the mesh was not read");
+            }
+            if *volume && matches!(e.velocity, Velocity::Normal { .. }) {
+                c.error(
+                    &path.field("velocity").variant("Normal"),
+                    "a particle spawned in a mesh's volume has no surface normal: use Radial (away from the mesh's centre) or Cone",
+                );
             }
         }
     }

@@ -1,6 +1,6 @@
 //! `Mesh`: a closed triangle mesh from an OBJ file, placed in the world by `offset`, `scale`
 //! and `rotation`; particles stay outside it. The mesh is baked once into a signed distance
-//! field ([`super::sdf`]) whose f32 values the GPU (the `collider_data` binding) and the f64
+//! field ([`crate::base::sdf`]) whose f32 values the GPU (the `collider_data` binding) and the f64
 //! reference both interpolate, so both collide with the very same surface: the field's zero
 //! level, which is the mesh to within its resolution (a cell is the mesh's longest side over
 //! `resolution`).
@@ -22,11 +22,11 @@ use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
 
-use super::sdf::{cached_or_baked, Sdf, MAX_RESOLUTION};
 use super::{collider_path, Collider, Hit};
 use crate::base::check::Checker;
 use crate::base::mesh::TriMesh;
 use crate::base::path::ValuePath;
+use crate::base::sdf::{read_and_bake, Sdf, MAX_RESOLUTION};
 use crate::base::values::Vec3;
 use crate::base::writer::{f32_lit, Writer};
 
@@ -126,31 +126,7 @@ pub fn read_meshes(collide: &mut [Collider], base_dir: Option<&Path>, c: &mut Ch
 }
 
 fn bake_file(path: &Path, resolution: u32) -> Result<Baked, String> {
-    let (mesh, bytes) = crate::base::mesh::read_obj(path)?;
-    let (open, first) = mesh.open_edges();
-    if let Some((a, b)) = first {
-        return Err(format!(
-            "mesh `{}` is not closed: {open} edge(s) border an odd number of triangles, the first from ({}, {}, {}) to ({}, {}, {}); a collider needs a closed mesh, so that it has an inside (close the holes, or weld the vertices)",
-            path.display(),
-            a.x,
-            a.y,
-            a.z,
-            b.x,
-            b.y,
-            b.z
-        ));
-    }
-    let (lo, hi) = mesh.bounds();
-    if (hi - lo).min_element() <= 0.0 {
-        return Err(format!(
-            "mesh `{}` is flat (its box is {} x {} x {}): a collider needs a volume",
-            path.display(),
-            hi.x - lo.x,
-            hi.y - lo.y,
-            hi.z - lo.z
-        ));
-    }
-    let sdf = cached_or_baked(&mesh, path, &bytes, resolution);
+    let (sdf, mesh) = read_and_bake(path, resolution)?;
     Ok(Baked { sdf, mesh })
 }
 

@@ -19,9 +19,9 @@ pub mod height_image;
 pub mod mesh;
 pub mod plane;
 mod schema;
-pub mod sdf;
 pub mod sphere;
 
+pub use crate::base::sdf;
 pub use schema::{collider_path, Collider};
 
 use glam::DVec3;

@@ -272,10 +272,9 @@ fn emit_shape(w: &mut Writer, e: usize, shape: &ShapeIr) {
         }
         ShapeIr::Mesh(_) => {
             w.line(format!(
-                "let on_mesh = mesh_spawn_{e}(rand_u32(id, {}u), rand_unit(id, {}u), rand_unit(id, {}u));",
-                stream::POSITION,
-                stream::POSITION + 1,
-                stream::POSITION + 2
+                "let on_mesh = mesh_spawn_{e}(rand_u32(id, {}u), {});",
+                stream::MESH_PICK,
+                unit3(stream::POSITION)
             ));
             w.line("s.x = on_mesh[0];");
             w.line("let surface_normal = on_mesh[1];");

@@ -1,4 +1,5 @@
-//! Signed distance fields baked from closed triangle meshes, for the `Mesh` collider.
+//! Signed distance fields baked from closed triangle meshes, for the `Mesh` collider and for
+//! spawning in a mesh's volume.
 //!
 //! **Grid.** Nodes sit `cell` apart on a box around the mesh, padded by [`PAD`] cells on every
 //! side (so every border node is outside, at a distance of at least `PAD` cells); `cell` is the
@@ -24,7 +25,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use crate::base::mesh::{fnv1a, TriMesh, FNV_OFFSET};
+use crate::base::mesh::{fnv1a, read_obj, TriMesh, FNV_OFFSET};
 
 /// Cells of padding around the mesh's box.
 pub const PAD: u32 = 3;
@@ -367,6 +368,38 @@ pub fn cached_or_baked(
         let _ = std::fs::remove_file(&aside);
     }
     sdf
+}
+
+/// Reads the closed OBJ mesh at `path` and bakes (or loads from the cache) its field at
+/// `resolution`; says what is wrong otherwise: the file's problems, a mesh that is not closed
+/// (it has no inside) or flat (no volume).
+pub fn read_and_bake(path: &Path, resolution: u32) -> Result<(Sdf, TriMesh), String> {
+    let (mesh, bytes) = read_obj(path)?;
+    let (open, first) = mesh.open_edges();
+    if let Some((a, b)) = first {
+        return Err(format!(
+            "mesh `{}` is not closed: {open} edge(s) border an odd number of triangles, the first from ({}, {}, {}) to ({}, {}, {}); a solid needs a closed mesh, so that it has an inside (close the holes, or weld the vertices)",
+            path.display(),
+            a.x,
+            a.y,
+            a.z,
+            b.x,
+            b.y,
+            b.z
+        ));
+    }
+    let (lo, hi) = mesh.bounds();
+    if (hi - lo).min_element() <= 0.0 {
+        return Err(format!(
+            "mesh `{}` is flat (its box is {} x {} x {}): a solid needs a volume",
+            path.display(),
+            hi.x - lo.x,
+            hi.y - lo.y,
+            hi.z - lo.z
+        ));
+    }
+    let sdf = cached_or_baked(&mesh, path, &bytes, resolution);
+    Ok((sdf, mesh))
 }
 
 #[cfg(test)]
