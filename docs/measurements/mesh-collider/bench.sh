@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# The Mesh collider's cost per step against the analytic Sphere it approximates and against the
+# ground alone (docs/performance.md, "Mesh colliders"): 10M particles falling onto a ball over
+# the ground, 100 steps. From the project root, after `cargo build --release`:
+#   python3 docs/measurements/mesh-collider/make.py && docs/measurements/mesh-collider/bench.sh
+set -euo pipefail
+dir=docs/measurements/mesh-collider
+plume=${PLUME:-./target/release/plume}
+for n in 1000000 10000000; do
+  for e in ground_only analytic mesh32 mesh96; do
+    $plume bench $dir/$e.ron --particles $n --steps 100 --json
+  done
+done
