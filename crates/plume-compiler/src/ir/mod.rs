@@ -238,6 +238,30 @@ impl EffectIr {
         out
     }
 
+    /// Whether the effect collides with the view's depth image (a `SceneDepth` collider): its
+    /// kernels then read the `scene_depth` and `scene_camera` bindings, which the host fills.
+    pub fn collides_with_scene_depth(&self) -> bool {
+        self.colliders.iter().any(|c| {
+            matches!(
+                c.surface,
+                crate::features::colliders::Surface::SceneDepth(_)
+            )
+        })
+    }
+
+    /// Gives every `SceneDepth` collider the image it collides with (the reference's copy of
+    /// what the host gives the GPU).
+    pub fn set_scene_depth(
+        &mut self,
+        image: &std::sync::Arc<crate::features::colliders::scene_depth::DepthImage>,
+    ) {
+        for c in &mut self.colliders {
+            if let crate::features::colliders::Surface::SceneDepth(s) = &mut c.surface {
+                s.image = Some(image.clone());
+            }
+        }
+    }
+
     /// Whether any collider needs the `collider_data` binding (a height field's samples, a
     /// mesh's field).
     pub fn has_collider_data(&self) -> bool {

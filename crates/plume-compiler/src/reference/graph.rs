@@ -43,6 +43,17 @@ impl ReferenceGraph {
         }
     }
 
+    /// Gives every group's `SceneDepth` collider the depth image (see
+    /// [`ReferenceSim::set_scene_depth`]).
+    pub fn set_scene_depth(
+        &mut self,
+        image: &std::sync::Arc<crate::features::colliders::scene_depth::DepthImage>,
+    ) {
+        for g in &mut self.groups {
+            g.set_scene_depth(image);
+        }
+    }
+
     /// Sets live param `name` in every group (see [`ReferenceSim::set_param`]).
     pub fn set_param(&mut self, name: &str, value: f32) -> Result<(), String> {
         for g in &mut self.groups {

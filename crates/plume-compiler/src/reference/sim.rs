@@ -97,6 +97,16 @@ impl ReferenceSim {
         self.placement = placement;
     }
 
+    /// Gives the `SceneDepth` collider the depth image and camera it collides with from the next
+    /// step on (the f64 twin of `Effect::set_scene_depth`, with the same f32 depths and
+    /// matrices the GPU reads).
+    pub fn set_scene_depth(
+        &mut self,
+        image: &std::sync::Arc<crate::features::colliders::scene_depth::DepthImage>,
+    ) {
+        self.ir.set_scene_depth(image);
+    }
+
     /// Sets live param `name` to `value` for the next steps (the f64 twin of
     /// `Effect::set_param`: custom forces then read the f32 `value`, as the GPU does); refused
     /// for a name the effect does not read at run time.

@@ -97,11 +97,16 @@ pub fn check_effect(effect: &Effect) -> Checker {
     if let Some(s) = effect.max_speed {
         c.positive(&root.field("max_speed"), s);
     }
+    let mut scene_depths = 0;
     for (i, collider) in effect.collide.iter().enumerate() {
-        collider.check(
-            &crate::features::colliders::collider_path(i, collider),
-            &mut c,
-        );
+        let path = crate::features::colliders::collider_path(i, collider);
+        collider.check(&path, &mut c);
+        if let crate::features::colliders::Collider::SceneDepth { .. } = collider {
+            scene_depths += 1;
+            if scene_depths > 1 {
+                c.error(&path, "an effect collides with the scene's depth once: one SceneDepth collider (give it the thickness it needs)");
+            }
+        }
     }
     for (i, k) in effect.kill.iter().enumerate() {
         let p = root.field("kill").index(i);

@@ -71,6 +71,9 @@ pub struct Resources {
     pub sort: Option<SortBuffers>,
     /// Buffers past the core bindings (7 up: flocking's and the baked field's), by binding.
     pub extra: Vec<(u32, wgpu::Buffer)>,
+    /// The depth image a `SceneDepth` collider reads: the host's, or until it gives one a
+    /// 1x1 placeholder (the camera's width 0 switches the collider off).
+    scene_depth: Option<wgpu::TextureView>,
     /// The compiled compute module.
     pub module: wgpu::ShaderModule,
     layout: wgpu::BindGroupLayout,
@@ -231,7 +234,12 @@ impl Resources {
             .layout
             .bindings
             .iter()
-            .filter(|b| b.binding >= 7 && b.name != "depth_axis" && b.name != "trail")
+            .filter(|b| {
+                b.binding >= 7
+                    && b.name != "depth_axis"
+                    && b.name != "trail"
+                    && b.name != "scene_depth"
+            })
             .map(|b| {
                 let size = b.bytes.max(16);
                 if let Some((_, buffer)) = shared.iter().find(|(at, _)| *at == b.binding) {
@@ -300,14 +308,23 @@ impl Resources {
                     "chunk" | "depth_axis" => {
                         buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
                     }
-                    "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data" => {
-                        buffer_entry(
-                            b.binding,
-                            wgpu::BufferBindingType::Storage { read_only: true },
-                            false,
-                            None,
-                        )
-                    }
+                    "scene_depth" => wgpu::BindGroupLayoutEntry {
+                        binding: b.binding,
+                        visibility: wgpu::ShaderStages::COMPUTE,
+                        ty: wgpu::BindingType::Texture {
+                            sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                            view_dimension: wgpu::TextureViewDimension::D2,
+                            multisampled: false,
+                        },
+                        count: None,
+                    },
+                    "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data"
+                    | "scene_camera" => buffer_entry(
+                        b.binding,
+                        wgpu::BufferBindingType::Storage { read_only: true },
+                        false,
+                        None,
+                    ),
                     _ => buffer_entry(b.binding, rw, false, None),
                 })
                 .collect::<Vec<_>>(),
@@ -316,6 +333,15 @@ impl Resources {
             label: Some("plume"),
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
+        });
+        let scene_depth = effect.ir.collides_with_scene_depth().then(|| {
+            gpu.texture_2d(
+                "scene depth placeholder",
+                (1, 1),
+                wgpu::TextureFormat::Depth32Float,
+                wgpu::TextureUsages::TEXTURE_BINDING,
+            )
+            .create_view(&Default::default())
         });
         let resources = Self {
             gpu: gpu.clone(),
@@ -331,6 +357,7 @@ impl Resources {
             frame,
             sort,
             extra,
+            scene_depth,
             module,
             layout,
             pipeline_layout,
@@ -472,6 +499,11 @@ impl Resources {
                     "sort_keys" => sort.expect("sorts").keys.as_entire_binding(),
                     "sort_vals" => sort.expect("sorts").vals.as_entire_binding(),
                     "depth_axis" => sort.expect("sorts").depth_axis.as_entire_binding(),
+                    "scene_depth" => wgpu::BindingResource::TextureView(
+                        self.scene_depth
+                            .as_ref()
+                            .expect("a SceneDepth collider gets a depth view"),
+                    ),
                     _ => self
                         .extra_buffer(b.binding)
                         .expect("every other binding is an extra buffer")
@@ -486,6 +518,20 @@ impl Resources {
                 layout: &self.layout,
                 entries: &entries,
             })
+    }
+
+    /// Binds `view` (a depth-only view of a single-sampled 2D depth texture) as the depth image
+    /// the `SceneDepth` collider reads, rebuilding the chunks' bind groups; the camera goes
+    /// into the `scene_camera` buffer separately.
+    pub fn set_scene_depth_view(&mut self, effect: &CompiledEffect, view: wgpu::TextureView) {
+        self.scene_depth = Some(view);
+        if let Some(mut chunks) = self.chunks.take() {
+            for (k, chunk) in chunks.iter_mut().enumerate() {
+                chunk.bind_group =
+                    self.bind_group(effect, &chunk.buffer, chunk.trail.as_ref(), k as u64);
+            }
+            let _ = self.chunks.set(chunks);
+        }
     }
 
     /// The extra buffer at `binding` (flocking's or the baked field's).

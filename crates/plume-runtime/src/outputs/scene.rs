@@ -28,18 +28,20 @@ pub struct Scene {
     uniforms: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     pipeline: wgpu::RenderPipeline,
+    depth_texture: wgpu::Texture,
     depth: wgpu::TextureView,
     size: (u32, u32),
 }
 
-fn depth_buffer(gpu: &Gpu, (width, height): (u32, u32)) -> wgpu::TextureView {
-    gpu.texture_2d(
+fn depth_buffer(gpu: &Gpu, (width, height): (u32, u32)) -> (wgpu::Texture, wgpu::TextureView) {
+    let texture = gpu.texture_2d(
         "scene depth",
         (width, height),
         DEPTH_FORMAT,
         wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
-    )
-    .create_view(&Default::default())
+    );
+    let view = texture.create_view(&Default::default());
+    (texture, view)
 }
 
 impl Scene {
@@ -142,7 +144,7 @@ impl Scene {
             multiview_mask: None,
             cache: None,
         });
-        let depth = depth_buffer(gpu, (width, height));
+        let (depth_texture, depth) = depth_buffer(gpu, (width, height));
         gpu.take_error()?;
         Ok(Some(Self {
             gpu: gpu.clone(),
@@ -151,6 +153,7 @@ impl Scene {
             uniforms,
             bind_group,
             pipeline,
+            depth_texture,
             depth,
             size: (width, height),
         }))
@@ -162,7 +165,7 @@ impl Scene {
         if size == self.size || size.0 == 0 || size.1 == 0 {
             return false;
         }
-        self.depth = depth_buffer(&self.gpu, size);
+        (self.depth_texture, self.depth) = depth_buffer(&self.gpu, size);
         self.size = size;
         true
     }
@@ -177,6 +180,59 @@ impl Scene {
     /// [`crate::EffectRenderer::set_scene_depth`]).
     pub fn depth_view(&self) -> &wgpu::TextureView {
         &self.depth
+    }
+
+    /// The depth buffer's texture (for a `SceneDepth` collider: [`crate::Effect::set_scene_depth`]).
+    pub fn depth_texture(&self) -> &wgpu::Texture {
+        &self.depth_texture
+    }
+
+    /// The depth buffer read back, row by row from the top (waits for the GPU): what a
+    /// `SceneDepth` collider's f64 reference collides with.
+    pub fn read_depth(&self) -> Result<Vec<f32>, RuntimeError> {
+        let gpu = &self.gpu;
+        let (width, height) = self.size;
+        let module = gpu
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("depth read"),
+                source: wgpu::ShaderSource::Wgsl(include_str!("depth_read.wgsl").into()),
+            });
+        let pipeline = gpu.compute_pipeline(&module, "main", None);
+        let out = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("depth read"),
+            size: u64::from(width) * u64::from(height) * 4,
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            mapped_at_creation: false,
+        });
+        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("depth read"),
+            layout: &pipeline.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: wgpu::BindingResource::TextureView(&self.depth),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: out.as_entire_binding(),
+                },
+            ],
+        });
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&pipeline);
+            pass.set_bind_group(0, &bind_group, &[]);
+            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        let bytes = crate::device::readback::read_buffer(gpu, &out)?;
+        gpu.take_error()?;
+        Ok(bytes
+            .chunks_exact(4)
+            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect())
     }
 
     /// The depth attachment of a particle pass over the scene: tested, not written, so that

@@ -248,6 +248,38 @@ impl Effect {
         }
     }
 
+    /// Gives the effect's `SceneDepth` collider the depth image it collides with from the next
+    /// submission on: `depth`, a single-sampled 2D depth texture with
+    /// `TextureUsages::TEXTURE_BINDING` (any depth format; depth exactly 0 or 1 is empty, so a
+    /// clear value of either convention is no surface), drawn through `view` (world to view,
+    /// right-handed, looking down −z) and `projection` (view to wgpu clip space, standard or
+    /// reversed depth). The previous frame's depth is fine: particles then meet the scene
+    /// where it was a frame ago. The camera is written through the queue, so steps recorded
+    /// into one submission all use the last one set. An effect without a `SceneDepth`
+    /// collider ignores it; one that has one collides with nothing until it is given an
+    /// image. The f64 twin is `ReferenceSim::set_scene_depth`.
+    pub fn set_scene_depth(
+        &mut self,
+        depth: &wgpu::Texture,
+        view: glam::Mat4,
+        projection: glam::Mat4,
+    ) -> Result<(), RuntimeError> {
+        crate::sim::scene_depth::check_texture(depth)?;
+        let camera = crate::sim::scene_depth::camera(view, projection)?;
+        for group in &mut self.groups {
+            crate::sim::scene_depth::bind(group, depth, &camera);
+        }
+        Ok(())
+    }
+
+    /// Whether the effect collides with a depth image the host gives
+    /// ([`Self::set_scene_depth`]).
+    pub fn collides_with_scene_depth(&self) -> bool {
+        self.groups
+            .iter()
+            .any(|g| g.effect.ir.collides_with_scene_depth())
+    }
+
     /// Fires a burst from code in group `group` (0 for an effect without groups): `burst.count`
     /// particles of emitter `burst.emitter`, spawned at the next step recorded (after the
     /// emitters' own spawns, up to `bursts::SLOTS` bursts a step; more wait, in order), moved

@@ -2,7 +2,8 @@
 //! kernels (spawn, update, a field's bake; or a stateless group's bookkeeping), [`flock`] the
 //! flocking pass between spawn and update, [`group`] holds one group's state (its resources,
 //! kernels, depth sort and spawn schedule) and steps, reads and times it, and [`events`] orders
-//! an event stream's firings for the child group, [`graph`] steps several groups and their
+//! an event stream's firings for the child group, [`scene_depth`] binds the host's depth image
+//! for a `SceneDepth` collider, [`graph`] steps several groups and their
 //! streams together, and [`effect`] is the public [`effect::Effect`]: one group, or a graph.
 //!
 //! Imports [`crate::device`] and [`crate::sort`]; never the draw.
@@ -12,4 +13,5 @@ pub(crate) mod events;
 pub(crate) mod flock;
 pub(crate) mod graph;
 pub(crate) mod group;
+pub(crate) mod scene_depth;
 pub(crate) mod steps;

@@ -18,6 +18,7 @@ pub mod height_field;
 pub mod height_image;
 pub mod mesh;
 pub mod plane;
+pub mod scene_depth;
 mod schema;
 pub mod sphere;
 
@@ -57,6 +58,8 @@ pub enum Surface {
     HeightField(height_field::HeightFieldIr),
     /// A mesh's baked signed distance field.
     Mesh(mesh::MeshIr),
+    /// The surfaces a depth image shows.
+    SceneDepth(scene_depth::SceneDepthIr),
 }
 
 /// A collider in the IR: a surface and how particles bounce off it.
@@ -79,6 +82,7 @@ impl Surface {
             Surface::Box(_) => "Box",
             Surface::HeightField(_) => "HeightField",
             Surface::Mesh(_) => "Mesh",
+            Surface::SceneDepth(_) => "SceneDepth",
         }
     }
 
@@ -91,6 +95,7 @@ impl Surface {
             Surface::Box(s) => s.hit(a, b),
             Surface::HeightField(s) => s.hit(a, b),
             Surface::Mesh(s) => s.hit(a, b),
+            Surface::SceneDepth(s) => s.hit(a, b),
         }
     }
 
@@ -102,6 +107,7 @@ impl Surface {
             Surface::Box(s) => s.push_out(x, margin),
             Surface::HeightField(s) => s.push_out(x, margin),
             Surface::Mesh(s) => s.push_out(x, margin),
+            Surface::SceneDepth(s) => s.push_out(x, margin),
         }
     }
 
@@ -113,6 +119,7 @@ impl Surface {
             Surface::Box(s) => s.allows(x),
             Surface::HeightField(s) => s.allows(x),
             Surface::Mesh(s) => s.allows(x),
+            Surface::SceneDepth(s) => s.allows(x),
         }
     }
 
@@ -124,13 +131,15 @@ impl Surface {
             Surface::Box(s) => s.min.abs().max(s.max.abs()).max_element(),
             Surface::HeightField(s) => s.scale(),
             Surface::Mesh(s) => s.scale(),
+            // A view's surfaces are as far out as the particles that meet them.
+            Surface::SceneDepth(_) => 0.0,
         }
     }
 
     /// The thinnest feature the surface has, for the f32 resolution warning (None: unbounded).
     pub fn thinnest(&self) -> Option<f64> {
         match self {
-            Surface::Plane(_) | Surface::HeightField(_) => None,
+            Surface::Plane(_) | Surface::HeightField(_) | Surface::SceneDepth(_) => None,
             Surface::Sphere(s) => Some(s.radius),
             Surface::Box(s) => Some((s.max - s.min).min_element()),
             Surface::Mesh(s) => Some(s.cell()),
@@ -156,6 +165,7 @@ impl Surface {
             ),
             Surface::HeightField(s) => s.describe(),
             Surface::Mesh(s) => s.describe(),
+            Surface::SceneDepth(s) => s.describe(),
         }
     }
 
@@ -168,6 +178,7 @@ impl Surface {
             Surface::Box(s) => s.emit(w, i),
             Surface::HeightField(s) => s.emit(w, i, data_offset),
             Surface::Mesh(s) => s.emit(w, i, data_offset),
+            Surface::SceneDepth(s) => s.emit(w, i),
         }
     }
 

@@ -5,7 +5,7 @@ use std::sync::Arc;
 
 use serde::Deserialize;
 
-use super::{aabb, height_field, mesh, plane, sphere, ColliderIr, Surface};
+use super::{aabb, height_field, mesh, plane, scene_depth, sphere, ColliderIr, Surface};
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::base::values::Vec3;
@@ -102,6 +102,18 @@ pub enum Collider {
         #[serde(skip)]
         baked: Option<Arc<mesh::Baked>>,
     },
+    /// The surfaces the view's depth image shows, given at run time by the host (or by the
+    /// scene `plume render` and `plume preview` draw); see [`scene_depth`].
+    SceneDepth {
+        /// How far behind a surface a particle still collides (m, > 0); farther behind, it is
+        /// behind the object, not in it, and passes.
+        #[serde(default = "default_thickness")]
+        thickness: f64,
+        /// Fraction of normal speed kept on a bounce, in [0, 1].
+        restitution: f64,
+        /// Fraction of tangential speed lost on a bounce, in [0, 1].
+        friction: f64,
+    },
 }
 
 fn origin() -> Vec3 {
@@ -110,6 +122,10 @@ fn origin() -> Vec3 {
 
 fn one() -> f64 {
     1.0
+}
+
+fn default_thickness() -> f64 {
+    scene_depth::DEFAULT_THICKNESS
 }
 
 fn default_resolution() -> u32 {
@@ -125,6 +141,7 @@ impl Collider {
             Collider::Box { .. } => "Box",
             Collider::HeightField { .. } => "HeightField",
             Collider::Mesh { .. } => "Mesh",
+            Collider::SceneDepth { .. } => "SceneDepth",
         }
     }
 
@@ -188,6 +205,14 @@ impl Collider {
                     (*offset, *scale, *rotation, *resolution),
                     baked.is_some(),
                 );
+                (restitution, friction)
+            }
+            Collider::SceneDepth {
+                thickness,
+                restitution,
+                friction,
+            } => {
+                scene_depth::check(path, c, *thickness);
                 (restitution, friction)
             }
         };
@@ -271,6 +296,18 @@ impl Collider {
                     baked: baked
                         .clone()
                         .expect("the checks refuse a mesh collider not read"),
+                }),
+                restitution,
+                friction,
+            ),
+            Collider::SceneDepth {
+                thickness,
+                restitution,
+                friction,
+            } => (
+                Surface::SceneDepth(scene_depth::SceneDepthIr {
+                    thickness: *thickness,
+                    image: None,
                 }),
                 restitution,
                 friction,

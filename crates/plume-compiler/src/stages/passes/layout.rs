@@ -192,6 +192,22 @@ pub fn decide(ir: &EffectIr) -> Layout {
             meaning: "the height fields' samples (row by row, x fastest) and the mesh colliders' distance fields (x fastest, then y, then z), in collider order",
         });
     }
+    if ir.collides_with_scene_depth() {
+        layout.bindings.push(Binding {
+            binding: 23,
+            name: "scene_depth",
+            space: "texture",
+            bytes: 0,
+            meaning: "the host's depth image that SceneDepth collides with (a depth texture read as texture_2d<f32>, as the soft draw reads it: GL cannot load from texture_depth_2d)",
+        });
+        layout.bindings.push(Binding {
+            binding: 24,
+            name: "scene_camera",
+            space: "storage, read",
+            bytes: crate::features::colliders::scene_depth::CAMERA_WORDS as u64 * 4,
+            meaning: "the depth image's size (width, height, 0, 0; width 0: no image yet) and camera: view, projection and their inverses, column-major",
+        });
+    }
     if let Some(flock) = &ir.flock {
         let groups = u64::from(ir.capacity.div_ceil(crate::base::kernel::WORKGROUP));
         layout.bindings.push(Binding {

@@ -109,6 +109,13 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         w.blank();
     }
     for b in &layout.bindings {
+        if b.space == "texture" {
+            w.line(format!(
+                "@group(0) @binding({}) var {}: texture_2d<f32>;",
+                b.binding, b.name
+            ));
+            continue;
+        }
         let ty = match b.name {
             name if crate::features::events::binding_type(name).is_some() => {
                 crate::features::events::binding_type(name).unwrap_or_default()
@@ -125,6 +132,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "fire_state" => "array<u32, 4>",
             "depth_axis" => "DepthAxis",
             "collider_data" | "force_data" => "array<f32>",
+            "scene_camera" => "array<vec4<f32>>",
             "spawn_data" => "array<u32>",
             _ => "StepParams",
         };
