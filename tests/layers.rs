@@ -67,8 +67,10 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
     (
         "plume-cli",
         &[
-            // 0: reading and compiling an effect file, with located errors.
+            // 0: reading and compiling an effect file, with located errors; the scene depth a
+            // SceneDepth collider meets where a command draws no scene.
             ("load", 0),
+            ("scene_depth", 0),
             // 1: the commands that only load and run.
             ("run", 1),
             ("render", 1),

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Writes the example meshes next to this script: rock.obj (a lumpy boulder: a sphere of 20
-rings and 40 segments whose radius follows a few fixed waves) and crystal.obj (a hexagonal
-prism with pointed ends). Deterministic: run it again and the files come out the same."""
+rings and 40 segments whose radius follows a few fixed waves), crystal.obj (a hexagonal
+prism with pointed ends) and steps.obj (a flight of four stone steps on a ground slab). Deterministic: run it again and the files come out the same."""
 
 import math
 import os
@@ -64,5 +64,25 @@ def crystal(sides=6, half_length=0.6, radius=0.3, tip=0.35):
     write("crystal.obj", vertices, faces, "A hexagonal crystal with pointed ends, along y.")
 
 
+def steps(count=4, rise=0.3, tread=0.5, width=3.0):
+    vertices, faces = [], []
+
+    def box(lo, hi):
+        base = len(vertices)
+        for k in range(8):
+            vertices.append(tuple(hi[a] if k >> a & 1 else lo[a] for a in range(3)))
+        # Corner k has x from bit 0, y from bit 1, z from bit 2; faces wind outward.
+        for q in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 4, 6, 2), (1, 3, 7, 5), (0, 1, 5, 4), (2, 6, 7, 3)):
+            faces.append(tuple(base + i for i in q))
+
+    box((-6.0, -0.1, -6.0), (6.0, 0.0, 6.0))
+    for k in range(count):
+        # Step k (0 the lowest) is k + 1 rises high, its front edge k treads back from z = 1;
+        # every step reaches back to z = -2 (the boxes overlap: this is drawn, not filled).
+        box((-width / 2, 0.0, -2.0), (width / 2, rise * (k + 1), 1.0 - tread * k))
+    write("steps.obj", vertices, faces, "Four stone steps climbing towards -z on a 12 m ground slab.")
+
+
 rock()
 crystal()
+steps()

@@ -6,6 +6,7 @@ mod load;
 mod preview;
 mod render;
 mod run;
+mod scene_depth;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;

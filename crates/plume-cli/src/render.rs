@@ -131,6 +131,26 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         DrawMethod::Raster => None,
     };
     let camera = target.effect_camera(&sim);
+    // A SceneDepth collider meets the scene's depth: the one drawn with the frames (drawn
+    // once now, so the first steps meet it too), or with splat one drawn for it alone.
+    let _depth_only = match &scene {
+        Some(scene) if sim.collides_with_scene_depth() => {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            scene.record(&mut encoder, target.attachment(glam::DVec3::ZERO), &camera);
+            gpu.queue.submit([encoder.finish()]);
+            sim.set_scene_depth(scene.depth_texture(), camera.view, camera.proj)?;
+            None
+        }
+        None if !args.no_scene => {
+            crate::scene_depth::bind_effect_scene(&gpu, &mut sim, &camera, (w, h))?
+        }
+        _ => {
+            if sim.collides_with_scene_depth() {
+                eprintln!("note: --no-scene: the SceneDepth collider meets nothing");
+            }
+            None
+        }
+    };
     let bar = frames_bar(args.frames);
     let mut frames = Vec::with_capacity(args.frames as usize);
     for _ in 0..args.frames {

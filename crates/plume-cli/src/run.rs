@@ -139,6 +139,13 @@ fn simulate(args: &RunArgs, graph: CompiledGraph) -> Result<Outcome, RuntimeErro
     })?;
     bar.set_message("gpu");
     let mut sim = Effect::from_graph(&gpu, graph)?;
+    // A SceneDepth collider meets the effect's scene as its camera sees it at 1280 x 720.
+    let size = (1280, 720);
+    let camera = plume_runtime::Camera::from_effect(
+        &sim.compiled().ir.camera,
+        size.0 as f32 / size.1 as f32,
+    );
+    let _scene = crate::scene_depth::bind_effect_scene(&gpu, &mut sim, &camera, size)?;
     let start = Instant::now();
     sim.run(args.steps, |done| bar.set_position(done))?;
     let seconds = start.elapsed().as_secs_f64();

@@ -250,6 +250,7 @@ pub(crate) fn compile_group(
         effect.base_dir.as_deref(),
         &mut read,
     );
+    crate::features::scene::read_scene(&mut effect.scene, effect.base_dir.as_deref(), &mut read);
     crate::features::forces::vector_field::read_vector_fields(
         &mut effect.forces,
         effect.base_dir.as_deref(),

@@ -109,6 +109,8 @@ pub fn group_effects(effect: &Effect) -> Vec<Effect> {
         e.substeps = g.substeps;
         e.collide.clone_from(&g.collide);
         e.kill.clone_from(&g.kill);
+        // The scene is the file's, drawn once: it stays with the first group.
+        e.scene.clear();
         e.sort = g.sort;
         e.field = g.field.clone();
         e.state = g.state;

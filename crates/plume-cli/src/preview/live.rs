@@ -100,6 +100,7 @@ impl Running {
             effect,
             renderer,
             meshes,
+            depth_camera: None,
             about,
             warnings,
         });

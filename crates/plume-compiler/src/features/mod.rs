@@ -14,3 +14,4 @@ pub mod forces;
 pub mod looks;
 pub mod mesh_emission;
 pub mod placement;
+pub mod scene;

@@ -46,6 +46,8 @@ pub struct EffectIr {
     pub integrator_reason: String,
     /// Colliders, in file order.
     pub colliders: Vec<crate::features::colliders::ColliderIr>,
+    /// Meshes drawn and not simulated (the file's `scene`; the first group's only).
+    pub scene: Vec<crate::features::scene::SceneMeshIr>,
     /// Kill volumes.
     pub kills: Vec<KillIr>,
     /// Whether a depth sort is requested.
@@ -222,7 +224,7 @@ impl EffectIr {
     }
 
     /// The triangles of every mesh the effect names (its mesh colliders', then its mesh
-    /// emitters'), placed in the world: the scene a preview draws around the particles.
+    /// emitters', then its scene's), placed in the world: the scene a preview draws around the particles.
     pub fn scene_triangles(&self) -> Vec<[glam::DVec3; 3]> {
         let mut out = Vec::new();
         for c in &self.colliders {
@@ -234,6 +236,9 @@ impl EffectIr {
             if let ShapeIr::Mesh(m) = &e.shape {
                 out.extend(m.world_triangles());
             }
+        }
+        for m in &self.scene {
+            out.extend(m.world_triangles());
         }
         out
     }
@@ -365,7 +370,21 @@ impl fmt::Display for EffectIr {
                 "    [{i}] burst {} rate {}/s lifetime {:?} steps {:?}",
                 e.burst, e.rate, e.lifetime, e.lifetime_steps
             )?;
-            writeln!(f, "        shape {:?}", e.shape)?;
+            match &e.shape {
+                // The surface's thresholds and triangles are data, not something to read.
+                ShapeIr::Mesh(m) => writeln!(
+                    f,
+                    "        shape Mesh `{}`: {} triangles, area {:.6} m², {}",
+                    m.file,
+                    m.triangles.len(),
+                    m.area,
+                    match &m.volume {
+                        Some(v) => format!("in its volume ({} inside cells)", v.cells.len()),
+                        None => "on its surface".to_string(),
+                    }
+                )?,
+                shape => writeln!(f, "        shape {shape:?}")?,
+            }
             writeln!(f, "        velocity {:?}", e.velocity)?;
         }
         writeln!(f, "  forces")?;
@@ -395,6 +414,21 @@ impl fmt::Display for EffectIr {
                 c.restitution,
                 c.friction
             )?;
+        }
+        if !self.scene.is_empty() {
+            writeln!(f, "  scene (drawn, not simulated)")?;
+            for m in &self.scene {
+                writeln!(
+                    f,
+                    "    {} ({} triangles) offset ({}, {}, {}) scale {}",
+                    m.file,
+                    m.mesh.triangles.len(),
+                    m.offset.x,
+                    m.offset.y,
+                    m.offset.z,
+                    m.scale
+                )?;
+            }
         }
         writeln!(f, "  kill")?;
         for k in &self.kills {

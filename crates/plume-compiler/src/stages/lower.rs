@@ -52,6 +52,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
         integrator: effect.integrator,
         integrator_reason: String::from("chosen in the file"),
         colliders: effect.collide.iter().map(Collider::lower).collect(),
+        scene: effect.scene.iter().map(|m| m.lower()).collect(),
         kills: effect
             .kill
             .iter()

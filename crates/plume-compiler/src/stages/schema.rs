@@ -65,6 +65,10 @@ pub struct Effect {
     /// Volumes that kill particles at the end of a step.
     #[serde(default)]
     pub kill: Vec<KillVolume>,
+    /// Meshes drawn around the effect and not simulated: what a `SceneDepth` collider meets
+    /// in `plume render` and `plume preview` (see [`crate::features::scene`]).
+    #[serde(default)]
+    pub scene: Vec<crate::features::scene::SceneMesh>,
     /// Draw back to front as seen from `camera`.
     #[serde(default)]
     pub sort: bool,

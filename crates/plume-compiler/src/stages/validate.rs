@@ -97,6 +97,7 @@ pub fn check_effect(effect: &Effect) -> Checker {
     if let Some(s) = effect.max_speed {
         c.positive(&root.field("max_speed"), s);
     }
+    crate::features::scene::check(&effect.scene, &mut c);
     let mut scene_depths = 0;
     for (i, collider) in effect.collide.iter().enumerate() {
         let path = crate::features::colliders::collider_path(i, collider);

@@ -136,6 +136,7 @@ pub fn bench(
     .run(2, |_| {})?;
     let stateless = time_stateless(gpu, &timer, effect, (particles, live), steps)?;
     let mut sim = Group::new(gpu, compiled, None, &[])?;
+    let _scene = bind_scene_depth(gpu, &mut sim, options.render.unwrap_or((1280, 720)))?;
     // Step 0 spawns everything (timed), then a few steps settle the caches.
     let spawn_step = sim.time_steps(&timer, 1)?;
     sim.run(3, |_| {})?;
@@ -296,3 +297,27 @@ fn time_stateless(
 /// (docs/performance.md, "The update at large sizes"), so a single timing of each can compare
 /// kernels measured at different levels.
 pub const ROUNDS: u32 = 5;
+
+/// For an effect with a `SceneDepth` collider, its scene drawn from its camera at `size` and
+/// bound to `sim` (the scene is returned to keep alive); the benchmark then measures the
+/// collider against the depth the effect's own scene leaves.
+fn bind_scene_depth(
+    gpu: &Gpu,
+    sim: &mut Group,
+    size: (u32, u32),
+) -> Result<Option<crate::outputs::Scene>, RuntimeError> {
+    if !sim.effect.ir.collides_with_scene_depth() {
+        return Ok(None);
+    }
+    let camera = crate::draw::camera::Camera::from_effect(
+        &sim.effect.ir.camera,
+        size.0 as f32 / size.1.max(1) as f32,
+    );
+    let triangles = sim.effect.ir.scene_triangles();
+    let Some(scene) = crate::outputs::Scene::depth_only(gpu, &triangles, &camera, size)? else {
+        return Ok(None);
+    };
+    let words = crate::sim::scene_depth::camera(camera.view, camera.proj)?;
+    crate::sim::scene_depth::bind(sim, scene.depth_texture(), &words);
+    Ok(Some(scene))
+}

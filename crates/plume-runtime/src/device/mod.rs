@@ -5,6 +5,7 @@
 //!
 //! Imports nothing of the crate but [`crate::error`]: every other folder builds on it.
 
+pub(crate) mod bind_layout;
 pub(crate) mod buffers;
 pub(crate) mod gpu;
 pub(crate) mod readback;

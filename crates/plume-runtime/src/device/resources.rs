@@ -81,24 +81,6 @@ pub struct Resources {
     pub pipeline_layout: wgpu::PipelineLayout,
 }
 
-fn buffer_entry(
-    binding: u32,
-    ty: wgpu::BufferBindingType,
-    dynamic: bool,
-    min: Option<u64>,
-) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: dynamic,
-            min_binding_size: min.and_then(wgpu::BufferSize::new),
-        },
-        count: None,
-    }
-}
-
 fn sized(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BindingResource<'_> {
     wgpu::BindingResource::Buffer(wgpu::BufferBinding {
         buffer,
@@ -289,45 +271,9 @@ impl Resources {
             label: Some(&effect.ir.name),
             source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(&effect.wgsl)),
         });
-        let rw = wgpu::BufferBindingType::Storage { read_only: false };
-        // One entry per binding of the compiled layout, typed by what it holds.
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("plume"),
-            entries: &effect
-                .layout
-                .bindings
-                .iter()
-                .filter(|b| b.name != EVENT_DISPATCH)
-                .map(|b| match b.name {
-                    "params" => buffer_entry(
-                        b.binding,
-                        wgpu::BufferBindingType::Uniform,
-                        true,
-                        Some(effect.layout.params_bytes()),
-                    ),
-                    "chunk" | "depth_axis" => {
-                        buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
-                    }
-                    "scene_depth" => wgpu::BindGroupLayoutEntry {
-                        binding: b.binding,
-                        visibility: wgpu::ShaderStages::COMPUTE,
-                        ty: wgpu::BindingType::Texture {
-                            sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                            view_dimension: wgpu::TextureViewDimension::D2,
-                            multisampled: false,
-                        },
-                        count: None,
-                    },
-                    "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data"
-                    | "scene_camera" => buffer_entry(
-                        b.binding,
-                        wgpu::BufferBindingType::Storage { read_only: true },
-                        false,
-                        None,
-                    ),
-                    _ => buffer_entry(b.binding, rw, false, None),
-                })
-                .collect::<Vec<_>>(),
+            entries: &crate::device::bind_layout::entries(effect, EVENT_DISPATCH),
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("plume"),
@@ -633,4 +579,4 @@ impl Resources {
 
 /// The binding an event-fed group's spawn dispatch arguments are in (bound only by
 /// [`Resources::event_prepare`]).
-const EVENT_DISPATCH: &str = "event_dispatch";
+pub(crate) const EVENT_DISPATCH: &str = "event_dispatch";

@@ -159,6 +159,46 @@ impl Scene {
         }))
     }
 
+    /// The scene of `triangles` drawn once from `camera` at `size` (into a colour image made and
+    /// dropped here), for its depth alone: what a `SceneDepth` collider meets where nothing
+    /// else draws the scene (`plume run`, `plume bench`). None when there are no triangles.
+    pub fn depth_only(
+        gpu: &Gpu,
+        triangles: &[[DVec3; 3]],
+        camera: &Camera,
+        size: (u32, u32),
+    ) -> Result<Option<Self>, RuntimeError> {
+        let format = wgpu::TextureFormat::Rgba8UnormSrgb;
+        let Some(scene) = Self::new(gpu, triangles, format, size)? else {
+            return Ok(None);
+        };
+        let colour = gpu
+            .texture_2d(
+                "scene colour (dropped)",
+                size,
+                format,
+                wgpu::TextureUsages::RENDER_ATTACHMENT,
+            )
+            .create_view(&Default::default());
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        scene.record(
+            &mut encoder,
+            wgpu::RenderPassColorAttachment {
+                view: &colour,
+                depth_slice: None,
+                resolve_target: None,
+                ops: wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                    store: wgpu::StoreOp::Discard,
+                },
+            },
+            camera,
+        );
+        gpu.queue.submit([encoder.finish()]);
+        gpu.take_error()?;
+        Ok(Some(scene))
+    }
+
     /// Makes the depth buffer `size` (a window resized); returns whether it changed, and with
     /// it [`Self::depth_view`].
     pub fn resize(&mut self, size: (u32, u32)) -> bool {

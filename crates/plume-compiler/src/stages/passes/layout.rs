@@ -378,6 +378,14 @@ impl fmt::Display for Layout {
         }
         writeln!(f, "bindings (group 0)")?;
         for b in &self.bindings {
+            if b.space == "texture" {
+                writeln!(
+                    f,
+                    "  @binding({}) {:<10} texture_2d<f32>  {}",
+                    b.binding, b.name, b.meaning
+                )?;
+                continue;
+            }
             writeln!(
                 f,
                 "  @binding({}) {:<10} var<{}>  {} bytes  {}",

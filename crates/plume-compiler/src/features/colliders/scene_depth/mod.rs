@@ -1,0 +1,336 @@
+//! `SceneDepth`: particles collide with the depth image of the view they are drawn in, the
+//! surfaces the camera sees. The host gives the image and its camera at run time (the
+//! runtime's `Effect::set_scene_depth`; `plume render` and `plume preview` draw the effect's
+//! scene meshes into one), so the compiled kernel reads them from two bindings:
+//! `scene_depth`, the depth texture, and `scene_camera`, [`DepthCamera::words`]. Until an
+//! image is given, nothing collides.
+//!
+//! **What a pixel is.** A pixel holding depth d in (0, 1) is the point its centre unprojects
+//! to at d through the inverse projection: a surface at that point's view depth (−z in view
+//! space). Depth exactly 0 or 1 (a clear value, standard or reversed-Z) is empty. A point is
+//! *behind* the surface at the pixel it projects to when its view depth exceeds the surface's,
+//! and *inside* it when it is behind by no more than `thickness`: past that it passes freely
+//! (behind an object, not in it). Off screen, behind the camera or over an empty pixel, it
+//! passes freely too: depth collision only knows what the camera sees.
+//!
+//! **Swept.** The substep's segment is sampled at one point per pixel it crosses on screen
+//! (at most [`MAX_SAMPLES`]); a crossing is a sample in front of its pixel's surface followed by
+//! one behind its own by at most `thickness` plus how much deeper the particle went between
+//! the two, so a particle moving fast along the view ray does not pass through. The crossing is
+//! bisected ([`BISECTIONS`] halvings) to the last point in front. The normal comes from the
+//! neighbouring pixels' surface points (of the left and right neighbours, the one nearer in
+//! depth, likewise up and down), turned to face the side the particle came from.
+//!
+//! **Inside.** A particle found inside the surface (a resting particle slid onto a nearer
+//! pixel) is moved along its view ray to just in front of the surface.
+//!
+//! The f64 reference ([`SceneDepthIr::hit`]) runs the same steps on the same f32 image and
+//! camera, given to `ReferenceSim::set_scene_depth`; f32 and f64 may round a point onto
+//! neighbouring pixels where it projects onto a pixel's edge.
+
+mod image;
+mod wgsl;
+
+use std::sync::Arc;
+
+use glam::{DMat3, DMat4, DVec3, DVec4};
+
+use super::Hit;
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+
+pub use image::{DepthCamera, DepthImage, CAMERA_WORDS};
+
+/// The thickness when the file gives none (m).
+pub const DEFAULT_THICKNESS: f64 = 0.5;
+
+/// The most points a substep's segment is sampled at.
+pub const MAX_SAMPLES: u32 = 32;
+
+/// Bisection halvings of a crossing.
+pub(super) const BISECTIONS: u32 = 16;
+
+/// A homogeneous w this small (in magnitude) is a point at infinity.
+pub(super) const TINY_W: f64 = 1e-30;
+
+/// A scene depth collider in the IR; `image` is set only in a reference simulation that was
+/// given one.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneDepthIr {
+    /// How far behind a surface a particle still collides (m).
+    pub thickness: f64,
+    /// The image the reference collides with.
+    pub image: Option<Arc<DepthImage>>,
+}
+
+/// Checks the thickness.
+pub fn check(path: &ValuePath, c: &mut Checker, thickness: f64) {
+    c.positive(&path.field("thickness"), thickness);
+}
+
+/// Where a world point is against the image.
+#[derive(Clone, Copy, Debug)]
+struct Place {
+    /// The point in view space.
+    view: DVec3,
+    /// Its normalised device coordinates (x, y).
+    ndc: (f64, f64),
+    /// The pixel it projects to.
+    pixel: (i64, i64),
+    /// The surface point on the point's view ray, in view space.
+    surface: DVec3,
+    /// How far the surface may be off for the depth image's precision (see [`precision`]).
+    tolerance: f64,
+}
+
+impl Place {
+    /// How far behind the surface the point is (m; negative in front), the surface taken
+    /// `tolerance` nearer so that a particle left just in front of it is not found behind it
+    /// by the depth image's rounding.
+    fn behind(&self) -> f64 {
+        self.surface.z - self.view.z + self.tolerance
+    }
+}
+
+/// Relative change of a depth value standing for its rounding: 8 f32 ulps.
+pub(super) const DEPTH_ULPS: f64 = 8.0 / 8_388_608.0;
+
+/// Relative rounding of a view-space coordinate computed in f32 through two matrices.
+pub(super) const VIEW_ROUNDING: f64 = 1e-6;
+
+/// The image's matrices in f64.
+struct Frame<'a> {
+    image: &'a DepthImage,
+    view: DMat4,
+    projection: DMat4,
+    inverse_projection: DMat4,
+    inverse_view: DMat4,
+}
+
+fn dmat(m: &[f32; 16]) -> DMat4 {
+    DMat4::from_cols_array(&m.map(f64::from))
+}
+
+impl<'a> Frame<'a> {
+    fn new(image: &'a DepthImage) -> Self {
+        Self {
+            image,
+            view: dmat(&image.camera.view),
+            projection: dmat(&image.camera.projection),
+            inverse_projection: dmat(&image.camera.inverse_projection),
+            inverse_view: dmat(&image.camera.inverse_view),
+        }
+    }
+
+    /// The view-space point at normalised device coordinates (x, y, d), if finite.
+    fn unproject(&self, x: f64, y: f64, d: f64) -> Option<DVec3> {
+        let p = self.inverse_projection * DVec4::new(x, y, d, 1.0);
+        (p.w.abs() > TINY_W).then(|| p.truncate() / p.w)
+    }
+
+    /// The surface point of pixel (ix, iy) in view space; None off the image or empty.
+    fn surface(&self, ix: i64, iy: i64) -> Option<DVec3> {
+        let (w, h) = (i64::from(self.image.width), i64::from(self.image.height));
+        if ix < 0 || iy < 0 || ix >= w || iy >= h {
+            return None;
+        }
+        let d = f64::from(self.image.depth[(iy * w + ix) as usize]);
+        if !(d > 0.0 && d < 1.0) {
+            return None;
+        }
+        let x = (ix as f64 + 0.5) / w as f64 * 2.0 - 1.0;
+        let y = 1.0 - (iy as f64 + 0.5) / h as f64 * 2.0;
+        self.unproject(x, y, d)
+    }
+
+    /// The view-space point, its pixel position (continuous) and its clip w.
+    fn project(&self, x: DVec3) -> (DVec3, Option<(f64, f64)>) {
+        let v = (self.view * x.extend(1.0)).truncate();
+        let c = self.projection * v.extend(1.0);
+        if c.w.is_nan() || c.w <= TINY_W {
+            return (v, None);
+        }
+        (v, Some((c.x / c.w, c.y / c.w)))
+    }
+
+    /// The depth of pixel (ix, iy), clamped to the image; None where it is empty.
+    fn depth(&self, ix: i64, iy: i64) -> Option<f64> {
+        let (w, h) = (i64::from(self.image.width), i64::from(self.image.height));
+        let d = f64::from(self.image.depth[(iy.clamp(0, h - 1) * w + ix.clamp(0, w - 1)) as usize]);
+        (d > 0.0 && d < 1.0).then_some(d)
+    }
+
+    /// Where `x` is against the image, or None where it passes freely regardless of depth.
+    fn place(&self, x: DVec3) -> Option<Place> {
+        let (view, ndc) = self.project(x);
+        let (nx, ny) = ndc?;
+        if !(nx.abs() < 1.0 && ny.abs() < 1.0) {
+            return None;
+        }
+        let (w, h) = (self.image.width as f64, self.image.height as f64);
+        // Continuous pixel coordinates: pixel centres at integers.
+        let fx = (nx * 0.5 + 0.5) * w - 0.5;
+        let fy = (0.5 - ny * 0.5) * h - 0.5;
+        let ix = (fx + 0.5).floor().clamp(0.0, w - 1.0) as i64;
+        let iy = (fy + 0.5).floor().clamp(0.0, h - 1.0) as i64;
+        let (x0, y0) = (fx.floor(), fy.floor());
+        let (tx, ty) = (fx - x0, fy - y0);
+        let (x0, y0) = (x0 as i64, y0 as i64);
+        let corners = [
+            self.depth(x0, y0),
+            self.depth(x0 + 1, y0),
+            self.depth(x0, y0 + 1),
+            self.depth(x0 + 1, y0 + 1),
+        ];
+        let d = match corners {
+            [Some(a), Some(b), Some(c), Some(e)] => {
+                let top = a + (b - a) * tx;
+                let bottom = c + (e - c) * tx;
+                top + (bottom - top) * ty
+            }
+            _ => self.depth(ix, iy)?,
+        };
+        let surface = self.unproject(nx, ny, d)?;
+        // How much 8 ulps of depth move the surface: far away a standard depth buffer's
+        // steps grow with the square of the distance.
+        let tolerance = self
+            .unproject(nx, ny, d * (1.0 + DEPTH_ULPS))
+            .map_or(0.0, |u| (u.z - surface.z).abs())
+            + VIEW_ROUNDING * view.z.abs();
+        Some(Place {
+            view,
+            ndc: (nx, ny),
+            pixel: (ix, iy),
+            surface,
+            tolerance,
+        })
+    }
+
+    /// The world normal of the surface at `p`'s pixel, facing `toward` (view space).
+    fn normal(&self, p: &Place, toward: DVec3) -> DVec3 {
+        let (ix, iy) = p.pixel;
+        let s = self.surface(ix, iy).unwrap_or(p.surface);
+        let tangent = |plus: Option<DVec3>, minus: Option<DVec3>| match (plus, minus) {
+            (Some(a), Some(b)) => Some(if (a.z - s.z).abs() <= (s.z - b.z).abs() {
+                a - s
+            } else {
+                s - b
+            }),
+            (Some(a), None) => Some(a - s),
+            (None, Some(b)) => Some(s - b),
+            (None, None) => None,
+        };
+        let tx = tangent(self.surface(ix + 1, iy), self.surface(ix - 1, iy));
+        let ty = tangent(self.surface(ix, iy + 1), self.surface(ix, iy - 1));
+        let to_eye = toward - s;
+        let n = match (tx, ty) {
+            (Some(a), Some(b)) => a.cross(b),
+            _ => to_eye,
+        };
+        let n = if n.dot(to_eye) < 0.0 { -n } else { n };
+        let world = DMat3::from_mat4(self.inverse_view) * n;
+        let l = world.length();
+        if l > 1e-30 && l.is_finite() {
+            world / l
+        } else {
+            let back = DMat3::from_mat4(self.inverse_view) * DVec3::Z;
+            back / back.length().max(1e-30)
+        }
+    }
+}
+
+impl SceneDepthIr {
+    /// The first contact of segment `a` -> `b` (see the module doc).
+    pub fn hit(&self, a: DVec3, b: DVec3) -> Option<Hit> {
+        let frame = Frame::new(self.image.as_deref()?);
+        let (w, h) = (frame.image.width as f64, frame.image.height as f64);
+        let samples = match (frame.project(a).1, frame.project(b).1) {
+            (Some(pa), Some(pb)) => {
+                let px = ((pb.0 - pa.0) * 0.5 * w)
+                    .abs()
+                    .max(((pb.1 - pa.1) * 0.5 * h).abs());
+                px.ceil().clamp(1.0, f64::from(MAX_SAMPLES)) as u32
+            }
+            _ => MAX_SAMPLES,
+        };
+        let mut prev = frame.place(a);
+        let mut prev_t = 0.0;
+        for k in 1..=samples {
+            let t = f64::from(k) / f64::from(samples);
+            let cur = frame.place(a + (b - a) * t);
+            if let (Some(p), Some(c)) = (prev, cur) {
+                let deeper = (p.view.z - c.view.z).max(0.0);
+                if p.behind() < 0.0 && c.behind() >= 0.0 && c.behind() <= self.thickness + deeper {
+                    let (mut lo, mut hi) = (prev_t, t);
+                    let mut front = p;
+                    for _ in 0..BISECTIONS {
+                        let mid = 0.5 * (lo + hi);
+                        match frame.place(a + (b - a) * mid) {
+                            Some(m) if m.behind() >= 0.0 => hi = mid,
+                            Some(m) => {
+                                lo = mid;
+                                front = m;
+                            }
+                            None => lo = mid,
+                        }
+                    }
+                    let toward = frame.project(a).0;
+                    return Some(Hit {
+                        s: lo,
+                        normal: frame.normal(&front, toward),
+                    });
+                }
+            }
+            prev = cur;
+            prev_t = t;
+        }
+        None
+    }
+
+    /// `x` moved along its view ray to `margin` in front of the surface when it is inside it.
+    pub fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
+        let Some(image) = self.image.as_deref() else {
+            return x;
+        };
+        let frame = Frame::new(image);
+        let Some(p) = frame.place(x) else {
+            return x;
+        };
+        let behind = p.behind();
+        if !(behind >= 0.0 && behind <= self.thickness) {
+            return x;
+        }
+        let (nx, ny) = p.ndc;
+        let (Some(u0), Some(u1)) = (frame.unproject(nx, ny, 0.25), frame.unproject(nx, ny, 0.75))
+        else {
+            return x;
+        };
+        let ray = u1 - u0;
+        if ray.z.is_nan() || ray.z.abs() <= TINY_W {
+            return x;
+        }
+        // Depth is −z: moving by λ·ray changes it by −λ·ray.z.
+        let lambda = (behind + margin) / ray.z;
+        let moved = p.view + ray * lambda;
+        let world = frame.inverse_view * moved.extend(1.0);
+        world.truncate()
+    }
+
+    /// Whether `x` is not inside a surface (the tests' check; no margin).
+    pub fn allows(&self, x: DVec3) -> bool {
+        let Some(image) = self.image.as_deref() else {
+            return true;
+        };
+        Frame::new(image)
+            .place(x)
+            .is_none_or(|p| !(p.behind() >= 0.0 && p.behind() <= self.thickness))
+    }
+
+    /// One line for `--emit ir`.
+    pub fn describe(&self) -> String {
+        format!(
+            "SceneDepth thickness {} (the host's depth image, at run time)",
+            self.thickness
+        )
+    }
+}

@@ -1,0 +1,132 @@
+//! The effect's scene: meshes that are drawn and not simulated (`scene: [Mesh(file: ..)]` in
+//! the file). `plume render` and `plume preview` draw them, with the meshes the effect's
+//! colliders and emitters name, so that an author sees what the particles meet, and a
+//! `SceneDepth` collider collides with the depth they leave. Particles meet a scene mesh only
+//! through its depth: without a `SceneDepth` collider it is scenery.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use glam::{DMat3, DVec3};
+use serde::Deserialize;
+
+use crate::base::check::Checker;
+use crate::base::mesh::{read_obj, rotation_degrees, TriMesh};
+use crate::base::path::ValuePath;
+use crate::base::values::Vec3;
+
+/// A scene mesh as written in an effect file.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum SceneMesh {
+    /// A triangle mesh from an OBJ file, placed in the world.
+    Mesh {
+        /// The OBJ file, relative to the effect file.
+        file: String,
+        /// Where the mesh's origin sits in the world (m).
+        #[serde(default = "origin")]
+        offset: Vec3,
+        /// The mesh's size against the world's (> 0).
+        #[serde(default = "one")]
+        scale: f64,
+        /// Degrees about x, then y, then z (the world's axes).
+        #[serde(default = "origin")]
+        rotation: Vec3,
+        /// The mesh read from `file`, by [`read_scene`] before the checks.
+        #[serde(skip)]
+        mesh: Option<Arc<TriMesh>>,
+    },
+}
+
+fn origin() -> Vec3 {
+    Vec3(0.0, 0.0, 0.0)
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// A scene mesh in the IR: the mesh and where it sits.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SceneMeshIr {
+    /// The mesh file as the effect names it.
+    pub file: String,
+    /// Where the mesh's origin sits in the world.
+    pub offset: DVec3,
+    /// The mesh's size against the world's.
+    pub scale: f64,
+    /// The mesh's rotation (its axes in world coordinates, as columns).
+    pub rotation: DMat3,
+    /// The mesh, in its own coordinates.
+    pub mesh: Arc<TriMesh>,
+}
+
+fn path(i: usize) -> ValuePath {
+    ValuePath::root().field("scene").index(i).variant("Mesh")
+}
+
+/// Reads every scene mesh's file (relative to `base_dir`); an unreadable or empty mesh, or a
+/// NaN vertex, is recorded in `c` at the mesh's `file`.
+pub fn read_scene(scene: &mut [SceneMesh], base_dir: Option<&Path>, c: &mut Checker) {
+    for (i, entry) in scene.iter_mut().enumerate() {
+        let SceneMesh::Mesh { file, mesh, .. } = entry;
+        let full = base_dir.map_or_else(|| PathBuf::from(&*file), |dir| dir.join(&*file));
+        match read_obj(&full) {
+            Ok((read, _)) => *mesh = Some(Arc::new(read)),
+            Err(message) => c.error(&path(i).field("file"), message),
+        }
+    }
+}
+
+/// Checks each scene mesh's placement.
+pub fn check(scene: &[SceneMesh], c: &mut Checker) {
+    for (i, entry) in scene.iter().enumerate() {
+        let SceneMesh::Mesh {
+            offset,
+            scale,
+            rotation,
+            mesh,
+            ..
+        } = entry;
+        let p = path(i);
+        c.vec3(&p.field("offset"), *offset);
+        c.vec3(&p.field("rotation"), *rotation);
+        c.positive(&p.field("scale"), *scale);
+        if mesh.is_none() {
+            c.error(&p.field("file"), "the mesh was not read");
+        }
+    }
+}
+
+impl SceneMesh {
+    /// Lowers a checked scene mesh to the IR.
+    pub fn lower(&self) -> SceneMeshIr {
+        let SceneMesh::Mesh {
+            file,
+            offset,
+            scale,
+            rotation,
+            mesh,
+        } = self;
+        SceneMeshIr {
+            file: file.clone(),
+            offset: offset.d(),
+            scale: *scale,
+            rotation: rotation_degrees(rotation.d()),
+            mesh: mesh
+                .clone()
+                .expect("the checks refuse a scene mesh not read"),
+        }
+    }
+}
+
+impl SceneMeshIr {
+    /// The mesh's triangles placed in the world.
+    pub fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+        (0..self.mesh.triangles.len()).map(move |t| {
+            self.mesh
+                .corners(t)
+                .map(|p| self.offset + self.scale * (self.rotation * p))
+        })
+    }
+}

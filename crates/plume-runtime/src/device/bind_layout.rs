@@ -1,0 +1,64 @@
+//! The compute module's bind group layout: one entry per binding of the compiled layout, typed
+//! by what it holds (uniforms, read-only and read-write storage, the scene depth texture).
+
+use plume_compiler::CompiledEffect;
+
+/// A compute-visible buffer entry.
+pub(crate) fn buffer_entry(
+    binding: u32,
+    ty: wgpu::BufferBindingType,
+    dynamic: bool,
+    min: Option<u64>,
+) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: dynamic,
+            min_binding_size: min.and_then(wgpu::BufferSize::new),
+        },
+        count: None,
+    }
+}
+
+/// The entries of `effect`'s shared bind group layout, leaving out the binding named `skip`
+/// (bound only by a kernel of its own).
+pub(crate) fn entries(effect: &CompiledEffect, skip: &str) -> Vec<wgpu::BindGroupLayoutEntry> {
+    let rw = wgpu::BufferBindingType::Storage { read_only: false };
+    effect
+        .layout
+        .bindings
+        .iter()
+        .filter(|b| b.name != skip)
+        .map(|b| match b.name {
+            "params" => buffer_entry(
+                b.binding,
+                wgpu::BufferBindingType::Uniform,
+                true,
+                Some(effect.layout.params_bytes()),
+            ),
+            "chunk" | "depth_axis" => {
+                buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
+            }
+            "scene_depth" => wgpu::BindGroupLayoutEntry {
+                binding: b.binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data"
+            | "scene_camera" => buffer_entry(
+                b.binding,
+                wgpu::BufferBindingType::Storage { read_only: true },
+                false,
+                None,
+            ),
+            _ => buffer_entry(b.binding, rw, false, None),
+        })
+        .collect()
+}
