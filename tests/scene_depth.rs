@@ -141,6 +141,7 @@ fn particles_stop_on_the_surfaces_the_camera_sees() {
     let (records, _, _) = run(0.0);
     assert_eq!(records.len(), 64, "every particle is alive");
     let (mut on_floor, mut on_box, mut hidden) = (0, 0, 0);
+    let mut worst_rest: f64 = 0.0;
     for r in &records {
         let p = r.position;
         assert!(p.is_finite(), "{p}");
@@ -152,6 +153,7 @@ fn particles_stop_on_the_surfaces_the_camera_sees() {
         let over_box = p.x.abs() < 0.5 && p.z.abs() < 0.5 && p.y > 0.5;
         if over_box {
             assert!((p.y - 1.0).abs() < REST_TOLERANCE, "on the box top: {p}");
+            worst_rest = worst_rest.max((p.y - 1.0).abs());
             assert!(in_column(p.x) && in_column(p.z), "{p} left its column");
             on_box += 1;
         } else if box_hides(DVec3::new(p.x, 0.0, p.z)) {
@@ -161,10 +163,12 @@ fn particles_stop_on_the_surfaces_the_camera_sees() {
             hidden += 1;
         } else {
             assert!(p.y.abs() < REST_TOLERANCE, "on the floor: {p}");
+            worst_rest = worst_rest.max(p.y.abs());
             assert!(in_column(p.x) && in_column(p.z), "{p} left its column");
             on_floor += 1;
         }
     }
+    eprintln!("largest distance from the surface at rest: {worst_rest:.2e} m");
     assert_eq!(on_box, 4, "the four columns over the box");
     assert!(on_floor >= 50, "{on_floor} on the floor, {hidden} hidden");
 }

@@ -181,6 +181,16 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             args.particles,
             gpu.describe()
         );
+        if effect
+            .collide
+            .iter()
+            .any(|c| matches!(c, plume_compiler::colliders::Collider::SceneDepth { .. }))
+        {
+            let (w, h) = args.render.unwrap_or((1280, 720));
+            eprintln!(
+                "scene depth: the SceneDepth collider meets the effect's scene meshes drawn from its camera at {w} x {h}"
+            );
+        }
     }
     let options = BenchOptions {
         particles: args.particles,

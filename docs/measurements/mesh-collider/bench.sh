@@ -8,7 +8,7 @@ set -euo pipefail
 dir=docs/measurements/mesh-collider
 plume=${PLUME:-./target/release/plume}
 for n in 1000000 10000000; do
-  for e in ground_only analytic mesh32 mesh96 mesh128 depth; do
+  for e in ground_only analytic mesh32 mesh96 mesh128 depth depth_nothing; do
     $plume bench $dir/$e.ron --particles $n --steps 100 --json
   done
 done

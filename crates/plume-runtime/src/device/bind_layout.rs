@@ -41,6 +41,12 @@ pub(crate) fn entries(effect: &CompiledEffect, skip: &str) -> Vec<wgpu::BindGrou
             "chunk" | "depth_axis" => {
                 buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
             }
+            "scene_camera" => buffer_entry(
+                b.binding,
+                wgpu::BufferBindingType::Uniform,
+                false,
+                Some(b.bytes),
+            ),
             "scene_depth" => wgpu::BindGroupLayoutEntry {
                 binding: b.binding,
                 visibility: wgpu::ShaderStages::COMPUTE,
@@ -51,8 +57,7 @@ pub(crate) fn entries(effect: &CompiledEffect, skip: &str) -> Vec<wgpu::BindGrou
                 },
                 count: None,
             },
-            "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data"
-            | "scene_camera" => buffer_entry(
+            "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data" => buffer_entry(
                 b.binding,
                 wgpu::BufferBindingType::Storage { read_only: true },
                 false,

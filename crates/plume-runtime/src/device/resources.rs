@@ -255,6 +255,10 @@ impl Resources {
                     // The event spawn's workgroup counts are read by an indirect dispatch.
                     let usage = match b.name {
                         "event_dispatch" => STORAGE | wgpu::BufferUsages::INDIRECT,
+                        // Written by Effect::set_scene_depth, read as a uniform.
+                        "scene_camera" => {
+                            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST
+                        }
                         _ => STORAGE,
                     };
                     device.create_buffer(&wgpu::BufferDescriptor {

@@ -111,6 +111,14 @@ impl Surface {
         }
     }
 
+    /// Whether a particle is pushed out at the start of a substep as well as at its end. The
+    /// scene depth is not: its image only changes between frames, and the end's push-out
+    /// (every substep) already leaves each particle outside; skipping the start's saves a
+    /// lookup of the image per particle and substep.
+    pub fn pushes_at_start(&self) -> bool {
+        !matches!(self, Surface::SceneDepth(_))
+    }
+
     /// Whether `x` is on the allowed side (the tests' check; no margin).
     pub fn allows(&self, x: DVec3) -> bool {
         match self {
@@ -224,9 +232,12 @@ pub fn margin(x: DVec3, scale: f64) -> f64 {
     MARGIN * x.abs().max_element().max(scale)
 }
 
-fn push_out_all(colliders: &[ColliderIr], mut x: DVec3, scale: f64) -> DVec3 {
+/// `x` pushed out of every collider (at the start of a substep, only of those that push there).
+fn push_out_all(colliders: &[ColliderIr], mut x: DVec3, scale: f64, start: bool) -> DVec3 {
     for c in colliders {
-        x = c.surface.push_out(x, margin(x, scale));
+        if !start || c.surface.pushes_at_start() {
+            x = c.surface.push_out(x, margin(x, scale));
+        }
     }
     x
 }
@@ -247,7 +258,7 @@ pub fn resolve(
         return false;
     }
     let scale = scale(colliders);
-    let mut x_from = push_out_all(colliders, x0, scale);
+    let mut x_from = push_out_all(colliders, x0, scale, true);
     let mut vel = if verlet { *v / h } else { *v };
     let mut rest = 1.0;
     let mut touched = false;
@@ -273,7 +284,7 @@ pub fn resolve(
         };
         touched = true;
     }
-    *x = push_out_all(colliders, *x, scale);
+    *x = push_out_all(colliders, *x, scale, false);
     if touched {
         *v = if verlet { vel * h } else { vel };
     }
@@ -318,8 +329,11 @@ pub fn emit_resolve(
     touched_flag: Option<&str>,
 ) {
     let scale = f32_lit(scale(colliders));
-    let push_all = |w: &mut Writer, var: &str| {
-        for i in 0..colliders.len() {
+    let push_all = |w: &mut Writer, var: &str, start: bool| {
+        for (i, c) in colliders.iter().enumerate() {
+            if start && !c.surface.pushes_at_start() {
+                continue;
+            }
             w.line(format!(
                 "{var} = collider_push_{i}({var}, {} * max(max(abs({var}.x), abs({var}.y)), max(abs({var}.z), {scale})));",
                 f32_lit(MARGIN)
@@ -328,7 +342,7 @@ pub fn emit_resolve(
     };
     w.block("", |w| {
         w.line("var x_from = x_start;");
-        push_all(w, "x_from");
+        push_all(w, "x_from", true);
         if verlet {
             w.line(format!("var vel = d * {};", f32_lit(1.0 / h)));
         } else {
@@ -374,7 +388,7 @@ pub fn emit_resolve(
             ));
             w.line("touched = true;");
         });
-        push_all(w, "x");
+        push_all(w, "x", false);
         w.block("if (touched)", |w| {
             if let Some(flag) = touched_flag {
                 w.line(format!("{flag} = true;"));

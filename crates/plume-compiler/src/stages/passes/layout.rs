@@ -203,9 +203,9 @@ pub fn decide(ir: &EffectIr) -> Layout {
         layout.bindings.push(Binding {
             binding: 24,
             name: "scene_camera",
-            space: "storage, read",
+            space: "uniform",
             bytes: crate::features::colliders::scene_depth::CAMERA_WORDS as u64 * 4,
-            meaning: "the depth image's size (width, height, 0, 0; width 0: no image yet) and camera: view, projection and their inverses, column-major",
+            meaning: "the depth image's size (width, height, 0, 0; width 0: no image yet) and camera: view-projection, the view's row 2, the inverse projection, the inverse view and the view, column-major",
         });
     }
     if let Some(flock) = &ir.flock {

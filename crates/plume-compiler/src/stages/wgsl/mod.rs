@@ -109,6 +109,14 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         w.blank();
     }
     for b in &layout.bindings {
+        if b.name == "scene_camera" {
+            w.line(format!(
+                "@group(0) @binding({}) var<uniform> scene_camera: array<vec4<f32>, {}>;",
+                b.binding,
+                crate::features::colliders::scene_depth::CAMERA_VEC4S
+            ));
+            continue;
+        }
         if b.space == "texture" {
             w.line(format!(
                 "@group(0) @binding({}) var {}: texture_2d<f32>;",
@@ -132,7 +140,6 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "fire_state" => "array<u32, 4>",
             "depth_axis" => "DepthAxis",
             "collider_data" | "force_data" => "array<f32>",
-            "scene_camera" => "array<vec4<f32>>",
             "spawn_data" => "array<u32>",
             _ => "StepParams",
         };

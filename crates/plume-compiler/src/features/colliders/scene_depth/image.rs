@@ -8,6 +8,8 @@ use glam::{DMat4, Mat4};
 /// inverses both the kernel and the reference use.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DepthCamera {
+    /// World to clip: projection · view, multiplied in f64 and rounded once.
+    pub view_projection: [f32; 16],
     /// World to view (right-handed, looking down −z).
     pub view: [f32; 16],
     /// View to clip (wgpu's clip space, depth in [0, 1], standard or reversed).
@@ -18,8 +20,29 @@ pub struct DepthCamera {
     pub inverse_view: [f32; 16],
 }
 
-/// f32 words of [`DepthCamera::words`]: (width, height, 0, 0), then the four matrices.
-pub const CAMERA_WORDS: usize = 4 + 4 * 16;
+/// f32 words of [`DepthCamera::words`], in vec4s: (width, height, 0, 0); view · projection's
+/// columns; the view's row 2 (−depth = row 2 · (x, 1)); the inverse projection's columns; the
+/// inverse view's; the view's.
+pub const CAMERA_VEC4S: usize = 18;
+
+/// f32 words of [`DepthCamera::words`].
+pub const CAMERA_WORDS: usize = 4 * CAMERA_VEC4S;
+
+/// Where each part starts in [`DepthCamera::words`], in vec4s.
+pub mod at {
+    /// (width, height, 0, 0).
+    pub const SIZE: usize = 0;
+    /// The view-projection's columns.
+    pub const VIEW_PROJECTION: usize = 1;
+    /// The view's row 2.
+    pub const VIEW_ROW_Z: usize = 5;
+    /// The inverse projection's columns.
+    pub const INVERSE_PROJECTION: usize = 6;
+    /// The inverse view's columns.
+    pub const INVERSE_VIEW: usize = 10;
+    /// The view's columns.
+    pub const VIEW: usize = 14;
+}
 
 impl DepthCamera {
     /// The camera of `view` and `projection`; refused when either is not finite or not
@@ -39,6 +62,7 @@ impl DepthCamera {
         }
         let f32s = |m: DMat4| m.as_mat4().to_cols_array();
         Ok(Self {
+            view_projection: f32s(p * v),
             view: view.to_cols_array(),
             projection: projection.to_cols_array(),
             inverse_projection: f32s(p.inverse()),
@@ -49,18 +73,15 @@ impl DepthCamera {
     /// The `scene_camera` binding's contents for an image of `width` x `height`.
     pub fn words(&self, width: u32, height: u32) -> [f32; CAMERA_WORDS] {
         let mut out = [0.0; CAMERA_WORDS];
-        out[0] = width as f32;
-        out[1] = height as f32;
-        for (k, m) in [
-            &self.view,
-            &self.projection,
-            &self.inverse_projection,
-            &self.inverse_view,
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            out[4 + 16 * k..4 + 16 * (k + 1)].copy_from_slice(m);
+        out[4 * at::SIZE] = width as f32;
+        out[4 * at::SIZE + 1] = height as f32;
+        let mut put = |vec4: usize, m: &[f32; 16]| out[4 * vec4..4 * vec4 + 16].copy_from_slice(m);
+        put(at::VIEW_PROJECTION, &self.view_projection);
+        put(at::INVERSE_PROJECTION, &self.inverse_projection);
+        put(at::INVERSE_VIEW, &self.inverse_view);
+        put(at::VIEW, &self.view);
+        for c in 0..4 {
+            out[4 * at::VIEW_ROW_Z + c] = self.view[4 * c + 2];
         }
         out
     }

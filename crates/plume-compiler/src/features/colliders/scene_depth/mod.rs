@@ -17,7 +17,7 @@
 //! (at most [`MAX_SAMPLES`]); a crossing is a sample in front of its pixel's surface followed by
 //! one behind its own by at most `thickness` plus how much deeper the particle went between
 //! the two, so a particle moving fast along the view ray does not pass through. The crossing is
-//! bisected ([`BISECTIONS`] halvings) to the last point in front. The normal comes from the
+//! bisected to the last point in front (until known to [`CONTACT_PRECISION`] of the view depth, at most [`BISECTIONS`] halvings). The normal comes from the
 //! neighbouring pixels' surface points (of the left and right neighbours, the one nearer in
 //! depth, likewise up and down), turned to face the side the particle came from.
 //!
@@ -39,7 +39,7 @@ use super::Hit;
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 
-pub use image::{DepthCamera, DepthImage, CAMERA_WORDS};
+pub use image::{at, DepthCamera, DepthImage, CAMERA_VEC4S, CAMERA_WORDS};
 
 /// The thickness when the file gives none (m).
 pub const DEFAULT_THICKNESS: f64 = 0.5;
@@ -47,8 +47,14 @@ pub const DEFAULT_THICKNESS: f64 = 0.5;
 /// The most points a substep's segment is sampled at.
 pub const MAX_SAMPLES: u32 = 32;
 
-/// Bisection halvings of a crossing.
+/// The most bisection halvings of a crossing.
 pub(super) const BISECTIONS: u32 = 16;
+
+/// A crossing is bisected until it is known to this fraction of the view depth (where the
+/// segment starts): 1e-5, 0.08 mm at 8 m, finer than the depth image's own rounding there
+/// (about 0.6 mm for a standard Depth32Float range; see [`Place::behind`]). A resting particle's
+/// short segment needs few halvings, a fast one's up to [`BISECTIONS`].
+pub(super) const CONTACT_PRECISION: f64 = 1e-5;
 
 /// A homogeneous w this small (in magnitude) is a point at infinity.
 pub(super) const TINY_W: f64 = 1e-30;
@@ -71,38 +77,36 @@ pub fn check(path: &ValuePath, c: &mut Checker, thickness: f64) {
 /// Where a world point is against the image.
 #[derive(Clone, Copy, Debug)]
 struct Place {
-    /// The point in view space.
-    view: DVec3,
-    /// Its normalised device coordinates (x, y).
-    ndc: (f64, f64),
-    /// The pixel it projects to.
-    pixel: (i64, i64),
-    /// The surface point on the point's view ray, in view space.
-    surface: DVec3,
-    /// How far the surface may be off for the depth image's precision (see [`precision`]).
-    tolerance: f64,
+    /// Its normalised device coordinates (x, y); None behind the camera.
+    ndc: Option<(f64, f64)>,
+    /// Its view depth (−z in view space).
+    depth: f64,
+    /// Where there is a surface on its view ray: the surface's view depth, taken nearer by
+    /// its rounding, and the nearest pixel.
+    surface: Option<(f64, (i64, i64))>,
 }
 
 impl Place {
-    /// How far behind the surface the point is (m; negative in front), the surface taken
-    /// `tolerance` nearer so that a particle left just in front of it is not found behind it
-    /// by the depth image's rounding.
-    fn behind(&self) -> f64 {
-        self.surface.z - self.view.z + self.tolerance
+    /// How far behind the surface the point is (m; negative in front), where there is one.
+    /// The surface is taken nearer by what 8 ulps of its depth are worth there, plus 1e-6 of
+    /// the point's depth, so that a particle left just in front of it is not found in it by
+    /// the depth image's rounding.
+    fn behind(&self) -> Option<f64> {
+        self.surface.map(|(s, _)| self.depth - s)
     }
 }
 
 /// Relative change of a depth value standing for its rounding: 8 f32 ulps.
 pub(super) const DEPTH_ULPS: f64 = 8.0 / 8_388_608.0;
 
-/// Relative rounding of a view-space coordinate computed in f32 through two matrices.
+/// Relative rounding of a view depth computed in f32 through a matrix.
 pub(super) const VIEW_ROUNDING: f64 = 1e-6;
 
-/// The image's matrices in f64.
+/// The image's matrices in f64 (from the very f32 words the GPU reads).
 struct Frame<'a> {
     image: &'a DepthImage,
+    view_projection: DMat4,
     view: DMat4,
-    projection: DMat4,
     inverse_projection: DMat4,
     inverse_view: DMat4,
 }
@@ -115,8 +119,8 @@ impl<'a> Frame<'a> {
     fn new(image: &'a DepthImage) -> Self {
         Self {
             image,
+            view_projection: dmat(&image.camera.view_projection),
             view: dmat(&image.camera.view),
-            projection: dmat(&image.camera.projection),
             inverse_projection: dmat(&image.camera.inverse_projection),
             inverse_view: dmat(&image.camera.inverse_view),
         }
@@ -143,16 +147,6 @@ impl<'a> Frame<'a> {
         self.unproject(x, y, d)
     }
 
-    /// The view-space point, its pixel position (continuous) and its clip w.
-    fn project(&self, x: DVec3) -> (DVec3, Option<(f64, f64)>) {
-        let v = (self.view * x.extend(1.0)).truncate();
-        let c = self.projection * v.extend(1.0);
-        if c.w.is_nan() || c.w <= TINY_W {
-            return (v, None);
-        }
-        (v, Some((c.x / c.w, c.y / c.w)))
-    }
-
     /// The depth of pixel (ix, iy), clamped to the image; None where it is empty.
     fn depth(&self, ix: i64, iy: i64) -> Option<f64> {
         let (w, h) = (i64::from(self.image.width), i64::from(self.image.height));
@@ -160,10 +154,23 @@ impl<'a> Frame<'a> {
         (d > 0.0 && d < 1.0).then_some(d)
     }
 
-    /// Where `x` is against the image, or None where it passes freely regardless of depth.
-    fn place(&self, x: DVec3) -> Option<Place> {
-        let (view, ndc) = self.project(x);
-        let (nx, ny) = ndc?;
+    /// Where `x` is against the image.
+    fn place(&self, x: DVec3) -> Place {
+        let p = x.extend(1.0);
+        let c = self.view_projection * p;
+        let depth = -self.view.row(2).dot(p);
+        let ndc = (c.w > TINY_W).then(|| (c.x / c.w, c.y / c.w));
+        let surface = ndc.and_then(|(nx, ny)| self.surface_on_ray(nx, ny, depth));
+        Place {
+            ndc,
+            depth,
+            surface,
+        }
+    }
+
+    /// The surface on the view ray through (nx, ny): its view depth (taken nearer by its
+    /// rounding; see [`Place::behind`]) and the nearest pixel, or None off screen or empty.
+    fn surface_on_ray(&self, nx: f64, ny: f64, depth: f64) -> Option<(f64, (i64, i64))> {
         if !(nx.abs() < 1.0 && ny.abs() < 1.0) {
             return None;
         }
@@ -190,26 +197,30 @@ impl<'a> Frame<'a> {
             }
             _ => self.depth(ix, iy)?,
         };
-        let surface = self.unproject(nx, ny, d)?;
-        // How much 8 ulps of depth move the surface: far away a standard depth buffer's
-        // steps grow with the square of the distance.
-        let tolerance = self
-            .unproject(nx, ny, d * (1.0 + DEPTH_ULPS))
-            .map_or(0.0, |u| (u.z - surface.z).abs())
-            + VIEW_ROUNDING * view.z.abs();
-        Some(Place {
-            view,
-            ndc: (nx, ny),
-            pixel: (ix, iy),
-            surface,
-            tolerance,
-        })
+        // Only the unprojection's z and w are needed: rows 2 and 3 of the inverse projection.
+        let ip = &self.inverse_projection;
+        let u = DVec4::new(nx, ny, d, 1.0);
+        let (z, w) = (ip.row(2).dot(u), ip.row(3).dot(u));
+        if w.is_nan() || w.abs() <= TINY_W {
+            return None;
+        }
+        // What 8 ulps of depth are worth: far away a standard depth buffer's steps grow with
+        // the square of the distance.
+        let step = d * DEPTH_ULPS;
+        let (z2, w2) = (z + step * ip.z_axis.z, w + step * ip.z_axis.w);
+        let rounding = if w2.abs() > TINY_W {
+            (z2 / w2 - z / w).abs()
+        } else {
+            0.0
+        };
+        Some((-z / w - rounding - VIEW_ROUNDING * depth.abs(), (ix, iy)))
     }
 
-    /// The world normal of the surface at `p`'s pixel, facing `toward` (view space).
-    fn normal(&self, p: &Place, toward: DVec3) -> DVec3 {
-        let (ix, iy) = p.pixel;
-        let s = self.surface(ix, iy).unwrap_or(p.surface);
+    /// The world normal of the surface at `pixel`, facing `toward` (a view-space point).
+    fn normal(&self, (ix, iy): (i64, i64), toward: DVec3) -> DVec3 {
+        let Some(s) = self.surface(ix, iy) else {
+            return self.back();
+        };
         let tangent = |plus: Option<DVec3>, minus: Option<DVec3>| match (plus, minus) {
             (Some(a), Some(b)) => Some(if (a.z - s.z).abs() <= (s.z - b.z).abs() {
                 a - s
@@ -233,9 +244,14 @@ impl<'a> Frame<'a> {
         if l > 1e-30 && l.is_finite() {
             world / l
         } else {
-            let back = DMat3::from_mat4(self.inverse_view) * DVec3::Z;
-            back / back.length().max(1e-30)
+            self.back()
         }
+    }
+
+    /// The direction back towards the camera (view +z in the world).
+    fn back(&self) -> DVec3 {
+        let back = DMat3::from_mat4(self.inverse_view) * DVec3::Z;
+        back / back.length().max(1e-30)
     }
 }
 
@@ -244,40 +260,52 @@ impl SceneDepthIr {
     pub fn hit(&self, a: DVec3, b: DVec3) -> Option<Hit> {
         let frame = Frame::new(self.image.as_deref()?);
         let (w, h) = (frame.image.width as f64, frame.image.height as f64);
-        let samples = match (frame.project(a).1, frame.project(b).1) {
-            (Some(pa), Some(pb)) => {
-                let px = ((pb.0 - pa.0) * 0.5 * w)
+        let (pa, pb) = (frame.place(a), frame.place(b));
+        let samples = match (pa.ndc, pb.ndc) {
+            (Some(na), Some(nb)) => {
+                let px = ((nb.0 - na.0) * 0.5 * w)
                     .abs()
-                    .max(((pb.1 - pa.1) * 0.5 * h).abs());
+                    .max(((nb.1 - na.1) * 0.5 * h).abs());
                 px.ceil().clamp(1.0, f64::from(MAX_SAMPLES)) as u32
             }
             _ => MAX_SAMPLES,
         };
-        let mut prev = frame.place(a);
+        let mut prev = pa;
         let mut prev_t = 0.0;
         for k in 1..=samples {
             let t = f64::from(k) / f64::from(samples);
-            let cur = frame.place(a + (b - a) * t);
-            if let (Some(p), Some(c)) = (prev, cur) {
-                let deeper = (p.view.z - c.view.z).max(0.0);
-                if p.behind() < 0.0 && c.behind() >= 0.0 && c.behind() <= self.thickness + deeper {
+            let cur = if k == samples {
+                pb
+            } else {
+                frame.place(a + (b - a) * t)
+            };
+            if let (Some(bp), Some(bc)) = (prev.behind(), cur.behind()) {
+                let deeper = (cur.depth - prev.depth).max(0.0);
+                if bp < 0.0 && bc >= 0.0 && bc <= self.thickness + deeper {
                     let (mut lo, mut hi) = (prev_t, t);
-                    let mut front = p;
+                    let mut front = prev;
+                    let enough =
+                        CONTACT_PRECISION * pa.depth.max(0.0) / (b - a).length().max(1e-30);
                     for _ in 0..BISECTIONS {
+                        if hi - lo <= enough {
+                            break;
+                        }
                         let mid = 0.5 * (lo + hi);
-                        match frame.place(a + (b - a) * mid) {
-                            Some(m) if m.behind() >= 0.0 => hi = mid,
-                            Some(m) => {
-                                lo = mid;
+                        let m = frame.place(a + (b - a) * mid);
+                        if m.behind().is_some_and(|b| b >= 0.0) {
+                            hi = mid;
+                        } else {
+                            lo = mid;
+                            if m.surface.is_some() {
                                 front = m;
                             }
-                            None => lo = mid,
                         }
                     }
-                    let toward = frame.project(a).0;
+                    let (_, pixel) = front.surface.expect("a front sample has a surface");
+                    let toward = (frame.view * a.extend(1.0)).truncate();
                     return Some(Hit {
                         s: lo,
-                        normal: frame.normal(&front, toward),
+                        normal: frame.normal(pixel, toward),
                     });
                 }
             }
@@ -293,14 +321,13 @@ impl SceneDepthIr {
             return x;
         };
         let frame = Frame::new(image);
-        let Some(p) = frame.place(x) else {
+        let p = frame.place(x);
+        let (Some(behind), Some((nx, ny))) = (p.behind(), p.ndc) else {
             return x;
         };
-        let behind = p.behind();
         if !(behind >= 0.0 && behind <= self.thickness) {
             return x;
         }
-        let (nx, ny) = p.ndc;
         let (Some(u0), Some(u1)) = (frame.unproject(nx, ny, 0.25), frame.unproject(nx, ny, 0.75))
         else {
             return x;
@@ -310,10 +337,9 @@ impl SceneDepthIr {
             return x;
         }
         // Depth is −z: moving by λ·ray changes it by −λ·ray.z.
-        let lambda = (behind + margin) / ray.z;
-        let moved = p.view + ray * lambda;
-        let world = frame.inverse_view * moved.extend(1.0);
-        world.truncate()
+        let view = (frame.view * x.extend(1.0)).truncate();
+        let moved = view + ray * ((behind + margin) / ray.z);
+        (frame.inverse_view * moved.extend(1.0)).truncate()
     }
 
     /// Whether `x` is not inside a surface (the tests' check; no margin).
@@ -323,7 +349,8 @@ impl SceneDepthIr {
         };
         Frame::new(image)
             .place(x)
-            .is_none_or(|p| !(p.behind() >= 0.0 && p.behind() <= self.thickness))
+            .behind()
+            .is_none_or(|b| !(b >= 0.0 && b <= self.thickness))
     }
 
     /// One line for `--emit ir`.
