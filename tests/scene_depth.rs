@@ -105,11 +105,16 @@ fn run_source(
         .unwrap();
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     scene.record(&mut encoder, target.attachment(DVec3::ZERO), &camera);
-    gpu.queue.submit([encoder.finish()]);
     if give_depth {
-        sim.set_scene_depth(scene.depth_texture(), camera.view, camera.proj)
-            .unwrap();
+        sim.set_scene_depth(
+            &mut encoder,
+            scene.depth_texture(),
+            camera.view,
+            camera.proj,
+        )
+        .unwrap();
     }
+    gpu.queue.submit([encoder.finish()]);
     sim.run(STEPS, |_| {}).unwrap();
     let image = Arc::new(DepthImage {
         width: SIDE,
@@ -221,47 +226,108 @@ fn without_an_image_nothing_collides() {
 fn bad_scene_depth_input_is_refused() {
     let gpu = gpu();
     let mut sim = Effect::new(&gpu, compile(&effect(0.0))).unwrap();
-    let colour = gpu.device.create_texture(&colour_descriptor());
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    let colour = gpu
+        .device
+        .create_texture(&texture(wgpu::TextureFormat::Rgba8Unorm, 1));
     let id = glam::Mat4::IDENTITY;
     let err = sim
-        .set_scene_depth(&colour, id, id)
+        .set_scene_depth(&mut encoder, &colour, id, id)
         .unwrap_err()
         .to_string();
     assert!(err.contains("not a depth format"), "{err}");
     let depth = gpu
         .device
-        .create_texture(&plume::runtime::wgpu::TextureDescriptor {
-            format: plume::runtime::wgpu::TextureFormat::Depth32Float,
-            ..colour_descriptor()
-        });
+        .create_texture(&texture(wgpu::TextureFormat::Depth32Float, 1));
     let err = sim
-        .set_scene_depth(&depth, id, glam::Mat4::ZERO)
+        .set_scene_depth(&mut encoder, &depth, id, glam::Mat4::ZERO)
         .unwrap_err()
         .to_string();
     assert!(err.contains("not invertible"), "{err}");
     let nan = glam::Mat4::from_cols_array(&[f32::NAN; 16]);
     let err = sim
-        .set_scene_depth(&depth, nan, id)
+        .set_scene_depth(&mut encoder, &depth, nan, id)
         .unwrap_err()
         .to_string();
     assert!(err.contains("not finite"), "{err}");
-    sim.set_scene_depth(&depth, id, id).unwrap();
+    sim.set_scene_depth(&mut encoder, &depth, id, id).unwrap();
+    gpu.queue.submit([encoder.finish()]);
 }
 
-fn colour_descriptor() -> plume::runtime::wgpu::TextureDescriptor<'static> {
-    plume::runtime::wgpu::TextureDescriptor {
+use plume::runtime::wgpu;
+
+/// A 64 x 64 texture of `format` and `samples` that can be drawn into and read.
+fn texture(format: wgpu::TextureFormat, samples: u32) -> wgpu::TextureDescriptor<'static> {
+    wgpu::TextureDescriptor {
         label: None,
-        size: plume::runtime::wgpu::Extent3d {
-            width: 4,
-            height: 4,
+        size: wgpu::Extent3d {
+            width: 64,
+            height: 64,
             depth_or_array_layers: 1,
         },
         mip_level_count: 1,
-        sample_count: 1,
-        dimension: plume::runtime::wgpu::TextureDimension::D2,
-        format: plume::runtime::wgpu::TextureFormat::Rgba8Unorm,
-        usage: plume::runtime::wgpu::TextureUsages::TEXTURE_BINDING,
+        sample_count: samples,
+        dimension: wgpu::TextureDimension::D2,
+        format,
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::RENDER_ATTACHMENT,
         view_formats: &[],
+    }
+}
+
+#[test]
+fn a_depth_buffer_cleared_to_5_m_is_a_wall_5_m_away_single_or_multisampled() {
+    // A camera at the origin looking down −z; a depth buffer cleared to the depth of a point 5
+    // m ahead is a plane there, whatever the sample count (a multisampled one is read by its
+    // sample 0). Particles flying away from the camera at 10 m/s stop on it.
+    let source = r#"Effect(
+    name: "wall",
+    capacity: 25,
+    emitters: [Emitter(burst: 25, shape: Grid(min: (-0.4, -0.4, -1.0), max: (0.4, 0.4, -1.0), counts: (5, 5, 1)), velocity: Constant((0.0, 0.0, -10.0)), lifetime: Some((100.0, 100.0)))],
+    collide: [SceneDepth(thickness: 0.5, restitution: 0.0, friction: 1.0)],
+)"#;
+    let view = glam::Mat4::look_at_rh(glam::Vec3::ZERO, -glam::Vec3::Z, glam::Vec3::Y);
+    let projection = glam::Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0);
+    let ahead = projection * glam::Vec4::new(0.0, 0.0, -5.0, 1.0);
+    let cleared = ahead.z / ahead.w;
+    let gpu = gpu();
+    for samples in [1, 4] {
+        let depth = gpu
+            .device
+            .create_texture(&texture(wgpu::TextureFormat::Depth32Float, samples));
+        let mut sim = Effect::new(&gpu, compile(source)).unwrap();
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        let attachment = depth.create_view(&Default::default());
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: None,
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &attachment,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(cleared),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        sim.set_scene_depth(&mut encoder, &depth, view, projection)
+            .unwrap();
+        gpu.queue.submit([encoder.finish()]);
+        sim.run(60, |_| {}).unwrap();
+        let records = sim.records().unwrap();
+        assert_eq!(records.len(), 25);
+        for r in &records {
+            // In front of the wall by the depth's rounding there (8 ulps of a depth near 1 at
+            // 5 m with a 0.1 m near plane: 2.4e-4 m along the ray) and the contact margin.
+            let ahead = -r.position.z;
+            assert!(
+                ahead < 5.0 && ahead > 5.0 - 2e-3,
+                "{samples} sample(s): a particle at {} m, not on the wall at 5 m",
+                ahead
+            );
+        }
     }
 }
 

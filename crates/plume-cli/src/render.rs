@@ -137,8 +137,13 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         Some(scene) if sim.collides_with_scene_depth() => {
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             scene.record(&mut encoder, target.attachment(glam::DVec3::ZERO), &camera);
+            sim.set_scene_depth(
+                &mut encoder,
+                scene.depth_texture(),
+                camera.view,
+                camera.proj,
+            )?;
             gpu.queue.submit([encoder.finish()]);
-            sim.set_scene_depth(scene.depth_texture(), camera.view, camera.proj)?;
             None
         }
         None if !args.no_scene => {

@@ -27,7 +27,14 @@ pub fn bind_effect_scene(
         );
         return Ok(None);
     };
-    sim.set_scene_depth(scene.depth_texture(), camera.view, camera.proj)?;
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    sim.set_scene_depth(
+        &mut encoder,
+        scene.depth_texture(),
+        camera.view,
+        camera.proj,
+    )?;
+    gpu.queue.submit([encoder.finish()]);
     eprintln!(
         "scene depth: {} triangles drawn from the effect's camera at {} x {}",
         triangles.len(),

@@ -33,15 +33,6 @@ impl Running {
         let mut drawn = false;
         let mut counters = None;
         if let Some(loaded) = &mut self.effect {
-            // A SceneDepth collider meets the meshes as the last frame drew them.
-            if let (Some(meshes), Some(previous)) = (&loaded.meshes, &loaded.depth_camera) {
-                if loaded.effect.collides_with_scene_depth() {
-                    loaded
-                        .effect
-                        .set_scene_depth(meshes.depth_texture(), previous.view, previous.proj)
-                        .map_err(|e| e.to_string())?;
-                }
-            }
             let recorded = loaded
                 .effect
                 .advance_timed(&mut encoder, steps, self.probe.step_writes())
@@ -79,7 +70,19 @@ impl Running {
                     loaded.renderer.set_scene_depth(meshes.depth_view());
                 }
                 meshes.record(&mut encoder, color.clone(), &camera);
-                loaded.depth_camera = Some(camera);
+                // A SceneDepth collider meets the meshes as this frame draws them, from the
+                // next frame's steps on (this frame's were recorded above).
+                if loaded.effect.collides_with_scene_depth() {
+                    loaded
+                        .effect
+                        .set_scene_depth(
+                            &mut encoder,
+                            meshes.depth_texture(),
+                            camera.view,
+                            camera.proj,
+                        )
+                        .map_err(|e| e.to_string())?;
+                }
                 color.ops.load = wgpu::LoadOp::Load;
                 depth = Some(meshes.particle_depth());
             }

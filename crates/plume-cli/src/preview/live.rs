@@ -100,7 +100,6 @@ impl Running {
             effect,
             renderer,
             meshes,
-            depth_camera: None,
             about,
             warnings,
         });

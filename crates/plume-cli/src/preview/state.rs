@@ -23,9 +23,6 @@ pub(super) struct Loaded {
     pub(super) renderer: EffectRenderer,
     /// The meshes the effect names, drawn around it (None: it names none).
     pub(super) meshes: Option<plume_runtime::outputs::Scene>,
-    /// The camera the meshes' depth was last drawn with: a `SceneDepth` collider meets the
-    /// last frame's depth (None until a frame is drawn).
-    pub(super) depth_camera: Option<plume_runtime::Camera>,
     /// What the compiler chose, for the figures.
     pub(super) about: String,
     /// Its warnings, rendered.

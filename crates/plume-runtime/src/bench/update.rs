@@ -318,6 +318,14 @@ fn bind_scene_depth(
         return Ok(None);
     };
     let words = crate::sim::scene_depth::camera(camera.view, camera.proj)?;
-    crate::sim::scene_depth::bind(sim, scene.depth_texture(), &words);
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    crate::sim::scene_depth::record(
+        sim,
+        &mut Default::default(),
+        &mut encoder,
+        scene.depth_texture(),
+        &words,
+    )?;
+    gpu.queue.submit([encoder.finish()]);
     Ok(Some(scene))
 }

@@ -1,5 +1,5 @@
 //! The compute module's bind group layout: one entry per binding of the compiled layout, typed
-//! by what it holds (uniforms, read-only and read-write storage, the scene depth texture).
+//! by what it holds (uniforms, read-only and read-write storage).
 
 use plume_compiler::CompiledEffect;
 
@@ -47,17 +47,8 @@ pub(crate) fn entries(effect: &CompiledEffect, skip: &str) -> Vec<wgpu::BindGrou
                 false,
                 Some(b.bytes),
             ),
-            "scene_depth" => wgpu::BindGroupLayoutEntry {
-                binding: b.binding,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Float { filterable: false },
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            },
-            "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data" => buffer_entry(
+            "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data"
+            | "scene_depth" => buffer_entry(
                 b.binding,
                 wgpu::BufferBindingType::Storage { read_only: true },
                 false,

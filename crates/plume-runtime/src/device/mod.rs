@@ -1,12 +1,14 @@
 //! Device and resources: the GPU handle ([`gpu::Gpu`]: Plume's own device or a host's), a
 //! group's buffers and compute module sized from its layout ([`resources`]), the small
-//! buffers every stage makes ([`buffers`]: filled, staging), and copying buffers back to the
+//! buffers every stage makes ([`buffers`]: filled, staging), a depth texture copied into a
+//! buffer ([`depth_copy`]), and copying buffers back to the
 //! CPU with the decoding of particles and counters ([`readback`]).
 //!
 //! Imports nothing of the crate but [`crate::error`]: every other folder builds on it.
 
 pub(crate) mod bind_layout;
 pub(crate) mod buffers;
+pub(crate) mod depth_copy;
 pub(crate) mod gpu;
 pub(crate) mod readback;
 pub(crate) mod resources;

@@ -71,9 +71,6 @@ pub struct Resources {
     pub sort: Option<SortBuffers>,
     /// Buffers past the core bindings (7 up: flocking's and the baked field's), by binding.
     pub extra: Vec<(u32, wgpu::Buffer)>,
-    /// The depth image a `SceneDepth` collider reads: the host's, or until it gives one a
-    /// 1x1 placeholder (the camera's width 0 switches the collider off).
-    scene_depth: Option<wgpu::TextureView>,
     /// The compiled compute module.
     pub module: wgpu::ShaderModule,
     layout: wgpu::BindGroupLayout,
@@ -216,12 +213,7 @@ impl Resources {
             .layout
             .bindings
             .iter()
-            .filter(|b| {
-                b.binding >= 7
-                    && b.name != "depth_axis"
-                    && b.name != "trail"
-                    && b.name != "scene_depth"
-            })
+            .filter(|b| b.binding >= 7 && b.name != "depth_axis" && b.name != "trail")
             .map(|b| {
                 let size = b.bytes.max(16);
                 if let Some((_, buffer)) = shared.iter().find(|(at, _)| *at == b.binding) {
@@ -284,15 +276,6 @@ impl Resources {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let scene_depth = effect.ir.collides_with_scene_depth().then(|| {
-            gpu.texture_2d(
-                "scene depth placeholder",
-                (1, 1),
-                wgpu::TextureFormat::Depth32Float,
-                wgpu::TextureUsages::TEXTURE_BINDING,
-            )
-            .create_view(&Default::default())
-        });
         let resources = Self {
             gpu: gpu.clone(),
             chunk_slots,
@@ -307,7 +290,6 @@ impl Resources {
             frame,
             sort,
             extra,
-            scene_depth,
             module,
             layout,
             pipeline_layout,
@@ -449,11 +431,6 @@ impl Resources {
                     "sort_keys" => sort.expect("sorts").keys.as_entire_binding(),
                     "sort_vals" => sort.expect("sorts").vals.as_entire_binding(),
                     "depth_axis" => sort.expect("sorts").depth_axis.as_entire_binding(),
-                    "scene_depth" => wgpu::BindingResource::TextureView(
-                        self.scene_depth
-                            .as_ref()
-                            .expect("a SceneDepth collider gets a depth view"),
-                    ),
                     _ => self
                         .extra_buffer(b.binding)
                         .expect("every other binding is an extra buffer")
@@ -470,11 +447,13 @@ impl Resources {
             })
     }
 
-    /// Binds `view` (a depth-only view of a single-sampled 2D depth texture) as the depth image
-    /// the `SceneDepth` collider reads, rebuilding the chunks' bind groups; the camera goes
-    /// into the `scene_camera` buffer separately.
-    pub fn set_scene_depth_view(&mut self, effect: &CompiledEffect, view: wgpu::TextureView) {
-        self.scene_depth = Some(view);
+    /// Puts `buffer` in the place of the extra buffer at `binding` (one that grew: the scene
+    /// depth's copy), rebuilding the chunks' bind groups.
+    pub fn replace_extra(&mut self, effect: &CompiledEffect, binding: u32, buffer: wgpu::Buffer) {
+        match self.extra.iter_mut().find(|(b, _)| *b == binding) {
+            Some(slot) => slot.1 = buffer,
+            None => self.extra.push((binding, buffer)),
+        }
         if let Some(mut chunks) = self.chunks.take() {
             for (k, chunk) in chunks.iter_mut().enumerate() {
                 chunk.bind_group =

@@ -231,41 +231,19 @@ impl Scene {
     /// `SceneDepth` collider's f64 reference collides with.
     pub fn read_depth(&self) -> Result<Vec<f32>, RuntimeError> {
         let gpu = &self.gpu;
-        let (width, height) = self.size;
-        let module = gpu
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("depth read"),
-                source: wgpu::ShaderSource::Wgsl(include_str!("depth_read.wgsl").into()),
-            });
-        let pipeline = gpu.compute_pipeline(&module, "main", None);
         let out = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("depth read"),
-            size: u64::from(width) * u64::from(height) * 4,
+            size: crate::device::depth_copy::copy_bytes(&self.depth_texture),
             usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
             mapped_at_creation: false,
         });
-        let bind_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("depth read"),
-            layout: &pipeline.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: wgpu::BindingResource::TextureView(&self.depth),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: out.as_entire_binding(),
-                },
-            ],
-        });
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&pipeline);
-            pass.set_bind_group(0, &bind_group, &[]);
-            pass.dispatch_workgroups(width.div_ceil(8), height.div_ceil(8), 1);
-        }
+        crate::device::depth_copy::DepthCopy::default().record(
+            gpu,
+            &mut encoder,
+            &self.depth_texture,
+            &out,
+        );
         gpu.queue.submit([encoder.finish()]);
         let bytes = crate::device::readback::read_buffer(gpu, &out)?;
         gpu.take_error()?;

@@ -91,6 +91,8 @@ pub struct Effect {
     /// The event streams; None for one group without events, which steps alone.
     events: Option<Events>,
     warnings: Diagnostics,
+    /// The kernels that copy a host's depth for a `SceneDepth` collider (made on first use).
+    depth_copy: crate::device::depth_copy::DepthCopy,
 }
 
 impl Effect {
@@ -183,6 +185,7 @@ impl Effect {
             groups,
             events,
             warnings,
+            depth_copy: Default::default(),
         })
     }
 
@@ -248,18 +251,19 @@ impl Effect {
         }
     }
 
-    /// Gives the effect's `SceneDepth` collider the depth image it collides with from the next
-    /// submission on: `depth`, a single-sampled 2D depth texture with
-    /// `TextureUsages::TEXTURE_BINDING` (any depth format; depth exactly 0 or 1 is empty, so a
-    /// clear value of either convention is no surface), drawn through `view` (world to view,
-    /// right-handed, looking down −z) and `projection` (view to wgpu clip space, standard or
-    /// reversed depth). The previous frame's depth is fine: particles then meet the scene
-    /// where it was a frame ago. The camera is written through the queue, so steps recorded
-    /// into one submission all use the last one set. An effect without a `SceneDepth`
-    /// collider ignores it; one that has one collides with nothing until it is given an
-    /// image. The f64 twin is `ReferenceSim::set_scene_depth`.
+    /// Records into `encoder` what the effect's `SceneDepth` collider meets in the steps
+    /// recorded after it: a copy of `depth` (a 2D depth texture of any depth format and sample
+    /// count, multisampled ones by their sample 0, with `TextureUsages::TEXTURE_BINDING`; depth
+    /// exactly 0 or 1 is empty, so a clear value of either convention is no surface), drawn
+    /// through `view` (world to view, right-handed, looking down −z) and `projection` (view to
+    /// wgpu clip space, standard or reversed depth). The copy is the effect's own, so the
+    /// texture may be reused or dropped once the encoder is submitted. The previous frame's
+    /// depth is fine: particles then meet the scene where it was a frame ago. Until it is
+    /// given an image the collider meets nothing; an effect without a `SceneDepth` collider
+    /// records nothing. The f64 twin is `ReferenceSim::set_scene_depth`.
     pub fn set_scene_depth(
         &mut self,
+        encoder: &mut wgpu::CommandEncoder,
         depth: &wgpu::Texture,
         view: glam::Mat4,
         projection: glam::Mat4,
@@ -267,7 +271,7 @@ impl Effect {
         crate::sim::scene_depth::check_texture(depth)?;
         let camera = crate::sim::scene_depth::camera(view, projection)?;
         for group in &mut self.groups {
-            crate::sim::scene_depth::bind(group, depth, &camera);
+            crate::sim::scene_depth::record(group, &mut self.depth_copy, encoder, depth, &camera)?;
         }
         Ok(())
     }

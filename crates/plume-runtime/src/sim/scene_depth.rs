@@ -1,66 +1,69 @@
 //! The depth image a `SceneDepth` collider meets (`plume_compiler::colliders::scene_depth`):
-//! checks the host's depth texture, binds a depth-only view of it in the group's compute bind
-//! groups and writes its camera into the `scene_camera` buffer.
+//! the host's depth texture copied into the group's `scene_depth` buffer (grown to its size)
+//! and its camera into `scene_camera`, both recorded into the host's encoder, so that the
+//! steps recorded after them meet that image.
 
 use glam::Mat4;
 use plume_compiler::colliders::scene_depth::DepthCamera;
 
+use crate::device::buffers::staging;
+use crate::device::depth_copy::{copy_bytes, DepthCopy};
 use crate::error::RuntimeError;
 use crate::sim::group::Group;
 
-/// Why `depth` cannot be a scene depth image, if it cannot.
-pub(crate) fn check_texture(depth: &wgpu::Texture) -> Result<(), RuntimeError> {
-    let refuse = |why: String| Err(RuntimeError::Control(format!("scene depth: {why}")));
-    if !depth.format().has_depth_aspect() {
-        return refuse(format!(
-            "the texture is {:?}, not a depth format",
-            depth.format()
-        ));
-    }
-    if depth.sample_count() != 1 {
-        return refuse(format!(
-            "the texture has {} samples; give a single-sampled depth texture (resolve or copy the multisampled one first)",
-            depth.sample_count()
-        ));
-    }
-    if depth.dimension() != wgpu::TextureDimension::D2 || depth.depth_or_array_layers() != 1 {
-        return refuse("the texture must be a single 2D image".into());
-    }
-    if !depth.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
-        return refuse("the texture needs TextureUsages::TEXTURE_BINDING to be read".into());
-    }
-    if depth.width() > 0xffff || depth.height() > 0xffff {
-        return refuse(format!(
-            "{} x {} pixels is past the 65535 a side the collider reads",
-            depth.width(),
-            depth.height()
-        ));
-    }
-    Ok(())
-}
+pub(crate) use crate::device::depth_copy::check_texture;
 
 /// The camera's words, or why the matrices cannot be used.
 pub(crate) fn camera(view: Mat4, projection: Mat4) -> Result<DepthCamera, RuntimeError> {
     DepthCamera::new(view, projection).map_err(RuntimeError::Control)
 }
 
-/// Binds `depth` (checked) and writes `camera` for `group`'s next steps; a group without a
-/// `SceneDepth` collider is left alone.
-pub(crate) fn bind(group: &mut Group, depth: &wgpu::Texture, camera: &DepthCamera) {
+/// Records into `encoder` the copy of `depth` (checked) and of `camera` for `group`'s steps
+/// recorded after it; a group without a `SceneDepth` collider is left alone.
+pub(crate) fn record(
+    group: &mut Group,
+    copy: &mut DepthCopy,
+    encoder: &mut wgpu::CommandEncoder,
+    depth: &wgpu::Texture,
+    camera: &DepthCamera,
+) -> Result<(), RuntimeError> {
     if !group.effect.ir.collides_with_scene_depth() {
-        return;
+        return Ok(());
     }
-    let view = depth.create_view(&wgpu::TextureViewDescriptor {
-        label: Some("scene depth"),
-        aspect: wgpu::TextureAspect::DepthOnly,
-        ..Default::default()
-    });
-    group.res.set_scene_depth_view(&group.effect, view);
+    let binding = |name: &str| {
+        group
+            .effect
+            .layout
+            .bindings
+            .iter()
+            .find(|b| b.name == name)
+            .map(|b| b.binding)
+            .expect("a SceneDepth collider has its bindings")
+    };
+    let (image_at, camera_at) = (binding("scene_depth"), binding("scene_camera"));
+    let bytes = copy_bytes(depth);
+    let held = group.res.extra_buffer(image_at).map_or(0, |b| b.size());
+    if held < bytes {
+        let grown = group.gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scene_depth"),
+            size: bytes,
+            usage: wgpu::BufferUsages::STORAGE,
+            mapped_at_creation: false,
+        });
+        group.res.replace_extra(&group.effect, image_at, grown);
+    }
+    let image = group
+        .res
+        .extra_buffer(image_at)
+        .expect("the scene depth's buffer was made above");
+    copy.record(&group.gpu, encoder, depth, image);
     let words = camera.words(depth.width(), depth.height());
     let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-    let buffer = group
+    let source = staging(&group.gpu, "scene camera", &bytes)?;
+    let target = group
         .res
-        .extra_named(&group.effect, "scene_camera")
+        .extra_buffer(camera_at)
         .expect("a SceneDepth collider gets its camera buffer");
-    group.gpu.queue.write_buffer(buffer, 0, &bytes);
+    encoder.copy_buffer_to_buffer(&source, 0, target, 0, bytes.len() as u64);
+    Ok(())
 }

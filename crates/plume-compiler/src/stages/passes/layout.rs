@@ -196,9 +196,9 @@ pub fn decide(ir: &EffectIr) -> Layout {
         layout.bindings.push(Binding {
             binding: 23,
             name: "scene_depth",
-            space: "texture",
+            space: "storage, read",
             bytes: 0,
-            meaning: "the host's depth image that SceneDepth collides with (a depth texture read as texture_2d<f32>, as the soft draw reads it: GL cannot load from texture_depth_2d)",
+            meaning: "the depth image SceneDepth collides with, row by row from the top: the runtime's copy of the host's depth texture, sized when it is given",
         });
         layout.bindings.push(Binding {
             binding: 24,
@@ -378,14 +378,6 @@ impl fmt::Display for Layout {
         }
         writeln!(f, "bindings (group 0)")?;
         for b in &self.bindings {
-            if b.space == "texture" {
-                writeln!(
-                    f,
-                    "  @binding({}) {:<10} texture_2d<f32>  {}",
-                    b.binding, b.name, b.meaning
-                )?;
-                continue;
-            }
             writeln!(
                 f,
                 "  @binding({}) {:<10} var<{}>  {} bytes  {}",

@@ -117,13 +117,6 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             ));
             continue;
         }
-        if b.space == "texture" {
-            w.line(format!(
-                "@group(0) @binding({}) var {}: texture_2d<f32>;",
-                b.binding, b.name
-            ));
-            continue;
-        }
         let ty = match b.name {
             name if crate::features::events::binding_type(name).is_some() => {
                 crate::features::events::binding_type(name).unwrap_or_default()
@@ -139,7 +132,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "frame" | "fire_frame" => "Frame",
             "fire_state" => "array<u32, 4>",
             "depth_axis" => "DepthAxis",
-            "collider_data" | "force_data" => "array<f32>",
+            "collider_data" | "force_data" | "scene_depth" => "array<f32>",
             "spawn_data" => "array<u32>",
             _ => "StepParams",
         };

@@ -5,24 +5,30 @@
 //! `scene_depth`, the depth texture, and `scene_camera`, [`DepthCamera::words`]. Until an
 //! image is given, nothing collides.
 //!
-//! **What a pixel is.** A pixel holding depth d in (0, 1) is the point its centre unprojects
-//! to at d through the inverse projection: a surface at that point's view depth (−z in view
-//! space). Depth exactly 0 or 1 (a clear value, standard or reversed-Z) is empty. A point is
-//! *behind* the surface at the pixel it projects to when its view depth exceeds the surface's,
-//! and *inside* it when it is behind by no more than `thickness`: past that it passes freely
-//! (behind an object, not in it). Off screen, behind the camera or over an empty pixel, it
-//! passes freely too: depth collision only knows what the camera sees.
+//! **What the image holds.** A pixel holding depth d in (0, 1) is the point its centre
+//! unprojects to at d through the inverse projection; depth exactly 0 or 1 (a clear value,
+//! standard or reversed-Z) is empty. The surface on a point's own view ray is d interpolated
+//! bilinearly between the four nearest pixel centres (d is affine across a triangle on screen,
+//! so a plane comes out exact but for the depth's rounding; where one of the four is empty,
+//! the nearest pixel's d), unprojected, and taken nearer by what 8 ulps of d are worth there
+//! ([`Place::behind`]). A point is *behind* the surface when its view depth (−z in view space)
+//! exceeds the surface's, and *inside* it when behind by no more than `thickness`: past that it
+//! passes freely (behind an object, not in it). Off screen, behind the camera or over an empty
+//! pixel, it passes freely too: depth collision only knows what the camera sees.
 //!
 //! **Swept.** The substep's segment is sampled at one point per pixel it crosses on screen
-//! (at most [`MAX_SAMPLES`]); a crossing is a sample in front of its pixel's surface followed by
-//! one behind its own by at most `thickness` plus how much deeper the particle went between
-//! the two, so a particle moving fast along the view ray does not pass through. The crossing is
-//! bisected to the last point in front (until known to [`CONTACT_PRECISION`] of the view depth, at most [`BISECTIONS`] halvings). The normal comes from the
-//! neighbouring pixels' surface points (of the left and right neighbours, the one nearer in
-//! depth, likewise up and down), turned to face the side the particle came from.
+//! (at most [`MAX_SAMPLES`]); a crossing is a sample in front of its surface followed by one
+//! inside it, or behind it by at most `thickness` plus how much deeper the particle went
+//! between the two, so a particle moving fast along the view ray does not pass through. The
+//! crossing is bisected to the last point in front, until known to [`CONTACT_PRECISION`] of
+//! the view depth (at most [`BISECTIONS`] halvings). The normal comes from the nearest pixel's
+//! neighbours' surface points (of the left and right neighbours, the one nearer in depth,
+//! likewise up and down), turned to face the side the particle came from.
 //!
-//! **Inside.** A particle found inside the surface (a resting particle slid onto a nearer
-//! pixel) is moved along its view ray to just in front of the surface.
+//! **Inside.** A particle found inside the surface at the end of a substep (a resting particle
+//! slid onto a pixel that shows the surface a little nearer) is moved along its view ray to
+//! just in front of it. There is no push-out at the start of a substep
+//! ([`super::Surface::pushes_at_start`]).
 //!
 //! The f64 reference ([`SceneDepthIr::hit`]) runs the same steps on the same f32 image and
 //! camera, given to `ReferenceSim::set_scene_depth`; f32 and f64 may round a point onto

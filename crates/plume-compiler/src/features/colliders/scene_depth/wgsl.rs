@@ -1,5 +1,5 @@
 //! The WGSL twin of the scene depth collider's swept test and push-out (see the parent module),
-//! reading the `scene_depth` texture and the `scene_camera` uniform ([`super::at`] says where
+//! reading the `scene_depth` buffer and the `scene_camera` uniform ([`super::at`] says where
 //! each matrix is).
 
 use super::{
@@ -31,7 +31,7 @@ impl SceneDepthIr {
             w.block("if (any(p < vec2<i32>(0)) || any(p >= vec2<i32>(sz)))", |w| {
                 w.line("return vec4<f32>(0.0);")
             });
-            w.line("let d = textureLoad(scene_depth, p, 0).r;");
+            w.line("let d = scene_depth[u32(p.y) * u32(sz.x) + u32(p.x)];");
             w.block("if (!(d > 0.0 && d < 1.0))", |w| {
                 w.line("return vec4<f32>(0.0);")
             });
@@ -44,8 +44,9 @@ impl SceneDepthIr {
         });
         w.comment("The depth of pixel p clamped to the image; -1 where it is empty.");
         w.block(format!("fn sd{i}_depth(p: vec2<i32>) -> f32"), |w| {
-            w.line(format!("let last = vec2<i32>({size}) - vec2<i32>(1);"));
-            w.line("let d = textureLoad(scene_depth, clamp(p, vec2<i32>(0), last), 0).r;");
+            w.line(format!("let sz = vec2<i32>({size});"));
+            w.line("let q = clamp(p, vec2<i32>(0), sz - vec2<i32>(1));");
+            w.line("let d = scene_depth[u32(q.y * sz.x + q.x)];");
             w.line("return select(-1.0, d, d > 0.0 && d < 1.0);");
         });
         w.comment("Where x is: (ndc, view depth, 0 behind the camera / 1 no surface / 2 a surface), (the surface's view depth taken nearer by its rounding, nearest pixel).");
