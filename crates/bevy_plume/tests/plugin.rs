@@ -664,3 +664,66 @@ fn each_camera_sees_a_sorted_effect_in_its_own_depth_order() {
         "from −z the centre should be the near green disc: {back:?}"
     );
 }
+
+/// Dots flying away from the camera at 5 m/s into the view's depth (a `SceneDepth` collider).
+const FLYING_DOTS: &str = r#"Effect(name: "flying", capacity: 25, seed: 5,
+    emitters: [Emitter(burst: 25, shape: Grid(min: (-1.0, -1.0, 0.0), max: (1.0, 1.0, 0.0), counts: (5, 5, 1)),
+        velocity: Constant((0.0, 0.0, -5.0)), lifetime: Some((100.0, 100.0)))],
+    collide: [SceneDepth(thickness: 0.5, restitution: 0.0, friction: 1.0)],
+    render: Render(color: [(0.0, (0.2, 1.0, 0.2, 1.0)), (1.0, (0.2, 1.0, 0.2, 1.0))],
+        size: [(0.0, 0.15), (1.0, 0.15)], blend: Additive))
+"#;
+
+#[test]
+fn a_scene_depth_collider_meets_what_the_camera_s_depth_prepass_drew() {
+    let _one = serial();
+    // A wall 2 m in front of the origin (12 m from the camera), drawn by Bevy; the dots fly at
+    // it from the origin. With the camera's depth prepass, single-sampled or with MSAA (a
+    // multisampled prepass, read by its sample 0), they stop on it; without one they fly on.
+    for (msaa, prepass) in [(Msaa::Off, true), (Msaa::Sample4, true), (Msaa::Off, false)] {
+        let dir = asset_dir("scene_depth");
+        std::fs::write(dir.join("flying.plume.ron"), FLYING_DOTS).unwrap();
+        let mut h = Harness::new(&dir);
+        let camera = h
+            .app
+            .world_mut()
+            .query_filtered::<Entity, With<Camera3d>>()
+            .single(h.app.world())
+            .unwrap();
+        let mut camera = h.app.world_mut().entity_mut(camera);
+        camera.insert(msaa);
+        if prepass {
+            camera.insert(bevy::core_pipeline::prepass::DepthPrepass);
+        }
+        let world = h.app.world_mut();
+        let wall = world
+            .resource_mut::<Assets<Mesh>>()
+            .add(Cuboid::new(20.0, 20.0, 0.2));
+        let grey = world
+            .resource_mut::<Assets<StandardMaterial>>()
+            .add(StandardMaterial::default());
+        world.spawn((
+            Mesh3d(wall),
+            MeshMaterial3d(grey),
+            Transform::from_xyz(0.0, 0.0, -2.1),
+        ));
+        let handle = h.load("flying.plume.ron");
+        let entity = h.app.world_mut().spawn(PlumeEffect::new(handle)).id();
+        h.update(60);
+        let dots = particles(&h, entity);
+        assert_eq!(dots.len(), 25);
+        for d in &dots {
+            let z = d.position.z;
+            if prepass {
+                // On the wall's face at z = -2, in front of it by the depth's rounding and the
+                // contact margin (Bevy's reversed-Z depth is fine-grained there: 1e-2 is loose).
+                assert!(
+                    z > -2.0 && z < -2.0 + 1e-2,
+                    "{msaa:?}: a dot at z = {z}, not on the wall at -2"
+                );
+            } else {
+                assert!(z < -4.0, "without a depth prepass a dot stopped at z = {z}");
+            }
+        }
+    }
+}

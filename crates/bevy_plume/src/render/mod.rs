@@ -46,7 +46,9 @@ pub(crate) fn build(app: &mut App) {
         )
         .add_systems(
             Core3d,
-            simulate::prepare_for_view.before(Core3dSystems::MainPass),
+            simulate::prepare_for_view
+                .after(Core3dSystems::Prepass)
+                .before(Core3dSystems::MainPass),
         );
 }
 

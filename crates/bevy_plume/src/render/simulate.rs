@@ -1,8 +1,10 @@
 //! The frame's GPU work for the effects: every instance's steps, once a frame before Bevy's
 //! cameras draw ([`simulate`]); then, in each camera's own schedule just before its main pass,
 //! what each draw needs from that camera: the view, and for `sort` the depth order
-//! ([`prepare_for_view`]). The depth order lives in the effect's buffers, so preparing it per
-//! camera, right before that camera draws, gives every camera its own back-to-front order.
+//! ([`prepare_for_view`]), and for a `SceneDepth` collider a copy of the camera's depth
+//! prepass for the next frame's steps. The depth order lives in the effect's buffers, so
+//! preparing it per camera, right before that camera draws, gives every camera its own
+//! back-to-front order.
 
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::prelude::*;
@@ -78,6 +80,26 @@ pub(crate) fn prepare_for_view(
                 }
             }
             let camera = view_camera(view, world_from_local);
+            // A SceneDepth collider meets what this camera's depth prepass drew this frame, in
+            // the effect's space, from the next frame's steps on (the runtime copies it).
+            if instance.effect.collides_with_scene_depth() {
+                match prepass.and_then(|p| p.depth.as_ref()) {
+                    Some(depth) => {
+                        if let Err(err) = instance.effect.set_scene_depth(
+                            encoder,
+                            &depth.texture.texture,
+                            camera.view,
+                            camera.proj,
+                        ) {
+                            error!("{}: {err}", instance.effect.compiled().ir.name);
+                        }
+                    }
+                    None => warn_once!(
+                        "{}: a SceneDepth collider meets the depth prepass of the camera that draws it: give the camera `DepthPrepass`",
+                        instance.effect.compiled().ir.name
+                    ),
+                }
+            }
             if let Err(err) = instance
                 .effect
                 .prepare_draw(encoder, &draw.renderer, &camera)

@@ -2,7 +2,7 @@
 //! surfaces the camera sees. The host gives the image and its camera at run time (the
 //! runtime's `Effect::set_scene_depth`; `plume render` and `plume preview` draw the effect's
 //! scene meshes into one), so the compiled kernel reads them from two bindings:
-//! `scene_depth`, the depth texture, and `scene_camera`, [`DepthCamera::words`]. Until an
+//! `scene_depth`, the runtime's copy of the host's depth (a buffer), and `scene_camera`, [`DepthCamera::words`]. Until an
 //! image is given, nothing collides.
 //!
 //! **What the image holds.** A pixel holding depth d in (0, 1) is the point its centre
