@@ -699,14 +699,34 @@ fn a_scene_depth_collider_meets_what_the_camera_s_depth_prepass_drew() {
         let wall = world
             .resource_mut::<Assets<Mesh>>()
             .add(Cuboid::new(20.0, 20.0, 0.2));
-        let grey = world
+        let white = world
             .resource_mut::<Assets<StandardMaterial>>()
-            .add(StandardMaterial::default());
+            .add(StandardMaterial {
+                unlit: true,
+                ..default()
+            });
         world.spawn((
             Mesh3d(wall),
-            MeshMaterial3d(grey),
+            MeshMaterial3d(white),
             Transform::from_xyz(0.0, 0.0, -2.1),
         ));
+        // Bevy compiles the wall's pipelines in the background: until they are ready there is
+        // no depth to meet, and dots launched now would be past the wall before it appears.
+        h.update(5);
+        let ready = h.update_until(600, Duration::from_millis(2), |h| {
+            h.app
+                .sub_app(RenderApp)
+                .world()
+                .resource::<bevy::render::render_resource::PipelineCache>()
+                .waiting_pipelines()
+                .count()
+                == 0
+        });
+        assert!(
+            ready,
+            "{msaa:?}: Bevy's pipelines were not ready within 600 frames"
+        );
+        h.update(5);
         let handle = h.load("flying.plume.ron");
         let entity = h.app.world_mut().spawn(PlumeEffect::new(handle)).id();
         h.update(60);
