@@ -7,6 +7,7 @@
 //! a burst fires every quarter second along a line and the wind blows from the left.
 //! The effect file is `crates/bevy_plume/assets/impact.plume.ron`.
 
+use bevy::core_pipeline::prepass::DepthPrepass;
 use bevy::prelude::*;
 use bevy_plume::headless::{default_plugins, Headless, HeadlessPlugin};
 use bevy_plume::{PlumeBurst, PlumeEffect, PlumePlugin};
@@ -66,8 +67,21 @@ fn setup(
         },
         Transform::from_xyz(3.0, 10.0, 5.0).looking_at(Vec3::ZERO, Vec3::Y),
     ));
+    // Crates the sparks bounce off: they meet what the camera's depth prepass draws (the
+    // effect's SceneDepth collider), so nothing about the crates is in the effect file.
+    let crate_mesh = meshes.add(Cuboid::new(1.2, 0.9, 1.2));
+    let wood = materials.add(Color::srgb(0.55, 0.38, 0.2));
+    // Between the headless demo's burst points (x = -6 + 1.5 k), downwind of one each.
+    for (x, z) in [(-3.75, -2.0), (0.75, -2.6), (3.75, -1.0)] {
+        commands.spawn((
+            Mesh3d(crate_mesh.clone()),
+            MeshMaterial3d(wood.clone()),
+            Transform::from_xyz(x, 0.45, z),
+        ));
+    }
     commands.spawn((
         Camera3d::default(),
+        DepthPrepass,
         Transform::from_xyz(0.0, 6.0, 12.0).looking_at(Vec3::new(0.0, 0.5, 0.0), Vec3::Y),
     ));
     // Takes bursts, and reads `wind` at run time (set now, so later changes need no rebuild).
