@@ -93,6 +93,41 @@ fn a_file_with_errors_fails_to_open_with_located_diagnostics() {
 }
 
 /// `plume render`'s 480x270 frame of step 24 of `file`, written to `out`.
+/// `plume preview FILE --size 480x270 --frames FRAMES --screenshot OUT` under a virtual
+/// display; fails the test with the preview's output if it fails.
+fn preview_screenshot(file: &Path, frames: u32, out: &Path) {
+    let run = xvfb_run()
+        .arg(env!("CARGO_BIN_EXE_plume"))
+        .arg("preview")
+        .arg(file)
+        .args([
+            "--size",
+            "480x270",
+            "--frames",
+            &frames.to_string(),
+            "--screenshot",
+        ])
+        .arg(out)
+        .output()
+        .expect("xvfb-run runs");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+}
+
+/// The largest difference of any channel of any pixel of two images of one size.
+fn max_difference(a: &image::RgbaImage, b: &image::RgbaImage) -> u8 {
+    assert_eq!(a.dimensions(), b.dimensions());
+    a.as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| x.abs_diff(*y))
+        .max()
+        .unwrap_or(0)
+}
+
 fn render_step_24(file: &Path, out: &Path) {
     let run = plume()
         .arg("render")
@@ -114,19 +149,7 @@ fn a_glowing_effect_glows_in_the_preview_as_in_plume_render() {
     let dir = std::env::temp_dir().join(format!("plume-preview-glow-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let (shot, still) = (dir.join("preview.png"), dir.join("render.png"));
-    let out = xvfb_run()
-        .arg(env!("CARGO_BIN_EXE_plume"))
-        .arg("preview")
-        .arg(effect("sparks.ron"))
-        .args(["--size", "480x270", "--frames", "24", "--screenshot"])
-        .arg(&shot)
-        .output()
-        .expect("xvfb-run runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    preview_screenshot(&effect("sparks.ron"), 24, &shot);
     render_step_24(&effect("sparks.ron"), &still);
     // The same sparks without their glow, for comparison.
     let source = std::fs::read_to_string(effect("sparks.ron")).unwrap();
@@ -144,13 +167,7 @@ fn a_glowing_effect_glows_in_the_preview_as_in_plume_render() {
     let c = image::open(&plain).unwrap().to_rgba8();
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!(a.dimensions(), b.dimensions());
-    let max = a
-        .as_raw()
-        .iter()
-        .zip(b.as_raw())
-        .map(|(x, y)| x.abs_diff(*y))
-        .max()
-        .unwrap();
+    let max = max_difference(&a, &b);
     assert!(max <= 1, "preview and render differ by up to {max}");
     // And the glow is there: light spills past the sparks onto pixels the plain draw leaves
     // dark, and the image is brighter overall.
@@ -205,13 +222,7 @@ fn an_effect_with_groups_previews_as_plume_render_draws_it() {
     let b = image::open(&still).unwrap().to_rgba8();
     std::fs::remove_dir_all(&dir).ok();
     assert_eq!(a.dimensions(), b.dimensions());
-    let max = a
-        .as_raw()
-        .iter()
-        .zip(b.as_raw())
-        .map(|(x, y)| x.abs_diff(*y))
-        .max()
-        .unwrap();
+    let max = max_difference(&a, &b);
     assert!(max <= 1, "preview and render differ by up to {max}");
     // Both groups show: white shells and orange sparks.
     let white = a.pixels().filter(|p| p[0] > 200 && p[2] > 200).count();
@@ -230,19 +241,7 @@ fn the_meshes_an_effect_names_are_drawn_in_the_preview_as_in_plume_render() {
         dir.join("render.png"),
         dir.join("bare.png"),
     );
-    let out = xvfb_run()
-        .arg(env!("CARGO_BIN_EXE_plume"))
-        .arg("preview")
-        .arg(effect("crystal.ron"))
-        .args(["--size", "480x270", "--frames", "24", "--screenshot"])
-        .arg(&shot)
-        .output()
-        .expect("xvfb-run runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    preview_screenshot(&effect("crystal.ron"), 24, &shot);
     render_step_24(&effect("crystal.ron"), &still);
     let run = plume()
         .arg("render")
@@ -269,13 +268,7 @@ fn the_meshes_an_effect_names_are_drawn_in_the_preview_as_in_plume_render() {
     let b = image::open(&still).unwrap().to_rgba8();
     let c = image::open(&bare).unwrap().to_rgba8();
     std::fs::remove_dir_all(&dir).ok();
-    let max = a
-        .as_raw()
-        .iter()
-        .zip(b.as_raw())
-        .map(|(x, y)| x.abs_diff(*y))
-        .max()
-        .unwrap();
+    let max = max_difference(&a, &b);
     assert!(max <= 1, "preview and render differ by up to {max}");
     // The meshes' grey: pixels where red, green and blue are close and mid-bright. The sparks
     // make some too (white-hot when they leave the crystal, fading over black), but far fewer.
@@ -311,19 +304,7 @@ fn a_scene_depth_collider_meets_the_preview_s_scene_as_it_meets_plume_render_s()
         dir.join("render.png"),
         dir.join("bare.png"),
     );
-    let out = xvfb_run()
-        .arg(env!("CARGO_BIN_EXE_plume"))
-        .arg("preview")
-        .arg(effect("steps.ron"))
-        .args(["--size", "480x270", "--frames", "60", "--screenshot"])
-        .arg(&shot)
-        .output()
-        .expect("xvfb-run runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    preview_screenshot(&effect("steps.ron"), 60, &shot);
     for (path, extra) in [(&still, None), (&bare, Some("--no-scene"))] {
         let mut render = plume();
         render
@@ -344,13 +325,7 @@ fn a_scene_depth_collider_meets_the_preview_s_scene_as_it_meets_plume_render_s()
     let b = image::open(&still).unwrap().to_rgba8();
     let c = image::open(&bare).unwrap().to_rgba8();
     std::fs::remove_dir_all(&dir).ok();
-    let max = a
-        .as_raw()
-        .iter()
-        .zip(b.as_raw())
-        .map(|(x, y)| x.abs_diff(*y))
-        .max()
-        .unwrap();
+    let max = max_difference(&a, &b);
     assert!(max <= 1, "preview and render differ by up to {max}");
     // Without the scene the sparks fall through where the steps were: the spray below the top
     // tread differs in many pixels (the steps' grey aside, which --no-scene also leaves out).

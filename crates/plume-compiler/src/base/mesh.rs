@@ -107,6 +107,17 @@ impl TriMesh {
         self.triangles[t].map(|i| self.vertices[i as usize])
     }
 
+    /// The triangles placed in the world: a mesh point p at `offset` + `scale` · `rotation` p.
+    pub fn placed_triangles(
+        &self,
+        offset: DVec3,
+        scale: f64,
+        rotation: DMat3,
+    ) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+        (0..self.triangles.len())
+            .map(move |t| self.corners(t).map(|p| offset + scale * (rotation * p)))
+    }
+
     /// The smallest box holding every vertex.
     pub fn bounds(&self) -> (DVec3, DVec3) {
         self.vertices.iter().fold(
@@ -136,6 +147,18 @@ impl TriMesh {
             .map(|&(a, b)| (self.vertices[a as usize], self.vertices[b as usize]));
         (open.len(), first)
     }
+}
+
+/// Checks a mesh's placement in the world at `path`: `offset` and `rotation` finite, `scale`
+/// finite and positive; returns whether the offset and rotation are finite.
+pub fn check_placement(
+    path: &crate::base::path::ValuePath,
+    c: &mut crate::base::check::Checker,
+    (offset, scale, rotation): (crate::base::values::Vec3, f64, crate::base::values::Vec3),
+) -> bool {
+    let placed = c.vec3(&path.field("offset"), offset) & c.vec3(&path.field("rotation"), rotation);
+    c.positive(&path.field("scale"), scale);
+    placed
 }
 
 /// The rotation that `degrees` (about x, then y, then z, the world's axes) stands for, as

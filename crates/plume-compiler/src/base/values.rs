@@ -151,3 +151,13 @@ pub(crate) fn default_colors() -> Vec<ColorStop> {
         ColorStop(1.0, Rgba(1.0, 1.0, 1.0, 0.0)),
     ]
 }
+
+/// `(0, 0, 0)`: the serde default of a placement's offset and rotation.
+pub fn origin() -> Vec3 {
+    Vec3(0.0, 0.0, 0.0)
+}
+
+/// `1.0`: the serde default of a placement's scale.
+pub fn unit_scale() -> f64 {
+    1.0
+}

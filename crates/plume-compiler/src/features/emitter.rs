@@ -79,13 +79,13 @@ pub enum Shape {
         /// The OBJ file, relative to the effect file.
         file: String,
         /// Where the mesh's origin sits in the world (m).
-        #[serde(default = "origin")]
+        #[serde(default = "crate::base::values::origin")]
         offset: Vec3,
         /// The mesh's size against the world's (> 0).
-        #[serde(default = "one")]
+        #[serde(default = "crate::base::values::unit_scale")]
         scale: f64,
         /// Degrees about x, then y, then z (the world's axes).
-        #[serde(default = "origin")]
+        #[serde(default = "crate::base::values::origin")]
         rotation: Vec3,
         /// Spawn in the closed mesh's volume instead of on its surface.
         #[serde(default)]
@@ -97,14 +97,6 @@ pub enum Shape {
         #[serde(skip)]
         surface: Option<Arc<MeshSurface>>,
     },
-}
-
-fn origin() -> Vec3 {
-    Vec3(0.0, 0.0, 0.0)
-}
-
-fn one() -> f64 {
-    1.0
 }
 
 fn default_resolution() -> u32 {

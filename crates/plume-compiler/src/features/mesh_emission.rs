@@ -133,8 +133,7 @@ pub fn place(
     let mut cumulative = Vec::with_capacity(mesh.triangles.len());
     let mut triangles = Vec::with_capacity(mesh.triangles.len());
     let (mut total, mut center, mut extent) = (0.0, DVec3::ZERO, 0.0_f64);
-    for t in 0..mesh.triangles.len() {
-        let [a, b, c] = mesh.corners(t).map(world);
+    for [a, b, c] in mesh.placed_triangles(offset.d(), scale, r) {
         let cross = (b - a).cross(c - a);
         let area = 0.5 * cross.length();
         let n = cross.normalize_or_zero();

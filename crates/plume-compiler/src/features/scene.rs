@@ -24,26 +24,18 @@ pub enum SceneMesh {
         /// The OBJ file, relative to the effect file.
         file: String,
         /// Where the mesh's origin sits in the world (m).
-        #[serde(default = "origin")]
+        #[serde(default = "crate::base::values::origin")]
         offset: Vec3,
         /// The mesh's size against the world's (> 0).
-        #[serde(default = "one")]
+        #[serde(default = "crate::base::values::unit_scale")]
         scale: f64,
         /// Degrees about x, then y, then z (the world's axes).
-        #[serde(default = "origin")]
+        #[serde(default = "crate::base::values::origin")]
         rotation: Vec3,
         /// The mesh read from `file`, by [`read_scene`] before the checks.
         #[serde(skip)]
         mesh: Option<Arc<TriMesh>>,
     },
-}
-
-fn origin() -> Vec3 {
-    Vec3(0.0, 0.0, 0.0)
-}
-
-fn one() -> f64 {
-    1.0
 }
 
 /// A scene mesh in the IR: the mesh and where it sits.
@@ -89,9 +81,7 @@ pub fn check(scene: &[SceneMesh], c: &mut Checker) {
             ..
         } = entry;
         let p = path(i);
-        c.vec3(&p.field("offset"), *offset);
-        c.vec3(&p.field("rotation"), *rotation);
-        c.positive(&p.field("scale"), *scale);
+        crate::base::mesh::check_placement(&p, c, (*offset, *scale, *rotation));
         if mesh.is_none() {
             c.error(&p.field("file"), "the mesh was not read");
         }
@@ -123,10 +113,7 @@ impl SceneMesh {
 impl SceneMeshIr {
     /// The mesh's triangles placed in the world.
     pub fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
-        (0..self.mesh.triangles.len()).map(move |t| {
-            self.mesh
-                .corners(t)
-                .map(|p| self.offset + self.scale * (self.rotation * p))
-        })
+        self.mesh
+            .placed_triangles(self.offset, self.scale, self.rotation)
     }
 }

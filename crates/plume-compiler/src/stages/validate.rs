@@ -253,9 +253,7 @@ pub(crate) fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: 
             ..
         } => {
             let s = shape.variant("Mesh");
-            let placed =
-                c.vec3(&s.field("offset"), *offset) & c.vec3(&s.field("rotation"), *rotation);
-            c.positive(&s.field("scale"), *scale);
+            let placed = crate::base::mesh::check_placement(&s, c, (*offset, *scale, *rotation));
             let max = crate::base::sdf::MAX_RESOLUTION;
             if *volume && !(4..=max).contains(resolution) {
                 c.error(

@@ -215,9 +215,7 @@ impl Offscreen {
     ) -> Result<Vec<u8>, RuntimeError> {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         self.record_over_scene(&mut encoder, effect, renderer, camera, scene)?;
-        self.gpu.queue.submit([encoder.finish()]);
-        self.gpu.take_error()?;
-        self.read()
+        self.submit_and_read(encoder)
     }
 
     /// Records what turns the drawn attachment into the image read back: the bloom passes
@@ -239,6 +237,11 @@ impl Offscreen {
     ) -> Result<Vec<u8>, RuntimeError> {
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         self.record(&mut encoder, effect, renderer, camera, None)?;
+        self.submit_and_read(encoder)
+    }
+
+    /// Submits `encoder`, then reads the target back.
+    fn submit_and_read(&self, encoder: wgpu::CommandEncoder) -> Result<Vec<u8>, RuntimeError> {
         self.gpu.queue.submit([encoder.finish()]);
         self.gpu.take_error()?;
         self.read()

@@ -261,6 +261,55 @@ impl Effect {
     /// depth is fine: particles then meet the scene where it was a frame ago. Until it is
     /// given an image the collider meets nothing; an effect without a `SceneDepth` collider
     /// records nothing. The f64 twin is `ReferenceSim::set_scene_depth`.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{wgpu, Effect, Gpu};
+    /// let source = r#"Effect(name: "darts", capacity: 4,
+    ///     emitters: [Emitter(burst: 4, shape: Point((0.0, 0.0, -1.0)),
+    ///                        velocity: Constant((0.0, 0.0, -10.0)), lifetime: Some((9.0, 9.0)))],
+    ///     collide: [SceneDepth(restitution: 0.0, friction: 1.0)])"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let mut darts = Effect::from_source(&gpu, source, &Default::default())?;
+    /// // The host's camera and depth buffer; here nothing is drawn but a clear to the depth of
+    /// // a point 5 m ahead: a wall there.
+    /// let view = glam::Mat4::look_at_rh(glam::Vec3::ZERO, -glam::Vec3::Z, glam::Vec3::Y);
+    /// let projection = glam::Mat4::perspective_rh(1.0, 1.0, 0.1, 100.0);
+    /// let ahead = projection * glam::Vec4::new(0.0, 0.0, -5.0, 1.0);
+    /// let depth = gpu.device.create_texture(&wgpu::TextureDescriptor {
+    ///     label: None,
+    ///     size: wgpu::Extent3d { width: 64, height: 64, depth_or_array_layers: 1 },
+    ///     mip_level_count: 1,
+    ///     sample_count: 1,
+    ///     dimension: wgpu::TextureDimension::D2,
+    ///     format: wgpu::TextureFormat::Depth32Float,
+    ///     usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+    ///     view_formats: &[],
+    /// });
+    /// let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    /// encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+    ///     label: None,
+    ///     color_attachments: &[],
+    ///     depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+    ///         view: &depth.create_view(&Default::default()),
+    ///         depth_ops: Some(wgpu::Operations {
+    ///             load: wgpu::LoadOp::Clear(ahead.z / ahead.w),
+    ///             store: wgpu::StoreOp::Store,
+    ///         }),
+    ///         stencil_ops: None,
+    ///     }),
+    ///     timestamp_writes: None,
+    ///     occlusion_query_set: None,
+    ///     multiview_mask: None,
+    /// });
+    /// // After the host's passes, before the steps that should meet them.
+    /// darts.set_scene_depth(&mut encoder, &depth, view, projection)?;
+    /// darts.advance(&mut encoder, 60)?;
+    /// gpu.queue.submit([encoder.finish()]);
+    /// assert!(darts.records()?.iter().all(|r| (r.position.z + 5.0).abs() < 0.01));
+    /// # Ok(())
+    /// # }
+    /// ```
     pub fn set_scene_depth(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,

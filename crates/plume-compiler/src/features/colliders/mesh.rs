@@ -84,9 +84,7 @@ pub fn check(
     (offset, scale, rotation, resolution): (Vec3, f64, Vec3, u32),
     baked: bool,
 ) {
-    c.vec3(&path.field("offset"), offset);
-    c.vec3(&path.field("rotation"), rotation);
-    c.positive(&path.field("scale"), scale);
+    crate::base::mesh::check_placement(path, c, (offset, scale, rotation));
     if !(MIN_RESOLUTION..=MAX_RESOLUTION).contains(&resolution) {
         c.error(
             &path.field("resolution"),
@@ -133,11 +131,9 @@ fn bake_file(path: &Path, resolution: u32) -> Result<Baked, String> {
 impl MeshIr {
     /// The mesh's triangles placed in the world.
     pub fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
-        let mesh = &self.baked.mesh;
-        (0..mesh.triangles.len()).map(move |t| {
-            mesh.corners(t)
-                .map(|p| self.offset + self.scale * (self.rotation * p))
-        })
+        self.baked
+            .mesh
+            .placed_triangles(self.offset, self.scale, self.rotation)
     }
 
     /// World `x` in grid coordinates (cells from node 0).

@@ -83,13 +83,13 @@ pub enum Collider {
         /// The OBJ file, relative to the effect file.
         file: String,
         /// Where the mesh's origin sits in the world (m).
-        #[serde(default = "origin")]
+        #[serde(default = "crate::base::values::origin")]
         offset: Vec3,
         /// The mesh's size against the world's (> 0).
-        #[serde(default = "one")]
+        #[serde(default = "crate::base::values::unit_scale")]
         scale: f64,
         /// Degrees about x, then y, then z (the world's axes).
-        #[serde(default = "origin")]
+        #[serde(default = "crate::base::values::origin")]
         rotation: Vec3,
         /// Field cells along the mesh's longest side (4 to 128).
         #[serde(default = "default_resolution")]
@@ -114,14 +114,6 @@ pub enum Collider {
         /// Fraction of tangential speed lost on a bounce, in [0, 1].
         friction: f64,
     },
-}
-
-fn origin() -> Vec3 {
-    Vec3(0.0, 0.0, 0.0)
-}
-
-fn one() -> f64 {
-    1.0
 }
 
 fn default_thickness() -> f64 {
