@@ -520,15 +520,15 @@ fn groups_split_into_chunks_run_as_one_buffer_does() {
 }
 
 #[test]
-fn firings_counted_or_sorted_spawn_the_reference_children_when_thousands_fire_at_once() {
-    // A group of up to COUNTED_MAX slots has its firings counted into order; a larger one sorts
-    // a key per slot. Each here fires thousands at once (a burst whose lifetimes all end at
+fn firings_counted_or_bucketed_spawn_the_reference_children_when_thousands_fire_at_once() {
+    // A group of up to COUNTED_MAX slots has its firings counted into order; a larger one drops
+    // them into buckets by id (one id a bucket here: the ids span fewer than the slots). Each here fires thousands at once (a burst whose lifetimes all end at
     // step 9: counting's worst case, every slot firing) and a few a step after (a stream of
     // 200 a second), and gives the reference's children.
     use plume::compiler::events::{Ordering, COUNTED_MAX};
     for (capacity, ordering) in [
         (COUNTED_MAX, Ordering::Counted),
-        (COUNTED_MAX + 2000, Ordering::Sorted),
+        (COUNTED_MAX + 2000, Ordering::Bucketed),
     ] {
         let burst = capacity - 200;
         let src = format!(
@@ -556,4 +556,44 @@ fn firings_counted_or_sorted_spawn_the_reference_children_when_thousands_fire_at
             "{ordering:?}: the burst's children: {t:?}"
         );
     }
+}
+
+#[test]
+fn firings_whose_ids_span_more_than_the_slots_share_buckets_and_still_spawn_in_id_order() {
+    // 3,000 immortal particles born first (ids 0..3,000) tick every step beside a stream that
+    // asks for 2,000 particles a step into 8,000 free slots, short-lived: each step the firing
+    // ids run from 0 past the newest, tens of thousands, far more than the 11,000 slots, so a
+    // bucket holds several ids (a shift above 0) and the firings of each bucket are ranked
+    // among themselves. The children (dropped where they overflow their group) match the
+    // reference's, which orders by id alone.
+    use plume::compiler::events::Ordering;
+    let src = r#"Effect(
+        name: "ancients",
+        capacity: 11000,
+        dt: 0.01,
+        emitters: [
+            Emitter(burst: 3000, shape: Box(min: (-5.0, 0.0, -5.0), max: (5.0, 1.0, 5.0)),
+                    velocity: Cone(axis: (0.0, 1.0, 0.0), angle: 30.0, speed: (0.1, 0.2)), lifetime: None),
+            Emitter(rate: 200000.0, shape: Sphere(center: (0.0, 3.0, 0.0), radius: 1.0),
+                    velocity: Radial(speed: (0.5, 1.0)), lifetime: Some((0.02, 0.04))),
+        ],
+        forces: [Gravity((0.0, -9.81, 0.0))],
+        events: [Event(on: Every(0.01), target: "ticks", count: 1, velocity: Radial(speed: (0.5, 1.0)), lifetime: Some((0.05, 0.05)))],
+        groups: [Group(name: "ticks", capacity: 30000, forces: [Gravity((0.0, -9.81, 0.0))])],
+    )"#;
+    let g = graph(src);
+    assert_eq!(g.streams[0].ordering, Ordering::Bucketed);
+    let sim = compare_runs("wide buckets", &g, &[1, 6, 15]);
+    let parents = sim.group_records(0).unwrap();
+    let ids = parents.iter().map(|p| p.id);
+    let (lo, hi) = (ids.clone().min().unwrap(), ids.max().unwrap());
+    assert!(
+        hi - lo > 11_000,
+        "the live (and firing) ids span {lo}..{hi}: wider than the slots"
+    );
+    let t = sim.group_totals(1).unwrap();
+    assert!(
+        t.dropped > 0 && t.spawned > 10_000,
+        "ticks spawned and dropped: {t:?}"
+    );
 }

@@ -4,11 +4,11 @@
 //!
 //! The contract (docs/effect-format.md, "Groups and events"): the parent's update of step k
 //! decides, per particle, whether an event fires (death, a collision during the step, or the
-//! end of every `Every` period of its life), notes its id and slot ([`Ordering`]: appended,
-//! or a key per slot) and records its position and velocity at the end of the step in its
-//! slot. At the start of step k + 1, before any group updates, the runtime puts the firing
-//! slots in id order (the order is the ids', not the threads'), and the child group spawns
-//! `count` particles per firing in that order: child ids
+//! end of every `Every` period of its life), appends its id and slot (and, for
+//! [`Ordering::Bucketed`], widens the firings' id range) and records its position and
+//! velocity at the end of the step in its slot. At the start of step k + 1, before any group
+//! updates, the runtime puts the firing slots in id order (the order is the ids', not the
+//! threads'), and the child group spawns `count` particles per firing in that order: child ids
 //! are handed out consecutively (first id + rank · count + c), and when the child group lacks
 //! room, the last ones in that order are dropped and counted. Nothing depends on which slots
 //! the GPU had free, so two runs give the same particles.
@@ -113,18 +113,22 @@ impl TriggerIr {
 
 /// The most slots a firing group may have for its firings to be put in order by counting: each
 /// firing counts the firings with smaller ids, one dispatch, at most 8,192² comparisons a step.
-/// Larger groups sort one key per slot with the radix sort, whose dozen dispatches cost more
-/// than counting a few thousand firings (docs/performance.md, "Events").
+/// Larger groups put their firings in buckets by id, whose six dispatches cost more than
+/// counting a few thousand firings (docs/performance.md, "Events").
 pub const COUNTED_MAX: u32 = 8192;
 
-/// How a stream's firings are put in parent id order at the step's start.
+/// How a stream's firings are put in parent id order at the step's start. Either way the
+/// update appends (id, slot) per firing, and the work is proportional to the firings, not to
+/// the firing group's slots.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Ordering {
-    /// The update appends (id, slot) per firing; the runtime ranks them by counting.
+    /// The runtime ranks the firings by counting, each against all (one dispatch).
     Counted,
-    /// The update writes a key (the id, or none) and a value (the slot) for every slot; the
-    /// runtime radix-sorts them, which leaves the firing slots first, in id order.
-    Sorted,
+    /// The update also notes the smallest and largest firing id; the runtime drops each firing
+    /// in a bucket of its id's range (one id a bucket while the ids span fewer than the group's
+    /// slots), scans the buckets' counts, and places each firing at its bucket's start plus the
+    /// number of smaller ids sharing its bucket (a stream compaction in id order; no sort).
+    Bucketed,
 }
 
 impl Ordering {
@@ -133,13 +137,10 @@ impl Ordering {
         if capacity <= COUNTED_MAX {
             Ordering::Counted
         } else {
-            Ordering::Sorted
+            Ordering::Bucketed
         }
     }
 }
-
-/// The key of a slot that fired nothing this step ([`Ordering::Sorted`]): sorts after every id.
-pub const NO_EVENT: u32 = u32::MAX;
 
 /// An event this group fires.
 #[derive(Clone, Debug, PartialEq)]
@@ -223,27 +224,21 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
                 name: OUT_KEYS[j],
                 space: "storage, read_write",
                 bytes: cap * 4,
-                meaning: match events[j].ordering {
-                    Ordering::Counted => "the ids of the particles that fired this event in the last update, appended (the first `count`)",
-                    Ordering::Sorted => "per slot: the particle's id if it fired this event in the last update, else 0xffffffff (the sort key)",
-                },
+                meaning: "the ids of the particles that fired this event in the last update, appended (the first `count`)",
             },
             Binding {
                 binding: out_binding(j) + 1,
                 name: OUT_VALS[j],
                 space: "storage, read_write",
                 bytes: cap * 4,
-                meaning: match events[j].ordering {
-                    Ordering::Counted => "the slot of each id in event_keys, appended with it",
-                    Ordering::Sorted => "per slot: the slot itself (the sort's values: after it, the firing slots in id order)",
-                },
+                meaning: "the slot of each id in event_keys, appended with it",
             },
             Binding {
                 binding: out_binding(j) + 2,
                 name: OUT_RECORDS[j],
                 space: "storage, read_write",
                 bytes: RECORDS_HEADER_BYTES + cap * RECORD_BYTES,
-                meaning: "the number of firings, then per slot the position and velocity it fired with",
+                meaning: "the number of firings, the complement of the smallest firing id and the largest, then per slot the position and velocity it fired with",
             },
         ]);
     }
@@ -301,29 +296,14 @@ pub fn emit_declarations(w: &mut Writer) {
         w.line("tint: u32,");
         w.line("v: vec4<f32>,");
     });
+    w.comment("The firings' count, the complement of their smallest id (zero is none, as cleared) and their largest id.");
     w.block("struct EventRecords", |w| {
         w.line("count: atomic<u32>,");
-        w.line("pad0: u32,");
-        w.line("pad1: u32,");
-        w.line("pad2: u32,");
+        w.line("not_min_id: atomic<u32>,");
+        w.line("max_id: atomic<u32>,");
+        w.line("pad: u32,");
         w.line("records: array<EventRecord>,");
     });
-}
-
-/// Emits, at the top of the update of slot `chunk.base + i`, the reset of the key and value of
-/// each [`Ordering::Sorted`] event (every slot, live or free, so the sort sees only this step's
-/// firings).
-pub fn emit_update_reset(w: &mut Writer, events: &[EventIr]) {
-    for (j, e) in events.iter().enumerate() {
-        if e.ordering == Ordering::Sorted {
-            w.line(format!(
-                "{}[chunk.base + i] = {};",
-                OUT_KEYS[j],
-                u32_lit(NO_EVENT)
-            ));
-            w.line(format!("{}[chunk.base + i] = chunk.base + i;", OUT_VALS[j]));
-        }
-    }
 }
 
 /// Emits the firing of every event whose trigger `fires_here` accepts, by the particle being
@@ -343,21 +323,17 @@ pub fn emit_fire(
         }
         let ordering = e.ordering;
         let body = |w: &mut Writer| {
-            match ordering {
-                // Appended in whatever order threads run: the runtime counts them into order.
-                Ordering::Counted => {
-                    w.line(format!(
-                        "let at_{j} = atomicAdd(&{}.count, 1u);",
-                        OUT_RECORDS[j]
-                    ));
-                    w.line(format!("{}[at_{j}] = p.id;", OUT_KEYS[j]));
-                    w.line(format!("{}[at_{j}] = chunk.base + i;", OUT_VALS[j]));
-                }
-                // The slot's key (reset at the update's start) becomes the id.
-                Ordering::Sorted => {
-                    w.line(format!("{}[chunk.base + i] = p.id;", OUT_KEYS[j]));
-                    w.line(format!("atomicAdd(&{}.count, 1u);", OUT_RECORDS[j]));
-                }
+            // Appended in whatever order threads run: the runtime puts them in id order.
+            w.line(format!(
+                "let at_{j} = atomicAdd(&{}.count, 1u);",
+                OUT_RECORDS[j]
+            ));
+            w.line(format!("{}[at_{j}] = p.id;", OUT_KEYS[j]));
+            w.line(format!("{}[at_{j}] = chunk.base + i;", OUT_VALS[j]));
+            if ordering == Ordering::Bucketed {
+                // The ids' range sets the buckets' width.
+                w.line(format!("atomicMax(&{}.not_min_id, ~p.id);", OUT_RECORDS[j]));
+                w.line(format!("atomicMax(&{}.max_id, p.id);", OUT_RECORDS[j]));
             }
             w.line(format!(
                 "{}.records[chunk.base + i] = EventRecord({x}, {tint}, vec4<f32>({vel}, 0.0));",
@@ -432,6 +408,8 @@ pub fn emit_kernels(
         w.block(format!("fn event_prepare_{j}()"), |w| {
             w.line(format!("let fired = atomicLoad(&{records}.count);"));
             w.line(format!("atomicStore(&{records}.count, 0u);"));
+            w.line(format!("atomicStore(&{records}.not_min_id, 0u);"));
+            w.line(format!("atomicStore(&{records}.max_id, 0u);"));
             w.line(format!("let requested = fired * {};", u32_lit(input.count)));
             w.line("let free = atomicLoad(&counters.free_count);");
             w.line("let n = min(requested, free);");

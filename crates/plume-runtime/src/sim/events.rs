@@ -1,79 +1,164 @@
 //! The order of an event stream's firings: the child group spawns their children in the firing
 //! particles' id order, so that ids and drops are the same every run, whatever order the
-//! firing group's threads ran in. How, the compiler decided by the firing group's capacity
-//! (plume_compiler::events::Ordering): up to `COUNTED_MAX` slots, the update appended
-//! (id, slot) pairs and `order_rank` (event_order.wgsl) ranks them by counting, in one
-//! dispatch; past that, the update wrote a key per slot and the radix sort (crate::sort::radix) leaves
-//! the firing slots first, in id order.
+//! firing group's threads ran in. The firing group's update appended (id, slot) pairs; how
+//! they are put in order, the compiler decided by the firing group's capacity
+//! (plume_compiler::events::Ordering): up to `COUNTED_MAX` slots, `order_rank`
+//! (event_order.wgsl) ranks them by counting, in one dispatch; past that, the firings are
+//! dropped into buckets by id and the buckets' counts scanned (event_buckets.wgsl: a stream
+//! compaction in id order, six dispatches, no sort).
 //!
-//! (Both in one stream, chosen on the GPU by the step's count through indirect arguments, was
-//! tried: on an H100 the fifteen indirect dispatches and the barriers between them cost more
-//! than the radix sort they could skip; docs/performance.md, "Events".)
+//! (Until 2026-11 a large group wrote a key per slot and the radix sort ordered every slot:
+//! four passes of 8 bits whether 5 or 50,000 fired; docs/performance.md, "Events", has both.)
 
 use plume_compiler::events::Ordering;
 
+use crate::device::buffers::STORAGE;
 use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;
-use crate::sort::radix::{GpuSorter, SortProgram};
 
-/// One stream's ordering.
-pub enum EventOrder {
-    /// `order_rank` over every slot of the firing group (whole workgroups past the count
-    /// return at once), with its bind group.
-    Counted {
-        /// The kernel and its bind group.
-        rank: (wgpu::ComputePipeline, wgpu::BindGroup),
-        /// Its workgroups.
-        groups: (u32, u32),
-    },
-    /// The radix sort of the firing group's keys and values.
-    Sorted(SortProgram),
+/// Threads of every ordering kernel's workgroup.
+const THREADS: u64 = 256;
+/// Buckets a workgroup of the bucket scan covers (event_buckets.wgsl's BLOCK).
+const BUCKET_BLOCK: u64 = 2048;
+/// The most workgroups of a bucket kernel: its threads stride over the firings (about the
+/// threads an H100 holds at once; a grid over every slot launched millions that had nothing
+/// to do).
+const BUCKET_WORKGROUPS: u64 = 1024;
+
+/// One dispatch: a kernel, its bind group and its workgroups.
+struct Dispatch {
+    pipeline: wgpu::ComputePipeline,
+    group: wgpu::BindGroup,
+    grid: (u32, u32),
+}
+
+/// One stream's ordering: its dispatches, in order.
+pub struct EventOrder {
+    dispatches: Vec<Dispatch>,
 }
 
 impl EventOrder {
     /// The ordering of a stream whose firing group has `n` slots: `keys`, `vals` (n each) and
-    /// `records` (the count in its first word) are the firing group's. A counted stream writes
-    /// the firing slots in id order to `order` (n); a sorted one leaves them first in `vals`.
+    /// `records` (the count, the id range, then the records) are the firing group's. The firing
+    /// slots, in id order, go to `order` (n).
     pub fn new(
         gpu: &Gpu,
-        sorter: &GpuSorter,
         ordering: Ordering,
         n: u64,
         (keys, vals, records): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
         order: &wgpu::Buffer,
     ) -> Result<Self, RuntimeError> {
-        Ok(match ordering {
-            Ordering::Counted => {
-                let module = gpu
-                    .device
-                    .create_shader_module(wgpu::ShaderModuleDescriptor {
-                        label: Some("event order"),
-                        source: wgpu::ShaderSource::Wgsl(include_str!("event_order.wgsl").into()),
-                    });
-                let pipeline = gpu.compute_pipeline(&module, "order_rank", None);
-                let group = gpu.bind_buffers(
-                    "order_rank",
-                    &pipeline.get_bind_group_layout(0),
-                    &[(0, keys), (1, vals), (2, records), (3, order)],
-                );
-                EventOrder::Counted {
-                    rank: (pipeline, group),
-                    groups: gpu.grid(n, 256)?,
-                }
+        let module = |label: &str, source: &'static str| {
+            gpu.device
+                .create_shader_module(wgpu::ShaderModuleDescriptor {
+                    label: Some(label),
+                    source: wgpu::ShaderSource::Wgsl(source.into()),
+                })
+        };
+        let dispatch = |module: &wgpu::ShaderModule,
+                        entry: &str,
+                        entries: &[(u32, &wgpu::Buffer)],
+                        grid: (u32, u32)| {
+            let pipeline = gpu.compute_pipeline(module, entry, None);
+            let group = gpu.bind_buffers(entry, &pipeline.get_bind_group_layout(0), entries);
+            Dispatch {
+                pipeline,
+                group,
+                grid,
             }
-            Ordering::Sorted => EventOrder::Sorted(sorter.radix_program(keys, vals, n, 32)?),
-        })
+        };
+        let dispatches = match ordering {
+            Ordering::Counted => {
+                let module = module("event order", include_str!("event_order.wgsl"));
+                vec![dispatch(
+                    &module,
+                    "order_rank",
+                    &[(0, keys), (1, vals), (2, records), (3, order)],
+                    gpu.grid(n, THREADS)?,
+                )]
+            }
+            Ordering::Bucketed => {
+                let module = module("event buckets", include_str!("event_buckets.wgsl"));
+                let buffer = |label: &str, words: u64| {
+                    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some(label),
+                        size: words.max(1) * 4,
+                        usage: STORAGE,
+                        mapped_at_creation: false,
+                    })
+                };
+                let blocks = n.div_ceil(BUCKET_BLOCK);
+                // Created zeroed, as the counts are between steps.
+                let counts = buffer("event bucket counts", n);
+                let starts = buffer("event bucket starts", n + blocks);
+                let within = buffer("event bucket places", n);
+                let staged = buffer("event bucket staging", 2 * n);
+                let over_blocks = gpu.grid(blocks.min(BUCKET_WORKGROUPS), 1)?;
+                let over_firings = gpu.grid(n.min(BUCKET_WORKGROUPS * THREADS), THREADS)?;
+                vec![
+                    dispatch(
+                        &module,
+                        "bucket_count",
+                        &[(0, keys), (2, records), (4, &counts), (6, &within)],
+                        over_firings,
+                    ),
+                    dispatch(
+                        &module,
+                        "bucket_reduce",
+                        &[(2, records), (4, &counts), (5, &starts)],
+                        over_blocks,
+                    ),
+                    dispatch(
+                        &module,
+                        "bucket_scan_sums",
+                        &[(2, records), (4, &counts), (5, &starts)],
+                        (1, 1),
+                    ),
+                    dispatch(
+                        &module,
+                        "bucket_scan",
+                        &[(2, records), (4, &counts), (5, &starts)],
+                        over_blocks,
+                    ),
+                    dispatch(
+                        &module,
+                        "bucket_place",
+                        &[
+                            (0, keys),
+                            (1, vals),
+                            (2, records),
+                            (3, order),
+                            (4, &counts),
+                            (5, &starts),
+                            (6, &within),
+                            (7, &staged),
+                        ],
+                        over_firings,
+                    ),
+                    dispatch(
+                        &module,
+                        "bucket_rank",
+                        &[
+                            (2, records),
+                            (3, order),
+                            (4, &counts),
+                            (5, &starts),
+                            (7, &staged),
+                        ],
+                        over_firings,
+                    ),
+                ]
+            }
+        };
+        Ok(Self { dispatches })
     }
 
     /// Records the ordering of this step's firings into `pass`.
     pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
-        match self {
-            EventOrder::Counted { rank, groups } => {
-                pass.set_pipeline(&rank.0);
-                pass.set_bind_group(0, &rank.1, &[]);
-                pass.dispatch_workgroups(groups.0, groups.1, 1);
-            }
-            EventOrder::Sorted(program) => program.record(pass),
+        for d in &self.dispatches {
+            pass.set_pipeline(&d.pipeline);
+            pass.set_bind_group(0, &d.group, &[]);
+            pass.dispatch_workgroups(d.grid.0, d.grid.1, 1);
         }
     }
 }

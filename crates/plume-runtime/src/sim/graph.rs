@@ -6,9 +6,7 @@
 //! step of every group and every stream is recorded into one compute pass per batch of
 //! steps: nothing is read back between steps.
 
-use plume_compiler::events::{
-    in_binding, out_binding, Ordering, RECORDS_HEADER_BYTES, RECORD_BYTES,
-};
+use plume_compiler::events::{in_binding, out_binding, RECORDS_HEADER_BYTES, RECORD_BYTES};
 use plume_compiler::graph::{CompiledGraph, Stream};
 use plume_compiler::schedule::StepPlan;
 
@@ -18,7 +16,6 @@ use crate::device::resources::STEPS_PER_SUBMIT;
 use crate::error::RuntimeError;
 use crate::sim::events::EventOrder;
 use crate::sim::group::Group;
-use crate::sort::radix::GpuSorter;
 
 /// One event stream and the ordering of its firings.
 pub(crate) struct StreamOrder {
@@ -42,7 +39,6 @@ impl Events {
         graph: &CompiledGraph,
     ) -> Result<(Self, Vec<SharedBuffers>), RuntimeError> {
         let mut shared: Vec<SharedBuffers> = vec![Vec::new(); graph.groups.len()];
-        let sorter = GpuSorter::new(gpu);
         let mut orders = Vec::new();
         let limit = gpu
             .limits
@@ -70,12 +66,8 @@ impl Events {
             };
             let keys = buffer("event keys", parent * 4);
             let vals = buffer("event slots", parent * 4);
-            // Where the child reads the firing slots in id order: counted into a buffer of
-            // their own, or first in the sorted values.
-            let order = match s.ordering {
-                Ordering::Counted => buffer("event order", parent * 4),
-                Ordering::Sorted => vals.clone(),
-            };
+            // Where the child reads the firing slots in id order.
+            let order = buffer("event order", parent * 4);
             let records = buffer(
                 "event records",
                 RECORDS_HEADER_BYTES + parent * RECORD_BYTES,
@@ -90,14 +82,7 @@ impl Events {
             shared[s.child].extend([(at, order.clone()), (at + 1, records.clone())]);
             orders.push(StreamOrder {
                 stream: s.clone(),
-                order: EventOrder::new(
-                    gpu,
-                    &sorter,
-                    s.ordering,
-                    parent,
-                    (&keys, &vals, &records),
-                    &order,
-                )?,
+                order: EventOrder::new(gpu, s.ordering, parent, (&keys, &vals, &records), &order)?,
             });
         }
         Ok((Self { orders }, shared))

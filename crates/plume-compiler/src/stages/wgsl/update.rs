@@ -19,7 +19,6 @@ use crate::stages::passes::layout::{Attribute, Layout};
 pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.comment("One particle's update: loaded, advanced, stored (or freed) in place.");
     w.block("fn update_particle(i: u32)", |w| {
-        crate::features::events::emit_update_reset(w, &ir.events);
         w.line("var p = load_particle(i);");
         emit_body(w, ir, layout);
     });
