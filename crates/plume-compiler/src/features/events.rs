@@ -306,9 +306,17 @@ pub fn emit_declarations(w: &mut Writer) {
     });
 }
 
+/// The bit of an update's outcome (`update.rs`) that says the particle fired its group's
+/// `j`-th event; bit 0 says it died.
+pub fn fired_bit(j: usize) -> u32 {
+    2 << j
+}
+
 /// Emits the firing of every event whose trigger `fires_here` accepts, by the particle being
-/// updated, with its position `x`, velocity `vel` and packed tint `tint` (WGSL expressions).
-/// An `Every` event's firing is guarded by its period.
+/// updated, with its position `x`, velocity `vel` and packed tint `tint` (WGSL expressions):
+/// its record, in its slot, and its bit in `fired` (the kernel appends its id and slot with
+/// the rest of its workgroup's: [`emit_workgroup_appends`]). An `Every` event's firing is
+/// guarded by its period.
 pub fn emit_fire(
     w: &mut Writer,
     events: &[EventIr],
@@ -321,20 +329,8 @@ pub fn emit_fire(
         if !fires_here(e.trigger) {
             continue;
         }
-        let ordering = e.ordering;
         let body = |w: &mut Writer| {
-            // Appended in whatever order threads run: the runtime puts them in id order.
-            w.line(format!(
-                "let at_{j} = atomicAdd(&{}.count, 1u);",
-                OUT_RECORDS[j]
-            ));
-            w.line(format!("{}[at_{j}] = p.id;", OUT_KEYS[j]));
-            w.line(format!("{}[at_{j}] = chunk.base + i;", OUT_VALS[j]));
-            if ordering == Ordering::Bucketed {
-                // The ids' range sets the buckets' width.
-                w.line(format!("atomicMax(&{}.not_min_id, ~p.id);", OUT_RECORDS[j]));
-                w.line(format!("atomicMax(&{}.max_id, p.id);", OUT_RECORDS[j]));
-            }
+            w.line(format!("fired = fired | {};", u32_lit(fired_bit(j))));
             w.line(format!(
                 "{}.records[chunk.base + i] = EventRecord({x}, {tint}, vec4<f32>({vel}, 0.0));",
                 OUT_RECORDS[j]
@@ -349,6 +345,85 @@ pub fn emit_fire(
                 body,
             ),
             _ => body(w),
+        }
+    }
+}
+
+/// The update kernel's appends of a workgroup's firings, in three parts around its barriers
+/// (`update.rs` emits the deaths' the same way): each firing takes a place among its
+/// workgroup's (a workgroup atomic), one thread adds the workgroup's count to the stream's (one
+/// global atomic a workgroup, not one a firing: thousands of firings a step adding to one word
+/// wait on each other), and each firing writes its id and slot at the workgroup's base plus
+/// its place. A [`Ordering::Bucketed`] stream's id range is widened the same way.
+pub enum AppendPart {
+    /// The workgroup's counters (module scope).
+    Declarations,
+    /// Their reset, by thread 0 before the first barrier.
+    Reset,
+    /// Each firing's place, from `outcome` (bits, id), after the update.
+    Place,
+    /// The workgroup's share of the stream's counts, by thread 0 after the second barrier.
+    Reserve,
+    /// The appends, after the third barrier.
+    Write,
+}
+
+/// Emits `part` of the appends of the firings of `events` (see [`AppendPart`]).
+pub fn emit_workgroup_appends(w: &mut Writer, events: &[EventIr], part: AppendPart) {
+    for (j, e) in events.iter().enumerate() {
+        let bucketed = e.ordering == Ordering::Bucketed;
+        let out = OUT_RECORDS[j];
+        let fired = format!("(outcome.x & {}) != 0u", u32_lit(fired_bit(j)));
+        match part {
+            AppendPart::Declarations => {
+                w.line(format!("var<workgroup> wg_fired_{j}: atomic<u32>;"));
+                w.line(format!("var<workgroup> wg_fired_base_{j}: u32;"));
+                if bucketed {
+                    w.line(format!("var<workgroup> wg_not_min_id_{j}: atomic<u32>;"));
+                    w.line(format!("var<workgroup> wg_max_id_{j}: atomic<u32>;"));
+                }
+            }
+            AppendPart::Reset => {
+                w.line(format!("atomicStore(&wg_fired_{j}, 0u);"));
+                if bucketed {
+                    w.line(format!("atomicStore(&wg_not_min_id_{j}, 0u);"));
+                    w.line(format!("atomicStore(&wg_max_id_{j}, 0u);"));
+                }
+            }
+            AppendPart::Place => {
+                w.line(format!("var fired_at_{j} = 0u;"));
+                w.block(format!("if ({fired})"), |w| {
+                    w.line(format!("fired_at_{j} = atomicAdd(&wg_fired_{j}, 1u);"));
+                    if bucketed {
+                        // The ids' range sets the buckets' width.
+                        w.line(format!("atomicMax(&wg_not_min_id_{j}, ~outcome.y);"));
+                        w.line(format!("atomicMax(&wg_max_id_{j}, outcome.y);"));
+                    }
+                });
+            }
+            AppendPart::Reserve => {
+                w.line(format!("let fired_{j} = atomicLoad(&wg_fired_{j});"));
+                w.block(format!("if (fired_{j} > 0u)"), |w| {
+                    w.line(format!(
+                        "wg_fired_base_{j} = atomicAdd(&{out}.count, fired_{j});"
+                    ));
+                    if bucketed {
+                        w.line(format!(
+                            "atomicMax(&{out}.not_min_id, atomicLoad(&wg_not_min_id_{j}));"
+                        ));
+                        w.line(format!(
+                            "atomicMax(&{out}.max_id, atomicLoad(&wg_max_id_{j}));"
+                        ));
+                    }
+                });
+            }
+            AppendPart::Write => {
+                w.block(format!("if ({fired})"), |w| {
+                    w.line(format!("let at_{j} = wg_fired_base_{j} + fired_at_{j};"));
+                    w.line(format!("{}[at_{j}] = outcome.y;", OUT_KEYS[j]));
+                    w.line(format!("{}[at_{j}] = chunk.base + i;", OUT_VALS[j]));
+                });
+            }
         }
     }
 }
