@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # What events cost (docs/performance.md, "Events"): fireworks.ron and rain.ron scaled to 1M
 # and 10M slots, each step with its events against the same groups and live particles with
-# none, and each event's sort alone, all timed in one run of `plume bench` per effect and size.
+# none, and each event's ordering alone, all timed in one run of `plume bench` per effect and size.
 # Usage: bash docs/measurements/events-bench.sh PLUME OUT
 set -euo pipefail
 plume=${1:?path to the plume binary}
