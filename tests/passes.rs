@@ -310,6 +310,7 @@ fn overrides_replace_file_values() {
             placed: true,
             bursts: true,
             live_params: true,
+            step_only: true,
         },
     )
     .unwrap();

@@ -335,3 +335,67 @@ fn the_compute_splat_refuses_textured_sprites_and_says_what_to_use() {
         "{message}"
     );
 }
+
+#[test]
+fn an_effect_compiled_to_step_only_runs_without_its_texture_and_its_draw_says_why_not() {
+    // `CompileOptions::step_only` (plume run, plume bench without drawing): the file is
+    // missing, yet the effect compiles, keeps its flipbook's 2 x 2 frames and steps; only a
+    // draw needs the image, and it is refused with the field, the file and why.
+    let gpu = gpu();
+    let dir = scratch("step-only");
+    let src = r#"Effect(
+    name: "no-texture",
+    capacity: 8,
+    emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 1.0, 0.0)),
+                       lifetime: Some((1.0, 1.0)))],
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 0.5)],
+                   texture: Some(Texture(file: "gone.png", frames: (2, 2)))),
+)"#;
+    let options = CompileOptions {
+        base_dir: Some(dir.clone()),
+        ..Default::default()
+    };
+    let drawn = compile_str(src, &options)
+        .unwrap_err()
+        .render("no-texture.ron", src);
+    assert!(
+        drawn.contains("no-texture.ron:7:48: error: render.texture.file: cannot open texture"),
+        "{drawn}"
+    );
+    let stepped = compile_str(
+        src,
+        &CompileOptions {
+            step_only: true,
+            ..options
+        },
+    )
+    .expect("a missing texture is no error for an effect that is only stepped");
+    let texture = stepped
+        .ir
+        .render
+        .texture
+        .clone()
+        .expect("the texture's frames");
+    assert_eq!((texture.columns, texture.rows), (2, 2));
+    let why = texture.missing.clone().expect("why it is missing");
+    assert!(
+        why.starts_with("render.texture.file: cannot open texture") && why.contains("gone.png"),
+        "{why}"
+    );
+    let mut sim = Effect::new(&gpu, stepped).unwrap();
+    sim.run(30, |_| {}).unwrap();
+    let alive = sim.records().unwrap();
+    assert_eq!(alive.len(), 8, "the particles stepped");
+    assert!(alive.iter().all(|p| (p.position.y - 0.5).abs() < 1e-4));
+    let target = plume::runtime::outputs::Offscreen::new(&gpu, 16, 16).unwrap();
+    let refused = plume::runtime::oracle::group_renderer(&sim, 0, &target.target())
+        .err()
+        .expect("the draw needs the texture")
+        .to_string();
+    assert!(
+        refused.contains("render.texture.file: cannot open texture")
+            && refused.contains("gone.png")
+            && refused.contains("compiled to be stepped, not drawn"),
+        "{refused}"
+    );
+}

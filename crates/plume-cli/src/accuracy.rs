@@ -54,7 +54,7 @@ pub struct AccuracyArgs {
 
 /// Runs `plume accuracy`.
 pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
-    let (load::Source { name, .. }, effect) = match load::checked(&args.file) {
+    let (load::Source { name, .. }, effect) = match load::checked(&args.file, true) {
         Ok(x) => x,
         Err(code) => return code,
     };

@@ -161,13 +161,14 @@ fn bench_graph_command(args: &BenchArgs, name: &str, effect: &plume_compiler::Ef
 
 /// Runs `plume bench`.
 pub fn bench_command(args: &BenchArgs) -> ExitCode {
-    if let Some((name, effect)) = load::graph_effect(&args.file) {
+    if let Some((name, effect)) = load::graph_effect(&args.file, true) {
         return match effect {
             Ok(effect) => bench_graph_command(args, &name, &effect),
             Err(code) => code,
         };
     }
-    let (load::Source { name, .. }, effect) = match load::checked(&args.file) {
+    let (load::Source { name, .. }, effect) = match load::checked(&args.file, args.render.is_none())
+    {
         Ok(x) => x,
         Err(code) => return code,
     };

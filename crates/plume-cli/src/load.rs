@@ -65,12 +65,14 @@ pub fn compiled_graph(
 
 /// For a file with groups or events: its name and the parsed effect, checked to compile as
 /// written (errors printed; Err holds the exit code). None for a file of one group, or one
-/// that does not parse (the single-group path reports that).
-pub fn graph_effect(file: &Path) -> Option<(String, Result<Effect, ExitCode>)> {
+/// that does not parse (the single-group path reports that). `step_only`: compiled to be
+/// stepped, not drawn (`CompileOptions::step_only`: a missing sprite texture is no error).
+pub fn graph_effect(file: &Path, step_only: bool) -> Option<(String, Result<Effect, ExitCode>)> {
     let src = read(file).ok()?;
     let mut effect = parse(&src.text).ok()?;
     plume_compiler::graph::graph_field(&effect)?;
     effect.base_dir = base_dir(file);
+    effect.step_only = step_only;
     let checked = match plume_compiler::graph::compile_graph(&effect, &src.text) {
         Ok(_) => Ok(effect),
         Err(e) => {
@@ -87,8 +89,9 @@ pub fn single(graph: &CompiledGraph) -> bool {
 }
 
 /// Reads and parses `file`, and checks it compiles as written (so errors point at the file),
-/// for commands that derive their own variants of the effect.
-pub fn checked(file: &Path) -> Result<(Source, Effect), ExitCode> {
+/// for commands that derive their own variants of the effect. `step_only`: as for
+/// [`graph_effect`].
+pub fn checked(file: &Path, step_only: bool) -> Result<(Source, Effect), ExitCode> {
     let src = read(file)?;
     let mut effect = match parse(&src.text) {
         Ok(e) => e,
@@ -98,6 +101,7 @@ pub fn checked(file: &Path) -> Result<(Source, Effect), ExitCode> {
         }
     };
     effect.base_dir = base_dir(file);
+    effect.step_only = step_only;
     if plume_compiler::graph::graph_field(&effect).is_some() {
         eprintln!(
             "{}: error: this command does not run effects with groups or events yet (plume check, compile, run, render, preview and bench do)",

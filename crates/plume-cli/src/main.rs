@@ -118,6 +118,7 @@ impl Overrides {
             placed: false,
             bursts: false,
             live_params: false,
+            step_only: false,
         }
     }
 }

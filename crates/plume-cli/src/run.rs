@@ -171,6 +171,8 @@ fn simulate(args: &RunArgs, graph: CompiledGraph) -> Result<Outcome, RuntimeErro
 /// Runs `plume run`.
 pub fn run(args: &RunArgs) -> ExitCode {
     let mut options = args.overrides.options();
+    // Nothing is drawn: a sprite texture need not be there.
+    options.step_only = true;
     if args.order == Order::Draw {
         options.sort = Some(true);
     }

@@ -61,6 +61,12 @@ pub struct CompileOptions {
     /// constants. The compile-time analyses (stiffness, the integrator `Auto` picks) see the
     /// file's values.
     pub live_params: bool,
+    /// Compiles the effect to be stepped, not drawn (`plume run`, `plume bench` without
+    /// drawing): a sprite texture that cannot be read is then no error here. The effect keeps
+    /// its flipbook's frames (the step may need its particles' ages), with a white stand-in of
+    /// one texel a frame, and any draw of it is refused with the reason, naming the file and
+    /// the field (`TextureIr::missing`).
+    pub step_only: bool,
 }
 
 /// A compiled effect: the IR after the passes, its layout, the WGSL and any warnings.
@@ -161,6 +167,7 @@ pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, Comp
     effect.placed = options.placed;
     effect.bursts = options.bursts;
     effect.live_params = options.live_params;
+    effect.step_only = options.step_only;
     for group in &mut effect.groups {
         if let Some(i) = options.integrator {
             group.integrator = i;
@@ -271,17 +278,24 @@ pub(crate) fn compile_group(
     ir.events.clone_from(&links.events);
     ir.event_inputs.clone_from(&links.inputs);
     if let Some(spec) = &effect.render.texture {
-        let texture =
-            texture::TextureIr::load(spec, effect.base_dir.as_deref()).map_err(|message| {
-                let path = ValuePath::root()
-                    .field("render")
-                    .field("texture")
-                    .field("file");
-                CompileError::Invalid(prefixed(vec![(
+        let path = ValuePath::root()
+            .field("render")
+            .field("texture")
+            .field("file");
+        let texture = match texture::TextureIr::load(spec, effect.base_dir.as_deref()) {
+            Ok(texture) => texture,
+            // Nothing will be drawn: the draw, if one is asked for after all, says why not.
+            Err(message) if effect.step_only => texture::TextureIr::stand_in(
+                spec,
+                format!("{}: {message}", join(prefix, &path.display)),
+            ),
+            Err(message) => {
+                return Err(CompileError::Invalid(prefixed(vec![(
                     Diagnostic::error(path.display, message),
                     path.lookup,
-                )]))
-            })?;
+                )])))
+            }
+        };
         ir.render.texture = Some(texture);
     }
     let names: Vec<&'static str> = effect.forces.iter().map(|f| f.name()).collect();

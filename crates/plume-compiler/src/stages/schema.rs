@@ -112,6 +112,10 @@ pub struct Effect {
     /// `CompileOptions::live_params`, never by the file.
     #[serde(skip)]
     pub live_params: bool,
+    /// Compiled to be stepped, not drawn: set by `CompileOptions::step_only`, never by the
+    /// file.
+    #[serde(skip)]
+    pub step_only: bool,
 }
 
 /// An axis-aligned box: `bounds: Some(Bounds(min: (-5.0, 0.0, -5.0), max: (5.0, 12.0, 5.0)))`.

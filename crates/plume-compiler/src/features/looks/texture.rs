@@ -84,6 +84,10 @@ pub struct TextureIr {
     pub play: Play,
     /// Whether each particle's loop starts at a frame drawn from its id (with `Rate`).
     pub random_start: bool,
+    /// Why the file could not be read, for an effect compiled to be stepped, not drawn
+    /// (`CompileOptions::step_only`): the image is then a white stand-in, and a draw refuses
+    /// with this message (the field's path, then what went wrong with the file).
+    pub missing: Option<String>,
 }
 
 impl std::fmt::Debug for TextureIr {
@@ -102,7 +106,11 @@ impl std::fmt::Debug for TextureIr {
             } else {
                 ""
             }
-        )
+        )?;
+        match &self.missing {
+            Some(_) => write!(f, " (missing: a white stand-in)"),
+            None => Ok(()),
+        }
     }
 }
 
@@ -149,7 +157,25 @@ impl TextureIr {
             rows,
             play: spec.play,
             random_start: spec.random_start,
+            missing: None,
         })
+    }
+
+    /// The texture `spec` names, standing in for a file that could not be read (`missing`
+    /// says why): its frames and how they play, each frame one white texel.
+    pub fn stand_in(spec: &Texture, missing: String) -> Self {
+        let (columns, rows) = spec.frames;
+        Self {
+            file: spec.file.clone(),
+            width: columns,
+            height: rows,
+            rgba: vec![255; (columns * rows * 4) as usize].into(),
+            columns,
+            rows,
+            play: spec.play,
+            random_start: spec.random_start,
+            missing: Some(missing),
+        }
     }
 
     /// Frames in the atlas.
@@ -328,6 +354,7 @@ mod tests {
             rows,
             play,
             random_start: false,
+            missing: None,
         }
     }
 
