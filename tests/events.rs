@@ -10,8 +10,9 @@ mod common;
 
 use common::compare::{compare_at, curved_colliders, roundings_per_step};
 use common::*;
+use plume::compiler::graph::ReferenceGraph;
 use plume::compiler::graph::{compile_graph_str, CompiledGraph};
-use plume::compiler::reference::{ParticleRecord, ReferenceGraph};
+use plume::compiler::reference::ParticleRecord;
 use plume::runtime::outputs::csv_groups;
 use plume::runtime::{oracle, Effect};
 use plume::CompileOptions;

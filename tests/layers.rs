@@ -33,14 +33,14 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
             // 3: the effect IR that gathers the features' lowered forms.
             ("ir", 3),
             // 4: the stages: schema, checks, lowering, passes, integrators, WGSL kernel assembly,
-            //    schedule.
+            //    schedule; beside them the f64 reference simulator, which executes the IR the
+            //    stages make and which the accuracy pass runs to calibrate a budget's choice.
             ("stages", 4),
+            ("reference", 4),
             // 5: the single-group compile driver.
             ("compile", 5),
-            // 6: effects with groups and the events between them.
+            // 6: effects with groups and the events between them (and their f64 reference run).
             ("graph", 6),
-            // 7: the f64 reference simulator, which nothing but the crate root imports.
-            ("reference", 7),
         ],
     ),
     (

@@ -1,6 +1,7 @@
 //! `plume accuracy`: each integrator x step size, the position error at the end against the
 //! closed form or an f64 RK4 at 1/64 of the smallest step, the time per step and the observed
-//! order; a table, JSON, and an SVG plot with the Pareto front.
+//! order; a table, JSON, and an SVG plot with the Pareto front. An effect with an accuracy
+//! budget is first checked against it on the GPU (a non-zero exit when it is exceeded).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -8,7 +9,8 @@ use std::process::ExitCode;
 use indicatif::{ProgressBar, ProgressStyle};
 use plume_compiler::Integrator;
 use plume_runtime::bench::{
-    accuracy_svg, field_sweep, measure, pareto_front, AccuracyPlan, Engine, ReferenceKind,
+    accuracy_svg, check_budget, field_sweep, measure, pareto_front, AccuracyPlan, Engine,
+    ReferenceKind,
 };
 use plume_runtime::outputs::write_atomically;
 
@@ -99,6 +101,26 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
     if args.field_sweep {
         return field_sweep_report(args, &name, &effect, &engine, &bar, duration, &gpu);
     }
+    // The effect's own budget, on the GPU, before the sweep.
+    let budget = match (&gpu, &effect.accuracy) {
+        (Some(g), Some(_)) => {
+            if !args.json {
+                eprintln!("{name}: checking the accuracy budget on the GPU ...");
+            }
+            match check_budget(g, &effect) {
+                Ok(b) => b,
+                Err(e) => {
+                    eprintln!("{name}: error: {e}");
+                    return ExitCode::FAILURE;
+                }
+            }
+        }
+        (None, Some(_)) => {
+            eprintln!("{name}: note: --cpu: the accuracy budget is checked on the GPU only");
+            None
+        }
+        _ => None,
+    };
     bar.set_style(
         ProgressStyle::with_template("measuring [{bar:30}] {pos}/{len} runs ({eta})")
             .unwrap_or_else(|_| ProgressStyle::default_bar())
@@ -143,12 +165,32 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
                 })
             })
             .collect();
+        let budget_json = budget.as_ref().map(|b| {
+            serde_json::json!({
+                "chosen": b.chosen, "budget": b.budget, "over": b.over, "measured": b.measured,
+                "truth_uncertainty": b.truth_uncertainty, "particles": b.particles,
+                "steps": b.steps, "met": b.met(),
+            })
+        });
         println!(
             "{}",
             serde_json::json!({ "effect": name, "engine": engine_name, "reference": reference,
-                                "duration": duration, "rows": items })
+                                "duration": duration, "rows": items, "budget": budget_json })
         );
     } else {
+        if let Some(b) = &budget {
+            println!("{name}: {}", b.chosen);
+            println!(
+                "budget: {} {:.3e} m measured on the GPU against {:.3e} m allowed, over the first {} s ({} steps) of {} particles (the f64 truth within {:.1e} m)",
+                if b.met() { "met:" } else { "EXCEEDED:" },
+                b.measured,
+                b.budget,
+                b.over,
+                b.steps,
+                b.particles,
+                b.truth_uncertainty
+            );
+        }
         println!("{name}: position error after {duration:.4} s against {reference}");
         println!("engine: {engine_name}; * marks the Pareto front (no row is both faster and more accurate)");
         println!(
@@ -188,7 +230,16 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
             println!("plot written to {}", path.display());
         }
     }
-    ExitCode::SUCCESS
+    match budget {
+        Some(b) if !b.met() => {
+            eprintln!(
+                "{name}: error: the accuracy budget is exceeded: {:.3e} m against {:.3e} m",
+                b.measured, b.budget
+            );
+            ExitCode::FAILURE
+        }
+        _ => ExitCode::SUCCESS,
+    }
 }
 
 /// `--field-sweep`: the baked field's error against evaluated forces, per resolution and filter.

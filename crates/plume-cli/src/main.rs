@@ -187,6 +187,7 @@ fn check(files: &[PathBuf]) -> ExitCode {
                 if !found.is_empty() {
                     eprintln!("{}", found.render(&name, &source));
                 }
+                print_accuracy(&name, &compiled);
             }
             Err(e) => {
                 failed += 1;
@@ -203,6 +204,22 @@ fn check(files: &[PathBuf]) -> ExitCode {
         ExitCode::FAILURE
     } else {
         ExitCode::SUCCESS
+    }
+}
+
+/// Prints what each group's accuracy budget chose (`plume check`, `plume compile`).
+fn print_accuracy(name: &str, graph: &plume_compiler::graph::CompiledGraph) {
+    for group in &graph.groups {
+        if let Some(budget) = &group.effect.ir.accuracy {
+            match graph.groups.len() {
+                1 => eprintln!("{name}: note: {}", budget.describe()),
+                _ => eprintln!(
+                    "{name}: note: group {:?}: {}",
+                    group.name,
+                    budget.describe()
+                ),
+            }
+        }
     }
 }
 
@@ -239,6 +256,7 @@ fn compile(
             names.join(", ")
         );
     }
+    print_accuracy(&name, &graph);
     let compiled = graph.groups[index].effect.clone();
     eprintln!(
         "{name}: note: integrator {} ({})",

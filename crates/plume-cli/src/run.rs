@@ -9,7 +9,8 @@ use std::time::Instant;
 
 use indicatif::{ProgressBar, ProgressStyle};
 use plume_compiler::graph::CompiledGraph;
-use plume_compiler::reference::{ParticleRecord, ReferenceGraph, ReferenceSim, Totals};
+use plume_compiler::graph::ReferenceGraph;
+use plume_compiler::reference::{ParticleRecord, ReferenceSim, Totals};
 use plume_runtime::outputs::{export, export_groups, summarize};
 use plume_runtime::{Effect, Gpu, GpuChoice, RuntimeError};
 

@@ -53,7 +53,9 @@ pub use compile::{
 };
 pub use diagnostics::{Diagnostic, Diagnostics, Severity};
 pub use features::looks::{glow, orient, rotation, texture, tint, trail};
-pub use features::{bursts, colliders, emitter, events, field, forces, mesh_emission, placement};
+pub use features::{
+    accuracy, bursts, colliders, emitter, events, field, forces, mesh_emission, placement,
+};
 pub use ir::EffectIr;
 pub use stages::passes::layout::Layout;
 pub use stages::schema::{Effect, Integrator};

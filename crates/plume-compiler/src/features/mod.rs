@@ -5,6 +5,7 @@
 //! (never `ir`, `stages` or the drivers); the stages above gather features through the small
 //! interfaces they expose (`ForceTerm`, the collider functions, `Event`'s kernels).
 
+pub mod accuracy;
 pub mod bursts;
 pub mod colliders;
 pub mod emitter;

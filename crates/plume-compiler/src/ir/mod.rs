@@ -44,6 +44,8 @@ pub struct EffectIr {
     pub integrator: Integrator,
     /// Why this integrator: the file chose it, or what Auto decided and why.
     pub integrator_reason: String,
+    /// The accuracy budget and what was chosen to meet it (`features::accuracy`).
+    pub accuracy: Option<crate::features::accuracy::AccuracyIr>,
     /// Colliders, in file order.
     pub colliders: Vec<crate::features::colliders::ColliderIr>,
     /// Meshes drawn and not simulated (the file's `scene`; the first group's only).
@@ -349,6 +351,9 @@ impl fmt::Display for EffectIr {
             self.integrator.name(),
             self.integrator_reason
         )?;
+        if let Some(budget) = &self.accuracy {
+            writeln!(f, "  {}", budget.reason())?;
+        }
         match self.max_speed {
             Some(s) => writeln!(f, "  max_speed {s} m/s")?,
             None => writeln!(f, "  max_speed none")?,

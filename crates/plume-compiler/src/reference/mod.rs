@@ -2,13 +2,12 @@
 //! spawn schedule, the same integer-hash random draws and the same integer death steps, in f64.
 //! Written for clarity, not speed; it is the oracle of every numeric test.
 
+pub mod calibrate;
 pub mod closed_form;
-pub mod graph;
 pub mod sim;
 pub mod spawn;
 pub mod step;
 
-pub use graph::ReferenceGraph;
 pub use sim::{Fired, ReferenceSim};
 
 use glam::DVec3;

@@ -51,6 +51,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
         max_speed: effect.max_speed,
         integrator: effect.integrator,
         integrator_reason: String::from("chosen in the file"),
+        accuracy: effect.accuracy.as_ref().map(|a| a.lower()),
         colliders: effect.collide.iter().map(Collider::lower).collect(),
         scene: effect.scene.iter().map(|m| m.lower()).collect(),
         kills: effect

@@ -59,6 +59,13 @@ pub struct Effect {
     /// How positions and velocities advance.
     #[serde(default)]
     pub integrator: Integrator,
+    /// The error the author accepts (see [`crate::features::accuracy`]): with it,
+    /// `integrator: Auto` becomes the integrator and substeps that meet it most cheaply.
+    #[serde(
+        default,
+        deserialize_with = "crate::features::accuracy::deserialize_budget"
+    )]
+    pub accuracy: Option<crate::features::accuracy::Accuracy>,
     /// Surfaces particles bounce off.
     #[serde(default)]
     pub collide: Vec<Collider>,

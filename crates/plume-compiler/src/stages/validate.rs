@@ -58,6 +58,9 @@ pub fn check_effect(effect: &Effect) -> Checker {
         c.error(&root.field("capacity"), "must be >= 1, got 0");
     }
     c.positive(&root.field("dt"), effect.dt);
+    if let Some(budget) = &effect.accuracy {
+        crate::features::accuracy::check(&mut c, &root.field("accuracy"), budget);
+    }
     if effect.substeps == 0 {
         c.error(&root.field("substeps"), "must be >= 1, got 0");
     }

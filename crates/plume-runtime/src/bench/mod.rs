@@ -2,7 +2,7 @@
 //! `examples/`: the update against a copy kernel ([`bench`](fn@bench)), the draw ([`DrawTimes`]), the
 //! events' cost ([`bench_graph`]), the radix sort alone ([`bench_sort`], with the sorter
 //! itself, [`GpuSorter`]), the integrators' error against time per step ([`measure`], plotted
-//! by [`accuracy_svg`]), and the GPU pass timer they share ([`PassTimer`]). Also the knobs the
+//! by [`accuracy_svg`]), an accuracy budget checked on the GPU ([`check_budget`]), and the GPU pass timer they share ([`PassTimer`]). Also the knobs the
 //! measurements turn: a renderer with other [`DrawOptions`] ([`renderer_with`]), a GPU buffer
 //! read back ([`read_buffer`]), and the dispatch helpers the layout experiments in `examples/`
 //! share with Plume's kernels ([`grid`], [`bind_buffers`], [`compute_pipeline`]).
@@ -10,6 +10,7 @@
 //! Imports every other folder; nothing imports it.
 
 pub(crate) mod accuracy;
+pub(crate) mod budget;
 pub(crate) mod copy;
 pub(crate) mod draw;
 pub(crate) mod graph;
@@ -27,6 +28,7 @@ pub use accuracy::{
     field_sweep, measure, measured_effect, pareto_front, reference, AccuracyPlan, AccuracyRow,
     Engine, FieldRow, ReferenceKind,
 };
+pub use budget::{check_budget, BudgetCheck, CHECKED};
 pub use draw::{DrawTimes, DRAW_REPEATS};
 pub use graph::{bench_graph, scaled, GraphBench};
 pub use plot::accuracy_svg;

@@ -75,7 +75,7 @@ use crate::sim::group::Group;
 /// assert_eq!(shells.group_totals(0).unwrap().alive, 0);
 /// assert_eq!(shells.group_totals(1).unwrap().spawned, 240);
 /// // The f64 reference runs the same graph: the same particles in every group.
-/// let mut reference = plume_compiler::reference::ReferenceGraph::new(&graph);
+/// let mut reference = plume_compiler::graph::ReferenceGraph::new(&graph);
 /// reference.run(20);
 /// for g in 0..2 {
 ///     let ids = |records: Vec<plume_compiler::reference::ParticleRecord>| {

@@ -1,7 +1,9 @@
 //! Passes over the IR, run in this order: fold constant terms and merge drags, prune terms that
-//! cannot act, resolve the integrator (Auto, and Exact's preconditions), analyse stability,
+//! cannot act, meet an accuracy budget (Auto's scheme from f64 calibration runs), resolve the
+//! integrator (Auto, and Exact's preconditions), analyse stability,
 //! decide whether particles need state at all, and decide the particle layout.
 
+pub mod accuracy;
 pub mod fold;
 pub mod integrator;
 pub mod layout;
@@ -22,8 +24,12 @@ pub fn run(
 ) -> Result<(Layout, Vec<(Diagnostic, String)>), Checker> {
     fold::fold(ir);
     prune::prune(ir);
+    // A budget picks the scheme before Auto's default does (and leaves Exact to it).
+    let exact_possible = integrator::exact_blocker(ir, force_names).is_none();
+    let budget_warning = accuracy::choose(ir, exact_possible)?;
     integrator::resolve(ir, force_names)?;
     let mut warnings = stability::analyse(ir, force_names);
+    warnings.extend(budget_warning);
     // A baked field with nothing to hold (no attractor, vortex or noise left) is dropped, so
     // the effect pays for no grid.
     if ir.field.is_some() && !ir.terms.iter().any(|t| t.as_dyn().bakeable()) {

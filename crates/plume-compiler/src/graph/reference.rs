@@ -2,8 +2,8 @@
 //! them delivered as the GPU delivers them (crate::features::events): at the start of each step, every
 //! stream in order spawns the children of the last step's firings, then every group steps.
 
-use super::{ParticleRecord, ReferenceSim, Totals};
 use crate::graph::{CompiledGraph, Stream};
+use crate::reference::{ParticleRecord, ReferenceSim, Totals};
 
 /// Runs a compiled graph on the CPU in f64.
 #[derive(Clone, Debug)]

@@ -5,6 +5,10 @@
 //! `camera`. Each group compiles to a [`CompiledEffect`] of its own, with the bindings its
 //! events need; [`CompiledGraph`] ties them together with the event streams.
 
+pub mod reference;
+
+pub use reference::ReferenceGraph;
+
 use crate::base::check::Checker;
 use crate::base::diagnostics::{Diagnostic, Diagnostics};
 use crate::base::locate::SourceMap;

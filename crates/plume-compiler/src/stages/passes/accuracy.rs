@@ -1,0 +1,215 @@
+//! The accuracy pass (`features::accuracy`): with a budget, `integrator: Auto` becomes the
+//! cheapest scheme (integrator and substeps, counted in force evaluations a step) whose f64
+//! error over sample particles stays within half the budget (the other half is left to f32's
+//! rounding on the GPU). Exact wherever a closed form exists: it is exact at any step. An
+//! integrator the file names is kept, and its error estimated for the note.
+//!
+//! The error model: each integrator's error falls as h^p. The search runs the sample at the
+//! file's substeps s and at 2s, takes the observed order p from the two errors, predicts the
+//! substeps that bring the error under the target, runs that, and corrects the prediction by
+//! the same model until it holds (or the substeps pass `MAX_SUBSTEPS`). Every error is measured
+//! against the converged RK4 truth (`reference::calibrate::truth`), plus the truth's own
+//! uncertainty.
+
+use std::time::Instant;
+
+use crate::base::check::Checker;
+use crate::base::diagnostics::Diagnostic;
+use crate::base::path::ValuePath;
+use crate::base::values::Integrator;
+use crate::features::accuracy::{Choice, Scheme};
+use crate::ir::EffectIr;
+use crate::reference::calibrate::{self, MAX_SUBSTEPS};
+
+/// The share of the budget the f64 error may take: the rest is f32's.
+const F64_SHARE: f64 = 0.5;
+
+/// The integrators the search compares (Euler costs what SemiImplicitEuler costs and is less
+/// accurate on every force here, so it is never the cheapest).
+const CANDIDATES: [Integrator; 4] = [
+    Integrator::SemiImplicitEuler,
+    Integrator::Verlet,
+    Integrator::Midpoint,
+    Integrator::Rk4,
+];
+
+/// Chooses how to meet `ir.accuracy`, when there is one (before the integrator pass, which then
+/// finds a concrete integrator or Exact). `exact_possible`: whether the closed form applies.
+/// Returns a warning (with its lookup path) when the file's own scheme misses the budget; an
+/// error when no scheme meets it.
+pub fn choose(
+    ir: &mut EffectIr,
+    exact_possible: bool,
+) -> Result<Option<(Diagnostic, String)>, Checker> {
+    let Some(budget) = ir.accuracy.clone() else {
+        return Ok(None);
+    };
+    let path = ValuePath::root().field("accuracy").field("position");
+    let choice = |ir: &mut EffectIr, choice: Choice| {
+        if let Some(a) = &mut ir.accuracy {
+            a.choice = Some(choice);
+        }
+    };
+    let auto = ir.integrator == Integrator::Auto;
+    if ir.integrator == Integrator::Exact || (auto && exact_possible) {
+        choice(ir, Choice::Exact);
+        return Ok(None);
+    }
+    let file_scheme = Scheme {
+        integrator: if auto {
+            Integrator::SemiImplicitEuler
+        } else {
+            ir.integrator
+        },
+        substeps: ir.substeps,
+    };
+    let started = Instant::now();
+    let steps = calibrate::window_steps(ir, budget.over);
+    let (truth, uncertainty) = calibrate::truth(ir, budget.position, steps, calibrate::SAMPLES);
+    let samples = truth.particles();
+    if samples == 0 {
+        choice(
+            ir,
+            Choice::Uncalibrated {
+                scheme: file_scheme,
+            },
+        );
+        return Ok(None);
+    }
+    let error = |scheme: Scheme| {
+        calibrate::run(ir, scheme, steps, calibrate::SAMPLES).max_distance(&truth) + uncertainty
+    };
+    if !auto {
+        let estimated = error(file_scheme);
+        choice(
+            ir,
+            Choice::Kept {
+                scheme: file_scheme,
+                estimated: Some(estimated),
+            },
+        );
+        let warning = (estimated > budget.position).then(|| {
+            (
+                Diagnostic::warning(
+                    path.display.clone(),
+                    format!(
+                        "{} (the file's) strays {estimated:.1e} m from the exact trajectory over {} s, more than the budget's {:.1e} m: `integrator: Auto` would choose a scheme that meets it",
+                        file_scheme.describe(),
+                        budget.over,
+                        budget.position
+                    ),
+                ),
+                path.lookup.clone(),
+            )
+        });
+        return Ok(warning);
+    }
+    let target = budget.position * F64_SHARE;
+    // f32's own floor: a position's rounding (2^-24 of its size), a random walk over the steps.
+    let floor = truth.extent() * f64::from(f32::EPSILON) * 0.5 * (steps as f64).sqrt();
+    if budget.position < 2.0 * floor {
+        let mut c = Checker::default();
+        c.error(
+            &path,
+            format!(
+                "{:.1e} m is below what f32 positions hold here: rounding alone moves these particles (up to {:.1} m from the origin) by about {floor:.1e} m over {steps} steps; the smallest budget that can be met is about {:.1e} m",
+                budget.position,
+                truth.extent(),
+                2.0 * floor
+            ),
+        );
+        return Err(c);
+    }
+    let mut met: Vec<(Scheme, f64)> = Vec::new();
+    let mut best_missed: Option<(Scheme, f64)> = None;
+    for integrator in CANDIDATES {
+        match search(integrator, ir.substeps.max(1), target, &error) {
+            Ok(found) => met.push(found),
+            Err(missed) => {
+                if best_missed.is_none_or(|(_, e)| missed.1 < e) {
+                    best_missed = Some(missed);
+                }
+            }
+        }
+    }
+    met.sort_by(|a, b| {
+        a.0.evaluations()
+            .cmp(&b.0.evaluations())
+            .then(a.1.total_cmp(&b.1))
+    });
+    let millis = started.elapsed().as_secs_f64() * 1e3;
+    let Some(&(scheme, estimated)) = met.first() else {
+        let (scheme, e) = best_missed.expect("four candidates were searched");
+        let mut c = Checker::default();
+        c.error(
+            &path,
+            format!(
+                "no integrator keeps within {:.1e} m over {} s with at most {MAX_SUBSTEPS} substeps: the closest, {}, strays {e:.1e} m in f64 (f32 alone rounds these positions by about {floor:.1e} m); raise the budget or shorten `over`",
+                budget.position,
+                budget.over,
+                scheme.describe()
+            ),
+        );
+        return Err(c);
+    };
+    let runner_up = met
+        .iter()
+        .find(|(s, _)| s.integrator != scheme.integrator)
+        .copied();
+    ir.integrator = scheme.integrator;
+    ir.substeps = scheme.substeps;
+    choice(
+        ir,
+        Choice::Stepped {
+            scheme,
+            estimated,
+            runner_up,
+            samples,
+            millis,
+        },
+    );
+    ir.integrator_reason = ir.accuracy.as_ref().map(|a| a.reason()).unwrap_or_default();
+    Ok(None)
+}
+
+/// The fewest substeps (from `first`) at which `integrator` keeps `error` within `target`, with
+/// that error; or, where none up to `MAX_SUBSTEPS` does, the closest it came.
+fn search(
+    integrator: Integrator,
+    first: u32,
+    target: f64,
+    error: &dyn Fn(Scheme) -> f64,
+) -> Result<(Scheme, f64), (Scheme, f64)> {
+    let scheme = |substeps: u32| Scheme {
+        integrator,
+        substeps: substeps.min(MAX_SUBSTEPS),
+    };
+    let e1 = error(scheme(first));
+    if e1 <= target {
+        return Ok((scheme(first), e1));
+    }
+    if first >= MAX_SUBSTEPS {
+        return Err((scheme(first), e1));
+    }
+    let second = (2 * first).min(MAX_SUBSTEPS);
+    let e2 = error(scheme(second));
+    // The observed order, kept sensible where rounding or a contact blurs it.
+    let order = (e1 / e2.max(f64::MIN_POSITIVE)).log2().clamp(0.5, 6.0);
+    let (mut substeps, mut e) = (second, e2);
+    for _ in 0..5 {
+        if e <= target {
+            return Ok((scheme(substeps), e));
+        }
+        if substeps >= MAX_SUBSTEPS {
+            break;
+        }
+        let predicted = f64::from(substeps) * (e / target).powf(1.0 / order) * 1.05;
+        substeps = (predicted.ceil() as u32).clamp(substeps + 1, MAX_SUBSTEPS);
+        e = error(scheme(substeps));
+    }
+    if e <= target {
+        Ok((scheme(substeps), e))
+    } else {
+        Err((scheme(substeps), e))
+    }
+}

@@ -1,0 +1,160 @@
+//! Accuracy budgets (`accuracy: (position, over)`): the compiler chooses the cheapest scheme
+//! that keeps each particle within the budget of its exact trajectory, and the GPU run keeps
+//! it. For a stiff attractor whose particles fall through its core, a custom spring and
+//! bouncing particles (no closed form), budgets from 1e-1 to 1e-4 m each hold on the GPU
+//! (llvmpipe) against the f64 truth; a looser budget never costs more force evaluations a step;
+//! a budget met by the closed form never steps (linear drag with k·dt from 0.01 to 2); and a
+//! budget below f32's floor is an error that says what can be met.
+
+mod common;
+
+use common::*;
+use plume::compiler::accuracy::Choice;
+use plume::runtime::bench::check_budget;
+use plume::{compile_str, CompileOptions};
+
+/// An effect of 64 particles with `forces`, `collide` and `budget` metres over 1 s.
+fn effect(forces: &str, extra: &str, budget: f64) -> String {
+    format!(
+        r#"Effect(
+    name: "budget",
+    capacity: 64,
+    seed: 3,
+    emitters: [Emitter(burst: 64, shape: Box(min: (1.5, -0.5, -0.5), max: (2.5, 0.5, 0.5)),
+                       velocity: Constant((-1.0, 0.0, 0.3)))],
+    forces: [{forces}],
+    {extra}
+    accuracy: (position: {budget:e}, over: 1.0),
+)"#
+    )
+}
+
+/// The stiff and the smooth cases with no closed form, and the budgets each is held to
+/// (tightest first). Contacts converge at first order in the substep, the truth's too, so
+/// bouncing particles are held to 1 cm at best (below, the next test).
+const STEPPED: [(&str, &str, &str, &[f64]); 3] = [
+    (
+        "attractor through its core",
+        "Attractor(center: (0.0, 0.0, 0.0), range: 4.0, strength: 30.0, core: 0.2)",
+        "",
+        &[1e-4, 1e-3, 1e-2, 1e-1],
+    ),
+    (
+        "custom spring",
+        r#"Custom(accel: "-40.0 * x - 0.5 * v")"#,
+        "",
+        &[1e-4, 1e-3, 1e-2, 1e-1],
+    ),
+    (
+        "bouncing on a plane",
+        "Gravity((0.0, -9.81, 0.0)), Drag(k: 0.3)",
+        BOUNCE,
+        &[1e-2, 1e-1],
+    ),
+];
+
+const BOUNCE: &str = "collide: [Plane(point: (0.0, -1.0, 0.0), normal: (0.0, 1.0, 0.0), restitution: 0.6, friction: 0.1)],";
+
+#[test]
+fn each_budget_holds_on_the_gpu_and_a_looser_one_never_costs_more() {
+    let gpu = gpu();
+    for (what, forces, extra, budgets) in STEPPED {
+        let mut last_cost = 0;
+        // Tightest first: each looser budget may cost no more than the one before it.
+        for &budget in budgets {
+            let src = effect(forces, extra, budget);
+            let compiled = compile_str(&src, &CompileOptions::default())
+                .unwrap_or_else(|e| panic!("{what} {budget}: {}", e.render("budget.ron", &src)));
+            let chosen = compiled.ir.accuracy.clone().unwrap();
+            let Some(Choice::Stepped {
+                scheme, estimated, ..
+            }) = chosen.choice
+            else {
+                panic!("{what}: {:?}", chosen.choice)
+            };
+            assert!(estimated <= budget / 2.0, "{what}: {}", chosen.describe());
+            assert_eq!(compiled.ir.integrator, scheme.integrator);
+            assert_eq!(compiled.ir.substeps, scheme.substeps);
+            if last_cost > 0 {
+                assert!(
+                    scheme.evaluations() <= last_cost,
+                    "{what}: {budget} m costs {} evaluations, a tighter budget {last_cost}",
+                    scheme.evaluations()
+                );
+            }
+            last_cost = scheme.evaluations();
+            let effect = plume::compiler::parse_with(&src, &CompileOptions::default()).unwrap();
+            let check = check_budget(&gpu, &effect).unwrap().expect("a budget");
+            assert!(
+                check.met() && check.particles == 64,
+                "{what}: {} measured {:.3e} m on the GPU against {budget:e} m",
+                chosen.describe(),
+                check.measured
+            );
+        }
+    }
+}
+
+#[test]
+fn a_budget_the_closed_form_meets_never_steps() {
+    let gpu = gpu();
+    // Linear drag from gentle to stiff for explicit schemes (k dt = 2 diverges with Euler).
+    for k_dt in [0.01, 0.1, 1.0, 2.0] {
+        let k = k_dt * 60.0;
+        let src = effect(
+            &format!("Gravity((0.0, -9.81, 0.0)), Drag(k: {k})"),
+            "",
+            1e-4,
+        );
+        let compiled = compile_str(&src, &CompileOptions::default()).unwrap();
+        let chosen = compiled.ir.accuracy.clone().unwrap();
+        assert_eq!(chosen.choice, Some(Choice::Exact), "k dt {k_dt}");
+        assert!(
+            compiled.ir.stateless.is_some(),
+            "k dt {k_dt}: {}",
+            compiled.ir.state_reason
+        );
+        let effect = plume::compiler::parse_with(&src, &CompileOptions::default()).unwrap();
+        let check = check_budget(&gpu, &effect).unwrap().unwrap();
+        assert!(check.met(), "k dt {k_dt}: {:.3e} m", check.measured);
+    }
+}
+
+#[test]
+fn a_budget_below_what_f32_holds_is_an_error_that_says_what_can_be_met() {
+    let src = effect(STEPPED[0].1, "", 1e-8);
+    let error = compile_str(&src, &CompileOptions::default())
+        .unwrap_err()
+        .render("budget.ron", &src);
+    assert!(
+        error.contains("budget.ron:9:26: error: accuracy.position: 1.0e-8 m is below what f32 positions hold here")
+            && error.contains("the smallest budget that can be met is about"),
+        "{error}"
+    );
+    let bad = effect(STEPPED[0].1, "", -1.0);
+    let error = compile_str(&bad, &CompileOptions::default())
+        .unwrap_err()
+        .render("budget.ron", &bad);
+    assert!(error.contains("accuracy.position"), "{error}");
+    // Bouncing particles within a millimetre: no scheme gets there in 64 substeps.
+    let src = effect(STEPPED[2].1, BOUNCE, 1e-3);
+    let error = compile_str(&src, &CompileOptions::default())
+        .unwrap_err()
+        .render("budget.ron", &src);
+    assert!(
+        error.contains("accuracy.position: no integrator keeps within 1.0e-3 m over 1 s with at most 64 substeps: the closest, "),
+        "{error}"
+    );
+}
+
+#[test]
+fn a_scheme_the_file_names_is_kept_and_a_warning_says_when_it_misses_the_budget() {
+    let src = effect(STEPPED[0].1, "integrator: Euler,", 1e-4);
+    let compiled = compile_str(&src, &CompileOptions::default()).unwrap();
+    assert_eq!(compiled.ir.integrator, plume::Integrator::Euler);
+    let warnings = compiled.warnings.render("budget.ron", &src);
+    assert!(
+        warnings.contains("accuracy.position: Euler x1 (the file's) strays"),
+        "{warnings}"
+    );
+}
