@@ -158,3 +158,50 @@ fn a_scheme_the_file_names_is_kept_and_a_warning_says_when_it_misses_the_budget(
         "{warnings}"
     );
 }
+
+#[test]
+fn a_pixel_budget_integrates_a_distant_effect_more_cheaply_and_both_stay_within_it() {
+    // A spring of half a metre seen from 2 m and from 200 m, half a pixel of a 720-pixel image
+    // allowed: the near one needs about 1 mm, the far one 10 cm.
+    let gpu = gpu();
+    let at = |distance: f64| {
+        format!(
+            r#"Effect(
+    name: "pixels",
+    capacity: 64,
+    seed: 3,
+    emitters: [Emitter(burst: 64, shape: Box(min: (0.3, -0.1, -0.1), max: (0.5, 0.1, 0.1)),
+                       velocity: Constant((-0.2, 0.0, 0.06)))],
+    forces: [Custom(accel: "-40.0 * x - 0.5 * v")],
+    camera: Camera(eye: (0.0, 0.0, {distance:?}), target: (0.0, 0.0, 0.0), fov_y: 45.0),
+    accuracy: (pixels: 0.5, height: 720, over: 1.0),
+)"#
+        )
+    };
+    let mut costs = Vec::new();
+    for distance in [2.0, 200.0] {
+        let src = at(distance);
+        let compiled = compile_str(&src, &CompileOptions::default())
+            .unwrap_or_else(|e| panic!("{}", e.render("pixels.ron", &src)));
+        let chosen = compiled.ir.accuracy.clone().unwrap();
+        let Some(Choice::Stepped { scheme, .. }) = chosen.choice else {
+            panic!("{distance} m: {:?}", chosen.choice)
+        };
+        assert!(chosen.describe().contains("px"), "{}", chosen.describe());
+        costs.push(scheme.evaluations());
+        let effect = plume::compiler::parse_with(&src, &CompileOptions::default()).unwrap();
+        let check = check_budget(&gpu, &effect).unwrap().unwrap();
+        assert!(
+            check.met() && check.unit == "px",
+            "{distance} m: {} measured {:.3} px",
+            chosen.describe(),
+            check.measured
+        );
+    }
+    assert!(
+        costs[1] < costs[0],
+        "the far effect costs {} force evaluations a step, the near one {}",
+        costs[1],
+        costs[0]
+    );
+}

@@ -167,7 +167,7 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
             .collect();
         let budget_json = budget.as_ref().map(|b| {
             serde_json::json!({
-                "chosen": b.chosen, "budget": b.budget, "over": b.over, "measured": b.measured,
+                "chosen": b.chosen, "budget": b.budget, "unit": b.unit, "over": b.over, "measured": b.measured,
                 "truth_uncertainty": b.truth_uncertainty, "particles": b.particles,
                 "steps": b.steps, "met": b.met(),
             })
@@ -181,14 +181,15 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
         if let Some(b) = &budget {
             println!("{name}: {}", b.chosen);
             println!(
-                "budget: {} {:.3e} m measured on the GPU against {:.3e} m allowed, over the first {} s ({} steps) of {} particles (the f64 truth within {:.1e} m)",
+                "budget: {} {:.3e} {u} measured on the GPU against {:.3e} {u} allowed, over the first {} s ({} steps) of {} particles (the f64 truth within {:.1e} {u})",
                 if b.met() { "met:" } else { "EXCEEDED:" },
                 b.measured,
                 b.budget,
                 b.over,
                 b.steps,
                 b.particles,
-                b.truth_uncertainty
+                b.truth_uncertainty,
+                u = b.unit,
             );
         }
         println!("{name}: position error after {duration:.4} s against {reference}");
@@ -233,8 +234,10 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
     match budget {
         Some(b) if !b.met() => {
             eprintln!(
-                "{name}: error: the accuracy budget is exceeded: {:.3e} m against {:.3e} m",
-                b.measured, b.budget
+                "{name}: error: the accuracy budget is exceeded: {:.3e} {u} against {:.3e} {u}",
+                b.measured,
+                b.budget,
+                u = b.unit
             );
             ExitCode::FAILURE
         }

@@ -4,6 +4,7 @@
 //! `stages::passes::accuracy` from f64 runs of sample particles (`reference::calibrate`), and
 //! `plume accuracy` checks the budget on the GPU.
 
+use glam::DVec3;
 use serde::{Deserialize, Deserializer};
 
 use crate::base::check::Checker;
@@ -11,12 +12,21 @@ use crate::base::path::ValuePath;
 use crate::base::values::Integrator;
 
 /// An accuracy budget: each particle's position stays within `position` metres of its exact
-/// (f64) trajectory over the first `over` seconds of its life (or its whole life, if shorter).
+/// (f64) trajectory, or its image within `pixels` of the exact one's as the effect's camera
+/// sees it in an image `height` pixels tall, over the first `over` seconds of its life (or
+/// its whole life, if shorter). One of `position` and `pixels`.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Accuracy {
     /// The largest distance (m) from the exact trajectory.
-    pub position: f64,
+    #[serde(default, deserialize_with = "plain_some")]
+    pub position: Option<f64>,
+    /// The largest distance on screen (pixels) from the exact trajectory's image.
+    #[serde(default, deserialize_with = "plain_some")]
+    pub pixels: Option<f64>,
+    /// The image height (pixels) a pixel budget is for.
+    #[serde(default = "default_height")]
+    pub height: u32,
     /// Seconds of each particle's life the budget covers.
     #[serde(default = "default_over")]
     pub over: f64,
@@ -24,6 +34,15 @@ pub struct Accuracy {
 
 fn default_over() -> f64 {
     4.0
+}
+
+fn default_height() -> u32 {
+    720
+}
+
+/// An optional number written without `Some`.
+fn plain_some<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    f64::deserialize(d).map(Some)
 }
 
 /// Reads `accuracy: (position: .., over: ..)` (or `Accuracy(..)`) as a budget: the field is
@@ -34,15 +53,43 @@ pub fn deserialize_budget<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Accu
 
 /// Checks a budget at `path`.
 pub fn check(c: &mut Checker, path: &ValuePath, budget: &Accuracy) {
-    c.positive(&path.field("position"), budget.position);
+    match (budget.position, budget.pixels) {
+        (Some(p), None) => c.positive(&path.field("position"), p),
+        (None, Some(p)) => c.positive(&path.field("pixels"), p),
+        (Some(_), Some(_)) => c.error(
+            &path.field("pixels"),
+            "a budget is in metres (`position`) or on screen (`pixels`), not both",
+        ),
+        (None, None) => c.error(
+            path,
+            "a budget needs `position` (metres) or `pixels` (on screen through the effect's camera)",
+        ),
+    }
+    if budget.height == 0 {
+        c.error(&path.field("height"), "must be at least 1 pixel");
+    }
     c.positive(&path.field("over"), budget.over);
+}
+
+/// What a budget is measured in.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Measure {
+    /// Metres, anywhere.
+    Metres,
+    /// Pixels of an image this many pixels tall, through the effect's camera.
+    Pixels {
+        /// The image's height.
+        height: u32,
+    },
 }
 
 /// The budget, lowered, with what was chosen to meet it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AccuracyIr {
-    /// The largest distance (m) from the exact trajectory.
-    pub position: f64,
+    /// The largest error, in `measure`'s unit.
+    pub limit: f64,
+    /// What the error is measured in.
+    pub measure: Measure,
     /// Seconds of each particle's life it covers.
     pub over: f64,
     /// What the compiler chose and why; None until the accuracy pass has run.
@@ -50,12 +97,89 @@ pub struct AccuracyIr {
 }
 
 impl Accuracy {
-    /// The lowered budget, nothing chosen yet.
+    /// The lowered budget, nothing chosen yet (checked: one of `position` and `pixels`).
     pub fn lower(&self) -> AccuracyIr {
+        let (limit, measure) = match (self.position, self.pixels) {
+            (_, Some(px)) => (
+                px,
+                Measure::Pixels {
+                    height: self.height,
+                },
+            ),
+            (p, None) => (p.unwrap_or(0.0), Measure::Metres),
+        };
         AccuracyIr {
-            position: self.position,
+            limit,
+            measure,
             over: self.over,
             choice: None,
+        }
+    }
+}
+
+/// Where a camera puts points in an image: the pixel distance between two points' images (a
+/// pinhole camera looking from `eye` at `target`, `fov_y` degrees tall, `height` pixels tall).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Screen {
+    eye: DVec3,
+    forward: DVec3,
+    right: DVec3,
+    up: DVec3,
+    /// Pixels per unit of (lateral offset / depth).
+    scale: f64,
+}
+
+impl Screen {
+    /// The camera at `eye` looking at `target` (world up +y; +z where it looks straight up or
+    /// down).
+    pub fn new(eye: DVec3, target: DVec3, fov_y: f64, height: u32) -> Self {
+        let forward = (target - eye).try_normalize().unwrap_or(DVec3::NEG_Z);
+        let right = forward
+            .cross(DVec3::Y)
+            .try_normalize()
+            .unwrap_or_else(|| forward.cross(DVec3::Z).normalize());
+        Self {
+            eye,
+            forward,
+            right,
+            up: right.cross(forward),
+            scale: f64::from(height) / (2.0 * (fov_y.to_radians() / 2.0).tan()),
+        }
+    }
+
+    /// The depth of `x` along the view axis (m).
+    pub fn depth(&self, x: DVec3) -> f64 {
+        (x - self.eye).dot(self.forward)
+    }
+
+    /// `x`'s image in pixels from the image's centre; None behind or at the eye (not drawn).
+    fn image(&self, x: DVec3) -> Option<(f64, f64)> {
+        let d = x - self.eye;
+        let z = d.dot(self.forward);
+        (z > 1e-6).then(|| {
+            (
+                self.scale * d.dot(self.right) / z,
+                self.scale * d.dot(self.up) / z,
+            )
+        })
+    }
+
+    /// The pixel distance between `a`'s and `b`'s images; 0 where either is not in front of
+    /// the camera.
+    pub fn pixels(&self, a: DVec3, b: DVec3) -> f64 {
+        match (self.image(a), self.image(b)) {
+            (Some(p), Some(q)) => ((p.0 - q.0).powi(2) + (p.1 - q.1).powi(2)).sqrt(),
+            _ => 0.0,
+        }
+    }
+
+    /// Pixels a lateral shift of `metres` at `x` moves its image by (0 behind the camera).
+    pub fn pixels_of(&self, metres: f64, x: DVec3) -> f64 {
+        let z = self.depth(x);
+        if z > 1e-6 {
+            self.scale * metres / z
+        } else {
+            0.0
         }
     }
 }
@@ -129,16 +253,36 @@ pub enum Choice {
 }
 
 impl AccuracyIr {
+    /// The unit of the budget and its estimates: `m` or `px`.
+    pub fn unit(&self) -> &'static str {
+        match self.measure {
+            Measure::Metres => "m",
+            Measure::Pixels { .. } => "px",
+        }
+    }
+
+    /// `1.0e-2 m over 4 s`, or `5.0e-1 px (a 720-pixel image from the effect's camera) over 4 s`.
+    pub fn budget(&self) -> String {
+        match self.measure {
+            Measure::Metres => format!("{:.1e} m over {} s", self.limit, self.over),
+            Measure::Pixels { height } => format!(
+                "{:.1e} px (a {height}-pixel image from the effect's camera) over {} s",
+                self.limit, self.over
+            ),
+        }
+    }
+
     /// What was chosen, for the IR print and the WGSL's header: [`Self::describe`] without the
     /// runner-up and the calibration's time, so that it is the same on every run.
     pub fn reason(&self) -> String {
-        let budget = format!("{:.1e} m over {} s", self.position, self.over);
+        let budget = self.budget();
         match &self.choice {
             Some(Choice::Stepped {
                 scheme, estimated, ..
             }) => format!(
-                "Auto with a budget of {budget}: {}, estimated {estimated:.1e} m in f64",
-                scheme.describe()
+                "Auto with a budget of {budget}: {}, estimated {estimated:.1e} {} in f64",
+                scheme.describe(),
+                self.unit()
             ),
             _ => self.describe(),
         }
@@ -146,7 +290,8 @@ impl AccuracyIr {
 
     /// The line `plume check` and `plume compile` print: what was chosen, with numbers.
     pub fn describe(&self) -> String {
-        let budget = format!("{:.1e} m over {} s", self.position, self.over);
+        let budget = self.budget();
+        let unit = self.unit();
         match &self.choice {
             None => format!("budget {budget}: not yet chosen"),
             Some(Choice::Exact) => {
@@ -164,12 +309,12 @@ impl AccuracyIr {
                     n => format!("{n} force evaluations"),
                 };
                 let mut line = format!(
-                    "accuracy: {}, estimated {estimated:.1e} m of {budget} ({evaluations} a step)",
+                    "accuracy: {}, estimated {estimated:.1e} {unit} of {budget} ({evaluations} a step)",
                     scheme.describe()
                 );
                 if let Some((other, e)) = runner_up {
                     line += &format!(
-                        "; {} would cost {:.1}x (estimated {e:.1e} m)",
+                        "; {} would cost {:.1}x (estimated {e:.1e} {unit})",
                         other.describe(),
                         f64::from(other.evaluations()) / f64::from(scheme.evaluations())
                     );
@@ -179,7 +324,7 @@ impl AccuracyIr {
             }
             Some(Choice::Kept { scheme, estimated }) => match estimated {
                 Some(e) => format!(
-                    "accuracy: {} as the file says, estimated {e:.1e} m of {budget}",
+                    "accuracy: {} as the file says, estimated {e:.1e} {unit} of {budget}",
                     scheme.describe()
                 ),
                 None => format!(

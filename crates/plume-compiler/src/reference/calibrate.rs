@@ -19,15 +19,6 @@ use crate::reference::sim::ReferenceSim;
 /// Particles a calibration follows.
 pub const SAMPLES: u32 = 64;
 
-/// The trajectories' positions, step by step, for a run made elsewhere (the GPU's).
-impl FromIterator<HashMap<u32, DVec3>> for Trajectories {
-    fn from_iter<I: IntoIterator<Item = HashMap<u32, DVec3>>>(steps: I) -> Self {
-        Self {
-            steps: steps.into_iter().collect(),
-        }
-    }
-}
-
 /// The most substeps a budget may ask of a scheme (and of the truth).
 pub const MAX_SUBSTEPS: u32 = 64;
 
@@ -49,26 +40,38 @@ impl Trajectories {
         ids.len()
     }
 
-    /// The largest distance from the origin of any followed position (m).
-    pub fn extent(&self) -> f64 {
+    /// The largest `f` of any followed position.
+    pub fn max_of(&self, f: &dyn Fn(DVec3) -> f64) -> f64 {
         self.steps
             .iter()
             .flat_map(|s| s.values())
-            .map(|x| x.length())
+            .map(|x| f(*x))
             .fold(0.0, f64::max)
     }
 
-    /// The largest distance between the same particle's positions in `self` and `other` at
-    /// the end of the same step (particles followed in both).
-    pub fn max_distance(&self, other: &Trajectories) -> f64 {
+    /// The largest distance, as `metric` measures it, between the same particle's positions
+    /// in `self` and `other` at the end of the same step (particles followed in both).
+    pub fn max_distance(&self, other: &Trajectories, metric: &Metric) -> f64 {
         self.steps
             .iter()
             .zip(&other.steps)
             .flat_map(|(a, b)| {
                 a.iter()
-                    .filter_map(|(id, x)| b.get(id).map(|y| (*x - *y).length()))
+                    .filter_map(|(id, x)| b.get(id).map(|y| metric(*x, *y)))
             })
             .fold(0.0, f64::max)
+    }
+}
+
+/// How far apart two positions are, in a budget's unit (metres, or pixels on screen).
+pub type Metric = dyn Fn(DVec3, DVec3) -> f64;
+
+/// The trajectories' positions, step by step, for a run made elsewhere (the GPU's).
+impl FromIterator<HashMap<u32, DVec3>> for Trajectories {
+    fn from_iter<I: IntoIterator<Item = HashMap<u32, DVec3>>>(steps: I) -> Self {
+        Self {
+            steps: steps.into_iter().collect(),
+        }
     }
 }
 
@@ -101,13 +104,19 @@ pub fn run(ir: &EffectIr, scheme: Scheme, steps: u64, particles: u32) -> Traject
     out
 }
 
-/// The truth for a budget of `position` metres over `steps` steps of the first `particles`:
-/// RK4 with its substeps
+/// The truth for a budget of `limit` (as `metric` measures) over `steps` steps of the first
+/// `particles`: RK4 with its substeps
 /// doubled until two in a row agree within a fiftieth of the budget (from 8), or up to
 /// `TRUTH_MAX_SUBSTEPS`. Returns the finer run and how far it may be from the exact
 /// trajectory: the last difference over 15 (RK4's error falls 16-fold a doubling), or the
 /// difference itself where it did not converge.
-pub fn truth(ir: &EffectIr, position: f64, steps: u64, particles: u32) -> (Trajectories, f64) {
+pub fn truth(
+    ir: &EffectIr,
+    limit: f64,
+    steps: u64,
+    particles: u32,
+    metric: &Metric,
+) -> (Trajectories, f64) {
     let rk4 = |substeps| Scheme {
         integrator: Integrator::Rk4,
         substeps,
@@ -116,8 +125,8 @@ pub fn truth(ir: &EffectIr, position: f64, steps: u64, particles: u32) -> (Traje
     let mut coarse = run(ir, rk4(substeps), steps, particles);
     loop {
         let fine = run(ir, rk4(2 * substeps), steps, particles);
-        let difference = coarse.max_distance(&fine);
-        if difference <= position / 50.0 {
+        let difference = coarse.max_distance(&fine, metric);
+        if difference <= limit / 50.0 {
             return (fine, difference / 15.0);
         }
         if 2 * substeps >= TRUTH_MAX_SUBSTEPS {

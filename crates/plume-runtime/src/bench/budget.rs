@@ -5,6 +5,7 @@
 //! converged RK4 of `plume_compiler::reference::calibrate`).
 
 use plume_compiler::accuracy::{Choice, Scheme};
+use plume_compiler::passes::accuracy::measures;
 use plume_compiler::reference::calibrate::{self, Trajectories};
 use plume_compiler::{compile_effect, Effect, Integrator};
 
@@ -20,13 +21,15 @@ pub const CHECKED: u32 = 256;
 pub struct BudgetCheck {
     /// What the compiler chose and why (`AccuracyIr::describe`).
     pub chosen: String,
-    /// The budget (m).
+    /// The budget, in `unit`.
     pub budget: f64,
+    /// `m`, or `px` for a budget on screen.
+    pub unit: &'static str,
     /// Seconds of each particle's life it covers.
     pub over: f64,
-    /// The largest distance between a GPU position and the truth's (m).
+    /// The largest distance between a GPU position and the truth's, in `unit`.
     pub measured: f64,
-    /// How far the truth itself may be from the exact trajectory (m).
+    /// How far the truth itself may be from the exact trajectory, in `unit`.
     pub truth_uncertainty: f64,
     /// Particles compared.
     pub particles: usize,
@@ -55,6 +58,7 @@ pub fn check_budget(gpu: &Gpu, effect: &Effect) -> Result<Option<BudgetCheck>, R
         return Ok(None);
     };
     let steps = calibrate::window_steps(&ir, budget.over);
+    let (metric, _) = measures(&ir, &budget);
     let (truth, truth_uncertainty) = match budget.choice {
         Some(Choice::Exact) => {
             let exact = Scheme {
@@ -63,7 +67,7 @@ pub fn check_budget(gpu: &Gpu, effect: &Effect) -> Result<Option<BudgetCheck>, R
             };
             (calibrate::run(&ir, exact, steps, CHECKED), 0.0)
         }
-        _ => calibrate::truth(&ir, budget.position, steps, CHECKED),
+        _ => calibrate::truth(&ir, budget.limit, steps, CHECKED, &*metric),
     };
     let window = steps as f64 * ir.dt + 0.5 * ir.dt;
     let mut sim = RunningEffect::new(gpu, compiled)?;
@@ -81,9 +85,10 @@ pub fn check_budget(gpu: &Gpu, effect: &Effect) -> Result<Option<BudgetCheck>, R
     let on_gpu: Trajectories = on_gpu.into_iter().collect();
     Ok(Some(BudgetCheck {
         chosen: budget.describe(),
-        budget: budget.position,
+        budget: budget.limit,
+        unit: budget.unit(),
         over: budget.over,
-        measured: on_gpu.max_distance(&truth),
+        measured: on_gpu.max_distance(&truth, &*metric),
         truth_uncertainty,
         particles: truth.particles(),
         steps,

@@ -17,9 +17,9 @@ use crate::base::check::Checker;
 use crate::base::diagnostics::Diagnostic;
 use crate::base::path::ValuePath;
 use crate::base::values::Integrator;
-use crate::features::accuracy::{Choice, Scheme};
+use crate::features::accuracy::{AccuracyIr, Choice, Measure, Scheme, Screen};
 use crate::ir::EffectIr;
-use crate::reference::calibrate::{self, MAX_SUBSTEPS};
+use crate::reference::calibrate::{self, Metric, MAX_SUBSTEPS};
 
 /// The share of the budget the f64 error may take: the rest is f32's.
 const F64_SHARE: f64 = 0.5;
@@ -44,7 +44,14 @@ pub fn choose(
     let Some(budget) = ir.accuracy.clone() else {
         return Ok(None);
     };
-    let path = ValuePath::root().field("accuracy").field("position");
+    let path = ValuePath::root()
+        .field("accuracy")
+        .field(match budget.measure {
+            Measure::Metres => "position",
+            Measure::Pixels { .. } => "pixels",
+        });
+    let unit = budget.unit();
+    let (metric, floor_at) = measures(ir, &budget);
     let choice = |ir: &mut EffectIr, choice: Choice| {
         if let Some(a) = &mut ir.accuracy {
             a.choice = Some(choice);
@@ -65,7 +72,8 @@ pub fn choose(
     };
     let started = Instant::now();
     let steps = calibrate::window_steps(ir, budget.over);
-    let (truth, uncertainty) = calibrate::truth(ir, budget.position, steps, calibrate::SAMPLES);
+    let (truth, uncertainty) =
+        calibrate::truth(ir, budget.limit, steps, calibrate::SAMPLES, &*metric);
     let samples = truth.particles();
     if samples == 0 {
         choice(
@@ -77,7 +85,8 @@ pub fn choose(
         return Ok(None);
     }
     let error = |scheme: Scheme| {
-        calibrate::run(ir, scheme, steps, calibrate::SAMPLES).max_distance(&truth) + uncertainty
+        calibrate::run(ir, scheme, steps, calibrate::SAMPLES).max_distance(&truth, &*metric)
+            + uncertainty
     };
     if !auto {
         let estimated = error(file_scheme);
@@ -88,15 +97,15 @@ pub fn choose(
                 estimated: Some(estimated),
             },
         );
-        let warning = (estimated > budget.position).then(|| {
+        let warning = (estimated > budget.limit).then(|| {
             (
                 Diagnostic::warning(
                     path.display.clone(),
                     format!(
-                        "{} (the file's) strays {estimated:.1e} m from the exact trajectory over {} s, more than the budget's {:.1e} m: `integrator: Auto` would choose a scheme that meets it",
+                        "{} (the file's) strays {estimated:.1e} {unit} from the exact trajectory over {} s, more than the budget's {:.1e} {unit}: `integrator: Auto` would choose a scheme that meets it",
                         file_scheme.describe(),
                         budget.over,
-                        budget.position
+                        budget.limit
                     ),
                 ),
                 path.lookup.clone(),
@@ -104,17 +113,18 @@ pub fn choose(
         });
         return Ok(warning);
     }
-    let target = budget.position * F64_SHARE;
+    let target = budget.limit * F64_SHARE;
     // f32's own floor: a position's rounding (2^-24 of its size), a random walk over the steps.
-    let floor = truth.extent() * f64::from(f32::EPSILON) * 0.5 * (steps as f64).sqrt();
-    if budget.position < 2.0 * floor {
+    let walk = f64::from(f32::EPSILON) * 0.5 * (steps as f64).sqrt();
+    let floor = truth.max_of(&|x| floor_at(x.length() * walk, x));
+    if budget.limit < 2.0 * floor {
         let mut c = Checker::default();
         c.error(
             &path,
             format!(
-                "{:.1e} m is below what f32 positions hold here: rounding alone moves these particles (up to {:.1} m from the origin) by about {floor:.1e} m over {steps} steps; the smallest budget that can be met is about {:.1e} m",
-                budget.position,
-                truth.extent(),
+                "{:.1e} {unit} is below what f32 positions hold here: rounding alone moves these particles (up to {:.1} m from the origin) by about {floor:.1e} {unit} over {steps} steps; the smallest budget that can be met is about {:.1e} {unit}",
+                budget.limit,
+                truth.max_of(&|x| x.length()),
                 2.0 * floor
             ),
         );
@@ -144,8 +154,8 @@ pub fn choose(
         c.error(
             &path,
             format!(
-                "no integrator keeps within {:.1e} m over {} s with at most {MAX_SUBSTEPS} substeps: the closest, {}, strays {e:.1e} m in f64 (f32 alone rounds these positions by about {floor:.1e} m); raise the budget or shorten `over`",
-                budget.position,
+                "no integrator keeps within {:.1e} {unit} over {} s with at most {MAX_SUBSTEPS} substeps: the closest, {}, strays {e:.1e} {unit} in f64 (f32 alone rounds these positions by about {floor:.1e} {unit}); raise the budget or shorten `over`",
+                budget.limit,
                 budget.over,
                 scheme.describe()
             ),
@@ -211,5 +221,30 @@ fn search(
         Ok((scheme(substeps), e))
     } else {
         Err((scheme(substeps), e))
+    }
+}
+
+/// How large a shift of some metres at a position is, in a budget's unit.
+pub type Scale = dyn Fn(f64, glam::DVec3) -> f64;
+
+/// How a budget measures an error between two positions, and how large a shift of some metres
+/// at a position is in its unit: metres themselves, or pixels through the effect's camera (a
+/// shift across the view at the position's depth, the most it can move the image).
+pub fn measures(
+    ir: &EffectIr,
+    budget: &AccuracyIr,
+) -> (Box<Metric>, Box<Scale>) {
+    match budget.measure {
+        Measure::Metres => (
+            Box::new(|a: glam::DVec3, b: glam::DVec3| (a - b).length()),
+            Box::new(|metres, _| metres),
+        ),
+        Measure::Pixels { height } => {
+            let screen = Screen::new(ir.camera.eye, ir.camera.target, ir.camera.fov_y, height);
+            (
+                Box::new(move |a, b| screen.pixels(a, b)),
+                Box::new(move |metres, x| screen.pixels_of(metres, x)),
+            )
+        }
     }
 }
