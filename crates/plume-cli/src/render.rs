@@ -34,9 +34,10 @@ pub struct RenderArgs {
     /// With a .png output: tile every frame into one contact sheet.
     #[arg(long)]
     sheet: bool,
-    /// How frames are drawn: `raster` (the render pipeline an embedding host uses) or `splat`
-    /// (compute shaders only, the same image; faster where raster units are few, as on an H100).
-    #[arg(long, value_enum, default_value_t = DrawMethod::Raster)]
+    /// How frames are drawn: `raster` (the render pipeline an embedding host uses), `splat`
+    /// (or `compute`: compute shaders only, the same image; faster where raster units are few,
+    /// as on an H100), or `auto`: the splat on a GPU where it draws the effect, else raster.
+    #[arg(long, value_enum, default_value_t = DrawMethod::Auto)]
     draw: DrawMethod,
     /// Leave out the scene: without it, the meshes the effect names (its mesh colliders and
     /// mesh emitters) are drawn, plain grey, behind and in front of the particles.
@@ -68,10 +69,46 @@ pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
 /// How `plume render` draws its frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum DrawMethod {
+    /// The compute splat where it is faster and draws the effect ([`DrawMethod::resolve`]),
+    /// else the render pipeline.
+    Auto,
     /// The render pipeline: the effect's draw module, as an embedding host draws it.
     Raster,
     /// The compute splat: the same image from compute shaders only.
+    #[value(alias = "compute")]
     Splat,
+}
+
+impl DrawMethod {
+    /// The method `auto` stands for on `gpu` for `graph` (without the scene's meshes when
+    /// `no_scene`), and why. The splat was 7 to 9 times faster than the raster pipeline for 10M
+    /// particles on an H100 (docs/performance.md) and slower on llvmpipe, whose raster path is
+    /// the CPU's; it draws one group of round, camera-facing, untextured sprites without glow,
+    /// trails or scene meshes.
+    fn resolve(self, gpu: &Gpu, graph: &CompiledGraph, no_scene: bool) -> (Self, String) {
+        if self != DrawMethod::Auto {
+            return (self, "as asked".into());
+        }
+        let ir = &graph.groups[0].effect.ir;
+        let why_not = if gpu.info.device_type == wgpu::DeviceType::Cpu {
+            Some("a CPU adapter rasterises faster than it splats")
+        } else if graph.groups.len() > 1 {
+            Some("the splat draws one group")
+        } else if !Splat::draws(ir) {
+            Some("the splat draws round camera-facing sprites only (no texture, glow, trail, size_y or orientation)")
+        } else if !no_scene && !ir.scene_triangles().is_empty() {
+            Some("the splat does not draw the scene's meshes")
+        } else {
+            None
+        };
+        match why_not {
+            Some(why) => (DrawMethod::Raster, format!("auto: {why}")),
+            None => (
+                DrawMethod::Splat,
+                "auto: a GPU adapter, where compute beats its raster units".into(),
+            ),
+        }
+    }
 }
 
 enum Format {
@@ -92,6 +129,14 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         backend: args.backend.clone(),
     })?;
     eprintln!("adapter: {}", gpu.describe());
+    let (draw, why) = args.draw.resolve(&gpu, &graph, args.no_scene);
+    eprintln!(
+        "draw: {} ({why})",
+        match draw {
+            DrawMethod::Splat => "the compute splat",
+            _ => "the raster pipeline",
+        }
+    );
     let (w, h) = args.size;
     // An effect that glows is drawn into an HDR image and bloomed (render.glow).
     let glow = graph.groups[0].effect.ir.render.glow;
@@ -101,7 +146,7 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         .iter()
         .flat_map(|g| g.effect.ir.scene_triangles())
         .collect();
-    let scene = match (args.no_scene, args.draw) {
+    let scene = match (args.no_scene, draw) {
         (false, DrawMethod::Raster) => {
             Scene::new(&gpu, &triangles, target.target().color_format, (w, h))?
         }
@@ -126,9 +171,9 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         // Soft particles fade where they meet the meshes.
         renderer.set_scene_depth(scene.depth_view());
     }
-    let mut splat = match args.draw {
+    let mut splat = match draw {
         DrawMethod::Splat => Some(Splat::new(&sim, w, h)?),
-        DrawMethod::Raster => None,
+        _ => None,
     };
     let camera = target.effect_camera(&sim);
     // A SceneDepth collider meets the scene's depth: the one drawn with the frames (drawn

@@ -230,10 +230,7 @@ pub type Scale = dyn Fn(f64, glam::DVec3) -> f64;
 /// How a budget measures an error between two positions, and how large a shift of some metres
 /// at a position is in its unit: metres themselves, or pixels through the effect's camera (a
 /// shift across the view at the position's depth, the most it can move the image).
-pub fn measures(
-    ir: &EffectIr,
-    budget: &AccuracyIr,
-) -> (Box<Metric>, Box<Scale>) {
+pub fn measures(ir: &EffectIr, budget: &AccuracyIr) -> (Box<Metric>, Box<Scale>) {
     match budget.measure {
         Measure::Metres => (
             Box::new(|a: glam::DVec3, b: glam::DVec3| (a - b).length()),
