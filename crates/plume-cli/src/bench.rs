@@ -376,6 +376,14 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                         .map(|(name, s)| format!("{name} {:.3}", s * 1e3))
                         .collect();
                     println!("      stages (ms)     {}", stages.join(", "));
+                    let (faster, ratio) = if seconds < d.draw {
+                        ("the compute splat", d.draw / seconds)
+                    } else {
+                        ("the raster pipeline", seconds / d.draw)
+                    };
+                    println!(
+                        "    faster here       {faster}, {ratio:.1}x (plume render --draw auto takes the splat on a GPU adapter, raster on a CPU one)"
+                    );
                 }
                 None => println!(
                     "    compute splat     - (it draws untextured camera-facing sprites without glow only; not this effect's)"
