@@ -363,18 +363,17 @@ fn a_stateless_group_fires_on_death_and_every_period_as_its_stateful_twin_does()
             );
         }
     }
-    // A firing group too large to count its firings keeps its state, and says why.
+    // A firing group too large to count its firings puts them in order by buckets, stateless
+    // too: from its closed form, the same children as the reference's.
+    use plume::compiler::events::Ordering;
     let large = graph(&src("Auto").replace("capacity: 200,", "capacity: 9000,"));
-    assert!(!large.groups[0].effect.layout.stateless());
     assert!(
-        large.groups[0]
-            .effect
-            .ir
-            .state_reason
-            .contains("events[0] fires from a group of 9000 slots"),
+        large.groups[0].effect.layout.stateless(),
         "{}",
         large.groups[0].effect.ir.state_reason
     );
+    assert_eq!(large.streams[0].ordering, Ordering::Bucketed);
+    compare_runs("large stateless firing group", &large, &[20, 60]);
 }
 
 #[test]

@@ -431,8 +431,8 @@ pub fn emit_workgroup_appends(w: &mut Writer, events: &[EventIr], part: AppendPa
 /// Emits, in a stateless group's `fire` kernel, the firing of every event by particle `id`
 /// at the end of the step in `fire_state`: `dies` (WGSL bool) whether it dies in it, `lived`
 /// (u32) its whole steps lived at its end, `x`, `vel` and `tint` (packed) as for
-/// [`emit_fire`]. The firings are appended with their records (every stateless firing group
-/// is [`Ordering::Counted`]): the record's index is the firing's slot.
+/// [`emit_fire`]. The firings are appended with their records, the record's index standing
+/// for the firing's slot (and, for [`Ordering::Bucketed`], the id range widened).
 pub fn emit_fire_appended(
     w: &mut Writer,
     events: &[EventIr],
@@ -448,6 +448,7 @@ pub fn emit_fire_appended(
             // Colliders rule out the closed form a stateless group needs.
             TriggerIr::Collide => continue,
         };
+        let bucketed = e.ordering == Ordering::Bucketed;
         w.block(format!("if ({fires})"), |w| {
             w.line(format!(
                 "let at_{j} = atomicAdd(&{}.count, 1u);",
@@ -455,6 +456,11 @@ pub fn emit_fire_appended(
             ));
             w.line(format!("{}[at_{j}] = {id};", OUT_KEYS[j]));
             w.line(format!("{}[at_{j}] = at_{j};", OUT_VALS[j]));
+            if bucketed {
+                // The ids' range sets the buckets' width.
+                w.line(format!("atomicMax(&{}.not_min_id, ~{id});", OUT_RECORDS[j]));
+                w.line(format!("atomicMax(&{}.max_id, {id});", OUT_RECORDS[j]));
+            }
             w.line(format!(
                 "{}.records[at_{j}] = EventRecord({x}, {tint}, vec4<f32>({vel}, 0.0));",
                 OUT_RECORDS[j]

@@ -197,9 +197,9 @@ impl StatefulSteps {
     }
 
     /// Records the spawn of the `input`-th event this group is fed by, from the parent's
-    /// sorted records, with the step's parameters at `offset`: `event_prepare` counts the
-    /// firings and pops slots, then `event_spawn` runs per chunk over as many workgroups as it
-    /// wrote to `dispatch`.
+    /// firings in id order (as the stream's ordering left them), with the step's parameters at
+    /// `offset`: `event_prepare` counts the firings and pops slots, then `event_spawn` runs per
+    /// chunk over as many workgroups as it wrote to `dispatch`.
     pub fn record_event_spawn(
         &self,
         pass: &mut wgpu::ComputePass<'_>,

@@ -71,23 +71,6 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("render").field("trail"),
         ));
     }
-    // A stateless group fires from its closed form, a `fire` kernel a step over the spawn
-    // segments that may hold live particles; it appends its firings, so they are put in order
-    // by counting, which takes at most COUNTED_MAX slots.
-    if let Some(j) = ir
-        .events
-        .iter()
-        .position(|e| e.ordering != crate::features::events::Ordering::Counted)
-    {
-        return Err((
-            format!(
-                "events[{j}] fires from a group of {} slots: a stateless group's firings are counted into order, which takes at most {} (a larger group sorts a key per slot of its state)",
-                ir.capacity,
-                crate::features::events::COUNTED_MAX
-            ),
-            ValuePath::root().field("events").index(j),
-        ));
-    }
     if !ir.event_inputs.is_empty() {
         return Err((
             "the group is fed by events, whose spawns only the GPU counts".into(),
@@ -183,7 +166,7 @@ pub fn decide(ir: &mut EffectIr) -> Result<(), Checker> {
             c.error(
                 &ValuePath::root().field("state"),
                 format!(
-                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes, no render.trail, no events fed in, at most 8192 slots to fire events from, and a capacity no spawn can overflow (use Auto)"
+                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes, no render.trail, no events fed in, and a capacity no spawn can overflow (use Auto)"
                 ),
             );
             return Err(c);
