@@ -145,6 +145,26 @@ fn a_budget_below_what_f32_holds_is_an_error_that_says_what_can_be_met() {
         error.contains("accuracy.position: no integrator keeps within 1.0e-3 m over 1 s with at most 64 substeps: the closest, "),
         "{error}"
     );
+    // A window too long to calibrate, and a budget in both units or in none.
+    for (budget, wanted) in [
+        (
+            "(position: 0.01, over: 1000.0)",
+            "accuracy.over: 1000 s is 60000 steps of 0.016666666666666666 s; a budget is calibrated over at most 20000 steps",
+        ),
+        (
+            "(position: 0.01, pixels: 0.5)",
+            "accuracy.pixels: a budget is in metres (`position`) or on screen (`pixels`), not both",
+        ),
+        ("(over: 2.0)", "accuracy: a budget needs `position` (metres) or `pixels`"),
+    ] {
+        let src = effect(STEPPED[0].1, "", 0.01)
+            .replace("accuracy: (position: 1e-2, over: 1.0)", &format!("accuracy: {budget}"));
+        assert!(src.contains(budget), "{src}");
+        let error = compile_str(&src, &CompileOptions::default())
+            .unwrap_err()
+            .render("budget.ron", &src);
+        assert!(error.contains(wanted), "{error}");
+    }
 }
 
 #[test]

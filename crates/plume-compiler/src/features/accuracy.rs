@@ -51,8 +51,12 @@ pub fn deserialize_budget<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Accu
     Accuracy::deserialize(d).map(Some)
 }
 
-/// Checks a budget at `path`.
-pub fn check(c: &mut Checker, path: &ValuePath, budget: &Accuracy) {
+/// The most steps a budget's window may span: the compiler runs its samples through every one
+/// of them for each scheme it tries (20,000 steps of 1/60 s are 5.5 minutes).
+pub const MAX_WINDOW_STEPS: f64 = 20_000.0;
+
+/// Checks a budget at `path`, for steps of `dt` seconds.
+pub fn check(c: &mut Checker, path: &ValuePath, budget: &Accuracy, dt: f64) {
     match (budget.position, budget.pixels) {
         (Some(p), None) => c.positive(&path.field("position"), p),
         (None, Some(p)) => c.positive(&path.field("pixels"), p),
@@ -69,6 +73,17 @@ pub fn check(c: &mut Checker, path: &ValuePath, budget: &Accuracy) {
         c.error(&path.field("height"), "must be at least 1 pixel");
     }
     c.positive(&path.field("over"), budget.over);
+    if dt > 0.0 && budget.over / dt > MAX_WINDOW_STEPS {
+        c.error(
+            &path.field("over"),
+            format!(
+                "{} s is {:.0} steps of {dt} s; a budget is calibrated over at most {MAX_WINDOW_STEPS} steps ({:.1} s at this dt)",
+                budget.over,
+                (budget.over / dt).ceil(),
+                MAX_WINDOW_STEPS * dt
+            ),
+        );
+    }
 }
 
 /// What a budget is measured in.

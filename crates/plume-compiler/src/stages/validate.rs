@@ -59,7 +59,7 @@ pub fn check_effect(effect: &Effect) -> Checker {
     }
     c.positive(&root.field("dt"), effect.dt);
     if let Some(budget) = &effect.accuracy {
-        crate::features::accuracy::check(&mut c, &root.field("accuracy"), budget);
+        crate::features::accuracy::check(&mut c, &root.field("accuracy"), budget, effect.dt);
     }
     if effect.substeps == 0 {
         c.error(&root.field("substeps"), "must be >= 1, got 0");
