@@ -224,4 +224,145 @@ fn a_pixel_budget_integrates_a_distant_effect_more_cheaply_and_both_stay_within_
         costs[1],
         costs[0]
     );
+    // A host that sees the near file from 200 m (`CompileOptions::accuracy_camera`) gets the far
+    // choice, and its check measures through the host's camera too.
+    let host = CompileOptions {
+        accuracy_camera: Some(plume::compiler::schema::Camera {
+            eye: plume::compiler::schema::Vec3(0.0, 0.0, 200.0),
+            target: plume::compiler::schema::Vec3(0.0, 0.0, 0.0),
+            fov_y: 45.0,
+        }),
+        ..Default::default()
+    };
+    let src = at(2.0);
+    let compiled = compile_str(&src, &host).unwrap();
+    let chosen = compiled.ir.accuracy.clone().unwrap();
+    let Some(Choice::Stepped { scheme, .. }) = chosen.choice else {
+        panic!("{:?}", chosen.choice)
+    };
+    assert!(
+        chosen.describe().contains("host's camera"),
+        "{}",
+        chosen.describe()
+    );
+    assert_eq!(scheme.evaluations(), costs[1], "{}", chosen.describe());
+    let effect = plume::compiler::parse_with(&src, &host).unwrap();
+    let check = check_budget(&gpu, &effect).unwrap().unwrap();
+    assert!(
+        check.met(),
+        "{} measured {:.3} px",
+        chosen.describe(),
+        check.measured
+    );
+}
+
+/// A group fed by events alone has no particles of its own: the graph's compiler calibrates its
+/// budget on a stand-in (its spawn rule where its parent first fires in f64, with the share of
+/// the parent's velocity the event passes on), and the GPU check of that stand-in keeps the
+/// budget. Shells fly up under gravity (closed form: Exact) and burst into debris that an
+/// attractor pulls through its core (no closed form: stepped).
+#[test]
+fn a_group_fed_by_events_is_calibrated_and_checked_on_a_stand_in() {
+    let src = r#"Effect(
+    name: "shells",
+    capacity: 8,
+    seed: 4,
+    emitters: [Emitter(burst: 4, shape: Point((0.0, 1.0, 0.0)),
+                       velocity: Cone(axis: (0.0, 1.0, 0.0), angle: 20.0, speed: (4.0, 5.0)),
+                       lifetime: Some((0.5, 0.6)))],
+    forces: [Gravity((0.0, -9.81, 0.0))],
+    accuracy: (position: 1e-3, over: 1.0),
+    events: [Event(on: Death, target: "debris", count: 32, velocity: Radial(speed: (1.0, 2.0)),
+                   lifetime: Some((2.0, 2.0)), inherit_velocity: 0.5)],
+    groups: [Group(name: "debris", capacity: 512,
+                   forces: [Attractor(center: (0.0, 3.0, 0.0), range: 5.0, strength: 20.0, core: 0.3)])],
+)"#;
+    let graph = plume::compiler::graph::compile_graph_str(src, &CompileOptions::default())
+        .unwrap_or_else(|e| panic!("{}", e.render("shells.ron", src)));
+    let shells = graph.groups[0].effect.ir.accuracy.clone().unwrap();
+    assert_eq!(shells.choice, Some(Choice::Exact), "{}", shells.describe());
+    let debris = graph.groups[1].effect.ir.accuracy.clone().unwrap();
+    let stand_in = debris.stand_in.expect("a stand-in for the debris");
+    // Where a shell dies: above its launch point, after about half a second of flight.
+    assert!(stand_in.offset[1] > 1.5, "{stand_in:?}");
+    assert!(stand_in.velocity != [0.0; 3], "{stand_in:?}");
+    let Some(Choice::Stepped {
+        scheme, samples, ..
+    }) = debris.choice
+    else {
+        panic!("{}", debris.describe())
+    };
+    assert_eq!(samples, 64, "{}", debris.describe());
+    assert!(
+        debris.describe().contains("stand-in burst"),
+        "{}",
+        debris.describe()
+    );
+    assert_eq!(graph.groups[1].effect.ir.integrator, scheme.integrator);
+
+    // Checked on the GPU as `plume accuracy` does: the debris alone, its spawn rule its one
+    // emitter, the stand-in fired at the first step (256 particles).
+    let effect = plume::compiler::parse_with(src, &CompileOptions::default()).unwrap();
+    let groups = plume::compiler::graph::group_effects(&effect);
+    let mut alone = groups[1].clone();
+    alone.emitters = vec![groups[0].events[0].as_emitter()];
+    alone.events.clear();
+    alone.bursts = true;
+    alone.stand_in = Some(plume::compiler::bursts::Burst {
+        emitter: 0,
+        count: 256,
+        ..stand_in
+    });
+    let check = check_budget(&gpu(), &alone).unwrap().expect("a budget");
+    assert!(
+        check.met() && check.particles == 256,
+        "{}: measured {:.3e} m on the GPU against 1e-3 m",
+        check.chosen,
+        check.measured
+    );
+    // The same choice as the graph's: the same sample.
+    assert!(
+        check
+            .chosen
+            .starts_with(&format!("accuracy: {}", scheme.describe())),
+        "{}",
+        check.chosen
+    );
+}
+
+/// A host's camera that cannot measure pixels (a zero field of view, or looking at its own
+/// eye) is an error at the pixel budget, not a NaN estimate.
+#[test]
+fn a_host_camera_that_cannot_measure_pixels_is_an_error() {
+    let src = r#"Effect(
+    name: "pixels",
+    capacity: 16,
+    emitters: [Emitter(burst: 16, shape: Point((0.4, 0.0, 0.0)), velocity: Constant((0.0, 0.1, 0.0)))],
+    forces: [Custom(accel: "-40.0 * x")],
+    accuracy: (pixels: 0.5),
+)"#;
+    use plume::compiler::schema::{Camera, Vec3};
+    for camera in [
+        Camera {
+            eye: Vec3(0.0, 0.0, 5.0),
+            target: Vec3(0.0, 0.0, 0.0),
+            fov_y: 0.0,
+        },
+        Camera {
+            eye: Vec3(1.0, 1.0, 1.0),
+            target: Vec3(1.0, 1.0, 1.0),
+            fov_y: 45.0,
+        },
+    ] {
+        let host = CompileOptions {
+            accuracy_camera: Some(camera),
+            ..Default::default()
+        };
+        let err = compile_str(src, &host).expect_err("an unusable camera");
+        let text = err.render("pixels.ron", src);
+        assert!(
+            text.contains("accuracy.pixels") && text.contains("host's camera"),
+            "{text}"
+        );
+    }
 }

@@ -80,19 +80,37 @@ fn accuracy_of_groups(
     effect: &plume_compiler::Effect,
 ) -> ExitCode {
     let mut failed = false;
-    for (g, mut group) in plume_compiler::graph::group_effects(effect)
-        .into_iter()
-        .enumerate()
-    {
+    let groups = plume_compiler::graph::group_effects(effect);
+    // The stand-ins of the groups fed by events alone come from an f64 run of the whole graph.
+    let graph = match plume_compiler::graph::compile_graph(effect, "") {
+        Ok(graph) => graph,
+        Err(e) => {
+            eprintln!("{name}: error: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    for (g, mut group) in groups.clone().into_iter().enumerate() {
         group.events.clear();
         let label = format!("{name} group {:?}", group.name);
         if group.emitters.is_empty() {
-            eprintln!(
-                "{label}: note: fed by events alone, no particles of its own: not measured alone"
-            );
-            continue;
-        }
-        if !args.json {
+            match stand_in_group(&groups, &graph, g, group) {
+                Some(stand_in) => group = stand_in,
+                None => {
+                    eprintln!(
+                        "{label}: note: fed by events alone, and no event into it fired within {} steps of an f64 run: not measured",
+                        plume_compiler::graph::reference::STAND_IN_STEPS
+                    );
+                    continue;
+                }
+            }
+            if !args.json {
+                let b = group.stand_in.expect("a stand-in");
+                println!(
+                    "== {label} (fed by events: {} particles of its spawn rule at ({:.2}, {:.2}, {:.2}), where its parent first fires in f64, with {:?} m/s of the parent's velocity)",
+                    b.count, b.offset[0], b.offset[1], b.offset[2], b.velocity
+                );
+            }
+        } else if !args.json {
             println!("== {label} (alone: its events left out)");
         }
         let plot = args.plot.as_ref().map(|p| {
@@ -115,6 +133,30 @@ fn accuracy_of_groups(
     } else {
         ExitCode::SUCCESS
     }
+}
+
+/// Group `g` of `groups` (fed by events alone; `group` is its effect, events cleared) made
+/// measurable: the spawn rule of the first event into it as its one emitter, and a stand-in
+/// burst of `bench::CHECKED` particles of it where the parent first fires in an f64 run
+/// of `graph` (`Effect::stand_in`), which the budget check and the sweep fire at their first
+/// step. None when no event into it fires within `STAND_IN_STEPS`.
+fn stand_in_group(
+    groups: &[plume_compiler::Effect],
+    graph: &plume_compiler::graph::CompiledGraph,
+    g: usize,
+    mut group: plume_compiler::Effect,
+) -> Option<plume_compiler::Effect> {
+    let burst =
+        plume_compiler::graph::reference::stand_in(graph, g, plume_runtime::bench::CHECKED)?;
+    let stream = graph.streams.iter().find(|s| s.child == g)?;
+    let event = &groups[stream.parent].events[stream.out_slot];
+    group.emitters = vec![event.as_emitter()];
+    group.bursts = true;
+    group.stand_in = Some(plume_compiler::bursts::Burst {
+        emitter: 0,
+        ..burst
+    });
+    Some(group)
 }
 
 /// `plume accuracy` of one group's effect `effect` (named `name` in messages), its plot to

@@ -119,6 +119,7 @@ impl Overrides {
             bursts: false,
             live_params: false,
             step_only: false,
+            accuracy_camera: None,
         }
     }
 }

@@ -67,6 +67,10 @@ pub struct CompileOptions {
     /// one texel a frame, and any draw of it is refused with the reason, naming the file and
     /// the field (`TextureIr::missing`).
     pub step_only: bool,
+    /// The camera a pixel budget (`accuracy: (pixels: ...)`) is measured through: a host's, or
+    /// the preview's, instead of the file's `camera`, so that the integration is chosen for
+    /// the view the effect is seen in. None: the file's camera.
+    pub accuracy_camera: Option<crate::stages::schema::Camera>,
 }
 
 /// A compiled effect: the IR after the passes, its layout, the WGSL and any warnings.
@@ -168,6 +172,7 @@ pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, Comp
     effect.bursts = options.bursts;
     effect.live_params = options.live_params;
     effect.step_only = options.step_only;
+    effect.accuracy_camera = options.accuracy_camera;
     for group in &mut effect.groups {
         if let Some(i) = options.integrator {
             group.integrator = i;

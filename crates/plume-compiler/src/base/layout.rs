@@ -41,9 +41,29 @@ impl Attribute {
         }
     }
 
-    /// Bytes this attribute takes per particle.
-    pub fn bytes(self) -> u32 {
-        4 * self.fields().0.len() as u32
+    /// Whether the attribute is the particle's motion (velocity, or Verlet's displacement):
+    /// the one an accuracy budget may store in 16-bit floats (`Layout::half_motion`).
+    pub fn is_motion(self) -> bool {
+        matches!(self, Attribute::Velocity | Attribute::Displacement)
+    }
+
+    /// The 4-byte words it is stored in, as (name, kind): the struct's fields themselves, or
+    /// for motion in 16-bit floats two words, `HALF2` holding x and y and `HALF1` holding z in
+    /// its low half (the struct's fields stay f32: loads unpack, stores pack).
+    pub fn words(self, half_motion: bool) -> Vec<(&'static str, &'static str)> {
+        match self {
+            Attribute::Velocity if half_motion => vec![("vxy", HALF2), ("vz", HALF1)],
+            Attribute::Displacement if half_motion => vec![("dxy", HALF2), ("dz", HALF1)],
+            _ => {
+                let (names, ty) = self.fields();
+                names.iter().map(|n| (*n, ty)).collect()
+            }
+        }
+    }
+
+    /// Bytes this attribute takes per particle, stored.
+    pub fn bytes(self, half_motion: bool) -> u32 {
+        4 * self.words(half_motion).len() as u32
     }
 
     /// What it holds, for `--emit layout`.
@@ -63,6 +83,11 @@ impl Attribute {
         }
     }
 }
+
+/// A stored word holding two 16-bit floats (fields x and y of its attribute).
+pub const HALF2: &str = "f16x2";
+/// A stored word holding one 16-bit float in its low half (field z of its attribute).
+pub const HALF1: &str = "f16";
 
 /// One resource binding of the compiled module (group 0).
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -84,7 +109,13 @@ pub struct Binding {
 pub struct Layout {
     /// Attributes in struct order.
     pub attributes: Vec<Attribute>,
-    /// Bytes per particle: the attributes' 4-byte fields, padded to a multiple of 16.
+    /// Whether the motion attribute is stored in 16-bit floats (an accuracy budget that
+    /// allows it: `stages::passes::accuracy`). Such a layout keeps its words unpadded: whole
+    /// 16-byte planes, then a plane of 8-byte and one of 4-byte words for the rest
+    /// ([`Layout::planes`]).
+    pub half_motion: bool,
+    /// Bytes per particle: the attributes' stored 4-byte words, padded to a multiple of 16
+    /// unless the motion is stored in halves.
     pub bytes_per_particle: u32,
     /// Bindings, in binding order.
     pub bindings: Vec<Binding>,
@@ -105,32 +136,83 @@ pub struct Layout {
 }
 
 impl Layout {
-    /// Offset of attribute `a` in the particle struct, in 4-byte words.
+    /// Offset of attribute `a` in the stored particle, in 4-byte words.
     pub fn word_offset(&self, a: Attribute) -> Option<usize> {
         let mut word = 0;
         for &b in &self.attributes {
             if a == b {
                 return Some(word);
             }
-            word += b.fields().0.len();
+            word += b.words(self.half_motion).len();
         }
         None
     }
 
-    /// The struct's 4-byte words in order, as (field name, WGSL scalar type), without padding.
+    /// The stored 4-byte words in order, as (name, kind: `f32`, `u32`, [`HALF2`] or
+    /// [`HALF1`]), without padding.
     pub fn words(&self) -> Vec<(&'static str, &'static str)> {
         self.attributes
             .iter()
-            .flat_map(|a| {
-                let (names, ty) = a.fields();
-                names.iter().map(move |n| (*n, ty))
-            })
+            .flat_map(|a| a.words(self.half_motion))
             .collect()
     }
 
-    /// 16-byte words per particle.
+    /// Whole 16-byte words per particle (planes of vec4s).
     pub fn vec4s(&self) -> u32 {
-        self.bytes_per_particle / 16
+        self.planes().full
+    }
+
+    /// How a buffer's slots are stored: word-major planes, each holding one word group of
+    /// every slot. A padded layout is whole 16-byte planes; a half-motion layout's last one to
+    /// three words go to an 8-byte plane (two slots a vec4) and a 4-byte plane (four slots a
+    /// vec4), so no slot carries padding.
+    pub fn planes(&self) -> Planes {
+        let words = self.words().len() as u32;
+        if !self.half_motion {
+            return Planes {
+                full: self.bytes_per_particle / 16,
+                pair: false,
+                single: false,
+            };
+        }
+        Planes {
+            full: words / 4,
+            pair: words % 4 >= 2,
+            single: words % 2 == 1,
+        }
+    }
+
+    /// Bytes of a particle buffer of `slots` slots: its planes, each a whole number of vec4s.
+    pub fn buffer_bytes(&self, slots: u64) -> u64 {
+        let p = self.planes();
+        let pair = if p.pair { slots.div_ceil(2) } else { 0 };
+        let single = if p.single { slots.div_ceil(4) } else { 0 };
+        16 * (u64::from(p.full) * slots + pair + single)
+    }
+
+    /// The slots of a particle buffer of `bytes` bytes (the inverse of [`Layout::buffer_bytes`]).
+    pub fn slots_in(&self, bytes: u64) -> u64 {
+        let bpp = u64::from(self.bytes_per_particle.max(1));
+        let mut slots = bytes / bpp;
+        while slots > 0 && self.buffer_bytes(slots) > bytes {
+            slots -= 1;
+        }
+        slots
+    }
+
+    /// Byte offset, in a buffer of `slots` slots, of stored word `word` of slot `i`.
+    pub fn word_byte(&self, word: usize, i: u64, slots: u64) -> u64 {
+        let p = self.planes();
+        let full = 4 * p.full as usize;
+        let pairs_at = 16 * u64::from(p.full) * slots;
+        if word < full {
+            16 * ((word as u64 / 4) * slots + i) + 4 * (word as u64 % 4)
+        } else if p.pair && word < full + 2 {
+            pairs_at + 8 * i + 4 * (word - full) as u64
+        } else {
+            let singles_at = pairs_at + if p.pair { 16 * slots.div_ceil(2) } else { 0 };
+            singles_at + 4 * i
+        }
     }
 
     /// Whether the layout has a binding called `name`.
@@ -176,6 +258,19 @@ impl Layout {
     pub fn user_vec4s(&self) -> u64 {
         u64::from(self.live_params).div_ceil(4)
     }
+}
+
+/// The planes a particle buffer stores its slots in ([`Layout::planes`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Planes {
+    /// Planes of 16-byte words (word k of slot i at vec4 k · slots + i).
+    pub full: u32,
+    /// Whether an 8-byte plane follows (slot i's pair in half i % 2 of vec4
+    /// full · slots + i / 2).
+    pub pair: bool,
+    /// Whether a 4-byte plane ends the buffer (slot i's word in lane i % 4 of the vec4
+    /// i / 4 after the pair plane).
+    pub single: bool,
 }
 
 /// Bytes of the counters struct (free count, spawn base, spawn count, spawned, dropped, died).

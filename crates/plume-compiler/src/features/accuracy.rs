@@ -109,6 +109,32 @@ pub struct AccuracyIr {
     pub over: f64,
     /// What the compiler chose and why; None until the accuracy pass has run.
     pub choice: Option<Choice>,
+    /// Whether the budget leaves room to store each particle's motion (velocity, or Verlet's
+    /// displacement) in 16-bit floats: the accuracy pass measures the chosen scheme with
+    /// its motion rounded to half precision after every step, and keeps the halves when that
+    /// error stays within the scheme's share of the budget too.
+    pub half_motion: bool,
+    /// The chosen scheme's estimated error with its motion in halves, where it was measured.
+    pub half_estimate: Option<f64>,
+    /// For a group fed by events alone, the sample it is calibrated on: a burst of its event's
+    /// spawn rule at the parent's first firing (`Effect::stand_in`). None: the group's own
+    /// emitters' first particles.
+    pub stand_in: Option<crate::features::bursts::Burst>,
+    /// The camera a pixel budget is measured through when it is not the effect's own (a
+    /// host's: `CompileOptions::accuracy_camera`).
+    pub host_camera: Option<BudgetCamera>,
+}
+
+/// A camera a pixel budget is measured through (a pinhole at `eye` looking at `target`,
+/// `fov_y` degrees tall).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BudgetCamera {
+    /// Where it is (m).
+    pub eye: DVec3,
+    /// What it looks at (m).
+    pub target: DVec3,
+    /// Vertical field of view (degrees).
+    pub fov_y: f64,
 }
 
 impl Accuracy {
@@ -128,6 +154,10 @@ impl Accuracy {
             measure,
             over: self.over,
             choice: None,
+            half_motion: false,
+            half_estimate: None,
+            stand_in: None,
+            host_camera: None,
         }
     }
 }
@@ -259,8 +289,9 @@ pub enum Choice {
         /// Its largest position error over the samples (m); None where no sample could be run.
         estimated: Option<f64>,
     },
-    /// No particle of the group's own to calibrate with (a group fed by events alone): the
-    /// file's scheme stands, and `plume accuracy` checks it.
+    /// No particle of the group's own to calibrate with (a group fed by events alone whose
+    /// parent never fired in the f64 run that looks for a stand-in): the file's scheme
+    /// stands, and `plume accuracy` checks it.
     Uncalibrated {
         /// The file's scheme.
         scheme: Scheme,
@@ -281,8 +312,14 @@ impl AccuracyIr {
         match self.measure {
             Measure::Metres => format!("{:.1e} m over {} s", self.limit, self.over),
             Measure::Pixels { height } => format!(
-                "{:.1e} px (a {height}-pixel image from the effect's camera) over {} s",
-                self.limit, self.over
+                "{:.1e} px (a {height}-pixel image from the {} camera) over {} s",
+                self.limit,
+                if self.host_camera.is_some() {
+                    "host's"
+                } else {
+                    "effect's"
+                },
+                self.over
             ),
         }
     }
@@ -295,9 +332,14 @@ impl AccuracyIr {
             Some(Choice::Stepped {
                 scheme, estimated, ..
             }) => format!(
-                "Auto with a budget of {budget}: {}, estimated {estimated:.1e} {} in f64",
+                "Auto with a budget of {budget}: {}, estimated {estimated:.1e} {} in f64{}",
                 scheme.describe(),
-                self.unit()
+                self.unit(),
+                if self.half_motion {
+                    "; motion stored in 16-bit floats"
+                } else {
+                    ""
+                }
             ),
             _ => self.describe(),
         }
@@ -334,7 +376,29 @@ impl AccuracyIr {
                         f64::from(other.evaluations()) / f64::from(scheme.evaluations())
                     );
                 }
-                line += &format!("; calibrated on {samples} particles in f64 in {millis:.0} ms");
+                match (self.half_motion, self.half_estimate) {
+                    (true, Some(e)) => {
+                        line += &format!(
+                            "; motion stored in 16-bit floats (estimated {e:.1e} {unit} with them)"
+                        )
+                    }
+                    (false, Some(e)) => {
+                        line += &format!(
+                            "; motion kept in 32-bit floats (16-bit would stray {e:.1e} {unit})"
+                        )
+                    }
+                    _ => {}
+                }
+                let sample = match &self.stand_in {
+                    Some(b) => format!(
+                        " of a stand-in burst at ({:.2}, {:.2}, {:.2}), where its parent first fires,",
+                        b.offset[0], b.offset[1], b.offset[2]
+                    ),
+                    None => String::new(),
+                };
+                line += &format!(
+                    "; calibrated on {samples} particles{sample} in f64 in {millis:.0} ms"
+                );
                 line
             }
             Some(Choice::Kept { scheme, estimated }) => match estimated {

@@ -206,11 +206,27 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
     if !errors.is_empty() {
         return Err(CompileError::Invalid(Diagnostics { items: errors }));
     }
-    Ok(CompiledGraph {
+    let mut graph = CompiledGraph {
         groups,
         streams,
         warnings: locate(warnings),
-    })
+    };
+    // A group fed by events alone has no particles of its own to calibrate a budget on: it is
+    // compiled again with a stand-in, its spawn rule where its parent first fires in f64.
+    for (g, (e, l)) in effects.iter().zip(&links).enumerate() {
+        if e.accuracy.is_none() || !e.emitters.is_empty() {
+            continue;
+        }
+        let Some(burst) = reference::stand_in(&graph, g, crate::reference::calibrate::SAMPLES)
+        else {
+            continue;
+        };
+        let mut sampled = e.clone();
+        sampled.stand_in = Some(burst);
+        graph.groups[g].effect =
+            crate::compile::compile_group(&sampled, l, &group_prefix(g), &locate)?;
+    }
+    Ok(graph)
 }
 
 /// An `Every` period in whole steps (at least one).

@@ -97,3 +97,43 @@ impl ReferenceGraph {
         self.groups[g].totals()
     }
 }
+
+/// Steps the f64 run looks for a parent's first firing before giving up (20 s at 60 Hz).
+pub const STAND_IN_STEPS: u64 = 1_200;
+
+/// The stand-in sample of group `g`, fed by events alone (`Effect::stand_in`): a burst of
+/// `particles` of the spawn rule of the first event into it, at the position of its parent's
+/// first firing in an f64 run of `graph` and with the share of that parent's velocity the event
+/// passes on. None when no event feeds `g` or none fires within [`STAND_IN_STEPS`].
+pub fn stand_in(
+    graph: &CompiledGraph,
+    g: usize,
+    particles: u32,
+) -> Option<crate::features::bursts::Burst> {
+    let (s, stream) = graph
+        .streams
+        .iter()
+        .enumerate()
+        .find(|(_, s)| s.child == g)?;
+    let input = graph.groups[g]
+        .effect
+        .ir
+        .event_inputs
+        .iter()
+        .find(|i| i.stream == s)?
+        .clone();
+    let mut run = ReferenceGraph::new(graph);
+    for _ in 0..STAND_IN_STEPS {
+        run.step();
+        if let Some(f) = run.group(stream.parent).fired(stream.out_slot).first() {
+            let v = input.inherit_velocity * f.v;
+            return Some(crate::features::bursts::Burst {
+                emitter: input.emitter as u32,
+                count: particles,
+                offset: f.x.as_vec3().to_array(),
+                velocity: v.as_vec3().to_array(),
+            });
+        }
+    }
+    None
+}

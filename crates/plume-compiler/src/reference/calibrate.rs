@@ -64,7 +64,7 @@ impl Trajectories {
 }
 
 /// How far apart two positions are, in a budget's unit (metres, or pixels on screen).
-pub type Metric = dyn Fn(DVec3, DVec3) -> f64;
+pub type Metric = dyn Fn(DVec3, DVec3) -> f64 + Send + Sync;
 
 /// The trajectories' positions, step by step, for a run made elsewhere (the GPU's).
 impl FromIterator<HashMap<u32, DVec3>> for Trajectories {
@@ -83,13 +83,38 @@ pub fn window_steps(ir: &EffectIr, over: f64) -> u64 {
 /// Runs the first `particles` of `ir` (its capacity cut to that) with `scheme` for `steps`
 /// steps, keeping the positions of particles no older than `steps` steps.
 pub fn run(ir: &EffectIr, scheme: Scheme, steps: u64, particles: u32) -> Trajectories {
+    run_stored(ir, scheme, steps, particles, false)
+}
+
+/// [`run`], with each particle's motion rounded to 16-bit floats wherever the GPU stores it
+/// when `halves` (a half-motion layout's model).
+pub fn run_stored(
+    ir: &EffectIr,
+    scheme: Scheme,
+    steps: u64,
+    particles: u32,
+    halves: bool,
+) -> Trajectories {
     let mut sample = ir.clone();
     sample.capacity = particles.min(ir.capacity);
     sample.integrator = scheme.integrator;
     sample.substeps = scheme.substeps;
     sample.stateless = None;
     let window = steps as f64 * ir.dt + 0.5 * ir.dt;
+    // A group fed by events alone is sampled by a burst of its spawn rule at its parent's first
+    // firing (`AccuracyIr::stand_in`), spawned at the first step as its children would be.
+    let stand_in = ir.accuracy.as_ref().and_then(|a| a.stand_in);
+    if stand_in.is_some() {
+        sample.bursts = true;
+    }
     let mut sim = ReferenceSim::new(&sample);
+    if halves {
+        sim.round_motion_to_halves();
+    }
+    if let Some(burst) = stand_in {
+        sim.burst(burst)
+            .expect("the stand-in names one of the group's emitters");
+    }
     let mut out = Trajectories::default();
     for _ in 0..steps {
         sim.step();
@@ -106,7 +131,7 @@ pub fn run(ir: &EffectIr, scheme: Scheme, steps: u64, particles: u32) -> Traject
 
 /// The truth for a budget of `limit` (as `metric` measures) over `steps` steps of the first
 /// `particles`: RK4 with its substeps
-/// doubled until two in a row agree within a fiftieth of the budget (from 8), or up to
+/// doubled until two in a row agree within a fiftieth of the budget (from 4), or up to
 /// `TRUTH_MAX_SUBSTEPS`. Returns the finer run and how far it may be from the exact
 /// trajectory: the last difference over 15 (RK4's error falls 16-fold a doubling), or the
 /// difference itself where it did not converge.
@@ -121,7 +146,7 @@ pub fn truth(
         integrator: Integrator::Rk4,
         substeps,
     };
-    let mut substeps = 8;
+    let mut substeps = 4;
     let mut coarse = run(ir, rk4(substeps), steps, particles);
     loop {
         let fine = run(ir, rk4(2 * substeps), steps, particles);

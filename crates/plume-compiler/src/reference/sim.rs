@@ -56,6 +56,13 @@ fn lifetime_of(born: u64, die_at: u32, dt: f64) -> f64 {
     }
 }
 
+/// `v` rounded to the nearest 16-bit floats, each clamped to f16's largest finite value first,
+/// as a half-motion layout's store does (`pack2x16float` of the clamped value).
+pub fn to_halves(v: DVec3) -> DVec3 {
+    let half = |x: f64| half::f16::from_f64(x.clamp(-65504.0, 65504.0)).to_f64();
+    DVec3::new(half(v.x), half(v.y), half(v.z))
+}
+
 /// Runs an effect's IR on the CPU in f64.
 #[derive(Clone, Debug)]
 pub struct ReferenceSim {
@@ -73,6 +80,9 @@ pub struct ReferenceSim {
     next_event_id: u32,
     /// Where emitters spawn in the world, for a placed effect (identity otherwise).
     placement: Placement,
+    /// Whether each particle's motion is rounded to 16-bit floats wherever the GPU would store
+    /// it (spawn and the end of each step): the accuracy pass's model of a half-motion layout.
+    motion_in_halves: bool,
 }
 
 impl ReferenceSim {
@@ -88,7 +98,16 @@ impl ReferenceSim {
             fired: vec![Vec::new(); ir.events.len()],
             next_event_id: 0,
             placement: Placement::IDENTITY,
+            motion_in_halves: false,
         }
+    }
+
+    /// Rounds each particle's stored motion (velocity, or Verlet's displacement) to 16-bit
+    /// floats as a half-motion layout stores it, from now on. The oracle that GPU runs are
+    /// compared with does not: it is the f64 model of the arithmetic, and the accuracy budget
+    /// that allowed the halves is what bounds their error (`plume accuracy` checks it).
+    pub fn round_motion_to_halves(&mut self) {
+        self.motion_in_halves = true;
     }
 
     /// Places the emitters' next spawns in the world by `placement` (a placed effect's f64
@@ -158,7 +177,7 @@ impl ReferenceSim {
                 DVec3::ONE
             };
             let tint = crate::features::looks::tint::spawned(self.ir.tint(), id, inherited);
-            let v = self.initial_v(id, step, time, s.x, s.v, s.die_at);
+            let v = self.stored(self.initial_v(id, step, time, s.x, s.v, s.die_at));
             self.particles.push(Particle {
                 id,
                 x: s.x,
@@ -178,6 +197,15 @@ impl ReferenceSim {
 
     /// What the state stores as velocity for a particle spawned at `step` with velocity `v`:
     /// `v` itself, or Verlet's first displacement.
+    /// Motion as the GPU stores it: rounded to halves in a half-motion model.
+    fn stored(&self, v: DVec3) -> DVec3 {
+        if self.motion_in_halves {
+            to_halves(v)
+        } else {
+            v
+        }
+    }
+
     fn initial_v(&self, id: u32, step: u64, time: f64, x: DVec3, v: DVec3, die_at: u32) -> DVec3 {
         if self.ir.integrator != Integrator::Verlet {
             return v;
@@ -243,7 +271,14 @@ impl ReferenceSim {
                     s.x = self.placement.point(s.x);
                     s.v = self.placement.vector(s.v);
                 }
-                let v = self.initial_v(id + local, plan.step, plan.time, s.x, s.v, s.die_at);
+                let v = self.stored(self.initial_v(
+                    id + local,
+                    plan.step,
+                    plan.time,
+                    s.x,
+                    s.v,
+                    s.die_at,
+                ));
                 self.particles.push(Particle {
                     id: id + local,
                     x: s.x,
@@ -282,6 +317,7 @@ impl ReferenceSim {
         let mut index = 0;
         let rest_speed = ir.rest_speed();
         let fired = &mut self.fired;
+        let halves = self.motion_in_halves;
         self.particles.retain_mut(|p| {
             let flock = frozen.get(index);
             index += 1;
@@ -301,6 +337,9 @@ impl ReferenceSim {
                 let x0 = p.x;
                 substep(ir, exact, baked, flock, &ctx, &mut p.x, &mut p.v, t);
                 collided |= resolve(&ir.colliders, rest_speed, x0, &mut p.x, &mut p.v, verlet, h);
+            }
+            if halves {
+                p.v = to_halves(p.v);
             }
             let dies =
                 (has_lifetimes && step_index >= p.die_at) || ir.kills.iter().any(|k| k.kills(p.x));

@@ -5,6 +5,7 @@ use glam::DVec3;
 
 use crate::base::lifetime::LifetimeSteps;
 use crate::base::rng::seed_mix;
+use crate::features::accuracy::BudgetCamera;
 use crate::features::forces::{safe_normalize, Force};
 use crate::ir::{Basis, CameraIr, EffectIr, EmitterIr, KillIr, RenderIr, ShapeIr, VelocityIr};
 use crate::stages::schema::{Collider, Effect, KillVolume, Shape, Velocity};
@@ -51,7 +52,16 @@ pub fn lower(effect: &Effect) -> EffectIr {
         max_speed: effect.max_speed,
         integrator: effect.integrator,
         integrator_reason: String::from("chosen in the file"),
-        accuracy: effect.accuracy.as_ref().map(|a| a.lower()),
+        accuracy: effect.accuracy.as_ref().map(|a| {
+            let mut lowered = a.lower();
+            lowered.stand_in = effect.stand_in;
+            lowered.host_camera = effect.accuracy_camera.map(|c| BudgetCamera {
+                eye: c.eye.d(),
+                target: c.target.d(),
+                fov_y: c.fov_y,
+            });
+            lowered
+        }),
         colliders: effect.collide.iter().map(Collider::lower).collect(),
         scene: effect.scene.iter().map(|m| m.lower()).collect(),
         kills: effect

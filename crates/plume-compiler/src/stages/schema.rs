@@ -123,6 +123,16 @@ pub struct Effect {
     /// file.
     #[serde(skip)]
     pub step_only: bool,
+    /// The sample that an accuracy budget of a group fed by events alone is calibrated and
+    /// measured on (`features::accuracy`): one burst of its event's spawn rule where and as
+    /// fast as the parent first fires, found by an f64 run of the graph. Set by the graph's
+    /// compiler and by `plume accuracy`, never by the file.
+    #[serde(skip)]
+    pub stand_in: Option<crate::features::bursts::Burst>,
+    /// The camera a pixel budget is measured through instead of `camera`: set by
+    /// `CompileOptions::accuracy_camera` (a host's), never by the file.
+    #[serde(skip)]
+    pub accuracy_camera: Option<Camera>,
 }
 
 /// An axis-aligned box: `bounds: Some(Bounds(min: (-5.0, 0.0, -5.0), max: (5.0, 12.0, 5.0)))`.

@@ -94,6 +94,9 @@ fn compile(
     // The sweep compares stepping integrators, so Exact steps too: a stateless effect would
     // compute the closed form once, whatever dt (tests/stateless.rs measures that).
     e.state = plume_compiler::schema::State::Stateful;
+    // The sweep measures each integrator as it is, at steps the budget was not stated for:
+    // the budget (checked on its own first) neither chooses nor calibrates here.
+    e.accuracy = None;
     compile_effect(&e, "").map_err(|err| match err {
         CompileError::Invalid(d) => RuntimeError::Output(format!("{integrator:?} at dt {dt}: {d}")),
         CompileError::Internal(i) => RuntimeError::Output(i.to_string()),
@@ -128,6 +131,9 @@ pub fn reference(
     };
     let c = compile(effect, integrator, dt)?;
     let mut sim = ReferenceSim::new(&c.ir);
+    if let Some(burst) = effect.stand_in {
+        sim.burst(burst).map_err(RuntimeError::Output)?;
+    }
     sim.run(steps_for(plan.duration, dt)?);
     Ok((
         sim.records()
@@ -149,17 +155,22 @@ fn max_and_rms(errors: &[f64]) -> (f64, f64) {
     (max, rms)
 }
 
-/// Runs `steps` of `c` on `engine`; returns the live particles and the wall time of the steps.
+/// Runs `steps` of `c` on `engine`, after firing `stand_in` (a group fed by events alone:
+/// `Effect::stand_in`); returns the live particles and the wall time of the steps.
 fn timed_run(
     engine: &Engine,
     c: plume_compiler::CompiledEffect,
     steps: u64,
+    stand_in: Option<plume_compiler::bursts::Burst>,
 ) -> Result<(Vec<plume_compiler::reference::ParticleRecord>, f64), RuntimeError> {
     Ok(match engine {
         Engine::Gpu(gpu) => {
             // Warm up: drivers compile shaders on first dispatch; keep that out of the timing.
             RunningEffect::new(gpu, c.clone())?.run(1, |_| {})?;
             let mut sim = RunningEffect::new(gpu, c)?;
+            if let Some(burst) = stand_in {
+                sim.burst(0, burst)?;
+            }
             let start = Instant::now();
             sim.run(steps, |_| {})?;
             let s = start.elapsed().as_secs_f64();
@@ -167,6 +178,9 @@ fn timed_run(
         }
         Engine::Cpu => {
             let mut sim = ReferenceSim::new(&c.ir);
+            if let Some(burst) = stand_in {
+                sim.burst(burst).map_err(RuntimeError::Output)?;
+            }
             let start = Instant::now();
             sim.run(steps);
             let s = start.elapsed().as_secs_f64();
@@ -200,7 +214,7 @@ pub fn measure(
                 Err(e) => return Err(e),
             };
             let steps = steps_for(plan.duration, dt)?;
-            let (records, seconds) = timed_run(engine, c, steps)?;
+            let (records, seconds) = timed_run(engine, c, steps, effect.stand_in)?;
             let errors: Vec<f64> = records
                 .iter()
                 .filter_map(|r| truth.get(&r.id).map(|t| (r.position - *t).length()))
@@ -288,7 +302,7 @@ pub fn field_sweep(
     let steps = steps_for(duration, effect.dt)?;
     let run = |e: &Effect| -> Result<(Vec<(u32, DVec3)>, f64), RuntimeError> {
         let c = compile_effect(e, "").map_err(|err| RuntimeError::Output(err.to_string()))?;
-        let (records, seconds) = timed_run(engine, c, steps)?;
+        let (records, seconds) = timed_run(engine, c, steps, effect.stand_in)?;
         Ok((
             records.iter().map(|r| (r.id, r.position)).collect(),
             seconds / steps as f64,

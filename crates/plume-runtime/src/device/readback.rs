@@ -109,17 +109,30 @@ pub fn decode_slots(
     let dt = effect.ir.dt;
     let total: usize = buffers.iter().map(|b| b.len()).sum();
     let mut out = Vec::with_capacity(total / stride.max(1));
-    for (bytes, i) in buffers
-        .iter()
-        .flat_map(|b| (0..b.len() / stride.max(1)).map(move |i| (b, i)))
-    {
-        let slots = bytes.len() / stride;
-        // The 4-byte field w of slot i: lane w % 4 of 16-byte word w / 4.
+    for (bytes, i, slots) in buffers.iter().flat_map(|b| {
+        let slots = layout.slots_in(b.len() as u64);
+        (0..slots).map(move |i| (b, i, slots))
+    }) {
+        // Stored word w of slot i, wherever its plane keeps it.
         let u = |w: usize| {
-            let at = 16 * ((w / 4) * slots + i) + 4 * (w % 4);
+            let at = layout.word_byte(w, i, slots) as usize;
             u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
         };
         let f = |w: usize| f64::from(f32::from_bits(u(w)));
+        // The two halves of a stored word (x in the low half).
+        let halves = |w: usize| {
+            let word = u(w);
+            (
+                f64::from(half::f16::from_bits(word as u16).to_f32()),
+                f64::from(half::f16::from_bits((word >> 16) as u16).to_f32()),
+            )
+        };
+        let velocity = if layout.half_motion {
+            let ((x, y), (z, _)) = (halves(vel_at), halves(vel_at + 1));
+            DVec3::new(x, y, z)
+        } else {
+            DVec3::new(f(vel_at), f(vel_at + 1), f(vel_at + 2))
+        };
         let id = u(id_at);
         if id == DEAD {
             out.push(None);
@@ -128,7 +141,7 @@ pub fn decode_slots(
         out.push(Some(ParticleRecord {
             id,
             position: DVec3::new(f(pos_at), f(pos_at + 1), f(pos_at + 2)),
-            velocity: DVec3::new(f(vel_at), f(vel_at + 1), f(vel_at + 2)) * scale,
+            velocity: velocity * scale,
             age: match born_at {
                 Some(b) => f64::from(done.wrapping_sub(u(b))) * dt,
                 None => schedule.age(id),

@@ -117,7 +117,9 @@ impl Resources {
         }
         // A trail's ring is split with the particles, so both must fit a binding.
         let trail_bpp = u64::from(effect.layout.trail_bytes_per_particle);
-        let chunk_slots = (limit / bpp.max(trail_bpp))
+        // A half-motion layout's last planes round each up to a whole vec4 (32 bytes at most).
+        let rounding = if effect.layout.half_motion { 32 } else { 0 };
+        let chunk_slots = (limit.saturating_sub(rounding) / bpp.max(trail_bpp))
             .min(max_chunk_slots.unwrap_or(u64::MAX))
             .max(1);
         let chunk_count = cap.div_ceil(chunk_slots);
@@ -344,7 +346,7 @@ impl Resources {
             let len = self.chunk_slots.min(cap - base);
             let buffer = device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("particles"),
-                size: len * bpp,
+                size: effect.layout.buffer_bytes(len),
                 usage: STORAGE,
                 mapped_at_creation: false,
             });

@@ -4,6 +4,11 @@
 //! rounding on the GPU). Exact wherever a closed form exists: it is exact at any step. An
 //! integrator the file names is kept, and its error estimated for the note.
 //!
+//! With the scheme chosen, the same sample runs once more with its motion (velocity, or Verlet's
+//! displacement) rounded to 16-bit floats after every step, as a half-motion layout stores it;
+//! where that error too stays within the f64 share, the layout stores the motion in halves
+//! (8 bytes a particle instead of 12: `base::layout::Layout::half_motion`).
+//!
 //! The error model: each integrator's error falls as h^p. The search runs the sample at the
 //! file's substeps s and at 2s, takes the observed order p from the two errors, predicts the
 //! substeps that bring the error under the target, runs that, and corrects the prediction by
@@ -51,6 +56,24 @@ pub fn choose(
             Measure::Pixels { .. } => "pixels",
         });
     let unit = budget.unit();
+    if let (Some(c), Measure::Pixels { .. }) = (budget.host_camera, budget.measure) {
+        let sound = c.eye.is_finite()
+            && c.target.is_finite()
+            && c.fov_y > 0.0
+            && c.fov_y < 180.0
+            && (c.eye - c.target).length_squared() > 1e-20;
+        if !sound {
+            let mut checker = Checker::default();
+            checker.error(
+                &path,
+                format!(
+                    "the host's camera this budget is measured through (CompileOptions::accuracy_camera: eye {}, target {}, fov_y {}) must be finite, look at a point other than its eye, and have 0 < fov_y < 180",
+                    c.eye, c.target, c.fov_y
+                ),
+            );
+            return Err(checker);
+        }
+    }
     let (metric, floor_at) = measures(ir, &budget);
     let choice = |ir: &mut EffectIr, choice: Choice| {
         if let Some(a) = &mut ir.accuracy {
@@ -84,7 +107,7 @@ pub fn choose(
         );
         return Ok(None);
     }
-    let error = |scheme: Scheme| {
+    let error = |scheme: Scheme| -> f64 {
         calibrate::run(ir, scheme, steps, calibrate::SAMPLES).max_distance(&truth, &*metric)
             + uncertainty
     };
@@ -132,8 +155,20 @@ pub fn choose(
     }
     let mut met: Vec<(Scheme, f64)> = Vec::new();
     let mut best_missed: Option<(Scheme, f64)> = None;
-    for integrator in CANDIDATES {
-        match search(integrator, ir.substeps.max(1), target, &error) {
+    // The four searches are independent f64 runs: one thread each.
+    let first = ir.substeps.max(1);
+    let found: Vec<Result<(Scheme, f64), (Scheme, f64)>> = std::thread::scope(|scope| {
+        let searches: Vec<_> = CANDIDATES
+            .iter()
+            .map(|&integrator| scope.spawn(move || search(integrator, first, target, &error)))
+            .collect();
+        searches
+            .into_iter()
+            .map(|s| s.join().expect("a calibration run panicked"))
+            .collect()
+    });
+    for result in found {
+        match result {
             Ok(found) => met.push(found),
             Err(missed) => {
                 if best_missed.is_none_or(|(_, e)| missed.1 < e) {
@@ -147,7 +182,6 @@ pub fn choose(
             .cmp(&b.0.evaluations())
             .then(a.1.total_cmp(&b.1))
     });
-    let millis = started.elapsed().as_secs_f64() * 1e3;
     let Some(&(scheme, estimated)) = met.first() else {
         let (scheme, e) = best_missed.expect("four candidates were searched");
         let mut c = Checker::default();
@@ -168,6 +202,15 @@ pub fn choose(
         .copied();
     ir.integrator = scheme.integrator;
     ir.substeps = scheme.substeps;
+    // The motion in 16-bit floats where the chosen scheme, so stored, still keeps its share.
+    let halves = calibrate::run_stored(ir, scheme, steps, calibrate::SAMPLES, true)
+        .max_distance(&truth, &*metric)
+        + uncertainty;
+    if let Some(a) = &mut ir.accuracy {
+        a.half_estimate = Some(halves);
+        a.half_motion = halves <= target;
+    }
+    let millis = started.elapsed().as_secs_f64() * 1e3;
     choice(
         ir,
         Choice::Stepped {
@@ -225,11 +268,12 @@ fn search(
 }
 
 /// How large a shift of some metres at a position is, in a budget's unit.
-pub type Scale = dyn Fn(f64, glam::DVec3) -> f64;
+pub type Scale = dyn Fn(f64, glam::DVec3) -> f64 + Send + Sync;
 
 /// How a budget measures an error between two positions, and how large a shift of some metres
-/// at a position is in its unit: metres themselves, or pixels through the effect's camera (a
-/// shift across the view at the position's depth, the most it can move the image).
+/// at a position is in its unit: metres themselves, or pixels through the effect's camera, or
+/// the host's where one was given (a shift across the view at the position's depth, the most
+/// it can move the image).
 pub fn measures(ir: &EffectIr, budget: &AccuracyIr) -> (Box<Metric>, Box<Scale>) {
     match budget.measure {
         Measure::Metres => (
@@ -237,7 +281,11 @@ pub fn measures(ir: &EffectIr, budget: &AccuracyIr) -> (Box<Metric>, Box<Scale>)
             Box::new(|metres, _| metres),
         ),
         Measure::Pixels { height } => {
-            let screen = Screen::new(ir.camera.eye, ir.camera.target, ir.camera.fov_y, height);
+            let (eye, target, fov_y) = match budget.host_camera {
+                Some(c) => (c.eye, c.target, c.fov_y),
+                None => (ir.camera.eye, ir.camera.target, ir.camera.fov_y),
+            };
+            let screen = Screen::new(eye, target, fov_y, height);
             (
                 Box::new(move |a, b| screen.pixels(a, b)),
                 Box::new(move |metres, x| screen.pixels_of(metres, x)),

@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-pub use crate::base::layout::{Attribute, Binding, Layout, COUNTERS_BYTES};
+pub use crate::base::layout::{Attribute, Binding, Layout, Planes, COUNTERS_BYTES};
 use crate::ir::EffectIr;
 use crate::stages::schema::Integrator;
 
@@ -36,16 +36,25 @@ pub fn needs_spawn_step(ir: &EffectIr) -> bool {
 
 /// Decides the layout for a resolved IR.
 pub fn decide(ir: &EffectIr) -> Layout {
-    let mut attributes = vec![Attribute::Position];
-    attributes.push(if ir.integrator == Integrator::Verlet {
+    let half_motion = ir.stateless.is_none() && ir.accuracy.as_ref().is_some_and(|a| a.half_motion);
+    let motion = if ir.integrator == Integrator::Verlet {
         Attribute::Displacement
     } else {
         Attribute::Velocity
-    });
+    };
+    // With the motion in halves the id sits beside the position, in the first whole 16-byte
+    // plane: freeing a slot and the live list touch that word alone, whole-word.
+    let mut attributes = if half_motion {
+        vec![Attribute::Position, Attribute::Id, motion]
+    } else {
+        vec![Attribute::Position, motion]
+    };
     if ir.has_lifetimes() {
         attributes.push(Attribute::DeathStep);
     }
-    attributes.push(Attribute::Id);
+    if !half_motion {
+        attributes.push(Attribute::Id);
+    }
     // A group fed by events cannot derive ages from ids (only the GPU knows when each id
     // spawned), and `Every` events count from each particle's spawn.
     let every = ir
@@ -63,16 +72,20 @@ pub fn decide(ir: &EffectIr) -> Layout {
     }
     // Padded to a multiple of 16 bytes so kernels move the state as whole vec4 words: scalar
     // accesses at a 28- or 32-byte stride reached under half the copy kernel's bandwidth on an
-    // H100 (docs/performance.md).
-    let bytes_per_particle = attributes
-        .iter()
-        .map(|a| a.bytes())
-        .sum::<u32>()
-        .next_multiple_of(16);
+    // H100 (docs/performance.md). Motion in halves exists to save bytes, so its layout keeps
+    // its last words in planes of 8 and 4 bytes a slot instead (`Layout::planes`): word-major,
+    // every access stays coalesced.
+    let words = attributes.iter().map(|a| a.bytes(half_motion)).sum::<u32>();
+    let bytes_per_particle = if half_motion {
+        words
+    } else {
+        words.next_multiple_of(16)
+    };
     let cap = u64::from(ir.capacity);
     let emitter_slots = ir.emitters.len().max(1) as u32;
     let mut layout = Layout {
         attributes,
+        half_motion,
         bytes_per_particle,
         bindings: Vec::new(),
         emitter_slots,
@@ -101,7 +114,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
         binding: 0,
         name: "particles",
         space: "storage, read_write",
-        bytes: cap * u64::from(bytes_per_particle),
+        bytes: layout.buffer_bytes(cap),
         meaning: particles,
     });
     match &ir.stateless {
@@ -358,15 +371,31 @@ impl fmt::Display for Layout {
         let mut offset = 0;
         for a in &self.attributes {
             let (names, ty) = a.fields();
+            let half = self.half_motion && a.is_motion();
             writeln!(
                 f,
-                "  {:<14} {:<4} offset {:>2}  {}",
+                "  {:<14} {:<4} offset {:>2}  {}{}",
                 names.join(", "),
-                ty,
+                if half { "f16" } else { ty },
                 offset,
-                a.meaning()
+                a.meaning(),
+                if half {
+                    " in 16-bit floats (x and y in one word, z in the low half of the next): the accuracy budget allows it"
+                } else {
+                    ""
+                }
             )?;
-            offset += a.bytes();
+            offset += a.bytes(self.half_motion);
+        }
+        if self.half_motion {
+            let p = self.planes();
+            writeln!(
+                f,
+                "  (planes: {} of 16 bytes{}{}: no padding)",
+                p.full,
+                if p.pair { ", one of 8" } else { "" },
+                if p.single { ", one of 4" } else { "" }
+            )?;
         }
         let pad = self.bytes_per_particle - 4 * self.words().len() as u32;
         if pad > 0 {

@@ -267,32 +267,58 @@ const LANES: [&str; 4] = ["x", "y", "z", "w"];
 
 /// `load_particle`, `store_particle` and `mark_free` on this dispatch's buffer (`chunk.len`
 /// slots, word-major: [`word_index`]): every access is a full 16-byte load or store, as
-/// coalesced as a copy kernel's.
+/// coalesced as a copy kernel's; a half-motion layout's last planes (8 and 4 bytes a slot,
+/// [`Layout::planes`]) are read a vec4 per two or four neighbouring slots and written a word at
+/// a time, still contiguous across a warp.
 fn emit_particle_access(w: &mut Writer, layout: &Layout) {
     let words = layout.words();
     let n = layout.vec4s();
     w.line(format!("const VEC4S: u32 = {n}u;"));
+    if layout.half_motion {
+        emit_half_unpack(w);
+        emit_half_pack(w);
+    }
     w.block("fn load_particle(i: u32) -> Particle", |w| {
-        for k in 0..n {
-            w.line(format!(
-                "let w{k} = particles[{}];",
-                word_index(k, "i", "chunk.len")
-            ));
+        for (name, _, expr) in word_loads(layout, "particles", "i", "chunk.len") {
+            w.line(format!("let {name} = {expr};"));
         }
         w.line(format!("return {};", particle_from_words(layout)));
     });
     w.block("fn store_particle(i: u32, p: Particle)", |w| {
+        let values = word_values(layout);
         for (k, word) in packed_words(layout).iter().enumerate() {
             w.line(format!(
                 "particles[{}] = {word};",
                 word_index(k as u32, "i", "chunk.len")
             ));
         }
+        let planes = layout.planes();
+        let mut next = 4 * n as usize;
+        if planes.pair {
+            let at = pair_index(layout, "i", "chunk.len");
+            w.line(format!(
+                "particles[{at}][2u * (i & 1u)] = {};",
+                values[next]
+            ));
+            w.line(format!(
+                "particles[{at}][2u * (i & 1u) + 1u] = {};",
+                values[next + 1]
+            ));
+            next += 2;
+        }
+        if planes.single {
+            let at = single_index(layout, "i", "chunk.len");
+            w.line(format!("particles[{at}][i & 3u] = {};", values[next]));
+        }
     });
     let id = words
         .iter()
         .position(|(name, _)| *name == "id")
         .unwrap_or(0);
+    assert!(
+        id < 4 * n as usize,
+        "the id is stored in a whole 16-byte plane"
+    );
     w.comment("Frees a slot by writing only its id word.");
     w.block("fn mark_free(i: u32)", |w| {
         w.line(format!(
@@ -303,37 +329,163 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
     });
 }
 
-/// The `Particle(...)` constructor from its vec4<u32> words held in `w0`, `w1`, ... (the
-/// inverse of [`packed_words`]); shared by the compute module's `load_particle` and the draw
-/// module's.
-pub fn particle_from_words(layout: &Layout) -> String {
-    let fields: Vec<String> = layout
-        .words()
-        .iter()
-        .enumerate()
-        .map(|(j, (_, ty))| {
-            let word = format!("w{}.{}", j / 4, LANES[j % 4]);
-            if *ty == "f32" {
-                format!("bitcast<f32>({word})")
-            } else {
-                word
-            }
+/// `half_to_f32(bits)`: the 16-bit float in the low half of `bits` (a half-motion layout's
+/// loads). Written with integer operations rather than `unpack2x16float`, which naga admits
+/// only with a capability that some adapters lack (llvmpipe's Vulkan without shader-f16).
+pub fn emit_half_unpack(w: &mut Writer) {
+    w.block("fn half_to_f32(bits: u32) -> f32", |w| {
+        w.line("let sign = (bits & 0x8000u) << 16u;");
+        w.line("let exponent = (bits >> 10u) & 0x1fu;");
+        w.line("let mantissa = bits & 0x3ffu;");
+        w.comment(
+            "Normal halves rebias the exponent (15 to 127); subnormals are mantissa · 2^-24.",
+        );
+        w.line("let normal = bitcast<f32>(sign | ((exponent + 112u) << 23u) | (mantissa << 13u));");
+        w.line("let subnormal = bitcast<f32>(sign | bitcast<u32>(f32(mantissa) * 5.9604645e-8));");
+        w.line("return select(normal, subnormal, exponent == 0u);");
+    });
+}
+
+/// `f32_to_half(x)`: `x` as a 16-bit float's bits, rounded to nearest even, its magnitude
+/// clamped to f16's largest finite value (65504) so that a store never makes an infinity
+/// (a NaN's bits clamp to it too).
+fn emit_half_pack(w: &mut Writer) {
+    w.block("fn f32_to_half(x: f32) -> u32", |w| {
+        w.line("let bits = bitcast<u32>(x);");
+        w.line("let sign = (bits >> 16u) & 0x8000u;");
+        w.line("let magnitude = min(bits & 0x7fffffffu, 0x477fe000u);");
+        w.comment("At or above 2^-14 a normal half: rebias (127 to 15) and round off 13 bits.");
+        w.line("let rebiased = magnitude - 0x38000000u;");
+        w.line("let normal = (rebiased + 0xfffu + ((rebiased >> 13u) & 1u)) >> 13u;");
+        w.comment("Below it a subnormal half: x · 2^24 rounded to an integer (exact in f32).");
+        w.line("let subnormal = u32(round(bitcast<f32>(magnitude) * 16777216.0));");
+        w.line("return sign | select(subnormal, normal, magnitude >= 0x38800000u);");
+    });
+}
+
+/// The vec4 index of slot `i`'s pair (8-byte plane) in a buffer of `slots` slots.
+fn pair_index(layout: &Layout, i: &str, slots: &str) -> String {
+    format!("{}u * {slots} + {i} / 2u", layout.vec4s())
+}
+
+/// The vec4 index of slot `i`'s single word (4-byte plane) in a buffer of `slots` slots.
+fn single_index(layout: &Layout, i: &str, slots: &str) -> String {
+    let pair = if layout.planes().pair {
+        format!(" + ({slots} + 1u) / 2u")
+    } else {
+        String::new()
+    };
+    format!("{}u * {slots}{pair} + {i} / 4u", layout.vec4s())
+}
+
+/// The loads of slot `i`'s stored words from `buffer` (an array<vec4<u32>> of `slots` slots),
+/// as (name, WGSL type, expression): `w0`, `w1`, ... its 16-byte words, then `t2` (its
+/// 8-byte pair) and `t1` (its 4-byte word) where the layout has those planes: the names
+/// [`particle_from_words`] reads. Shared by the compute module and the draw modules.
+pub fn word_loads(
+    layout: &Layout,
+    buffer: &str,
+    i: &str,
+    slots: &str,
+) -> Vec<(String, &'static str, String)> {
+    let mut out: Vec<(String, &'static str, String)> = (0..layout.vec4s())
+        .map(|k| {
+            (
+                format!("w{k}"),
+                "vec4<u32>",
+                format!("{buffer}[{}]", word_index(k, i, slots)),
+            )
         })
         .collect();
+    let planes = layout.planes();
+    if planes.pair {
+        let at = pair_index(layout, i, slots);
+        out.push((
+            "t2".to_string(),
+            "vec2<u32>",
+            format!("select({buffer}[{at}].xy, {buffer}[{at}].zw, ({i} & 1u) == 1u)"),
+        ));
+    }
+    if planes.single {
+        let at = single_index(layout, i, slots);
+        out.push(("t1".to_string(), "u32", format!("{buffer}[{at}][{i} & 3u]")));
+    }
+    out
+}
+
+/// Stored word `j` of a slot, as loaded by [`word_loads`].
+fn loaded_word(layout: &Layout, j: usize) -> String {
+    let full = 4 * layout.vec4s() as usize;
+    if j < full {
+        format!("w{}.{}", j / 4, LANES[j % 4])
+    } else if layout.planes().pair && j < full + 2 {
+        format!("t2.{}", LANES[j - full])
+    } else {
+        "t1".to_string()
+    }
+}
+
+/// The `Particle(...)` constructor from its stored words as [`word_loads`] names them (the
+/// inverse of [`word_values`]); shared by the compute module's `load_particle` and the draw
+/// module's. Motion in halves is unpacked to the struct's f32 fields.
+pub fn particle_from_words(layout: &Layout) -> String {
+    let mut fields = Vec::new();
+    let mut j = 0;
+    for a in &layout.attributes {
+        let words = a.words(layout.half_motion);
+        if layout.half_motion && a.is_motion() {
+            let (xy, z) = (loaded_word(layout, j), loaded_word(layout, j + 1));
+            fields.push(format!("half_to_f32({xy})"));
+            fields.push(format!("half_to_f32({xy} >> 16u)"));
+            fields.push(format!("half_to_f32({z})"));
+        } else {
+            for (k, (_, ty)) in words.iter().enumerate() {
+                let word = loaded_word(layout, j + k);
+                fields.push(if *ty == "f32" {
+                    format!("bitcast<f32>({word})")
+                } else {
+                    word
+                });
+            }
+        }
+        j += words.len();
+    }
     format!("Particle({})", fields.join(", "))
 }
 
-/// The particle struct `p` as its vec4<u32> words (WGSL expressions, in memory order).
+/// The particle struct `p` as its stored words (u32 WGSL expressions, in order): motion in
+/// halves is packed with `f32_to_half`, x in the low half.
+pub fn word_values(layout: &Layout) -> Vec<String> {
+    let mut out = Vec::new();
+    for a in &layout.attributes {
+        let (names, _) = a.fields();
+        if layout.half_motion && a.is_motion() {
+            out.push(format!(
+                "f32_to_half(p.{}) | (f32_to_half(p.{}) << 16u)",
+                names[0], names[1]
+            ));
+            out.push(format!("f32_to_half(p.{})", names[2]));
+        } else {
+            for (name, ty) in a.words(false) {
+                out.push(if ty == "f32" {
+                    format!("bitcast<u32>(p.{name})")
+                } else {
+                    format!("p.{name}")
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The particle struct `p`'s whole 16-byte words as vec4<u32> expressions, in memory order
+/// (padded with zeros); a half-motion layout's last words are [`word_values`]' rest.
 pub fn packed_words(layout: &Layout) -> Vec<String> {
-    let words = layout.words();
+    let values = word_values(layout);
     (0..layout.vec4s() as usize)
         .map(|k| {
             let lanes: Vec<String> = (0..4)
-                .map(|l| match words.get(4 * k + l) {
-                    Some((name, "f32")) => format!("bitcast<u32>(p.{name})"),
-                    Some((name, _)) => format!("p.{name}"),
-                    None => "0u".to_string(),
-                })
+                .map(|l| values.get(4 * k + l).cloned().unwrap_or("0u".to_string()))
                 .collect();
             format!("vec4<u32>({})", lanes.join(", "))
         })

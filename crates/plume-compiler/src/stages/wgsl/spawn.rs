@@ -102,8 +102,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
 /// global slot this chunk holds), as every spawn kernel ends: Verlet's first displacement,
 /// the lifetime, the id and the spawn step as the layout has them.
 pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
-    let mut fields = vec!["s.x.x", "s.x.y", "s.x.z"];
-    if layout.has(Attribute::Displacement) {
+    let motion = if layout.has(Attribute::Displacement) {
         // Verlet: store the displacement that makes step one x0 + v0 h + a h²/2.
         let h = ir.h();
         if ir.custom_terms().any(|c| c.needs_context()) {
@@ -120,20 +119,23 @@ pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             f32_lit(h),
             f32_lit(0.5 * h * h)
         ));
-        fields.extend(["d.x", "d.y", "d.z"]);
+        ["d.x", "d.y", "d.z"]
     } else {
-        fields.extend(["s.v.x", "s.v.y", "s.v.z"]);
-    }
-    if layout.has(Attribute::DeathStep) {
-        fields.push("s.die_at");
-    }
-    fields.push("id");
-    if layout.has(Attribute::SpawnStep) {
-        fields.push("params.step");
-    }
-    if layout.has(Attribute::Tint) {
-        fields.push("tint");
-    }
+        ["s.v.x", "s.v.y", "s.v.z"]
+    };
+    // In the layout's attribute order.
+    let fields: Vec<&str> = layout
+        .attributes
+        .iter()
+        .flat_map(|a| match a {
+            Attribute::Position => vec!["s.x.x", "s.x.y", "s.x.z"],
+            Attribute::Velocity | Attribute::Displacement => motion.to_vec(),
+            Attribute::DeathStep => vec!["s.die_at"],
+            Attribute::Id => vec!["id"],
+            Attribute::SpawnStep => vec!["params.step"],
+            Attribute::Tint => vec!["tint"],
+        })
+        .collect();
     w.line(format!(
         "store_particle(slot - chunk.base, Particle({}));",
         fields.join(", ")

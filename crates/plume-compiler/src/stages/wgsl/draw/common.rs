@@ -8,7 +8,7 @@ use crate::base::rng;
 use crate::base::writer::{f32_lit, Writer};
 use crate::ir::EffectIr;
 use crate::stages::passes::layout::{Attribute, Layout};
-use crate::stages::wgsl::particle_from_words;
+use crate::stages::wgsl::{particle_from_words, word_loads};
 
 /// `finite3(x)`: whether no component is Inf or NaN, tested on the bits.
 pub(crate) fn emit_finite3(w: &mut Writer) {
@@ -36,22 +36,28 @@ pub(crate) fn emit_draw_view(w: &mut Writer) {
 /// (each buffer word-major over its own slots: [`crate::base::kernel::word_index`]).
 pub(crate) fn emit_load(w: &mut Writer, layout: &Layout, shape: &DrawShape) {
     let n = layout.vec4s();
+    // A padded layout's slots follow from a buffer's length; a half-motion layout's planes
+    // are not all vec4s a slot, so its slots come from the chunking.
+    let padded = !layout.half_motion;
+    if layout.half_motion {
+        crate::stages::wgsl::emit_half_unpack(w);
+    }
     w.block("fn load_particle(slot: u32) -> Particle", |w| {
         if shape.chunks <= 1 {
-            if n > 1 {
+            if padded && n > 1 {
                 w.line("let slots = arrayLength(&particles_0) / VEC4S;");
+            } else if !padded {
+                w.line("let slots = CAPACITY;");
             }
-            for k in 0..n {
-                w.line(format!(
-                    "let w{k} = particles_0[{}];",
-                    crate::base::kernel::word_index(k, "slot", "slots")
-                ));
+            for (name, _, expr) in word_loads(layout, "particles_0", "slot", "slots") {
+                w.line(format!("let {name} = {expr};"));
             }
         } else {
             w.line("let c = slot / CHUNK_SLOTS;");
             w.line("let i = slot - c * CHUNK_SLOTS;");
-            for k in 0..n {
-                w.line(format!("var w{k}: vec4<u32>;"));
+            let loads = word_loads(layout, "particles_0", "i", "slots");
+            for (name, ty, _) in &loads {
+                w.line(format!("var {name}: {ty};"));
             }
             w.block("switch c", |w| {
                 for c in 0..shape.chunks {
@@ -61,14 +67,16 @@ pub(crate) fn emit_load(w: &mut Writer, layout: &Layout, shape: &DrawShape) {
                         format!("case {c}u")
                     };
                     w.block(label, |w| {
-                        if n > 1 {
-                            w.line(format!("let slots = arrayLength(&particles_{c}) / VEC4S;"));
-                        }
-                        for k in 0..n {
+                        let buffer = format!("particles_{c}");
+                        if padded && n > 1 {
+                            w.line(format!("let slots = arrayLength(&{buffer}) / VEC4S;"));
+                        } else if !padded {
                             w.line(format!(
-                                "w{k} = particles_{c}[{}];",
-                                crate::base::kernel::word_index(k, "i", "slots")
+                                "let slots = min(CHUNK_SLOTS, CAPACITY - {c}u * CHUNK_SLOTS);"
                             ));
+                        }
+                        for (name, _, expr) in word_loads(layout, &buffer, "i", "slots") {
+                            w.line(format!("{name} = {expr};"));
                         }
                     });
                 }

@@ -141,6 +141,9 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     }
     if !stateless {
         w.line(format!("const VEC4S: u32 = {}u;", layout.vec4s()));
+        if layout.half_motion {
+            w.line(format!("const CAPACITY: u32 = {};", u32_lit(ir.capacity)));
+        }
         if shape.chunks > 1 {
             w.line(format!(
                 "const CHUNK_SLOTS: u32 = {};",
