@@ -62,6 +62,11 @@ fn compare_runs(name: &str, graph: &CompiledGraph, checkpoints: &[u64]) -> Effec
                 at,
                 false,
                 curved_colliders(&group.effect.ir),
+                group
+                    .effect
+                    .layout
+                    .half_motion
+                    .then_some(group.effect.ir.dt),
                 roundings,
                 &gsim.group_records(g).unwrap(),
                 &csim.records(g),

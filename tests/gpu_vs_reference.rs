@@ -47,6 +47,7 @@ fn every_example_matches_the_reference_after_50_and_100_steps() {
                 steps,
                 effect.ir.flock.is_some(),
                 curved_colliders(&effect.ir),
+                effect.layout.half_motion.then_some(effect.ir.dt),
                 roundings_per_step(&effect.ir),
                 &g,
                 &c,

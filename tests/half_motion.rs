@@ -94,8 +94,8 @@ fn a_tight_budget_keeps_motion_in_32_bit_floats() {
     assert_eq!(c.layout.bytes_per_particle, 32);
 }
 
-/// The GPU run of a half-motion effect against the f64 model that rounds the motion to halves
-/// where the GPU stores it: every stored velocity component is a half, and positions agree.
+/// The GPU run of a half-motion effect against its f64 oracle, which rounds the motion to
+/// halves where the GPU stores it: every stored velocity component is a half, and positions agree.
 /// They differ by f32's arithmetic, plus, where f32 and f64 land on opposite sides of a
 /// half's rounding boundary (about 1 in 2,000 roundings, given f32's 6e-8 relative error against
 /// a half's 4.9e-4 spacing), one half's spacing of velocity (at most 3 m/s · 4.9e-4 = 1.5e-3 m/s)
@@ -109,8 +109,8 @@ fn the_gpu_follows_the_f64_model_of_its_halves() {
         assert_eq!(c.layout.bytes_per_particle, if mortal { 28 } else { 24 });
         let steps = 50;
         let (_, gpu_records) = run_gpu(&c, steps);
+        // The oracle stores what the layout stores: halves here.
         let mut sim = ReferenceSim::new(&c.ir);
-        sim.round_motion_to_halves();
         sim.run(steps);
         let cpu_records = sim.records();
         assert_eq!(gpu_records.len(), 64);

@@ -70,6 +70,7 @@ fn a_vector_field_acts_on_the_gpu_as_the_reference_interpolates_it() {
             75,
             false,
             true,
+            None,
             roundings_per_step(&compiled.ir),
             &sim.records().expect("records"),
             &cpu,

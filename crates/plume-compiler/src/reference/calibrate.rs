@@ -108,9 +108,7 @@ pub fn run_stored(
         sample.bursts = true;
     }
     let mut sim = ReferenceSim::new(&sample);
-    if halves {
-        sim.round_motion_to_halves();
-    }
+    sim.set_motion_in_halves(halves);
     if let Some(burst) = stand_in {
         sim.burst(burst)
             .expect("the stand-in names one of the group's emitters");

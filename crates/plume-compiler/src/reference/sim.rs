@@ -98,16 +98,19 @@ impl ReferenceSim {
             fired: vec![Vec::new(); ir.events.len()],
             next_event_id: 0,
             placement: Placement::IDENTITY,
-            motion_in_halves: false,
+            // The f64 twin stores what the GPU stores: motion in halves where the accuracy
+            // pass chose them (`AccuracyIr::half_motion`; never in a stateless effect).
+            motion_in_halves: ir.stateless.is_none()
+                && ir.accuracy.as_ref().is_some_and(|a| a.half_motion),
         }
     }
 
-    /// Rounds each particle's stored motion (velocity, or Verlet's displacement) to 16-bit
-    /// floats as a half-motion layout stores it, from now on. The oracle that GPU runs are
-    /// compared with does not: it is the f64 model of the arithmetic, and the accuracy budget
-    /// that allowed the halves is what bounds their error (`plume accuracy` checks it).
-    pub fn round_motion_to_halves(&mut self) {
-        self.motion_in_halves = true;
+    /// Whether each particle's stored motion (velocity, or Verlet's displacement) is rounded
+    /// to 16-bit floats where the GPU would store it, from now on: by default, as the
+    /// effect's layout stores it. The accuracy pass sets it either way to compare the two, and
+    /// the truth a budget is measured against never rounds.
+    pub fn set_motion_in_halves(&mut self, on: bool) {
+        self.motion_in_halves = on;
     }
 
     /// Places the emitters' next spawns in the world by `placement` (a placed effect's f64
