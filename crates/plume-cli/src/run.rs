@@ -42,6 +42,11 @@ pub struct RunArgs {
     /// Run the CPU f64 reference simulator instead of the GPU.
     #[arg(long)]
     pub(crate) cpu_reference: bool,
+    /// Measure the box that holds every live particle at the end of every step (on the GPU, or
+    /// in f64 with --cpu-reference) and print it as a `bounds:` line for the file (the box a
+    /// host culls the effect by).
+    #[arg(long)]
+    pub(crate) bounds: bool,
 }
 
 /// The order of exported particles.
@@ -65,6 +70,32 @@ struct Outcome {
     engine: String,
     groups: Vec<GroupOutcome>,
     seconds: f64,
+    /// With `--bounds`: the union over the steps of the boxes of every group's live particles.
+    bounds: Option<Bounds>,
+}
+
+/// A box: its corners (m).
+type Bounds = plume_runtime::LiveBounds;
+
+/// The smallest box holding `a` and `b`, where there is one.
+fn union(a: Option<Bounds>, b: Option<Bounds>) -> Option<Bounds> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.union(b)),
+        (a, None) => a,
+        (None, b) => b,
+    }
+}
+
+/// The box of `records`' finite positions (the f64 run's, rounded to f32).
+fn box_of(records: &[ParticleRecord]) -> Option<Bounds> {
+    records
+        .iter()
+        .filter(|r| r.position.is_finite())
+        .map(|r| {
+            let x = r.position.as_vec3().to_array();
+            Bounds { min: x, max: x }
+        })
+        .fold(None, |acc, b| union(acc, Some(b)))
 }
 
 pub(crate) fn progress_bar(steps: u64, quiet: bool) -> ProgressBar {
@@ -85,11 +116,15 @@ pub(crate) fn progress_bar(steps: u64, quiet: bool) -> ProgressBar {
 fn simulate_cpu(args: &RunArgs, graph: &CompiledGraph, bar: &ProgressBar) -> Outcome {
     bar.set_message("cpu reference");
     let start = Instant::now();
+    let mut bounds = None;
     let groups = if load::single(graph) {
         let effect = &graph.groups[0].effect;
         let mut sim = ReferenceSim::new(&effect.ir);
         for _ in 0..args.steps {
             sim.step();
+            if args.bounds {
+                bounds = union(bounds, box_of(&sim.records()));
+            }
             bar.inc(1);
         }
         let mut records = sim.records();
@@ -112,6 +147,11 @@ fn simulate_cpu(args: &RunArgs, graph: &CompiledGraph, bar: &ProgressBar) -> Out
         let mut sim = ReferenceGraph::new(graph);
         for _ in 0..args.steps {
             sim.step();
+            if args.bounds {
+                for g in 0..graph.groups.len() {
+                    bounds = union(bounds, box_of(&sim.records(g)));
+                }
+            }
             bar.inc(1);
         }
         (0..graph.groups.len())
@@ -127,6 +167,7 @@ fn simulate_cpu(args: &RunArgs, graph: &CompiledGraph, bar: &ProgressBar) -> Out
         engine: "cpu reference (f64)".into(),
         groups,
         seconds: start.elapsed().as_secs_f64(),
+        bounds,
     }
 }
 
@@ -148,7 +189,17 @@ fn simulate(args: &RunArgs, graph: CompiledGraph) -> Result<Outcome, RuntimeErro
     );
     let _scene = crate::scene_depth::bind_effect_scene(&gpu, &mut sim, &camera, size)?;
     let start = Instant::now();
-    sim.run(args.steps, |done| bar.set_position(done))?;
+    let mut bounds = None;
+    if args.bounds {
+        // A step at a time, the box measured after each (24 bytes read back a step).
+        for done in 1..=args.steps {
+            sim.run(1, |_| {})?;
+            bounds = union(bounds, sim.live_bounds()?);
+            bar.set_position(done);
+        }
+    } else {
+        sim.run(args.steps, |done| bar.set_position(done))?;
+    }
     let seconds = start.elapsed().as_secs_f64();
     bar.finish_and_clear();
     let mut groups = Vec::new();
@@ -166,6 +217,7 @@ fn simulate(args: &RunArgs, graph: CompiledGraph) -> Result<Outcome, RuntimeErro
         engine: gpu.describe(),
         groups,
         seconds,
+        bounds,
     })
 }
 
@@ -225,7 +277,30 @@ pub fn run(args: &RunArgs) -> ExitCode {
         (false, true) => print_groups_json(&outcome),
         (false, false) => print_groups(args, &name, &outcome, dt),
     }
+    if args.bounds && !args.json {
+        print_bounds(args.steps, outcome.bounds);
+    }
     ExitCode::SUCCESS
+}
+
+/// The measured box as a line for the file: its corners rounded outward to the centimetre.
+fn print_bounds(steps: u64, bounds: Option<Bounds>) {
+    match bounds {
+        Some(Bounds { min, max }) => {
+            let out = |v: [f32; 3], round: fn(f64) -> f64| {
+                let c = v.map(|x| round(f64::from(x) * 100.0) / 100.0);
+                format!("({:.2}, {:.2}, {:.2})", c[0], c[1], c[2])
+            };
+            println!(
+                "live bounds over {steps} steps (every live particle at the end of every step):\n  bounds: Some(Bounds(min: {}, max: {})),",
+                out(min, f64::floor),
+                out(max, f64::ceil)
+            );
+        }
+        None => {
+            println!("live bounds over {steps} steps: no particle was alive at the end of any step")
+        }
+    }
 }
 
 /// One JSON object for an effect without groups.
@@ -236,6 +311,12 @@ fn print_json(outcome: &Outcome, state: &str) {
     v.insert("seconds".into(), outcome.seconds.into());
     v.insert("adapter".into(), outcome.engine.clone().into());
     v.insert("stateless".into(), state.starts_with("stateless (").into());
+    if let Some(Bounds { min, max }) = outcome.bounds {
+        v.insert(
+            "live_bounds".into(),
+            serde_json::json!({ "min": min, "max": max }),
+        );
+    }
     println!("{}", serde_json::Value::Object(v));
 }
 
@@ -301,12 +382,15 @@ fn print_groups_json(outcome: &Outcome) {
             serde_json::Value::Object(fields)
         })
         .collect();
-    let v = serde_json::json!({
+    let mut v = serde_json::json!({
         "steps": outcome.groups[0].totals.steps,
         "groups": per_group,
         "seconds": outcome.seconds,
         "adapter": outcome.engine,
     });
+    if let Some(Bounds { min, max }) = outcome.bounds {
+        v["live_bounds"] = serde_json::json!({ "min": min, "max": max });
+    }
     println!("{v}");
 }
 

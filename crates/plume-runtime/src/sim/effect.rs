@@ -93,6 +93,8 @@ pub struct Effect {
     warnings: Diagnostics,
     /// The kernels that copy a host's depth for a `SceneDepth` collider (made on first use).
     depth_copy: crate::device::depth_copy::DepthCopy,
+    /// The live-bounds reduction (made on first use: [`Self::live_bounds`]).
+    bounds: std::sync::OnceLock<crate::sim::bounds::BoundsProbe>,
 }
 
 impl Effect {
@@ -186,6 +188,7 @@ impl Effect {
             events,
             warnings,
             depth_copy: Default::default(),
+            bounds: std::sync::OnceLock::new(),
         })
     }
 
@@ -480,6 +483,24 @@ impl Effect {
             out.extend(group.records()?);
         }
         Ok(out)
+    }
+
+    /// The box that holds every live particle of every group now (its corners in metres),
+    /// measured on the GPU (a stateless effect's particles evaluated at the steps
+    /// done); None when none is alive. For a host's culling, or to write a file's `bounds`
+    /// (`plume run --bounds` takes the union over a run). Reads 24 bytes back and waits.
+    pub fn live_bounds(&self) -> Result<Option<crate::sim::bounds::LiveBounds>, RuntimeError> {
+        if self.bounds.get().is_none() {
+            let probe = crate::sim::bounds::BoundsProbe::new(&self.gpu)?;
+            let _ = self.bounds.set(probe);
+        }
+        let probe = self.bounds.get().expect("set above");
+        probe.reset();
+        for group in &self.groups {
+            group.evaluate_view()?;
+            probe.add(&group.effect.layout, group.chunks()?)?;
+        }
+        probe.read()
     }
 
     /// The groups' names, the top-level group first (one name for an effect without groups).

@@ -1,0 +1,220 @@
+//! The box that holds an effect's live particles, measured on the GPU ([`Effect::live_bounds`]):
+//! for a host's culling and for writing a file's `bounds` (`plume run --bounds`). One pass over
+//! each particle buffer: every live slot with a finite position takes part, each workgroup
+//! reduces its box in workgroup memory, and one thread a workgroup folds it into six global
+//! atomics (each coordinate as an order-preserving u32, so integer min and max order the
+//! floats). Only 24 bytes come back, whatever the capacity.
+//!
+//! [`Effect::live_bounds`]: crate::sim::effect::Effect::live_bounds
+
+use plume_compiler::passes::layout::Attribute;
+
+use crate::device::buffers::{filled_buffer, STORAGE};
+use crate::device::gpu::Gpu;
+use crate::device::readback::read_buffer;
+use crate::device::resources::Chunk;
+use crate::error::RuntimeError;
+
+const BOUNDS_WGSL: &str = r#"
+// One particle buffer's slots, word-major: the position in lanes x, y, z of 16-byte word 0,
+// the id in lane `id_lane` of word `id_vec4` (0xffffffff: a free slot).
+struct Part {
+    len: u32,
+    id_vec4: u32,
+    id_lane: u32,
+    pad: u32,
+}
+
+@group(0) @binding(0) var<storage, read> particles: array<vec4<u32>>;
+// min x, y, z, then max x, y, z, as ordered keys.
+@group(0) @binding(1) var<storage, read_write> box_keys: array<atomic<u32>, 6>;
+@group(0) @binding(2) var<uniform> part: Part;
+
+var<workgroup> group_keys: array<atomic<u32>, 6>;
+
+// A float as a u32 whose unsigned order is the float's order.
+fn ordered(bits: u32) -> u32 {
+    return select(bits | 0x80000000u, ~bits, (bits & 0x80000000u) != 0u);
+}
+
+@compute @workgroup_size(256)
+fn bounds(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+          @builtin(local_invocation_index) lane: u32) {
+    if (lane < 3u) {
+        atomicStore(&group_keys[lane], 0xffffffffu);
+        atomicStore(&group_keys[lane + 3u], 0u);
+    }
+    workgroupBarrier();
+    let i = gid.x + gid.y * groups.x * 256u;
+    if (i < part.len) {
+        let id = particles[part.id_vec4 * part.len + i][part.id_lane];
+        let w = particles[i];
+        let x = bitcast<vec3<f32>>(w.xyz);
+        // Finite: not NaN (x == x) and not infinite (|x| <= the largest f32).
+        let finite = all(x == x) && all(abs(x) <= vec3<f32>(3.4028235e38));
+        if (id != 0xffffffffu && finite) {
+            for (var k = 0u; k < 3u; k++) {
+                let key = ordered(w[k]);
+                atomicMin(&group_keys[k], key);
+                atomicMax(&group_keys[k + 3u], key);
+            }
+        }
+    }
+    workgroupBarrier();
+    if (lane < 3u) {
+        let lo = atomicLoad(&group_keys[lane]);
+        // A workgroup with no live particle leaves the box alone.
+        if (lo != 0xffffffffu) {
+            atomicMin(&box_keys[lane], lo);
+            atomicMax(&box_keys[lane + 3u], atomicLoad(&group_keys[lane + 3u]));
+        }
+    }
+}
+"#;
+
+/// A box that holds particles: its corners (m, in the effect's space).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LiveBounds {
+    /// The smallest x, y and z.
+    pub min: [f32; 3],
+    /// The largest x, y and z.
+    pub max: [f32; 3],
+}
+
+impl LiveBounds {
+    /// The smallest box holding both.
+    pub fn union(self, other: LiveBounds) -> LiveBounds {
+        LiveBounds {
+            min: std::array::from_fn(|k| self.min[k].min(other.min[k])),
+            max: std::array::from_fn(|k| self.max[k].max(other.max[k])),
+        }
+    }
+}
+
+/// The inverse of the kernel's `ordered`.
+fn float_of(key: u32) -> f32 {
+    f32::from_bits(if key & 0x8000_0000 != 0 {
+        key & 0x7fff_ffff
+    } else {
+        !key
+    })
+}
+
+/// The reduction's pipeline and its six-word result.
+pub(crate) struct BoundsProbe {
+    pipeline: wgpu::ComputePipeline,
+    keys: wgpu::Buffer,
+    gpu: Gpu,
+}
+
+impl BoundsProbe {
+    /// The pipeline and an empty box, on `gpu`.
+    pub(crate) fn new(gpu: &Gpu) -> Result<Self, RuntimeError> {
+        let module = gpu
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("live bounds"),
+                source: wgpu::ShaderSource::Wgsl(BOUNDS_WGSL.into()),
+            });
+        let keys = filled_buffer(gpu, "live bounds", 24, STORAGE, |_| {})?;
+        let probe = Self {
+            pipeline: gpu.compute_pipeline(&module, "bounds", None),
+            keys,
+            gpu: gpu.clone(),
+        };
+        probe.reset();
+        Ok(probe)
+    }
+
+    /// Empties the box.
+    pub(crate) fn reset(&self) {
+        let empty: Vec<u8> = [u32::MAX; 3]
+            .into_iter()
+            .chain([0; 3])
+            .flat_map(u32::to_le_bytes)
+            .collect();
+        self.gpu.queue.write_buffer(&self.keys, 0, &empty);
+    }
+
+    /// Grows the box by the live particles of `chunks` (one group's buffers, laid out as
+    /// `layout`), on the GPU.
+    pub(crate) fn add(
+        &self,
+        layout: &plume_compiler::Layout,
+        chunks: &[Chunk],
+    ) -> Result<(), RuntimeError> {
+        let id_word = layout
+            .word_offset(Attribute::Id)
+            .ok_or_else(|| RuntimeError::Gpu("the layout has no id".into()))?
+            as u32;
+        let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+        let mut parts = Vec::new();
+        for chunk in chunks {
+            let words = [chunk.len as u32, id_word / 4, id_word % 4, 0];
+            let part = filled_buffer(
+                &self.gpu,
+                "live bounds part",
+                16,
+                wgpu::BufferUsages::UNIFORM,
+                |b| {
+                    for (w, out) in words.iter().zip(b.chunks_exact_mut(4)) {
+                        out.copy_from_slice(&w.to_le_bytes());
+                    }
+                },
+            )?;
+            let group = self.gpu.bind_buffers(
+                "live bounds",
+                &self.pipeline.get_bind_group_layout(0),
+                &[(0, &chunk.buffer), (1, &self.keys), (2, &part)],
+            );
+            parts.push((group, self.gpu.grid(chunk.len, 256)?, part));
+        }
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            for (group, (x, y), _) in &parts {
+                pass.set_bind_group(0, group, &[]);
+                pass.dispatch_workgroups(*x, *y, 1);
+            }
+        }
+        self.gpu.queue.submit([encoder.finish()]);
+        Ok(())
+    }
+
+    /// The box so far: (min, max), or None when no live particle has been seen.
+    pub(crate) fn read(&self) -> Result<Option<LiveBounds>, RuntimeError> {
+        let bytes = read_buffer(&self.gpu, &self.keys)?;
+        let key = |k: usize| u32::from_le_bytes(bytes[4 * k..4 * k + 4].try_into().unwrap());
+        if key(0) == u32::MAX && key(3) == 0 {
+            return Ok(None);
+        }
+        let min = [float_of(key(0)), float_of(key(1)), float_of(key(2))];
+        let max = [float_of(key(3)), float_of(key(4)), float_of(key(5))];
+        Ok(Some(LiveBounds { min, max }))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::float_of;
+
+    /// The kernel's `ordered`, on the CPU.
+    fn ordered(bits: u32) -> u32 {
+        if bits & 0x8000_0000 != 0 {
+            !bits
+        } else {
+            bits | 0x8000_0000
+        }
+    }
+
+    #[test]
+    fn ordered_keys_order_floats_and_invert() {
+        let xs = [-1e30f32, -2.5, -0.0, 0.0, 1e-30, 3.25, 7e37];
+        for w in xs.windows(2) {
+            assert!(ordered(w[0].to_bits()) <= ordered(w[1].to_bits()), "{w:?}");
+        }
+        for x in xs {
+            assert_eq!(float_of(ordered(x.to_bits())).to_bits(), x.to_bits());
+        }
+    }
+}
