@@ -304,15 +304,13 @@ fn a_group_fed_by_events_is_calibrated_and_checked_on_a_stand_in() {
     // emitter, the stand-in fired at the first step (256 particles).
     let effect = plume::compiler::parse_with(src, &CompileOptions::default()).unwrap();
     let groups = plume::compiler::graph::group_effects(&effect);
-    let mut alone = groups[1].clone();
-    alone.emitters = vec![groups[0].events[0].as_emitter()];
-    alone.events.clear();
-    alone.bursts = true;
-    alone.stand_in = Some(plume::compiler::bursts::Burst {
-        emitter: 0,
-        count: 256,
-        ..stand_in
-    });
+    let alone = plume::compiler::graph::reference::stand_in_group(&groups, &graph, 1, 256)
+        .expect("the shells fire");
+    assert_eq!(alone.emitters, vec![groups[0].events[0].as_emitter()]);
+    assert_eq!(
+        alone.stand_in.map(|b| (b.emitter, b.count, b.offset)),
+        Some((0, 256, stand_in.offset))
+    );
     let check = check_budget(&gpu(), &alone).unwrap().expect("a budget");
     assert!(
         check.met() && check.particles == 256,

@@ -93,7 +93,12 @@ fn accuracy_of_groups(
         group.events.clear();
         let label = format!("{name} group {:?}", group.name);
         if group.emitters.is_empty() {
-            match stand_in_group(&groups, &graph, g, group) {
+            match plume_compiler::graph::reference::stand_in_group(
+                &groups,
+                &graph,
+                g,
+                plume_runtime::bench::CHECKED,
+            ) {
                 Some(stand_in) => group = stand_in,
                 None => {
                     eprintln!(
@@ -133,30 +138,6 @@ fn accuracy_of_groups(
     } else {
         ExitCode::SUCCESS
     }
-}
-
-/// Group `g` of `groups` (fed by events alone; `group` is its effect, events cleared) made
-/// measurable: the spawn rule of the first event into it as its one emitter, and a stand-in
-/// burst of `bench::CHECKED` particles of it where the parent first fires in an f64 run
-/// of `graph` (`Effect::stand_in`), which the budget check and the sweep fire at their first
-/// step. None when no event into it fires within `STAND_IN_STEPS`.
-fn stand_in_group(
-    groups: &[plume_compiler::Effect],
-    graph: &plume_compiler::graph::CompiledGraph,
-    g: usize,
-    mut group: plume_compiler::Effect,
-) -> Option<plume_compiler::Effect> {
-    let burst =
-        plume_compiler::graph::reference::stand_in(graph, g, plume_runtime::bench::CHECKED)?;
-    let stream = graph.streams.iter().find(|s| s.child == g)?;
-    let event = &groups[stream.parent].events[stream.out_slot];
-    group.emitters = vec![event.as_emitter()];
-    group.bursts = true;
-    group.stand_in = Some(plume_compiler::bursts::Burst {
-        emitter: 0,
-        ..burst
-    });
-    Some(group)
 }
 
 /// `plume accuracy` of one group's effect `effect` (named `name` in messages), its plot to

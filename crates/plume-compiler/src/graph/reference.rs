@@ -137,3 +137,28 @@ pub fn stand_in(
     }
     None
 }
+
+/// Group `g` of `groups` (the file's groups as effects of their own, `graph::group_effects`),
+/// fed by events alone, made measurable alone: its events left out, the spawn rule of the first
+/// event into it as its one emitter, and a [`stand_in`] burst of `particles` of it
+/// (`Effect::stand_in`, which the budget check and `plume accuracy`'s sweep fire at their first
+/// step). None when no event into it fires within [`STAND_IN_STEPS`].
+pub fn stand_in_group(
+    groups: &[crate::stages::schema::Effect],
+    graph: &CompiledGraph,
+    g: usize,
+    particles: u32,
+) -> Option<crate::stages::schema::Effect> {
+    let burst = stand_in(graph, g, particles)?;
+    let stream = graph.streams.iter().find(|s| s.child == g)?;
+    let event = &groups[stream.parent].events[stream.out_slot];
+    let mut group = groups[g].clone();
+    group.events.clear();
+    group.emitters = vec![event.as_emitter()];
+    group.bursts = true;
+    group.stand_in = Some(crate::features::bursts::Burst {
+        emitter: 0,
+        ..burst
+    });
+    Some(group)
+}

@@ -99,7 +99,6 @@ impl Resources {
     ) -> Result<Self, RuntimeError> {
         let device = &gpu.device;
         let cap = u64::from(effect.ir.capacity);
-        let bpp = u64::from(effect.layout.bytes_per_particle);
         let limit = gpu
             .limits
             .max_storage_buffer_binding_size
@@ -117,9 +116,13 @@ impl Resources {
         }
         // A trail's ring is split with the particles, so both must fit a binding.
         let trail_bpp = u64::from(effect.layout.trail_bytes_per_particle);
-        // A half-motion layout's last planes round each up to a whole vec4 (32 bytes at most).
-        let rounding = if effect.layout.half_motion { 32 } else { 0 };
-        let chunk_slots = (limit.saturating_sub(rounding) / bpp.max(trail_bpp))
+        // The most slots whose buffer fits a binding (`Layout::buffer_bytes`: a half-motion
+        // layout's last planes round up to whole vec4s), and whose trail ring does.
+        let trail_slots = limit.checked_div(trail_bpp).unwrap_or(u64::MAX);
+        let chunk_slots = effect
+            .layout
+            .slots_in(limit)
+            .min(trail_slots)
             .min(max_chunk_slots.unwrap_or(u64::MAX))
             .max(1);
         let chunk_count = cap.div_ceil(chunk_slots);
@@ -306,9 +309,9 @@ impl Resources {
             return Err(RuntimeError::OutOfMemory {
                 what: format!(
                     "{chunk_count} particle buffer(s) of up to {} bytes and a {free_list_bytes}-byte free list ({e})",
-                    chunk_slots * bpp,
+                    effect.layout.buffer_bytes(chunk_slots),
                 ),
-                bytes: cap * bpp + free_list_bytes,
+                bytes: effect.layout.buffer_bytes(cap) + free_list_bytes,
                 bytes_per_particle: effect.layout.bytes_per_particle,
             });
         }
@@ -338,7 +341,6 @@ impl Resources {
     fn allocate_chunks(&self, effect: &CompiledEffect) -> Result<Vec<Chunk>, RuntimeError> {
         let device = &self.gpu.device;
         let cap = u64::from(effect.ir.capacity);
-        let bpp = u64::from(effect.layout.bytes_per_particle);
         let out_of_memory = device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let mut chunks = Vec::new();
         for k in 0..self.chunk_count {
@@ -375,7 +377,7 @@ impl Resources {
                 what: format!(
                     "{} particle buffer(s) of up to {} bytes{} ({e})",
                     self.chunk_count,
-                    self.chunk_slots * bpp,
+                    effect.layout.buffer_bytes(self.chunk_slots),
                     if trail_bpp > 0 {
                         format!(
                             " and as many trail rings of up to {} bytes",
@@ -385,7 +387,7 @@ impl Resources {
                         String::new()
                     }
                 ),
-                bytes: cap * (bpp + trail_bpp),
+                bytes: effect.layout.buffer_bytes(cap) + cap * trail_bpp,
                 bytes_per_particle: effect.layout.bytes_per_particle,
             });
         }

@@ -100,89 +100,89 @@ fn float_of(key: u32) -> f32 {
     })
 }
 
-/// The reduction's pipeline and its six-word result.
+/// The reduction over a fixed set of particle buffers: its pipeline, a bind group and grid
+/// per buffer (made once: an effect's buffers never move), and its six-word result.
 pub(crate) struct BoundsProbe {
     pipeline: wgpu::ComputePipeline,
     keys: wgpu::Buffer,
+    /// Per particle buffer: its bind group, its grid, and the uniform the group holds.
+    parts: Vec<(wgpu::BindGroup, (u32, u32), wgpu::Buffer)>,
     gpu: Gpu,
 }
 
 impl BoundsProbe {
-    /// The pipeline and an empty box, on `gpu`.
-    pub(crate) fn new(gpu: &Gpu) -> Result<Self, RuntimeError> {
+    /// The reduction over `buffers`: each group's layout and particle buffers.
+    pub(crate) fn new(
+        gpu: &Gpu,
+        buffers: &[(&plume_compiler::Layout, &[Chunk])],
+    ) -> Result<Self, RuntimeError> {
         let module = gpu
             .device
             .create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("live bounds"),
                 source: wgpu::ShaderSource::Wgsl(BOUNDS_WGSL.into()),
             });
+        let pipeline = gpu.compute_pipeline(&module, "bounds", None);
         let keys = filled_buffer(gpu, "live bounds", 24, STORAGE, |_| {})?;
-        let probe = Self {
-            pipeline: gpu.compute_pipeline(&module, "bounds", None),
+        let mut parts = Vec::new();
+        for (layout, chunks) in buffers {
+            let id_word = layout
+                .word_offset(Attribute::Id)
+                .ok_or_else(|| RuntimeError::Gpu("the layout has no id".into()))?
+                as u32;
+            for chunk in *chunks {
+                let words = [chunk.len as u32, id_word / 4, id_word % 4, 0];
+                let part = filled_buffer(
+                    gpu,
+                    "live bounds part",
+                    16,
+                    wgpu::BufferUsages::UNIFORM,
+                    |b| {
+                        for (w, out) in words.iter().zip(b.chunks_exact_mut(4)) {
+                            out.copy_from_slice(&w.to_le_bytes());
+                        }
+                    },
+                )?;
+                let group = gpu.bind_buffers(
+                    "live bounds",
+                    &pipeline.get_bind_group_layout(0),
+                    &[(0, &chunk.buffer), (1, &keys), (2, &part)],
+                );
+                parts.push((group, gpu.grid(chunk.len, 256)?, part));
+            }
+        }
+        Ok(Self {
+            pipeline,
             keys,
+            parts,
             gpu: gpu.clone(),
-        };
-        probe.reset();
-        Ok(probe)
+        })
     }
 
-    /// Empties the box.
-    pub(crate) fn reset(&self) {
+    /// Measures the buffers' live particles now: empties the box and runs the reduction over
+    /// every buffer in one submission.
+    pub(crate) fn measure(&self) -> Result<Option<LiveBounds>, RuntimeError> {
         let empty: Vec<u8> = [u32::MAX; 3]
             .into_iter()
             .chain([0; 3])
             .flat_map(u32::to_le_bytes)
             .collect();
         self.gpu.queue.write_buffer(&self.keys, 0, &empty);
-    }
-
-    /// Grows the box by the live particles of `chunks` (one group's buffers, laid out as
-    /// `layout`), on the GPU.
-    pub(crate) fn add(
-        &self,
-        layout: &plume_compiler::Layout,
-        chunks: &[Chunk],
-    ) -> Result<(), RuntimeError> {
-        let id_word = layout
-            .word_offset(Attribute::Id)
-            .ok_or_else(|| RuntimeError::Gpu("the layout has no id".into()))?
-            as u32;
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        let mut parts = Vec::new();
-        for chunk in chunks {
-            let words = [chunk.len as u32, id_word / 4, id_word % 4, 0];
-            let part = filled_buffer(
-                &self.gpu,
-                "live bounds part",
-                16,
-                wgpu::BufferUsages::UNIFORM,
-                |b| {
-                    for (w, out) in words.iter().zip(b.chunks_exact_mut(4)) {
-                        out.copy_from_slice(&w.to_le_bytes());
-                    }
-                },
-            )?;
-            let group = self.gpu.bind_buffers(
-                "live bounds",
-                &self.pipeline.get_bind_group_layout(0),
-                &[(0, &chunk.buffer), (1, &self.keys), (2, &part)],
-            );
-            parts.push((group, self.gpu.grid(chunk.len, 256)?, part));
-        }
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.pipeline);
-            for (group, (x, y), _) in &parts {
+            for (group, (x, y), _) in &self.parts {
                 pass.set_bind_group(0, group, &[]);
                 pass.dispatch_workgroups(*x, *y, 1);
             }
         }
         self.gpu.queue.submit([encoder.finish()]);
-        Ok(())
+        self.read()
     }
 
-    /// The box so far: (min, max), or None when no live particle has been seen.
-    pub(crate) fn read(&self) -> Result<Option<LiveBounds>, RuntimeError> {
+    /// The box measured: None when no live particle was seen.
+    fn read(&self) -> Result<Option<LiveBounds>, RuntimeError> {
         let bytes = read_buffer(&self.gpu, &self.keys)?;
         let key = |k: usize| u32::from_le_bytes(bytes[4 * k..4 * k + 4].try_into().unwrap());
         if key(0) == u32::MAX && key(3) == 0 {

@@ -490,17 +490,18 @@ impl Effect {
     /// done); None when none is alive. For a host's culling, or to write a file's `bounds`
     /// (`plume run --bounds` takes the union over a run). Reads 24 bytes back and waits.
     pub fn live_bounds(&self) -> Result<Option<crate::sim::bounds::LiveBounds>, RuntimeError> {
-        if self.bounds.get().is_none() {
-            let probe = crate::sim::bounds::BoundsProbe::new(&self.gpu)?;
-            let _ = self.bounds.set(probe);
-        }
-        let probe = self.bounds.get().expect("set above");
-        probe.reset();
         for group in &self.groups {
             group.evaluate_view()?;
-            probe.add(&group.effect.layout, group.chunks()?)?;
         }
-        probe.read()
+        if self.bounds.get().is_none() {
+            let mut buffers = Vec::new();
+            for group in &self.groups {
+                buffers.push((&group.effect.layout, group.chunks()?));
+            }
+            let probe = crate::sim::bounds::BoundsProbe::new(&self.gpu, &buffers)?;
+            let _ = self.bounds.set(probe);
+        }
+        self.bounds.get().expect("set above").measure()
     }
 
     /// The groups' names, the top-level group first (one name for an effect without groups).
