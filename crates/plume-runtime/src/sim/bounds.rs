@@ -72,7 +72,25 @@ fn bounds(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups
 }
 "#;
 
-/// A box that holds particles: its corners (m, in the effect's space).
+/// A box that holds particles: its corners (m, in the effect's space), as
+/// [`Effect::live_bounds`](crate::Effect::live_bounds) measures it.
+///
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use plume_runtime::{Effect, Gpu};
+/// let source = r#"Effect(name: "puff", capacity: 64,
+///     emitters: [Emitter(burst: 64, shape: Sphere(center: (0.0, 2.0, 0.0), radius: 0.5),
+///                        velocity: Constant((1.0, 0.0, 0.0)))])"#;
+/// let gpu = Gpu::new(&Default::default())?;
+/// let mut puff = Effect::from_source(&gpu, source, &Default::default())?;
+/// puff.run(30, |_| {})?;
+/// // Half a second at 1 m/s along x: the ball of radius 0.5 has moved 0.5 m.
+/// let bounds = puff.live_bounds()?.expect("64 particles alive");
+/// assert!(bounds.min[0] > -0.01 && bounds.max[0] < 1.01);
+/// assert!(bounds.min[1] > 1.49 && bounds.max[1] < 2.51);
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LiveBounds {
     /// The smallest x, y and z.

@@ -489,23 +489,7 @@ impl Effect {
     /// measured on the GPU (a stateless effect's particles evaluated at the steps
     /// done); None when none is alive. For a host's culling, or to write a file's `bounds`
     /// (`plume run --bounds` takes the union over a run). Reads 24 bytes back and waits.
-    ///
-    /// ```
-    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
-    /// use plume_runtime::{Effect, Gpu};
-    /// let source = r#"Effect(name: "puff", capacity: 64,
-    ///     emitters: [Emitter(burst: 64, shape: Sphere(center: (0.0, 2.0, 0.0), radius: 0.5),
-    ///                        velocity: Constant((1.0, 0.0, 0.0)))])"#;
-    /// let gpu = Gpu::new(&Default::default())?;
-    /// let mut puff = Effect::from_source(&gpu, source, &Default::default())?;
-    /// puff.run(30, |_| {})?;
-    /// // Half a second at 1 m/s along x: the ball of radius 0.5 has moved 0.5 m.
-    /// let bounds = puff.live_bounds()?.expect("64 particles alive");
-    /// assert!(bounds.min[0] > -0.01 && bounds.max[0] < 1.01);
-    /// assert!(bounds.min[1] > 1.49 && bounds.max[1] < 2.51);
-    /// # Ok(())
-    /// # }
-    /// ```
+    /// [`LiveBounds`](crate::LiveBounds) has an example.
     pub fn live_bounds(&self) -> Result<Option<crate::sim::bounds::LiveBounds>, RuntimeError> {
         for group in &self.groups {
             group.evaluate_view()?;
