@@ -444,15 +444,15 @@ fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
     // blend as the blend unit does (llvmpipe blends in 8-bit fixed point). Each blend can then
     // land one step apart, and a deep stack a few; a misplaced sprite (half a pixel off: mean
     // difference 1.25 on the tornado), a wrong colour or order is far outside.
-    // Oriented sprites (render.orient other than Camera) are the raster draw's alone: the
-    // splat refuses them (tests/looks.rs), and at least three examples remain to compare.
+    // Glowing and trailed effects are the raster draw's alone (tests/glow.rs, tests/trails.rs);
+    // every other example is compared.
     let gpu = gpu();
     let mut compared = 0;
     for path in examples() {
         let sim = advance_to_show(simulate(&gpu, compile_file(&path), 0));
         let name = path.file_name().unwrap().to_string_lossy();
         if !Splat::draws(&sim.compiled().ir) {
-            eprintln!("{name}: oriented sprites, not for the splat");
+            eprintln!("{name}: glow or trails, not for the splat");
             continue;
         }
         compared += 1;
@@ -474,16 +474,30 @@ fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
                 "{name} {w}x{h}: entries lost"
             );
             let (mean, max, over) = differences(&raster, &img, 2);
+            if std::env::var_os("PLUME_DUMP").is_some() {
+                for (pixels, kind) in [(&raster, "raster"), (&img, "splat")] {
+                    image::save_buffer(format!("/tmp/{name}_{w}_{kind}.png"), pixels, w, h, image::ColorType::Rgba8).unwrap();
+                }
+            }
+            let local = local_difference(&raster, &img, w, 4);
             eprintln!(
-                "{name} {w}x{h}: splat vs raster: mean {mean:.5}, max {max}, {over} channels over 2"
+                "{name} {w}x{h}: splat vs raster: mean {mean:.5}, max {max}, {over} channels over 2, 4x4 {local:.2}"
             );
+            // A disc fades to nothing at its rim, so a pixel the two draws cover differently
+            // differs by little. A textured quad may be opaque up to its edge: a pixel centre
+            // within the rasteriser's vertex snapping (1/256 pixel on llvmpipe) of the edge is
+            // covered by one draw and not the other and differs by the whole texel (up to 42
+            // steps seen on boids' 2-pixel birds), but it is one pixel: a 4 x 4 square's mean
+            // moves by a sixteenth of it, where a misplaced or miscoloured sprite moves it by
+            // all of it.
+            let edges_matter = !plume::compiler::wgsl::draw::splat_discs(&sim.compiled().ir);
             assert!(
-                mean < 0.05 && max <= 8 && over * 1000 < img.len(),
-                "{name} {w}x{h}: splat and raster differ: mean {mean}, max {max}, {over} over 2"
+                mean < 0.15 && (max <= 8 || edges_matter) && local < 6.0 && over * 1000 < img.len(),
+                "{name} {w}x{h}: splat and raster differ: mean {mean}, max {max}, {over} over 2, 4x4 {local}"
             );
         }
     }
-    assert!(compared >= 3, "only {compared} examples drawn by the splat");
+    assert!(compared >= 8, "only {compared} examples drawn by the splat");
 }
 
 #[test]

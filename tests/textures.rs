@@ -2,7 +2,7 @@
 //! textured sprite shows its texture's pattern the right way up (and along the velocity when
 //! it is velocity-aligned), a flipbook shows frame k at the documented time (over life and at
 //! a rate, stateful and stateless), each image matches the CPU-fed reference drawing (frame
-//! chosen in f64), and the compute splat refuses textured sprites.
+//! chosen in f64), and the compute splat samples them as the raster draw does.
 
 mod common;
 
@@ -322,18 +322,54 @@ fn a_random_start_gives_particles_born_together_different_frames() {
 }
 
 #[test]
-fn the_compute_splat_refuses_textured_sprites_and_says_what_to_use() {
+fn the_compute_splat_samples_textures_as_the_raster_draw_does() {
+    // The splat maps each pixel to the quad's texture coordinates through the quad's
+    // projective map and takes their derivatives from it, where the rasteriser interpolates
+    // over two triangles and differences 2 x 2 pixel blocks: for these quads (affine, or
+    // projective but smooth over a pixel) both give the same coordinates and mip level to
+    // well under a texel, and the same trilinear sample. A pixel whose level sits at a
+    // rounding boundary, or on the quad's edge, may differ by a few steps; a wrong frame,
+    // turn or level moves whole 4 x 4 squares by tens.
     let gpu = gpu();
     let dir = scratch("splat");
-    write_blocks(&dir.join("q.png"), 1, 1, 4, &[RED]);
-    let texture = r#"texture: Some(Texture(file: "q.png"))"#;
-    let sim = probe(&gpu, &dir, (0.0, 0.0, 0.0), None, texture, State::Stateful);
-    assert!(!Splat::draws(&sim.compiled().ir));
-    let message = Splat::new(&sim, 64, 64).err().expect("refused").to_string();
-    assert!(
-        message.contains("render.texture") && message.contains("--draw raster"),
-        "{message}"
-    );
+    // 128 x 128 texels over a sprite about 110 pixels wide: a minified sprite, so mip level 1
+    // is in use over part of it.
+    write_blocks(&dir.join("big.png"), 2, 2, 64, &[RED, GREEN, BLUE, YELLOW]);
+    write_blocks(&dir.join("book.png"), 2, 2, 8, &[RED, GREEN, BLUE, YELLOW]);
+    let cases = [
+        (r#"texture: Some(Texture(file: "big.png"))"#, 1),
+        (
+            r#"texture: Some(Texture(file: "big.png")), orient: Fixed((0.0, 1.0, 1.0)), rotation: Some(Rotation(angle: (30.0, 30.0)))"#,
+            1,
+        ),
+        (
+            r#"texture: Some(Texture(file: "book.png", frames: (2, 2), play: Rate(6.0))), rotation: Some(Rotation(spin: (90.0, 90.0)))"#,
+            25,
+        ),
+        (
+            r#"texture: Some(Texture(file: "book.png", frames: (2, 2), play: Rate(6.0))), size_y: Some([(0.0, 1.0)])"#,
+            45,
+        ),
+    ];
+    for state in [State::Stateful, State::Stateless] {
+        for (extra, steps) in cases {
+            let what = format!("{state:?} {extra} after {steps} steps");
+            let mut sim = probe(&gpu, &dir, (0.0, 0.0, 0.0), None, extra, state);
+            sim.run(steps, |_| {}).unwrap();
+            assert!(Splat::draws(&sim.compiled().ir), "{what}");
+            let (raster, _) = draw_both(&sim);
+            let splat = splat_image(&sim, SIDE);
+            let lit = raster.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
+            assert!(lit > 50, "{what}: the raster draw shows {lit} pixels");
+            let (mean, max, over) = differences(&raster, &splat, 2);
+            let local = local_difference(&raster, &splat, SIDE, 4);
+            eprintln!("{what}: mean {mean:.4}, max {max}, {over} over 2, 4x4 {local:.2}");
+            assert!(
+                mean < 0.05 && local < 4.0 && over * 1000 < splat.len(),
+                "{what}: the splat differs from the raster draw: mean {mean}, max {max}, {over} over 2, 4x4 {local}"
+            );
+        }
+    }
 }
 
 #[test]

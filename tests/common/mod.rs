@@ -169,3 +169,40 @@ pub fn assert_back_to_front(effect: &CompiledEffect, drawn: &[ParticleRecord]) {
         );
     }
 }
+
+/// `sim` drawn by the compute splat from the effect's camera, `side` pixels square.
+pub fn splat_image(sim: &Effect, side: u32) -> Vec<u8> {
+    let mut splat =
+        plume::runtime::outputs::Splat::new(sim, side, side).expect("the splat draws it");
+    let camera = plume::runtime::Camera::from_effect(&sim.compiled().ir.camera, 1.0);
+    let img = splat.render(sim, &camera).unwrap();
+    assert!(splat.entries_are_complete().unwrap(), "splat entries lost");
+    img
+}
+
+/// The largest difference between two `width`-wide RGBA images' means over `block` x `block`
+/// squares, over the squares and the three colour channels: a pixel that flips at a sprite's
+/// edge moves a 4 x 4 square's mean by a sixteenth of its difference; a misplaced, missing or
+/// miscoloured sprite moves the squares it covers by all of it.
+pub fn local_difference(a: &[u8], b: &[u8], width: u32, block: u32) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let height = (a.len() / 4) as u32 / width;
+    let mut worst = 0.0f64;
+    for by in (0..height).step_by(block as usize) {
+        for bx in (0..width).step_by(block as usize) {
+            for c in 0..3 {
+                let (mut sa, mut sb, mut n) = (0i64, 0i64, 0i64);
+                for y in by..(by + block).min(height) {
+                    for x in bx..(bx + block).min(width) {
+                        let k = 4 * (y * width + x) as usize + c;
+                        sa += i64::from(a[k]);
+                        sb += i64::from(b[k]);
+                        n += 1;
+                    }
+                }
+                worst = worst.max((sa - sb).abs() as f64 / n as f64);
+            }
+        }
+    }
+    worst
+}

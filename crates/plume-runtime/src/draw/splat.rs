@@ -5,20 +5,30 @@
 //! `sprite_at`, through its `project` kernel), coverage tested at pixel centres, the same alpha
 //! falloff and blend, the 8-bit rounding after every blend, in the same order.
 //!
-//! One compute pass: `project` (each sprite's pixel extent, colour and tile count), an exclusive
+//! Sprites are discs (round and camera-facing: a 16-byte record, the fixed `raster` kernel of
+//! `splat.wgsl`) or quads (textured, oriented, rotated or of their own height: a 64-byte record
+//! holding the quad's projective map, composited by the effect's generated `raster_quads`,
+//! which shades each pixel as the fragment shader does, textures sampled with the same mip
+//! levels); see the compiler's `wgsl::draw::splat`.
+//!
+//! One compute pass: `project` (each sprite's record and tile count), an exclusive
 //! scan of the counts, one (tile, sprite) entry per tile touched, a stable radix sort of the
 //! entries by tile (so each tile's sprites stay in draw order), each tile's run, then a
 //! workgroup per 16x16 tile composites its sprites in order. Entries are sized from the sprites'
 //! count and grown when a frame needs more (the frame is then drawn again). The embedding API
 //! always draws with the raster pipeline, into the host's render pass.
 
-use plume_compiler::orient::OrientIr;
-use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_TILE};
+use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
+use plume_compiler::wgsl::draw::{
+    splat_discs, DrawShape, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_QUAD_WORDS,
+    SPLAT_RASTER_BINDINGS, SPLAT_TILE,
+};
 
 use crate::device::buffers::{filled_buffer, staging, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
 use crate::draw::raster::{draw_module, draw_shape, draw_view_bytes};
+use crate::draw::texture::SpriteTexture;
 use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
 use crate::sim::group::Group;
@@ -48,6 +58,15 @@ struct Entries {
     vals: wgpu::Buffer,
     sort: SortProgram,
     group: wgpu::BindGroup,
+    /// `raster_quads`'s bind group (quads only).
+    quads_group: Option<wgpu::BindGroup>,
+}
+
+/// What draws quads (every sprite but a round camera-facing one): the effect's generated
+/// `raster_quads` kernel and its texture.
+struct QuadRaster {
+    pipeline: wgpu::ComputePipeline,
+    texture: Option<SpriteTexture>,
 }
 
 /// A compute splat of one effect (of one group) into `width` x `height` images.
@@ -65,6 +84,8 @@ pub struct Splat {
     scan: SortProgram,
     tiles: Tiles,
     entries: Entries,
+    /// Set for quads; discs use the fixed `raster` kernel.
+    quads: Option<QuadRaster>,
     additive: bool,
     background: u32,
 }
@@ -98,15 +119,11 @@ const TILE_BINDINGS: [(u32, bool, bool); 10] = [
 ];
 
 impl Splat {
-    /// Whether the splat can draw `ir`'s sprites: round (no `texture`), camera-facing
-    /// (`orient: Camera`) and square (no `size_y`), into an 8-bit image (no `glow`), with no
-    /// ribbons (no `trail`).
+    /// Whether the splat can draw `ir`'s sprites: any sprite (textured or round, any
+    /// orientation, rotation and height), into an 8-bit image (no `glow`), with no ribbons
+    /// (no `trail`).
     pub fn draws(ir: &plume_compiler::EffectIr) -> bool {
-        ir.render.orient == OrientIr::Camera
-            && ir.render.texture.is_none()
-            && ir.render.glow.is_none()
-            && ir.render.trail.is_none()
-            && ir.render.size_y.is_none()
+        ir.render.glow.is_none() && ir.render.trail.is_none()
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
@@ -122,22 +139,14 @@ impl Splat {
             )));
         }
         if !Self::draws(&effect.ir) {
-            let render = &effect.ir.render;
-            let why = match (&render.texture, render.glow, &render.trail) {
-                (_, _, Some(_)) => "followed by ribbons (render.trail)".to_string(),
-                (_, Some(_), None) => "drawn into an HDR image to glow (render.glow)".to_string(),
-                (Some(t), None, None) => format!("textured (render.texture: {:?})", t.file),
-                (None, None, None) if render.size_y.is_some() => {
-                    "of their own height (render.size_y)".to_string()
-                }
-                (None, None, None) => {
-                    format!("oriented (render.orient: {})", render.orient.name())
-                }
+            let why = if effect.ir.render.trail.is_some() {
+                "followed by ribbons (render.trail)"
+            } else {
+                "drawn into an HDR image to glow (render.glow)"
             };
             return Err(RuntimeError::Output(format!(
-                "the compute splat draws round camera-facing sprites into an 8-bit image only; \
-                 this effect's sprites are {why}: draw it with the raster pipeline \
-                 (plume render --draw raster)"
+                "the compute splat draws sprites into an 8-bit image only; this effect's sprites \
+                 are {why}: draw it with the raster pipeline (plume render --draw raster)"
             )));
         }
         let count = effect.ir.capacity;
@@ -146,6 +155,8 @@ impl Splat {
             ..draw_shape(effect, res)
         };
         let (module, mut entries) = draw_module(&gpu, effect, res, &shape, None)?;
+        let discs = splat_discs(&effect.ir);
+        let record_words = if discs { 4 } else { SPLAT_QUAD_WORDS };
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
         let words = |label, n: u64| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -171,7 +182,7 @@ impl Splat {
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
-            splats: words("splats", 4 * u64::from(count)),
+            splats: words("splats", record_words * u64::from(count)),
             offsets: words("tile offsets", u64::from(count)),
             counts: words("tile counts", u64::from(count)),
             ranges: words("tile ranges", 2 * u64::from(tiles_x) * u64::from(tiles_y)),
@@ -192,7 +203,18 @@ impl Splat {
             (b_boxes, tiles.boxes.clone()),
         ]);
         let project = gpu.compute_pipeline(&module, "project", None);
-        // `project` uses every binding of its module, so its derived layout holds them all.
+        let quads = match discs {
+            true => None,
+            false => Some(QuadRaster {
+                pipeline: gpu.compute_pipeline(&module, "raster_quads", None),
+                texture: match &effect.ir.render.texture {
+                    Some(t) => Some(SpriteTexture::new(&gpu, t)?),
+                    None => None,
+                },
+            }),
+        };
+        // `project` uses every binding of its module but `raster_quads`'s, so its derived
+        // layout holds the entries above.
         let project_group = bind(&gpu, &project.get_bind_group_layout(0), &entries);
         let bg = effect.ir.render.background;
         // As a clear colour reaches an 8-bit target: each channel rounded to the nearest step.
@@ -208,6 +230,7 @@ impl Splat {
                 vals: tiles.counts.clone(),
                 sort: GpuSorter::new(&gpu).radix_program(&tiles.counts, &tiles.offsets, 0, 8)?,
                 group: project_group.clone(),
+                quads_group: None,
             },
             gpu,
             width,
@@ -220,6 +243,7 @@ impl Splat {
             project_group,
             scan,
             tiles,
+            quads,
             additive,
             background,
         };
@@ -268,11 +292,44 @@ impl Splat {
             (8, t.status.clone()),
             (9, t.boxes.clone()),
         ];
+        let quads_group = self.quads.as_ref().map(|q| {
+            let [params, sprites, ranges, image] = SPLAT_RASTER_BINDINGS;
+            let buffers = [
+                (SPLAT_BINDINGS[1], &t.splats),
+                (params, &t.params),
+                (sprites, &vals),
+                (ranges, &t.ranges),
+                (image, &t.image),
+            ];
+            let mut entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
+                .iter()
+                .map(|(binding, buffer)| wgpu::BindGroupEntry {
+                    binding: *binding,
+                    resource: buffer.as_entire_binding(),
+                })
+                .collect();
+            if let Some(texture) = &q.texture {
+                entries.push(wgpu::BindGroupEntry {
+                    binding: TEXTURE_BINDING,
+                    resource: wgpu::BindingResource::TextureView(&texture.view),
+                });
+                entries.push(wgpu::BindGroupEntry {
+                    binding: SAMPLER_BINDING,
+                    resource: wgpu::BindingResource::Sampler(&texture.sampler),
+                });
+            }
+            device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("splat quads"),
+                layout: &q.pipeline.get_bind_group_layout(0),
+                entries: &entries,
+            })
+        });
         self.entries = Entries {
             len,
             vals: vals.clone(),
             sort: GpuSorter::new(&self.gpu).radix_program(&keys, &vals, len, key_bits)?,
             group: bind(&self.gpu, &t.layout, &all),
+            quads_group,
         };
         Ok(())
     }
@@ -336,8 +393,16 @@ impl Splat {
                 pass.dispatch_workgroups(rx, ry, 1);
             }
             "raster" => {
-                pass.set_bind_group(0, &e.group, &[]);
-                pass.set_pipeline(raster);
+                match (&self.quads, &e.quads_group) {
+                    (Some(q), Some(group)) => {
+                        pass.set_bind_group(0, group, &[]);
+                        pass.set_pipeline(&q.pipeline);
+                    }
+                    _ => {
+                        pass.set_bind_group(0, &e.group, &[]);
+                        pass.set_pipeline(raster);
+                    }
+                }
                 pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
             }
             _ => {

@@ -305,8 +305,27 @@ impl TextureIr {
         );
     }
 
+    /// Emits `frame_texel(cell, quad, gx, gy)`: the texel of the frame at atlas cell `cell`
+    /// (column, row) at `quad` (the sprite's corner coordinates mapped to [0, 1]², v down),
+    /// filtered for the screen-space derivatives `gx`, `gy` of its unclamped atlas coordinate.
+    /// The fragment shader takes those derivatives from the rasteriser (`dpdxFine`), the
+    /// compute splat from its quad's projective map, so both sample the same mip levels.
+    pub fn emit_texel_fn(&self, w: &mut Writer) {
+        w.block(
+            "fn frame_texel(cell: vec2<f32>, quad: vec2<f32>, gx: vec2<f32>, gy: vec2<f32>) -> vec4<f32>",
+            |w| {
+                w.comment("Sample no nearer the frame's edge than half a texel of the coarser mip level in use, so no neighbouring frame blends in.");
+                w.line("let rho = max(length(gx * ATLAS_TEXELS), length(gy * ATLAS_TEXELS));");
+                w.line("let level = ceil(log2(max(rho, 1.0)));");
+                w.line("let half_texel = min(vec2<f32>(0.5), 0.5 * exp2(level) / FRAME_TEXELS);");
+                w.line("let local = clamp(quad, half_texel, vec2<f32>(1.0) - half_texel);");
+                w.line("return textureSampleGrad(sprite_texture, sprite_sampler, (cell + local) * FRAME_SIZE, gx, gy);");
+            },
+        );
+    }
+
     /// Emits the fragment shader's body for a textured sprite: the frame's texel at the
-    /// fragment's corner coordinates `in.uv`, times the colour.
+    /// fragment's corner coordinates `in.uv`, times the colour (`frame_texel` in scope).
     pub fn emit_fragment_body(&self, w: &mut Writer) {
         w.line(
             "let cell = vec2<f32>(f32(in.frame % FRAME_COLUMNS), f32(in.frame / FRAME_COLUMNS));",
@@ -322,13 +341,24 @@ impl TextureIr {
         w.block("if (any(abs(in.uv) > vec2<f32>(1.0)))", |w| {
             w.line("discard;")
         });
-        w.comment("Sample no nearer the frame's edge than half a texel of the coarser mip level in use, so no neighbouring frame blends in.");
-        w.line("let rho = max(length(gx * ATLAS_TEXELS), length(gy * ATLAS_TEXELS));");
-        w.line("let level = ceil(log2(max(rho, 1.0)));");
-        w.line("let half_texel = min(vec2<f32>(0.5), 0.5 * exp2(level) / FRAME_TEXELS);");
-        w.line("let local = clamp(quad, half_texel, vec2<f32>(1.0) - half_texel);");
-        w.line("let texel = textureSampleGrad(sprite_texture, sprite_sampler, (cell + local) * FRAME_SIZE, gx, gy);");
-        w.line("return in.color * texel;");
+        w.line("return in.color * frame_texel(cell, quad, gx, gy);");
+    }
+
+    /// Emits the compute splat's shading of a textured sprite: `splat_shade(uv, du, dv, color,
+    /// frame)` is the frame's texel at corner coordinates `uv`, whose derivatives along the
+    /// image's x and y are `du` and `dv`, times the colour (as [`Self::emit_fragment_body`]).
+    pub fn emit_splat_shade(&self, w: &mut Writer) {
+        w.block(
+            "fn splat_shade(uv: vec2<f32>, du: vec2<f32>, dv: vec2<f32>, color: vec4<f32>, frame: u32) -> vec4<f32>",
+            |w| {
+                w.line("let cell = vec2<f32>(f32(frame % FRAME_COLUMNS), f32(frame / FRAME_COLUMNS));");
+                w.line("let quad = vec2<f32>(uv.x + 1.0, 1.0 - uv.y) * 0.5;");
+                w.comment("quad's derivatives are half of uv's, v flipped; the atlas coordinate's are FRAME_SIZE times those.");
+                w.line("let gx = vec2<f32>(du.x, -du.y) * 0.5 * FRAME_SIZE;");
+                w.line("let gy = vec2<f32>(dv.x, -dv.y) * 0.5 * FRAME_SIZE;");
+                w.line("return color * frame_texel(cell, quad, gx, gy);");
+            },
+        );
     }
 
     /// Mip levels the atlas keeps: it halves while every frame's width and height stay whole

@@ -26,7 +26,8 @@ use common::{
     emit_age_steps, emit_draw_view, emit_finite3, emit_gradients, emit_life_fraction, emit_load,
     emit_soft,
 };
-use splat::{emit_project, emit_splat_declarations};
+pub use splat::{splat_discs, SPLAT_QUAD_WORDS, SPLAT_RASTER_BINDINGS};
+use splat::{emit_project, emit_project_quads, emit_quad_raster, emit_splat_declarations};
 
 /// How the runtime binds the particles for drawing. The compiled effect's own draw module is
 /// [`DrawShape::single`]; the runtime asks for another shape when its device splits the state
@@ -190,7 +191,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     }
     if shape.splat {
         w.blank();
-        emit_splat_declarations(&mut w);
+        emit_splat_declarations(&mut w, splat_discs(ir));
     }
     let soft = ir.render.soft.filter(|_| shape.soft);
     if let Some(distance) = soft {
@@ -234,13 +235,23 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     emit_gradients(&mut w, ir);
     w.blank();
     emit_sprite_at(&mut w, ir, layout, shape, life);
+    if let Some(t) = texture {
+        w.blank();
+        t.emit_texel_fn(&mut w);
+    }
     w.blank();
     emit_vertex(&mut w, shape, ir.render.turns_quad(), texture.is_some());
     w.blank();
     emit_fragment(&mut w, texture, soft.is_some());
     if shape.splat {
         w.blank();
-        emit_project(&mut w);
+        if splat_discs(ir) {
+            emit_project(&mut w);
+        } else {
+            emit_project_quads(&mut w, ir);
+            w.blank();
+            emit_quad_raster(&mut w, ir);
+        }
     }
     w.finish()
 }

@@ -1,12 +1,43 @@
 //! The compute splat's part of the draw module: its bindings and the `project` kernel, which
-//! writes each sprite's pixel centre, extent, colour and tile box for the splat's tile
-//! kernels (the runtime's `splat.wgsl`).
+//! writes each sprite's record and tile box for the splat's tile kernels (the runtime's
+//! `splat.wgsl`).
+//!
+//! Two kinds of record. Round camera-facing sprites ([`splat_discs`]) are discs: 16 bytes (a
+//! centre, an extent, a colour), composited by the runtime's fixed `raster` kernel. Every other
+//! sprite (a texture, an orientation, a rotation, its own height) is a quad: 64 bytes holding
+//! the projective map from the image's pixels back to the quad's corner coordinates, so that a
+//! pixel finds where it lies on the sprite (and the derivatives a texture's mip level needs)
+//! as the rasteriser's perspective-correct interpolation would; the kernel that composites
+//! them, `raster_quads`, is generated here with the effect's own shading.
 
 use super::{SPLAT_BINDINGS, SPLAT_TILE};
 use crate::base::writer::Writer;
+use crate::features::looks::orient::OrientIr;
+use crate::ir::EffectIr;
 
-/// The splat's declarations: its view and output buffers (bindings [`SPLAT_BINDINGS`]).
-pub(crate) fn emit_splat_declarations(w: &mut Writer) {
+/// Whether the splat draws `ir`'s sprites as discs (round, camera-facing, square, untextured:
+/// the runtime's fixed raster kernel) rather than as quads (`raster_quads`, generated).
+pub fn splat_discs(ir: &EffectIr) -> bool {
+    ir.render.orient == OrientIr::Camera
+        && ir.render.texture.is_none()
+        && ir.render.size_y.is_none()
+}
+
+/// 32-bit words of a quad's record: rows of the pixel-to-corner map (xyz) with the colour's
+/// red, green and blue (w), then alpha, the flipbook frame and the pixel box's two corners.
+pub const SPLAT_QUAD_WORDS: u64 = 16;
+
+/// Bindings `raster_quads` reads besides the records: the tile parameters (the runtime's
+/// `Params`, 8 words), the sorted entries' sprites, each tile's run of entries, the image.
+pub const SPLAT_RASTER_BINDINGS: [u32; 4] = [25, 26, 27, 28];
+
+/// Sprites a quad raster workgroup bins at once: 128 records (8 KiB) and a 4-word mask per
+/// pixel (4 KiB) stay within WebGPU's 16 KiB of workgroup memory.
+const QUAD_BATCH: u32 = 128;
+
+/// The splat's declarations: its view and output buffers (bindings [`SPLAT_BINDINGS`]), and
+/// for quads the tile buffers `raster_quads` reads ([`SPLAT_RASTER_BINDINGS`]).
+pub(crate) fn emit_splat_declarations(w: &mut Writer, discs: bool) {
     w.comment("The compute splat's image: size in pixels, tiles, and the instances to project.");
     w.block("struct SplatView", |w| {
         w.line("width: u32,");
@@ -18,6 +49,7 @@ pub(crate) fn emit_splat_declarations(w: &mut Writer) {
     w.line(format!(
         "@group(0) @binding({view}) var<uniform> splat_view: SplatView;"
     ));
+    w.comment("Records as words (a quad's floats bitcast), so packed integers never pass through float registers.");
     w.line(format!(
         "@group(0) @binding({splats}) var<storage, read_write> splats: array<vec4<u32>>;"
     ));
@@ -29,6 +61,31 @@ pub(crate) fn emit_splat_declarations(w: &mut Writer) {
     ));
     w.line(format!(
         "@group(0) @binding({boxes}) var<storage, read_write> tile_boxes: array<vec2<u32>>;"
+    ));
+    if discs {
+        return;
+    }
+    w.blank();
+    w.comment("The tile kernels' parameters (the runtime's splat.wgsl `Params`).");
+    w.block("struct SplatTiles", |w| {
+        for field in [
+            "width", "height", "tiles_x", "tiles", "count", "entries", "additive", "background",
+        ] {
+            w.line(format!("{field}: u32,"));
+        }
+    });
+    let [params, sprites, ranges, image] = SPLAT_RASTER_BINDINGS;
+    w.line(format!(
+        "@group(0) @binding({params}) var<uniform> splat_tiles: SplatTiles;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({sprites}) var<storage, read> tile_sprites: array<u32>;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({ranges}) var<storage, read> tile_ranges: array<vec2<u32>>;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({image}) var<storage, read_write> splat_image: array<u32>;"
     ));
 }
 
@@ -76,6 +133,225 @@ pub(crate) fn emit_project(w: &mut Writer) {
             });
             w.line("tile_counts[k] = tiles;");
             w.line("tile_offsets[k] = tiles;");
+        },
+    );
+}
+
+/// `project` for quads: instance k's quad as the vertex shader places it (the same half axes,
+/// the same projection), as a 64-byte record: the inverse of the map from corner coordinates
+/// (u, v, 1) to homogeneous pixels counted from the quad's pixel box (small numbers: f32 keeps
+/// about a ten-thousandth of a pixel), its colour and frame, the box itself; and its tile
+/// count. A quad with a corner behind the camera or outside the depth range is not drawn (the
+/// rasteriser would clip it to the part inside).
+pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
+    let (half_x, half_y) = if ir.render.turns_quad() {
+        ("s.half_x", "s.half_y")
+    } else {
+        (
+            "vec3<f32>(0.5 * s.size, 0.0, 0.0)",
+            "vec3<f32>(0.0, 0.5 * s.size, 0.0)",
+        )
+    };
+    let frame = if ir.render.texture.is_some() {
+        "s.frame"
+    } else {
+        "0u"
+    };
+    w.comment("A clip-space vector's homogeneous pixel coordinates (x right, y down, w), counted from pixel `origin`: a point's pixel is xy / w.");
+    w.block(
+        "fn to_pixels(q: vec4<f32>, origin: vec2<f32>, size: vec2<f32>) -> vec3<f32>",
+        |w| {
+            w.line("let h = vec2<f32>(0.5 * size.x * (q.x + q.w), 0.5 * size.y * (q.w - q.y));");
+            w.line("return vec3<f32>(h - origin * q.w, q.w);");
+        },
+    );
+    w.blank();
+    w.line("@compute @workgroup_size(256)");
+    w.block(
+        "fn project(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let k = gid.x + gid.y * groups.x * 256u;");
+            w.block("if (k >= splat_view.count)", |w| w.line("return;"));
+            w.line("var tiles = 0u;");
+            w.line("let s = sprite_at(k);");
+            w.block("if (s.visible)", |w| {
+                w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
+                w.line("let c0 = draw.proj * s.center;");
+                w.line(format!("let ax = draw.proj * vec4<f32>({half_x}, 0.0);"));
+                w.line(format!("let ay = draw.proj * vec4<f32>({half_y}, 0.0);"));
+                w.line("var inside = true;");
+                w.line("var lo = vec2<f32>(3.0e38);");
+                w.line("var hi = vec2<f32>(-3.0e38);");
+                w.block("for (var i = 0u; i < 4u; i++)", |w| {
+                    w.line("let corner = vec2<f32>(f32(i & 1u), f32(i >> 1u)) * 2.0 - 1.0;");
+                    w.line("let q = c0 + corner.x * ax + corner.y * ay;");
+                    w.line("inside = inside && q.w > 0.0 && q.z >= 0.0 && q.z <= q.w;");
+                    w.line("let p = vec2<f32>(q.x / q.w * 0.5 + 0.5, 0.5 - q.y / q.w * 0.5) * size;");
+                    w.line("lo = min(lo, p);");
+                    w.line("hi = max(hi, p);");
+                });
+                w.comment("Pixels whose centres (i + 0.5) the quad's bounding box holds.");
+                w.line("let first = max(ceil(lo - 0.5), vec2<f32>(0.0));");
+                w.line("let last = min(floor(hi - 0.5), size - 1.0);");
+                w.block("if (inside && all(first <= last))", |w| {
+                    w.comment("Columns of the map (u, v, 1) -> (x w, y w, w), pixels counted from the box's first one.");
+                    w.line("let cx = to_pixels(ax, first, size);");
+                    w.line("let cy = to_pixels(ay, first, size);");
+                    w.line("let cc = to_pixels(c0, first, size);");
+                    w.comment("Its inverse, the adjugate over the determinant: rows (cy x cc, cc x cx, cx x cy) / det.");
+                    w.line("let det = dot(cx, cross(cy, cc));");
+                    w.comment("Edge-on (no area in the image): nothing to draw.");
+                    w.block("if (abs(det) > 1e-30)", |w| {
+                        w.line("let r0 = cross(cy, cc) / det;");
+                        w.line("let r1 = cross(cc, cx) / det;");
+                        w.line("let r2 = cross(cx, cy) / det;");
+                        w.line(format!("let t0 = vec2<u32>(first) / {SPLAT_TILE}u;"));
+                        w.line(format!("let t1 = vec2<u32>(last) / {SPLAT_TILE}u;"));
+                        w.line("tiles = (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
+                        w.line("tile_boxes[k] = vec2<u32>(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u));");
+                        w.line("let color = clamp(s.color, vec4<f32>(0.0), vec4<f32>(1.0));");
+                        w.line("let box = vec2<u32>(u32(first.x) | (u32(first.y) << 16u), u32(last.x) | (u32(last.y) << 16u));");
+                        w.line("splats[4u * k] = bitcast<vec4<u32>>(vec4<f32>(r0, color.r));");
+                        w.line("splats[4u * k + 1u] = bitcast<vec4<u32>>(vec4<f32>(r1, color.g));");
+                        w.line("splats[4u * k + 2u] = bitcast<vec4<u32>>(vec4<f32>(r2, color.b));");
+                        w.line(format!("splats[4u * k + 3u] = vec4<u32>(bitcast<u32>(color.a), {frame}, box);"));
+                    });
+                });
+            });
+            w.line("tile_counts[k] = tiles;");
+            w.line("tile_offsets[k] = tiles;");
+        },
+    );
+}
+
+/// `raster_quads`: a workgroup per 16x16 tile, a thread per pixel, blends the tile's quads in
+/// draw order as the blend unit would (the effect's blend, 8-bit rounding after each), each
+/// pixel's colour from `splat_shade` at the corner coordinates its centre maps to. Batches of
+/// [`QUAD_BATCH`] records are binned to the pixels of their boxes first (bit masks), so a pixel
+/// visits only the quads whose boxes hold it.
+pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr) {
+    let words = QUAD_BATCH / 32;
+    match &ir.render.texture {
+        Some(t) => t.emit_splat_shade(w),
+        None => {
+            w.comment("The soft round sprite at corner coordinates uv (the fragment shader's disc).");
+            w.block(
+                "fn splat_shade(uv: vec2<f32>, du: vec2<f32>, dv: vec2<f32>, color: vec4<f32>, frame: u32) -> vec4<f32>",
+                |w| {
+                    w.line("let r2 = dot(uv, uv);");
+                    w.block("if (r2 >= 1.0)", |w| w.line("return vec4<f32>(0.0);"));
+                    w.line("let falloff = (1.0 - r2) * (1.0 - r2);");
+                    w.line("return vec4<f32>(color.rgb, color.a * falloff);");
+                },
+            );
+        }
+    }
+    w.blank();
+    w.comment("Rounds to the 8-bit value the render target would store.");
+    w.block("fn quantize(c: vec3<f32>) -> vec3<f32>", |w| {
+        w.line("return floor(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0 + 0.5) / 255.0;");
+    });
+    w.blank();
+    w.line(format!(
+        "var<workgroup> batch: array<vec4<u32>, {}>;",
+        4 * QUAD_BATCH
+    ));
+    w.line("var<workgroup> batch_range: vec2<u32>;");
+    w.comment(format!(
+        "Per pixel of the tile, which of the batch's {QUAD_BATCH} quads may cover it: {words} words of bits."
+    ));
+    w.line(format!(
+        "var<workgroup> pixel_masks: array<atomic<u32>, {}>;",
+        SPLAT_TILE * SPLAT_TILE * words
+    ));
+    w.blank();
+    w.comment("A box's corner, packed as x | y << 16.");
+    w.block("fn unpack_corner(b: u32) -> vec2<u32>", |w| {
+        w.line("return vec2<u32>(b & 0xffffu, b >> 16u);");
+    });
+    w.blank();
+    w.line(format!("@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"));
+    w.block(
+        "fn raster_quads(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>, @builtin(local_invocation_index) t: u32)",
+        |w| {
+            w.line("let tile = wid.x + wid.y * splat_tiles.tiles_x;");
+            w.line(format!("let origin = wid.xy * {SPLAT_TILE}u;"));
+            w.line("let px = origin.x + lid.x;");
+            w.line("let py = origin.y + lid.y;");
+            w.line("let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);");
+            w.line("var c = unpack4x8unorm(splat_tiles.background).rgb;");
+            w.block("if (t == 0u)", |w| w.line("batch_range = tile_ranges[tile];"));
+            w.comment("Uniform for the whole workgroup, as the barriers in the loop need.");
+            w.line("let range = workgroupUniformLoad(&batch_range);");
+            w.block(
+                format!("for (var start = range.x; start < range.y; start += {QUAD_BATCH}u)"),
+                |w| {
+                    w.block(format!("for (var m = 0u; m < {words}u; m++)"), |w| {
+                        w.line(format!("atomicStore(&pixel_masks[t * {words}u + m], 0u);"));
+                    });
+                    w.line("workgroupBarrier();");
+                    w.line("let i = start + t;");
+                    w.block(format!("if (t < {QUAD_BATCH}u && i < range.y)"), |w| {
+                        w.line("let k = tile_sprites[i];");
+                        w.block("for (var r = 0u; r < 4u; r++)", |w| {
+                            w.line("batch[4u * t + r] = splats[4u * k + r];");
+                        });
+                        w.line("let last = batch[4u * t + 3u];");
+                        w.comment("The quad's pixel box, within this tile.");
+                        w.line("let o = vec2<i32>(origin);");
+                        w.line("let lo = max(vec2<i32>(unpack_corner(last.z)) - o, vec2<i32>(0));");
+                        w.line(format!(
+                            "let hi = min(vec2<i32>(unpack_corner(last.w)) - o, vec2<i32>({}));",
+                            SPLAT_TILE - 1
+                        ));
+                        w.block("if (all(lo <= hi))", |w| {
+                            w.line("let bit = 1u << (t & 31u);");
+                            w.block("for (var y = lo.y; y <= hi.y; y++)", |w| {
+                                w.block("for (var x = lo.x; x <= hi.x; x++)", |w| {
+                                    w.line(format!(
+                                        "atomicOr(&pixel_masks[u32(y * {SPLAT_TILE} + x) * {words}u + (t >> 5u)], bit);"
+                                    ));
+                                });
+                            });
+                        });
+                    });
+                    w.line("workgroupBarrier();");
+                    w.block(format!("for (var m = 0u; m < {words}u; m++)"), |w| {
+                        w.line(format!("var bits = atomicLoad(&pixel_masks[t * {words}u + m]);"));
+                        w.block("while (bits != 0u)", |w| {
+                            w.line("let j = m * 32u + firstTrailingBit(bits);");
+                            w.line("bits &= bits - 1u;");
+                            w.line("let r0 = bitcast<vec4<f32>>(batch[4u * j]);");
+                            w.line("let r1 = bitcast<vec4<f32>>(batch[4u * j + 1u]);");
+                            w.line("let r2 = bitcast<vec4<f32>>(batch[4u * j + 2u]);");
+                            w.line("let r3 = batch[4u * j + 3u];");
+                            w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r3.z)), 1.0);");
+                            w.comment("s = 1 / w: positive in front of the camera.");
+                            w.line("let s = dot(r2.xyz, p);");
+                            w.block("if (s > 0.0)", |w| {
+                                w.line("let uv = vec2<f32>(dot(r0.xyz, p), dot(r1.xyz, p)) / s;");
+                                w.block("if (all(abs(uv) < vec2<f32>(1.0)))", |w| {
+                                    w.comment("uv's derivatives along the image's x and y (the quotient rule).");
+                                    w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
+                                    w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
+                                    w.line("let color = vec4<f32>(r0.w, r1.w, r2.w, bitcast<f32>(r3.x));");
+                                    w.comment("A unorm target clamps what the fragment shader returns before blending.");
+                                    w.line("let f = clamp(splat_shade(uv, du, dv, color, r3.y), vec4<f32>(0.0), vec4<f32>(1.0));");
+                                    if ir.render.blend == crate::stages::schema::Blend::Additive {
+                                        w.line("c = quantize(f.rgb * f.a + c);");
+                                    } else {
+                                        w.line("c = quantize(f.rgb * f.a + c * (1.0 - f.a));");
+                                    }
+                                });
+                            });
+                        });
+                    });
+                    w.line("workgroupBarrier();");
+                },
+            );
+            w.block("if (px < splat_tiles.width && py < splat_tiles.height)", |w| {
+                w.line("splat_image[py * splat_tiles.width + px] = pack4x8unorm(vec4<f32>(c, 1.0));");
+            });
         },
     );
 }
