@@ -6,11 +6,12 @@
 //           so entries are in draw order; a stable radix sort by tile then keeps that order
 //           within each tile;
 //   ranges: each tile's run of entries;
-//   raster: a workgroup per 16x16 tile, a thread per pixel, blends the tile's sprites in draw
-//           order exactly as the blend unit would: coverage at the pixel centre, alpha
-//           a (1 - r²)², the effect's blend, and the 8-bit rounding after every blend. Batches
-//           of 256 sprites are binned to the pixels they touch first (bit masks), so a pixel
-//           in a dense tile visits its own sprites, not the whole tile's.
+//   raster: a workgroup per 16x16 tile, a thread per pixel, composites the tile's sprites
+//           front to back (coverage at the pixel centre, alpha a (1 - r²)², the effect's
+//           blend) and stops where nothing behind can change the 8-bit result. Batches of 256
+//           sprites are binned to the pixels they touch first (bit masks), so a pixel in a
+//           dense tile visits its own sprites, not the whole tile's. Quads use the draw
+//           module's generated `raster_quads` instead.
 
 struct Params {
     width: u32,
@@ -125,17 +126,20 @@ fn find_ranges(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
 
 var<workgroup> shared_splats: array<vec4<u32>, 256>;
 var<workgroup> tile_range: vec2<u32>;
-// Per pixel of the tile, which of the batch's 256 sprites may cover it: 8 words of bits.
+// Per pixel of the tile, which of the batch's 256 sprites may cover it: 8 words of bits; and
+// the sprites whose boxes cover the whole tile.
 var<workgroup> masks: array<atomic<u32>, 2048>;
+var<workgroup> tile_masks: array<atomic<u32>, 8>;
+// Pixels of the tile that are finished (or outside the image).
+var<workgroup> finished: atomic<u32>;
 
-// Rounds to the 8-bit value the render target would store.
-fn quantize(c: vec3<f32>) -> vec3<f32> {
-    return floor(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0 + 0.5) / 255.0;
-}
-
-// A workgroup per tile, a thread per pixel. Each batch of 256 sprites is first binned to the
-// pixels their boxes touch (a bit per sprite in each pixel's mask), so a pixel visits only the
-// sprites that may cover it, in ascending bit order: the tile's order, the draw order.
+// A workgroup per tile, a thread per pixel, compositing the tile's sprites front to back (the
+// draw order reversed) and rounding to 8 bits once at the end. Alpha: the light that still
+// comes through, T, falls by (1 - a) at each sprite, and a pixel stops once T is under half an
+// 8-bit step; additive: once every channel is full. The tile stops when all its pixels have.
+// Each batch of 256 sprites is first binned to the pixels their boxes touch (a bit per sprite
+// in each pixel's mask; one tile-wide bit for a box that covers the tile), so a pixel visits
+// only the sprites that may cover it, in descending bit order: front to back.
 @compute @workgroup_size(16, 16)
 fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>,
           @builtin(local_invocation_index) t: u32) {
@@ -144,19 +148,31 @@ fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) l
     let px = origin.x + lid.x;
     let py = origin.y + lid.y;
     let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);
-    var c = unpack4x8unorm(params.background).rgb;
+    let background = unpack4x8unorm(params.background).rgb;
+    var gathered = vec3<f32>(0.0);
+    var through = 1.0;
+    var done = px >= params.width || py >= params.height;
     if (t == 0u) {
         tile_range = ranges[tile];
+        atomicStore(&finished, 0u);
     }
     // Uniform for the whole workgroup, as the barriers in the loop need.
     let range = workgroupUniformLoad(&tile_range);
-    for (var start = range.x; start < range.y; start += 256u) {
+    if (done) {
+        atomicAdd(&finished, 1u);
+    }
+    var end = range.y;
+    while (end > range.x) {
+        let start = select(range.x, end - 256u, end - range.x > 256u);
         for (var w = 0u; w < 8u; w++) {
             atomicStore(&masks[t * 8u + w], 0u);
         }
+        if (t < 8u) {
+            atomicStore(&tile_masks[t], 0u);
+        }
         workgroupBarrier();
         let i = start + t;
-        if (i < range.y) {
+        if (i < end) {
             let raw = splats[vals[i]];
             shared_splats[t] = raw;
             let s = unpack_splat(raw);
@@ -165,8 +181,10 @@ fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) l
             // the exact test below finds no cover anyway.
             let lo = max(ceil(s.centre - s.extent - 0.501) - o, vec2<f32>(0.0));
             let hi = min(floor(s.centre + s.extent - 0.499) - o, vec2<f32>(f32(TILE - 1u)));
-            if (all(lo <= hi)) {
-                let bit = 1u << (t & 31u);
+            let bit = 1u << (t & 31u);
+            if (all(lo == vec2<f32>(0.0)) && all(hi == vec2<f32>(f32(TILE - 1u)))) {
+                atomicOr(&tile_masks[t >> 5u], bit);
+            } else if (all(lo <= hi)) {
                 for (var y = u32(lo.y); y <= u32(hi.y); y++) {
                     for (var x = u32(lo.x); x <= u32(hi.x); x++) {
                         atomicOr(&masks[(y * TILE + x) * 8u + (t >> 5u)], bit);
@@ -175,27 +193,46 @@ fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) l
             }
         }
         workgroupBarrier();
-        for (var w = 0u; w < 8u; w++) {
-            var m = atomicLoad(&masks[t * 8u + w]);
+        var w = 8u;
+        while (!done && w > 0u) {
+            w -= 1u;
+            var m = atomicLoad(&masks[t * 8u + w]) | atomicLoad(&tile_masks[w]);
             while (m != 0u) {
-                let j = w * 32u + firstTrailingBit(m);
-                m &= m - 1u;
-                let s = unpack_splat(shared_splats[j]);
+                let b = firstLeadingBit(m);
+                m &= ~(1u << b);
+                let s = unpack_splat(shared_splats[w * 32u + b]);
                 let uv = (centre - s.centre) / s.extent;
                 let r2 = dot(uv, uv);
-                if (r2 < 1.0) {
-                    let a = s.color.a * (1.0 - r2) * (1.0 - r2);
-                    if (params.additive != 0u) {
-                        c = quantize(s.color.rgb * a + c);
-                    } else {
-                        c = quantize(s.color.rgb * a + c * (1.0 - a));
-                    }
+                if (r2 >= 1.0) {
+                    continue;
+                }
+                let a = s.color.a * (1.0 - r2) * (1.0 - r2);
+                if (params.additive != 0u) {
+                    gathered += s.color.rgb * a;
+                    done = all(gathered + background >= vec3<f32>(1.0));
+                } else {
+                    gathered += through * a * s.color.rgb;
+                    through *= 1.0 - a;
+                    // What lies behind can move no channel by half an 8-bit step.
+                    done = through < 0.5 / 255.0;
+                }
+                if (done) {
+                    atomicAdd(&finished, 1u);
+                    break;
                 }
             }
         }
-        workgroupBarrier();
+        end = start;
+        // Also the barrier before the next batch overwrites the masks.
+        if (workgroupUniformLoad(&finished) == TILE * TILE) {
+            break;
+        }
     }
     if (px < params.width && py < params.height) {
-        image[py * params.width + px] = pack4x8unorm(vec4<f32>(c, 1.0));
+        var c = gathered + through * background;
+        if (params.additive != 0u) {
+            c = gathered + background;
+        }
+        image[py * params.width + px] = pack4x8unorm(vec4<f32>(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));
     }
 }

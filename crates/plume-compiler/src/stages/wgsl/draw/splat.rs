@@ -224,13 +224,22 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
     );
 }
 
-/// `raster_quads`: a workgroup per 16x16 tile, a thread per pixel, blends the tile's quads in
-/// draw order as the blend unit would (the effect's blend, 8-bit rounding after each), each
-/// pixel's colour from `splat_shade` at the corner coordinates its centre maps to. Batches of
-/// [`QUAD_BATCH`] records are binned to the pixels of their boxes first (bit masks), so a pixel
+/// `raster_quads`: a workgroup per 16x16 tile, a thread per pixel, composites the tile's quads
+/// front to back (the draw order reversed), each pixel's colour from `splat_shade` at the
+/// corner coordinates its centre maps to, and rounds to 8 bits once at the end. Alpha: the
+/// light that still comes through, T, falls by (1 - a) at each sprite, and a pixel stops once
+/// T is under half an 8-bit step (what lies behind can no longer change it); additive: a pixel
+/// stops once every channel is full. The tile stops when all its pixels have. The raster
+/// pipeline blends back to front and rounds after every blend; this is the same sum without
+/// those roundings (tests/render.rs measures how far apart they land).
+///
+/// Batches of [`QUAD_BATCH`] records are binned to the pixels of their boxes first (bit
+/// masks; a box that covers the whole tile sets one tile-wide bit instead of 256), so a pixel
 /// visits only the quads whose boxes hold it.
 pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr) {
     let words = QUAD_BATCH / 32;
+    let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
+    let last = SPLAT_TILE - 1;
     match &ir.render.texture {
         Some(t) => t.emit_splat_shade(w),
         None => {
@@ -247,23 +256,23 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr) {
         }
     }
     w.blank();
-    w.comment("Rounds to the 8-bit value the render target would store.");
-    w.block("fn quantize(c: vec3<f32>) -> vec3<f32>", |w| {
-        w.line("return floor(clamp(c, vec3<f32>(0.0), vec3<f32>(1.0)) * 255.0 + 0.5) / 255.0;");
-    });
-    w.blank();
     w.line(format!(
         "var<workgroup> batch: array<vec4<u32>, {}>;",
         4 * QUAD_BATCH
     ));
     w.line("var<workgroup> batch_range: vec2<u32>;");
     w.comment(format!(
-        "Per pixel of the tile, which of the batch's {QUAD_BATCH} quads may cover it: {words} words of bits."
+        "Per pixel of the tile, which of the batch's {QUAD_BATCH} quads may cover it: {words} words of bits; and the quads that cover the whole tile."
     ));
     w.line(format!(
         "var<workgroup> pixel_masks: array<atomic<u32>, {}>;",
         SPLAT_TILE * SPLAT_TILE * words
     ));
+    w.line(format!(
+        "var<workgroup> tile_masks: array<atomic<u32>, {words}>;"
+    ));
+    w.comment("Pixels of the tile that are finished (or outside the image).");
+    w.line("var<workgroup> finished: atomic<u32>;");
     w.blank();
     w.comment("A box's corner, packed as x | y << 16.");
     w.block("fn unpack_corner(b: u32) -> vec2<u32>", |w| {
@@ -279,78 +288,122 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr) {
             w.line("let px = origin.x + lid.x;");
             w.line("let py = origin.y + lid.y;");
             w.line("let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);");
-            w.line("var c = unpack4x8unorm(splat_tiles.background).rgb;");
-            w.block("if (t == 0u)", |w| w.line("batch_range = tile_ranges[tile];"));
+            w.line("let background = unpack4x8unorm(splat_tiles.background).rgb;");
+            w.comment("Light gathered so far, front to back, and (alpha) the share of what lies behind that still comes through.");
+            w.line("var gathered = vec3<f32>(0.0);");
+            w.line("var through = 1.0;");
+            w.line("var done = px >= splat_tiles.width || py >= splat_tiles.height;");
+            w.block("if (t == 0u)", |w| {
+                w.line("batch_range = tile_ranges[tile];");
+                w.line("atomicStore(&finished, 0u);");
+            });
             w.comment("Uniform for the whole workgroup, as the barriers in the loop need.");
             w.line("let range = workgroupUniformLoad(&batch_range);");
-            w.block(
-                format!("for (var start = range.x; start < range.y; start += {QUAD_BATCH}u)"),
-                |w| {
-                    w.block(format!("for (var m = 0u; m < {words}u; m++)"), |w| {
-                        w.line(format!("atomicStore(&pixel_masks[t * {words}u + m], 0u);"));
+            w.block("if (done)", |w| w.line("atomicAdd(&finished, 1u);"));
+            w.line("var end = range.y;");
+            w.block("while (end > range.x)", |w| {
+                w.line(format!(
+                    "let start = select(range.x, end - {QUAD_BATCH}u, end - range.x > {QUAD_BATCH}u);"
+                ));
+                w.block(format!("for (var m = 0u; m < {words}u; m++)"), |w| {
+                    w.line(format!("atomicStore(&pixel_masks[t * {words}u + m], 0u);"));
+                });
+                w.block(format!("if (t < {words}u)"), |w| {
+                    w.line("atomicStore(&tile_masks[t], 0u);");
+                });
+                w.line("workgroupBarrier();");
+                w.line("let i = start + t;");
+                w.block("if (i < end)", |w| {
+                    w.line("let k = tile_sprites[i];");
+                    w.block("for (var r = 0u; r < 4u; r++)", |w| {
+                        w.line("batch[4u * t + r] = splats[4u * k + r];");
                     });
-                    w.line("workgroupBarrier();");
-                    w.line("let i = start + t;");
-                    w.block(format!("if (t < {QUAD_BATCH}u && i < range.y)"), |w| {
-                        w.line("let k = tile_sprites[i];");
-                        w.block("for (var r = 0u; r < 4u; r++)", |w| {
-                            w.line("batch[4u * t + r] = splats[4u * k + r];");
-                        });
-                        w.line("let last = batch[4u * t + 3u];");
-                        w.comment("The quad's pixel box, within this tile.");
-                        w.line("let o = vec2<i32>(origin);");
-                        w.line("let lo = max(vec2<i32>(unpack_corner(last.z)) - o, vec2<i32>(0));");
-                        w.line(format!(
-                            "let hi = min(vec2<i32>(unpack_corner(last.w)) - o, vec2<i32>({}));",
-                            SPLAT_TILE - 1
-                        ));
-                        w.block("if (all(lo <= hi))", |w| {
-                            w.line("let bit = 1u << (t & 31u);");
-                            w.block("for (var y = lo.y; y <= hi.y; y++)", |w| {
-                                w.block("for (var x = lo.x; x <= hi.x; x++)", |w| {
-                                    w.line(format!(
-                                        "atomicOr(&pixel_masks[u32(y * {SPLAT_TILE} + x) * {words}u + (t >> 5u)], bit);"
-                                    ));
-                                });
+                    w.line("let box = batch[4u * t + 3u];");
+                    w.comment("The quad's pixel box, within this tile.");
+                    w.line("let o = vec2<i32>(origin);");
+                    w.line("let lo = max(vec2<i32>(unpack_corner(box.z)) - o, vec2<i32>(0));");
+                    w.line(format!(
+                        "let hi = min(vec2<i32>(unpack_corner(box.w)) - o, vec2<i32>({last}));"
+                    ));
+                    w.line("let bit = 1u << (t & 31u);");
+                    w.block(
+                        format!("if (all(lo == vec2<i32>(0)) && all(hi == vec2<i32>({last})))"),
+                        |w| w.line("atomicOr(&tile_masks[t >> 5u], bit);"),
+                    );
+                    w.block("else if (all(lo <= hi))", |w| {
+                        w.block("for (var y = lo.y; y <= hi.y; y++)", |w| {
+                            w.block("for (var x = lo.x; x <= hi.x; x++)", |w| {
+                                w.line(format!(
+                                    "atomicOr(&pixel_masks[u32(y * {SPLAT_TILE} + x) * {words}u + (t >> 5u)], bit);"
+                                ));
                             });
                         });
                     });
-                    w.line("workgroupBarrier();");
-                    w.block(format!("for (var m = 0u; m < {words}u; m++)"), |w| {
-                        w.line(format!("var bits = atomicLoad(&pixel_masks[t * {words}u + m]);"));
-                        w.block("while (bits != 0u)", |w| {
-                            w.line("let j = m * 32u + firstTrailingBit(bits);");
-                            w.line("bits &= bits - 1u;");
-                            w.line("let r0 = bitcast<vec4<f32>>(batch[4u * j]);");
-                            w.line("let r1 = bitcast<vec4<f32>>(batch[4u * j + 1u]);");
-                            w.line("let r2 = bitcast<vec4<f32>>(batch[4u * j + 2u]);");
-                            w.line("let r3 = batch[4u * j + 3u];");
-                            w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r3.z)), 1.0);");
-                            w.comment("s = 1 / w: positive in front of the camera.");
-                            w.line("let s = dot(r2.xyz, p);");
-                            w.block("if (s > 0.0)", |w| {
-                                w.line("let uv = vec2<f32>(dot(r0.xyz, p), dot(r1.xyz, p)) / s;");
-                                w.block("if (all(abs(uv) < vec2<f32>(1.0)))", |w| {
-                                    w.comment("uv's derivatives along the image's x and y (the quotient rule).");
-                                    w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
-                                    w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
-                                    w.line("let color = vec4<f32>(r0.w, r1.w, r2.w, bitcast<f32>(r3.x));");
-                                    w.comment("A unorm target clamps what the fragment shader returns before blending.");
-                                    w.line("let f = clamp(splat_shade(uv, du, dv, color, r3.y), vec4<f32>(0.0), vec4<f32>(1.0));");
-                                    if ir.render.blend == crate::stages::schema::Blend::Additive {
-                                        w.line("c = quantize(f.rgb * f.a + c);");
-                                    } else {
-                                        w.line("c = quantize(f.rgb * f.a + c * (1.0 - f.a));");
-                                    }
-                                });
-                            });
+                });
+                w.line("workgroupBarrier();");
+                w.comment("Front to back: the batch's last entry first.");
+                w.line(format!("var m = {words}u;"));
+                w.block("while (!done && m > 0u)", |w| {
+                    w.line("m -= 1u;");
+                    w.line(format!(
+                        "var bits = atomicLoad(&pixel_masks[t * {words}u + m]) | atomicLoad(&tile_masks[m]);"
+                    ));
+                    w.block("while (bits != 0u)", |w| {
+                        w.line("let b = firstLeadingBit(bits);");
+                        w.line("bits &= ~(1u << b);");
+                        w.line("let j = m * 32u + b;");
+                        w.line("let r0 = bitcast<vec4<f32>>(batch[4u * j]);");
+                        w.line("let r1 = bitcast<vec4<f32>>(batch[4u * j + 1u]);");
+                        w.line("let r2 = bitcast<vec4<f32>>(batch[4u * j + 2u]);");
+                        w.line("let r3 = batch[4u * j + 3u];");
+                        w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r3.z)), 1.0);");
+                        w.comment("s = 1 / w: positive in front of the camera.");
+                        w.line("let s = dot(r2.xyz, p);");
+                        w.block("if (s <= 0.0)", |w| w.line("continue;"));
+                        w.line("let uv = vec2<f32>(dot(r0.xyz, p), dot(r1.xyz, p)) / s;");
+                        w.block("if (any(abs(uv) >= vec2<f32>(1.0)))", |w| {
+                            w.line("continue;")
+                        });
+                        w.comment("uv's derivatives along the image's x and y (the quotient rule).");
+                        w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
+                        w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
+                        w.line("let color = vec4<f32>(r0.w, r1.w, r2.w, bitcast<f32>(r3.x));");
+                        w.comment("A unorm target clamps what the fragment shader returns before blending.");
+                        w.line("let f = clamp(splat_shade(uv, du, dv, color, r3.y), vec4<f32>(0.0), vec4<f32>(1.0));");
+                        if additive {
+                            w.line("gathered += f.rgb * f.a;");
+                            w.line("done = all(gathered + background >= vec3<f32>(1.0));");
+                        } else {
+                            w.line("gathered += through * f.a * f.rgb;");
+                            w.line("through *= 1.0 - f.a;");
+                            w.comment("What lies behind can move no channel by half an 8-bit step.");
+                            w.line("done = through < 0.5 / 255.0;");
+                        }
+                        w.block("if (done)", |w| {
+                            w.line("atomicAdd(&finished, 1u);");
+                            w.line("break;");
                         });
                     });
-                    w.line("workgroupBarrier();");
-                },
-            );
+                });
+                w.line("end = start;");
+                w.comment("Also the barrier before the next batch overwrites the masks.");
+                w.block(
+                    format!(
+                        "if (workgroupUniformLoad(&finished) == {}u)",
+                        SPLAT_TILE * SPLAT_TILE
+                    ),
+                    |w| w.line("break;"),
+                );
+            });
+            let colour = if additive {
+                "gathered + background"
+            } else {
+                "gathered + through * background"
+            };
             w.block("if (px < splat_tiles.width && py < splat_tiles.height)", |w| {
-                w.line("splat_image[py * splat_tiles.width + px] = pack4x8unorm(vec4<f32>(c, 1.0));");
+                w.line(format!(
+                    "splat_image[py * splat_tiles.width + px] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
+                ));
             });
         },
     );
