@@ -60,9 +60,17 @@ fn bench_draws_a_stateless_effect_from_its_closed_form() {
     let d = r.render.expect("draw timed");
     assert!(d.stateless.is_some_and(|s| s > 0.0), "{d:?}");
     assert_eq!(d.prepare, None, "sparks does not sort");
-    // Sparks are streaks along their velocity, which the compute splat does not draw.
-    assert_eq!(d.splat, None);
-    assert!(d.splat_stages.is_empty());
+    // Sparks glow: the compute splat draws them into an HDR image and times the bloom too.
+    assert!(
+        d.splat.is_some_and(|(s, entries)| s > 0.0 && entries > 0),
+        "{d:?}"
+    );
+    assert!(
+        d.splat_stages
+            .iter()
+            .any(|(stage, s)| *stage == "glow" && *s > 0.0),
+        "{d:?}"
+    );
 }
 
 #[test]

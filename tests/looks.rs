@@ -278,7 +278,14 @@ fn assert_splat_matches_raster(sim: &Effect, raster: &[u8], what: &str) {
     if std::env::var_os("PLUME_DUMP").is_some() {
         let name = what.replace(|c: char| !c.is_ascii_alphanumeric(), "_");
         for (img, kind) in [(raster, "raster"), (&splat[..], "splat")] {
-            image::save_buffer(format!("/tmp/{name}_{kind}.png"), img, SIDE, SIDE, image::ColorType::Rgba8).unwrap();
+            image::save_buffer(
+                format!("/tmp/{name}_{kind}.png"),
+                img,
+                SIDE,
+                SIDE,
+                image::ColorType::Rgba8,
+            )
+            .unwrap();
         }
     }
     eprintln!("{what}: splat vs raster: mean {mean:.4}, max {max}, {over} over 2, 4x4 {local:.2}");
@@ -293,8 +300,16 @@ fn the_compute_splat_draws_oriented_sprites_as_the_raster_draw_does() {
     let gpu = gpu();
     let cases = [
         // Streaked along the velocity, seen from the front and from an angle.
-        ((1.0, 0.0, 0.0), (0.0, 0.0, 10.0), "Velocity(stretch: 0.1, max_length: 2.0)"),
-        ((1.0, 0.5, 0.0), (4.0, 3.0, 8.0), "Velocity(stretch: 0.3, max_length: 2.0)"),
+        (
+            (1.0, 0.0, 0.0),
+            (0.0, 0.0, 10.0),
+            "Velocity(stretch: 0.1, max_length: 2.0)",
+        ),
+        (
+            (1.0, 0.5, 0.0),
+            (4.0, 3.0, 8.0),
+            "Velocity(stretch: 0.3, max_length: 2.0)",
+        ),
         // Lying on the ground seen from above at a slant: a foreshortened, perspective quad.
         ((0.0, 0.0, 0.0), (0.0, 3.0, 4.0), "Fixed((0.0, 1.0, 0.0))"),
         ((0.0, 0.0, 0.0), (2.0, 1.0, 1.5), "Fixed((1.0, 1.0, 0.0))"),

@@ -386,7 +386,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                     );
                 }
                 None => println!(
-                    "    compute splat     - (it draws sprites without glow or trails only; not this effect's)"
+                    "    compute splat     - (it draws sprites without ribbons only; not this effect's)"
                 ),
             }
             if let Some((draw, blur)) = d.glow {

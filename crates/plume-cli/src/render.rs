@@ -83,8 +83,8 @@ impl DrawMethod {
     /// The method `auto` stands for on `gpu` for `graph` (without the scene's meshes when
     /// `no_scene`), and why. The splat was 7 to 9 times faster than the raster pipeline for 10M
     /// particles on an H100 (docs/performance.md) and slower on llvmpipe, whose raster path is
-    /// the CPU's; it draws one group of sprites (any texture, orientation, rotation and height)
-    /// without glow, trails or scene meshes.
+    /// the CPU's; it draws one group of sprites (any texture, orientation, rotation and height,
+    /// glowing or not) without trails or scene meshes.
     fn resolve(self, gpu: &Gpu, graph: &CompiledGraph, no_scene: bool) -> (Self, String) {
         if self != DrawMethod::Auto {
             return (self, "as asked".into());
@@ -95,7 +95,7 @@ impl DrawMethod {
         } else if graph.groups.len() > 1 {
             Some("the splat draws one group")
         } else if !Splat::draws(ir) {
-            Some("the splat draws sprites into an 8-bit image only (no glow, no trail)")
+            Some("the splat draws no ribbons (render.trail)")
         } else if !no_scene && !ir.scene_triangles().is_empty() {
             Some("the splat does not draw the scene's meshes")
         } else {

@@ -141,7 +141,13 @@ pub(crate) fn time_draws(
             let mut encoder = gpu.device.create_command_encoder(&Default::default());
             splat.prepare(&mut encoder, sim, &camera)?;
             gpu.queue.submit([encoder.finish()]);
-            times.push(timer.time(|pass| splat.record(pass))?);
+            times.push(timer.time(|pass| {
+                splat.record(pass)?;
+                if let Some(glow) = splat.glow_passes() {
+                    glow.record_into(pass);
+                }
+                Ok(())
+            })?);
         }
         // Stage by stage, in order, each in its own timed pass: repeating one stage alone is
         // not the same work (the scan works in place).
@@ -154,11 +160,24 @@ pub(crate) fn time_draws(
                 times.push(timer.time(|pass| splat.record_stage(pass, stage))?);
             }
         }
-        let stages: Vec<(&'static str, f64)> = STAGES
+        let mut stages: Vec<(&'static str, f64)> = STAGES
             .into_iter()
             .zip(per_stage.iter_mut())
             .map(|(stage, times)| (stage, median(times)))
             .collect();
+        // A glowing effect's bloom: the same two blur passes as the raster draw's (the copy of
+        // the HDR image into the glow's texture before them is not timed).
+        if let Some(glow) = splat.glow_passes() {
+            let mut times: Vec<f64> = (0..DRAW_REPEATS)
+                .map(|_| {
+                    timer.time(|pass| {
+                        glow.record_into(pass);
+                        Ok(())
+                    })
+                })
+                .collect::<Result<_, _>>()?;
+            stages.push(("glow", median(&mut times)));
+        }
         (Some((median(&mut times), splat.entries())), stages)
     };
     let prepare = match sim.compiled().ir.sort {

@@ -15,6 +15,8 @@ pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// The HDR image to draw into and the bloom passes into an RGBA8 image, for one image size.
 pub struct GlowPasses {
     hdr: wgpu::TextureView,
+    /// The HDR image itself (the compute splat copies its image into it).
+    hdr_texture: wgpu::Texture,
     blur_x: (wgpu::ComputePipeline, wgpu::BindGroup),
     blur_y: (wgpu::ComputePipeline, wgpu::BindGroup),
     groups: (u32, u32),
@@ -61,10 +63,14 @@ impl GlowPasses {
                 HDR_FORMAT,
                 usage | wgpu::TextureUsages::TEXTURE_BINDING,
             )
-            .create_view(&Default::default())
         };
-        let hdr = hdr_image("frame, HDR", wgpu::TextureUsages::RENDER_ATTACHMENT);
-        let blurred = hdr_image("glow blurred along x", wgpu::TextureUsages::STORAGE_BINDING);
+        let hdr_texture = hdr_image(
+            "frame, HDR",
+            wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::COPY_DST,
+        );
+        let hdr = hdr_texture.create_view(&Default::default());
+        let blurred = hdr_image("glow blurred along x", wgpu::TextureUsages::STORAGE_BINDING)
+            .create_view(&Default::default());
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("glow"),
             source: wgpu::ShaderSource::Wgsl(include_str!("glow.wgsl").into()),
@@ -91,6 +97,7 @@ impl GlowPasses {
         gpu.take_error()?;
         Ok(Self {
             hdr,
+            hdr_texture,
             blur_x,
             blur_y,
             groups: (width.div_ceil(8), height.div_ceil(8)),
@@ -100,6 +107,11 @@ impl GlowPasses {
     /// The HDR image to draw the effect into (a colour attachment of [`HDR_FORMAT`]).
     pub fn hdr(&self) -> &wgpu::TextureView {
         &self.hdr
+    }
+
+    /// The HDR image as a texture (a copy destination).
+    pub fn hdr_texture(&self) -> &wgpu::Texture {
+        &self.hdr_texture
     }
 
     /// Records both passes (after the effect's draw into the HDR image).

@@ -20,13 +20,14 @@
 
 use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
 use plume_compiler::wgsl::draw::{
-    splat_discs, DrawShape, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_QUAD_WORDS,
+    splat_discs, splat_hdr_pitch, DrawShape, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_QUAD_WORDS,
     SPLAT_RASTER_BINDINGS, SPLAT_TILE,
 };
 
 use crate::device::buffers::{filled_buffer, staging, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
+use crate::draw::glow::GlowPasses;
 use crate::draw::raster::{draw_module, draw_shape, draw_view_bytes};
 use crate::draw::texture::SpriteTexture;
 use crate::error::RuntimeError;
@@ -69,6 +70,13 @@ struct QuadRaster {
     texture: Option<SpriteTexture>,
 }
 
+/// A glowing effect's bloom: the splat's HDR image is copied into the glow's HDR texture, and
+/// the same two blur passes as the raster draw's write `output` (RGBA8).
+struct SplatGlow {
+    passes: GlowPasses,
+    output: wgpu::Texture,
+}
+
 /// A compute splat of one effect (of one group) into `width` x `height` images.
 pub struct Splat {
     gpu: Gpu,
@@ -86,6 +94,8 @@ pub struct Splat {
     entries: Entries,
     /// Set for quads; discs use the fixed `raster` kernel.
     quads: Option<QuadRaster>,
+    /// Set when the effect glows (its quads composite into an HDR image).
+    glow: Option<SplatGlow>,
     additive: bool,
     background: u32,
 }
@@ -120,10 +130,9 @@ const TILE_BINDINGS: [(u32, bool, bool); 10] = [
 
 impl Splat {
     /// Whether the splat can draw `ir`'s sprites: any sprite (textured or round, any
-    /// orientation, rotation and height), into an 8-bit image (no `glow`), with no ribbons
-    /// (no `trail`).
+    /// orientation, rotation and height, glowing or not), with no ribbons (no `trail`).
     pub fn draws(ir: &plume_compiler::EffectIr) -> bool {
-        ir.render.glow.is_none() && ir.render.trail.is_none()
+        ir.render.trail.is_none()
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
@@ -139,15 +148,12 @@ impl Splat {
             )));
         }
         if !Self::draws(&effect.ir) {
-            let why = if effect.ir.render.trail.is_some() {
-                "followed by ribbons (render.trail)"
-            } else {
-                "drawn into an HDR image to glow (render.glow)"
-            };
-            return Err(RuntimeError::Output(format!(
-                "the compute splat draws sprites into an 8-bit image only; this effect's sprites \
-                 are {why}: draw it with the raster pipeline (plume render --draw raster)"
-            )));
+            return Err(RuntimeError::Output(
+                "the compute splat draws sprites without ribbons; this effect's sprites are \
+                 followed by ribbons (render.trail): draw it with the raster pipeline \
+                 (plume render --draw raster)"
+                    .into(),
+            ));
         }
         let count = effect.ir.capacity;
         let shape = DrawShape {
@@ -186,7 +192,14 @@ impl Splat {
             offsets: words("tile offsets", u64::from(count)),
             counts: words("tile counts", u64::from(count)),
             ranges: words("tile ranges", 2 * u64::from(tiles_x) * u64::from(tiles_y)),
-            image: words("image", u64::from(width) * u64::from(height)),
+            // An HDR image (the effect glows) holds two words a pixel in rows a copy can take.
+            image: match effect.ir.render.glow {
+                Some(_) => words(
+                    "image",
+                    2 * u64::from(splat_hdr_pitch(width)) * u64::from(height),
+                ),
+                None => words("image", u64::from(width) * u64::from(height)),
+            },
             status: words("splat status", 4),
             boxes: words("tile boxes", 2 * u64::from(count)),
         };
@@ -212,6 +225,22 @@ impl Splat {
                     None => None,
                 },
             }),
+        };
+        let glow = match &effect.ir.render.glow {
+            Some(g) => {
+                let output = gpu.texture_2d(
+                    "splat glow output",
+                    (width, height),
+                    wgpu::TextureFormat::Rgba8Unorm,
+                    wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+                );
+                let view = output.create_view(&Default::default());
+                Some(SplatGlow {
+                    passes: GlowPasses::new(&gpu, g, &view, width, height)?,
+                    output,
+                })
+            }
+            None => None,
         };
         // `project` uses every binding of its module but `raster_quads`'s, so its derived
         // layout holds the entries above.
@@ -244,6 +273,7 @@ impl Splat {
             scan,
             tiles,
             quads,
+            glow,
             additive,
             background,
         };
@@ -414,6 +444,36 @@ impl Splat {
         Ok(())
     }
 
+    /// Records the bloom of a glowing effect after the splat's pass: its HDR image copied into
+    /// the glow's texture, then the two blur passes (nothing for an effect that does not glow).
+    pub fn record_glow(&self, encoder: &mut wgpu::CommandEncoder) {
+        let Some(glow) = &self.glow else {
+            return;
+        };
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: &self.tiles.image,
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(8 * splat_hdr_pitch(self.width)),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            glow.passes.hdr_texture().as_image_copy(),
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
+        );
+        glow.passes.record(encoder);
+    }
+
+    /// The bloom's passes, for a glowing effect (the benchmark times them).
+    pub fn glow_passes(&self) -> Option<&GlowPasses> {
+        self.glow.as_ref().map(|g| &g.passes)
+    }
+
     /// Whether the entry list held every entry the last frame needed (read after it ran); if
     /// not, it is grown to a quarter more than needed, and the frame must be drawn again.
     pub fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
@@ -438,10 +498,19 @@ impl Splat {
                 });
                 self.record(&mut pass)?;
             }
+            self.record_glow(&mut encoder);
             self.gpu.queue.submit([encoder.finish()]);
             self.gpu.take_error()?;
             if self.fits_or_grow()? {
-                return crate::device::readback::read_buffer(&self.gpu, &self.tiles.image);
+                return match &self.glow {
+                    Some(glow) => crate::device::readback::read_texture(
+                        &self.gpu,
+                        &glow.output,
+                        self.width,
+                        self.height,
+                    ),
+                    None => crate::device::readback::read_buffer(&self.gpu, &self.tiles.image),
+                };
             }
         }
     }

@@ -11,11 +11,12 @@ pub(crate) mod images;
 pub(crate) mod offscreen;
 pub(crate) mod scene;
 
+pub use crate::device::readback::read_texture;
 pub use crate::draw::glow::{GlowPasses, HDR_FORMAT};
 pub use crate::draw::splat::Splat;
 pub use export::{
     csv, csv_groups, export, export_groups, ply, ply_groups, summarize, write_atomically, Summary,
 };
 pub use images::{contact_sheet, gif, png, Frame8};
-pub use offscreen::{read_texture, Offscreen, FORMAT};
+pub use offscreen::{Offscreen, FORMAT};
 pub use scene::{Scene, DEPTH_FORMAT};

@@ -26,8 +26,8 @@ use common::{
     emit_age_steps, emit_draw_view, emit_finite3, emit_gradients, emit_life_fraction, emit_load,
     emit_soft,
 };
-pub use splat::{splat_discs, SPLAT_QUAD_WORDS, SPLAT_RASTER_BINDINGS};
 use splat::{emit_project, emit_project_quads, emit_quad_raster, emit_splat_declarations};
+pub use splat::{splat_discs, splat_hdr_pitch, SPLAT_QUAD_WORDS, SPLAT_RASTER_BINDINGS};
 
 /// How the runtime binds the particles for drawing. The compiled effect's own draw module is
 /// [`DrawShape::single`]; the runtime asks for another shape when its device splits the state
@@ -191,7 +191,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     }
     if shape.splat {
         w.blank();
-        emit_splat_declarations(&mut w, splat_discs(ir));
+        emit_splat_declarations(&mut w, splat_discs(ir), ir.render.glow.is_some());
     }
     let soft = ir.render.soft.filter(|_| shape.soft);
     if let Some(distance) = soft {

@@ -17,10 +17,20 @@ use crate::ir::EffectIr;
 
 /// Whether the splat draws `ir`'s sprites as discs (round, camera-facing, square, untextured:
 /// the runtime's fixed raster kernel) rather than as quads (`raster_quads`, generated).
+/// A glowing effect is drawn as quads: its colours go to an HDR image, past what a disc's
+/// 10-bit record holds.
 pub fn splat_discs(ir: &EffectIr) -> bool {
     ir.render.orient == OrientIr::Camera
         && ir.render.texture.is_none()
         && ir.render.size_y.is_none()
+        && ir.render.glow.is_none()
+}
+
+/// Pixels per row of the splat's HDR image (a glowing effect's): the width rounded up to 32,
+/// so that a row of 8-byte pixels is a whole number of 256-byte copy rows and the image can be
+/// copied into the glow's HDR texture as it is.
+pub fn splat_hdr_pitch(width: u32) -> u32 {
+    width.next_multiple_of(32)
 }
 
 /// 32-bit words of a quad's record: rows of the pixel-to-corner map (xyz) with the colour's
@@ -37,7 +47,7 @@ const QUAD_BATCH: u32 = 128;
 
 /// The splat's declarations: its view and output buffers (bindings [`SPLAT_BINDINGS`]), and
 /// for quads the tile buffers `raster_quads` reads ([`SPLAT_RASTER_BINDINGS`]).
-pub(crate) fn emit_splat_declarations(w: &mut Writer, discs: bool) {
+pub(crate) fn emit_splat_declarations(w: &mut Writer, discs: bool, hdr: bool) {
     w.comment("The compute splat's image: size in pixels, tiles, and the instances to project.");
     w.block("struct SplatView", |w| {
         w.line("width: u32,");
@@ -69,7 +79,14 @@ pub(crate) fn emit_splat_declarations(w: &mut Writer, discs: bool) {
     w.comment("The tile kernels' parameters (the runtime's splat.wgsl `Params`).");
     w.block("struct SplatTiles", |w| {
         for field in [
-            "width", "height", "tiles_x", "tiles", "count", "entries", "additive", "background",
+            "width",
+            "height",
+            "tiles_x",
+            "tiles",
+            "count",
+            "entries",
+            "additive",
+            "background",
         ] {
             w.line(format!("{field}: u32,"));
         }
@@ -84,8 +101,14 @@ pub(crate) fn emit_splat_declarations(w: &mut Writer, discs: bool) {
     w.line(format!(
         "@group(0) @binding({ranges}) var<storage, read> tile_ranges: array<vec2<u32>>;"
     ));
+    w.comment(if hdr {
+        "The image: HDR (the effect glows), (r, g) and (b, 1) as f16 pairs, rows of splat_hdr_pitch(width) pixels."
+    } else {
+        "The image: RGBA8 pixels."
+    });
     w.line(format!(
-        "@group(0) @binding({image}) var<storage, read_write> splat_image: array<u32>;"
+        "@group(0) @binding({image}) var<storage, read_write> splat_image: array<{}>;",
+        if hdr { "vec2<u32>" } else { "u32" }
     ));
 }
 
@@ -239,11 +262,14 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
 pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr) {
     let words = QUAD_BATCH / 32;
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
+    let hdr = ir.render.glow.is_some();
     let last = SPLAT_TILE - 1;
     match &ir.render.texture {
         Some(t) => t.emit_splat_shade(w),
         None => {
-            w.comment("The soft round sprite at corner coordinates uv (the fragment shader's disc).");
+            w.comment(
+                "The soft round sprite at corner coordinates uv (the fragment shader's disc).",
+            );
             w.block(
                 "fn splat_shade(uv: vec2<f32>, du: vec2<f32>, dv: vec2<f32>, color: vec4<f32>, frame: u32) -> vec4<f32>",
                 |w| {
@@ -279,7 +305,9 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr) {
         w.line("return vec2<u32>(b & 0xffffu, b >> 16u);");
     });
     w.blank();
-    w.line(format!("@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"));
+    w.line(format!(
+        "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
+    ));
     w.block(
         "fn raster_quads(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>, @builtin(local_invocation_index) t: u32)",
         |w| {
@@ -368,9 +396,17 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr) {
                         w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
                         w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
                         w.line("let color = vec4<f32>(r0.w, r1.w, r2.w, bitcast<f32>(r3.x));");
-                        w.comment("A unorm target clamps what the fragment shader returns before blending.");
-                        w.line("let f = clamp(splat_shade(uv, du, dv, color, r3.y), vec4<f32>(0.0), vec4<f32>(1.0));");
-                        if additive {
+                        if hdr {
+                            w.comment("A float target takes what the fragment shader returns as it is.");
+                            w.line("let f = splat_shade(uv, du, dv, color, r3.y);");
+                        } else {
+                            w.comment("A unorm target clamps what the fragment shader returns before blending.");
+                            w.line("let f = clamp(splat_shade(uv, du, dv, color, r3.y), vec4<f32>(0.0), vec4<f32>(1.0));");
+                        }
+                        if additive && hdr {
+                            w.comment("Light adds up past 1 in an HDR image: nothing ever finishes a pixel.");
+                            w.line("gathered += f.rgb * f.a;");
+                        } else if additive {
                             w.line("gathered += f.rgb * f.a;");
                             w.line("done = all(gathered + background >= vec3<f32>(1.0));");
                         } else {
@@ -401,9 +437,16 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr) {
                 "gathered + through * background"
             };
             w.block("if (px < splat_tiles.width && py < splat_tiles.height)", |w| {
-                w.line(format!(
-                    "splat_image[py * splat_tiles.width + px] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
-                ));
+                if hdr {
+                    w.comment("Clamped to f16's largest finite value: no infinity reaches the bloom.");
+                    w.line(format!("let c = min({colour}, vec3<f32>(65504.0));"));
+                    w.line("let pitch = (splat_tiles.width + 31u) & ~31u;");
+                    w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
+                } else {
+                    w.line(format!(
+                        "splat_image[py * splat_tiles.width + px] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
+                    ));
+                }
             });
         },
     );
