@@ -83,20 +83,19 @@ impl DrawMethod {
     /// The method `auto` stands for on `gpu` for `graph` (without the scene's meshes when
     /// `no_scene`), and why. The splat was 7 to 9 times faster than the raster pipeline for 10M
     /// particles on an H100 (docs/performance.md) and slower on llvmpipe, whose raster path is
-    /// the CPU's; it draws one group of sprites (any texture, orientation, rotation and height,
-    /// glowing or not) without trails or scene meshes.
+    /// the CPU's; it draws every group's sprites (any texture, orientation, rotation and
+    /// height, glowing or not) without trails or scene meshes.
     fn resolve(self, gpu: &Gpu, graph: &CompiledGraph, no_scene: bool) -> (Self, String) {
         if self != DrawMethod::Auto {
             return (self, "as asked".into());
         }
-        let ir = &graph.groups[0].effect.ir;
+        let irs: Vec<&plume_compiler::EffectIr> =
+            graph.groups.iter().map(|g| &g.effect.ir).collect();
         let why_not = if gpu.info.device_type == wgpu::DeviceType::Cpu {
             Some("a CPU adapter rasterises faster than it splats")
-        } else if graph.groups.len() > 1 {
-            Some("the splat draws one group")
-        } else if !Splat::draws(ir) {
-            Some("the splat draws no ribbons (render.trail)")
-        } else if !no_scene && !ir.scene_triangles().is_empty() {
+        } else if let Some(why) = Splat::why_not(&irs) {
+            Some(why)
+        } else if !no_scene && irs.iter().any(|ir| !ir.scene_triangles().is_empty()) {
             Some("the splat does not draw the scene's meshes")
         } else {
             None
@@ -119,12 +118,6 @@ enum Format {
 /// Simulates `graph` and draws its frames: every group in one pass each frame, in group
 /// order, from the top-level group's camera, over its background (and its glow, if any).
 fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>, RuntimeError> {
-    if args.draw == DrawMethod::Splat && graph.groups.len() > 1 {
-        return Err(RuntimeError::Output(
-            "--draw splat draws one group; an effect with groups is drawn with --draw raster"
-                .into(),
-        ));
-    }
     let gpu = Gpu::new(&GpuChoice {
         backend: args.backend.clone(),
     })?;

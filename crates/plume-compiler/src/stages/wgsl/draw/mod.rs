@@ -47,6 +47,9 @@ pub struct DrawShape {
     /// Whether the module also holds `project`, the compute splat's first kernel (the
     /// runtime's `splat.rs` draws `plume render`'s images with it).
     pub splat: bool,
+    /// Whether the splat composites into an HDR image (the effect glows, or the top-level
+    /// group of its graph does: every group then draws into the one HDR image).
+    pub hdr: bool,
     /// Whether the fragment shader fades sprites near the host's depth buffer, bound at
     /// [`SCENE_DEPTH_BINDING`] (an effect with `render.soft`, drawn into a pass with depth).
     pub soft: bool,
@@ -94,6 +97,7 @@ impl DrawShape {
             through_list: ir.sort,
             primitive: Primitive::Quad,
             splat: false,
+            hdr: false,
             soft: false,
         }
     }
@@ -191,7 +195,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     }
     if shape.splat {
         w.blank();
-        emit_splat_declarations(&mut w, splat_discs(ir), ir.render.glow.is_some());
+        emit_splat_declarations(&mut w, splat_discs(ir, shape.hdr), shape.hdr);
     }
     let soft = ir.render.soft.filter(|_| shape.soft);
     if let Some(distance) = soft {
@@ -245,12 +249,12 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     emit_fragment(&mut w, texture, soft.is_some());
     if shape.splat {
         w.blank();
-        if splat_discs(ir) {
+        if splat_discs(ir, shape.hdr) {
             emit_project(&mut w);
         } else {
             emit_project_quads(&mut w, ir);
             w.blank();
-            emit_quad_raster(&mut w, ir);
+            emit_quad_raster(&mut w, ir, shape.hdr);
         }
     }
     w.finish()

@@ -16,14 +16,14 @@ use crate::features::looks::orient::OrientIr;
 use crate::ir::EffectIr;
 
 /// Whether the splat draws `ir`'s sprites as discs (round, camera-facing, square, untextured:
-/// the runtime's fixed raster kernel) rather than as quads (`raster_quads`, generated).
-/// A glowing effect is drawn as quads: its colours go to an HDR image, past what a disc's
-/// 10-bit record holds.
-pub fn splat_discs(ir: &EffectIr) -> bool {
+/// the runtime's fixed raster kernel) rather than as quads (`raster_quads`, generated). Into
+/// an HDR image (`hdr`: the effect or its graph glows) sprites are drawn as quads: their
+/// colours may pass what a disc's 10-bit record holds.
+pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
     ir.render.orient == OrientIr::Camera
         && ir.render.texture.is_none()
         && ir.render.size_y.is_none()
-        && ir.render.glow.is_none()
+        && !hdr
 }
 
 /// Pixels per row of the splat's HDR image (a glowing effect's): the width rounded up to 32,
@@ -259,10 +259,9 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
 /// Batches of [`QUAD_BATCH`] records are binned to the pixels of their boxes first (bit
 /// masks; a box that covers the whole tile sets one tile-wide bit instead of 256), so a pixel
 /// visits only the quads whose boxes hold it.
-pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr) {
+pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
     let words = QUAD_BATCH / 32;
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
-    let hdr = ir.render.glow.is_some();
     let last = SPLAT_TILE - 1;
     match &ir.render.texture {
         Some(t) => t.emit_splat_shade(w),
@@ -316,11 +315,20 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr) {
             w.line("let px = origin.x + lid.x;");
             w.line("let py = origin.y + lid.y;");
             w.line("let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);");
-            w.line("let background = unpack4x8unorm(splat_tiles.background).rgb;");
             w.comment("Light gathered so far, front to back, and (alpha) the share of what lies behind that still comes through.");
             w.line("var gathered = vec3<f32>(0.0);");
             w.line("var through = 1.0;");
             w.line("var done = px >= splat_tiles.width || py >= splat_tiles.height;");
+            w.line("var background = unpack4x8unorm(splat_tiles.background).rgb;");
+            w.comment("Alpha 0: this group draws over the image the groups before it drew.");
+            w.block("if ((splat_tiles.background >> 24u) == 0u && !done)", |w| {
+                if hdr {
+                    w.line("let under = splat_image[py * ((splat_tiles.width + 31u) & ~31u) + px];");
+                    w.line("background = vec3<f32>(unpack2x16float(under.x), unpack2x16float(under.y).x);");
+                } else {
+                    w.line("background = unpack4x8unorm(splat_image[py * splat_tiles.width + px]).rgb;");
+                }
+            });
             w.block("if (t == 0u)", |w| {
                 w.line("batch_range = tile_ranges[tile];");
                 w.line("atomicStore(&finished, 0u);");

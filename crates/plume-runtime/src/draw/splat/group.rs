@@ -1,22 +1,7 @@
-//! The compute splat: another way to draw `plume render`'s images, in compute shaders only, for
-//! GPUs whose raster units are few (an H100 has graphics units in only a small part of the chip,
-//! and the raster draw of 10M sprites is bound by their vertex and primitive rate; see
-//! docs/performance.md). It gives the raster draw's image: the same sprites (the draw module's
-//! `sprite_at`, through its `project` kernel), coverage tested at pixel centres, the same alpha
-//! falloff and blend, the 8-bit rounding after every blend, in the same order.
-//!
-//! Sprites are discs (round and camera-facing: a 16-byte record, the fixed `raster` kernel of
-//! `splat.wgsl`) or quads (textured, oriented, rotated or of their own height: a 64-byte record
-//! holding the quad's projective map, composited by the effect's generated `raster_quads`,
-//! which shades each pixel as the fragment shader does, textures sampled with the same mip
-//! levels); see the compiler's `wgsl::draw::splat`.
-//!
-//! One compute pass: `project` (each sprite's record and tile count), an exclusive
-//! scan of the counts, one (tile, sprite) entry per tile touched, a stable radix sort of the
-//! entries by tile (so each tile's sprites stay in draw order), each tile's run, then a
-//! workgroup per 16x16 tile composites its sprites in order. Entries are sized from the sprites'
-//! count and grown when a frame needs more (the frame is then drawn again). The embedding API
-//! always draws with the raster pipeline, into the host's render pass.
+//! One group's compute splat: its `project` kernel (from the group's draw module), the scan,
+//! the (tile, sprite) entries and their sort, and the composite (the fixed disc kernel of
+//! `splat.wgsl` or the group's generated `raster_quads`), into an image it owns or shares with
+//! the groups drawn before it ([`super::Splat`] strings them together).
 
 use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
 use plume_compiler::wgsl::draw::{
@@ -27,11 +12,9 @@ use plume_compiler::wgsl::draw::{
 use crate::device::buffers::{filled_buffer, staging, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
-use crate::draw::glow::GlowPasses;
 use crate::draw::raster::{draw_module, draw_shape, draw_view_bytes};
 use crate::draw::texture::SpriteTexture;
 use crate::error::RuntimeError;
-use crate::sim::effect::Effect;
 use crate::sim::group::Group;
 use crate::sort::radix::{GpuSorter, SortProgram};
 
@@ -70,15 +53,8 @@ struct QuadRaster {
     texture: Option<SpriteTexture>,
 }
 
-/// A glowing effect's bloom: the splat's HDR image is copied into the glow's HDR texture, and
-/// the same two blur passes as the raster draw's write `output` (RGBA8).
-struct SplatGlow {
-    passes: GlowPasses,
-    output: wgpu::Texture,
-}
-
-/// A compute splat of one effect (of one group) into `width` x `height` images.
-pub struct Splat {
+/// The compute splat of one group into `width` x `height` images.
+pub(crate) struct GroupSplat {
     gpu: Gpu,
     width: u32,
     height: u32,
@@ -94,20 +70,8 @@ pub struct Splat {
     entries: Entries,
     /// Set for quads; discs use the fixed `raster` kernel.
     quads: Option<QuadRaster>,
-    /// Set when the effect glows (its quads composite into an HDR image).
-    glow: Option<SplatGlow>,
     additive: bool,
     background: u32,
-}
-
-/// The one group the splat draws: the effect's, or the error of an effect with groups.
-fn splat_group(effect: &Effect) -> Result<&Group, RuntimeError> {
-    match effect.groups() {
-        [group] => Ok(group),
-        _ => Err(RuntimeError::Output(
-            "the compute splat draws one group; an effect with groups is drawn with the raster pipeline (plume render --draw raster)".into(),
-        )),
-    }
 }
 
 /// The splat's stages, in order.
@@ -128,40 +92,28 @@ const TILE_BINDINGS: [(u32, bool, bool); 10] = [
     (9, true, false),
 ];
 
-impl Splat {
-    /// Whether the splat can draw `ir`'s sprites: any sprite (textured or round, any
-    /// orientation, rotation and height, glowing or not), with no ribbons (no `trail`).
-    pub fn draws(ir: &plume_compiler::EffectIr) -> bool {
-        ir.render.trail.is_none()
-    }
-
-    /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
-    /// draw (see [`Self::draws`]) and for an effect with groups (it draws one).
-    pub fn new(effect: &Effect, width: u32, height: u32) -> Result<Self, RuntimeError> {
-        let group = splat_group(effect)?;
+impl GroupSplat {
+    /// A splat of `group` into `width` x `height` images: into `under`, the image of the
+    /// groups drawn before it (over what they drew), or into an image of its own over the
+    /// group's background.
+    pub(crate) fn new(
+        group: &Group,
+        width: u32,
+        height: u32,
+        under: Option<&wgpu::Buffer>,
+        hdr: bool,
+    ) -> Result<Self, RuntimeError> {
         let gpu = group.gpu.clone();
         let (res, effect) = (&group.res, &group.effect);
         let device = &gpu.device;
-        if width == 0 || height == 0 {
-            return Err(RuntimeError::Output(format!(
-                "image size {width}x{height} must be at least 1x1"
-            )));
-        }
-        if !Self::draws(&effect.ir) {
-            return Err(RuntimeError::Output(
-                "the compute splat draws sprites without ribbons; this effect's sprites are \
-                 followed by ribbons (render.trail): draw it with the raster pipeline \
-                 (plume render --draw raster)"
-                    .into(),
-            ));
-        }
         let count = effect.ir.capacity;
         let shape = DrawShape {
             splat: true,
+            hdr,
             ..draw_shape(effect, res)
         };
         let (module, mut entries) = draw_module(&gpu, effect, res, &shape, None)?;
-        let discs = splat_discs(&effect.ir);
+        let discs = splat_discs(&effect.ir, hdr);
         let record_words = if discs { 4 } else { SPLAT_QUAD_WORDS };
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
         let words = |label, n: u64| {
@@ -193,12 +145,13 @@ impl Splat {
             counts: words("tile counts", u64::from(count)),
             ranges: words("tile ranges", 2 * u64::from(tiles_x) * u64::from(tiles_y)),
             // An HDR image (the effect glows) holds two words a pixel in rows a copy can take.
-            image: match effect.ir.render.glow {
-                Some(_) => words(
+            image: match (under, hdr) {
+                (Some(image), _) => image.clone(),
+                (None, true) => words(
                     "image",
                     2 * u64::from(splat_hdr_pitch(width)) * u64::from(height),
                 ),
-                None => words("image", u64::from(width) * u64::from(height)),
+                (None, false) => words("image", u64::from(width) * u64::from(height)),
             },
             status: words("splat status", 4),
             boxes: words("tile boxes", 2 * u64::from(count)),
@@ -226,29 +179,17 @@ impl Splat {
                 },
             }),
         };
-        let glow = match &effect.ir.render.glow {
-            Some(g) => {
-                let output = gpu.texture_2d(
-                    "splat glow output",
-                    (width, height),
-                    wgpu::TextureFormat::Rgba8Unorm,
-                    wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
-                );
-                let view = output.create_view(&Default::default());
-                Some(SplatGlow {
-                    passes: GlowPasses::new(&gpu, g, &view, width, height)?,
-                    output,
-                })
-            }
-            None => None,
-        };
         // `project` uses every binding of its module but `raster_quads`'s, so its derived
         // layout holds the entries above.
         let project_group = bind(&gpu, &project.get_bind_group_layout(0), &entries);
         let bg = effect.ir.render.background;
         // As a clear colour reaches an 8-bit target: each channel rounded to the nearest step.
         let byte = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u32;
-        let background = byte(bg.x) | byte(bg.y) << 8 | byte(bg.z) << 16 | 255 << 24;
+        // Alpha 0 tells the composite to start from the image (the groups drawn before).
+        let background = match under {
+            Some(_) => 0,
+            None => byte(bg.x) | byte(bg.y) << 8 | byte(bg.z) << 16 | 255 << 24,
+        };
         let additive = effect.ir.render.blend == plume_compiler::schema::Blend::Additive;
         // A first guess at the entries: a quarter more than the sprites (most touch one tile).
         let first = u64::from(count) + u64::from(count) / 4 + 4096;
@@ -273,7 +214,6 @@ impl Splat {
             scan,
             tiles,
             quads,
-            glow,
             additive,
             background,
         };
@@ -366,13 +306,13 @@ impl Splat {
 
     /// Records what the frame needs before the splat's pass into `encoder`: the effect's
     /// frame preparation (frame table, depth sort) and the camera.
-    pub fn prepare(
+    pub(crate) fn prepare(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        effect: &Effect,
+        group: &Group,
         camera: &Camera,
     ) -> Result<(), RuntimeError> {
-        let frame = splat_group(effect)?.prepare_frame(encoder, camera)?;
+        let frame = group.prepare_frame(encoder, camera)?;
         let src = staging(
             &self.gpu,
             "splat draw view",
@@ -383,7 +323,7 @@ impl Splat {
     }
 
     /// Records the splat itself into `pass`: project, scan, entries, sort, ranges, raster.
-    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
+    pub(crate) fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
         for stage in STAGES {
             self.record_stage(pass, stage)?;
         }
@@ -391,7 +331,7 @@ impl Splat {
     }
 
     /// Records one stage of the splat into `pass` (the benchmark times them one by one).
-    pub fn record_stage(
+    pub(crate) fn record_stage(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         stage: &str,
@@ -444,39 +384,9 @@ impl Splat {
         Ok(())
     }
 
-    /// Records the bloom of a glowing effect after the splat's pass: its HDR image copied into
-    /// the glow's texture, then the two blur passes (nothing for an effect that does not glow).
-    pub fn record_glow(&self, encoder: &mut wgpu::CommandEncoder) {
-        let Some(glow) = &self.glow else {
-            return;
-        };
-        encoder.copy_buffer_to_texture(
-            wgpu::TexelCopyBufferInfo {
-                buffer: &self.tiles.image,
-                layout: wgpu::TexelCopyBufferLayout {
-                    offset: 0,
-                    bytes_per_row: Some(8 * splat_hdr_pitch(self.width)),
-                    rows_per_image: Some(self.height),
-                },
-            },
-            glow.passes.hdr_texture().as_image_copy(),
-            wgpu::Extent3d {
-                width: self.width,
-                height: self.height,
-                depth_or_array_layers: 1,
-            },
-        );
-        glow.passes.record(encoder);
-    }
-
-    /// The bloom's passes, for a glowing effect (the benchmark times them).
-    pub fn glow_passes(&self) -> Option<&GlowPasses> {
-        self.glow.as_ref().map(|g| &g.passes)
-    }
-
     /// Whether the entry list held every entry the last frame needed (read after it ran); if
     /// not, it is grown to a quarter more than needed, and the frame must be drawn again.
-    pub fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
+    pub(crate) fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
         let needed =
             u64::from(crate::device::readback::read_words(&self.gpu, &self.tiles.status, 1)?[0]);
         if needed <= self.entries.len {
@@ -486,38 +396,9 @@ impl Splat {
         Ok(false)
     }
 
-    /// Draws `effect` from `camera` and returns the image as RGBA8 rows, top row first.
-    pub fn render(&mut self, effect: &Effect, camera: &Camera) -> Result<Vec<u8>, RuntimeError> {
-        loop {
-            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-            self.prepare(&mut encoder, effect, camera)?;
-            {
-                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                    label: Some("splat"),
-                    timestamp_writes: None,
-                });
-                self.record(&mut pass)?;
-            }
-            self.record_glow(&mut encoder);
-            self.gpu.queue.submit([encoder.finish()]);
-            self.gpu.take_error()?;
-            if self.fits_or_grow()? {
-                return match &self.glow {
-                    Some(glow) => crate::device::readback::read_texture(
-                        &self.gpu,
-                        &glow.output,
-                        self.width,
-                        self.height,
-                    ),
-                    None => crate::device::readback::read_buffer(&self.gpu, &self.tiles.image),
-                };
-            }
-        }
-    }
-
     /// Whether the last frame's sorted entries hold every sprite exactly as many times as
     /// `project` counted tiles for it (reads the buffers back; for tests).
-    pub fn entries_are_complete(&self) -> Result<bool, RuntimeError> {
+    pub(crate) fn entries_are_complete(&self) -> Result<bool, RuntimeError> {
         let read = |b: &wgpu::Buffer| crate::device::readback::read_words(&self.gpu, b, usize::MAX);
         let needed = read(&self.tiles.status)?[0] as usize;
         let counts = read(&self.tiles.counts)?;
@@ -532,13 +413,13 @@ impl Splat {
         Ok(needed <= sprites.len() && seen == counts[..seen.len()])
     }
 
-    /// The image size.
-    pub fn size(&self) -> (u32, u32) {
-        (self.width, self.height)
+    /// The image this group composites into.
+    pub(crate) fn image(&self) -> &wgpu::Buffer {
+        &self.tiles.image
     }
 
     /// Entries the list holds now.
-    pub fn entries(&self) -> u64 {
+    pub(crate) fn entries(&self) -> u64 {
         self.entries.len
     }
 }

@@ -148,10 +148,14 @@ fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) l
     let px = origin.x + lid.x;
     let py = origin.y + lid.y;
     let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);
-    let background = unpack4x8unorm(params.background).rgb;
     var gathered = vec3<f32>(0.0);
     var through = 1.0;
     var done = px >= params.width || py >= params.height;
+    var background = unpack4x8unorm(params.background).rgb;
+    // Alpha 0: this group draws over the image the groups before it drew.
+    if ((params.background >> 24u) == 0u && !done) {
+        background = unpack4x8unorm(image[py * params.width + px]).rgb;
+    }
     if (t == 0u) {
         tile_range = ranges[tile];
         atomicStore(&finished, 0u);

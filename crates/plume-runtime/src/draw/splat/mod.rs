@@ -1,0 +1,246 @@
+//! The compute splat: another way to draw `plume render`'s images, in compute shaders only, for
+//! GPUs whose raster units are few (an H100 has graphics units in only a small part of the chip,
+//! and the raster draw of 10M sprites is bound by their vertex and primitive rate; see
+//! docs/performance.md). It gives the raster draw's image: the same sprites (the draw module's
+//! `sprite_at`, through its `project` kernel), coverage tested at pixel centres, the same
+//! shading and blend, composited in f32 and rounded once (as the raster draw into a float
+//! target is).
+//!
+//! Sprites are discs (round and camera-facing: a 16-byte record, the fixed `raster` kernel of
+//! `splat.wgsl`) or quads (textured, oriented, rotated, of their own height or glowing: a
+//! 64-byte record holding the quad's projective map, composited by the effect's generated
+//! `raster_quads`, which shades each pixel as the fragment shader does, textures sampled with
+//! the same mip levels); see the compiler's `wgsl::draw::splat`.
+//!
+//! Per group, one compute pass: `project` (each sprite's record and tile count), an exclusive
+//! scan of the counts, one (tile, sprite) entry per tile touched, a stable radix sort of the
+//! entries by tile (so each tile's sprites stay in draw order), each tile's run, then a
+//! workgroup per 16x16 tile composites its sprites front to back ([`group`]). The groups of an
+//! effect share one image, in group order, each over what the ones before drew. Entries are
+//! sized from the sprites' count and grown when a frame needs more (the frame is then drawn
+//! again). A glowing effect composites into an HDR image and blooms with the raster draw's
+//! passes. The embedding API always draws with the raster pipeline, into the host's render
+//! pass.
+
+mod group;
+
+use plume_compiler::wgsl::draw::splat_hdr_pitch;
+use plume_compiler::EffectIr;
+
+use crate::device::gpu::Gpu;
+use crate::draw::camera::Camera;
+use crate::draw::glow::GlowPasses;
+use crate::error::RuntimeError;
+use crate::sim::effect::Effect;
+use group::GroupSplat;
+pub use group::STAGES;
+
+/// A glowing effect's bloom: the splat's HDR image is copied into the glow's HDR texture, and
+/// the same two blur passes as the raster draw's write `output` (RGBA8).
+struct SplatGlow {
+    passes: GlowPasses,
+    output: wgpu::Texture,
+}
+
+/// A compute splat of an effect (every group, in group order) into `width` x `height` images.
+pub struct Splat {
+    gpu: Gpu,
+    width: u32,
+    height: u32,
+    /// One per group; the first owns the image the others draw over.
+    parts: Vec<GroupSplat>,
+    /// Set when the effect glows (its groups composite into an HDR image).
+    glow: Option<SplatGlow>,
+}
+
+impl Splat {
+    /// Whether the splat can draw `ir`'s sprites: any sprite (textured or round, any
+    /// orientation, rotation and height, glowing or not), with no ribbons (no `trail`).
+    pub fn draws(ir: &EffectIr) -> bool {
+        ir.render.trail.is_none()
+    }
+
+    /// Why the splat cannot draw an effect whose groups are `groups`, or `None` when it can:
+    /// a group with ribbons.
+    pub fn why_not(groups: &[&EffectIr]) -> Option<&'static str> {
+        groups
+            .iter()
+            .any(|ir| !Self::draws(ir))
+            .then_some("the compute splat draws no ribbons (render.trail)")
+    }
+
+    /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
+    /// draw (see [`Self::why_not`]).
+    pub fn new(effect: &Effect, width: u32, height: u32) -> Result<Self, RuntimeError> {
+        if width == 0 || height == 0 {
+            return Err(RuntimeError::Output(format!(
+                "image size {width}x{height} must be at least 1x1"
+            )));
+        }
+        let irs: Vec<&EffectIr> = effect.groups().iter().map(|g| &g.effect.ir).collect();
+        if let Some(why) = Self::why_not(&irs) {
+            return Err(RuntimeError::Output(format!(
+                "{why}: draw this effect with the raster pipeline (plume render --draw raster)"
+            )));
+        }
+        let gpu = effect.gpu().clone();
+        // The top-level group's glow blooms every group, as in `plume render`: all of them
+        // composite into one HDR image then.
+        let hdr = irs[0].render.glow.is_some();
+        let mut parts: Vec<GroupSplat> = Vec::with_capacity(irs.len());
+        for group in effect.groups() {
+            let under = parts.first().map(|p| p.image().clone());
+            parts.push(GroupSplat::new(group, width, height, under.as_ref(), hdr)?);
+        }
+        // The top-level group's glow, as `plume render` blooms a graph's image.
+        let glow = match &irs[0].render.glow {
+            Some(g) => {
+                let output = gpu.texture_2d(
+                    "splat glow output",
+                    (width, height),
+                    wgpu::TextureFormat::Rgba8Unorm,
+                    wgpu::TextureUsages::STORAGE_BINDING | wgpu::TextureUsages::COPY_SRC,
+                );
+                let view = output.create_view(&Default::default());
+                Some(SplatGlow {
+                    passes: GlowPasses::new(&gpu, g, &view, width, height)?,
+                    output,
+                })
+            }
+            None => None,
+        };
+        Ok(Self {
+            gpu,
+            width,
+            height,
+            parts,
+            glow,
+        })
+    }
+
+    /// Records what the frame needs before the splat's pass into `encoder`: each group's frame
+    /// preparation (frame table, depth sort) and the camera.
+    pub fn prepare(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        effect: &Effect,
+        camera: &Camera,
+    ) -> Result<(), RuntimeError> {
+        for (part, group) in self.parts.iter().zip(effect.groups()) {
+            part.prepare(encoder, group, camera)?;
+        }
+        Ok(())
+    }
+
+    /// Records the splat itself into `pass`: each group's project, scan, entries, sort,
+    /// ranges and composite, in group order.
+    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
+        for part in &self.parts {
+            part.record(pass)?;
+        }
+        Ok(())
+    }
+
+    /// Records one stage of the splat into `pass`, for every group in order (the benchmark
+    /// times them one by one).
+    pub fn record_stage(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        stage: &str,
+    ) -> Result<(), RuntimeError> {
+        for part in &self.parts {
+            part.record_stage(pass, stage)?;
+        }
+        Ok(())
+    }
+
+    /// Records the bloom of a glowing effect after the splat's pass: its HDR image copied into
+    /// the glow's texture, then the two blur passes (nothing for an effect that does not glow).
+    pub fn record_glow(&self, encoder: &mut wgpu::CommandEncoder) {
+        let Some(glow) = &self.glow else {
+            return;
+        };
+        encoder.copy_buffer_to_texture(
+            wgpu::TexelCopyBufferInfo {
+                buffer: self.parts[0].image(),
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(8 * splat_hdr_pitch(self.width)),
+                    rows_per_image: Some(self.height),
+                },
+            },
+            glow.passes.hdr_texture().as_image_copy(),
+            wgpu::Extent3d {
+                width: self.width,
+                height: self.height,
+                depth_or_array_layers: 1,
+            },
+        );
+        glow.passes.record(encoder);
+    }
+
+    /// The bloom's passes, for a glowing effect (the benchmark times them).
+    pub fn glow_passes(&self) -> Option<&GlowPasses> {
+        self.glow.as_ref().map(|g| &g.passes)
+    }
+
+    /// Whether every group's entry list held every entry the last frame needed (read after
+    /// it ran); the lists that did not are grown, and the frame must be drawn again.
+    pub fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
+        let mut fits = true;
+        for part in &mut self.parts {
+            fits &= part.fits_or_grow()?;
+        }
+        Ok(fits)
+    }
+
+    /// Draws `effect` from `camera` and returns the image as RGBA8 rows, top row first.
+    pub fn render(&mut self, effect: &Effect, camera: &Camera) -> Result<Vec<u8>, RuntimeError> {
+        loop {
+            let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
+            self.prepare(&mut encoder, effect, camera)?;
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("splat"),
+                    timestamp_writes: None,
+                });
+                self.record(&mut pass)?;
+            }
+            self.record_glow(&mut encoder);
+            self.gpu.queue.submit([encoder.finish()]);
+            self.gpu.take_error()?;
+            if self.fits_or_grow()? {
+                return match &self.glow {
+                    Some(glow) => crate::device::readback::read_texture(
+                        &self.gpu,
+                        &glow.output,
+                        self.width,
+                        self.height,
+                    ),
+                    None => crate::device::readback::read_buffer(&self.gpu, self.parts[0].image()),
+                };
+            }
+        }
+    }
+
+    /// Whether the last frame's sorted entries hold every sprite exactly as many times as
+    /// `project` counted tiles for it, in every group (reads the buffers back; for tests).
+    pub fn entries_are_complete(&self) -> Result<bool, RuntimeError> {
+        for part in &self.parts {
+            if !part.entries_are_complete()? {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// The image size.
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Entries the lists hold now, over every group.
+    pub fn entries(&self) -> u64 {
+        self.parts.iter().map(GroupSplat::entries).sum()
+    }
+}
