@@ -386,7 +386,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                     );
                 }
                 None => println!(
-                    "    compute splat     - (it draws sprites without ribbons only; not this effect's)"
+                    "    compute splat     - (it does not draw this effect)"
                 ),
             }
             if let Some((draw, blur)) = d.glow {

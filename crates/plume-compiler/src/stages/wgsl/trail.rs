@@ -17,7 +17,8 @@ use crate::features::looks::trail::TrailIr;
 use crate::ir::EffectIr;
 use crate::stages::passes::layout::{self, Attribute, Layout};
 use crate::stages::wgsl::draw::common as draw;
-use crate::stages::wgsl::draw::{DrawShape, FIRST_DATA_BINDING};
+use crate::stages::wgsl::draw::splat::{emit_composite, emit_splat_declarations, emit_to_pixels};
+use crate::stages::wgsl::draw::{DrawShape, FIRST_DATA_BINDING, SPLAT_TILE};
 use crate::stages::wgsl::emit_particle_struct;
 
 /// Binding of chunk 0's trail ring in the trail draw module (chunk c at this + c).
@@ -112,6 +113,10 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     draw::emit_finite3(&mut w);
     w.blank();
     emit_entry(&mut w, shape);
+    if shape.splat {
+        w.blank();
+        emit_splat_declarations(&mut w, false, shape.hdr);
+    }
     w.blank();
     emit_vertex(&mut w, ir, shape, life);
     w.blank();
@@ -128,7 +133,114 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
             }
         },
     );
+    if shape.splat {
+        w.blank();
+        emit_splat(&mut w, ir, trail, shape.hdr);
+    }
     w.finish()
+}
+
+/// 32-bit words of a ribbon triangle's record in the compute splat: the rows of the map from
+/// pixels to the triangle's barycentric weights (xyz; the first row's w: the triangle's index
+/// in its strip, whose parity says which side its first vertex is on), the three vertices'
+/// colours as f16 pairs, and the pixel box's two corners.
+pub const SPLAT_TRIANGLE_WORDS: u64 = 20;
+
+/// Triangles of one ribbon's strip.
+pub fn triangles(trail: &TrailIr) -> u32 {
+    vertices(trail) - 2
+}
+
+/// The compute splat's kernels for ribbons: `project`, each strip triangle (three calls of
+/// `trail_vertex`, as the vertex shader places them) as a record, and `composite`, which gives
+/// each pixel the triangle's perspective-correct barycentric weights and shades it as
+/// `fs_trail` does.
+fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
+    w.line(format!(
+        "const TRIANGLES: u32 = {};",
+        u32_lit(triangles(trail))
+    ));
+    w.blank();
+    emit_to_pixels(w);
+    w.blank();
+    w.line("@compute @workgroup_size(256)");
+    w.block(
+        "fn project(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let k = gid.x + gid.y * groups.x * 256u;");
+            w.block("if (k >= splat_view.count)", |w| w.line("return;"));
+            w.line("let instance = k / TRIANGLES;");
+            w.line("let i = k - instance * TRIANGLES;");
+            w.line("var tiles = 0u;");
+            w.line("let v = array<TrailVertex, 3>(trail_vertex(i, instance), trail_vertex(i + 1u, instance), trail_vertex(i + 2u, instance));");
+            w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
+            w.line("var inside = true;");
+            w.line("var lo = vec2<f32>(3.0e38);");
+            w.line("var hi = vec2<f32>(-3.0e38);");
+            w.block("for (var c = 0u; c < 3u; c++)", |w| {
+                w.line("let q = v[c].clip;");
+                w.comment("A hidden vertex lies outside the depth range: its triangle draws nothing.");
+                w.line("inside = inside && q.w > 0.0 && q.z >= 0.0 && q.z <= q.w;");
+                w.line("let p = vec2<f32>(q.x / q.w * 0.5 + 0.5, 0.5 - q.y / q.w * 0.5) * size;");
+                w.line("lo = min(lo, p);");
+                w.line("hi = max(hi, p);");
+            });
+            w.line("let first = max(ceil(lo - 0.5), vec2<f32>(0.0));");
+            w.line("let last = min(floor(hi - 0.5), size - 1.0);");
+            w.block("if (inside && all(first <= last))", |w| {
+                w.line("let a = to_pixels(v[0].clip, first, size);");
+                w.line("let b = to_pixels(v[1].clip, first, size);");
+                w.line("let c = to_pixels(v[2].clip, first, size);");
+                w.comment("The inverse of the columns (a, b, c): pixel -> barycentric weights over 1 / w.");
+                w.line("let det = dot(a, cross(b, c));");
+                w.block("if (abs(det) > 1e-30)", |w| {
+                    w.line(format!("let t0 = vec2<u32>(first) / {SPLAT_TILE}u;"));
+                    w.line(format!("let t1 = vec2<u32>(last) / {SPLAT_TILE}u;"));
+                    w.line("tiles = (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
+                    w.line("tile_boxes[k] = vec2<u32>(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u));");
+                    w.line("let box = vec2<u32>(u32(first.x) | (u32(first.y) << 16u), u32(last.x) | (u32(last.y) << 16u));");
+                    w.line("let base = 5u * k;");
+                    w.line("splats[base] = vec4<u32>(bitcast<vec3<u32>>(cross(b, c) / det), i);");
+                    w.line("splats[base + 1u] = vec4<u32>(bitcast<vec3<u32>>(cross(c, a) / det), 0u);");
+                    w.line("splats[base + 2u] = vec4<u32>(bitcast<vec3<u32>>(cross(a, b) / det), 0u);");
+                    w.line("let c0 = min(v[0].color, vec4<f32>(65504.0));");
+                    w.line("let c1 = min(v[1].color, vec4<f32>(65504.0));");
+                    w.line("let c2 = min(v[2].color, vec4<f32>(65504.0));");
+                    w.line("splats[base + 3u] = vec4<u32>(pack2x16float(c0.rg), pack2x16float(c0.ba), pack2x16float(c1.rg), pack2x16float(c1.ba));");
+                    w.line("splats[base + 4u] = vec4<u32>(pack2x16float(c2.rg), pack2x16float(c2.ba), box);");
+                });
+            });
+            w.line("tile_counts[k] = tiles;");
+            w.line("tile_offsets[k] = tiles;");
+        },
+    );
+    w.blank();
+    let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
+    emit_composite(w, hdr, additive, 5, &|w: &mut Writer| {
+        w.line("let r0 = batch[5u * j];");
+        w.line("let r1 = bitcast<vec3<f32>>(batch[5u * j + 1u].xyz);");
+        w.line("let r2 = bitcast<vec3<f32>>(batch[5u * j + 2u].xyz);");
+        w.line("let r3 = batch[5u * j + 3u];");
+        w.line("let r4 = batch[5u * j + 4u];");
+        w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r4.z)), 1.0);");
+        w.line(
+            "let weighed = vec3<f32>(dot(bitcast<vec3<f32>>(r0.xyz), p), dot(r1, p), dot(r2, p));",
+        );
+        w.comment("The weights over 1 / w: their sum is positive in front of the camera.");
+        w.line("let sum = weighed.x + weighed.y + weighed.z;");
+        w.block("if (sum <= 0.0)", |w| w.line("continue;"));
+        w.line("let b = weighed / sum;");
+        w.comment("The edge shared with the strip's next triangle (opposite the first vertex) is that one's.");
+        w.block("if (b.x <= 0.0 || b.y < 0.0 || b.z < 0.0)", |w| {
+            w.line("continue;")
+        });
+        w.comment("Strip vertex i is on side (i & 1) * 2 - 1; the sides alternate.");
+        w.line("let side = select(-1.0, 1.0, (r0.w & 1u) == 1u);");
+        w.line("let across = dot(b, vec3<f32>(side, -side, side));");
+        w.line("let color = b.x * vec4<f32>(unpack2x16float(r3.x), unpack2x16float(r3.y)) + b.y * vec4<f32>(unpack2x16float(r3.z), unpack2x16float(r3.w)) + b.z * vec4<f32>(unpack2x16float(r4.x), unpack2x16float(r4.y));");
+        w.comment("fs_trail: soft across the strip.");
+        w.line("let shaded = vec4<f32>(color.rgb, color.a * (1.0 - across * across));");
+    });
 }
 
 /// `trail_width(t)` and `trail_color(t)`: the trail's stops baked in, as
@@ -193,6 +305,12 @@ fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
     w.line("@vertex");
     w.block(
         "fn vs_trail(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance: u32) -> TrailVertex",
+        |w| w.line("return trail_vertex(vertex, instance);"),
+    );
+    w.blank();
+    w.comment("Strip vertex `vertex` of instance `instance`'s ribbon (the vertex shader's, and the compute splat's triangles').");
+    w.block(
+        "fn trail_vertex(vertex: u32, instance: u32) -> TrailVertex",
         |w| {
             w.line("var out: TrailVertex;");
             w.line("out.clip = HIDDEN;");

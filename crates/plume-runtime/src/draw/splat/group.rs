@@ -1,13 +1,14 @@
 //! One group's compute splat: its `project` kernel (from the group's draw module), the scan,
 //! the (tile, sprite) entries and their sort, and the composite (the fixed disc kernel of
-//! `splat.wgsl` or the group's generated `raster_quads`), into an image it owns or shares with
+//! `splat.wgsl` or the group's generated `composite`), into an image it owns or shares with
 //! the groups drawn before it ([`super::Splat`] strings them together).
 
 use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
 use plume_compiler::wgsl::draw::{
-    splat_discs, splat_hdr_pitch, DrawShape, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_QUAD_WORDS,
-    SPLAT_RASTER_BINDINGS, SPLAT_TILE,
+    splat_discs, splat_hdr_pitch, DrawShape, DRAW_VIEW_BYTES, FIRST_DATA_BINDING, SPLAT_BINDINGS,
+    SPLAT_QUAD_WORDS, SPLAT_RASTER_BINDINGS, SPLAT_TILE,
 };
+use plume_compiler::wgsl::trail;
 
 use crate::device::buffers::{filled_buffer, staging, STORAGE};
 use crate::device::gpu::Gpu;
@@ -42,12 +43,12 @@ struct Entries {
     vals: wgpu::Buffer,
     sort: SortProgram,
     group: wgpu::BindGroup,
-    /// `raster_quads`'s bind group (quads only).
+    /// `composite`'s bind group (quads only).
     quads_group: Option<wgpu::BindGroup>,
 }
 
 /// What draws quads (every sprite but a round camera-facing one): the effect's generated
-/// `raster_quads` kernel and its texture.
+/// `composite` kernel and its texture.
 struct QuadRaster {
     pipeline: wgpu::ComputePipeline,
     texture: Option<SpriteTexture>,
@@ -93,11 +94,13 @@ const TILE_BINDINGS: [(u32, bool, bool); 10] = [
 ];
 
 impl GroupSplat {
-    /// A splat of `group` into `width` x `height` images: into `under`, the image of the
-    /// groups drawn before it (over what they drew), or into an image of its own over the
-    /// group's background.
+    /// A splat of `group`'s sprites, or of its ribbons (`ribbons`: the strips' triangles,
+    /// from its trail draw module), into `width` x `height` images: into `under`, the image
+    /// of the parts drawn before it (over what they drew), or into an image of its own over
+    /// the group's background.
     pub(crate) fn new(
         group: &Group,
+        ribbons: bool,
         width: u32,
         height: u32,
         under: Option<&wgpu::Buffer>,
@@ -106,15 +109,33 @@ impl GroupSplat {
         let gpu = group.gpu.clone();
         let (res, effect) = (&group.res, &group.effect);
         let device = &gpu.device;
-        let count = effect.ir.capacity;
         let shape = DrawShape {
             splat: true,
             hdr,
             ..draw_shape(effect, res)
         };
-        let (module, mut entries) = draw_module(&gpu, effect, res, &shape, None)?;
-        let discs = splat_discs(&effect.ir, hdr);
-        let record_words = if discs { 4 } else { SPLAT_QUAD_WORDS };
+        let (module, mut entries, count) = match (&effect.ir.render.trail, ribbons) {
+            (Some(trail), true) => {
+                let triangles = u64::from(effect.ir.capacity) * u64::from(trail::triangles(trail));
+                let count = u32::try_from(triangles).map_err(|_| {
+                    RuntimeError::Output(format!(
+                        "{triangles} ribbon triangles are more than the compute splat counts (2^32); draw this effect with the raster pipeline"
+                    ))
+                })?;
+                let (module, entries) = ribbon_module(&gpu, effect, res, shape)?;
+                (module, entries, count)
+            }
+            _ => {
+                let (module, entries) = draw_module(&gpu, effect, res, &shape, None)?;
+                (module, entries, effect.ir.capacity)
+            }
+        };
+        let discs = !ribbons && splat_discs(&effect.ir, hdr);
+        let record_words = match (discs, ribbons) {
+            (true, _) => 4,
+            (false, true) => trail::SPLAT_TRIANGLE_WORDS,
+            (false, false) => SPLAT_QUAD_WORDS,
+        };
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
         let words = |label, n: u64| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -172,14 +193,14 @@ impl GroupSplat {
         let quads = match discs {
             true => None,
             false => Some(QuadRaster {
-                pipeline: gpu.compute_pipeline(&module, "raster_quads", None),
-                texture: match &effect.ir.render.texture {
-                    Some(t) => Some(SpriteTexture::new(&gpu, t)?),
-                    None => None,
+                pipeline: gpu.compute_pipeline(&module, "composite", None),
+                texture: match (&effect.ir.render.texture, ribbons) {
+                    (Some(t), false) => Some(SpriteTexture::new(&gpu, t)?),
+                    _ => None,
                 },
             }),
         };
-        // `project` uses every binding of its module but `raster_quads`'s, so its derived
+        // `project` uses every binding of its module but `composite`'s, so its derived
         // layout holds the entries above.
         let project_group = bind(&gpu, &project.get_bind_group_layout(0), &entries);
         let bg = effect.ir.render.background;
@@ -304,19 +325,18 @@ impl GroupSplat {
         Ok(())
     }
 
-    /// Records what the frame needs before the splat's pass into `encoder`: the effect's
-    /// frame preparation (frame table, depth sort) and the camera.
-    pub(crate) fn prepare(
+    /// Records the camera and the steps done (`steps`, from the group's frame preparation)
+    /// into `encoder`, before the splat's pass.
+    pub(crate) fn write_view(
         &self,
         encoder: &mut wgpu::CommandEncoder,
-        group: &Group,
         camera: &Camera,
+        steps: u64,
     ) -> Result<(), RuntimeError> {
-        let frame = group.prepare_frame(encoder, camera)?;
         let src = staging(
             &self.gpu,
             "splat draw view",
-            &draw_view_bytes(camera, frame.steps, 1.0),
+            &draw_view_bytes(camera, steps, 1.0),
         )?;
         encoder.copy_buffer_to_buffer(&src, 0, &self.draw_view, 0, DRAW_VIEW_BYTES);
         Ok(())
@@ -497,4 +517,40 @@ fn uniform(gpu: &Gpu, label: &str, words: &[u32]) -> Result<wgpu::Buffer, Runtim
 fn bind(gpu: &Gpu, layout: &wgpu::BindGroupLayout, all: &[(u32, wgpu::Buffer)]) -> wgpu::BindGroup {
     let entries: Vec<(u32, &wgpu::Buffer)> = all.iter().map(|(b, buffer)| (*b, buffer)).collect();
     gpu.bind_buffers("splat", layout, &entries)
+}
+
+/// The trail draw module of `effect` in the splat's shape (its `project` and `composite` for
+/// ribbon triangles) and the buffers it reads, as the raster trail draw binds them: every
+/// slot, in the depth order when the effect sorts.
+fn ribbon_module(
+    gpu: &Gpu,
+    effect: &plume_compiler::CompiledEffect,
+    res: &crate::device::resources::Resources,
+    shape: DrawShape,
+) -> Result<(wgpu::ShaderModule, Vec<(u32, wgpu::Buffer)>), RuntimeError> {
+    let shape = DrawShape {
+        through_list: effect.ir.sort,
+        primitive: plume_compiler::wgsl::draw::Primitive::Quad,
+        ..shape
+    };
+    let source = trail::emit(&effect.ir, &effect.layout, &shape);
+    let module = gpu
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("splat ribbons"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+    let mut entries = Vec::new();
+    if shape.through_list {
+        entries.push((1, crate::sort::depth::sort_buffers(res)?.vals.clone()));
+    }
+    for (k, chunk) in res.chunks(effect)?.iter().enumerate() {
+        let ring = chunk
+            .trail
+            .as_ref()
+            .expect("the chunks of an effect with a trail hold rings");
+        entries.push((FIRST_DATA_BINDING + k as u32, chunk.buffer.clone()));
+        entries.push((trail::FIRST_TRAIL_BINDING + k as u32, ring.clone()));
+    }
+    Ok((module, entries))
 }

@@ -9,7 +9,7 @@
 //! Sprites are discs (round and camera-facing: a 16-byte record, the fixed `raster` kernel of
 //! `splat.wgsl`) or quads (textured, oriented, rotated, of their own height or glowing: a
 //! 64-byte record holding the quad's projective map, composited by the effect's generated
-//! `raster_quads`, which shades each pixel as the fragment shader does, textures sampled with
+//! `composite`, which shades each pixel as the fragment shader does, textures sampled with
 //! the same mip levels); see the compiler's `wgsl::draw::splat`.
 //!
 //! Per group, one compute pass: `project` (each sprite's record and tile count), an exclusive
@@ -47,26 +47,26 @@ pub struct Splat {
     gpu: Gpu,
     width: u32,
     height: u32,
-    /// One per group; the first owns the image the others draw over.
-    parts: Vec<GroupSplat>,
+    /// Per group, its ribbons (if it has a trail) then its sprites, with the group's index;
+    /// the first part owns the image the others draw over.
+    parts: Vec<(usize, GroupSplat)>,
     /// Set when the effect glows (its groups composite into an HDR image).
     glow: Option<SplatGlow>,
 }
 
 impl Splat {
-    /// Whether the splat can draw `ir`'s sprites: any sprite (textured or round, any
-    /// orientation, rotation and height, glowing or not), with no ribbons (no `trail`).
+    /// Whether the splat can draw `ir`: any sprite (textured or round, any orientation,
+    /// rotation and height, glowing or not) and ribbons (`trail`) of a stateful effect.
     pub fn draws(ir: &EffectIr) -> bool {
-        ir.render.trail.is_none()
+        ir.render.trail.is_none() || ir.stateless.is_none()
     }
 
-    /// Why the splat cannot draw an effect whose groups are `groups`, or `None` when it can:
-    /// a group with ribbons.
+    /// Why the splat cannot draw an effect whose groups are `groups`, or `None` when it can.
     pub fn why_not(groups: &[&EffectIr]) -> Option<&'static str> {
         groups
             .iter()
             .any(|ir| !Self::draws(ir))
-            .then_some("the compute splat draws no ribbons (render.trail)")
+            .then_some("the compute splat draws the ribbons of stateful effects only")
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
@@ -87,10 +87,18 @@ impl Splat {
         // The top-level group's glow blooms every group, as in `plume render`: all of them
         // composite into one HDR image then.
         let hdr = irs[0].render.glow.is_some();
-        let mut parts: Vec<GroupSplat> = Vec::with_capacity(irs.len());
-        for group in effect.groups() {
-            let under = parts.first().map(|p| p.image().clone());
-            parts.push(GroupSplat::new(group, width, height, under.as_ref(), hdr)?);
+        let mut parts: Vec<(usize, GroupSplat)> = Vec::with_capacity(irs.len());
+        for (g, group) in effect.groups().iter().enumerate() {
+            // Ribbons first, as the raster draw draws them under the group's sprites.
+            let kinds: &[bool] = match irs[g].render.trail {
+                Some(_) => &[true, false],
+                None => &[false],
+            };
+            for &ribbons in kinds {
+                let under = parts.first().map(|(_, p)| p.image().clone());
+                let part = GroupSplat::new(group, ribbons, width, height, under.as_ref(), hdr)?;
+                parts.push((g, part));
+            }
         }
         // The top-level group's glow, as `plume render` blooms a graph's image.
         let glow = match &irs[0].render.glow {
@@ -126,8 +134,11 @@ impl Splat {
         effect: &Effect,
         camera: &Camera,
     ) -> Result<(), RuntimeError> {
-        for (part, group) in self.parts.iter().zip(effect.groups()) {
-            part.prepare(encoder, group, camera)?;
+        for (g, group) in effect.groups().iter().enumerate() {
+            let frame = group.prepare_frame(encoder, camera)?;
+            for (_, part) in self.parts.iter().filter(|(of, _)| *of == g) {
+                part.write_view(encoder, camera, frame.steps)?;
+            }
         }
         Ok(())
     }
@@ -135,7 +146,7 @@ impl Splat {
     /// Records the splat itself into `pass`: each group's project, scan, entries, sort,
     /// ranges and composite, in group order.
     pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
-        for part in &self.parts {
+        for (_, part) in &self.parts {
             part.record(pass)?;
         }
         Ok(())
@@ -148,7 +159,7 @@ impl Splat {
         pass: &mut wgpu::ComputePass<'_>,
         stage: &str,
     ) -> Result<(), RuntimeError> {
-        for part in &self.parts {
+        for (_, part) in &self.parts {
             part.record_stage(pass, stage)?;
         }
         Ok(())
@@ -162,7 +173,7 @@ impl Splat {
         };
         encoder.copy_buffer_to_texture(
             wgpu::TexelCopyBufferInfo {
-                buffer: self.parts[0].image(),
+                buffer: self.parts[0].1.image(),
                 layout: wgpu::TexelCopyBufferLayout {
                     offset: 0,
                     bytes_per_row: Some(8 * splat_hdr_pitch(self.width)),
@@ -188,7 +199,7 @@ impl Splat {
     /// it ran); the lists that did not are grown, and the frame must be drawn again.
     pub fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
         let mut fits = true;
-        for part in &mut self.parts {
+        for (_, part) in &mut self.parts {
             fits &= part.fits_or_grow()?;
         }
         Ok(fits)
@@ -217,7 +228,9 @@ impl Splat {
                         self.width,
                         self.height,
                     ),
-                    None => crate::device::readback::read_buffer(&self.gpu, self.parts[0].image()),
+                    None => {
+                        crate::device::readback::read_buffer(&self.gpu, self.parts[0].1.image())
+                    }
                 };
             }
         }
@@ -226,7 +239,7 @@ impl Splat {
     /// Whether the last frame's sorted entries hold every sprite exactly as many times as
     /// `project` counted tiles for it, in every group (reads the buffers back; for tests).
     pub fn entries_are_complete(&self) -> Result<bool, RuntimeError> {
-        for part in &self.parts {
+        for (_, part) in &self.parts {
             if !part.entries_are_complete()? {
                 return Ok(false);
             }
@@ -241,6 +254,6 @@ impl Splat {
 
     /// Entries the lists hold now, over every group.
     pub fn entries(&self) -> u64 {
-        self.parts.iter().map(GroupSplat::entries).sum()
+        self.parts.iter().map(|(_, part)| part.entries()).sum()
     }
 }

@@ -14,7 +14,7 @@
 //! frame from the particle's age).
 
 pub(crate) mod common;
-mod splat;
+pub(crate) mod splat;
 
 use crate::base::rng;
 use crate::base::writer::{f32_lit, u32_lit, Writer};

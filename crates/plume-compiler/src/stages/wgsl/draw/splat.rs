@@ -8,7 +8,7 @@
 //! the projective map from the image's pixels back to the quad's corner coordinates, so that a
 //! pixel finds where it lies on the sprite (and the derivatives a texture's mip level needs)
 //! as the rasteriser's perspective-correct interpolation would; the kernel that composites
-//! them, `raster_quads`, is generated here with the effect's own shading.
+//! them, `composite`, is generated here with the effect's own shading.
 
 use super::{SPLAT_BINDINGS, SPLAT_TILE};
 use crate::base::writer::Writer;
@@ -16,7 +16,7 @@ use crate::features::looks::orient::OrientIr;
 use crate::ir::EffectIr;
 
 /// Whether the splat draws `ir`'s sprites as discs (round, camera-facing, square, untextured:
-/// the runtime's fixed raster kernel) rather than as quads (`raster_quads`, generated). Into
+/// the runtime's fixed raster kernel) rather than as quads (`composite`, generated). Into
 /// an HDR image (`hdr`: the effect or its graph glows) sprites are drawn as quads: their
 /// colours may pass what a disc's 10-bit record holds.
 pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
@@ -37,16 +37,17 @@ pub fn splat_hdr_pitch(width: u32) -> u32 {
 /// red, green and blue (w), then alpha, the flipbook frame and the pixel box's two corners.
 pub const SPLAT_QUAD_WORDS: u64 = 16;
 
-/// Bindings `raster_quads` reads besides the records: the tile parameters (the runtime's
+/// Bindings `composite` reads besides the records: the tile parameters (the runtime's
 /// `Params`, 8 words), the sorted entries' sprites, each tile's run of entries, the image.
 pub const SPLAT_RASTER_BINDINGS: [u32; 4] = [25, 26, 27, 28];
 
-/// Sprites a quad raster workgroup bins at once: 128 records (8 KiB) and a 4-word mask per
-/// pixel (4 KiB) stay within WebGPU's 16 KiB of workgroup memory.
+/// Records a composite workgroup bins at once: 128 records (8 KiB of quads, 10 KiB of ribbon
+/// triangles) and a 4-word mask per pixel (4 KiB) stay within WebGPU's 16 KiB of workgroup
+/// memory.
 const QUAD_BATCH: u32 = 128;
 
 /// The splat's declarations: its view and output buffers (bindings [`SPLAT_BINDINGS`]), and
-/// for quads the tile buffers `raster_quads` reads ([`SPLAT_RASTER_BINDINGS`]).
+/// for quads the tile buffers `composite` reads ([`SPLAT_RASTER_BINDINGS`]).
 pub(crate) fn emit_splat_declarations(w: &mut Writer, discs: bool, hdr: bool) {
     w.comment("The compute splat's image: size in pixels, tiles, and the instances to project.");
     w.block("struct SplatView", |w| {
@@ -160,6 +161,18 @@ pub(crate) fn emit_project(w: &mut Writer) {
     );
 }
 
+/// `to_pixels(q, origin, size)`: a clip-space vector's homogeneous pixel coordinates.
+pub(crate) fn emit_to_pixels(w: &mut Writer) {
+    w.comment("A clip-space vector's homogeneous pixel coordinates (x right, y down, w), counted from pixel `origin`: a point's pixel is xy / w.");
+    w.block(
+        "fn to_pixels(q: vec4<f32>, origin: vec2<f32>, size: vec2<f32>) -> vec3<f32>",
+        |w| {
+            w.line("let h = vec2<f32>(0.5 * size.x * (q.x + q.w), 0.5 * size.y * (q.w - q.y));");
+            w.line("return vec3<f32>(h - origin * q.w, q.w);");
+        },
+    );
+}
+
 /// `project` for quads: instance k's quad as the vertex shader places it (the same half axes,
 /// the same projection), as a 64-byte record: the inverse of the map from corner coordinates
 /// (u, v, 1) to homogeneous pixels counted from the quad's pixel box (small numbers: f32 keeps
@@ -180,14 +193,7 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
     } else {
         "0u"
     };
-    w.comment("A clip-space vector's homogeneous pixel coordinates (x right, y down, w), counted from pixel `origin`: a point's pixel is xy / w.");
-    w.block(
-        "fn to_pixels(q: vec4<f32>, origin: vec2<f32>, size: vec2<f32>) -> vec3<f32>",
-        |w| {
-            w.line("let h = vec2<f32>(0.5 * size.x * (q.x + q.w), 0.5 * size.y * (q.w - q.y));");
-            w.line("return vec3<f32>(h - origin * q.w, q.w);");
-        },
-    );
+    emit_to_pixels(w);
     w.blank();
     w.line("@compute @workgroup_size(256)");
     w.block(
@@ -247,22 +253,10 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
     );
 }
 
-/// `raster_quads`: a workgroup per 16x16 tile, a thread per pixel, composites the tile's quads
-/// front to back (the draw order reversed), each pixel's colour from `splat_shade` at the
-/// corner coordinates its centre maps to, and rounds to 8 bits once at the end. Alpha: the
-/// light that still comes through, T, falls by (1 - a) at each sprite, and a pixel stops once
-/// T is under half an 8-bit step (what lies behind can no longer change it); additive: a pixel
-/// stops once every channel is full. The tile stops when all its pixels have. The raster
-/// pipeline blends back to front and rounds after every blend; this is the same sum without
-/// those roundings (tests/render.rs measures how far apart they land).
-///
-/// Batches of [`QUAD_BATCH`] records are binned to the pixels of their boxes first (bit
-/// masks; a box that covers the whole tile sets one tile-wide bit instead of 256), so a pixel
-/// visits only the quads whose boxes hold it.
+/// `composite` for quads: [`emit_composite`] with each pixel centre mapped back to the quad's
+/// corner coordinates and shaded by `splat_shade` (the fragment shader's disc, or its texel
+/// with derivatives from the quad's map).
 pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
-    let words = QUAD_BATCH / 32;
-    let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
-    let last = SPLAT_TILE - 1;
     match &ir.render.texture {
         Some(t) => t.emit_splat_shade(w),
         None => {
@@ -281,13 +275,60 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
         }
     }
     w.blank();
+    let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
+    emit_composite(w, hdr, additive, 4, &|w: &mut Writer| {
+        w.line("let r0 = bitcast<vec4<f32>>(batch[4u * j]);");
+        w.line("let r1 = bitcast<vec4<f32>>(batch[4u * j + 1u]);");
+        w.line("let r2 = bitcast<vec4<f32>>(batch[4u * j + 2u]);");
+        w.line("let r3 = batch[4u * j + 3u];");
+        w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r3.z)), 1.0);");
+        w.comment("s = 1 / w: positive in front of the camera.");
+        w.line("let s = dot(r2.xyz, p);");
+        w.block("if (s <= 0.0)", |w| w.line("continue;"));
+        w.line("let uv = vec2<f32>(dot(r0.xyz, p), dot(r1.xyz, p)) / s;");
+        w.block("if (any(abs(uv) >= vec2<f32>(1.0)))", |w| {
+            w.line("continue;")
+        });
+        w.comment("uv's derivatives along the image's x and y (the quotient rule).");
+        w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
+        w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
+        w.line("let color = vec4<f32>(r0.w, r1.w, r2.w, bitcast<f32>(r3.x));");
+        w.line("let shaded = splat_shade(uv, du, dv, color, r3.y);");
+    });
+}
+
+/// `composite`: a workgroup per 16x16 tile, a thread per pixel, composites the tile's records
+/// (`record` vec4s each, the last one's z and w the pixel box's corners) front to back (the
+/// draw order reversed), each pixel's colour `shaded` from the code `evaluate` emits (which
+/// reads record j of the batch, the pixel centre `centre`, and may `continue` past a record
+/// that does not cover it), and rounds to 8 bits once at the end (or stores f16 pairs into an
+/// HDR image). Alpha: the light that still comes through, T, falls by (1 - a) at each record,
+/// and a pixel stops once T is under half an 8-bit step (what lies behind can no longer change
+/// it); additive into an 8-bit image: a pixel stops once every channel is full. The tile stops
+/// when all its pixels have. The raster pipeline blends back to front, into an 8-bit target
+/// rounding after every blend; this is the same sum without those roundings (tests/render.rs
+/// measures how far apart they land).
+///
+/// Batches of [`QUAD_BATCH`] records are binned to the pixels of their boxes first (bit masks;
+/// a box that covers the whole tile sets one tile-wide bit instead of 256), so a pixel visits
+/// only the records whose boxes hold it.
+pub(crate) fn emit_composite(
+    w: &mut Writer,
+    hdr: bool,
+    additive: bool,
+    record: u32,
+    evaluate: &dyn Fn(&mut Writer),
+) {
+    let words = QUAD_BATCH / 32;
+    let last = SPLAT_TILE - 1;
+    let box_word = format!("{}u * t + {}u", record, record - 1);
     w.line(format!(
         "var<workgroup> batch: array<vec4<u32>, {}>;",
-        4 * QUAD_BATCH
+        record * QUAD_BATCH
     ));
     w.line("var<workgroup> batch_range: vec2<u32>;");
     w.comment(format!(
-        "Per pixel of the tile, which of the batch's {QUAD_BATCH} quads may cover it: {words} words of bits; and the quads that cover the whole tile."
+        "Per pixel of the tile, which of the batch's {QUAD_BATCH} records may cover it: {words} words of bits; and the records that cover the whole tile."
     ));
     w.line(format!(
         "var<workgroup> pixel_masks: array<atomic<u32>, {}>;",
@@ -308,7 +349,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
         "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
     ));
     w.block(
-        "fn raster_quads(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>, @builtin(local_invocation_index) t: u32)",
+        "fn composite(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>, @builtin(local_invocation_index) t: u32)",
         |w| {
             w.line("let tile = wid.x + wid.y * splat_tiles.tiles_x;");
             w.line(format!("let origin = wid.xy * {SPLAT_TILE}u;"));
@@ -320,7 +361,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
             w.line("var through = 1.0;");
             w.line("var done = px >= splat_tiles.width || py >= splat_tiles.height;");
             w.line("var background = unpack4x8unorm(splat_tiles.background).rgb;");
-            w.comment("Alpha 0: this group draws over the image the groups before it drew.");
+            w.comment("Alpha 0: this part draws over the image the parts before it drew.");
             w.block("if ((splat_tiles.background >> 24u) == 0u && !done)", |w| {
                 if hdr {
                     w.line("let under = splat_image[py * ((splat_tiles.width + 31u) & ~31u) + px];");
@@ -351,11 +392,13 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
                 w.line("let i = start + t;");
                 w.block("if (i < end)", |w| {
                     w.line("let k = tile_sprites[i];");
-                    w.block("for (var r = 0u; r < 4u; r++)", |w| {
-                        w.line("batch[4u * t + r] = splats[4u * k + r];");
+                    w.block(format!("for (var r = 0u; r < {record}u; r++)"), |w| {
+                        w.line(format!(
+                            "batch[{record}u * t + r] = splats[{record}u * k + r];"
+                        ));
                     });
-                    w.line("let box = batch[4u * t + 3u];");
-                    w.comment("The quad's pixel box, within this tile.");
+                    w.line(format!("let box = batch[{box_word}];"));
+                    w.comment("The record's pixel box, within this tile.");
                     w.line("let o = vec2<i32>(origin);");
                     w.line("let lo = max(vec2<i32>(unpack_corner(box.z)) - o, vec2<i32>(0));");
                     w.line(format!(
@@ -385,31 +428,16 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
                         "var bits = atomicLoad(&pixel_masks[t * {words}u + m]) | atomicLoad(&tile_masks[m]);"
                     ));
                     w.block("while (bits != 0u)", |w| {
-                        w.line("let b = firstLeadingBit(bits);");
-                        w.line("bits &= ~(1u << b);");
-                        w.line("let j = m * 32u + b;");
-                        w.line("let r0 = bitcast<vec4<f32>>(batch[4u * j]);");
-                        w.line("let r1 = bitcast<vec4<f32>>(batch[4u * j + 1u]);");
-                        w.line("let r2 = bitcast<vec4<f32>>(batch[4u * j + 2u]);");
-                        w.line("let r3 = batch[4u * j + 3u];");
-                        w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r3.z)), 1.0);");
-                        w.comment("s = 1 / w: positive in front of the camera.");
-                        w.line("let s = dot(r2.xyz, p);");
-                        w.block("if (s <= 0.0)", |w| w.line("continue;"));
-                        w.line("let uv = vec2<f32>(dot(r0.xyz, p), dot(r1.xyz, p)) / s;");
-                        w.block("if (any(abs(uv) >= vec2<f32>(1.0)))", |w| {
-                            w.line("continue;")
-                        });
-                        w.comment("uv's derivatives along the image's x and y (the quotient rule).");
-                        w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
-                        w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
-                        w.line("let color = vec4<f32>(r0.w, r1.w, r2.w, bitcast<f32>(r3.x));");
+                        w.line("let top = firstLeadingBit(bits);");
+                        w.line("bits &= ~(1u << top);");
+                        w.line("let j = m * 32u + top;");
+                        evaluate(w);
                         if hdr {
                             w.comment("A float target takes what the fragment shader returns as it is.");
-                            w.line("let f = splat_shade(uv, du, dv, color, r3.y);");
+                            w.line("let f = shaded;");
                         } else {
                             w.comment("A unorm target clamps what the fragment shader returns before blending.");
-                            w.line("let f = clamp(splat_shade(uv, du, dv, color, r3.y), vec4<f32>(0.0), vec4<f32>(1.0));");
+                            w.line("let f = clamp(shaded, vec4<f32>(0.0), vec4<f32>(1.0));");
                         }
                         if additive && hdr {
                             w.comment("Light adds up past 1 in an HDR image: nothing ever finishes a pixel.");
