@@ -385,9 +385,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                         "    faster here       {faster}, {ratio:.1}x (plume render --draw auto takes the splat on a GPU adapter, raster on a CPU one)"
                     );
                 }
-                None => println!(
-                    "    compute splat     - (it does not draw this effect)"
-                ),
+                None => println!("    compute splat     - (it does not draw this effect)"),
             }
             if let Some((draw, blur)) = d.glow {
                 println!(

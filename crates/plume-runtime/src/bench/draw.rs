@@ -130,10 +130,15 @@ pub(crate) fn time_draws(
             },
         )?,
     )?;
-    let (splat, splat_stages) = if !Splat::draws(&sim.compiled().ir) {
-        (None, Vec::new())
-    } else {
-        let mut splat = Splat::new(sim, width, height)?;
+    // An effect the splat does not draw, or not at this size on this adapter: no splat line.
+    let made = match Splat::draws(&sim.compiled().ir) {
+        true => match Splat::new(sim, width, height) {
+            Err(RuntimeError::Unsupported(_)) => None,
+            made => Some(made?),
+        },
+        false => None,
+    };
+    let (splat, splat_stages) = if let Some(mut splat) = made {
         // Draws once, growing the entry list to what the frame needs, then times the pass.
         splat.render(sim, &camera)?;
         let mut times = Vec::with_capacity(DRAW_REPEATS);
@@ -179,6 +184,8 @@ pub(crate) fn time_draws(
             stages.push(("glow", median(&mut times)));
         }
         (Some((median(&mut times), splat.entries())), stages)
+    } else {
+        (None, Vec::new())
     };
     let prepare = match sim.compiled().ir.sort {
         true => {

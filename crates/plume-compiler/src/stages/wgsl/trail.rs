@@ -140,21 +140,23 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.finish()
 }
 
-/// 32-bit words of a ribbon triangle's record in the compute splat: the rows of the map from
-/// pixels to the triangle's barycentric weights (xyz; the first row's w: the triangle's index
-/// in its strip, whose parity says which side its first vertex is on), the three vertices'
-/// colours as f16 pairs, and the pixel box's two corners.
-pub const SPLAT_TRIANGLE_WORDS: u64 = 20;
+/// Vec4s of a ribbon triangle's record in the compute splat's composite: the rows of the map
+/// from pixels to the triangle's barycentric weights (xyz; the first row's w: the triangle's
+/// index in its strip, whose parity says which side its first vertex is on), the three
+/// vertices' colours as f16 pairs, and the pixel box's two corners. Records are not stored:
+/// `project` and `composite` both make them from the particle state (`triangle_record`), as
+/// a million ribbons of 46 triangles would need 3.7 GB of them.
+pub const SPLAT_TRIANGLE_VEC4S: u32 = 5;
 
 /// Triangles of one ribbon's strip.
 pub fn triangles(trail: &TrailIr) -> u32 {
     vertices(trail) - 2
 }
 
-/// The compute splat's kernels for ribbons: `project`, each strip triangle (three calls of
-/// `trail_vertex`, as the vertex shader places them) as a record, and `composite`, which gives
-/// each pixel the triangle's perspective-correct barycentric weights and shades it as
-/// `fs_trail` does.
+/// The compute splat's kernels for ribbons: `triangle_record(k)`, strip triangle k (three
+/// calls of `trail_vertex`, as the vertex shader places them) as a record; `project`, its tile
+/// box and count; and `composite`, which gives each pixel the triangle's perspective-correct
+/// barycentric weights and shades it as `fs_trail` does.
 fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
     w.line(format!(
         "const TRIANGLES: u32 = {};",
@@ -163,52 +165,69 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
     w.blank();
     emit_to_pixels(w);
     w.blank();
+    w.block("struct TriangleRecord", |w| {
+        w.line("valid: bool,");
+        w.line("first: vec2<f32>,");
+        w.line("last: vec2<f32>,");
+        w.line(format!("words: array<vec4<u32>, {SPLAT_TRIANGLE_VEC4S}>,"));
+    });
+    w.blank();
+    w.comment("Strip triangle k (instance k / TRIANGLES, vertices i, i + 1, i + 2) as a record; not valid when it covers no pixel centre or has a hidden vertex.");
+    w.block("fn triangle_record(k: u32) -> TriangleRecord", |w| {
+        w.line("var rec: TriangleRecord;");
+        w.line("rec.valid = false;");
+        w.line("let instance = k / TRIANGLES;");
+        w.line("let i = k - instance * TRIANGLES;");
+        w.line("let v = array<TrailVertex, 3>(trail_vertex(i, instance), trail_vertex(i + 1u, instance), trail_vertex(i + 2u, instance));");
+        w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
+        w.line("var inside = true;");
+        w.line("var lo = vec2<f32>(3.0e38);");
+        w.line("var hi = vec2<f32>(-3.0e38);");
+        w.block("for (var c = 0u; c < 3u; c++)", |w| {
+            w.line("let q = v[c].clip;");
+            w.comment("A hidden vertex lies outside the depth range: its triangle draws nothing.");
+            w.line("inside = inside && q.w > 0.0 && q.z >= 0.0 && q.z <= q.w;");
+            w.line("let p = vec2<f32>(q.x / q.w * 0.5 + 0.5, 0.5 - q.y / q.w * 0.5) * size;");
+            w.line("lo = min(lo, p);");
+            w.line("hi = max(hi, p);");
+        });
+        w.line("rec.first = max(ceil(lo - 0.5), vec2<f32>(0.0));");
+        w.line("rec.last = min(floor(hi - 0.5), size - 1.0);");
+        w.block("if (!inside || any(rec.first > rec.last))", |w| {
+            w.line("return rec;")
+        });
+        w.line("let a = to_pixels(v[0].clip, rec.first, size);");
+        w.line("let b = to_pixels(v[1].clip, rec.first, size);");
+        w.line("let c = to_pixels(v[2].clip, rec.first, size);");
+        w.comment("The inverse of the columns (a, b, c): pixel -> barycentric weights over 1 / w.");
+        w.line("let det = dot(a, cross(b, c));");
+        w.block("if (abs(det) <= 1e-30)", |w| w.line("return rec;"));
+        w.line("rec.valid = true;");
+        w.line("let box = vec2<u32>(u32(rec.first.x) | (u32(rec.first.y) << 16u), u32(rec.last.x) | (u32(rec.last.y) << 16u));");
+        w.line("rec.words[0] = vec4<u32>(bitcast<vec3<u32>>(cross(b, c) / det), i);");
+        w.line("rec.words[1] = vec4<u32>(bitcast<vec3<u32>>(cross(c, a) / det), 0u);");
+        w.line("rec.words[2] = vec4<u32>(bitcast<vec3<u32>>(cross(a, b) / det), 0u);");
+        w.line("let c0 = min(v[0].color, vec4<f32>(65504.0));");
+        w.line("let c1 = min(v[1].color, vec4<f32>(65504.0));");
+        w.line("let c2 = min(v[2].color, vec4<f32>(65504.0));");
+        w.line("rec.words[3] = vec4<u32>(pack2x16float(c0.rg), pack2x16float(c0.ba), pack2x16float(c1.rg), pack2x16float(c1.ba));");
+        w.line("rec.words[4] = vec4<u32>(pack2x16float(c2.rg), pack2x16float(c2.ba), box);");
+        w.line("return rec;");
+    });
+    w.blank();
     w.line("@compute @workgroup_size(256)");
     w.block(
         "fn project(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
             w.line("let k = gid.x + gid.y * groups.x * 256u;");
             w.block("if (k >= splat_view.count)", |w| w.line("return;"));
-            w.line("let instance = k / TRIANGLES;");
-            w.line("let i = k - instance * TRIANGLES;");
             w.line("var tiles = 0u;");
-            w.line("let v = array<TrailVertex, 3>(trail_vertex(i, instance), trail_vertex(i + 1u, instance), trail_vertex(i + 2u, instance));");
-            w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
-            w.line("var inside = true;");
-            w.line("var lo = vec2<f32>(3.0e38);");
-            w.line("var hi = vec2<f32>(-3.0e38);");
-            w.block("for (var c = 0u; c < 3u; c++)", |w| {
-                w.line("let q = v[c].clip;");
-                w.comment("A hidden vertex lies outside the depth range: its triangle draws nothing.");
-                w.line("inside = inside && q.w > 0.0 && q.z >= 0.0 && q.z <= q.w;");
-                w.line("let p = vec2<f32>(q.x / q.w * 0.5 + 0.5, 0.5 - q.y / q.w * 0.5) * size;");
-                w.line("lo = min(lo, p);");
-                w.line("hi = max(hi, p);");
-            });
-            w.line("let first = max(ceil(lo - 0.5), vec2<f32>(0.0));");
-            w.line("let last = min(floor(hi - 0.5), size - 1.0);");
-            w.block("if (inside && all(first <= last))", |w| {
-                w.line("let a = to_pixels(v[0].clip, first, size);");
-                w.line("let b = to_pixels(v[1].clip, first, size);");
-                w.line("let c = to_pixels(v[2].clip, first, size);");
-                w.comment("The inverse of the columns (a, b, c): pixel -> barycentric weights over 1 / w.");
-                w.line("let det = dot(a, cross(b, c));");
-                w.block("if (abs(det) > 1e-30)", |w| {
-                    w.line(format!("let t0 = vec2<u32>(first) / {SPLAT_TILE}u;"));
-                    w.line(format!("let t1 = vec2<u32>(last) / {SPLAT_TILE}u;"));
-                    w.line("tiles = (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
-                    w.line("tile_boxes[k] = vec2<u32>(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u));");
-                    w.line("let box = vec2<u32>(u32(first.x) | (u32(first.y) << 16u), u32(last.x) | (u32(last.y) << 16u));");
-                    w.line("let base = 5u * k;");
-                    w.line("splats[base] = vec4<u32>(bitcast<vec3<u32>>(cross(b, c) / det), i);");
-                    w.line("splats[base + 1u] = vec4<u32>(bitcast<vec3<u32>>(cross(c, a) / det), 0u);");
-                    w.line("splats[base + 2u] = vec4<u32>(bitcast<vec3<u32>>(cross(a, b) / det), 0u);");
-                    w.line("let c0 = min(v[0].color, vec4<f32>(65504.0));");
-                    w.line("let c1 = min(v[1].color, vec4<f32>(65504.0));");
-                    w.line("let c2 = min(v[2].color, vec4<f32>(65504.0));");
-                    w.line("splats[base + 3u] = vec4<u32>(pack2x16float(c0.rg), pack2x16float(c0.ba), pack2x16float(c1.rg), pack2x16float(c1.ba));");
-                    w.line("splats[base + 4u] = vec4<u32>(pack2x16float(c2.rg), pack2x16float(c2.ba), box);");
-                });
+            w.line("let rec = triangle_record(k);");
+            w.block("if (rec.valid)", |w| {
+                w.line(format!("let t0 = vec2<u32>(rec.first) / {SPLAT_TILE}u;"));
+                w.line(format!("let t1 = vec2<u32>(rec.last) / {SPLAT_TILE}u;"));
+                w.line("tiles = (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
+                w.line("tile_boxes[k] = vec2<u32>(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u));");
             });
             w.line("tile_counts[k] = tiles;");
             w.line("tile_offsets[k] = tiles;");
@@ -216,31 +235,50 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
     );
     w.blank();
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
-    emit_composite(w, hdr, additive, 5, &|w: &mut Writer| {
-        w.line("let r0 = batch[5u * j];");
-        w.line("let r1 = bitcast<vec3<f32>>(batch[5u * j + 1u].xyz);");
-        w.line("let r2 = bitcast<vec3<f32>>(batch[5u * j + 2u].xyz);");
-        w.line("let r3 = batch[5u * j + 3u];");
-        w.line("let r4 = batch[5u * j + 4u];");
-        w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r4.z)), 1.0);");
-        w.line(
+    let load = |w: &mut Writer| {
+        w.comment("Made again from the particle state: the same record `project` made.");
+        w.line("let rec = triangle_record(k);");
+        w.block(
+            format!("for (var r = 0u; r < {SPLAT_TRIANGLE_VEC4S}u; r++)"),
+            |w| {
+                w.line(format!(
+                    "batch[{SPLAT_TRIANGLE_VEC4S}u * t + r] = rec.words[r];"
+                ));
+            },
+        );
+    };
+    emit_composite(
+        w,
+        hdr,
+        additive,
+        SPLAT_TRIANGLE_VEC4S,
+        &load,
+        &|w: &mut Writer| {
+            w.line("let r0 = batch[5u * j];");
+            w.line("let r1 = bitcast<vec3<f32>>(batch[5u * j + 1u].xyz);");
+            w.line("let r2 = bitcast<vec3<f32>>(batch[5u * j + 2u].xyz);");
+            w.line("let r3 = batch[5u * j + 3u];");
+            w.line("let r4 = batch[5u * j + 4u];");
+            w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r4.z)), 1.0);");
+            w.line(
             "let weighed = vec3<f32>(dot(bitcast<vec3<f32>>(r0.xyz), p), dot(r1, p), dot(r2, p));",
         );
-        w.comment("The weights over 1 / w: their sum is positive in front of the camera.");
-        w.line("let sum = weighed.x + weighed.y + weighed.z;");
-        w.block("if (sum <= 0.0)", |w| w.line("continue;"));
-        w.line("let b = weighed / sum;");
-        w.comment("The edge shared with the strip's next triangle (opposite the first vertex) is that one's.");
-        w.block("if (b.x <= 0.0 || b.y < 0.0 || b.z < 0.0)", |w| {
-            w.line("continue;")
-        });
-        w.comment("Strip vertex i is on side (i & 1) * 2 - 1; the sides alternate.");
-        w.line("let side = select(-1.0, 1.0, (r0.w & 1u) == 1u);");
-        w.line("let across = dot(b, vec3<f32>(side, -side, side));");
-        w.line("let color = b.x * vec4<f32>(unpack2x16float(r3.x), unpack2x16float(r3.y)) + b.y * vec4<f32>(unpack2x16float(r3.z), unpack2x16float(r3.w)) + b.z * vec4<f32>(unpack2x16float(r4.x), unpack2x16float(r4.y));");
-        w.comment("fs_trail: soft across the strip.");
-        w.line("let shaded = vec4<f32>(color.rgb, color.a * (1.0 - across * across));");
-    });
+            w.comment("The weights over 1 / w: their sum is positive in front of the camera.");
+            w.line("let sum = weighed.x + weighed.y + weighed.z;");
+            w.block("if (sum <= 0.0)", |w| w.line("continue;"));
+            w.line("let b = weighed / sum;");
+            w.comment("The edge shared with the strip's next triangle (opposite the first vertex) is that one's.");
+            w.block("if (b.x <= 0.0 || b.y < 0.0 || b.z < 0.0)", |w| {
+                w.line("continue;")
+            });
+            w.comment("Strip vertex i is on side (i & 1) * 2 - 1; the sides alternate.");
+            w.line("let side = select(-1.0, 1.0, (r0.w & 1u) == 1u);");
+            w.line("let across = dot(b, vec3<f32>(side, -side, side));");
+            w.line("let color = b.x * vec4<f32>(unpack2x16float(r3.x), unpack2x16float(r3.y)) + b.y * vec4<f32>(unpack2x16float(r3.z), unpack2x16float(r3.w)) + b.z * vec4<f32>(unpack2x16float(r4.x), unpack2x16float(r4.y));");
+            w.comment("fs_trail: soft across the strip.");
+            w.line("let shaded = vec4<f32>(color.rgb, color.a * (1.0 - across * across));");
+        },
+    );
 }
 
 /// `trail_width(t)` and `trail_color(t)`: the trail's stops baked in, as

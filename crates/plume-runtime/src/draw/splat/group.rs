@@ -52,6 +52,9 @@ struct Entries {
 struct QuadRaster {
     pipeline: wgpu::ComputePipeline,
     texture: Option<SpriteTexture>,
+    /// What `composite` reads besides the tile buffers: the records (quads), or what
+    /// `triangle_record` reads to make them again (ribbons: the particles, the rings, the view).
+    reads: Vec<(u32, wgpu::Buffer)>,
 }
 
 /// The compute splat of one group into `width` x `height` images.
@@ -133,10 +136,21 @@ impl GroupSplat {
         let discs = !ribbons && splat_discs(&effect.ir, hdr);
         let record_words = match (discs, ribbons) {
             (true, _) => 4,
-            (false, true) => trail::SPLAT_TRIANGLE_WORDS,
+            // Ribbon triangles are made again where they are used, not stored.
+            (false, true) => 0,
             (false, false) => SPLAT_QUAD_WORDS,
         };
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
+        // Every buffer is bound whole: none may pass the adapter's binding size.
+        let largest = (record_words.max(2) * u64::from(count) * 4)
+            .max(2 * 4 * u64::from(width) * u64::from(height));
+        let limit = u64::from(gpu.limits.max_storage_buffer_binding_size);
+        if largest > limit {
+            return Err(RuntimeError::Unsupported(format!(
+                "{}: the compute splat of {count} records into {width}x{height} needs a {largest}-byte buffer, past the adapter's {limit}-byte binding limit; draw this effect with the raster pipeline",
+                gpu.info.name
+            )));
+        }
         let words = |label, n: u64| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some(label),
@@ -184,7 +198,15 @@ impl GroupSplat {
                 b_view,
                 uniform(&gpu, "splat view", &[width, height, tiles_x, count])?,
             ),
-            (b_splats, tiles.splats.clone()),
+        ]);
+        let reads = match ribbons {
+            true => entries.clone(),
+            false => vec![(b_splats, tiles.splats.clone())],
+        };
+        if !ribbons {
+            entries.push((b_splats, tiles.splats.clone()));
+        }
+        entries.extend([
             (b_counts, tiles.counts.clone()),
             (b_offsets, tiles.offsets.clone()),
             (b_boxes, tiles.boxes.clone()),
@@ -198,6 +220,7 @@ impl GroupSplat {
                     (Some(t), false) => Some(SpriteTexture::new(&gpu, t)?),
                     _ => None,
                 },
+                reads,
             }),
         };
         // `project` uses every binding of its module but `composite`'s, so its derived
@@ -285,13 +308,13 @@ impl GroupSplat {
         ];
         let quads_group = self.quads.as_ref().map(|q| {
             let [params, sprites, ranges, image] = SPLAT_RASTER_BINDINGS;
-            let buffers = [
-                (SPLAT_BINDINGS[1], &t.splats),
+            let mut buffers = vec![
                 (params, &t.params),
                 (sprites, &vals),
                 (ranges, &t.ranges),
                 (image, &t.image),
             ];
+            buffers.extend(q.reads.iter().map(|(binding, buffer)| (*binding, buffer)));
             let mut entries: Vec<wgpu::BindGroupEntry<'_>> = buffers
                 .iter()
                 .map(|(binding, buffer)| wgpu::BindGroupEntry {

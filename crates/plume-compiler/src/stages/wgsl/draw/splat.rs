@@ -276,7 +276,12 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
     }
     w.blank();
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
-    emit_composite(w, hdr, additive, 4, &|w: &mut Writer| {
+    let load = |w: &mut Writer| {
+        w.block("for (var r = 0u; r < 4u; r++)", |w| {
+            w.line("batch[4u * t + r] = splats[4u * k + r];");
+        });
+    };
+    emit_composite(w, hdr, additive, 4, &load, &|w: &mut Writer| {
         w.line("let r0 = bitcast<vec4<f32>>(batch[4u * j]);");
         w.line("let r1 = bitcast<vec4<f32>>(batch[4u * j + 1u]);");
         w.line("let r2 = bitcast<vec4<f32>>(batch[4u * j + 2u]);");
@@ -298,7 +303,8 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
 }
 
 /// `composite`: a workgroup per 16x16 tile, a thread per pixel, composites the tile's records
-/// (`record` vec4s each, the last one's z and w the pixel box's corners) front to back (the
+/// (`record` vec4s each, the last one's z and w the pixel box's corners; the code `load` emits
+/// puts entry `k`'s record at `batch[record * t]`) front to back (the
 /// draw order reversed), each pixel's colour `shaded` from the code `evaluate` emits (which
 /// reads record j of the batch, the pixel centre `centre`, and may `continue` past a record
 /// that does not cover it), and rounds to 8 bits once at the end (or stores f16 pairs into an
@@ -317,6 +323,7 @@ pub(crate) fn emit_composite(
     hdr: bool,
     additive: bool,
     record: u32,
+    load: &dyn Fn(&mut Writer),
     evaluate: &dyn Fn(&mut Writer),
 ) {
     let words = QUAD_BATCH / 32;
@@ -392,11 +399,7 @@ pub(crate) fn emit_composite(
                 w.line("let i = start + t;");
                 w.block("if (i < end)", |w| {
                     w.line("let k = tile_sprites[i];");
-                    w.block(format!("for (var r = 0u; r < {record}u; r++)"), |w| {
-                        w.line(format!(
-                            "batch[{record}u * t + r] = splats[{record}u * k + r];"
-                        ));
-                    });
+                    load(w);
                     w.line(format!("let box = batch[{box_word}];"));
                     w.comment("The record's pixel box, within this tile.");
                     w.line("let o = vec2<i32>(origin);");
