@@ -144,7 +144,7 @@ impl GroupSplat {
         // Every buffer is bound whole: none may pass the adapter's binding size.
         let largest = (record_words.max(2) * u64::from(count) * 4)
             .max(2 * 4 * u64::from(width) * u64::from(height));
-        let limit = u64::from(gpu.limits.max_storage_buffer_binding_size);
+        let limit = gpu.limits.max_storage_buffer_binding_size;
         if largest > limit {
             return Err(RuntimeError::Unsupported(format!(
                 "{}: the compute splat of {count} records into {width}x{height} needs a {largest}-byte buffer, past the adapter's {limit}-byte binding limit; draw this effect with the raster pipeline",
