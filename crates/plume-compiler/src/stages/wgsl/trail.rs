@@ -17,7 +17,9 @@ use crate::features::looks::trail::TrailIr;
 use crate::ir::EffectIr;
 use crate::stages::passes::layout::{self, Attribute, Layout};
 use crate::stages::wgsl::draw::common as draw;
-use crate::stages::wgsl::draw::splat::{emit_composite, emit_splat_declarations, emit_to_pixels};
+use crate::stages::wgsl::draw::splat::{
+    emit_composite, emit_scatter, emit_splat_declarations, emit_to_pixels,
+};
 use crate::stages::wgsl::draw::{DrawShape, FIRST_DATA_BINDING, SPLAT_TILE};
 use crate::stages::wgsl::emit_particle_struct;
 
@@ -247,38 +249,41 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
             },
         );
     };
-    emit_composite(
-        w,
-        hdr,
-        additive,
-        SPLAT_TRIANGLE_VEC4S,
-        &load,
-        &|w: &mut Writer| {
-            w.line("let r0 = batch[5u * j];");
-            w.line("let r1 = bitcast<vec3<f32>>(batch[5u * j + 1u].xyz);");
-            w.line("let r2 = bitcast<vec3<f32>>(batch[5u * j + 2u].xyz);");
-            w.line("let r3 = batch[5u * j + 3u];");
-            w.line("let r4 = batch[5u * j + 4u];");
-            w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r4.z)), 1.0);");
-            w.line(
+    let evaluate = |w: &mut Writer| {
+        w.line("let r0 = batch[5u * j];");
+        w.line("let r1 = bitcast<vec3<f32>>(batch[5u * j + 1u].xyz);");
+        w.line("let r2 = bitcast<vec3<f32>>(batch[5u * j + 2u].xyz);");
+        w.line("let r3 = batch[5u * j + 3u];");
+        w.line("let r4 = batch[5u * j + 4u];");
+        w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r4.z)), 1.0);");
+        w.line(
             "let weighed = vec3<f32>(dot(bitcast<vec3<f32>>(r0.xyz), p), dot(r1, p), dot(r2, p));",
         );
-            w.comment("The weights over 1 / w: their sum is positive in front of the camera.");
-            w.line("let sum = weighed.x + weighed.y + weighed.z;");
-            w.block("if (sum <= 0.0)", |w| w.line("continue;"));
-            w.line("let b = weighed / sum;");
-            w.comment("The edge shared with the strip's next triangle (opposite the first vertex) is that one's.");
-            w.block("if (b.x <= 0.0 || b.y < 0.0 || b.z < 0.0)", |w| {
-                w.line("continue;")
-            });
-            w.comment("Strip vertex i is on side (i & 1) * 2 - 1; the sides alternate.");
-            w.line("let side = select(-1.0, 1.0, (r0.w & 1u) == 1u);");
-            w.line("let across = dot(b, vec3<f32>(side, -side, side));");
-            w.line("let color = b.x * vec4<f32>(unpack2x16float(r3.x), unpack2x16float(r3.y)) + b.y * vec4<f32>(unpack2x16float(r3.z), unpack2x16float(r3.w)) + b.z * vec4<f32>(unpack2x16float(r4.x), unpack2x16float(r4.y));");
-            w.comment("fs_trail: soft across the strip.");
-            w.line("let shaded = vec4<f32>(color.rgb, color.a * (1.0 - across * across));");
-        },
-    );
+        w.comment("The weights over 1 / w: their sum is positive in front of the camera.");
+        w.line("let sum = weighed.x + weighed.y + weighed.z;");
+        w.block("if (sum <= 0.0)", |w| w.line("continue;"));
+        w.line("let b = weighed / sum;");
+        w.comment("The edge shared with the strip's next triangle (opposite the first vertex) is that one's.");
+        w.block("if (b.x <= 0.0 || b.y < 0.0 || b.z < 0.0)", |w| {
+            w.line("continue;")
+        });
+        w.comment("Strip vertex i is on side (i & 1) * 2 - 1; the sides alternate.");
+        w.line("let side = select(-1.0, 1.0, (r0.w & 1u) == 1u);");
+        w.line("let across = dot(b, vec3<f32>(side, -side, side));");
+        w.line("let color = b.x * vec4<f32>(unpack2x16float(r3.x), unpack2x16float(r3.y)) + b.y * vec4<f32>(unpack2x16float(r3.z), unpack2x16float(r3.w)) + b.z * vec4<f32>(unpack2x16float(r4.x), unpack2x16float(r4.y));");
+        w.comment("fs_trail: soft across the strip.");
+        w.line("let shaded = vec4<f32>(color.rgb, color.a * (1.0 - across * across));");
+    };
+    if additive {
+        let load = |w: &mut Writer| {
+            w.line("let rec = triangle_record(k);");
+            w.block("if (!rec.valid)", |w| w.line("return;"));
+            w.line("batch = rec.words;");
+        };
+        emit_scatter(w, hdr, SPLAT_TRIANGLE_VEC4S, &load, &evaluate);
+    } else {
+        emit_composite(w, hdr, additive, SPLAT_TRIANGLE_VEC4S, &load, &evaluate);
+    }
 }
 
 /// `trail_width(t)` and `trail_color(t)`: the trail's stops baked in, as

@@ -5,8 +5,8 @@
 
 use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
 use plume_compiler::wgsl::draw::{
-    splat_discs, splat_hdr_pitch, DrawShape, DRAW_VIEW_BYTES, FIRST_DATA_BINDING, SPLAT_BINDINGS,
-    SPLAT_QUAD_WORDS, SPLAT_RASTER_BINDINGS, SPLAT_TILE,
+    splat_discs, splat_hdr_pitch, splat_scatters, DrawShape, DRAW_VIEW_BYTES, FIRST_DATA_BINDING,
+    SPLAT_BINDINGS, SPLAT_LIGHT_BINDING, SPLAT_QUAD_WORDS, SPLAT_RASTER_BINDINGS, SPLAT_TILE,
 };
 use plume_compiler::wgsl::trail;
 
@@ -47,6 +47,15 @@ struct Entries {
     quads_group: Option<wgpu::BindGroup>,
 }
 
+/// Additive light, scattered: each record adds itself into the pixels it covers (`scatter`),
+/// then `resolve` puts the sum over what lies under it; no tile lists.
+struct Scatter {
+    scatter: wgpu::ComputePipeline,
+    resolve: wgpu::ComputePipeline,
+    scatter_group: wgpu::BindGroup,
+    resolve_group: wgpu::BindGroup,
+}
+
 /// What draws quads (every sprite but a round camera-facing one): the effect's generated
 /// `composite` kernel and its texture.
 struct QuadRaster {
@@ -72,8 +81,10 @@ pub(crate) struct GroupSplat {
     scan: SortProgram,
     tiles: Tiles,
     entries: Entries,
-    /// Set for quads; discs use the fixed `raster` kernel.
+    /// Set for quads that composite; discs use the fixed `raster` kernel.
     quads: Option<QuadRaster>,
+    /// Set for additive light, which is scattered instead.
+    scatter: Option<Scatter>,
     additive: bool,
     background: u32,
 }
@@ -192,13 +203,8 @@ impl GroupSplat {
             boxes: words("tile boxes", 2 * u64::from(count)),
         };
         let [b_view, b_splats, b_counts, b_offsets, b_boxes] = SPLAT_BINDINGS;
-        entries.extend([
-            (0, draw_view.clone()),
-            (
-                b_view,
-                uniform(&gpu, "splat view", &[width, height, tiles_x, count])?,
-            ),
-        ]);
+        let splat_view = uniform(&gpu, "splat view", &[width, height, tiles_x, count])?;
+        entries.extend([(0, draw_view.clone()), (b_view, splat_view.clone())]);
         let reads = match ribbons {
             true => entries.clone(),
             false => vec![(b_splats, tiles.splats.clone())],
@@ -212,14 +218,50 @@ impl GroupSplat {
             (b_boxes, tiles.boxes.clone()),
         ]);
         let project = gpu.compute_pipeline(&module, "project", None);
-        let quads = match discs {
+        let texture = match (&effect.ir.render.texture, ribbons, discs) {
+            (Some(t), false, false) => Some(SpriteTexture::new(&gpu, t)?),
+            _ => None,
+        };
+        let scatters = !discs && splat_scatters(&effect.ir);
+        let scatter = match scatters {
+            false => None,
+            true => {
+                let light = words("scattered light", 4 * u64::from(width) * u64::from(height));
+                let [params, _, _, image] = SPLAT_RASTER_BINDINGS;
+                let mut reads = reads.clone();
+                if !ribbons {
+                    reads.push((b_view, splat_view.clone()));
+                    reads.push((b_counts, tiles.counts.clone()));
+                }
+                reads.extend([
+                    (params, tiles.params.clone()),
+                    (SPLAT_LIGHT_BINDING, light.clone()),
+                ]);
+                let scatter = gpu.compute_pipeline(&module, "scatter", None);
+                let resolve = gpu.compute_pipeline(&module, "resolve", None);
+                let resolve_reads = [
+                    (params, tiles.params.clone()),
+                    (image, tiles.image.clone()),
+                    (SPLAT_LIGHT_BINDING, light),
+                ];
+                Some(Scatter {
+                    scatter_group: bind_with_texture(
+                        &gpu,
+                        &scatter.get_bind_group_layout(0),
+                        &reads,
+                        texture.as_ref(),
+                    ),
+                    resolve_group: bind(&gpu, &resolve.get_bind_group_layout(0), &resolve_reads),
+                    scatter,
+                    resolve,
+                })
+            }
+        };
+        let quads = match discs || scatters {
             true => None,
             false => Some(QuadRaster {
                 pipeline: gpu.compute_pipeline(&module, "composite", None),
-                texture: match (&effect.ir.render.texture, ribbons) {
-                    (Some(t), false) => Some(SpriteTexture::new(&gpu, t)?),
-                    _ => None,
-                },
+                texture,
                 reads,
             }),
         };
@@ -236,7 +278,11 @@ impl GroupSplat {
         };
         let additive = effect.ir.render.blend == plume_compiler::schema::Blend::Additive;
         // A first guess at the entries: a quarter more than the sprites (most touch one tile).
-        let first = u64::from(count) + u64::from(count) / 4 + 4096;
+        // (Scattered light uses no entries.)
+        let first = match scatters {
+            true => 4096,
+            false => u64::from(count) + u64::from(count) / 4 + 4096,
+        };
         let scan = GpuSorter::new(&gpu).scan_program(&tiles.offsets, u64::from(count))?;
         let mut splat = Self {
             entries: Entries {
@@ -258,6 +304,7 @@ impl GroupSplat {
             scan,
             tiles,
             quads,
+            scatter,
             additive,
             background,
         };
@@ -389,6 +436,17 @@ impl GroupSplat {
                 pass.set_bind_group(0, &self.project_group, &[]);
                 pass.dispatch_workgroups(x, y, 1);
             }
+            // Scattered light needs no tile lists.
+            "scan" | "emit" | "sort" | "ranges" if self.scatter.is_some() => {}
+            "raster" if self.scatter.is_some() => {
+                let s = self.scatter.as_ref().expect("checked");
+                pass.set_pipeline(&s.scatter);
+                pass.set_bind_group(0, &s.scatter_group, &[]);
+                pass.dispatch_workgroups(x, y, 1);
+                pass.set_pipeline(&s.resolve);
+                pass.set_bind_group(0, &s.resolve_group, &[]);
+                pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
+            }
             "scan" => self.scan.record(pass),
             "emit" => {
                 let (cx, cy) = self.gpu.grid(e.len.max(tiles), 256)?;
@@ -442,6 +500,10 @@ impl GroupSplat {
     /// Whether the last frame's sorted entries hold every sprite exactly as many times as
     /// `project` counted tiles for it (reads the buffers back; for tests).
     pub(crate) fn entries_are_complete(&self) -> Result<bool, RuntimeError> {
+        if self.scatter.is_some() {
+            // No entries: every record scatters itself.
+            return Ok(true);
+        }
         let read = |b: &wgpu::Buffer| crate::device::readback::read_words(&self.gpu, b, usize::MAX);
         let needed = read(&self.tiles.status)?[0] as usize;
         let counts = read(&self.tiles.counts)?;
@@ -534,6 +596,38 @@ fn uniform(gpu: &Gpu, label: &str, words: &[u32]) -> Result<wgpu::Buffer, Runtim
             }
         },
     )
+}
+
+/// A bind group of `layout` from (binding, buffer) pairs and, when there is one, the sprite
+/// texture and its sampler.
+fn bind_with_texture(
+    gpu: &Gpu,
+    layout: &wgpu::BindGroupLayout,
+    all: &[(u32, wgpu::Buffer)],
+    texture: Option<&SpriteTexture>,
+) -> wgpu::BindGroup {
+    let mut entries: Vec<wgpu::BindGroupEntry<'_>> = all
+        .iter()
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    if let Some(texture) = texture {
+        entries.push(wgpu::BindGroupEntry {
+            binding: TEXTURE_BINDING,
+            resource: wgpu::BindingResource::TextureView(&texture.view),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: SAMPLER_BINDING,
+            resource: wgpu::BindingResource::Sampler(&texture.sampler),
+        });
+    }
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("splat"),
+        layout,
+        entries: &entries,
+    })
 }
 
 /// A bind group of `layout` from (binding, buffer) pairs.

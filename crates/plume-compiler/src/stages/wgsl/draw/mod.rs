@@ -27,7 +27,10 @@ use common::{
     emit_soft,
 };
 use splat::{emit_project, emit_project_quads, emit_quad_raster, emit_splat_declarations};
-pub use splat::{splat_discs, splat_hdr_pitch, SPLAT_QUAD_WORDS, SPLAT_RASTER_BINDINGS};
+pub use splat::{
+    splat_discs, splat_hdr_pitch, splat_scatters, SPLAT_LIGHT_BINDING, SPLAT_QUAD_WORDS,
+    SPLAT_RASTER_BINDINGS,
+};
 
 /// How the runtime binds the particles for drawing. The compiled effect's own draw module is
 /// [`DrawShape::single`]; the runtime asks for another shape when its device splits the state

@@ -19,12 +19,29 @@ use crate::ir::EffectIr;
 /// the runtime's fixed raster kernel) rather than as quads (`composite`, generated). Into
 /// an HDR image (`hdr`: the effect or its graph glows) sprites are drawn as quads: their
 /// colours may pass what a disc's 10-bit record holds.
+/// Additive sprites are quads too: they are scattered ([`emit_scatter`]), not composited.
 pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
     ir.render.orient == OrientIr::Camera
         && ir.render.texture.is_none()
         && ir.render.size_y.is_none()
+        && ir.render.blend != crate::stages::schema::Blend::Additive
         && !hdr
 }
+
+/// Whether the splat scatters `ir`'s light instead of compositing tiles: additive light is
+/// the same in any order, so each record adds itself into the pixels it covers, with no tile
+/// lists ([`emit_scatter`]).
+pub fn splat_scatters(ir: &EffectIr) -> bool {
+    ir.render.blend == crate::stages::schema::Blend::Additive
+}
+
+/// Binding of the scattered light: four words a pixel (red, green, blue in 16.16 fixed point,
+/// and a word of flags for channels that overflowed).
+pub const SPLAT_LIGHT_BINDING: u32 = 29;
+
+/// Fixed-point steps per unit of scattered light: 2^16 (a contribution is rounded to 1/65536,
+/// 1/257 of an 8-bit step; a pixel holds 65535 units before its channel is flagged full).
+const LIGHT_ONE: u32 = 1 << 16;
 
 /// Pixels per row of the splat's HDR image (a glowing effect's): the width rounded up to 32,
 /// so that a row of 8-byte pixels is a whole number of 256-byte copy rows and the image can be
@@ -281,7 +298,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
             w.line("batch[4u * t + r] = splats[4u * k + r];");
         });
     };
-    emit_composite(w, hdr, additive, 4, &load, &|w: &mut Writer| {
+    let evaluate = |w: &mut Writer| {
         w.line("let r0 = bitcast<vec4<f32>>(batch[4u * j]);");
         w.line("let r1 = bitcast<vec4<f32>>(batch[4u * j + 1u]);");
         w.line("let r2 = bitcast<vec4<f32>>(batch[4u * j + 2u]);");
@@ -299,7 +316,125 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
         w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
         w.line("let color = vec4<f32>(r0.w, r1.w, r2.w, bitcast<f32>(r3.x));");
         w.line("let shaded = splat_shade(uv, du, dv, color, r3.y);");
+    };
+    if additive {
+        let load = |w: &mut Writer| {
+            w.comment("A sprite hidden this frame counted no tiles, and its record is stale.");
+            w.block("if (tile_counts[k] == 0u)", |w| w.line("return;"));
+            w.block("for (var r = 0u; r < 4u; r++)", |w| {
+                w.line("batch[r] = splats[4u * k + r];");
+            });
+        };
+        emit_scatter(w, hdr, 4, &load, &evaluate);
+    } else {
+        emit_composite(w, hdr, additive, 4, &load, &evaluate);
+    }
+}
+
+/// `scatter` and `resolve`, for additive light (order-free): a thread per record (the code
+/// `load` emits puts record `k` at `batch[0..record]`, or returns for one that draws nothing)
+/// visits the pixels of its box, evaluates each (`evaluate`, as in [`emit_composite`], with
+/// `j = 0`), and adds its light in fixed point with integer atomics, so the sum is the same
+/// whatever order the threads run in: the image is deterministic. `resolve` then adds the
+/// light to what lies under it, rounds once, and clears the light for the next frame. A
+/// channel whose sum wraps past 2^32 is flagged and drawn full.
+pub(crate) fn emit_scatter(
+    w: &mut Writer,
+    hdr: bool,
+    record: u32,
+    load: &dyn Fn(&mut Writer),
+    evaluate: &dyn Fn(&mut Writer),
+) {
+    w.line(format!(
+        "@group(0) @binding({SPLAT_LIGHT_BINDING}) var<storage, read_write> light: array<atomic<u32>>;"
+    ));
+    w.blank();
+    w.comment("A box's corner, packed as x | y << 16.");
+    w.block("fn unpack_corner(b: u32) -> vec2<u32>", |w| {
+        w.line("return vec2<u32>(b & 0xffffu, b >> 16u);");
     });
+    w.blank();
+    w.line("@compute @workgroup_size(256)");
+    w.block(
+        "fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let k = gid.x + gid.y * groups.x * 256u;");
+            w.block("if (k >= splat_view.count)", |w| w.line("return;"));
+            w.line(format!("var batch: array<vec4<u32>, {record}>;"));
+            w.line("let j = 0u;");
+            load(w);
+            w.line(format!("let box = batch[{}];", record - 1));
+            w.line("let lo = unpack_corner(box.z);");
+            w.line("let hi = unpack_corner(box.w);");
+            w.block("for (var y = lo.y; y <= hi.y; y++)", |w| {
+                w.block("for (var x = lo.x; x <= hi.x; x++)", |w| {
+                    w.line("let centre = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);");
+                    evaluate(w);
+                    if hdr {
+                        w.line("let f = max(shaded, vec4<f32>(0.0));");
+                    } else {
+                        w.comment("A unorm target clamps what the fragment shader returns before blending.");
+                        w.line("let f = clamp(shaded, vec4<f32>(0.0), vec4<f32>(1.0));");
+                    }
+                    w.line(format!(
+                        "let add = vec3<u32>(round(min(f.rgb * f.a, vec3<f32>(65535.0)) * {}));",
+                        crate::base::writer::f32_lit(f64::from(LIGHT_ONE))
+                    ));
+                    w.block("if (any(add != vec3<u32>(0u)))", |w| {
+                        w.line("let at = 4u * (y * splat_tiles.width + x);");
+                        w.block("for (var c = 0u; c < 3u; c++)", |w| {
+                            w.line("let before = atomicAdd(&light[at + c], add[c]);");
+                            w.block("if (before + add[c] < before)", |w| {
+                                w.line("atomicOr(&light[at + 3u], 1u << c);");
+                            });
+                        });
+                    });
+                });
+            });
+        },
+    );
+    w.blank();
+    w.line(format!(
+        "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
+    ));
+    w.block(
+        "fn resolve(@builtin(global_invocation_id) gid: vec3<u32>)",
+        |w| {
+            w.line("let px = gid.x;");
+            w.line("let py = gid.y;");
+            w.block("if (px >= splat_tiles.width || py >= splat_tiles.height)", |w| {
+                w.line("return;")
+            });
+            w.line("let at = 4u * (py * splat_tiles.width + px);");
+            w.line(format!(
+                "var sum = vec3<f32>(f32(atomicLoad(&light[at])), f32(atomicLoad(&light[at + 1u])), f32(atomicLoad(&light[at + 2u]))) / {};",
+                crate::base::writer::f32_lit(f64::from(LIGHT_ONE))
+            ));
+            w.line("let full = atomicLoad(&light[at + 3u]);");
+            w.line("sum = select(sum, vec3<f32>(65504.0), (vec3<u32>(full) & vec3<u32>(1u, 2u, 4u)) != vec3<u32>(0u));");
+            w.comment("Cleared for the next frame.");
+            w.block("for (var c = 0u; c < 4u; c++)", |w| {
+                w.line("atomicStore(&light[at + c], 0u);");
+            });
+            w.line("var under = unpack4x8unorm(splat_tiles.background).rgb;");
+            if hdr {
+                w.line("let pitch = (splat_tiles.width + 31u) & ~31u;");
+                w.comment("Alpha 0: over the image the parts before drew.");
+                w.block("if ((splat_tiles.background >> 24u) == 0u)", |w| {
+                    w.line("let below = splat_image[py * pitch + px];");
+                    w.line("under = vec3<f32>(unpack2x16float(below.x), unpack2x16float(below.y).x);");
+                });
+                w.line("let c = min(under + sum, vec3<f32>(65504.0));");
+                w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
+            } else {
+                w.comment("Alpha 0: over the image the parts before drew.");
+                w.block("if ((splat_tiles.background >> 24u) == 0u)", |w| {
+                    w.line("under = unpack4x8unorm(splat_image[py * splat_tiles.width + px]).rgb;");
+                });
+                w.line("splat_image[py * splat_tiles.width + px] = pack4x8unorm(vec4<f32>(clamp(under + sum, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));");
+            }
+        },
+    );
 }
 
 /// `composite`: a workgroup per 16x16 tile, a thread per pixel, composites the tile's records
