@@ -113,7 +113,7 @@ fn light_below_the_threshold_leaves_the_image_as_it_is() {
 
 #[test]
 fn the_compute_splat_glows_as_the_raster_draw_does() {
-    // The splat sums the stack in 16.16 fixed point and stores the HDR image as f16 once; the raster draw
+    // The splat sums the stack in f32 and stores the HDR image as f16 once; the raster draw
     // adds each sprite into its f16 target, rounding at every blend (each rounding under
     // 1/2048 of the value: 40 of them move a pixel by about 2% of a step at most before the
     // bloom). Both bloom the same HDR image with the same passes, so the halo and the disc
@@ -131,8 +131,8 @@ fn the_compute_splat_glows_as_the_raster_draw_does() {
         let mut splat = Splat::new(&sim, W, H).unwrap();
         let camera = sim.camera(W as f32 / H as f32);
         let img = splat.render(&sim, &camera).unwrap();
-        // Additive light is scattered with integer atomics: the same sum in any thread order,
-        // so the same image every time.
+        // Each pixel sums its sprites in the tile list's fixed order: the same image every
+        // time.
         assert!(
             img == splat.render(&sim, &camera).unwrap(),
             "a second frame differs"

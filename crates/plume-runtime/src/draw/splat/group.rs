@@ -222,17 +222,13 @@ impl GroupSplat {
             (Some(t), false, false) => Some(SpriteTexture::new(&gpu, t)?),
             _ => None,
         };
-        let scatters = !discs && splat_scatters(&effect.ir);
+        let scatters = ribbons && splat_scatters(&effect.ir);
         let scatter = match scatters {
             false => None,
             true => {
                 let light = words("scattered light", 4 * u64::from(width) * u64::from(height));
                 let [params, _, _, image] = SPLAT_RASTER_BINDINGS;
                 let mut reads = reads.clone();
-                if !ribbons {
-                    reads.push((b_view, splat_view.clone()));
-                    reads.push((b_counts, tiles.counts.clone()));
-                }
                 reads.extend([
                     (params, tiles.params.clone()),
                     (SPLAT_LIGHT_BINDING, light.clone()),
