@@ -22,6 +22,7 @@
 //! passes. The embedding API always draws with the raster pipeline, into the host's render
 //! pass.
 
+mod binding;
 mod group;
 
 use plume_compiler::wgsl::draw::splat_hdr_pitch;

@@ -1,0 +1,311 @@
+//! The splat's composite kernels, the same for every record kind (quads, ribbon triangles):
+//! `composite`, a workgroup per tile blending its list front to back, and `scatter` with
+//! `resolve`, additive light added pixel by pixel with integer atomics. The record kind supplies
+//! the code that loads a record and evaluates it at a pixel.
+
+use super::{SPLAT_LIGHT_BINDING, SPLAT_TILE};
+use crate::base::writer::Writer;
+
+/// Records a composite workgroup bins at once: 128 records (8 KiB of quads, 10 KiB of ribbon
+/// triangles) and a 4-word mask per pixel (4 KiB) stay within WebGPU's 16 KiB of workgroup
+/// memory.
+const QUAD_BATCH: u32 = 128;
+
+/// Fixed-point steps per unit of scattered light: 2^16 (a contribution is rounded to 1/65536,
+/// 1/257 of an 8-bit step; a pixel holds 65535 units before its channel is flagged full).
+const LIGHT_ONE: u32 = 1 << 16;
+
+/// `composite`: a workgroup per 16x16 tile, a thread per pixel, composites the tile's records
+/// (`record` vec4s each, the last one's z and w the pixel box's corners; the code `load` emits
+/// puts entry `k`'s record at `batch[record * t]`) front to back (the
+/// draw order reversed), each pixel's colour `shaded` from the code `evaluate` emits (which
+/// reads record j of the batch, the pixel centre `centre`, and may `continue` past a record
+/// that does not cover it), and rounds to 8 bits once at the end (or stores f16 pairs into an
+/// HDR image). Alpha: the light that still comes through, T, falls by (1 - a) at each record,
+/// and a pixel stops once T is under half an 8-bit step (what lies behind can no longer change
+/// it); additive into an 8-bit image: a pixel stops once every channel is full. The tile stops
+/// when all its pixels have. The raster pipeline blends back to front, into an 8-bit target
+/// rounding after every blend; this is the same sum without those roundings (tests/render.rs
+/// measures how far apart they land).
+///
+/// Batches of [`QUAD_BATCH`] records are binned to the pixels of their boxes first (bit masks;
+/// a box that covers the whole tile sets one tile-wide bit instead of 256), so a pixel visits
+/// only the records whose boxes hold it.
+pub(crate) fn emit_composite(
+    w: &mut Writer,
+    hdr: bool,
+    additive: bool,
+    record: u32,
+    load: &dyn Fn(&mut Writer),
+    evaluate: &dyn Fn(&mut Writer),
+) {
+    let words = QUAD_BATCH / 32;
+    let last = SPLAT_TILE - 1;
+    let box_word = format!("{}u * t + {}u", record, record - 1);
+    w.line(format!(
+        "var<workgroup> batch: array<vec4<u32>, {}>;",
+        record * QUAD_BATCH
+    ));
+    w.line("var<workgroup> batch_range: vec2<u32>;");
+    w.comment(format!(
+        "Per pixel of the tile, which of the batch's {QUAD_BATCH} records may cover it: {words} words of bits; and the records that cover the whole tile."
+    ));
+    w.line(format!(
+        "var<workgroup> pixel_masks: array<atomic<u32>, {}>;",
+        SPLAT_TILE * SPLAT_TILE * words
+    ));
+    w.line(format!(
+        "var<workgroup> tile_masks: array<atomic<u32>, {words}>;"
+    ));
+    w.comment("Pixels of the tile that are finished (or outside the image).");
+    w.line("var<workgroup> finished: atomic<u32>;");
+    w.blank();
+    w.comment("A box's corner, packed as x | y << 16.");
+    w.block("fn unpack_corner(b: u32) -> vec2<u32>", |w| {
+        w.line("return vec2<u32>(b & 0xffffu, b >> 16u);");
+    });
+    w.blank();
+    w.line(format!(
+        "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
+    ));
+    w.block(
+        "fn composite(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>, @builtin(local_invocation_index) t: u32)",
+        |w| {
+            w.line("let tile = wid.x + wid.y * splat_tiles.tiles_x;");
+            w.line(format!("let origin = wid.xy * {SPLAT_TILE}u;"));
+            w.line("let px = origin.x + lid.x;");
+            w.line("let py = origin.y + lid.y;");
+            w.line("let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);");
+            w.comment("Light gathered so far, front to back, and (alpha) the share of what lies behind that still comes through.");
+            w.line("var gathered = vec3<f32>(0.0);");
+            w.line("var through = 1.0;");
+            w.line("var done = px >= splat_tiles.width || py >= splat_tiles.height;");
+            w.line("var background = unpack4x8unorm(splat_tiles.background).rgb;");
+            w.comment("Alpha 0: this part draws over the image the parts before it drew.");
+            w.block("if ((splat_tiles.background >> 24u) == 0u && !done)", |w| {
+                if hdr {
+                    w.line("let under = splat_image[py * ((splat_tiles.width + 31u) & ~31u) + px];");
+                    w.line("background = vec3<f32>(unpack2x16float(under.x), unpack2x16float(under.y).x);");
+                } else {
+                    w.line("background = unpack4x8unorm(splat_image[py * splat_tiles.width + px]).rgb;");
+                }
+            });
+            w.block("if (t == 0u)", |w| {
+                w.line("batch_range = tile_ranges[tile];");
+                w.line("atomicStore(&finished, 0u);");
+            });
+            w.comment("Uniform for the whole workgroup, as the barriers in the loop need.");
+            w.line("let range = workgroupUniformLoad(&batch_range);");
+            w.block("if (done)", |w| w.line("atomicAdd(&finished, 1u);"));
+            w.line("var end = range.y;");
+            w.block("while (end > range.x)", |w| {
+                w.line(format!(
+                    "let start = select(range.x, end - {QUAD_BATCH}u, end - range.x > {QUAD_BATCH}u);"
+                ));
+                w.block(format!("for (var m = 0u; m < {words}u; m++)"), |w| {
+                    w.line(format!("atomicStore(&pixel_masks[t * {words}u + m], 0u);"));
+                });
+                w.block(format!("if (t < {words}u)"), |w| {
+                    w.line("atomicStore(&tile_masks[t], 0u);");
+                });
+                w.line("workgroupBarrier();");
+                w.line("let i = start + t;");
+                w.block("if (i < end)", |w| {
+                    w.line("let k = tile_sprites[i];");
+                    load(w);
+                    w.line(format!("let box = batch[{box_word}];"));
+                    w.comment("The record's pixel box, within this tile.");
+                    w.line("let o = vec2<i32>(origin);");
+                    w.line("let lo = max(vec2<i32>(unpack_corner(box.z)) - o, vec2<i32>(0));");
+                    w.line(format!(
+                        "let hi = min(vec2<i32>(unpack_corner(box.w)) - o, vec2<i32>({last}));"
+                    ));
+                    w.line("let bit = 1u << (t & 31u);");
+                    w.block(
+                        format!("if (all(lo == vec2<i32>(0)) && all(hi == vec2<i32>({last})))"),
+                        |w| w.line("atomicOr(&tile_masks[t >> 5u], bit);"),
+                    );
+                    w.block("else if (all(lo <= hi))", |w| {
+                        w.block("for (var y = lo.y; y <= hi.y; y++)", |w| {
+                            w.block("for (var x = lo.x; x <= hi.x; x++)", |w| {
+                                w.line(format!(
+                                    "atomicOr(&pixel_masks[u32(y * {SPLAT_TILE} + x) * {words}u + (t >> 5u)], bit);"
+                                ));
+                            });
+                        });
+                    });
+                });
+                w.line("workgroupBarrier();");
+                w.comment("Front to back: the batch's last entry first.");
+                w.line(format!("var m = {words}u;"));
+                w.block("while (!done && m > 0u)", |w| {
+                    w.line("m -= 1u;");
+                    w.line(format!(
+                        "var bits = atomicLoad(&pixel_masks[t * {words}u + m]) | atomicLoad(&tile_masks[m]);"
+                    ));
+                    w.block("while (bits != 0u)", |w| {
+                        w.line("let top = firstLeadingBit(bits);");
+                        w.line("bits &= ~(1u << top);");
+                        w.line("let j = m * 32u + top;");
+                        evaluate(w);
+                        if hdr {
+                            w.comment("A float target takes what the fragment shader returns as it is.");
+                            w.line("let f = shaded;");
+                        } else {
+                            w.comment("A unorm target clamps what the fragment shader returns before blending.");
+                            w.line("let f = clamp(shaded, vec4<f32>(0.0), vec4<f32>(1.0));");
+                        }
+                        if additive && hdr {
+                            w.comment("Light adds up past 1 in an HDR image: nothing ever finishes a pixel.");
+                            w.line("gathered += f.rgb * f.a;");
+                        } else if additive {
+                            w.line("gathered += f.rgb * f.a;");
+                            w.line("done = all(gathered + background >= vec3<f32>(1.0));");
+                        } else {
+                            w.line("gathered += through * f.a * f.rgb;");
+                            w.line("through *= 1.0 - f.a;");
+                            w.comment("What lies behind can move no channel by half an 8-bit step.");
+                            w.line("done = through < 0.5 / 255.0;");
+                        }
+                        w.block("if (done)", |w| {
+                            w.line("atomicAdd(&finished, 1u);");
+                            w.line("break;");
+                        });
+                    });
+                });
+                w.line("end = start;");
+                w.comment("Also the barrier before the next batch overwrites the masks.");
+                w.block(
+                    format!(
+                        "if (workgroupUniformLoad(&finished) == {}u)",
+                        SPLAT_TILE * SPLAT_TILE
+                    ),
+                    |w| w.line("break;"),
+                );
+            });
+            let colour = if additive {
+                "gathered + background"
+            } else {
+                "gathered + through * background"
+            };
+            w.block("if (px < splat_tiles.width && py < splat_tiles.height)", |w| {
+                if hdr {
+                    w.comment("Clamped to f16's largest finite value: no infinity reaches the bloom.");
+                    w.line(format!("let c = min({colour}, vec3<f32>(65504.0));"));
+                    w.line("let pitch = (splat_tiles.width + 31u) & ~31u;");
+                    w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
+                } else {
+                    w.line(format!(
+                        "splat_image[py * splat_tiles.width + px] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
+                    ));
+                }
+            });
+        },
+    );
+}
+
+/// `scatter` and `resolve`, for additive light (order-free): a thread per record (the code
+/// `load` emits puts record `k` at `batch[0..record]`, or returns for one that draws nothing)
+/// visits the pixels of its box, evaluates each (`evaluate`, as in [`emit_composite`], with
+/// `j = 0`), and adds its light in fixed point with integer atomics, so the sum is the same
+/// whatever order the threads run in: the image is deterministic. `resolve` then adds the
+/// light to what lies under it, rounds once, and clears the light for the next frame. A
+/// channel whose sum wraps past 2^32 is flagged and drawn full.
+pub(crate) fn emit_scatter(
+    w: &mut Writer,
+    hdr: bool,
+    record: u32,
+    load: &dyn Fn(&mut Writer),
+    evaluate: &dyn Fn(&mut Writer),
+) {
+    w.line(format!(
+        "@group(0) @binding({SPLAT_LIGHT_BINDING}) var<storage, read_write> light: array<atomic<u32>>;"
+    ));
+    w.blank();
+    w.comment("A box's corner, packed as x | y << 16.");
+    w.block("fn unpack_corner(b: u32) -> vec2<u32>", |w| {
+        w.line("return vec2<u32>(b & 0xffffu, b >> 16u);");
+    });
+    w.blank();
+    w.line("@compute @workgroup_size(256)");
+    w.block(
+        "fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let k = gid.x + gid.y * groups.x * 256u;");
+            w.block("if (k >= splat_view.count)", |w| w.line("return;"));
+            w.line(format!("var batch: array<vec4<u32>, {record}>;"));
+            w.line("let j = 0u;");
+            load(w);
+            w.line(format!("let box = batch[{}];", record - 1));
+            w.line("let lo = unpack_corner(box.z);");
+            w.line("let hi = unpack_corner(box.w);");
+            w.block("for (var y = lo.y; y <= hi.y; y++)", |w| {
+                w.block("for (var x = lo.x; x <= hi.x; x++)", |w| {
+                    w.line("let centre = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);");
+                    evaluate(w);
+                    if hdr {
+                        w.line("let f = max(shaded, vec4<f32>(0.0));");
+                    } else {
+                        w.comment("A unorm target clamps what the fragment shader returns before blending.");
+                        w.line("let f = clamp(shaded, vec4<f32>(0.0), vec4<f32>(1.0));");
+                    }
+                    w.line(format!(
+                        "let add = vec3<u32>(round(min(f.rgb * f.a, vec3<f32>(65535.0)) * {}));",
+                        crate::base::writer::f32_lit(f64::from(LIGHT_ONE))
+                    ));
+                    w.block("if (any(add != vec3<u32>(0u)))", |w| {
+                        w.line("let at = 4u * (y * splat_tiles.width + x);");
+                        w.block("for (var c = 0u; c < 3u; c++)", |w| {
+                            w.line("let before = atomicAdd(&light[at + c], add[c]);");
+                            w.block("if (before + add[c] < before)", |w| {
+                                w.line("atomicOr(&light[at + 3u], 1u << c);");
+                            });
+                        });
+                    });
+                });
+            });
+        },
+    );
+    w.blank();
+    w.line(format!(
+        "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
+    ));
+    w.block(
+        "fn resolve(@builtin(global_invocation_id) gid: vec3<u32>)",
+        |w| {
+            w.line("let px = gid.x;");
+            w.line("let py = gid.y;");
+            w.block("if (px >= splat_tiles.width || py >= splat_tiles.height)", |w| {
+                w.line("return;")
+            });
+            w.line("let at = 4u * (py * splat_tiles.width + px);");
+            w.line(format!(
+                "var sum = vec3<f32>(f32(atomicLoad(&light[at])), f32(atomicLoad(&light[at + 1u])), f32(atomicLoad(&light[at + 2u]))) / {};",
+                crate::base::writer::f32_lit(f64::from(LIGHT_ONE))
+            ));
+            w.line("let full = atomicLoad(&light[at + 3u]);");
+            w.line("sum = select(sum, vec3<f32>(65504.0), (vec3<u32>(full) & vec3<u32>(1u, 2u, 4u)) != vec3<u32>(0u));");
+            w.comment("Cleared for the next frame.");
+            w.block("for (var c = 0u; c < 4u; c++)", |w| {
+                w.line("atomicStore(&light[at + c], 0u);");
+            });
+            w.line("var under = unpack4x8unorm(splat_tiles.background).rgb;");
+            if hdr {
+                w.line("let pitch = (splat_tiles.width + 31u) & ~31u;");
+                w.comment("Alpha 0: over the image the parts before drew.");
+                w.block("if ((splat_tiles.background >> 24u) == 0u)", |w| {
+                    w.line("let below = splat_image[py * pitch + px];");
+                    w.line("under = vec3<f32>(unpack2x16float(below.x), unpack2x16float(below.y).x);");
+                });
+                w.line("let c = min(under + sum, vec3<f32>(65504.0));");
+                w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
+            } else {
+                w.comment("Alpha 0: over the image the parts before drew.");
+                w.block("if ((splat_tiles.background >> 24u) == 0u)", |w| {
+                    w.line("under = unpack4x8unorm(splat_image[py * splat_tiles.width + px]).rgb;");
+                });
+                w.line("splat_image[py * splat_tiles.width + px] = pack4x8unorm(vec4<f32>(clamp(under + sum, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));");
+            }
+        },
+    );
+}

@@ -1,0 +1,174 @@
+//! What the splat's groups bind: the tile kernels of `splat.wgsl` and their shared layout, the
+//! bind groups of the generated kernels (buffers, and the sprite texture where there is one),
+//! and the trail module a group's ribbons are drawn from.
+
+use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
+use plume_compiler::wgsl::draw::{DrawShape, FIRST_DATA_BINDING};
+use plume_compiler::wgsl::trail;
+
+use crate::device::buffers::filled_buffer;
+use crate::device::gpu::Gpu;
+use crate::draw::texture::SpriteTexture;
+use crate::error::RuntimeError;
+
+/// The tile kernels' bindings: (binding, read-only storage?, uniform?), as `splat.wgsl`
+/// declares them.
+const TILE_BINDINGS: [(u32, bool, bool); 10] = [
+    (0, true, true),
+    (1, true, false),
+    (2, true, false),
+    (3, true, false),
+    (4, false, false),
+    (5, false, false),
+    (6, false, false),
+    (7, false, false),
+    (8, false, false),
+    (9, true, false),
+];
+
+/// The layout every tile kernel shares (each uses a subset).
+pub(super) fn tile_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
+    let entries: Vec<wgpu::BindGroupLayoutEntry> = TILE_BINDINGS
+        .iter()
+        .map(
+            |&(binding, read_only, is_uniform)| wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Buffer {
+                    ty: if is_uniform {
+                        wgpu::BufferBindingType::Uniform
+                    } else {
+                        wgpu::BufferBindingType::Storage { read_only }
+                    },
+                    has_dynamic_offset: false,
+                    min_binding_size: None,
+                },
+                count: None,
+            },
+        )
+        .collect();
+    gpu.device
+        .create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("splat tiles"),
+            entries: &entries,
+        })
+}
+
+/// The four tile kernels of `splat.wgsl` on the shared layout.
+pub(super) fn tile_kernels(
+    gpu: &Gpu,
+    layout: &wgpu::BindGroupLayout,
+) -> Result<[wgpu::ComputePipeline; 4], RuntimeError> {
+    let device = &gpu.device;
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("splat"),
+        source: wgpu::ShaderSource::Wgsl(include_str!("splat.wgsl").into()),
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("splat tiles"),
+        bind_group_layouts: &[Some(layout)],
+        immediate_size: 0,
+    });
+    let kernel = |entry| gpu.compute_pipeline(&module, entry, Some(&pipeline_layout));
+    let kernels = [
+        kernel("clear"),
+        kernel("emit"),
+        kernel("find_ranges"),
+        kernel("raster"),
+    ];
+    gpu.take_error()?;
+    Ok(kernels)
+}
+
+/// A uniform buffer of `words`.
+pub(super) fn uniform(gpu: &Gpu, label: &str, words: &[u32]) -> Result<wgpu::Buffer, RuntimeError> {
+    filled_buffer(
+        gpu,
+        label,
+        (words.len() as u64 * 4).next_multiple_of(16),
+        wgpu::BufferUsages::UNIFORM,
+        |b| {
+            for (w, out) in words.iter().zip(b.chunks_exact_mut(4)) {
+                out.copy_from_slice(&w.to_le_bytes());
+            }
+        },
+    )
+}
+
+/// A bind group of `layout` from (binding, buffer) pairs and, when there is one, the sprite
+/// texture and its sampler.
+pub(super) fn bind_with_texture(
+    gpu: &Gpu,
+    layout: &wgpu::BindGroupLayout,
+    all: &[(u32, wgpu::Buffer)],
+    texture: Option<&SpriteTexture>,
+) -> wgpu::BindGroup {
+    let mut entries: Vec<wgpu::BindGroupEntry<'_>> = all
+        .iter()
+        .map(|(binding, buffer)| wgpu::BindGroupEntry {
+            binding: *binding,
+            resource: buffer.as_entire_binding(),
+        })
+        .collect();
+    if let Some(texture) = texture {
+        entries.push(wgpu::BindGroupEntry {
+            binding: TEXTURE_BINDING,
+            resource: wgpu::BindingResource::TextureView(&texture.view),
+        });
+        entries.push(wgpu::BindGroupEntry {
+            binding: SAMPLER_BINDING,
+            resource: wgpu::BindingResource::Sampler(&texture.sampler),
+        });
+    }
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("splat"),
+        layout,
+        entries: &entries,
+    })
+}
+
+/// A bind group of `layout` from (binding, buffer) pairs.
+pub(super) fn bind(
+    gpu: &Gpu,
+    layout: &wgpu::BindGroupLayout,
+    all: &[(u32, wgpu::Buffer)],
+) -> wgpu::BindGroup {
+    let entries: Vec<(u32, &wgpu::Buffer)> = all.iter().map(|(b, buffer)| (*b, buffer)).collect();
+    gpu.bind_buffers("splat", layout, &entries)
+}
+
+/// The trail draw module of `effect` in the splat's shape (its `project` and `composite` for
+/// ribbon triangles) and the buffers it reads, as the raster trail draw binds them: every
+/// slot, in the depth order when the effect sorts.
+pub(super) fn ribbon_module(
+    gpu: &Gpu,
+    effect: &plume_compiler::CompiledEffect,
+    res: &crate::device::resources::Resources,
+    shape: DrawShape,
+) -> Result<(wgpu::ShaderModule, Vec<(u32, wgpu::Buffer)>), RuntimeError> {
+    let shape = DrawShape {
+        through_list: effect.ir.sort,
+        primitive: plume_compiler::wgsl::draw::Primitive::Quad,
+        ..shape
+    };
+    let source = trail::emit(&effect.ir, &effect.layout, &shape);
+    let module = gpu
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("splat ribbons"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+    let mut entries = Vec::new();
+    if shape.through_list {
+        entries.push((1, crate::sort::depth::sort_buffers(res)?.vals.clone()));
+    }
+    for (k, chunk) in res.chunks(effect)?.iter().enumerate() {
+        let ring = chunk
+            .trail
+            .as_ref()
+            .expect("the chunks of an effect with a trail hold rings");
+        entries.push((FIRST_DATA_BINDING + k as u32, chunk.buffer.clone()));
+        entries.push((trail::FIRST_TRAIL_BINDING + k as u32, ring.clone()));
+    }
+    Ok((module, entries))
+}
