@@ -282,7 +282,15 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
         };
         emit_scatter(w, hdr, SPLAT_TRIANGLE_VEC4S, &load, &evaluate);
     } else {
-        emit_composite(w, hdr, additive, SPLAT_TRIANGLE_VEC4S, &load, &evaluate);
+        emit_composite(
+            w,
+            hdr,
+            additive,
+            crate::stages::wgsl::draw::splat_slices(ir),
+            SPLAT_TRIANGLE_VEC4S,
+            &load,
+            &evaluate,
+        );
     }
 }
 

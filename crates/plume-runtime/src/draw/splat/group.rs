@@ -4,8 +4,9 @@
 //! the groups drawn before it ([`super::Splat`] strings them together).
 
 use plume_compiler::wgsl::draw::{
-    splat_discs, splat_hdr_pitch, splat_scatters, DrawShape, DRAW_VIEW_BYTES, SPLAT_BINDINGS,
-    SPLAT_LIGHT_BINDING, SPLAT_QUAD_WORDS, SPLAT_RASTER_BINDINGS, SPLAT_TILE,
+    splat_discs, splat_hdr_pitch, splat_scatters, splat_slices, DrawShape, DRAW_VIEW_BYTES,
+    SPLAT_BINDINGS, SPLAT_LIGHT_BINDING, SPLAT_PARTIAL_BINDING, SPLAT_QUAD_WORDS,
+    SPLAT_RASTER_BINDINGS, SPLAT_TILE,
 };
 use plume_compiler::wgsl::trail;
 
@@ -60,6 +61,12 @@ struct Scatter {
 /// `composite` kernel and its texture.
 struct QuadRaster {
     pipeline: wgpu::ComputePipeline,
+    /// `merge`, which composes the slices' partial sums into the image, and its bind group.
+    merge: (wgpu::ComputePipeline, wgpu::BindGroup),
+    /// Workgroups each tile's list is split over (`splat_slices`).
+    slices: u32,
+    /// The slices' partial sums (a vec4 a pixel and slice).
+    partials: wgpu::Buffer,
     texture: Option<SpriteTexture>,
     /// What `composite` reads besides the tile buffers: the records (quads), or what
     /// `triangle_record` reads to make them again (ribbons: the particles, the rings, the view).
@@ -138,8 +145,15 @@ impl GroupSplat {
         };
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
         // Every buffer is bound whole: none may pass the adapter's binding size.
+        let scattered = ribbons && splat_scatters(&effect.ir);
+        let composites = !(discs || scattered);
+        let partial_bytes = match composites {
+            true => 16 * u64::from(splat_slices(&effect.ir)) * u64::from(width) * u64::from(height),
+            false => 0,
+        };
         let largest = (record_words.max(2) * u64::from(count) * 4)
-            .max(2 * 4 * u64::from(width) * u64::from(height));
+            .max(8 * u64::from(width) * u64::from(height))
+            .max(partial_bytes);
         let limit = gpu.limits.max_storage_buffer_binding_size;
         if largest > limit {
             return Err(RuntimeError::Unsupported(format!(
@@ -240,11 +254,30 @@ impl GroupSplat {
         };
         let quads = match discs || scatters {
             true => None,
-            false => Some(QuadRaster {
-                pipeline: gpu.compute_pipeline(&module, "composite", None),
-                texture,
-                reads,
-            }),
+            false => {
+                let pixels = u64::from(width) * u64::from(height);
+                let slices = u64::from(splat_slices(&effect.ir));
+                let partials = words("splat partials", 4 * slices * pixels);
+                let merge = gpu.compute_pipeline(&module, "merge", None);
+                let [params, _, _, image] = SPLAT_RASTER_BINDINGS;
+                let merge_group = bind(
+                    &gpu,
+                    &merge.get_bind_group_layout(0),
+                    &[
+                        (params, tiles.params.clone()),
+                        (SPLAT_PARTIAL_BINDING, partials.clone()),
+                        (image, tiles.image.clone()),
+                    ],
+                );
+                Some(QuadRaster {
+                    slices: splat_slices(&effect.ir),
+                    pipeline: gpu.compute_pipeline(&module, "composite", None),
+                    merge: (merge, merge_group),
+                    partials,
+                    texture,
+                    reads,
+                })
+            }
         };
         // `project` uses every binding of its module but `composite`'s, so its derived
         // layout holds the entries above.
@@ -335,12 +368,12 @@ impl GroupSplat {
             (9, t.boxes.clone()),
         ];
         let quads_group = self.quads.as_ref().map(|q| {
-            let [params, sprites, ranges, image] = SPLAT_RASTER_BINDINGS;
+            let [params, sprites, ranges, _] = SPLAT_RASTER_BINDINGS;
             let mut buffers = vec![
                 (params, t.params.clone()),
                 (sprites, vals.clone()),
                 (ranges, t.ranges.clone()),
-                (image, t.image.clone()),
+                (SPLAT_PARTIAL_BINDING, q.partials.clone()),
             ];
             buffers.extend(q.reads.iter().cloned());
             bind_with_texture(
@@ -428,19 +461,21 @@ impl GroupSplat {
                 pass.set_pipeline(ranges);
                 pass.dispatch_workgroups(rx, ry, 1);
             }
-            "raster" => {
-                match (&self.quads, &e.quads_group) {
-                    (Some(q), Some(group)) => {
-                        pass.set_bind_group(0, group, &[]);
-                        pass.set_pipeline(&q.pipeline);
-                    }
-                    _ => {
-                        pass.set_bind_group(0, &e.group, &[]);
-                        pass.set_pipeline(raster);
-                    }
+            "raster" => match (&self.quads, &e.quads_group) {
+                (Some(q), Some(group)) => {
+                    pass.set_bind_group(0, group, &[]);
+                    pass.set_pipeline(&q.pipeline);
+                    pass.dispatch_workgroups(self.tiles_x, self.tiles_y, q.slices);
+                    pass.set_pipeline(&q.merge.0);
+                    pass.set_bind_group(0, &q.merge.1, &[]);
+                    pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
                 }
-                pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
-            }
+                _ => {
+                    pass.set_bind_group(0, &e.group, &[]);
+                    pass.set_pipeline(raster);
+                    pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
+                }
+            },
             _ => {
                 return Err(RuntimeError::Output(format!(
                     "the splat has no stage {stage}"

@@ -11,7 +11,7 @@
 //           blend) and stops where nothing behind can change the 8-bit result. Batches of 256
 //           sprites are binned to the pixels they touch first (bit masks), so a pixel in a
 //           dense tile visits its own sprites, not the whole tile's. Quads use the draw
-//           module's generated `raster_quads` instead.
+//           module's generated `composite` and `merge` instead.
 
 struct Params {
     width: u32,

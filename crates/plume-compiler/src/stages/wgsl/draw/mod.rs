@@ -28,8 +28,8 @@ use common::{
 };
 use splat::{emit_project, emit_project_quads, emit_quad_raster, emit_splat_declarations};
 pub use splat::{
-    splat_discs, splat_hdr_pitch, splat_scatters, SPLAT_LIGHT_BINDING, SPLAT_QUAD_WORDS,
-    SPLAT_RASTER_BINDINGS,
+    splat_discs, splat_hdr_pitch, splat_scatters, splat_slices, SPLAT_LIGHT_BINDING,
+    SPLAT_PARTIAL_BINDING, SPLAT_QUAD_WORDS, SPLAT_RASTER_BINDINGS, SPLAT_SLICES,
 };
 
 /// How the runtime binds the particles for drawing. The compiled effect's own draw module is

@@ -11,17 +11,38 @@ use crate::base::writer::Writer;
 /// memory.
 const QUAD_BATCH: u32 = 128;
 
+/// Workgroups a tile's list of additive light is split over ([`splat_slices`]).
+pub const SPLAT_SLICES: u32 = 8;
+
+/// Workgroups each tile's list is split over: each composites a contiguous slice of it front
+/// to back into partial sums (light gathered, light let through), and `merge` composes the
+/// slices front to back per pixel. Additive light gets [`SPLAT_SLICES`]: it seldom stops early,
+/// and a busy tile then keeps eight workgroups busy instead of one (sparks, 10M on an H100:
+/// composite 35.8 -> 28.8 ms). Alpha gets one: a slice behind cannot know that the slices in
+/// front already hide it, so slicing did the work early stopping saves (snow 10M 1.25 ->
+/// 6.79 ms, smoke 1M 3.69 -> 5.84; docs/measurements/h100-splat/slices-8-everywhere.jsonl).
+pub fn splat_slices(ir: &crate::ir::EffectIr) -> u32 {
+    match ir.render.blend {
+        crate::stages::schema::Blend::Additive => SPLAT_SLICES,
+        crate::stages::schema::Blend::Alpha => 1,
+    }
+}
+
+/// Binding of the slices' partial sums: `SPLAT_SLICES` vec4s a pixel (slice-major).
+pub const SPLAT_PARTIAL_BINDING: u32 = 33;
+
 /// Fixed-point steps per unit of scattered light: 2^16 (a contribution is rounded to 1/65536,
 /// 1/257 of an 8-bit step; a pixel holds 65535 units before its channel is flagged full).
 const LIGHT_ONE: u32 = 1 << 16;
 
-/// `composite`: a workgroup per 16x16 tile, a thread per pixel, composites the tile's records
+/// `composite`: a workgroup per 16x16 tile and slice (`slices`: [`splat_slices`]), a thread per pixel,
+/// composites its slice of the tile's records
 /// (`record` vec4s each, the last one's z and w the pixel box's corners; the code `load` emits
 /// puts entry `k`'s record at `batch[record * t]`) front to back (the
 /// draw order reversed), each pixel's colour `shaded` from the code `evaluate` emits (which
 /// reads record j of the batch, the pixel centre `centre`, and may `continue` past a record
-/// that does not cover it), and rounds to 8 bits once at the end (or stores f16 pairs into an
-/// HDR image). Alpha: the light that still comes through, T, falls by (1 - a) at each record,
+/// that does not cover it), into the slice's partial sums; `merge` composes the slices and
+/// rounds to 8 bits once (or stores f16 pairs into an HDR image). Alpha: the light that still comes through, T, falls by (1 - a) at each record,
 /// and a pixel stops once T is under half an 8-bit step (what lies behind can no longer change
 /// it); additive into an 8-bit image: a pixel stops once every channel is full. The tile stops
 /// when all its pixels have. The raster pipeline blends back to front, into an 8-bit target
@@ -35,6 +56,7 @@ pub(crate) fn emit_composite(
     w: &mut Writer,
     hdr: bool,
     additive: bool,
+    slices: u32,
     record: u32,
     load: &dyn Fn(&mut Writer),
     evaluate: &dyn Fn(&mut Writer),
@@ -59,6 +81,10 @@ pub(crate) fn emit_composite(
     ));
     w.comment("Pixels of the tile that are finished (or outside the image).");
     w.line("var<workgroup> finished: atomic<u32>;");
+    w.line(format!("const SLICES: u32 = {slices}u;"));
+    w.line(format!(
+        "@group(0) @binding({SPLAT_PARTIAL_BINDING}) var<storage, read_write> partials: array<vec4<f32>>;"
+    ));
     w.blank();
     w.comment("A box's corner, packed as x | y << 16.");
     w.block("fn unpack_corner(b: u32) -> vec2<u32>", |w| {
@@ -80,22 +106,16 @@ pub(crate) fn emit_composite(
             w.line("var gathered = vec3<f32>(0.0);");
             w.line("var through = 1.0;");
             w.line("var done = px >= splat_tiles.width || py >= splat_tiles.height;");
-            w.line("var background = unpack4x8unorm(splat_tiles.background).rgb;");
-            w.comment("Alpha 0: this part draws over the image the parts before it drew.");
-            w.block("if ((splat_tiles.background >> 24u) == 0u && !done)", |w| {
-                if hdr {
-                    w.line("let under = splat_image[py * ((splat_tiles.width + 31u) & ~31u) + px];");
-                    w.line("background = vec3<f32>(unpack2x16float(under.x), unpack2x16float(under.y).x);");
-                } else {
-                    w.line("background = unpack4x8unorm(splat_image[py * splat_tiles.width + px]).rgb;");
-                }
-            });
             w.block("if (t == 0u)", |w| {
                 w.line("batch_range = tile_ranges[tile];");
                 w.line("atomicStore(&finished, 0u);");
             });
             w.comment("Uniform for the whole workgroup, as the barriers in the loop need.");
-            w.line("let range = workgroupUniformLoad(&batch_range);");
+            w.line("let whole = workgroupUniformLoad(&batch_range);");
+            w.comment("This workgroup's slice of the tile's list (slice SLICES - 1 is the front-most).");
+            w.line("let chunk = (whole.y - whole.x + SLICES - 1u) / SLICES;");
+            w.line("let first = min(whole.x + wid.z * chunk, whole.y);");
+            w.line("let range = vec2<u32>(first, min(first + chunk, whole.y));");
             w.block("if (done)", |w| w.line("atomicAdd(&finished, 1u);"));
             w.line("var end = range.y;");
             w.block("while (end > range.x)", |w| {
@@ -160,7 +180,8 @@ pub(crate) fn emit_composite(
                             w.line("gathered += f.rgb * f.a;");
                         } else if additive {
                             w.line("gathered += f.rgb * f.a;");
-                            w.line("done = all(gathered + background >= vec3<f32>(1.0));");
+                            w.comment("Full on its own: full with whatever else adds to it.");
+                            w.line("done = all(gathered >= vec3<f32>(1.0));");
                         } else {
                             w.line("gathered += through * f.a * f.rgb;");
                             w.line("through *= 1.0 - f.a;");
@@ -183,25 +204,66 @@ pub(crate) fn emit_composite(
                     |w| w.line("break;"),
                 );
             });
-            let colour = if additive {
-                "gathered + background"
-            } else {
-                "gathered + through * background"
-            };
             w.block("if (px < splat_tiles.width && py < splat_tiles.height)", |w| {
-                if hdr {
-                    w.comment("Clamped to f16's largest finite value: no infinity reaches the bloom.");
-                    w.line(format!("let c = min({colour}, vec3<f32>(65504.0));"));
-                    w.line("let pitch = (splat_tiles.width + 31u) & ~31u;");
-                    w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
-                } else {
-                    w.line(format!(
-                        "splat_image[py * splat_tiles.width + px] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
-                    ));
-                }
+                w.line("let pixels = splat_tiles.width * splat_tiles.height;");
+                w.line("partials[wid.z * pixels + py * splat_tiles.width + px] = vec4<f32>(gathered, through);");
             });
         },
     );
+    w.blank();
+    emit_merge(w, hdr, additive);
+}
+
+/// `merge`: a thread per pixel composes the slices' partial sums front to back (light gathered
+/// adds as much of itself as the slices in front let through), puts them over the background
+/// (or the image the parts before drew), and rounds once (or stores f16 pairs into an HDR
+/// image).
+fn emit_merge(w: &mut Writer, hdr: bool, additive: bool) {
+    w.line(format!(
+        "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
+    ));
+    w.block("fn merge(@builtin(global_invocation_id) gid: vec3<u32>)", |w| {
+        w.line("let px = gid.x;");
+        w.line("let py = gid.y;");
+        w.block(
+            "if (px >= splat_tiles.width || py >= splat_tiles.height)",
+            |w| w.line("return;"),
+        );
+        w.line("let pixels = splat_tiles.width * splat_tiles.height;");
+        w.line("let pixel = py * splat_tiles.width + px;");
+        w.line("var gathered = vec3<f32>(0.0);");
+        w.line("var through = 1.0;");
+        w.block("for (var s = SLICES; s > 0u; s--)", |w| {
+            w.line("let part = partials[(s - 1u) * pixels + pixel];");
+            w.line("gathered += through * part.rgb;");
+            w.line("through *= part.a;");
+        });
+        w.line("var background = unpack4x8unorm(splat_tiles.background).rgb;");
+        w.comment("Alpha 0: this part draws over the image the parts before it drew.");
+        w.block("if ((splat_tiles.background >> 24u) == 0u)", |w| {
+            if hdr {
+                w.line("let under = splat_image[py * ((splat_tiles.width + 31u) & ~31u) + px];");
+                w.line("background = vec3<f32>(unpack2x16float(under.x), unpack2x16float(under.y).x);");
+            } else {
+                w.line("background = unpack4x8unorm(splat_image[pixel]).rgb;");
+            }
+        });
+        let colour = if additive {
+            "gathered + background"
+        } else {
+            "gathered + through * background"
+        };
+        if hdr {
+            w.comment("Clamped to f16's largest finite value: no infinity reaches the bloom.");
+            w.line(format!("let c = min({colour}, vec3<f32>(65504.0));"));
+            w.line("let pitch = (splat_tiles.width + 31u) & ~31u;");
+            w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
+        } else {
+            w.line(format!(
+                "splat_image[pixel] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
+            ));
+        }
+    });
 }
 
 /// `scatter` and `resolve`, for additive light (order-free): a thread per record (the code

@@ -13,6 +13,7 @@
 mod composite;
 
 pub(crate) use composite::{emit_composite, emit_scatter};
+pub use composite::{splat_slices, SPLAT_PARTIAL_BINDING, SPLAT_SLICES};
 
 use super::{SPLAT_BINDINGS, SPLAT_TILE};
 use crate::base::writer::Writer;
@@ -315,5 +316,5 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
         w.line("let color = vec4<f32>(r0.w, r1.w, r2.w, bitcast<f32>(r3.x));");
         w.line("let shaded = splat_shade(uv, du, dv, color, r3.y);");
     };
-    emit_composite(w, hdr, additive, 4, &load, &evaluate);
+    emit_composite(w, hdr, additive, splat_slices(ir), 4, &load, &evaluate);
 }
