@@ -40,7 +40,7 @@ struct Tiles {
 /// bind group.
 struct Entries {
     len: u64,
-    /// The sprites of the entries, sorted by tile (kept for [`Splat::entries_are_complete`]).
+    /// The sprites of the entries, sorted by tile (kept for [`GroupSplat::entries_are_complete`]).
     vals: wgpu::Buffer,
     sort: SortProgram,
     group: wgpu::BindGroup,
@@ -48,7 +48,7 @@ struct Entries {
     quads_group: Option<wgpu::BindGroup>,
 }
 
-/// Additive light, scattered: each record adds itself into the pixels it covers (`scatter`),
+/// Ribbons' additive light, scattered: each triangle adds itself into the pixels it covers (`scatter`),
 /// then `resolve` puts the sum over what lies under it; no tile lists.
 struct Scatter {
     scatter: wgpu::ComputePipeline,

@@ -33,7 +33,7 @@ pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
 
 /// Whether the splat scatters the light of `ir`'s ribbons instead of compositing tiles:
 /// additive light is the same in any order, so each triangle adds itself into the pixels it
-/// covers, with no tile lists ([`emit_scatter`]). Only ribbons: a ribbon triangle is made
+/// covers, with no tile lists (`emit_scatter`). Only ribbons: a ribbon triangle is made
 /// again from the particle state each time it is used, once per tile it touches when
 /// composited and once when scattered (orbit, 1M particles on an H200: 21 ms scattered
 /// against 51 composited on an H100); sprites are stored records, and scattering sparks'
