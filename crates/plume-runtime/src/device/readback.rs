@@ -25,6 +25,17 @@ pub fn read_buffer(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RuntimeE
     });
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    submit_and_map(gpu, encoder, &staging, |data| data.to_vec())
+}
+
+/// Submits `encoder` (whose last command copies into `staging`, a `MAP_READ` buffer), waits
+/// for the GPU, and returns what `read` makes of the mapped bytes.
+fn submit_and_map<T>(
+    gpu: &Gpu,
+    encoder: wgpu::CommandEncoder,
+    staging: &wgpu::Buffer,
+    read: impl FnOnce(&[u8]) -> T,
+) -> Result<T, RuntimeError> {
     gpu.queue.submit([encoder.finish()]);
     let (tx, rx) = std::sync::mpsc::channel();
     staging.map_async(wgpu::MapMode::Read, .., move |r| {
@@ -36,10 +47,11 @@ pub fn read_buffer(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RuntimeE
         .map_err(|e| RuntimeError::Readback(e.to_string()))?;
     let data = staging
         .get_mapped_range(..)
-        .map_err(|e| RuntimeError::Readback(e.to_string()))?
-        .to_vec();
+        .map_err(|e| RuntimeError::Readback(e.to_string()))?;
+    let out = read(&data);
+    drop(data);
     staging.unmap();
-    Ok(data)
+    Ok(out)
 }
 
 /// Reads a buffer of u32 words and returns the first `n`.
@@ -198,24 +210,13 @@ pub fn read_texture(
             depth_or_array_layers: 1,
         },
     );
-    gpu.queue.submit([encoder.finish()]);
-    let (tx, rx) = std::sync::mpsc::channel();
-    readback.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.wait()?;
-    rx.recv()
-        .map_err(|e| RuntimeError::Readback(e.to_string()))?
-        .map_err(|e| RuntimeError::Readback(e.to_string()))?;
-    let data = readback
-        .get_mapped_range(..)
-        .map_err(|e| RuntimeError::Readback(e.to_string()))?;
-    let mut pixels = Vec::with_capacity((width * height * 4) as usize);
-    for y in 0..height as usize {
-        let start = y * row as usize;
-        pixels.extend_from_slice(&data[start..start + width as usize * 4]);
-    }
-    drop(data);
-    readback.unmap();
-    Ok(pixels)
+    // Rows are padded to the copy alignment; the image keeps only each row's pixels.
+    submit_and_map(gpu, encoder, &readback, |data| {
+        let mut pixels = Vec::with_capacity((width * height * 4) as usize);
+        for y in 0..height as usize {
+            let start = y * row as usize;
+            pixels.extend_from_slice(&data[start..start + width as usize * 4]);
+        }
+        pixels
+    })
 }

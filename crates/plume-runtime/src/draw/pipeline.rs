@@ -83,6 +83,24 @@ pub(crate) fn draw_group(
     texture: Option<&SpriteTexture>,
     scene_depth: Option<&wgpu::TextureView>,
 ) -> wgpu::BindGroup {
+    bind_resources(
+        gpu,
+        &pipeline.get_bind_group_layout(0),
+        buffers,
+        texture,
+        scene_depth,
+    )
+}
+
+/// A bind group of `layout` (a render pipeline's or the compute splat's): `buffers`, the
+/// sprite texture and sampler when there is one, and the scene depth when there is one.
+pub(crate) fn bind_resources(
+    gpu: &Gpu,
+    layout: &wgpu::BindGroupLayout,
+    buffers: &[(u32, wgpu::Buffer)],
+    texture: Option<&SpriteTexture>,
+    scene_depth: Option<&wgpu::TextureView>,
+) -> wgpu::BindGroup {
     let mut bindings: Vec<wgpu::BindGroupEntry<'_>> = buffers
         .iter()
         .map(|(binding, buffer)| wgpu::BindGroupEntry {
@@ -108,7 +126,7 @@ pub(crate) fn draw_group(
     }
     gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("draw"),
-        layout: &pipeline.get_bind_group_layout(0),
+        layout,
         entries: &bindings,
     })
 }

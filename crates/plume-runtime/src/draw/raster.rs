@@ -253,10 +253,14 @@ impl GroupDraw {
         camera: &Camera,
         steps: u64,
     ) -> Result<(), RuntimeError> {
-        let bytes = draw_view_bytes(camera, steps, self.size_scale);
-        let src = staging(&self.gpu, "draw view", &bytes)?;
-        encoder.copy_buffer_to_buffer(&src, 0, &self.view, 0, DRAW_VIEW_BYTES);
-        Ok(())
+        record_draw_view(
+            &self.gpu,
+            encoder,
+            &self.view,
+            camera,
+            steps,
+            self.size_scale,
+        )
     }
 
     /// Records what decides the instances on the GPU: the live count, or the compacted list.
@@ -435,6 +439,25 @@ pub(crate) fn draw_module(
         }
     }
     Ok((module, entries))
+}
+
+/// Records a copy of the `DrawView` uniform (camera, steps done, size scale) into `view` in
+/// `encoder`, so that several frames prepared in one submission each draw with their own.
+pub(crate) fn record_draw_view(
+    gpu: &Gpu,
+    encoder: &mut wgpu::CommandEncoder,
+    view: &wgpu::Buffer,
+    camera: &Camera,
+    steps: u64,
+    size_scale: f32,
+) -> Result<(), RuntimeError> {
+    let src = staging(
+        gpu,
+        "draw view",
+        &draw_view_bytes(camera, steps, size_scale),
+    )?;
+    encoder.copy_buffer_to_buffer(&src, 0, view, 0, DRAW_VIEW_BYTES);
+    Ok(())
 }
 
 /// The `DrawView` uniform's bytes: view and projection matrices, steps done (mod 2^32, as the

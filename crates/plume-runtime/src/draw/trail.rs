@@ -63,17 +63,7 @@ impl TrailDraw {
         );
         debug_assert_eq!(view.size(), DRAW_VIEW_BYTES);
         let mut buffers = vec![(0, view.clone())];
-        if shape.through_list {
-            buffers.push((1, crate::sort::depth::sort_buffers(res)?.vals.clone()));
-        }
-        for (k, chunk) in res.chunks(effect)?.iter().enumerate() {
-            let ring = chunk
-                .trail
-                .as_ref()
-                .expect("the chunks of an effect with a trail hold rings");
-            buffers.push((FIRST_DATA_BINDING + k as u32, chunk.buffer.clone()));
-            buffers.push((FIRST_TRAIL_BINDING + k as u32, ring.clone()));
-        }
+        buffers.extend(trail_buffers(effect, res, shape.through_list)?);
         let group = draw_group(gpu, &pipeline, &buffers, None, scene_depth);
         Ok(Self {
             pipeline,
@@ -95,4 +85,27 @@ impl TrailDraw {
         pass.set_bind_group(0, &self.group, &[]);
         pass.draw(0..self.vertices, 0..self.instances);
     }
+}
+
+/// What a trail draw module reads besides its view (the raster draw's and the compute
+/// splat's alike): the depth order when it draws `through_list`, and each particle buffer with
+/// its trail ring.
+pub(crate) fn trail_buffers(
+    effect: &CompiledEffect,
+    res: &Resources,
+    through_list: bool,
+) -> Result<Vec<(u32, wgpu::Buffer)>, RuntimeError> {
+    let mut buffers = Vec::new();
+    if through_list {
+        buffers.push((1, crate::sort::depth::sort_buffers(res)?.vals.clone()));
+    }
+    for (k, chunk) in res.chunks(effect)?.iter().enumerate() {
+        let ring = chunk
+            .trail
+            .as_ref()
+            .expect("the chunks of an effect with a trail hold rings");
+        buffers.push((FIRST_DATA_BINDING + k as u32, chunk.buffer.clone()));
+        buffers.push((FIRST_TRAIL_BINDING + k as u32, ring.clone()));
+    }
+    Ok(buffers)
 }

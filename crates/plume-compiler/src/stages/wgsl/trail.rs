@@ -18,9 +18,9 @@ use crate::ir::EffectIr;
 use crate::stages::passes::layout::{self, Attribute, Layout};
 use crate::stages::wgsl::draw::common as draw;
 use crate::stages::wgsl::draw::splat::{
-    emit_composite, emit_scatter, emit_splat_declarations, emit_to_pixels,
+    emit_composite, emit_project_kernel, emit_scatter, emit_splat_declarations,
 };
-use crate::stages::wgsl::draw::{DrawShape, FIRST_DATA_BINDING, SPLAT_TILE};
+use crate::stages::wgsl::draw::{DrawShape, FIRST_DATA_BINDING};
 use crate::stages::wgsl::emit_particle_struct;
 
 /// Binding of chunk 0's trail ring in the trail draw module (chunk c at this + c).
@@ -165,8 +165,6 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
         u32_lit(triangles(trail))
     ));
     w.blank();
-    emit_to_pixels(w);
-    w.blank();
     w.block("struct TriangleRecord", |w| {
         w.line("valid: bool,");
         w.line("first: vec2<f32>,");
@@ -188,13 +186,13 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
         w.block("for (var c = 0u; c < 3u; c++)", |w| {
             w.line("let q = v[c].clip;");
             w.comment("A hidden vertex lies outside the depth range: its triangle draws nothing.");
-            w.line("inside = inside && q.w > 0.0 && q.z >= 0.0 && q.z <= q.w;");
-            w.line("let p = vec2<f32>(q.x / q.w * 0.5 + 0.5, 0.5 - q.y / q.w * 0.5) * size;");
+            w.line("inside = inside && unclipped(q);");
+            w.line("let p = clip_pixel(q, size);");
             w.line("lo = min(lo, p);");
             w.line("hi = max(hi, p);");
         });
-        w.line("rec.first = max(ceil(lo - 0.5), vec2<f32>(0.0));");
-        w.line("rec.last = min(floor(hi - 0.5), size - 1.0);");
+        w.line("rec.first = first_pixel(lo);");
+        w.line("rec.last = last_pixel(hi, size);");
         w.block("if (!inside || any(rec.first > rec.last))", |w| {
             w.line("return rec;")
         });
@@ -205,10 +203,11 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
         w.line("let det = dot(a, cross(b, c));");
         w.block("if (abs(det) <= 1e-30)", |w| w.line("return rec;"));
         w.line("rec.valid = true;");
-        w.line("let box = vec2<u32>(u32(rec.first.x) | (u32(rec.first.y) << 16u), u32(rec.last.x) | (u32(rec.last.y) << 16u));");
-        w.line("rec.words[0] = vec4<u32>(bitcast<vec3<u32>>(cross(b, c) / det), i);");
-        w.line("rec.words[1] = vec4<u32>(bitcast<vec3<u32>>(cross(c, a) / det), 0u);");
-        w.line("rec.words[2] = vec4<u32>(bitcast<vec3<u32>>(cross(a, b) / det), 0u);");
+        w.line("let box = pack_box(rec.first, rec.last);");
+        w.line("let rows = inverse_rows(a, b, c, det);");
+        w.line("rec.words[0] = vec4<u32>(bitcast<vec3<u32>>(rows[0]), i);");
+        w.line("rec.words[1] = vec4<u32>(bitcast<vec3<u32>>(rows[1]), 0u);");
+        w.line("rec.words[2] = vec4<u32>(bitcast<vec3<u32>>(rows[2]), 0u);");
         w.line("let c0 = min(v[0].color, vec4<f32>(65504.0));");
         w.line("let c1 = min(v[1].color, vec4<f32>(65504.0));");
         w.line("let c2 = min(v[2].color, vec4<f32>(65504.0));");
@@ -217,24 +216,12 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
         w.line("return rec;");
     });
     w.blank();
-    w.line("@compute @workgroup_size(256)");
-    w.block(
-        "fn project(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
-        |w| {
-            w.line("let k = gid.x + gid.y * groups.x * 256u;");
-            w.block("if (k >= splat_view.count)", |w| w.line("return;"));
-            w.line("var tiles = 0u;");
-            w.line("let rec = triangle_record(k);");
-            w.block("if (rec.valid)", |w| {
-                w.line(format!("let t0 = vec2<u32>(rec.first) / {SPLAT_TILE}u;"));
-                w.line(format!("let t1 = vec2<u32>(rec.last) / {SPLAT_TILE}u;"));
-                w.line("tiles = (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
-                w.line("tile_boxes[k] = vec2<u32>(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u));");
-            });
-            w.line("tile_counts[k] = tiles;");
-            w.line("tile_offsets[k] = tiles;");
-        },
-    );
+    emit_project_kernel(w, &|w: &mut Writer| {
+        w.line("let rec = triangle_record(k);");
+        w.block("if (rec.valid)", |w| {
+            w.line("tiles = box_tiles(k, rec.first, rec.last);");
+        });
+    });
     w.blank();
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
     let load = |w: &mut Writer| {

@@ -2,13 +2,11 @@
 //! bind groups of the generated kernels (buffers, and the sprite texture where there is one),
 //! and the trail module a group's ribbons are drawn from.
 
-use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
-use plume_compiler::wgsl::draw::{DrawShape, FIRST_DATA_BINDING};
+use plume_compiler::wgsl::draw::DrawShape;
 use plume_compiler::wgsl::trail;
 
 use crate::device::buffers::filled_buffer;
 use crate::device::gpu::Gpu;
-use crate::draw::texture::SpriteTexture;
 use crate::error::RuntimeError;
 
 /// The tile kernels' bindings: (binding, read-only storage?, uniform?), as `splat.wgsl`
@@ -95,38 +93,6 @@ pub(super) fn uniform(gpu: &Gpu, label: &str, words: &[u32]) -> Result<wgpu::Buf
     )
 }
 
-/// A bind group of `layout` from (binding, buffer) pairs and, when there is one, the sprite
-/// texture and its sampler.
-pub(super) fn bind_with_texture(
-    gpu: &Gpu,
-    layout: &wgpu::BindGroupLayout,
-    all: &[(u32, wgpu::Buffer)],
-    texture: Option<&SpriteTexture>,
-) -> wgpu::BindGroup {
-    let mut entries: Vec<wgpu::BindGroupEntry<'_>> = all
-        .iter()
-        .map(|(binding, buffer)| wgpu::BindGroupEntry {
-            binding: *binding,
-            resource: buffer.as_entire_binding(),
-        })
-        .collect();
-    if let Some(texture) = texture {
-        entries.push(wgpu::BindGroupEntry {
-            binding: TEXTURE_BINDING,
-            resource: wgpu::BindingResource::TextureView(&texture.view),
-        });
-        entries.push(wgpu::BindGroupEntry {
-            binding: SAMPLER_BINDING,
-            resource: wgpu::BindingResource::Sampler(&texture.sampler),
-        });
-    }
-    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("splat"),
-        layout,
-        entries: &entries,
-    })
-}
-
 /// A bind group of `layout` from (binding, buffer) pairs.
 pub(super) fn bind(
     gpu: &Gpu,
@@ -158,17 +124,6 @@ pub(super) fn ribbon_module(
             label: Some("splat ribbons"),
             source: wgpu::ShaderSource::Wgsl(source.into()),
         });
-    let mut entries = Vec::new();
-    if shape.through_list {
-        entries.push((1, crate::sort::depth::sort_buffers(res)?.vals.clone()));
-    }
-    for (k, chunk) in res.chunks(effect)?.iter().enumerate() {
-        let ring = chunk
-            .trail
-            .as_ref()
-            .expect("the chunks of an effect with a trail hold rings");
-        entries.push((FIRST_DATA_BINDING + k as u32, chunk.buffer.clone()));
-        entries.push((trail::FIRST_TRAIL_BINDING + k as u32, ring.clone()));
-    }
+    let entries = crate::draw::trail::trail_buffers(effect, res, shape.through_list)?;
     Ok((module, entries))
 }

@@ -10,11 +10,12 @@ use plume_compiler::wgsl::draw::{
 };
 use plume_compiler::wgsl::trail;
 
-use super::binding::{bind, bind_with_texture, ribbon_module, tile_kernels, tile_layout, uniform};
-use crate::device::buffers::{staging, STORAGE};
+use super::binding::{bind, ribbon_module, tile_kernels, tile_layout, uniform};
+use crate::device::buffers::STORAGE;
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
-use crate::draw::raster::{draw_module, draw_shape, draw_view_bytes};
+use crate::draw::pipeline::bind_resources;
+use crate::draw::raster::{draw_module, draw_shape, record_draw_view};
 use crate::draw::texture::SpriteTexture;
 use crate::error::RuntimeError;
 use crate::sim::group::Group;
@@ -240,12 +241,7 @@ impl GroupSplat {
                     (SPLAT_LIGHT_BINDING, light),
                 ];
                 Some(Scatter {
-                    scatter_group: bind_with_texture(
-                        &gpu,
-                        &scatter.get_bind_group_layout(0),
-                        &reads,
-                        texture.as_ref(),
-                    ),
+                    scatter_group: bind(&gpu, &scatter.get_bind_group_layout(0), &reads),
                     resolve_group: bind(&gpu, &resolve.get_bind_group_layout(0), &resolve_reads),
                     scatter,
                     resolve,
@@ -376,11 +372,12 @@ impl GroupSplat {
                 (SPLAT_PARTIAL_BINDING, q.partials.clone()),
             ];
             buffers.extend(q.reads.iter().cloned());
-            bind_with_texture(
+            bind_resources(
                 &self.gpu,
                 &q.pipeline.get_bind_group_layout(0),
                 &buffers,
                 q.texture.as_ref(),
+                None,
             )
         });
         self.entries = Entries {
@@ -401,13 +398,7 @@ impl GroupSplat {
         camera: &Camera,
         steps: u64,
     ) -> Result<(), RuntimeError> {
-        let src = staging(
-            &self.gpu,
-            "splat draw view",
-            &draw_view_bytes(camera, steps, 1.0),
-        )?;
-        encoder.copy_buffer_to_buffer(&src, 0, &self.draw_view, 0, DRAW_VIEW_BYTES);
-        Ok(())
+        record_draw_view(&self.gpu, encoder, &self.draw_view, camera, steps, 1.0)
     }
 
     /// Records the splat itself into `pass`: project, scan, entries, sort, ranges, raster.

@@ -44,6 +44,26 @@ struct SplatGlow {
 }
 
 /// A compute splat of an effect (every group, in group order) into `width` x `height` images.
+///
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use plume_runtime::outputs::Splat;
+/// use plume_runtime::{Effect, Gpu};
+/// let source = r#"Effect(name: "streaks", capacity: 64,
+///     emitters: [Emitter(burst: 64, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 0.5),
+///                        velocity: Constant((1.0, 0.0, 0.0)))],
+///     render: Render(color: [(0.0, (1.0, 0.6, 0.2, 1.0))], size: [(0.0, 0.2)], blend: Additive,
+///                    orient: Velocity(stretch: 0.2, max_length: 1.0)))"#;
+/// let effect = plume_compiler::compile_str(source, &Default::default())?;
+/// let gpu = Gpu::new(&Default::default())?;
+/// let mut streaks = Effect::new(&gpu, effect)?;
+/// streaks.run(10, |_| {})?;
+/// let mut splat = Splat::new(&streaks, 64, 48)?;
+/// let image = splat.render(&streaks, &streaks.camera(64.0 / 48.0))?;
+/// assert_eq!(image.len(), 64 * 48 * 4); // RGBA8 rows, top row first
+/// # Ok(())
+/// # }
+/// ```
 pub struct Splat {
     gpu: Gpu,
     width: u32,

@@ -222,48 +222,63 @@ fn emit_merge(w: &mut Writer, hdr: bool, additive: bool) {
     w.line(format!(
         "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
     ));
-    w.block("fn merge(@builtin(global_invocation_id) gid: vec3<u32>)", |w| {
-        w.line("let px = gid.x;");
-        w.line("let py = gid.y;");
-        w.block(
-            "if (px >= splat_tiles.width || py >= splat_tiles.height)",
-            |w| w.line("return;"),
-        );
-        w.line("let pixels = splat_tiles.width * splat_tiles.height;");
-        w.line("let pixel = py * splat_tiles.width + px;");
-        w.line("var gathered = vec3<f32>(0.0);");
-        w.line("var through = 1.0;");
-        w.block("for (var s = SLICES; s > 0u; s--)", |w| {
-            w.line("let part = partials[(s - 1u) * pixels + pixel];");
-            w.line("gathered += through * part.rgb;");
-            w.line("through *= part.a;");
-        });
-        w.line("var background = unpack4x8unorm(splat_tiles.background).rgb;");
-        w.comment("Alpha 0: this part draws over the image the parts before it drew.");
-        w.block("if ((splat_tiles.background >> 24u) == 0u)", |w| {
-            if hdr {
-                w.line("let under = splat_image[py * ((splat_tiles.width + 31u) & ~31u) + px];");
-                w.line("background = vec3<f32>(unpack2x16float(under.x), unpack2x16float(under.y).x);");
+    w.block(
+        "fn merge(@builtin(global_invocation_id) gid: vec3<u32>)",
+        |w| {
+            w.line("let px = gid.x;");
+            w.line("let py = gid.y;");
+            w.block(
+                "if (px >= splat_tiles.width || py >= splat_tiles.height)",
+                |w| w.line("return;"),
+            );
+            w.line("let pixels = splat_tiles.width * splat_tiles.height;");
+            w.line("let pixel = py * splat_tiles.width + px;");
+            w.line("var gathered = vec3<f32>(0.0);");
+            w.line("var through = 1.0;");
+            w.block("for (var s = SLICES; s > 0u; s--)", |w| {
+                w.line("let part = partials[(s - 1u) * pixels + pixel];");
+                w.line("gathered += through * part.rgb;");
+                w.line("through *= part.a;");
+            });
+            emit_background(w, hdr);
+            let colour = if additive {
+                "gathered + background"
             } else {
-                w.line("background = unpack4x8unorm(splat_image[pixel]).rgb;");
-            }
-        });
-        let colour = if additive {
-            "gathered + background"
-        } else {
-            "gathered + through * background"
-        };
+                "gathered + through * background"
+            };
+            emit_store(w, hdr, colour);
+        },
+    );
+}
+
+/// `var background`: what pixel (`px`, `py`; `pixel` = py * width + px) is drawn over: the
+/// effect's background, or, when the parameters' background has alpha 0, the image the parts
+/// drawn before this one left there.
+fn emit_background(w: &mut Writer, hdr: bool) {
+    w.line("var background = unpack4x8unorm(splat_tiles.background).rgb;");
+    w.comment("Alpha 0: this part draws over the image the parts before it drew.");
+    w.block("if ((splat_tiles.background >> 24u) == 0u)", |w| {
         if hdr {
-            w.comment("Clamped to f16's largest finite value: no infinity reaches the bloom.");
-            w.line(format!("let c = min({colour}, vec3<f32>(65504.0));"));
-            w.line("let pitch = (splat_tiles.width + 31u) & ~31u;");
-            w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
+            w.line("let under = splat_image[py * ((splat_tiles.width + 31u) & ~31u) + px];");
+            w.line("background = vec3<f32>(unpack2x16float(under.x), unpack2x16float(under.y).x);");
         } else {
-            w.line(format!(
-                "splat_image[pixel] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
-            ));
+            w.line("background = unpack4x8unorm(splat_image[pixel]).rgb;");
         }
     });
+}
+
+/// Stores `colour` (a WGSL expression) at the pixel: rounded to 8 bits, or as f16 pairs into
+/// an HDR image (clamped to f16's largest finite value: no infinity reaches the bloom).
+fn emit_store(w: &mut Writer, hdr: bool, colour: &str) {
+    if hdr {
+        w.line(format!("let c = min({colour}, vec3<f32>(65504.0));"));
+        w.line("let pitch = (splat_tiles.width + 31u) & ~31u;");
+        w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
+    } else {
+        w.line(format!(
+            "splat_image[pixel] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
+        ));
+    }
 }
 
 /// `scatter` and `resolve`, for additive light (order-free): a thread per record (the code
@@ -340,7 +355,8 @@ pub(crate) fn emit_scatter(
             w.block("if (px >= splat_tiles.width || py >= splat_tiles.height)", |w| {
                 w.line("return;")
             });
-            w.line("let at = 4u * (py * splat_tiles.width + px);");
+            w.line("let pixel = py * splat_tiles.width + px;");
+            w.line("let at = 4u * pixel;");
             w.line(format!(
                 "var sum = vec3<f32>(f32(atomicLoad(&light[at])), f32(atomicLoad(&light[at + 1u])), f32(atomicLoad(&light[at + 2u]))) / {};",
                 crate::base::writer::f32_lit(f64::from(LIGHT_ONE))
@@ -351,23 +367,8 @@ pub(crate) fn emit_scatter(
             w.block("for (var c = 0u; c < 4u; c++)", |w| {
                 w.line("atomicStore(&light[at + c], 0u);");
             });
-            w.line("var under = unpack4x8unorm(splat_tiles.background).rgb;");
-            if hdr {
-                w.line("let pitch = (splat_tiles.width + 31u) & ~31u;");
-                w.comment("Alpha 0: over the image the parts before drew.");
-                w.block("if ((splat_tiles.background >> 24u) == 0u)", |w| {
-                    w.line("let below = splat_image[py * pitch + px];");
-                    w.line("under = vec3<f32>(unpack2x16float(below.x), unpack2x16float(below.y).x);");
-                });
-                w.line("let c = min(under + sum, vec3<f32>(65504.0));");
-                w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
-            } else {
-                w.comment("Alpha 0: over the image the parts before drew.");
-                w.block("if ((splat_tiles.background >> 24u) == 0u)", |w| {
-                    w.line("under = unpack4x8unorm(splat_image[py * splat_tiles.width + px]).rgb;");
-                });
-                w.line("splat_image[py * splat_tiles.width + px] = pack4x8unorm(vec4<f32>(clamp(under + sum, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));");
-            }
+            emit_background(w, hdr);
+            emit_store(w, hdr, "background + sum");
         },
     );
 }

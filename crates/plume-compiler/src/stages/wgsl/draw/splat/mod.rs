@@ -89,6 +89,8 @@ pub(crate) fn emit_splat_declarations(w: &mut Writer, discs: bool, hdr: bool) {
     w.line(format!(
         "@group(0) @binding({boxes}) var<storage, read_write> tile_boxes: array<vec2<u32>>;"
     ));
+    w.blank();
+    emit_place_helpers(w);
     if discs {
         return;
     }
@@ -135,6 +137,36 @@ pub(crate) fn emit_splat_declarations(w: &mut Writer, discs: bool, hdr: bool) {
 /// hidden, clipped, or covering no pixel centre). Pixels are square (the projection's aspect is
 /// the image's), so one extent serves both axes.
 pub(crate) fn emit_project(w: &mut Writer) {
+    emit_project_kernel(w, &|w: &mut Writer| {
+        w.line("let s = sprite_at(k);");
+        w.block("if (s.visible)", |w| {
+                w.line("let clip = draw.proj * s.center;");
+                w.comment("All corners share z and w: the rasteriser clips the whole sprite or none of it.");
+                w.block("if (unclipped(clip))", |w| {
+                    w.line("let h = 0.5 * s.size;");
+                    w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
+                    w.line("let extent = abs((draw.proj * vec4<f32>(h, 0.0, 0.0, 0.0)).x / clip.w) * 0.5 * size.x;");
+                    w.comment("The extent as stored (f16), as the tile kernels see it.");
+                    w.line("let packed = pack2x16float(vec2<f32>(extent, s.color.a));");
+                    w.line("let e = unpack2x16float(packed).x;");
+                    w.line("let c = clip_pixel(clip, size);");
+                    w.comment("Pixels whose centres (i + 0.5) lie strictly inside the sprite.");
+                    w.line("let lo = first_pixel(c - e);");
+                    w.line("let hi = last_pixel(c + e, size);");
+                    w.block("if (all(lo <= hi))", |w| {
+                        w.line("tiles = box_tiles(k, lo, hi);");
+                        w.line("let rgb = vec3<u32>(round(clamp(s.color.rgb, vec3<f32>(0.0), vec3<f32>(1.0)) * 1023.0));");
+                        w.line("splats[k] = vec4<u32>(bitcast<vec2<u32>>(c), packed, rgb.x | (rgb.y << 10u) | (rgb.z << 20u));");
+                    });
+                });
+            });
+    });
+}
+
+/// A `project` kernel: a thread per record k (under `splat_view.count`), `tiles` = 0 until
+/// `body` counts the tiles record k touches (and writes its record), then the count kept twice
+/// (the runtime scans the second copy in place into the entries' offsets).
+pub(crate) fn emit_project_kernel(w: &mut Writer, body: &dyn Fn(&mut Writer)) {
     w.line("@compute @workgroup_size(256)");
     w.block(
         "fn project(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
@@ -142,49 +174,66 @@ pub(crate) fn emit_project(w: &mut Writer) {
             w.line("let k = gid.x + gid.y * groups.x * 256u;");
             w.block("if (k >= splat_view.count)", |w| w.line("return;"));
             w.line("var tiles = 0u;");
-            w.line("let s = sprite_at(k);");
-            w.block("if (s.visible)", |w| {
-                w.line("let clip = draw.proj * s.center;");
-                w.comment("All corners share z and w: the rasteriser clips the whole sprite or none of it.");
-                w.block("if (clip.w > 0.0 && clip.z >= 0.0 && clip.z <= clip.w)", |w| {
-                    w.line("let h = 0.5 * s.size;");
-                    w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
-                    w.line("let extent = abs((draw.proj * vec4<f32>(h, 0.0, 0.0, 0.0)).x / clip.w) * 0.5 * size.x;");
-                    w.comment("The extent as stored (f16), as the tile kernels see it.");
-                    w.line("let packed = pack2x16float(vec2<f32>(extent, s.color.a));");
-                    w.line("let e = unpack2x16float(packed).x;");
-                    w.line("let c = vec2<f32>(clip.x / clip.w * 0.5 + 0.5, 0.5 - clip.y / clip.w * 0.5) * size;");
-                    w.comment("Pixels whose centres (i + 0.5) lie strictly inside the sprite.");
-                    w.line("let lo = max(ceil(c - e - 0.5), vec2<f32>(0.0));");
-                    w.line("let hi = min(floor(c + e - 0.5), size - 1.0);");
-                    w.block("if (all(lo <= hi))", |w| {
-                        w.line(format!(
-                            "let t0 = vec2<u32>(lo) / {SPLAT_TILE}u;"
-                        ));
-                        w.line(format!(
-                            "let t1 = vec2<u32>(hi) / {SPLAT_TILE}u;"
-                        ));
-                        w.line("tiles = (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
-                        w.line("tile_boxes[k] = vec2<u32>(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u));");
-                        w.line("let rgb = vec3<u32>(round(clamp(s.color.rgb, vec3<f32>(0.0), vec3<f32>(1.0)) * 1023.0));");
-                        w.line("splats[k] = vec4<u32>(bitcast<vec2<u32>>(c), packed, rgb.x | (rgb.y << 10u) | (rgb.z << 20u));");
-                    });
-                });
-            });
+            body(w);
             w.line("tile_counts[k] = tiles;");
             w.line("tile_offsets[k] = tiles;");
         },
     );
 }
 
-/// `to_pixels(q, origin, size)`: a clip-space vector's homogeneous pixel coordinates.
-pub(crate) fn emit_to_pixels(w: &mut Writer) {
+/// The WGSL every `project` shares to place a record in the image: a clip-space point's pixel,
+/// whether the rasteriser keeps a vertex, the pixel centres a span of the image covers, the
+/// tiles of a pixel box (recorded in `tile_boxes`), the box packed for the composite, a
+/// clip-space vector's homogeneous pixel coordinates, and the inverse of a 3x3 map.
+fn emit_place_helpers(w: &mut Writer) {
+    w.comment("A clip-space point's pixel (x right, y down).");
+    w.block(
+        "fn clip_pixel(q: vec4<f32>, size: vec2<f32>) -> vec2<f32>",
+        |w| {
+            w.line("return vec2<f32>(q.x / q.w * 0.5 + 0.5, 0.5 - q.y / q.w * 0.5) * size;");
+        },
+    );
+    w.comment("Whether the rasteriser keeps a vertex unclipped: in front of the camera, inside the depth range.");
+    w.block("fn unclipped(q: vec4<f32>) -> bool", |w| {
+        w.line("return q.w > 0.0 && q.z >= 0.0 && q.z <= q.w;");
+    });
+    w.comment("The first and last pixels whose centres (i + 0.5) a span from lo to hi holds, in the image.");
+    w.block("fn first_pixel(lo: vec2<f32>) -> vec2<f32>", |w| {
+        w.line("return max(ceil(lo - 0.5), vec2<f32>(0.0));");
+    });
+    w.block(
+        "fn last_pixel(hi: vec2<f32>, size: vec2<f32>) -> vec2<f32>",
+        |w| {
+            w.line("return min(floor(hi - 0.5), size - 1.0);");
+        },
+    );
+    w.comment("Record k's tiles, from its pixel box: kept in tile_boxes (x0 | y0 << 16, x1 | y1 << 16), and counted.");
+    w.block(
+        "fn box_tiles(k: u32, first: vec2<f32>, last: vec2<f32>) -> u32",
+        |w| {
+            w.line(format!("let t0 = vec2<u32>(first) / {SPLAT_TILE}u;"));
+            w.line(format!("let t1 = vec2<u32>(last) / {SPLAT_TILE}u;"));
+            w.line("tile_boxes[k] = vec2<u32>(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u));");
+            w.line("return (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
+        },
+    );
+    w.comment("A pixel box as the composite reads it: its corners as x | y << 16.");
+    w.block("fn pack_box(first: vec2<f32>, last: vec2<f32>) -> vec2<u32>", |w| {
+        w.line("return vec2<u32>(u32(first.x) | (u32(first.y) << 16u), u32(last.x) | (u32(last.y) << 16u));");
+    });
     w.comment("A clip-space vector's homogeneous pixel coordinates (x right, y down, w), counted from pixel `origin`: a point's pixel is xy / w.");
     w.block(
         "fn to_pixels(q: vec4<f32>, origin: vec2<f32>, size: vec2<f32>) -> vec3<f32>",
         |w| {
             w.line("let h = vec2<f32>(0.5 * size.x * (q.x + q.w), 0.5 * size.y * (q.w - q.y));");
             w.line("return vec3<f32>(h - origin * q.w, q.w);");
+        },
+    );
+    w.comment("The rows of the inverse of the map whose columns are a, b, c (det = a . (b x c), not 0): the adjugate over the determinant.");
+    w.block(
+        "fn inverse_rows(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, det: f32) -> mat3x3<f32>",
+        |w| {
+            w.line("return mat3x3<f32>(cross(b, c) / det, cross(c, a) / det, cross(a, b) / det);");
         },
     );
 }
@@ -209,17 +258,9 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
     } else {
         "0u"
     };
-    emit_to_pixels(w);
-    w.blank();
-    w.line("@compute @workgroup_size(256)");
-    w.block(
-        "fn project(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
-        |w| {
-            w.line("let k = gid.x + gid.y * groups.x * 256u;");
-            w.block("if (k >= splat_view.count)", |w| w.line("return;"));
-            w.line("var tiles = 0u;");
-            w.line("let s = sprite_at(k);");
-            w.block("if (s.visible)", |w| {
+    emit_project_kernel(w, &|w: &mut Writer| {
+        w.line("let s = sprite_at(k);");
+        w.block("if (s.visible)", |w| {
                 w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
                 w.line("let c0 = draw.proj * s.center;");
                 w.line(format!("let ax = draw.proj * vec4<f32>({half_x}, 0.0);"));
@@ -230,43 +271,35 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
                 w.block("for (var i = 0u; i < 4u; i++)", |w| {
                     w.line("let corner = vec2<f32>(f32(i & 1u), f32(i >> 1u)) * 2.0 - 1.0;");
                     w.line("let q = c0 + corner.x * ax + corner.y * ay;");
-                    w.line("inside = inside && q.w > 0.0 && q.z >= 0.0 && q.z <= q.w;");
-                    w.line("let p = vec2<f32>(q.x / q.w * 0.5 + 0.5, 0.5 - q.y / q.w * 0.5) * size;");
+                    w.line("inside = inside && unclipped(q);");
+                    w.line("let p = clip_pixel(q, size);");
                     w.line("lo = min(lo, p);");
                     w.line("hi = max(hi, p);");
                 });
                 w.comment("Pixels whose centres (i + 0.5) the quad's bounding box holds.");
-                w.line("let first = max(ceil(lo - 0.5), vec2<f32>(0.0));");
-                w.line("let last = min(floor(hi - 0.5), size - 1.0);");
+                w.line("let first = first_pixel(lo);");
+                w.line("let last = last_pixel(hi, size);");
                 w.block("if (inside && all(first <= last))", |w| {
                     w.comment("Columns of the map (u, v, 1) -> (x w, y w, w), pixels counted from the box's first one.");
                     w.line("let cx = to_pixels(ax, first, size);");
                     w.line("let cy = to_pixels(ay, first, size);");
                     w.line("let cc = to_pixels(c0, first, size);");
-                    w.comment("Its inverse, the adjugate over the determinant: rows (cy x cc, cc x cx, cx x cy) / det.");
+                    w.comment("Its inverse maps pixels back to corner coordinates.");
                     w.line("let det = dot(cx, cross(cy, cc));");
                     w.comment("Edge-on (no area in the image): nothing to draw.");
                     w.block("if (abs(det) > 1e-30)", |w| {
-                        w.line("let r0 = cross(cy, cc) / det;");
-                        w.line("let r1 = cross(cc, cx) / det;");
-                        w.line("let r2 = cross(cx, cy) / det;");
-                        w.line(format!("let t0 = vec2<u32>(first) / {SPLAT_TILE}u;"));
-                        w.line(format!("let t1 = vec2<u32>(last) / {SPLAT_TILE}u;"));
-                        w.line("tiles = (t1.x - t0.x + 1u) * (t1.y - t0.y + 1u);");
-                        w.line("tile_boxes[k] = vec2<u32>(t0.x | (t0.y << 16u), t1.x | (t1.y << 16u));");
+                        w.line("let rows = inverse_rows(cx, cy, cc, det);");
+                        w.line("tiles = box_tiles(k, first, last);");
                         w.line("let color = clamp(s.color, vec4<f32>(0.0), vec4<f32>(1.0));");
-                        w.line("let box = vec2<u32>(u32(first.x) | (u32(first.y) << 16u), u32(last.x) | (u32(last.y) << 16u));");
-                        w.line("splats[4u * k] = bitcast<vec4<u32>>(vec4<f32>(r0, color.r));");
-                        w.line("splats[4u * k + 1u] = bitcast<vec4<u32>>(vec4<f32>(r1, color.g));");
-                        w.line("splats[4u * k + 2u] = bitcast<vec4<u32>>(vec4<f32>(r2, color.b));");
+                        w.line("let box = pack_box(first, last);");
+                        w.line("splats[4u * k] = bitcast<vec4<u32>>(vec4<f32>(rows[0], color.r));");
+                        w.line("splats[4u * k + 1u] = bitcast<vec4<u32>>(vec4<f32>(rows[1], color.g));");
+                        w.line("splats[4u * k + 2u] = bitcast<vec4<u32>>(vec4<f32>(rows[2], color.b));");
                         w.line(format!("splats[4u * k + 3u] = vec4<u32>(bitcast<u32>(color.a), {frame}, box);"));
                     });
                 });
             });
-            w.line("tile_counts[k] = tiles;");
-            w.line("tile_offsets[k] = tiles;");
-        },
-    );
+    });
 }
 
 /// `composite` for quads: [`emit_composite`] with each pixel centre mapped back to the quad's
