@@ -9,7 +9,12 @@
 //! ```sh
 //! cargo run --release --example embed -- effects/fountain.ron             # a window
 //! cargo run --release --example embed -- effects/fountain.ron --headless out.png [--size 640x360] [--frames 120] [--steps-per-frame 1]
+//! cargo run --release --example embed -- effects/fountain.ron --draw compute  # the compute renderer
 //! ```
+//!
+//! Either renderer draws the same way for the host: Plume's preparation goes into the host's
+//! encoder after the pass that draws the host's depth (the compute renderer reads that depth
+//! in a compute pass), then the particles go into a second pass over the host's colour.
 //!
 //! `--headless` renders offscreen through the same code and writes the last frame as a PNG
 //! (tests/embed.rs runs it). In the window the effect steps in real time (the effect's dt,
@@ -212,6 +217,9 @@ pub struct Layers {
     pub particles: bool,
     /// Test the effect against the host's depth buffer (as a real host does).
     pub depth_test: bool,
+    /// Draw the effect with the compute renderer (`Effect::compute_renderer`) instead of the
+    /// raster one.
+    pub compute: bool,
 }
 
 impl Default for Layers {
@@ -220,6 +228,7 @@ impl Default for Layers {
             host: true,
             particles: true,
             depth_test: true,
+            compute: false,
         }
     }
 }
@@ -230,7 +239,11 @@ pub struct Host {
     queue: wgpu::Queue,
     scene: HostScene,
     effect: Effect,
-    particles: EffectRenderer,
+    /// What the particles are drawn into, and how (raster or compute).
+    draw_target: DrawTarget,
+    compute: bool,
+    /// Made on the first frame, and again when a compute renderer's target changes size.
+    particles: Option<EffectRenderer>,
     background: wgpu::Color,
 }
 
@@ -259,13 +272,14 @@ impl Host {
             false => DrawTarget::new(color_format)
                 .with_depth_compare(DEPTH, wgpu::CompareFunction::Always),
         };
-        let particles = effect.renderer(&draw_target)?;
         Ok(Self {
             device: device.clone(),
             queue: queue.clone(),
             scene,
             effect,
-            particles,
+            draw_target,
+            compute: layers.compute,
+            particles: None,
             background: wgpu::Color {
                 r: bg.x,
                 g: bg.y,
@@ -280,8 +294,8 @@ impl Host {
         self.effect.camera(aspect)
     }
 
-    /// One frame: `steps` simulation steps, then one render pass with the host's geometry
-    /// (writing depth) and the particles (testing it), all in one submission.
+    /// One frame: `steps` simulation steps, the host's geometry (writing depth), then the
+    /// particles (testing it) in a second pass, all in one submission.
     pub fn frame(
         &mut self,
         color: &wgpu::TextureView,
@@ -293,16 +307,34 @@ impl Host {
         let view_proj = camera.proj * camera.view;
         self.queue
             .write_buffer(&self.scene.uniform, 0, bytemuck_mat(&view_proj).as_slice());
-        let mut encoder = self.device.create_command_encoder(&Default::default());
-        // Plume records its steps and its draw's preparation into the host's encoder ...
-        self.effect.advance(&mut encoder, steps)?;
-        if layers.particles {
-            self.effect
-                .prepare_draw(&mut encoder, &self.particles, camera)?;
+        let size = (color.texture().width(), color.texture().height());
+        // A compute renderer draws one size: a resized window needs a new one.
+        let stale = match &self.particles {
+            None => true,
+            Some(p) => p.size().is_some_and(|s| s != size),
+        };
+        if stale {
+            let particles = match self.compute {
+                true => self
+                    .effect
+                    .compute_renderer(&self.draw_target, size.0, size.1)?,
+                false => self.effect.renderer(&self.draw_target)?,
+            };
+            self.particles = Some(particles);
         }
+        let particles = self.particles.as_mut().expect("made above");
+        // The compute renderer reads the host's depth itself (this frame's texture: a resized
+        // window has a new one).
+        if particles.is_compute() {
+            particles.set_scene_depth(depth);
+        }
+        let particles = &*particles;
+        let mut encoder = self.device.create_command_encoder(&Default::default());
+        // Plume records its steps into the host's encoder ...
+        self.effect.advance(&mut encoder, steps)?;
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
-                label: Some("host frame"),
+                label: Some("host geometry"),
                 color_attachments: &[Some(wgpu::RenderPassColorAttachment {
                     view: color,
                     depth_slice: None,
@@ -331,10 +363,34 @@ impl Host {
                 pass.set_vertex_buffer(0, self.scene.vertices.slice(..));
                 pass.draw(0..self.scene.count, 0..1);
             }
-            // ... and Plume draws its particles into the same pass, after it.
-            if layers.particles {
-                self.particles.draw(&mut pass);
-            }
+        }
+        if layers.particles {
+            // ... Plume prepares its draw once the host's depth is drawn (the compute
+            // renderer composites its particles here, tested against that depth) ...
+            self.effect.prepare_draw(&mut encoder, particles, camera)?;
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("particles"),
+                color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+                    view: color,
+                    depth_slice: None,
+                    resolve_target: None,
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Load,
+                        store: wgpu::StoreOp::Store,
+                    },
+                })],
+                // Tested, not written.
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: depth,
+                    depth_ops: None,
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            // ... and draws its particles over the host's image.
+            particles.draw(&mut pass);
         }
         self.queue.submit([encoder.finish()]);
         Ok(())
@@ -410,7 +466,13 @@ pub fn render_headless(path: &Path, options: &Headless) -> Result<Vec<u8>, Box<d
         format,
         attachment | wgpu::TextureUsages::COPY_SRC,
     );
-    let depth = gpu.texture_2d("depth", (w, h), DEPTH, attachment);
+    // Bindable: the compute renderer copies it.
+    let depth = gpu.texture_2d(
+        "depth",
+        (w, h),
+        DEPTH,
+        attachment | wgpu::TextureUsages::TEXTURE_BINDING,
+    );
     let (color_view, depth_view) = (
         color.create_view(&Default::default()),
         depth.create_view(&Default::default()),
@@ -433,9 +495,10 @@ pub fn render_headless(path: &Path, options: &Headless) -> Result<Vec<u8>, Box<d
 #[path = "embed/window.rs"]
 mod window;
 
-fn parse_args() -> Result<(PathBuf, Option<(PathBuf, Headless)>), String> {
+/// The effect, the headless output (None: a window), and the options (`--draw` for both).
+fn parse_args() -> Result<(PathBuf, Option<PathBuf>, Headless), String> {
     let usage =
-        "usage: embed EFFECT.ron [--headless OUT.png [--size WxH] [--frames N] [--steps-per-frame K]]";
+        "usage: embed EFFECT.ron [--draw raster|compute] [--headless OUT.png [--size WxH] [--frames N] [--steps-per-frame K]]";
     let mut args = std::env::args().skip(1);
     let mut effect = None;
     let mut out = None;
@@ -456,6 +519,11 @@ fn parse_args() -> Result<(PathBuf, Option<(PathBuf, Headless)>), String> {
             "--frames" => {
                 headless.frames = args.next().ok_or(usage)?.parse().map_err(|_| usage)?;
             }
+            "--draw" => match args.next().as_deref() {
+                Some("raster") => headless.layers.compute = false,
+                Some("compute") => headless.layers.compute = true,
+                _ => return Err(usage.into()),
+            },
             "--steps-per-frame" => {
                 headless.steps_per_frame = args.next().ok_or(usage)?.parse().map_err(|_| usage)?;
             }
@@ -463,7 +531,7 @@ fn parse_args() -> Result<(PathBuf, Option<(PathBuf, Headless)>), String> {
             _ => return Err(usage.into()),
         }
     }
-    Ok((effect.ok_or(usage)?, out.map(|o| (o, headless))))
+    Ok((effect.ok_or(usage)?, out, headless))
 }
 
 /// `--headless`: renders and writes the last frame to `out` as a PNG.
@@ -478,9 +546,9 @@ pub fn write_headless(effect: &Path, out: &Path, options: &Headless) -> Result<(
 fn main() -> std::process::ExitCode {
     let result = parse_args()
         .map_err(Box::<dyn Error>::from)
-        .and_then(|(effect, headless)| match headless {
-            None => window::run(effect),
-            Some((out, options)) => {
+        .and_then(|(effect, out, options)| match out {
+            None => window::run(effect, options.layers),
+            Some(out) => {
                 write_headless(&effect, &out, &options)?;
                 eprintln!("wrote {}", out.display());
                 Ok(())

@@ -1,6 +1,8 @@
 //! Soft particles (`render.soft`) in the embedded path, on llvmpipe: a host's depth buffer
 //! holding a wall behind a sprite fades the sprite by the documented fraction of the fade
-//! distance, a wall in front hides it, and before the host binds its depth nothing fades.
+//! distance, a wall in front hides it, and before the host binds its depth nothing fades;
+//! with the raster renderer and with the compute one (`Effect::compute_renderer`), which
+//! tests and fades each pixel against a copy of the host's depth.
 
 mod common;
 
@@ -38,18 +40,29 @@ fn probe(gpu: &Gpu, state: State) -> Effect {
 /// The centre pixel's red value with the host's depth buffer cleared to a wall `wall` metres
 /// from the camera (None: the far plane), the sprite drawn in a pass that tests against it
 /// read-only; `bind` says whether the host's depth is bound for the fade.
-fn centre(gpu: &Gpu, sim: &Effect, wall: Option<f32>, bind: bool) -> u8 {
+/// `compute` draws with the compute renderer.
+fn centre(gpu: &Gpu, sim: &Effect, wall: Option<f32>, bind: bool, compute: bool) -> u8 {
     let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
-    centre_from(gpu, sim, &camera, wall, bind)
+    centre_from(gpu, sim, &camera, wall, bind, compute)
 }
 
 /// [`centre`] seen through `camera` (the host's matrices).
-fn centre_from(gpu: &Gpu, sim: &Effect, camera: &Camera, wall: Option<f32>, bind: bool) -> u8 {
+fn centre_from(
+    gpu: &Gpu,
+    sim: &Effect,
+    camera: &Camera,
+    wall: Option<f32>,
+    bind: bool,
+    compute: bool,
+) -> u8 {
     let target = Offscreen::new(gpu, SIDE, SIDE).unwrap();
-    let mut renderer = sim
-        .renderer(&DrawTarget::new(plume::runtime::outputs::FORMAT).with_depth(DEPTH))
-        .unwrap();
+    let draw_target = DrawTarget::new(plume::runtime::outputs::FORMAT).with_depth(DEPTH);
+    let mut renderer = match compute {
+        true => sim.compute_renderer(&draw_target, SIDE, SIDE).unwrap(),
+        false => sim.renderer(&draw_target).unwrap(),
+    };
     assert!(renderer.is_soft());
+    assert_eq!(renderer.is_compute(), compute);
     let depth_texture = |label| {
         gpu.device.create_texture(&wgpu::TextureDescriptor {
             label: Some(label),
@@ -72,9 +85,12 @@ fn centre_from(gpu: &Gpu, sim: &Effect, camera: &Camera, wall: Option<f32>, bind
     // resource in the same pass (Vulkan), the draw samples the attachment itself; where it
     // cannot (GL: llvmpipe in CI), the host writes its depth into a second texture too and
     // binds that one (a texture copy of the depth read back as zeros on llvmpipe's GL).
-    let shared = gpu
-        .downlevel
-        .is_none_or(|f| f.contains(wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL));
+    // (The compute renderer copies the depth in a compute pass before the particles' pass:
+    // the texture itself always does.)
+    let shared = compute
+        || gpu
+            .downlevel
+            .is_none_or(|f| f.contains(wgpu::DownlevelFlags::READ_ONLY_DEPTH_STENCIL));
     let second = (!shared).then(|| depth_texture("host depth, second"));
     if bind {
         match &second {
@@ -141,9 +157,16 @@ fn clear_depth(encoder: &mut wgpu::CommandEncoder, view: &wgpu::TextureView, ndc
 #[test]
 fn a_wall_behind_a_soft_sprite_fades_it_by_its_distance_over_the_fade_distance() {
     let gpu = gpu();
-    for state in [State::Stateful, State::Stateless] {
+    for (state, compute) in [
+        (State::Stateful, false),
+        (State::Stateless, false),
+        (State::Stateful, true),
+        (State::Stateless, true),
+    ] {
         let sim = probe(&gpu, state);
-        let full = centre(&gpu, &sim, None, true);
+        let centre = |wall, bind| centre(&gpu, &sim, wall, bind, compute);
+        let state = format!("{state:?}, compute {compute}");
+        let full = centre(None, true);
         assert!(
             full > 200,
             "{state:?}: the unfaded centre is bright: {full}"
@@ -152,21 +175,17 @@ fn a_wall_behind_a_soft_sprite_fades_it_by_its_distance_over_the_fade_distance()
         // of the 1 m fade, one 2 m behind leaves it whole. (The depth is stored as f32 and
         // linearised back: well under 1% of the fade here, under one 8-bit step.)
         for (wall, fade) in [(10.25, 0.25), (10.5, 0.5), (10.75, 0.75), (12.0, 1.0)] {
-            let got = centre(&gpu, &sim, Some(wall), true);
+            let got = centre(Some(wall), true);
             let want = f64::from(full) * fade;
             assert!(
                 (f64::from(got) - want).abs() <= 2.0,
-                "{state:?}: wall at {wall} m: centre {got}, want {want:.1} ({fade} of {full})"
+                "{state}: wall at {wall} m: centre {got}, want {want:.1} ({fade} of {full})"
             );
         }
         // A wall in front hides the sprite: the depth test, as without soft particles.
-        assert_eq!(centre(&gpu, &sim, Some(9.5), true), 0, "{state:?}: hidden");
+        assert_eq!(centre(Some(9.5), true), 0, "{state}: hidden");
         // Not bound yet: the placeholder is the far plane, nothing fades.
-        assert_eq!(
-            centre(&gpu, &sim, Some(10.25), false),
-            full,
-            "{state:?}: unbound"
-        );
+        assert_eq!(centre(Some(10.25), false), full, "{state}: unbound");
     }
 }
 
@@ -181,21 +200,23 @@ fn an_orthographic_host_camera_fades_by_the_same_distances() {
         view: perspective.view,
         proj: glam::Mat4::orthographic_rh(-2.0, 2.0, -2.0, 2.0, 0.1, 100.0),
     };
-    let full = centre_from(&gpu, &sim, &camera, None, true);
-    assert!(full > 200, "the unfaded centre is bright: {full}");
-    for (wall, fade) in [(10.25, 0.25), (10.5, 0.5), (10.75, 0.75), (12.0, 1.0)] {
-        let got = centre_from(&gpu, &sim, &camera, Some(wall), true);
-        let want = f64::from(full) * fade;
+    for compute in [false, true] {
+        let centre = |wall| centre_from(&gpu, &sim, &camera, wall, true, compute);
+        let full = centre(None);
         assert!(
-            (f64::from(got) - want).abs() <= 2.0,
-            "wall at {wall} m: centre {got}, want {want:.1} ({fade} of {full})"
+            full > 200,
+            "compute {compute}: the unfaded centre is bright: {full}"
         );
+        for (wall, fade) in [(10.25, 0.25), (10.5, 0.5), (10.75, 0.75), (12.0, 1.0)] {
+            let got = centre(Some(wall));
+            let want = f64::from(full) * fade;
+            assert!(
+                (f64::from(got) - want).abs() <= 2.0,
+                "compute {compute}: wall at {wall} m: centre {got}, want {want:.1} ({fade} of {full})"
+            );
+        }
+        assert_eq!(centre(Some(9.5)), 0, "compute {compute}: hidden");
     }
-    assert_eq!(
-        centre_from(&gpu, &sim, &camera, Some(9.5), true),
-        0,
-        "hidden"
-    );
 }
 
 #[test]

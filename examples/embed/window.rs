@@ -21,6 +21,8 @@ struct Open {
 
 struct App {
     path: PathBuf,
+    /// What is drawn, and with which renderer.
+    layers: Layers,
     open: Option<Open>,
     error: Option<Box<dyn Error>>,
 }
@@ -38,7 +40,8 @@ fn depth_view(device: &wgpu::Device, w: u32, h: u32) -> wgpu::TextureView {
             sample_count: 1,
             dimension: wgpu::TextureDimension::D2,
             format: DEPTH,
-            usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+            // Bindable: the compute renderer copies it (`--draw compute`).
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
             view_formats: &[],
         })
         .create_view(&Default::default())
@@ -73,13 +76,7 @@ impl App {
             config.format = linear;
         }
         surface.configure(&device, &config);
-        let host = Host::new(
-            &device,
-            &queue,
-            &self.path,
-            config.format,
-            Layers::default(),
-        )?;
+        let host = Host::new(&device, &queue, &self.path, config.format, self.layers)?;
         Ok(Open {
             depth: depth_view(&device, config.width, config.height),
             window,
@@ -145,9 +142,9 @@ impl ApplicationHandler for App {
                 let view = frame.texture.create_view(&Default::default());
                 let aspect = open.config.width as f32 / open.config.height as f32;
                 let camera = open.host.camera(aspect);
-                if let Err(e) =
-                    open.host
-                        .frame(&view, &open.depth, &camera, steps, Layers::default())
+                if let Err(e) = open
+                    .host
+                    .frame(&view, &open.depth, &camera, steps, self.layers)
                 {
                     self.error = Some(e);
                     event_loop.exit();
@@ -162,7 +159,7 @@ impl ApplicationHandler for App {
 }
 
 /// Opens the window and runs until it is closed.
-pub fn run(path: PathBuf) -> Result<(), Box<dyn Error>> {
+pub fn run(path: PathBuf, layers: Layers) -> Result<(), Box<dyn Error>> {
     let event_loop = EventLoop::new().map_err(|e| {
         format!(
             "cannot open a window ({e}): no display? Use --headless OUT.png, or run under xvfb-run"
@@ -170,6 +167,7 @@ pub fn run(path: PathBuf) -> Result<(), Box<dyn Error>> {
     })?;
     let mut app = App {
         path,
+        layers,
         open: None,
         error: None,
     };

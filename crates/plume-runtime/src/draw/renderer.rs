@@ -7,16 +7,27 @@ use plume_compiler::reference::ParticleRecord;
 
 use crate::draw::camera::Camera;
 use crate::draw::raster::{DrawOptions, GroupDraw};
+use crate::draw::splat::HostSplat;
 use crate::draw::target::DrawTarget;
 use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
 
-/// An effect's draw into render targets like one [`DrawTarget`]: each group's draw module on
-/// a render pipeline for that target, trails included. Made by [`Effect::renderer`], prepared
-/// each frame by [`Effect::prepare_draw`], recorded into a render pass by [`Self::draw`].
+/// An effect's draw into render targets like one [`DrawTarget`], trails included, in one of
+/// two ways:
+/// - raster ([`Effect::renderer`]): each group's draw module on a render pipeline for that
+///   target, drawn in the host's render pass;
+/// - compute ([`Effect::compute_renderer`]): the compute splat composites every group into an
+///   image of its own, tested against the host's depth, and the host's render pass puts that
+///   image over its colour with one full-screen triangle. Faster where raster units are few
+///   (an H100 draws 10M sprites about 25x faster so; docs/performance.md).
+///
+/// Prepared each frame by [`Effect::prepare_draw`], recorded into a render pass by
+/// [`Self::draw`].
 pub struct EffectRenderer {
-    /// (group index, its draw), in group order.
+    /// (group index, its draw), in group order (raster).
     parts: Vec<(usize, GroupDraw)>,
+    /// The compute splat into the host's images (compute).
+    compute: Option<HostSplat>,
 }
 
 impl EffectRenderer {
@@ -24,6 +35,9 @@ impl EffectRenderer {
     /// [`Effect::prepare_draw`] in the same or an earlier submission). Sets its own pipelines
     /// and bind group 0.
     pub fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        if let Some(compute) = &self.compute {
+            compute.draw(pass);
+        }
         for (_, part) in &self.parts {
             part.draw(pass);
         }
@@ -32,7 +46,19 @@ impl EffectRenderer {
     /// Whether this draw fades sprites near the scene's depth (a group has `render.soft` and
     /// the target a depth buffer): then bind the host's depth with [`Self::set_scene_depth`].
     pub fn is_soft(&self) -> bool {
-        self.parts.iter().any(|(_, part)| part.is_soft())
+        self.compute.as_ref().is_some_and(HostSplat::is_soft)
+            || self.parts.iter().any(|(_, part)| part.is_soft())
+    }
+
+    /// Whether this is the compute renderer ([`Effect::compute_renderer`]).
+    pub fn is_compute(&self) -> bool {
+        self.compute.is_some()
+    }
+
+    /// The target size a compute renderer was made for (a target of another size needs a new
+    /// one); None for the raster renderer, which draws into any size.
+    pub fn size(&self) -> Option<(u32, u32)> {
+        self.compute.as_ref().map(HostSplat::size)
     }
 
     /// Binds the host's depth buffer for soft particles: a depth-only view (of a texture
@@ -43,6 +69,12 @@ impl EffectRenderer {
     /// there, write the scene's depth into a second texture as well and bind that one).
     /// Call it again when the texture changes (a resize); until the first call sprites are not
     /// faded. Does nothing for a draw that is not soft.
+    ///
+    /// The compute renderer reads the host's depth for every sprite, soft or not: it copies
+    /// `depth`'s texture (any depth format and sample count, multisampled ones by sample 0,
+    /// with `TEXTURE_BINDING`, of the renderer's size) in each [`Effect::prepare_draw`], so
+    /// record that after the host has drawn its depth; until the first call nothing hides
+    /// the particles.
     ///
     /// ```
     /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -64,6 +96,9 @@ impl EffectRenderer {
     /// # }
     /// ```
     pub fn set_scene_depth(&mut self, depth: &wgpu::TextureView) {
+        if let Some(compute) = &self.compute {
+            compute.set_scene_depth(depth);
+        }
         for (_, part) in &mut self.parts {
             part.set_scene_depth(depth);
         }
@@ -71,6 +106,9 @@ impl EffectRenderer {
 
     /// Scales every sprite's size (1: the effect's own sizes).
     pub fn set_size_scale(&mut self, scale: f32) {
+        if let Some(compute) = &self.compute {
+            compute.set_size_scale(scale);
+        }
         for (_, part) in &mut self.parts {
             part.set_size_scale(scale);
         }
@@ -112,7 +150,31 @@ impl Effect {
         let parts = (0..self.groups().len())
             .map(|g| Ok((g, self.group_draw(g, target, options)?)))
             .collect::<Result<_, RuntimeError>>()?;
-        Ok(EffectRenderer { parts })
+        Ok(EffectRenderer {
+            parts,
+            compute: None,
+        })
+    }
+
+    /// The compute renderer of this effect, every group, into `width` x `height` targets like
+    /// `target` ([`EffectRenderer`] says how it draws). Its image is the raster draw's, as
+    /// `plume render --draw splat` draws it: every look, ribbons, the depth test (`Less`,
+    /// `LessEqual`, `Greater`, `GreaterEqual` or `Always`) and soft particles. The host records
+    /// [`Effect::prepare_draw`] after its depth is drawn (the splat reads it in a compute
+    /// pass), then [`EffectRenderer::draw`] in a pass over its colour (any format and sample
+    /// count). A glowing effect puts its light into the host's target as it is (an HDR target
+    /// keeps it, for the host's bloom), as the raster renderer does. Make a new one when the
+    /// target's size changes. An error for what the splat cannot draw ([`crate::outputs::Splat::why_not`]).
+    pub fn compute_renderer(
+        &self,
+        target: &DrawTarget,
+        width: u32,
+        height: u32,
+    ) -> Result<EffectRenderer, RuntimeError> {
+        Ok(EffectRenderer {
+            parts: Vec::new(),
+            compute: Some(HostSplat::new(self, target, width, height)?),
+        })
     }
 
     /// A renderer that draws group `g` alone (the tests compare each group's draw).
@@ -124,6 +186,7 @@ impl Effect {
         let part = self.group_draw(g, target, &DrawOptions::default())?;
         Ok(EffectRenderer {
             parts: vec![(g, part)],
+            compute: None,
         })
     }
 
@@ -142,13 +205,18 @@ impl Effect {
     /// stateless group its segment table; for `sort: true` the depth keys and their sort along
     /// the camera's axis, and the live count of the indirect draw. Then call
     /// [`EffectRenderer::draw`] in a render pass. An unsorted stateless effect records no
-    /// compute pass at all.
+    /// compute pass at all. For the compute renderer it records the whole splat (the host's
+    /// depth copied, every group composited), so record it after the host's depth is drawn;
+    /// its image is only read by the draw.
     pub fn prepare_draw(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         renderer: &EffectRenderer,
         camera: &Camera,
     ) -> Result<(), RuntimeError> {
+        if let Some(compute) = &renderer.compute {
+            compute.prepare(encoder, self, camera)?;
+        }
         for (g, part) in &renderer.parts {
             let frame = self.group(*g)?.prepare_frame(encoder, camera)?;
             part.write_view(encoder, camera, frame.steps)?;

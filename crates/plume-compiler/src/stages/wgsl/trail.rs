@@ -18,7 +18,7 @@ use crate::ir::EffectIr;
 use crate::stages::passes::layout::{self, Attribute, Layout};
 use crate::stages::wgsl::draw::common as draw;
 use crate::stages::wgsl::draw::splat::{
-    emit_composite, emit_project_kernel, emit_scatter, emit_splat_declarations,
+    emit_composite, emit_project_kernel, emit_scatter, emit_splat_declarations, host_depth,
 };
 use crate::stages::wgsl::draw::{DrawShape, FIRST_DATA_BINDING};
 use crate::stages::wgsl::emit_particle_struct;
@@ -117,7 +117,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     emit_entry(&mut w, shape);
     if shape.splat {
         w.blank();
-        emit_splat_declarations(&mut w, false, shape.hdr);
+        emit_splat_declarations(&mut w, ir, false, shape);
     }
     w.blank();
     emit_vertex(&mut w, ir, shape, life);
@@ -137,7 +137,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     );
     if shape.splat {
         w.blank();
-        emit_splat(&mut w, ir, trail, shape.hdr);
+        emit_splat(&mut w, ir, trail, shape);
     }
     w.finish()
 }
@@ -159,7 +159,7 @@ pub fn triangles(trail: &TrailIr) -> u32 {
 /// calls of `trail_vertex`, as the vertex shader places them) as a record; `project`, its tile
 /// box and count; and `composite`, which gives each pixel the triangle's perspective-correct
 /// barycentric weights and shades it as `fs_trail` does.
-fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
+fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawShape) {
     w.line(format!(
         "const TRIANGLES: u32 = {};",
         u32_lit(triangles(trail))
@@ -205,9 +205,11 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
         w.line("rec.valid = true;");
         w.line("let box = pack_box(rec.first, rec.last);");
         w.line("let rows = inverse_rows(a, b, c, det);");
-        w.line("rec.words[0] = vec4<u32>(bitcast<vec3<u32>>(rows[0]), i);");
-        w.line("rec.words[1] = vec4<u32>(bitcast<vec3<u32>>(rows[1]), 0u);");
-        w.line("rec.words[2] = vec4<u32>(bitcast<vec3<u32>>(rows[2]), 0u);");
+        w.comment("Each vertex's clip z (a pixel's NDC depth is the weights' dot product with them; z >= 0 in the depth range), the first one's sign bit holding the parity of i (the strip's side).");
+        w.line("let z0 = bitcast<u32>(abs(v[0].clip.z)) | ((i & 1u) << 31u);");
+        w.line("rec.words[0] = vec4<u32>(bitcast<vec3<u32>>(rows[0]), z0);");
+        w.line("rec.words[1] = vec4<u32>(bitcast<vec3<u32>>(rows[1]), bitcast<u32>(v[1].clip.z));");
+        w.line("rec.words[2] = vec4<u32>(bitcast<vec3<u32>>(rows[2]), bitcast<u32>(v[2].clip.z));");
         w.line("let c0 = min(v[0].color, vec4<f32>(65504.0));");
         w.line("let c1 = min(v[1].color, vec4<f32>(65504.0));");
         w.line("let c2 = min(v[2].color, vec4<f32>(65504.0));");
@@ -236,6 +238,7 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
             },
         );
     };
+    let depth = host_depth(shape);
     let evaluate = |w: &mut Writer| {
         w.line("let r0 = batch[5u * j];");
         w.line("let r1 = bitcast<vec3<f32>>(batch[5u * j + 1u].xyz);");
@@ -254,12 +257,21 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
         w.block("if (b.x <= 0.0 || b.y < 0.0 || b.z < 0.0)", |w| {
             w.line("continue;")
         });
+        if depth {
+            w.comment("NDC depth: the weights (screen-space barycentrics over w) times the vertices' clip z.");
+            w.line("let zs = vec3<f32>(bitcast<f32>(r0.w & 0x7fffffffu), bitcast<f32>(batch[5u * j + 1u].w), bitcast<f32>(batch[5u * j + 2u].w));");
+            w.line("let fade = host_fade(centre, dot(weighed, zs));");
+            w.block("if (fade <= 0.0)", |w| w.line("continue;"));
+        }
         w.comment("Strip vertex i is on side (i & 1) * 2 - 1; the sides alternate.");
-        w.line("let side = select(-1.0, 1.0, (r0.w & 1u) == 1u);");
+        w.line("let side = select(-1.0, 1.0, (r0.w >> 31u) == 1u);");
         w.line("let across = dot(b, vec3<f32>(side, -side, side));");
         w.line("let color = b.x * vec4<f32>(unpack2x16float(r3.x), unpack2x16float(r3.y)) + b.y * vec4<f32>(unpack2x16float(r3.z), unpack2x16float(r3.w)) + b.z * vec4<f32>(unpack2x16float(r4.x), unpack2x16float(r4.y));");
         w.comment("fs_trail: soft across the strip.");
-        w.line("let shaded = vec4<f32>(color.rgb, color.a * (1.0 - across * across));");
+        let fade = if depth { " * fade" } else { "" };
+        w.line(format!(
+            "let shaded = vec4<f32>(color.rgb, color.a * (1.0 - across * across){fade});"
+        ));
     };
     if additive {
         let load = |w: &mut Writer| {
@@ -267,11 +279,11 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, hdr: bool) {
             w.block("if (!rec.valid)", |w| w.line("return;"));
             w.line("batch = rec.words;");
         };
-        emit_scatter(w, hdr, SPLAT_TRIANGLE_VEC4S, &load, &evaluate);
+        emit_scatter(w, shape, SPLAT_TRIANGLE_VEC4S, &load, &evaluate);
     } else {
         emit_composite(
             w,
-            hdr,
+            shape,
             additive,
             crate::stages::wgsl::draw::splat_slices(ir),
             SPLAT_TRIANGLE_VEC4S,

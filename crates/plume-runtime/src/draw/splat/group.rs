@@ -4,9 +4,9 @@
 //! the groups drawn before it ([`super::Splat`] strings them together).
 
 use plume_compiler::wgsl::draw::{
-    splat_discs, splat_hdr_pitch, splat_scatters, splat_slices, DrawShape, DRAW_VIEW_BYTES,
-    SPLAT_BINDINGS, SPLAT_LIGHT_BINDING, SPLAT_PARTIAL_BINDING, SPLAT_QUAD_WORDS,
-    SPLAT_RASTER_BINDINGS, SPLAT_TILE,
+    splat_discs, splat_hdr_pitch, splat_quad_words, splat_scatters, splat_slices, DrawShape,
+    SplatHost, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_HOST_DEPTH_BINDING, SPLAT_LIGHT_BINDING,
+    SPLAT_PARTIAL_BINDING, SPLAT_RASTER_BINDINGS, SPLAT_TILE,
 };
 use plume_compiler::wgsl::trail;
 
@@ -74,6 +74,18 @@ struct QuadRaster {
     reads: Vec<(u32, wgpu::Buffer)>,
 }
 
+/// The image a splat draws: its size, whether it is HDR (f16 pairs), and for a host's image
+/// how it meets the host ([`SplatHost`]) and the buffer the host's depth is copied into.
+#[derive(Clone)]
+pub(crate) struct SplatImage {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) hdr: bool,
+    pub(crate) host: Option<SplatHost>,
+    /// One f32 a pixel (a host whose draw tests depth).
+    pub(crate) host_depth: Option<wgpu::Buffer>,
+}
+
 /// The compute splat of one group into `width` x `height` images.
 pub(crate) struct GroupSplat {
     gpu: Gpu,
@@ -108,17 +120,17 @@ impl GroupSplat {
     pub(crate) fn new(
         group: &Group,
         ribbons: bool,
-        width: u32,
-        height: u32,
+        image: &SplatImage,
         under: Option<&wgpu::Buffer>,
-        hdr: bool,
     ) -> Result<Self, RuntimeError> {
+        let (width, height, hdr) = (image.width, image.height, image.hdr);
         let gpu = group.gpu.clone();
         let (res, effect) = (&group.res, &group.effect);
         let device = &gpu.device;
         let shape = DrawShape {
             splat: true,
             hdr,
+            host: image.host,
             ..draw_shape(effect, res)
         };
         let (module, mut entries, count) = match (&effect.ir.render.trail, ribbons) {
@@ -142,7 +154,7 @@ impl GroupSplat {
             (true, _) => 4,
             // Ribbon triangles are made again where they are used, not stored.
             (false, true) => 0,
-            (false, false) => SPLAT_QUAD_WORDS,
+            (false, false) => splat_quad_words(image.host.is_some()),
         };
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
         // Every buffer is bound whole: none may pass the adapter's binding size.
@@ -205,10 +217,19 @@ impl GroupSplat {
         let [b_view, b_splats, b_counts, b_offsets, b_boxes] = SPLAT_BINDINGS;
         let splat_view = uniform(&gpu, "splat view", &[width, height, tiles_x, count])?;
         entries.extend([(0, draw_view.clone()), (b_view, splat_view.clone())]);
-        let reads = match ribbons {
+        let mut reads = match ribbons {
             true => entries.clone(),
             false => vec![(b_splats, tiles.splats.clone())],
         };
+        // The host's depth, which the composite (or scatter) tests each pixel against; a soft
+        // effect's fade reads the projection too (ribbons read the view already).
+        if let Some(depth) = &image.host_depth {
+            reads.push((SPLAT_HOST_DEPTH_BINDING, depth.clone()));
+            let soft = image.host.is_some_and(|h| h.soft) && effect.ir.render.soft.is_some();
+            if soft && !ribbons {
+                reads.push((0, draw_view.clone()));
+            }
+        }
         if !ribbons {
             entries.push((b_splats, tiles.splats.clone()));
         }
@@ -281,8 +302,10 @@ impl GroupSplat {
         let bg = effect.ir.render.background;
         // As a clear colour reaches an 8-bit target: each channel rounded to the nearest step.
         let byte = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u32;
-        // Alpha 0 tells the composite to start from the image (the groups drawn before).
+        // Alpha 0 tells the composite to start from the image (the groups drawn before; for a
+        // host's image, cleared each frame, always).
         let background = match under {
+            _ if image.host.is_some() => 0,
             Some(_) => 0,
             None => byte(bg.x) | byte(bg.y) << 8 | byte(bg.z) << 16 | 255 << 24,
         };
@@ -390,15 +413,23 @@ impl GroupSplat {
         Ok(())
     }
 
-    /// Records the camera and the steps done (`steps`, from the group's frame preparation)
-    /// into `encoder`, before the splat's pass.
+    /// Records the camera, the steps done (`steps`, from the group's frame preparation) and
+    /// the sprites' size scale into `encoder`, before the splat's pass.
     pub(crate) fn write_view(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         camera: &Camera,
         steps: u64,
+        size_scale: f32,
     ) -> Result<(), RuntimeError> {
-        record_draw_view(&self.gpu, encoder, &self.draw_view, camera, steps, 1.0)
+        record_draw_view(
+            &self.gpu,
+            encoder,
+            &self.draw_view,
+            camera,
+            steps,
+            size_scale,
+        )
     }
 
     /// Records the splat itself into `pass`: project, scan, entries, sort, ranges, raster.
@@ -484,8 +515,22 @@ impl GroupSplat {
         if needed <= self.entries.len {
             return Ok(true);
         }
-        self.resize(needed + needed / 4 + 4096)?;
+        self.grow(needed)?;
         Ok(false)
+    }
+
+    /// Grows the entry list to a quarter more than `needed` if it holds fewer.
+    pub(crate) fn grow(&mut self, needed: u64) -> Result<(), RuntimeError> {
+        if needed > self.entries.len {
+            self.resize(needed + needed / 4 + 4096)?;
+        }
+        Ok(())
+    }
+
+    /// The word the last frame left the entries it needed in (for a readback that does not
+    /// wait: the embedding API's compute draw).
+    pub(crate) fn status(&self) -> &wgpu::Buffer {
+        &self.tiles.status
     }
 
     /// Whether the last frame's sorted entries hold every sprite exactly as many times as

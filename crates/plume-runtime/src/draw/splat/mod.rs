@@ -19,11 +19,13 @@
 //! effect share one image, in group order, each over what the ones before drew. Entries are
 //! sized from the sprites' count and grown when a frame needs more (the frame is then drawn
 //! again). A glowing effect composites into an HDR image and blooms with the raster draw's
-//! passes. The embedding API always draws with the raster pipeline, into the host's render
-//! pass.
+//! passes. The embedding API's compute renderer ([`host`]) draws the same splat into a host's
+//! images: an HDR image that keeps each pixel's coverage, every pixel tested against a copy of
+//! the host's depth, put over the host's colour by one full-screen triangle.
 
 mod binding;
 mod group;
+mod host;
 
 use plume_compiler::wgsl::draw::splat_hdr_pitch;
 use plume_compiler::EffectIr;
@@ -33,8 +35,10 @@ use crate::draw::camera::Camera;
 use crate::draw::glow::GlowPasses;
 use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
-use group::GroupSplat;
 pub use group::STAGES;
+use group::{GroupSplat, SplatImage};
+pub(crate) use host::HostSplat;
+use plume_compiler::wgsl::draw::SplatHost;
 
 /// A glowing effect's bloom: the splat's HDR image is copied into the glow's HDR texture, and
 /// the same two blur passes as the raster draw's write `output` (RGBA8).
@@ -73,6 +77,10 @@ pub struct Splat {
     parts: Vec<(usize, GroupSplat)>,
     /// Set when the effect glows (its groups composite into an HDR image).
     glow: Option<SplatGlow>,
+    /// The buffer a host's depth is copied into (a host splat whose draw tests depth).
+    host_depth: Option<wgpu::Buffer>,
+    /// The sprites' size scale (the embedding API's `set_size_scale`).
+    size_scale: f32,
 }
 
 impl Splat {
@@ -93,6 +101,18 @@ impl Splat {
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
     /// draw (see [`Self::why_not`]).
     pub fn new(effect: &Effect, width: u32, height: u32) -> Result<Self, RuntimeError> {
+        Self::with_host(effect, width, height, None)
+    }
+
+    /// [`Self::new`], or for a host's image (`host`: the embedding API's compute draw) an HDR
+    /// image that keeps each pixel's coverage and meets the host's depth, with no bloom of
+    /// its own (the host's HDR target takes the light as it is).
+    pub(crate) fn with_host(
+        effect: &Effect,
+        width: u32,
+        height: u32,
+        host: Option<SplatHost>,
+    ) -> Result<Self, RuntimeError> {
         if width == 0 || height == 0 {
             return Err(RuntimeError::Output(format!(
                 "image size {width}x{height} must be at least 1x1"
@@ -107,7 +127,22 @@ impl Splat {
         let gpu = effect.gpu().clone();
         // The top-level group's glow blooms every group, as in `plume render`: all of them
         // composite into one HDR image then.
-        let hdr = irs[0].render.glow.is_some();
+        let hdr = irs[0].render.glow.is_some() || host.is_some();
+        let host_depth = host.and_then(|h| h.depth).map(|_| {
+            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("splat host depth"),
+                size: 4 * u64::from(width) * u64::from(height),
+                usage: crate::device::buffers::STORAGE,
+                mapped_at_creation: false,
+            })
+        });
+        let image = SplatImage {
+            width,
+            height,
+            hdr,
+            host,
+            host_depth: host_depth.clone(),
+        };
         let mut parts: Vec<(usize, GroupSplat)> = Vec::with_capacity(irs.len());
         for (g, group) in effect.groups().iter().enumerate() {
             // Ribbons first, as the raster draw draws them under the group's sprites.
@@ -117,13 +152,13 @@ impl Splat {
             };
             for &ribbons in kinds {
                 let under = parts.first().map(|(_, p)| p.image().clone());
-                let part = GroupSplat::new(group, ribbons, width, height, under.as_ref(), hdr)?;
+                let part = GroupSplat::new(group, ribbons, &image, under.as_ref())?;
                 parts.push((g, part));
             }
         }
         // The top-level group's glow, as `plume render` blooms a graph's image.
         let glow = match &irs[0].render.glow {
-            Some(g) => {
+            Some(g) if host.is_none() => {
                 let output = gpu.texture_2d(
                     "splat glow output",
                     (width, height),
@@ -136,7 +171,7 @@ impl Splat {
                     output,
                 })
             }
-            None => None,
+            _ => None,
         };
         Ok(Self {
             gpu,
@@ -144,6 +179,8 @@ impl Splat {
             height,
             parts,
             glow,
+            host_depth,
+            size_scale: 1.0,
         })
     }
 
@@ -158,7 +195,7 @@ impl Splat {
         for (g, group) in effect.groups().iter().enumerate() {
             let frame = group.prepare_frame(encoder, camera)?;
             for (_, part) in self.parts.iter().filter(|(of, _)| *of == g) {
-                part.write_view(encoder, camera, frame.steps)?;
+                part.write_view(encoder, camera, frame.steps, self.size_scale)?;
             }
         }
         Ok(())

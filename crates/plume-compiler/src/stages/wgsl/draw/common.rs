@@ -233,19 +233,9 @@ pub(crate) fn emit_gradient(
     });
 }
 
-/// The host's depth texture and `soft_fade(frag)`: how far (in metres along the view axis) the
-/// scene's surface lies behind the fragment, over the fade distance, clamped to [0, 1]. Depths
-/// are linearised with the projection's own terms, A = proj[2][2], B = proj[3][2]: for a
-/// perspective projection (standard or reversed Z, finite or infinite far plane; proj[3][3] = 0)
-/// NDC depth z and view distance d satisfy d = B / (z + A); for an orthographic one
-/// (proj[3][3] = 1, w = 1) z = −A d + B, so d = (B − z) / A.
-pub(crate) fn emit_soft(w: &mut Writer, distance: f64) {
-    w.comment("Soft particles: the host's depth buffer (render.soft).");
-    w.line(format!(
-        "@group(0) @binding({SCENE_DEPTH_BINDING}) var scene_depth: texture_2d<f32>;"
-    ));
-    w.line(format!("const SOFT_DISTANCE: f32 = {};", f32_lit(distance)));
-    w.blank();
+/// `view_distance(z)`: the distance in front of the camera of NDC depth z, from the draw
+/// view's projection (see [`emit_soft`]).
+pub(crate) fn emit_view_distance(w: &mut Writer) {
     w.comment(
         "Distance in front of the camera of NDC depth z (a far plane at infinity: a huge one).",
     );
@@ -261,6 +251,22 @@ pub(crate) fn emit_soft(w: &mut Writer, distance: f64) {
         w.block("if (abs(den) < 1e-30)", |w| w.line("return 3.0e38;"));
         w.line("return min(draw.proj[3][2] / den, 3.0e38);");
     });
+}
+
+/// The host's depth texture and `soft_fade(frag)`: how far (in metres along the view axis) the
+/// scene's surface lies behind the fragment, over the fade distance, clamped to [0, 1]. Depths
+/// are linearised with the projection's own terms, A = proj[2][2], B = proj[3][2]: for a
+/// perspective projection (standard or reversed Z, finite or infinite far plane; proj[3][3] = 0)
+/// NDC depth z and view distance d satisfy d = B / (z + A); for an orthographic one
+/// (proj[3][3] = 1, w = 1) z = −A d + B, so d = (B − z) / A.
+pub(crate) fn emit_soft(w: &mut Writer, distance: f64) {
+    w.comment("Soft particles: the host's depth buffer (render.soft).");
+    w.line(format!(
+        "@group(0) @binding({SCENE_DEPTH_BINDING}) var scene_depth: texture_2d<f32>;"
+    ));
+    w.line(format!("const SOFT_DISTANCE: f32 = {};", f32_lit(distance)));
+    w.blank();
+    emit_view_distance(w);
     w.blank();
     w.block("fn soft_fade(frag: vec4<f32>) -> f32", |w| {
         w.comment("Clamped to the texture: a smaller one (the placeholder before the host binds its own) stays in bounds.");

@@ -28,8 +28,9 @@ use common::{
 };
 use splat::{emit_project, emit_project_quads, emit_quad_raster, emit_splat_declarations};
 pub use splat::{
-    splat_discs, splat_hdr_pitch, splat_scatters, splat_slices, SPLAT_LIGHT_BINDING,
-    SPLAT_PARTIAL_BINDING, SPLAT_QUAD_WORDS, SPLAT_RASTER_BINDINGS, SPLAT_SLICES,
+    splat_discs, splat_hdr_pitch, splat_quad_words, splat_scatters, splat_slices, HostDepthTest,
+    SplatHost, SPLAT_HOST_DEPTH_BINDING, SPLAT_LIGHT_BINDING, SPLAT_PARTIAL_BINDING,
+    SPLAT_RASTER_BINDINGS, SPLAT_SLICES,
 };
 
 /// How the runtime binds the particles for drawing. The compiled effect's own draw module is
@@ -56,6 +57,10 @@ pub struct DrawShape {
     /// Whether the fragment shader fades sprites near the host's depth buffer, bound at
     /// [`SCENE_DEPTH_BINDING`] (an effect with `render.soft`, drawn into a pass with depth).
     pub soft: bool,
+    /// Set when the splat draws for a host's image (the embedding API's compute draw): it
+    /// keeps each pixel's coverage for the composite over the host's colour, and tests (and
+    /// fades) against the host's depth. Needs `splat` and `hdr`.
+    pub host: Option<SplatHost>,
 }
 
 /// Binding of the host's depth texture in a soft draw module.
@@ -102,6 +107,7 @@ impl DrawShape {
             splat: false,
             hdr: false,
             soft: false,
+            host: None,
         }
     }
 }
@@ -198,7 +204,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     }
     if shape.splat {
         w.blank();
-        emit_splat_declarations(&mut w, splat_discs(ir, shape.hdr), shape.hdr);
+        emit_splat_declarations(&mut w, ir, splat_discs(ir, shape.hdr), shape);
     }
     let soft = ir.render.soft.filter(|_| shape.soft);
     if let Some(distance) = soft {
@@ -255,9 +261,9 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         if splat_discs(ir, shape.hdr) {
             emit_project(&mut w);
         } else {
-            emit_project_quads(&mut w, ir);
+            emit_project_quads(&mut w, ir, shape.host.is_some());
             w.blank();
-            emit_quad_raster(&mut w, ir, shape.hdr);
+            emit_quad_raster(&mut w, ir, shape);
         }
     }
     w.finish()

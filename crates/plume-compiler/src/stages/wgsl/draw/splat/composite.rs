@@ -3,7 +3,7 @@
 //! `resolve`, additive light added pixel by pixel with integer atomics. The record kind supplies
 //! the code that loads a record and evaluates it at a pixel.
 
-use super::{SPLAT_LIGHT_BINDING, SPLAT_TILE};
+use super::{DrawShape, SPLAT_LIGHT_BINDING, SPLAT_TILE};
 use crate::base::writer::Writer;
 
 /// Records a composite workgroup bins at once: 128 records (8 KiB of quads, 10 KiB of ribbon
@@ -42,7 +42,8 @@ const LIGHT_ONE: u32 = 1 << 16;
 /// draw order reversed), each pixel's colour `shaded` from the code `evaluate` emits (which
 /// reads record j of the batch, the pixel centre `centre`, and may `continue` past a record
 /// that does not cover it), into the slice's partial sums; `merge` composes the slices and
-/// rounds to 8 bits once (or stores f16 pairs into an HDR image). Alpha: the light that still comes through, T, falls by (1 - a) at each record,
+/// rounds to 8 bits once (or stores f16 pairs into an HDR image; for a host's image with each
+/// pixel's coverage, see [`emit_background`]). Alpha: the light that still comes through, T, falls by (1 - a) at each record,
 /// and a pixel stops once T is under half an 8-bit step (what lies behind can no longer change
 /// it); additive into an 8-bit image: a pixel stops once every channel is full. The tile stops
 /// when all its pixels have. The raster pipeline blends back to front, into an 8-bit target
@@ -54,13 +55,14 @@ const LIGHT_ONE: u32 = 1 << 16;
 /// only the records whose boxes hold it.
 pub(crate) fn emit_composite(
     w: &mut Writer,
-    hdr: bool,
+    shape: &DrawShape,
     additive: bool,
     slices: u32,
     record: u32,
     load: &dyn Fn(&mut Writer),
     evaluate: &dyn Fn(&mut Writer),
 ) {
+    let hdr = shape.hdr;
     let words = QUAD_BATCH / 32;
     let last = SPLAT_TILE - 1;
     let box_word = format!("{}u * t + {}u", record, record - 1);
@@ -211,14 +213,14 @@ pub(crate) fn emit_composite(
         },
     );
     w.blank();
-    emit_merge(w, hdr, additive);
+    emit_merge(w, shape, additive);
 }
 
 /// `merge`: a thread per pixel composes the slices' partial sums front to back (light gathered
 /// adds as much of itself as the slices in front let through), puts them over the background
 /// (or the image the parts before drew), and rounds once (or stores f16 pairs into an HDR
 /// image).
-fn emit_merge(w: &mut Writer, hdr: bool, additive: bool) {
+fn emit_merge(w: &mut Writer, shape: &DrawShape, additive: bool) {
     w.line(format!(
         "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
     ));
@@ -240,27 +242,39 @@ fn emit_merge(w: &mut Writer, hdr: bool, additive: bool) {
                 w.line("gathered += through * part.rgb;");
                 w.line("through *= part.a;");
             });
-            emit_background(w, hdr);
-            let colour = if additive {
-                "gathered + background"
+            emit_background(w, shape);
+            let (colour, cover) = if additive {
+                ("gathered + background", "cover")
             } else {
-                "gathered + through * background"
+                (
+                    "gathered + through * background",
+                    "1.0 - through * (1.0 - cover)",
+                )
             };
-            emit_store(w, hdr, colour);
+            emit_store(w, shape, colour, cover);
         },
     );
 }
 
 /// `var background`: what pixel (`px`, `py`; `pixel` = py * width + px) is drawn over: the
 /// effect's background, or, when the parameters' background has alpha 0, the image the parts
-/// drawn before this one left there.
-fn emit_background(w: &mut Writer, hdr: bool) {
+/// drawn before this one left there; and `cover`, how much of the pixel those parts cover (0
+/// over the effect's background). A host's image starts each frame cleared to nothing (the
+/// runtime clears it): its parts always draw over it and keep its coverage, which the
+/// composite over the host's colour reads as alpha.
+fn emit_background(w: &mut Writer, shape: &DrawShape) {
     w.line("var background = unpack4x8unorm(splat_tiles.background).rgb;");
+    if shape.host.is_some() {
+        w.line("var cover = 0.0;");
+    }
     w.comment("Alpha 0: this part draws over the image the parts before it drew.");
     w.block("if ((splat_tiles.background >> 24u) == 0u)", |w| {
-        if hdr {
+        if shape.hdr {
             w.line("let under = splat_image[py * ((splat_tiles.width + 31u) & ~31u) + px];");
             w.line("background = vec3<f32>(unpack2x16float(under.x), unpack2x16float(under.y).x);");
+            if shape.host.is_some() {
+                w.line("cover = unpack2x16float(under.y).y;");
+            }
         } else {
             w.line("background = unpack4x8unorm(splat_image[pixel]).rgb;");
         }
@@ -268,12 +282,18 @@ fn emit_background(w: &mut Writer, hdr: bool) {
 }
 
 /// Stores `colour` (a WGSL expression) at the pixel: rounded to 8 bits, or as f16 pairs into
-/// an HDR image (clamped to f16's largest finite value: no infinity reaches the bloom).
-fn emit_store(w: &mut Writer, hdr: bool, colour: &str) {
-    if hdr {
+/// an HDR image (clamped to f16's largest finite value: no infinity reaches the bloom), with
+/// alpha 1, or for a host's image the pixel's coverage `cover` (a WGSL expression).
+fn emit_store(w: &mut Writer, shape: &DrawShape, colour: &str, cover: &str) {
+    if shape.hdr {
         w.line(format!("let c = min({colour}, vec3<f32>(65504.0));"));
+        let alpha = match shape.host {
+            Some(_) => cover,
+            None => "1.0",
+        };
+        w.line(format!("let alpha = {alpha};"));
         w.line("let pitch = (splat_tiles.width + 31u) & ~31u;");
-        w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
+        w.line("splat_image[py * pitch + px] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, alpha)));");
     } else {
         w.line(format!(
             "splat_image[pixel] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
@@ -290,11 +310,12 @@ fn emit_store(w: &mut Writer, hdr: bool, colour: &str) {
 /// channel whose sum wraps past 2^32 is flagged and drawn full.
 pub(crate) fn emit_scatter(
     w: &mut Writer,
-    hdr: bool,
+    shape: &DrawShape,
     record: u32,
     load: &dyn Fn(&mut Writer),
     evaluate: &dyn Fn(&mut Writer),
 ) {
+    let hdr = shape.hdr;
     w.line(format!(
         "@group(0) @binding({SPLAT_LIGHT_BINDING}) var<storage, read_write> light: array<atomic<u32>>;"
     ));
@@ -367,8 +388,8 @@ pub(crate) fn emit_scatter(
             w.block("for (var c = 0u; c < 4u; c++)", |w| {
                 w.line("atomicStore(&light[at + c], 0u);");
             });
-            emit_background(w, hdr);
-            emit_store(w, hdr, "background + sum");
+            emit_background(w, shape);
+            emit_store(w, shape, "background + sum", "cover");
         },
     );
 }

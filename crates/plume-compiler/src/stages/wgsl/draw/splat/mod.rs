@@ -15,8 +15,8 @@ mod composite;
 pub(crate) use composite::{emit_composite, emit_scatter};
 pub use composite::{splat_slices, SPLAT_PARTIAL_BINDING, SPLAT_SLICES};
 
-use super::{SPLAT_BINDINGS, SPLAT_TILE};
-use crate::base::writer::Writer;
+use super::{DrawShape, SPLAT_BINDINGS, SPLAT_TILE};
+use crate::base::writer::{f32_lit, Writer};
 use crate::features::looks::orient::OrientIr;
 use crate::ir::EffectIr;
 
@@ -55,16 +55,120 @@ pub fn splat_hdr_pitch(width: u32) -> u32 {
 }
 
 /// 32-bit words of a quad's record: rows of the pixel-to-corner map (xyz) with the colour's
-/// red, green and blue (w), then alpha, the flipbook frame and the pixel box's two corners.
-pub const SPLAT_QUAD_WORDS: u64 = 16;
+/// red, green and blue (w); for a host's image (`host`) the quad's clip-space depth terms
+/// (centre, x and y half axes), from which a pixel's depth follows; last, alpha, the flipbook
+/// frame and the pixel box's two corners.
+pub fn splat_quad_words(host: bool) -> u64 {
+    if host {
+        20
+    } else {
+        16
+    }
+}
+
+/// How the splat meets a host's image (the embedding API's compute draw): the image keeps each
+/// pixel's coverage, so that a full-screen pass can put it over the host's colour, and every
+/// pixel of a sprite or ribbon is tested against the host's depth (a copy of it, one f32 a
+/// pixel at [`SPLAT_HOST_DEPTH_BINDING`]) as the rasteriser's depth test would test its
+/// fragment, and faded by `render.soft` as the fragment shader would fade it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SplatHost {
+    /// The host's depth test; None when the host draws without depth (nothing hides
+    /// particles).
+    pub depth: Option<HostDepthTest>,
+    /// Whether `render.soft` sprites fade against the host's depth.
+    pub soft: bool,
+}
+
+/// Which particle depths pass a host's depth test: its compare function, particle against
+/// scene, on NDC depth (`Greater` for reversed Z).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HostDepthTest {
+    /// Nearer with a standard depth buffer.
+    Less,
+    /// Nearer or level, standard depth.
+    LessEqual,
+    /// Nearer with reversed Z.
+    Greater,
+    /// Nearer or level, reversed Z.
+    GreaterEqual,
+    /// Every particle passes (only the soft fade reads the depth).
+    Always,
+}
+
+impl HostDepthTest {
+    /// The WGSL comparison that passes `z` against `scene`.
+    fn passes(self) -> &'static str {
+        match self {
+            HostDepthTest::Less => "z < scene",
+            HostDepthTest::LessEqual => "z <= scene",
+            HostDepthTest::Greater => "z > scene",
+            HostDepthTest::GreaterEqual => "z >= scene",
+            HostDepthTest::Always => "true",
+        }
+    }
+}
+
+/// Binding of the host's depth in a host splat: one f32 a pixel, rows of the image's width.
+pub const SPLAT_HOST_DEPTH_BINDING: u32 = 34;
+
+/// Whether a host splat's records are tested against the host's depth (`host_fade`).
+pub(crate) fn host_depth(shape: &DrawShape) -> bool {
+    shape.host.is_some_and(|h| h.depth.is_some())
+}
+
+/// `host_fade(pixel, z)`: the share of a record's alpha that the host's depth lets through at
+/// the pixel centre `pixel` for NDC depth `z`: 0 where the depth test fails, else 1, or for a
+/// soft effect how far the scene lies behind over the fade distance (the fragment shader's
+/// `soft_fade`).
+fn emit_host_fade(w: &mut Writer, ir: &EffectIr, host: SplatHost, raster_soft: bool) {
+    let Some(test) = host.depth else {
+        return;
+    };
+    w.comment("The host's depth, one f32 a pixel (a copy of its depth image).");
+    w.line(format!(
+        "@group(0) @binding({SPLAT_HOST_DEPTH_BINDING}) var<storage, read> host_depth: array<f32>;"
+    ));
+    let soft = ir.render.soft.filter(|_| host.soft);
+    if let Some(distance) = soft {
+        w.line(format!(
+            "const HOST_SOFT_DISTANCE: f32 = {};",
+            f32_lit(distance)
+        ));
+        // A module soft for the raster draw too has it already (`emit_soft`).
+        if !raster_soft {
+            super::common::emit_view_distance(w);
+        }
+    }
+    w.comment("The share of a record's alpha the host's depth lets through at pixel centre `pixel`, for NDC depth z.");
+    w.block("fn host_fade(pixel: vec2<f32>, z: f32) -> f32", |w| {
+        w.line("let scene = host_depth[u32(pixel.y) * splat_tiles.width + u32(pixel.x)];");
+        w.block(format!("if (!({}))", test.passes()), |w| {
+            w.line("return 0.0;")
+        });
+        match soft {
+            Some(_) => w.line(
+                "return clamp((view_distance(scene) - view_distance(z)) / HOST_SOFT_DISTANCE, 0.0, 1.0);",
+            ),
+            None => w.line("return 1.0;"),
+        }
+    });
+}
 
 /// Bindings `composite` reads besides the records: the tile parameters (the runtime's
 /// `Params`, 8 words), the sorted entries' sprites, each tile's run of entries, the image.
 pub const SPLAT_RASTER_BINDINGS: [u32; 4] = [25, 26, 27, 28];
 
-/// The splat's declarations: its view and output buffers (bindings [`SPLAT_BINDINGS`]), and
-/// for quads the tile buffers `composite` reads ([`SPLAT_RASTER_BINDINGS`]).
-pub(crate) fn emit_splat_declarations(w: &mut Writer, discs: bool, hdr: bool) {
+/// The splat's declarations: its view and output buffers (bindings [`SPLAT_BINDINGS`]), for
+/// quads the tile buffers `composite` reads ([`SPLAT_RASTER_BINDINGS`]), and for a host's
+/// image its depth (`host_fade`).
+pub(crate) fn emit_splat_declarations(
+    w: &mut Writer,
+    ir: &EffectIr,
+    discs: bool,
+    shape: &DrawShape,
+) {
+    let hdr = shape.hdr;
     w.comment("The compute splat's image: size in pixels, tiles, and the instances to project.");
     w.block("struct SplatView", |w| {
         w.line("width: u32,");
@@ -91,6 +195,10 @@ pub(crate) fn emit_splat_declarations(w: &mut Writer, discs: bool, hdr: bool) {
     ));
     w.blank();
     emit_place_helpers(w);
+    if let Some(host) = shape.host {
+        w.blank();
+        emit_host_fade(w, ir, host, shape.soft);
+    }
     if discs {
         return;
     }
@@ -243,8 +351,10 @@ fn emit_place_helpers(w: &mut Writer) {
 /// (u, v, 1) to homogeneous pixels counted from the quad's pixel box (small numbers: f32 keeps
 /// about a ten-thousandth of a pixel), its colour and frame, the box itself; and its tile
 /// count. A quad with a corner behind the camera or outside the depth range is not drawn (the
-/// rasteriser would clip it to the part inside).
-pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
+/// rasteriser would clip it to the part inside). For a host's image (`host`) the record also
+/// holds the clip-space depth terms a pixel's depth is found from (a vec4 before the last).
+pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr, host: bool) {
+    let vec4s = splat_quad_words(host) / 4;
     let (half_x, half_y) = if ir.render.turns_quad() {
         ("s.half_x", "s.half_y")
     } else {
@@ -292,10 +402,14 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
                         w.line("tiles = box_tiles(k, first, last);");
                         w.line("let color = clamp(s.color, vec4<f32>(0.0), vec4<f32>(1.0));");
                         w.line("let box = pack_box(first, last);");
-                        w.line("splats[4u * k] = bitcast<vec4<u32>>(vec4<f32>(rows[0], color.r));");
-                        w.line("splats[4u * k + 1u] = bitcast<vec4<u32>>(vec4<f32>(rows[1], color.g));");
-                        w.line("splats[4u * k + 2u] = bitcast<vec4<u32>>(vec4<f32>(rows[2], color.b));");
-                        w.line(format!("splats[4u * k + 3u] = vec4<u32>(bitcast<u32>(color.a), {frame}, box);"));
+                        w.line(format!("splats[{vec4s}u * k] = bitcast<vec4<u32>>(vec4<f32>(rows[0], color.r));"));
+                        w.line(format!("splats[{vec4s}u * k + 1u] = bitcast<vec4<u32>>(vec4<f32>(rows[1], color.g));"));
+                        w.line(format!("splats[{vec4s}u * k + 2u] = bitcast<vec4<u32>>(vec4<f32>(rows[2], color.b));"));
+                        if host {
+                            w.comment("Clip z at corner coordinates (u, v) is c0.z + u ax.z + v ay.z.");
+                            w.line("splats[5u * k + 3u] = bitcast<vec4<u32>>(vec4<f32>(c0.z, ax.z, ay.z, 0.0));");
+                        }
+                        w.line(format!("splats[{vec4s}u * k + {}u] = vec4<u32>(bitcast<u32>(color.a), {frame}, box);", vec4s - 1));
                     });
                 });
             });
@@ -304,8 +418,9 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr) {
 
 /// `composite` for quads: [`emit_composite`] with each pixel centre mapped back to the quad's
 /// corner coordinates and shaded by `splat_shade` (the fragment shader's disc, or its texel
-/// with derivatives from the quad's map).
-pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
+/// with derivatives from the quad's map); for a host's image, tested and faded against its
+/// depth at the pixel.
+pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
     match &ir.render.texture {
         Some(t) => t.emit_splat_shade(w),
         None => {
@@ -325,16 +440,24 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
     }
     w.blank();
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
+    let vec4s = (splat_quad_words(shape.host.is_some()) / 4) as u32;
+    let depth = host_depth(shape);
     let load = |w: &mut Writer| {
-        w.block("for (var r = 0u; r < 4u; r++)", |w| {
-            w.line("batch[4u * t + r] = splats[4u * k + r];");
+        w.block(format!("for (var r = 0u; r < {vec4s}u; r++)"), |w| {
+            w.line(format!(
+                "batch[{vec4s}u * t + r] = splats[{vec4s}u * k + r];"
+            ));
         });
     };
     let evaluate = |w: &mut Writer| {
-        w.line("let r0 = bitcast<vec4<f32>>(batch[4u * j]);");
-        w.line("let r1 = bitcast<vec4<f32>>(batch[4u * j + 1u]);");
-        w.line("let r2 = bitcast<vec4<f32>>(batch[4u * j + 2u]);");
-        w.line("let r3 = batch[4u * j + 3u];");
+        w.line(format!("let r0 = bitcast<vec4<f32>>(batch[{vec4s}u * j]);"));
+        w.line(format!(
+            "let r1 = bitcast<vec4<f32>>(batch[{vec4s}u * j + 1u]);"
+        ));
+        w.line(format!(
+            "let r2 = bitcast<vec4<f32>>(batch[{vec4s}u * j + 2u]);"
+        ));
+        w.line(format!("let r3 = batch[{vec4s}u * j + {}u];", vec4s - 1));
         w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r3.z)), 1.0);");
         w.comment("s = 1 / w: positive in front of the camera.");
         w.line("let s = dot(r2.xyz, p);");
@@ -343,11 +466,32 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, hdr: bool) {
         w.block("if (any(abs(uv) >= vec2<f32>(1.0)))", |w| {
             w.line("continue;")
         });
+        if depth {
+            w.comment("NDC depth at the pixel: clip z at uv over w (times s = 1 / w).");
+            w.line(format!(
+                "let rz = bitcast<vec4<f32>>(batch[{vec4s}u * j + 3u]);"
+            ));
+            w.line("let fade = host_fade(centre, dot(rz.xyz, vec3<f32>(1.0, uv)) * s);");
+            w.block("if (fade <= 0.0)", |w| w.line("continue;"));
+        }
         w.comment("uv's derivatives along the image's x and y (the quotient rule).");
         w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
         w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
         w.line("let color = vec4<f32>(r0.w, r1.w, r2.w, bitcast<f32>(r3.x));");
-        w.line("let shaded = splat_shade(uv, du, dv, color, r3.y);");
+        if depth {
+            w.line("let lit = splat_shade(uv, du, dv, color, r3.y);");
+            w.line("let shaded = vec4<f32>(lit.rgb, lit.a * fade);");
+        } else {
+            w.line("let shaded = splat_shade(uv, du, dv, color, r3.y);");
+        }
     };
-    emit_composite(w, hdr, additive, splat_slices(ir), 4, &load, &evaluate);
+    emit_composite(
+        w,
+        shape,
+        additive,
+        splat_slices(ir),
+        vec4s,
+        &load,
+        &evaluate,
+    );
 }

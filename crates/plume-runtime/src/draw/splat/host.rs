@@ -1,0 +1,318 @@
+//! The compute splat drawn into a host's images: the embedding API's compute renderer
+//! ([`crate::EffectRenderer`] made by `Effect::compute_renderer`). Each frame, after the host has
+//! drawn its depth, the splat composites every group into its own HDR image, testing (and for
+//! `render.soft`, fading) each pixel against a copy of the host's depth; then one full-screen
+//! triangle in the host's render pass puts that image over the host's colour (`host.wgsl`).
+//!
+//! Nothing waits on the GPU: the entries each group's tile lists needed are copied into a small
+//! buffer and read a frame or more later, when its mapping is done; a list that was too short
+//! grows then (that frame's tiles lost the entries past the end; later frames have them all).
+
+use std::sync::atomic::{AtomicU8, Ordering};
+use std::sync::{Arc, Mutex};
+
+use plume_compiler::wgsl::draw::{splat_hdr_pitch, HostDepthTest, SplatHost};
+
+use super::Splat;
+use crate::device::depth_copy::{check_texture, DepthCopy};
+use crate::device::gpu::Gpu;
+use crate::draw::camera::Camera;
+use crate::draw::target::DrawTarget;
+use crate::error::RuntimeError;
+use crate::sim::effect::Effect;
+
+/// A readback of one group's entries needed, in the states it moves through.
+struct EntriesReadback {
+    buffer: wgpu::Buffer,
+    /// [`IDLE`], [`COPIED`], [`MAPPING`] or [`MAPPED`] (the map callback sets the last).
+    state: Arc<AtomicU8>,
+}
+
+/// Free: the next frame copies its count in.
+const IDLE: u8 = 0;
+/// A frame's count is copied in (in an encoder the host submits).
+const COPIED: u8 = 1;
+/// Mapping asked for, after that submission.
+const MAPPING: u8 = 2;
+/// Mapped: the count can be read.
+const MAPPED: u8 = 3;
+
+/// What changes from frame to frame, behind a lock (the renderer is prepared through `&self`).
+struct Frame {
+    splat: Splat,
+    depth_copy: DepthCopy,
+    /// The host's depth texture (set by `set_scene_depth`), copied each frame.
+    scene_depth: Option<wgpu::Texture>,
+    readbacks: Vec<EntriesReadback>,
+    /// Whether the depth copy holds the far plane (no scene depth bound yet).
+    far_written: bool,
+}
+
+/// The compute renderer of an effect into a host's `width` x `height` targets.
+pub(crate) struct HostSplat {
+    gpu: Gpu,
+    width: u32,
+    height: u32,
+    /// Whether the draw tests the host's depth (the target has a depth attachment).
+    tests_depth: bool,
+    /// The far plane's depth: 0 for a reversed-Z test, else 1.
+    far: f32,
+    soft: bool,
+    frame: Mutex<Frame>,
+    blit: wgpu::RenderPipeline,
+    blit_group: wgpu::BindGroup,
+}
+
+/// The splat's test for a host depth test.
+fn depth_test(compare: wgpu::CompareFunction) -> Result<HostDepthTest, RuntimeError> {
+    Ok(match compare {
+        wgpu::CompareFunction::Less => HostDepthTest::Less,
+        wgpu::CompareFunction::LessEqual => HostDepthTest::LessEqual,
+        wgpu::CompareFunction::Greater => HostDepthTest::Greater,
+        wgpu::CompareFunction::GreaterEqual => HostDepthTest::GreaterEqual,
+        wgpu::CompareFunction::Always => HostDepthTest::Always,
+        other => {
+            return Err(RuntimeError::Unsupported(format!(
+                "the compute renderer tests depth with Less, LessEqual, Greater, GreaterEqual or Always, not {other:?}; draw with the raster renderer (Effect::renderer)"
+            )))
+        }
+    })
+}
+
+impl HostSplat {
+    /// The compute renderer of `effect` into targets like `target` of `width` x `height`.
+    pub(crate) fn new(
+        effect: &Effect,
+        target: &DrawTarget,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, RuntimeError> {
+        let gpu = effect.gpu().clone();
+        let depth = target.depth.map(|d| depth_test(d.compare)).transpose()?;
+        let soft = depth.is_some()
+            && target.soft
+            && effect
+                .groups()
+                .iter()
+                .any(|g| g.effect.ir.render.soft.is_some());
+        let host = SplatHost {
+            depth,
+            soft: target.soft,
+        };
+        let splat = Splat::with_host(effect, width, height, Some(host))?;
+        let readbacks = splat
+            .parts
+            .iter()
+            .map(|_| EntriesReadback {
+                buffer: gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                    label: Some("splat entries needed"),
+                    size: 4,
+                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                    mapped_at_creation: false,
+                }),
+                state: Arc::new(AtomicU8::new(IDLE)),
+            })
+            .collect();
+        let module = gpu
+            .device
+            .create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("splat over the host"),
+                source: wgpu::ShaderSource::Wgsl(include_str!("host.wgsl").into()),
+            });
+        // Over whatever the pass holds: the splat has tested depth itself, so the triangle
+        // passes any depth attachment the pass has, and writes none.
+        let blit_target = match target.depth {
+            Some(d) => target.with_depth_compare(d.format, wgpu::CompareFunction::Always),
+            None => *target,
+        };
+        let premultiplied = wgpu::BlendComponent {
+            src_factor: wgpu::BlendFactor::One,
+            dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+            operation: wgpu::BlendOperation::Add,
+        };
+        let blit = crate::draw::pipeline::render_pipeline(
+            &gpu,
+            &module,
+            ("vs", "fs"),
+            wgpu::PrimitiveTopology::TriangleList,
+            &blit_target,
+            wgpu::BlendState {
+                color: premultiplied,
+                alpha: premultiplied,
+            },
+        );
+        let pitch = super::binding::uniform(
+            &gpu,
+            "splat host pitch",
+            &[splat_hdr_pitch(width), width, height, 0],
+        )?;
+        let blit_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("splat over the host"),
+            layout: &blit.get_bind_group_layout(0),
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: pitch.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: splat.parts[0].1.image().as_entire_binding(),
+                },
+            ],
+        });
+        Ok(Self {
+            gpu,
+            width,
+            height,
+            tests_depth: depth.is_some(),
+            far: match depth {
+                Some(HostDepthTest::Greater | HostDepthTest::GreaterEqual) => 0.0,
+                _ => 1.0,
+            },
+            soft,
+            frame: Mutex::new(Frame {
+                splat,
+                depth_copy: DepthCopy::default(),
+                scene_depth: None,
+                readbacks,
+                far_written: false,
+            }),
+            blit,
+            blit_group,
+        })
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Frame> {
+        self.frame.lock().unwrap_or_else(|p| p.into_inner())
+    }
+
+    /// Whether `render.soft` sprites fade against the host's depth.
+    pub(crate) fn is_soft(&self) -> bool {
+        self.soft
+    }
+
+    /// Keeps the texture behind `depth` to copy each frame (a draw that tests no depth keeps
+    /// nothing).
+    pub(crate) fn set_scene_depth(&self, depth: &wgpu::TextureView) {
+        if self.tests_depth {
+            let mut frame = self.lock();
+            frame.scene_depth = Some(depth.texture().clone());
+            frame.far_written = false;
+        }
+    }
+
+    /// Scales every sprite's size.
+    pub(crate) fn set_size_scale(&self, scale: f32) {
+        self.lock().splat.size_scale = scale;
+    }
+
+    /// The image size the renderer draws.
+    pub(crate) fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// Records the frame's splat into `encoder`: every group's preparation, the host's depth
+    /// copied, the image cleared, the compute pass; and the readback of the entries needed.
+    pub(crate) fn prepare(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        effect: &Effect,
+        camera: &Camera,
+    ) -> Result<(), RuntimeError> {
+        let mut frame = self.lock();
+        let frame = &mut *frame;
+        // Lists a frame before found too short grow now.
+        for (readback, (_, part)) in frame.readbacks.iter().zip(frame.splat.parts.iter_mut()) {
+            if readback.state.load(Ordering::Acquire) == MAPPED {
+                let needed = {
+                    let bytes = readback
+                        .buffer
+                        .slice(..)
+                        .get_mapped_range()
+                        .map_err(|e| RuntimeError::Readback(e.to_string()))?;
+                    u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])
+                };
+                readback.buffer.unmap();
+                readback.state.store(IDLE, Ordering::Release);
+                part.grow(u64::from(needed))?;
+            }
+        }
+        if self.tests_depth {
+            match &frame.scene_depth {
+                Some(texture) => {
+                    check_texture(texture)?;
+                    if (texture.width(), texture.height()) != (self.width, self.height) {
+                        return Err(RuntimeError::Output(format!(
+                            "the scene depth is {}x{} but the compute renderer draws {}x{}: make a renderer of the target's size",
+                            texture.width(),
+                            texture.height(),
+                            self.width,
+                            self.height
+                        )));
+                    }
+                    let out = frame
+                        .splat
+                        .host_depth
+                        .as_ref()
+                        .expect("made for a depth test");
+                    frame.depth_copy.record(&self.gpu, encoder, texture, out);
+                }
+                // Until the host binds its depth, nothing hides particles: the far plane.
+                None if !frame.far_written => {
+                    let out = frame
+                        .splat
+                        .host_depth
+                        .as_ref()
+                        .expect("made for a depth test");
+                    let pixels = self.width as usize * self.height as usize;
+                    let far: Vec<u8> = std::iter::repeat_n(self.far.to_le_bytes(), pixels)
+                        .flatten()
+                        .collect();
+                    self.gpu.queue.write_buffer(out, 0, &far);
+                    frame.far_written = true;
+                }
+                None => {}
+            }
+        }
+        encoder.clear_buffer(frame.splat.parts[0].1.image(), 0, None);
+        frame.splat.prepare(encoder, effect, camera)?;
+        {
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("splat"),
+                timestamp_writes: None,
+            });
+            frame.splat.record(&mut pass)?;
+        }
+        for (readback, (_, part)) in frame.readbacks.iter().zip(frame.splat.parts.iter()) {
+            match readback.state.load(Ordering::Acquire) {
+                IDLE => {
+                    encoder.copy_buffer_to_buffer(part.status(), 0, &readback.buffer, 0, 4);
+                    readback.state.store(COPIED, Ordering::Release);
+                }
+                // The copy was recorded in an earlier frame, whose encoder the host has
+                // submitted before recording this one.
+                COPIED => {
+                    readback.state.store(MAPPING, Ordering::Release);
+                    let state = readback.state.clone();
+                    readback
+                        .buffer
+                        .slice(..)
+                        .map_async(wgpu::MapMode::Read, move |result| {
+                            // A failed mapping (a lost device) tries again.
+                            let next = if result.is_ok() { MAPPED } else { IDLE };
+                            state.store(next, Ordering::Release);
+                        });
+                }
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+
+    /// Records the splat's image over the host's colour into `pass`.
+    pub(crate) fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
+        pass.set_pipeline(&self.blit);
+        pass.set_bind_group(0, &self.blit_group, &[]);
+        pass.draw(0..3, 0..1);
+    }
+}
