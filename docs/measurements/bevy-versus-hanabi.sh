@@ -14,7 +14,7 @@ python3 -c "import lzma,sys; open(sys.argv[2],'wb').write(lzma.open(sys.argv[1])
 chmod +x "$bin"
 run() { # plugin, then the case's arguments
   local line
-  line=$(timeout 150 "$bin" --plugin "$@" --frames 120 2>"$out/last-stderr.txt" | tail -1)
+  line=$(timeout 170 "$bin" --plugin "$@" --frames 120 2>"$out/last-stderr.txt" | tail -1)
   if [ -z "$line" ]; then
     line="{\"plugin\":\"$1\",\"case\":\"${*:2}\",\"error\":\"no result (exit or timeout); see stderr\"}"
     tail -5 "$out/last-stderr.txt" >&2
@@ -23,14 +23,22 @@ run() { # plugin, then the case's arguments
 }
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader | tee "$out/device.txt"
 run empty --live 1
-for c in "--live 100000" "--live 1000000" "--live 10000000" \
-         "--live 1000 --effects 1" "--live 1000 --effects 100" "--live 1000 --effects 1000"; do
-  for p in hanabi plume; do
+# Plume with each renderer (auto takes compute for 65,536 particles or more on a GPU); the
+# compute renderer's fixed cost per effect is also measured on small effects.
+for c in "--live 100000" "--live 1000000" "--live 10000000" "--live 1000 --effects 1"; do
+  for p in "hanabi" "plume --draw raster" "plume --draw compute"; do
     run $p $c
   done
 done
+for c in "--live 1000 --effects 100" "--live 1000 --effects 1000"; do
+  for p in "hanabi" "plume --draw auto"; do
+    run $p $c
+  done
+done
+run plume --draw compute --live 1000 --effects 100
 # The side-by-side frames, 1M particles each.
-for p in hanabi plume; do
-  timeout 150 "$bin" --plugin $p --live 1000000 --frames 5 --out "$out/$p-1M.png" >/dev/null 2>&1
+timeout 150 "$bin" --plugin hanabi --live 1000000 --frames 5 --out "$out/hanabi-1M.png" >/dev/null 2>&1
+for d in raster compute; do
+  timeout 150 "$bin" --plugin plume --draw $d --live 1000000 --frames 5 --out "$out/plume-$d-1M.png" >/dev/null 2>&1
 done
 ls -la "$out"

@@ -3,7 +3,8 @@
 //!
 //! ```sh
 //! cargo +nightly run --release --ignore-rust-version --features hanabi --example versus_hanabi -- \
-//!     --plugin plume --live 1000000 [--effects 1] [--frames 120] [--out frame.png]
+//!     --plugin plume --live 1000000 [--effects 1] [--frames 120] [--out frame.png] \
+//!     [--draw auto|raster|compute]
 //! ```
 //!
 //! The fountain: particles spawned at a constant rate for `live` of them alive at once over a
@@ -14,7 +15,8 @@
 //!
 //! Timing, per frame once the fountains are full: `cpu_ms` is `App::update` (main and render
 //! worlds: pipelined rendering is off, so the render world runs inside it); `frame_ms` adds the
-//! wait until the GPU has finished the frame. Medians over `--frames` frames.
+//! wait until the GPU has finished the frame. Medians over `--frames` frames. `--draw` picks
+//! Plume's renderer (`PlumeDraw`; default auto).
 
 use std::time::{Duration, Instant};
 
@@ -25,7 +27,7 @@ use bevy::render::renderer::RenderDevice;
 use bevy::render::view::screenshot::{save_to_disk, Screenshot};
 use bevy::time::TimeUpdateStrategy;
 use bevy_plume::headless::{default_plugins, Headless};
-use bevy_plume::{PlumeEffect, PlumeEffectAsset, PlumePlugin};
+use bevy_plume::{PlumeDraw, PlumeEffect, PlumeEffectAsset, PlumePlugin};
 
 /// Seconds each particle lives.
 const LIFETIME: f64 = 2.0;
@@ -44,6 +46,8 @@ struct Args {
     effects: u32,
     frames: u32,
     out: Option<String>,
+    /// Plume's renderer.
+    draw: PlumeDraw,
 }
 
 fn parse() -> Result<Args, String> {
@@ -53,6 +57,7 @@ fn parse() -> Result<Args, String> {
         effects: 1,
         frames: 120,
         out: None,
+        draw: PlumeDraw::Auto,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -75,6 +80,14 @@ fn parse() -> Result<Args, String> {
             "--effects" => args.effects = number()?.max(1),
             "--frames" => args.frames = number()?.max(1),
             "--out" => args.out = Some(value),
+            "--draw" => {
+                args.draw = match value.as_str() {
+                    "auto" => PlumeDraw::Auto,
+                    "raster" => PlumeDraw::Raster,
+                    "compute" => PlumeDraw::Compute,
+                    _ => return Err(format!("--draw {value}: auto, raster or compute")),
+                }
+            }
             _ => return Err(format!("unknown argument {flag}")),
         }
     }
@@ -162,7 +175,8 @@ fn main() {
         Plugin::Empty => "empty",
     };
     println!(
-        "{{\"plugin\":\"{name}\",\"live_per_effect\":{},\"effects\":{},\"frames\":{},\"frame_ms\":{:.3},\"frame_ms_p90\":{:.3},\"cpu_ms\":{:.3}}}",
+        "{{\"plugin\":\"{name}\",\"draw\":\"{:?}\",\"live_per_effect\":{},\"effects\":{},\"frames\":{},\"frame_ms\":{:.3},\"frame_ms_p90\":{:.3},\"cpu_ms\":{:.3}}}",
+        args.draw,
         args.live,
         args.effects,
         args.frames,
@@ -221,7 +235,10 @@ fn spawn_plume(app: &mut App, args: &Args, rate: f64, spread: f32) {
     let source = plume_source(args.live, rate);
     let asset = PlumeEffectAsset::compile("fountain.plume.ron", &source, None)
         .unwrap_or_else(|e| panic!("the benchmark's fountain does not compile:\n{e}"));
-    spawn_grid(app, args.effects, spread, asset, PlumeEffect::new);
+    let draw = args.draw;
+    spawn_grid(app, args.effects, spread, asset, |h| {
+        PlumeEffect::new(h).with_draw(draw)
+    });
 }
 
 /// Adds `asset` and spawns `n` effects of it on the grid, each made by `effect`.

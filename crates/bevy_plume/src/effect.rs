@@ -24,6 +24,28 @@ pub enum SimulationSpace {
     Local,
 }
 
+/// Which of Plume's renderers draws an effect for a camera. Both draw in Bevy's transparent
+/// 3D phase, tested against the camera's depth, into its format and MSAA, every look.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect)]
+pub enum PlumeDraw {
+    /// The compute renderer for an effect of 65,536 particles or more on a GPU adapter,
+    /// where compute beats the raster units (an H100 draws 10M sprites about 25x faster so);
+    /// the raster one for smaller effects (the compute one costs a few passes over the whole
+    /// image per effect), on a CPU adapter (lavapipe, llvmpipe) and wherever the compute one
+    /// cannot draw.
+    #[default]
+    Auto,
+    /// Plume's raster pipelines in the camera's transparent pass.
+    Raster,
+    /// The compute splat (Plume's `Effect::compute_renderer`): after the camera's opaque pass
+    /// it composites the effect into an image of its own, every pixel tested (and for
+    /// `render.soft` faded) against the camera's depth, and one full-screen triangle in the
+    /// transparent pass puts that image over the camera's. Where it cannot draw (a camera
+    /// whose viewport is not its whole target, an effect the splat refuses) the raster one
+    /// draws, and the reason is logged once.
+    Compute,
+}
+
 /// A Plume effect playing at this entity's [`Transform`]: the effect file's handle and how
 /// this instance plays. Every instance simulates on its own, on Bevy's render device, and is
 /// drawn in Bevy's transparent 3D phase for every camera that sees it.
@@ -45,6 +67,8 @@ pub struct PlumeEffect {
     pub handle: Handle<PlumeEffectAsset>,
     /// Where the particles live (default: the world, left behind by a moving entity).
     pub space: SimulationSpace,
+    /// Which renderer draws it (default: the faster one for the adapter).
+    pub draw: PlumeDraw,
     /// Whether time runs for this effect (false: it freezes, still drawn).
     pub playing: bool,
     /// How fast the effect's time runs against the app's (1: real time).
@@ -128,6 +152,7 @@ impl PlumeEffect {
         Self {
             handle,
             space: SimulationSpace::World,
+            draw: PlumeDraw::Auto,
             playing: true,
             time_scale: 1.0,
             seed: None,
@@ -169,6 +194,11 @@ impl PlumeEffect {
         Self { space, ..self }
     }
 
+    /// Drawn by `draw`'s renderer.
+    pub fn with_draw(self, draw: PlumeDraw) -> Self {
+        Self { draw, ..self }
+    }
+
     /// With `seed` instead of the file's.
     pub fn with_seed(self, seed: u32) -> Self {
         Self {
@@ -196,6 +226,25 @@ impl PlumeEffect {
     /// Starts the effect again from nothing (its warm-up included) on the next frame.
     pub fn restart(&mut self) {
         self.generation = self.generation.wrapping_add(1);
+    }
+}
+
+/// Makes every 3D camera's depth texture bindable while an effect may be drawn by the compute
+/// renderer, which copies the depth after the opaque pass (Bevy makes it a render attachment
+/// only, unless asked).
+pub(crate) fn bindable_camera_depth(
+    mut cameras: Query<&mut Camera3d>,
+    effects: Query<&PlumeEffect>,
+) {
+    use bevy::render::render_resource::TextureUsages;
+    if effects.iter().all(|e| e.draw == PlumeDraw::Raster) {
+        return;
+    }
+    for mut camera in &mut cameras {
+        let usages = TextureUsages::from(camera.depth_texture_usages);
+        if !usages.contains(TextureUsages::TEXTURE_BINDING) {
+            camera.depth_texture_usages = (usages | TextureUsages::TEXTURE_BINDING).into();
+        }
     }
 }
 

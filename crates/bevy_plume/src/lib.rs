@@ -29,7 +29,7 @@ pub mod headless;
 mod render;
 
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
-pub use effect::{PlumeBurst, PlumeEffect, SimulationSpace};
+pub use effect::{PlumeBurst, PlumeDraw, PlumeEffect, SimulationSpace};
 pub use plume_compiler;
 pub use plume_runtime;
 pub use render::instances::{read_particles, read_totals, PlumeRenderStats};
@@ -57,7 +57,8 @@ impl Plugin for PlumePlugin {
             .add_systems(
                 PostUpdate,
                 effect::bounds_from_files.in_set(VisibilitySystems::CalculateBounds),
-            );
+            )
+            .add_systems(PostUpdate, effect::bindable_camera_depth);
         render::build(app);
     }
 

@@ -5,15 +5,17 @@
 
 use bevy::core_pipeline::core_3d::{Transparent3d, TransparentSortingInfo3d, CORE_3D_DEPTH_FORMAT};
 use bevy::prelude::*;
+use bevy::render::camera::ExtractedCamera;
 use bevy::render::render_phase::{
     Draw, DrawError, DrawFunctions, PhaseItemExtraIndex, TrackedRenderPass, ViewSortedRenderPhases,
 };
 use bevy::render::render_resource::CachedRenderPipelineId;
+use bevy::render::renderer::RenderAdapterInfo;
 use bevy::render::view::{ExtractedView, RenderVisibleEntities};
 use plume_runtime::DrawTarget;
 
-use crate::effect::PlumeEffect;
-use crate::render::instances::PlumeInstances;
+use crate::effect::{PlumeDraw, PlumeEffect};
+use crate::render::instances::{PlumeInstances, PlumeRenderStats};
 
 /// The target a camera's transparent pass draws into: its colour format and samples, Bevy's
 /// reversed-Z depth buffer tested (nearer is greater) and never written. Soft particles fade
@@ -27,26 +29,52 @@ pub(crate) fn view_target(view: &ExtractedView, msaa: &Msaa, depth_prepass: bool
         .with_soft(samples == 1 && depth_prepass)
 }
 
+/// The capacity from which `PlumeDraw::Auto` draws an effect with the compute renderer on a GPU
+/// adapter. The compute renderer costs a few passes over the camera's image per effect
+/// whatever its particles (clearing, merging and putting an image of 8 bytes a pixel over the
+/// camera's), where the raster one costs per particle: small effects are drawn faster by the
+/// raster renderer, large ones far faster by the compute one (docs/bevy.md has both measured).
+pub const AUTO_COMPUTE_CAPACITY: u64 = 65_536;
+
+/// The size of the compute renderer's image for a camera: its target's, when its viewport is
+/// the whole target (the splat's image maps the projection onto the whole depth texture it
+/// reads); None otherwise.
+fn compute_size(view: &ExtractedView, camera: Option<&ExtractedCamera>) -> Option<(u32, u32)> {
+    let size = camera?.physical_target_size?;
+    let whole = view.viewport == UVec4::new(0, 0, size.x, size.y);
+    whole.then_some((size.x, size.y))
+}
+
+/// What [`queue_effects`] reads of each camera: its entity, view, camera, MSAA, the entities it
+/// sees and whether it has a depth prepass.
+type ViewItem = (
+    Entity,
+    &'static ExtractedView,
+    Option<&'static ExtractedCamera>,
+    &'static Msaa,
+    &'static RenderVisibleEntities,
+    Has<bevy::core_pipeline::prepass::DepthPrepass>,
+);
+
 /// Queues one transparent item per visible effect per camera, making each camera's draw of
 /// it first where there is none yet.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn queue_effects(
     draw_functions: Res<DrawFunctions<Transparent3d>>,
     mut phases: ResMut<ViewSortedRenderPhases<Transparent3d>>,
-    views: Query<(
-        Entity,
-        &ExtractedView,
-        &Msaa,
-        &RenderVisibleEntities,
-        Has<bevy::core_pipeline::prepass::DepthPrepass>,
-    )>,
+    views: Query<ViewItem>,
+    adapter: Res<RenderAdapterInfo>,
     mut store: ResMut<PlumeInstances>,
+    mut stats: ResMut<PlumeRenderStats>,
 ) {
+    // A CPU adapter rasterises faster than it splats (as `plume render --draw auto` finds).
+    let gpu_adapter = adapter.device_type != wgpu::DeviceType::Cpu;
     let Some(draw_function) = draw_functions.read().get_id::<DrawPlume>() else {
         return;
     };
     let store = &mut *store;
     let frame = store.frame;
-    for (view_entity, view, msaa, visible, depth_prepass) in &views {
+    for (view_entity, view, camera, msaa, visible, depth_prepass) in &views {
         let Some(phase) = phases.get_mut(&view.retained_view_entity) else {
             continue;
         };
@@ -58,8 +86,33 @@ pub(crate) fn queue_effects(
             let Some(instance) = store.instances.get_mut(&main_entity.id()) else {
                 continue;
             };
-            if instance.view_draw(view_entity, target, frame).is_none() {
+            let compute = match instance.draw {
+                PlumeDraw::Raster => false,
+                PlumeDraw::Compute => true,
+                PlumeDraw::Auto => gpu_adapter && instance.capacity >= AUTO_COMPUTE_CAPACITY,
+            };
+            let (target, size) = match compute.then(|| compute_size(view, camera)) {
+                // The compute renderer reads the main pass's depth (sample 0 of a multisampled
+                // one): soft particles fade with MSAA too.
+                Some(Some(size)) => (target.with_soft(true), Some(size)),
+                Some(None) => {
+                    warn_once!("bevy_plume: a camera whose viewport is not its whole target draws effects with the raster renderer");
+                    (target, None)
+                }
+                None => (target, None),
+            };
+            if instance
+                .view_draw(view_entity, target, size, frame)
+                .is_none()
+            {
                 continue;
+            }
+            if instance
+                .views
+                .get(&view_entity)
+                .is_some_and(|d| d.renderer.is_compute())
+            {
+                stats.compute_draws += 1;
             }
             phase.add_transient(Transparent3d {
                 sorting_info: TransparentSortingInfo3d::Sorted {

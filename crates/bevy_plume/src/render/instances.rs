@@ -13,7 +13,7 @@ use plume_compiler::reference::{ParticleRecord, Totals};
 use plume_runtime::{DrawTarget, Effect, EffectRenderer, Gpu, RuntimeError};
 
 use crate::asset::Variant;
-use crate::effect::{PlumeBurst, SimulationSpace};
+use crate::effect::{PlumeBurst, PlumeDraw, SimulationSpace};
 use crate::render::extract::{ExtractedBursts, ExtractedEffect, ExtractedEffects};
 
 /// At most this much effect time is stepped in one frame; a longer frame (a stall, a
@@ -59,6 +59,8 @@ impl BuildKey {
 pub(crate) struct ViewDraw {
     /// The target the renderer was made for (the camera's format, samples and depth).
     pub target: DrawTarget,
+    /// The target's size, for the compute renderer (None: the raster one).
+    pub size: Option<(u32, u32)>,
     /// The draw.
     pub renderer: EffectRenderer,
     /// The frame it was last queued in (a camera that stops seeing it drops it).
@@ -81,6 +83,12 @@ pub(crate) struct Instance {
     pub world_from_local: Mat4,
     /// Where its particles live.
     pub space: SimulationSpace,
+    /// Which renderer draws it.
+    pub draw: PlumeDraw,
+    /// Whether the compute renderer was refused (said once; the raster one draws then).
+    compute_refused: bool,
+    /// Particles it can hold, over every group.
+    pub capacity: u64,
     /// The transform its last world-space steps spawned at (None before the first).
     pub placed_at: Option<Mat4>,
     /// The entity's render-world twin.
@@ -110,6 +118,9 @@ pub struct PlumeRenderStats {
     /// Bytes of particle state they hold on the GPU (capacity times bytes per particle, trail
     /// history included, over every group of every instance).
     pub particle_bytes: u64,
+    /// Camera draws of an effect queued this frame that the compute renderer makes (the rest
+    /// are raster ones; see `PlumeDraw`).
+    pub compute_draws: usize,
 }
 
 /// Every instance, by main-world entity, and the device they run on.
@@ -170,6 +181,7 @@ pub(crate) fn sync_instances(
         if let Some(instance) = store.instances.get_mut(&e.main) {
             instance.world_from_local = e.world_from_local;
             instance.space = e.control.space;
+            instance.draw = e.control.draw;
             instance.render_entity = e.render;
             instance.control_from_code(e);
             if e.control.playing {
@@ -192,6 +204,8 @@ pub(crate) fn sync_instances(
     *stats = PlumeRenderStats {
         instances: store.instances.len(),
         particle_bytes: store.instances.values().map(|i| i.particle_bytes).sum(),
+        // Counted as the draws are queued.
+        compute_draws: 0,
     };
 }
 
@@ -227,6 +241,11 @@ fn build(
             u64::from(g.effect.ir.capacity) * u64::from(per_particle)
         })
         .sum();
+    let capacity = graph
+        .groups
+        .iter()
+        .map(|g| u64::from(g.effect.ir.capacity))
+        .sum();
     let effect = Effect::from_graph(gpu, graph)
         .map_err(|err| format!("{}: the effect could not start: {err}", e.asset.path))?;
     let dt = e.asset.dt();
@@ -239,6 +258,9 @@ fn build(
         steps: (warm_up / dt).round() as u64,
         world_from_local: e.world_from_local,
         space: e.control.space,
+        draw: e.control.draw,
+        compute_refused: false,
+        capacity,
         placed_at: None,
         render_entity: e.render,
         views: HashMap::new(),
@@ -300,22 +322,48 @@ impl Instance {
     }
 
     /// The draw for the camera `view` into `target`, made (or remade, when the camera's
-    /// format or samples changed) as needed; None, with the reason logged once, when the
-    /// effect cannot be drawn there.
-    pub fn view_draw(&mut self, view: Entity, target: DrawTarget, frame: u64) -> Option<()> {
-        if self.undrawable.contains(&target) {
-            return None;
+    /// format, samples or size changed) as needed: by the compute renderer into a target of
+    /// `compute_size` when that is given and the effect takes it (else the raster one, the
+    /// reason logged once); None, with the reason logged once, when the effect cannot be
+    /// drawn there.
+    pub fn view_draw(
+        &mut self,
+        view: Entity,
+        target: DrawTarget,
+        compute_size: Option<(u32, u32)>,
+        frame: u64,
+    ) -> Option<()> {
+        let size = compute_size.filter(|_| !self.compute_refused);
+        if let Some(draw) = self.views.get_mut(&view) {
+            if draw.target == target && draw.size == size {
+                draw.frame = frame;
+                return Some(());
+            }
         }
-        if self.views.get(&view).is_some_and(|d| d.target == target) {
-            self.views.get_mut(&view)?.frame = frame;
-            return Some(());
-        }
-        match self.effect.renderer(&target) {
+        let name = self.effect.compiled().ir.name.clone();
+        let compute = size.map(|(w, h)| self.effect.compute_renderer(&target, w, h));
+        let renderer = match compute {
+            Some(Ok(renderer)) => Ok(renderer),
+            Some(Err(err)) => {
+                warn!("{name}: the compute renderer cannot draw it ({err}): the raster one does");
+                self.compute_refused = true;
+                self.effect.renderer(&target)
+            }
+            None => {
+                if self.undrawable.contains(&target) {
+                    return None;
+                }
+                self.effect.renderer(&target)
+            }
+        };
+        let size = size.filter(|_| !self.compute_refused);
+        match renderer {
             Ok(renderer) => {
                 self.views.insert(
                     view,
                     ViewDraw {
                         target,
+                        size,
                         renderer,
                         frame,
                     },
@@ -325,7 +373,7 @@ impl Instance {
             Err(err) => {
                 // Said once per kind of target, not every frame.
                 if !self.undrawable.contains(&target) {
-                    error!("{}: cannot be drawn: {err}", self.effect.compiled().ir.name);
+                    error!("{name}: cannot be drawn: {err}");
                     self.undrawable.push(target);
                 }
                 None

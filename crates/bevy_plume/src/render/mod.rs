@@ -9,7 +9,7 @@ pub(crate) mod instances;
 pub(crate) mod motion;
 pub(crate) mod simulate;
 
-use bevy::core_pipeline::core_3d::Transparent3d;
+use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d, Transparent3d};
 use bevy::core_pipeline::schedule::camera_driver;
 use bevy::core_pipeline::{Core3d, Core3dSystems};
 use bevy::prelude::*;
@@ -46,9 +46,14 @@ pub(crate) fn build(app: &mut App) {
         )
         .add_systems(
             Core3d,
-            simulate::prepare_for_view
-                .after(Core3dSystems::Prepass)
-                .before(Core3dSystems::MainPass),
+            (
+                simulate::prepare_for_view
+                    .after(Core3dSystems::Prepass)
+                    .before(Core3dSystems::MainPass),
+                simulate::composite_for_view
+                    .after(main_opaque_pass_3d)
+                    .before(main_transparent_pass_3d),
+            ),
         );
 }
 

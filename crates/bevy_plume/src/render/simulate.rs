@@ -4,12 +4,14 @@
 //! ([`prepare_for_view`]), and for a `SceneDepth` collider a copy of the camera's depth
 //! prepass for the next frame's steps. The depth order lives in the effect's buffers, so
 //! preparing it per camera, right before that camera draws, gives every camera its own
-//! back-to-front order.
+//! back-to-front order. A draw by the compute renderer is prepared later, between the
+//! camera's opaque and transparent passes ([`composite_for_view`]): it reads the depth the
+//! opaque pass drew.
 
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::prelude::*;
 use bevy::render::renderer::{RenderContext, ViewQuery};
-use bevy::render::view::ExtractedView;
+use bevy::render::view::{ExtractedView, ViewDepthStencilTexture};
 use plume_compiler::placement::Placement;
 use plume_runtime::Camera;
 
@@ -74,7 +76,7 @@ pub(crate) fn prepare_for_view(
             if draw.frame != frame {
                 continue;
             }
-            if draw.renderer.is_soft() {
+            if draw.renderer.is_soft() && !draw.renderer.is_compute() {
                 if let Some(depth) = prepass.and_then(|p| p.depth_only_view()) {
                     draw.renderer.set_scene_depth(depth);
                 }
@@ -100,12 +102,56 @@ pub(crate) fn prepare_for_view(
                     ),
                 }
             }
+            if draw.renderer.is_compute() {
+                continue;
+            }
             if let Err(err) = instance
                 .effect
                 .prepare_draw(encoder, &draw.renderer, &camera)
             {
                 error!("{}: {err}", instance.effect.compiled().ir.name);
             }
+        }
+    }
+}
+
+/// Prepares every compute-renderer draw the current camera queued this frame, between its
+/// opaque and transparent passes: the splat copies the depth the opaque pass drew, composites
+/// the effect against it, and the transparent pass puts the image over the camera's.
+pub(crate) fn composite_for_view(
+    view: ViewQuery<(Entity, &ExtractedView, &ViewDepthStencilTexture)>,
+    mut context: RenderContext,
+    mut store: ResMut<PlumeInstances>,
+) {
+    let (view_entity, view, depth) = view.into_inner();
+    let frame = store.frame;
+    let mut depth_view = None;
+    for instance in store.instances.values_mut() {
+        let world_from_local = match instance.space {
+            SimulationSpace::World => Mat4::IDENTITY,
+            SimulationSpace::Local => instance.world_from_local,
+        };
+        let Some(draw) = instance.views.get_mut(&view_entity) else {
+            continue;
+        };
+        if draw.frame != frame || !draw.renderer.is_compute() {
+            continue;
+        }
+        let depth_view = depth_view.get_or_insert_with(|| {
+            depth.texture().create_view(&wgpu::TextureViewDescriptor {
+                label: Some("plume scene depth"),
+                aspect: wgpu::TextureAspect::DepthOnly,
+                ..Default::default()
+            })
+        });
+        draw.renderer.set_scene_depth(depth_view);
+        let camera = view_camera(view, world_from_local);
+        let encoder = context.command_encoder();
+        if let Err(err) = instance
+            .effect
+            .prepare_draw(encoder, &draw.renderer, &camera)
+        {
+            error!("{}: {err}", instance.effect.compiled().ir.name);
         }
     }
 }
