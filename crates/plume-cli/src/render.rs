@@ -84,8 +84,14 @@ impl DrawMethod {
     /// `no_scene`), and why. The splat was 7 to 9 times faster than the raster pipeline for 10M
     /// particles on an H100 (docs/performance.md) and slower on llvmpipe, whose raster path is
     /// the CPU's; it draws every group's sprites (any texture, orientation, rotation and
-    /// height, glowing or not) without trails or scene meshes.
-    fn resolve(self, gpu: &Gpu, graph: &CompiledGraph, no_scene: bool) -> (Self, String) {
+    /// height, glowing or not) and ribbons, but `plume render` does not draw the scene's meshes
+    /// under it (the preview, whose compute renderer tests them, passes `no_scene`).
+    pub(crate) fn resolve(
+        self,
+        gpu: &Gpu,
+        graph: &CompiledGraph,
+        no_scene: bool,
+    ) -> (Self, String) {
         if self != DrawMethod::Auto {
             return (self, "as asked".into());
         }

@@ -43,10 +43,16 @@ impl Running {
                 .as_ref()
                 .expect("an orbit exists once an effect is loaded")
                 .camera(w as f32 / h.max(1) as f32);
-            loaded
-                .effect
-                .prepare_draw(&mut encoder, &loaded.renderer, &camera)
-                .map_err(|e| e.to_string())?;
+            // A compute renderer draws one size: a resized window needs a new one.
+            if loaded.renderer.size().is_some_and(|s| s != (w, h)) {
+                loaded.renderer = loaded
+                    .effect
+                    .compute_renderer(&loaded.target, w, h)
+                    .map_err(|e| e.to_string())?;
+                if let Some(meshes) = &loaded.meshes {
+                    loaded.renderer.set_scene_depth(meshes.depth_view());
+                }
+            }
             let bg = loaded.effect.compiled().ir.render.background;
             let mut color = wgpu::RenderPassColorAttachment {
                 view: self.scene.view(),
@@ -86,6 +92,11 @@ impl Running {
                 color.ops.load = wgpu::LoadOp::Load;
                 depth = Some(meshes.particle_depth());
             }
+            // After the meshes: the compute renderer reads the depth they drew.
+            loaded
+                .effect
+                .prepare_draw(&mut encoder, &loaded.renderer, &camera)
+                .map_err(|e| e.to_string())?;
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
                 label: Some("effect"),
                 color_attachments: &[Some(color)],

@@ -12,6 +12,7 @@ use super::reload::Outcome;
 use super::scene::Scene;
 use super::state::{Loaded, Running};
 use super::Options;
+use crate::render::DrawMethod;
 
 impl Running {
     /// Reloads the file (`noticed`: when a change was seen; None for the first load).
@@ -83,13 +84,24 @@ impl Running {
         let size = (self.config.width.max(1), self.config.height.max(1));
         let meshes = plume_runtime::outputs::Scene::new(&self.gpu, &triangles, format, size)
             .map_err(|e| e.to_string())?;
+        // The compute renderer draws over the scene's meshes too (it tests their depth).
+        let (method, why) = self.draw.resolve(&self.gpu, &compiled, true);
         let effect = Effect::from_graph(&self.gpu, compiled).map_err(|e| e.to_string())?;
-        let target = DrawTarget::new(format);
-        let mut renderer = match &meshes {
-            Some(_) => effect.renderer(&plume_runtime::outputs::Scene::target(target)),
-            None => effect.renderer(&target),
+        let target = match &meshes {
+            Some(_) => plume_runtime::outputs::Scene::target(DrawTarget::new(format)),
+            None => DrawTarget::new(format),
+        };
+        let mut renderer = match method {
+            DrawMethod::Splat => effect.compute_renderer(&target, size.0, size.1),
+            _ => effect.renderer(&target),
         }
         .map_err(|e| e.to_string())?;
+        let drawn_by = if renderer.is_compute() {
+            "compute"
+        } else {
+            "raster"
+        };
+        about.push_str(&format!("; drawn by {drawn_by} ({why})"));
         if let Some(meshes) = &meshes {
             renderer.set_scene_depth(meshes.depth_view());
         }
@@ -99,6 +111,7 @@ impl Running {
         self.effect = Some(Loaded {
             effect,
             renderer,
+            target,
             meshes,
             about,
             warnings,

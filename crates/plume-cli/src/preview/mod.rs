@@ -29,6 +29,7 @@ use std::process::ExitCode;
 use plume_compiler::CompileOptions;
 use plume_runtime::GpuChoice;
 
+use crate::render::DrawMethod;
 use crate::Overrides;
 
 /// Options of `plume preview`.
@@ -50,6 +51,11 @@ pub struct PreviewArgs {
     /// Backends to search: vulkan, gl, metal, dx12 (comma-separated); default WGPU_BACKEND or all.
     #[arg(long)]
     backend: Option<String>,
+    /// How the particles are drawn: `raster` (the render pipeline), `compute` (the compute
+    /// renderer of the embedding API, tested against the scene's meshes), or `auto`: compute on
+    /// a GPU where it draws the effect, else raster. The figures say which.
+    #[arg(long, value_enum, default_value_t = DrawMethod::Auto)]
+    draw: DrawMethod,
     #[command(flatten)]
     overrides: Overrides,
 }
@@ -62,6 +68,7 @@ pub struct Options {
     frames: Option<u32>,
     screenshot: Option<PathBuf>,
     size: (u32, u32),
+    draw: DrawMethod,
 }
 
 impl Options {
@@ -101,6 +108,7 @@ pub fn preview(args: &PreviewArgs) -> ExitCode {
         frames: args.frames,
         screenshot: args.screenshot.clone(),
         size: args.size,
+        draw: args.draw,
     };
     match window::run(options) {
         Ok(()) => ExitCode::SUCCESS,

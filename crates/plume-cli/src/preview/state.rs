@@ -21,6 +21,8 @@ use super::scene::Scene;
 pub(super) struct Loaded {
     pub(super) effect: Effect,
     pub(super) renderer: EffectRenderer,
+    /// What the renderer draws into (a compute renderer is made again for a new size).
+    pub(super) target: plume_runtime::DrawTarget,
     /// The meshes the effect names, drawn around it (None: it names none).
     pub(super) meshes: Option<plume_runtime::outputs::Scene>,
     /// What the compiler chose, for the figures.
@@ -65,4 +67,6 @@ pub(super) struct Running {
     pub(super) help: bool,
     /// When a one-shot effect (no emitter with a rate) was first seen with nothing alive.
     pub(super) finished_at: Option<Instant>,
+    /// How the particles are drawn (`--draw`).
+    pub(super) draw: crate::render::DrawMethod,
 }

@@ -115,6 +115,7 @@ impl App {
             frame_ms: 0.0,
             reload_started: None,
             reload_ms: None,
+            draw: self.options.draw,
             frames: 0,
             screenshot: false,
             help: true,
