@@ -32,6 +32,7 @@ pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
 pub use effect::{PlumeBurst, PlumeDraw, PlumeEffect, SimulationSpace};
 pub use plume_compiler;
 pub use plume_runtime;
+pub use render::draw::AUTO_COMPUTE_CAPACITY;
 pub use render::instances::{read_particles, read_totals, PlumeRenderStats};
 
 use bevy::asset::io::file::FileAssetReader;

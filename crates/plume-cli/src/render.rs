@@ -80,18 +80,12 @@ pub enum DrawMethod {
 }
 
 impl DrawMethod {
-    /// The method `auto` stands for on `gpu` for `graph` (without the scene's meshes when
-    /// `no_scene`), and why. The splat was 7 to 9 times faster than the raster pipeline for 10M
+    /// The method `auto` stands for on `gpu` for `graph`, and why. The splat was 7 to 9 times faster than the raster pipeline for 10M
     /// particles on an H100 (docs/performance.md) and slower on llvmpipe, whose raster path is
     /// the CPU's; it draws every group's sprites (any texture, orientation, rotation and
-    /// height, glowing or not) and ribbons, but `plume render` does not draw the scene's meshes
-    /// under it (the preview, whose compute renderer tests them, passes `no_scene`).
-    pub(crate) fn resolve(
-        self,
-        gpu: &Gpu,
-        graph: &CompiledGraph,
-        no_scene: bool,
-    ) -> (Self, String) {
+    /// height, glowing or not) and ribbons; the scene's meshes are drawn by the raster
+    /// pipeline first and the splat tests their depth (`Effect::compute_renderer`).
+    pub(crate) fn resolve(self, gpu: &Gpu, graph: &CompiledGraph) -> (Self, String) {
         if self != DrawMethod::Auto {
             return (self, "as asked".into());
         }
@@ -101,8 +95,6 @@ impl DrawMethod {
             Some("a CPU adapter rasterises faster than it splats")
         } else if let Some(why) = Splat::why_not(&irs) {
             Some(why)
-        } else if !no_scene && irs.iter().any(|ir| !ir.scene_triangles().is_empty()) {
-            Some("the splat does not draw the scene's meshes")
         } else {
             None
         };
@@ -128,7 +120,7 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         backend: args.backend.clone(),
     })?;
     eprintln!("adapter: {}", gpu.describe());
-    let (draw, why) = args.draw.resolve(&gpu, &graph, args.no_scene);
+    let (draw, why) = args.draw.resolve(&gpu, &graph);
     eprintln!(
         "draw: {} ({why})",
         match draw {
@@ -145,15 +137,9 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         .iter()
         .flat_map(|g| g.effect.ir.scene_triangles())
         .collect();
-    let scene = match (args.no_scene, draw) {
-        (false, DrawMethod::Raster) => {
-            Scene::new(&gpu, &triangles, target.target().color_format, (w, h))?
-        }
-        (false, DrawMethod::Splat) if !triangles.is_empty() => {
-            eprintln!("note: --draw splat does not draw the scene's meshes (--draw raster does)");
-            None
-        }
-        _ => None,
+    let scene = match args.no_scene {
+        false => Scene::new(&gpu, &triangles, target.target().color_format, (w, h))?,
+        true => None,
     };
     if scene.is_some() {
         eprintln!(
@@ -162,16 +148,21 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         );
     }
     let mut sim = Effect::from_graph(&gpu, graph)?;
-    let mut renderer = match &scene {
-        Some(_) => sim.renderer(&Scene::target(target.target()))?,
-        None => sim.renderer(&target.target())?,
+    // Over the scene's meshes the splat is the embedding API's compute renderer, which tests
+    // their depth; without meshes, the splat draws the image alone.
+    let mut renderer = match (&scene, draw) {
+        (Some(_), DrawMethod::Splat) => {
+            sim.compute_renderer(&Scene::target(target.target()), w, h)?
+        }
+        (Some(_), _) => sim.renderer(&Scene::target(target.target()))?,
+        (None, _) => sim.renderer(&target.target())?,
     };
     if let Some(scene) = &scene {
         // Soft particles fade where they meet the meshes.
         renderer.set_scene_depth(scene.depth_view());
     }
-    let mut splat = match draw {
-        DrawMethod::Splat => Some(Splat::new(&sim, w, h)?),
+    let mut splat = match (draw, &scene) {
+        (DrawMethod::Splat, None) => Some(Splat::new(&sim, w, h)?),
         _ => None,
     };
     let camera = target.effect_camera(&sim);

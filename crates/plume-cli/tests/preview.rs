@@ -96,6 +96,11 @@ fn a_file_with_errors_fails_to_open_with_located_diagnostics() {
 /// `plume preview FILE --size 480x270 --frames FRAMES --screenshot OUT` under a virtual
 /// display; fails the test with the preview's output if it fails.
 fn preview_screenshot(file: &Path, frames: u32, out: &Path) {
+    preview_screenshot_drawn(file, frames, out, "auto");
+}
+
+/// [`preview_screenshot`] with `--draw DRAW`; returns what the preview wrote to stderr.
+fn preview_screenshot_drawn(file: &Path, frames: u32, out: &Path, draw: &str) -> String {
     let run = xvfb_run()
         .arg(env!("CARGO_BIN_EXE_plume"))
         .arg("preview")
@@ -105,16 +110,16 @@ fn preview_screenshot(file: &Path, frames: u32, out: &Path) {
             "480x270",
             "--frames",
             &frames.to_string(),
+            "--draw",
+            draw,
             "--screenshot",
         ])
         .arg(out)
         .output()
         .expect("xvfb-run runs");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    let stderr = String::from_utf8_lossy(&run.stderr).into_owned();
+    assert!(run.status.success(), "{stderr}");
+    stderr
 }
 
 /// The largest difference of any channel of any pixel of two images of one size.
@@ -335,4 +340,33 @@ fn a_scene_depth_collider_meets_the_preview_s_scene_as_it_meets_plume_render_s()
         "the sparks look the same with and without the steps: {}",
         bright(&b)
     );
+}
+
+#[test]
+fn the_compute_renderer_previews_what_the_raster_one_does() {
+    // crystal.ron: sprites over a mesh the preview draws; the compute renderer tests its depth.
+    let dir = std::env::temp_dir();
+    let pid = std::process::id();
+    let (raster, compute) = (
+        dir.join(format!("plume-preview-raster-{pid}.png")),
+        dir.join(format!("plume-preview-compute-{pid}.png")),
+    );
+    let said = preview_screenshot_drawn(&effect("crystal.ron"), 20, &raster, "raster");
+    assert!(said.contains("drawn by raster (as asked)"), "{said}");
+    let said = preview_screenshot_drawn(&effect("crystal.ron"), 20, &compute, "compute");
+    assert!(said.contains("drawn by compute (as asked)"), "{said}");
+    let a = image::open(&raster).unwrap().to_rgba8();
+    let b = image::open(&compute).unwrap().to_rgba8();
+    std::fs::remove_file(&raster).ok();
+    std::fs::remove_file(&compute).ok();
+    // The raster draw rounds after every blend and snaps edges; the compute one blends once at
+    // pixel centres: close on average (tests/embed.rs measures the gap per effect).
+    let mean = a
+        .as_raw()
+        .iter()
+        .zip(b.as_raw())
+        .map(|(x, y)| f64::from(x.abs_diff(*y)))
+        .sum::<f64>()
+        / a.as_raw().len() as f64;
+    assert!(mean < 1.0, "mean difference {mean:.3} of 255");
 }

@@ -73,6 +73,7 @@ impl Running {
             ));
         }
         let dt = top.dt;
+        let top_name = top.name.clone();
         let camera = top.camera;
         let glow = top.render.glow;
         let triangles: Vec<_> = compiled
@@ -84,8 +85,7 @@ impl Running {
         let size = (self.config.width.max(1), self.config.height.max(1));
         let meshes = plume_runtime::outputs::Scene::new(&self.gpu, &triangles, format, size)
             .map_err(|e| e.to_string())?;
-        // The compute renderer draws over the scene's meshes too (it tests their depth).
-        let (method, why) = self.draw.resolve(&self.gpu, &compiled, true);
+        let (method, why) = self.draw.resolve(&self.gpu, &compiled);
         let effect = Effect::from_graph(&self.gpu, compiled).map_err(|e| e.to_string())?;
         let target = match &meshes {
             Some(_) => plume_runtime::outputs::Scene::target(DrawTarget::new(format)),
@@ -102,6 +102,7 @@ impl Running {
             "raster"
         };
         about.push_str(&format!("; drawn by {drawn_by} ({why})"));
+        eprintln!("{}: drawn by {drawn_by} ({why})", top_name);
         if let Some(meshes) = &meshes {
             renderer.set_scene_depth(meshes.depth_view());
         }

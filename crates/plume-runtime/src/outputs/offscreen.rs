@@ -174,7 +174,8 @@ impl Offscreen {
 
     /// As [`Self::record`], over `scene`: the scene's pass clears the image to the background
     /// and draws its meshes with depth, then the particles are drawn tested against that depth
-    /// (`renderer` must be made for [`Scene::target`] of this target's).
+    /// (`renderer`, raster or compute, must be made for [`Scene::target`] of this target's; the
+    /// draw is prepared after the meshes, whose depth a compute renderer reads).
     pub fn record_over_scene(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -183,13 +184,13 @@ impl Offscreen {
         camera: &Camera,
         scene: &Scene,
     ) -> Result<(), RuntimeError> {
-        effect.prepare_draw(encoder, renderer, camera)?;
         let background = effect
             .group_compiled(renderer.first_group())?
             .ir
             .render
             .background;
         scene.record(encoder, self.attachment(background), camera);
+        effect.prepare_draw(encoder, renderer, camera)?;
         let mut color = self.attachment(background);
         color.ops.load = wgpu::LoadOp::Load;
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
