@@ -93,10 +93,8 @@ impl DrawMethod {
             graph.groups.iter().map(|g| &g.effect.ir).collect();
         let why_not = if gpu.info.device_type == wgpu::DeviceType::Cpu {
             Some("a CPU adapter rasterises faster than it splats")
-        } else if let Some(why) = Splat::why_not(&irs) {
-            Some(why)
         } else {
-            None
+            Splat::why_not(&irs)
         };
         match why_not {
             Some(why) => (DrawMethod::Raster, format!("auto: {why}")),
