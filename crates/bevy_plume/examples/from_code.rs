@@ -5,7 +5,10 @@
 //! In a window: `cargo +nightly run --ignore-rust-version --example from_code`.
 //! Headless: `... --example from_code -- --headless from_code.png --frames 90`: with no mouse,
 //! a burst fires every quarter second along a line and the wind blows from the left.
-//! The effect file is `crates/bevy_plume/assets/impact.plume.ron`.
+//! The effect file is `crates/bevy_plume/assets/impact.plume.ron`. `tests/click.rs` includes
+//! this file as a module and clicks through [`burst_on_click`].
+
+#![allow(dead_code)] // tests/click.rs uses part of it.
 
 use bevy::core_pipeline::prepass::DepthPrepass;
 use bevy::prelude::*;
@@ -13,7 +16,7 @@ use bevy_plume::headless::{default_plugins, Headless, HeadlessPlugin};
 use bevy_plume::{PlumeBurst, PlumeEffect, PlumePlugin};
 
 /// The example's asset folder.
-const ASSETS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets");
+pub const ASSETS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/assets");
 
 /// How much one press of an arrow key changes the wind (m/s²), and its limit either way.
 const WIND_STEP: f32 = 2.0;
@@ -48,7 +51,7 @@ fn main() -> AppExit {
 /// Marks the sparks' effect, which sits at the origin so that a burst's position is the
 /// world position it was fired at.
 #[derive(Component)]
-struct Impacts;
+pub struct Impacts;
 
 fn setup(
     mut commands: Commands,
@@ -94,7 +97,7 @@ fn setup(
 }
 
 /// A burst of sparks where the cursor's ray meets the ground (y = 0), on a left click.
-fn burst_on_click(
+pub fn burst_on_click(
     buttons: Res<ButtonInput<MouseButton>>,
     windows: Query<&Window>,
     cameras: Query<(&Camera, &GlobalTransform)>,
