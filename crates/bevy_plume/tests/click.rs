@@ -4,7 +4,6 @@
 //! outside the window bursts nothing. Headless on lavapipe, with a
 //! window entity that only carries the cursor (no display).
 
-#[allow(dead_code)]
 #[path = "../examples/from_code.rs"]
 mod from_code;
 
