@@ -451,9 +451,16 @@ fn a_compacted_list_of_live_slots_draws_what_hidden_free_slots_draw() {
     assert!(sim.totals().unwrap().died > 0, "slots were freed");
     let target = Offscreen::new(&gpu, 200, 120).unwrap();
     let camera = target.effect_camera(&sim);
-    let hidden = target
-        .render(&sim, &sim.renderer(&target.target()).unwrap(), &camera)
-        .unwrap();
+    let hidden = renderer_with(
+        &sim,
+        &target.target(),
+        &DrawOptions {
+            dead_slots: DeadSlots::Hidden,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let hidden = target.render(&sim, &hidden, &camera).unwrap();
     let compacted = renderer_with(
         &sim,
         &target.target(),

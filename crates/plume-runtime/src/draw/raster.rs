@@ -3,8 +3,8 @@
 //! `DrawView` uniform, and how many instances a draw issues.
 //!
 //! - A stateful effect draws its live slots: by default through a compacted list of them
-//!   (order kept), or one instance per slot with free slots as degenerate quads
-//!   ([`DeadSlots`]). With `sort: true` it draws through the sorted slots, and only as many
+//!   (order kept) from 4096 slots, below that one instance per slot with free slots as
+//!   degenerate quads ([`DeadSlots`]). With `sort: true` it draws through the sorted slots, and only as many
 //!   instances as are alive: a one-thread kernel writes the indirect draw's instance count
 //!   (capacity − free count) on the GPU, so nothing is read back.
 //! - A stateless effect draws the slots of its segment table (a count the CPU knows); each
@@ -33,18 +33,28 @@ use crate::error::RuntimeError;
 use crate::draw::target::DrawTarget;
 
 /// How a stateful, unsorted draw skips the free slots (a sorted draw and a stateless draw
-/// already issue only the live instances). The default is the compacted list: on an H100 it
-/// was faster at every occupancy measured, 1% to 75% alive (docs/performance.md), because a
-/// hidden quad still costs its vertices while listing 10M slots costs 0.4 ms.
+/// already issue only the live instances). The default compacts the list of an effect of
+/// [`COMPACT_FROM_SLOTS`] slots or more: on an H100 the list was faster at every occupancy
+/// measured, 1% to 75% alive of 10M slots (docs/performance.md), because a hidden quad still
+/// costs its vertices (about 3 ns a slot) while listing 10M slots costs 0.4 ms. A small effect
+/// draws every slot instead: its hidden quads cost microseconds, and the list would cost a
+/// compute pass of three dispatches a frame, which a game with hundreds of small effects pays
+/// on the CPU for each.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DeadSlots {
     /// One instance per slot; the vertex shader turns a free slot into a degenerate quad.
     Hidden,
     /// A compacted list of the live slots first (three compute passes),
     /// then an indirect draw of exactly those.
-    #[default]
     Compacted,
+    /// Compacted from [`COMPACT_FROM_SLOTS`] slots, hidden below.
+    #[default]
+    BySize,
 }
+
+/// The capacity from which [`DeadSlots::BySize`] compacts the list of live slots: about where
+/// 4 hidden vertices a slot (3 ns on an H100) cost what the list's three small dispatches do.
+pub const COMPACT_FROM_SLOTS: u32 = 4096;
 
 /// Choices of a draw beyond its target.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -125,7 +135,12 @@ impl GroupDraw {
         }
         let device = &gpu.device;
         let stateless = effect.layout.stateless();
-        let compacted = options.dead_slots == DeadSlots::Compacted && !stateless && !effect.ir.sort;
+        let compacted = match options.dead_slots {
+            DeadSlots::Hidden => false,
+            DeadSlots::Compacted => true,
+            DeadSlots::BySize => effect.ir.capacity >= COMPACT_FROM_SLOTS,
+        } && !stateless
+            && !effect.ir.sort;
         let live = match compacted {
             true => Some(LiveList::new(gpu, res, effect, options.primitive)?),
             false => None,
