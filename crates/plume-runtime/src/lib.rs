@@ -42,5 +42,6 @@ pub use error::RuntimeError;
 pub use glam;
 pub use sim::bounds::LiveBounds;
 pub use sim::effect::Effect;
+pub use sim::planned::PlannedSteps;
 /// The wgpu this crate is built against: a host must use the same version.
 pub use wgpu;

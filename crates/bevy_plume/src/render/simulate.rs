@@ -19,10 +19,14 @@ use crate::effect::SimulationSpace;
 use crate::render::instances::PlumeInstances;
 use crate::render::motion;
 
-/// Steps every instance.
+/// Steps every instance. An instance whose frame is one part (the usual frame: one place, a
+/// few steps) has its steps planned, and all of those are recorded in one compute pass: a pass
+/// per instance cost the CPU more than the steps themselves for small effects. The rest (a
+/// world-space frame in parts, an effect with events) record their own passes.
 pub(crate) fn simulate(mut context: RenderContext, mut store: ResMut<PlumeInstances>) {
     let encoder = context.command_encoder();
-    for instance in store.instances.values_mut() {
+    let mut planned = Vec::new();
+    for (entity, instance) in store.instances.iter_mut() {
         let steps = std::mem::take(&mut instance.steps);
         let in_world = instance.space == SimulationSpace::World;
         let name = &instance.effect.compiled().ir.name;
@@ -39,19 +43,43 @@ pub(crate) fn simulate(mut context: RenderContext, mut store: ResMut<PlumeInstan
             (true, _) => motion::parts(steps, instance.placed_at.unwrap_or(to), to),
             (false, _) => vec![(steps, to)],
         };
+        // One plan holds at most 256 steps (a long warm-up records its own passes).
+        let plan = parts.len() == 1 && steps <= 256 && instance.effect.plans_steps();
         for (n, at) in parts {
             if in_world && finite {
                 if let Some(placement) = Placement::from_cols(at.to_cols_array()) {
                     instance.effect.set_placement(placement);
                 }
             }
-            if let Err(err) = instance.effect.advance(encoder, n) {
+            let recorded = match plan {
+                true => instance
+                    .effect
+                    .plan_steps(encoder, n)
+                    .map(|steps| planned.push((*entity, steps))),
+                false => instance.effect.advance(encoder, n),
+            };
+            if let Err(err) = recorded {
                 error!("{}: {err}", instance.effect.compiled().ir.name);
                 break;
             }
         }
         if finite {
             instance.placed_at = Some(to);
+        }
+    }
+    if planned.is_empty() {
+        return;
+    }
+    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+        label: Some("plume steps"),
+        timestamp_writes: None,
+    });
+    for (entity, steps) in &planned {
+        let Some(instance) = store.instances.get(entity) else {
+            continue;
+        };
+        if let Err(err) = instance.effect.record_planned(&mut pass, steps) {
+            error!("{}: {err}", instance.effect.compiled().ir.name);
         }
     }
 }

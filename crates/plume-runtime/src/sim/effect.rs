@@ -89,7 +89,7 @@ pub struct Effect {
     names: Vec<String>,
     groups: Vec<Group>,
     /// The event streams; None for one group without events, which steps alone.
-    events: Option<Events>,
+    pub(crate) events: Option<Events>,
     warnings: Diagnostics,
     /// The kernels that copy a host's depth for a `SceneDepth` collider (made on first use).
     depth_copy: crate::device::depth_copy::DepthCopy,

@@ -113,6 +113,41 @@ impl Group {
         Ok(steps > 0)
     }
 
+    /// Plans `steps` steps (at most [`STEPS_PER_SUBMIT`]) and records their parameters' copy
+    /// into `encoder`, for [`Self::record_planned`] in a compute pass of the caller's; a
+    /// stateless group only advances its bookkeeping and plans nothing.
+    pub(crate) fn plan_steps(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        steps: u64,
+    ) -> Result<Vec<StepPlan>, RuntimeError> {
+        if let Steps::Stateless(stateless) = &mut self.steps {
+            stateless.advance(&mut self.schedule, steps, |_| {});
+            return Ok(Vec::new());
+        }
+        let plans: Vec<StepPlan> = (0..steps).map(|_| self.schedule.next_plan()).collect();
+        self.copy_params(encoder, &plans)?;
+        Ok(plans)
+    }
+
+    /// Records `plans` (from [`Self::plan_steps`]) into the caller's compute pass.
+    pub(crate) fn record_planned(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        plans: &[StepPlan],
+    ) -> Result<(), RuntimeError> {
+        match &self.steps {
+            Steps::Stateful(stateful) if !plans.is_empty() => stateful.record(
+                &self.gpu,
+                pass,
+                self.chunks()?,
+                plans,
+                self.res.params_stride,
+            ),
+            _ => Ok(()),
+        }
+    }
+
     /// Records the parameters' copy and one compute pass of `plans` (at most 256 steps).
     fn record_plans(
         &self,

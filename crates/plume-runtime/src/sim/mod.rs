@@ -14,5 +14,6 @@ pub(crate) mod events;
 pub(crate) mod flock;
 pub(crate) mod graph;
 pub(crate) mod group;
+pub(crate) mod planned;
 pub(crate) mod scene_depth;
 pub(crate) mod steps;
