@@ -41,12 +41,7 @@ fn click(h: &mut Harness, window: Entity, at: Option<Vec2>) {
 fn a_click_bursts_where_the_cursor_s_ray_meets_the_ground() {
     let mut h = Harness::new(std::path::Path::new(from_code::ASSETS));
     // The example's camera: up and back, looking down at the ground.
-    let camera = h
-        .app
-        .world_mut()
-        .query_filtered::<Entity, With<Camera3d>>()
-        .single(h.app.world())
-        .unwrap();
+    let camera = h.camera();
     h.app
         .world_mut()
         .entity_mut(camera)

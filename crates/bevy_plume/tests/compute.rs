@@ -6,7 +6,6 @@
 mod common;
 
 use std::sync::Mutex;
-use std::time::Duration;
 
 use bevy::prelude::*;
 use bevy::render::RenderApp;
@@ -33,43 +32,12 @@ fn wall_and_dots(draw: PlumeDraw, msaa: Msaa, wall: bool) -> image::RgbaImage {
     std::fs::write(dir.join("red.plume.ron"), big_dots((1.0, 0.2, 0.1))).unwrap();
     std::fs::write(dir.join("green.plume.ron"), big_dots((0.1, 1.0, 0.2))).unwrap();
     let mut h = Harness::new(&dir);
-    let camera = h
-        .app
-        .world_mut()
-        .query_filtered::<Entity, With<Camera3d>>()
-        .single(h.app.world())
-        .unwrap();
+    let camera = h.camera();
     h.app.world_mut().entity_mut(camera).insert(msaa);
-    let world = h.app.world_mut();
-    let wall_mesh = world
-        .resource_mut::<Assets<Mesh>>()
-        .add(Cuboid::new(10.0, 10.0, 0.2));
-    let black = world
-        .resource_mut::<Assets<StandardMaterial>>()
-        .add(StandardMaterial {
-            base_color: Color::BLACK,
-            unlit: true,
-            ..default()
-        });
     if wall {
-        world.spawn((
-            Mesh3d(wall_mesh),
-            MeshMaterial3d(black),
-            Transform::from_xyz(-5.0, 0.0, 2.0),
-        ));
+        h.spawn_wall(10.0, Color::BLACK, Vec3::new(-5.0, 0.0, 2.0));
     }
-    // Bevy compiles the wall's pipelines in the background: wait until they are ready.
-    h.update(5);
-    let ready = h.update_until(600, Duration::from_millis(2), |h| {
-        h.app
-            .sub_app(RenderApp)
-            .world()
-            .resource::<bevy::render::render_resource::PipelineCache>()
-            .waiting_pipelines()
-            .count()
-            == 0
-    });
-    assert!(ready, "Bevy's pipelines were not ready within 600 frames");
+    h.wait_for_pipelines();
     let red = h.load("red.plume.ron");
     let green = h.load("green.plume.ron");
     for (handle, x) in [(red, -2.0), (green, 2.0)] {

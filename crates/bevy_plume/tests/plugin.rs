@@ -684,48 +684,16 @@ fn a_scene_depth_collider_meets_what_the_camera_s_depth_prepass_drew() {
         let dir = asset_dir("scene_depth");
         std::fs::write(dir.join("flying.plume.ron"), FLYING_DOTS).unwrap();
         let mut h = Harness::new(&dir);
-        let camera = h
-            .app
-            .world_mut()
-            .query_filtered::<Entity, With<Camera3d>>()
-            .single(h.app.world())
-            .unwrap();
+        let camera = h.camera();
         let mut camera = h.app.world_mut().entity_mut(camera);
         camera.insert(msaa);
         if prepass {
             camera.insert(bevy::core_pipeline::prepass::DepthPrepass);
         }
-        let world = h.app.world_mut();
-        let wall = world
-            .resource_mut::<Assets<Mesh>>()
-            .add(Cuboid::new(20.0, 20.0, 0.2));
-        let white = world
-            .resource_mut::<Assets<StandardMaterial>>()
-            .add(StandardMaterial {
-                unlit: true,
-                ..default()
-            });
-        world.spawn((
-            Mesh3d(wall),
-            MeshMaterial3d(white),
-            Transform::from_xyz(0.0, 0.0, -2.1),
-        ));
-        // Bevy compiles the wall's pipelines in the background: until they are ready there is
-        // no depth to meet, and dots launched now would be past the wall before it appears.
-        h.update(5);
-        let ready = h.update_until(600, Duration::from_millis(2), |h| {
-            h.app
-                .sub_app(RenderApp)
-                .world()
-                .resource::<bevy::render::render_resource::PipelineCache>()
-                .waiting_pipelines()
-                .count()
-                == 0
-        });
-        assert!(
-            ready,
-            "{msaa:?}: Bevy's pipelines were not ready within 600 frames"
-        );
+        h.spawn_wall(20.0, Color::WHITE, Vec3::new(0.0, 0.0, -2.1));
+        // Until the wall's pipelines are ready there is no depth to meet, and dots launched
+        // now would be past the wall before it appears.
+        h.wait_for_pipelines();
         h.update(5);
         let handle = h.load("flying.plume.ron");
         let entity = h.app.world_mut().spawn(PlumeEffect::new(handle)).id();

@@ -3,6 +3,8 @@
 //! display at all it fails with a message that says so and suggests `plume render`. These tests
 //! never skip: without `xvfb-run` they fail with how to install it (`.ci/run` installs it).
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -345,28 +347,14 @@ fn a_scene_depth_collider_meets_the_preview_s_scene_as_it_meets_plume_render_s()
 #[test]
 fn the_compute_renderer_previews_what_the_raster_one_does() {
     // crystal.ron: sprites over a mesh the preview draws; the compute renderer tests its depth.
-    let dir = std::env::temp_dir();
-    let pid = std::process::id();
-    let (raster, compute) = (
-        dir.join(format!("plume-preview-raster-{pid}.png")),
-        dir.join(format!("plume-preview-compute-{pid}.png")),
-    );
-    let said = preview_screenshot_drawn(&effect("crystal.ron"), 20, &raster, "raster");
+    let paths = common::image_pair("preview");
+    let said = preview_screenshot_drawn(&effect("crystal.ron"), 20, &paths.0, "raster");
     assert!(said.contains("drawn by raster (as asked)"), "{said}");
-    let said = preview_screenshot_drawn(&effect("crystal.ron"), 20, &compute, "compute");
+    let said = preview_screenshot_drawn(&effect("crystal.ron"), 20, &paths.1, "compute");
     assert!(said.contains("drawn by compute (as asked)"), "{said}");
-    let a = image::open(&raster).unwrap().to_rgba8();
-    let b = image::open(&compute).unwrap().to_rgba8();
-    std::fs::remove_file(&raster).ok();
-    std::fs::remove_file(&compute).ok();
+    let (a, b) = common::take_images(&paths);
     // The raster draw rounds after every blend and snaps edges; the compute one blends once at
     // pixel centres: close on average (tests/embed.rs measures the gap per effect).
-    let mean = a
-        .as_raw()
-        .iter()
-        .zip(b.as_raw())
-        .map(|(x, y)| f64::from(x.abs_diff(*y)))
-        .sum::<f64>()
-        / a.as_raw().len() as f64;
+    let mean = common::mean_difference(&a, &b);
     assert!(mean < 1.0, "mean difference {mean:.3} of 255");
 }

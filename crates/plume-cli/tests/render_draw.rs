@@ -3,6 +3,8 @@
 //! the meshes an effect names the splat tests their depth (the embedding API's compute
 //! renderer) and draws the raster image.
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -55,36 +57,22 @@ fn auto_says_which_renderer_it_took_and_compute_names_the_splat() {
 fn over_the_scene_s_meshes_the_splat_draws_the_raster_image() {
     // crystal.ron names a mesh (a collider) that `plume render` draws around the particles:
     // the splat now draws over it too, tested against its depth.
-    let dir = std::env::temp_dir();
-    let pid = std::process::id();
-    let (raster, compute) = (
-        dir.join(format!("plume-crystal-raster-{pid}.png")),
-        dir.join(format!("plume-crystal-compute-{pid}.png")),
-    );
+    let paths = common::image_pair("crystal");
     let args = |draw| {
         [
             "--draw", draw, "--size", "160x90", "--frames", "1", "--every", "40",
         ]
     };
-    let (ok, err) = render_effect("crystal", &args("raster"), &raster);
+    let (ok, err) = render_effect("crystal", &args("raster"), &paths.0);
     assert!(ok, "{err}");
-    let (ok, err) = render_effect("crystal", &args("compute"), &compute);
+    let (ok, err) = render_effect("crystal", &args("compute"), &paths.1);
     assert!(ok, "{err}");
     assert!(err.contains("scene:"), "the meshes are drawn: {err}");
-    let a = image::open(&raster).unwrap().to_rgba8();
-    let b = image::open(&compute).unwrap().to_rgba8();
-    std::fs::remove_file(&raster).ok();
-    std::fs::remove_file(&compute).ok();
+    let (a, b) = common::take_images(&paths);
     // The same meshes; the particles in front of them and not behind: a raster draw rounds
     // after every blend and snaps edges, the splat blends once at pixel centres (tests/embed.rs
     // in the facade measures the same gap on five effects), so the mean stays small.
-    let diff: f64 = a
-        .as_raw()
-        .iter()
-        .zip(b.as_raw())
-        .map(|(x, y)| f64::from(x.abs_diff(*y)))
-        .sum::<f64>()
-        / a.as_raw().len() as f64;
+    let diff = common::mean_difference(&a, &b);
     assert!(diff < 1.0, "mean difference {diff:.3} of 255");
     // The mesh is shaded grey (channels within a few steps; the sparks are gold).
     let grey = |p: &image::Rgba<u8>| {

@@ -180,6 +180,55 @@ impl Harness {
 }
 
 impl Harness {
+    /// The harness's camera (its one `Camera3d`).
+    pub fn camera(&mut self) -> Entity {
+        self.app
+            .world_mut()
+            .query_filtered::<Entity, With<Camera3d>>()
+            .single(self.app.world())
+            .expect("one camera")
+    }
+
+    /// An unlit wall Bevy draws (a `width` x `width` square 0.2 m thick, facing the camera)
+    /// of `color`, centred at `at`.
+    pub fn spawn_wall(&mut self, width: f32, color: Color, at: Vec3) -> Entity {
+        let world = self.app.world_mut();
+        let mesh = world
+            .resource_mut::<Assets<Mesh>>()
+            .add(Cuboid::new(width, width, 0.2));
+        let material = world
+            .resource_mut::<Assets<StandardMaterial>>()
+            .add(StandardMaterial {
+                base_color: color,
+                unlit: true,
+                ..default()
+            });
+        world
+            .spawn((
+                Mesh3d(mesh),
+                MeshMaterial3d(material),
+                Transform::from_translation(at),
+            ))
+            .id()
+    }
+
+    /// Runs frames until Bevy has compiled every pipeline it was asked for (it compiles in the
+    /// background: a mesh spawned now is drawn, and its depth there to meet, only then); fails
+    /// the test after 600 frames.
+    pub fn wait_for_pipelines(&mut self) {
+        self.update(5);
+        let ready = self.update_until(600, Duration::from_millis(2), |h| {
+            h.app
+                .sub_app(bevy::render::RenderApp)
+                .world()
+                .resource::<bevy::render::render_resource::PipelineCache>()
+                .waiting_pipelines()
+                .count()
+                == 0
+        });
+        assert!(ready, "Bevy's pipelines were not ready within 600 frames");
+    }
+
     /// The first captured frame with anything lit (channel over 40), trying up to 10 frames
     /// (each capture runs at least one). Known issue (docs/bevy.md): now and then, on
     /// llvmpipe, the frame a screenshot captures lacks the particles that the frames around it

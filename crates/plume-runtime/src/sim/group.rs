@@ -155,7 +155,7 @@ impl Group {
         plans: &[StepPlan],
         timestamp_writes: Option<wgpu::ComputePassTimestampWrites<'_>>,
     ) -> Result<(), RuntimeError> {
-        let Steps::Stateful(stateful) = &self.steps else {
+        let Steps::Stateful(_) = &self.steps else {
             return Ok(());
         };
         self.copy_params(encoder, plans)?;
@@ -163,13 +163,7 @@ impl Group {
             label: Some("steps"),
             timestamp_writes,
         });
-        stateful.record(
-            &self.gpu,
-            &mut pass,
-            self.chunks()?,
-            plans,
-            self.res.params_stride,
-        )
+        self.record_planned(&mut pass, plans)
     }
 
     /// Records the copy of `plans`' parameters (at most 256 steps) into the params buffer.
