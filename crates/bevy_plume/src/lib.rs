@@ -57,7 +57,9 @@ impl Plugin for PlumePlugin {
             .register_asset_loader(PlumeEffectLoader { root: Some(root) })
             .add_systems(
                 PostUpdate,
-                effect::bounds_from_files.in_set(VisibilitySystems::CalculateBounds),
+                (effect::bounds_from_files, effect::bounds_from_gpu)
+                    .chain()
+                    .in_set(VisibilitySystems::CalculateBounds),
             )
             .add_systems(PostUpdate, effect::bindable_camera_depth);
         render::build(app);

@@ -40,7 +40,7 @@ pub use error::RuntimeError;
 /// The glam of [`Camera`]'s matrices (a host on another glam converts through
 /// `Mat4::from_cols_array`).
 pub use glam;
-pub use sim::bounds::LiveBounds;
+pub use sim::bounds::{BoundsWatch, LiveBounds};
 pub use sim::effect::Effect;
 pub use sim::planned::PlannedSteps;
 /// The wgpu this crate is built against: a host must use the same version.

@@ -107,6 +107,7 @@ pub(crate) fn queue_effects(
             {
                 continue;
             }
+            stats.draws += 1;
             if instance
                 .views
                 .get(&view_entity)

@@ -118,8 +118,10 @@ pub struct PlumeRenderStats {
     /// Bytes of particle state they hold on the GPU (capacity times bytes per particle, trail
     /// history included, over every group of every instance).
     pub particle_bytes: u64,
-    /// Camera draws of an effect queued this frame that the compute renderer makes (the rest
-    /// are raster ones; see `PlumeDraw`).
+    /// Camera draws of an effect queued this frame (an effect culled by its bounds has none).
+    pub draws: usize,
+    /// Of those, the ones the compute renderer makes (the rest are raster ones; see
+    /// `PlumeDraw`).
     pub compute_draws: usize,
 }
 
@@ -205,6 +207,7 @@ pub(crate) fn sync_instances(
         instances: store.instances.len(),
         particle_bytes: store.instances.values().map(|i| i.particle_bytes).sum(),
         // Counted as the draws are queued.
+        draws: 0,
         compute_draws: 0,
     };
 }

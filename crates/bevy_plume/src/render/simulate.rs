@@ -8,22 +8,29 @@
 //! camera's opaque and transparent passes ([`composite_for_view`]): it reads the depth the
 //! opaque pass drew.
 
+use std::collections::HashMap;
+
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
 use bevy::prelude::*;
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::view::{ExtractedView, ViewDepthStencilTexture};
 use plume_compiler::placement::Placement;
-use plume_runtime::Camera;
+use plume_runtime::{BoundsWatch, Camera};
 
 use crate::effect::SimulationSpace;
-use crate::render::instances::PlumeInstances;
+use crate::render::instances::{Instance, PlumeInstances};
+use crate::render::measured::{MeasuredBounds, MeasuredBox};
 use crate::render::motion;
 
 /// Steps every instance. An instance whose frame is one part (the usual frame: one place, a
 /// few steps) has its steps planned, and all of those are recorded in one compute pass: a pass
 /// per instance cost the CPU more than the steps themselves for small effects. The rest (a
 /// world-space frame in parts, an effect with events) record their own passes.
-pub(crate) fn simulate(mut context: RenderContext, mut store: ResMut<PlumeInstances>) {
+pub(crate) fn simulate(
+    mut context: RenderContext,
+    mut store: ResMut<PlumeInstances>,
+    measured: Res<MeasuredBounds>,
+) {
     let encoder = context.command_encoder();
     let mut planned = Vec::new();
     for (entity, instance) in store.instances.iter_mut() {
@@ -67,20 +74,81 @@ pub(crate) fn simulate(mut context: RenderContext, mut store: ResMut<PlumeInstan
             instance.placed_at = Some(to);
         }
     }
-    if planned.is_empty() {
-        return;
-    }
-    let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-        label: Some("plume steps"),
-        timestamp_writes: None,
-    });
-    for (entity, steps) in &planned {
-        let Some(instance) = store.instances.get(entity) else {
-            continue;
-        };
-        if let Err(err) = instance.effect.record_planned(&mut pass, steps) {
-            error!("{}: {err}", instance.effect.compiled().ir.name);
+    // Bounds: the planned instances' reductions go into the shared pass, after their steps.
+    let mut boxes = measured.lock();
+    boxes.retain(|entity, _| store.instances.contains_key(entity));
+    let mut reducing = std::collections::HashSet::new();
+    for (entity, _) in &planned {
+        if let Some(instance) = store.instances.get(entity).filter(|i| measures_bounds(i)) {
+            match instance.effect.watch_bounds_begin(encoder) {
+                Ok((watch, now)) => {
+                    note_bounds(&mut boxes, *entity, instance, watch);
+                    if now {
+                        reducing.insert(*entity);
+                    }
+                }
+                Err(err) => warn_once!("{}: {err}", instance.effect.compiled().ir.name),
+            }
         }
+    }
+    if !planned.is_empty() {
+        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("plume steps"),
+            timestamp_writes: None,
+        });
+        for (entity, steps) in &planned {
+            let Some(instance) = store.instances.get(entity) else {
+                continue;
+            };
+            let effect = &instance.effect;
+            let mut recorded = effect.record_planned(&mut pass, steps);
+            if recorded.is_ok() && reducing.contains(entity) {
+                recorded = effect.watch_bounds_dispatch(&mut pass);
+            }
+            if let Err(err) = recorded {
+                error!("{}: {err}", effect.compiled().ir.name);
+            }
+        }
+    }
+    for entity in &reducing {
+        if let Some(instance) = store.instances.get(entity) {
+            if let Err(err) = instance.effect.watch_bounds_end(encoder) {
+                warn_once!("{}: {err}", instance.effect.compiled().ir.name);
+            }
+        }
+    }
+    // The rest measure in passes of their own.
+    let planned: std::collections::HashSet<Entity> = planned.iter().map(|(e, _)| *e).collect();
+    for (entity, instance) in &store.instances {
+        if planned.contains(entity) || !measures_bounds(instance) {
+            if !measures_bounds(instance) {
+                boxes.remove(entity);
+            }
+            continue;
+        }
+        match instance.effect.watch_live_bounds(encoder) {
+            Ok(watch) => note_bounds(&mut boxes, *entity, instance, watch),
+            Err(err) => warn_once!("{}: {err}", instance.effect.compiled().ir.name),
+        }
+    }
+}
+
+/// Whether an instance's bounds are measured: a stateful effect whose file declares none.
+fn measures_bounds(instance: &Instance) -> bool {
+    instance.effect.compiled().ir.bounds.is_none() && !instance.effect.is_stateless()
+}
+
+/// Puts a reading that came back into `boxes`.
+fn note_bounds(
+    boxes: &mut HashMap<Entity, MeasuredBox>,
+    entity: Entity,
+    instance: &Instance,
+    watch: BoundsWatch,
+) {
+    if let BoundsWatch::Measured(bounds) = watch {
+        let corners = bounds.map(|b| (Vec3::from(b.min), Vec3::from(b.max)));
+        let in_world = instance.space == SimulationSpace::World;
+        boxes.insert(entity, MeasuredBox { corners, in_world });
     }
 }
 

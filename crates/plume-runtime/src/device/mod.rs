@@ -6,6 +6,7 @@
 //!
 //! Imports nothing of the crate but [`crate::error`]: every other folder builds on it.
 
+pub(crate) mod async_read;
 pub(crate) mod bind_layout;
 pub(crate) mod buffers;
 pub(crate) mod depth_copy;

@@ -9,11 +9,13 @@
 
 use plume_compiler::passes::layout::Attribute;
 
+use crate::device::async_read::AsyncRead;
 use crate::device::buffers::{filled_buffer, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::device::readback::read_buffer;
 use crate::device::resources::Chunk;
 use crate::error::RuntimeError;
+use crate::sim::effect::Effect;
 
 const BOUNDS_WGSL: &str = r#"
 // One particle buffer's slots, word-major: the position in lanes x, y, z of 16-byte word 0,
@@ -123,6 +125,10 @@ fn float_of(key: u32) -> f32 {
 pub(crate) struct BoundsProbe {
     pipeline: wgpu::ComputePipeline,
     keys: wgpu::Buffer,
+    /// The keys of an empty box, copied over `keys` before each watched reduction.
+    empty: wgpu::Buffer,
+    /// The watched reductions' box, read back without waiting.
+    reading: AsyncRead,
     /// Per particle buffer: its bind group, its grid, and the uniform the group holds.
     parts: Vec<(wgpu::BindGroup, (u32, u32), wgpu::Buffer)>,
     gpu: Gpu,
@@ -142,6 +148,9 @@ impl BoundsProbe {
             });
         let pipeline = gpu.compute_pipeline(&module, "bounds", None);
         let keys = filled_buffer(gpu, "live bounds", 24, STORAGE, |_| {})?;
+        let empty = filled_buffer(gpu, "empty bounds", 24, STORAGE, |b| {
+            b.copy_from_slice(&empty_keys());
+        })?;
         let mut parts = Vec::new();
         for (layout, chunks) in buffers {
             let id_word = layout
@@ -172,6 +181,8 @@ impl BoundsProbe {
         Ok(Self {
             pipeline,
             keys,
+            empty,
+            reading: AsyncRead::new(gpu, "live bounds reading", 24),
             parts,
             gpu: gpu.clone(),
         })
@@ -180,35 +191,176 @@ impl BoundsProbe {
     /// Measures the buffers' live particles now: empties the box and runs the reduction over
     /// every buffer in one submission.
     pub(crate) fn measure(&self) -> Result<Option<LiveBounds>, RuntimeError> {
-        let empty: Vec<u8> = [u32::MAX; 3]
-            .into_iter()
-            .chain([0; 3])
-            .flat_map(u32::to_le_bytes)
-            .collect();
-        self.gpu.queue.write_buffer(&self.keys, 0, &empty);
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
-        {
-            let mut pass = encoder.begin_compute_pass(&Default::default());
-            pass.set_pipeline(&self.pipeline);
-            for (group, (x, y), _) in &self.parts {
-                pass.set_bind_group(0, group, &[]);
-                pass.dispatch_workgroups(*x, *y, 1);
-            }
-        }
+        self.record(&mut encoder);
         self.gpu.queue.submit([encoder.finish()]);
-        self.read()
+        Ok(decode(&read_buffer(&self.gpu, &self.keys)?))
     }
 
-    /// The box measured: None when no live particle was seen.
-    fn read(&self) -> Result<Option<LiveBounds>, RuntimeError> {
-        let bytes = read_buffer(&self.gpu, &self.keys)?;
-        let key = |k: usize| u32::from_le_bytes(bytes[4 * k..4 * k + 4].try_into().unwrap());
-        if key(0) == u32::MAX && key(3) == 0 {
-            return Ok(None);
+    /// Records the box emptied, then the reduction over every buffer, into `encoder`.
+    fn record(&self, encoder: &mut wgpu::CommandEncoder) {
+        self.clear(encoder);
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        self.dispatch(&mut pass);
+    }
+
+    /// Records the box emptied.
+    fn clear(&self, encoder: &mut wgpu::CommandEncoder) {
+        encoder.copy_buffer_to_buffer(&self.empty, 0, &self.keys, 0, 24);
+    }
+
+    /// Records the reduction over every buffer into `pass`.
+    fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>) {
+        pass.set_pipeline(&self.pipeline);
+        for (group, (x, y), _) in &self.parts {
+            pass.set_bind_group(0, group, &[]);
+            pass.dispatch_workgroups(*x, *y, 1);
         }
-        let min = [float_of(key(0)), float_of(key(1)), float_of(key(2))];
-        let max = [float_of(key(3)), float_of(key(4)), float_of(key(5))];
-        Ok(Some(LiveBounds { min, max }))
+    }
+
+    /// The first part of a watched reduction: the reading an earlier frame's reduction left,
+    /// if it has come back, and whether a new reduction is to be recorded now (the last
+    /// reading was taken), in which case the box is emptied in `encoder`.
+    fn watch_begin(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(BoundsWatch, bool), RuntimeError> {
+        let taken = self.reading.poll()?;
+        let now = self.reading.is_free();
+        if now {
+            self.clear(encoder);
+        }
+        let watch = match taken {
+            Some(bytes) => BoundsWatch::Measured(decode(&bytes)),
+            None => BoundsWatch::Waiting,
+        };
+        Ok((watch, now))
+    }
+}
+
+/// The six keys of an empty box (min at the largest key, max at the smallest).
+fn empty_keys() -> Vec<u8> {
+    [u32::MAX; 3]
+        .into_iter()
+        .chain([0; 3])
+        .flat_map(u32::to_le_bytes)
+        .collect()
+}
+
+/// The box the six keys in `bytes` hold: None when no live particle was seen.
+fn decode(bytes: &[u8]) -> Option<LiveBounds> {
+    let key = |k: usize| u32::from_le_bytes(bytes[4 * k..4 * k + 4].try_into().unwrap());
+    if key(0) == u32::MAX && key(3) == 0 {
+        return None;
+    }
+    let min = [float_of(key(0)), float_of(key(1)), float_of(key(2))];
+    let max = [float_of(key(3)), float_of(key(4)), float_of(key(5))];
+    Some(LiveBounds { min, max })
+}
+
+/// What [`Effect::watch_live_bounds`] knows this frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum BoundsWatch {
+    /// No reading has come back since the last one.
+    Waiting,
+    /// The box of the live particles at a recent frame (None: none was alive).
+    Measured(Option<LiveBounds>),
+}
+
+impl Effect {
+    /// The reduction over every group's particle buffers (made on first use).
+    pub(crate) fn bounds_probe(&self) -> Result<&BoundsProbe, RuntimeError> {
+        if self.bounds.get().is_none() {
+            let mut buffers = Vec::new();
+            for group in self.groups() {
+                buffers.push((&group.effect.layout, group.chunks()?));
+            }
+            let probe = BoundsProbe::new(self.gpu(), &buffers)?;
+            let _ = self.bounds.set(probe);
+        }
+        Ok(self.bounds.get().expect("set above"))
+    }
+
+    /// [`Self::live_bounds`] without waiting, for a host that culls by it every frame: records
+    /// the reduction into `encoder` (after the frame's steps, where the host puts it) when the
+    /// last one's reading has been taken, and returns the box of an earlier frame's reduction
+    /// once it has come back (a frame or two after it was recorded, the host's encoders
+    /// submitted in between), else [`BoundsWatch::Waiting`]. An error for a stateless effect,
+    /// whose particles are only evaluated on demand ([`Self::live_bounds`] does).
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{BoundsWatch, Effect, Gpu};
+    /// let source = r#"Effect(name: "puff", capacity: 64,
+    ///     emitters: [Emitter(burst: 64, shape: Sphere(center: (0.0, 2.0, 0.0), radius: 0.5),
+    ///                        velocity: Constant((1.0, 0.0, 0.0)))])"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let options = plume_compiler::CompileOptions { state: Some(plume_compiler::schema::State::Stateful), ..Default::default() };
+    /// let mut puff = Effect::from_source(&gpu, source, &options)?;
+    /// let mut measured = None;
+    /// for _ in 0..10 {
+    ///     let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    ///     puff.advance(&mut encoder, 1)?;
+    ///     if let BoundsWatch::Measured(bounds) = puff.watch_live_bounds(&mut encoder)? {
+    ///         measured = bounds;
+    ///     }
+    ///     gpu.queue.submit([encoder.finish()]);
+    ///     gpu.device.poll(wgpu::PollType::wait_indefinitely())?;
+    /// }
+    /// let bounds = measured.expect("a reading came back");
+    /// assert!(bounds.min[1] > 1.49 && bounds.max[1] < 2.51);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn watch_live_bounds(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<BoundsWatch, RuntimeError> {
+        let (watch, now) = self.watch_bounds_begin(encoder)?;
+        if now {
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                self.watch_bounds_dispatch(&mut pass)?;
+            }
+            self.watch_bounds_end(encoder)?;
+        }
+        Ok(watch)
+    }
+
+    /// [`Self::watch_live_bounds`] in three parts, for a host that records many effects' work
+    /// in one compute pass ([`Self::plan_steps`]): this part, before the pass, returns the
+    /// reading and whether a reduction is to be recorded now; if so,
+    /// [`Self::watch_bounds_dispatch`] records it into the pass (after the effect's steps) and
+    /// [`Self::watch_bounds_end`], after the pass, records its reading.
+    pub fn watch_bounds_begin(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(BoundsWatch, bool), RuntimeError> {
+        if self.is_stateless() {
+            return Err(RuntimeError::Control(format!(
+                "{}: a stateless effect's bounds are measured on demand (Effect::live_bounds)",
+                self.compiled().ir.name
+            )));
+        }
+        self.bounds_probe()?.watch_begin(encoder)
+    }
+
+    /// The reduction of a watched measurement, into the host's compute pass (see
+    /// [`Self::watch_bounds_begin`]).
+    pub fn watch_bounds_dispatch(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+    ) -> Result<(), RuntimeError> {
+        self.bounds_probe()?.dispatch(pass);
+        Ok(())
+    }
+
+    /// The reading of a watched measurement, recorded after the pass that reduced it (see
+    /// [`Self::watch_bounds_begin`]).
+    pub fn watch_bounds_end(&self, encoder: &mut wgpu::CommandEncoder) -> Result<(), RuntimeError> {
+        let probe = self.bounds_probe()?;
+        probe.reading.record_copy(encoder, &probe.keys);
+        Ok(())
     }
 }
 

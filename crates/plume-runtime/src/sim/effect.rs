@@ -94,7 +94,7 @@ pub struct Effect {
     /// The kernels that copy a host's depth for a `SceneDepth` collider (made on first use).
     depth_copy: crate::device::depth_copy::DepthCopy,
     /// The live-bounds reduction (made on first use: [`Self::live_bounds`]).
-    bounds: std::sync::OnceLock<crate::sim::bounds::BoundsProbe>,
+    pub(crate) bounds: std::sync::OnceLock<crate::sim::bounds::BoundsProbe>,
 }
 
 impl Effect {
@@ -494,15 +494,7 @@ impl Effect {
         for group in &self.groups {
             group.evaluate_view()?;
         }
-        if self.bounds.get().is_none() {
-            let mut buffers = Vec::new();
-            for group in &self.groups {
-                buffers.push((&group.effect.layout, group.chunks()?));
-            }
-            let probe = crate::sim::bounds::BoundsProbe::new(&self.gpu, &buffers)?;
-            let _ = self.bounds.set(probe);
-        }
-        self.bounds.get().expect("set above").measure()
+        self.bounds_probe()?.measure()
     }
 
     /// The groups' names, the top-level group first (one name for an effect without groups).

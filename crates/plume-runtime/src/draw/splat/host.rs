@@ -8,12 +8,12 @@
 //! buffer and read a frame or more later, when its mapping is done; a list that was too short
 //! grows then (that frame's tiles lost the entries past the end; later frames have them all).
 
-use std::sync::atomic::{AtomicU8, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Mutex;
 
 use plume_compiler::wgsl::draw::{splat_hdr_pitch, HostDepthTest, SplatHost};
 
 use super::Splat;
+use crate::device::async_read::AsyncRead;
 use crate::device::depth_copy::{check_texture, DepthCopy};
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
@@ -21,29 +21,14 @@ use crate::draw::target::DrawTarget;
 use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
 
-/// A readback of one group's entries needed, in the states it moves through.
-struct EntriesReadback {
-    buffer: wgpu::Buffer,
-    /// [`IDLE`], [`COPIED`], [`MAPPING`] or [`MAPPED`] (the map callback sets the last).
-    state: Arc<AtomicU8>,
-}
-
-/// Free: the next frame copies its count in.
-const IDLE: u8 = 0;
-/// A frame's count is copied in (in an encoder the host submits).
-const COPIED: u8 = 1;
-/// Mapping asked for, after that submission.
-const MAPPING: u8 = 2;
-/// Mapped: the count can be read.
-const MAPPED: u8 = 3;
-
 /// What changes from frame to frame, behind a lock (the renderer is prepared through `&self`).
 struct Frame {
     splat: Splat,
     depth_copy: DepthCopy,
     /// The host's depth texture (set by `set_scene_depth`), copied each frame.
     scene_depth: Option<wgpu::Texture>,
-    readbacks: Vec<EntriesReadback>,
+    /// Per part, the entries its last frames needed, read back without waiting.
+    readbacks: Vec<AsyncRead>,
     /// Whether the depth copy holds the far plane (no scene depth bound yet).
     far_written: bool,
 }
@@ -103,15 +88,7 @@ impl HostSplat {
         let readbacks = splat
             .parts
             .iter()
-            .map(|_| EntriesReadback {
-                buffer: gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some("splat entries needed"),
-                    size: 4,
-                    usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-                    mapped_at_creation: false,
-                }),
-                state: Arc::new(AtomicU8::new(IDLE)),
-            })
+            .map(|_| AsyncRead::new(&gpu, "splat entries needed", 4))
             .collect();
         let module = gpu
             .device
@@ -223,17 +200,8 @@ impl HostSplat {
         let frame = &mut *frame;
         // Lists a frame before found too short grow now.
         for (readback, (_, part)) in frame.readbacks.iter().zip(frame.splat.parts.iter_mut()) {
-            if readback.state.load(Ordering::Acquire) == MAPPED {
-                let needed = {
-                    let bytes = readback
-                        .buffer
-                        .slice(..)
-                        .get_mapped_range()
-                        .map_err(|e| RuntimeError::Readback(e.to_string()))?;
-                    u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]])
-                };
-                readback.buffer.unmap();
-                readback.state.store(IDLE, Ordering::Release);
+            if let Some(bytes) = readback.poll()? {
+                let needed = u32::from_le_bytes([bytes[0], bytes[1], bytes[2], bytes[3]]);
                 part.grow(u64::from(needed))?;
             }
         }
@@ -284,27 +252,7 @@ impl HostSplat {
             frame.splat.record(&mut pass)?;
         }
         for (readback, (_, part)) in frame.readbacks.iter().zip(frame.splat.parts.iter()) {
-            match readback.state.load(Ordering::Acquire) {
-                IDLE => {
-                    encoder.copy_buffer_to_buffer(part.status(), 0, &readback.buffer, 0, 4);
-                    readback.state.store(COPIED, Ordering::Release);
-                }
-                // The copy was recorded in an earlier frame, whose encoder the host has
-                // submitted before recording this one.
-                COPIED => {
-                    readback.state.store(MAPPING, Ordering::Release);
-                    let state = readback.state.clone();
-                    readback
-                        .buffer
-                        .slice(..)
-                        .map_async(wgpu::MapMode::Read, move |result| {
-                            // A failed mapping (a lost device) tries again.
-                            let next = if result.is_ok() { MAPPED } else { IDLE };
-                            state.store(next, Ordering::Release);
-                        });
-                }
-                _ => {}
-            }
+            readback.record_copy(encoder, part.status());
         }
         Ok(())
     }
