@@ -17,3 +17,4 @@ pub(crate) mod group;
 pub(crate) mod planned;
 pub(crate) mod scene_depth;
 pub(crate) mod steps;
+pub(crate) mod watch;

@@ -1,0 +1,103 @@
+//! The box of an effect's live particles measured without waiting, for a host that culls by
+//! it every frame ([`Effect::watch_live_bounds`], or in three parts inside a compute pass the
+//! host shares between effects); the reduction itself is [`crate::sim::bounds`]'s.
+
+use crate::error::RuntimeError;
+use crate::sim::bounds::{BoundsProbe, BoundsWatch};
+use crate::sim::effect::Effect;
+
+impl Effect {
+    /// The reduction over every group's particle buffers (made on first use).
+    pub(crate) fn bounds_probe(&self) -> Result<&BoundsProbe, RuntimeError> {
+        if self.bounds.get().is_none() {
+            let mut buffers = Vec::new();
+            for group in self.groups() {
+                buffers.push((&group.effect.layout, group.chunks()?));
+            }
+            let probe = BoundsProbe::new(self.gpu(), &buffers)?;
+            let _ = self.bounds.set(probe);
+        }
+        Ok(self.bounds.get().expect("set above"))
+    }
+
+    /// [`Self::live_bounds`] without waiting, for a host that culls by it every frame: records
+    /// the reduction into `encoder` (after the frame's steps, where the host puts it) when the
+    /// last one's reading has been taken, and returns the box of an earlier frame's reduction
+    /// once it has come back (a frame or two after it was recorded, the host's encoders
+    /// submitted in between), else [`BoundsWatch::Waiting`]. An error for a stateless effect,
+    /// whose particles are only evaluated on demand ([`Self::live_bounds`] does).
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{BoundsWatch, Effect, Gpu};
+    /// let source = r#"Effect(name: "puff", capacity: 64,
+    ///     emitters: [Emitter(burst: 64, shape: Sphere(center: (0.0, 2.0, 0.0), radius: 0.5),
+    ///                        velocity: Constant((1.0, 0.0, 0.0)))])"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let options = plume_compiler::CompileOptions { state: Some(plume_compiler::schema::State::Stateful), ..Default::default() };
+    /// let mut puff = Effect::from_source(&gpu, source, &options)?;
+    /// let mut measured = None;
+    /// for _ in 0..10 {
+    ///     let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    ///     puff.advance(&mut encoder, 1)?;
+    ///     if let BoundsWatch::Measured(bounds) = puff.watch_live_bounds(&mut encoder)? {
+    ///         measured = bounds;
+    ///     }
+    ///     gpu.queue.submit([encoder.finish()]);
+    ///     gpu.device.poll(wgpu::PollType::wait_indefinitely())?;
+    /// }
+    /// let bounds = measured.expect("a reading came back");
+    /// assert!(bounds.min[1] > 1.49 && bounds.max[1] < 2.51);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn watch_live_bounds(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<BoundsWatch, RuntimeError> {
+        let (watch, now) = self.watch_bounds_begin(encoder)?;
+        if now {
+            {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                self.watch_bounds_dispatch(&mut pass)?;
+            }
+            self.watch_bounds_end(encoder)?;
+        }
+        Ok(watch)
+    }
+
+    /// [`Self::watch_live_bounds`] in three parts, for a host that records many effects' work
+    /// in one compute pass ([`Self::plan_steps`]): this part, before the pass, returns the
+    /// reading and whether a reduction is to be recorded now; if so,
+    /// [`Self::watch_bounds_dispatch`] records it into the pass (after the effect's steps) and
+    /// [`Self::watch_bounds_end`], after the pass, records its reading.
+    pub fn watch_bounds_begin(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<(BoundsWatch, bool), RuntimeError> {
+        if self.is_stateless() {
+            return Err(RuntimeError::Control(format!(
+                "{}: a stateless effect's bounds are measured on demand (Effect::live_bounds)",
+                self.compiled().ir.name
+            )));
+        }
+        self.bounds_probe()?.watch_begin(encoder)
+    }
+
+    /// The reduction of a watched measurement, into the host's compute pass (see
+    /// [`Self::watch_bounds_begin`]).
+    pub fn watch_bounds_dispatch(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+    ) -> Result<(), RuntimeError> {
+        self.bounds_probe()?.dispatch(pass);
+        Ok(())
+    }
+
+    /// The reading of a watched measurement, recorded after the pass that reduced it (see
+    /// [`Self::watch_bounds_begin`]).
+    pub fn watch_bounds_end(&self, encoder: &mut wgpu::CommandEncoder) -> Result<(), RuntimeError> {
+        self.bounds_probe()?.watch_end(encoder);
+        Ok(())
+    }
+}
