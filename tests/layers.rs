@@ -86,6 +86,7 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
             // 0: the main world's types: the asset and the component.
             ("asset", 0),
             ("effect", 0),
+            ("bounds", 0),
             // 1: the render world, which reads them; the headless runner, which waits on them.
             ("render", 1),
             ("headless", 1),

@@ -24,6 +24,7 @@
 //! See docs/bevy.md in the Plume repository for what is supported and what is measured.
 
 mod asset;
+mod bounds;
 mod effect;
 pub mod headless;
 mod render;
@@ -57,7 +58,7 @@ impl Plugin for PlumePlugin {
             .register_asset_loader(PlumeEffectLoader { root: Some(root) })
             .add_systems(
                 PostUpdate,
-                (effect::bounds_from_files, effect::bounds_from_gpu)
+                (bounds::bounds_from_files, bounds::bounds_from_gpu)
                     .chain()
                     .in_set(VisibilitySystems::CalculateBounds),
             )

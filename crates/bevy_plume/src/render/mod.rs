@@ -6,7 +6,6 @@
 pub(crate) mod draw;
 pub(crate) mod extract;
 pub(crate) mod instances;
-pub(crate) mod measured;
 pub(crate) mod motion;
 pub(crate) mod simulate;
 
@@ -21,7 +20,7 @@ use bevy::render::{ExtractSchedule, Render, RenderApp, RenderSystems};
 /// Adds the render world's resources and systems (from [`crate::PlumePlugin::build`]).
 pub(crate) fn build(app: &mut App) {
     // One map both worlds hold: the render world's readings, the main world's `Aabb`s.
-    let measured = measured::MeasuredBounds::default();
+    let measured = crate::bounds::MeasuredBounds::default();
     app.insert_resource(measured.clone());
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         warn!("bevy_plume: no render app (RenderPlugin missing): effects will not run");

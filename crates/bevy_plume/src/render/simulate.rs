@@ -17,9 +17,9 @@ use bevy::render::view::{ExtractedView, ViewDepthStencilTexture};
 use plume_compiler::placement::Placement;
 use plume_runtime::{BoundsWatch, Camera};
 
+use crate::bounds::{MeasuredBounds, MeasuredBox};
 use crate::effect::SimulationSpace;
 use crate::render::instances::{Instance, PlumeInstances};
-use crate::render::measured::{MeasuredBounds, MeasuredBox};
 use crate::render::motion;
 
 /// Steps every instance. An instance whose frame is one part (the usual frame: one place, a
