@@ -120,10 +120,11 @@ pub(crate) fn simulate(
     // The rest measure in passes of their own.
     let planned: std::collections::HashSet<Entity> = planned.iter().map(|(e, _)| *e).collect();
     for (entity, instance) in &store.instances {
-        if planned.contains(entity) || !measures_bounds(instance) {
-            if !measures_bounds(instance) {
-                boxes.remove(entity);
-            }
+        if !measures_bounds(instance) {
+            boxes.remove(entity);
+            continue;
+        }
+        if planned.contains(entity) {
             continue;
         }
         match instance.effect.watch_live_bounds(encoder) {
