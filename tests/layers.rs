@@ -37,8 +37,9 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
             //    stages make and which the accuracy pass runs to calibrate a budget's choice.
             ("stages", 4),
             ("reference", 4),
-            // 5: the single-group compile driver.
+            // 5: the single-group compile driver, and its batched form.
             ("compile", 5),
+            ("batch", 5),
             // 6: effects with groups and the events between them (and their f64 reference run).
             ("graph", 6),
         ],

@@ -39,6 +39,7 @@
 //! `reference`. The public modules below re-export each stage under its short name.
 
 mod base;
+pub mod batch;
 mod compile;
 pub mod expr;
 mod features;

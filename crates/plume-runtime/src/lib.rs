@@ -40,6 +40,7 @@ pub use error::RuntimeError;
 /// The glam of [`Camera`]'s matrices (a host on another glam converts through
 /// `Mat4::from_cols_array`).
 pub use glam;
+pub use sim::batch::{BatchInstance, EffectBatch};
 pub use sim::bounds::{BoundsWatch, LiveBounds};
 pub use sim::effect::Effect;
 pub use sim::planned::PlannedSteps;

@@ -133,6 +133,10 @@ pub struct Layout {
     /// Bytes of trail history per particle (`render.trail`; 0 without one), held in the
     /// `trail` binding beside the particle struct.
     pub trail_bytes_per_particle: u32,
+    /// Compiled for batched instances (`crate::batch`): `CAPACITY` slots per instance, every
+    /// instance's counters, free list segment and step parameters side by side, the instance
+    /// read from the dispatch's z.
+    pub batched: bool,
 }
 
 impl Layout {
@@ -251,7 +255,13 @@ impl Layout {
     pub fn params_bytes(&self) -> u64 {
         let placement = if self.placed { 48 } else { 0 };
         let bursts = if self.bursts { 384 } else { 0 };
-        16 + placement + 16 * u64::from(self.emitter_slots) + bursts + 16 * self.user_vec4s()
+        // A batched instance's row ends with (active, 0, 0, 0).
+        let batch = if self.batched { 16 } else { 0 };
+        16 + placement
+            + 16 * u64::from(self.emitter_slots)
+            + bursts
+            + 16 * self.user_vec4s()
+            + batch
     }
 
     /// The vec4s the live params take in the step parameters.

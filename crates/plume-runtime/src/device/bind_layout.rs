@@ -34,7 +34,11 @@ pub(crate) fn entries(effect: &CompiledEffect, skip: &str) -> Vec<wgpu::BindGrou
         .map(|b| match b.name {
             "params" => buffer_entry(
                 b.binding,
-                wgpu::BufferBindingType::Uniform,
+                match effect.layout.batched {
+                    // A row per instance: more than a uniform binding may hold.
+                    true => wgpu::BufferBindingType::Storage { read_only: true },
+                    false => wgpu::BufferBindingType::Uniform,
+                },
                 true,
                 Some(effect.layout.params_bytes()),
             ),

@@ -21,6 +21,25 @@ use crate::error::RuntimeError;
 /// one submission keeps the GPU busy.
 pub const STEPS_PER_SUBMIT: u32 = 256;
 
+/// Steps one plan of a batch holds ([`crate::sim::batch`]): a batch's step parameters are a row
+/// per instance, so its buffer holds fewer steps than an effect's.
+pub const BATCH_STEPS: u32 = 8;
+
+/// Bytes of the `params` binding: one step's parameters (a batch's: every instance's rows,
+/// as the batch sized the binding).
+pub fn params_binding_bytes(effect: &CompiledEffect) -> u64 {
+    match effect.layout.batched {
+        true => binding_bytes(effect, "params"),
+        false => effect.layout.params_bytes(),
+    }
+}
+
+/// Bytes of `effect`'s binding `name` (0 when it has none).
+fn binding_bytes(effect: &CompiledEffect, name: &str) -> u64 {
+    let binding = effect.layout.bindings.iter().find(|b| b.name == name);
+    binding.map_or(0, |b| b.bytes)
+}
+
 /// One particle buffer: global slots `base .. base + len`, and the compute bind group that
 /// binds it (with every shared buffer).
 pub struct Chunk {
@@ -151,12 +170,17 @@ impl Resources {
                 mapped_at_creation: false,
             })
         });
+        // A batch's counters are an array, one per instance, filled by its `init`.
+        let counters_bytes = match effect.layout.batched {
+            true => binding_bytes(effect, "counters"),
+            false => COUNTERS_BYTES,
+        };
         let counters = (!stateless)
             .then(|| {
                 filled_buffer(
                     gpu,
                     "counters",
-                    COUNTERS_BYTES.next_multiple_of(16),
+                    counters_bytes.next_multiple_of(16),
                     STORAGE,
                     |bytes| {
                         bytes.fill(0);
@@ -165,13 +189,20 @@ impl Resources {
                 )
             })
             .transpose()?;
-        let uniform_align = u64::from(gpu.limits.min_uniform_buffer_offset_alignment).max(16);
-        let params_stride = effect.layout.params_bytes().next_multiple_of(uniform_align);
+        // A batch binds its step parameters as storage: offsets aligned for both kinds.
+        let uniform_align = u64::from(gpu.limits.min_uniform_buffer_offset_alignment)
+            .max(u64::from(gpu.limits.min_storage_buffer_offset_alignment))
+            .max(16);
+        let params_stride = params_binding_bytes(effect).next_multiple_of(uniform_align);
+        let (params_steps, params_usage) = match effect.layout.batched {
+            true => (BATCH_STEPS, wgpu::BufferUsages::STORAGE),
+            false => (STEPS_PER_SUBMIT, wgpu::BufferUsages::UNIFORM),
+        };
         let params = (!stateless).then(|| {
             device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("params"),
-                size: params_stride * u64::from(STEPS_PER_SUBMIT),
-                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                size: params_stride * u64::from(params_steps),
+                usage: params_usage | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             })
         });
@@ -428,7 +459,7 @@ impl Resources {
                     "params" => sized(
                         self.params.as_ref().expect("stateful"),
                         0,
-                        effect.layout.params_bytes(),
+                        params_binding_bytes(effect),
                     ),
                     "chunk" => sized(&self.chunk_params, k * self.uniform_align, 16),
                     "frame" => self.frame.as_ref().expect("stateless").as_entire_binding(),

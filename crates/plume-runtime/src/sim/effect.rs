@@ -85,14 +85,14 @@ use crate::sim::group::Group;
 /// }
 /// ```
 pub struct Effect {
-    gpu: Gpu,
-    names: Vec<String>,
-    groups: Vec<Group>,
+    pub(crate) gpu: Gpu,
+    pub(crate) names: Vec<String>,
+    pub(crate) groups: Vec<Group>,
     /// The event streams; None for one group without events, which steps alone.
     pub(crate) events: Option<Events>,
-    warnings: Diagnostics,
+    pub(crate) warnings: Diagnostics,
     /// The kernels that copy a host's depth for a `SceneDepth` collider (made on first use).
-    depth_copy: crate::device::depth_copy::DepthCopy,
+    pub(crate) depth_copy: crate::device::depth_copy::DepthCopy,
     /// The live-bounds reduction (made on first use: [`Self::live_bounds`]).
     pub(crate) bounds: std::sync::OnceLock<crate::sim::bounds::BoundsProbe>,
 }

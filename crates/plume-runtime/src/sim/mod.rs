@@ -8,6 +8,7 @@
 //!
 //! Imports [`crate::device`] and [`crate::sort`]; never the draw.
 
+pub(crate) mod batch;
 pub(crate) mod bounds;
 pub(crate) mod effect;
 pub(crate) mod events;

@@ -24,17 +24,32 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         emit_body(w, ir, layout);
     });
     w.blank();
+    if layout.batched {
+        emit_hold(w, layout);
+        w.blank();
+    }
     if !appends(ir, layout) {
         w.line("@compute @workgroup_size(WORKGROUP)");
         w.block(
             "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
             |w| {
-                crate::base::kernel::emit_thread_index(w, "i", Some("chunk.len"));
+                if layout.batched {
+                    crate::stages::wgsl::emit_instance(w, layout, "gid.z");
+                    crate::base::kernel::emit_thread_index(w, "local", Some("CAPACITY"));
+                    w.line("let i = inst * CAPACITY + local;");
+                    w.block("if (params.batch.x == 0u)", |w| {
+                        w.line("hold_particle(i);");
+                        w.line("return;");
+                    });
+                } else {
+                    crate::base::kernel::emit_thread_index(w, "i", Some("chunk.len"));
+                }
                 w.line("_ = update_particle(i);");
             },
         );
         return;
     }
+    let counters = crate::stages::wgsl::counters(layout);
     // A workgroup's deaths and firings are appended together: a workgroup atomic each, then
     // one global atomic a workgroup. One global atomic a death or firing (rain at 10M: 180k
     // deaths and 37k firings a step, each adding to the same few words) serialised them.
@@ -50,14 +65,33 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.block(
         "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lane: u32)",
         |w| {
-            crate::base::kernel::emit_thread_index(w, "i", None);
+            crate::stages::wgsl::emit_instance(w, layout, "gid.z");
+            let bound = match layout.batched {
+                true => {
+                    crate::base::kernel::emit_thread_index(w, "local", None);
+                    w.line("let i = inst * CAPACITY + local;");
+                    "local < CAPACITY"
+                }
+                false => {
+                    crate::base::kernel::emit_thread_index(w, "i", None);
+                    "i < chunk.len"
+                }
+            };
             w.block("if (lane == 0u)", |w| {
                 w.line("atomicStore(&wg_deaths, 0u);");
                 emit_workgroup_appends(w, &ir.events, AppendPart::Reset);
             });
             w.line("workgroupBarrier();");
             w.line("var outcome = vec2<u32>(0u, 0u);");
-            w.block("if (i < chunk.len)", |w| w.line("outcome = update_particle(i);"));
+            w.block(format!("if ({bound})"), |w| {
+                if layout.batched {
+                    w.comment("A paused instance's particles keep their ages: no update.");
+                    w.block("if (params.batch.x == 0u)", |w| w.line("hold_particle(i);"));
+                    w.block("else", |w| w.line("outcome = update_particle(i);"));
+                } else {
+                    w.line("outcome = update_particle(i);");
+                }
+            });
             w.line("var death_at = 0u;");
             w.block("if ((outcome.x & 1u) != 0u)", |w| {
                 w.line("death_at = atomicAdd(&wg_deaths, 1u);")
@@ -67,18 +101,44 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             w.block("if (lane == 0u)", |w| {
                 w.line("let deaths = atomicLoad(&wg_deaths);");
                 w.block("if (deaths > 0u)", |w| {
-                    w.line("wg_death_base = atomicAdd(&counters.free_count, deaths);");
-                    w.line("atomicAdd(&counters.died, deaths);");
+                    w.line(format!(
+                        "wg_death_base = atomicAdd(&{counters}.free_count, deaths);"
+                    ));
+                    w.line(format!("atomicAdd(&{counters}.died, deaths);"));
                 });
                 emit_workgroup_appends(w, &ir.events, AppendPart::Reserve);
             });
             w.line("workgroupBarrier();");
             w.block("if ((outcome.x & 1u) != 0u)", |w| {
-                w.line("free_list[wg_death_base + death_at] = chunk.base + i;")
+                w.line(format!(
+                    "free_list[{}wg_death_base + death_at] = chunk.base + i;",
+                    crate::stages::wgsl::free_list_base(layout)
+                ))
             });
             emit_workgroup_appends(w, &ir.events, AppendPart::Write);
         },
     );
+}
+
+/// `hold_particle(i)`: a batched instance's particle on a step its instance sits out (paused,
+/// or slower than the batch): the batch's step index goes on, so its death step and spawn step
+/// move on with it, and its age, which the kernels and the draw reckon from them, stays.
+fn emit_hold(w: &mut Writer, layout: &Layout) {
+    w.comment("A paused instance's particle: its steps move on with the batch's, its age stays.");
+    w.block("fn hold_particle(i: u32)", |w| {
+        w.line("var p = load_particle(i);");
+        w.block("if (p.id == DEAD)", |w| w.line("return;"));
+        if layout.has(Attribute::DeathStep) {
+            w.comment("0xffffffff: a particle that never dies.");
+            w.block("if (p.die_at != 0xffffffffu)", |w| {
+                w.line("p.die_at = p.die_at + 1u;")
+            });
+        }
+        if layout.has(Attribute::SpawnStep) {
+            w.line("p.born = p.born + 1u;");
+        }
+        w.line("store_particle(i, p);");
+    });
 }
 
 /// Whether the update appends anything: deaths to the free list, firings to their streams.

@@ -1,0 +1,367 @@
+//! Batched instances (`EffectBatch`): many instances of one effect in one set of buffers,
+//! stepped by one dispatch chain, give each instance exactly the particles the same effect
+//! gives alone with the same placement, params, bursts and steps, whether the instance plays,
+//! sits steps out (paused) or takes more steps than the others (a faster time scale), and
+//! whether it joined at the start or later in a place another instance left.
+
+mod common;
+
+use plume::compiler::bursts::Burst;
+use plume::compiler::placement::Placement;
+use plume::compiler::reference::ParticleRecord;
+use plume::runtime::{BatchInstance, Effect, EffectBatch, Gpu};
+use plume::{compile_str, CompileOptions, CompiledEffect};
+
+/// Sparks from a small sphere, falling onto a floor, pushed sideways by a live param; some
+/// emitter bursts fired from code. A short life, so slots are freed and used again; a small
+/// capacity, so spawns are dropped.
+const SPARKS: &str = r#"Effect(name: "sparks", capacity: 120, seed: 9, dt: 0.02,
+    params: {"push": 1.0},
+    emitters: [
+        Emitter(rate: 400.0, shape: Sphere(center: (0.0, 0.5, 0.0), radius: 0.2),
+            velocity: Radial(speed: (1.0, 3.0)), lifetime: Some((0.2, 0.5))),
+    ],
+    forces: [Gravity((0.0, -9.81, 0.0)), Drag(k: 0.5), Custom(accel: "vec3(push, 0, 0)")],
+    collide: [Plane(point: (0.0, 0.0, 0.0), normal: (0.0, 1.0, 0.0), restitution: 0.5, friction: 0.1)],
+    integrator: SemiImplicitEuler)"#;
+
+fn compiled() -> CompiledEffect {
+    let options = CompileOptions {
+        placed: true,
+        bursts: true,
+        live_params: true,
+        ..Default::default()
+    };
+    compile_str(SPARKS, &options).expect("compiles")
+}
+
+/// A move to `(x, 0, z)` turned by `turn` radians about +y (column-major).
+fn placed(x: f32, z: f32, turn: f32) -> Placement {
+    let (s, c) = turn.sin_cos();
+    Placement::from_cols([
+        c, 0.0, -s, 0.0, 0.0, 1.0, 0.0, 0.0, s, 0.0, c, 0.0, x, 0.0, z, 1.0,
+    ])
+    .expect("finite")
+}
+
+/// One instance's part in the run: where it is, its param, its steps in frame f.
+struct Part {
+    placement: Placement,
+    push: f32,
+    steps: fn(u32) -> u64,
+    burst_at: Option<u32>,
+}
+
+fn parts() -> Vec<Part> {
+    vec![
+        // Plays at one step a frame.
+        Part {
+            placement: placed(0.0, 0.0, 0.0),
+            push: 1.0,
+            steps: |_| 1,
+            burst_at: None,
+        },
+        // Paused for frames 8 to 19, with a burst fired while paused (spawned when it plays on).
+        Part {
+            placement: placed(4.0, -1.0, 0.7),
+            push: -2.0,
+            steps: |f| u64::from(!(8..20).contains(&f)),
+            burst_at: Some(12),
+        },
+        // Twice as fast, and a burst.
+        Part {
+            placement: placed(-3.0, 2.0, 2.0),
+            push: 0.0,
+            steps: |_| 2,
+            burst_at: Some(5),
+        },
+    ]
+}
+
+fn burst() -> Burst {
+    Burst::new(0, 30)
+        .at([0.0, 1.0, 0.0])
+        .with_velocity([0.0, 2.0, 0.0])
+}
+
+/// Bitwise the same particles: ids, positions and velocities to the bit, ages and lifetimes.
+fn assert_same(what: &str, batched: &[ParticleRecord], alone: &[ParticleRecord]) {
+    assert_eq!(batched.len(), alone.len(), "{what}: live particles");
+    assert!(
+        !alone.is_empty(),
+        "{what}: the run has particles to compare"
+    );
+    for (b, a) in batched.iter().zip(alone) {
+        assert_eq!(b.id, a.id, "{what}");
+        for (p, q) in [(b.position, a.position), (b.velocity, a.velocity)] {
+            assert_eq!(
+                p.to_array().map(f64::to_bits),
+                q.to_array().map(f64::to_bits),
+                "{what}: id {}",
+                a.id
+            );
+        }
+        assert_eq!(b.age, a.age, "{what}: id {} age", a.id);
+        assert_eq!(b.lifetime, a.lifetime, "{what}: id {} lifetime", a.id);
+    }
+}
+
+fn alone(gpu: &Gpu, compiled: &CompiledEffect, part: &Part) -> Effect {
+    let mut effect = Effect::new(gpu, compiled.clone()).expect("effect");
+    effect.set_placement(part.placement);
+    effect.set_param("push", part.push).expect("param");
+    effect
+}
+
+#[test]
+fn each_batched_instance_has_the_particles_of_the_same_effect_alone() {
+    let gpu = common::gpu();
+    let compiled = compiled();
+    let parts = parts();
+    // Room for more instances than there are: the dispatches cover only those there are.
+    let mut batch = EffectBatch::new(&gpu, &compiled, 8).expect("batch");
+    let mut instances = Vec::new();
+    let mut effects = Vec::new();
+    for part in &parts {
+        let instance = batch.add().expect("room");
+        batch
+            .set_placement(instance, part.placement)
+            .expect("placement");
+        batch.set_param(instance, "push", part.push).expect("param");
+        instances.push(instance);
+        effects.push(alone(&gpu, &compiled, part));
+    }
+    for frame in 0..40u32 {
+        for (k, part) in parts.iter().enumerate() {
+            if part.burst_at == Some(frame) {
+                batch.burst(instances[k], burst()).expect("burst");
+                effects[k].burst(0, burst()).expect("burst");
+            }
+        }
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        batch
+            .advance(&mut encoder, |i| (parts[i.0 as usize].steps)(frame))
+            .expect("batch steps");
+        for (effect, part) in effects.iter_mut().zip(&parts) {
+            effect
+                .advance(&mut encoder, (part.steps)(frame))
+                .expect("steps");
+        }
+        gpu.queue.submit([encoder.finish()]);
+    }
+    for (k, effect) in effects.iter().enumerate() {
+        let what = format!("instance {k}");
+        assert_eq!(
+            batch.steps_done(instances[k]).expect("steps"),
+            effect.steps_done(),
+            "{what}"
+        );
+        assert_eq!(
+            batch.totals(instances[k]).expect("totals"),
+            effect.totals().expect("totals"),
+            "{what}"
+        );
+        assert_same(
+            &what,
+            &batch.records(instances[k]).expect("records"),
+            &effect.records().expect("records"),
+        );
+    }
+    let totals = batch.totals(instances[0]).expect("totals");
+    assert!(
+        totals.died > 0 && totals.dropped > 0,
+        "slots were freed and spawns dropped: {totals:?}"
+    );
+}
+
+#[test]
+fn an_instance_added_in_a_freed_place_starts_afresh_and_a_restart_starts_again() {
+    let gpu = common::gpu();
+    let compiled = compiled();
+    let parts = parts();
+    let mut batch = EffectBatch::new(&gpu, &compiled, 2).expect("batch");
+    let first = batch.add().expect("room");
+    let second = batch.add().expect("room");
+    assert!(batch.add().is_none(), "a batch of 2 is full with 2");
+    let step = |batch: &mut EffectBatch, frames: u32| {
+        for _ in 0..frames {
+            let mut encoder = gpu.device.create_command_encoder(&Default::default());
+            batch.advance(&mut encoder, |_| 1).expect("steps");
+            gpu.queue.submit([encoder.finish()]);
+        }
+    };
+    step(&mut batch, 15);
+    // The first leaves; a new one takes its place, 15 steps into the batch, elsewhere.
+    batch.remove(first).expect("remove");
+    assert!(batch.records(first).is_err(), "a removed instance is gone");
+    let third = batch.add().expect("a freed place");
+    assert_eq!(third, first, "the freed place is given again");
+    batch
+        .set_placement(third, parts[1].placement)
+        .expect("placement");
+    batch
+        .set_param(third, "push", parts[1].push)
+        .expect("param");
+    step(&mut batch, 20);
+    let mut fresh = alone(&gpu, &compiled, &parts[1]);
+    fresh.run(20, |_| {}).expect("run");
+    assert_same(
+        "the new instance",
+        &batch.records(third).expect("records"),
+        &fresh.records().expect("records"),
+    );
+    assert_eq!(
+        batch.totals(third).expect("totals"),
+        fresh.totals().expect("totals")
+    );
+    // The second never left: 35 steps as one effect alone.
+    let mut long = alone(
+        &gpu,
+        &compiled,
+        &Part {
+            placement: Placement::IDENTITY,
+            push: 1.0,
+            steps: |_| 1,
+            burst_at: None,
+        },
+    );
+    long.run(35, |_| {}).expect("run");
+    assert_same(
+        "the instance that stayed",
+        &batch.records(second).expect("records"),
+        &long.records().expect("records"),
+    );
+    // A restart: its particles gone at once, then as a fresh effect.
+    batch.restart(second).expect("restart");
+    step(&mut batch, 10);
+    let mut again = alone(
+        &gpu,
+        &compiled,
+        &Part {
+            placement: Placement::IDENTITY,
+            push: 1.0,
+            steps: |_| 1,
+            burst_at: None,
+        },
+    );
+    again.run(10, |_| {}).expect("run");
+    assert_same(
+        "the restarted instance",
+        &batch.records(second).expect("records"),
+        &again.records().expect("records"),
+    );
+}
+
+#[test]
+fn what_a_batch_cannot_take_is_refused_with_the_reason() {
+    let gpu = common::gpu();
+    let sorted = compile_str(
+        &SPARKS.replace(
+            "integrator: SemiImplicitEuler",
+            "integrator: SemiImplicitEuler, sort: true",
+        ),
+        &CompileOptions::default(),
+    )
+    .expect("compiles");
+    let refused = EffectBatch::new(&gpu, &sorted, 4)
+        .err()
+        .expect("refused")
+        .to_string();
+    assert!(
+        refused.contains("sparks: cannot be batched: it is sorted by depth"),
+        "{refused}"
+    );
+    let mut batch = EffectBatch::new(&gpu, &compiled(), 2).expect("batch");
+    let one = batch.add().expect("room");
+    let unknown = batch.set_param(one, "pull", 1.0).unwrap_err().to_string();
+    assert!(
+        unknown.contains("unknown param `pull`") && unknown.contains("push"),
+        "{unknown}"
+    );
+    let gone = batch
+        .set_param(BatchInstance(1), "push", 1.0)
+        .unwrap_err()
+        .to_string();
+    assert!(gone.contains("no instance 1"), "{gone}");
+}
+
+#[test]
+fn one_draw_draws_every_instance_as_the_reference_draws_their_particles() {
+    use plume::runtime::oracle::{sprites, ReferenceRenderer};
+    use plume::runtime::outputs::Offscreen;
+    const SIDE: u32 = 128;
+    // Life-faded colours and sizes (the draw reckons ages from the batch's step index),
+    // additive, so the order of the sprites does not matter; seen from above.
+    let source = SPARKS.replace(
+        "integrator: SemiImplicitEuler)",
+        r#"integrator: SemiImplicitEuler,
+        camera: Camera(eye: (0.5, 14.0, 6.0), target: (0.5, 0.0, 0.5), fov_y: 60.0),
+        render: Render(color: [(0.0, (1.0, 0.9, 0.5, 1.0)), (1.0, (0.6, 0.1, 0.0, 0.2))],
+            size: [(0.0, 0.25), (1.0, 0.1)], blend: Additive))"#,
+    );
+    let options = CompileOptions {
+        placed: true,
+        bursts: true,
+        live_params: true,
+        ..Default::default()
+    };
+    let compiled = compile_str(&source, &options).expect("compiles");
+    let gpu = common::gpu();
+    let parts = parts();
+    let mut batch = EffectBatch::new(&gpu, &compiled, 4).expect("batch");
+    let instances: Vec<BatchInstance> = parts
+        .iter()
+        .map(|part| {
+            let instance = batch.add().expect("room");
+            batch
+                .set_placement(instance, part.placement)
+                .expect("placement");
+            batch.set_param(instance, "push", part.push).expect("param");
+            instance
+        })
+        .collect();
+    for frame in 0..25u32 {
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        batch
+            .advance(&mut encoder, |i| (parts[i.0 as usize].steps)(frame))
+            .expect("steps");
+        gpu.queue.submit([encoder.finish()]);
+    }
+    let ir = &batch.compiled().ir;
+    let camera = plume::runtime::Camera::from_effect(&ir.camera, 1.0);
+    let target = Offscreen::new(&gpu, SIDE, SIDE).expect("target");
+    let renderer = batch.effect().renderer(&target.target()).expect("renderer");
+    let drawn = target
+        .render(batch.effect(), &renderer, &camera)
+        .expect("draw");
+    let mut records = Vec::new();
+    for instance in &instances {
+        records.extend(batch.records(*instance).expect("records"));
+    }
+    let reference = ReferenceRenderer::new(&gpu, SIDE, SIDE, &ir.render).expect("reference");
+    let expected = reference
+        .draw(&sprites(&records, ir, camera.view, false), &camera)
+        .expect("reference draw");
+    // Every instance is in the image: the bright pixels span the three places (4 m apart
+    // and more: over 30 pixels in this view), not one.
+    let bright: Vec<u32> = (0..SIDE * SIDE)
+        .filter(|&k| drawn[4 * k as usize] > 60)
+        .map(|k| k % SIDE)
+        .collect();
+    let spread = bright
+        .iter()
+        .max()
+        .zip(bright.iter().min())
+        .map_or(0, |(a, b)| a - b);
+    assert!(
+        bright.len() > 30 && spread > 30,
+        "{} bright pixels over {spread} columns",
+        bright.len()
+    );
+    let (mean, max, over) = common::differences(&drawn, &expected, 8);
+    // The same sprites rasterised from the same positions: only edge pixels may differ.
+    assert!(
+        mean < 0.5 && over < 60,
+        "batch draw vs reference: mean {mean:.3}, largest {max}, {over} over 8"
+    );
+}
