@@ -365,3 +365,31 @@ fn one_draw_draws_every_instance_as_the_reference_draws_their_particles() {
         "batch draw vs reference: mean {mean:.3}, largest {max}, {over} over 8"
     );
 }
+
+#[test]
+fn steps_in_parts_spawn_at_each_part_s_placement_as_an_effect_placed_between_advances() {
+    let gpu = common::gpu();
+    let compiled = compiled();
+    let parts = parts();
+    let mut batch = EffectBatch::new(&gpu, &compiled, 2).expect("batch");
+    let moving = batch.add().expect("room");
+    let mut effect = alone(&gpu, &compiled, &parts[0]);
+    for frame in 0..6 {
+        // Four steps a frame, in parts: one at each of two places, then three at a third.
+        let at = |k: u32| placed(frame as f32 + k as f32, 0.5 * k as f32, 0.3 * k as f32);
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        batch
+            .advance_along(&mut encoder, |_| vec![(1, Some(at(1))), (3, Some(at(2)))])
+            .expect("steps");
+        for (n, k) in [(1, 1), (3, 2)] {
+            effect.set_placement(at(k));
+            effect.advance(&mut encoder, n).expect("steps");
+        }
+        gpu.queue.submit([encoder.finish()]);
+    }
+    assert_same(
+        "in parts",
+        &batch.records(moving).expect("records"),
+        &effect.records().expect("records"),
+    );
+}

@@ -346,12 +346,24 @@ impl EffectBatch {
         encoder: &mut wgpu::CommandEncoder,
         steps: impl Fn(BatchInstance) -> u64,
     ) -> Result<(), RuntimeError> {
-        let wants: Vec<u64> = (0..self.instances.len())
+        self.advance_along(encoder, |i| vec![(steps(i), None)])
+    }
+
+    /// [`Self::advance`] with each instance's steps in parts: `parts(instance)` is a list of
+    /// (steps, the placement they spawn at, or None to keep the one set), in order. A host
+    /// whose emitter moved far in a frame of several steps spawns along the way so.
+    pub fn advance_along(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        parts: impl Fn(BatchInstance) -> Vec<(u64, Option<Placement>)>,
+    ) -> Result<(), RuntimeError> {
+        let parts: Vec<Vec<(u64, Option<Placement>)>> = (0..self.instances.len())
             .map(|k| match self.instances[k] {
-                Some(_) => steps(BatchInstance(k as u32)),
-                None => 0,
+                Some(_) => parts(BatchInstance(k as u32)),
+                None => Vec::new(),
             })
             .collect();
+        let wants: Vec<u64> = parts.iter().map(|p| p.iter().map(|q| q.0).sum()).collect();
         let most = wants.iter().copied().max().unwrap_or(0);
         // Dispatches cover the instances up to the last one there is.
         let layers = self
@@ -363,7 +375,7 @@ impl EffectBatch {
         let mut done = 0;
         while done < most {
             let n = (most - done).min(u64::from(BATCH_STEPS));
-            self.record_plan(encoder, &wants, done, n, layers as u32)?;
+            self.record_plan(encoder, &parts, done, n, layers as u32)?;
             done += n;
         }
         Ok(())
@@ -394,11 +406,12 @@ impl EffectBatch {
     }
 
     /// Records `n` batch steps from step `from` of this frame: each instance's rows (its
-    /// plan while it still wants steps, else a held row), one upload, one compute pass.
+    /// plan while its parts still hold steps, placed as its part says, else a held row), one
+    /// upload, one compute pass.
     fn record_plan(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
-        wants: &[u64],
+        parts: &[Vec<(u64, Option<Placement>)>],
         from: u64,
         n: u64,
         layers: u32,
@@ -417,7 +430,10 @@ impl EffectBatch {
                 let Some(state) = state else {
                     continue;
                 };
-                if from + (j as u64) < wants[k] {
+                if let Some(placement) = part_at(&parts[k], from + j as u64) {
+                    if let Some(placement) = placement {
+                        state.placement = placement;
+                    }
                     let plan = state.schedule.next_plan();
                     most_requested[j] = most_requested[j].max(plan.requested());
                     let words = params_bytes(
@@ -525,4 +541,17 @@ impl EffectBatch {
         out.sort_by_key(|r| r.id);
         Ok(out)
     }
+}
+
+/// The placement of step `t` of an instance's frame in `parts` (Some(None): its own), or None
+/// past its steps.
+fn part_at(parts: &[(u64, Option<Placement>)], t: u64) -> Option<Option<Placement>> {
+    let mut end = 0;
+    for (steps, placement) in parts {
+        end += steps;
+        if t < end {
+            return Some(*placement);
+        }
+    }
+    None
 }
