@@ -16,14 +16,14 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.comment(
         "Pops this step's slots: never more than are free; the rest are dropped and counted.",
     );
-    let counters = crate::stages::wgsl::counters(layout);
+    let counters = crate::stages::wgsl::batch::counters(layout);
     w.line("@compute @workgroup_size(1)");
     let prepare_args = match layout.batched {
         true => "@builtin(global_invocation_id) gid: vec3<u32>",
         false => "",
     };
     w.block(format!("fn spawn_prepare({prepare_args})"), |w| {
-        crate::stages::wgsl::emit_instance(w, layout, "gid.z");
+        crate::stages::wgsl::batch::emit_instance(w, layout, "gid.z");
         w.line(format!("let free = atomicLoad(&{counters}.free_count);"));
         w.line("let n = min(params.requested, free);");
         w.line(format!("atomicStore(&{counters}.free_count, free - n);"));
@@ -40,12 +40,12 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.block(
         "fn spawn(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
-            crate::stages::wgsl::emit_instance(w, layout, "gid.z");
+            crate::stages::wgsl::batch::emit_instance(w, layout, "gid.z");
             let bound = format!("{counters}.spawn_count");
             crate::base::kernel::emit_thread_index(w, "i", Some(&bound));
             w.line(format!(
                 "let slot = free_list[{}{counters}.spawn_base + i];",
-                crate::stages::wgsl::free_list_base(layout)
+                crate::stages::wgsl::batch::free_list_base(layout)
             ));
             w.comment("Dispatched once per chunk: only the chunk that holds the slot writes it.");
             w.block("if (slot < chunk.base || slot - chunk.base >= chunk.len)", |w| w.line("return;"));

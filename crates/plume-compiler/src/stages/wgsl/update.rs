@@ -34,7 +34,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
             |w| {
                 if layout.batched {
-                    crate::stages::wgsl::emit_instance(w, layout, "gid.z");
+                    crate::stages::wgsl::batch::emit_instance(w, layout, "gid.z");
                     crate::base::kernel::emit_thread_index(w, "local", Some("CAPACITY"));
                     w.line("let i = inst * CAPACITY + local;");
                     w.block("if (params.batch.x == 0u)", |w| {
@@ -49,7 +49,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         );
         return;
     }
-    let counters = crate::stages::wgsl::counters(layout);
+    let counters = crate::stages::wgsl::batch::counters(layout);
     // A workgroup's deaths and firings are appended together: a workgroup atomic each, then
     // one global atomic a workgroup. One global atomic a death or firing (rain at 10M: 180k
     // deaths and 37k firings a step, each adding to the same few words) serialised them.
@@ -65,7 +65,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.block(
         "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lane: u32)",
         |w| {
-            crate::stages::wgsl::emit_instance(w, layout, "gid.z");
+            crate::stages::wgsl::batch::emit_instance(w, layout, "gid.z");
             let bound = match layout.batched {
                 true => {
                     crate::base::kernel::emit_thread_index(w, "local", None);
@@ -112,7 +112,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             w.block("if ((outcome.x & 1u) != 0u)", |w| {
                 w.line(format!(
                     "free_list[{}wg_death_base + death_at] = chunk.base + i;",
-                    crate::stages::wgsl::free_list_base(layout)
+                    crate::stages::wgsl::batch::free_list_base(layout)
                 ))
             });
             emit_workgroup_appends(w, &ir.events, AppendPart::Write);
