@@ -45,6 +45,13 @@ pub enum PlumeDraw {
     Compute,
 }
 
+/// The capacity from which `PlumeDraw::Auto` draws an effect with the compute renderer on a GPU
+/// adapter. The compute renderer costs a few passes over the camera's image per effect
+/// whatever its particles (clearing, merging and putting an image of 8 bytes a pixel over the
+/// camera's), where the raster one costs per particle: small effects are drawn faster by the
+/// raster renderer, large ones far faster by the compute one (docs/bevy.md has both measured).
+pub const AUTO_COMPUTE_CAPACITY: u64 = 65_536;
+
 /// A Plume effect playing at this entity's [`Transform`]: the effect file's handle and how
 /// this instance plays. Every instance simulates on its own, on Bevy's render device, and is
 /// drawn in Bevy's transparent 3D phase for every camera that sees it.

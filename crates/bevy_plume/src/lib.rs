@@ -30,11 +30,12 @@ pub mod headless;
 mod render;
 
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
-pub use effect::{PlumeBurst, PlumeDraw, PlumeEffect, SimulationSpace};
+pub use effect::{PlumeBurst, PlumeDraw, PlumeEffect, SimulationSpace, AUTO_COMPUTE_CAPACITY};
 pub use plume_compiler;
 pub use plume_runtime;
-pub use render::draw::AUTO_COMPUTE_CAPACITY;
-pub use render::instances::{read_particles, read_totals, PlumeRenderStats};
+pub use render::batches::BATCH_FROM;
+pub use render::instances::PlumeRenderStats;
+pub use render::read::{read_particles, read_totals};
 
 use bevy::asset::io::file::FileAssetReader;
 use bevy::camera::visibility::VisibilitySystems;

@@ -3,6 +3,8 @@
 //! (the particles within it in Plume's own order, back to front when the file says `sort`),
 //! and drawn with Plume's pipelines straight into Bevy's render pass.
 
+use std::collections::HashMap;
+
 use bevy::core_pipeline::core_3d::{Transparent3d, TransparentSortingInfo3d, CORE_3D_DEPTH_FORMAT};
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
@@ -14,7 +16,8 @@ use bevy::render::renderer::RenderAdapterInfo;
 use bevy::render::view::{ExtractedView, RenderVisibleEntities};
 use plume_runtime::DrawTarget;
 
-use crate::effect::{PlumeDraw, PlumeEffect};
+use crate::effect::{PlumeDraw, PlumeEffect, AUTO_COMPUTE_CAPACITY};
+use crate::render::batches::PlumeBatches;
 use crate::render::instances::{PlumeInstances, PlumeRenderStats};
 
 /// The target a camera's transparent pass draws into: its colour format and samples, Bevy's
@@ -28,13 +31,6 @@ pub(crate) fn view_target(view: &ExtractedView, msaa: &Msaa, depth_prepass: bool
         .with_samples(samples)
         .with_soft(samples == 1 && depth_prepass)
 }
-
-/// The capacity from which `PlumeDraw::Auto` draws an effect with the compute renderer on a GPU
-/// adapter. The compute renderer costs a few passes over the camera's image per effect
-/// whatever its particles (clearing, merging and putting an image of 8 bytes a pixel over the
-/// camera's), where the raster one costs per particle: small effects are drawn faster by the
-/// raster renderer, large ones far faster by the compute one (docs/bevy.md has both measured).
-pub const AUTO_COMPUTE_CAPACITY: u64 = 65_536;
 
 /// The size of the compute renderer's image for a camera: its target's, when its viewport is
 /// the whole target (the splat's image maps the projection onto the whole depth texture it
@@ -65,8 +61,12 @@ pub(crate) fn queue_effects(
     views: Query<ViewItem>,
     adapter: Res<RenderAdapterInfo>,
     mut store: ResMut<PlumeInstances>,
+    mut batches: ResMut<PlumeBatches>,
     mut stats: ResMut<PlumeRenderStats>,
 ) {
+    stats.instances += batches.members.len();
+    stats.batches = batches.count();
+    stats.particle_bytes += batches.particle_bytes();
     // A CPU adapter rasterises faster than it splats (as `plume render --draw auto` finds).
     let gpu_adapter = adapter.device_type != wgpu::DeviceType::Cpu;
     let Some(draw_function) = draw_functions.read().get_id::<DrawPlume>() else {
@@ -82,8 +82,15 @@ pub(crate) fn queue_effects(
             continue;
         };
         let target = view_target(view, msaa, depth_prepass);
+        // The batches this camera sees an entity of, each with the first such entity.
+        let mut seen_batches = HashMap::new();
         for &(render_entity, main_entity) in &visible.entities_cpu_culling {
             let Some(instance) = store.instances.get_mut(&main_entity.id()) else {
+                if let Some(id) = batches.batch_id(main_entity.id()) {
+                    seen_batches
+                        .entry(id)
+                        .or_insert((render_entity, main_entity));
+                }
                 continue;
             };
             let compute = match instance.draw {
@@ -129,10 +136,57 @@ pub(crate) fn queue_effects(
                 indexed: false,
             });
         }
+        for (id, entity) in seen_batches {
+            let Some(batch) = batches.batch_mut(id) else {
+                continue;
+            };
+            if !batch
+                .views
+                .get(&view_entity)
+                .is_some_and(|(t, _, _)| *t == target)
+            {
+                match batch.batch.effect().renderer(&target) {
+                    Ok(renderer) => {
+                        batch.views.insert(view_entity, (target, renderer, frame));
+                    }
+                    Err(err) => {
+                        warn_once!(
+                            "{}: a batch cannot be drawn: {err}",
+                            batch.batch.compiled().ir.name
+                        );
+                        continue;
+                    }
+                }
+            }
+            if let Some(draw) = batch.views.get_mut(&view_entity) {
+                draw.2 = frame;
+            }
+            stats.draws += 1;
+            let center = batches
+                .members
+                .get(&entity.1.id())
+                .map_or(Vec3::ZERO, |m| m.world_from_local().w_axis.truncate());
+            phase.add_transient(Transparent3d {
+                sorting_info: TransparentSortingInfo3d::Sorted {
+                    mesh_center: center,
+                    depth_bias: 0.0,
+                },
+                distance: 0.0,
+                pipeline: CachedRenderPipelineId::INVALID,
+                entity,
+                draw_function,
+                batch_range: 0..1,
+                extra_index: PhaseItemExtraIndex::None,
+                indexed: false,
+            });
+        }
     }
     // A camera that no longer sees an effect (or is gone) drops its draw of it.
     for instance in store.instances.values_mut() {
         instance.views.retain(|_, draw| draw.frame == frame);
+    }
+    for batch in batches.batches_mut() {
+        batch.views.retain(|_, draw| draw.2 == frame);
     }
 }
 
@@ -149,12 +203,17 @@ impl Draw<Transparent3d> for DrawPlume {
         item: &Transparent3d,
     ) -> Result<(), DrawError> {
         let store = world.resource::<PlumeInstances>();
+        let entity = item.entity.1.id();
         let draw = store
             .instances
-            .get(&item.entity.1.id())
+            .get(&entity)
             .and_then(|instance| instance.views.get(&view));
         if let Some(draw) = draw {
             draw.renderer.draw(pass.wgpu_pass());
+        } else if let Some(batch) = world.resource::<PlumeBatches>().batch_of(entity) {
+            if let Some((_, renderer, _)) = batch.views.get(&view) {
+                renderer.draw(pass.wgpu_pass());
+            }
         }
         Ok(())
     }

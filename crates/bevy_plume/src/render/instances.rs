@@ -9,8 +9,7 @@ use std::sync::Arc;
 use bevy::prelude::*;
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use plume_compiler::graph::CompiledGraph;
-use plume_compiler::reference::{ParticleRecord, Totals};
-use plume_runtime::{DrawTarget, Effect, EffectRenderer, Gpu, RuntimeError};
+use plume_runtime::{DrawTarget, Effect, EffectRenderer, Gpu};
 
 use crate::asset::Variant;
 use crate::effect::{PlumeBurst, PlumeDraw, SimulationSpace};
@@ -26,15 +25,15 @@ const STEP_SLACK: f64 = 1e-6;
 
 /// What an instance was built from: a change of any part rebuilds it.
 #[derive(Clone)]
-struct BuildKey {
+pub(crate) struct BuildKey {
     /// The file's compiled version (compared by address: a hot reload makes a new one).
-    graph: Arc<CompiledGraph>,
-    variant: Variant,
-    generation: u32,
+    pub graph: Arc<CompiledGraph>,
+    pub variant: Variant,
+    pub generation: u32,
 }
 
 impl BuildKey {
-    fn of(effect: &ExtractedEffect) -> Self {
+    pub(crate) fn of(effect: &ExtractedEffect) -> Self {
         let control = &effect.control;
         Self {
             graph: effect.asset.graph.clone(),
@@ -48,7 +47,7 @@ impl BuildKey {
         }
     }
 
-    fn same(&self, other: &Self) -> bool {
+    pub(crate) fn same(&self, other: &Self) -> bool {
         Arc::ptr_eq(&self.graph, &other.graph)
             && self.variant == other.variant
             && self.generation == other.generation
@@ -72,12 +71,8 @@ pub(crate) struct Instance {
     key: BuildKey,
     /// The effect on Bevy's device.
     pub effect: Effect,
-    /// Seconds per step.
-    dt: f64,
-    /// Effect time not yet stepped.
-    pending_time: f64,
-    /// Steps to record this frame.
-    pub steps: u64,
+    /// Its steps from the app's time.
+    pub clock: StepClock,
     /// The entity's world transform: where a world-space effect's emitters spawn, or what
     /// every draw of a local-space one is seen through.
     pub world_from_local: Mat4,
@@ -105,9 +100,44 @@ pub(crate) struct Instance {
     burst_refused: bool,
 }
 
+/// An instance's steps from the app's time: whole steps of `dt` a frame, the rest carried.
+pub(crate) struct StepClock {
+    /// Seconds per step.
+    dt: f64,
+    /// Effect time not yet stepped.
+    pending_time: f64,
+    /// Steps to record this frame.
+    pub steps: u64,
+}
+
+impl StepClock {
+    /// A clock of `dt` seconds a step with `warm_up` seconds of steps due at once.
+    pub(crate) fn new(dt: f64, warm_up: f32) -> Self {
+        let warm_up = f64::from(warm_up.max(0.0));
+        Self {
+            dt,
+            pending_time: 0.0,
+            steps: (warm_up / dt).round() as u64,
+        }
+    }
+
+    /// Adds `seconds` of effect time; whole steps of it are recorded this frame.
+    pub(crate) fn advance_time(&mut self, seconds: f64) {
+        let max_steps = (MAX_CATCH_UP_SECONDS / self.dt).ceil().max(1.0);
+        self.pending_time += seconds.max(0.0);
+        // A frame of exactly `dt` is one step: without the slack, 1/60 s over a dt of 1/60 s
+        // can round to 0.99999, and a 60 Hz app would step 0, 2, 0, 2 ... times a frame.
+        let steps = (self.pending_time / self.dt + STEP_SLACK)
+            .floor()
+            .min(max_steps);
+        self.pending_time = (self.pending_time - steps * self.dt).clamp(0.0, self.dt);
+        self.steps += steps as u64;
+    }
+}
+
 /// Compiled variants of effect files, by (the file version's address, variant): the file
 /// version (kept alive so the address stays its own) and the variant.
-type Variants = HashMap<(usize, Variant), (Arc<CompiledGraph>, Arc<CompiledGraph>)>;
+pub(crate) type Variants = HashMap<(usize, Variant), (Arc<CompiledGraph>, Arc<CompiledGraph>)>;
 
 /// What the plugin holds in the render world, for a game's diagnostics and the tests: read it
 /// with `app.sub_app(RenderApp).world().resource::<PlumeRenderStats>()`.
@@ -123,6 +153,9 @@ pub struct PlumeRenderStats {
     /// Of those, the ones the compute renderer makes (the rest are raster ones; see
     /// `PlumeDraw`).
     pub compute_draws: usize,
+    /// Batches of instances running (a crowd of one file's effects shares one; see
+    /// `bevy_plume::BATCH_FROM`). Their instances are counted in `instances`.
+    pub batches: usize,
 }
 
 /// Every instance, by main-world entity, and the device they run on.
@@ -137,7 +170,7 @@ pub(crate) struct PlumeInstances {
     /// The files' variants compiled for a seed or for world space, so that a thousand
     /// instances of one file compile it once: by (the file version's address, seed, placed),
     /// with that version kept alive beside it (dropped once no instance uses it).
-    variants: Variants,
+    pub variants: Variants,
     /// Frames seen (ages views' draws).
     pub frame: u64,
 }
@@ -188,7 +221,7 @@ pub(crate) fn sync_instances(
             instance.control_from_code(e);
             if e.control.playing {
                 let scale = f64::from(e.control.time_scale.max(0.0));
-                instance.advance_time(extracted.delta * scale);
+                instance.clock.advance_time(extracted.delta * scale);
             }
         }
     }
@@ -209,7 +242,31 @@ pub(crate) fn sync_instances(
         // Counted as the draws are queued.
         draws: 0,
         compute_draws: 0,
+        batches: 0,
     };
+}
+
+/// `e`'s file compiled for `key`'s variant: the file as written, or its variant (compiled
+/// once, then shared).
+pub(crate) fn variant_graph(
+    e: &ExtractedEffect,
+    key: &BuildKey,
+    variants: &mut Variants,
+) -> Result<Arc<CompiledGraph>, String> {
+    Ok(match key.variant {
+        as_written if as_written == Variant::default() => e.asset.graph.clone(),
+        wanted => {
+            let id = (Arc::as_ptr(&e.asset.graph) as usize, wanted);
+            match variants.get(&id) {
+                Some((_, variant)) => variant.clone(),
+                None => {
+                    let variant = Arc::new(e.asset.compile_with(wanted)?);
+                    variants.insert(id, (e.asset.graph.clone(), variant.clone()));
+                    variant
+                }
+            }
+        }
+    })
 }
 
 /// A new instance of `e`'s effect on `gpu`, with its warm-up steps due this frame: the file as
@@ -220,21 +277,7 @@ fn build(
     key: BuildKey,
     variants: &mut Variants,
 ) -> Result<Instance, String> {
-    let graph = match key.variant {
-        as_written if as_written == Variant::default() => (*e.asset.graph).clone(),
-        wanted => {
-            let id = (Arc::as_ptr(&e.asset.graph) as usize, wanted);
-            let variant = match variants.get(&id) {
-                Some((_, variant)) => variant.clone(),
-                None => {
-                    let variant = Arc::new(e.asset.compile_with(wanted)?);
-                    variants.insert(id, (e.asset.graph.clone(), variant.clone()));
-                    variant
-                }
-            };
-            (*variant).clone()
-        }
-    };
+    let graph = (*variant_graph(e, &key, variants)?).clone();
     let particle_bytes = graph
         .groups
         .iter()
@@ -251,14 +294,10 @@ fn build(
         .sum();
     let effect = Effect::from_graph(gpu, graph)
         .map_err(|err| format!("{}: the effect could not start: {err}", e.asset.path))?;
-    let dt = e.asset.dt();
-    let warm_up = f64::from(e.control.warm_up.max(0.0));
     Ok(Instance {
         key,
         effect,
-        dt,
-        pending_time: 0.0,
-        steps: (warm_up / dt).round() as u64,
+        clock: StepClock::new(e.asset.dt(), e.control.warm_up),
         world_from_local: e.world_from_local,
         space: e.control.space,
         draw: e.control.draw,
@@ -309,19 +348,6 @@ impl Instance {
                 }
             }
         }
-    }
-
-    /// Adds `seconds` of effect time; whole steps of it are recorded this frame.
-    fn advance_time(&mut self, seconds: f64) {
-        let max_steps = (MAX_CATCH_UP_SECONDS / self.dt).ceil().max(1.0);
-        self.pending_time += seconds.max(0.0);
-        // A frame of exactly `dt` is one step: without the slack, 1/60 s over a dt of 1/60 s
-        // can round to 0.99999, and a 60 Hz app would step 0, 2, 0, 2 ... times a frame.
-        let steps = (self.pending_time / self.dt + STEP_SLACK)
-            .floor()
-            .min(max_steps);
-        self.pending_time = (self.pending_time - steps * self.dt).clamp(0.0, self.dt);
-        self.steps += steps as u64;
     }
 
     /// The draw for the camera `view` into `target`, made (or remade, when the camera's
@@ -383,35 +409,4 @@ impl Instance {
             }
         }
     }
-}
-
-/// Reads back the live particles of group `group` of `entity`'s effect (the main-world
-/// entity; group 0 is the top level), in id order, blocking until the GPU has finished: for
-/// tests, tools and debugging, not for every frame. None when the entity has no running
-/// instance. Call it with the render app's world, between frames:
-/// `read_particles(app.sub_app(RenderApp).world(), entity, 0)`.
-pub fn read_particles(
-    render_world: &World,
-    entity: Entity,
-    group: usize,
-) -> Option<Result<Vec<ParticleRecord>, RuntimeError>> {
-    let instance = render_world
-        .get_resource::<PlumeInstances>()?
-        .instances
-        .get(&entity)?;
-    Some(instance.effect.group_records(group))
-}
-
-/// Reads back the counts of group `group` of `entity`'s effect (spawned, alive, dropped,
-/// died), blocking like [`read_particles`]. None when the entity has no running instance.
-pub fn read_totals(
-    render_world: &World,
-    entity: Entity,
-    group: usize,
-) -> Option<Result<Totals, RuntimeError>> {
-    let instance = render_world
-        .get_resource::<PlumeInstances>()?
-        .instances
-        .get(&entity)?;
-    Some(instance.effect.group_totals(group))
 }

@@ -3,10 +3,12 @@
 //! preparation before its main pass ([`simulate`], world-space steps along the entity's
 //! motion in [`motion`]), and the draw in the transparent phase ([`draw`]).
 
+pub(crate) mod batches;
 pub(crate) mod draw;
 pub(crate) mod extract;
 pub(crate) mod instances;
 pub(crate) mod motion;
+pub(crate) mod read;
 pub(crate) mod simulate;
 
 use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d, Transparent3d};
@@ -31,6 +33,7 @@ pub(crate) fn build(app: &mut App) {
         .init_resource::<extract::ExtractedEffects>()
         .init_resource::<extract::ExtractedBursts>()
         .init_resource::<instances::PlumeInstances>()
+        .init_resource::<batches::PlumeBatches>()
         .init_resource::<instances::PlumeRenderStats>()
         .add_systems(
             ExtractSchedule,
@@ -38,7 +41,11 @@ pub(crate) fn build(app: &mut App) {
         )
         .add_systems(
             Render,
-            (instances::sync_instances, draw::queue_effects)
+            (
+                batches::sync_batches,
+                instances::sync_instances,
+                draw::queue_effects,
+            )
                 .chain()
                 .in_set(RenderSystems::Queue),
         )

@@ -19,6 +19,7 @@ use plume_runtime::{BoundsWatch, Camera};
 
 use crate::bounds::{MeasuredBounds, MeasuredBox};
 use crate::effect::SimulationSpace;
+use crate::render::batches::PlumeBatches;
 use crate::render::instances::{Instance, PlumeInstances};
 use crate::render::motion;
 
@@ -29,12 +30,14 @@ use crate::render::motion;
 pub(crate) fn simulate(
     mut context: RenderContext,
     mut store: ResMut<PlumeInstances>,
+    mut batches: ResMut<PlumeBatches>,
     measured: Res<MeasuredBounds>,
 ) {
     let encoder = context.command_encoder();
+    batches.record_steps(encoder);
     let mut planned = Vec::new();
     for (entity, instance) in store.instances.iter_mut() {
-        let steps = std::mem::take(&mut instance.steps);
+        let steps = std::mem::take(&mut instance.clock.steps);
         let in_world = instance.space == SimulationSpace::World;
         let name = &instance.effect.compiled().ir.name;
         let finite = instance.world_from_local.is_finite();
@@ -159,10 +162,27 @@ pub(crate) fn prepare_for_view(
     view: ViewQuery<(Entity, &ExtractedView, Option<&ViewPrepassTextures>)>,
     mut context: RenderContext,
     mut store: ResMut<PlumeInstances>,
+    mut batches: ResMut<PlumeBatches>,
 ) {
     let (view_entity, view, prepass) = view.into_inner();
     let encoder = context.command_encoder();
     let frame = store.frame;
+    // A batch is in world space: drawn through the camera alone.
+    for batch in batches.batches_mut() {
+        if let Some((_, renderer, queued)) = batch.views.get(&view_entity) {
+            if *queued != frame {
+                continue;
+            }
+            let camera = view_camera(view, Mat4::IDENTITY);
+            if let Err(err) = batch
+                .batch
+                .effect()
+                .prepare_draw(encoder, renderer, &camera)
+            {
+                error!("{}: {err}", batch.batch.compiled().ir.name);
+            }
+        }
+    }
     for instance in store.instances.values_mut() {
         // Drawn through the entity's transform only in local space.
         let world_from_local = match instance.space {

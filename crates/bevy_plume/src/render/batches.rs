@@ -1,0 +1,417 @@
+//! Batched instances: a game's crowd of one small effect (impacts, torches, footsteps) costs
+//! the CPU one upload, a few dispatches and one draw a frame, not each of those per entity.
+//! Once [`BATCH_FROM`] instances of a file variant run, each new entity of it that can be
+//! batched joins a Plume [`EffectBatch`] of that variant (its own place in the batch's
+//! buffers: its particles, schedule, placement, params and bursts, paused and scaled on its
+//! own), instead of becoming an [`Effect`](plume_runtime::Effect) of its own. A batch is drawn
+//! by one transparent item per camera that sees any of its entities, and freed when its last
+//! entity goes.
+//!
+//! What can be batched: world space, drawn by the raster renderer (not `PlumeDraw::Compute`,
+//! nor `Auto` at [`AUTO_COMPUTE_CAPACITY`] particles and up), one group without events,
+//! trails, depth sort, flocking, baked fields or scene-depth colliders. A batched entity gets
+//! no measured bounds (a declared `bounds` still culls it) and is sorted with its batch.
+
+use std::collections::{BTreeMap, HashMap};
+use std::sync::Arc;
+
+use bevy::prelude::*;
+use plume_compiler::graph::CompiledGraph;
+use plume_compiler::placement::Placement;
+use plume_compiler::CompiledEffect;
+use plume_runtime::{BatchInstance, DrawTarget, EffectBatch, EffectRenderer, Gpu};
+
+use crate::asset::Variant;
+use crate::effect::{PlumeDraw, SimulationSpace, AUTO_COMPUTE_CAPACITY};
+use crate::render::extract::{ExtractedBursts, ExtractedEffect, ExtractedEffects};
+use crate::render::instances::{variant_graph, BuildKey, PlumeInstances, StepClock};
+use crate::render::motion;
+
+/// Entities of one file variant from which new ones of it are batched (those already running
+/// alone go on so): a few effects keep what an effect alone has (measured bounds, their own
+/// place in the transparent sort); a crowd is batched.
+pub const BATCH_FROM: usize = 8;
+
+/// The most instances one batch holds.
+const BATCH_ROOM: u64 = 256;
+
+/// The most particle state one batch allocates: fewer instances of a larger effect.
+const BATCH_BYTES: u64 = 32 << 20;
+
+/// Each instance's steps this frame in parts (steps, where they spawn), by its place.
+type InstanceParts = HashMap<BatchInstance, Vec<(u64, Option<Placement>)>>;
+
+/// A file variant's batches: by (the file version's address, variant).
+pub(crate) type SetKey = (usize, Variant);
+
+/// The batched entities and their batches.
+#[derive(Resource, Default)]
+pub(crate) struct PlumeBatches {
+    /// Each file variant's batches (None: one that emptied, its place kept so indices hold).
+    sets: HashMap<SetKey, BatchSet>,
+    /// Each batched entity, by main-world entity.
+    pub members: HashMap<Entity, Member>,
+}
+
+/// One file variant's batches and its batched compile.
+struct BatchSet {
+    /// The file version, kept alive so its address stays its own.
+    _source: Arc<CompiledGraph>,
+    compiled: CompiledEffect,
+    pub batches: Vec<Option<RenderBatch>>,
+}
+
+/// One batch and its draws.
+pub(crate) struct RenderBatch {
+    /// The instances' buffers and kernels.
+    pub batch: EffectBatch,
+    /// The entity in each instance's place.
+    slots: Vec<Option<Entity>>,
+    /// Its draws, by the camera's render-world entity: (target, renderer, frame last queued).
+    pub views: HashMap<Entity, (DrawTarget, EffectRenderer, u64)>,
+    /// Bytes of particle state it holds.
+    pub particle_bytes: u64,
+}
+
+/// One batched entity.
+pub(crate) struct Member {
+    key: BuildKey,
+    set: SetKey,
+    /// Its batch in the set's list, and its place there.
+    pub batch: usize,
+    pub instance: BatchInstance,
+    clock: StepClock,
+    world_from_local: Mat4,
+    placed_at: Option<Mat4>,
+    /// The entity's render-world twin.
+    pub render_entity: Entity,
+    params: BTreeMap<String, f32>,
+}
+
+impl Member {
+    /// The entity's world transform this frame.
+    pub(crate) fn world_from_local(&self) -> Mat4 {
+        self.world_from_local
+    }
+}
+
+impl PlumeBatches {
+    /// The batch `entity` is in.
+    pub(crate) fn batch_of(&self, entity: Entity) -> Option<&RenderBatch> {
+        let member = self.members.get(&entity)?;
+        self.sets
+            .get(&member.set)?
+            .batches
+            .get(member.batch)?
+            .as_ref()
+    }
+
+    /// The batch `entity` is in, by (its set, its place in the set).
+    pub(crate) fn batch_id(&self, entity: Entity) -> Option<(SetKey, usize)> {
+        self.members.get(&entity).map(|m| (m.set, m.batch))
+    }
+
+    /// The batch at `id`.
+    pub(crate) fn batch_mut(&mut self, id: (SetKey, usize)) -> Option<&mut RenderBatch> {
+        self.sets.get_mut(&id.0)?.batches.get_mut(id.1)?.as_mut()
+    }
+
+    /// Every batch.
+    pub(crate) fn batches_mut(&mut self) -> impl Iterator<Item = &mut RenderBatch> {
+        self.sets
+            .values_mut()
+            .flat_map(|s| s.batches.iter_mut().flatten())
+    }
+
+    /// Batches there are now.
+    pub(crate) fn count(&self) -> usize {
+        self.sets
+            .values()
+            .map(|s| s.batches.iter().flatten().count())
+            .sum()
+    }
+
+    /// Bytes of particle state every batch holds.
+    pub(crate) fn particle_bytes(&self) -> u64 {
+        let batches = self.sets.values().flat_map(|s| s.batches.iter().flatten());
+        batches.map(|b| b.particle_bytes).sum()
+    }
+}
+
+/// Brings the batches in line with this frame's effect entities, before the instances are: a
+/// batched entity's changes go to its batch (a restart restarts its place, a new file version
+/// or variant moves it), a new entity that can be batched joins a batch when its variant has
+/// [`BATCH_FROM`] entities or more, gone ones leave (a batch that empties is freed). The batched
+/// entities and their bursts are then taken out of this frame's lists, which the instances
+/// see next.
+pub(crate) fn sync_batches(
+    mut batches: ResMut<PlumeBatches>,
+    mut extracted: ResMut<ExtractedEffects>,
+    mut bursts: ResMut<ExtractedBursts>,
+    mut store: ResMut<PlumeInstances>,
+) {
+    let batches = &mut *batches;
+    let Some(gpu) = store.gpu.clone() else {
+        // The instances make the device on their first frame; batching starts the next.
+        return;
+    };
+    // Entities of each variant this frame, alone, batched or new.
+    let mut crowds: HashMap<SetKey, usize> = HashMap::new();
+    for e in &extracted.effects {
+        *crowds.entry(set_key(&BuildKey::of(e))).or_default() += 1;
+    }
+    let delta = extracted.delta;
+    let mut alive = std::collections::HashSet::with_capacity(batches.members.len());
+    let mut batched = std::collections::HashSet::new();
+    for e in &extracted.effects {
+        let key = BuildKey::of(e);
+        let member_key = batches.members.get(&e.main).map(|m| m.key.clone());
+        match member_key {
+            Some(old) if old.same(&key) => {}
+            // A restart: the same place, started again.
+            Some(old) if Arc::ptr_eq(&old.graph, &key.graph) && old.variant == key.variant => {
+                if let Some((batch, member)) = batches.lookup_mut(e.main) {
+                    if let Err(err) = batch.batch.restart(member.instance) {
+                        error!("{}: {err}", e.asset.path);
+                    }
+                    member.key = key.clone();
+                    member.clock = StepClock::new(e.asset.dt(), e.control.warm_up);
+                    member.placed_at = None;
+                }
+            }
+            // A new file version or variant: it leaves, and joins again below.
+            Some(_) => batches.leave(e.main),
+            None => {}
+        }
+        if !batches.members.contains_key(&e.main) && !store.instances.contains_key(&e.main) {
+            let crowd = crowds.get(&set_key(&key)).copied().unwrap_or(0) >= BATCH_FROM;
+            if crowd && can_batch(e) {
+                if let Err(message) = batches.join(&gpu, e, key.clone(), &mut store.variants) {
+                    warn_once!("{message}: it runs alone");
+                }
+            }
+        }
+        let Some((batch, member)) = batches.lookup_mut(e.main) else {
+            continue;
+        };
+        alive.insert(e.main);
+        batched.insert(e.main);
+        member.world_from_local = e.world_from_local;
+        member.render_entity = e.render;
+        for (param, &value) in &e.control.params {
+            if member.params.get(param) != Some(&value) {
+                member.params.insert(param.clone(), value);
+                if let Err(err) = batch.batch.set_param(member.instance, param, value) {
+                    warn!("{}: {err}", e.asset.path);
+                }
+            }
+        }
+        if e.control.playing {
+            let scale = f64::from(e.control.time_scale.max(0.0));
+            member.clock.advance_time(delta * scale);
+        }
+    }
+    for (entity, fired) in &bursts.0 {
+        let Some((batch, member)) = batches.lookup_mut(*entity) else {
+            continue;
+        };
+        for burst in fired {
+            let fired = plume_compiler::bursts::Burst::new(burst.emitter, burst.count)
+                .at(burst.position.to_array())
+                .with_velocity(burst.velocity.to_array());
+            if let Err(err) = batch.batch.burst(member.instance, fired) {
+                warn_once!("a burst was refused: {err}");
+            }
+        }
+    }
+    let gone: Vec<Entity> = batches
+        .members
+        .keys()
+        .filter(|e| !alive.contains(e))
+        .copied()
+        .collect();
+    for entity in gone {
+        batches.leave(entity);
+    }
+    extracted.effects.retain(|e| !batched.contains(&e.main));
+    bursts.0.retain(|(entity, _)| !batched.contains(entity));
+}
+
+/// The batches of `key`'s file variant.
+fn set_key(key: &BuildKey) -> SetKey {
+    (Arc::as_ptr(&key.graph) as usize, key.variant)
+}
+
+/// Whether `e` may join a batch (before its file is looked at): world space, drawn by the
+/// raster renderer.
+fn can_batch(e: &ExtractedEffect) -> bool {
+    let capacity: u64 = e
+        .asset
+        .graph
+        .groups
+        .iter()
+        .map(|g| u64::from(g.effect.ir.capacity))
+        .sum();
+    e.control.space == SimulationSpace::World
+        && match e.control.draw {
+            PlumeDraw::Raster => true,
+            PlumeDraw::Auto => capacity < AUTO_COMPUTE_CAPACITY,
+            PlumeDraw::Compute => false,
+        }
+}
+
+impl PlumeBatches {
+    fn lookup_mut(&mut self, entity: Entity) -> Option<(&mut RenderBatch, &mut Member)> {
+        let member = self.members.get_mut(&entity)?;
+        let batch = self
+            .sets
+            .get_mut(&member.set)?
+            .batches
+            .get_mut(member.batch)?
+            .as_mut()?;
+        Some((batch, member))
+    }
+
+    /// Puts `e` in a batch of its variant with room (a new batch when none has), at its
+    /// start; it runs alone when its effect cannot be batched (Ok), or the batch could not
+    /// start (the error).
+    fn join(
+        &mut self,
+        gpu: &Gpu,
+        e: &ExtractedEffect,
+        key: BuildKey,
+        variants: &mut crate::render::instances::Variants,
+    ) -> Result<(), String> {
+        let id = set_key(&key);
+        let set = match self.sets.entry(id) {
+            std::collections::hash_map::Entry::Occupied(set) => set.into_mut(),
+            std::collections::hash_map::Entry::Vacant(place) => {
+                let graph = variant_graph(e, &key, variants)?;
+                if graph.groups.len() != 1 || !graph.streams.is_empty() {
+                    return Ok(());
+                }
+                let effect = &graph.groups[0].effect;
+                if plume_compiler::batch::unbatchable(effect).is_some() {
+                    return Ok(());
+                }
+                let compiled = plume_compiler::batch::compile_batched(effect)
+                    .map_err(|err| format!("{}: {err}", e.asset.path))?;
+                place.insert(BatchSet {
+                    _source: key.graph.clone(),
+                    compiled,
+                    batches: Vec::new(),
+                })
+            }
+        };
+        let room = set
+            .batches
+            .iter()
+            .position(|b| b.as_ref().is_some_and(|b| b.batch.len() < b.slots.len()));
+        let at = match room {
+            Some(at) => at,
+            None => {
+                let layout = &set.compiled.layout;
+                let per_instance =
+                    u64::from(set.compiled.ir.capacity) * u64::from(layout.bytes_per_particle);
+                let instances = (BATCH_BYTES / per_instance.max(1)).clamp(1, BATCH_ROOM) as u32;
+                let batch = EffectBatch::new(gpu, &set.compiled, instances)
+                    .map_err(|err| format!("{}: a batch could not start: {err}", e.asset.path))?;
+                let made = RenderBatch {
+                    batch,
+                    slots: vec![None; instances as usize],
+                    views: HashMap::new(),
+                    particle_bytes: per_instance * u64::from(instances),
+                };
+                match set.batches.iter().position(Option::is_none) {
+                    Some(free) => {
+                        set.batches[free] = Some(made);
+                        free
+                    }
+                    None => {
+                        set.batches.push(Some(made));
+                        set.batches.len() - 1
+                    }
+                }
+            }
+        };
+        let batch = set.batches[at].as_mut().expect("a batch with room");
+        let instance = batch.batch.add().expect("a batch with room");
+        batch.slots[instance.0 as usize] = Some(e.main);
+        self.members.insert(
+            e.main,
+            Member {
+                key,
+                set: id,
+                batch: at,
+                instance,
+                clock: StepClock::new(e.asset.dt(), e.control.warm_up),
+                world_from_local: e.world_from_local,
+                placed_at: None,
+                render_entity: e.render,
+                params: BTreeMap::new(),
+            },
+        );
+        Ok(())
+    }
+
+    /// Takes `entity` out of its batch (its particles go before the next step); a batch left
+    /// empty is freed, and a set left without batches goes.
+    fn leave(&mut self, entity: Entity) {
+        let Some(member) = self.members.remove(&entity) else {
+            return;
+        };
+        let Some(set) = self.sets.get_mut(&member.set) else {
+            return;
+        };
+        if let Some(Some(batch)) = set.batches.get_mut(member.batch) {
+            let _ = batch.batch.remove(member.instance);
+            batch.slots[member.instance.0 as usize] = None;
+            if batch.batch.is_empty() {
+                set.batches[member.batch] = None;
+            }
+        }
+        if set.batches.iter().all(Option::is_none) {
+            self.sets.remove(&member.set);
+        }
+    }
+
+    /// Records every batch's steps for this frame into `encoder`: each entity's steps along
+    /// its motion since the last frame, as a world-space effect alone steps.
+    pub(crate) fn record_steps(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        let mut parts: HashMap<(SetKey, usize), InstanceParts> = HashMap::new();
+        for member in self.members.values_mut() {
+            let steps = std::mem::take(&mut member.clock.steps);
+            let to = member.world_from_local;
+            let finite = to.is_finite();
+            let path = match (finite, steps) {
+                (_, 0) => Vec::new(),
+                (true, _) => motion::parts(steps, member.placed_at.unwrap_or(to), to)
+                    .into_iter()
+                    .map(|(n, at)| (n, Placement::from_cols(at.to_cols_array())))
+                    .collect(),
+                (false, _) => vec![(steps, None)],
+            };
+            if finite {
+                member.placed_at = Some(to);
+            }
+            parts
+                .entry((member.set, member.batch))
+                .or_default()
+                .insert(member.instance, path);
+        }
+        for (id, set) in &mut self.sets {
+            for (at, batch) in set.batches.iter_mut().enumerate() {
+                let Some(batch) = batch else {
+                    continue;
+                };
+                let mine = parts.remove(&(*id, at)).unwrap_or_default();
+                let recorded = batch
+                    .batch
+                    .advance_along(encoder, |i| mine.get(&i).cloned().unwrap_or_default());
+                if let Err(err) = recorded {
+                    error!("{}: {err}", set.compiled.ir.name);
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,140 @@
+//! A crowd of one effect file runs batched: one Plume `EffectBatch` for all its entities,
+//! each entity still its own (its particles where it stands, its bursts, its pause), and the
+//! batch freed when its last entity goes. Headless on lavapipe.
+
+mod common;
+
+use bevy::prelude::*;
+use bevy::render::RenderApp;
+use bevy_plume::{
+    read_particles, read_totals, PlumeBurst, PlumeEffect, PlumeRenderStats, BATCH_FROM,
+};
+use common::{asset_dir, dots, lit_pixels, project, Harness};
+
+fn stats(h: &Harness) -> PlumeRenderStats {
+    *h.app
+        .sub_app(RenderApp)
+        .world()
+        .resource::<PlumeRenderStats>()
+}
+
+/// Where entity k of the crowd stands: a row across the view.
+fn x_of(k: usize) -> f32 {
+    -4.4 + 0.8 * k as f32
+}
+
+/// Lit pixels in the columns nearer to where `x` projects than to its neighbours'.
+fn lit_near(image: &image::RgbaImage, x: f32) -> usize {
+    let (px, _) = project(x, 0.0);
+    let half = (project(x + 0.8, 0.0).0 - px).abs() / 2.0;
+    image
+        .enumerate_pixels()
+        .filter(|(col, _, p)| (*col as f32 - px).abs() < half && p.0[1] > 40)
+        .count()
+}
+
+fn render(h: &Harness) -> &World {
+    h.app.sub_app(RenderApp).world()
+}
+
+#[test]
+fn a_crowd_of_one_file_runs_as_one_batch_each_entity_its_own() {
+    let dir = asset_dir("batches");
+    // 40 dots each, room for a burst of 17 more.
+    let file = dots(40, 100.0, (0.2, 1.0, 0.2)).replace("capacity: 40", "capacity: 64");
+    std::fs::write(dir.join("dots.plume.ron"), file).unwrap();
+    let mut h = Harness::new(&dir);
+    let handle = h.load("dots.plume.ron");
+    let crowd = 12;
+    assert!(crowd >= BATCH_FROM);
+    let entities: Vec<Entity> = (0..crowd)
+        .map(|k| {
+            let effect = PlumeEffect::new(handle.clone()).with_bursts();
+            h.app
+                .world_mut()
+                .spawn((effect, Transform::from_xyz(x_of(k), 0.0, 0.0)))
+                .id()
+        })
+        .collect();
+    h.update(4);
+    let now = stats(&h);
+    assert_eq!((now.instances, now.batches), (crowd, 1), "{now:?}");
+    assert_eq!(now.draws, 1, "one draw for the whole crowd: {now:?}");
+    // One pauses: its particles stop ageing while the others' age on.
+    let ages = |h: &Harness, entity| {
+        let particles = read_particles(render(h), entity, 0)
+            .expect("batched")
+            .expect("read");
+        particles.iter().map(|p| p.age).sum::<f64>() / particles.len().max(1) as f64
+    };
+    h.app
+        .world_mut()
+        .get_mut::<PlumeEffect>(entities[3])
+        .unwrap()
+        .playing = false;
+    h.update(1);
+    let (paused_before, playing_before) = (ages(&h, entities[3]), ages(&h, entities[4]));
+    h.update(3);
+    assert_eq!(ages(&h, entities[3]), paused_before, "the paused one aged");
+    assert!(
+        ages(&h, entities[4]) > playing_before,
+        "the playing one did not age"
+    );
+    // Each entity's 40 particles, where it stands (world space).
+    for (k, &entity) in entities.iter().enumerate() {
+        let particles = read_particles(render(&h), entity, 0)
+            .expect("batched")
+            .expect("read");
+        assert_eq!(particles.len(), 40, "entity {k}");
+        assert!(
+            particles
+                .iter()
+                .all(|p| (p.position.x - f64::from(x_of(k))).abs() < 0.3),
+            "entity {k}'s particles are where it stands"
+        );
+    }
+    // A burst from code on one of them: exactly its count, on that one only.
+    h.app
+        .world_mut()
+        .get_mut::<PlumeEffect>(entities[5])
+        .unwrap()
+        .burst(PlumeBurst::new(17).at(Vec3::new(0.0, 0.5, 0.0)));
+    h.update(2);
+    for (k, &entity) in entities.iter().enumerate() {
+        let totals = read_totals(render(&h), entity, 0)
+            .expect("batched")
+            .expect("read");
+        let expected = if k == 5 { 57 } else { 40 };
+        assert_eq!(totals.spawned, expected, "entity {k}");
+    }
+    // Drawn where each stands.
+    let image = h.capture_lit();
+    for k in 0..crowd {
+        assert!(lit_near(&image, x_of(k)) > 0, "entity {k} is drawn");
+    }
+    // Half go: their particles are drawn no more, the rest still are, in the same batch.
+    for &entity in entities.iter().step_by(2) {
+        h.app.world_mut().despawn(entity);
+    }
+    h.update(2);
+    let now = stats(&h);
+    assert_eq!((now.instances, now.batches), (crowd / 2, 1), "{now:?}");
+    let image = h.capture_lit();
+    for k in 0..crowd {
+        let lit = lit_near(&image, x_of(k));
+        assert_eq!(lit > 0, k % 2 == 1, "entity {k} ({lit} lit pixels)");
+    }
+    // The last ones go: the batch is freed.
+    for &entity in entities.iter().skip(1).step_by(2) {
+        h.app.world_mut().despawn(entity);
+    }
+    h.update(2);
+    let now = stats(&h);
+    assert_eq!(
+        (now.instances, now.batches, now.particle_bytes),
+        (0, 0, 0),
+        "{now:?}"
+    );
+    let (lit, _, _) = lit_pixels(&h.capture(), 40);
+    assert_eq!(lit, 0, "nothing is drawn once every entity went");
+}
