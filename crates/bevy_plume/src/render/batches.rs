@@ -16,6 +16,7 @@ use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use bevy::prelude::*;
+use bevy::render::renderer::{RenderDevice, RenderQueue};
 use plume_compiler::graph::CompiledGraph;
 use plume_compiler::placement::Placement;
 use plume_compiler::CompiledEffect;
@@ -149,12 +150,14 @@ pub(crate) fn sync_batches(
     mut extracted: ResMut<ExtractedEffects>,
     mut bursts: ResMut<ExtractedBursts>,
     mut store: ResMut<PlumeInstances>,
+    device: Res<RenderDevice>,
+    queue: Res<RenderQueue>,
 ) {
     let batches = &mut *batches;
-    let Some(gpu) = store.gpu.clone() else {
-        // The instances make the device on their first frame; batching starts the next.
-        return;
-    };
+    let gpu = store
+        .gpu
+        .get_or_insert_with(|| Gpu::from_device(device.wgpu_device(), &queue))
+        .clone();
     // Entities of each variant this frame, alone, batched or new.
     let mut crowds: HashMap<SetKey, usize> = HashMap::new();
     for e in &extracted.effects {
