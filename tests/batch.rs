@@ -379,7 +379,7 @@ fn steps_in_parts_spawn_at_each_part_s_placement_as_an_effect_placed_between_adv
         let at = |k: u32| placed(frame as f32 + k as f32, 0.5 * k as f32, 0.3 * k as f32);
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         batch
-            .advance_along(&mut encoder, |_| vec![(1, Some(at(1))), (3, Some(at(2)))])
+            .advance_along(&mut encoder, &[vec![(1, Some(at(1))), (3, Some(at(2)))]])
             .expect("steps");
         for (n, k) in [(1, 1), (3, 2)] {
             effect.set_placement(at(k));

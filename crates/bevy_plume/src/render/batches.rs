@@ -39,9 +39,6 @@ const BATCH_ROOM: u64 = 256;
 /// The most particle state one batch allocates: fewer instances of a larger effect.
 const BATCH_BYTES: u64 = 32 << 20;
 
-/// Each instance's steps this frame in parts (steps, where they spawn), by its place.
-type InstanceParts = HashMap<BatchInstance, Vec<(u64, Option<Placement>)>>;
-
 /// A file variant's batches: by (the file version's address, variant).
 pub(crate) type SetKey = (usize, Variant);
 
@@ -159,20 +156,24 @@ pub(crate) fn sync_batches(
         .get_or_insert_with(|| Gpu::from_device(device.wgpu_device(), &queue))
         .clone();
     // Entities of each variant this frame, alone, batched or new.
+    let keys: Vec<BuildKey> = extracted.effects.iter().map(BuildKey::of).collect();
     let mut crowds: HashMap<SetKey, usize> = HashMap::new();
-    for e in &extracted.effects {
-        *crowds.entry(set_key(&BuildKey::of(e))).or_default() += 1;
+    for key in &keys {
+        *crowds.entry(set_key(key)).or_default() += 1;
     }
     let delta = extracted.delta;
     let mut alive = std::collections::HashSet::with_capacity(batches.members.len());
-    let mut batched = std::collections::HashSet::new();
-    for e in &extracted.effects {
-        let key = BuildKey::of(e);
-        let member_key = batches.members.get(&e.main).map(|m| m.key.clone());
-        match member_key {
-            Some(old) if old.same(&key) => {}
+    for (e, key) in extracted.effects.iter().zip(keys) {
+        // How the entity's build differs from its batch place's: not at all (Some(true)), by
+        // its generation alone (Some(false)), by more (None); not batched: no entry.
+        let change = batches.members.get(&e.main).map(|m| {
+            let place = Arc::ptr_eq(&m.key.graph, &key.graph) && m.key.variant == key.variant;
+            place.then_some(m.key.generation == key.generation)
+        });
+        match change {
+            Some(Some(true)) => {}
             // A restart: the same place, started again.
-            Some(old) if Arc::ptr_eq(&old.graph, &key.graph) && old.variant == key.variant => {
+            Some(Some(false)) => {
                 if let Some((batch, member)) = batches.lookup_mut(e.main) {
                     if let Err(err) = batch.batch.restart(member.instance) {
                         error!("{}: {err}", e.asset.path);
@@ -183,7 +184,7 @@ pub(crate) fn sync_batches(
                 }
             }
             // A new file version or variant: it leaves, and joins again below.
-            Some(_) => batches.leave(e.main),
+            Some(None) => batches.leave(e.main),
             None => {}
         }
         if !batches.members.contains_key(&e.main) && !store.instances.contains_key(&e.main) {
@@ -198,7 +199,6 @@ pub(crate) fn sync_batches(
             continue;
         };
         alive.insert(e.main);
-        batched.insert(e.main);
         member.world_from_local = e.world_from_local;
         member.render_entity = e.render;
         for (param, &value) in &e.control.params {
@@ -236,8 +236,8 @@ pub(crate) fn sync_batches(
     for entity in gone {
         batches.leave(entity);
     }
-    extracted.effects.retain(|e| !batched.contains(&e.main));
-    bursts.0.retain(|(entity, _)| !batched.contains(entity));
+    extracted.effects.retain(|e| !alive.contains(&e.main));
+    bursts.0.retain(|(entity, _)| !alive.contains(entity));
 }
 
 /// The batches of `key`'s file variant.
@@ -381,40 +381,43 @@ impl PlumeBatches {
     /// Records every batch's steps for this frame into `encoder`: each entity's steps along
     /// its motion since the last frame, as a world-space effect alone steps.
     pub(crate) fn record_steps(&mut self, encoder: &mut wgpu::CommandEncoder) {
-        let mut parts: HashMap<(SetKey, usize), InstanceParts> = HashMap::new();
-        for member in self.members.values_mut() {
-            let steps = std::mem::take(&mut member.clock.steps);
-            let to = member.world_from_local;
-            let finite = to.is_finite();
-            let path = match (finite, steps) {
-                (_, 0) => Vec::new(),
-                (true, _) => motion::parts(steps, member.placed_at.unwrap_or(to), to)
-                    .into_iter()
-                    .map(|(n, at)| (n, Placement::from_cols(at.to_cols_array())))
-                    .collect(),
-                (false, _) => vec![(steps, None)],
-            };
-            if finite {
-                member.placed_at = Some(to);
-            }
-            parts
-                .entry((member.set, member.batch))
-                .or_default()
-                .insert(member.instance, path);
-        }
-        for (id, set) in &mut self.sets {
-            for (at, batch) in set.batches.iter_mut().enumerate() {
-                let Some(batch) = batch else {
-                    continue;
-                };
-                let mine = parts.remove(&(*id, at)).unwrap_or_default();
-                let recorded = batch
-                    .batch
-                    .advance_along(encoder, |i| mine.get(&i).cloned().unwrap_or_default());
-                if let Err(err) = recorded {
+        let members = &mut self.members;
+        for set in self.sets.values_mut() {
+            for batch in set.batches.iter_mut().flatten() {
+                let parts: Vec<Vec<(u64, Option<Placement>)>> = batch
+                    .slots
+                    .iter()
+                    .map(|slot| {
+                        slot.and_then(|e| members.get_mut(&e))
+                            .map_or_else(Vec::new, path)
+                    })
+                    .collect();
+                if let Err(err) = batch.batch.advance_along(encoder, &parts) {
                     error!("{}: {err}", set.compiled.ir.name);
                 }
             }
         }
+    }
+}
+
+/// `member`'s steps this frame, taken from its clock, along its motion since the last frame
+/// (as a world-space effect alone steps: `motion::parts`).
+fn path(member: &mut Member) -> Vec<(u64, Option<Placement>)> {
+    let steps = std::mem::take(&mut member.clock.steps);
+    let to = member.world_from_local;
+    if !to.is_finite() {
+        // Its emitters stay where they were.
+        return vec![(steps, None)];
+    }
+    let from = member.placed_at.replace(to).unwrap_or(to);
+    let placed = |at: Mat4| Placement::from_cols(at.to_cols_array());
+    match steps {
+        0 => Vec::new(),
+        // One place for every step: what `motion::parts` gives too, without its interpolation.
+        _ if steps == 1 || from == to => vec![(steps, placed(to))],
+        _ => motion::parts(steps, from, to)
+            .into_iter()
+            .map(|(n, at)| (n, placed(at)))
+            .collect(),
     }
 }

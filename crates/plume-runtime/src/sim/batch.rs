@@ -26,7 +26,7 @@ use crate::device::resources::{Resources, BATCH_STEPS};
 use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
 use crate::sim::group::Group;
-use crate::sim::steps::{params_bytes, Steps};
+use crate::sim::steps::{write_params_row, Steps};
 
 /// An instance's place in an [`EffectBatch`] (from [`EffectBatch::add`]); the place is given
 /// to a new instance once this one is removed.
@@ -346,24 +346,31 @@ impl EffectBatch {
         encoder: &mut wgpu::CommandEncoder,
         steps: impl Fn(BatchInstance) -> u64,
     ) -> Result<(), RuntimeError> {
-        self.advance_along(encoder, |i| vec![(steps(i), None)])
-    }
-
-    /// [`Self::advance`] with each instance's steps in parts: `parts(instance)` is a list of
-    /// (steps, the placement they spawn at, or None to keep the one set), in order. A host
-    /// whose emitter moved far in a frame of several steps spawns along the way so.
-    pub fn advance_along(
-        &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        parts: impl Fn(BatchInstance) -> Vec<(u64, Option<Placement>)>,
-    ) -> Result<(), RuntimeError> {
         let parts: Vec<Vec<(u64, Option<Placement>)>> = (0..self.instances.len())
             .map(|k| match self.instances[k] {
-                Some(_) => parts(BatchInstance(k as u32)),
+                Some(_) => vec![(steps(BatchInstance(k as u32)), None)],
                 None => Vec::new(),
             })
             .collect();
-        let wants: Vec<u64> = parts.iter().map(|p| p.iter().map(|q| q.0).sum()).collect();
+        self.advance_along(encoder, &parts)
+    }
+
+    /// [`Self::advance`] with each instance's steps in parts: `parts[k]`, for the instance in
+    /// place k ([`BatchInstance`]`(k)`), is a list of (steps, the placement they spawn at, or
+    /// None to keep the one set), in order; a place without an instance, or past the list, is
+    /// ignored. A host whose emitter moved far in a frame of several steps spawns along the
+    /// way so.
+    pub fn advance_along(
+        &mut self,
+        encoder: &mut wgpu::CommandEncoder,
+        parts: &[Vec<(u64, Option<Placement>)>],
+    ) -> Result<(), RuntimeError> {
+        let wants: Vec<u64> = (0..self.instances.len())
+            .map(|k| match (&self.instances[k], parts.get(k)) {
+                (Some(_), Some(p)) => p.iter().map(|q| q.0).sum(),
+                _ => 0,
+            })
+            .collect();
         let most = wants.iter().copied().max().unwrap_or(0);
         // Dispatches cover the instances up to the last one there is.
         let layers = self
@@ -375,7 +382,7 @@ impl EffectBatch {
         let mut done = 0;
         while done < most {
             let n = (most - done).min(u64::from(BATCH_STEPS));
-            self.record_plan(encoder, &parts, done, n, layers as u32)?;
+            self.record_plan(encoder, parts, done, n, layers as u32)?;
             done += n;
         }
         Ok(())
@@ -430,21 +437,20 @@ impl EffectBatch {
                 let Some(state) = state else {
                     continue;
                 };
-                if let Some(placement) = part_at(&parts[k], from + j as u64) {
+                if let Some(placement) = parts.get(k).and_then(|p| part_at(p, from + j as u64)) {
                     if let Some(placement) = placement {
                         state.placement = placement;
                     }
                     let plan = state.schedule.next_plan();
                     most_requested[j] = most_requested[j].max(plan.requested());
-                    let words = params_bytes(
-                        &[plan],
+                    write_params_row(
+                        out,
+                        &plan,
                         &layout,
-                        row as u64,
                         wraps,
                         &state.placement,
                         &state.live_params,
                     );
-                    out.copy_from_slice(&words);
                     // Active this step.
                     out[row - 16..row - 12].copy_from_slice(&1u32.to_le_bytes());
                 } else {

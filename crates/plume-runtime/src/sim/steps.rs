@@ -241,32 +241,56 @@ pub fn params_bytes(
     live_params: &[f32],
 ) -> Vec<u8> {
     let mut bytes = vec![0u8; stride as usize * plans.len()];
-    for (j, plan) in plans.iter().enumerate() {
-        let at = j * stride as usize;
-        let mut words: Vec<u32> = vec![
-            plan.first_id,
-            plan.requested(),
-            plan.kernel_time(wrap_time).to_bits(),
-            plan.step as u32,
-        ];
-        if layout.placed {
-            words.extend(placement.words());
-        }
-        for e in 0..layout.emitter_slots as usize {
-            let (count, k0) = plan.emitters.get(e).copied().unwrap_or((0, 0));
-            words.extend([count, k0, 0, 0]);
-        }
-        if layout.bursts {
-            words.extend(plume_compiler::bursts::words(&plan.bursts));
-        }
-        let mut user: Vec<u32> = live_params.iter().map(|p| p.to_bits()).collect();
-        user.resize(layout.user_vec4s() as usize * 4, 0);
-        words.extend(user);
-        for (w, chunk) in words.iter().zip(bytes[at..].chunks_exact_mut(4)) {
-            chunk.copy_from_slice(&w.to_le_bytes());
-        }
+    for (plan, row) in plans.iter().zip(bytes.chunks_exact_mut(stride as usize)) {
+        write_params_row(row, plan, layout, wrap_time, placement, live_params);
     }
     bytes
+}
+
+/// One step's parameters (see [`params_bytes`]) into `row`, whose bytes past them are left as
+/// they are. Allocates nothing unless the step fires bursts: a batch writes a row per
+/// instance per step.
+pub fn write_params_row(
+    row: &mut [u8],
+    plan: &StepPlan,
+    layout: &Layout,
+    wrap_time: bool,
+    placement: &Placement,
+    live_params: &[f32],
+) {
+    let mut at = 0;
+    let mut put = |w: u32| {
+        row[at..at + 4].copy_from_slice(&w.to_le_bytes());
+        at += 4;
+    };
+    for w in [
+        plan.first_id,
+        plan.requested(),
+        plan.kernel_time(wrap_time).to_bits(),
+        plan.step as u32,
+    ] {
+        put(w);
+    }
+    if layout.placed {
+        placement.words().into_iter().for_each(&mut put);
+    }
+    for e in 0..layout.emitter_slots as usize {
+        let (count, k0) = plan.emitters.get(e).copied().unwrap_or((0, 0));
+        [count, k0, 0, 0].into_iter().for_each(&mut put);
+    }
+    if layout.bursts {
+        match plan.bursts.is_empty() {
+            // No bursts: every slot zero.
+            true => (0..plume_compiler::bursts::SLOTS * 12).for_each(|_| put(0)),
+            false => plume_compiler::bursts::words(&plan.bursts)
+                .into_iter()
+                .for_each(&mut put),
+        }
+    }
+    let user = layout.user_vec4s() as usize * 4;
+    for k in 0..user {
+        put(live_params.get(k).map_or(0, |p| p.to_bits()));
+    }
 }
 
 impl StatelessSteps {
