@@ -342,6 +342,42 @@ fn churn_never_leaks_loses_or_draws_the_gone() {
         frame += 1;
         assert_eq!(stats(&h).instances, alive.len() + 1, "ramp frame {frame}");
     }
+    // Then churn at about a thousand alive, up to frame 1,000 of the whole run: every frame a
+    // few of any file go and as many come (the small ones batched, the others alone), so
+    // batches fill, empty, are freed and made again.
+    let every: Vec<_> = handles.iter().chain(&small).cloned().collect();
+    let mut batched_frames = 0;
+    for frame in 240 + frame..1_000 {
+        for _ in 0..1 + next(6) {
+            let gone = alive.swap_remove(next(alive.len() as u32) as usize);
+            h.app.world_mut().despawn(gone);
+        }
+        while alive.len() < 1_000 {
+            let x = -2.0 - next(40) as f32 * 0.1;
+            // Mostly the small files: the large ones would grow the churn past lavapipe's
+            // patience, a few are enough to come and go.
+            let file = match next(10) {
+                0 => next(3) as usize,
+                _ => 3 + next(2) as usize,
+            };
+            let effect = PlumeEffect::new(every[file].clone());
+            let id = h
+                .app
+                .world_mut()
+                .spawn((
+                    effect,
+                    Transform::from_xyz(x, next(20) as f32 * 0.1 - 1.0, 0.0),
+                ))
+                .id();
+            alive.push(id);
+        }
+        h.update(1);
+        let now = stats(&h);
+        assert_eq!(now.instances, alive.len() + 1, "churn frame {frame}");
+        batched_frames += usize::from(now.batches > 0);
+        peak = peak.max(now.particle_bytes);
+    }
+    assert!(batched_frames > 0, "the crowd never ran batched");
     for gone in alive.drain(..) {
         h.app.world_mut().despawn(gone);
     }

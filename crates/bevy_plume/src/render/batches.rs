@@ -188,9 +188,10 @@ pub(crate) fn sync_batches(
             None => {}
         }
         if !batches.members.contains_key(&e.main) && !store.instances.contains_key(&e.main) {
-            let crowd = crowds.get(&set_key(&key)).copied().unwrap_or(0) >= BATCH_FROM;
-            if crowd && can_batch(e) {
-                if let Err(message) = batches.join(&gpu, e, key.clone(), &mut store.variants) {
+            let crowd = crowds.get(&set_key(&key)).copied().unwrap_or(0);
+            if crowd >= BATCH_FROM && can_batch(e) {
+                let joined = batches.join(&gpu, e, key.clone(), crowd, &mut store.variants);
+                if let Err(message) = joined {
                     warn_once!("{message}: it runs alone");
                 }
             }
@@ -275,14 +276,15 @@ impl PlumeBatches {
         Some((batch, member))
     }
 
-    /// Puts `e` in a batch of its variant with room (a new batch when none has), at its
-    /// start; it runs alone when its effect cannot be batched (Ok), or the batch could not
-    /// start (the error).
+    /// Puts `e` in a batch of its variant with room (a new batch, with room for a `crowd` of
+    /// entities, when none has), at its start; it runs alone when its effect cannot be batched
+    /// (Ok), or the batch could not start (the error).
     fn join(
         &mut self,
         gpu: &Gpu,
         e: &ExtractedEffect,
         key: BuildKey,
+        crowd: usize,
         variants: &mut crate::render::instances::Variants,
     ) -> Result<(), String> {
         let id = set_key(&key);
@@ -316,7 +318,11 @@ impl PlumeBatches {
                 let layout = &set.compiled.layout;
                 let per_instance =
                     u64::from(set.compiled.ir.capacity) * u64::from(layout.bytes_per_particle);
-                let instances = (BATCH_BYTES / per_instance.max(1)).clamp(1, BATCH_ROOM) as u32;
+                // Room for the crowd there is (from `BATCH_FROM`, doubling), within the bytes.
+                let wanted = (crowd as u64)
+                    .next_power_of_two()
+                    .clamp(BATCH_FROM as u64, BATCH_ROOM);
+                let instances = (BATCH_BYTES / per_instance.max(1)).clamp(1, wanted) as u32;
                 let batch = EffectBatch::new(gpu, &set.compiled, instances)
                     .map_err(|err| format!("{}: a batch could not start: {err}", e.asset.path))?;
                 let made = RenderBatch {
