@@ -30,10 +30,15 @@ for c in "--live 100000" "--live 1000000" "--live 10000000" "--live 1000 --effec
     run $p $c
   done
 done
-for c in "--live 1000 --effects 100" "--live 1000 --effects 1000"; do
-  for p in "hanabi" "plume --draw auto"; do
-    run $p $c
+# Many small effects: the CPU's case, three rounds alternated (the two plugins' CPU times
+# move by up to 15% from run to run), each round with the empty frame beside it.
+for round in 1 2 3; do
+  for c in "--live 1000 --effects 100" "--live 1000 --effects 1000"; do
+    for p in "hanabi" "plume --draw auto"; do
+      run $p $c
+    done
   done
+  run empty --live 1
 done
 run plume --draw compute --live 1000 --effects 100
 # The side-by-side frames, 1M particles each.
