@@ -172,6 +172,15 @@ fn each_batched_instance_has_the_particles_of_the_same_effect_alone() {
         totals.died > 0 && totals.dropped > 0,
         "slots were freed and spawns dropped: {totals:?}"
     );
+    // The batch as one effect counts every instance.
+    let whole = batch.effect().totals().expect("totals");
+    let each: Vec<_> = effects
+        .iter()
+        .map(|e| e.totals().expect("totals"))
+        .collect();
+    assert_eq!(whole.alive, each.iter().map(|t| t.alive).sum::<u64>());
+    assert_eq!(whole.spawned, each.iter().map(|t| t.spawned).sum::<u64>());
+    assert_eq!(whole.died, each.iter().map(|t| t.died).sum::<u64>());
 }
 
 #[test]
@@ -357,6 +366,14 @@ fn one_draw_draws_every_instance_as_the_reference_draws_their_particles() {
         bright.len() > 30 && spread > 30,
         "{} bright pixels over {spread} columns",
         bright.len()
+    );
+    // The compute renderer draws the batch as one effect too: the same sprites, blended once
+    // at pixel centres (the tolerances of tests/render.rs, which compares the two renderers).
+    let splat = common::splat_image(batch.effect(), SIDE);
+    let (splat_mean, splat_max, _) = common::differences(&splat, &drawn, 1);
+    assert!(
+        splat_mean < 1.0 && common::local_difference(&splat, &drawn, SIDE, 4) < 4.0,
+        "splat vs raster: mean {splat_mean:.3}, largest {splat_max}"
     );
     let (mean, max, over) = common::differences(&drawn, &expected, 8);
     // The same sprites rasterised from the same positions: only edge pixels may differ.

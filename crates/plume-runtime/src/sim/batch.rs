@@ -131,12 +131,16 @@ impl EffectBatch {
             )));
         }
         let steps = Steps::new(gpu, &res, &whole)?;
+        let Steps::Stateful(stateful) = &steps else {
+            return Err(RuntimeError::Control("a batched effect is stateful".into()));
+        };
+        // The group's kernels, and the one that frees a single instance's slots.
         let kernels = BatchKernels {
-            init: res.pipeline("init"),
+            init: stateful.init.clone(),
             init_last: res.pipeline("init_last"),
-            prepare: res.pipeline("spawn_prepare"),
-            spawn: res.pipeline("spawn"),
-            update: res.pipeline("update"),
+            prepare: stateful.prepare.clone(),
+            spawn: stateful.spawn.clone(),
+            update: stateful.update.clone(),
         };
         let step_stride = res.params_stride;
         // The group's schedule only counts the batch's steps (the draw reads them): it spawns
@@ -184,8 +188,10 @@ impl EffectBatch {
         Ok(batch)
     }
 
-    /// The batch as one effect: what draws every instance ([`Effect::renderer`],
-    /// [`Effect::prepare_draw`]) and reads the whole batch back.
+    /// The batch as one effect: what draws every instance ([`Effect::renderer`] and
+    /// [`Effect::compute_renderer`], then [`Effect::prepare_draw`]), and its totals and live
+    /// box over every instance. Read an instance's particles back with [`Self::records`]: the
+    /// effect's own records count ages in the batch's steps.
     pub fn effect(&self) -> &Effect {
         &self.effect
     }
@@ -425,11 +431,11 @@ impl EffectBatch {
     ) -> Result<(), RuntimeError> {
         let row = self.row_bytes as usize;
         let stride = self.step_stride as usize;
-        let layout = self.batched.layout.clone();
+        let layout = &self.batched.layout;
         let wraps = self.batched.ir.wraps_kernel_time();
         let mut bytes = vec![0u8; stride * n as usize];
         let mut most_requested = vec![0u32; n as usize];
-        for j in 0..n as usize {
+        for (j, most) in most_requested.iter_mut().enumerate() {
             let step = self.effect.groups[0].schedule.next_plan().step as u32;
             for (k, state) in self.instances.iter_mut().enumerate() {
                 let at = j * stride + k * row;
@@ -442,11 +448,11 @@ impl EffectBatch {
                         state.placement = placement;
                     }
                     let plan = state.schedule.next_plan();
-                    most_requested[j] = most_requested[j].max(plan.requested());
+                    *most = (*most).max(plan.requested());
                     write_params_row(
                         out,
                         &plan,
-                        &layout,
+                        layout,
                         wraps,
                         &state.placement,
                         &state.live_params,

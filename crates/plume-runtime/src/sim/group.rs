@@ -392,11 +392,35 @@ impl Group {
             .as_ref()
             .expect("a stateful effect has counters");
         let bytes = read_buffer(&self.gpu, counters)?;
-        Ok(decode_totals(
-            &bytes,
-            self.effect.ir.capacity,
-            self.schedule.steps_done(),
-        ))
+        let steps = self.schedule.steps_done();
+        if !self.effect.layout.batched {
+            return Ok(decode_totals(&bytes, self.effect.ir.capacity, steps));
+        }
+        // A batch (`sim::batch`): every instance's counters, added up.
+        let size = plume_compiler::passes::layout::COUNTERS_BYTES as usize;
+        let binding = self
+            .effect
+            .layout
+            .bindings
+            .iter()
+            .find(|b| b.name == "counters");
+        let instances = binding.map_or(1, |b| b.bytes as usize / size).max(1);
+        let capacity = self.effect.ir.capacity / instances as u32;
+        let mut sum = Totals {
+            steps,
+            alive: 0,
+            spawned: 0,
+            died: 0,
+            dropped: 0,
+        };
+        for one in bytes.chunks_exact(size).take(instances) {
+            let t = decode_totals(one, capacity, steps);
+            sum.alive += t.alive;
+            sum.spawned += t.spawned;
+            sum.died += t.died;
+            sum.dropped += t.dropped;
+        }
+        Ok(sum)
     }
 
     /// The live particles in id order, velocity as the integrator knows it (Verlet's derived).

@@ -29,10 +29,10 @@ pub enum Steps {
 
 /// A stateful effect's kernels.
 pub struct StatefulSteps {
-    init: wgpu::ComputePipeline,
-    prepare: wgpu::ComputePipeline,
-    spawn: wgpu::ComputePipeline,
-    update: wgpu::ComputePipeline,
+    pub(crate) init: wgpu::ComputePipeline,
+    pub(crate) prepare: wgpu::ComputePipeline,
+    pub(crate) spawn: wgpu::ComputePipeline,
+    pub(crate) update: wgpu::ComputePipeline,
     flock: Option<FlockPass>,
     /// The baked field's `bake` kernel, its node count, and whether it runs every step.
     bake: Option<(wgpu::ComputePipeline, u64, bool)>,
