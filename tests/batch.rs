@@ -410,3 +410,32 @@ fn steps_in_parts_spawn_at_each_part_s_placement_as_an_effect_placed_between_adv
         &effect.records().expect("records"),
     );
 }
+
+#[test]
+fn a_long_run_remembers_only_the_steps_whose_particles_may_live() {
+    // 3,000 steps of 400 sparks a second living 0.2 to 0.5 s: every step spawns, no spark
+    // lives past 25 steps. The schedule keeps the steps whose sparks may live, not all 3,000,
+    // and still gives every live spark its age: as the f64 reference does.
+    let compiled = compile_str(SPARKS, &CompileOptions::default()).expect("compiles");
+    let mut schedule = plume::compiler::schedule::Schedule::new(&compiled.ir);
+    for _ in 0..3_000 {
+        schedule.next_plan();
+    }
+    assert!(
+        schedule.steps_remembered() <= 30,
+        "{} steps remembered",
+        schedule.steps_remembered()
+    );
+    let (gpu_totals, gpu) = common::run_gpu(&compiled, 3_000);
+    let (cpu_totals, cpu) = common::run_cpu(&compiled, 3_000);
+    assert_eq!(gpu_totals.spawned, cpu_totals.spawned);
+    assert!(!gpu.is_empty());
+    let ages = |records: &[ParticleRecord]| -> Vec<(u32, f64, Option<f64>)> {
+        records.iter().map(|r| (r.id, r.age, r.lifetime)).collect()
+    };
+    assert_eq!(
+        ages(&gpu),
+        ages(&cpu),
+        "ages and lifetimes of the live sparks"
+    );
+}

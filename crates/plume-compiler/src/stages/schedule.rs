@@ -58,8 +58,13 @@ pub struct Schedule {
     emitted: Vec<u32>,
     next_step: u64,
     next_id: u32,
-    /// (first id, step) for every step that requested at least one spawn, in order.
-    first_ids: Vec<(u32, u64)>,
+    /// (first id, step) for every step that requested at least one spawn, in order; entries
+    /// whose particles have all died are dropped (see `keeps`).
+    first_ids: VecDeque<(u32, u64)>,
+    /// The most steps a particle lives (every emitter's lifetime bounded), so that a step's
+    /// entry can go once its particles are all dead: a game's effect that spawns every frame
+    /// would otherwise hold one more entry a frame for as long as it runs. None: kept.
+    keeps: Option<u64>,
     /// Bursts fired from code that no step has spawned yet, oldest first.
     pending: VecDeque<Burst>,
 }
@@ -75,7 +80,16 @@ impl Schedule {
             emitted: vec![0; ir.emitters.len()],
             next_step: 0,
             next_id: 0,
-            first_ids: Vec::new(),
+            first_ids: VecDeque::new(),
+            keeps: ir
+                .emitters
+                .iter()
+                .map(|e| {
+                    e.lifetime_steps
+                        .map(|l| u64::from(l.first) + u64::from(l.span))
+                })
+                .try_fold(0, |most, life| life.map(|l| most.max(l)))
+                .filter(|_| ir.event_inputs.is_empty()),
             pending: VecDeque::new(),
         }
     }
@@ -104,6 +118,11 @@ impl Schedule {
     /// Bursts queued and not yet spawned.
     pub fn bursts_pending(&self) -> usize {
         self.pending.len()
+    }
+
+    /// Steps whose spawns it still remembers (for ages): those that may have live particles.
+    pub fn steps_remembered(&self) -> usize {
+        self.first_ids.len()
     }
 
     /// Steps planned so far.
@@ -151,7 +170,14 @@ impl Schedule {
             self.next_id += burst.count;
         }
         if self.next_id > first_id {
-            self.first_ids.push((first_id, step));
+            self.first_ids.push_back((first_id, step));
+        }
+        // An entry whose particles have all died (spawned `keeps` steps ago and more) goes,
+        // once a later one covers the ids after it.
+        if let Some(keeps) = self.keeps {
+            while self.first_ids.len() > 1 && self.first_ids[0].1 + keeps + 1 < step {
+                self.first_ids.pop_front();
+            }
         }
         self.next_step += 1;
         StepPlan {
