@@ -55,6 +55,14 @@ pub fn compile_batched(compiled: &CompiledEffect) -> Result<CompiledEffect, Batc
     }
     let mut batched = compiled.clone();
     batched.layout.batched = true;
+    batched.layout.instance_slots = compiled.ir.capacity;
+    batched.layout.bindings.push(crate::base::layout::Binding {
+        binding: wgsl::batch::INSTANCE_MODELS_BINDING,
+        name: "instance_models",
+        space: "storage, read",
+        bytes: 64,
+        meaning: "per instance, its transform from its own space to the world, column-major (the draw's; identity for an instance in world space)",
+    });
     let params_bytes = batched.layout.params_bytes();
     for binding in &mut batched.layout.bindings {
         match binding.name {
@@ -74,6 +82,9 @@ pub fn compile_batched(compiled: &CompiledEffect) -> Result<CompiledEffect, Batc
     }
     batched.wgsl = wgsl::emit_module(&batched.ir, &batched.layout);
     naga_check::validate(&batched.wgsl).map_err(|e| BatchError::Compile(e.into()))?;
+    let shape = wgsl::draw::DrawShape::single(&batched.ir);
+    batched.draw_wgsl = wgsl::draw::emit(&batched.ir, &batched.layout, &shape);
+    naga_check::validate(&batched.draw_wgsl).map_err(|e| BatchError::Compile(e.into()))?;
     Ok(batched)
 }
 

@@ -137,6 +137,8 @@ pub struct Layout {
     /// instance's counters, free list segment and step parameters side by side, the instance
     /// read from the dispatch's z.
     pub batched: bool,
+    /// A batched layout's slots per instance (`CAPACITY` of its compute module; 0 otherwise).
+    pub instance_slots: u32,
 }
 
 impl Layout {

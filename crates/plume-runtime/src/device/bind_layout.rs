@@ -52,7 +52,7 @@ pub(crate) fn entries(effect: &CompiledEffect, skip: &str) -> Vec<wgpu::BindGrou
                 Some(b.bytes),
             ),
             "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data"
-            | "scene_depth" => buffer_entry(
+            | "scene_depth" | "instance_models" => buffer_entry(
                 b.binding,
                 wgpu::BufferBindingType::Storage { read_only: true },
                 false,

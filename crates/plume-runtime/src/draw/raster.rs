@@ -17,6 +17,7 @@
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use plume_compiler::schema::Blend;
+use plume_compiler::wgsl::batch::INSTANCE_MODELS_BINDING;
 use plume_compiler::wgsl::draw::{DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
 use plume_compiler::CompiledEffect;
 
@@ -452,6 +453,13 @@ pub(crate) fn draw_module(
         for (k, chunk) in res.chunks(effect)?.iter().enumerate() {
             entries.push((FIRST_DATA_BINDING + k as u32, chunk.buffer.clone()));
         }
+    }
+    if effect.layout.batched {
+        // A batch's instances' transforms (`sim::batch`).
+        let models = res.extra_named(effect, "instance_models").ok_or_else(|| {
+            RuntimeError::Gpu("a batch has no instance transforms (a bug in the compiler)".into())
+        })?;
+        entries.push((INSTANCE_MODELS_BINDING, models.clone()));
     }
     Ok((module, entries))
 }

@@ -98,6 +98,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
             .as_ref()
             .map_or(0, |t| t.bytes_per_particle()),
         batched: false,
+        instance_slots: 0,
     };
     // Binding 0 holds the particles: their state, or for a stateless effect the view that
     // `evaluate` writes; binding 4 names the slots of this dispatch's buffer.

@@ -76,3 +76,32 @@ pub(crate) fn emit_init(w: &mut Writer) {
         );
     }
 }
+
+/// Where the draw module reads each batched instance's transform (its own space to the
+/// world; identity for an instance in world space).
+pub const INSTANCE_MODELS_BINDING: u32 = 35;
+
+/// A batched draw module's camera: the uniform the runtime writes (`draw_uniform`), each
+/// instance's transform, and the private copy every other line reads as `draw`, whose view
+/// [`emit_instance_view`] turns by the sprite's instance (the fragment shader takes it as
+/// written: it reads the projection, never the view).
+pub(crate) fn emit_draw_declarations(w: &mut Writer) {
+    w.line("@group(0) @binding(0) var<uniform> draw_uniform: DrawView;");
+    w.line(format!(
+        "@group(0) @binding({INSTANCE_MODELS_BINDING}) var<storage, read> instance_models: array<mat4x4<f32>>;"
+    ));
+    w.comment(
+        "The camera as this sprite's instance sees it: the view times the instance's transform.",
+    );
+    w.line("var<private> draw: DrawView;");
+}
+
+/// In a batched draw's `sprite_at`, once `slot` is known: the camera through the transform of
+/// the instance that owns the slot.
+pub(crate) fn emit_instance_view(w: &mut Writer, layout: &Layout) {
+    w.line("draw = draw_uniform;");
+    w.line(format!(
+        "draw.view = draw_uniform.view * instance_models[slot / {}u];",
+        layout.instance_slots
+    ));
+}

@@ -139,6 +139,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "depth_axis" => "DepthAxis",
             "collider_data" | "force_data" | "scene_depth" => "array<f32>",
             "spawn_data" => "array<u32>",
+            "instance_models" => "array<mat4x4<f32>>",
             _ => "StepParams",
         };
         if b.name == "params" && layout.batched {

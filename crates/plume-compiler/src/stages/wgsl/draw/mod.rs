@@ -182,7 +182,11 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         emit_particle_struct(&mut w, layout);
     }
     w.blank();
-    w.line("@group(0) @binding(0) var<uniform> draw: DrawView;");
+    if layout.batched {
+        crate::stages::wgsl::batch::emit_draw_declarations(&mut w);
+    } else {
+        w.line("@group(0) @binding(0) var<uniform> draw: DrawView;");
+    }
     if shape.through_list {
         w.line("@group(0) @binding(1) var<storage, read> order: array<u32>;");
     }
@@ -255,7 +259,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.blank();
     emit_vertex(&mut w, shape, ir.render.turns_quad(), texture.is_some());
     w.blank();
-    emit_fragment(&mut w, texture, soft.is_some());
+    emit_fragment(&mut w, texture, soft.is_some(), layout.batched);
     if shape.splat {
         w.blank();
         if splat_discs(ir, shape.hdr) {
@@ -307,6 +311,9 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
             w.line("let slot = order[instance];");
         } else {
             w.line("let slot = instance;");
+        }
+        if layout.batched {
+            crate::stages::wgsl::batch::emit_instance_view(w, layout);
         }
         if stateless {
             w.line("let e = evaluate_at(slot);");
@@ -462,7 +469,14 @@ fn emit_fragment(
     w: &mut Writer,
     texture: Option<&crate::features::looks::texture::TextureIr>,
     soft: bool,
+    batched: bool,
 ) {
+    // A batch's draw reads the camera through its private copy (see `wgsl::batch`).
+    let take_view = |w: &mut Writer| {
+        if batched {
+            w.line("draw = draw_uniform;");
+        }
+    };
     if soft {
         w.block("fn shade(in: Sprite) -> vec4<f32>", |w| {
             emit_shade(w, texture)
@@ -470,12 +484,14 @@ fn emit_fragment(
         w.blank();
         w.line("@fragment");
         w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
+            take_view(w);
             w.line("let c = shade(in);");
             w.line("return vec4<f32>(c.rgb, c.a * soft_fade(in.clip));");
         });
     } else {
         w.line("@fragment");
         w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
+            take_view(w);
             emit_shade(w, texture)
         });
     }

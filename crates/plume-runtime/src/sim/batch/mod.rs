@@ -8,25 +8,31 @@
 //! Each instance keeps what makes it itself: its spawn schedule (ids, emitter counters,
 //! bursts, time), its placement and its live params. Instances share the batch's step index;
 //! one that takes fewer steps in a frame than the batch (paused, or slower) is held through
-//! the others, its particles' ages unchanged.
+//! the others, its particles' ages unchanged. `steps.rs` records the steps, `read.rs` reads
+//! instances back.
+
+mod read;
+mod steps;
 
 use plume_compiler::batch::compile_batched;
 use plume_compiler::bursts::Burst;
 use plume_compiler::passes::layout::COUNTERS_BYTES;
 use plume_compiler::placement::Placement;
-use plume_compiler::reference::{ParticleRecord, Totals};
 use plume_compiler::schedule::Schedule;
 use plume_compiler::wgsl::WORKGROUP;
 use plume_compiler::CompiledEffect;
 
-use crate::device::buffers::staging;
 use crate::device::gpu::Gpu;
-use crate::device::readback::{decode_slots, decode_totals, read_buffer};
-use crate::device::resources::{Resources, BATCH_STEPS};
+use crate::device::resources::Resources;
 use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
 use crate::sim::group::Group;
-use crate::sim::steps::{write_params_row, Steps};
+use crate::sim::steps::Steps;
+
+/// The identity transform, column-major.
+const IDENTITY: [f32; 16] = [
+    1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+];
 
 /// An instance's place in an [`EffectBatch`] (from [`EffectBatch::add`]); the place is given
 /// to a new instance once this one is removed.
@@ -70,6 +76,10 @@ pub struct EffectBatch {
     /// The batched compile, `CAPACITY` an instance's (how one instance's slots decode).
     batched: CompiledEffect,
     instances: Vec<Option<InstanceState>>,
+    /// Each place's transform from its instance's space to the world (column-major), as the
+    /// draw reads them, and whether they changed since the last upload.
+    models: Vec<[f32; 16]>,
+    models_changed: bool,
     /// Instances whose slots are freed before the next step: new, restarted or removed.
     to_init: Vec<u32>,
     kernels: BatchKernels,
@@ -121,6 +131,7 @@ impl EffectBatch {
             match binding.name {
                 "counters" => binding.bytes = COUNTERS_BYTES * u64::from(instances),
                 "params" => binding.bytes = row_bytes * u64::from(instances),
+                "instance_models" => binding.bytes = 64 * u64::from(instances),
                 _ => {}
             }
         }
@@ -169,6 +180,8 @@ impl EffectBatch {
             },
             batched,
             instances: (0..instances).map(|_| None).collect(),
+            models: vec![IDENTITY; instances as usize],
+            models_changed: true,
             to_init: Vec::new(),
             kernels,
             row_bytes,
@@ -220,11 +233,13 @@ impl EffectBatch {
         self.len() == 0
     }
 
-    /// Adds an instance: at its start, at the identity placement, with the file's params.
-    /// None when the batch is full. Its slots are freed before the next step.
+    /// Adds an instance: at its start, at the identity placement and transform, with the
+    /// file's params. None when the batch is full. Its slots are freed before the next step.
     pub fn add(&mut self) -> Option<BatchInstance> {
         let at = self.instances.iter().position(Option::is_none)?;
         self.instances[at] = Some(self.fresh_state());
+        self.models[at] = IDENTITY;
+        self.models_changed = true;
         self.to_init.push(at as u32);
         Some(BatchInstance(at as u32))
     }
@@ -292,6 +307,31 @@ impl EffectBatch {
         Ok(())
     }
 
+    /// The transform (column-major) from `instance`'s own space to the world, which its
+    /// particles are drawn through once the next [`Self::advance`] (of any steps, 0 too) has
+    /// uploaded it: an instance in its own space (an
+    /// effect compiled without `placed`) moves its particles with it so, as a host moves an
+    /// effect in local space by the view it draws it with. Identity until set. Refused when
+    /// not finite.
+    pub fn set_transform(
+        &mut self,
+        instance: BatchInstance,
+        cols: [f32; 16],
+    ) -> Result<(), RuntimeError> {
+        self.state(instance)?;
+        if !cols.iter().all(|c| c.is_finite()) {
+            return Err(RuntimeError::Control(format!(
+                "instance {}: a transform must be finite",
+                instance.0
+            )));
+        }
+        if self.models[instance.0 as usize] != cols {
+            self.models[instance.0 as usize] = cols;
+            self.models_changed = true;
+        }
+        Ok(())
+    }
+
     /// Sets `instance`'s param `name` (an effect compiled with `live_params`), as
     /// [`Effect::set_param`] does for an effect.
     pub fn set_param(
@@ -341,229 +381,4 @@ impl EffectBatch {
     pub fn steps_done(&self, instance: BatchInstance) -> Result<u64, RuntimeError> {
         Ok(self.state(instance)?.schedule.steps_done())
     }
-
-    /// Records this frame's steps into `encoder`: `steps(instance)` steps for each instance (0
-    /// for one that is paused). The batch takes as many steps as the instance that takes
-    /// most; the others sit out the rest, held. First the slots of instances added, restarted
-    /// or removed since the last call are freed. Then, per [`BATCH_STEPS`] steps, one upload
-    /// of every instance's rows and one compute pass. The schedules advance now.
-    pub fn advance(
-        &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        steps: impl Fn(BatchInstance) -> u64,
-    ) -> Result<(), RuntimeError> {
-        let parts: Vec<Vec<(u64, Option<Placement>)>> = (0..self.instances.len())
-            .map(|k| match self.instances[k] {
-                Some(_) => vec![(steps(BatchInstance(k as u32)), None)],
-                None => Vec::new(),
-            })
-            .collect();
-        self.advance_along(encoder, &parts)
-    }
-
-    /// [`Self::advance`] with each instance's steps in parts: `parts[k]`, for the instance in
-    /// place k ([`BatchInstance`]`(k)`), is a list of (steps, the placement they spawn at, or
-    /// None to keep the one set), in order; a place without an instance, or past the list, is
-    /// ignored. A host whose emitter moved far in a frame of several steps spawns along the
-    /// way so.
-    pub fn advance_along(
-        &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        parts: &[Vec<(u64, Option<Placement>)>],
-    ) -> Result<(), RuntimeError> {
-        let wants: Vec<u64> = (0..self.instances.len())
-            .map(|k| match (&self.instances[k], parts.get(k)) {
-                (Some(_), Some(p)) => p.iter().map(|q| q.0).sum(),
-                _ => 0,
-            })
-            .collect();
-        let most = wants.iter().copied().max().unwrap_or(0);
-        // Dispatches cover the instances up to the last one there is.
-        let layers = self
-            .instances
-            .iter()
-            .rposition(Option::is_some)
-            .map_or(0, |k| k + 1);
-        self.record_inits(encoder)?;
-        let mut done = 0;
-        while done < most {
-            let n = (most - done).min(u64::from(BATCH_STEPS));
-            self.record_plan(encoder, parts, done, n, layers as u32)?;
-            done += n;
-        }
-        Ok(())
-    }
-
-    /// Frees the slots of every instance added, restarted or removed since the last steps.
-    fn record_inits(&mut self, encoder: &mut wgpu::CommandEncoder) -> Result<(), RuntimeError> {
-        if self.to_init.is_empty() {
-            return Ok(());
-        }
-        let gpu = &self.effect.gpu;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("batch init"),
-            timestamp_writes: None,
-        });
-        let (x, y) = gpu.grid(u64::from(self.batched.ir.capacity), u64::from(WORKGROUP))?;
-        pass.set_pipeline(&self.kernels.init_last);
-        pass.set_bind_group(0, &self.group().chunks()?[0].bind_group, &[0]);
-        self.to_init.sort_unstable();
-        self.to_init.dedup();
-        for &k in &self.to_init {
-            // `init_last` inits the last layer of its dispatch: instance k.
-            pass.dispatch_workgroups(x, y, k + 1);
-        }
-        drop(pass);
-        self.to_init.clear();
-        Ok(())
-    }
-
-    /// Records `n` batch steps from step `from` of this frame: each instance's rows (its
-    /// plan while its parts still hold steps, placed as its part says, else a held row), one
-    /// upload, one compute pass.
-    fn record_plan(
-        &mut self,
-        encoder: &mut wgpu::CommandEncoder,
-        parts: &[Vec<(u64, Option<Placement>)>],
-        from: u64,
-        n: u64,
-        layers: u32,
-    ) -> Result<(), RuntimeError> {
-        let row = self.row_bytes as usize;
-        let stride = self.step_stride as usize;
-        let layout = &self.batched.layout;
-        let wraps = self.batched.ir.wraps_kernel_time();
-        let mut bytes = vec![0u8; stride * n as usize];
-        let mut most_requested = vec![0u32; n as usize];
-        for (j, most) in most_requested.iter_mut().enumerate() {
-            let step = self.effect.groups[0].schedule.next_plan().step as u32;
-            for (k, state) in self.instances.iter_mut().enumerate() {
-                let at = j * stride + k * row;
-                let out = &mut bytes[at..at + row];
-                let Some(state) = state else {
-                    continue;
-                };
-                if let Some(placement) = parts.get(k).and_then(|p| part_at(p, from + j as u64)) {
-                    if let Some(placement) = placement {
-                        state.placement = placement;
-                    }
-                    let plan = state.schedule.next_plan();
-                    *most = (*most).max(plan.requested());
-                    write_params_row(
-                        out,
-                        &plan,
-                        layout,
-                        wraps,
-                        &state.placement,
-                        &state.live_params,
-                    );
-                    // Active this step.
-                    out[row - 16..row - 12].copy_from_slice(&1u32.to_le_bytes());
-                } else {
-                    state.held += 1;
-                }
-                // Every row carries the batch's step index: deaths and ages reckon from it.
-                out[12..16].copy_from_slice(&step.to_le_bytes());
-            }
-        }
-        let src = staging(&self.effect.gpu, "batch step params", &bytes)?;
-        let params = self
-            .group()
-            .res
-            .params
-            .as_ref()
-            .expect("a batch is stateful");
-        encoder.copy_buffer_to_buffer(&src, 0, params, 0, bytes.len() as u64);
-        let gpu = &self.effect.gpu;
-        let group = &self.effect.groups[0];
-        let bind_group = &group.chunks()?[0].bind_group;
-        let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("batch steps"),
-            timestamp_writes: None,
-        });
-        let (ux, uy) = gpu.grid(u64::from(self.batched.ir.capacity), u64::from(WORKGROUP))?;
-        for (j, requested) in most_requested.iter().enumerate() {
-            pass.set_bind_group(0, bind_group, &[(j * stride) as u32]);
-            if *requested > 0 {
-                pass.set_pipeline(&self.kernels.prepare);
-                pass.dispatch_workgroups(1, 1, layers);
-                let (x, y) = gpu.grid(u64::from(*requested), u64::from(WORKGROUP))?;
-                pass.set_pipeline(&self.kernels.spawn);
-                pass.dispatch_workgroups(x, y, layers);
-            }
-            pass.set_pipeline(&self.kernels.update);
-            pass.dispatch_workgroups(ux, uy, layers);
-        }
-        Ok(())
-    }
-
-    /// `instance`'s totals (waits for the GPU): its counters, its own steps.
-    pub fn totals(&self, instance: BatchInstance) -> Result<Totals, RuntimeError> {
-        let state = self.state(instance)?;
-        let group = self.group();
-        let counters = group.res.counters.as_ref().expect("a batch is stateful");
-        let bytes = read_buffer(&self.effect.gpu, counters)?;
-        let at = instance.0 as usize * COUNTERS_BYTES as usize;
-        Ok(decode_totals(
-            &bytes[at..at + COUNTERS_BYTES as usize],
-            self.batched.ir.capacity,
-            state.schedule.steps_done(),
-        ))
-    }
-
-    /// `instance`'s live particles, by id (waits for the GPU), as [`Effect::records`] gives
-    /// an effect's: ages and lifetimes in the instance's own steps.
-    pub fn records(&self, instance: BatchInstance) -> Result<Vec<ParticleRecord>, RuntimeError> {
-        let state = self.state(instance)?;
-        let group = self.group();
-        let all = read_buffer(&self.effect.gpu, &group.chunks()?[0].buffer)?;
-        let layout = &self.batched.layout;
-        let (capacity, total) = (
-            u64::from(self.batched.ir.capacity),
-            u64::from(group.effect.ir.capacity),
-        );
-        // The instance's slots as an effect of its capacity holds them, with its death and
-        // spawn steps moved from the batch's step index to its own.
-        let words = layout.bytes_per_particle as usize / 4;
-        let own = |w: usize| {
-            [
-                plume_compiler::passes::layout::Attribute::DeathStep,
-                plume_compiler::passes::layout::Attribute::SpawnStep,
-            ]
-            .iter()
-            .any(|a| layout.word_offset(*a) == Some(w))
-        };
-        let mut bytes = vec![0u8; layout.buffer_bytes(capacity) as usize];
-        for i in 0..capacity {
-            let slot = u64::from(instance.0) * capacity + i;
-            for w in 0..words {
-                let from = layout.word_byte(w, slot, total) as usize;
-                let to = layout.word_byte(w, i, capacity) as usize;
-                let mut word = u32::from_le_bytes(all[from..from + 4].try_into().expect("4 bytes"));
-                if own(w) && word != u32::MAX {
-                    word = word.wrapping_sub(state.held as u32);
-                }
-                bytes[to..to + 4].copy_from_slice(&word.to_le_bytes());
-            }
-        }
-        let mut out: Vec<ParticleRecord> = decode_slots(&self.batched, &state.schedule, &[bytes])?
-            .into_iter()
-            .flatten()
-            .collect();
-        out.sort_by_key(|r| r.id);
-        Ok(out)
-    }
-}
-
-/// The placement of step `t` of an instance's frame in `parts` (Some(None): its own), or None
-/// past its steps.
-fn part_at(parts: &[(u64, Option<Placement>)], t: u64) -> Option<Option<Placement>> {
-    let mut end = 0;
-    for (steps, placement) in parts {
-        end += steps;
-        if t < end {
-            return Some(*placement);
-        }
-    }
-    None
 }
