@@ -7,7 +7,8 @@ mod common;
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{
-    read_particles, read_totals, PlumeBurst, PlumeEffect, PlumeRenderStats, BATCH_FROM,
+    read_particles, read_totals, PlumeBurst, PlumeEffect, PlumeRenderStats, SimulationSpace,
+    BATCH_FROM,
 };
 use common::{asset_dir, dots, lit_pixels, project, Harness};
 
@@ -137,4 +138,64 @@ fn a_crowd_of_one_file_runs_as_one_batch_each_entity_its_own() {
     );
     let (lit, _, _) = lit_pixels(&h.capture(), 40);
     assert_eq!(lit, 0, "nothing is drawn once every entity went");
+}
+
+#[test]
+fn a_batched_crowd_in_local_space_moves_with_its_entities() {
+    let dir = asset_dir("batches_local");
+    // Stateful as written (in local space the file is compiled as written, and these dots
+    // would be stateless: their particles computed in the draw, nothing to batch).
+    let file = dots(40, 100.0, (0.2, 1.0, 0.2)).replace(
+        r#"Effect(name: "dots","#,
+        r#"Effect(name: "dots", state: Stateful,"#,
+    );
+    std::fs::write(dir.join("dots.plume.ron"), file).unwrap();
+    let mut h = Harness::new(&dir);
+    let handle = h.load("dots.plume.ron");
+    let entities: Vec<Entity> = (0..10)
+        .map(|k| {
+            let effect = PlumeEffect::new(handle.clone()).with_space(SimulationSpace::Local);
+            h.app
+                .world_mut()
+                .spawn((effect, Transform::from_xyz(x_of(k), 0.0, 0.0)))
+                .id()
+        })
+        .collect();
+    h.update(3);
+    let now = stats(&h);
+    assert_eq!((now.instances, now.batches), (10, 1), "{now:?}");
+    // Every entity goes up 1.5 m: its particles, in its own space, go with it.
+    for &entity in &entities {
+        h.app
+            .world_mut()
+            .get_mut::<Transform>(entity)
+            .unwrap()
+            .translation
+            .y = 1.5;
+    }
+    h.update(2);
+    let image = h.capture_lit();
+    let (lit, x, y) = lit_pixels(&image, 40);
+    let (_, up) = project(0.0, 1.5);
+    let (_, down) = project(0.0, 0.0);
+    assert!(lit > 10, "{lit} lit pixels");
+    assert!(
+        (y - up).abs() < (up - down).abs() / 4.0,
+        "the particles' rows centre at {y:.1}: the entities stand at {up:.1} (they were at {down:.1})"
+    );
+    let (left, right) = (project(x_of(0), 1.5).0, project(x_of(9), 1.5).0);
+    assert!(
+        x > left && x < right,
+        "centred at column {x:.1}, the row spans {left:.1} to {right:.1}"
+    );
+    // Read back in each entity's own space: still around its origin.
+    for (k, &entity) in entities.iter().enumerate() {
+        let particles = read_particles(render(&h), entity, 0)
+            .expect("batched")
+            .expect("read");
+        assert!(
+            particles.iter().all(|p| p.position.length() < 0.3),
+            "entity {k}'s particles in its own space"
+        );
+    }
 }

@@ -1,15 +1,16 @@
 //! Batched instances: a game's crowd of one small effect (impacts, torches, footsteps) costs
 //! the CPU one upload, a few dispatches and one draw a frame, not each of those per entity.
-//! Once [`BATCH_FROM`] instances of a file variant run, each new entity of it that can be
-//! batched joins a Plume [`EffectBatch`] of that variant (its own place in the batch's
+//! When [`BATCH_FROM`] entities or more of a file variant exist in a frame, each new one that
+//! can be batched joins a Plume [`EffectBatch`] of that variant (its own place in the batch's
 //! buffers: its particles, schedule, placement, params and bursts, paused and scaled on its
 //! own), instead of becoming an [`Effect`](plume_runtime::Effect) of its own. A batch is drawn
 //! by one transparent item per camera that sees any of its entities, and freed when its last
 //! entity goes.
 //!
-//! What can be batched: world space, drawn by the raster renderer (not `PlumeDraw::Compute`,
-//! nor `Auto` at [`AUTO_COMPUTE_CAPACITY`] particles and up), one group without events,
-//! trails, depth sort, flocking, baked fields or scene-depth colliders. A batched entity gets
+//! What can be batched: either space (a local-space entity's particles are drawn through its
+//! transform), drawn by the raster renderer (not `PlumeDraw::Compute`, nor `Auto` at
+//! [`AUTO_COMPUTE_CAPACITY`] particles and up), stateful, one group without events, trails,
+//! depth sort, flocking, baked fields or scene-depth colliders. A batched entity gets
 //! no measured bounds (a declared `bounds` still culls it) and is sorted with its batch.
 
 use std::collections::{BTreeMap, HashMap};
@@ -202,6 +203,14 @@ pub(crate) fn sync_batches(
         alive.insert(e.main);
         member.world_from_local = e.world_from_local;
         member.render_entity = e.render;
+        // In local space its particles are drawn through its transform (world space: they
+        // were placed when spawned, and its transform stays the identity).
+        if e.control.space == SimulationSpace::Local {
+            let cols = e.world_from_local.to_cols_array();
+            if let Err(err) = batch.batch.set_transform(member.instance, cols) {
+                warn_once!("{}: {err}", e.asset.path);
+            }
+        }
         for (param, &value) in &e.control.params {
             if member.params.get(param) != Some(&value) {
                 member.params.insert(param.clone(), value);
@@ -246,8 +255,7 @@ fn set_key(key: &BuildKey) -> SetKey {
     (Arc::as_ptr(&key.graph) as usize, key.variant)
 }
 
-/// Whether `e` may join a batch (before its file is looked at): world space, drawn by the
-/// raster renderer.
+/// Whether `e` may join a batch (before its file is looked at): drawn by the raster renderer.
 fn can_batch(e: &ExtractedEffect) -> bool {
     let capacity: u64 = e
         .asset
@@ -256,12 +264,11 @@ fn can_batch(e: &ExtractedEffect) -> bool {
         .iter()
         .map(|g| u64::from(g.effect.ir.capacity))
         .sum();
-    e.control.space == SimulationSpace::World
-        && match e.control.draw {
-            PlumeDraw::Raster => true,
-            PlumeDraw::Auto => capacity < AUTO_COMPUTE_CAPACITY,
-            PlumeDraw::Compute => false,
-        }
+    match e.control.draw {
+        PlumeDraw::Raster => true,
+        PlumeDraw::Auto => capacity < AUTO_COMPUTE_CAPACITY,
+        PlumeDraw::Compute => false,
+    }
 }
 
 impl PlumeBatches {
@@ -411,7 +418,8 @@ impl PlumeBatches {
 fn path(member: &mut Member) -> Vec<(u64, Option<Placement>)> {
     let steps = std::mem::take(&mut member.clock.steps);
     let to = member.world_from_local;
-    if !to.is_finite() {
+    // In local space the emitters stay in the entity's own space: nothing to place.
+    if !member.key.variant.placed || !to.is_finite() {
         // Its emitters stay where they were.
         return vec![(steps, None)];
     }
