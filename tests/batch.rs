@@ -228,16 +228,13 @@ fn an_instance_added_in_a_freed_place_starts_afresh_and_a_restart_starts_again()
         fresh.totals().expect("totals")
     );
     // The second never left: 35 steps as one effect alone.
-    let mut long = alone(
-        &gpu,
-        &compiled,
-        &Part {
-            placement: Placement::IDENTITY,
-            push: 1.0,
-            steps: |_| 1,
-            burst_at: None,
-        },
-    );
+    let unmoved = Part {
+        placement: Placement::IDENTITY,
+        push: 1.0,
+        steps: |_| 1,
+        burst_at: None,
+    };
+    let mut long = alone(&gpu, &compiled, &unmoved);
     long.run(35, |_| {}).expect("run");
     assert_same(
         "the instance that stayed",
@@ -247,16 +244,7 @@ fn an_instance_added_in_a_freed_place_starts_afresh_and_a_restart_starts_again()
     // A restart: its particles gone at once, then as a fresh effect.
     batch.restart(second).expect("restart");
     step(&mut batch, 10);
-    let mut again = alone(
-        &gpu,
-        &compiled,
-        &Part {
-            placement: Placement::IDENTITY,
-            push: 1.0,
-            steps: |_| 1,
-            burst_at: None,
-        },
-    );
+    let mut again = alone(&gpu, &compiled, &unmoved);
     again.run(10, |_| {}).expect("run");
     assert_same(
         "the restarted instance",
@@ -300,17 +288,11 @@ fn what_a_batch_cannot_take_is_refused_with_the_reason() {
 
 #[test]
 fn one_draw_draws_every_instance_as_the_reference_draws_their_particles() {
-    use plume::runtime::oracle::{sprites, ReferenceRenderer};
-    use plume::runtime::outputs::Offscreen;
     const SIDE: u32 = 128;
-    // Life-faded colours and sizes (the draw reckons ages from the batch's step index),
-    // additive, so the order of the sprites does not matter; seen from above.
-    let source = SPARKS.replace(
-        "integrator: SemiImplicitEuler)",
-        r#"integrator: SemiImplicitEuler,
-        camera: Camera(eye: (0.5, 14.0, 6.0), target: (0.5, 0.0, 0.5), fov_y: 60.0),
-        render: Render(color: [(0.0, (1.0, 0.9, 0.5, 1.0)), (1.0, (0.6, 0.1, 0.0, 0.2))],
-            size: [(0.0, 0.25), (1.0, 0.1)], blend: Additive))"#,
+    // Life-faded colours and sizes (the draw reckons ages from the batch's step index).
+    let source = seen_from_above(
+        "Render(color: [(0.0, (1.0, 0.9, 0.5, 1.0)), (1.0, (0.6, 0.1, 0.0, 0.2))],
+            size: [(0.0, 0.25), (1.0, 0.1)], blend: Additive)",
     );
     let options = CompileOptions {
         placed: true,
@@ -340,21 +322,11 @@ fn one_draw_draws_every_instance_as_the_reference_draws_their_particles() {
             .expect("steps");
         gpu.queue.submit([encoder.finish()]);
     }
-    let ir = &batch.compiled().ir;
-    let camera = plume::runtime::Camera::from_effect(&ir.camera, 1.0);
-    let target = Offscreen::new(&gpu, SIDE, SIDE).expect("target");
-    let renderer = batch.effect().renderer(&target.target()).expect("renderer");
-    let drawn = target
-        .render(batch.effect(), &renderer, &camera)
-        .expect("draw");
     let mut records = Vec::new();
     for instance in &instances {
         records.extend(batch.records(*instance).expect("records"));
     }
-    let reference = ReferenceRenderer::new(&gpu, SIDE, SIDE, &ir.render).expect("reference");
-    let expected = reference
-        .draw(&sprites(&records, ir, camera.view, false), &camera)
-        .expect("reference draw");
+    let (drawn, expected) = draw_and_reference(&gpu, &batch, &records, SIDE);
     // Every instance is in the image: the bright pixels span the three places (4 m apart
     // and more: over 30 pixels in this view), not one.
     let bright: Vec<u32> = (0..SIDE * SIDE)
@@ -448,20 +420,15 @@ fn a_long_run_remembers_only_the_steps_whose_particles_may_live() {
 
 #[test]
 fn instances_in_their_own_spaces_are_drawn_through_their_transforms() {
-    use plume::runtime::oracle::{sprites, ReferenceRenderer};
-    use plume::runtime::outputs::Offscreen;
     const SIDE: u32 = 128;
     // Not placed: each instance simulates in its own space, and the draw turns its particles
     // by its transform (an entity that carries an effect in local space), here a move and a
     // quarter turn about +y. Velocity-aligned streaks check that the turn reaches the
     // sprites' axes too.
-    let source = SPARKS.replace(
-        "integrator: SemiImplicitEuler)",
-        r#"integrator: SemiImplicitEuler,
-        camera: Camera(eye: (0.5, 14.0, 6.0), target: (0.5, 0.0, 0.5), fov_y: 60.0),
-        render: Render(color: [(0.0, (1.0, 0.9, 0.5, 1.0)), (1.0, (0.6, 0.1, 0.0, 0.2))],
+    let source = seen_from_above(
+        "Render(color: [(0.0, (1.0, 0.9, 0.5, 1.0)), (1.0, (0.6, 0.1, 0.0, 0.2))],
             size: [(0.0, 0.2), (1.0, 0.1)], blend: Additive,
-            orient: Velocity(stretch: 0.1, max_length: 0.6)))"#,
+            orient: Velocity(stretch: 0.1, max_length: 0.6))",
     );
     let compiled = compile_str(&source, &CompileOptions::default()).expect("compiles");
     let gpu = common::gpu();
@@ -483,13 +450,6 @@ fn instances_in_their_own_spaces_are_drawn_through_their_transforms() {
         batch.advance(&mut encoder, |_| 1).expect("steps");
         gpu.queue.submit([encoder.finish()]);
     }
-    let ir = &batch.compiled().ir;
-    let camera = plume::runtime::Camera::from_effect(&ir.camera, 1.0);
-    let target = Offscreen::new(&gpu, SIDE, SIDE).expect("target");
-    let renderer = batch.effect().renderer(&target.target()).expect("renderer");
-    let drawn = target
-        .render(batch.effect(), &renderer, &camera)
-        .expect("draw");
     // The reference draws each instance's particles moved into the world by its transform.
     let mut records = Vec::new();
     for (instance, place) in instances.iter().zip(&places) {
@@ -499,10 +459,7 @@ fn instances_in_their_own_spaces_are_drawn_through_their_transforms() {
             records.push(r);
         }
     }
-    let reference = ReferenceRenderer::new(&gpu, SIDE, SIDE, &ir.render).expect("reference");
-    let expected = reference
-        .draw(&sprites(&records, ir, camera.view, false), &camera)
-        .expect("reference draw");
+    let (drawn, expected) = draw_and_reference(&gpu, &batch, &records, SIDE);
     let bright = drawn.chunks(4).filter(|p| p[0] > 60).count();
     assert!(bright > 30, "{bright} bright pixels");
     let (mean, max, over) = common::differences(&drawn, &expected, 8);
@@ -510,4 +467,41 @@ fn instances_in_their_own_spaces_are_drawn_through_their_transforms() {
         mean < 0.5 && over < 60,
         "batch draw vs reference: mean {mean:.3}, largest {max}, {over} over 8"
     );
+}
+
+/// SPARKS seen from above, with `render` (additive, so the order of the sprites does not
+/// matter).
+fn seen_from_above(render: &str) -> String {
+    SPARKS.replace(
+        "integrator: SemiImplicitEuler)",
+        &format!(
+            "integrator: SemiImplicitEuler,
+        camera: Camera(eye: (0.5, 14.0, 6.0), target: (0.5, 0.0, 0.5), fov_y: 60.0),
+        render: {render})"
+        ),
+    )
+}
+
+/// The batch drawn from its camera by its one draw, and the reference drawing of `records`
+/// (in the world) from the same camera, `side` pixels square.
+fn draw_and_reference(
+    gpu: &Gpu,
+    batch: &EffectBatch,
+    records: &[ParticleRecord],
+    side: u32,
+) -> (Vec<u8>, Vec<u8>) {
+    use plume::runtime::oracle::{sprites, ReferenceRenderer};
+    use plume::runtime::outputs::Offscreen;
+    let ir = &batch.compiled().ir;
+    let camera = plume::runtime::Camera::from_effect(&ir.camera, 1.0);
+    let target = Offscreen::new(gpu, side, side).expect("target");
+    let renderer = batch.effect().renderer(&target.target()).expect("renderer");
+    let drawn = target
+        .render(batch.effect(), &renderer, &camera)
+        .expect("draw");
+    let reference = ReferenceRenderer::new(gpu, side, side, &ir.render).expect("reference");
+    let expected = reference
+        .draw(&sprites(records, ir, camera.view, false), &camera)
+        .expect("reference draw");
+    (drawn, expected)
 }

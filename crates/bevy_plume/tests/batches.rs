@@ -12,6 +12,13 @@ use bevy_plume::{
 };
 use common::{asset_dir, dots, lit_pixels, project, Harness};
 
+/// Runs the tests one at a time (two apps at once on lavapipe lost a screenshot here).
+static ONE_APP: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    ONE_APP.lock().unwrap_or_else(|p| p.into_inner())
+}
+
 fn stats(h: &Harness) -> PlumeRenderStats {
     *h.app
         .sub_app(RenderApp)
@@ -34,12 +41,23 @@ fn lit_near(image: &image::RgbaImage, x: f32) -> usize {
         .count()
 }
 
+/// `n` entities of `effect` in a row, entity k at `x_of(k)`.
+fn spawn_row(h: &mut Harness, n: usize, effect: impl Fn() -> PlumeEffect) -> Vec<Entity> {
+    (0..n)
+        .map(|k| {
+            let at = Transform::from_xyz(x_of(k), 0.0, 0.0);
+            h.app.world_mut().spawn((effect(), at)).id()
+        })
+        .collect()
+}
+
 fn render(h: &Harness) -> &World {
     h.app.sub_app(RenderApp).world()
 }
 
 #[test]
 fn a_crowd_of_one_file_runs_as_one_batch_each_entity_its_own() {
+    let _one = serial();
     let dir = asset_dir("batches");
     // 40 dots each, room for a burst of 17 more.
     let file = dots(40, 100.0, (0.2, 1.0, 0.2)).replace("capacity: 40", "capacity: 64");
@@ -48,15 +66,9 @@ fn a_crowd_of_one_file_runs_as_one_batch_each_entity_its_own() {
     let handle = h.load("dots.plume.ron");
     let crowd = 12;
     assert!(crowd >= BATCH_FROM);
-    let entities: Vec<Entity> = (0..crowd)
-        .map(|k| {
-            let effect = PlumeEffect::new(handle.clone()).with_bursts();
-            h.app
-                .world_mut()
-                .spawn((effect, Transform::from_xyz(x_of(k), 0.0, 0.0)))
-                .id()
-        })
-        .collect();
+    let entities = spawn_row(&mut h, crowd, || {
+        PlumeEffect::new(handle.clone()).with_bursts()
+    });
     h.update(4);
     let now = stats(&h);
     assert_eq!((now.instances, now.batches), (crowd, 1), "{now:?}");
@@ -142,6 +154,7 @@ fn a_crowd_of_one_file_runs_as_one_batch_each_entity_its_own() {
 
 #[test]
 fn a_batched_crowd_in_local_space_moves_with_its_entities() {
+    let _one = serial();
     let dir = asset_dir("batches_local");
     // Stateful as written (in local space the file is compiled as written, and these dots
     // would be stateless: their particles computed in the draw, nothing to batch).
@@ -152,15 +165,9 @@ fn a_batched_crowd_in_local_space_moves_with_its_entities() {
     std::fs::write(dir.join("dots.plume.ron"), file).unwrap();
     let mut h = Harness::new(&dir);
     let handle = h.load("dots.plume.ron");
-    let entities: Vec<Entity> = (0..10)
-        .map(|k| {
-            let effect = PlumeEffect::new(handle.clone()).with_space(SimulationSpace::Local);
-            h.app
-                .world_mut()
-                .spawn((effect, Transform::from_xyz(x_of(k), 0.0, 0.0)))
-                .id()
-        })
-        .collect();
+    let entities = spawn_row(&mut h, 10, || {
+        PlumeEffect::new(handle.clone()).with_space(SimulationSpace::Local)
+    });
     h.update(3);
     let now = stats(&h);
     assert_eq!((now.instances, now.batches), (10, 1), "{now:?}");

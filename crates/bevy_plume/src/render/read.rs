@@ -3,7 +3,7 @@
 
 use bevy::prelude::*;
 use plume_compiler::reference::{ParticleRecord, Totals};
-use plume_runtime::RuntimeError;
+use plume_runtime::{BatchInstance, Effect, EffectBatch, RuntimeError};
 
 use crate::render::batches::PlumeBatches;
 use crate::render::instances::PlumeInstances;
@@ -23,21 +23,13 @@ pub fn read_particles(
     entity: Entity,
     group: usize,
 ) -> Option<Result<Vec<ParticleRecord>, RuntimeError>> {
-    if let Some(batch) = render_world
-        .get_resource::<PlumeBatches>()?
-        .batch_of(entity)
-    {
-        let member = &render_world.resource::<PlumeBatches>().members[&entity];
-        return Some(match group {
-            0 => batch.batch.records(member.instance),
-            _ => Err(no_group(group)),
-        });
-    }
-    let instance = render_world
-        .get_resource::<PlumeInstances>()?
-        .instances
-        .get(&entity)?;
-    Some(instance.effect.group_records(group))
+    read(
+        render_world,
+        entity,
+        group,
+        EffectBatch::records,
+        Effect::group_records,
+    )
 }
 
 /// Reads back the counts of group `group` of `entity`'s effect (spawned, alive, dropped,
@@ -47,13 +39,27 @@ pub fn read_totals(
     entity: Entity,
     group: usize,
 ) -> Option<Result<Totals, RuntimeError>> {
-    if let Some(batch) = render_world
-        .get_resource::<PlumeBatches>()?
-        .batch_of(entity)
-    {
-        let member = &render_world.resource::<PlumeBatches>().members[&entity];
+    read(
+        render_world,
+        entity,
+        group,
+        EffectBatch::totals,
+        Effect::group_totals,
+    )
+}
+
+/// `entity`'s reading: from its place in a batch (group 0 only), or from its instance.
+fn read<T>(
+    render_world: &World,
+    entity: Entity,
+    group: usize,
+    batched: impl Fn(&EffectBatch, BatchInstance) -> Result<T, RuntimeError>,
+    alone: impl Fn(&Effect, usize) -> Result<T, RuntimeError>,
+) -> Option<Result<T, RuntimeError>> {
+    let batches = render_world.get_resource::<PlumeBatches>()?;
+    if let (Some(batch), Some(member)) = (batches.batch_of(entity), batches.members.get(&entity)) {
         return Some(match group {
-            0 => batch.batch.totals(member.instance),
+            0 => batched(&batch.batch, member.instance),
             _ => Err(no_group(group)),
         });
     }
@@ -61,5 +67,5 @@ pub fn read_totals(
         .get_resource::<PlumeInstances>()?
         .instances
         .get(&entity)?;
-    Some(instance.effect.group_totals(group))
+    Some(alone(&instance.effect, group))
 }
