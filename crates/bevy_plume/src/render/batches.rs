@@ -165,6 +165,11 @@ pub(crate) fn sync_batches(
     let delta = extracted.delta;
     let mut alive = std::collections::HashSet::with_capacity(batches.members.len());
     for (e, key) in extracted.effects.iter().zip(keys) {
+        // One that can no longer be batched (now drawn by the compute renderer) leaves: the
+        // instances make it an effect of its own.
+        if batches.members.contains_key(&e.main) && !can_batch(e) {
+            batches.leave(e.main);
+        }
         // How the entity's build differs from its batch place's: not at all (Some(true)), by
         // its generation alone (Some(false)), by more (None); not batched: no entry.
         let change = batches.members.get(&e.main).map(|m| {

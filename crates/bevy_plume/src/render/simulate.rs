@@ -169,9 +169,14 @@ pub(crate) fn prepare_for_view(
     let frame = store.frame;
     // A batch is in world space: drawn through the camera alone.
     for batch in batches.batches_mut() {
-        if let Some((_, renderer, queued)) = batch.views.get(&view_entity) {
+        if let Some((_, renderer, queued)) = batch.views.get_mut(&view_entity) {
             if *queued != frame {
                 continue;
+            }
+            if renderer.is_soft() {
+                if let Some(depth) = prepass.and_then(|p| p.depth_only_view()) {
+                    renderer.set_scene_depth(depth);
+                }
             }
             let camera = view_camera(view, Mat4::IDENTITY);
             if let Err(err) = batch
