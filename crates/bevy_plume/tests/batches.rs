@@ -10,7 +10,7 @@ use bevy_plume::{
     read_particles, read_totals, PlumeBurst, PlumeEffect, PlumeRenderStats, SimulationSpace,
     BATCH_FROM,
 };
-use common::{asset_dir, dots, lit_pixels, project, Harness};
+use common::{dots, lit_pixels, project, Harness};
 
 /// Runs the tests one at a time (two apps at once on lavapipe lost a screenshot here).
 static ONE_APP: std::sync::Mutex<()> = std::sync::Mutex::new(());
@@ -58,12 +58,9 @@ fn render(h: &Harness) -> &World {
 #[test]
 fn a_crowd_of_one_file_runs_as_one_batch_each_entity_its_own() {
     let _one = serial();
-    let dir = asset_dir("batches");
     // 40 dots each, room for a burst of 17 more.
     let file = dots(40, 100.0, (0.2, 1.0, 0.2)).replace("capacity: 40", "capacity: 64");
-    std::fs::write(dir.join("dots.plume.ron"), file).unwrap();
-    let mut h = Harness::new(&dir);
-    let handle = h.load("dots.plume.ron");
+    let (mut h, handle) = Harness::with_effect("batches", &file);
     let crowd = 12;
     assert!(crowd >= BATCH_FROM);
     let entities = spawn_row(&mut h, crowd, || {
@@ -155,16 +152,13 @@ fn a_crowd_of_one_file_runs_as_one_batch_each_entity_its_own() {
 #[test]
 fn a_batched_crowd_in_local_space_moves_with_its_entities() {
     let _one = serial();
-    let dir = asset_dir("batches_local");
     // Stateful as written (in local space the file is compiled as written, and these dots
     // would be stateless: their particles computed in the draw, nothing to batch).
     let file = dots(40, 100.0, (0.2, 1.0, 0.2)).replace(
         r#"Effect(name: "dots","#,
         r#"Effect(name: "dots", state: Stateful,"#,
     );
-    std::fs::write(dir.join("dots.plume.ron"), file).unwrap();
-    let mut h = Harness::new(&dir);
-    let handle = h.load("dots.plume.ron");
+    let (mut h, handle) = Harness::with_effect("batches_local", &file);
     let entities = spawn_row(&mut h, 10, || {
         PlumeEffect::new(handle.clone()).with_space(SimulationSpace::Local)
     });

@@ -10,7 +10,7 @@ use bevy::camera::visibility::NoFrustumCulling;
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{read_particles, PlumeEffect, PlumeRenderStats};
-use common::{asset_dir, dots, Harness};
+use common::{dots, Harness};
 
 fn stats(h: &Harness) -> PlumeRenderStats {
     *h.app
@@ -32,15 +32,9 @@ fn measured_aabb(h: &mut Harness, entity: Entity) -> Aabb {
 
 #[test]
 fn measured_bounds_hold_the_particles_and_cull_an_effect_out_of_view() {
-    let dir = asset_dir("measured_bounds");
     // No `bounds:` in the file: 300 dots, 0.15 m across, spread at most 0.13 m.
-    std::fs::write(
-        dir.join("dots.plume.ron"),
-        dots(300, 100.0, (1.0, 1.0, 1.0)),
-    )
-    .unwrap();
-    let mut h = Harness::new(&dir);
-    let handle = h.load("dots.plume.ron");
+    let (mut h, handle) =
+        Harness::with_effect("measured_bounds", &dots(300, 100.0, (1.0, 1.0, 1.0)));
     // 30 m to the side: out of the camera's view (10 m away, 45° high, 16:9).
     let aside = Vec3::new(30.0, 0.0, 0.0);
     let entity = h

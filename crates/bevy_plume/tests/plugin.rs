@@ -28,14 +28,7 @@ const PLACE_TOLERANCE_PX: f32 = 4.0;
 #[test]
 fn an_effect_is_drawn_where_its_entity_is() {
     let _one = serial();
-    let dir = asset_dir("place");
-    std::fs::write(
-        dir.join("dots.plume.ron"),
-        dots(300, 100.0, (1.0, 0.2, 0.1)),
-    )
-    .unwrap();
-    let mut h = Harness::new(&dir);
-    let handle = h.load("dots.plume.ron");
+    let (mut h, handle) = Harness::with_effect("place", &dots(300, 100.0, (1.0, 0.2, 0.1)));
     h.app
         .world_mut()
         .spawn((PlumeEffect::new(handle), Transform::from_xyz(2.0, 1.0, 0.0)));
@@ -188,11 +181,8 @@ fn a_world_space_effect_leaves_its_particles_behind() {
 #[test]
 fn restart_and_pause_control_an_instance() {
     let _one = serial();
-    let dir = asset_dir("control");
     // Dots that live 0.5 s: after a second they are gone unless restarted.
-    std::fs::write(dir.join("dots.plume.ron"), dots(300, 0.5, (1.0, 1.0, 1.0))).unwrap();
-    let mut h = Harness::new(&dir);
-    let handle = h.load("dots.plume.ron");
+    let (mut h, handle) = Harness::with_effect("control", &dots(300, 0.5, (1.0, 1.0, 1.0)));
     let fx = h.app.world_mut().spawn(PlumeEffect::new(handle)).id();
     h.update(70);
     assert_eq!(

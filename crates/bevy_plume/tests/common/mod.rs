@@ -40,6 +40,16 @@ impl Harness {
         Self::with_watching(asset_dir, false)
     }
 
+    /// An app ([`Self::new`]) in a fresh asset folder `name` (see [`asset_dir`]) that holds one
+    /// effect file, `dots.plume.ron`, of `text`, and that file's handle.
+    pub fn with_effect(name: &str, text: &str) -> (Self, Handle<PlumeEffectAsset>) {
+        let dir = asset_dir(name);
+        std::fs::write(dir.join("dots.plume.ron"), text).expect("the effect file is written");
+        let mut h = Self::new(&dir);
+        let handle = h.load("dots.plume.ron");
+        (h, handle)
+    }
+
     /// [`Self::new`], watching the files for changes (hot reload) when `watch`.
     pub fn with_watching(asset_dir: &Path, watch: bool) -> Self {
         let headless = Headless {

@@ -35,7 +35,7 @@ pub fn params_binding_bytes(effect: &CompiledEffect) -> u64 {
 }
 
 /// Bytes of `effect`'s binding `name` (0 when it has none).
-fn binding_bytes(effect: &CompiledEffect, name: &str) -> u64 {
+pub(crate) fn binding_bytes(effect: &CompiledEffect, name: &str) -> u64 {
     let binding = effect.layout.bindings.iter().find(|b| b.name == name);
     binding.map_or(0, |b| b.bytes)
 }

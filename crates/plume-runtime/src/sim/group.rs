@@ -15,7 +15,7 @@ use plume_compiler::CompiledEffect;
 use crate::device::buffers::staging;
 use crate::device::gpu::Gpu;
 use crate::device::readback::{decode_slots, decode_totals, read_buffer};
-use crate::device::resources::{Chunk, Resources, STEPS_PER_SUBMIT};
+use crate::device::resources::{binding_bytes, Chunk, Resources, STEPS_PER_SUBMIT};
 use crate::error::RuntimeError;
 use crate::sim::steps::{params_bytes, StatelessSteps, Steps};
 use crate::sort::depth::DepthSort;
@@ -230,9 +230,7 @@ impl Group {
             }
             return Ok(Vec::new());
         }
-        let plans: Vec<StepPlan> = (0..n).map(|_| self.schedule.next_plan()).collect();
-        self.copy_params(encoder, &plans)?;
-        Ok(plans)
+        self.plan_steps(encoder, n)
     }
 
     /// Records step `j` of a batch planned by [`Self::plan_graph_batch`] (for a stateless
@@ -398,13 +396,7 @@ impl Group {
         }
         // A batch (`sim::batch`): every instance's counters, added up.
         let size = plume_compiler::passes::layout::COUNTERS_BYTES as usize;
-        let binding = self
-            .effect
-            .layout
-            .bindings
-            .iter()
-            .find(|b| b.name == "counters");
-        let instances = binding.map_or(1, |b| b.bytes as usize / size).max(1);
+        let instances = (binding_bytes(&self.effect, "counters") as usize / size).max(1);
         let capacity = self.effect.ir.capacity / instances as u32;
         let mut sum = Totals {
             steps,
