@@ -7,7 +7,6 @@
 //! readback needs, so the view is allocated the first time something reads particles back, and
 //! never for an effect that is only drawn.
 
-use std::borrow::Cow;
 use std::sync::OnceLock;
 
 use plume_compiler::passes::layout::COUNTERS_BYTES;
@@ -299,10 +298,7 @@ impl Resources {
                 Ok((b.binding, buffer))
             })
             .collect::<Result<_, RuntimeError>>()?;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some(&effect.ir.name),
-            source: wgpu::ShaderSource::Wgsl(Cow::Borrowed(&effect.wgsl)),
-        });
+        let module = crate::device::gpu::shader_module(device, &effect.ir.name, &effect.wgsl);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("plume"),
             entries: &crate::device::bind_layout::entries(effect, EVENT_DISPATCH),

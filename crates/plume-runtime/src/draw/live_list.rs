@@ -107,10 +107,7 @@ impl LiveList {
             STORAGE | wgpu::BufferUsages::INDIRECT,
             |b| b[..4].copy_from_slice(&primitive.vertices().to_le_bytes()),
         )?;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("live list"),
-            source: wgpu::ShaderSource::Wgsl(LIVE_LIST_WGSL.into()),
-        });
+        let module = crate::device::gpu::shader_module(device, "live list", LIVE_LIST_WGSL);
         let pipeline = |entry| gpu.compute_pipeline(&module, entry, None);
         let (flags, scatter) = (pipeline("flags"), pipeline("scatter"));
         let id_word = effect

@@ -353,10 +353,7 @@ fn alive_instances(
             b[16..20].copy_from_slice(&capacity.to_le_bytes());
         },
     )?;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("draw args"),
-        source: wgpu::ShaderSource::Wgsl(DRAW_ARGS_WGSL.into()),
-    });
+    let module = crate::device::gpu::shader_module(device, "draw args", DRAW_ARGS_WGSL);
     let kernel = gpu.compute_pipeline(&module, "draw_args", None);
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("draw args"),
@@ -429,12 +426,7 @@ pub(crate) fn draw_module(
     } else {
         plume_compiler::wgsl::draw::emit(&effect.ir, &effect.layout, shape)
     };
-    let module = gpu
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("draw"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
+    let module = crate::device::gpu::shader_module(&gpu.device, "draw", source);
     let mut entries = Vec::new();
     if shape.through_list {
         let order = match list {

@@ -47,12 +47,7 @@ impl TrailDraw {
             Some(compiled) if shape == DrawShape::single(&effect.ir) => compiled.clone(),
             _ => trail::emit(&effect.ir, &effect.layout, &shape),
         };
-        let module = gpu
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("trail"),
-                source: wgpu::ShaderSource::Wgsl(source.into()),
-            });
+        let module = crate::device::gpu::shader_module(&gpu.device, "trail", source);
         let pipeline = render_pipeline(
             gpu,
             &module,

@@ -96,10 +96,11 @@ impl RibbonPipeline {
         camera: &wgpu::Buffer,
     ) -> Self {
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("reference ribbons"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("reference_ribbon.wgsl").into()),
-        });
+        let module = crate::device::gpu::shader_module(
+            device,
+            "reference ribbons",
+            include_str!("reference_ribbon.wgsl"),
+        );
         let pipeline = vertex_pipeline(
             gpu,
             &module,

@@ -125,10 +125,11 @@ impl ReferenceRenderer {
         let (blend, background) = (render.blend, render.background);
         let target = Offscreen::new(gpu, width, height)?;
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("sprites"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("reference_sprite.wgsl").into()),
-        });
+        let module = crate::device::gpu::shader_module(
+            device,
+            "sprites",
+            include_str!("reference_sprite.wgsl"),
+        );
         let camera = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("camera"),
             size: 128,

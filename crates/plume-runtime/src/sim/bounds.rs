@@ -139,12 +139,7 @@ impl BoundsProbe {
         gpu: &Gpu,
         buffers: &[(&plume_compiler::Layout, &[Chunk])],
     ) -> Result<Self, RuntimeError> {
-        let module = gpu
-            .device
-            .create_shader_module(wgpu::ShaderModuleDescriptor {
-                label: Some("live bounds"),
-                source: wgpu::ShaderSource::Wgsl(BOUNDS_WGSL.into()),
-            });
+        let module = crate::device::gpu::shader_module(&gpu.device, "live bounds", BOUNDS_WGSL);
         let pipeline = gpu.compute_pipeline(&module, "bounds", None);
         let keys = filled_buffer(gpu, "live bounds", 24, STORAGE, |_| {})?;
         let empty = filled_buffer(gpu, "empty bounds", 24, STORAGE, |b| {

@@ -49,11 +49,7 @@ impl EventOrder {
         order: &wgpu::Buffer,
     ) -> Result<Self, RuntimeError> {
         let module = |label: &str, source: &'static str| {
-            gpu.device
-                .create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some(label),
-                    source: wgpu::ShaderSource::Wgsl(source.into()),
-                })
+            crate::device::gpu::shader_module(&gpu.device, label, source)
         };
         let dispatch = |module: &wgpu::ShaderModule,
                         entry: &str,

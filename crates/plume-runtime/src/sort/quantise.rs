@@ -32,10 +32,11 @@ impl DepthQuantise {
     /// The kernels that quantise the first `n` keys of `keys` in place.
     pub fn new(gpu: &Gpu, keys: &wgpu::Buffer, n: u64) -> Result<Self, RuntimeError> {
         let device = &gpu.device;
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("depth quantise"),
-            source: wgpu::ShaderSource::Wgsl(include_str!("depth_quantise.wgsl").into()),
-        });
+        let module = crate::device::gpu::shader_module(
+            device,
+            "depth quantise",
+            include_str!("depth_quantise.wgsl"),
+        );
         let pipeline = |entry| gpu.compute_pipeline(&module, entry, None);
         let (reset, reduce, quantise) = (
             pipeline("range_reset"),

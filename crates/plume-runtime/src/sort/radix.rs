@@ -144,11 +144,7 @@ impl GpuSorter {
 
     fn build(gpu: &Gpu, ranking: Ranking) -> Self {
         let module = |label: &str, source: String| {
-            gpu.device
-                .create_shader_module(wgpu::ShaderModuleDescriptor {
-                    label: Some(label),
-                    source: wgpu::ShaderSource::Wgsl(source.into()),
-                })
+            crate::device::gpu::shader_module(&gpu.device, label, source)
         };
         let sort = module("sort", include_str!("sort.wgsl").to_owned());
         // The shared kernels and one downsweep: a subgroup module only on adapters with them.

@@ -58,10 +58,7 @@ pub(super) fn tile_kernels(
     layout: &wgpu::BindGroupLayout,
 ) -> Result<[wgpu::ComputePipeline; 4], RuntimeError> {
     let device = &gpu.device;
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-        label: Some("splat"),
-        source: wgpu::ShaderSource::Wgsl(include_str!("splat.wgsl").into()),
-    });
+    let module = crate::device::gpu::shader_module(device, "splat", include_str!("splat.wgsl"));
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("splat tiles"),
         bind_group_layouts: &[Some(layout)],
@@ -118,12 +115,7 @@ pub(super) fn ribbon_module(
         ..shape
     };
     let source = trail::emit(&effect.ir, &effect.layout, &shape);
-    let module = gpu
-        .device
-        .create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("splat ribbons"),
-            source: wgpu::ShaderSource::Wgsl(source.into()),
-        });
+    let module = crate::device::gpu::shader_module(&gpu.device, "splat ribbons", source);
     let entries = crate::draw::trail::trail_buffers(effect, res, shape.through_list)?;
     Ok((module, entries))
 }
