@@ -128,6 +128,14 @@ fn draw_order_is_back_to_front_with_ties_by_id_and_covers_every_live_particle() 
         order.iter().all(|&(_, key)| key <= 65533),
         "a live key past 65,533"
     );
+    // The radix sort maps the depth keys to 16 bits as its first pass reads them; the bitonic
+    // sort's path maps them in place first, with a kernel of its own. The same keys, and (ties
+    // in slot order both ways) the same order.
+    assert_eq!(
+        order,
+        oracle::draw_order(&sim, SortAlgorithm::Bitonic).unwrap(),
+        "the radix sort's quantised keys differ from the in-place map's"
+    );
 }
 
 #[test]

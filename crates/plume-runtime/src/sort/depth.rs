@@ -1,7 +1,7 @@
 //! The depth sort of an effect with `sort: true`: the compute module's `depth_keys` kernel gives
 //! every slot a key (farthest first along the camera's depth axis; free slots last),
-//! [`DepthQuantise`] maps the keys to 16 bits over the live depth range, then the radix sort
-//! orders (key, slot) pairs in two passes. The sorted slots are the draw order the vertex shader
+//! [`DepthQuantise`] finds the live depth range, then the radix sort orders (key, slot) pairs
+//! in two passes, the first mapping each key to 16 bits over that range as it reads it. The sorted slots are the draw order the vertex shader
 //! follows. A stateless effect's keys come from its closed form evaluated in place, so sorting
 //! costs 8 bytes a slot of per-frame scratch and no state.
 
@@ -11,7 +11,7 @@ use plume_compiler::CompiledEffect;
 use crate::device::gpu::Gpu;
 use crate::device::resources::{Chunk, Resources, SortBuffers};
 use crate::error::RuntimeError;
-use crate::sort::quantise::{DepthQuantise, KEY_BITS};
+use crate::sort::quantise::DepthQuantise;
 use crate::sort::radix::{GpuSorter, SortAlgorithm, SortProgram};
 
 /// How the keys kernel reads the particles.
@@ -28,8 +28,8 @@ pub struct DepthSort {
     keys: Keys,
     /// The keys to 16 bits, built once.
     quantise: DepthQuantise,
-    /// The radix sort of every slot's 16-bit key, built once: scratch buffers and bind groups
-    /// reused.
+    /// The radix sort of every slot's key mapped to 16 bits, built once: scratch buffers and
+    /// bind groups reused.
     radix: SortProgram,
     sorter: GpuSorter,
     capacity: u64,
@@ -47,9 +47,15 @@ impl DepthSort {
         };
         let sorter = GpuSorter::new(gpu);
         let capacity = u64::from(effect.ir.capacity);
+        let quantise = DepthQuantise::new(gpu, &buffers.keys, capacity)?;
         Ok(Self {
-            quantise: DepthQuantise::new(gpu, &buffers.keys, capacity)?,
-            radix: sorter.radix_program(&buffers.keys, &buffers.vals, capacity, KEY_BITS)?,
+            radix: sorter.depth_program(
+                &buffers.keys,
+                &buffers.vals,
+                capacity,
+                quantise.range(),
+            )?,
+            quantise,
             keys,
             sorter,
             capacity,
@@ -84,10 +90,13 @@ impl DepthSort {
                 pass.dispatch_workgroups(x, y, 1);
             }
         }
-        self.quantise.record(pass);
         match algorithm {
-            SortAlgorithm::Radix => self.radix.record(pass),
+            SortAlgorithm::Radix => {
+                self.quantise.record_range(pass);
+                self.radix.record(pass);
+            }
             SortAlgorithm::Bitonic => {
+                self.quantise.record_in_place(pass);
                 let buffers = sort_buffers(res)?;
                 self.sorter
                     .record(pass, algorithm, &buffers.keys, &buffers.vals, self.capacity)?

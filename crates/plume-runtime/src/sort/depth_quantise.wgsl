@@ -1,5 +1,7 @@
 // Depth keys quantised to 16 bits over the live particles' depth range, so the depth sort needs
-// two 8-bit radix passes instead of four (depth_quantise.rs says what the draw loses).
+// two 8-bit radix passes instead of four (quantise.rs says what the draw loses). The radix sort
+// maps the keys as its first pass reads them (radix.wgsl's `quantised`, the same map); the
+// `quantise` kernel here maps them in place for the bitonic sort.
 //
 // In: `keys[slot]` as the effect's `depth_keys` kernel writes them: the order-preserving u32 of
 // the f32 depth, inverted so the farthest is smallest, at most 0xfffffffd; 0xfffffffe for a
@@ -32,27 +34,43 @@ fn range_reset() {
     atomicStore(&range[1], 0u);
 }
 
+// Keys each thread of `range_reduce` reads: a workgroup covers 4,096, so that 16.7M keys take
+// 4,096 workgroups and as many pairs of atomics on `range` (one a workgroup of 256 keys, 65,536
+// pairs on the same two words, waited on each other).
+const RANGE_KEYS_PER_THREAD: u32 = 16u;
+
 // The smallest and largest live key: one atomic per workgroup on `range`.
 @compute @workgroup_size(WORKGROUP)
-fn range_reduce(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(local_invocation_index) lane: u32) {
+fn range_reduce(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                @builtin(local_invocation_index) lane: u32) {
     if (lane == 0u) {
         atomicStore(&group_min, 0xffffffffu);
         atomicStore(&group_max, 0u);
     }
     workgroupBarrier();
-    let slot = gid.x + gid.y * params.row;
-    if (slot < params.n) {
-        let key = keys[slot];
-        if (key <= LIVE_MAX) {
-            atomicMin(&group_min, key);
-            atomicMax(&group_max, key);
+    let first = (wid.x + wid.y * groups.x) * WORKGROUP * RANGE_KEYS_PER_THREAD;
+    var lo = 0xffffffffu;
+    var hi = 0u;
+    for (var k = 0u; k < RANGE_KEYS_PER_THREAD; k++) {
+        // Consecutive threads read consecutive keys.
+        let slot = first + k * WORKGROUP + lane;
+        if (slot < params.n) {
+            let key = keys[slot];
+            if (key <= LIVE_MAX) {
+                lo = min(lo, key);
+                hi = max(hi, key);
+            }
         }
+    }
+    if (lo != 0xffffffffu) {
+        atomicMin(&group_min, lo);
+        atomicMax(&group_max, hi);
     }
     workgroupBarrier();
     if (lane == 0u) {
-        let lo = atomicLoad(&group_min);
-        if (lo != 0xffffffffu) {
-            atomicMin(&range[0], lo);
+        let group_lo = atomicLoad(&group_min);
+        if (group_lo != 0xffffffffu) {
+            atomicMin(&range[0], group_lo);
             atomicMax(&range[1], atomicLoad(&group_max));
         }
     }

@@ -10,20 +10,33 @@
 //! keep about 1/200 of the f32 order; 24 bits would keep it all but take as long as 32 (the
 //! radix sort runs an even number of passes).
 //!
-//! Three kernels (depth_quantise.wgsl) between the effect's `depth_keys` and the sort: reset
-//! the range, reduce it over the live keys (one atomic per workgroup), map every key in place.
+//! Two kernels (depth_quantise.wgsl) between the effect's `depth_keys` and the sort: reset the
+//! range, reduce it over the live keys (one atomic pair per workgroup of 4,096 keys). The radix
+//! sort maps each key as its first pass reads it ([`crate::sort::radix::GpuSorter::depth_program`]);
+//! for the bitonic sort a third kernel maps every key in place first.
 
 use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;
 
+/// One recorded dispatch: pipeline, its bind group, its workgroups.
+type Dispatch = (wgpu::ComputePipeline, wgpu::BindGroup, (u32, u32));
+
 /// The quantising kernels of one sort buffer, built once.
 pub struct DepthQuantise {
-    /// (pipeline, its bind group, its workgroups) in recording order.
-    dispatches: Vec<(wgpu::ComputePipeline, wgpu::BindGroup, (u32, u32))>,
+    /// The range's reset and reduction, in recording order.
+    range_dispatches: [Dispatch; 2],
+    /// The map of every key in place (the bitonic sort's path).
+    map: Dispatch,
+    /// The live range: the smallest and largest live key (8 bytes).
+    range: wgpu::Buffer,
 }
 
 /// Threads per workgroup of the reduce and quantise kernels (depth_quantise.wgsl).
 const WORKGROUP: u64 = 256;
+
+/// Keys a workgroup of `range_reduce` reads (depth_quantise.wgsl's RANGE_KEYS_PER_THREAD times
+/// its threads).
+const RANGE_KEYS_PER_WORKGROUP: u64 = 16 * WORKGROUP;
 
 /// The bits of a quantised key the radix sort must order.
 pub const KEY_BITS: u32 = 16;
@@ -44,6 +57,7 @@ impl DepthQuantise {
             pipeline("quantise"),
         );
         let grid = gpu.grid(n, WORKGROUP)?;
+        let range_grid = gpu.grid(n.div_ceil(RANGE_KEYS_PER_WORKGROUP), 1)?;
         let range = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("live depth range"),
             size: 8,
@@ -73,20 +87,38 @@ impl DepthQuantise {
         };
         let all = [(0, keys), (1, &range), (2, &params)];
         Ok(Self {
-            dispatches: vec![
+            range_dispatches: [
                 (reset.clone(), bind(&reset, &[(1, &range)]), (1, 1)),
-                (reduce.clone(), bind(&reduce, &all), grid),
-                (quantise.clone(), bind(&quantise, &all), grid),
+                (reduce.clone(), bind(&reduce, &all), range_grid),
             ],
+            map: (quantise.clone(), bind(&quantise, &all), grid),
+            range,
         })
     }
 
-    /// Records the three kernels into `pass`.
-    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
-        for (pipeline, group, (x, y)) in &self.dispatches {
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, group, &[]);
-            pass.dispatch_workgroups(*x, *y, 1);
+    /// The live range the reduction leaves: the smallest and largest live key, for the radix
+    /// sort's first pass to map the keys by.
+    pub fn range(&self) -> &wgpu::Buffer {
+        &self.range
+    }
+
+    /// Records the range's reset and reduction into `pass`.
+    pub fn record_range(&self, pass: &mut wgpu::ComputePass<'_>) {
+        for dispatch in &self.range_dispatches {
+            record(pass, dispatch);
         }
     }
+
+    /// Records the range and then the map of every key in place into `pass` (before a sort
+    /// that does not map the keys itself).
+    pub fn record_in_place(&self, pass: &mut wgpu::ComputePass<'_>) {
+        self.record_range(pass);
+        record(pass, &self.map);
+    }
+}
+
+fn record(pass: &mut wgpu::ComputePass<'_>, (pipeline, group, (x, y)): &Dispatch) {
+    pass.set_pipeline(pipeline);
+    pass.set_bind_group(0, group, &[]);
+    pass.dispatch_workgroups(*x, *y, 1);
 }

@@ -53,6 +53,9 @@ pub struct GpuSorter {
     digit_scan: wgpu::ComputePipeline,
     digit_scan_small: wgpu::ComputePipeline,
     downsweep: wgpu::ComputePipeline,
+    /// The radix module, for the depth sort's first-pass entry points (built on demand: most
+    /// sorters never sort depths).
+    radix: wgpu::ShaderModule,
     scan_blocks: wgpu::ComputePipeline,
     add_sums: wgpu::ComputePipeline,
     bitonic: wgpu::ComputePipeline,
@@ -67,6 +70,14 @@ const PARTITION: u64 = 2560;
 /// The most partitions whose digit counts one workgroup scans (`rs_scan_small`, a thread a
 /// digit walking its row) instead of one workgroup a digit (`rs_scan`): 81,920 keys.
 const SMALL_SCAN_PARTITIONS: u64 = 32;
+
+/// The first pass of a depth sort: entry points that map each key to 16 bits over the live
+/// depth range as they read it (radix.wgsl's `quantised`).
+struct DepthPass<'a> {
+    upsweep: wgpu::ComputePipeline,
+    downsweep: wgpu::ComputePipeline,
+    range: &'a wgpu::Buffer,
+}
 
 /// One recorded dispatch of a sort.
 struct Dispatch {
@@ -177,6 +188,7 @@ impl GpuSorter {
             digit_scan: pipeline(&radix, "rs_scan"),
             digit_scan_small: pipeline(&radix, "rs_scan_small"),
             downsweep: pipeline(&radix, "rs_downsweep"),
+            radix: radix.clone(),
             scan_blocks: pipeline(&sort, "scan_blocks"),
             add_sums: pipeline(&sort, "add_sums"),
             bitonic: pipeline(&sort, "bitonic_step"),
@@ -290,6 +302,39 @@ impl GpuSorter {
         Ok(program)
     }
 
+    /// The depth sort's radix sort of the first `n` pairs: 32-bit depth keys (the effect's
+    /// `depth_keys`) mapped to 16 bits over the live range `depth_range` (8 bytes: the smallest
+    /// and largest live key, as depth_quantise.wgsl's `range_reduce` leaves them) as the first
+    /// pass reads them, then two 8-bit passes. The keys end quantised, as
+    /// [`crate::sort::quantise::DepthQuantise`]'s map would leave them; no pass of its own
+    /// rewrites them first.
+    pub fn depth_program(
+        &self,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+        depth_range: &wgpu::Buffer,
+    ) -> Result<SortProgram, RuntimeError> {
+        let mut program = SortProgram {
+            dispatches: Vec::new(),
+        };
+        if n >= 1 {
+            // Even one key is mapped (the sort itself needs two): the keys always end quantised.
+            let first = DepthPass {
+                upsweep: self
+                    .gpu
+                    .compute_pipeline(&self.radix, "rs_upsweep_depth", None),
+                downsweep: self
+                    .gpu
+                    .compute_pipeline(&self.radix, "rs_downsweep_depth", None),
+                range: depth_range,
+            };
+            let passes = crate::sort::quantise::KEY_BITS.div_ceil(8);
+            self.radix_passes_mapped(&mut program, keys, vals, n, passes, Some(first))?;
+        }
+        Ok(program)
+    }
+
     /// Records `passes` 8-bit digit passes of the radix sort, from the lowest digit up: per
     /// pass, the digit counts of each partition, their scan, and the ranked scatter.
     fn radix_passes(
@@ -299,6 +344,19 @@ impl GpuSorter {
         vals: &wgpu::Buffer,
         n: u64,
         passes: u32,
+    ) -> Result<(), RuntimeError> {
+        self.radix_passes_mapped(pass, keys, vals, n, passes, None)
+    }
+
+    /// [`Self::radix_passes`], the first pass reading its keys through `first`'s map when given.
+    fn radix_passes_mapped(
+        &self,
+        pass: &mut SortProgram,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+        passes: u32,
+        first: Option<DepthPass<'_>>,
     ) -> Result<(), RuntimeError> {
         let partitions = n.div_ceil(PARTITION);
         let (keys2, vals2) = (self.buffer("keys tmp", n), self.buffer("vals tmp", n));
@@ -311,12 +369,14 @@ impl GpuSorter {
                 (&keys2, &vals2, keys, vals)
             };
             let p = self.uniform(&[n as u32, 8 * pass_index, partitions as u32, 0]);
-            self.dispatch(
-                pass,
-                &self.upsweep,
-                &[(0, ki), (4, &counts), (5, &p)],
-                partitions,
-            )?;
+            let mapped = first.as_ref().filter(|_| pass_index == 0);
+            let (upsweep, downsweep) = match mapped {
+                Some(depth) => (&depth.upsweep, &depth.downsweep),
+                None => (&self.upsweep, &self.downsweep),
+            };
+            let mut up_entries = vec![(0, ki), (4, &counts), (5, &p)];
+            up_entries.extend(mapped.map(|depth| (7, depth.range)));
+            self.dispatch(pass, upsweep, &up_entries, partitions)?;
             if partitions <= SMALL_SCAN_PARTITIONS {
                 self.dispatch(
                     pass,
@@ -332,20 +392,17 @@ impl GpuSorter {
                     256,
                 )?;
             }
-            self.dispatch(
-                pass,
-                &self.downsweep,
-                &[
-                    (0, ki),
-                    (1, vi),
-                    (2, ko),
-                    (3, vo),
-                    (4, &counts),
-                    (5, &p),
-                    (6, &totals),
-                ],
-                partitions,
-            )?;
+            let mut down_entries = vec![
+                (0, ki),
+                (1, vi),
+                (2, ko),
+                (3, vo),
+                (4, &counts),
+                (5, &p),
+                (6, &totals),
+            ];
+            down_entries.extend(mapped.map(|depth| (7, depth.range)));
+            self.dispatch(pass, downsweep, &down_entries, partitions)?;
         }
         Ok(())
     }

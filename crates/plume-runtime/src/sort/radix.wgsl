@@ -36,6 +36,9 @@ struct RadixParams {
 @group(0) @binding(4) var<storage, read_write> pass_hist: array<u32>;
 @group(0) @binding(5) var<uniform> params: RadixParams;
 @group(0) @binding(6) var<storage, read_write> digit_totals: array<u32, 256>;
+// The depth sort's live range (depth_quantise.wgsl's `range`: the smallest and largest live
+// key), read only by the `_depth` entry points.
+@group(0) @binding(7) var<storage, read> depth_range: array<u32, 2>;
 
 var<workgroup> counts: array<atomic<u32>, 256>;
 var<workgroup> scan_buf: array<u32, 256>;
@@ -66,9 +69,64 @@ fn exclusive_scan_256(t: u32, v: u32) -> u32 {
     return scan_buf[t] - v;
 }
 
+// How a pass reads its keys: as they are, or (the first pass of a depth sort) mapped to 16
+// bits over the live depth range (`quantised`), so that no pass of its own rewrites them.
+struct KeyMap {
+    quantise: bool,
+    // Half the farthest live depth, and half the span to the nearest (see `quantised`).
+    far: f32,
+    span: f32,
+}
+
+// Keys as they are: the entry points that do not map keys never touch `depth_range`, so their
+// bind groups need not hold it.
+fn plain_keys() -> KeyMap {
+    return KeyMap(false, 0.0, 0.0);
+}
+
+// The f32 depth a depth key stands for (the inverse of the effect's `depth_keys` map).
+fn depth_of(key: u32) -> f32 {
+    let ordered = ~key;
+    let bits = select(~ordered, ordered & 0x7fffffffu, (ordered & 0x80000000u) != 0u);
+    return bitcast<f32>(bits);
+}
+
+// A depth key mapped to 16 bits over the live range, exactly as depth_quantise.wgsl's `quantise`
+// kernel maps it in place (the bitonic sort's path): 0 (farthest) ..= 65533 (nearest), 0xfffe
+// for a non-finite depth, 0xffff for a free slot.
+fn quantised(key: u32, map: KeyMap) -> u32 {
+    if (key > 0xfffffffdu) {
+        return key & 0xffffu;
+    }
+    var q = 0.0;
+    // One live particle, or all at one depth: every key 0 (the sort keeps slot order).
+    if (map.span > 0.0) {
+        q = floor((map.far - 0.5 * depth_of(key)) / map.span * 65533.0);
+    }
+    return u32(clamp(q, 0.0, 65533.0));
+}
+
+fn load_key(i: u32, map: KeyMap) -> u32 {
+    let key = keys_in[i];
+    if (map.quantise) {
+        return quantised(key, map);
+    }
+    return key;
+}
+
 @compute @workgroup_size(256)
 fn rs_upsweep(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
               @builtin(local_invocation_index) t: u32) {
+    upsweep(wid, groups, t, plain_keys());
+}
+
+@compute @workgroup_size(256)
+fn rs_upsweep_depth(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                    @builtin(local_invocation_index) t: u32) {
+    upsweep(wid, groups, t, depth_keys_map());
+}
+
+fn upsweep(wid: vec3<u32>, groups: vec3<u32>, t: u32, map: KeyMap) {
     let part = partition_of(wid, groups);
     atomicStore(&counts[t], 0u);
     workgroupBarrier();
@@ -81,7 +139,7 @@ fn rs_upsweep(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gr
         for (var k = 0u; k < KPT; k++) {
             let i = base + k * THREADS + t;
             if (i < params.n) {
-                keys[k] = keys_in[i];
+                keys[k] = load_key(i, map);
             }
         }
         var run_digit = 0u;
@@ -153,4 +211,12 @@ fn partition_len(part: u32) -> u32 {
         return 0u;
     }
     return min(PART, params.n - part * PART);
+}
+
+// The map of a depth sort's first pass, from the live range (halves, so that neither
+// difference overflows to Inf for depths near the f32 limit).
+fn depth_keys_map() -> KeyMap {
+    let far = 0.5 * depth_of(depth_range[0]);
+    let near = 0.5 * depth_of(depth_range[1]);
+    return KeyMap(true, far, far - near);
 }

@@ -21,6 +21,16 @@ fn partition_digit_base(t: u32, part: u32) -> u32 {
 @compute @workgroup_size(256)
 fn rs_downsweep(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) t: u32) {
+    downsweep(wid, groups, t, plain_keys());
+}
+
+@compute @workgroup_size(256)
+fn rs_downsweep_depth(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                      @builtin(local_invocation_index) t: u32) {
+    downsweep(wid, groups, t, depth_keys_map());
+}
+
+fn downsweep(wid: vec3<u32>, groups: vec3<u32>, t: u32, map: KeyMap) {
     let part = partition_of(wid, groups);
     let len = partition_len(part);
     // Where the next key of digit t goes; advanced by each tile's count of digit t.
@@ -31,7 +41,7 @@ fn rs_downsweep(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) 
         let valid = local < len;
         var digit = 255u;
         if (valid) {
-            digit = digit_of(keys_in[base + local]);
+            digit = digit_of(load_key(base + local, map));
         }
         atomicStore(&counts[t], 0u);
         workgroupBarrier();
@@ -62,7 +72,7 @@ fn rs_downsweep(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) 
             let d = entry >> 8u;
             let src = base + k * THREADS + (entry & 255u);
             let dst = digit_next[d] + (t - tile_start[d]);
-            keys_out[dst] = keys_in[src];
+            keys_out[dst] = load_key(src, map);
             vals_out[dst] = vals_in[src];
         }
         workgroupBarrier();

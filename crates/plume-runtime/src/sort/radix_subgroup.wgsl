@@ -36,6 +36,18 @@ fn rs_downsweep(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) 
                 @builtin(local_invocation_index) t: u32,
                 @builtin(subgroup_id) sg: u32,
                 @builtin(subgroup_invocation_id) lane: u32) {
+    downsweep(wid, groups, t, sg, lane, plain_keys());
+}
+
+@compute @workgroup_size(256)
+fn rs_downsweep_depth(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                      @builtin(local_invocation_index) t: u32,
+                      @builtin(subgroup_id) sg: u32,
+                      @builtin(subgroup_invocation_id) lane: u32) {
+    downsweep(wid, groups, t, sg, lane, depth_keys_map());
+}
+
+fn downsweep(wid: vec3<u32>, groups: vec3<u32>, t: u32, sg: u32, lane: u32, map: KeyMap) {
     let part = partition_of(wid, groups);
     let len = partition_len(part);
     for (var j = t; j < SUBGROUPS * 128u; j += THREADS) {
@@ -55,7 +67,7 @@ fn rs_downsweep(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) 
         let local = first + k * 32u + lane;
         keys[k] = 0u;
         if (local < len) {
-            keys[k] = keys_in[part * PART + local];
+            keys[k] = load_key(part * PART + local, map);
         }
     }
     for (var k = 0u; k < KPT; k++) {
