@@ -70,6 +70,38 @@ fn radix_sort_matches_at_every_size(sorter: &GpuSorter) {
 }
 
 #[test]
+fn scans_match_a_cpu_prefix_sum_and_the_scan_from_a_source_clears_it() {
+    let gpu = gpu();
+    let sorter = GpuSorter::new(&gpu);
+    // One block, one and two blocks of 256, the last size with a one-dispatch second level
+    // (256 blocks: each block sums the totals before it) and the first past it (257 blocks:
+    // the totals scanned as a level of their own), and the flock grid's 2^15 + 1 buckets.
+    for n in [0, 1, 255, 256, 257, 65_536, 65_537, 32_769] {
+        let words: Vec<u32> = (0..n as u32).map(|i| pcg(i) % 5).collect();
+        let expected: Vec<u32> = words
+            .iter()
+            .scan(0u32, |sum, &w| {
+                let before = *sum;
+                *sum += w;
+                Some(before)
+            })
+            .collect();
+        let (in_place, untouched) = sorter.scan_words(&words, false).unwrap();
+        assert_eq!(in_place, expected, "in place, n = {n}");
+        assert_eq!(
+            untouched, words,
+            "the in-place scan read no source, n = {n}"
+        );
+        let (scanned, source) = sorter.scan_words(&words, true).unwrap();
+        assert_eq!(scanned, expected, "from a source, n = {n}");
+        assert!(
+            source.iter().all(|&w| w == 0),
+            "source not cleared, n = {n}"
+        );
+    }
+}
+
+#[test]
 fn radix_sort_of_a_million_keys() {
     let gpu = gpu();
     for sorter in sorters(&gpu) {

@@ -1,8 +1,8 @@
 //! The per-step flocking pass of an effect with a Flock force, recorded between the spawn and
 //! the update: the snapshot (+ partial sums) where all pairs or the global means need it, the
-//! global means, then all pairs or the grid (bucket counts, their scan into run starts, the
-//! scatter of the boids into their runs, each run put in slot order with the snapshot, the
-//! search by tiles). The kernels are the compiler's (`forces/flock.rs`); this module only
+//! global means, then all pairs or the grid (bucket counts, their scan into run starts, which
+//! also zeroes the counts for the next step, the scatter of the boids into their runs, each run
+//! put in slot order with the snapshot, the search by tiles). The kernels are the compiler's (`forces/flock.rs`); this module only
 //! dispatches them.
 
 use plume_compiler::forces::flock::{FlockIr, Neighbors, Scope, GRID_TILE, SEARCH_BUFFERS};
@@ -15,12 +15,10 @@ use crate::sort::radix::{GpuSorter, SortProgram};
 
 /// The uniform grid's extra kernels and its scan.
 struct GridPass {
-    clear: wgpu::ComputePipeline,
     bucket: wgpu::ComputePipeline,
     scatter: wgpu::ComputePipeline,
     rank: wgpu::ComputePipeline,
-    buckets: u64,
-    /// The exclusive scan of the bucket counts into run starts.
+    /// The exclusive scan of the bucket counts into run starts, zeroing the counts.
     scan: SortProgram,
     /// Whether the search runs nine threads a boid (`FlockIr::split_search`).
     split_search: bool,
@@ -71,13 +69,12 @@ impl FlockPass {
                 Some(GridPass {
                     search,
                     search_group,
-                    clear: res.pipeline("grid_clear"),
                     bucket: res.pipeline("grid_bucket"),
                     scatter: res.pipeline("grid_scatter"),
                     rank: res.pipeline("grid_rank"),
-                    buckets: FlockIr::grid_buckets(effect.ir.capacity),
                     split_search: FlockIr::split_search(effect.ir.capacity),
-                    scan: GpuSorter::new(gpu).scan_program(
+                    scan: GpuSorter::new(gpu).scan_program_from(
+                        Some(find("cell_counts")),
                         find("cell_start"),
                         FlockIr::grid_buckets(effect.ir.capacity) + 1,
                     )?,
@@ -158,10 +155,8 @@ impl FlockPass {
             if !next() {
                 return Ok(());
             }
-            let (bx, by) =
-                gpu.grid(grid.buckets + 1, u64::from(plume_compiler::wgsl::WORKGROUP))?;
-            pass.set_pipeline(&grid.clear);
-            pass.dispatch_workgroups(bx, by, 1);
+            // The counts start at zero: the last step's scan cleared them (and a new buffer is
+            // zeroed).
             pass.set_pipeline(&grid.bucket);
             pass.dispatch_workgroups(x, y, 1);
             if !next() {

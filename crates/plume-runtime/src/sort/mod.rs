@@ -8,3 +8,4 @@
 pub(crate) mod depth;
 pub(crate) mod quantise;
 pub(crate) mod radix;
+pub(crate) mod words;

@@ -1,4 +1,5 @@
-// The exclusive scan (scan_blocks / add_sums: 256 per workgroup, applied level by level) and the
+// The exclusive scan (scan_blocks / add_sums: 256 per workgroup, applied level by level; up to
+// 256 blocks, add_block_prefix adds each block's prefix of the block totals in one dispatch) and the
 // bitonic sort (the radix sort's baseline, on a power-of-two padded array, by (key, value)); no
 // subgroup operations, so they run on llvmpipe. The radix sort is in radix.wgsl.
 
@@ -19,6 +20,9 @@ struct Params {
 @group(0) @binding(3) var<storage, read_write> vals_out: array<u32>;
 @group(0) @binding(4) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(5) var<uniform> params: Params;
+// What `scan_blocks_from` scans out of place, zeroing it as it reads it (the flock grid's bucket
+// counts, ready for the next step's counting with no kernel to clear them).
+@group(0) @binding(6) var<storage, read_write> source: array<u32>;
 
 var<workgroup> start: array<u32, 256>;
 
@@ -37,6 +41,27 @@ fn scan_blocks(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) g
     if (i < params.n) {
         v = counts[i];
     }
+    scan_block(block, i, t, v);
+}
+
+// `scan_blocks` of `source` into `counts`, leaving `source` zeroed (each word is read by one
+// thread only, so it can clear what it read).
+@compute @workgroup_size(256)
+fn scan_blocks_from(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                    @builtin(local_invocation_index) t: u32) {
+    let block = tile_of(wid, groups);
+    let i = block * 256u + t;
+    var v = 0u;
+    if (i < params.n) {
+        v = source[i];
+        source[i] = 0u;
+    }
+    scan_block(block, i, t, v);
+}
+
+// Block `block`'s exclusive scan of the values `v` its threads hold into counts[i], and its
+// total into keys_out[block]. Every thread must call it.
+fn scan_block(block: u32, i: u32, t: u32, v: u32) {
     start[t] = v;
     workgroupBarrier();
     // Hillis-Steele inclusive scan.
@@ -54,6 +79,31 @@ fn scan_blocks(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) g
     }
     if (t == 255u && block < params.tiles) {
         keys_out[block] = start[255];
+    }
+}
+
+// Up to 256 blocks: each workgroup sums the totals of the blocks before its own (keys_out, as
+// scan_blocks left them) and adds that to its block: one dispatch where scanning the totals
+// first would take two.
+@compute @workgroup_size(256)
+fn add_block_prefix(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                    @builtin(local_invocation_index) t: u32) {
+    let block = tile_of(wid, groups);
+    var v = 0u;
+    if (t < block) {
+        v = keys_out[t];
+    }
+    start[t] = v;
+    workgroupBarrier();
+    for (var half = 128u; half > 0u; half >>= 1u) {
+        if (t < half) {
+            start[t] += start[t + half];
+        }
+        workgroupBarrier();
+    }
+    let i = block * 256u + t;
+    if (i < params.n) {
+        counts[i] += start[0];
     }
 }
 

@@ -272,11 +272,18 @@ pub fn decide(ir: &EffectIr) -> Layout {
                 meaning: "the live boids' slots by bucket, in the order their threads counted them (ranked into grid_vals)",
             });
             layout.bindings.push(Binding {
+                binding: 25,
+                name: "cell_counts",
+                space: "storage, read_write",
+                bytes: (buckets + 1) * 4,
+                meaning: "per bucket: its live boids this step (zeroed by the scan that reads them into cell_start)",
+            });
+            layout.bindings.push(Binding {
                 binding: 12,
                 name: "cell_start",
                 space: "storage, read_write",
                 bytes: (buckets + 1) * 4,
-                meaning: "per bucket: its boids' count, then (scanned) where its run starts in the sorted slots; one past the last: the live boids",
+                meaning: "per bucket: where its run starts in the sorted slots (the scan of cell_counts); one past the last: the live boids",
             });
         }
     }

@@ -70,11 +70,11 @@ impl FlockIr {
 
 /// The grid, a counting sort of the boids by cell, and a search by tiles of boids:
 ///
-/// - `grid_clear` zeroes the bucket counts; `grid_bucket` gives each live boid its cell's
-///   bucket and counts it (`atomicAdd`, which also hands it a place among its bucket's boids,
-///   in whatever order the threads ran); the runtime scans the counts into `cell_start`, where
-///   each bucket's run starts; `grid_scatter` puts each boid's slot at its run's start plus
-///   that place.
+/// - `grid_bucket` gives each live boid its cell's bucket and counts it in `cell_counts`
+///   (`atomicAdd`, which also hands it a place among its bucket's boids, in whatever order the
+///   threads ran); the runtime scans the counts into `cell_start`, where each bucket's run
+///   starts, zeroing them as it reads them (ready for the next step: no kernel clears them);
+///   `grid_scatter` puts each boid's slot at its run's start plus that place.
 /// - `grid_rank` makes the order the same every run: each boid's rank in its run is the number
 ///   of the run's slots below its own, so a run ends up in slot order, and the boid's snapshot
 ///   is written there (`boids` in sorted order: a bucket's boids contiguous).
@@ -97,16 +97,6 @@ impl FlockIr {
 pub(super) fn emit_grid(w: &mut Writer, cell: f64) {
     emit_cell_fns(w, cell);
     w.line("const NO_BUCKET: u32 = 0xffffffffu;");
-    w.line("@compute @workgroup_size(WORKGROUP)");
-    w.block(
-        "fn grid_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
-        |w| {
-            crate::base::kernel::emit_thread_index(w, "k", None);
-            w.block("if (k <= GRID_BUCKETS)", |w| {
-                w.line("atomicStore(&cell_start[k], 0u);");
-            });
-        },
-    );
     w.comment("Each live boid's bucket, counted; grid_vals holds its place among its bucket's boids until the scatter.");
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
@@ -118,7 +108,7 @@ pub(super) fn emit_grid(w: &mut Writer, cell: f64) {
             w.line("var place = 0u;");
             w.block("if (b.w > 0.0)", |w| {
                 w.line("key = bucket_of(cell_of(b.xyz));");
-                w.line("place = atomicAdd(&cell_start[key], 1u);");
+                w.line("place = atomicAdd(&cell_counts[key], 1u);");
             });
             w.line("grid_keys[i] = key;");
             w.line("grid_vals[i] = place;");
