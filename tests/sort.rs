@@ -51,9 +51,9 @@ fn radix_sort_matches_a_stable_cpu_sort_at_every_size() {
 }
 
 fn radix_sort_matches_at_every_size(sorter: &GpuSorter) {
-    // Around one tile (256 keys) and one partition (2,560 keys), and awkward sizes past them.
+    // Around one tile (256 keys) and one partition (2,048 keys), and awkward sizes past them.
     for n in [
-        0, 1, 2, 3, 255, 256, 257, 1000, 2559, 2560, 2561, 7327, 65537,
+        0, 1, 2, 3, 255, 256, 257, 1000, 2047, 2048, 2049, 7327, 65537,
     ] {
         check(sorter, SortAlgorithm::Radix, n, u32::MAX);
         check(sorter, SortAlgorithm::Radix, n, 7);

@@ -67,10 +67,10 @@ pub struct GpuSorter {
 const TILE: u64 = 256;
 
 /// Keys per radix partition (radix.wgsl's PART).
-const PARTITION: u64 = 2560;
+const PARTITION: u64 = 2048;
 
 /// The most partitions whose digit counts one workgroup scans (`rs_scan_small`, a thread a
-/// digit walking its row) instead of one workgroup a digit (`rs_scan`): 81,920 keys.
+/// digit walking its row) instead of one workgroup a digit (`rs_scan`): 65,536 keys.
 const SMALL_SCAN_PARTITIONS: u64 = 32;
 
 /// The first pass of a depth sort: entry points that map each key to 16 bits over the live

@@ -17,10 +17,13 @@
 
 const THREADS: u32 = 256u;
 // Keys per thread and per partition. PART keys staged in workgroup memory, the subgroup
-// downsweep's per-subgroup digit counts and two 256-word scan buffers fill WebGPU's guaranteed
-// 16 KiB of workgroup memory exactly.
-const KPT: u32 = 10u;
-const PART: u32 = 2560u;
+// downsweep's per-subgroup digit counts and two 256-word scan buffers take 14 of WebGPU's
+// guaranteed 16 KiB of workgroup memory. Measured on the H100 (16.7M keys, one device call;
+// docs/performance.md): the downsweep took 0.26 ms a pass with 8 keys a thread, 0.36 with 10,
+// 0.43 with 15 and 0.73 with 20 (fewer workgroups fit an SM at once), 0.26 with 6, whose
+// digit scan over more partitions cost more.
+const KPT: u32 = 8u;
+const PART: u32 = 2048u;
 
 struct RadixParams {
     n: u32,

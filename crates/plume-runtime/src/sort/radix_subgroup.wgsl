@@ -9,7 +9,7 @@
 
 const SUBGROUPS: u32 = 8u;
 
-var<workgroup> staged: array<u32, 2560>;
+var<workgroup> staged: array<u32, 2048>;
 // Per subgroup, 128 words: digit 2m in the low half of word m, 2m + 1 in the high half.
 var<workgroup> sub_counts: array<atomic<u32>, 1024>;
 var<workgroup> digit_dst: array<u32, 256>;
