@@ -240,6 +240,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "sort_bitonic_keys_per_s": r.sort.map(|(_, s)| r.particles as f64 / s),
                 "flock_mean_neighbours": r.flock.as_ref().map(|(n, _)| *n),
                 "flock_search": r.flock.as_ref().map(|(_, s)| s.clone()),
+                "sort_stages_ms": r.sort_stages.iter().map(|(n, s)| (n.to_string(), s * 1e3)).collect::<std::collections::BTreeMap<_, _>>(),
                 "flock_stages_ms": r.flock_stages.iter().map(|(n, s)| (n.to_string(), s * 1e3)).collect::<std::collections::BTreeMap<_, _>>(),
                 "field_error_max": r.field_error.map(|(m, _, _)| m),
                 "field_error_rms": r.field_error.map(|(_, s, _)| s),

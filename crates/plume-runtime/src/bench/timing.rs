@@ -10,7 +10,7 @@ use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
 use crate::sim::group::Group;
 use crate::sim::steps::{params_bytes, Steps};
-use crate::sort::depth::sort_buffers;
+use crate::sort::depth::{sort_buffers, DEPTH_SORT_STAGES};
 use crate::sort::radix::SortAlgorithm;
 
 impl Group {
@@ -22,6 +22,16 @@ impl Group {
         algorithm: SortAlgorithm,
     ) -> Result<f64, RuntimeError> {
         let depth = self.depth()?;
+        self.sort_from_effect_camera()?;
+        let chunks = self.sort_chunks()?;
+        let seconds =
+            timer.time(|pass| depth.record(&self.gpu, pass, &self.res, chunks, algorithm))?;
+        self.gpu.take_error()?;
+        Ok(seconds)
+    }
+
+    /// Readies a timed sort: a stateless effect's frame, and the effect camera's depth axis.
+    fn sort_from_effect_camera(&self) -> Result<(), RuntimeError> {
         if let Steps::Stateless(stateless) = &self.steps {
             self.write_frame_now(stateless)?;
         }
@@ -30,11 +40,39 @@ impl Group {
             0,
             &self.effect_camera().depth_axis_bytes(),
         );
+        Ok(())
+    }
+
+    /// Times the radix depth sort's stages ([`DEPTH_SORT_STAGES`]) by difference: the first
+    /// one, the first two, all three, each the median of `repeats` passes; (name, seconds).
+    pub(crate) fn time_sort_stages(
+        &self,
+        timer: &PassTimer<'_>,
+        repeats: u32,
+    ) -> Result<Vec<(&'static str, f64)>, RuntimeError> {
+        let depth = self.depth()?;
+        self.sort_from_effect_camera()?;
         let chunks = self.sort_chunks()?;
-        let seconds =
-            timer.time(|pass| depth.record(&self.gpu, pass, &self.res, chunks, algorithm))?;
+        let mut before = 0.0;
+        let mut out = Vec::new();
+        for (k, name) in DEPTH_SORT_STAGES.iter().enumerate() {
+            let seconds = median_after_warmup(repeats, || {
+                timer.time(|pass| {
+                    depth.record_stages(
+                        &self.gpu,
+                        pass,
+                        &self.res,
+                        chunks,
+                        SortAlgorithm::Radix,
+                        k + 1,
+                    )
+                })
+            })?;
+            out.push((*name, (seconds - before).max(0.0)));
+            before = seconds;
+        }
         self.gpu.take_error()?;
-        Ok(seconds)
+        Ok(out)
     }
 
     /// Runs `steps` (at most [`STEPS_PER_SUBMIT`]) in one timed compute pass; returns seconds.

@@ -41,6 +41,8 @@ pub struct BenchResult {
     /// Seconds for depth keys plus the radix sort of every slot, and the same with the bitonic
     /// baseline, when the effect has `sort: true`.
     pub sort: Option<(f64, f64)>,
+    /// The radix depth sort's stages (name, seconds: keys, range, sort), when it sorts.
+    pub sort_stages: Vec<(&'static str, f64)>,
     /// The flocking pass's stages (name, seconds) on the timed state, when the effect flocks.
     pub flock_stages: Vec<(&'static str, f64)>,
     /// The draw of all live particles from the GPU buffers, when asked for.
@@ -156,6 +158,11 @@ pub fn bench(
             copy_in_place.min(copy_in_place_kernel.time(&timer, per_round)? / f64::from(per_round));
     }
     drop((copy_kernel, copy_in_place_kernel));
+    let sort_stages = if sim.effect.layout.sorts() {
+        sim.time_sort_stages(&timer, 9)?
+    } else {
+        Vec::new()
+    };
     let sort = if sim.effect.layout.sorts() {
         // Warm up both, then time them.
         sim.time_sort(&timer, SortAlgorithm::Radix)?;
@@ -212,6 +219,7 @@ pub fn bench(
     Ok(BenchResult {
         chunks,
         sort,
+        sort_stages,
         flock_stages,
         render,
         adapter: gpu.describe(),

@@ -14,6 +14,10 @@ use crate::error::RuntimeError;
 use crate::sort::quantise::DepthQuantise;
 use crate::sort::radix::{GpuSorter, SortAlgorithm, SortProgram};
 
+/// The depth sort's stages in recording order: the keys of every slot, their live range, the
+/// radix sort (whose first pass maps the keys to 16 bits over that range).
+pub const DEPTH_SORT_STAGES: [&str; 3] = ["keys", "range", "sort"];
+
 /// How the keys kernel reads the particles.
 enum Keys {
     /// One dispatch per particle buffer, on the compute module's shared bind groups.
@@ -72,6 +76,23 @@ impl DepthSort {
         chunks: &[Chunk],
         algorithm: SortAlgorithm,
     ) -> Result<(), RuntimeError> {
+        self.record_stages(gpu, pass, res, chunks, algorithm, DEPTH_SORT_STAGES.len())
+    }
+
+    /// Records the first `stages` of [`DEPTH_SORT_STAGES`] (the benchmark times them by
+    /// difference).
+    pub(crate) fn record_stages(
+        &self,
+        gpu: &Gpu,
+        pass: &mut wgpu::ComputePass<'_>,
+        res: &Resources,
+        chunks: &[Chunk],
+        algorithm: SortAlgorithm,
+        stages: usize,
+    ) -> Result<(), RuntimeError> {
+        if stages == 0 {
+            return Ok(());
+        }
         match &self.keys {
             Keys::PerChunk(pipeline) => {
                 pass.set_pipeline(pipeline);
@@ -90,10 +111,15 @@ impl DepthSort {
                 pass.dispatch_workgroups(x, y, 1);
             }
         }
+        if stages == 1 {
+            return Ok(());
+        }
         match algorithm {
             SortAlgorithm::Radix => {
                 self.quantise.record_range(pass);
-                self.radix.record(pass);
+                if stages > 2 {
+                    self.radix.record(pass);
+                }
             }
             SortAlgorithm::Bitonic => {
                 self.quantise.record_in_place(pass);
