@@ -28,12 +28,13 @@ fn check(sorter: &GpuSorter, algorithm: SortAlgorithm, n: usize, distinct: u32) 
 }
 
 /// The rankings `gpu` can run: the portable one always, subgroup ballots where the adapter has
-/// subgroups of 32 (the H100; not llvmpipe, where this tests the portable ranking alone).
+/// subgroups of 32, and those in one dispatch a pass (OneSweep) on NVIDIA (the H100 runs all
+/// three; llvmpipe the portable ranking alone).
 fn sorters(gpu: &plume::runtime::Gpu) -> Vec<GpuSorter> {
-    let mut out = vec![GpuSorter::with_ranking(gpu, Ranking::Portable).unwrap()];
-    if Ranking::best_for(gpu) == Ranking::Subgroup {
-        out.push(GpuSorter::with_ranking(gpu, Ranking::Subgroup).unwrap());
-    }
+    let out: Vec<GpuSorter> = Ranking::runnable_on(gpu)
+        .into_iter()
+        .map(|ranking| GpuSorter::with_ranking(gpu, ranking).unwrap())
+        .collect();
     eprintln!(
         "rankings tested on {}: {:?}",
         gpu.info.name,
@@ -118,6 +119,14 @@ fn asking_for_a_ranking_the_adapter_lacks_is_an_error() {
     assert_eq!(subgroup.is_ok(), gpu.has_subgroups_of(32));
     if let Err(e) = subgroup {
         assert!(e.to_string().contains("subgroups"), "{e}");
+    }
+    let onesweep = GpuSorter::with_ranking(&gpu, Ranking::OneSweep);
+    assert_eq!(
+        onesweep.is_ok(),
+        Ranking::runnable_on(&gpu).contains(&Ranking::OneSweep)
+    );
+    if let Err(e) = onesweep {
+        assert!(e.to_string().contains("NVIDIA"), "{e}");
     }
 }
 

@@ -76,11 +76,7 @@ fn sort_json(s: &plume_runtime::bench::SortBench) -> serde_json::Value {
         serde_json::json!({
             "keys": s.keys, "ranking": format!("{:?}", t.ranking), "key_bits": t.key_bits,
             "ms": t.seconds * 1e3, "keys_per_s": s.keys as f64 / t.seconds,
-            "first_pass_ms": {
-                "upsweep": t.stages[0] * 1e3,
-                "digit_scan": t.stages[1] * 1e3,
-                "downsweep": t.stages[2] * 1e3,
-            },
+            "first_pass_ms": t.stages.iter().map(|(name, s)| (name.to_string(), s * 1e3)).collect::<std::collections::BTreeMap<_, _>>(),
         })
     });
     serde_json::Value::Array(times.collect())
@@ -319,16 +315,19 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
         }
         if let Some(s) = &sort_alone {
             for t in &s.times {
+                let stages: Vec<String> = t
+                    .stages
+                    .iter()
+                    .map(|(name, s)| format!("{} {:.3}", name.replace('_', " "), s * 1e3))
+                    .collect();
                 println!(
-                    "  radix sort alone    {:.3} ms ({:.2} G keys/s): {} random pairs, {}-bit keys, {:?} ranking; first pass: upsweep {:.3}, digit scan {:.3}, downsweep {:.3} ms",
+                    "  radix sort alone    {:.3} ms ({:.2} G keys/s): {} random pairs, {}-bit keys, {:?} ranking; first stages: {} ms",
                     t.seconds * 1e3,
                     s.keys as f64 / t.seconds * 1e-9,
                     s.keys,
                     t.key_bits,
                     t.ranking,
-                    t.stages[0] * 1e3,
-                    t.stages[1] * 1e3,
-                    t.stages[2] * 1e3
+                    stages.join(", ")
                 );
             }
         }

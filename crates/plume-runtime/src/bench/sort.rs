@@ -21,9 +21,9 @@ pub struct SortTime {
     pub key_bits: u32,
     /// Median seconds per sort over the timed repeats.
     pub seconds: f64,
-    /// Median seconds of the first pass's upsweep, digit scan and downsweep, timed by
-    /// difference (the first 1, 2 and 3 dispatches).
-    pub stages: [f64; 3],
+    /// Median seconds of the first stages ([`first_stages`]), timed by difference: (name,
+    /// seconds).
+    pub stages: [(&'static str, f64); 3],
 }
 
 /// The sort benchmark's result.
@@ -33,6 +33,18 @@ pub struct SortBench {
     pub keys: u64,
     /// One entry per (ranking, key bits).
     pub times: Vec<SortTime>,
+}
+
+/// The stages a sort's first dispatches make, timed by difference: (name, dispatches up to
+/// its end). Reduce-then-scan: the first pass's upsweep, digit scan and downsweep; OneSweep: the
+/// counts of every pass (a clear and the histogram), their scan, the first pass.
+pub fn first_stages(ranking: Ranking) -> [(&'static str, usize); 3] {
+    match ranking {
+        Ranking::OneSweep => [("histogram", 2), ("offsets", 3), ("first_sweep", 4)],
+        Ranking::Subgroup | Ranking::Portable => {
+            [("upsweep", 1), ("digit_scan", 2), ("downsweep", 3)]
+        }
+    }
 }
 
 /// Times the radix sort of `n` random pairs, `repeats` times each (the median is kept), with
@@ -63,12 +75,8 @@ pub fn bench_sort(gpu: &Gpu, n: u64, repeats: u32) -> Result<SortBench, RuntimeE
     };
     let (work_keys, work_vals) = (work("sorted keys"), work("sorted vals"));
     let timer = PassTimer::new(gpu);
-    let mut rankings = vec![Ranking::Portable];
-    if Ranking::best_for(gpu) == Ranking::Subgroup {
-        rankings.insert(0, Ranking::Subgroup);
-    }
     let mut times = Vec::new();
-    for ranking in rankings {
+    for ranking in Ranking::runnable_on(gpu) {
         let sorter = GpuSorter::with_ranking(gpu, ranking)?;
         for key_bits in [32, 16] {
             let program = sorter.radix_program(&work_keys, &work_vals, n, key_bits)?;
@@ -85,7 +93,8 @@ pub fn bench_sort(gpu: &Gpu, n: u64, repeats: u32) -> Result<SortBench, RuntimeE
                     })
                 })
             };
-            let prefix = [time(1)?, time(2)?, time(3)?];
+            let stages = first_stages(ranking);
+            let prefix = [time(stages[0].1)?, time(stages[1].1)?, time(stages[2].1)?];
             let seconds = time(usize::MAX)?;
             gpu.take_error()?;
             check_sorted(gpu, &keys, &work_keys, &work_vals, key_bits)?;
@@ -93,7 +102,11 @@ pub fn bench_sort(gpu: &Gpu, n: u64, repeats: u32) -> Result<SortBench, RuntimeE
                 ranking,
                 key_bits,
                 seconds,
-                stages: [prefix[0], prefix[1] - prefix[0], prefix[2] - prefix[1]],
+                stages: [
+                    (stages[0].0, prefix[0]),
+                    (stages[1].0, prefix[1] - prefix[0]),
+                    (stages[2].0, prefix[2] - prefix[1]),
+                ],
             });
         }
     }

@@ -525,7 +525,7 @@ impl Resources {
         let device = &self.gpu.device;
         let pipeline = self.gpu.compute_pipeline(&self.module, entry, None);
         let sort = self.sort.as_ref();
-        let used = ["frame", "sort_keys", "sort_vals", "depth_axis"];
+        let used = ["frame", "sort_keys", "depth_axis"];
         let entries: Vec<wgpu::BindGroupEntry<'_>> = effect
             .layout
             .bindings
@@ -536,7 +536,6 @@ impl Resources {
                 resource: match b.name {
                     "frame" => self.frame.as_ref().expect("stateless").as_entire_binding(),
                     "sort_keys" => sort.expect("sorts").keys.as_entire_binding(),
-                    "sort_vals" => sort.expect("sorts").vals.as_entire_binding(),
                     _ => sort.expect("sorts").depth_axis.as_entire_binding(),
                 },
             })

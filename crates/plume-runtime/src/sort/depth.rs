@@ -51,7 +51,7 @@ impl DepthSort {
         };
         let sorter = GpuSorter::new(gpu);
         let capacity = u64::from(effect.ir.capacity);
-        let quantise = DepthQuantise::new(gpu, &buffers.keys, capacity)?;
+        let quantise = DepthQuantise::new(gpu, &buffers.keys, &buffers.vals, capacity)?;
         Ok(Self {
             radix: sorter.depth_program(
                 &buffers.keys,

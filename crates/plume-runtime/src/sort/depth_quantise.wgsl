@@ -20,6 +20,8 @@ struct Params {
 // (smallest live key, largest live key): the farthest and the nearest live depth.
 @group(0) @binding(1) var<storage, read_write> range: array<atomic<u32>, 2>;
 @group(0) @binding(2) var<uniform> params: Params;
+// The sort's values, for the bitonic sort (the radix sort pairs each key with its index itself).
+@group(0) @binding(3) var<storage, read_write> vals: array<u32>;
 
 const WORKGROUP: u32 = 256u;
 const LIVE_MAX: u32 = 0xfffffffdu;
@@ -106,4 +108,14 @@ fn quantise(@builtin(global_invocation_id) gid: vec3<u32>) {
         q = floor((far - 0.5 * depth_of(key)) / span * STEPS);
     }
     keys[slot] = u32(clamp(q, 0.0, STEPS));
+}
+
+// Every slot its own value: the bitonic sort's input pairs (the effect's `depth_keys` writes keys
+// only).
+@compute @workgroup_size(WORKGROUP)
+fn identity_vals(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let slot = gid.x + gid.y * params.row;
+    if (slot < params.n) {
+        vals[slot] = slot;
+    }
 }

@@ -25,8 +25,8 @@ type Dispatch = (wgpu::ComputePipeline, wgpu::BindGroup, (u32, u32));
 pub struct DepthQuantise {
     /// The range's reset and reduction, in recording order.
     range_dispatches: [Dispatch; 2],
-    /// The map of every key in place (the bitonic sort's path).
-    map: Dispatch,
+    /// The map of every key in place and every slot's value (the bitonic sort's path).
+    map: [Dispatch; 2],
     /// The live range: the smallest and largest live key (8 bytes).
     range: wgpu::Buffer,
 }
@@ -42,8 +42,14 @@ const RANGE_KEYS_PER_WORKGROUP: u64 = 16 * WORKGROUP;
 pub const KEY_BITS: u32 = 16;
 
 impl DepthQuantise {
-    /// The kernels that quantise the first `n` keys of `keys` in place.
-    pub fn new(gpu: &Gpu, keys: &wgpu::Buffer, n: u64) -> Result<Self, RuntimeError> {
+    /// The kernels that quantise the first `n` keys of `keys` in place (and, for the bitonic
+    /// sort, give `vals` every slot's index).
+    pub fn new(
+        gpu: &Gpu,
+        keys: &wgpu::Buffer,
+        vals: &wgpu::Buffer,
+        n: u64,
+    ) -> Result<Self, RuntimeError> {
         let device = &gpu.device;
         let module = crate::device::gpu::shader_module(
             device,
@@ -51,10 +57,11 @@ impl DepthQuantise {
             include_str!("depth_quantise.wgsl"),
         );
         let pipeline = |entry| gpu.compute_pipeline(&module, entry, None);
-        let (reset, reduce, quantise) = (
+        let (reset, reduce, quantise, identity) = (
             pipeline("range_reset"),
             pipeline("range_reduce"),
             pipeline("quantise"),
+            pipeline("identity_vals"),
         );
         let grid = gpu.grid(n, WORKGROUP)?;
         let range_grid = gpu.grid(n.div_ceil(RANGE_KEYS_PER_WORKGROUP), 1)?;
@@ -91,7 +98,14 @@ impl DepthQuantise {
                 (reset.clone(), bind(&reset, &[(1, &range)]), (1, 1)),
                 (reduce.clone(), bind(&reduce, &all), range_grid),
             ],
-            map: (quantise.clone(), bind(&quantise, &all), grid),
+            map: [
+                (quantise.clone(), bind(&quantise, &all), grid),
+                (
+                    identity.clone(),
+                    bind(&identity, &[(2, &params), (3, vals)]),
+                    grid,
+                ),
+            ],
             range,
         })
     }
@@ -109,11 +123,13 @@ impl DepthQuantise {
         }
     }
 
-    /// Records the range and then the map of every key in place into `pass` (before a sort
-    /// that does not map the keys itself).
+    /// Records the range, then the map of every key in place and the slots as values into
+    /// `pass` (before a sort that does not map the keys itself).
     pub fn record_in_place(&self, pass: &mut wgpu::ComputePass<'_>) {
         self.record_range(pass);
-        record(pass, &self.map);
+        for dispatch in &self.map {
+            record(pass, dispatch);
+        }
     }
 }
 

@@ -6,13 +6,16 @@
 //! The radix sort is reduce-then-scan (radix.wgsl: count digits per partition, scan the counts,
 //! rank and scatter), with two ways to rank keys within a partition ([`Ranking`]): subgroup
 //! ballots where the adapter's subgroups are exactly 32 wide (NVIDIA, AMD RDNA in wave32), and
-//! a workgroup-memory sorting network everywhere else (llvmpipe included). Both give the same
-//! output, bit for bit: the sort is stable, so its result is fully determined by its input.
+//! a workgroup-memory sorting network everywhere else (llvmpipe included). On NVIDIA the
+//! subgroup ranking runs in one dispatch a pass instead ([`Ranking::OneSweep`],
+//! [`crate::sort::onesweep`]). All give the same output, bit for bit: the sort is stable, so its
+//! result is fully determined by its input.
 
 use wgpu::util::DeviceExt;
 
 use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;
+use crate::sort::onesweep::SweepKernels;
 
 /// Which sort.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -23,9 +26,15 @@ pub enum SortAlgorithm {
     Bitonic,
 }
 
-/// How the radix sort ranks keys within a partition.
+/// How the radix sort ranks keys within a partition, and how a pass learns where each
+/// partition's keys go.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Ranking {
+    /// [`Ranking::Subgroup`]'s ranking in one dispatch a pass (OneSweep: every pass's digits
+    /// counted at once beforehand, each partition's offsets by decoupled look-back on the
+    /// partitions before it). A workgroup waits on workgroups that started before it, which
+    /// neither WebGPU nor Vulkan promises will progress; NVIDIA GPUs do, so only they get it.
+    OneSweep,
     /// Subgroup ballots (8 per 32 keys) and per-subgroup digit counters; needs
     /// `wgpu::Features::SUBGROUP` and subgroups of exactly 32 invocations.
     Subgroup,
@@ -37,13 +46,25 @@ pub enum Ranking {
 impl Ranking {
     /// The fastest ranking `gpu` can run.
     pub fn best_for(gpu: &Gpu) -> Self {
+        Self::runnable_on(gpu)[0]
+    }
+
+    /// Every ranking `gpu` can run, the fastest first.
+    pub fn runnable_on(gpu: &Gpu) -> Vec<Self> {
+        let mut out = Vec::new();
         if gpu.has_subgroups_of(32) {
-            Ranking::Subgroup
-        } else {
-            Ranking::Portable
+            if gpu.info.vendor == NVIDIA {
+                out.push(Ranking::OneSweep);
+            }
+            out.push(Ranking::Subgroup);
         }
+        out.push(Ranking::Portable);
+        out
     }
 }
+
+/// PCI vendor id of NVIDIA, whose GPUs run [`Ranking::OneSweep`].
+const NVIDIA: u32 = 0x10de;
 
 /// The sort kernels.
 pub struct GpuSorter {
@@ -55,7 +76,9 @@ pub struct GpuSorter {
     downsweep: wgpu::ComputePipeline,
     /// The radix module, for the depth sort's first-pass entry points (built on demand: most
     /// sorters never sort depths).
-    radix: wgpu::ShaderModule,
+    pub(super) radix: wgpu::ShaderModule,
+    /// The OneSweep kernels ([`Ranking::OneSweep`]).
+    pub(super) sweep: Option<SweepKernels>,
     scan_blocks: wgpu::ComputePipeline,
     scan_blocks_from: wgpu::ComputePipeline,
     add_block_prefix: wgpu::ComputePipeline,
@@ -67,7 +90,7 @@ pub struct GpuSorter {
 const TILE: u64 = 256;
 
 /// Keys per radix partition (radix.wgsl's PART).
-const PARTITION: u64 = 2048;
+pub(super) const PARTITION: u64 = 2048;
 
 /// The most partitions whose digit counts one workgroup scans (`rs_scan_small`, a thread a
 /// digit walking its row) instead of one workgroup a digit (`rs_scan`): 65,536 keys.
@@ -141,9 +164,9 @@ impl GpuSorter {
 
     /// Builds the kernels with the given ranking; an error when `gpu` cannot run it.
     pub fn with_ranking(gpu: &Gpu, ranking: Ranking) -> Result<Self, RuntimeError> {
-        if ranking == Ranking::Subgroup && !gpu.has_subgroups_of(32) {
+        if !Ranking::runnable_on(gpu).contains(&ranking) {
             return Err(RuntimeError::Gpu(format!(
-                "{} has no subgroups of exactly 32 invocations (subgroup ranking)",
+                "{} cannot run the {ranking:?} ranking (subgroup ranking needs subgroups of exactly 32 invocations; OneSweep an NVIDIA GPU as well)",
                 gpu.info.name
             )));
         }
@@ -172,6 +195,7 @@ impl GpuSorter {
                     include_str!("radix_subgroup.wgsl")
                 ),
             ),
+            Ranking::OneSweep => module("radix (OneSweep)", SweepKernels::source()),
             Ranking::Portable => module(
                 "radix (portable ranking)",
                 format!(
@@ -190,6 +214,7 @@ impl GpuSorter {
             digit_scan: pipeline(&radix, "rs_scan"),
             digit_scan_small: pipeline(&radix, "rs_scan_small"),
             downsweep: pipeline(&radix, "rs_downsweep"),
+            sweep: (ranking == Ranking::OneSweep).then(|| SweepKernels::new(gpu, &radix)),
             radix: radix.clone(),
             scan_blocks: pipeline(&sort, "scan_blocks"),
             scan_blocks_from: pipeline(&sort, "scan_blocks_from"),
@@ -199,11 +224,11 @@ impl GpuSorter {
         }
     }
 
-    fn params(&self, n: u64, shift: u32, tiles: u64, j: u64, k: u64) -> wgpu::Buffer {
+    pub(super) fn params(&self, n: u64, shift: u32, tiles: u64, j: u64, k: u64) -> wgpu::Buffer {
         self.uniform(&[n as u32, shift, tiles as u32, j as u32, k as u32, 0, 0, 0])
     }
 
-    fn uniform(&self, words: &[u32]) -> wgpu::Buffer {
+    pub(super) fn uniform(&self, words: &[u32]) -> wgpu::Buffer {
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         self.gpu
             .device
@@ -214,7 +239,7 @@ impl GpuSorter {
             })
     }
 
-    fn buffer(&self, label: &str, words: u64) -> wgpu::Buffer {
+    pub(super) fn buffer(&self, label: &str, words: u64) -> wgpu::Buffer {
         self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some(label),
             size: words.max(1) * 4,
@@ -227,7 +252,7 @@ impl GpuSorter {
 
     /// Dispatches `pipeline` over `groups` workgroups (2D past the per-dimension limit) with the
     /// given (binding, buffer) entries.
-    fn dispatch(
+    pub(super) fn dispatch(
         &self,
         program: &mut SortProgram,
         pipeline: &wgpu::ComputePipeline,
@@ -356,6 +381,19 @@ impl GpuSorter {
             dispatches: Vec::new(),
         };
         if n >= 1 {
+            let passes = crate::sort::quantise::KEY_BITS.div_ceil(8);
+            if let Some(sweep) = &self.sweep {
+                self.sweep_passes(
+                    sweep,
+                    &mut program,
+                    keys,
+                    vals,
+                    n,
+                    passes,
+                    Some(depth_range),
+                )?;
+                return Ok(program);
+            }
             // Even one key is mapped (the sort itself needs two): the keys always end quantised.
             let first = DepthPass {
                 upsweep: self
@@ -366,7 +404,6 @@ impl GpuSorter {
                     .compute_pipeline(&self.radix, "rs_downsweep_depth", None),
                 range: depth_range,
             };
-            let passes = crate::sort::quantise::KEY_BITS.div_ceil(8);
             self.radix_passes_mapped(&mut program, keys, vals, n, passes, Some(first))?;
         }
         Ok(program)
@@ -382,7 +419,10 @@ impl GpuSorter {
         n: u64,
         passes: u32,
     ) -> Result<(), RuntimeError> {
-        self.radix_passes_mapped(pass, keys, vals, n, passes, None)
+        match &self.sweep {
+            Some(sweep) => self.sweep_passes(sweep, pass, keys, vals, n, passes, None),
+            None => self.radix_passes_mapped(pass, keys, vals, n, passes, None),
+        }
     }
 
     /// [`Self::radix_passes`], the first pass reading its keys through `first`'s map when given.
@@ -521,9 +561,9 @@ mod tests {
         .unwrap_or_else(|e| panic!("{}", e.emit_to_string(source)));
     }
 
-    // Both radix modules validate here, on any machine: CI's adapter (llvmpipe) has no
-    // subgroups, so it runs only the portable ranking, and this catches a broken subgroup
-    // module before an adapter with subgroups does.
+    // Every radix module validates here, on any machine: CI's adapter (llvmpipe) has no
+    // subgroups, so it runs only the portable ranking, and this catches a broken subgroup or
+    // OneSweep module before an adapter that runs them does.
     #[test]
     fn both_radix_modules_validate() {
         validate(&format!(
@@ -536,5 +576,6 @@ mod tests {
             include_str!("radix.wgsl"),
             include_str!("radix_subgroup.wgsl")
         ));
+        validate(&crate::sort::onesweep::SweepKernels::source());
     }
 }

@@ -109,6 +109,15 @@ fn quantised(key: u32, map: KeyMap) -> u32 {
     return u32(clamp(q, 0.0, 65533.0));
 }
 
+// The value paired with key i: a depth sort's first pass pairs each key with its slot, which
+// is its index (so the effect's `depth_keys` writes no values and this pass reads none).
+fn load_val(i: u32, map: KeyMap) -> u32 {
+    if (map.quantise) {
+        return i;
+    }
+    return vals_in[i];
+}
+
 fn load_key(i: u32, map: KeyMap) -> u32 {
     let key = keys_in[i];
     if (map.quantise) {

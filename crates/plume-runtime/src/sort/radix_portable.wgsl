@@ -73,7 +73,7 @@ fn downsweep(wid: vec3<u32>, groups: vec3<u32>, t: u32, map: KeyMap) {
             let src = base + k * THREADS + (entry & 255u);
             let dst = digit_next[d] + (t - tile_start[d]);
             keys_out[dst] = load_key(src, map);
-            vals_out[dst] = vals_in[src];
+            vals_out[dst] = load_val(src, map);
         }
         workgroupBarrier();
         digit_next[t] += count;

@@ -50,6 +50,29 @@ fn rs_downsweep_depth(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgr
 fn downsweep(wid: vec3<u32>, groups: vec3<u32>, t: u32, sg: u32, lane: u32, map: KeyMap) {
     let part = partition_of(wid, groups);
     let len = partition_len(part);
+    let ranked = rank_partition(part, len, t, sg, lane, map);
+    // Where this digit's keys of the partition start in the output: the keys of every smaller
+    // digit, plus this digit's keys in earlier partitions.
+    let digit = sg * 32u + lane;
+    var base = exclusive_scan_subgroups(sg, lane, digit_totals[digit]);
+    if (part < params.partitions) {
+        base += pass_hist[digit * params.partitions + part];
+    }
+    place_partition(part, len, t, sg, lane, ranked, base, map);
+}
+
+// A partition's keys ranked within it: each key's place among the partition's keys of its
+// digit (`pos`, before `place_partition` adds the digit's start), and, for the digit of thread
+// (sg, lane) (digit sg * 32 + lane), the partition's count of it and where its run starts in
+// the partition's sorted order.
+struct Ranked {
+    keys: array<u32, KPT>,
+    pos: array<u32, KPT>,
+    total: u32,
+    local_start: u32,
+}
+
+fn rank_partition(part: u32, len: u32, t: u32, sg: u32, lane: u32, map: KeyMap) -> Ranked {
     for (var j = t; j < SUBGROUPS * 128u; j += THREADS) {
         atomicStore(&sub_counts[j], 0u);
     }
@@ -108,15 +131,28 @@ fn downsweep(wid: vec3<u32>, groups: vec3<u32>, t: u32, sg: u32, lane: u32, map:
     let digit = sg * 32u + lane;
     let total = digit_dst[digit];
     let local_start = exclusive_scan_subgroups(sg, lane, total);
-    // Where this digit's keys of the partition start in the output: the keys of every smaller
-    // digit, plus this digit's keys in earlier partitions.
-    var base = exclusive_scan_subgroups(sg, lane, digit_totals[digit]);
-    if (part < params.partitions) {
-        base += pass_hist[digit * params.partitions + part];
-    }
-    // The output index of local sorted position j (of this digit) is digit_dst[digit] + j.
-    digit_dst[digit] = base - local_start;
-    staged[digit] = local_start;
+    return Ranked(keys, pos, total, local_start);
+}
+
+// Writes a ranked partition's keys and values out, digit d's run from `base` (given by the
+// thread of digit d: the keys of every smaller digit plus this digit's keys in earlier
+// partitions).
+fn place_partition(part: u32, len: u32, t: u32, sg: u32, lane: u32, ranked: Ranked, base: u32,
+                   map: KeyMap) {
+    let pos = stage_partition(len, t, sg, lane, ranked);
+    write_partition(part, len, t, sg, lane, ranked.local_start, pos, base, map);
+}
+
+// Puts a ranked partition's keys in workgroup memory in sorted order (`staged`), and returns
+// each of this thread's keys' places there. Needs nothing from other partitions, so OneSweep
+// does it before it waits for them.
+fn stage_partition(len: u32, t: u32, sg: u32, lane: u32, ranked: Ranked) -> array<u32, KPT> {
+    let first = sg * 32u * KPT;
+    let digit = sg * 32u + lane;
+    let keys = ranked.keys;
+    var pos = ranked.pos;
+    workgroupBarrier();
+    staged[digit] = ranked.local_start;
     workgroupBarrier();
     for (var k = 0u; k < KPT; k++) {
         let d = digit_of(keys[k]);
@@ -129,10 +165,61 @@ fn downsweep(wid: vec3<u32>, groups: vec3<u32>, t: u32, sg: u32, lane: u32, map:
             staged[pos[k]] = keys[k];
         }
     }
+    return pos;
+}
+
+// Writes the staged keys, then the values, to their places: digit d's run from `base`, given
+// by the thread of digit d.
+fn write_partition(part: u32, len: u32, t: u32, sg: u32, lane: u32, local_start: u32,
+                   pos: array<u32, KPT>, base: u32, map: KeyMap) {
+    let first = sg * 32u * KPT;
+    let dst = write_keys(len, t, sg, lane, local_start, base);
+    for (var k = 0u; k < KPT; k++) {
+        let local = first + k * 32u + lane;
+        if (local < len) {
+            staged[pos[k]] = load_val(part * PART + local, map);
+        }
+    }
+    write_vals(len, t, dst);
+}
+
+// This thread's values (its keys' partners, in input order), loaded before they are needed.
+fn load_vals(part: u32, len: u32, sg: u32, lane: u32, map: KeyMap) -> array<u32, KPT> {
+    let first = sg * 32u * KPT;
+    var vals: array<u32, KPT>;
+    for (var k = 0u; k < KPT; k++) {
+        let local = first + k * 32u + lane;
+        vals[k] = 0u;
+        if (local < len) {
+            vals[k] = load_val(part * PART + local, map);
+        }
+    }
+    return vals;
+}
+
+// [`write_partition`] with the values loaded beforehand (`load_vals`).
+fn write_partition_loaded(len: u32, t: u32, sg: u32, lane: u32, local_start: u32,
+                          pos: array<u32, KPT>, base: u32, vals: array<u32, KPT>) {
+    let first = sg * 32u * KPT;
+    let dst = write_keys(len, t, sg, lane, local_start, base);
+    for (var k = 0u; k < KPT; k++) {
+        if (first + k * 32u + lane < len) {
+            staged[pos[k]] = vals[k];
+        }
+    }
+    write_vals(len, t, dst);
+}
+
+// Writes the staged keys to their places and returns where each of this thread's went; the
+// staging memory is free for the values once it returns.
+fn write_keys(len: u32, t: u32, sg: u32, lane: u32, local_start: u32, base: u32) -> array<u32, KPT> {
+    // The output index of local sorted position j (of this digit) is digit_dst[digit] + j.
+    digit_dst[sg * 32u + lane] = base - local_start;
     workgroupBarrier();
     var dst: array<u32, KPT>;
     for (var k = 0u; k < KPT; k++) {
         let j = k * THREADS + t;
+        dst[k] = 0u;
         if (j < len) {
             let key = staged[j];
             dst[k] = digit_dst[digit_of(key)] + j;
@@ -140,12 +227,11 @@ fn downsweep(wid: vec3<u32>, groups: vec3<u32>, t: u32, sg: u32, lane: u32, map:
         }
     }
     workgroupBarrier();
-    for (var k = 0u; k < KPT; k++) {
-        let local = first + k * 32u + lane;
-        if (local < len) {
-            staged[pos[k]] = vals_in[part * PART + local];
-        }
-    }
+    return dst;
+}
+
+// Writes the values staged in sorted order to the places their keys went.
+fn write_vals(len: u32, t: u32, dst: array<u32, KPT>) {
     workgroupBarrier();
     for (var k = 0u; k < KPT; k++) {
         let j = k * THREADS + t;

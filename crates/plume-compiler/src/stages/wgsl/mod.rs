@@ -551,8 +551,8 @@ fn emit_depth_keys(w: &mut Writer, ir: &EffectIr) {
                     w.line("key = min(~ordered, 0xfffffffdu);");
                 });
             });
+            w.comment("No value: the sort's first pass pairs each key with its index, the slot.");
             w.line("sort_keys[slot] = key;");
-            w.line("sort_vals[slot] = slot;");
         },
     );
 }
