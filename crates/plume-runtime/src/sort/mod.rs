@@ -8,6 +8,7 @@
 
 pub(crate) mod depth;
 pub(crate) mod onesweep;
+pub(crate) mod program;
 pub(crate) mod quantise;
 pub(crate) mod radix;
 pub(crate) mod words;

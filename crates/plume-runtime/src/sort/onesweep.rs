@@ -3,14 +3,11 @@
 //! learns how many keys of each digit the partitions before it hold by decoupled look-back, and
 //! scatters. Reduce-then-scan (`radix.wgsl`) takes three dispatches a pass and reads the keys
 //! twice; this takes one and reads them once, but a workgroup waits on others that started
-//! before it, so it runs only where the GPU lets those progress ([`Ranking::OneSweep`]).
+//! before it, so it runs only where the GPU lets those progress (`Ranking::OneSweep`).
 
 use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;
-use crate::sort::radix::{GpuSorter, SortProgram, PARTITION};
-
-#[cfg(doc)]
-use crate::sort::radix::Ranking;
+use crate::sort::program::{self, SortProgram};
 
 /// Partitions one workgroup of `rs_sweep_histogram` counts (radix_onesweep.wgsl's HIST_PARTS).
 const HIST_PARTS: u64 = 4;
@@ -46,54 +43,49 @@ impl SweepKernels {
     }
 }
 
-impl GpuSorter {
-    /// Records `passes` OneSweep passes over the first `n` pairs: the counts' clear, the
-    /// histogram of every pass, its scan, then one dispatch a pass. With `depth_range`, the keys
-    /// are depth keys mapped to 16 bits over that range as the histogram and the first pass read
-    /// them ([`GpuSorter::depth_program`]).
+impl SweepKernels {
+    /// Records `passes` OneSweep passes over the first `n` pairs, in partitions of `partition`
+    /// keys (radix.wgsl's PART): the counts' clear, the histogram of every pass, its scan, then
+    /// one dispatch a pass. With `depth_range`, the keys are depth keys mapped to 16 bits over
+    /// that range as the histogram and the first pass read them, each paired with its index
+    /// (`GpuSorter::depth_program`); `module` has the depth entry points.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn sweep_passes(
+    pub(super) fn record_passes(
         &self,
-        kernels: &SweepKernels,
+        gpu: &Gpu,
+        module: &wgpu::ShaderModule,
         program: &mut SortProgram,
-        keys: &wgpu::Buffer,
-        vals: &wgpu::Buffer,
+        (keys, vals): (&wgpu::Buffer, &wgpu::Buffer),
         n: u64,
+        partition: u64,
         passes: u32,
         depth_range: Option<&wgpu::Buffer>,
     ) -> Result<(), RuntimeError> {
-        let partitions = n.div_ceil(PARTITION);
-        let (keys2, vals2) = (self.buffer("keys tmp", n), self.buffer("vals tmp", n));
-        let hist = self.buffer("sweep digit counts", 256 * u64::from(passes));
-        let status = self.buffer("sweep look-back", 256 * partitions * u64::from(passes));
-        let next = self.buffer("sweep partition tickets", u64::from(passes));
-        let depth = |entry: &str| {
-            self.gpu
-                .compute_pipeline(&self.radix, &format!("{entry}_depth"), None)
-        };
+        let partitions = n.div_ceil(partition);
+        let buffer = |label, words| program::buffer(gpu, label, words);
+        let (keys2, vals2) = (buffer("keys tmp", n), buffer("vals tmp", n));
+        let hist = buffer("sweep digit counts", 256 * u64::from(passes));
+        let status = buffer("sweep look-back", 256 * partitions * u64::from(passes));
+        let next = buffer("sweep partition tickets", u64::from(passes));
+        let depth = |entry: &str| gpu.compute_pipeline(module, &format!("{entry}_depth"), None);
         let (histogram, first_sweep) = match depth_range {
             Some(_) => (depth("rs_sweep_histogram"), depth("rs_sweep")),
-            None => (kernels.histogram.clone(), kernels.sweep.clone()),
+            None => (self.histogram.clone(), self.sweep.clone()),
         };
         let range: Vec<(u32, &wgpu::Buffer)> = depth_range.map(|r| (7, r)).into_iter().collect();
-        let p = self.uniform(&[n as u32, 0, partitions as u32, 0]);
-        self.dispatch(program, &kernels.clear, &[(8, &hist), (10, &next)], 1)?;
+        let p = program::uniform(gpu, &[n as u32, 0, partitions as u32, 0]);
+        program.push(gpu, &self.clear, &[(8, &hist), (10, &next)], 1)?;
         let mut entries = vec![(0, keys), (5, &p), (8, &hist), (9, &status), (10, &next)];
         entries.extend(range.iter().copied());
-        self.dispatch(
-            program,
-            &histogram,
-            &entries,
-            partitions.div_ceil(HIST_PARTS),
-        )?;
-        self.dispatch(program, &kernels.offsets, &[(8, &hist), (10, &next)], 1)?;
+        program.push(gpu, &histogram, &entries, partitions.div_ceil(HIST_PARTS))?;
+        program.push(gpu, &self.offsets, &[(8, &hist), (10, &next)], 1)?;
         for pass_index in 0..passes {
             let (ki, vi, ko, vo) = if pass_index % 2 == 0 {
                 (keys, vals, &keys2, &vals2)
             } else {
                 (&keys2, &vals2, keys, vals)
             };
-            let p = self.uniform(&[n as u32, 8 * pass_index, partitions as u32, 0]);
+            let p = program::uniform(gpu, &[n as u32, 8 * pass_index, partitions as u32, 0]);
             let mut entries = vec![
                 (0, ki),
                 (1, vi),
@@ -108,9 +100,9 @@ impl GpuSorter {
                 entries.extend(range.iter().copied());
                 &first_sweep
             } else {
-                &kernels.sweep
+                &self.sweep
             };
-            self.dispatch(program, kernel, &entries, partitions)?;
+            program.push(gpu, kernel, &entries, partitions)?;
         }
         Ok(())
     }

@@ -11,11 +11,11 @@
 //! [`crate::sort::onesweep`]). All give the same output, bit for bit: the sort is stable, so its
 //! result is fully determined by its input.
 
-use wgpu::util::DeviceExt;
-
 use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;
 use crate::sort::onesweep::SweepKernels;
+use crate::sort::program;
+pub use crate::sort::program::SortProgram;
 
 /// Which sort.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -76,9 +76,9 @@ pub struct GpuSorter {
     downsweep: wgpu::ComputePipeline,
     /// The radix module, for the depth sort's first-pass entry points (built on demand: most
     /// sorters never sort depths).
-    pub(super) radix: wgpu::ShaderModule,
+    radix: wgpu::ShaderModule,
     /// The OneSweep kernels ([`Ranking::OneSweep`]).
-    pub(super) sweep: Option<SweepKernels>,
+    sweep: Option<SweepKernels>,
     scan_blocks: wgpu::ComputePipeline,
     scan_blocks_from: wgpu::ComputePipeline,
     add_block_prefix: wgpu::ComputePipeline,
@@ -90,7 +90,7 @@ pub struct GpuSorter {
 const TILE: u64 = 256;
 
 /// Keys per radix partition (radix.wgsl's PART).
-pub(super) const PARTITION: u64 = 2048;
+const PARTITION: u64 = 2048;
 
 /// The most partitions whose digit counts one workgroup scans (`rs_scan_small`, a thread a
 /// digit walking its row) instead of one workgroup a digit (`rs_scan`): 65,536 keys.
@@ -102,58 +102,6 @@ struct DepthPass<'a> {
     upsweep: wgpu::ComputePipeline,
     downsweep: wgpu::ComputePipeline,
     range: &'a wgpu::Buffer,
-}
-
-/// One recorded dispatch of a sort.
-struct Dispatch {
-    pipeline: wgpu::ComputePipeline,
-    group: wgpu::BindGroup,
-    x: u32,
-    y: u32,
-}
-
-/// A sort of fixed buffers and length, built once and recorded any number of times.
-pub struct SortProgram {
-    dispatches: Vec<Dispatch>,
-}
-
-impl SortProgram {
-    /// Records the sort's dispatches into `pass`.
-    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
-        self.record_first(pass, self.dispatches.len());
-    }
-
-    /// Each dispatch's workgroup counts (x, y, 1), in order: the indirect arguments that
-    /// [`Self::record_indirect`] runs the program with.
-    pub fn dispatch_args(&self) -> Vec<[u32; 3]> {
-        self.dispatches.iter().map(|d| [d.x, d.y, 1]).collect()
-    }
-
-    /// Records the program with each dispatch's workgroup counts read from `args` (12 bytes a
-    /// dispatch, from byte `offset`): arguments written on the GPU can then skip the sort (all
-    /// zero) or run it ([`Self::dispatch_args`]).
-    pub fn record_indirect(
-        &self,
-        pass: &mut wgpu::ComputePass<'_>,
-        args: &wgpu::Buffer,
-        offset: u64,
-    ) {
-        for (k, d) in self.dispatches.iter().enumerate() {
-            pass.set_pipeline(&d.pipeline);
-            pass.set_bind_group(0, &d.group, &[]);
-            pass.dispatch_workgroups_indirect(args, offset + 12 * k as u64);
-        }
-    }
-
-    /// Records only the first `count` dispatches (the benchmark times the radix sort's
-    /// stages by difference: a pass is upsweep, digit scan, downsweep).
-    pub fn record_first(&self, pass: &mut wgpu::ComputePass<'_>, count: usize) {
-        for d in self.dispatches.iter().take(count) {
-            pass.set_pipeline(&d.pipeline);
-            pass.set_bind_group(0, &d.group, &[]);
-            pass.dispatch_workgroups(d.x, d.y, 1);
-        }
-    }
 }
 
 impl GpuSorter {
@@ -224,52 +172,27 @@ impl GpuSorter {
         }
     }
 
-    pub(super) fn params(&self, n: u64, shift: u32, tiles: u64, j: u64, k: u64) -> wgpu::Buffer {
+    fn params(&self, n: u64, shift: u32, tiles: u64, j: u64, k: u64) -> wgpu::Buffer {
         self.uniform(&[n as u32, shift, tiles as u32, j as u32, k as u32, 0, 0, 0])
     }
 
-    pub(super) fn uniform(&self, words: &[u32]) -> wgpu::Buffer {
-        let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
-        self.gpu
-            .device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some("sort params"),
-                contents: &bytes,
-                usage: wgpu::BufferUsages::UNIFORM,
-            })
+    fn uniform(&self, words: &[u32]) -> wgpu::Buffer {
+        program::uniform(&self.gpu, words)
     }
 
-    pub(super) fn buffer(&self, label: &str, words: u64) -> wgpu::Buffer {
-        self.gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some(label),
-            size: words.max(1) * 4,
-            usage: wgpu::BufferUsages::STORAGE
-                | wgpu::BufferUsages::COPY_SRC
-                | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        })
+    fn buffer(&self, label: &str, words: u64) -> wgpu::Buffer {
+        program::buffer(&self.gpu, label, words)
     }
 
-    /// Dispatches `pipeline` over `groups` workgroups (2D past the per-dimension limit) with the
-    /// given (binding, buffer) entries.
-    pub(super) fn dispatch(
+    /// Adds `pipeline` over `groups` workgroups with the given (binding, buffer) entries.
+    fn dispatch(
         &self,
         program: &mut SortProgram,
         pipeline: &wgpu::ComputePipeline,
         entries: &[(u32, &wgpu::Buffer)],
         groups: u64,
     ) -> Result<(), RuntimeError> {
-        let group = self
-            .gpu
-            .bind_buffers("sort", &pipeline.get_bind_group_layout(0), entries);
-        let (x, y) = self.gpu.grid(groups, 1)?;
-        program.dispatches.push(Dispatch {
-            pipeline: pipeline.clone(),
-            group,
-            x,
-            y,
-        });
-        Ok(())
+        program.push(&self.gpu, pipeline, entries, groups)
     }
 
     /// Exclusive scan of the first `len` words of `data`, level by level: in place, or (`from`)
@@ -336,9 +259,7 @@ impl GpuSorter {
         data: &wgpu::Buffer,
         len: u64,
     ) -> Result<SortProgram, RuntimeError> {
-        let mut program = SortProgram {
-            dispatches: Vec::new(),
-        };
+        let mut program = SortProgram::default();
         if len > 0 {
             self.scan(&mut program, from, data, len)?;
         }
@@ -354,9 +275,7 @@ impl GpuSorter {
         n: u64,
         key_bits: u32,
     ) -> Result<SortProgram, RuntimeError> {
-        let mut program = SortProgram {
-            dispatches: Vec::new(),
-        };
+        let mut program = SortProgram::default();
         if n >= 2 {
             let passes = key_bits.clamp(1, 32).div_ceil(8).next_multiple_of(2);
             self.radix_passes(&mut program, keys, vals, n, passes)?;
@@ -377,18 +296,17 @@ impl GpuSorter {
         n: u64,
         depth_range: &wgpu::Buffer,
     ) -> Result<SortProgram, RuntimeError> {
-        let mut program = SortProgram {
-            dispatches: Vec::new(),
-        };
+        let mut program = SortProgram::default();
         if n >= 1 {
             let passes = crate::sort::quantise::KEY_BITS.div_ceil(8);
             if let Some(sweep) = &self.sweep {
-                self.sweep_passes(
-                    sweep,
+                sweep.record_passes(
+                    &self.gpu,
+                    &self.radix,
                     &mut program,
-                    keys,
-                    vals,
+                    (keys, vals),
                     n,
+                    PARTITION,
                     passes,
                     Some(depth_range),
                 )?;
@@ -420,7 +338,16 @@ impl GpuSorter {
         passes: u32,
     ) -> Result<(), RuntimeError> {
         match &self.sweep {
-            Some(sweep) => self.sweep_passes(sweep, pass, keys, vals, n, passes, None),
+            Some(sweep) => sweep.record_passes(
+                &self.gpu,
+                &self.radix,
+                pass,
+                (keys, vals),
+                n,
+                PARTITION,
+                passes,
+                None,
+            ),
             None => self.radix_passes_mapped(pass, keys, vals, n, passes, None),
         }
     }
@@ -506,9 +433,7 @@ impl GpuSorter {
         vals: &wgpu::Buffer,
         n: u64,
     ) -> Result<SortProgram, RuntimeError> {
-        let mut program = SortProgram {
-            dispatches: Vec::new(),
-        };
+        let mut program = SortProgram::default();
         let pass = &mut program;
         if n < 2 {
             return Ok(program);
