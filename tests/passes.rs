@@ -67,7 +67,7 @@ fn gravity_only_wgsl_has_no_trace_of_other_forces_and_a_minimal_layout() {
     assert!(c.wgsl.contains("a += vec3<f32>(0.0, -9.81, 0.0);"));
     assert_eq!(
         c.layout.attributes,
-        vec![Attribute::Position, Attribute::Velocity, Attribute::Id]
+        vec![Attribute::Position, Attribute::Id, Attribute::Velocity]
     );
     // 28 bytes of attributes, padded to whole 16-byte words for vec4 access.
     assert_eq!(c.layout.bytes_per_particle, 32);

@@ -42,18 +42,13 @@ pub fn decide(ir: &EffectIr) -> Layout {
     } else {
         Attribute::Velocity
     };
-    // With the motion in halves the id sits beside the position, in the first whole 16-byte
-    // plane: freeing a slot and the live list touch that word alone, whole-word.
-    let mut attributes = if half_motion {
-        vec![Attribute::Position, Attribute::Id, motion]
-    } else {
-        vec![Attribute::Position, motion]
-    };
+    // The id sits beside the position, in the first 16-byte word: what reads only where live
+    // particles are (the depth keys, the live bounds, the live list, freeing a slot) touches
+    // that word alone. With the id in the second word, the depth keys of 16.7M particles read
+    // both words (0.20 ms on an H100, at the copy kernel's bandwidth; docs/performance.md).
+    let mut attributes = vec![Attribute::Position, Attribute::Id, motion];
     if ir.has_lifetimes() {
         attributes.push(Attribute::DeathStep);
-    }
-    if !half_motion {
-        attributes.push(Attribute::Id);
     }
     // A group fed by events cannot derive ages from ids (only the GPU knows when each id
     // spawned), and `Every` events count from each particle's spawn.

@@ -127,18 +127,23 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         w.block("if (!e.alive)", |w| {
             w.line(format!("return Particle({});", dead_fields.join(", ")));
         });
-        let mut fields = vec![
-            "e.now.x.x",
-            "e.now.x.y",
-            "e.now.x.z",
-            "e.now.v.x",
-            "e.now.v.y",
-            "e.now.v.z",
-        ];
-        if layout.has(Attribute::DeathStep) {
-            fields.push("e.now.die_at");
-        }
-        fields.push("e.id");
+        // In the struct's order (the layout's: the id beside the position).
+        let fields: Vec<&str> = layout
+            .attributes
+            .iter()
+            .flat_map(|a| match a {
+                Attribute::Position => vec!["e.now.x.x", "e.now.x.y", "e.now.x.z"],
+                Attribute::DeathStep => vec!["e.now.die_at"],
+                Attribute::Id => vec!["e.id"],
+                // A closed form's motion is its velocity.
+                Attribute::Velocity | Attribute::Displacement => {
+                    vec!["e.now.v.x", "e.now.v.y", "e.now.v.z"]
+                }
+                // A view stores no spawn step or tint (`needs_spawn_step` and `stores_tint` are
+                // for stateful groups only).
+                Attribute::SpawnStep | Attribute::Tint => vec![],
+            })
+            .collect();
         w.line(format!("return Particle({});", fields.join(", ")));
     });
     w.blank();
