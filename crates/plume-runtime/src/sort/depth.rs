@@ -1,7 +1,8 @@
 //! The depth sort of an effect with `sort: true`: the compute module's `depth_keys` kernel gives
 //! every slot a key (farthest first along the camera's depth axis; free slots last),
 //! [`DepthQuantise`] finds the live depth range, then the radix sort orders (key, slot) pairs
-//! in two passes, the first mapping each key to 16 bits over that range as it reads it. The sorted slots are the draw order the vertex shader
+//! in two passes, the first mapping each key to 16 bits over that range as it reads it and
+//! pairing it with its index, the slot. The sorted slots are the draw order the vertex shader
 //! follows. A stateless effect's keys come from its closed form evaluated in place, so sorting
 //! costs 8 bytes a slot of per-frame scratch and no state.
 

@@ -41,9 +41,7 @@ impl SweepKernels {
             sweep: pipeline("rs_sweep"),
         }
     }
-}
 
-impl SweepKernels {
     /// Records `passes` OneSweep passes over the first `n` pairs, in partitions of `partition`
     /// keys (radix.wgsl's PART): the counts' clear, the histogram of every pass, its scan, then
     /// one dispatch a pass. With `depth_range`, the keys are depth keys mapped to 16 bits over

@@ -12,8 +12,9 @@
 //!
 //! Two kernels (depth_quantise.wgsl) between the effect's `depth_keys` and the sort: reset the
 //! range, reduce it over the live keys (one atomic pair per workgroup of 4,096 keys). The radix
-//! sort maps each key as its first pass reads it ([`crate::sort::radix::GpuSorter::depth_program`]);
-//! for the bitonic sort a third kernel maps every key in place first.
+//! sort maps each key as its first pass reads it
+//! ([`crate::sort::radix::GpuSorter::depth_program`]); for the bitonic sort two more map every
+//! key in place and give every slot its own index as its value first.
 
 use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;

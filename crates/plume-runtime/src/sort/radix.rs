@@ -197,7 +197,8 @@ impl GpuSorter {
 
     /// Exclusive scan of the first `len` words of `data`, level by level: in place, or (`from`)
     /// of `from` into `data`, zeroing `from`. Up to 256 blocks of 256 the second level is one
-    /// dispatch (sort.wgsl's `add_block_prefix`); past that the block totals are scanned the same way.
+    /// dispatch (sort.wgsl's `add_block_prefix`); past that the block totals are scanned the
+    /// same way.
     fn scan(
         &self,
         pass: &mut SortProgram,
