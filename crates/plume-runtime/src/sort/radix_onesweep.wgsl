@@ -137,6 +137,12 @@ fn sweep(t: u32, sg: u32, lane: u32, map: KeyMap) {
         sweep_ticket = atomicAdd(&sweep_next[this_pass], 1u);
     }
     let part = workgroupUniformLoad(&sweep_ticket);
+    // A 2D grid (past 65,535 partitions) may hold more workgroups than partitions: the tickets
+    // past the last partition have nothing to sort and must publish nothing (their look-back
+    // words would land in the next pass's).
+    if (part >= params.partitions) {
+        return;
+    }
     let len = partition_len(part);
     let ranked = rank_partition(part, len, t, sg, lane, map);
     let digit = sg * 32u + lane;
