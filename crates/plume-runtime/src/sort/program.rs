@@ -27,28 +27,6 @@ impl SortProgram {
         self.record_first(pass, self.dispatches.len());
     }
 
-    /// Each dispatch's workgroup counts (x, y, 1), in order: the indirect arguments that
-    /// [`Self::record_indirect`] runs the program with.
-    pub fn dispatch_args(&self) -> Vec<[u32; 3]> {
-        self.dispatches.iter().map(|d| [d.x, d.y, 1]).collect()
-    }
-
-    /// Records the program with each dispatch's workgroup counts read from `args` (12 bytes a
-    /// dispatch, from byte `offset`): arguments written on the GPU can then skip the sort (all
-    /// zero) or run it ([`Self::dispatch_args`]).
-    pub fn record_indirect(
-        &self,
-        pass: &mut wgpu::ComputePass<'_>,
-        args: &wgpu::Buffer,
-        offset: u64,
-    ) {
-        for (k, d) in self.dispatches.iter().enumerate() {
-            pass.set_pipeline(&d.pipeline);
-            pass.set_bind_group(0, &d.group, &[]);
-            pass.dispatch_workgroups_indirect(args, offset + 12 * k as u64);
-        }
-    }
-
     /// Records only the first `count` dispatches (the benchmark times the radix sort's
     /// stages by difference: a pass is upsweep, digit scan, downsweep).
     pub fn record_first(&self, pass: &mut wgpu::ComputePass<'_>, count: usize) {
@@ -58,9 +36,7 @@ impl SortProgram {
             pass.dispatch_workgroups(d.x, d.y, 1);
         }
     }
-}
 
-impl SortProgram {
     /// Adds `pipeline` over `groups` workgroups (2D past the per-dimension limit) with the
     /// given (binding, buffer) entries.
     pub(crate) fn push(
