@@ -284,20 +284,20 @@ fn the_compute_splat_draws_the_ribbons_the_raster_draw_draws() {
     // vertices to 1/256 pixel and the splat does not, so a pixel centre on a strip's edge may
     // flip; across the strip the alpha falls to 0 at that edge, so a flipped pixel differs by
     // little. A ribbon offset, missing or widened would differ by tens of steps.
-    // Additive ribbons are scattered with integer atomics (splat_scatters): the same sum in
-    // any thread order, so a second frame is the same image.
+    // Additive ribbons composite in tiles as alpha ones do (the sum in list order), so a
+    // second frame is the same image.
     let gpu = gpu();
     let (_, mut thrown) = thrown(&gpu);
     thrown.run(51, |_| {}).unwrap();
     let mut recycled = Effect::new(&gpu, compile(RECYCLED)).unwrap();
     recycled.run(40, |_| {}).unwrap();
-    let additive = RECYCLED.replace("render: Render(", "render: Render(blend: Additive, ");
-    let mut scattered = Effect::new(&gpu, compile(&additive)).unwrap();
-    scattered.run(40, |_| {}).unwrap();
+    let additive_source = RECYCLED.replace("render: Render(", "render: Render(blend: Additive, ");
+    let mut additive = Effect::new(&gpu, compile(&additive_source)).unwrap();
+    additive.run(40, |_| {}).unwrap();
     for (name, sim) in [
         ("thrown", &thrown),
         ("recycled", &recycled),
-        ("recycled, additive", &scattered),
+        ("recycled, additive", &additive),
     ] {
         assert!(Splat::draws(&sim.compiled().ir));
         let target = Offscreen::new(&gpu, SIDE, SIDE).unwrap();

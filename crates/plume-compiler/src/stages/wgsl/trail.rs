@@ -18,7 +18,7 @@ use crate::ir::EffectIr;
 use crate::stages::passes::layout::{self, Attribute, Layout};
 use crate::stages::wgsl::draw::common as draw;
 use crate::stages::wgsl::draw::splat::{
-    emit_composite, emit_project_kernel, emit_scatter, emit_splat_declarations, host_depth,
+    emit_composite, emit_project_kernel, emit_splat_declarations, host_depth,
 };
 use crate::stages::wgsl::draw::{DrawShape, FIRST_DATA_BINDING};
 use crate::stages::wgsl::emit_particle_struct;
@@ -273,24 +273,15 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawShape)
             "let shaded = vec4<f32>(color.rgb, color.a * (1.0 - across * across){fade});"
         ));
     };
-    if additive {
-        let load = |w: &mut Writer| {
-            w.line("let rec = triangle_record(k);");
-            w.block("if (!rec.valid)", |w| w.line("return;"));
-            w.line("batch = rec.words;");
-        };
-        emit_scatter(w, shape, SPLAT_TRIANGLE_VEC4S, &load, &evaluate);
-    } else {
-        emit_composite(
-            w,
-            shape,
-            additive,
-            crate::stages::wgsl::draw::splat_slices(ir),
-            SPLAT_TRIANGLE_VEC4S,
-            &load,
-            &evaluate,
-        );
-    }
+    emit_composite(
+        w,
+        shape,
+        additive,
+        crate::stages::wgsl::draw::splat_slices(ir),
+        SPLAT_TRIANGLE_VEC4S,
+        &load,
+        &evaluate,
+    );
 }
 
 /// `trail_width(t)` and `trail_color(t)`: the trail's stops baked in, as

@@ -4,9 +4,9 @@
 //! the groups drawn before it ([`super::Splat`] strings them together).
 
 use plume_compiler::wgsl::draw::{
-    splat_discs, splat_hdr_pitch, splat_quad_words, splat_scatters, splat_slices, DrawShape,
-    SplatHost, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_HOST_DEPTH_BINDING, SPLAT_LIGHT_BINDING,
-    SPLAT_PARTIAL_BINDING, SPLAT_RASTER_BINDINGS, SPLAT_TILE,
+    splat_discs, splat_hdr_pitch, splat_quad_words, splat_slices, DrawShape, SplatHost,
+    DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_HOST_DEPTH_BINDING, SPLAT_PARTIAL_BINDING,
+    SPLAT_RASTER_BINDINGS, SPLAT_TILE,
 };
 use plume_compiler::wgsl::trail;
 
@@ -47,15 +47,6 @@ struct Entries {
     group: wgpu::BindGroup,
     /// `composite`'s bind group (quads only).
     quads_group: Option<wgpu::BindGroup>,
-}
-
-/// Ribbons' additive light, scattered: each triangle adds itself into the pixels it covers (`scatter`),
-/// then `resolve` puts the sum over what lies under it; no tile lists.
-struct Scatter {
-    scatter: wgpu::ComputePipeline,
-    resolve: wgpu::ComputePipeline,
-    scatter_group: wgpu::BindGroup,
-    resolve_group: wgpu::BindGroup,
 }
 
 /// What draws quads (every sprite but a round camera-facing one): the effect's generated
@@ -103,8 +94,6 @@ pub(crate) struct GroupSplat {
     entries: Entries,
     /// Set for quads that composite; discs use the fixed `raster` kernel.
     quads: Option<QuadRaster>,
-    /// Set for additive light, which is scattered instead.
-    scatter: Option<Scatter>,
     additive: bool,
     background: u32,
 }
@@ -158,8 +147,8 @@ impl GroupSplat {
         };
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
         // Every buffer is bound whole: none may pass the adapter's binding size.
-        let scattered = ribbons && splat_scatters(&effect.ir);
-        let composites = !(discs || scattered);
+        let limit = gpu.limits.max_storage_buffer_binding_size;
+        let composites = !discs;
         let partial_bytes = match composites {
             true => 16 * u64::from(splat_slices(&effect.ir)) * u64::from(width) * u64::from(height),
             false => 0,
@@ -167,7 +156,6 @@ impl GroupSplat {
         let largest = (record_words.max(2) * u64::from(count) * 4)
             .max(8 * u64::from(width) * u64::from(height))
             .max(partial_bytes);
-        let limit = gpu.limits.max_storage_buffer_binding_size;
         if effect.layout.batched {
             return Err(RuntimeError::Unsupported(format!(
                 "{}: a batch is drawn by the raster renderer (Effect::renderer), which turns each instance by its transform",
@@ -227,7 +215,7 @@ impl GroupSplat {
             true => entries.clone(),
             false => vec![(b_splats, tiles.splats.clone())],
         };
-        // The host's depth, which the composite (or scatter) tests each pixel against; a soft
+        // The host's depth, which the composite tests each pixel against; a soft
         // effect's fade reads the projection too (ribbons read the view already).
         if let Some(depth) = &image.host_depth {
             reads.push((SPLAT_HOST_DEPTH_BINDING, depth.clone()));
@@ -249,33 +237,7 @@ impl GroupSplat {
             (Some(t), false, false) => Some(SpriteTexture::new(&gpu, t)?),
             _ => None,
         };
-        let scatters = ribbons && splat_scatters(&effect.ir);
-        let scatter = match scatters {
-            false => None,
-            true => {
-                let light = words("scattered light", 4 * u64::from(width) * u64::from(height));
-                let [params, _, _, image] = SPLAT_RASTER_BINDINGS;
-                let mut reads = reads.clone();
-                reads.extend([
-                    (params, tiles.params.clone()),
-                    (SPLAT_LIGHT_BINDING, light.clone()),
-                ]);
-                let scatter = gpu.compute_pipeline(&module, "scatter", None);
-                let resolve = gpu.compute_pipeline(&module, "resolve", None);
-                let resolve_reads = [
-                    (params, tiles.params.clone()),
-                    (image, tiles.image.clone()),
-                    (SPLAT_LIGHT_BINDING, light),
-                ];
-                Some(Scatter {
-                    scatter_group: bind(&gpu, &scatter.get_bind_group_layout(0), &reads),
-                    resolve_group: bind(&gpu, &resolve.get_bind_group_layout(0), &resolve_reads),
-                    scatter,
-                    resolve,
-                })
-            }
-        };
-        let quads = match discs || scatters {
+        let quads = match discs {
             true => None,
             false => {
                 let pixels = u64::from(width) * u64::from(height);
@@ -317,11 +279,7 @@ impl GroupSplat {
         };
         let additive = effect.ir.render.blend == plume_compiler::schema::Blend::Additive;
         // A first guess at the entries: a quarter more than the sprites (most touch one tile).
-        // (Scattered light uses no entries.)
-        let first = match scatters {
-            true => 4096,
-            false => u64::from(count) + u64::from(count) / 4 + 4096,
-        };
+        let first = u64::from(count) + u64::from(count) / 4 + 4096;
         let scan = GpuSorter::new(&gpu).scan_program(&tiles.offsets, u64::from(count))?;
         let mut splat = Self {
             entries: Entries {
@@ -343,7 +301,6 @@ impl GroupSplat {
             scan,
             tiles,
             quads,
-            scatter,
             additive,
             background,
         };
@@ -354,6 +311,13 @@ impl GroupSplat {
     /// (Re)builds the entry list for `len` entries: its buffers, its sort (only the bits a
     /// tile index needs) and the tile kernels' bind group.
     fn resize(&mut self, len: u64) -> Result<(), RuntimeError> {
+        let limit = self.gpu.limits.max_storage_buffer_binding_size;
+        if len * 4 > limit {
+            return Err(RuntimeError::Unsupported(format!(
+                "the compute splat's tile lists need {len} entries, {} bytes a list, past the adapter's {limit}-byte binding limit; draw this effect with the raster pipeline",
+                len * 4
+            )));
+        }
         let device = &self.gpu.device;
         let make = |label| {
             device.create_buffer(&wgpu::BufferDescriptor {
@@ -462,17 +426,6 @@ impl GroupSplat {
                 pass.set_bind_group(0, &self.project_group, &[]);
                 pass.dispatch_workgroups(x, y, 1);
             }
-            // Scattered light needs no tile lists.
-            "scan" | "emit" | "sort" | "ranges" if self.scatter.is_some() => {}
-            "raster" if self.scatter.is_some() => {
-                let s = self.scatter.as_ref().expect("checked");
-                pass.set_pipeline(&s.scatter);
-                pass.set_bind_group(0, &s.scatter_group, &[]);
-                pass.dispatch_workgroups(x, y, 1);
-                pass.set_pipeline(&s.resolve);
-                pass.set_bind_group(0, &s.resolve_group, &[]);
-                pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
-            }
             "scan" => self.scan.record(pass),
             "emit" => {
                 let (cx, cy) = self.gpu.grid(e.len.max(tiles), 256)?;
@@ -542,10 +495,6 @@ impl GroupSplat {
     /// Whether the last frame's sorted entries hold every sprite exactly as many times as
     /// `project` counted tiles for it (reads the buffers back; for tests).
     pub(crate) fn entries_are_complete(&self) -> Result<bool, RuntimeError> {
-        if self.scatter.is_some() {
-            // No entries: every record scatters itself.
-            return Ok(true);
-        }
         let read = |b: &wgpu::Buffer| crate::device::readback::read_words(&self.gpu, b, usize::MAX);
         let needed = read(&self.tiles.status)?[0] as usize;
         let counts = read(&self.tiles.counts)?;

@@ -1,9 +1,9 @@
 //! The splat's composite kernels, the same for every record kind (quads, ribbon triangles):
-//! `composite`, a workgroup per tile blending its list front to back, and `scatter` with
-//! `resolve`, additive light added pixel by pixel with integer atomics. The record kind supplies
-//! the code that loads a record and evaluates it at a pixel.
+//! `composite`, a workgroup per tile blending its list front to back, and `merge`, which
+//! composes the slices of a tile's list. The record kind supplies the code that loads a record
+//! and evaluates it at a pixel.
 
-use super::{DrawShape, SPLAT_LIGHT_BINDING, SPLAT_TILE};
+use super::{DrawShape, SPLAT_TILE};
 use crate::base::writer::Writer;
 
 /// Records a composite workgroup bins at once: 128 records (8 KiB of quads, 10 KiB of ribbon
@@ -34,10 +34,6 @@ pub fn splat_slices(ir: &crate::ir::EffectIr) -> u32 {
 
 /// Binding of the slices' partial sums: `SPLAT_SLICES` vec4s a pixel (slice-major).
 pub const SPLAT_PARTIAL_BINDING: u32 = 33;
-
-/// Fixed-point steps per unit of scattered light: 2^16 (a contribution is rounded to 1/65536,
-/// 1/257 of an 8-bit step; a pixel holds 65535 units before its channel is flagged full).
-const LIGHT_ONE: u32 = 1 << 16;
 
 /// `composite`: a workgroup per 16x16 tile and slice (`slices`: [`splat_slices`]), a thread per pixel,
 /// composites its slice of the tile's records
@@ -296,97 +292,4 @@ fn emit_store(w: &mut Writer, shape: &DrawShape, colour: &str, cover: &str) {
             "splat_image[pixel] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
         ));
     }
-}
-
-/// `scatter` and `resolve`, for additive light (order-free): a thread per record (the code
-/// `load` emits puts record `k` at `batch[0..record]`, or returns for one that draws nothing)
-/// visits the pixels of its box, evaluates each (`evaluate`, as in [`emit_composite`], with
-/// `j = 0`), and adds its light in fixed point with integer atomics, so the sum is the same
-/// whatever order the threads run in: the image is deterministic. `resolve` then adds the
-/// light to what lies under it, rounds once, and clears the light for the next frame. A
-/// channel whose sum wraps past 2^32 is flagged and drawn full.
-pub(crate) fn emit_scatter(
-    w: &mut Writer,
-    shape: &DrawShape,
-    record: u32,
-    load: &dyn Fn(&mut Writer),
-    evaluate: &dyn Fn(&mut Writer),
-) {
-    let hdr = shape.hdr;
-    w.line(format!(
-        "@group(0) @binding({SPLAT_LIGHT_BINDING}) var<storage, read_write> light: array<atomic<u32>>;"
-    ));
-    w.blank();
-    w.comment("A box's corner, packed as x | y << 16.");
-    w.block("fn unpack_corner(b: u32) -> vec2<u32>", |w| {
-        w.line("return vec2<u32>(b & 0xffffu, b >> 16u);");
-    });
-    w.blank();
-    w.line("@compute @workgroup_size(256)");
-    w.block(
-        "fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
-        |w| {
-            w.line("let k = gid.x + gid.y * groups.x * 256u;");
-            w.block("if (k >= splat_view.count)", |w| w.line("return;"));
-            w.line(format!("var batch: array<vec4<u32>, {record}>;"));
-            w.line("let j = 0u;");
-            load(w);
-            w.line(format!("let box = batch[{}];", record - 1));
-            w.line("let lo = unpack_corner(box.z);");
-            w.line("let hi = unpack_corner(box.w);");
-            w.block("for (var y = lo.y; y <= hi.y; y++)", |w| {
-                w.block("for (var x = lo.x; x <= hi.x; x++)", |w| {
-                    w.line("let centre = vec2<f32>(f32(x) + 0.5, f32(y) + 0.5);");
-                    evaluate(w);
-                    if hdr {
-                        w.line("let f = max(shaded, vec4<f32>(0.0));");
-                    } else {
-                        w.comment("A unorm target clamps what the fragment shader returns before blending.");
-                        w.line("let f = clamp(shaded, vec4<f32>(0.0), vec4<f32>(1.0));");
-                    }
-                    w.line(format!(
-                        "let add = vec3<u32>(round(min(f.rgb * f.a, vec3<f32>(65535.0)) * {}));",
-                        crate::base::writer::f32_lit(f64::from(LIGHT_ONE))
-                    ));
-                    w.block("if (any(add != vec3<u32>(0u)))", |w| {
-                        w.line("let at = 4u * (y * splat_tiles.width + x);");
-                        w.block("for (var c = 0u; c < 3u; c++)", |w| {
-                            w.line("let before = atomicAdd(&light[at + c], add[c]);");
-                            w.block("if (before + add[c] < before)", |w| {
-                                w.line("atomicOr(&light[at + 3u], 1u << c);");
-                            });
-                        });
-                    });
-                });
-            });
-        },
-    );
-    w.blank();
-    w.line(format!(
-        "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
-    ));
-    w.block(
-        "fn resolve(@builtin(global_invocation_id) gid: vec3<u32>)",
-        |w| {
-            w.line("let px = gid.x;");
-            w.line("let py = gid.y;");
-            w.block("if (px >= splat_tiles.width || py >= splat_tiles.height)", |w| {
-                w.line("return;")
-            });
-            w.line("let pixel = py * splat_tiles.width + px;");
-            w.line("let at = 4u * pixel;");
-            w.line(format!(
-                "var sum = vec3<f32>(f32(atomicLoad(&light[at])), f32(atomicLoad(&light[at + 1u])), f32(atomicLoad(&light[at + 2u]))) / {};",
-                crate::base::writer::f32_lit(f64::from(LIGHT_ONE))
-            ));
-            w.line("let full = atomicLoad(&light[at + 3u]);");
-            w.line("sum = select(sum, vec3<f32>(65504.0), (vec3<u32>(full) & vec3<u32>(1u, 2u, 4u)) != vec3<u32>(0u));");
-            w.comment("Cleared for the next frame.");
-            w.block("for (var c = 0u; c < 4u; c++)", |w| {
-                w.line("atomicStore(&light[at + c], 0u);");
-            });
-            emit_background(w, shape);
-            emit_store(w, shape, "background + sum", "cover");
-        },
-    );
 }

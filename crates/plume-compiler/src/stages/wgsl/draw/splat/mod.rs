@@ -12,7 +12,7 @@
 
 mod composite;
 
-pub(crate) use composite::{emit_composite, emit_scatter};
+pub(crate) use composite::emit_composite;
 pub use composite::{splat_slices, SPLAT_PARTIAL_BINDING, SPLAT_SLICES};
 
 use super::{DrawShape, SPLAT_BINDINGS, SPLAT_TILE};
@@ -30,22 +30,6 @@ pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
         && ir.render.size_y.is_none()
         && !hdr
 }
-
-/// Whether the splat scatters the light of `ir`'s ribbons instead of compositing tiles:
-/// additive light is the same in any order, so each triangle adds itself into the pixels it
-/// covers, with no tile lists (`emit_scatter`). Only ribbons: a ribbon triangle is made
-/// again from the particle state each time it is used, once per tile it touches when
-/// composited and once when scattered (orbit, 1M particles on an H200: 21 ms scattered
-/// against 51 composited on an H100); sprites are stored records, and scattering sparks'
-/// dense streaks took longer than compositing them (54 ms against 41), their hot pixels'
-/// atomics waiting on each other.
-pub fn splat_scatters(ir: &EffectIr) -> bool {
-    ir.render.blend == crate::stages::schema::Blend::Additive
-}
-
-/// Binding of the scattered light: four words a pixel (red, green, blue in 16.16 fixed point,
-/// and a word of flags for channels that overflowed).
-pub const SPLAT_LIGHT_BINDING: u32 = 29;
 
 /// Pixels per row of the splat's HDR image (a glowing effect's): the width rounded up to 32,
 /// so that a row of 8-byte pixels is a whole number of 256-byte copy rows and the image can be
