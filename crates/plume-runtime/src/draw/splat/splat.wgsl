@@ -9,9 +9,9 @@
 //   raster: a workgroup per 16x16 tile, a thread per pixel, composites the tile's sprites
 //           front to back (coverage at the pixel centre, alpha a (1 - r²)², the effect's
 //           blend) and stops where nothing behind can change the 8-bit result. Batches of 256
-//           sprites are binned first (a bit mask per column and per row of the tile), so a
-//           pixel in a dense tile visits its own sprites, not the whole tile's. Quads use the
-//           draw module's generated `composite` and `merge` instead.
+//           sprites are binned to the pixels they touch first (bit masks), so a pixel in a
+//           dense tile visits its own sprites, not the whole tile's. Quads use the draw
+//           module's generated `composite` and `merge` instead.
 
 struct Params {
     width: u32,
@@ -126,9 +126,12 @@ fn find_ranges(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
 
 var<workgroup> shared_splats: array<vec4<u32>, 256>;
 var<workgroup> tile_range: vec2<u32>;
-// Per column of the tile, then per row, which of the batch's 256 sprites' boxes hold it: 8
-// words of bits each. A pixel's sprites are those of its column and its row.
-var<workgroup> line_masks: array<u32, 256>;
+// Per pixel of the tile, which of the batch's 256 sprites may cover it: 8 words of bits; and
+// the sprites whose boxes cover the whole tile. (The quads' composite builds a mask per column
+// and per row instead, 32 box tests a thread; discs are small, a few atomics each, and that
+// took fountain 10M's raster stage from 0.34 to 0.74 ms on an H100.)
+var<workgroup> masks: array<atomic<u32>, 2048>;
+var<workgroup> tile_masks: array<atomic<u32>, 8>;
 // Pixels of the tile that are finished (or outside the image).
 var<workgroup> finished: atomic<u32>;
 
@@ -136,9 +139,9 @@ var<workgroup> finished: atomic<u32>;
 // draw order reversed) and rounding to 8 bits once at the end. Alpha: the light that still
 // comes through, T, falls by (1 - a) at each sprite, and a pixel stops once T is under half an
 // 8-bit step; additive: once every channel is full. The tile stops when all its pixels have.
-// Each batch of 256 sprites is first binned to the tile's columns and rows their boxes cross
-// (thread t builds word t % 8 of line t / 8, no atomics), so a pixel visits only the sprites
-// whose boxes hold it, in descending bit order: front to back.
+// Each batch of 256 sprites is first binned to the pixels their boxes touch (a bit per sprite
+// in each pixel's mask; one tile-wide bit for a box that covers the tile), so a pixel visits
+// only the sprites that may cover it, in descending bit order: front to back.
 @compute @workgroup_size(16, 16)
 fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>,
           @builtin(local_invocation_index) t: u32) {
@@ -167,32 +170,39 @@ fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) l
     var end = range.y;
     while (end > range.x) {
         let start = select(range.x, end - 256u, end - range.x > 256u);
-        let i = start + t;
-        if (i < end) {
-            shared_splats[t] = splats[vals[i]];
+        for (var w = 0u; w < 8u; w++) {
+            atomicStore(&masks[t * 8u + w], 0u);
+        }
+        if (t < 8u) {
+            atomicStore(&tile_masks[t], 0u);
         }
         workgroupBarrier();
-        let word = t % 8u;
-        let line = t / 8u;
-        let is_row = line >= TILE;
-        let at = f32(select(origin.x + line, origin.y + line - TILE, is_row));
-        var bits = 0u;
-        for (var r = 0u; r < 32u; r++) {
-            let j = word * 32u + r;
-            let s = unpack_splat(shared_splats[j]);
-            let c = select(s.centre.x, s.centre.y, is_row);
+        let i = start + t;
+        if (i < end) {
+            let raw = splats[vals[i]];
+            shared_splats[t] = raw;
+            let s = unpack_splat(raw);
+            let o = vec2<f32>(origin);
             // A thousandth of a pixel of margin: a pixel this box misses is at the rim, where
             // the exact test below finds no cover anyway.
-            let holds = start + j < end && ceil(c - s.extent - 0.501) <= at
-                && at <= floor(c + s.extent - 0.499);
-            bits |= select(0u, 1u << r, holds);
+            let lo = max(ceil(s.centre - s.extent - 0.501) - o, vec2<f32>(0.0));
+            let hi = min(floor(s.centre + s.extent - 0.499) - o, vec2<f32>(f32(TILE - 1u)));
+            let bit = 1u << (t & 31u);
+            if (all(lo == vec2<f32>(0.0)) && all(hi == vec2<f32>(f32(TILE - 1u)))) {
+                atomicOr(&tile_masks[t >> 5u], bit);
+            } else if (all(lo <= hi)) {
+                for (var y = u32(lo.y); y <= u32(hi.y); y++) {
+                    for (var x = u32(lo.x); x <= u32(hi.x); x++) {
+                        atomicOr(&masks[(y * TILE + x) * 8u + (t >> 5u)], bit);
+                    }
+                }
+            }
         }
-        line_masks[t] = bits;
         workgroupBarrier();
         var w = 8u;
         while (!done && w > 0u) {
             w -= 1u;
-            var m = line_masks[lid.x * 8u + w] & line_masks[(TILE + lid.y) * 8u + w];
+            var m = atomicLoad(&masks[t * 8u + w]) | atomicLoad(&tile_masks[w]);
             while (m != 0u) {
                 let b = firstLeadingBit(m);
                 m &= ~(1u << b);
