@@ -148,10 +148,12 @@ impl GroupSplat {
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
         // Every buffer is bound whole: none may pass the adapter's binding size.
         let limit = gpu.limits.max_storage_buffer_binding_size;
-        let composites = !discs;
-        let partial_bytes = match composites {
-            true => 16 * u64::from(splat_slices(&effect.ir)) * u64::from(width) * u64::from(height),
-            false => 0,
+        // Quads and ribbons composite into a vec4 of partial sums a pixel and slice.
+        let partial_bytes = match discs {
+            false => {
+                16 * u64::from(splat_slices(&effect.ir)) * u64::from(width) * u64::from(height)
+            }
+            true => 0,
         };
         let largest = (record_words.max(2) * u64::from(count) * 4)
             .max(8 * u64::from(width) * u64::from(height))
