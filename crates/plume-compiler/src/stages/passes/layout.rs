@@ -224,8 +224,8 @@ pub fn decide(ir: &EffectIr) -> Layout {
             binding: 7,
             name: "boids",
             space: "storage, read_write",
-            bytes: (cap + u64::from(crate::features::forces::flock::GRID_ROUND)) * 32,
-            meaning: "flock snapshot at the step's start: (x, alive), (v, 0) per slot; the grid's: per boid in bucket order, (x, row key), (v, 0), then spare entries that the split search's last round reads past its run",
+            bytes: (cap + u64::from(crate::features::forces::flock::GRID_SPARE)) * 32,
+            meaning: "flock snapshot at the step's start: (x, alive), (v, 0) per slot; the grid's: per boid in bucket order, (x, row key), (v, 0), then spare entries that a search's last round reads past its run",
         });
         layout.bindings.push(Binding {
             binding: 8,

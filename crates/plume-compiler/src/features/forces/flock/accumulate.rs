@@ -106,7 +106,7 @@ pub(super) fn emit_accumulate(w: &mut Writer, is_self: &str, ox: &str, ov: &str)
 
 /// Adds the candidate (snapshot `ox`, `ov`) where `counts` holds and it is closer than the
 /// radius.
-pub(super) fn emit_accumulate_if(w: &mut Writer, counts: &str, ox: &str, ov: &str) {
+fn emit_accumulate_if(w: &mut Writer, counts: &str, ox: &str, ov: &str) {
     w.line(format!("let d = me.xyz - {ox}.xyz;"));
     w.line("let r2 = dot(d, d);");
     w.block(format!("if ({counts} && r2 < FLOCK_R2)"), |w| {

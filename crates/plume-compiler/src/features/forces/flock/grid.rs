@@ -1,10 +1,10 @@
 //! The uniform grid: its build kernels in the main module (clear, bucket, scatter, rank) and
 //! its search, a WGSL module of its own on read-only bindings (`emit_search_module`).
 
-use super::accumulate::{
-    emit_accumulate_if, emit_accumulators, emit_add_neighbour, emit_store_out,
+use super::accumulate::{emit_accumulators, emit_add_neighbour, emit_store_out};
+use super::{
+    FlockIr, Neighbors, GRID_ONE_ROUND, GRID_ROUND, GRID_SPARE, GRID_TILE, SEARCH_BUFFERS,
 };
-use super::{FlockIr, Neighbors, GRID_ROUND, GRID_ROW_UNROLL, GRID_TILE, SEARCH_BUFFERS};
 use crate::base::layout::Layout;
 use crate::base::writer::{f32_lit, u32_lit, Writer};
 
@@ -179,37 +179,6 @@ pub(super) fn emit_cell_fns(w: &mut Writer, cell: f64) {
     });
 }
 
-/// The candidates of the row of 3 cells from cell `c` along x: the sorted boids in buckets
-/// `bucket_of(c) .. + 2` (mod the buckets: one run, or two where they wrap), of which those
-/// with the row's key (another row may share the buckets; see [`emit_grid`]) are tested
-/// against boid `k` at (`me`, `heading`), in run order, [`GRID_ROW_UNROLL`] loaded at a time
-/// (more loads in flight per thread). One thread a boid: see [`emit_row_masked`] for the split
-/// search.
-pub(super) fn emit_row(w: &mut Writer) {
-    emit_row_runs(w, |w| {
-        w.block(
-            format!("for (var m = first; m < last; m += {GRID_ROW_UNROLL}u)"),
-            |w| {
-                for j in 0..GRID_ROW_UNROLL {
-                    w.line(format!("let m{j} = min(m + {j}u, last - 1u);"));
-                    w.line(format!("let x{j} = boids[2u * m{j}];"));
-                    w.line(format!("let v{j} = boids[2u * m{j} + 1u];"));
-                }
-                for j in 0..GRID_ROW_UNROLL {
-                    w.block(format!("if (m + {j}u < last)"), |w| {
-                        emit_accumulate_if(
-                            w,
-                            &format!("x{j}.w == key && m{j} != k"),
-                            &format!("x{j}"),
-                            &format!("v{j}"),
-                        );
-                    });
-                }
-            },
-        );
-    });
-}
-
 /// The row from cell `c`: its first bucket `b0` and its `key`, then the one or two runs of its
 /// 3 buckets (two where the buckets wrap), each as `first .. last` for `body`.
 pub(super) fn emit_row_runs(w: &mut Writer, body: impl Fn(&mut Writer)) {
@@ -223,24 +192,28 @@ pub(super) fn emit_row_runs(w: &mut Writer, body: impl Fn(&mut Writer)) {
     });
 }
 
-/// The split search's walk of the same row, [`GRID_ROUND`] candidates a round: all of the
-/// round's loaded at once, tested by position alone (the row's key and the distance), the
-/// neighbours marked in a bit mask, then the pair function run on the marked ones in run order.
-/// In a warp, inline pair code runs for every candidate that any of its threads accepts, nearly
-/// all of them; with the masks it runs as often as the warp's busiest thread has neighbours
-/// among the round's. (With one thread a boid the masks were slower: 1.66 against 1.55 ms at
-/// 1M.) The last round reads up to `GRID_ROUND - 1` boids past the run (the snapshot has that
-/// many spare entries) and masks them off; the boid itself is masked off by its index.
-pub(super) fn emit_row_masked(w: &mut Writer) {
+/// The walk of the row of 3 cells from cell `c` along x (see [`emit_row_runs`]) for boid `k` at
+/// (`me`, `heading`), `round` candidates a round: all of the round's loaded at once, tested by
+/// position alone (the row's key and the distance), the neighbours marked in a bit mask, then
+/// the pair function run on the marked ones in run order. In a warp, inline pair code runs for
+/// every candidate that any of its threads accepts, nearly all of them; with the masks it runs
+/// as often as the warp's busiest thread has neighbours among the round's. The last round
+/// reads up to `round - 1` boids past the run (the snapshot has [`GRID_SPARE`] spare entries)
+/// and masks them off; the boid itself is masked off by its index.
+pub(super) fn emit_row_masked(w: &mut Writer, round: u32) {
+    assert!(
+        round <= 32 && round <= GRID_SPARE,
+        "a round's marks fit one u32"
+    );
     emit_row_runs(w, |w| {
         w.block(
-            format!("for (var base = first; base < last; base += {GRID_ROUND}u)"),
+            format!("for (var base = first; base < last; base += {round}u)"),
             |w| {
-                for j in 0..GRID_ROUND {
+                for j in 0..round {
                     w.line(format!("let x{j} = boids[2u * (base + {j}u)];"));
                 }
                 w.line("var hits = 0u;");
-                for j in 0..GRID_ROUND {
+                for j in 0..round {
                     w.line(format!("let d{j} = me.xyz - x{j}.xyz;"));
                     w.line(format!(
                         "hits |= select(0u, {}u, x{j}.w == key && dot(d{j}, d{j}) < FLOCK_R2);",
@@ -249,10 +222,10 @@ pub(super) fn emit_row_masked(w: &mut Writer) {
                 }
                 w.comment("Only the run's candidates, and not the boid itself.");
                 w.line(format!(
-                    "hits &= (2u << (min(last - base, {GRID_ROUND}u) - 1u)) - 1u;"
+                    "hits &= (2u << (min(last - base, {round}u) - 1u)) - 1u;"
                 ));
                 w.line(format!(
-                    "hits &= select(0xffffffffu, ~(1u << (k - base)), k - base < {GRID_ROUND}u);"
+                    "hits &= select(0xffffffffu, ~(1u << (k - base)), k - base < {round}u);"
                 ));
                 w.block("while (hits != 0u)", |w| {
                     w.line("let m = base + firstTrailingBit(hits);");
@@ -283,7 +256,7 @@ pub(super) fn emit_search(w: &mut Writer) {
             w.line("let home = cell_of(me.xyz);");
             w.block("for (var n = 0; n < 9; n++)", |w| {
                 w.line("let c = home + vec3<i32>(-1, n % 3 - 1, n / 3 - 1);");
-                emit_row(w);
+                emit_row_masked(w, GRID_ONE_ROUND);
             });
             emit_store_out(w, "grid_vals[k]");
         },
@@ -313,7 +286,7 @@ pub(super) fn emit_split_search(w: &mut Writer) {
                 w.line("let me_v = boids[2u * k + 1u];");
                 w.line("let heading = flock_heading(me_v.xyz);");
                 w.line("let c = cell_of(me.xyz) + vec3<i32>(-1, i32(n % 3u) - 1, i32(n / 3u) - 1);");
-                emit_row_masked(w);
+                emit_row_masked(w, GRID_ROUND);
             });
             w.line("let at = 3u * (b * 9u + n);");
             w.line("grid_partial[at] = vec4<f32>(push, sum_w);");

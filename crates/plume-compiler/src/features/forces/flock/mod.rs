@@ -173,12 +173,14 @@ pub const GRID_FASTER_FROM: u32 = 4096;
 
 /// Below this capacity the grid's search splits each boid over nine threads, one row of 3
 /// cells each, [`GRID_TILE`] boids a workgroup, and marks neighbours in masks before running
-/// the pair function on them; from it on, one thread a boid walks all nine rows and runs the
-/// pair function inline. Measured on the H100 with effects/boids.ron (docs/performance.md,
-/// "Flocking"), ms a step split against one thread: 0.055 against 0.059 at 16k, 0.129 against
-/// 0.155 at 64k, 0.234 against 0.263 at 128k (before the PCG bucket hash); with it, 0.355
-/// against 0.359 at 256k (a tie), 0.728 against 0.703 at 512k and 1.54 against 1.37 at 1M,
-/// where the GPU is full and nine threads' partial sums cost more than they hide.
+/// the pair function on them; from it on, one thread a boid walks all nine rows. Measured on
+/// the H100 with effects/boids.ron (docs/performance.md, "Flocking"), ms a step split against
+/// one thread: 0.055 against 0.059 at 16k, 0.129 against 0.155 at 64k, 0.234 against 0.263 at
+/// 128k (before the PCG bucket hash); with it, 0.355 against 0.359 at 256k (a tie), 0.728
+/// against 0.703 at 512k and 1.54 against 1.37 at 1M, where the GPU is full and nine threads'
+/// partial sums cost more than they hide. With the one-thread search in rounds of
+/// [`GRID_ONE_ROUND`] (2026-11-26, one call): 0.096 against 0.109 at 64k, 0.167 against 0.179
+/// at 128k; at 256k, in an earlier call, 0.329 against 0.320 for rounds of 32.
 pub const GRID_SPLIT_BELOW: u32 = 262_144;
 
 /// Boids per workgroup of the split search. Its threads are laid out row by row (thread t:
@@ -187,15 +189,24 @@ pub const GRID_SPLIT_BELOW: u32 = 262_144;
 /// threads, under WebGPU's default limit of 256 a workgroup.
 pub const GRID_TILE: u32 = 16;
 
-/// Candidates the one-thread search loads before testing any of them (more loads in flight per
-/// thread: 16k boids 0.068 against 0.064 ms a step, 1M 1.82 against 1.75 ms on the H100).
-pub const GRID_ROW_UNROLL: u32 = 4;
+/// Candidates the one-thread search loads and tests a round, in masks as the split search's
+/// rounds: 1M boids 1.178 ms a step, against 1.194 with 32, 1.182 with 20, 1.205 with 28 and
+/// 1.270 for the pair function inline, four candidates loaded at a time (H100, one call). With
+/// a thread a boid, the pair function inline ran for every candidate any thread of the warp
+/// accepted; it now runs as often as the warp's busiest thread has neighbours in the round.
+pub const GRID_ONE_ROUND: u32 = 24;
 
 /// Candidates the split search loads and tests a round (one bit each in the round's mask):
-/// 16k boids 0.0457 ms a step, against 0.0457 with 8 and 0.0478 with 32 (H100). The sorted
-/// snapshot has this many spare entries past its last boid, for the last round's loads past
-/// the run.
+/// 16k boids 0.0457 ms a step, against 0.0457 with 8 and 0.0478 with 32 (H100).
 pub const GRID_ROUND: u32 = 16;
+
+/// Spare entries of the sorted snapshot past its last boid, for the last round's loads past
+/// the run (the longer of the two searches' rounds).
+pub const GRID_SPARE: u32 = if GRID_ROUND > GRID_ONE_ROUND {
+    GRID_ROUND
+} else {
+    GRID_ONE_ROUND
+};
 
 /// The main module's buffers that the grid's search module binds (at the layout's binding
 /// numbers): the sorted snapshot, the results, the sorted order and the run starts.
@@ -224,15 +235,19 @@ impl FlockIr {
         capacity < GRID_SPLIT_BELOW
     }
 
-    /// Hash-table buckets of the grid for `capacity` boids: a power of two >= 2 x capacity,
-    /// at most 2^31 (so that the count fits the shaders' u32). Twice the capacity because the
-    /// boids of another row that shares a boid's buckets are loaded and rejected: at 16k boids
-    /// with as many buckets as boids, 681 candidates a boid against 443 in its own 27 cells.
-    /// Twice as many buckets took the step from 0.0615 to 0.0585 ms there and from 1.605 to
-    /// 1.547 ms at 1M with the scan hardly slower; four times as many slowed the scan more
-    /// than they sped the search up (H100, docs/performance.md, "Flocking").
+    /// Hash-table buckets of the grid for `capacity` boids: a power of two >= 2 x capacity
+    /// below [`GRID_SPLIT_BELOW`], >= capacity from it, at most 2^31 (so that the count fits the
+    /// shaders' u32). The boids of another row that shares a boid's buckets are loaded and
+    /// rejected: at 16k boids with as many buckets as boids, 681 candidates a boid against 443
+    /// in its own 27 cells, and twice as many took the step from 0.0615 to 0.0585 ms there
+    /// (four times as many slowed the scan more than they sped the search up). From 256k
+    /// boids, where the one-thread search runs, the scan of twice as many buckets costs more
+    /// than the rejected candidates: 1M 1.170 against 1.178 ms a step (the scan 0.030 against
+    /// 0.064, the search 0.955 against 0.935), 256k 0.315 against 0.315 (H100,
+    /// docs/performance.md, "Flocking").
     pub fn grid_buckets(capacity: u32) -> u64 {
-        (2 * u64::from(capacity.max(1)))
+        let per_boid = if Self::split_search(capacity) { 2 } else { 1 };
+        (per_boid * u64::from(capacity.max(1)))
             .next_power_of_two()
             .min(1 << 31)
     }
