@@ -208,6 +208,9 @@ pub const GRID_SPARE: u32 = if GRID_ROUND > GRID_ONE_ROUND {
     GRID_ONE_ROUND
 };
 
+// A round's marks are the bits of one u32.
+const _: () = assert!(GRID_SPARE <= 32);
+
 /// The main module's buffers that the grid's search module binds (at the layout's binding
 /// numbers): the sorted snapshot, the results, the sorted order and the run starts.
 pub const SEARCH_BUFFERS: [&str; 4] = ["boids", "flock_out", "grid_vals", "cell_start"];
