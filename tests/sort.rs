@@ -74,10 +74,14 @@ fn radix_sort_matches_at_every_size(sorter: &GpuSorter) {
 fn scans_match_a_cpu_prefix_sum_and_the_scan_from_a_source_clears_it() {
     let gpu = gpu();
     let sorter = GpuSorter::new(&gpu);
-    // One block, one and two blocks of 256, the last size with a one-dispatch second level
-    // (256 blocks: each block sums the totals before it) and the first past it (257 blocks:
-    // the totals scanned as a level of their own), and the flock grid's 2^15 + 1 buckets.
-    for n in [0, 1, 255, 256, 257, 65_536, 65_537, 32_769] {
+    // Short scans (up to 65,536 words, blocks of 256): none, one word, one block and the
+    // first word of a second, the flock grid's 2^15 + 1 buckets, the longest short scan. Long
+    // ones (blocks of 2,048, eight words a thread): the shortest, a block ending inside a
+    // thread's eight words, the most blocks whose workgroups add up the totals before their own
+    // (1,024) and the first size past it (its totals scanned by a dispatch of their own).
+    for n in [
+        0, 1, 255, 256, 257, 32_769, 65_536, 65_537, 600_001, 2_097_152, 2_097_153,
+    ] {
         let words: Vec<u32> = (0..n as u32).map(|i| pcg(i) % 5).collect();
         let expected: Vec<u32> = words
             .iter()

@@ -82,12 +82,33 @@ pub struct GpuSorter {
     scan_blocks: wgpu::ComputePipeline,
     scan_blocks_from: wgpu::ComputePipeline,
     add_block_prefix: wgpu::ComputePipeline,
-    add_sums: wgpu::ComputePipeline,
+    scan_reduce: wgpu::ComputePipeline,
+    scan_reduce_from: wgpu::ComputePipeline,
+    scan_totals: wgpu::ComputePipeline,
+    scan_apply: wgpu::ComputePipeline,
+    scan_apply_from: wgpu::ComputePipeline,
     bitonic: wgpu::ComputePipeline,
 }
 
-/// Block length of the exclusive scan (`scan_program`) and threads of the bitonic kernel.
+/// Words a workgroup of a short exclusive scan (`scan_program`) takes, and threads of the
+/// bitonic kernel's workgroups.
 const TILE: u64 = 256;
+
+/// Words a workgroup of a long exclusive scan takes (sort.wgsl's 2,048: eight a thread).
+const SCAN_BLOCK: u64 = 2048;
+
+/// The longest short scan: 256 blocks of 256 words, scanned in a dispatch and added up in
+/// another (sort.wgsl's `scan_blocks`, `add_block_prefix`). Longer ones reduce then scan, eight
+/// words a thread. On the H100 (2026-11-26, third session; the flock grid's bucket counts, ms a
+/// scan, short against long): 8,193 words 0.0063 against 0.0098, 32,769 0.0066 against 0.0101
+/// (their few workgroups wait on their own steps more than on memory); 131,073 0.0128 against
+/// 0.0103, 1,048,577 0.028 against 0.017, 10M 0.129 against 0.098.
+const SCAN_SHORT_MAX: u64 = 65_536;
+
+/// The most blocks whose scan adds up the totals before each block in the block's own
+/// workgroup (sort.wgsl's `scan_apply`, params.shift 0) instead of scanning the totals in a
+/// dispatch of their own first: 2M words, each workgroup reading at most 1,024 totals.
+const SCAN_PREFIX_MAX: u64 = 1024;
 
 /// Keys per radix partition (radix.wgsl's PART).
 const PARTITION: u64 = 2048;
@@ -167,7 +188,11 @@ impl GpuSorter {
             scan_blocks: pipeline(&sort, "scan_blocks"),
             scan_blocks_from: pipeline(&sort, "scan_blocks_from"),
             add_block_prefix: pipeline(&sort, "add_block_prefix"),
-            add_sums: pipeline(&sort, "add_sums"),
+            scan_reduce: pipeline(&sort, "scan_reduce"),
+            scan_reduce_from: pipeline(&sort, "scan_reduce_from"),
+            scan_totals: pipeline(&sort, "scan_totals"),
+            scan_apply: pipeline(&sort, "scan_apply"),
+            scan_apply_from: pipeline(&sort, "scan_apply_from"),
             bitonic: pipeline(&sort, "bitonic_step"),
         }
     }
@@ -195,10 +220,15 @@ impl GpuSorter {
         program.push(&self.gpu, pipeline, entries, groups)
     }
 
-    /// Exclusive scan of the first `len` words of `data`, level by level: in place, or (`from`)
-    /// of `from` into `data`, zeroing `from`. Up to 256 blocks of 256 the second level is one
-    /// dispatch (sort.wgsl's `add_block_prefix`); past that the block totals are scanned the
-    /// same way.
+    /// Exclusive scan of the first `len` words of `data`, in place, or (`from`) of `from` into
+    /// `data`, zeroing `from`. Up to [`SCAN_SHORT_MAX`] words, blocks of 256 each scanned in
+    /// one dispatch and given the sum of the totals before it in another (one block: one
+    /// dispatch). Longer, reduce then scan, 2,048 words a workgroup: the blocks' totals
+    /// (`scan_reduce`), then each block scanned from its prefix (`scan_apply`), which up to
+    /// [`SCAN_PREFIX_MAX`] blocks adds up the totals before its own and past that reads them
+    /// as `scan_totals`, one workgroup, scanned them in a dispatch between. (Long scans were
+    /// short ones applied level by level until 2026-11-26: the splat's 10M-word scan 0.129 ms
+    /// against 0.098 now, docs/performance.md.)
     fn scan(
         &self,
         pass: &mut SortProgram,
@@ -206,43 +236,38 @@ impl GpuSorter {
         data: &wgpu::Buffer,
         len: u64,
     ) -> Result<(), RuntimeError> {
-        let blocks = len.div_ceil(TILE);
-        let sums = self.buffer("scan sums", blocks);
-        let p = self.params(len, 0, blocks, 0, 0);
+        let short = len <= SCAN_SHORT_MAX;
+        let blocks = len.div_ceil(if short { TILE } else { SCAN_BLOCK });
+        let totals = self.buffer("scan totals", blocks);
+        let scanned_totals = !short && blocks > SCAN_PREFIX_MAX;
+        let p = self.params(len, u32::from(scanned_totals), blocks, 0, 0);
+        let with_source: Option<Vec<(u32, &wgpu::Buffer)>> =
+            from.map(|source| vec![(6, source), (4, data), (2, &totals), (5, &p)]);
+        let in_place = vec![(4, data), (2, &totals), (5, &p)];
+        if short {
+            match &with_source {
+                Some(entries) => self.dispatch(pass, &self.scan_blocks_from, entries, blocks)?,
+                None => self.dispatch(pass, &self.scan_blocks, &in_place, blocks)?,
+            }
+            if blocks > 1 {
+                self.dispatch(pass, &self.add_block_prefix, &in_place, blocks)?;
+            }
+            return Ok(());
+        }
         match from {
-            Some(source) => self.dispatch(
-                pass,
-                &self.scan_blocks_from,
-                &[(6, source), (4, data), (2, &sums), (5, &p)],
-                blocks,
-            )?,
-            None => self.dispatch(
-                pass,
-                &self.scan_blocks,
-                &[(4, data), (2, &sums), (5, &p)],
-                blocks,
-            )?,
+            Some(source) => {
+                let reduce = [(6, source), (2, &totals), (5, &p)];
+                self.dispatch(pass, &self.scan_reduce_from, &reduce, blocks)?;
+            }
+            None => self.dispatch(pass, &self.scan_reduce, &in_place, blocks)?,
         }
-        if blocks > TILE {
-            self.scan(pass, None, &sums, blocks)?;
-            self.dispatch(
-                pass,
-                &self.add_sums,
-                &[(4, data), (2, &sums), (5, &p)],
-                blocks,
-            )?;
-        } else if blocks > 1 {
-            // Each block adds the sum of the totals before it: a dispatch fewer than scanning
-            // the totals and adding them back (about 3 µs of the H100's time between dependent
-            // dispatches).
-            self.dispatch(
-                pass,
-                &self.add_block_prefix,
-                &[(4, data), (2, &sums), (5, &p)],
-                blocks,
-            )?;
+        if scanned_totals {
+            self.dispatch(pass, &self.scan_totals, &[(2, &totals), (5, &p)], 1)?;
         }
-        Ok(())
+        match &with_source {
+            Some(entries) => self.dispatch(pass, &self.scan_apply_from, entries, blocks),
+            None => self.dispatch(pass, &self.scan_apply, &in_place, blocks),
+        }
     }
 
     /// A program that replaces the first `len` words of `data` by their exclusive prefix sum

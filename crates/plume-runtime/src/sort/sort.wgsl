@@ -1,5 +1,5 @@
-// The exclusive scan (scan_blocks / add_sums: 256 per workgroup, applied level by level; up to
-// 256 blocks, add_block_prefix adds each block's prefix of the block totals in one dispatch) and the
+// The exclusive scan (short ones 256 words a workgroup: scan_blocks, add_block_prefix; long ones
+// reduce then scan, 2,048 words a workgroup: scan_reduce, scan_totals, scan_apply) and the
 // bitonic sort (the radix sort's baseline, on a power-of-two padded array, by (key, value)); no
 // subgroup operations, so they run on llvmpipe. The radix sort is in radix.wgsl.
 
@@ -30,8 +30,8 @@ fn tile_of(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return wid.x + wid.y * groups.x;
 }
 
-// Exclusive scan of `counts` in blocks of 256: each block scanned in place, its total written to
-// keys_out[block] (used as the next level's input).
+// A short scan (up to 256 blocks of 256 words): each block scanned in place, its total written to
+// keys_out[block]; then `add_block_prefix`.
 @compute @workgroup_size(256)
 fn scan_blocks(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                @builtin(local_invocation_index) t: u32) {
@@ -63,17 +63,7 @@ fn scan_blocks_from(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgrou
 // total into keys_out[block]. Every thread must call it.
 fn scan_block(block: u32, i: u32, t: u32, v: u32) {
     start[t] = v;
-    workgroupBarrier();
-    // Hillis-Steele inclusive scan.
-    for (var off = 1u; off < 256u; off <<= 1u) {
-        var add = 0u;
-        if (t >= off) {
-            add = start[t - off];
-        }
-        workgroupBarrier();
-        start[t] += add;
-        workgroupBarrier();
-    }
+    scan_start(t);
     if (i < params.n) {
         counts[i] = start[t] - v;
     }
@@ -82,7 +72,7 @@ fn scan_block(block: u32, i: u32, t: u32, v: u32) {
     }
 }
 
-// Up to 256 blocks: each workgroup sums the totals of the blocks before its own (keys_out, as
+// Each workgroup sums the totals of the blocks before its own (keys_out, as
 // scan_blocks left them) and adds that to its block: one dispatch where scanning the totals
 // first would take two.
 @compute @workgroup_size(256)
@@ -107,15 +97,176 @@ fn add_block_prefix(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgrou
     }
 }
 
-// Adds the scanned block totals (in keys_out) back to every element of their block.
-@compute @workgroup_size(256)
-fn add_sums(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-            @builtin(local_invocation_index) t: u32) {
-    let block = tile_of(wid, groups);
-    let i = block * 256u + t;
-    if (i < params.n) {
-        counts[i] += keys_out[block];
+// A long scan of `counts` (or of `source` into `counts`, zeroing `source`), reduce then scan,
+// SCAN_PER words a thread: `scan_reduce` writes each block's total to keys_out[block];
+// past SCAN_PREFIX_MAX blocks `scan_totals` (one workgroup) scans the totals in place
+// (params.shift 1); `scan_apply` scans each block from its prefix: the scanned total, or (fewer
+// blocks, params.shift 0) the sum of the totals before its own, which it adds up itself (one
+// dispatch fewer; one block needs neither of the others).
+const SCAN_PER: u32 = 8u;
+
+// A block of 2,048 words staged in workgroup memory, word e at e + e / 32: the eight
+// consecutive words a thread scans then lie in eight different banks.
+var<workgroup> staged: array<u32, 2112>;
+
+fn padded(e: u32) -> u32 {
+    return e + (e >> 5u);
+}
+
+// start[0..256] replaced by its inclusive scan (Hillis-Steele). Every thread must call it, after
+// writing start[t].
+fn scan_start(t: u32) {
+    workgroupBarrier();
+    for (var off = 1u; off < 256u; off <<= 1u) {
+        var add = 0u;
+        if (t >= off) {
+            add = start[t - off];
+        }
+        workgroupBarrier();
+        start[t] += add;
+        workgroupBarrier();
     }
+}
+
+// The sum of the threads' `v`, returned to every thread. Every thread must call it.
+fn workgroup_sum(t: u32, v: u32) -> u32 {
+    start[t] = v;
+    workgroupBarrier();
+    for (var half = 128u; half > 0u; half >>= 1u) {
+        if (t < half) {
+            start[t] += start[t + half];
+        }
+        workgroupBarrier();
+    }
+    let total = start[0];
+    workgroupBarrier();
+    return total;
+}
+
+@compute @workgroup_size(256)
+fn scan_reduce(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+               @builtin(local_invocation_index) t: u32) {
+    let block = tile_of(wid, groups);
+    var s = 0u;
+    for (var r = 0u; r < SCAN_PER; r++) {
+        let i = block * 2048u + r * 256u + t;
+        if (i < params.n) {
+            s += counts[i];
+        }
+    }
+    let total = workgroup_sum(t, s);
+    if (t == 0u) {
+        keys_out[block] = total;
+    }
+}
+
+@compute @workgroup_size(256)
+fn scan_reduce_from(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                    @builtin(local_invocation_index) t: u32) {
+    let block = tile_of(wid, groups);
+    var s = 0u;
+    for (var r = 0u; r < SCAN_PER; r++) {
+        let i = block * 2048u + r * 256u + t;
+        if (i < params.n) {
+            s += source[i];
+        }
+    }
+    let total = workgroup_sum(t, s);
+    if (t == 0u) {
+        keys_out[block] = total;
+    }
+}
+
+// One workgroup: keys_out[0..params.tiles] replaced by its exclusive scan, each thread taking a
+// contiguous run of the totals.
+@compute @workgroup_size(256)
+fn scan_totals(@builtin(local_invocation_index) t: u32) {
+    let per = (params.tiles + 255u) / 256u;
+    let lo = min(t * per, params.tiles);
+    let hi = min(lo + per, params.tiles);
+    var s = 0u;
+    for (var b = lo; b < hi; b++) {
+        s += keys_out[b];
+    }
+    start[t] = s;
+    scan_start(t);
+    var run = start[t] - s;
+    for (var b = lo; b < hi; b++) {
+        let v = keys_out[b];
+        keys_out[b] = run;
+        run += v;
+    }
+}
+
+// Block `block`, staged, scanned from its prefix into counts. Every thread must call it.
+fn apply_block(block: u32, t: u32) {
+    var before = 0u;
+    if (params.shift == 1u) {
+        before = keys_out[block];
+    } else {
+        var s = 0u;
+        for (var b = t; b < block; b += 256u) {
+            s += keys_out[b];
+        }
+        before = workgroup_sum(t, s);
+    }
+    workgroupBarrier();
+    var mine: array<u32, SCAN_PER>;
+    var s = 0u;
+    for (var r = 0u; r < SCAN_PER; r++) {
+        mine[r] = staged[padded(SCAN_PER * t + r)];
+        s += mine[r];
+    }
+    start[t] = s;
+    scan_start(t);
+    var run = before + start[t] - s;
+    for (var r = 0u; r < SCAN_PER; r++) {
+        staged[padded(SCAN_PER * t + r)] = run;
+        run += mine[r];
+    }
+    workgroupBarrier();
+    for (var r = 0u; r < SCAN_PER; r++) {
+        let e = r * 256u + t;
+        let i = block * 2048u + e;
+        if (i < params.n) {
+            counts[i] = staged[padded(e)];
+        }
+    }
+}
+
+@compute @workgroup_size(256)
+fn scan_apply(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+              @builtin(local_invocation_index) t: u32) {
+    let block = tile_of(wid, groups);
+    for (var r = 0u; r < SCAN_PER; r++) {
+        let e = r * 256u + t;
+        let i = block * 2048u + e;
+        var v = 0u;
+        if (i < params.n) {
+            v = counts[i];
+        }
+        staged[padded(e)] = v;
+    }
+    apply_block(block, t);
+}
+
+// `scan_apply` of `source` into `counts`, leaving `source` zeroed (each word is read by one
+// thread only, so it can clear what it read).
+@compute @workgroup_size(256)
+fn scan_apply_from(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+                   @builtin(local_invocation_index) t: u32) {
+    let block = tile_of(wid, groups);
+    for (var r = 0u; r < SCAN_PER; r++) {
+        let e = r * 256u + t;
+        let i = block * 2048u + e;
+        var v = 0u;
+        if (i < params.n) {
+            v = source[i];
+            source[i] = 0u;
+        }
+        staged[padded(e)] = v;
+    }
+    apply_block(block, t);
 }
 
 // One compare-exchange step of a bitonic sort over keys_in/vals_in (power-of-two length n),
