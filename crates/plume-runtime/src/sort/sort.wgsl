@@ -20,8 +20,9 @@ struct Params {
 @group(0) @binding(3) var<storage, read_write> vals_out: array<u32>;
 @group(0) @binding(4) var<storage, read_write> counts: array<u32>;
 @group(0) @binding(5) var<uniform> params: Params;
-// What `scan_blocks_from` scans out of place, zeroing it as it reads it (the flock grid's bucket
-// counts, ready for the next step's counting with no kernel to clear them).
+// What the `_from` scans (`scan_blocks_from`, `scan_reduce_from`, `scan_apply_from`) scan out
+// of place, zeroing it as they read it (the flock grid's bucket counts, ready for the next
+// step's counting with no kernel to clear them).
 @group(0) @binding(6) var<storage, read_write> source: array<u32>;
 
 var<workgroup> start: array<u32, 256>;
