@@ -227,10 +227,20 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawShape)
     w.blank();
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
     let load = |w: &mut Writer| {
-        w.comment("Made again from the particle state: the same record `project` made.");
+        w.comment("Made again from the particle state: the same record `project` made, its weights' rows moved from the box corner to the tile's origin (their constant terms absorb the shift), so that a pixel tests a triangle on its first three vec4s.");
         w.line("let rec = triangle_record(k);");
+        w.line(format!(
+            "let shift = vec2<f32>(vec2<i32>(unpack_corner(rec.words[{}u].z)) - vec2<i32>(origin));",
+            SPLAT_TRIANGLE_VEC4S - 1
+        ));
+        w.block("for (var r = 0u; r < 3u; r++)", |w| {
+            w.line("let row = bitcast<vec3<f32>>(rec.words[r].xyz);");
+            w.line(format!(
+                "batch[{SPLAT_TRIANGLE_VEC4S}u * t + r] = vec4<u32>(bitcast<vec3<u32>>(vec3<f32>(row.xy, row.z - dot(row.xy, shift))), rec.words[r].w);"
+            ));
+        });
         w.block(
-            format!("for (var r = 0u; r < {SPLAT_TRIANGLE_VEC4S}u; r++)"),
+            format!("for (var r = 3u; r < {SPLAT_TRIANGLE_VEC4S}u; r++)"),
             |w| {
                 w.line(format!(
                     "batch[{SPLAT_TRIANGLE_VEC4S}u * t + r] = rec.words[r];"
@@ -243,9 +253,8 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawShape)
         w.line("let r0 = batch[5u * j];");
         w.line("let r1 = bitcast<vec3<f32>>(batch[5u * j + 1u].xyz);");
         w.line("let r2 = bitcast<vec3<f32>>(batch[5u * j + 2u].xyz);");
-        w.line("let r3 = batch[5u * j + 3u];");
-        w.line("let r4 = batch[5u * j + 4u];");
-        w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r4.z)), 1.0);");
+        w.comment("The pixel centre from the tile's origin (the rows' frame, as loaded).");
+        w.line("let p = vec3<f32>(centre - vec2<f32>(origin), 1.0);");
         w.line(
             "let weighed = vec3<f32>(dot(bitcast<vec3<f32>>(r0.xyz), p), dot(r1, p), dot(r2, p));",
         );
@@ -263,6 +272,9 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawShape)
             w.line("let fade = host_fade(centre, dot(weighed, zs));");
             w.block("if (fade <= 0.0)", |w| w.line("continue;"));
         }
+        w.comment("The rest of the record, for the pixels it covers.");
+        w.line("let r3 = batch[5u * j + 3u];");
+        w.line("let r4 = batch[5u * j + 4u];");
         w.comment("Strip vertex i is on side (i & 1) * 2 - 1; the sides alternate.");
         w.line("let side = select(-1.0, 1.0, (r0.w >> 31u) == 1u);");
         w.line("let across = dot(b, vec3<f32>(side, -side, side));");

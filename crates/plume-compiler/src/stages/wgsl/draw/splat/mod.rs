@@ -427,7 +427,18 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
     let vec4s = (splat_quad_words(shape.host.is_some()) / 4) as u32;
     let depth = host_depth(shape);
     let load = |w: &mut Writer| {
-        w.block(format!("for (var r = 0u; r < {vec4s}u; r++)"), |w| {
+        w.comment("The map's rows moved from the record's box corner to the tile's origin (its constant terms absorb the shift), so that a pixel tests a record on its first three vec4s, without the corner.");
+        w.line(format!("let last = splats[{vec4s}u * k + {}u];", vec4s - 1));
+        w.line("let shift = vec2<f32>(vec2<i32>(unpack_corner(last.z)) - vec2<i32>(origin));");
+        w.block("for (var r = 0u; r < 3u; r++)", |w| {
+            w.line(format!(
+                "let row = bitcast<vec4<f32>>(splats[{vec4s}u * k + r]);"
+            ));
+            w.line(format!(
+                "batch[{vec4s}u * t + r] = bitcast<vec4<u32>>(vec4<f32>(row.xy, row.z - dot(row.xy, shift), row.w));"
+            ));
+        });
+        w.block(format!("for (var r = 3u; r < {vec4s}u; r++)"), |w| {
             w.line(format!(
                 "batch[{vec4s}u * t + r] = splats[{vec4s}u * k + r];"
             ));
@@ -441,8 +452,8 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         w.line(format!(
             "let r2 = bitcast<vec4<f32>>(batch[{vec4s}u * j + 2u]);"
         ));
-        w.line(format!("let r3 = batch[{vec4s}u * j + {}u];", vec4s - 1));
-        w.line("let p = vec3<f32>(centre - vec2<f32>(unpack_corner(r3.z)), 1.0);");
+        w.comment("The pixel centre from the tile's origin (the rows' frame, as loaded).");
+        w.line("let p = vec3<f32>(centre - vec2<f32>(origin), 1.0);");
         w.comment("s = 1 / w: positive in front of the camera.");
         w.line("let s = dot(r2.xyz, p);");
         w.block("if (s <= 0.0)", |w| w.line("continue;"));
@@ -458,6 +469,8 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
             w.line("let fade = host_fade(centre, dot(rz.xyz, vec3<f32>(1.0, uv)) * s);");
             w.block("if (fade <= 0.0)", |w| w.line("continue;"));
         }
+        w.comment("The rest of the record, for the pixels it covers.");
+        w.line(format!("let r3 = batch[{vec4s}u * j + {}u];", vec4s - 1));
         w.comment("uv's derivatives along the image's x and y (the quotient rule).");
         w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
         w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
