@@ -427,17 +427,28 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
     let vec4s = (splat_quad_words(shape.host.is_some()) / 4) as u32;
     let depth = host_depth(shape);
     let load = |w: &mut Writer| {
-        w.comment("The map's rows moved from the record's box corner to the tile's origin (its constant terms absorb the shift), so that a pixel tests a record on its first three vec4s, without the corner.");
+        w.comment("The map's rows moved from the record's box corner to the tile's origin (their constant terms absorb the shift) and packed ahead of the colour: (a.xyz, b.x), (b.yz, c.xy), (c.z, rgb), so that a pixel tests the record on nine words, without the corner.");
         w.line(format!("let last = splats[{vec4s}u * k + {}u];", vec4s - 1));
         w.line("let shift = vec2<f32>(vec2<i32>(unpack_corner(last.z)) - vec2<i32>(origin));");
-        w.block("for (var r = 0u; r < 3u; r++)", |w| {
-            w.line(format!(
-                "let row = bitcast<vec4<f32>>(splats[{vec4s}u * k + r]);"
-            ));
-            w.line(format!(
-                "batch[{vec4s}u * t + r] = bitcast<vec4<u32>>(vec4<f32>(row.xy, row.z - dot(row.xy, shift), row.w));"
-            ));
-        });
+        w.line(format!("let a = bitcast<vec4<f32>>(splats[{vec4s}u * k]);"));
+        w.line(format!(
+            "let b = bitcast<vec4<f32>>(splats[{vec4s}u * k + 1u]);"
+        ));
+        w.line(format!(
+            "let c = bitcast<vec4<f32>>(splats[{vec4s}u * k + 2u]);"
+        ));
+        w.line("let az = a.z - dot(a.xy, shift);");
+        w.line("let bz = b.z - dot(b.xy, shift);");
+        w.line("let cz = c.z - dot(c.xy, shift);");
+        w.line(format!(
+            "batch[{vec4s}u * t] = bitcast<vec4<u32>>(vec4<f32>(a.xy, az, b.x));"
+        ));
+        w.line(format!(
+            "batch[{vec4s}u * t + 1u] = bitcast<vec4<u32>>(vec4<f32>(b.y, bz, c.xy));"
+        ));
+        w.line(format!(
+            "batch[{vec4s}u * t + 2u] = bitcast<vec4<u32>>(vec4<f32>(cz, a.w, b.w, c.w));"
+        ));
         w.block(format!("for (var r = 3u; r < {vec4s}u; r++)"), |w| {
             w.line(format!(
                 "batch[{vec4s}u * t + r] = splats[{vec4s}u * k + r];"
@@ -445,19 +456,23 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         });
     };
     let evaluate = |w: &mut Writer| {
-        w.line(format!("let r0 = bitcast<vec4<f32>>(batch[{vec4s}u * j]);"));
+        w.line(format!("let q0 = bitcast<vec4<f32>>(batch[{vec4s}u * j]);"));
         w.line(format!(
-            "let r1 = bitcast<vec4<f32>>(batch[{vec4s}u * j + 1u]);"
+            "let q1 = bitcast<vec4<f32>>(batch[{vec4s}u * j + 1u]);"
         ));
         w.line(format!(
-            "let r2 = bitcast<vec4<f32>>(batch[{vec4s}u * j + 2u]);"
+            "let q2x = bitcast<f32>(batch[{vec4s}u * j + 2u].x);"
         ));
+        w.comment("The map's rows, unpacked.");
+        w.line("let r0 = q0.xyz;");
+        w.line("let r1 = vec3<f32>(q0.w, q1.xy);");
+        w.line("let r2 = vec3<f32>(q1.zw, q2x);");
         w.comment("The pixel centre from the tile's origin (the rows' frame, as loaded).");
         w.line("let p = vec3<f32>(centre - vec2<f32>(origin), 1.0);");
         w.comment("s = 1 / w: positive in front of the camera.");
-        w.line("let s = dot(r2.xyz, p);");
+        w.line("let s = dot(r2, p);");
         w.block("if (s <= 0.0)", |w| w.line("continue;"));
-        w.line("let uv = vec2<f32>(dot(r0.xyz, p), dot(r1.xyz, p)) / s;");
+        w.line("let uv = vec2<f32>(dot(r0, p), dot(r1, p)) / s;");
         w.block("if (any(abs(uv) >= vec2<f32>(1.0)))", |w| {
             w.line("continue;")
         });
@@ -470,11 +485,14 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
             w.block("if (fade <= 0.0)", |w| w.line("continue;"));
         }
         w.comment("The rest of the record, for the pixels it covers.");
+        w.line(format!(
+            "let rgb = bitcast<vec4<f32>>(batch[{vec4s}u * j + 2u]).yzw;"
+        ));
         w.line(format!("let r3 = batch[{vec4s}u * j + {}u];", vec4s - 1));
         w.comment("uv's derivatives along the image's x and y (the quotient rule).");
         w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
         w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
-        w.line("let color = vec4<f32>(r0.w, r1.w, r2.w, bitcast<f32>(r3.x));");
+        w.line("let color = vec4<f32>(rgb, bitcast<f32>(r3.x));");
         if depth {
             w.line("let lit = splat_shade(uv, du, dv, color, r3.y);");
             w.line("let shaded = vec4<f32>(lit.rgb, lit.a * fade);");
