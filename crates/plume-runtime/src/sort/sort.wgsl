@@ -105,10 +105,12 @@ fn add_block_prefix(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgrou
 // blocks, params.shift 0) the sum of the totals before its own, which it adds up itself (one
 // dispatch fewer; one block needs neither of the others).
 const SCAN_PER: u32 = 8u;
+// Words a workgroup of a long scan takes (radix.rs's SCAN_BLOCK).
+const SCAN_BLOCK: u32 = 256u * SCAN_PER;
 
 // A block of 2,048 words staged in workgroup memory, word e at e + e / 32: the eight
 // consecutive words a thread scans then lie in eight different banks.
-var<workgroup> staged: array<u32, 2112>;
+var<workgroup> staged: array<u32, SCAN_BLOCK + SCAN_BLOCK / 32u>;
 
 fn padded(e: u32) -> u32 {
     return e + (e >> 5u);
@@ -150,7 +152,7 @@ fn scan_reduce(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) g
     let block = tile_of(wid, groups);
     var s = 0u;
     for (var r = 0u; r < SCAN_PER; r++) {
-        let i = block * 2048u + r * 256u + t;
+        let i = block * SCAN_BLOCK + r * 256u + t;
         if (i < params.n) {
             s += counts[i];
         }
@@ -167,7 +169,7 @@ fn scan_reduce_from(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgrou
     let block = tile_of(wid, groups);
     var s = 0u;
     for (var r = 0u; r < SCAN_PER; r++) {
-        let i = block * 2048u + r * 256u + t;
+        let i = block * SCAN_BLOCK + r * 256u + t;
         if (i < params.n) {
             s += source[i];
         }
@@ -228,7 +230,7 @@ fn apply_block(block: u32, t: u32) {
     workgroupBarrier();
     for (var r = 0u; r < SCAN_PER; r++) {
         let e = r * 256u + t;
-        let i = block * 2048u + e;
+        let i = block * SCAN_BLOCK + e;
         if (i < params.n) {
             counts[i] = staged[padded(e)];
         }
@@ -241,7 +243,7 @@ fn scan_apply(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gr
     let block = tile_of(wid, groups);
     for (var r = 0u; r < SCAN_PER; r++) {
         let e = r * 256u + t;
-        let i = block * 2048u + e;
+        let i = block * SCAN_BLOCK + e;
         var v = 0u;
         if (i < params.n) {
             v = counts[i];
@@ -259,7 +261,7 @@ fn scan_apply_from(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroup
     let block = tile_of(wid, groups);
     for (var r = 0u; r < SCAN_PER; r++) {
         let e = r * 256u + t;
-        let i = block * 2048u + e;
+        let i = block * SCAN_BLOCK + e;
         var v = 0u;
         if (i < params.n) {
             v = source[i];
