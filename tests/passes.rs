@@ -510,3 +510,45 @@ fn bounds_pass_through_and_bad_bounds_are_located() {
         "{text}"
     );
 }
+
+/// The update stores only the words holding position and motion (`store_moved`): every field
+/// any example group's update assigns must be one of those, or its change would be lost.
+#[test]
+fn the_update_assigns_only_the_fields_it_stores() {
+    use plume::compiler::graph::compile_graph_str;
+    use plume::compiler::wgsl::MOVED_FIELDS;
+    let mut updates = 0;
+    for entry in std::fs::read_dir("effects").unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_none_or(|e| e != "ron") {
+            continue;
+        }
+        let source = std::fs::read_to_string(&path).unwrap();
+        let options = CompileOptions {
+            base_dir: path.parent().map(|p| p.to_path_buf()),
+            ..Default::default()
+        };
+        let graph = compile_graph_str(&source, &options).unwrap();
+        for group in &graph.groups {
+            let wgsl = &group.effect.wgsl;
+            let Some(start) = wgsl.find("fn update_particle(") else {
+                continue;
+            };
+            updates += 1;
+            let body = &wgsl[start..start + wgsl[start..].find("\n}\n").unwrap()];
+            assert!(body.contains("store_moved(i, p)"), "{}", path.display());
+            for line in body.lines().map(str::trim) {
+                let Some(rest) = line.strip_prefix("p.") else {
+                    continue;
+                };
+                let field = rest.split([' ', '=']).next().unwrap();
+                assert!(
+                    MOVED_FIELDS.contains(&field),
+                    "{}: the update assigns p.{field}, which store_moved does not store",
+                    path.display()
+                );
+            }
+        }
+    }
+    assert!(updates >= 10, "only {updates} example updates found");
+}

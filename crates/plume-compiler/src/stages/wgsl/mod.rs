@@ -340,6 +340,47 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
             LANES[id % 4]
         ));
     });
+    w.comment("Whether a slot is free, from its id word alone: the update reads a free slot's other words not at all.");
+    w.block("fn slot_is_free(i: u32) -> bool", |w| {
+        w.line(format!(
+            "return particles[{}].{} == DEAD;",
+            word_index(id as u32 / 4, "i", "chunk.len"),
+            LANES[id % 4]
+        ));
+    });
+    emit_store_moved(w, layout);
+}
+
+/// The fields the update changes: position and motion (velocity, or Verlet's displacement).
+/// Everything else (id, death and spawn steps, tint) is written by the spawn alone.
+pub const MOVED_FIELDS: [&str; 9] = ["px", "py", "pz", "vx", "vy", "vz", "dx", "dy", "dz"];
+
+/// `store_moved(i, p)`: the update's store, of only the 16-byte words that hold a field it
+/// changes ([`MOVED_FIELDS`]): a word of spawn-time fields alone (a fed group's spawn step and
+/// tint) is neither written back nor, as nothing reads it, loaded (fireworks' embers: 32 of 48
+/// bytes a particle). A half-motion layout's last planes hold motion: they are always written.
+fn emit_store_moved(w: &mut Writer, layout: &Layout) {
+    let words = layout.words();
+    w.comment("The update's store: only the words that hold position or motion (the rest the spawn wrote).");
+    w.block("fn store_moved(i: u32, p: Particle)", |w| {
+        if layout.half_motion {
+            w.line("store_particle(i, p);");
+            return;
+        }
+        for (k, word) in packed_words(layout).iter().enumerate() {
+            let moved = words
+                .iter()
+                .skip(4 * k)
+                .take(4)
+                .any(|(name, _)| MOVED_FIELDS.contains(name));
+            if moved {
+                w.line(format!(
+                    "particles[{}] = {word};",
+                    word_index(k as u32, "i", "chunk.len")
+                ));
+            }
+        }
+    });
 }
 
 /// `half_to_f32(bits)`: the 16-bit float in the low half of `bits` (a half-motion layout's

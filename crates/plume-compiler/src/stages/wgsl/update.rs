@@ -20,6 +20,10 @@ use crate::stages::passes::layout::{Attribute, Layout};
 pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.comment("One particle's update: loaded, advanced, stored (or freed) in place. Returns its outcome: bit 0 whether it died, bit 1 + j whether it fired event j; and its id.");
     w.block("fn update_particle(i: u32) -> vec2<u32>", |w| {
+        w.comment("A free slot's id word is all the update reads of it.");
+        w.block("if (slot_is_free(i))", |w| {
+            w.line("return vec2<u32>(0u, 0u);")
+        });
         w.line("var p = load_particle(i);");
         emit_body(w, ir, layout);
     });
@@ -146,11 +150,10 @@ fn appends(ir: &EffectIr, layout: &Layout) -> bool {
     layout.has(Attribute::DeathStep) || !ir.kills.is_empty() || !ir.events.is_empty()
 }
 
-/// The update of the particle `p` (already loaded), from the dead check to the store.
+/// The update of the live particle `p` (already loaded), from the forces to the store.
 fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     let verlet = layout.has(Attribute::Displacement);
     let lifetimes = layout.has(Attribute::DeathStep);
-    w.block("if (p.id == DEAD)", |w| w.line("return vec2<u32>(0u, 0u);"));
     if let Some(flock) = &ir.flock {
         flock.emit_update_prologue(w);
     }
@@ -281,7 +284,7 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         w.line("p.vy = v.y;");
         w.line("p.vz = v.z;");
     }
-    w.line("store_particle(i, p);");
+    w.line("store_moved(i, p);");
     w.line(format!("return vec2<u32>({fired}, p.id);"));
 }
 
