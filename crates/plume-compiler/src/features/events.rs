@@ -113,7 +113,7 @@ impl TriggerIr {
 
 /// The most slots a firing group may have for its firings to be put in order by counting: each
 /// firing counts the firings with smaller ids, one dispatch, at most 8,192² comparisons a step.
-/// Larger groups put their firings in buckets by id, whose six dispatches cost more than
+/// Larger groups put their firings in buckets by id, whose five dispatches cost more than
 /// counting a few thousand firings (docs/performance.md, "Events").
 pub const COUNTED_MAX: u32 = 8192;
 

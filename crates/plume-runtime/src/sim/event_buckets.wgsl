@@ -7,9 +7,8 @@
 //                      the least that fits the ids' range into the n buckets (n = the firing
 //                      group's slots): 0, one id a bucket, while the range is under n.
 //   bucket_reduce,
-//   bucket_scan_sums,
 //   bucket_scan:       the exclusive scan of the used buckets' counts (reduce-then-scan, blocks
-//                      of 2,048 buckets), into `starts`.
+//                      of 2,048 buckets; each block sums the totals before it), into `starts`.
 //   bucket_place:      with one id a bucket, each firing's slot goes to order[its bucket's
 //                      start]; otherwise the firing is staged in its bucket's run.
 //   bucket_rank:       (wider buckets only) each staged firing's rank is its bucket's start plus
@@ -42,7 +41,7 @@ struct Header {
 @group(0) @binding(3) var<storage, read_write> order: array<u32>;
 // n buckets' counts: zero between steps.
 @group(0) @binding(4) var<storage, read_write> counts: array<atomic<u32>>;
-// n buckets' starts, then each block's total (its start, once scanned).
+// n buckets' starts, then each block's total.
 @group(0) @binding(5) var<storage, read_write> starts: array<u32>;
 // Each firing's place in its bucket (wider buckets only).
 @group(0) @binding(6) var<storage, read_write> within: array<u32>;
@@ -150,36 +149,23 @@ fn bucket_reduce(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups)
     }
 }
 
-// The exclusive scan of the blocks' totals, in place, in one workgroup.
-@compute @workgroup_size(256)
-fn bucket_scan_sums(@builtin(local_invocation_index) lane: u32) {
-    let w = uniform_window(lane);
-    let blocks = (w.buckets + BLOCK - 1u) / BLOCK;
-    if (blocks == 0u) {
-        return;
-    }
-    let base = arrayLength(&counts);
-    let per = (blocks + THREADS - 1u) / THREADS;
-    let first = min(lane * per, blocks);
-    let last = min(first + per, blocks);
-    var sum = 0u;
-    for (var b = first; b < last; b++) {
-        sum += starts[base + b];
-    }
-    var run = exclusive_scan_256(lane, sum);
-    for (var b = first; b < last; b++) {
-        let c = starts[base + b];
-        starts[base + b] = run;
-        run += c;
-    }
-}
-
-// Each used bucket's start: its block's start plus the buckets before it in the block.
+// Each used bucket's start: the totals of the blocks before its block (each workgroup sums
+// them itself: at most n / 2,048 words, a few loads a thread, where a dispatch of its own to
+// scan them cost a dependent launch a step) plus the buckets before it in the block.
 @compute @workgroup_size(256)
 fn bucket_scan(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                @builtin(local_invocation_index) lane: u32) {
     let w = uniform_window(lane);
+    let totals = arrayLength(&counts);
     for (var block = flat(wid, groups); block * BLOCK < w.buckets; block += workgroups(groups)) {
+        var before = 0u;
+        for (var b = lane; b < block; b += THREADS) {
+            before += starts[totals + b];
+        }
+        // The scan leaves the workgroup's total in its last entry, read before the next scan's
+        // first barrier lets anyone write it again.
+        _ = exclusive_scan_256(lane, before);
+        let block_start = scan_buf[THREADS - 1u];
         let first = block * BLOCK + lane * PER_THREAD;
         var mine: array<u32, PER_THREAD>;
         var sum = 0u;
@@ -190,7 +176,7 @@ fn bucket_scan(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) g
             }
             sum += mine[j];
         }
-        var run = starts[arrayLength(&counts) + block] + exclusive_scan_256(lane, sum);
+        var run = block_start + exclusive_scan_256(lane, sum);
         for (var j = 0u; j < PER_THREAD; j++) {
             if (first + j < w.buckets) {
                 starts[first + j] = run;

@@ -5,7 +5,7 @@
 //! (plume_compiler::events::Ordering): up to `COUNTED_MAX` slots, `order_rank`
 //! (event_order.wgsl) ranks them by counting, in one dispatch; past that, the firings are
 //! dropped into buckets by id and the buckets' counts scanned (event_buckets.wgsl: a stream
-//! compaction in id order, six dispatches, no sort).
+//! compaction in id order, five dispatches, no sort).
 //!
 //! (Until 2026-11 a large group wrote a key per slot and the radix sort ordered every slot:
 //! four passes of 8 bits whether 5 or 50,000 fired; docs/performance.md, "Events", has both.)
@@ -103,12 +103,6 @@ impl EventOrder {
                         "bucket_reduce",
                         &[(2, records), (4, &counts), (5, &starts)],
                         over_blocks,
-                    ),
-                    dispatch(
-                        &module,
-                        "bucket_scan_sums",
-                        &[(2, records), (4, &counts), (5, &starts)],
-                        (1, 1),
                     ),
                     dispatch(
                         &module,
