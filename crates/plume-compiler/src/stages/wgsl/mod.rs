@@ -332,21 +332,18 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
         id < 4 * n as usize,
         "the id is stored in a whole 16-byte plane"
     );
+    let id_word = format!(
+        "particles[{}].{}",
+        word_index(id as u32 / 4, "i", "chunk.len"),
+        LANES[id % 4]
+    );
     w.comment("Frees a slot by writing only its id word.");
     w.block("fn mark_free(i: u32)", |w| {
-        w.line(format!(
-            "particles[{}].{} = DEAD;",
-            word_index(id as u32 / 4, "i", "chunk.len"),
-            LANES[id % 4]
-        ));
+        w.line(format!("{id_word} = DEAD;"))
     });
     w.comment("Whether a slot is free, from its id word alone: the update reads a free slot's other words not at all.");
     w.block("fn slot_is_free(i: u32) -> bool", |w| {
-        w.line(format!(
-            "return particles[{}].{} == DEAD;",
-            word_index(id as u32 / 4, "i", "chunk.len"),
-            LANES[id % 4]
-        ));
+        w.line(format!("return {id_word} == DEAD;"))
     });
     emit_store_moved(w, layout);
 }
