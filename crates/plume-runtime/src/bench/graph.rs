@@ -186,8 +186,8 @@ const PLAIN_LIFETIME: f64 = 86_400.0;
 
 /// One plain group per group of `big`: its forces, integrator, colliders, kills and look, with
 /// `alive` particles from one burst that outlives the run, and no events. (A group fed by
-/// events also stores its particles' spawn step, which the copy does not: that is part of
-/// what events cost.)
+/// events may also store its particles' spawn step or tint, which the copy does not: that is
+/// part of what events cost.)
 fn plain_graph(big: &Effect, groups: &[(String, u32, u64)]) -> Result<CompiledGraph, RuntimeError> {
     let mut out = Vec::new();
     for (e, (name, cap, alive)) in group_effects(big).into_iter().zip(groups) {

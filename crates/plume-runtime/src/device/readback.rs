@@ -113,9 +113,13 @@ pub fn decode_slots(
         ),
     };
     let die_at = layout.word_offset(Attribute::DeathStep);
-    // A particle that stores its spawn step ages from it (a group fed by events has no other
-    // record of it); the others from the schedule, which gives the same for them.
+    // A particle that stores its spawn step ages from it; one of a group fed by events that
+    // does not (`fed_ages_derived`) from its death step and the lifetime its id draws, as the
+    // draw does; the others from the schedule, which gives the same for them.
     let born_at = layout.word_offset(Attribute::SpawnStep);
+    let derived = (born_at.is_none() && !effect.ir.event_inputs.is_empty())
+        .then(|| plume_compiler::passes::layout::shared_lifetime(&effect.ir))
+        .flatten();
     let tint_at = layout.word_offset(Attribute::Tint);
     let done = schedule.steps_done() as u32;
     let dt = effect.ir.dt;
@@ -154,14 +158,22 @@ pub fn decode_slots(
             id,
             position: DVec3::new(f(pos_at), f(pos_at + 1), f(pos_at + 2)),
             velocity: velocity * scale,
-            age: match born_at {
-                Some(b) => f64::from(done.wrapping_sub(u(b))) * dt,
-                None => schedule.age(id),
+            age: match (born_at, derived, die_at) {
+                (Some(b), _, _) => f64::from(done.wrapping_sub(u(b))) * dt,
+                (None, Some(draw), Some(w)) => {
+                    let (lived, _) = derived_steps(draw, effect.ir.seed_mix, id, u(w), done);
+                    f64::from(lived) * dt
+                }
+                _ => schedule.age(id),
             },
-            lifetime: die_at.and_then(|w| match born_at {
-                Some(_) if u(w) == DEAD => None,
-                Some(b) => Some(f64::from(u(w).wrapping_sub(u(b)).wrapping_add(1)) * dt),
-                None => schedule.lifetime(id, u(w)),
+            lifetime: die_at.and_then(|w| match (born_at, derived) {
+                _ if u(w) == DEAD => None,
+                (Some(b), _) => Some(f64::from(u(w).wrapping_sub(u(b)).wrapping_add(1)) * dt),
+                (None, Some(draw)) => {
+                    let (_, life) = derived_steps(draw, effect.ir.seed_mix, id, u(w), done);
+                    Some(f64::from(life) * dt)
+                }
+                (None, None) => schedule.lifetime(id, u(w)),
             }),
             // A stored tint, or the one the draw derives from the id.
             tint: match tint_at {
@@ -171,6 +183,25 @@ pub fn decode_slots(
         }));
     }
     Ok(out)
+}
+
+/// (Whole steps lived, whole steps of life) of particle `id`, dying in the update of step
+/// `die_at`, after `done` steps, from the lifetime its id draws: the draw's `life_fraction`.
+fn derived_steps(
+    draw: plume_compiler::lifetime::LifetimeSteps,
+    seed_mix: u32,
+    id: u32,
+    die_at: u32,
+    done: u32,
+) -> (u32, u32) {
+    let life = draw.draw(plume_compiler::rng::rand_u32(
+        seed_mix,
+        id,
+        plume_compiler::rng::stream::LIFETIME,
+    ));
+    // Steps still to live, the update of step `done` included; wraps like die_at.
+    let left = die_at.wrapping_add(1).wrapping_sub(done);
+    (life - left.min(life), life)
 }
 
 /// Reads an RGBA8 texture back as rows, top row first (waits for the GPU).

@@ -34,6 +34,16 @@ pub fn needs_spawn_step(ir: &EffectIr) -> bool {
     (life && !shared) || (age && !(all_mortal && shared))
 }
 
+/// Whether a group fed by events can leave its spawn step out: every particle dies
+/// (`die_at`) and all draw their lifetimes from one range, so a particle's spawn step is
+/// `die_at + 1` less the lifetime its id draws (rain's splashes: 32 bytes a particle, not 48,
+/// and a third fewer bytes scattered by each event spawn).
+pub fn fed_ages_derived(ir: &EffectIr) -> bool {
+    ir.has_lifetimes()
+        && ir.emitters.iter().all(|e| e.lifetime.is_some())
+        && shared_lifetime(ir).is_some()
+}
+
 /// Decides the layout for a resolved IR.
 pub fn decide(ir: &EffectIr) -> Layout {
     let half_motion = ir.stateless.is_none() && ir.accuracy.as_ref().is_some_and(|a| a.half_motion);
@@ -50,15 +60,18 @@ pub fn decide(ir: &EffectIr) -> Layout {
     if ir.has_lifetimes() {
         attributes.push(Attribute::DeathStep);
     }
-    // A group fed by events cannot derive ages from ids (only the GPU knows when each id
-    // spawned), and `Every` events count from each particle's spawn.
+    // `Every` events count from each particle's spawn. A group fed by events cannot derive
+    // ages from ids and its schedule (only the GPU knows when each id spawned), unless every
+    // particle dies and draws its lifetime from one range: then `die_at` and the lifetime
+    // drawn from the id give the spawn step, as they do for the draw (`fed_ages_derived`).
     let every = ir
         .events
         .iter()
         .any(|e| matches!(e.trigger, crate::features::events::TriggerIr::Every(_)));
     if needs_spawn_step(ir)
         || ir.custom_terms().any(|c| c.reads_age_or_life())
-        || (ir.stateless.is_none() && (every || !ir.event_inputs.is_empty()))
+        || (ir.stateless.is_none()
+            && (every || (!ir.event_inputs.is_empty() && !fed_ages_derived(ir))))
     {
         attributes.push(Attribute::SpawnStep);
     }
