@@ -105,3 +105,58 @@ fn the_bench_copy_fills_the_capacity_and_keeps_the_layout() {
         .iter()
         .all(|em| em.rate == 0.0 && em.lifetime.is_some()));
 }
+
+/// `--profile`: each dispatch of a step timed, labelled by kernel and scope. Times are
+/// measured, never asserted; what is checked is which dispatches a step records, and how often.
+#[test]
+fn the_profile_names_every_dispatch_of_a_step_once() {
+    let gpu = gpu();
+    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/fountain.ron"))
+        .unwrap();
+    let options = BenchOptions {
+        profile: true,
+        ..BenchOptions::new(2000, 4)
+    };
+    let r = bench(&gpu, &parse(&src).unwrap(), &options).unwrap();
+    let update = r.dispatches.iter().find(|d| d.label == "update");
+    assert!(
+        update.is_some_and(|d| (d.per_step - 1.0).abs() < 1e-9 && d.us_per_step >= 0.0),
+        "{:?}",
+        r.dispatches
+    );
+    assert!(!BenchOptions::new(2000, 4).profile, "off unless asked for");
+
+    let src =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/rain.ron")).unwrap();
+    let graph =
+        plume::runtime::bench::bench_graph(&gpu, &parse(&src).unwrap(), 40_000, 30, 4, true)
+            .unwrap();
+    let (with, without) = &graph.dispatches;
+    let labels: Vec<&str> = with.iter().map(|d| d.label.as_str()).collect();
+    // Rain's drops (group 0) are bucketed (past 8,192 slots) and feed the splashes (group 1).
+    for expected in [
+        "s0.bucket_count",
+        "s0.bucket_place",
+        "s0.event_prepare",
+        "s0.event_spawn",
+        "g0.update",
+        "g1.update",
+    ] {
+        assert!(
+            labels.contains(&expected),
+            "{expected} missing from {labels:?}"
+        );
+    }
+    assert!(
+        with.iter().all(|d| (d.per_step - 1.0).abs() < 1e-9),
+        "{with:?}"
+    );
+    assert!(
+        without.iter().all(|d| !d.label.starts_with('s')),
+        "the step without events orders nothing: {without:?}"
+    );
+    assert!(
+        without.iter().any(|d| d.label == "g1.update"),
+        "{without:?}"
+    );
+}

@@ -3,7 +3,9 @@
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use plume_runtime::bench::{bench, bench_graph, bench_sort, BenchOptions, TimingSource};
+use plume_runtime::bench::{
+    bench, bench_graph, bench_sort, BenchOptions, DispatchTime, TimingSource,
+};
 
 use crate::load;
 
@@ -33,6 +35,11 @@ pub struct BenchArgs {
     /// state).
     #[arg(long, default_value_t = 240)]
     warm_steps: u64,
+    /// Also time each dispatch of a step: one batch of steps more with a GPU timestamp after
+    /// every dispatch (each adds a few microseconds, so the times are shares, not costs);
+    /// needs timestamps inside compute passes.
+    #[arg(long)]
+    profile: bool,
     /// Print one JSON object.
     #[arg(long)]
     json: bool,
@@ -70,6 +77,31 @@ fn draw_json(d: &plume_runtime::bench::DrawTimes) -> serde_json::Value {
     })
 }
 
+/// Each dispatch's time a step as JSON (`dispatches` of `plume bench --json --profile`).
+fn dispatches_json(d: &[DispatchTime]) -> serde_json::Value {
+    d.iter()
+        .map(|t| serde_json::json!({"label": t.label, "us_per_step": t.us_per_step, "per_step": t.per_step}))
+        .collect()
+}
+
+/// Prints each dispatch's time a step under `title`, if any were timed.
+fn print_dispatches(title: &str, d: &[DispatchTime]) {
+    if d.is_empty() {
+        return;
+    }
+    let total: f64 = d.iter().map(|t| t.us_per_step).sum();
+    println!("  {title} (µs a step, timestamps included: {total:.1} in all)");
+    for t in d {
+        println!(
+            "    {:<26} {:>8.2}  ({:.0}%, {} a step)",
+            t.label,
+            t.us_per_step,
+            100.0 * t.us_per_step / total,
+            t.per_step
+        );
+    }
+}
+
 /// The sort benchmark's figures as JSON (the `sort_alone` array of `plume bench --json`).
 fn sort_json(s: &plume_runtime::bench::SortBench) -> serde_json::Value {
     let times = s.times.iter().map(|t| {
@@ -95,7 +127,14 @@ fn bench_graph_command(args: &BenchArgs, name: &str, effect: &plume_compiler::Ef
             gpu.describe()
         );
     }
-    let r = match bench_graph(&gpu, effect, args.particles, args.warm_steps, args.steps) {
+    let r = match bench_graph(
+        &gpu,
+        effect,
+        args.particles,
+        args.warm_steps,
+        args.steps,
+        args.profile,
+    ) {
         Ok(r) => r,
         Err(e) => {
             eprintln!("{name}: error: {e}");
@@ -120,6 +159,8 @@ fn bench_graph_command(args: &BenchArgs, name: &str, effect: &plume_compiler::Ef
                 "children_per_step": r.children_per_step,
                 "firings_per_second": r.firings_per_second(),
                 "order_ms": r.order_seconds.iter().map(|s| s * 1e3).collect::<Vec<_>>(),
+                "dispatches": args.profile.then(|| dispatches_json(&r.dispatches.0)),
+                "plain_dispatches": args.profile.then(|| dispatches_json(&r.dispatches.1)),
             })
         );
         return ExitCode::SUCCESS;
@@ -152,6 +193,8 @@ fn bench_graph_command(args: &BenchArgs, name: &str, effect: &plume_compiler::Ef
             s * 1e3
         );
     }
+    print_dispatches("dispatches with events", &r.dispatches.0);
+    print_dispatches("dispatches without", &r.dispatches.1);
     ExitCode::SUCCESS
 }
 
@@ -194,6 +237,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
         steps: args.steps,
         render: args.render,
         occupancy: args.occupancy,
+        profile: args.profile,
     };
     let r = match bench(&gpu, &effect, &options) {
         Ok(r) => r,
@@ -246,6 +290,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "stateful_because": r.stateless.as_ref().err(),
                 "fill_ms": r.fill_seconds.map(|s| s * 1e3),
                 "sort_alone": sort_alone.as_ref().map(sort_json),
+                "dispatches": args.profile.then(|| dispatches_json(&r.dispatches)),
             })
         );
     } else {
@@ -340,6 +385,7 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 .collect();
             println!("    stages (ms)       {}", stages.join(", "));
         }
+        print_dispatches("dispatches", &r.dispatches);
         if let Some(d) = &r.render {
             println!(
                 "  draw                {:.3} ms for a {}x{} frame of {} particles, from the GPU buffers (render pass only)",

@@ -9,8 +9,10 @@ use plume_compiler::graph::{compile_graph, group_effects, CompiledGraph, Compile
 use plume_compiler::schema::{Effect, Emitter, Shape, Vec3, Velocity};
 use plume_compiler::{compile_effect, CompileError};
 
+use crate::bench::profile::{profiled, DispatchTime};
 use crate::bench::timer::{median_after_warmup, PassTimer, TimingSource};
 use crate::device::gpu::Gpu;
+use crate::device::resources::STEPS_PER_SUBMIT;
 use crate::error::RuntimeError;
 // The running effect; `Effect` here is the file's schema.
 use crate::sim::effect::Effect as RunningEffect;
@@ -41,6 +43,9 @@ pub struct GraphBench {
     pub order_seconds: Vec<f64>,
     /// Timestamps or wall clock.
     pub timing: TimingSource,
+    /// With `profile`: each dispatch's time a step with events, then without
+    /// ([`DispatchTime`]: `s0.` is event stream 0, `g1.` group 1).
+    pub dispatches: (Vec<DispatchTime>, Vec<DispatchTime>),
 }
 
 impl GraphBench {
@@ -102,13 +107,14 @@ fn requested(sim: &RunningEffect, fed: &[bool]) -> Result<Vec<u64>, RuntimeError
 }
 
 /// Benchmarks `effect` (a graph) scaled to about `particles` slots: `warm_steps` untimed, then
-/// batches of `steps` timed.
+/// batches of `steps` timed; with `profile`, one batch more of each with every dispatch timed.
 pub fn bench_graph(
     gpu: &Gpu,
     effect: &Effect,
     particles: u32,
     warm_steps: u64,
     steps: u32,
+    profile: bool,
 ) -> Result<GraphBench, RuntimeError> {
     let total: u64 = u64::from(effect.capacity)
         + effect
@@ -143,6 +149,11 @@ pub fn bench_graph(
         firings += n / (per_firing[g].0 as f64 / per_firing[g].1 as f64);
     }
     let order_seconds = sim.time_orders(&timer, repeats)?;
+    let batch = steps.min(STEPS_PER_SUBMIT);
+    let with_events = match profile {
+        true => profiled(gpu, batch, || sim.time_steps(&timer, batch))?,
+        false => Vec::new(),
+    };
     let mut groups = Vec::new();
     for (g, name) in names.iter().enumerate() {
         let cap = sim.group_compiled(g)?.ir.capacity;
@@ -153,6 +164,10 @@ pub fn bench_graph(
     let mut plain_sim = RunningEffect::from_graph(gpu, plain)?;
     plain_sim.run(1, |_| {})?;
     let plain_seconds_per_step = per_step(&mut plain_sim, &timer, steps, repeats)?;
+    let without = match profile {
+        true => profiled(gpu, batch, || plain_sim.time_steps(&timer, batch))?,
+        false => Vec::new(),
+    };
     for (g, (name, _, alive)) in groups.iter().enumerate() {
         let left = plain_sim.group_totals(g)?.alive;
         if left != *alive {
@@ -173,6 +188,7 @@ pub fn bench_graph(
         children_per_step: children / timed_steps,
         order_seconds,
         timing: timer.source(),
+        dispatches: (with_events, without),
     })
 }
 

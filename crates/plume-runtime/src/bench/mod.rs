@@ -1,6 +1,6 @@
 //! Benchmarks and measurements, for `plume bench`, `plume accuracy` and the tools in
 //! `examples/`: the update against a copy kernel ([`bench`](fn@bench)), the draw ([`DrawTimes`]), the
-//! events' cost ([`bench_graph`]), the radix sort alone ([`bench_sort`], with the sorter
+//! events' cost ([`bench_graph`]), each dispatch's share of a step ([`DispatchTime`], `--profile`), the radix sort alone ([`bench_sort`], with the sorter
 //! itself, [`GpuSorter`]), the integrators' error against time per step ([`measure`], plotted
 //! by [`accuracy_svg`]), an accuracy budget checked on the GPU ([`check_budget`]), and the GPU pass timer they share ([`PassTimer`]). Also the knobs the
 //! measurements turn: a renderer with other [`DrawOptions`] ([`renderer_with`]), a GPU buffer
@@ -15,6 +15,7 @@ pub(crate) mod copy;
 pub(crate) mod draw;
 pub(crate) mod graph;
 pub(crate) mod plot;
+pub(crate) mod profile;
 pub(crate) mod scene;
 pub(crate) mod sort;
 pub(crate) mod timer;
@@ -32,6 +33,7 @@ pub use budget::{check_budget, BudgetCheck, CHECKED};
 pub use draw::{DrawTimes, DRAW_REPEATS};
 pub use graph::{bench_graph, scaled, GraphBench};
 pub use plot::accuracy_svg;
+pub use profile::DispatchTime;
 pub use scene::{bench_effect, bench_effect_occupied, compile_bench, draw_scene};
 pub use sort::{bench_sort, SortBench, SortTime};
 pub use timer::{median_after_warmup, PassTimer, TimingSource};

@@ -8,6 +8,7 @@ use plume_compiler::{CompiledEffect, Effect};
 
 use crate::bench::copy::CopyKernel;
 use crate::bench::draw::{time_draws, DrawTimes};
+use crate::bench::profile::{profiled, DispatchTime};
 use crate::bench::scene::{compile_bench_as, compile_occupied};
 use crate::bench::timer::{PassTimer, TimingSource};
 use crate::device::gpu::Gpu;
@@ -62,6 +63,8 @@ pub struct BenchResult {
     /// Seconds per pass of a write-only kernel over the same bytes (the stateless ceiling),
     /// when the effect can be stateless.
     pub fill_seconds: Option<f64>,
+    /// With [`BenchOptions::profile`]: each dispatch's time a step (timestamps included).
+    pub dispatches: Vec<DispatchTime>,
 }
 
 impl BenchResult {
@@ -99,6 +102,8 @@ pub struct BenchOptions {
     /// The fraction of the slots alive (1: all N). Below 1 the draw's two ways of skipping
     /// free slots, hidden quads and a compacted list, are compared.
     pub occupancy: f64,
+    /// Also time each dispatch of a step (`--profile`: [`BenchResult::dispatches`]).
+    pub profile: bool,
 }
 
 impl BenchOptions {
@@ -109,6 +114,7 @@ impl BenchOptions {
             steps,
             render: None,
             occupancy: 1.0,
+            profile: false,
         }
     }
 }
@@ -158,6 +164,10 @@ pub fn bench(
             copy_in_place.min(copy_in_place_kernel.time(&timer, per_round)? / f64::from(per_round));
     }
     drop((copy_kernel, copy_in_place_kernel));
+    let dispatches = match options.profile {
+        true => profiled(gpu, per_round, || sim.time_steps(&timer, per_round))?,
+        false => Vec::new(),
+    };
     let sort_stages = if sim.effect.layout.sorts() {
         sim.time_sort_stages(&timer, 9)?
     } else {
@@ -242,6 +252,7 @@ pub fn bench(
             Err(_) => None,
         },
         stateless,
+        dispatches,
     })
 }
 

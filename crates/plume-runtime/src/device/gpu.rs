@@ -131,10 +131,12 @@ impl Gpu {
         let downlevel = adapter.get_downlevel_capabilities().flags;
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("plume"),
-            // Timestamps (for `plume bench`) and subgroup operations (the radix sort's ranking)
-            // where the adapter has them; nothing else.
+            // Timestamps (for `plume bench`, and inside passes for `--profile`) and subgroup
+            // operations (the radix sort's ranking) where the adapter has them; nothing else.
             required_features: adapter.features()
-                & (wgpu::Features::TIMESTAMP_QUERY | wgpu::Features::SUBGROUP),
+                & (wgpu::Features::TIMESTAMP_QUERY
+                    | wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES
+                    | wgpu::Features::SUBGROUP),
             required_limits: limits.clone(),
             experimental_features: wgpu::ExperimentalFeatures::disabled(),
             memory_hints: wgpu::MemoryHints::Performance,

@@ -30,6 +30,8 @@ struct Dispatch {
     pipeline: wgpu::ComputePipeline,
     group: wgpu::BindGroup,
     grid: (u32, u32),
+    /// The kernel's name, for `plume bench --profile`.
+    entry: &'static str,
 }
 
 /// One stream's ordering: its dispatches, in order.
@@ -52,7 +54,7 @@ impl EventOrder {
             crate::device::gpu::shader_module(&gpu.device, label, source)
         };
         let dispatch = |module: &wgpu::ShaderModule,
-                        entry: &str,
+                        entry: &'static str,
                         entries: &[(u32, &wgpu::Buffer)],
                         grid: (u32, u32)| {
             let pipeline = gpu.compute_pipeline(module, entry, None);
@@ -61,6 +63,7 @@ impl EventOrder {
                 pipeline,
                 group,
                 grid,
+                entry,
             }
         };
         let dispatches = match ordering {
@@ -149,6 +152,7 @@ impl EventOrder {
             pass.set_pipeline(&d.pipeline);
             pass.set_bind_group(0, &d.group, &[]);
             pass.dispatch_workgroups(d.grid.0, d.grid.1, 1);
+            crate::device::dispatch_marks::mark(pass, d.entry);
         }
     }
 }

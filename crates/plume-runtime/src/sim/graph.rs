@@ -136,11 +136,14 @@ impl Events {
         steps: u64,
     ) -> Result<(), RuntimeError> {
         for j in 0..steps as usize {
-            for s in &self.orders {
+            crate::device::dispatch_marks::boundary(pass);
+            for (k, s) in self.orders.iter().enumerate() {
+                crate::device::dispatch_marks::scope(&format!("s{k}."));
                 s.order.record(pass);
                 groups[s.stream.child].record_event_spawn(pass, s.stream.in_slot, j)?;
             }
             for (g, group) in groups.iter().enumerate() {
+                crate::device::dispatch_marks::scope(&format!("g{g}."));
                 group.record_graph_step(pass, &plans[g], j)?;
             }
         }

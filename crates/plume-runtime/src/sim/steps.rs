@@ -165,17 +165,20 @@ impl StatefulSteps {
         plan: &StepPlan,
         offset: u32,
     ) -> Result<(), RuntimeError> {
+        crate::device::dispatch_marks::boundary(pass);
         // A field baked every step is baked first: the spawn (Verlet's start) samples it too.
         if let Some((bake, nodes, true)) = &self.bake {
             let (x, y) = groups(gpu, *nodes)?;
             pass.set_bind_group(0, &chunks[0].bind_group, &[offset]);
             pass.set_pipeline(bake);
             pass.dispatch_workgroups(x, y, 1);
+            crate::device::dispatch_marks::mark(pass, "bake");
         }
         if plan.requested() > 0 {
             pass.set_bind_group(0, &chunks[0].bind_group, &[offset]);
             pass.set_pipeline(&self.prepare);
             pass.dispatch_workgroups(1, 1, 1);
+            crate::device::dispatch_marks::mark(pass, "spawn_prepare");
             // Every chunk sees every spawn; each writes only the slots it holds.
             let (x, y) = groups(gpu, u64::from(plan.requested()))?;
             pass.set_pipeline(&self.spawn);
@@ -183,9 +186,11 @@ impl StatefulSteps {
                 pass.set_bind_group(0, &chunk.bind_group, &[offset]);
                 pass.dispatch_workgroups(x, y, 1);
             }
+            crate::device::dispatch_marks::mark(pass, "spawn");
         }
         if let Some(flock) = &self.flock {
             flock.record(gpu, pass, &chunks[0], offset)?;
+            crate::device::dispatch_marks::mark(pass, "flock");
         }
         pass.set_pipeline(&self.update);
         for chunk in chunks {
@@ -193,6 +198,7 @@ impl StatefulSteps {
             pass.set_bind_group(0, &chunk.bind_group, &[offset]);
             pass.dispatch_workgroups(x, y, 1);
         }
+        crate::device::dispatch_marks::mark(pass, "update");
         Ok(())
     }
 
@@ -212,11 +218,13 @@ impl StatefulSteps {
         pass.set_bind_group(0, prepare_group, &[]);
         pass.set_pipeline(prepare);
         pass.dispatch_workgroups(1, 1, 1);
+        crate::device::dispatch_marks::mark(pass, "event_prepare");
         pass.set_pipeline(spawn);
         for chunk in chunks {
             pass.set_bind_group(0, &chunk.bind_group, &[offset]);
             pass.dispatch_workgroups_indirect(dispatch, 0);
         }
+        crate::device::dispatch_marks::mark(pass, "event_spawn");
     }
 }
 
@@ -413,9 +421,11 @@ impl StatelessSteps {
             let (x, y) = groups(gpu, f.threads)?;
             pass.set_pipeline(&f.fire);
             pass.dispatch_workgroups(x, y, 1);
+            crate::device::dispatch_marks::mark(pass, "fire");
         }
         pass.set_pipeline(&f.next);
         pass.dispatch_workgroups(1, 1, 1);
+        crate::device::dispatch_marks::mark(pass, "fire_next");
         Ok(())
     }
 
