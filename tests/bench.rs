@@ -125,6 +125,26 @@ fn the_profile_names_every_dispatch_of_a_step_once() {
         r.dispatches
     );
     assert!(!BenchOptions::new(2000, 4).profile, "off unless asked for");
+    // A grid flock's stages each have their own line.
+    let src =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/boids.ron")).unwrap();
+    let mut boids = parse(&src).unwrap();
+    boids.render.texture = None;
+    let r = bench(&gpu, &boids, &options).unwrap();
+    let labels: Vec<&str> = r.dispatches.iter().map(|d| d.label.as_str()).collect();
+    assert_eq!(
+        labels,
+        [
+            "flock_bucket",
+            "flock_scan",
+            "flock_scatter",
+            "flock_rank",
+            "flock_search",
+            "update"
+        ],
+        "{:?}",
+        r.dispatches
+    );
 
     let src =
         std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/effects/rain.ron")).unwrap();

@@ -93,7 +93,7 @@ fn print_dispatches(title: &str, d: &[DispatchTime]) {
     println!("  {title} (µs a step, timestamps included: {total:.1} in all)");
     for t in d {
         println!(
-            "    {:<26} {:>8.2}  ({:.0}%, {} a step)",
+            "    {:<26} {:>8.2}  ({:.0}%, {:.1} a step)",
             t.label,
             t.us_per_step,
             100.0 * t.us_per_step / total,

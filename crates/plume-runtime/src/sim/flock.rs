@@ -150,6 +150,7 @@ impl FlockPass {
                 pass.set_pipeline(reduce);
                 pass.dispatch_workgroups(1, 1, 1);
             }
+            crate::device::dispatch_marks::mark(pass, "flock_snapshot");
         }
         if let Some(grid) = &self.grid {
             if !next() {
@@ -159,21 +160,25 @@ impl FlockPass {
             // zeroed).
             pass.set_pipeline(&grid.bucket);
             pass.dispatch_workgroups(x, y, 1);
+            crate::device::dispatch_marks::mark(pass, "flock_bucket");
             if !next() {
                 return Ok(());
             }
             grid.scan.record(pass);
+            crate::device::dispatch_marks::mark(pass, "flock_scan");
             pass.set_bind_group(0, &chunk.bind_group, &[offset]);
             if !next() {
                 return Ok(());
             }
             pass.set_pipeline(&grid.scatter);
             pass.dispatch_workgroups(x, y, 1);
+            crate::device::dispatch_marks::mark(pass, "flock_scatter");
             if !next() {
                 return Ok(());
             }
             pass.set_pipeline(&grid.rank);
             pass.dispatch_workgroups(x, y, 1);
+            crate::device::dispatch_marks::mark(pass, "flock_rank");
         }
         if !next() {
             return Ok(());
@@ -187,11 +192,13 @@ impl FlockPass {
             pass.set_pipeline(&grid.search);
             pass.set_bind_group(0, &grid.search_group, &[]);
             pass.dispatch_workgroups(x, y, 1);
+            crate::device::dispatch_marks::mark(pass, "flock_search");
             // What the caller records next runs on the effect's own bind group.
             pass.set_bind_group(0, &chunk.bind_group, &[offset]);
         } else if let Some(pairs) = &self.pairs {
             pass.set_pipeline(pairs);
             pass.dispatch_workgroups(x, y, 1);
+            crate::device::dispatch_marks::mark(pass, "flock_pairs");
         }
         Ok(())
     }

@@ -190,7 +190,6 @@ impl StatefulSteps {
         }
         if let Some(flock) = &self.flock {
             flock.record(gpu, pass, &chunks[0], offset)?;
-            crate::device::dispatch_marks::mark(pass, "flock");
         }
         pass.set_pipeline(&self.update);
         for chunk in chunks {
