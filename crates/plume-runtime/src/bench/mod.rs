@@ -1,7 +1,7 @@
 //! Benchmarks and measurements, for `plume bench`, `plume accuracy` and the tools in
 //! `examples/`: the update against a copy kernel ([`bench`](fn@bench)), the draw ([`DrawTimes`]), the
-//! events' cost ([`bench_graph`]), each dispatch's share of a step ([`DispatchTime`], `--profile`), the radix sort alone ([`bench_sort`], with the sorter
-//! itself, [`GpuSorter`]), the integrators' error against time per step ([`measure`], plotted
+//! events' cost ([`bench_graph`]), each dispatch's share of a step ([`DispatchTime`],
+//! `--profile`), the radix sort alone ([`bench_sort`], with the sorter itself, [`GpuSorter`]), the integrators' error against time per step ([`measure`], plotted
 //! by [`accuracy_svg`]), an accuracy budget checked on the GPU ([`check_budget`]), and the GPU pass timer they share ([`PassTimer`]). Also the knobs the
 //! measurements turn: a renderer with other [`DrawOptions`] ([`renderer_with`]), a GPU buffer
 //! read back ([`read_buffer`]), and the dispatch helpers the layout experiments in `examples/`

@@ -84,11 +84,12 @@ pub(crate) fn boundary(pass: &mut wgpu::ComputePass<'_>) {
     write(pass, None);
 }
 
-/// What the next labels start with.
-pub(crate) fn scope(prefix: &str) {
+/// What the next labels start with: `kind`, `index` and a dot (`s0.`: event stream 0).
+/// Formats nothing unless a collection is open.
+pub(crate) fn scope(kind: char, index: usize) {
     OPEN.with(|o| {
         if let Some(c) = o.borrow_mut().as_mut() {
-            c.prefix = prefix.to_string();
+            c.prefix = format!("{kind}{index}.");
         }
     });
 }

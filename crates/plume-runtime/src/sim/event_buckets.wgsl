@@ -156,11 +156,12 @@ fn bucket_reduce(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups)
 fn bucket_scan(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                @builtin(local_invocation_index) lane: u32) {
     let w = uniform_window(lane);
-    let totals = arrayLength(&counts);
+    // The blocks' totals follow the n buckets' starts.
+    let totals_at = arrayLength(&counts);
     for (var block = flat(wid, groups); block * BLOCK < w.buckets; block += workgroups(groups)) {
         var before = 0u;
         for (var b = lane; b < block; b += THREADS) {
-            before += starts[totals + b];
+            before += starts[totals_at + b];
         }
         // The scan leaves the workgroup's total in its last entry, read before the next scan's
         // first barrier lets anyone write it again.

@@ -138,12 +138,12 @@ impl Events {
         for j in 0..steps as usize {
             crate::device::dispatch_marks::boundary(pass);
             for (k, s) in self.orders.iter().enumerate() {
-                crate::device::dispatch_marks::scope(&format!("s{k}."));
+                crate::device::dispatch_marks::scope('s', k);
                 s.order.record(pass);
                 groups[s.stream.child].record_event_spawn(pass, s.stream.in_slot, j)?;
             }
             for (g, group) in groups.iter().enumerate() {
-                crate::device::dispatch_marks::scope(&format!("g{g}."));
+                crate::device::dispatch_marks::scope('g', g);
                 group.record_graph_step(pass, &plans[g], j)?;
             }
         }
