@@ -10,6 +10,7 @@
 use std::cell::RefCell;
 
 use crate::device::gpu::Gpu;
+use crate::device::readback::read_buffer;
 use crate::error::RuntimeError;
 
 /// The most timestamps one collection takes (wgpu's limit for a query set); later marks are
@@ -104,37 +105,19 @@ pub(crate) fn finish(gpu: &Gpu, steps: u32) -> Result<Vec<DispatchTime>, Runtime
     if n < 2 {
         return Ok(Vec::new());
     }
-    let buffer = |usage| {
-        gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("dispatch marks"),
-            size: n * 8,
-            usage,
-            mapped_at_creation: false,
-        })
-    };
-    let resolve = buffer(wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC);
-    let read = buffer(wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST);
+    let resolve = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("dispatch marks"),
+        size: n * 8,
+        usage: wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
     let mut encoder = gpu.device.create_command_encoder(&Default::default());
     encoder.resolve_query_set(&c.set, 0..n as u32, &resolve, 0);
-    encoder.copy_buffer_to_buffer(&resolve, 0, &read, 0, n * 8);
     gpu.queue.submit([encoder.finish()]);
-    let (tx, rx) = std::sync::mpsc::channel();
-    read.map_async(wgpu::MapMode::Read, .., move |r| {
-        let _ = tx.send(r);
-    });
-    gpu.wait()?;
-    rx.recv()
-        .map_err(|e| RuntimeError::Readback(e.to_string()))?
-        .map_err(|e| RuntimeError::Readback(e.to_string()))?;
-    let ticks: Vec<u64> = {
-        let data = read
-            .get_mapped_range(..)
-            .map_err(|e| RuntimeError::Readback(e.to_string()))?;
-        data.chunks_exact(8)
-            .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
-            .collect()
-    };
-    read.unmap();
+    let ticks: Vec<u64> = read_buffer(gpu, &resolve)?
+        .chunks_exact(8)
+        .map(|b| u64::from_le_bytes(b.try_into().expect("8 bytes")))
+        .collect();
     let us_per_tick = f64::from(gpu.queue.get_timestamp_period()) * 1e-3;
     let steps = f64::from(steps.max(1));
     let mut out: Vec<DispatchTime> = Vec::new();
