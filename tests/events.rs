@@ -602,3 +602,40 @@ fn firings_whose_ids_span_more_than_the_slots_share_buckets_and_still_spawn_in_i
         "ticks spawned and dropped: {t:?}"
     );
 }
+
+#[test]
+fn a_stateless_group_that_never_dies_fires_every_period_as_its_stateful_twin_does() {
+    // A burst with no lifetime, stateless, ticking every step: its particles fire every step
+    // for as long as the run goes (the closed form once took their unset death step for 0,
+    // firing once and never again), as the same group stateful does, and as the reference.
+    let src = |state: &str| {
+        format!(
+            r#"Effect(
+        name: "ticks",
+        capacity: 64,
+        seed: 1,
+        state: {state},
+        emitters: [Emitter(burst: 64, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 1.0),
+                           velocity: Constant((0.0, 0.0, 0.0)))],
+        events: [Event(on: Every(0.016666667), target: "dots", count: 1, lifetime: Some((0.02, 0.02)))],
+        groups: [Group(name: "dots", capacity: 256)],
+    )"#
+        )
+    };
+    let stateless = graph(&src("Auto"));
+    assert!(
+        stateless.groups[0].effect.layout.stateless(),
+        "{}",
+        stateless.groups[0].effect.ir.state_reason
+    );
+    let a = compare_runs("immortal stateless ticks", &stateless, &[10, 300]);
+    let b = compare_runs(
+        "immortal stateful ticks",
+        &graph(&src("Stateful")),
+        &[10, 300],
+    );
+    let (ta, tb) = (a.group_totals(1).unwrap(), b.group_totals(1).unwrap());
+    assert_eq!(ta, tb);
+    // 64 firings a step, each spawning its dot the step after.
+    assert_eq!(ta.spawned, 64 * 299, "{ta:?}");
+}

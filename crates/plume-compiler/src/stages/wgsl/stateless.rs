@@ -183,11 +183,18 @@ pub fn emit_fire(w: &mut Writer, ir: &EffectIr) {
             w.line("let id = seg.a.y + j;");
             w.line("let k = seg.a.z + j;");
             emit_spawn_draws(w, ir, "id", "born", "return;");
-            w.comment("It dies in the update of step die_at (the stateful update's `step >= die_at`).");
-            w.block("if (s.die_at != DEAD && step > s.die_at)", |w| {
-                w.line("return;")
-            });
-            w.line("let dies = s.die_at != DEAD && step == s.die_at;");
+            if ir.has_lifetimes() {
+                w.comment("It dies in the update of step die_at (the stateful update's `step >= die_at`).");
+                w.block("if (s.die_at != DEAD && step > s.die_at)", |w| {
+                    w.line("return;")
+                });
+                w.line("let dies = s.die_at != DEAD && step == s.die_at;");
+            } else {
+                // The spawn draws set no death step then (`die_at` stays 0): read as one, it
+                // ended every particle at its spawn step, firing `Every` once and `Death` then.
+                w.comment("No emitter sets a lifetime: every particle lives forever.");
+                w.line("let dies = false;");
+            }
             w.line("let lived = step + 1u - born;");
             w.line(format!(
                 "let now = advance(s, f32(lived) * {});",
