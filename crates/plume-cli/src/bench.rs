@@ -35,7 +35,7 @@ pub struct BenchArgs {
     /// state).
     #[arg(long, default_value_t = 240)]
     warm_steps: u64,
-    /// Also time each dispatch of a step: one batch of steps more with a GPU timestamp after
+    /// Also time each dispatch of a step: up to 16 steps more with a GPU timestamp after
     /// every dispatch (each adds a few microseconds, so the times are shares, not costs);
     /// needs timestamps inside compute passes.
     #[arg(long)]

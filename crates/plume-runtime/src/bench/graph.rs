@@ -12,7 +12,6 @@ use plume_compiler::{compile_effect, CompileError};
 use crate::bench::profile::{profiled, DispatchTime};
 use crate::bench::timer::{median_after_warmup, PassTimer, TimingSource};
 use crate::device::gpu::Gpu;
-use crate::device::resources::STEPS_PER_SUBMIT;
 use crate::error::RuntimeError;
 // The running effect; `Effect` here is the file's schema.
 use crate::sim::effect::Effect as RunningEffect;
@@ -149,9 +148,8 @@ pub fn bench_graph(
         firings += n / (per_firing[g].0 as f64 / per_firing[g].1 as f64);
     }
     let order_seconds = sim.time_orders(&timer, repeats)?;
-    let batch = steps.min(STEPS_PER_SUBMIT);
     let with_events = match profile {
-        true => profiled(gpu, batch, || sim.time_steps(&timer, batch))?,
+        true => profiled(gpu, steps, |n| sim.time_steps(&timer, n))?,
         false => Vec::new(),
     };
     let mut groups = Vec::new();
@@ -165,7 +163,7 @@ pub fn bench_graph(
     plain_sim.run(1, |_| {})?;
     let plain_seconds_per_step = per_step(&mut plain_sim, &timer, steps, repeats)?;
     let without = match profile {
-        true => profiled(gpu, batch, || plain_sim.time_steps(&timer, batch))?,
+        true => profiled(gpu, steps, |n| plain_sim.time_steps(&timer, n))?,
         false => Vec::new(),
     };
     for (g, (name, _, alive)) in groups.iter().enumerate() {

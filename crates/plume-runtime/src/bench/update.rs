@@ -165,7 +165,7 @@ pub fn bench(
     }
     drop((copy_kernel, copy_in_place_kernel));
     let dispatches = match options.profile {
-        true => profiled(gpu, per_round, || sim.time_steps(&timer, per_round))?,
+        true => profiled(gpu, per_round, |n| sim.time_steps(&timer, n))?,
         false => Vec::new(),
     };
     let sort_stages = if sim.effect.layout.sorts() {

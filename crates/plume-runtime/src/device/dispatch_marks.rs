@@ -13,11 +13,29 @@ use crate::device::gpu::Gpu;
 use crate::device::readback::read_buffer;
 use crate::error::RuntimeError;
 
-/// The most timestamps one collection takes (wgpu's limit for a query set); later marks are
-/// dropped.
+/// The most timestamps one collection takes (wgpu's limit for a query set); a batch that
+/// records more is an error (`finish`), not a profile that silently misses its last steps.
 const MOST_MARKS: u32 = 4096;
 
-/// One kind of dispatch's time in a profiled batch of steps.
+/// One kind of dispatch's time in a profiled batch of steps: what `plume bench --profile`
+/// prints, and what a host reads from [`crate::bench::BenchResult::dispatches`]:
+///
+/// ```no_run
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use plume_runtime::bench::{bench, BenchOptions};
+/// let gpu = plume_runtime::Gpu::new(&Default::default())?;
+/// let effect = plume_compiler::parse(&std::fs::read_to_string("effects/fountain.ron")?)
+///     .map_err(|d| format!("{d:?}"))?;
+/// let options = BenchOptions {
+///     profile: true,
+///     ..BenchOptions::new(1_000_000, 50)
+/// };
+/// for d in bench(&gpu, &effect, &options)?.dispatches {
+///     println!("{:<20} {:6.1} µs a step", d.label, d.us_per_step);
+/// }
+/// # Ok(())
+/// # }
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub struct DispatchTime {
     /// The kernel, prefixed by its scope (`s0.` event stream 0, `g1.` group 1).
@@ -32,6 +50,8 @@ struct Collection {
     set: wgpu::QuerySet,
     /// Each timestamp's label; None for a boundary.
     labels: Vec<Option<String>>,
+    /// Marks past [`MOST_MARKS`], not written.
+    dropped: usize,
     prefix: String,
 }
 
@@ -57,6 +77,7 @@ pub(crate) fn begin(gpu: &Gpu) {
         *o.borrow_mut() = Some(Collection {
             set,
             labels: Vec::new(),
+            dropped: 0,
             prefix: String::new(),
         })
     });
@@ -70,6 +91,8 @@ fn write(pass: &mut wgpu::ComputePass<'_>, label: Option<&str>) {
                 pass.write_timestamp(&c.set, at);
                 let label = label.map(|l| format!("{}{l}", c.prefix));
                 c.labels.push(label);
+            } else {
+                c.dropped += 1;
             }
         }
     });
@@ -101,6 +124,12 @@ pub(crate) fn finish(gpu: &Gpu, steps: u32) -> Result<Vec<DispatchTime>, Runtime
     let Some(c) = OPEN.with(|o| o.borrow_mut().take()) else {
         return Ok(Vec::new());
     };
+    if c.dropped > 0 {
+        return Err(RuntimeError::Output(format!(
+            "the profiled steps recorded {} dispatches, more than the {MOST_MARKS} timestamps a profile takes",
+            c.labels.len() + c.dropped
+        )));
+    }
     let n = c.labels.len() as u64;
     if n < 2 {
         return Ok(Vec::new());
