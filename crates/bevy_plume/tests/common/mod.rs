@@ -23,6 +23,8 @@ pub const WIDTH: u32 = 160;
 pub const HEIGHT: u32 = 90;
 /// The camera's distance from the origin, on +z looking down −z.
 pub const CAMERA_DISTANCE: f32 = 10.0;
+/// The most frames a capture waits for its screenshot before the test fails.
+const CAPTURE_FRAMES: usize = 600;
 
 /// The test app and its target image.
 pub struct Harness {
@@ -178,14 +180,16 @@ impl Harness {
             .observe(move |captured: On<ScreenshotCaptured>| {
                 *sink.lock().unwrap() = Some(captured.image.clone());
             });
-        for _ in 0..60 {
+        // Usually two or three frames; lavapipe on a busy two-core machine has taken more than
+        // 60 (a CI run at 6bdd6d1), so the bound is there only to end a capture that never comes.
+        for _ in 0..CAPTURE_FRAMES {
             self.app.update();
             if let Some(image) = slot.lock().unwrap().take() {
                 let dynamic = image.try_into_dynamic().expect("an RGBA8 image");
                 return dynamic.to_rgba8();
             }
         }
-        panic!("the screenshot did not come back within 60 frames");
+        panic!("the screenshot did not come back within {CAPTURE_FRAMES} frames");
     }
 }
 
