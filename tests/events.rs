@@ -379,6 +379,23 @@ fn a_stateless_group_fires_on_death_and_every_period_as_its_stateful_twin_does()
     );
     assert_eq!(large.streams[0].ordering, Ordering::Bucketed);
     compare_runs("large stateless firing group", &large, &[20, 60]);
+    // The host knows a stateless group fires at most once an event a particle of its table, so
+    // a bucketed stream of one counts its firings into order in every batch whose table (and
+    // the batch's before it) holds at most COUNTED_MAX threads. A burst of 10,000 shells makes
+    // the first batches' tables larger (buckets); once it has died, the stream's few hundred
+    // make them small (counting): both orderings, and the switch between, give the reference's
+    // children.
+    let switching = graph(
+        &src("Auto")
+            .replace("capacity: 200,", "capacity: 12000,")
+            .replace("burst: 5,", "burst: 10000,"),
+    );
+    assert_eq!(switching.streams[0].ordering, Ordering::Bucketed);
+    compare_runs(
+        "stateless firing group, ordering switched",
+        &switching,
+        &[20, 70, 120],
+    );
 }
 
 #[test]

@@ -6,7 +6,9 @@
 //! step of every group and every stream is recorded into one compute pass per batch of
 //! steps: nothing is read back between steps.
 
-use plume_compiler::events::{in_binding, out_binding, RECORDS_HEADER_BYTES, RECORD_BYTES};
+use plume_compiler::events::{
+    in_binding, out_binding, Ordering, COUNTED_MAX, RECORDS_HEADER_BYTES, RECORD_BYTES,
+};
 use plume_compiler::graph::{CompiledGraph, Stream};
 use plume_compiler::schedule::StepPlan;
 
@@ -21,6 +23,22 @@ use crate::sim::group::Group;
 pub(crate) struct StreamOrder {
     pub(crate) stream: Stream,
     pub(crate) order: EventOrder,
+    /// For a bucketed stream whose firing group is stateless, the same firings' ordering by
+    /// counting, which a step takes when the host knows it orders at most
+    /// [`COUNTED_MAX`] firings: a stateless group fires over a table whose size the host sets
+    /// each batch (one dispatch, not five: fireworks' rockets fire over a few hundred threads of
+    /// their 9,403 slots at 10M).
+    pub(crate) counted: Option<EventOrder>,
+}
+
+impl StreamOrder {
+    /// The ordering that step `j` of the planned batch records, given the firing group.
+    pub(crate) fn for_step(&self, parent: &Group, j: usize) -> &EventOrder {
+        match (&self.counted, parent.firings_bound(j)) {
+            (Some(counted), Some(bound)) if bound <= u64::from(COUNTED_MAX) => counted,
+            _ => &self.order,
+        }
+    }
 }
 
 /// Buffers a group binds instead of allocating them, by binding index.
@@ -80,9 +98,17 @@ impl Events {
             ]);
             let at = in_binding(s.in_slot);
             shared[s.child].extend([(at, order.clone()), (at + 1, records.clone())]);
+            let stateless_parent = graph.groups[s.parent].effect.ir.stateless.is_some();
+            let counted = (s.ordering == Ordering::Bucketed && stateless_parent)
+                .then(|| {
+                    let buffers = (&keys, &vals, &records);
+                    EventOrder::new(gpu, Ordering::Counted, parent, buffers, &order)
+                })
+                .transpose()?;
             orders.push(StreamOrder {
                 stream: s.clone(),
                 order: EventOrder::new(gpu, s.ordering, parent, (&keys, &vals, &records), &order)?,
+                counted,
             });
         }
         Ok((Self { orders }, shared))
@@ -139,7 +165,7 @@ impl Events {
             crate::device::dispatch_marks::boundary(pass);
             for (k, s) in self.orders.iter().enumerate() {
                 crate::device::dispatch_marks::scope('s', k);
-                s.order.record(pass);
+                s.for_step(&groups[s.stream.parent], j).record(pass);
                 groups[s.stream.child].record_event_spawn(pass, s.stream.in_slot, j)?;
             }
             for (g, group) in groups.iter().enumerate() {

@@ -454,6 +454,16 @@ impl Group {
         }
     }
 
+    /// For a stateless group that fires events, the most firings of one event that step `j` of
+    /// the planned batch orders ([`StatelessSteps::firings_bound`]); None for a stateful group,
+    /// whose firings the host cannot bound below its capacity.
+    pub(crate) fn firings_bound(&self, j: usize) -> Option<u64> {
+        match &self.steps {
+            Steps::Stateless(s) => s.firings_bound(j),
+            Steps::Stateful(_) => None,
+        }
+    }
+
     /// Whether the effect runs stateless (no state kept; computed when read or drawn).
     pub(crate) fn is_stateless(&self) -> bool {
         matches!(self.steps, Steps::Stateless(_))

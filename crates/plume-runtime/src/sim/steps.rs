@@ -46,11 +46,12 @@ pub struct StatefulSteps {
 
 /// A stateless group's events: its `fire` kernel (a step's firings from the closed form, over
 /// the batch's segment table) and `fire_next` (on to the next step), and how many threads the
-/// current batch's table has.
+/// current batch's table has, and the batch's before it.
 pub struct Firing {
     fire: wgpu::ComputePipeline,
     next: wgpu::ComputePipeline,
     threads: u64,
+    previous_threads: u64,
 }
 
 /// A stateless effect's `evaluate` kernel and its bookkeeping: steps only advance the live
@@ -80,6 +81,7 @@ impl Steps {
                     fire: res.pipeline("fire"),
                     next: res.pipeline("fire_next"),
                     threads: 0,
+                    previous_threads: 0,
                 }),
                 segments: LiveSegments::new(plan.lives.clone()),
                 evaluated_at: AtomicU64::new(u64::MAX),
@@ -401,8 +403,22 @@ impl StatelessSteps {
     /// Sets the current batch's table size ([`Self::fire_table`]'s threads).
     pub fn set_fire_threads(&mut self, threads: u64) {
         if let Some(f) = &mut self.firing {
+            f.previous_threads = f.threads;
             f.threads = threads;
         }
+    }
+
+    /// The most firings of one event that step `j` of the current batch orders: those of the
+    /// step before, which fired over the current batch's table or, for its first step, over
+    /// the batch's before it (each particle of the table fires an event at most once a step).
+    pub fn firings_bound(&self, j: usize) -> Option<u64> {
+        self.firing.as_ref().map(|f| {
+            if j == 0 {
+                f.previous_threads
+            } else {
+                f.threads
+            }
+        })
     }
 
     /// Records one step's firings (the step in `fire_state`) and the move to the next step.
