@@ -5,7 +5,8 @@
 //! (plume_compiler::events::Ordering): up to `COUNTED_MAX` slots, `order_rank`
 //! (event_order.wgsl) ranks them by counting, in one dispatch; past that, the firings are
 //! dropped into buckets by id and the buckets' counts scanned (event_buckets.wgsl: a stream
-//! compaction in id order, five dispatches, no sort).
+//! compaction in id order, five dispatches, no sort). A stateless firing group's stream may
+//! take the counting kernel in steps whose firings the host bounds (crate::sim::graph).
 //!
 //! (Until 2026-11 a large group wrote a key per slot and the radix sort ordered every slot:
 //! four passes of 8 bits whether 5 or 50,000 fired; docs/performance.md, "Events", has both.)
