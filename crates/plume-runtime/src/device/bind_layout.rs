@@ -45,6 +45,14 @@ pub(crate) fn entries(effect: &CompiledEffect, skip: &str) -> Vec<wgpu::BindGrou
             "chunk" | "depth_axis" => {
                 buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
             }
+            // The step a stateless group's `fire` fires for: one a step of the batch, each at
+            // its own offset (`StatelessSteps::record_fire`).
+            "fire_state" => buffer_entry(
+                b.binding,
+                wgpu::BufferBindingType::Storage { read_only: true },
+                true,
+                Some(b.bytes),
+            ),
             "scene_camera" => buffer_entry(
                 b.binding,
                 wgpu::BufferBindingType::Uniform,

@@ -96,6 +96,12 @@ pub struct Resources {
     pub pipeline_layout: wgpu::PipelineLayout,
 }
 
+/// Bytes between two steps' words in a firing stateless group's `fire_state`: the adapter's
+/// storage offset alignment, so that each step's can be bound at a dynamic offset.
+pub(crate) fn fire_state_stride(gpu: &Gpu) -> u64 {
+    u64::from(gpu.limits.min_storage_buffer_offset_alignment).max(16)
+}
+
 fn sized(buffer: &wgpu::Buffer, offset: u64, size: u64) -> wgpu::BindingResource<'_> {
     wgpu::BindingResource::Buffer(wgpu::BufferBinding {
         buffer,
@@ -250,7 +256,13 @@ impl Resources {
             .iter()
             .filter(|b| b.binding >= 7 && b.name != "depth_axis" && b.name != "trail")
             .map(|b| {
-                let size = b.bytes.max(16);
+                let size = match b.name {
+                    // A step of the batch at each storage offset (`fire_state_stride`).
+                    "fire_state" => {
+                        plume_compiler::passes::stateless::FIRE_BATCH_STEPS * fire_state_stride(gpu)
+                    }
+                    _ => b.bytes.max(16),
+                };
                 if let Some((_, buffer)) = shared.iter().find(|(at, _)| *at == b.binding) {
                     return Ok((b.binding, buffer.clone()));
                 }
@@ -458,6 +470,12 @@ impl Resources {
                         params_binding_bytes(effect),
                     ),
                     "chunk" => sized(&self.chunk_params, k * self.uniform_align, 16),
+                    // Bound at a dynamic offset: the step's (`fire_state_stride`).
+                    "fire_state" => sized(
+                        self.extra_buffer(b.binding).expect("a firing group's step"),
+                        0,
+                        b.bytes,
+                    ),
                     "frame" => self.frame.as_ref().expect("stateless").as_entire_binding(),
                     "sort_keys" => sort.expect("sorts").keys.as_entire_binding(),
                     "sort_vals" => sort.expect("sorts").vals.as_entire_binding(),

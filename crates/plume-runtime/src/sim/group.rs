@@ -216,8 +216,12 @@ impl Group {
                     .advance_noting(&mut self.schedule, n, &mut seen);
                 let (table, threads) = StatelessSteps::fire_table(&self.effect, &seen)?;
                 stateless.set_fire_threads(threads);
-                let mut state = [0u8; 16];
-                state[..4].copy_from_slice(&(first_step as u32).to_le_bytes());
+                // Each step of the batch at its own offset, which its `fire` binds.
+                let stride = crate::device::resources::fire_state_stride(&self.gpu) as usize;
+                let mut state = vec![0u8; n as usize * stride];
+                for (j, word) in state.chunks_exact_mut(stride).enumerate() {
+                    word[..4].copy_from_slice(&((first_step + j as u64) as u32).to_le_bytes());
+                }
                 for (name, bytes) in [("fire_frame", table.as_slice()), ("fire_state", &state)] {
                     let dst = self.res.extra_named(&self.effect, name).ok_or_else(|| {
                         RuntimeError::Gpu(format!("a firing stateless group has no {name}"))
@@ -244,7 +248,7 @@ impl Group {
         if let Steps::Stateless(stateless) = &self.steps {
             // A group that does not fire has no step work (and its view may not exist yet).
             return match stateless.firing {
-                Some(_) => stateless.record_fire(&self.gpu, pass, &self.chunks()?[0]),
+                Some(_) => stateless.record_fire(&self.gpu, pass, &self.chunks()?[0], j),
                 None => Ok(()),
             };
         }

@@ -45,11 +45,10 @@ pub struct StatefulSteps {
 }
 
 /// A stateless group's events: its `fire` kernel (a step's firings from the closed form, over
-/// the batch's segment table) and `fire_next` (on to the next step), and how many threads the
-/// current batch's table has, and the batch's before it.
+/// the batch's segment table, for the step its `fire_state` binding holds), and how many
+/// threads the current batch's table has, and the batch's before it.
 pub struct Firing {
     fire: wgpu::ComputePipeline,
-    next: wgpu::ComputePipeline,
     threads: u64,
     previous_threads: u64,
 }
@@ -79,7 +78,6 @@ impl Steps {
                 evaluate: res.pipeline("evaluate"),
                 firing: (!effect.ir.events.is_empty()).then(|| Firing {
                     fire: res.pipeline("fire"),
-                    next: res.pipeline("fire_next"),
                     threads: 0,
                     previous_threads: 0,
                 }),
@@ -421,26 +419,26 @@ impl StatelessSteps {
         })
     }
 
-    /// Records one step's firings (the step in `fire_state`) and the move to the next step.
+    /// Records the firings of step `j` of the batch (its step, in `fire_state` at the offset
+    /// `Group::plan_graph_batch` wrote it, bound at that dynamic offset).
     pub fn record_fire(
         &self,
         gpu: &Gpu,
         pass: &mut wgpu::ComputePass<'_>,
         chunk: &Chunk,
+        j: usize,
     ) -> Result<(), RuntimeError> {
         let Some(f) = &self.firing else {
             return Ok(());
         };
-        pass.set_bind_group(0, &chunk.bind_group, &[]);
         if f.threads > 0 {
+            let offset = j as u64 * crate::device::resources::fire_state_stride(gpu);
             let (x, y) = groups(gpu, f.threads)?;
+            pass.set_bind_group(0, &chunk.bind_group, &[offset as u32]);
             pass.set_pipeline(&f.fire);
             pass.dispatch_workgroups(x, y, 1);
             crate::device::dispatch_marks::mark(pass, "fire");
         }
-        pass.set_pipeline(&f.next);
-        pass.dispatch_workgroups(1, 1, 1);
-        crate::device::dispatch_marks::mark(pass, "fire_next");
         Ok(())
     }
 
@@ -452,9 +450,11 @@ impl StatelessSteps {
         chunks: &[Chunk],
     ) -> Result<(), RuntimeError> {
         pass.set_pipeline(&self.evaluate);
+        // A firing group's layout has the step's dynamic offset, which `evaluate` ignores.
+        let offsets: &[u32] = if self.firing.is_some() { &[0] } else { &[] };
         for chunk in chunks {
             let (x, y) = groups(gpu, chunk.len)?;
-            pass.set_bind_group(0, &chunk.bind_group, &[]);
+            pass.set_bind_group(0, &chunk.bind_group, offsets);
             pass.dispatch_workgroups(x, y, 1);
         }
         Ok(())

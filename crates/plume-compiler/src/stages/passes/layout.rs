@@ -338,9 +338,9 @@ pub fn decide(ir: &EffectIr) -> Layout {
             Binding {
                 binding: 20,
                 name: "fire_state",
-                space: "storage, read_write",
+                space: "storage, read",
                 bytes: 16,
-                meaning: "the step `fire` fires for (the batch's first from the CPU, then one more after each step)",
+                meaning: "the step `fire` fires for: the CPU writes each step of the batch at an offset of its own and binds it at that dynamic offset",
             },
         ]);
     }

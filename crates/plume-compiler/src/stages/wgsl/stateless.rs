@@ -157,13 +157,15 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     );
 }
 
-/// Emits a firing stateless group's `fire` kernel and `fire_next`. `fire` runs once a step over
+/// Emits a firing stateless group's `fire` kernel. It runs once a step over
 /// `fire_frame`, the segments that may hold live particles at any step of the batch: a
 /// particle spawned by the step in `fire_state` and not dead before it fires, at the end of
 /// the step, what its events' triggers say (`Death` in the step its lifetime ends, `Every(P)`
-/// after every P steps lived), with its closed form at that moment. `fire_next` then moves
-/// `fire_state` to the next step. The same contract as the stateful update's firings
-/// (`events.rs`): the f64 reference steps the same particles.
+/// after every P steps lived), with its closed form at that moment. `fire_state` holds the
+/// step: the runtime writes every step of the batch at an offset of its own and binds the
+/// step's at a dynamic offset (a one-thread kernel advancing it cost a dispatch a step). The
+/// same contract as the stateful update's firings (`events.rs`): the f64 reference steps the
+/// same particles.
 pub fn emit_fire(w: &mut Writer, ir: &EffectIr) {
     if ir.events.is_empty() {
         return;
@@ -210,9 +212,4 @@ pub fn emit_fire(w: &mut Writer, ir: &EffectIr) {
             );
         },
     );
-    w.blank();
-    w.line("@compute @workgroup_size(1)");
-    w.block("fn fire_next()", |w| {
-        w.line("fire_state[0] = fire_state[0] + 1u;");
-    });
 }
