@@ -567,47 +567,6 @@ impl Resources {
     }
 }
 
-impl Resources {
-    /// The `event_prepare_{input}` kernel of a group fed by events, with a bind group of only
-    /// what it uses (counters, the parent's records, the dispatch arguments): the arguments
-    /// are read by the indirect dispatch of `event_spawn`, and a buffer may not be both
-    /// storage and indirect in one dispatch, so the shared bind group leaves them out.
-    pub fn event_prepare(
-        &self,
-        effect: &CompiledEffect,
-        input: usize,
-    ) -> Result<(wgpu::ComputePipeline, wgpu::BindGroup), RuntimeError> {
-        let entry = format!("event_prepare_{input}");
-        let records = format!("event_in_{input}");
-        let missing = |what: &str| RuntimeError::Gpu(format!("{entry}: no {what} buffer"));
-        let pipeline = self.gpu.compute_pipeline(&self.module, &entry, None);
-        let mut entries = Vec::new();
-        for b in &effect.layout.bindings {
-            let buffer = if b.name == "counters" {
-                self.counters.as_ref().ok_or_else(|| missing("counters"))?
-            } else if b.name == records || b.name == EVENT_DISPATCH {
-                self.extra_buffer(b.binding)
-                    .ok_or_else(|| missing(b.name))?
-            } else {
-                continue;
-            };
-            entries.push(wgpu::BindGroupEntry {
-                binding: b.binding,
-                resource: buffer.as_entire_binding(),
-            });
-        }
-        let group = self
-            .gpu
-            .device
-            .create_bind_group(&wgpu::BindGroupDescriptor {
-                label: Some(&entry),
-                layout: &pipeline.get_bind_group_layout(0),
-                entries: &entries,
-            });
-        Ok((pipeline, group))
-    }
-}
-
-/// The binding an event-fed group's spawn dispatch arguments are in (bound only by
-/// [`Resources::event_prepare`]).
+/// The binding an event-fed group's spawn dispatch arguments are in (bound only by the
+/// `event_prepare` kernels, `crate::sim::steps`).
 pub(crate) const EVENT_DISPATCH: &str = "event_dispatch";

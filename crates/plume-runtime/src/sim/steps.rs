@@ -15,7 +15,7 @@ use plume_compiler::CompiledEffect;
 use plume_compiler::Layout;
 
 use crate::device::gpu::Gpu;
-use crate::device::resources::{Chunk, Resources};
+use crate::device::resources::{Chunk, Resources, EVENT_DISPATCH};
 use crate::error::RuntimeError;
 use crate::sim::flock::FlockPass;
 
@@ -105,13 +105,49 @@ impl Steps {
             events: (0..effect.ir.event_inputs.len())
                 .map(|j| {
                     Ok((
-                        res.event_prepare(effect, j)?,
+                        event_prepare(gpu, res, effect, j)?,
                         res.pipeline(&format!("event_spawn_{j}")),
                     ))
                 })
                 .collect::<Result<_, RuntimeError>>()?,
         }))
     }
+}
+
+/// The `event_prepare_{input}` kernel of a group fed by events, with a bind group of only what
+/// it uses (counters, the parent's records, the dispatch arguments): the arguments are read by
+/// the indirect dispatch of `event_spawn`, and a buffer may not be both storage and indirect
+/// in one dispatch, so the shared bind group leaves them out.
+fn event_prepare(
+    gpu: &Gpu,
+    res: &Resources,
+    effect: &CompiledEffect,
+    input: usize,
+) -> Result<(wgpu::ComputePipeline, wgpu::BindGroup), RuntimeError> {
+    let entry = format!("event_prepare_{input}");
+    let records = format!("event_in_{input}");
+    let missing = |what: &str| RuntimeError::Gpu(format!("{entry}: no {what} buffer"));
+    let pipeline = gpu.compute_pipeline(&res.module, &entry, None);
+    let mut entries = Vec::new();
+    for b in &effect.layout.bindings {
+        let buffer = if b.name == "counters" {
+            res.counters.as_ref().ok_or_else(|| missing("counters"))?
+        } else if b.name == records || b.name == EVENT_DISPATCH {
+            res.extra_buffer(b.binding).ok_or_else(|| missing(b.name))?
+        } else {
+            continue;
+        };
+        entries.push(wgpu::BindGroupEntry {
+            binding: b.binding,
+            resource: buffer.as_entire_binding(),
+        });
+    }
+    let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some(&entry),
+        layout: &pipeline.get_bind_group_layout(0),
+        entries: &entries,
+    });
+    Ok((pipeline, group))
 }
 
 impl StatefulSteps {
