@@ -581,43 +581,55 @@ fn firings_counted_or_bucketed_spawn_the_reference_children_when_thousands_fire_
 }
 
 #[test]
-fn firings_whose_ids_span_more_than_the_slots_share_buckets_and_still_spawn_in_id_order() {
-    // 3,000 immortal particles born first (ids 0..3,000) tick every step beside a stream that
-    // asks for 2,000 particles a step into 8,000 free slots, short-lived: each step the firing
-    // ids run from 0 past the newest, tens of thousands, far more than the 11,000 slots, so a
-    // bucket holds several ids (a shift above 0) and the firings of each bucket are ranked
-    // among themselves. The children (dropped where they overflow their group) match the
-    // reference's, which orders by id alone.
+fn firings_whose_ids_span_more_than_the_slots_spawn_in_id_order_by_bits_or_shared_buckets() {
+    // 3,000 immortal particles born first (ids 0..3,000) tick every step beside a stream of
+    // short-lived ones that asks for more particles a step than the 8,000 free slots hold: each
+    // step the firing ids run from 0 past the newest, far more than the 11,000 slots. Under
+    // 32 ids a slot, the ordering sets a bit an id and counts the bits below each firing's
+    // (past 8,192 words, 262,144 ids, a group count covers more than 4 words: the faster
+    // stream by step 10); past 32 ids a slot (by step 14), a bucket holds several ids (a shift
+    // above 0) and the firings of each bucket are ranked among themselves. The children
+    // (dropped where they overflow their group) match the reference's, which orders by id
+    // alone.
     use plume::compiler::events::Ordering;
-    let src = r#"Effect(
+    const SLOTS: u64 = 11_000;
+    for (rate, checkpoints, spread) in [
+        (200_000.0, [1, 6, 15], SLOTS..32 * 8192),
+        (3_000_000.0, [1, 6, 10], 32 * 8192..32 * SLOTS),
+        (3_000_000.0, [1, 14, 20], 32 * SLOTS..u64::MAX),
+    ] {
+        let src = format!(
+            r#"Effect(
         name: "ancients",
-        capacity: 11000,
+        capacity: {SLOTS},
         dt: 0.01,
         emitters: [
             Emitter(burst: 3000, shape: Box(min: (-5.0, 0.0, -5.0), max: (5.0, 1.0, 5.0)),
                     velocity: Cone(axis: (0.0, 1.0, 0.0), angle: 30.0, speed: (0.1, 0.2)), lifetime: None),
-            Emitter(rate: 200000.0, shape: Sphere(center: (0.0, 3.0, 0.0), radius: 1.0),
+            Emitter(rate: {rate:?}, shape: Sphere(center: (0.0, 3.0, 0.0), radius: 1.0),
                     velocity: Radial(speed: (0.5, 1.0)), lifetime: Some((0.02, 0.04))),
         ],
         forces: [Gravity((0.0, -9.81, 0.0))],
         events: [Event(on: Every(0.01), target: "ticks", count: 1, velocity: Radial(speed: (0.5, 1.0)), lifetime: Some((0.05, 0.05)))],
         groups: [Group(name: "ticks", capacity: 30000, forces: [Gravity((0.0, -9.81, 0.0))])],
-    )"#;
-    let g = graph(src);
-    assert_eq!(g.streams[0].ordering, Ordering::Bucketed);
-    let sim = compare_runs("wide buckets", &g, &[1, 6, 15]);
-    let parents = sim.group_records(0).unwrap();
-    let ids = parents.iter().map(|p| p.id);
-    let (lo, hi) = (ids.clone().min().unwrap(), ids.max().unwrap());
-    assert!(
-        hi - lo > 11_000,
-        "the live (and firing) ids span {lo}..{hi}: wider than the slots"
-    );
-    let t = sim.group_totals(1).unwrap();
-    assert!(
-        t.dropped > 0 && t.spawned > 10_000,
-        "ticks spawned and dropped: {t:?}"
-    );
+    )"#
+        );
+        let g = graph(&src);
+        assert_eq!(g.streams[0].ordering, Ordering::Bucketed);
+        let sim = compare_runs(&format!("ids spread at {rate}/s"), &g, &checkpoints);
+        let parents = sim.group_records(0).unwrap();
+        let ids = parents.iter().map(|p| u64::from(p.id));
+        let (lo, hi) = (ids.clone().min().unwrap(), ids.max().unwrap());
+        assert!(
+            spread.contains(&(hi - lo)),
+            "at {rate}/s after {checkpoints:?} steps the live (and firing) ids span {lo}..{hi}, not {spread:?}"
+        );
+        let t = sim.group_totals(1).unwrap();
+        assert!(
+            t.dropped > 0 && t.spawned > 10_000,
+            "at {rate}/s ticks spawned and dropped: {t:?}"
+        );
+    }
 }
 
 #[test]

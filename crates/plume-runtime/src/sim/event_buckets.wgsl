@@ -1,32 +1,46 @@
 // The order of an event's firings by buckets (crate::sim::events, Ordering::Bucketed): a stream
-// compaction in id order, with no sort. The firing group's update appended (id, slot) pairs to
-// `keys`/`vals` in whatever order its threads ran, counted them, and noted the complement of
-// the smallest id and the largest id in the records' header. Then, at the next step's start:
+// compaction in id order, with no sort, in three dispatches. The firing group's update appended
+// (id, slot) pairs to `keys`/`vals` in whatever order its threads ran, counted them, and noted
+// the complement of the smallest id and the largest id in the records' header. At the next
+// step's start, one of two ways by the range of the ids (n = the firing group's slots):
 //
-//   bucket_count:      each firing drops into the bucket (id - smallest) >> shift, the shift
-//                      the least that fits the ids' range into the n buckets (n = the firing
-//                      group's slots): 0, one id a bucket, while the range is under n.
-//   bucket_reduce,
-//   bucket_scan:       the exclusive scan of the used buckets' counts (reduce-then-scan, blocks
-//                      of 2,048 buckets; each block sums the totals before it), into `starts`.
-//   bucket_place:      with one id a bucket, each firing's slot goes to order[its bucket's
-//                      start]; otherwise the firing is staged in its bucket's run.
-//   bucket_rank:       (wider buckets only) each staged firing's rank is its bucket's start plus
-//                      the staged ids of its bucket smaller than its own.
+// While the ids span fewer than 32 n, one bit an id (`shift` 0): the n words are a bitmap.
+//   bucket_count:      each firing sets its id's bit (atomicOr) and counts itself in its word's
+//                      quad (4 words) and in its word's group (a run of quads: at most GROUPS
+//                      groups cover the words).
+//   bucket_place:      each workgroup scans the groups' counts in workgroup memory; a firing's
+//                      place is its group's start, plus the firings of its group's quads before
+//                      its quad, of its quad's words before its word, and the bits below its
+//                      own in the word: order[place] = slot.
+//   bucket_rank:       clears the words and the groups' counts (no one reads them after the
+//                      place).
+// Past that, buckets of 2^shift ids (the least shift that fits the ids' range into n buckets),
+// which a word each counts:
+//   bucket_count:      each firing counts itself in its bucket (its place among the bucket's
+//                      firings, in whatever order threads ran), its quad and its group.
+//   bucket_place:      the same scan gives the bucket's run; the firing is staged there and
+//                      the run noted in `runs`.
+//   bucket_rank:       each staged firing's rank is its run's start plus the staged ids of the
+//                      run smaller than its own; the counts are cleared.
 //
+// Until 2026-11-26 the words' counts were scanned across the device (a reduce and a scan of
+// blocks of 2,048 words, five dispatches, one word an id): each dispatch costs an H100 about
+// 2.7 µs before any work, and the two scans about 13 µs a step for fireworks' sparks and
+// rain's drops at 10M slots (docs/performance.md, "Events").
 // The work follows the firings and the range of their ids, not the group's slots: each kernel
-// is dispatched on a fixed grid (at most 1,024 workgroups) whose threads, or workgroups, stride
-// over this step's firings (or used buckets), so that a step with few firings launches few
-// threads (a grid over every slot of a 5.6M-slot group cost more, on an H100, than the work).
-// Ids are unique, so a bucket of width 2^shift holds at most 2^shift firings, and at most as
-// many as fired: the ranking's comparisons stay below n * 2^32 / n = 2^32 in the worst case,
-// and are none while the ids span fewer than n. `bucket_place` clears the counts it used, so
-// every bucket is zero again for the next step.
+// is dispatched on a fixed grid (at most 1,024 workgroups) whose threads stride over this
+// step's firings, so that a step with few firings launches few threads. Ids are unique, so a
+// bucket of width 2^shift holds at most 2^shift firings, and at most as many as fired: the
+// ranking's comparisons stay below n * 2^32 / n = 2^32 in the worst case.
+// Every word and group count is zero again for the next step.
 
 const THREADS: u32 = 256u;
-// Buckets per thread and per block of the scan.
+// The most groups of words (their counts scanned by every workgroup of bucket_place).
+const GROUPS: u32 = 2048u;
+// GROUPS = THREADS * PER_THREAD: each thread scans 8 groups.
 const PER_THREAD: u32 = 8u;
-const BLOCK: u32 = 2048u;
+// Words a quad count covers: 1 << QUAD_SHIFT.
+const QUAD_SHIFT: u32 = 2u;
 
 struct Header {
     count: u32,
@@ -39,38 +53,54 @@ struct Header {
 @group(0) @binding(1) var<storage, read> vals: array<u32>;
 @group(0) @binding(2) var<storage, read> header: Header;
 @group(0) @binding(3) var<storage, read_write> order: array<u32>;
-// n buckets' counts: zero between steps.
+// n words: a bit an id, or a bucket's count (zero between steps).
 @group(0) @binding(4) var<storage, read_write> counts: array<atomic<u32>>;
-// n buckets' starts, then each block's total.
-@group(0) @binding(5) var<storage, read_write> starts: array<u32>;
+// GROUPS groups' counts, then a count for every 4 words (zero between steps).
+@group(0) @binding(5) var<storage, read_write> group_counts: array<atomic<u32>>;
 // Each firing's place in its bucket (wider buckets only).
 @group(0) @binding(6) var<storage, read_write> within: array<u32>;
 // The firings (id, slot) staged by bucket (wider buckets only).
 @group(0) @binding(7) var<storage, read_write> staged: array<vec2<u32>>;
+// Each bucket's run of staged firings, first and end (wider buckets only).
+@group(0) @binding(8) var<storage, read_write> runs: array<vec2<u32>>;
 
-// This step's firings and their buckets.
+// This step's firings and their words: with shift 0 a word holds 32 ids' bits, otherwise it
+// is the count of a bucket of 2^shift ids. A group counts 2^group_shift words (at least a
+// quad's 4).
 struct Window {
     count: u32,
     min_id: u32,
     shift: u32,
-    buckets: u32,
+    words: u32,
+    group_shift: u32,
 }
 
 var<workgroup> shared_window: Window;
 var<workgroup> scan_buf: array<u32, 256>;
+// The groups' starts (bucket_place).
+var<workgroup> group_starts: array<u32, GROUPS>;
 
 fn window_of(h: Header) -> Window {
     if (h.count == 0u) {
-        return Window(0u, 0u, 0u, 0u);
+        return Window(0u, 0u, 0u, 0u, 0u);
     }
     let min_id = ~h.not_min_id;
     let spread = h.max_id - min_id;
     let n = arrayLength(&counts);
     var shift = 0u;
-    while (shift < 31u && (spread >> shift) >= n) {
-        shift += 1u;
+    var words = (spread >> 5u) + 1u;
+    if ((spread >> 5u) >= n) {
+        shift = 6u;
+        while (shift < 31u && (spread >> shift) >= n) {
+            shift += 1u;
+        }
+        words = (spread >> shift) + 1u;
     }
-    return Window(h.count, min_id, shift, (spread >> shift) + 1u);
+    var group_shift = QUAD_SHIFT;
+    while (((words - 1u) >> group_shift) >= GROUPS) {
+        group_shift += 1u;
+    }
+    return Window(h.count, min_id, shift, words, group_shift);
 }
 
 fn window() -> Window {
@@ -85,8 +115,15 @@ fn uniform_window(lane: u32) -> Window {
     return workgroupUniformLoad(&shared_window);
 }
 
-fn bucket_of(w: Window, id: u32) -> u32 {
-    return (id - w.min_id) >> w.shift;
+// A firing's word: its bit's word (shift 0), or its bucket.
+fn word_of(w: Window, id: u32) -> u32 {
+    return (id - w.min_id) >> select(w.shift, 5u, w.shift == 0u);
+}
+
+// What a word adds to the scan: its bits set, or its bucket's count.
+fn word_total(w: Window, at: u32) -> u32 {
+    let v = atomicLoad(&counts[at]);
+    return select(v, countOneBits(v), w.shift == 0u);
 }
 
 fn flat(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
@@ -120,88 +157,64 @@ fn bucket_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) 
                 @builtin(local_invocation_index) lane: u32) {
     let w = window();
     for (var k = flat(wid, groups) * THREADS + lane; k < w.count; k += workgroups(groups) * THREADS) {
-        let b = bucket_of(w, keys[k]);
+        let id = keys[k];
+        let word = word_of(w, id);
         if (w.shift == 0u) {
-            atomicStore(&counts[b], 1u);
+            atomicOr(&counts[word], 1u << ((id - w.min_id) & 31u));
         } else {
-            within[k] = atomicAdd(&counts[b], 1u);
+            within[k] = atomicAdd(&counts[word], 1u);
         }
-    }
-}
-
-// The total of a block's used buckets, after the n starts.
-@compute @workgroup_size(256)
-fn bucket_reduce(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-                 @builtin(local_invocation_index) lane: u32) {
-    let w = uniform_window(lane);
-    for (var block = flat(wid, groups); block * BLOCK < w.buckets; block += workgroups(groups)) {
-        let first = block * BLOCK + lane * PER_THREAD;
-        var sum = 0u;
-        for (var j = 0u; j < PER_THREAD; j++) {
-            if (first + j < w.buckets) {
-                sum += atomicLoad(&counts[first + j]);
-            }
-        }
-        let before = exclusive_scan_256(lane, sum);
-        if (lane == THREADS - 1u) {
-            starts[arrayLength(&counts) + block] = before + sum;
-        }
-    }
-}
-
-// Each used bucket's start: the totals of the blocks before its block (each workgroup sums
-// them itself: at most n / 2,048 words, a few loads a thread, where a dispatch of its own to
-// scan them cost a dependent launch a step) plus the buckets before it in the block.
-@compute @workgroup_size(256)
-fn bucket_scan(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
-               @builtin(local_invocation_index) lane: u32) {
-    let w = uniform_window(lane);
-    // The blocks' totals follow the n buckets' starts.
-    let totals_at = arrayLength(&counts);
-    for (var block = flat(wid, groups); block * BLOCK < w.buckets; block += workgroups(groups)) {
-        var before = 0u;
-        for (var b = lane; b < block; b += THREADS) {
-            before += starts[totals_at + b];
-        }
-        // The scan leaves the workgroup's total in its last entry, read before the next scan's
-        // first barrier lets anyone write it again.
-        _ = exclusive_scan_256(lane, before);
-        let block_start = scan_buf[THREADS - 1u];
-        let first = block * BLOCK + lane * PER_THREAD;
-        var mine: array<u32, PER_THREAD>;
-        var sum = 0u;
-        for (var j = 0u; j < PER_THREAD; j++) {
-            mine[j] = 0u;
-            if (first + j < w.buckets) {
-                mine[j] = atomicLoad(&counts[first + j]);
-            }
-            sum += mine[j];
-        }
-        var run = block_start + exclusive_scan_256(lane, sum);
-        for (var j = 0u; j < PER_THREAD; j++) {
-            if (first + j < w.buckets) {
-                starts[first + j] = run;
-            }
-            run += mine[j];
-        }
+        atomicAdd(&group_counts[GROUPS + (word >> QUAD_SHIFT)], 1u);
+        atomicAdd(&group_counts[word >> w.group_shift], 1u);
     }
 }
 
 @compute @workgroup_size(256)
 fn bucket_place(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) lane: u32) {
-    let w = window();
-    for (var k = flat(wid, groups) * THREADS + lane; k < w.count; k += workgroups(groups) * THREADS) {
+    let w = uniform_window(lane);
+    let first_firing = flat(wid, groups) * THREADS;
+    if (first_firing >= w.count) {
+        return;
+    }
+    // Every group's start, in workgroup memory: a few thousand words read from L2 by each
+    // workgroup, where a scan of its own would cost a dispatch.
+    let used = ((w.words - 1u) >> w.group_shift) + 1u;
+    var mine: array<u32, PER_THREAD>;
+    var sum = 0u;
+    for (var j = 0u; j < PER_THREAD; j++) {
+        let g = lane * PER_THREAD + j;
+        mine[j] = 0u;
+        if (g < used) {
+            mine[j] = atomicLoad(&group_counts[g]);
+        }
+        sum += mine[j];
+    }
+    var run = exclusive_scan_256(lane, sum);
+    for (var j = 0u; j < PER_THREAD; j++) {
+        group_starts[lane * PER_THREAD + j] = run;
+        run += mine[j];
+    }
+    workgroupBarrier();
+    for (var k = first_firing + lane; k < w.count; k += workgroups(groups) * THREADS) {
         let id = keys[k];
-        let b = bucket_of(w, id);
-        let start = starts[b];
+        let word = word_of(w, id);
+        let quad = word >> QUAD_SHIFT;
+        var start = group_starts[word >> w.group_shift];
+        for (var q = (word >> w.group_shift) << (w.group_shift - QUAD_SHIFT); q < quad; q++) {
+            start += atomicLoad(&group_counts[GROUPS + q]);
+        }
+        for (var at = quad << QUAD_SHIFT; at < word; at++) {
+            start += word_total(w, at);
+        }
         if (w.shift == 0u) {
-            order[start] = vals[k];
+            let below = atomicLoad(&counts[word]) & ((1u << ((id - w.min_id) & 31u)) - 1u);
+            order[start + countOneBits(below)] = vals[k];
         } else {
             staged[start + within[k]] = vec2<u32>(id, vals[k]);
+            // Every firing of the bucket notes the same run.
+            runs[word] = vec2<u32>(start, start + atomicLoad(&counts[word]));
         }
-        // Every firing of the bucket clears it (no one reads the counts from here on).
-        atomicStore(&counts[b], 0u);
     }
 }
 
@@ -209,19 +222,19 @@ fn bucket_place(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) 
 fn bucket_rank(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                @builtin(local_invocation_index) lane: u32) {
     let w = window();
-    if (w.shift == 0u) {
-        return;
-    }
     for (var q = flat(wid, groups) * THREADS + lane; q < w.count; q += workgroups(groups) * THREADS) {
-        let mine = staged[q];
-        let b = bucket_of(w, mine.x);
-        let lo = starts[b];
-        var hi = w.count;
-        if (b + 1u < w.buckets) {
-            hi = starts[b + 1u];
+        // Every firing clears its word and its group (no one reads them from here on).
+        let word = word_of(w, keys[q]);
+        atomicStore(&counts[word], 0u);
+        atomicStore(&group_counts[GROUPS + (word >> QUAD_SHIFT)], 0u);
+        atomicStore(&group_counts[word >> w.group_shift], 0u);
+        if (w.shift == 0u) {
+            continue;
         }
-        var rank = lo;
-        for (var m = lo; m < hi; m++) {
+        let mine = staged[q];
+        let run = runs[word_of(w, mine.x)];
+        var rank = run.x;
+        for (var m = run.x; m < run.y; m++) {
             rank += select(0u, 1u, staged[m].x < mine.x);
         }
         order[rank] = mine.y;

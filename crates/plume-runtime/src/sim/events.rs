@@ -3,9 +3,10 @@
 //! firing group's threads ran in. The firing group's update appended (id, slot) pairs; how
 //! they are put in order, the compiler decided by the firing group's capacity
 //! (plume_compiler::events::Ordering): up to `COUNTED_MAX` slots, `order_rank`
-//! (event_order.wgsl) ranks them by counting, in one dispatch; past that, the firings are
-//! dropped into buckets by id and the buckets' counts scanned (event_buckets.wgsl: a stream
-//! compaction in id order, five dispatches, no sort). A stateless firing group's stream may
+//! (event_order.wgsl) ranks them by counting, in one dispatch; past that, each firing sets its
+//! id's bit in a bitmap (or, where the ids span more than 32 bits a slot, drops into a bucket of
+//! ids) and each firing's place is counted from the words' counts (event_buckets.wgsl: a stream
+//! compaction in id order, three dispatches, no sort). A stateless firing group's stream may
 //! take the counting kernel in steps whose firings the host bounds (crate::sim::graph).
 //!
 //! (Until 2026-11 a large group wrote a key per slot and the radix sort ordered every slot:
@@ -19,8 +20,9 @@ use crate::error::RuntimeError;
 
 /// Threads of every ordering kernel's workgroup.
 const THREADS: u64 = 256;
-/// Buckets a workgroup of the bucket scan covers (event_buckets.wgsl's BLOCK).
-const BUCKET_BLOCK: u64 = 2048;
+/// The most groups of words whose counts every workgroup of `bucket_place` scans
+/// (event_buckets.wgsl's GROUPS).
+const BUCKET_GROUPS: u64 = 2048;
 /// The most workgroups of a bucket kernel: its threads stride over the firings (about the
 /// threads an H100 holds at once; a grid over every slot launched millions that had nothing
 /// to do).
@@ -87,32 +89,25 @@ impl EventOrder {
                         mapped_at_creation: false,
                     })
                 };
-                let blocks = n.div_ceil(BUCKET_BLOCK);
                 // Created zeroed, as the counts are between steps.
                 let counts = buffer("event bucket counts", n);
-                let starts = buffer("event bucket starts", n + blocks);
+                let group_counts = buffer("event bucket group counts", BUCKET_GROUPS + n / 4 + 1);
                 let within = buffer("event bucket places", n);
                 let staged = buffer("event bucket staging", 2 * n);
-                let over_blocks = gpu.grid(blocks.min(BUCKET_WORKGROUPS), 1)?;
+                let runs = buffer("event bucket runs", 2 * n);
                 let over_firings = gpu.grid(n.min(BUCKET_WORKGROUPS * THREADS), THREADS)?;
                 vec![
                     dispatch(
                         &module,
                         "bucket_count",
-                        &[(0, keys), (2, records), (4, &counts), (6, &within)],
+                        &[
+                            (0, keys),
+                            (2, records),
+                            (4, &counts),
+                            (5, &group_counts),
+                            (6, &within),
+                        ],
                         over_firings,
-                    ),
-                    dispatch(
-                        &module,
-                        "bucket_reduce",
-                        &[(2, records), (4, &counts), (5, &starts)],
-                        over_blocks,
-                    ),
-                    dispatch(
-                        &module,
-                        "bucket_scan",
-                        &[(2, records), (4, &counts), (5, &starts)],
-                        over_blocks,
                     ),
                     dispatch(
                         &module,
@@ -123,9 +118,10 @@ impl EventOrder {
                             (2, records),
                             (3, order),
                             (4, &counts),
-                            (5, &starts),
+                            (5, &group_counts),
                             (6, &within),
                             (7, &staged),
+                            (8, &runs),
                         ],
                         over_firings,
                     ),
@@ -133,11 +129,13 @@ impl EventOrder {
                         &module,
                         "bucket_rank",
                         &[
+                            (0, keys),
                             (2, records),
                             (3, order),
                             (4, &counts),
-                            (5, &starts),
+                            (5, &group_counts),
                             (7, &staged),
+                            (8, &runs),
                         ],
                         over_firings,
                     ),
