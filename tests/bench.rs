@@ -154,10 +154,14 @@ fn the_profile_names_every_dispatch_of_a_step_once() {
     let (with, without) = &graph.dispatches;
     let labels: Vec<&str> = with.iter().map(|d| d.label.as_str()).collect();
     // Rain's drops (group 0) are bucketed (past 8,192 slots) and feed the splashes (group 1).
+    assert!(
+        !labels.contains(&"s0.event_prepare"),
+        "the ordering prepares the spawn: {labels:?}"
+    );
     for expected in [
         "s0.bucket_count",
         "s0.bucket_place",
-        "s0.event_prepare",
+        "s0.bucket_rank",
         "s0.event_spawn",
         "g0.update",
         "g1.update",

@@ -269,7 +269,7 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
             space: "storage, read_write",
             bytes: 16,
             meaning:
-                "the workgroups of the event spawn, written by event_prepare (indirect dispatch)",
+                "the workgroups of the event spawn, written by the stream's ordering (indirect dispatch)",
         });
     }
     out
@@ -469,7 +469,10 @@ pub fn emit_fire_appended(
     }
 }
 
-/// Emits `event_prepare_J` and `event_spawn_J` for every event the group receives.
+/// Emits `event_spawn_J` for every event the group receives. The stream's ordering (a runtime
+/// kernel, `crate::events` in plume-runtime) has already taken the firings' count, popped the
+/// children's slots and written this dispatch's workgroups (at least one): the spawn's first
+/// thread clears the parent's records header for the firings of the step to come.
 /// `store` emits the store of the spawned particle `s` with id `id` (and packed tint `tint`,
 /// when the group stores tints) in `slot`: the same code as the group's own spawn. `own` is
 /// the WGSL of the group's own tint for the particle `id` when it stores tints (`tint.rs`).
@@ -482,36 +485,21 @@ pub fn emit_kernels(
     for (j, input) in inputs.iter().enumerate() {
         let records = IN_RECORDS[j];
         w.comment(format!(
-            "Event {}: takes the parent's firings of the last step ({} particles each); pops slots for as many as fit, in parent id order, the rest dropped and counted; ids consumed either way.",
+            "Event {}: the parent's firings of the last step ({} particles each), in parent id order, spawned into the slots the ordering popped for as many as fit (the rest dropped and counted; ids consumed either way).",
             input.stream, input.count
         ));
-        w.line("@compute @workgroup_size(1)");
-        w.block(format!("fn event_prepare_{j}()"), |w| {
-            w.line(format!("let fired = atomicLoad(&{records}.count);"));
-            w.line(format!("atomicStore(&{records}.count, 0u);"));
-            w.line(format!("atomicStore(&{records}.not_min_id, 0u);"));
-            w.line(format!("atomicStore(&{records}.max_id, 0u);"));
-            w.line(format!("let requested = fired * {};", u32_lit(input.count)));
-            w.line("let free = atomicLoad(&counters.free_count);");
-            w.line("let n = min(requested, free);");
-            w.line("atomicStore(&counters.free_count, free - n);");
-            w.line("counters.spawn_base = free - n;");
-            w.line("counters.spawn_count = n;");
-            w.line("counters.spawned = counters.spawned + n;");
-            w.line("counters.dropped = counters.dropped + (requested - n);");
-            w.line("counters.event_first_id = counters.next_id;");
-            w.line("counters.next_id = counters.next_id + requested;");
-            w.line("let workgroups = (n + WORKGROUP - 1u) / WORKGROUP;");
-            w.line("event_dispatch[0] = min(workgroups, 65535u);");
-            w.line("event_dispatch[1] = (workgroups + 65534u) / 65535u;");
-            w.line("event_dispatch[2] = 1u;");
-        });
-        w.blank();
         w.line("@compute @workgroup_size(WORKGROUP)");
         w.block(
             format!("fn event_spawn_{j}(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)"),
             |w| {
-                crate::base::kernel::emit_thread_index(w, "i", Some("counters.spawn_count"));
+                crate::base::kernel::emit_thread_index(w, "i", None);
+                w.comment("The header was read by the ordering; the parent's next firings count from zero.");
+                w.block("if (i == 0u)", |w| {
+                    w.line(format!("atomicStore(&{records}.count, 0u);"));
+                    w.line(format!("atomicStore(&{records}.not_min_id, 0u);"));
+                    w.line(format!("atomicStore(&{records}.max_id, 0u);"));
+                });
+                w.block("if (i >= counters.spawn_count)", |w| w.line("return;"));
                 w.line("let slot = free_list[counters.spawn_base + i];");
                 w.block("if (slot < chunk.base || slot - chunk.base >= chunk.len)", |w| {
                     w.line("return;")

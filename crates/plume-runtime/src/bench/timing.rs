@@ -187,7 +187,7 @@ impl Effect {
 
     /// Times each stream's ordering of the last step's firings alone, in stream order
     /// (seconds each, the median of `repeats`). The state does not change: it orders the
-    /// same firings again.
+    /// same firings again, and does not prepare their children's spawn.
     pub(crate) fn time_orders(
         &self,
         timer: &PassTimer<'_>,
@@ -205,7 +205,7 @@ impl Effect {
                 let order = s.for_step(&self.groups()[s.stream.parent], 1);
                 median_after_warmup(repeats, || {
                     timer.time(|pass| {
-                        order.record(pass);
+                        order.record_alone(pass);
                         Ok(())
                     })
                 })

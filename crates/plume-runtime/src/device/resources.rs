@@ -567,6 +567,6 @@ impl Resources {
     }
 }
 
-/// The binding an event-fed group's spawn dispatch arguments are in (bound only by the
-/// `event_prepare` kernels, `crate::sim::steps`).
+/// The binding an event-fed group's spawn dispatch arguments are in (written only by the
+/// first kernel of each stream's ordering, `crate::sim::events`, which binds it itself).
 pub(crate) const EVENT_DISPATCH: &str = "event_dispatch";

@@ -180,6 +180,10 @@ impl Effect {
             names.push(group.name);
             groups.push(Group::new(gpu, group.effect, max_chunk_slots, shared)?);
         }
+        let mut events = events;
+        if let Some(events) = &mut events {
+            events.bind_children(gpu, &groups)?;
+        }
         gpu.take_error()?;
         Ok(Self {
             gpu: gpu.clone(),

@@ -5,9 +5,10 @@
 // step's start, one of two ways by the range of the ids (n = the firing group's slots):
 //
 // While the ids span fewer than 32 n, one bit an id (`shift` 0): the n words are a bitmap.
-//   bucket_count:      each firing sets its id's bit (atomicOr) and counts itself in its word's
-//                      quad (4 words) and in its word's group (a run of quads: at most GROUPS
-//                      groups cover the words).
+//   bucket_count:      each firing sets its id's bit (atomicOr) and counts itself in its
+//                      word's quad (4 words) and in its word's group (a run of quads: at most
+//                      GROUPS groups cover the words). Its first thread also prepares the
+//                      children's spawn (event_prepare.wgsl, before this file).
 //   bucket_place:      each workgroup scans the groups' counts in workgroup memory; a firing's
 //                      place is its group's start, plus the firings of its group's quads before
 //                      its quad, of its quad's words before its word, and the bits below its
@@ -184,6 +185,9 @@ fn count_local(array: u32, at: u32, base: u32, amount: u32) {
 fn bucket_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) lane: u32) {
     let w = uniform_window(lane);
+    if (flat(wid, groups) == 0u && lane == 0u) {
+        prepare_spawn(w.count);
+    }
     for (var first = flat(wid, groups) * THREADS; first < w.count; first += workgroups(groups) * THREADS) {
         let k = first + lane;
         let live = k < w.count;

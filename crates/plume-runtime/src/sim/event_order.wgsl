@@ -2,6 +2,7 @@
 // appended (id, slot) pairs to `keys`/`vals` and counted them in the records' first word;
 // `order_rank` puts the slots in id order in `order`. Each firing counts the firings with
 // smaller ids (ids are unique, so the ranks are too), 256 at a time through workgroup memory.
+// Its first thread also prepares the children's spawn (event_prepare.wgsl, before this file).
 
 const NONE: u32 = 0xffffffffu;
 
@@ -23,6 +24,9 @@ fn order_rank(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gr
         shared_count = records[0];
     }
     let count = workgroupUniformLoad(&shared_count);
+    if (first == 0u && lane == 0u) {
+        prepare_spawn(count);
+    }
     // Dispatched over every slot: a whole workgroup past the count has nothing to rank.
     if (first >= count) {
         return;

@@ -13,6 +13,7 @@
 //! four passes of 8 bits whether 5 or 50,000 fired; docs/performance.md, "Events", has both.)
 
 use plume_compiler::events::Ordering;
+use plume_compiler::wgsl::{counter_word, WORKGROUP};
 
 use crate::device::buffers::STORAGE;
 use crate::device::gpu::Gpu;
@@ -37,21 +38,39 @@ struct Dispatch {
     entry: &'static str,
 }
 
+/// The ordering's first kernel, whose first thread also prepares the children's spawn
+/// (event_prepare.wgsl): its pipeline that does, and one that does not (for timing the
+/// ordering alone), each bound to the parent's buffers and, once the child exists
+/// ([`EventOrder::bind_child`]), the child's counters and spawn workgroups.
+struct First {
+    pipelines: [wgpu::ComputePipeline; 2],
+    groups: Option<[wgpu::BindGroup; 2]>,
+    parent: Vec<(u32, wgpu::Buffer)>,
+    grid: (u32, u32),
+    entry: &'static str,
+}
+
 /// One stream's ordering: its dispatches, in order.
 pub struct EventOrder {
-    dispatches: Vec<Dispatch>,
+    first: First,
+    rest: Vec<Dispatch>,
 }
+
+/// The child's counters and its spawn's workgroups, where the first kernel binds them.
+const CHILD_COUNTERS: u32 = 10;
+const CHILD_DISPATCH: u32 = 11;
 
 impl EventOrder {
     /// The ordering of a stream whose firing group has `n` slots: `keys`, `vals` (n each) and
     /// `records` (the count, the id range, then the records) are the firing group's. The firing
-    /// slots, in id order, go to `order` (n).
+    /// slots, in id order, go to `order` (n). Each firing asks for `count` children.
     pub fn new(
         gpu: &Gpu,
         ordering: Ordering,
         n: u64,
         (keys, vals, records): (&wgpu::Buffer, &wgpu::Buffer, &wgpu::Buffer),
         order: &wgpu::Buffer,
+        count: u32,
     ) -> Result<Self, RuntimeError> {
         let module = |label: &str, source: &'static str| {
             crate::device::gpu::shader_module(&gpu.device, label, source)
@@ -69,18 +88,66 @@ impl EventOrder {
                 entry,
             }
         };
-        let dispatches = match ordering {
+        let first = |module: &wgpu::ShaderModule,
+                     entry: &'static str,
+                     entries: &[(u32, &wgpu::Buffer)],
+                     grid: (u32, u32)| {
+            let pipeline = |prepare: bool| {
+                let mut constants = vec![
+                    ("PREPARE", if prepare { 1.0 } else { 0.0 }),
+                    ("CHILD_COUNT", f64::from(count)),
+                    ("CHILD_WORKGROUP", f64::from(WORKGROUP)),
+                ];
+                for (name, field) in PREPARED_COUNTERS {
+                    let word = counter_word(field).expect("a counter the compiler declares");
+                    constants.push((name, f64::from(word)));
+                }
+                gpu.device
+                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                        label: Some(entry),
+                        layout: None,
+                        module,
+                        entry_point: Some(entry),
+                        compilation_options: wgpu::PipelineCompilationOptions {
+                            constants: &constants,
+                            ..Default::default()
+                        },
+                        cache: None,
+                    })
+            };
+            First {
+                pipelines: [pipeline(true), pipeline(false)],
+                groups: None,
+                parent: entries.iter().map(|(at, b)| (*at, (*b).clone())).collect(),
+                grid,
+                entry,
+            }
+        };
+        let (first, rest) = match ordering {
             Ordering::Counted => {
-                let module = module("event order", include_str!("event_order.wgsl"));
-                vec![dispatch(
+                let module = module(
+                    "event order",
+                    concat!(
+                        include_str!("event_prepare.wgsl"),
+                        include_str!("event_order.wgsl")
+                    ),
+                );
+                let rank = first(
                     &module,
                     "order_rank",
                     &[(0, keys), (1, vals), (2, records), (3, order)],
                     gpu.grid(n, THREADS)?,
-                )]
+                );
+                (rank, Vec::new())
             }
             Ordering::Bucketed => {
-                let module = module("event buckets", include_str!("event_buckets.wgsl"));
+                let module = module(
+                    "event buckets",
+                    concat!(
+                        include_str!("event_prepare.wgsl"),
+                        include_str!("event_buckets.wgsl")
+                    ),
+                );
                 let buffer = |label: &str, words: u64| {
                     gpu.device.create_buffer(&wgpu::BufferDescriptor {
                         label: Some(label),
@@ -96,19 +163,19 @@ impl EventOrder {
                 let staged = buffer("event bucket staging", 2 * n);
                 let runs = buffer("event bucket runs", 2 * n);
                 let over_firings = gpu.grid(n.min(BUCKET_WORKGROUPS * THREADS), THREADS)?;
-                vec![
-                    dispatch(
-                        &module,
-                        "bucket_count",
-                        &[
-                            (0, keys),
-                            (2, records),
-                            (4, &counts),
-                            (5, &group_counts),
-                            (6, &within),
-                        ],
-                        over_firings,
-                    ),
+                let count = first(
+                    &module,
+                    "bucket_count",
+                    &[
+                        (0, keys),
+                        (2, records),
+                        (4, &counts),
+                        (5, &group_counts),
+                        (6, &within),
+                    ],
+                    over_firings,
+                );
+                let rest = vec![
                     dispatch(
                         &module,
                         "bucket_place",
@@ -139,15 +206,61 @@ impl EventOrder {
                         ],
                         over_firings,
                     ),
-                ]
+                ];
+                (count, rest)
             }
         };
-        Ok(Self { dispatches })
+        Ok(Self { first, rest })
     }
 
-    /// Records the ordering of this step's firings into `pass`.
+    /// Binds the first kernel to the child group's `counters` and `dispatch` (its event
+    /// spawn's workgroups), once the child exists.
+    pub(crate) fn bind_child(
+        &mut self,
+        gpu: &Gpu,
+        counters: &wgpu::Buffer,
+        dispatch: &wgpu::Buffer,
+    ) {
+        let mut entries: Vec<(u32, &wgpu::Buffer)> =
+            self.first.parent.iter().map(|(at, b)| (*at, b)).collect();
+        entries.extend([(CHILD_COUNTERS, counters), (CHILD_DISPATCH, dispatch)]);
+        let group = |pipeline: &wgpu::ComputePipeline| {
+            gpu.bind_buffers(
+                self.first.entry,
+                &pipeline.get_bind_group_layout(0),
+                &entries,
+            )
+        };
+        self.first.groups = Some([
+            group(&self.first.pipelines[0]),
+            group(&self.first.pipelines[1]),
+        ]);
+    }
+
+    /// Records the ordering of this step's firings, and the preparation of the children's
+    /// spawn, into `pass`.
     pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
-        for d in &self.dispatches {
+        self.record_with(pass, true);
+    }
+
+    /// Records the ordering alone (the children's spawn not prepared: the state does not
+    /// change), for timing it.
+    pub(crate) fn record_alone(&self, pass: &mut wgpu::ComputePass<'_>) {
+        self.record_with(pass, false);
+    }
+
+    fn record_with(&self, pass: &mut wgpu::ComputePass<'_>, prepare: bool) {
+        let at = usize::from(!prepare);
+        let groups = self
+            .first
+            .groups
+            .as_ref()
+            .expect("an ordering is bound to its child before it is recorded");
+        pass.set_pipeline(&self.first.pipelines[at]);
+        pass.set_bind_group(0, &groups[at], &[]);
+        pass.dispatch_workgroups(self.first.grid.0, self.first.grid.1, 1);
+        crate::device::dispatch_marks::mark(pass, self.first.entry);
+        for d in &self.rest {
             pass.set_pipeline(&d.pipeline);
             pass.set_bind_group(0, &d.group, &[]);
             pass.dispatch_workgroups(d.grid.0, d.grid.1, 1);
@@ -155,3 +268,15 @@ impl EventOrder {
         }
     }
 }
+
+/// The child's counters the preparation writes: the override constant of each, and the
+/// counter's name (plume_compiler::wgsl::COUNTER_FIELDS).
+const PREPARED_COUNTERS: [(&str, &str); 7] = [
+    ("FREE_COUNT", "free_count"),
+    ("SPAWN_BASE", "spawn_base"),
+    ("SPAWN_COUNT", "spawn_count"),
+    ("SPAWNED", "spawned"),
+    ("DROPPED", "dropped"),
+    ("NEXT_ID", "next_id"),
+    ("EVENT_FIRST_ID", "event_first_id"),
+];

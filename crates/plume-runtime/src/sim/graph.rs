@@ -1,8 +1,9 @@
 //! An effect graph's event streams (plume_compiler::events has the contract), and the steps
 //! of several groups recorded together. Each stream owns buffers that both groups bind: the
 //! firing group notes each firing's id and slot and writes its record in the slot; at the
-//! start of the next step [`crate::sim::events`] puts the firing slots in id order, and the
-//! child's `event_prepare` and `event_spawn` turn them, in that order, into particles. Every
+//! start of the next step [`crate::sim::events`] puts the firing slots in id order (its first
+//! kernel also pops the children's slots), and the child's `event_spawn` turns them, in that
+//! order, into particles. Every
 //! step of every group and every stream is recorded into one compute pass per batch of
 //! steps: nothing is read back between steps.
 
@@ -102,16 +103,40 @@ impl Events {
             let counted = (s.ordering == Ordering::Bucketed && stateless_parent)
                 .then(|| {
                     let buffers = (&keys, &vals, &records);
-                    EventOrder::new(gpu, Ordering::Counted, parent, buffers, &order)
+                    EventOrder::new(gpu, Ordering::Counted, parent, buffers, &order, s.count)
                 })
                 .transpose()?;
             orders.push(StreamOrder {
                 stream: s.clone(),
-                order: EventOrder::new(gpu, s.ordering, parent, (&keys, &vals, &records), &order)?,
+                order: EventOrder::new(
+                    gpu,
+                    s.ordering,
+                    parent,
+                    (&keys, &vals, &records),
+                    &order,
+                    s.count,
+                )?,
                 counted,
             });
         }
         Ok((Self { orders }, shared))
+    }
+
+    /// Binds each stream's ordering to its child group's counters and spawn workgroups (its
+    /// first kernel prepares the children's spawn), once `groups` exist.
+    pub(crate) fn bind_children(
+        &mut self,
+        gpu: &Gpu,
+        groups: &[Group],
+    ) -> Result<(), RuntimeError> {
+        for s in &mut self.orders {
+            let (counters, dispatch) = groups[s.stream.child].event_spawn_buffers()?;
+            s.order.bind_child(gpu, counters, dispatch);
+            if let Some(counted) = &mut s.counted {
+                counted.bind_child(gpu, counters, dispatch);
+            }
+        }
+        Ok(())
     }
 
     /// Records `steps` steps of every group into `encoder` (a compute pass per

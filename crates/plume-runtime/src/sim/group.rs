@@ -259,6 +259,28 @@ impl Group {
         stateful.record_step(&self.gpu, pass, self.chunks()?, plan, offset)
     }
 
+    /// The counters and the event spawn's workgroups of a group fed by events, which the
+    /// streams' orderings write.
+    pub(crate) fn event_spawn_buffers(
+        &self,
+    ) -> Result<(&wgpu::Buffer, &wgpu::Buffer), RuntimeError> {
+        let missing = |what: &str| {
+            RuntimeError::Gpu(format!(
+                "a group fed by events has no {what} buffer (a bug)"
+            ))
+        };
+        let counters = self
+            .res
+            .counters
+            .as_ref()
+            .ok_or_else(|| missing("counters"))?;
+        let dispatch = self
+            .res
+            .extra_named(&self.effect, "event_dispatch")
+            .ok_or_else(|| missing("dispatch"))?;
+        Ok((counters, dispatch))
+    }
+
     /// Records the spawn of the `input`-th event this group is fed by at step `j` of the batch.
     pub(crate) fn record_event_spawn(
         &self,

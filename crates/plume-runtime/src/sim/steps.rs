@@ -15,7 +15,7 @@ use plume_compiler::CompiledEffect;
 use plume_compiler::Layout;
 
 use crate::device::gpu::Gpu;
-use crate::device::resources::{Chunk, Resources, EVENT_DISPATCH};
+use crate::device::resources::{Chunk, Resources};
 use crate::error::RuntimeError;
 use crate::sim::flock::FlockPass;
 
@@ -36,12 +36,9 @@ pub struct StatefulSteps {
     flock: Option<FlockPass>,
     /// The baked field's `bake` kernel, its node count, and whether it runs every step.
     bake: Option<(wgpu::ComputePipeline, u64, bool)>,
-    /// Per event the group is fed by: its `event_prepare` kernel with its own bind group,
-    /// and its `event_spawn` kernel.
-    events: Vec<(
-        (wgpu::ComputePipeline, wgpu::BindGroup),
-        wgpu::ComputePipeline,
-    )>,
+    /// Per event the group is fed by: its `event_spawn` kernel (the stream's ordering prepares
+    /// it).
+    events: Vec<wgpu::ComputePipeline>,
 }
 
 /// A stateless group's events: its `fire` kernel (a step's firings from the closed form, over
@@ -103,51 +100,10 @@ impl Steps {
                 )
             }),
             events: (0..effect.ir.event_inputs.len())
-                .map(|j| {
-                    Ok((
-                        event_prepare(gpu, res, effect, j)?,
-                        res.pipeline(&format!("event_spawn_{j}")),
-                    ))
-                })
-                .collect::<Result<_, RuntimeError>>()?,
+                .map(|j| res.pipeline(&format!("event_spawn_{j}")))
+                .collect(),
         }))
     }
-}
-
-/// The `event_prepare_{input}` kernel of a group fed by events, with a bind group of only what
-/// it uses (counters, the parent's records, the dispatch arguments): the arguments are read by
-/// the indirect dispatch of `event_spawn`, and a buffer may not be both storage and indirect
-/// in one dispatch, so the shared bind group leaves them out.
-fn event_prepare(
-    gpu: &Gpu,
-    res: &Resources,
-    effect: &CompiledEffect,
-    input: usize,
-) -> Result<(wgpu::ComputePipeline, wgpu::BindGroup), RuntimeError> {
-    let entry = format!("event_prepare_{input}");
-    let records = format!("event_in_{input}");
-    let missing = |what: &str| RuntimeError::Gpu(format!("{entry}: no {what} buffer"));
-    let pipeline = gpu.compute_pipeline(&res.module, &entry, None);
-    let mut entries = Vec::new();
-    for b in &effect.layout.bindings {
-        let buffer = if b.name == "counters" {
-            res.counters.as_ref().ok_or_else(|| missing("counters"))?
-        } else if b.name == records || b.name == EVENT_DISPATCH {
-            res.extra_buffer(b.binding).ok_or_else(|| missing(b.name))?
-        } else {
-            continue;
-        };
-        entries.push(wgpu::BindGroupEntry {
-            binding: b.binding,
-            resource: buffer.as_entire_binding(),
-        });
-    }
-    let group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some(&entry),
-        layout: &pipeline.get_bind_group_layout(0),
-        entries: &entries,
-    });
-    Ok((pipeline, group))
 }
 
 impl StatefulSteps {
@@ -238,9 +194,9 @@ impl StatefulSteps {
     }
 
     /// Records the spawn of the `input`-th event this group is fed by, from the parent's
-    /// firings in id order (as the stream's ordering left them), with the step's parameters at
-    /// `offset`: `event_prepare` counts the firings and pops slots, then `event_spawn` runs per
-    /// chunk over as many workgroups as it wrote to `dispatch`.
+    /// firings in id order (as the stream's ordering left them, having popped the children's
+    /// slots), with the step's parameters at `offset`: `event_spawn` runs per chunk over as
+    /// many workgroups as the ordering wrote to `dispatch`.
     pub fn record_event_spawn(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
@@ -249,12 +205,7 @@ impl StatefulSteps {
         dispatch: &wgpu::Buffer,
         offset: u32,
     ) {
-        let ((prepare, prepare_group), spawn) = &self.events[input];
-        pass.set_bind_group(0, prepare_group, &[]);
-        pass.set_pipeline(prepare);
-        pass.dispatch_workgroups(1, 1, 1);
-        crate::device::dispatch_marks::mark(pass, "event_prepare");
-        pass.set_pipeline(spawn);
+        pass.set_pipeline(&self.events[input]);
         for chunk in chunks {
             pass.set_bind_group(0, &chunk.bind_group, &[offset]);
             pass.dispatch_workgroups_indirect(dispatch, 0);

@@ -18,6 +18,28 @@ use crate::ir::EffectIr;
 use crate::stages::integrators;
 use crate::stages::passes::layout::Layout;
 
+/// The fields of a stateful effect's `Counters` struct, in order, a 32-bit word each: the last
+/// two only where the group is fed by events. The runtime's event ordering prepares a stream's
+/// spawn in the child's counters by these words (`counter_word`).
+pub const COUNTER_FIELDS: [(&str, &str); 8] = [
+    ("free_count", "atomic<u32>"),
+    ("spawn_base", "u32"),
+    ("spawn_count", "u32"),
+    ("spawned", "u32"),
+    ("dropped", "u32"),
+    ("died", "atomic<u32>"),
+    ("next_id", "u32"),
+    ("event_first_id", "u32"),
+];
+
+/// The word of the counter `name` in `Counters` ([`COUNTER_FIELDS`]).
+pub fn counter_word(name: &str) -> Option<u32> {
+    COUNTER_FIELDS
+        .iter()
+        .position(|(field, _)| *field == name)
+        .map(|at| at as u32)
+}
+
 /// Emits the complete WGSL module for a resolved IR and its layout.
 pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     let mut w = Writer::new();
@@ -44,15 +66,12 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     let stateless = ir.stateless.is_some();
     if !stateless {
         w.block("struct Counters", |w| {
-            w.line("free_count: atomic<u32>,");
-            w.line("spawn_base: u32,");
-            w.line("spawn_count: u32,");
-            w.line("spawned: u32,");
-            w.line("dropped: u32,");
-            w.line("died: atomic<u32>,");
-            if !ir.event_inputs.is_empty() {
-                w.line("next_id: u32,");
-                w.line("event_first_id: u32,");
+            let fields = match ir.event_inputs.is_empty() {
+                true => &COUNTER_FIELDS[..6],
+                false => &COUNTER_FIELDS[..],
+            };
+            for (name, ty) in fields {
+                w.line(format!("{name}: {ty},"));
             }
         });
         w.blank();

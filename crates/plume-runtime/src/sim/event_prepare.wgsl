@@ -1,0 +1,51 @@
+// The spawn of a stream's children, prepared by the first kernel of the stream's ordering
+// (crate::sim::events; the ordering files follow this one in the module). The firings' count
+// is known from the step's start, so one thread takes it there: it pops the child's free slots
+// for as many children as fit, counts the rest as dropped, hands out the children's ids and
+// writes the workgroups of the child's `event_spawn` (indirect). The child's kernel did this in
+// a one-thread dispatch of its own until 2026-11-26: about 2.7 µs a stream a step on an H100
+// (docs/performance.md, "Events"). The records' header is cleared by the spawn's first thread,
+// after every kernel of the ordering has read it, so the spawn has at least one workgroup.
+
+// Whether this pipeline prepares the spawn (`plume bench` times the orderings alone, again and
+// again over the same firings, with it off).
+override PREPARE: bool = true;
+// Children a firing asks for.
+override CHILD_COUNT: u32 = 1u;
+// Threads of a workgroup of the child's `event_spawn`.
+override CHILD_WORKGROUP: u32 = 256u;
+// Words of the child's counters (plume_compiler::wgsl::COUNTER_FIELDS).
+override FREE_COUNT: u32 = 0u;
+override SPAWN_BASE: u32 = 1u;
+override SPAWN_COUNT: u32 = 2u;
+override SPAWNED: u32 = 3u;
+override DROPPED: u32 = 4u;
+override NEXT_ID: u32 = 6u;
+override EVENT_FIRST_ID: u32 = 7u;
+
+// The child group's counters and its `event_spawn`'s workgroups.
+@group(0) @binding(10) var<storage, read_write> child_counters: array<atomic<u32>>;
+@group(0) @binding(11) var<storage, read_write> child_dispatch: array<u32, 4>;
+
+// One thread: `fired` firings of the last step ask for CHILD_COUNT children each.
+fn prepare_spawn(fired: u32) {
+    if (!PREPARE) {
+        return;
+    }
+    let requested = fired * CHILD_COUNT;
+    let free = atomicLoad(&child_counters[FREE_COUNT]);
+    let n = min(requested, free);
+    atomicStore(&child_counters[FREE_COUNT], free - n);
+    atomicStore(&child_counters[SPAWN_BASE], free - n);
+    atomicStore(&child_counters[SPAWN_COUNT], n);
+    atomicAdd(&child_counters[SPAWNED], n);
+    atomicAdd(&child_counters[DROPPED], requested - n);
+    let next_id = atomicLoad(&child_counters[NEXT_ID]);
+    atomicStore(&child_counters[EVENT_FIRST_ID], next_id);
+    atomicStore(&child_counters[NEXT_ID], next_id + requested);
+    // At least one workgroup, whose first thread clears the parent's records header.
+    let workgroups = max((n + CHILD_WORKGROUP - 1u) / CHILD_WORKGROUP, 1u);
+    child_dispatch[0] = min(workgroups, 65535u);
+    child_dispatch[1] = (workgroups + 65534u) / 65535u;
+    child_dispatch[2] = 1u;
+}
