@@ -113,8 +113,8 @@ impl TriggerIr {
 
 /// The most slots a firing group may have for its firings to be put in order by counting: each
 /// firing counts the firings with smaller ids, one dispatch, at most 8,192² comparisons a step.
-/// Larger groups put their firings in buckets by id, whose five dispatches cost more than
-/// counting a few thousand firings (docs/performance.md, "Events").
+/// Larger groups count their firings by id in a bitmap (or buckets), whose three dispatches
+/// cost more than counting a few thousand firings (docs/performance.md, "Events").
 pub const COUNTED_MAX: u32 = 8192;
 
 /// How a stream's firings are put in parent id order at the step's start. Either way the
@@ -124,10 +124,10 @@ pub const COUNTED_MAX: u32 = 8192;
 pub enum Ordering {
     /// The runtime ranks the firings by counting, each against all (one dispatch).
     Counted,
-    /// The update also notes the smallest and largest firing id; the runtime drops each firing
-    /// in a bucket of its id's range (one id a bucket while the ids span fewer than the group's
-    /// slots), scans the buckets' counts, and places each firing at its bucket's start plus the
-    /// number of smaller ids sharing its bucket (a stream compaction in id order; no sort).
+    /// The update also notes the smallest and largest firing id; the runtime sets each firing's
+    /// bit in a bitmap of the ids' range (a bucket of ids counted, past 32 ids a slot), counts
+    /// it per group of words, and places each firing at its group's start plus the firings
+    /// before it in the group (a stream compaction in id order in three dispatches; no sort).
     Bucketed,
 }
 

@@ -27,7 +27,7 @@ pub(crate) struct StreamOrder {
     /// For a bucketed stream whose firing group is stateless, the same firings' ordering by
     /// counting, which a step takes when the host knows it orders at most
     /// [`COUNTED_MAX`] firings: a stateless group fires over a table whose size the host sets
-    /// each batch (one dispatch, not five: fireworks' rockets fire over a few hundred threads of
+    /// each batch (one dispatch, not three: fireworks' rockets fire over a few hundred threads of
     /// their 9,403 slots at 10M).
     pub(crate) counted: Option<EventOrder>,
 }
