@@ -158,9 +158,10 @@ fn exclusive_scan_256(t: u32, v: u32) -> u32 {
     return scan_buf[t] - v;
 }
 
-// Counts `amount` at `at` of `array` (0: the words, 1: the group counts) through the
-// workgroup's window `local` of THREADS entries from `base`, or straight into the array where
-// `at` lies outside it.
+// Counts `amount` at `at`: of the words (`array` 0, bits or'd) or of the group counts (1: a
+// quad's, 2: a group's, added), through the workgroup's window of THREADS entries from `base`
+// (`local_words`, or the first or second half of `local_counts`), or straight into the array
+// where `at` lies outside the window.
 fn count_local(array: u32, at: u32, base: u32, amount: u32) {
     let offset = at - base;
     if (offset < THREADS) {
@@ -178,9 +179,9 @@ fn count_local(array: u32, at: u32, base: u32, amount: u32) {
 
 // Each firing's bit (or its bucket's count), its quad's count and its group's. A workgroup
 // gathers its 256 firings' in workgroup memory first, in windows of 256 entries around its
-// first firing's, and adds each window entry it used to the arrays once: the firings of one parent's
-// cohort have consecutive ids, and their atomics on the same few words serialised (fireworks'
-// count took 7.5 µs a step on an H100 with three global atomics a firing).
+// first firing's, and adds each window entry it used to the arrays once: the firings of one
+// parent's cohort have consecutive ids, and their atomics on the same few words serialised
+// (fireworks' count took 7.5 µs a step on an H100 with three global atomics a firing).
 @compute @workgroup_size(256)
 fn bucket_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) lane: u32) {
