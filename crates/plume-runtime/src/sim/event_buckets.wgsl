@@ -8,7 +8,8 @@
 //   bucket_count:      each firing sets its id's bit (atomicOr) and counts itself in its
 //                      word's quad (4 words) and in its word's group (a run of quads: at most
 //                      GROUPS groups cover the words). Its first thread also prepares the
-//                      children's spawn (event_prepare.wgsl, before this file).
+//                      children's spawn (event_prepare.wgsl, before this file): the child's
+//                      counters read at its start, written at its end.
 //   bucket_place:      each workgroup scans the groups' counts in workgroup memory; a firing's
 //                      place is its group's start, plus the firings of its group's quads before
 //                      its quad, of its quad's words before its word, and the bits below its
@@ -186,8 +187,10 @@ fn count_local(array: u32, at: u32, base: u32, amount: u32) {
 fn bucket_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) lane: u32) {
     let w = uniform_window(lane);
-    if (flat(wid, groups) == 0u && lane == 0u) {
-        prepare_spawn(w.count);
+    let preparer = flat(wid, groups) == 0u && lane == 0u;
+    var loaded = vec2<u32>(0u);
+    if (preparer) {
+        loaded = prepare_loads();
     }
     for (var first = flat(wid, groups) * THREADS; first < w.count; first += workgroups(groups) * THREADS) {
         let k = first + lane;
@@ -227,6 +230,9 @@ fn bucket_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) 
         if (in_group != 0u) {
             atomicAdd(&group_counts[bases.z + lane], in_group);
         }
+    }
+    if (preparer) {
+        prepare_spawn(w.count, loaded);
     }
 }
 

@@ -2,7 +2,8 @@
 // appended (id, slot) pairs to `keys`/`vals` and counted them in the records' first word;
 // `order_rank` puts the slots in id order in `order`. Each firing counts the firings with
 // smaller ids (ids are unique, so the ranks are too), 256 at a time through workgroup memory.
-// Its first thread also prepares the children's spawn (event_prepare.wgsl, before this file).
+// Its first thread also prepares the children's spawn (event_prepare.wgsl, before this file),
+// reading the child's counters at its start and writing them at its end.
 
 const NONE: u32 = 0xffffffffu;
 
@@ -24,11 +25,16 @@ fn order_rank(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gr
         shared_count = records[0];
     }
     let count = workgroupUniformLoad(&shared_count);
-    if (first == 0u && lane == 0u) {
-        prepare_spawn(count);
+    let preparer = first == 0u && lane == 0u;
+    var loaded = vec2<u32>(0u);
+    if (preparer) {
+        loaded = prepare_loads();
     }
     // Dispatched over every slot: a whole workgroup past the count has nothing to rank.
     if (first >= count) {
+        if (preparer) {
+            prepare_spawn(count, loaded);
+        }
         return;
     }
     var mine = NONE;
@@ -64,5 +70,8 @@ fn order_rank(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) gr
     }
     if (k < count) {
         order[rank] = vals[k];
+    }
+    if (preparer) {
+        prepare_spawn(count, loaded);
     }
 }

@@ -27,22 +27,32 @@ override EVENT_FIRST_ID: u32 = 7u;
 @group(0) @binding(10) var<storage, read_write> child_counters: array<atomic<u32>>;
 @group(0) @binding(11) var<storage, read_write> child_dispatch: array<u32, 4>;
 
-// One thread: `fired` firings of the last step ask for CHILD_COUNT children each.
-fn prepare_spawn(fired: u32) {
+// The counters the preparation reads (free slots, next id), loaded by the kernel's first thread
+// at its start, so that their latency passes under the ordering's own work.
+fn prepare_loads() -> vec2<u32> {
+    if (!PREPARE) {
+        return vec2<u32>(0u);
+    }
+    return vec2<u32>(atomicLoad(&child_counters[FREE_COUNT]), atomicLoad(&child_counters[NEXT_ID]));
+}
+
+// One thread, at the kernel's end: `fired` firings of the last step ask for CHILD_COUNT
+// children each; `loaded` is what `prepare_loads` read (no other kernel of the dispatch writes
+// the child's counters).
+fn prepare_spawn(fired: u32, loaded: vec2<u32>) {
     if (!PREPARE) {
         return;
     }
     let requested = fired * CHILD_COUNT;
-    let free = atomicLoad(&child_counters[FREE_COUNT]);
+    let free = loaded.x;
     let n = min(requested, free);
     atomicStore(&child_counters[FREE_COUNT], free - n);
     atomicStore(&child_counters[SPAWN_BASE], free - n);
     atomicStore(&child_counters[SPAWN_COUNT], n);
     atomicAdd(&child_counters[SPAWNED], n);
     atomicAdd(&child_counters[DROPPED], requested - n);
-    let next_id = atomicLoad(&child_counters[NEXT_ID]);
-    atomicStore(&child_counters[EVENT_FIRST_ID], next_id);
-    atomicStore(&child_counters[NEXT_ID], next_id + requested);
+    atomicStore(&child_counters[EVENT_FIRST_ID], loaded.y);
+    atomicStore(&child_counters[NEXT_ID], loaded.y + requested);
     // At least one workgroup, whose first thread clears the parent's records header.
     let workgroups = max((n + CHILD_WORKGROUP - 1u) / CHILD_WORKGROUP, 1u);
     child_dispatch[0] = min(workgroups, 65535u);
