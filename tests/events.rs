@@ -454,6 +454,42 @@ fn collisions_fire_events_where_the_particle_hits() {
 }
 
 #[test]
+fn two_streams_into_one_group_take_its_slots_in_stream_order() {
+    // Each stream's ordering pops its children's slots from the child's counters as its first
+    // kernel starts, and the stream's spawn reads what it wrote: the second stream into the same
+    // group must pop after the first one's spawn. Both streams fire every step here (ticks and
+    // deaths), the child fills up, and the children and drops match the reference, counted
+    // (a firing group of 2,000 slots) and bucketed (9,000).
+    use plume::compiler::events::Ordering;
+    for (capacity, ordering) in [(2000, Ordering::Counted), (9000, Ordering::Bucketed)] {
+        let src = format!(
+            r#"Effect(
+        name: "twice",
+        capacity: {capacity},
+        dt: 0.01,
+        emitters: [Emitter(rate: 40000.0, shape: Sphere(center: (0.0, 1.0, 0.0), radius: 1.0),
+                           velocity: Radial(speed: (0.5, 1.0)), lifetime: Some((0.03, 0.08)))],
+        forces: [Gravity((0.0, -9.81, 0.0))],
+        events: [
+            Event(on: Every(0.02), target: "motes", count: 2, velocity: Radial(speed: (0.2, 0.4)), lifetime: Some((0.1, 0.1))),
+            Event(on: Death, target: "motes", count: 3, velocity: Radial(speed: (1.0, 2.0)), lifetime: Some((0.05, 0.2))),
+        ],
+        groups: [Group(name: "motes", capacity: 6000, forces: [Gravity((0.0, -9.81, 0.0))])],
+    )"#
+        );
+        let g = graph(&src);
+        assert_eq!(g.streams.len(), 2);
+        assert!(g.streams.iter().all(|s| s.ordering == ordering));
+        let sim = compare_runs(&format!("two streams, {ordering:?}"), &g, &[3, 12, 25]);
+        let t = sim.group_totals(1).unwrap();
+        assert!(
+            t.spawned > 6000 && t.dropped > 0,
+            "{ordering:?}: both streams spawn and the group fills up: {t:?}"
+        );
+    }
+}
+
+#[test]
 fn events_that_cannot_fire_are_warned_about() {
     let src = r#"Effect(
         name: "immortal",
