@@ -4,6 +4,7 @@
 //! ([`draw`]) whose vertex shader reads the particles where the compute module left them.
 
 pub mod batch;
+pub mod counters;
 pub mod draw;
 pub mod spawn;
 pub mod stateless;
@@ -17,28 +18,7 @@ use crate::features::forces::noise;
 use crate::ir::EffectIr;
 use crate::stages::integrators;
 use crate::stages::passes::layout::Layout;
-
-/// The fields of a stateful effect's `Counters` struct, in order, a 32-bit word each: the last
-/// two only where the group is fed by events. The runtime's event ordering prepares a stream's
-/// spawn in the child's counters by these words (`counter_word`).
-pub const COUNTER_FIELDS: [(&str, &str); 8] = [
-    ("free_count", "atomic<u32>"),
-    ("spawn_base", "u32"),
-    ("spawn_count", "u32"),
-    ("spawned", "u32"),
-    ("dropped", "u32"),
-    ("died", "atomic<u32>"),
-    ("next_id", "u32"),
-    ("event_first_id", "u32"),
-];
-
-/// The word of the counter `name` in `Counters` ([`COUNTER_FIELDS`]).
-pub fn counter_word(name: &str) -> Option<u32> {
-    COUNTER_FIELDS
-        .iter()
-        .position(|(field, _)| *field == name)
-        .map(|at| at as u32)
-}
+pub use counters::{counter_word, COUNTER_FIELDS};
 
 /// Emits the complete WGSL module for a resolved IR and its layout.
 pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
@@ -65,15 +45,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     w.blank();
     let stateless = ir.stateless.is_some();
     if !stateless {
-        w.block("struct Counters", |w| {
-            let fields = match ir.event_inputs.is_empty() {
-                true => &COUNTER_FIELDS[..6],
-                false => &COUNTER_FIELDS[..],
-            };
-            for (name, ty) in fields {
-                w.line(format!("{name}: {ty},"));
-            }
-        });
+        counters::emit_struct(&mut w, !ir.event_inputs.is_empty());
         w.blank();
         w.comment(
             "emitters[e] = (spawns this step, emitter's own spawn counter before them, 0, 0).",
