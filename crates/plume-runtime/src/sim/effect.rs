@@ -167,7 +167,7 @@ impl Effect {
     ) -> Result<Self, RuntimeError> {
         let warnings = graph.all_warnings();
         let alone = graph.groups.len() == 1 && graph.streams.is_empty();
-        let (events, shared) = match alone {
+        let (mut events, shared) = match alone {
             true => (None, vec![Vec::new()]),
             false => {
                 let (events, shared) = Events::new(gpu, &graph)?;
@@ -180,7 +180,6 @@ impl Effect {
             names.push(group.name);
             groups.push(Group::new(gpu, group.effect, max_chunk_slots, shared)?);
         }
-        let mut events = events;
         if let Some(events) = &mut events {
             events.bind_children(gpu, &groups)?;
         }

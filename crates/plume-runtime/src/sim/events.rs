@@ -102,18 +102,7 @@ impl EventOrder {
                     let word = counter_word(field).expect("a counter the compiler declares");
                     constants.push((name, f64::from(word)));
                 }
-                gpu.device
-                    .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                        label: Some(entry),
-                        layout: None,
-                        module,
-                        entry_point: Some(entry),
-                        compilation_options: wgpu::PipelineCompilationOptions {
-                            constants: &constants,
-                            ..Default::default()
-                        },
-                        cache: None,
-                    })
+                gpu.compute_pipeline_with(module, entry, None, &constants)
             };
             First {
                 pipelines: [pipeline(true), pipeline(false)],
