@@ -293,12 +293,7 @@ impl Group {
                 "a group fed by events is stateful (a bug in the compiler)".into(),
             ));
         };
-        let dispatch = self
-            .res
-            .extra_named(&self.effect, "event_dispatch")
-            .ok_or_else(|| {
-                RuntimeError::Gpu("a group fed by events has no dispatch buffer".into())
-            })?;
+        let (_, dispatch) = self.event_spawn_buffers()?;
         let offset = (j as u64 * self.res.params_stride) as u32;
         stateful.record_event_spawn(pass, self.chunks()?, input, dispatch, offset);
         Ok(())
