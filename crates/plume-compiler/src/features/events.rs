@@ -15,7 +15,7 @@
 
 use serde::Deserialize;
 
-use crate::base::layout::{Binding, Layout};
+use crate::base::layout::Binding;
 use crate::base::values::{Range, Vec3};
 use crate::base::writer::{f32_lit, u32_lit, Writer};
 use crate::features::emitter::{Shape, Velocity};
@@ -210,9 +210,6 @@ pub fn in_binding(j: usize) -> u32 {
     64 + 2 * j as u32
 }
 
-/// Binding of the indirect dispatch arguments of an event-fed group's spawn.
-pub const DISPATCH_BINDING: u32 = 17;
-
 /// The bindings events add to a group's compute module.
 pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> Vec<Binding> {
     let cap = u64::from(capacity);
@@ -262,16 +259,6 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
             },
         ]);
     }
-    if !inputs.is_empty() {
-        out.push(Binding {
-            binding: DISPATCH_BINDING,
-            name: "event_dispatch",
-            space: "storage, read_write",
-            bytes: 16,
-            meaning:
-                "the workgroups of the event spawn, written by the stream's ordering (indirect dispatch)",
-        });
-    }
     out
 }
 
@@ -281,8 +268,6 @@ pub fn binding_type(name: &str) -> Option<&'static str> {
         Some("array<u32>")
     } else if OUT_RECORDS.contains(&name) || IN_RECORDS.contains(&name) {
         Some("EventRecords")
-    } else if name == "event_dispatch" {
-        Some("array<u32, 4>")
     } else {
         None
     }
@@ -470,9 +455,13 @@ pub fn emit_fire_appended(
 }
 
 /// Emits `event_spawn_J` for every event the group receives. The stream's ordering (a runtime
-/// kernel, `crate::events` in plume-runtime) has already taken the firings' count, popped the
-/// children's slots and written this dispatch's workgroups (at least one): the spawn's first
-/// thread clears the parent's records header for the firings of the step to come.
+/// kernel, `crate::events` in plume-runtime) has already taken the firings' count and popped
+/// the children's slots: the spawn's first thread clears the parent's records header for the
+/// firings of the step to come, and the threads of a fixed grid (the runtime sizes it by the
+/// group's slots, [`SPAWN_WORKGROUPS`] at most) stride over the children, each spawned by
+/// `event_child_J`. (Until 2026-11-27 the ordering wrote the spawn's workgroups for an
+/// indirect dispatch, which an H100 starts about 3 µs later than a direct one after the
+/// kernel that writes them: docs/performance.md, "Events".)
 /// `store` emits the store of the spawned particle `s` with id `id` (and packed tint `tint`,
 /// when the group stores tints) in `slot`: the same code as the group's own spawn. `own` is
 /// the WGSL of the group's own tint for the particle `id` when it stores tints (`tint.rs`).
@@ -485,55 +474,71 @@ pub fn emit_kernels(
     for (j, input) in inputs.iter().enumerate() {
         let records = IN_RECORDS[j];
         w.comment(format!(
-            "Event {}: the parent's firings of the last step ({} particles each), in parent id order, spawned into the slots the ordering popped for as many as fit (the rest dropped and counted; ids consumed either way).",
+            "Event {}: child i of the parent's firings of the last step ({} particles each), in parent id order, spawned into the slot the ordering popped for it (the children past the free slots were dropped and counted; ids consumed either way).",
             input.stream, input.count
+        ));
+        w.block(format!("fn event_child_{j}(i: u32)"), |w| {
+            w.line("let slot = free_list[counters.spawn_base + i];");
+            w.line(format!("let rank = i / {};", u32_lit(input.count)));
+            w.line(format!("let c = i % {};", u32_lit(input.count)));
+            // Loaded before the slot is tested, so that the free list's load and the order's
+            // wait together (a test between them made them two latencies in turn).
+            w.line(format!("let r = {records}.records[{}[rank]];", IN_ORDER[j]));
+            w.block(
+                "if (slot < chunk.base || slot - chunk.base >= chunk.len)",
+                |w| w.line("return;"),
+            );
+            w.line("let id = counters.event_first_id + i;");
+            w.line(format!(
+                "var s = emit_{}(id, c, params.step);",
+                input.emitter
+            ));
+            w.line("s.x = s.x + r.x;");
+            if input.inherit_velocity != 0.0 {
+                w.line(format!(
+                    "s.v = s.v + {} * r.v.xyz;",
+                    f32_lit(input.inherit_velocity)
+                ));
+            }
+            match own {
+                Some(own) if input.inherit_color => w.line(format!(
+                    "let tint = pack4x8unorm(vec4<f32>({own} * unpack4x8unorm(r.tint).rgb, 1.0));"
+                )),
+                Some(own) => w.line(format!("let tint = pack4x8unorm(vec4<f32>({own}, 1.0));")),
+                None => {}
+            }
+            store(w);
+        });
+        w.blank();
+        w.comment(format!(
+            "Event {}: the children of the parent's firings, spawned by a fixed grid whose threads stride over them.",
+            input.stream
         ));
         w.line("@compute @workgroup_size(WORKGROUP)");
         w.block(
             format!("fn event_spawn_{j}(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)"),
             |w| {
-                crate::base::kernel::emit_thread_index(w, "i", None);
+                crate::base::kernel::emit_thread_index(w, "first", None);
                 w.comment("The header was read by the ordering; the parent's next firings count from zero.");
-                w.block("if (i == 0u)", |w| {
+                w.block("if (first == 0u)", |w| {
                     w.line(format!("atomicStore(&{records}.count, 0u);"));
                     w.line(format!("atomicStore(&{records}.not_min_id, 0u);"));
                     w.line(format!("atomicStore(&{records}.max_id, 0u);"));
                 });
-                w.block("if (i >= counters.spawn_count)", |w| w.line("return;"));
-                w.line("let slot = free_list[counters.spawn_base + i];");
-                w.block("if (slot < chunk.base || slot - chunk.base >= chunk.len)", |w| {
-                    w.line("return;")
-                });
-                w.line(format!("let rank = i / {};", u32_lit(input.count)));
-                w.line(format!("let c = i % {};", u32_lit(input.count)));
-                w.line(format!(
-                    "let r = {records}.records[{}[rank]];",
-                    IN_ORDER[j]
-                ));
-                w.line("let id = counters.event_first_id + i;");
-                w.line(format!("var s = emit_{}(id, c, params.step);", input.emitter));
-                w.line("s.x = s.x + r.x;");
-                if input.inherit_velocity != 0.0 {
-                    w.line(format!(
-                        "s.v = s.v + {} * r.v.xyz;",
-                        f32_lit(input.inherit_velocity)
-                    ));
-                }
-                match own {
-                    Some(own) if input.inherit_color => w.line(format!(
-                        "let tint = pack4x8unorm(vec4<f32>({own} * unpack4x8unorm(r.tint).rgb, 1.0));"
-                    )),
-                    Some(own) => w.line(format!("let tint = pack4x8unorm(vec4<f32>({own}, 1.0));")),
-                    None => {}
-                }
-                store(w);
+                w.line("let stride = groups.x * groups.y * WORKGROUP;");
+                w.line("let children = counters.spawn_count;");
+                w.block(
+                    "for (var i = first; i < children; i = i + stride)",
+                    |w| w.line(format!("event_child_{j}(i);")),
+                );
             },
         );
         w.blank();
     }
 }
 
-/// Whether the layout needs the counters' event fields (next id, first id of the spawn).
-pub fn counts_ids_on_gpu(layout: &Layout) -> bool {
-    layout.bindings.iter().any(|b| b.name == "event_dispatch")
-}
+/// The most workgroups of an event spawn's grid (of `WORKGROUP` threads each): about the
+/// threads an H100 holds at once; a group of fewer slots gets one workgroup per `WORKGROUP`
+/// slots (at least one: its first thread clears the header). 256 took rain's splashes (four
+/// children a firing) 1.4% longer a step on an H100.
+pub const SPAWN_WORKGROUPS: u32 = 1024;

@@ -22,15 +22,13 @@ pub(crate) fn buffer_entry(
     }
 }
 
-/// The entries of `effect`'s shared bind group layout, leaving out the binding named `skip`
-/// (bound only by a kernel of its own).
-pub(crate) fn entries(effect: &CompiledEffect, skip: &str) -> Vec<wgpu::BindGroupLayoutEntry> {
+/// The entries of `effect`'s shared bind group layout.
+pub(crate) fn entries(effect: &CompiledEffect) -> Vec<wgpu::BindGroupLayoutEntry> {
     let rw = wgpu::BufferBindingType::Storage { read_only: false };
     effect
         .layout
         .bindings
         .iter()
-        .filter(|b| b.name != skip)
         .map(|b| match b.name {
             "params" => buffer_entry(
                 b.binding,

@@ -76,10 +76,10 @@ pub(crate) fn instance(backends: wgpu::Backends) -> wgpu::Instance {
     let mut desc = wgpu::InstanceDescriptor::new_without_display_handle();
     desc.backends = backends;
     // No validation pass before each indirect call: Plume's own kernels write every indirect
-    // argument it uses, within the limits (an event spawn's workgroups: x at most 65,535 and
-    // y = x's overflow, `features::events::emit_kernels`; the draws pull their vertices from
-    // storage buffers, bounds-checked), and wgpu's check adds a dispatch and a barrier before
-    // each one (an event stream's spawn at 10M slots: docs/performance.md, "Events").
+    // argument it uses (the indirect draws' counts; the draws pull their vertices from storage
+    // buffers, bounds-checked), and wgpu's check adds a dispatch and a barrier before each one
+    // (when the event spawns were indirect dispatches, 4% of the events' time at 1M slots:
+    // docs/performance.md, "Events").
     desc.flags
         .remove(wgpu::InstanceFlags::VALIDATION_INDIRECT_CALL);
     // wgpu's own switches (WGPU_VALIDATION, WGPU_VALIDATION_INDIRECT_CALL, ...) apply.

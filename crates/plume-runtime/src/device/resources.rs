@@ -291,9 +291,7 @@ impl Resources {
                         }
                     })?
                 } else {
-                    // The event spawn's workgroup counts are read by an indirect dispatch.
                     let usage = match b.name {
-                        "event_dispatch" => STORAGE | wgpu::BufferUsages::INDIRECT,
                         // Written by Effect::set_scene_depth, read as a uniform.
                         "scene_camera" => {
                             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST
@@ -313,7 +311,7 @@ impl Resources {
         let module = crate::device::gpu::shader_module(device, &effect.ir.name, &effect.wgsl);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("plume"),
-            entries: &crate::device::bind_layout::entries(effect, EVENT_DISPATCH),
+            entries: &crate::device::bind_layout::entries(effect),
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("plume"),
@@ -446,7 +444,6 @@ impl Resources {
             .layout
             .bindings
             .iter()
-            .filter(|b| b.name != EVENT_DISPATCH)
             .map(|b| wgpu::BindGroupEntry {
                 binding: b.binding,
                 resource: match b.name {
@@ -566,7 +563,3 @@ impl Resources {
         (pipeline, group)
     }
 }
-
-/// The binding an event-fed group's spawn dispatch arguments are in (written only by the
-/// first kernel of each stream's ordering, `crate::sim::events`, which binds it itself).
-pub(crate) const EVENT_DISPATCH: &str = "event_dispatch";

@@ -186,19 +186,26 @@ fn count_local(array: u32, at: u32, base: u32, amount: u32) {
 @compute @workgroup_size(256)
 fn bucket_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) lane: u32) {
+    let first0 = flat(wid, groups) * THREADS;
+    // The first round's key, loaded with the header (not after it: one latency, not two);
+    // past the count it is not used.
+    let key0 = keys[min(first0 + lane, arrayLength(&keys) - 1u)];
     let w = uniform_window(lane);
-    let preparer = flat(wid, groups) == 0u && lane == 0u;
+    let preparer = first0 == 0u && lane == 0u;
     var loaded = vec2<u32>(0u);
     if (preparer) {
         loaded = prepare_loads();
     }
-    for (var first = flat(wid, groups) * THREADS; first < w.count; first += workgroups(groups) * THREADS) {
+    for (var first = first0; first < w.count; first += workgroups(groups) * THREADS) {
         let k = first + lane;
         let live = k < w.count;
         var word = 0u;
         var bit = 0u;
         if (live) {
-            let id = keys[k];
+            var id = key0;
+            if (first != first0) {
+                id = keys[k];
+            }
             word = word_of(w, id);
             bit = 1u << ((id - w.min_id) & 31u);
         }
@@ -250,7 +257,11 @@ struct Firing {
 }
 
 fn firing_at(w: Window, k: u32) -> Firing {
-    let id = keys[k];
+    return firing_of(w, keys[k], vals[k]);
+}
+
+// The firing of `id` in `slot`.
+fn firing_of(w: Window, id: u32, slot: u32) -> Firing {
     let word = word_of(w, id);
     let quad = word >> QUAD_SHIFT;
     var partial = 0u;
@@ -264,7 +275,7 @@ fn firing_at(w: Window, k: u32) -> Firing {
     if (w.shift == 0u) {
         partial += countOneBits(own & ((1u << ((id - w.min_id) & 31u)) - 1u));
     }
-    return Firing(word, partial, vals[k], own);
+    return Firing(word, partial, slot, own);
 }
 
 fn place_firing(w: Window, k: u32, f: Firing) {
@@ -281,16 +292,20 @@ fn place_firing(w: Window, k: u32, f: Firing) {
 @compute @workgroup_size(256)
 fn bucket_place(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) lane: u32) {
-    let w = uniform_window(lane);
     let first_firing = flat(wid, groups) * THREADS;
+    let k0 = first_firing + lane;
+    // The first firing's id and slot, loaded with the header (one latency, not two); past
+    // the count they are not used.
+    let id0 = keys[min(k0, arrayLength(&keys) - 1u)];
+    let slot0 = vals[min(k0, arrayLength(&vals) - 1u)];
+    let w = uniform_window(lane);
     if (first_firing >= w.count) {
         return;
     }
     // The first firing's loads are issued before the scan below, so that they wait together.
-    let k0 = first_firing + lane;
     var f0 = Firing(0u, 0u, 0u, 0u);
     if (k0 < w.count) {
-        f0 = firing_at(w, k0);
+        f0 = firing_of(w, id0, slot0);
     }
     // Every group's start, in workgroup memory: a few thousand words read from L2 by each
     // workgroup, where a scan of its own would cost a dispatch.

@@ -1,19 +1,19 @@
 // The spawn of a stream's children, prepared by the first kernel of the stream's ordering
 // (crate::sim::events; the ordering files follow this one in the module). The firings' count
 // is known from the step's start, so one thread takes it there: it pops the child's free slots
-// for as many children as fit, counts the rest as dropped, hands out the children's ids and
-// writes the workgroups of the child's `event_spawn` (indirect). The child's kernel did this in
-// a one-thread dispatch of its own until 2026-11-26: about 2.7 µs a stream a step on an H100
-// (docs/performance.md, "Events"). The records' header is cleared by the spawn's first thread,
-// after every kernel of the ordering has read it, so the spawn has at least one workgroup.
+// for as many children as fit, counts the rest as dropped and hands out the children's ids.
+// The child's kernel did this in a one-thread dispatch of its own until 2026-11-26: about 2.7
+// µs a stream a step on an H100 (docs/performance.md, "Events"). The child's `event_spawn` is
+// a direct dispatch over a fixed grid whose threads stride over the children (it was an
+// indirect one, its workgroups written here, until 2026-11-27: an H100 started it about 3 µs
+// later). The records' header is cleared by the spawn's first thread, after every kernel of
+// the ordering has read it.
 
 // Whether this pipeline prepares the spawn (`plume bench` times the orderings alone, again and
 // again over the same firings, with it off).
 override PREPARE: bool = true;
 // Children a firing asks for.
 override CHILD_COUNT: u32 = 1u;
-// Threads of a workgroup of the child's `event_spawn`.
-override CHILD_WORKGROUP: u32 = 256u;
 // Words of the child's counters (plume_compiler::wgsl::COUNTER_FIELDS).
 override FREE_COUNT: u32 = 0u;
 override SPAWN_BASE: u32 = 1u;
@@ -23,9 +23,8 @@ override DROPPED: u32 = 4u;
 override NEXT_ID: u32 = 6u;
 override EVENT_FIRST_ID: u32 = 7u;
 
-// The child group's counters and its `event_spawn`'s workgroups.
+// The child group's counters.
 @group(0) @binding(10) var<storage, read_write> child_counters: array<atomic<u32>>;
-@group(0) @binding(11) var<storage, read_write> child_dispatch: array<u32, 4>;
 
 // The counters the preparation reads (free slots, next id), loaded by the kernel's first thread
 // at its start, so that their latency passes under the ordering's own work.
@@ -53,9 +52,4 @@ fn prepare_spawn(fired: u32, loaded: vec2<u32>) {
     atomicAdd(&child_counters[DROPPED], requested - n);
     atomicStore(&child_counters[EVENT_FIRST_ID], loaded.y);
     atomicStore(&child_counters[NEXT_ID], loaded.y + requested);
-    // At least one workgroup, whose first thread clears the parent's records header.
-    let workgroups = max((n + CHILD_WORKGROUP - 1u) / CHILD_WORKGROUP, 1u);
-    child_dispatch[0] = min(workgroups, 65535u);
-    child_dispatch[1] = (workgroups + 65534u) / 65535u;
-    child_dispatch[2] = 1u;
 }

@@ -13,7 +13,7 @@
 //! four passes of 8 bits whether 5 or 50,000 fired; docs/performance.md, "Events", has both.)
 
 use plume_compiler::events::Ordering;
-use plume_compiler::wgsl::{counter_word, WORKGROUP};
+use plume_compiler::wgsl::counter_word;
 
 use crate::device::buffers::STORAGE;
 use crate::device::gpu::Gpu;
@@ -24,10 +24,13 @@ const THREADS: u64 = 256;
 /// The most groups of words whose counts every workgroup of `bucket_place` scans
 /// (event_buckets.wgsl's GROUPS).
 const BUCKET_GROUPS: u64 = 2048;
-/// The most workgroups of a bucket kernel: its threads stride over the firings (about the
-/// threads an H100 holds at once; a grid over every slot launched millions that had nothing
-/// to do).
-const BUCKET_WORKGROUPS: u64 = 1024;
+/// The most workgroups of a bucket kernel: its threads stride over the firings (a grid over
+/// every slot launched millions that had nothing to do). 256 rather than the 1,024 an H100
+/// holds at once: fewer idle workgroups for the usual few thousand firings, and fewer
+/// workgroups scanning the groups' counts in `bucket_place` when a million fire (fireworks at
+/// 10M slots 1.520x → 1.511x, 2M slots all firing 0.0976 → 0.0919 ms a step; 128 was no
+/// better: docs/measurements/h100-events/2026-11-27-seventh/).
+const BUCKET_WORKGROUPS: u64 = 256;
 
 /// One dispatch: a kernel, its bind group and its workgroups.
 struct Dispatch {
@@ -41,7 +44,7 @@ struct Dispatch {
 /// The ordering's first kernel, whose first thread also prepares the children's spawn
 /// (event_prepare.wgsl): its pipeline that does, and one that does not (for timing the
 /// ordering alone), each bound to the parent's buffers and, once the child exists
-/// ([`EventOrder::bind_child`]), the child's counters and spawn workgroups.
+/// ([`EventOrder::bind_child`]), the child's counters.
 struct First {
     pipelines: [wgpu::ComputePipeline; 2],
     groups: Option<[wgpu::BindGroup; 2]>,
@@ -56,9 +59,8 @@ pub struct EventOrder {
     rest: Vec<Dispatch>,
 }
 
-/// The child's counters and its spawn's workgroups, where the first kernel binds them.
+/// The child's counters, where the first kernel binds them.
 const CHILD_COUNTERS: u32 = 10;
-const CHILD_DISPATCH: u32 = 11;
 
 impl EventOrder {
     /// The ordering of a stream whose firing group has `n` slots: `keys`, `vals` (n each) and
@@ -96,7 +98,6 @@ impl EventOrder {
                 let mut constants = vec![
                     ("PREPARE", if prepare { 1.0 } else { 0.0 }),
                     ("CHILD_COUNT", f64::from(count)),
-                    ("CHILD_WORKGROUP", f64::from(WORKGROUP)),
                 ];
                 for (name, field) in PREPARED_COUNTERS {
                     let word = counter_word(field).expect("a counter the compiler declares");
@@ -202,17 +203,11 @@ impl EventOrder {
         Ok(Self { first, rest })
     }
 
-    /// Binds the first kernel to the child group's `counters` and `dispatch` (its event
-    /// spawn's workgroups), once the child exists.
-    pub(crate) fn bind_child(
-        &mut self,
-        gpu: &Gpu,
-        counters: &wgpu::Buffer,
-        dispatch: &wgpu::Buffer,
-    ) {
+    /// Binds the first kernel to the child group's `counters`, once the child exists.
+    pub(crate) fn bind_child(&mut self, gpu: &Gpu, counters: &wgpu::Buffer) {
         let mut entries: Vec<(u32, &wgpu::Buffer)> =
             self.first.parent.iter().map(|(at, b)| (*at, b)).collect();
-        entries.extend([(CHILD_COUNTERS, counters), (CHILD_DISPATCH, dispatch)]);
+        entries.push((CHILD_COUNTERS, counters));
         let group = |pipeline: &wgpu::ComputePipeline| {
             gpu.bind_buffers(
                 self.first.entry,

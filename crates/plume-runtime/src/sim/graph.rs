@@ -122,18 +122,18 @@ impl Events {
         Ok((Self { orders }, shared))
     }
 
-    /// Binds each stream's ordering to its child group's counters and spawn workgroups (its
-    /// first kernel prepares the children's spawn), once `groups` exist.
+    /// Binds each stream's ordering to its child group's counters (its first kernel prepares
+    /// the children's spawn), once `groups` exist.
     pub(crate) fn bind_children(
         &mut self,
         gpu: &Gpu,
         groups: &[Group],
     ) -> Result<(), RuntimeError> {
         for s in &mut self.orders {
-            let (counters, dispatch) = groups[s.stream.child].event_spawn_buffers()?;
-            s.order.bind_child(gpu, counters, dispatch);
+            let counters = groups[s.stream.child].event_counters()?;
+            s.order.bind_child(gpu, counters);
             if let Some(counted) = &mut s.counted {
-                counted.bind_child(gpu, counters, dispatch);
+                counted.bind_child(gpu, counters);
             }
         }
         Ok(())

@@ -259,26 +259,12 @@ impl Group {
         stateful.record_step(&self.gpu, pass, self.chunks()?, plan, offset)
     }
 
-    /// The counters and the event spawn's workgroups of a group fed by events, which the
-    /// streams' orderings write.
-    pub(crate) fn event_spawn_buffers(
-        &self,
-    ) -> Result<(&wgpu::Buffer, &wgpu::Buffer), RuntimeError> {
-        let missing = |what: &str| {
-            RuntimeError::Gpu(format!(
-                "a group fed by events has no {what} buffer (a bug)"
-            ))
-        };
-        let counters = self
-            .res
-            .counters
-            .as_ref()
-            .ok_or_else(|| missing("counters"))?;
-        let dispatch = self
-            .res
-            .extra_named(&self.effect, "event_dispatch")
-            .ok_or_else(|| missing("dispatch"))?;
-        Ok((counters, dispatch))
+    /// The counters of a group fed by events, where the streams' orderings prepare its
+    /// spawns.
+    pub(crate) fn event_counters(&self) -> Result<&wgpu::Buffer, RuntimeError> {
+        self.res.counters.as_ref().ok_or_else(|| {
+            RuntimeError::Gpu("a group fed by events has no counters buffer (a bug)".into())
+        })
     }
 
     /// Records the spawn of the `input`-th event this group is fed by at step `j` of the batch.
@@ -293,9 +279,17 @@ impl Group {
                 "a group fed by events is stateful (a bug in the compiler)".into(),
             ));
         };
-        let (_, dispatch) = self.event_spawn_buffers()?;
+        // A fixed grid over the group's slots, at most SPAWN_WORKGROUPS workgroups, whose
+        // threads stride over the children (plume_compiler::events::emit_kernels).
+        let slots = u64::from(self.effect.ir.capacity).min(
+            u64::from(plume_compiler::events::SPAWN_WORKGROUPS)
+                * u64::from(plume_compiler::wgsl::WORKGROUP),
+        );
+        let grid = self
+            .gpu
+            .grid(slots.max(1), u64::from(plume_compiler::wgsl::WORKGROUP))?;
         let offset = (j as u64 * self.res.params_stride) as u32;
-        stateful.record_event_spawn(pass, self.chunks()?, input, dispatch, offset);
+        stateful.record_event_spawn(pass, self.chunks()?, input, grid, offset);
         Ok(())
     }
 

@@ -195,20 +195,20 @@ impl StatefulSteps {
 
     /// Records the spawn of the `input`-th event this group is fed by, from the parent's
     /// firings in id order (as the stream's ordering left them, having popped the children's
-    /// slots), with the step's parameters at `offset`: `event_spawn` runs per chunk over as
-    /// many workgroups as the ordering wrote to `dispatch`.
+    /// slots), with the step's parameters at `offset`: `event_spawn` runs per chunk over
+    /// `grid`'s workgroups, whose threads stride over the children.
     pub fn record_event_spawn(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         chunks: &[Chunk],
         input: usize,
-        dispatch: &wgpu::Buffer,
+        grid: (u32, u32),
         offset: u32,
     ) {
         pass.set_pipeline(&self.events[input]);
         for chunk in chunks {
             pass.set_bind_group(0, &chunk.bind_group, &[offset]);
-            pass.dispatch_workgroups_indirect(dispatch, 0);
+            pass.dispatch_workgroups(grid.0, grid.1, 1);
         }
         crate::device::dispatch_marks::mark(pass, "event_spawn");
     }
