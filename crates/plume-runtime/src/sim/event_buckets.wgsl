@@ -30,7 +30,7 @@
 // 2.7 µs before any work, and the two scans about 13 µs a step for fireworks' sparks and
 // rain's drops at 10M slots (docs/performance.md, "Events").
 // The work follows the firings and the range of their ids, not the group's slots: each kernel
-// is dispatched on a fixed grid (at most 1,024 workgroups) whose threads stride over this
+// is dispatched on a fixed grid (at most 256 workgroups) whose threads stride over this
 // step's firings, so that a step with few firings launches few threads. Ids are unique, so a
 // bucket of width 2^shift holds at most 2^shift firings, and at most as many as fired: the
 // ranking's comparisons stay below n * 2^32 / n = 2^32 in the worst case.
