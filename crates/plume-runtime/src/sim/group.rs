@@ -287,7 +287,7 @@ impl Group {
         );
         let grid = self
             .gpu
-            .grid(slots.max(1), u64::from(plume_compiler::wgsl::WORKGROUP))?;
+            .grid(slots, u64::from(plume_compiler::wgsl::WORKGROUP))?;
         let offset = (j as u64 * self.res.params_stride) as u32;
         stateful.record_event_spawn(pass, self.chunks()?, input, grid, offset);
         Ok(())

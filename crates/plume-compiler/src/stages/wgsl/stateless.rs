@@ -47,7 +47,7 @@ pub fn emit_evaluate_at(w: &mut Writer, ir: &EffectIr) {
         w.block("if (slot >= frame.threads)", |w| {
             w.line("return e;");
         });
-        emit_segment_of(w, "frame", "slot");
+        emit_segment_of(w, "frame", "slot", SegmentSearch::Halves);
         w.line("let j = slot - seg.a.x;");
         w.line("e.id = seg.a.y + j;");
         w.line("e.born = seg.b.y;");
@@ -67,45 +67,55 @@ pub fn emit_evaluate_at(w: &mut Writer, ir: &EffectIr) {
     });
 }
 
-/// Emits `let seg`: the segment of `table` (a `Frame`) that holds thread `thread`, the last one
-/// starting at or before it (their first threads increase), by binary search.
-fn emit_segment_of(w: &mut Writer, table: &str, thread: &str) {
-    w.comment("The last segment starting at or before this slot (offsets increase).");
-    w.line("var lo = 0u;");
-    w.line(format!("var hi = {table}.count;"));
-    w.block("while (hi - lo > 1u)", |w| {
-        w.line("let mid = (lo + hi) / 2u;");
-        w.block(format!("if ({table}.segments[mid].a.x <= {thread})"), |w| {
-            w.line("lo = mid;")
-        });
-        w.block("else", |w| w.line("hi = mid;"));
-    });
-    w.line(format!("let seg = {table}.segments[lo];"));
+/// How [`emit_segment_of`] looks a thread's segment up.
+#[derive(Clone, Copy)]
+enum SegmentSearch {
+    /// Halving the range: a load a round, each waiting on the one before.
+    Halves,
+    /// Eighths: each round loads the starts of seven segments at once (independent loads,
+    /// waited for together) and keeps the eighth of the range that holds the thread, three
+    /// rounds for a hundred segments where halving takes seven loads in turn. For the `fire`
+    /// kernel, a few thousand threads a step whose search is most of their work: on an H100
+    /// each load in turn costs an L2 latency.
+    Eighths,
 }
 
-/// Emits `let seg` as [`emit_segment_of`] does, by a search in eighths: each round loads the
-/// starts of seven segments at once (independent loads, waited for together) and keeps the
-/// eighth of the range that holds the thread, three rounds for a hundred segments where
-/// halving took seven loads in turn. For the `fire` kernel, a few thousand threads a step
-/// whose search is most of their work: on an H100 each load in turn costs an L2 latency.
-fn emit_segment_of_by_eighths(w: &mut Writer, table: &str, thread: &str) {
-    w.comment("The last segment starting at or before this slot (offsets increase), by eighths.");
+/// Emits `let seg`: the segment of `table` (a `Frame`) that holds thread `thread`, the last one
+/// starting at or before it (their first threads increase), found as `search` says.
+fn emit_segment_of(w: &mut Writer, table: &str, thread: &str, search: SegmentSearch) {
+    w.comment(match search {
+        SegmentSearch::Halves => {
+            "The last segment starting at or before this slot (offsets increase)."
+        }
+        SegmentSearch::Eighths => {
+            "The last segment starting at or before this slot (offsets increase), by eighths."
+        }
+    });
     w.line("var lo = 0u;");
     w.line(format!("var hi = {table}.count;"));
-    w.block("while (hi - lo > 1u)", |w| {
-        w.line("let eighth = (hi - lo + 7u) / 8u;");
-        w.line("var next = lo;");
-        w.block("for (var q = 1u; q < 8u; q++)", |w| {
-            w.line("let m = lo + q * eighth;");
-            w.line(format!(
-                "let start = {table}.segments[min(m, hi - 1u)].a.x;"
-            ));
-            w.block(format!("if (m < hi && start <= {thread})"), |w| {
-                w.line("next = m;")
+    w.block("while (hi - lo > 1u)", |w| match search {
+        SegmentSearch::Halves => {
+            w.line("let mid = (lo + hi) / 2u;");
+            w.block(format!("if ({table}.segments[mid].a.x <= {thread})"), |w| {
+                w.line("lo = mid;")
             });
-        });
-        w.line("hi = min(next + eighth, hi);");
-        w.line("lo = next;");
+            w.block("else", |w| w.line("hi = mid;"));
+        }
+        SegmentSearch::Eighths => {
+            w.line("let eighth = (hi - lo + 7u) / 8u;");
+            w.line("var next = lo;");
+            w.block("for (var q = 1u; q < 8u; q++)", |w| {
+                w.line("let m = lo + q * eighth;");
+                w.line(format!(
+                    "let start = {table}.segments[min(m, hi - 1u)].a.x;"
+                ));
+                w.block(format!("if (m < hi && start <= {thread})"), |w| {
+                    w.line("next = m;")
+                });
+            });
+            w.line("hi = min(next + eighth, hi);");
+            w.line("lo = next;");
+        }
     });
     w.line(format!("let seg = {table}.segments[lo];"));
 }
@@ -203,7 +213,7 @@ pub fn emit_fire(w: &mut Writer, ir: &EffectIr) {
         "fn fire(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
             crate::base::kernel::emit_thread_index(w, "t", Some("fire_frame.threads"));
-            emit_segment_of_by_eighths(w, "fire_frame", "t");
+            emit_segment_of(w, "fire_frame", "t", SegmentSearch::Eighths);
             w.line("let step = fire_state[0];");
             w.line("let born = seg.b.y;");
             w.comment("Spawned by a later step of the batch: nothing yet.");
