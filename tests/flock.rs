@@ -254,10 +254,20 @@ fn cohesion_and_alignment_blow_up_just_past_their_limits_and_not_just_below() {
 
 #[test]
 fn flocking_runs_are_deterministic() {
-    let src = cloud(700, 650, "Local", "Grid(cell: 0.5)");
-    let run = || {
-        let (_, r) = run_gpu(&compile(&src), 40);
-        plume::runtime::outputs::csv(&r)
-    };
-    assert_eq!(run(), run());
+    // Both searches: nine threads a boid over whole cells, and (from GRID_SPLIT_BELOW) one
+    // thread a boid over cells split along x.
+    let one_thread = plume::compiler::forces::flock::GRID_SPLIT_BELOW;
+    for (capacity, steps) in [(700u32, 40u64), (one_thread, 20)] {
+        let src = cloud(capacity, 650, "Local", "Grid(cell: 0.5)");
+        let run = || {
+            let (_, r) = run_gpu(&compile(&src), steps);
+            plume::runtime::outputs::csv(&r)
+        };
+        let first = run();
+        assert!(
+            first.split(|&b| b == b'\n').count() > 600,
+            "too few rows to compare"
+        );
+        assert_eq!(first, run(), "capacity {capacity}");
+    }
 }

@@ -232,7 +232,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     if let Some(flock) = &ir.flock {
         w.blank();
         let verlet = layout.has(crate::stages::passes::layout::Attribute::Displacement);
-        flock.emit_kernels(&mut w, verlet.then(|| ir.h()));
+        flock.emit_kernels(&mut w, ir.capacity, verlet.then(|| ir.h()));
     }
     w.finish()
 }

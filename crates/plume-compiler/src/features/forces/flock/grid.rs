@@ -57,12 +57,12 @@ impl FlockIr {
         w.blank();
         self.emit_pair_fn(&mut w);
         w.blank();
-        emit_cell_fns(&mut w, cell);
+        emit_cell_fns(&mut w, cell, Self::x_split(capacity));
         w.blank();
         if Self::split_search(capacity) {
             emit_split_search(&mut w);
         } else {
-            emit_search(&mut w);
+            emit_search(&mut w, Self::x_split(capacity));
         }
         Some(w.finish())
     }
@@ -82,20 +82,22 @@ impl FlockIr {
 ///   [`GRID_SPLIT_BELOW`] boids a workgroup takes [`GRID_TILE`] consecutive sorted boids; nine
 ///   threads a boid each walk one row of 3 cells around the boid's own (27 cells in all), and
 ///   the boid's first thread adds the nine partial sums in row order. From it on, one thread a
-///   boid walks the nine rows.
+///   boid walks the nine rows, each of its cells split in [`super::GRID_X_SPLIT`] along x (a row of
+///   7 sub-cells: [`FlockIr::x_split`]).
 ///
-/// The bucket hash keeps x-neighbouring cells in consecutive buckets, so a row of 3 cells is
-/// one run of sorted boids (two where the buckets wrap), and scatters the rows over the table
+/// The bucket hash keeps x-neighbouring cells in consecutive buckets, so a row of 3 cells (or
+/// sub-cells) is one run of sorted boids (two where the buckets wrap), and scatters the rows
+/// over the table
 /// (a PCG hash of (y, z): the multiply-xor hash before it put 2,164 occupied cells of a 16k
 /// flock in 1,677 of 32,768 buckets, and a boid walked 401 candidates for the 268 in its 27
 /// cells; with PCG, 286). Other cells may share a row's buckets; a candidate counts only if its
 /// row key (the snapshot's spare word) is the row's: a sorted boid in the row's buckets with
 /// that key is either in the row's 3 cells, or in a row at least 4 cells away in y or z (the
-/// key is (y, z) modulo 4), or in the same row at least `GRID_BUCKETS - 2` cells away in x, and
-/// both lie beyond the radius (cell >= radius), so the distance test drops them. A boid adds
-/// its neighbours in (row, x, slot) order, the same every run.
-pub(super) fn emit_grid(w: &mut Writer, cell: f64) {
-    emit_cell_fns(w, cell);
+/// key is (y, z) modulo 4), or in the same row at least `GRID_BUCKETS - 2 x_split` cells or
+/// sub-cells away in x, and both lie beyond the radius (cell >= radius), so the distance test
+/// drops them. A boid adds its neighbours in (row, x, slot) order, the same every run.
+pub(super) fn emit_grid(w: &mut Writer, cell: f64, x_split: u32) {
+    emit_cell_fns(w, cell, x_split);
     w.line("const NO_BUCKET: u32 = 0xffffffffu;");
     w.comment("Each live boid's bucket, counted; grid_vals holds its place among its bucket's boids until the scatter.");
     w.line("@compute @workgroup_size(WORKGROUP)");
@@ -155,9 +157,22 @@ pub(super) fn emit_grid(w: &mut Writer, cell: f64) {
 
 /// The grid's cell arithmetic, shared by the build kernels (main module) and the search (its
 /// own module): `cell_of`, `row_key` (what the sorted snapshot's spare word holds) and
-/// `bucket_of`.
-pub(super) fn emit_cell_fns(w: &mut Writer, cell: f64) {
-    w.line(format!("const INV_CELL: f32 = {};", f32_lit(1.0 / cell)));
+/// `bucket_of`. With `x_split` > 1 a cell is that many sub-cells along x, each with a bucket of
+/// its own; rows (and so `row_key`) stay whole cells in y and z.
+pub(super) fn emit_cell_fns(w: &mut Writer, cell: f64, x_split: u32) {
+    if x_split == 1 {
+        w.line(format!("const INV_CELL: f32 = {};", f32_lit(1.0 / cell)));
+    } else {
+        w.comment(format!(
+            "Cells of {cell} m in y and z, split in {x_split} along x."
+        ));
+        w.line(format!(
+            "const INV_CELL: vec3<f32> = vec3<f32>({}, {}, {});",
+            f32_lit(f64::from(x_split) / cell),
+            f32_lit(1.0 / cell),
+            f32_lit(1.0 / cell)
+        ));
+    }
     w.block("fn cell_of(x: vec3<f32>) -> vec3<i32>", |w| {
         w.comment(
             "Clamped so that far-away boids share the outermost cells instead of overflowing.",
@@ -244,10 +259,11 @@ fn emit_run_masked(w: &mut Writer, round: u32) {
     );
 }
 
-/// `flock_grid`, one thread a boid: its nine rows of 3 cells in turn, in rounds of
-/// [`GRID_ONE_ROUND`] ([`emit_row_masked`]'s), every row's run start loaded first (1M boids
-/// 1.148 against 1.166 ms a step, H100).
-pub(super) fn emit_search(w: &mut Writer) {
+/// `flock_grid`, one thread a boid: its nine rows in turn, each `2 x_split + 1` cells (or
+/// sub-cells) along x around the boid's own, in rounds of [`GRID_ONE_ROUND`]
+/// ([`emit_row_masked`]'s), every row's run start loaded first (1M boids 1.148 against 1.166
+/// ms a step, H100).
+pub(super) fn emit_search(w: &mut Writer, x_split: u32) {
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
         "fn flock_grid(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
@@ -259,15 +275,18 @@ pub(super) fn emit_search(w: &mut Writer) {
             w.line("let heading = flock_heading(me_v.xyz);");
             emit_accumulators(w);
             w.line("let home = cell_of(me.xyz);");
+            w.line(format!("const ROW_BUCKETS: u32 = {}u;", 2 * x_split + 1));
             w.comment("Every row's run, and where its buckets wrap the end of the second (0: none), loaded before any row is walked: a row's candidates then wait on one load, not two in turn.");
             w.line("var runs: array<vec3<u32>, 9>;");
             w.block("for (var n = 0; n < 9; n++)", |w| {
-                w.line("let b0 = bucket_of(home + vec3<i32>(-1, n % 3 - 1, n / 3 - 1));");
-                w.line("let wrapped = max(b0 + 3u, GRID_BUCKETS) - GRID_BUCKETS;");
-                w.line("runs[n] = vec3<u32>(cell_start[b0], cell_start[min(b0 + 3u, GRID_BUCKETS)], wrapped);");
+                w.line(format!(
+                    "let b0 = bucket_of(home + vec3<i32>(-{x_split}, n % 3 - 1, n / 3 - 1));"
+                ));
+                w.line("let wrapped = max(b0 + ROW_BUCKETS, GRID_BUCKETS) - GRID_BUCKETS;");
+                w.line("runs[n] = vec3<u32>(cell_start[b0], cell_start[min(b0 + ROW_BUCKETS, GRID_BUCKETS)], wrapped);");
             });
             w.block("for (var n = 0; n < 9; n++)", |w| {
-                w.line("let key = row_key(home + vec3<i32>(-1, n % 3 - 1, n / 3 - 1));");
+                w.line("let key = row_key(home + vec3<i32>(0, n % 3 - 1, n / 3 - 1));");
                 w.block("", |w| {
                     w.line("let first = runs[n].x;");
                     w.line("let last = runs[n].y;");

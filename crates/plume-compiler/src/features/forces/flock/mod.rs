@@ -196,6 +196,16 @@ pub const GRID_TILE: u32 = 16;
 /// accepted; it now runs as often as the warp's busiest thread has neighbours in the round.
 pub const GRID_ONE_ROUND: u32 = 24;
 
+/// Sub-cells along x of each cell where the one-thread search runs (from [`GRID_SPLIT_BELOW`]):
+/// a row is then 2 x 3 + 1 = 7 sub-cells, 7/3 of a cell, where a boid reaches 2 cells of it
+/// (its radius either way), instead of 3 whole cells: 22% fewer candidates walked. 1M boids
+/// (H100, one call, three rounds): 1.071 against 1.130 ms a step (the search 0.879 against
+/// 0.935); 2 sub-cells 1.072, 4 sub-cells 1.081. The neighbours are the same; the order they
+/// are added in changes within a cell (by sub-cell, then slot), so the sums round differently
+/// (docs/performance.md, "The flock's cells split along x"). Rows clipped, sub-cell by sub-cell,
+/// to the sphere of the radius (44% fewer candidates than whole cells) were slower: 1.095.
+pub const GRID_X_SPLIT: u32 = 3;
+
 /// Candidates the split search loads and tests a round (one bit each in the round's mask):
 /// 16k boids 0.0457 ms a step, against 0.0457 with 8 and 0.0478 with 32 (H100).
 pub const GRID_ROUND: u32 = 16;
@@ -236,6 +246,16 @@ impl FlockIr {
     /// ([`GRID_SPLIT_BELOW`]).
     pub fn split_search(capacity: u32) -> bool {
         capacity < GRID_SPLIT_BELOW
+    }
+
+    /// Sub-cells along x of a grid cell for `capacity` boids: [`GRID_X_SPLIT`] where the
+    /// one-thread search runs, 1 (whole cells) where the split search does.
+    pub fn x_split(capacity: u32) -> u32 {
+        if Self::split_search(capacity) {
+            1
+        } else {
+            GRID_X_SPLIT
+        }
     }
 
     /// Hash-table buckets of the grid for `capacity` boids: a power of two >= 2 x capacity
