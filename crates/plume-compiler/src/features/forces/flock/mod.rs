@@ -190,11 +190,15 @@ pub const GRID_SPLIT_BELOW: u32 = 262_144;
 pub const GRID_TILE: u32 = 16;
 
 /// Candidates the one-thread search loads and tests a round, in masks as the split search's
-/// rounds: 1M boids 1.178 ms a step, against 1.194 with 32, 1.182 with 20, 1.205 with 28 and
-/// 1.270 for the pair function inline, four candidates loaded at a time (H100, one call). With
-/// a thread a boid, the pair function inline ran for every candidate any thread of the warp
-/// accepted; it now runs as often as the warp's busiest thread has neighbours in the round.
-pub const GRID_ONE_ROUND: u32 = 24;
+/// rounds. With cells split along x and the next row's run loaded during a row (H100, one call,
+/// three rounds, 1M boids): 1.048 ms a step, against 1.051 with 18, 1.073 with 22 and 1.067
+/// with 24. The driver gave the kernel 80 registers with 20, 64 with 18, 75 with 22 and 74 with
+/// 24 (`VK_KHR_pipeline_executable_properties`). Before (whole cells, every run loaded first):
+/// 1.178 with 24, 1.194 with 32, 1.182 with 20, 1.205 with 28 and 1.270 for the pair function
+/// inline, four candidates loaded at a time. With a thread a boid, the pair function inline ran
+/// for every candidate any thread of the warp accepted; it now runs as often as the warp's
+/// busiest thread has neighbours in the round.
+pub const GRID_ONE_ROUND: u32 = 20;
 
 /// Sub-cells along x of each cell where the one-thread search runs (from [`GRID_SPLIT_BELOW`]):
 /// a row is then 2 x 3 + 1 = 7 sub-cells, 7/3 of a cell, where a boid reaches 2 cells of it
