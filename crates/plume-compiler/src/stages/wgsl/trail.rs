@@ -178,27 +178,30 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawShape)
         w.line("rec.valid = false;");
         w.line("let instance = k / TRIANGLES;");
         w.line("let i = k - instance * TRIANGLES;");
-        w.line("let v = array<TrailVertex, 3>(trail_vertex(i, instance), trail_vertex(i + 1u, instance), trail_vertex(i + 2u, instance));");
+        w.comment("Three values, not an array: the driver kept an array indexed in a loop in local memory (H100: 144 bytes a thread here, 384 in the composite).");
+        for c in 0..3 {
+            let at = if c == 0 { "i".to_string() } else { format!("i + {c}u") };
+            w.line(format!("let v{c} = trail_vertex({at}, instance);"));
+        }
         w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
         w.line("var inside = true;");
         w.line("var lo = vec2<f32>(3.0e38);");
         w.line("var hi = vec2<f32>(-3.0e38);");
-        w.block("for (var c = 0u; c < 3u; c++)", |w| {
-            w.line("let q = v[c].clip;");
-            w.comment("A hidden vertex lies outside the depth range: its triangle draws nothing.");
-            w.line("inside = inside && unclipped(q);");
-            w.line("let p = clip_pixel(q, size);");
-            w.line("lo = min(lo, p);");
-            w.line("hi = max(hi, p);");
-        });
+        w.comment("A hidden vertex lies outside the depth range: its triangle draws nothing.");
+        for c in 0..3 {
+            w.line(format!("inside = inside && unclipped(v{c}.clip);"));
+            w.line(format!("let p{c} = clip_pixel(v{c}.clip, size);"));
+            w.line(format!("lo = min(lo, p{c});"));
+            w.line(format!("hi = max(hi, p{c});"));
+        }
         w.line("rec.first = first_pixel(lo);");
         w.line("rec.last = last_pixel(hi, size);");
         w.block("if (!inside || any(rec.first > rec.last))", |w| {
             w.line("return rec;")
         });
-        w.line("let a = to_pixels(v[0].clip, rec.first, size);");
-        w.line("let b = to_pixels(v[1].clip, rec.first, size);");
-        w.line("let c = to_pixels(v[2].clip, rec.first, size);");
+        w.line("let a = to_pixels(v0.clip, rec.first, size);");
+        w.line("let b = to_pixels(v1.clip, rec.first, size);");
+        w.line("let c = to_pixels(v2.clip, rec.first, size);");
         w.comment("The inverse of the columns (a, b, c): pixel -> barycentric weights over 1 / w.");
         w.line("let det = dot(a, cross(b, c));");
         w.block("if (abs(det) <= 1e-30)", |w| w.line("return rec;"));
@@ -206,13 +209,13 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawShape)
         w.line("let box = pack_box(rec.first, rec.last);");
         w.line("let rows = inverse_rows(a, b, c, det);");
         w.comment("Each vertex's clip z (a pixel's NDC depth is the weights' dot product with them; z >= 0 in the depth range), the first one's sign bit holding the parity of i (the strip's side).");
-        w.line("let z0 = bitcast<u32>(abs(v[0].clip.z)) | ((i & 1u) << 31u);");
+        w.line("let z0 = bitcast<u32>(abs(v0.clip.z)) | ((i & 1u) << 31u);");
         w.line("rec.words[0] = vec4<u32>(bitcast<vec3<u32>>(rows[0]), z0);");
-        w.line("rec.words[1] = vec4<u32>(bitcast<vec3<u32>>(rows[1]), bitcast<u32>(v[1].clip.z));");
-        w.line("rec.words[2] = vec4<u32>(bitcast<vec3<u32>>(rows[2]), bitcast<u32>(v[2].clip.z));");
-        w.line("let c0 = min(v[0].color, vec4<f32>(65504.0));");
-        w.line("let c1 = min(v[1].color, vec4<f32>(65504.0));");
-        w.line("let c2 = min(v[2].color, vec4<f32>(65504.0));");
+        w.line("rec.words[1] = vec4<u32>(bitcast<vec3<u32>>(rows[1]), bitcast<u32>(v1.clip.z));");
+        w.line("rec.words[2] = vec4<u32>(bitcast<vec3<u32>>(rows[2]), bitcast<u32>(v2.clip.z));");
+        w.line("let c0 = min(v0.color, vec4<f32>(65504.0));");
+        w.line("let c1 = min(v1.color, vec4<f32>(65504.0));");
+        w.line("let c2 = min(v2.color, vec4<f32>(65504.0));");
         w.line("rec.words[3] = vec4<u32>(pack2x16float(c0.rg), pack2x16float(c0.ba), pack2x16float(c1.rg), pack2x16float(c1.ba));");
         w.line("rec.words[4] = vec4<u32>(pack2x16float(c2.rg), pack2x16float(c2.ba), box);");
         w.line("return rec;");
@@ -233,20 +236,20 @@ fn emit_splat(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawShape)
             "let shift = vec2<f32>(vec2<i32>(unpack_corner(rec.words[{}u].z)) - vec2<i32>(origin));",
             SPLAT_TRIANGLE_VEC4S - 1
         ));
-        w.block("for (var r = 0u; r < 3u; r++)", |w| {
-            w.line("let row = bitcast<vec3<f32>>(rec.words[r].xyz);");
+        // Unrolled here, not in WGSL: `rec.words` indexed by a loop counter went to local memory.
+        for r in 0..3 {
             w.line(format!(
-                "batch[{SPLAT_TRIANGLE_VEC4S}u * t + r] = vec4<u32>(bitcast<vec3<u32>>(vec3<f32>(row.xy, row.z - dot(row.xy, shift))), rec.words[r].w);"
+                "let row{r} = bitcast<vec3<f32>>(rec.words[{r}u].xyz);"
             ));
-        });
-        w.block(
-            format!("for (var r = 3u; r < {SPLAT_TRIANGLE_VEC4S}u; r++)"),
-            |w| {
-                w.line(format!(
-                    "batch[{SPLAT_TRIANGLE_VEC4S}u * t + r] = rec.words[r];"
-                ));
-            },
-        );
+            w.line(format!(
+                "batch[{SPLAT_TRIANGLE_VEC4S}u * t + {r}u] = vec4<u32>(bitcast<vec3<u32>>(vec3<f32>(row{r}.xy, row{r}.z - dot(row{r}.xy, shift))), rec.words[{r}u].w);"
+            ));
+        }
+        for r in 3..SPLAT_TRIANGLE_VEC4S {
+            w.line(format!(
+                "batch[{SPLAT_TRIANGLE_VEC4S}u * t + {r}u] = rec.words[{r}u];"
+            ));
+        }
     };
     let depth = host_depth(shape);
     let evaluate = |w: &mut Writer| {

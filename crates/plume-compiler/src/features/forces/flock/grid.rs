@@ -82,15 +82,14 @@ impl FlockIr {
 ///   [`GRID_SPLIT_BELOW`] boids a workgroup takes [`GRID_TILE`] consecutive sorted boids; nine
 ///   threads a boid each walk one row of 3 cells around the boid's own (27 cells in all), and
 ///   the boid's first thread adds the nine partial sums in row order. From it on, one thread a
-///   boid walks the nine rows, each of its cells split in [`super::GRID_X_SPLIT`] along x (a row of
-///   7 sub-cells: [`FlockIr::x_split`]).
+///   boid walks the nine rows, each of its cells split in [`super::GRID_X_SPLIT`] along x (a
+///   row of 7 sub-cells: [`FlockIr::x_split`]).
 ///
 /// The bucket hash keeps x-neighbouring cells in consecutive buckets, so a row of 3 cells (or
-/// sub-cells) is one run of sorted boids (two where the buckets wrap), and scatters the rows
-/// over the table
-/// (a PCG hash of (y, z): the multiply-xor hash before it put 2,164 occupied cells of a 16k
-/// flock in 1,677 of 32,768 buckets, and a boid walked 401 candidates for the 268 in its 27
-/// cells; with PCG, 286). Other cells may share a row's buckets; a candidate counts only if its
+/// 7 sub-cells) is one run of sorted boids (two where the buckets wrap), and scatters the rows
+/// over the table (a PCG hash of (y, z): the multiply-xor hash before it put 2,164 occupied
+/// cells of a 16k flock in 1,677 of 32,768 buckets, and a boid walked 401 candidates for the
+/// 268 in its 27 cells; with PCG, 286). Other cells may share a row's buckets; a candidate counts only if its
 /// row key (the snapshot's spare word) is the row's: a sorted boid in the row's buckets with
 /// that key is either in the row's 3 cells, or in a row at least 4 cells away in y or z (the
 /// key is (y, z) modulo 4), or in the same row at least `GRID_BUCKETS - 2 x_split` cells or
