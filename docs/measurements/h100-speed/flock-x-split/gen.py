@@ -27,18 +27,8 @@ def round_loop(R, ind='            '):
     o.append(f"{ind}}}")
     return "\n".join(o)
 
-def kernel(R, wg=256, shared=False, xs=1):
-    h=head.replace("const WORKGROUP: u32 = 256u;", f"const WORKGROUP: u32 = {wg}u;")
-    if xs>1:
-        h=h.replace("const INV_CELL: f32 = 1.25;", f"const INV_CELL: vec3<f32> = vec3<f32>({1.25*xs}, 1.25, 1.25);")
-    nb=2*xs+1
-    off=f"home + vec3<i32>(-{xs}, n % 3 - 1, n / 3 - 1)"
-    o=[]
-    if shared:
-        o.append(f"var<workgroup> run_words: array<u32, {27*wg}u>;")
-    o.append("@compute @workgroup_size(WORKGROUP)")
-    o.append("fn flock_grid(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32) {")
-    o.append("""    let k = gid.x + gid.y * groups.x * WORKGROUP;
+# The search kernel's start: its boid, its sums, its cell.
+PROLOGUE = """    let k = gid.x + gid.y * groups.x * WORKGROUP;
     if (k >= cell_start[GRID_BUCKETS]) {
         return;
     }
@@ -50,7 +40,33 @@ def kernel(R, wg=256, shared=False, xs=1):
     var sum_v = vec3<f32>(0.0);
     var sum_w = 0.0;
     var count = 0.0;
-    let home = cell_of(me.xyz);""")
+    let home = cell_of(me.xyz);"""
+
+def rows_end(R, wrapped):
+    """A row's first run's rounds, its wrapped run, the end of the row loop and the results."""
+    middle = ("\n        }\n        let wrapped = " + wrapped + ";\n        if (wrapped > 0u) {\n"
+              "            let first = cell_start[0];\n            let last = cell_start[wrapped];\n")
+    return "\n" + round_loop(R) + middle + round_loop(R) + """
+        }
+    }
+    flock_out[3u * grid_vals[k]] = vec4<f32>(push, sum_w);
+    flock_out[3u * grid_vals[k] + 1u] = vec4<f32>(sum_x, count);
+    flock_out[3u * grid_vals[k] + 2u] = vec4<f32>(sum_v, 0.0);
+}
+"""
+
+def kernel(R, wg=256, shared=False, xs=1):
+    h=head.replace("const WORKGROUP: u32 = 256u;", f"const WORKGROUP: u32 = {wg}u;")
+    if xs>1:
+        h=h.replace("const INV_CELL: f32 = 1.25;", f"const INV_CELL: vec3<f32> = vec3<f32>({1.25*xs}, 1.25, 1.25);")
+    nb=2*xs+1
+    off=f"home + vec3<i32>(-{xs}, n % 3 - 1, n / 3 - 1)"
+    o=[]
+    if shared:
+        o.append(f"var<workgroup> run_words: array<u32, {27*wg}u>;")
+    o.append("@compute @workgroup_size(WORKGROUP)")
+    o.append("fn flock_grid(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) lid: u32) {")
+    o.append(PROLOGUE)
     if not shared:
         o.append("    var runs: array<vec3<u32>, 9>;")
     o.append(f"""    for (var n = 0; n < 9; n++) {{
@@ -70,21 +86,7 @@ def kernel(R, wg=256, shared=False, xs=1):
         {{
             let first = {F};
             let last = {L};""")
-    o.append(round_loop(R))
-    o.append(f"""        }}
-        let wrapped = {W};
-        if (wrapped > 0u) {{
-            let first = cell_start[0];
-            let last = cell_start[wrapped];""")
-    o.append(round_loop(R))
-    o.append("""        }
-    }
-    flock_out[3u * grid_vals[k]] = vec4<f32>(push, sum_w);
-    flock_out[3u * grid_vals[k] + 1u] = vec4<f32>(sum_x, count);
-    flock_out[3u * grid_vals[k] + 2u] = vec4<f32>(sum_v, 0.0);
-}
-""")
-    return h+"\n".join(o)
+    return h + "\n".join(o) + rows_end(R, W)
 
 def kernel_cull(R, xs=3):
     """x split in xs sub-cells; each row clipped to the sub-cells within reach (exact set)."""
@@ -92,20 +94,8 @@ def kernel_cull(R, xs=3):
     o=[]
     o.append("@compute @workgroup_size(WORKGROUP)")
     o.append("fn flock_grid(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {")
-    o.append(f"""    let k = gid.x + gid.y * groups.x * WORKGROUP;
-    if (k >= cell_start[GRID_BUCKETS]) {{
-        return;
-    }}
-    let me = boids[2u * k];
-    let me_v = boids[2u * k + 1u];
-    let heading = flock_heading(me_v.xyz);
-    var push = vec3<f32>(0.0);
-    var sum_x = vec3<f32>(0.0);
-    var sum_v = vec3<f32>(0.0);
-    var sum_w = 0.0;
-    var count = 0.0;
-    let home = cell_of(me.xyz);
-    // Margin for rounding: cell membership and these bounds, relative to the coordinates.
+    o.append(PROLOGUE)
+    o.append(f"""    // Margin for rounding: cell membership and these bounds, relative to the coordinates.
     let slack = 1e-3 * 0.8 + 2.4e-7 * (max(max(abs(me.x), abs(me.y)), abs(me.z)) + 0.8);
     let clamped = any(abs(home) >= vec3<i32>(999990));
     var runs: array<vec3<u32>, 9>;
@@ -135,18 +125,4 @@ def kernel_cull(R, xs=3):
         {{
             let first = runs[n].x;
             let last = runs[n].y;""")
-    o.append(round_loop(R))
-    o.append(f"""        }}
-        let wrapped = runs[n].z;
-        if (wrapped > 0u) {{
-            let first = cell_start[0];
-            let last = cell_start[wrapped];""")
-    o.append(round_loop(R))
-    o.append("""        }
-    }
-    flock_out[3u * grid_vals[k]] = vec4<f32>(push, sum_w);
-    flock_out[3u * grid_vals[k] + 1u] = vec4<f32>(sum_x, count);
-    flock_out[3u * grid_vals[k] + 2u] = vec4<f32>(sum_v, 0.0);
-}
-""")
-    return h+"\n".join(o)
+    return h + "\n".join(o) + rows_end(R, "runs[n].z")
