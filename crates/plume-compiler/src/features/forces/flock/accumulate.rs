@@ -116,11 +116,17 @@ fn emit_accumulate_if(w: &mut Writer, counts: &str, ox: &str, ov: &str) {
 }
 
 /// Adds the pair function's result `f` for the neighbour (snapshot `ox`, `ov`) to the running
-/// sums.
+/// sums, and counts it.
 pub(super) fn emit_add_neighbour(w: &mut Writer, ox: &str, ov: &str) {
+    emit_add_pair(w, ox, ov);
+    w.line("count += 1.0;");
+}
+
+/// [`emit_add_neighbour`] but for the count, which a masked round adds once for all of its
+/// neighbours (the same whole number: counts stay far below 2^24).
+pub(super) fn emit_add_pair(w: &mut Writer, ox: &str, ov: &str) {
     w.line("push += f.xyz;");
     w.line(format!("sum_x += f.w * {ox}.xyz;"));
     w.line(format!("sum_v += f.w * {ov}.xyz;"));
     w.line("sum_w += f.w;");
-    w.line("count += 1.0;");
 }

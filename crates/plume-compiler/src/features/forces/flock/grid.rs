@@ -1,9 +1,10 @@
 //! The uniform grid: its build kernels in the main module (clear, bucket, scatter, rank) and
 //! its search, a WGSL module of its own on read-only bindings (`emit_search_module`).
 
-use super::accumulate::{emit_accumulators, emit_add_neighbour, emit_store_out};
+use super::accumulate::{emit_accumulators, emit_add_pair, emit_store_out};
 use super::{
-    FlockIr, Neighbors, GRID_ONE_ROUND, GRID_ROUND, GRID_SPARE, GRID_TILE, SEARCH_BUFFERS,
+    FlockIr, Neighbors, GRID_ONE_LOADS, GRID_ONE_LOADS_PER_ROUND, GRID_ROUND, GRID_SPARE,
+    GRID_TILE, SEARCH_BUFFERS,
 };
 use crate::base::layout::Layout;
 use crate::base::writer::{f32_lit, u32_lit, Writer};
@@ -211,32 +212,48 @@ pub(super) fn emit_row_runs(w: &mut Writer, body: impl Fn(&mut Writer)) {
 /// position alone (the row's key and the distance), the neighbours marked in a bit mask, then
 /// the pair function run on the marked ones in run order. In a warp, inline pair code runs for
 /// every candidate that any of its threads accepts, nearly all of them; with the masks it runs
-/// as often as the warp's busiest thread has neighbours among the round's. The last round
+/// as often as the warp's busiest thread has neighbours in the round. The last round
 /// reads up to `round - 1` boids past the run (the snapshot has [`GRID_SPARE`] spare entries)
 /// and masks them off; the boid itself is masked off by its index.
 pub(super) fn emit_row_masked(w: &mut Writer, round: u32) {
-    emit_row_runs(w, |w| emit_run_masked(w, round));
+    emit_row_runs(w, |w| emit_run_masked(w, round, 1));
 }
 
-/// The rounds of [`emit_row_masked`] over the run `first .. last` of a row with key `key`.
-fn emit_run_masked(w: &mut Writer, round: u32) {
+/// The rounds of [`emit_row_masked`] over the run `first .. last` of a row with key `key`, each
+/// `loads` candidates loaded and tested at a time, `per_round` times (the later loads only
+/// where the run reaches them), into one mask: a round reads at most `loads - 1` boids past the
+/// run.
+fn emit_run_masked(w: &mut Writer, loads: u32, per_round: u32) {
+    let round = loads * per_round;
     assert!(
-        round <= GRID_SPARE,
-        "a round's loads past its run stay within the spare entries"
+        loads <= GRID_SPARE && round <= 32,
+        "a round's loads past its run stay within the spare entries, its marks within a u32"
     );
     w.block(
         format!("for (var base = first; base < last; base += {round}u)"),
         |w| {
-            for j in 0..round {
-                w.line(format!("let x{j} = boids[2u * (base + {j}u)];"));
-            }
             w.line("var hits = 0u;");
-            for j in 0..round {
-                w.line(format!("let d{j} = me.xyz - x{j}.xyz;"));
-                w.line(format!(
-                    "hits |= select(0u, {}u, x{j}.w == key && dot(d{j}, d{j}) < FLOCK_R2);",
-                    1u32 << j
-                ));
+            for g in 0..per_round {
+                let at = g * loads;
+                let test = |w: &mut Writer| {
+                    for j in 0..loads {
+                        w.line(format!("let x{j} = boids[2u * (base + {}u)];", at + j));
+                    }
+                    for j in 0..loads {
+                        w.line(format!("let d{j} = me.xyz - x{j}.xyz;"));
+                        w.line(format!(
+                            "hits |= select(0u, {}u, x{j}.w == key && dot(d{j}, d{j}) < FLOCK_R2);",
+                            1u32 << (at + j)
+                        ));
+                    }
+                };
+                if per_round == 1 {
+                    test(w);
+                } else if g == 0 {
+                    w.block("", test);
+                } else {
+                    w.block(format!("if (base + {at}u < last)"), test);
+                }
             }
             w.comment("Only the run's candidates, and not the boid itself.");
             w.line(format!(
@@ -245,6 +262,7 @@ fn emit_run_masked(w: &mut Writer, round: u32) {
             w.line(format!(
                 "hits &= select(0xffffffffu, ~(1u << (k - base)), k - base < {round}u);"
             ));
+            w.line("count += f32(countOneBits(hits));");
             w.block("while (hits != 0u)", |w| {
                 w.line("let m = base + firstTrailingBit(hits);");
                 w.line("hits &= hits - 1u;");
@@ -252,17 +270,17 @@ fn emit_run_masked(w: &mut Writer, round: u32) {
                 w.line("let vm = boids[2u * m + 1u];");
                 w.line("let d = me.xyz - xm.xyz;");
                 w.line("let f = flock_pair(d, dot(d, d), heading);");
-                emit_add_neighbour(w, "xm", "vm");
+                emit_add_pair(w, "xm", "vm");
             });
         },
     );
 }
 
 /// `flock_grid`, one thread a boid: its nine rows in turn, each `2 x_split + 1` cells (or
-/// sub-cells) along x around the boid's own, in rounds of [`GRID_ONE_ROUND`]
-/// ([`emit_row_masked`]'s), the next row's run loaded while a row is walked (1M boids, H100,
-/// one call, three rounds: 1.048 against 1.067 ms a step for every row's run loaded first into
-/// an array, which the driver kept in local memory).
+/// sub-cells) along x around the boid's own, in rounds of [`GRID_ONE_LOADS_PER_ROUND`] loads
+/// of [`GRID_ONE_LOADS`] candidates ([`emit_run_masked`]), the next row's run loaded while a
+/// row is walked (1M boids, H100, one call, three rounds: 1.048 against 1.067 ms a step for
+/// every row's run loaded first into an array, which the driver kept in local memory).
 pub(super) fn emit_search(w: &mut Writer, x_split: u32) {
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(
@@ -302,12 +320,12 @@ pub(super) fn emit_search(w: &mut Writer, x_split: u32) {
                 w.block("", |w| {
                     w.line("let first = first_row;");
                     w.line("let last = last_row;");
-                    emit_run_masked(w, GRID_ONE_ROUND);
+                    emit_run_masked(w, GRID_ONE_LOADS, GRID_ONE_LOADS_PER_ROUND);
                 });
                 w.block("if (wrapped > 0u)", |w| {
                     w.line("let first = cell_start[0];");
                     w.line("let last = cell_start[wrapped];");
-                    emit_run_masked(w, GRID_ONE_ROUND);
+                    emit_run_masked(w, GRID_ONE_LOADS, GRID_ONE_LOADS_PER_ROUND);
                 });
             });
             emit_store_out(w, "grid_vals[k]");

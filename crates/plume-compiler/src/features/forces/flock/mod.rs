@@ -179,7 +179,7 @@ pub const GRID_FASTER_FROM: u32 = 4096;
 /// 128k (before the PCG bucket hash); with it, 0.355 against 0.359 at 256k (a tie), 0.728
 /// against 0.703 at 512k and 1.54 against 1.37 at 1M, where the GPU is full and nine threads'
 /// partial sums cost more than they hide. With the one-thread search in rounds of
-/// [`GRID_ONE_ROUND`] (2026-11-26, one call): 0.096 against 0.109 at 64k, 0.167 against 0.179
+/// 20 (2026-11-26, one call): 0.096 against 0.109 at 64k, 0.167 against 0.179
 /// at 128k; at 256k, in an earlier call, 0.329 against 0.320 for rounds of 32.
 pub const GRID_SPLIT_BELOW: u32 = 262_144;
 
@@ -189,16 +189,21 @@ pub const GRID_SPLIT_BELOW: u32 = 262_144;
 /// threads, under WebGPU's default limit of 256 a workgroup.
 pub const GRID_TILE: u32 = 16;
 
-/// Candidates the one-thread search loads and tests a round, in masks as the split search's
-/// rounds. With cells split along x and the next row's run loaded during a row (H100, one call,
-/// three rounds, 1M boids): 1.048 ms a step, against 1.051 with 18, 1.073 with 22 and 1.067
-/// with 24. The driver gave the kernel 80 registers with 20, 64 with 18, 75 with 22 and 74 with
-/// 24 (`VK_KHR_pipeline_executable_properties`). Before (whole cells, every run loaded first):
-/// 1.178 with 24, 1.194 with 32, 1.182 with 20, 1.205 with 28 and 1.270 for the pair function
-/// inline, four candidates loaded at a time. With a thread a boid, the pair function inline ran
-/// for every candidate any thread of the warp accepted; it now runs as often as the warp's
-/// busiest thread has neighbours in the round.
-pub const GRID_ONE_ROUND: u32 = 20;
+/// Candidates the one-thread search loads and tests at a time, [`GRID_ONE_LOADS_PER_ROUND`]
+/// times a round; a round's neighbours are marked in one mask, and the pair function runs on
+/// them after its last loads. In a warp the pair loop runs as often as the busiest thread has
+/// neighbours in the round, so a longer round wastes less of it; loaded 10 at a time, the
+/// kernel keeps its registers (57). 1M boids (H100, one call, three rounds): 1.032 ms a step
+/// for 3 x 10, against 1.048 for rounds of 20 loaded at once (80 registers), 1.039 for 2 x 16,
+/// 1.049 for 4 x 8; two mask words for rounds of up to 64 (1.043 to 1.118) and the pair loop's
+/// next loads started before its pair function (1.072 to 1.137) were slower
+/// (docs/measurements/h100-speed/flock-batches/README.md). Before (rounds loaded at once): 1.048
+/// with 20, 1.051 with 18, 1.073 with 22, 1.067 with 24; with whole cells, every run loaded
+/// first, 1.178 with 24, 1.194 with 32, 1.182 with 20 and 1.270 for the pair function inline.
+pub const GRID_ONE_LOADS: u32 = 10;
+
+/// Loads of [`GRID_ONE_LOADS`] candidates in a round of the one-thread search.
+pub const GRID_ONE_LOADS_PER_ROUND: u32 = 3;
 
 /// Sub-cells along x of each cell where the one-thread search runs (from [`GRID_SPLIT_BELOW`]):
 /// a row is then 2 x 3 + 1 = 7 sub-cells, 7/3 of a cell, where a boid reaches 2 cells of it
@@ -214,16 +219,16 @@ pub const GRID_X_SPLIT: u32 = 3;
 /// 16k boids 0.0457 ms a step, against 0.0457 with 8 and 0.0478 with 32 (H100).
 pub const GRID_ROUND: u32 = 16;
 
-/// Spare entries of the sorted snapshot past its last boid, for the last round's loads past
-/// the run (the longer of the two searches' rounds).
-pub const GRID_SPARE: u32 = if GRID_ROUND > GRID_ONE_ROUND {
+/// Spare entries of the sorted snapshot past its last boid, for the loads past a run (up to
+/// one fewer than the longer of the two searches' loads at a time).
+pub const GRID_SPARE: u32 = if GRID_ROUND > GRID_ONE_LOADS {
     GRID_ROUND
 } else {
-    GRID_ONE_ROUND
+    GRID_ONE_LOADS
 };
 
 // A round's marks are the bits of one u32.
-const _: () = assert!(GRID_SPARE <= 32);
+const _: () = assert!(GRID_ROUND <= 32 && GRID_ONE_LOADS * GRID_ONE_LOADS_PER_ROUND <= 32);
 
 /// The main module's buffers that the grid's search module binds (at the layout's binding
 /// numbers): the sorted snapshot, the results, the sorted order and the run starts.
@@ -262,19 +267,18 @@ impl FlockIr {
         }
     }
 
-    /// Hash-table buckets of the grid for `capacity` boids: a power of two >= 2 x capacity
-    /// below [`GRID_SPLIT_BELOW`], >= capacity from it, at most 2^31 (so that the count fits the
-    /// shaders' u32). The boids of another row that shares a boid's buckets are loaded and
-    /// rejected: at 16k boids with as many buckets as boids, 681 candidates a boid against 443
-    /// in its own 27 cells, and twice as many took the step from 0.0615 to 0.0585 ms there
-    /// (four times as many slowed the scan more than they sped the search up). From 256k
-    /// boids, where the one-thread search runs, the scan of twice as many buckets costs more
-    /// than the rejected candidates: 1M 1.170 against 1.178 ms a step (the scan 0.030 against
-    /// 0.064, the search 0.955 against 0.935), 256k 0.315 against 0.315 (H100,
-    /// docs/performance.md, "Flocking").
+    /// Hash-table buckets of the grid for `capacity` boids: a power of two >= 2 x capacity, at
+    /// most 2^31 (so that the count fits the shaders' u32). The boids of other rows that share
+    /// a row's buckets are loaded and rejected: about one a bucket with as many buckets as
+    /// boids, half as many with twice as many. At 16k boids: 681 candidates a boid against 443
+    /// in its own 27 cells with as many buckets as boids, and twice as many took the step from
+    /// 0.0615 to 0.0585 ms. At 1M boids (H100, one call, three rounds): 2 buckets a boid took
+    /// the search from 0.843 to 0.805 ms and the scan from 0.017 to 0.028 (its zeros no longer
+    /// written back over zeros: 0.045 before), the step 1.032 to 1.000; 4 a boid took the
+    /// search to 0.783 and the scan to 0.042, the step to 1.000 as well (docs/performance.md,
+    /// "Flocking"). Until then the one-thread search had one bucket a boid.
     pub fn grid_buckets(capacity: u32) -> u64 {
-        let per_boid = if Self::split_search(capacity) { 2 } else { 1 };
-        (per_boid * u64::from(capacity.max(1)))
+        (2 * u64::from(capacity.max(1)))
             .next_power_of_two()
             .min(1 << 31)
     }
