@@ -78,9 +78,10 @@ fn scans_match_a_cpu_prefix_sum_and_the_scan_from_a_source_clears_it() {
     // first word of a second, the flock grid's 2^15 + 1 buckets, the longest short scan. Long
     // ones (blocks of 2,048, eight words a thread): the shortest, a block ending inside a
     // thread's eight words, the most blocks whose workgroups add up the totals before their own
-    // (1,024) and the first size past it (its totals scanned by a dispatch of their own).
+    // (2,048) and the first size past it (its totals scanned by a dispatch of their own), and
+    // the flock grid's 2M + 1 buckets at 1M boids.
     for n in [
-        0, 1, 255, 256, 257, 32_769, 65_536, 65_537, 600_001, 2_097_152, 2_097_153,
+        0, 1, 255, 256, 257, 32_769, 65_536, 65_537, 600_001, 2_097_153, 4_194_304, 4_194_305,
     ] {
         let words: Vec<u32> = (0..n as u32).map(|i| pcg(i) % 5).collect();
         let expected: Vec<u32> = words
