@@ -123,7 +123,10 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             "chunk" => "Chunk",
             "sort_keys" | "sort_vals" | "grid_keys" | "grid_vals" | "grid_placed" => "array<u32>",
             "boids" | "flock_out" | "flock_sums" => "array<vec4<f32>>",
-            "cell_start" | "cell_counts" => "array<atomic<u32>>",
+            // The main module only reads cell_start (the scan writes it): plain loads, which
+            // may be cached where atomic ones go to memory.
+            "cell_counts" => "array<atomic<u32>>",
+            "cell_start" => "array<u32>",
             "field" => "array<vec4<f32>>",
             "frame" | "fire_frame" => "Frame",
             "fire_state" => "array<u32, 4>",

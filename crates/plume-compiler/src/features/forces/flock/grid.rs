@@ -124,7 +124,7 @@ pub(super) fn emit_grid(w: &mut Writer, cell: f64, x_split: u32) {
             crate::base::kernel::emit_thread_index(w, "i", Some("chunk.len"));
             w.line("let key = grid_keys[i];");
             w.block("if (key != NO_BUCKET)", |w| {
-                w.line("grid_placed[atomicLoad(&cell_start[key]) + grid_vals[i]] = i;");
+                w.line("grid_placed[cell_start[key] + grid_vals[i]] = i;");
             });
         },
     );
@@ -134,13 +134,13 @@ pub(super) fn emit_grid(w: &mut Writer, cell: f64, x_split: u32) {
         "fn grid_rank(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
             crate::base::kernel::emit_thread_index(w, "k", None);
-            w.block("if (k >= atomicLoad(&cell_start[GRID_BUCKETS]))", |w| {
+            w.block("if (k >= cell_start[GRID_BUCKETS])", |w| {
                 w.line("return;")
             });
             w.line("let s = grid_placed[k];");
             w.line("let b = grid_keys[s];");
-            w.line("let first = atomicLoad(&cell_start[b]);");
-            w.line("let last = atomicLoad(&cell_start[b + 1u]);");
+            w.line("let first = cell_start[b];");
+            w.line("let last = cell_start[b + 1u];");
             w.line("var at = first;");
             w.block("for (var m = first; m < last; m++)", |w| {
                 w.line("at += select(0u, 1u, grid_placed[m] < s);");
