@@ -196,7 +196,7 @@ pub const GRID_TILE: u32 = 16;
 /// kernel keeps its registers (57). 1M boids (H100, one call, three rounds): 1.032 ms a step
 /// for 3 x 10, against 1.048 for rounds of 20 loaded at once (80 registers), 1.039 for 2 x 16,
 /// 1.049 for 4 x 8; two mask words for rounds of up to 64 (1.043 to 1.118) and the pair loop's
-/// next loads started before its pair function (1.072 to 1.137) were slower
+/// next loads started before its pair function (1.070 to 1.137) were slower
 /// (docs/measurements/h100-speed/flock-batches/README.md). Before (rounds loaded at once): 1.048
 /// with 20, 1.051 with 18, 1.073 with 22, 1.067 with 24; with whole cells, every run loaded
 /// first, 1.178 with 24, 1.194 with 32, 1.182 with 20 and 1.270 for the pair function inline.
@@ -274,8 +274,8 @@ impl FlockIr {
     /// in its own 27 cells with as many buckets as boids, and twice as many took the step from
     /// 0.0615 to 0.0585 ms. At 1M boids (H100, one call, three rounds): 2 buckets a boid took
     /// the search from 0.843 to 0.805 ms and the scan from 0.017 to 0.028 (its zeros no longer
-    /// written back over zeros: 0.045 before), the step 1.032 to 1.000; 4 a boid took the
-    /// search to 0.783 and the scan to 0.042, the step to 1.000 as well (docs/performance.md,
+    /// written back over zeros: 0.045 before), the step 1.031 to 1.000; 4 a boid took the
+    /// search to 0.783 and the scan to 0.044, the step to 1.000 as well (docs/performance.md,
     /// "Flocking"). Until then the one-thread search had one bucket a boid.
     pub fn grid_buckets(capacity: u32) -> u64 {
         (2 * u64::from(capacity.max(1)))
