@@ -101,7 +101,7 @@ pub(super) fn bind(
 }
 
 /// The trail draw module of `effect` in the splat's shape (its `project` and `composite` for
-/// ribbon triangles) and the buffers it reads, as the raster trail draw binds them: every
+/// ribbon segments) and the buffers it reads, as the raster trail draw binds them: every
 /// slot, in the depth order when the effect sorts.
 pub(super) fn ribbon_module(
     gpu: &Gpu,

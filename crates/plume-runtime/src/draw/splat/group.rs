@@ -61,7 +61,7 @@ struct QuadRaster {
     partials: wgpu::Buffer,
     texture: Option<SpriteTexture>,
     /// What `composite` reads besides the tile buffers: the records (quads), or what
-    /// `triangle_record` reads to make them again (ribbons: the particles, the rings, the view).
+    /// `segment_record` reads to make them again (ribbons: the particles, the rings, the view).
     reads: Vec<(u32, wgpu::Buffer)>,
 }
 
@@ -102,7 +102,7 @@ pub(crate) struct GroupSplat {
 pub const STAGES: [&str; 6] = ["project", "scan", "emit", "sort", "ranges", "raster"];
 
 impl GroupSplat {
-    /// A splat of `group`'s sprites, or of its ribbons (`ribbons`: the strips' triangles,
+    /// A splat of `group`'s sprites, or of its ribbons (`ribbons`: the strips' segments,
     /// from its trail draw module), into `width` x `height` images: into `under`, the image
     /// of the parts drawn before it (over what they drew), or into an image of its own over
     /// the group's background.
@@ -124,10 +124,10 @@ impl GroupSplat {
         };
         let (module, mut entries, count) = match (&effect.ir.render.trail, ribbons) {
             (Some(trail), true) => {
-                let triangles = u64::from(effect.ir.capacity) * u64::from(trail::triangles(trail));
-                let count = u32::try_from(triangles).map_err(|_| {
+                let segments = u64::from(effect.ir.capacity) * u64::from(trail::segments(trail));
+                let count = u32::try_from(segments).map_err(|_| {
                     RuntimeError::Output(format!(
-                        "{triangles} ribbon triangles are more than the compute splat counts (2^32); draw this effect with the raster pipeline"
+                        "{segments} ribbon segments are more than the compute splat counts (2^32); draw this effect with the raster pipeline"
                     ))
                 })?;
                 let (module, entries) = ribbon_module(&gpu, effect, res, shape)?;
@@ -141,7 +141,7 @@ impl GroupSplat {
         let discs = !ribbons && splat_discs(&effect.ir, hdr);
         let record_words = match (discs, ribbons) {
             (true, _) => 4,
-            // Ribbon triangles are made again where they are used, not stored.
+            // Ribbon segments are made again where they are used, not stored.
             (false, true) => 0,
             (false, false) => splat_quad_words(image.host.is_some()),
         };

@@ -1,4 +1,4 @@
-//! The splat's composite kernels, the same for every record kind (quads, ribbon triangles):
+//! The splat's composite kernels, the same for every record kind (quads, ribbon segments):
 //! `composite`, a workgroup per tile blending its list front to back, and `merge`, which
 //! composes the slices of a tile's list. The record kind supplies the code that loads a record
 //! and evaluates it at a pixel.
@@ -6,8 +6,8 @@
 use super::{DrawShape, SPLAT_TILE};
 use crate::base::writer::Writer;
 
-/// Records a composite workgroup bins at once: 128 records (8 KiB of quads, 10 KiB of ribbon
-/// triangles) and a 4-word mask per column and row of the tile (512 bytes) stay within
+/// Records a composite workgroup bins at once: 128 records (8 KiB of quads, 12 KiB of ribbon
+/// segments) and a 4-word mask per column and row of the tile (512 bytes) stay within
 /// WebGPU's 16 KiB of workgroup memory.
 const QUAD_BATCH: u32 = 128;
 
