@@ -55,7 +55,10 @@ fn scan_blocks_from(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgrou
     var v = 0u;
     if (i < params.n) {
         v = source[i];
-        source[i] = 0u;
+        // Only where it is not zero already, as scan_apply_from.
+        if (v != 0u) {
+            source[i] = 0u;
+        }
     }
     scan_block(block, i, t, v);
 }
