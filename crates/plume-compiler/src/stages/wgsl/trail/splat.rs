@@ -10,7 +10,9 @@
 use crate::base::writer::{u32_lit, Writer};
 use crate::features::looks::trail::TrailIr;
 use crate::ir::EffectIr;
-use crate::stages::wgsl::draw::splat::{emit_composite, emit_project_kernel, host_depth};
+use crate::stages::wgsl::draw::splat::{
+    emit_composite, emit_project_kernel, host_depth, RecordBatch, SPLAT_BATCH,
+};
 use crate::stages::wgsl::draw::DrawShape;
 
 /// Vec4s of a ribbon segment's record in the compute splat's composite:
@@ -249,7 +251,10 @@ fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
         shape,
         additive,
         crate::stages::wgsl::draw::splat_slices(ir),
-        n,
+        RecordBatch {
+            vec4s: n,
+            size: SPLAT_BATCH,
+        },
         &load,
         &evaluate,
     );

@@ -9,11 +9,14 @@ use crate::base::writer::Writer;
 /// Records a composite workgroup bins at once: 128 records (8 KiB of quads, 12 KiB of ribbon
 /// segments) and a 4-word mask per column and row of the tile (512 bytes) stay within
 /// WebGPU's 16 KiB of workgroup memory.
-const QUAD_BATCH: u32 = 128;
+pub(crate) const SPLAT_BATCH: u32 = 128;
 
-/// Words of the composite's line masks: a mask of [`QUAD_BATCH`] bits for each of a tile's
-/// columns and rows.
-const LINE_MASKS: u32 = 2 * SPLAT_TILE * QUAD_BATCH / 32;
+/// Records a composite workgroup bins at once for additive quads: half a batch. A pixel then
+/// walks a batch's masks in two words, not four, and a workgroup spends less of its time with
+/// most of its threads waiting at a barrier for a slow mask or load (H100, sparks 10M: the
+/// composite 16.1 -> 15.4 ms; smoke 1M, alpha, 2.07 -> 2.18 and orbit's ribbons 8.4 -> 11.4,
+/// which keep 128; docs/measurements/h100-splat/line-masks/8-batch-64-96/).
+pub(crate) const SPLAT_ADDITIVE_QUAD_BATCH: u32 = 64;
 
 /// Workgroups a tile's list of additive light is split over ([`splat_slices`]).
 pub const SPLAT_SLICES: u32 = 8;
@@ -37,7 +40,7 @@ pub const SPLAT_PARTIAL_BINDING: u32 = 33;
 
 /// `composite`: a workgroup per 16x16 tile and slice (`slices`: [`splat_slices`]), a thread per pixel,
 /// composites its slice of the tile's records
-/// (`record` vec4s each, the last one's z and w the pixel box's corners; the code `load` emits
+/// (`records.vec4s` vec4s each, the last one's z and w the pixel box's corners; the code `load` emits
 /// puts entry `k`'s record at `batch[record * t]`) front to back (the
 /// draw order reversed), each pixel's colour `shaded` from the code `evaluate` emits (which
 /// reads record j of the batch, the pixel centre `centre`, and may `continue` past a record
@@ -50,35 +53,51 @@ pub const SPLAT_PARTIAL_BINDING: u32 = 33;
 /// rounding after every blend; this is the same sum without those roundings (tests/render.rs
 /// measures how far apart they land).
 ///
-/// Batches of [`QUAD_BATCH`] records are binned first, so that a pixel visits only the records
+/// Batches of `batch` records ([`SPLAT_BATCH`], or [`SPLAT_ADDITIVE_QUAD_BATCH`]) are binned first, so that a pixel visits only the records
 /// whose boxes hold it: a box is the product of a column range and a row range, so a bit mask
 /// per column of the tile and one per row (each built by one thread from the batch's boxes,
 /// with no atomics) give each pixel its records as the AND of its column's and its row's. The
 /// masks cost the same whatever the boxes' sizes; binning each record into a mask per pixel
 /// cost its box's area in workgroup atomics (H100: smoke 1M's composite 3.06 -> 2.08 ms, snow
 /// 10M 1.04 -> 0.54, sparks 10M 24.7 -> 16.1; docs/performance.md).
+/// How a composite workgroup holds its records: vec4s a record (`vec4s`), and records a batch
+/// (`size`: [`SPLAT_BATCH`] or [`SPLAT_ADDITIVE_QUAD_BATCH`], a multiple of 32).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RecordBatch {
+    /// Vec4s of one record in workgroup memory.
+    pub vec4s: u32,
+    /// Records binned at once.
+    pub size: u32,
+}
+
 pub(crate) fn emit_composite(
     w: &mut Writer,
     shape: &DrawShape,
     additive: bool,
     slices: u32,
-    record: u32,
+    records: RecordBatch,
     load: &dyn Fn(&mut Writer),
     evaluate: &dyn Fn(&mut Writer),
 ) {
+    let RecordBatch {
+        vec4s: record,
+        size: batch,
+    } = records;
     let hdr = shape.hdr;
-    let words = QUAD_BATCH / 32;
+    let words = batch / 32;
+    // A mask of `batch` bits for each of the tile's columns and rows.
+    let line_masks = 2 * SPLAT_TILE * words;
     let box_word = format!("{}u * j + {}u", record, record - 1);
     w.line(format!(
         "var<workgroup> batch: array<vec4<u32>, {}>;",
-        record * QUAD_BATCH
+        record * batch
     ));
     w.line("var<workgroup> batch_range: vec2<u32>;");
     w.comment(format!(
-        "Per column of the tile, then per row, which of the batch's {QUAD_BATCH} records' boxes hold it ({words} words of bits): a pixel's records are those of its column and its row."
+        "Per column of the tile, then per row, which of the batch's {batch} records' boxes hold it ({words} words of bits): a pixel's records are those of its column and its row."
     ));
     w.line(format!(
-        "var<workgroup> line_masks: array<u32, {LINE_MASKS}>;"
+        "var<workgroup> line_masks: array<u32, {line_masks}>;"
     ));
     w.comment("Pixels of the tile that are finished (or outside the image).");
     w.line("var<workgroup> finished: atomic<u32>;");
@@ -121,7 +140,7 @@ pub(crate) fn emit_composite(
             w.line("var end = range.y;");
             w.block("while (end > range.x)", |w| {
                 w.line(format!(
-                    "let start = select(range.x, end - {QUAD_BATCH}u, end - range.x > {QUAD_BATCH}u);"
+                    "let start = select(range.x, end - {batch}u, end - range.x > {batch}u);"
                 ));
                 w.line("let i = start + t;");
                 w.block("if (i < end)", |w| {
@@ -130,9 +149,9 @@ pub(crate) fn emit_composite(
                 });
                 w.line("workgroupBarrier();");
                 w.comment(format!(
-                    "Thread t < {LINE_MASKS} builds word t % {words} of line t / {words} (columns {SPLAT_TILE} of them, then rows): no atomics, and a record costs the lines its box crosses, not its pixels."
+                    "Thread t < {line_masks} builds word t % {words} of line t / {words} (columns {SPLAT_TILE} of them, then rows): no atomics, and a record costs the lines its box crosses, not its pixels."
                 ));
-                w.block(format!("if (t < {LINE_MASKS}u)"), |w| {
+                w.block(format!("if (t < {line_masks}u)"), |w| {
                     w.line(format!("let word = t % {words}u;"));
                     w.line(format!("let line = t / {words}u;"));
                     w.line(format!("let is_row = line >= {SPLAT_TILE}u;"));

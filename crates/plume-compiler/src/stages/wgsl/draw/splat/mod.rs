@@ -12,7 +12,7 @@
 
 mod composite;
 
-pub(crate) use composite::emit_composite;
+pub(crate) use composite::{emit_composite, RecordBatch, SPLAT_BATCH};
 pub use composite::{splat_slices, SPLAT_PARTIAL_BINDING, SPLAT_SLICES};
 
 use super::{DrawShape, SPLAT_BINDINGS, SPLAT_TILE};
@@ -505,7 +505,14 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         shape,
         additive,
         splat_slices(ir),
-        vec4s,
+        composite::RecordBatch {
+            vec4s,
+            size: if additive {
+                composite::SPLAT_ADDITIVE_QUAD_BATCH
+            } else {
+                composite::SPLAT_BATCH
+            },
+        },
         &load,
         &evaluate,
     );
