@@ -254,6 +254,7 @@ fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
         RecordBatch {
             vec4s: n,
             size: SPLAT_BATCH,
+            diagonals: false,
         },
         &load,
         &evaluate,

@@ -68,7 +68,13 @@ pub(crate) struct RecordBatch {
     pub vec4s: u32,
     /// Records binned at once.
     pub size: u32,
+    /// Whether `load` also writes `diagonal_spans[t]` ([`emit_diagonal_spans`]), so that the
+    /// masks hold the tile's diagonals and anti-diagonals too.
+    pub diagonals: bool,
 }
+
+/// Diagonals of a tile (x + y constant), and as many anti-diagonals (x - y).
+const TILE_DIAGONALS: u32 = 2 * SPLAT_TILE - 1;
 
 pub(crate) fn emit_composite(
     w: &mut Writer,
@@ -82,17 +88,29 @@ pub(crate) fn emit_composite(
     let RecordBatch {
         vec4s: record,
         size: batch,
+        diagonals,
     } = records;
     let hdr = shape.hdr;
     let words = batch / 32;
-    // A mask of `batch` bits for each of the tile's columns and rows.
-    let line_masks = 2 * SPLAT_TILE * words;
+    // A mask of `batch` bits for each of the tile's columns and rows (and diagonals).
+    let lines = 2 * SPLAT_TILE + if diagonals { 2 * TILE_DIAGONALS } else { 0 };
+    let line_masks = lines * words;
     let box_word = format!("{}u * j + {}u", record, record - 1);
     w.line(format!(
         "var<workgroup> batch: array<vec4<u32>, {}>;",
         record * batch
     ));
     w.line("var<workgroup> batch_range: vec2<u32>;");
+    if diagonals {
+        w.comment(format!(
+            "Per record of the batch, the tile's diagonals (x + y, 0 to {}) and anti-diagonals (x - y + {}) its corners span, a byte each: first, last, first, last.",
+            TILE_DIAGONALS - 1,
+            SPLAT_TILE - 1
+        ));
+        w.line(format!(
+            "var<workgroup> diagonal_spans: array<u32, {batch}>;"
+        ));
+    }
     w.comment(format!(
         "Per column of the tile, then per row, which of the batch's {batch} records' boxes hold it ({words} words of bits): a pixel's records are those of its column and its row."
     ));
@@ -148,27 +166,31 @@ pub(crate) fn emit_composite(
                     load(w);
                 });
                 w.line("workgroupBarrier();");
-                w.comment(format!(
-                    "Thread t < {line_masks} builds word t % {words} of line t / {words} (columns {SPLAT_TILE} of them, then rows): no atomics, and a record costs the lines its box crosses, not its pixels."
-                ));
-                w.block(format!("if (t < {line_masks}u)"), |w| {
-                    w.line(format!("let word = t % {words}u;"));
-                    w.line(format!("let line = t / {words}u;"));
-                    w.line(format!("let is_row = line >= {SPLAT_TILE}u;"));
-                    w.line(format!(
-                        "let at = select(origin.x + line, origin.y + line - {SPLAT_TILE}u, is_row);"
+                if diagonals {
+                    emit_diagonal_masks(w, &box_word, words, line_masks);
+                } else {
+                    w.comment(format!(
+                        "Thread t < {line_masks} builds word t % {words} of line t / {words} (columns {SPLAT_TILE} of them, then rows): no atomics, and a record costs the lines its box crosses, not its pixels."
                     ));
-                    w.line("var bits = 0u;");
-                    w.block("for (var r = 0u; r < 32u; r++)", |w| {
-                        w.line("let j = word * 32u + r;");
-                        w.line(format!("let box = batch[{box_word}];"));
-                        w.line("let lo = unpack_corner(box.z);");
-                        w.line("let hi = unpack_corner(box.w);");
-                        w.line("let holds = start + j < end && select(lo.x, lo.y, is_row) <= at && at <= select(hi.x, hi.y, is_row);");
-                        w.line("bits |= select(0u, 1u << r, holds);");
+                    w.block(format!("if (t < {line_masks}u)"), |w| {
+                        w.line(format!("let word = t % {words}u;"));
+                        w.line(format!("let line = t / {words}u;"));
+                        w.line(format!("let is_row = line >= {SPLAT_TILE}u;"));
+                        w.line(format!(
+                            "let at = select(origin.x + line, origin.y + line - {SPLAT_TILE}u, is_row);"
+                        ));
+                        w.line("var bits = 0u;");
+                        w.block("for (var r = 0u; r < 32u; r++)", |w| {
+                            w.line("let j = word * 32u + r;");
+                            w.line(format!("let box = batch[{box_word}];"));
+                            w.line("let lo = unpack_corner(box.z);");
+                            w.line("let hi = unpack_corner(box.w);");
+                            w.line("let holds = start + j < end && select(lo.x, lo.y, is_row) <= at && at <= select(hi.x, hi.y, is_row);");
+                            w.line("bits |= select(0u, 1u << r, holds);");
+                        });
+                        w.line("line_masks[t] = bits;");
                     });
-                    w.line("line_masks[t] = bits;");
-                });
+                }
                 w.line("workgroupBarrier();");
                 w.comment("Front to back: the batch's last entry first.");
                 w.line(format!("var m = {words}u;"));
@@ -177,6 +199,13 @@ pub(crate) fn emit_composite(
                     w.line(format!(
                         "var bits = line_masks[lid.x * {words}u + m] & line_masks[({SPLAT_TILE}u + lid.y) * {words}u + m];"
                     ));
+                    if diagonals {
+                        w.line(format!(
+                            "bits &= line_masks[({}u + lid.x + lid.y) * {words}u + m] & line_masks[({}u + lid.x - lid.y) * {words}u + m];",
+                            2 * SPLAT_TILE,
+                            2 * SPLAT_TILE + TILE_DIAGONALS + SPLAT_TILE - 1
+                        ));
+                    }
                     w.block("while (bits != 0u)", |w| {
                         w.line("let top = firstLeadingBit(bits);");
                         w.line("bits &= ~(1u << top);");
@@ -311,4 +340,101 @@ fn emit_store(w: &mut Writer, shape: &DrawShape, colour: &str, cover: &str) {
             "splat_image[pixel] = pack4x8unorm(vec4<f32>(clamp({colour}, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"
         ));
     }
+}
+
+/// The line masks with diagonals: word q % `words` of line q / `words` (columns, rows,
+/// diagonals, anti-diagonals), built by thread q % 256 from the batch's boxes and
+/// `diagonal_spans`.
+fn emit_diagonal_masks(w: &mut Writer, box_word: &str, words: u32, line_masks: u32) {
+    let tile = SPLAT_TILE;
+    w.comment("Word q % WORDS of line q / WORDS (columns, rows, diagonals, anti-diagonals), built by thread q % 256: no atomics, and a record costs the lines it crosses, not its pixels.");
+    w.block(format!("for (var q = t; q < {line_masks}u; q += 256u)"), |w| {
+        w.line(format!("let word = q % {words}u;"));
+        w.line(format!("let line = q / {words}u;"));
+        w.line("var bits = 0u;");
+        w.block(format!("if (line < {}u)", 2 * tile), |w| {
+            w.line(format!("let is_row = line >= {tile}u;"));
+            w.line(format!(
+                "let at = select(origin.x + line, origin.y + line - {tile}u, is_row);"
+            ));
+            w.block("for (var r = 0u; r < 32u; r++)", |w| {
+                w.line("let j = word * 32u + r;");
+                w.line(format!("let box = batch[{box_word}];"));
+                w.line("let lo = unpack_corner(box.z);");
+                w.line("let hi = unpack_corner(box.w);");
+                w.line("let holds = start + j < end && select(lo.x, lo.y, is_row) <= at && at <= select(hi.x, hi.y, is_row);");
+                w.line("bits |= select(0u, 1u << r, holds);");
+            });
+        });
+        w.block("else", |w| {
+            w.comment(format!(
+                "Diagonal d of the tile's 2 x {TILE_DIAGONALS}: bytes 0 and 1 of the span, or 2 and 3."
+            ));
+            w.line(format!("let d = line - {}u;", 2 * tile));
+            w.line(format!(
+                "let shift = select(0u, 16u, d >= {TILE_DIAGONALS}u);"
+            ));
+            w.line(format!(
+                "let at = select(d, d - {TILE_DIAGONALS}u, d >= {TILE_DIAGONALS}u);"
+            ));
+            w.block("for (var r = 0u; r < 32u; r++)", |w| {
+                w.line("let j = word * 32u + r;");
+                w.line("let span = diagonal_spans[j] >> shift;");
+                w.line("let holds = start + j < end && (span & 0xffu) <= at && at <= ((span >> 8u) & 0xffu);");
+                w.line("bits |= select(0u, 1u << r, holds);");
+            });
+        });
+        w.line("line_masks[q] = bits;");
+    });
+}
+
+/// Writes `diagonal_spans[t]` for the record just loaded: the tile's diagonals and
+/// anti-diagonals that its `corners` span (WGSL vec3s in the record's own coordinates, a
+/// quad's (u, v, 1)). `rows` are the WGSL of the three rows of the map from a pixel (x, y, 1),
+/// counted from the tile's origin, to those coordinates over 1 / w; a corner's pixel is that
+/// map's inverse (its adjugate's columns, up to a factor) applied to the corner. A corner
+/// behind the camera (1 / w not positive there) or too far out leaves every diagonal in the
+/// span: the record's box still bounds it. Its footprint is convex, so the corners' extremes
+/// bound it along each diagonal; the spans are widened a hundredth of a pixel, which float
+/// rounding of the corners (about 1e-4 pixel) stays well inside, and every pixel is then tested
+/// exactly anyway.
+pub(crate) fn emit_diagonal_spans(w: &mut Writer, rows: [&str; 3], corners: &[&str]) {
+    let last = TILE_DIAGONALS - 1;
+    let [a, b, c] = rows;
+    w.line(format!(
+        "let adjugate = mat3x3<f32>(cross({b}, {c}), cross({c}, {a}), cross({a}, {b}));"
+    ));
+    w.line(format!("let det = dot({a}, adjugate[0]);"));
+    w.line("var lows = vec2<f32>(1e9);");
+    w.line("var highs = vec2<f32>(-1e9);");
+    w.line("var bounded = true;");
+    for (n, corner) in corners.iter().enumerate() {
+        w.line(format!("let h{n} = adjugate * {corner};"));
+        w.line(format!("let p{n} = h{n}.xy / h{n}.z;"));
+        w.line(format!(
+            "bounded = bounded && h{n}.z * det > 0.0 && all(abs(p{n}) < vec2<f32>(1e6));"
+        ));
+        w.line(format!(
+            "lows = min(lows, vec2<f32>(p{n}.x + p{n}.y, p{n}.x - p{n}.y));"
+        ));
+        w.line(format!(
+            "highs = max(highs, vec2<f32>(p{n}.x + p{n}.y, p{n}.x - p{n}.y));"
+        ));
+    }
+    w.comment(format!(
+        "Pixel (i, j)'s centre is on x + y = i + j + 1 (diagonal i + j) and x - y = i - j (anti-diagonal i - j + {}).",
+        SPLAT_TILE - 1
+    ));
+    w.line(format!(
+        "let first_line = clamp(ceil(lows + vec2<f32>(-1.01, {}.99)), vec2<f32>(0.0), vec2<f32>({last}.0));",
+        SPLAT_TILE - 2
+    ));
+    w.line(format!(
+        "let last_line = clamp(floor(highs + vec2<f32>(-0.99, {}.01)), vec2<f32>(0.0), vec2<f32>({last}.0));",
+        SPLAT_TILE - 1
+    ));
+    w.line(format!(
+        "let spans = select(vec4<u32>(0u, {last}u, 0u, {last}u), vec4<u32>(vec4<f32>(first_line.x, last_line.x, first_line.y, last_line.y)), bounded);"
+    ));
+    w.line("diagonal_spans[t] = spans.x | spans.y << 8u | spans.z << 16u | spans.w << 24u;");
 }

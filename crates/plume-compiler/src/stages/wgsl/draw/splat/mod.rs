@@ -440,6 +440,22 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         w.line("let az = a.z - dot(a.xy, shift);");
         w.line("let bz = b.z - dot(b.xy, shift);");
         w.line("let cz = c.z - dot(c.xy, shift);");
+        if additive {
+            composite::emit_diagonal_spans(
+                w,
+                [
+                    "vec3<f32>(a.xy, az)",
+                    "vec3<f32>(b.xy, bz)",
+                    "vec3<f32>(c.xy, cz)",
+                ],
+                &[
+                    "vec3<f32>(-1.0, -1.0, 1.0)",
+                    "vec3<f32>(1.0, -1.0, 1.0)",
+                    "vec3<f32>(1.0, 1.0, 1.0)",
+                    "vec3<f32>(-1.0, 1.0, 1.0)",
+                ],
+            );
+        }
         w.line(format!(
             "batch[{vec4s}u * t] = bitcast<vec4<u32>>(vec4<f32>(a.xy, az, b.x));"
         ));
@@ -512,6 +528,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
             } else {
                 composite::SPLAT_BATCH
             },
+            diagonals: additive,
         },
         &load,
         &evaluate,
