@@ -11,7 +11,7 @@ use crate::base::writer::{u32_lit, Writer};
 use crate::features::looks::trail::TrailIr;
 use crate::ir::EffectIr;
 use crate::stages::wgsl::draw::splat::{
-    emit_composite, emit_project_kernel, host_depth, RecordBatch, SPLAT_BATCH,
+    batch_stride, emit_composite, emit_project_kernel, host_depth, RecordBatch, SPLAT_BATCH,
 };
 use crate::stages::wgsl::draw::DrawShape;
 
@@ -160,6 +160,7 @@ fn emit_segment_record(w: &mut Writer) {
 fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
     let n = SPLAT_SEGMENT_VEC4S;
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
+    let stride = batch_stride(n, additive);
     let load = |w: &mut Writer| {
         w.comment("Made again from the particle state: the same record `project` made, its weights' rows moved from the box corner to the tile's origin (their constant terms absorb the shift; the fourth vertex's weights do not change).");
         w.line("let rec = segment_record(k);");
@@ -173,21 +174,25 @@ fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
                 "let row{r} = bitcast<vec3<f32>>(rec.words[{r}u].xyz);"
             ));
             w.line(format!(
-                "batch[{n}u * t + {r}u] = vec4<u32>(bitcast<vec3<u32>>(vec3<f32>(row{r}.xy, row{r}.z - dot(row{r}.xy, shift))), rec.words[{r}u].w);"
+                "batch[{stride}u * t + {r}u] = vec4<u32>(bitcast<vec3<u32>>(vec3<f32>(row{r}.xy, row{r}.z - dot(row{r}.xy, shift))), rec.words[{r}u].w);"
             ));
         }
         for r in 3..n {
-            w.line(format!("batch[{n}u * t + {r}u] = rec.words[{r}u];"));
+            // The box's vec4 last in the batch's record, past the padding.
+            let at = if r + 1 == n { stride - 1 } else { r };
+            w.line(format!("batch[{stride}u * t + {at}u] = rec.words[{r}u];"));
         }
     };
     let depth = host_depth(shape);
     let evaluate = |w: &mut Writer| {
-        w.line(format!("let r0 = bitcast<vec4<f32>>(batch[{n}u * j]);"));
         w.line(format!(
-            "let r1 = bitcast<vec4<f32>>(batch[{n}u * j + 1u]);"
+            "let r0 = bitcast<vec4<f32>>(batch[{stride}u * j]);"
         ));
         w.line(format!(
-            "let r2 = bitcast<vec4<f32>>(batch[{n}u * j + 2u]);"
+            "let r1 = bitcast<vec4<f32>>(batch[{stride}u * j + 1u]);"
+        ));
+        w.line(format!(
+            "let r2 = bitcast<vec4<f32>>(batch[{stride}u * j + 2u]);"
         ));
         w.comment("The pixel centre from the tile's origin (the rows' frame, as loaded).");
         w.line("let p = vec3<f32>(centre - vec2<f32>(origin), 1.0);");
@@ -202,15 +207,15 @@ fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
             w.line("inside = b.x > 0.0 && b.y >= 0.0 && b.z >= 0.0;");
         });
         w.line(format!(
-            "var second = batch[{n}u * j + {}u].x == 1u;",
-            n - 1
+            "var second = batch[{stride}u * j + {}u].x == 1u;",
+            stride - 1
         ));
         if depth {
             w.line("var zs = vec3<f32>(r0.w, r1.w, r2.w);");
         }
         w.block("if (!inside)", |w| {
             w.comment("The segment's second triangle (v1, v2, v3), if the first is (v0, v1, v2) and it has one.");
-            w.line(format!("let r3 = bitcast<vec4<f32>>(batch[{n}u * j + 3u]);"));
+            w.line(format!("let r3 = bitcast<vec4<f32>>(batch[{stride}u * j + 3u]);"));
             w.block("if (second || r3.x == 0.0)", |w| w.line("continue;"));
             w.line("let on_fourth = weighed.x * r3.x;");
             w.line("weighed = vec3<f32>(weighed.y - r3.y * on_fourth, weighed.z - r3.z * on_fourth, on_fourth);");
@@ -233,7 +238,7 @@ fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
         w.comment(
             "The rest of the record, for the pixels it covers: the near and far points' colours.",
         );
-        w.line(format!("let cw = batch[{n}u * j + 4u];"));
+        w.line(format!("let cw = batch[{stride}u * j + 4u];"));
         w.line("let c_near = vec4<f32>(unpack2x16float(cw.x), unpack2x16float(cw.y));");
         w.line("let c_far = vec4<f32>(unpack2x16float(cw.z), unpack2x16float(cw.w));");
         w.comment("(v0, v1, v2) are near, near, far; (v1, v2, v3) near, far, far.");
@@ -252,7 +257,7 @@ fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
         additive,
         crate::stages::wgsl::draw::splat_slices(ir),
         RecordBatch {
-            vec4s: n,
+            vec4s: stride,
             size: SPLAT_BATCH,
             diagonals: false,
         },

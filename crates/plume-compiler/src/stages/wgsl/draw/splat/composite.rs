@@ -64,13 +64,30 @@ pub const SPLAT_PARTIAL_BINDING: u32 = 33;
 /// (`size`: [`SPLAT_BATCH`] or [`SPLAT_ADDITIVE_QUAD_BATCH`], a multiple of 32).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RecordBatch {
-    /// Vec4s of one record in workgroup memory.
+    /// Vec4s from one record to the next in workgroup memory ([`batch_stride`]), the record's
+    /// box in the last of them.
     pub vec4s: u32,
     /// Records binned at once.
     pub size: u32,
     /// Whether `load` also writes `diagonal_spans[t]` ([`emit_diagonal_spans`]), so that the
     /// masks hold the tile's diagonals and anti-diagonals too.
     pub diagonals: bool,
+}
+
+/// Vec4s between the records of a composite's batch in workgroup memory, for records of
+/// `vec4s`. For additive light an odd number, so that the eight threads of a quarter warp that
+/// read a vec4 each from different records land on different banks (records 64 bytes apart all
+/// begin on one of two banks' groups of four); the record's last vec4 (the box) goes last in
+/// its stride. H100 (docs/measurements/h100-splat/segments/): sparks 10M's composite 12.3 ->
+/// 10.6 ms with quads 80 bytes apart, orbit 1M's ribbons 5.76 -> 5.71 ms 112 bytes apart. Alpha
+/// records keep theirs: few of them shade a pixel before it is opaque, and the larger batch
+/// slowed snow 10M's composite 0.53 -> 0.55 ms and boids 1M's 0.51 -> 0.52.
+pub(crate) fn batch_stride(vec4s: u32, additive: bool) -> u32 {
+    if additive {
+        vec4s | 1
+    } else {
+        vec4s
+    }
 }
 
 /// Diagonals of a tile (x + y constant), and as many anti-diagonals (x - y).

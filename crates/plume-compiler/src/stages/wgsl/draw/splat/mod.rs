@@ -12,7 +12,7 @@
 
 mod composite;
 
-pub(crate) use composite::{emit_composite, RecordBatch, SPLAT_BATCH};
+pub(crate) use composite::{batch_stride, emit_composite, RecordBatch, SPLAT_BATCH};
 pub use composite::{splat_slices, SPLAT_PARTIAL_BINDING, SPLAT_SLICES};
 
 use super::{DrawShape, SPLAT_BINDINGS, SPLAT_TILE};
@@ -426,6 +426,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
     let vec4s = (splat_quad_words(shape.host.is_some()) / 4) as u32;
     let depth = host_depth(shape);
+    let stride = composite::batch_stride(vec4s, additive);
     let load = |w: &mut Writer| {
         w.comment("The map's rows moved from the record's box corner to the tile's origin (their constant terms absorb the shift) and packed ahead of the colour: (a.xyz, b.x), (b.yz, c.xy), (c.z, rgb), so that a pixel tests the record on nine words, without the corner.");
         w.line(format!("let last = splats[{vec4s}u * k + {}u];", vec4s - 1));
@@ -457,27 +458,31 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
             );
         }
         w.line(format!(
-            "batch[{vec4s}u * t] = bitcast<vec4<u32>>(vec4<f32>(a.xy, az, b.x));"
+            "batch[{stride}u * t] = bitcast<vec4<u32>>(vec4<f32>(a.xy, az, b.x));"
         ));
         w.line(format!(
-            "batch[{vec4s}u * t + 1u] = bitcast<vec4<u32>>(vec4<f32>(b.y, bz, c.xy));"
+            "batch[{stride}u * t + 1u] = bitcast<vec4<u32>>(vec4<f32>(b.y, bz, c.xy));"
         ));
         w.line(format!(
-            "batch[{vec4s}u * t + 2u] = bitcast<vec4<u32>>(vec4<f32>(cz, a.w, b.w, c.w));"
+            "batch[{stride}u * t + 2u] = bitcast<vec4<u32>>(vec4<f32>(cz, a.w, b.w, c.w));"
         ));
-        w.block(format!("for (var r = 3u; r < {vec4s}u; r++)"), |w| {
+        for r in 3..vec4s {
+            // The box's vec4 last in the batch's record, past the padding.
+            let at = if r + 1 == vec4s { stride - 1 } else { r };
             w.line(format!(
-                "batch[{vec4s}u * t + r] = splats[{vec4s}u * k + r];"
+                "batch[{stride}u * t + {at}u] = splats[{vec4s}u * k + {r}u];"
             ));
-        });
+        }
     };
     let evaluate = |w: &mut Writer| {
-        w.line(format!("let q0 = bitcast<vec4<f32>>(batch[{vec4s}u * j]);"));
         w.line(format!(
-            "let q1 = bitcast<vec4<f32>>(batch[{vec4s}u * j + 1u]);"
+            "let q0 = bitcast<vec4<f32>>(batch[{stride}u * j]);"
         ));
         w.line(format!(
-            "let q2x = bitcast<f32>(batch[{vec4s}u * j + 2u].x);"
+            "let q1 = bitcast<vec4<f32>>(batch[{stride}u * j + 1u]);"
+        ));
+        w.line(format!(
+            "let q2x = bitcast<f32>(batch[{stride}u * j + 2u].x);"
         ));
         w.comment("The map's rows, unpacked.");
         w.line("let r0 = q0.xyz;");
@@ -495,16 +500,16 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         if depth {
             w.comment("NDC depth at the pixel: clip z at uv over w (times s = 1 / w).");
             w.line(format!(
-                "let rz = bitcast<vec4<f32>>(batch[{vec4s}u * j + 3u]);"
+                "let rz = bitcast<vec4<f32>>(batch[{stride}u * j + 3u]);"
             ));
             w.line("let fade = host_fade(centre, dot(rz.xyz, vec3<f32>(1.0, uv)) * s);");
             w.block("if (fade <= 0.0)", |w| w.line("continue;"));
         }
         w.comment("The rest of the record, for the pixels it covers.");
         w.line(format!(
-            "let rgb = bitcast<vec4<f32>>(batch[{vec4s}u * j + 2u]).yzw;"
+            "let rgb = bitcast<vec4<f32>>(batch[{stride}u * j + 2u]).yzw;"
         ));
-        w.line(format!("let r3 = batch[{vec4s}u * j + {}u];", vec4s - 1));
+        w.line(format!("let r3 = batch[{stride}u * j + {}u];", stride - 1));
         w.comment("uv's derivatives along the image's x and y (the quotient rule).");
         w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
         w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
@@ -522,7 +527,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         additive,
         splat_slices(ir),
         composite::RecordBatch {
-            vec4s,
+            vec4s: stride,
             size: if additive {
                 composite::SPLAT_ADDITIVE_QUAD_BATCH
             } else {
