@@ -192,19 +192,8 @@ pub(crate) fn emit_composite(
                     w.block(format!("if (t < {line_masks}u)"), |w| {
                         w.line(format!("let word = t % {words}u;"));
                         w.line(format!("let line = t / {words}u;"));
-                        w.line(format!("let is_row = line >= {SPLAT_TILE}u;"));
-                        w.line(format!(
-                            "let at = select(origin.x + line, origin.y + line - {SPLAT_TILE}u, is_row);"
-                        ));
                         w.line("var bits = 0u;");
-                        w.block("for (var r = 0u; r < 32u; r++)", |w| {
-                            w.line("let j = word * 32u + r;");
-                            w.line(format!("let box = batch[{box_word}];"));
-                            w.line("let lo = unpack_corner(box.z);");
-                            w.line("let hi = unpack_corner(box.w);");
-                            w.line("let holds = start + j < end && select(lo.x, lo.y, is_row) <= at && at <= select(hi.x, hi.y, is_row);");
-                            w.line("bits |= select(0u, 1u << r, holds);");
-                        });
+                        emit_box_line(w, &box_word);
                         w.line("line_masks[t] = bits;");
                     });
                 }
@@ -359,6 +348,23 @@ fn emit_store(w: &mut Writer, shape: &DrawShape, colour: &str, cover: &str) {
     }
 }
 
+/// The bits of word `word` of column or row `line` (columns, then rows) into `bits`: which of
+/// the word's 32 records of the batch have boxes (at `box_word`) that hold it.
+fn emit_box_line(w: &mut Writer, box_word: &str) {
+    w.line(format!("let is_row = line >= {SPLAT_TILE}u;"));
+    w.line(format!(
+        "let at = select(origin.x + line, origin.y + line - {SPLAT_TILE}u, is_row);"
+    ));
+    w.block("for (var r = 0u; r < 32u; r++)", |w| {
+        w.line("let j = word * 32u + r;");
+        w.line(format!("let box = batch[{box_word}];"));
+        w.line("let lo = unpack_corner(box.z);");
+        w.line("let hi = unpack_corner(box.w);");
+        w.line("let holds = start + j < end && select(lo.x, lo.y, is_row) <= at && at <= select(hi.x, hi.y, is_row);");
+        w.line("bits |= select(0u, 1u << r, holds);");
+    });
+}
+
 /// The line masks with diagonals: word q % `words` of line q / `words` (columns, rows,
 /// diagonals, anti-diagonals), built by thread q % 256 from the batch's boxes and
 /// `diagonal_spans`.
@@ -370,18 +376,7 @@ fn emit_diagonal_masks(w: &mut Writer, box_word: &str, words: u32, line_masks: u
         w.line(format!("let line = q / {words}u;"));
         w.line("var bits = 0u;");
         w.block(format!("if (line < {}u)", 2 * tile), |w| {
-            w.line(format!("let is_row = line >= {tile}u;"));
-            w.line(format!(
-                "let at = select(origin.x + line, origin.y + line - {tile}u, is_row);"
-            ));
-            w.block("for (var r = 0u; r < 32u; r++)", |w| {
-                w.line("let j = word * 32u + r;");
-                w.line(format!("let box = batch[{box_word}];"));
-                w.line("let lo = unpack_corner(box.z);");
-                w.line("let hi = unpack_corner(box.w);");
-                w.line("let holds = start + j < end && select(lo.x, lo.y, is_row) <= at && at <= select(hi.x, hi.y, is_row);");
-                w.line("bits |= select(0u, 1u << r, holds);");
-            });
+            emit_box_line(w, box_word)
         });
         w.block("else", |w| {
             w.comment(format!(
