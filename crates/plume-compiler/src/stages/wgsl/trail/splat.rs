@@ -5,7 +5,8 @@
 //!
 //! A segment, not a triangle, is the record: its two triangles cover nearly the same tiles, so
 //! a record for each triangle put each tile entry in the list twice, and made the ribbon's
-//! particle, its samples and its points again for each (H100, orbit 1M: 86M entries).
+//! particle, its samples and its points again for each (H100, orbit 1M: 87.8M entries, now
+//! 46.7M, and 13.9 -> 8.7 ms a frame).
 
 use crate::base::writer::{u32_lit, Writer};
 use crate::features::looks::trail::TrailIr;

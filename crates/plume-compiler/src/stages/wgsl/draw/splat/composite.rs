@@ -6,9 +6,9 @@
 use super::{DrawShape, SPLAT_TILE};
 use crate::base::writer::Writer;
 
-/// Records a composite workgroup bins at once: 128 records (8 KiB of quads, 12 KiB of ribbon
-/// segments) and a 4-word mask per column and row of the tile (512 bytes) stay within
-/// WebGPU's 16 KiB of workgroup memory.
+/// Records a composite workgroup bins at once: 128 records (8 KiB of alpha quads, 14 KiB of
+/// additive ribbon segments, [`batch_stride`]) and a 4-word mask per column and row of the
+/// tile (512 bytes) stay within WebGPU's 16 KiB of workgroup memory.
 pub(crate) const SPLAT_BATCH: u32 = 128;
 
 /// Records a composite workgroup bins at once for additive quads: half a batch. A pixel then
@@ -38,30 +38,8 @@ pub fn splat_slices(ir: &crate::ir::EffectIr) -> u32 {
 /// Binding of the slices' partial sums: `SPLAT_SLICES` vec4s a pixel (slice-major).
 pub const SPLAT_PARTIAL_BINDING: u32 = 33;
 
-/// `composite`: a workgroup per 16x16 tile and slice (`slices`: [`splat_slices`]), a thread per pixel,
-/// composites its slice of the tile's records
-/// (`records.vec4s` vec4s each, the last one's z and w the pixel box's corners; the code `load` emits
-/// puts entry `k`'s record at `batch[record * t]`) front to back (the
-/// draw order reversed), each pixel's colour `shaded` from the code `evaluate` emits (which
-/// reads record j of the batch, the pixel centre `centre`, and may `continue` past a record
-/// that does not cover it), into the slice's partial sums; `merge` composes the slices and
-/// rounds to 8 bits once (or stores f16 pairs into an HDR image; for a host's image with each
-/// pixel's coverage, see [`emit_background`]). Alpha: the light that still comes through, T, falls by (1 - a) at each record,
-/// and a pixel stops once T is under half an 8-bit step (what lies behind can no longer change
-/// it); additive into an 8-bit image: a pixel stops once every channel is full. The tile stops
-/// when all its pixels have. The raster pipeline blends back to front, into an 8-bit target
-/// rounding after every blend; this is the same sum without those roundings (tests/render.rs
-/// measures how far apart they land).
-///
-/// Batches of `batch` records ([`SPLAT_BATCH`], or [`SPLAT_ADDITIVE_QUAD_BATCH`]) are binned first, so that a pixel visits only the records
-/// whose boxes hold it: a box is the product of a column range and a row range, so a bit mask
-/// per column of the tile and one per row (each built by one thread from the batch's boxes,
-/// with no atomics) give each pixel its records as the AND of its column's and its row's. The
-/// masks cost the same whatever the boxes' sizes; binning each record into a mask per pixel
-/// cost its box's area in workgroup atomics (H100: smoke 1M's composite 3.06 -> 2.08 ms, snow
-/// 10M 1.04 -> 0.54, sparks 10M 24.7 -> 16.1; docs/performance.md).
-/// How a composite workgroup holds its records: vec4s a record (`vec4s`), and records a batch
-/// (`size`: [`SPLAT_BATCH`] or [`SPLAT_ADDITIVE_QUAD_BATCH`], a multiple of 32).
+/// How a composite workgroup holds its records: vec4s from one to the next (`vec4s`), and
+/// records a batch (`size`: [`SPLAT_BATCH`] or [`SPLAT_ADDITIVE_QUAD_BATCH`], a multiple of 32).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct RecordBatch {
     /// Vec4s from one record to the next in workgroup memory ([`batch_stride`]), the record's
@@ -93,6 +71,31 @@ pub(crate) fn batch_stride(vec4s: u32, additive: bool) -> u32 {
 /// Diagonals of a tile (x + y constant), and as many anti-diagonals (x - y).
 const TILE_DIAGONALS: u32 = 2 * SPLAT_TILE - 1;
 
+/// `composite`: a workgroup per 16x16 tile and slice (`slices`: [`splat_slices`]), a thread per pixel,
+/// composites its slice of the tile's records
+/// (`records.vec4s` vec4s each, the last one's z and w the pixel box's corners; the code `load` emits
+/// puts entry `k`'s record at `batch[records.vec4s * t]`) front to back (the
+/// draw order reversed), each pixel's colour `shaded` from the code `evaluate` emits (which
+/// reads record j of the batch, the pixel centre `centre`, and may `continue` past a record
+/// that does not cover it), into the slice's partial sums; `merge` composes the slices and
+/// rounds to 8 bits once (or stores f16 pairs into an HDR image; for a host's image with each
+/// pixel's coverage, see [`emit_background`]). Alpha: the light that still comes through, T, falls by (1 - a) at each record,
+/// and a pixel stops once T is under half an 8-bit step (what lies behind can no longer change
+/// it); additive into an 8-bit image: a pixel stops once every channel is full. The tile stops
+/// when all its pixels have. The raster pipeline blends back to front, into an 8-bit target
+/// rounding after every blend; this is the same sum without those roundings (tests/render.rs
+/// measures how far apart they land).
+///
+/// Batches of `records.size` records are binned first, so that a pixel visits only the records
+/// whose boxes hold it: a box is the product of a column range and a row range, so a bit mask
+/// per column of the tile and one per row (each built by one thread from the batch's boxes,
+/// with no atomics) give each pixel its records as the AND of its column's and its row's. The
+/// masks cost the same whatever the boxes' sizes; binning each record into a mask per pixel
+/// cost its box's area in workgroup atomics (H100: smoke 1M's composite 3.06 -> 2.08 ms, snow
+/// 10M 1.04 -> 0.54, sparks 10M 24.7 -> 16.1; docs/performance.md). With
+/// `records.diagonals` (additive quads) the masks hold the tile's diagonals and anti-diagonals
+/// too, so that a slanted streak is visited within an octagon rather than its box (sparks 10M
+/// with the batches of 64: 14.1 -> 12.3 ms).
 pub(crate) fn emit_composite(
     w: &mut Writer,
     shape: &DrawShape,
