@@ -276,3 +276,17 @@ pub(crate) fn emit_soft(w: &mut Writer, distance: f64) {
         w.line("return clamp(gap / SOFT_DISTANCE, 0.0, 1.0);");
     });
 }
+
+/// The draw modules' randomness: the PCG hash where the draw draws a value of its own (`draws`:
+/// a shared lifetime, a palette), and `palette_tint` where the effect has a palette; each
+/// followed by a blank line.
+pub(crate) fn emit_draw_randomness(w: &mut Writer, ir: &EffectIr, draws: bool) {
+    if draws {
+        rng::emit_wgsl(w);
+        w.blank();
+    }
+    if ir.render.palette.is_some() {
+        crate::features::looks::tint::emit_palette_fn(w, ir.tint());
+        w.blank();
+    }
+}

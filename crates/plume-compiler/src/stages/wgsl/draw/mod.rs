@@ -16,15 +16,14 @@
 pub(crate) mod common;
 pub(crate) mod splat;
 
-use crate::base::rng;
 use crate::base::writer::{f32_lit, u32_lit, Writer};
 use crate::ir::EffectIr;
 use crate::stages::integrators::emit_advance;
 use crate::stages::passes::layout::{self, Attribute, Layout};
 use crate::stages::wgsl::{emit_particle_struct, spawn, stateless};
 use common::{
-    emit_age_steps, emit_draw_view, emit_finite3, emit_gradients, emit_life_fraction, emit_load,
-    emit_soft,
+    emit_age_steps, emit_draw_randomness, emit_draw_view, emit_finite3, emit_gradients,
+    emit_life_fraction, emit_load, emit_soft,
 };
 use splat::{emit_project, emit_project_quads, emit_quad_raster, emit_splat_declarations};
 pub use splat::{
@@ -215,14 +214,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         emit_soft(&mut w, distance);
     }
     w.blank();
-    if draws {
-        rng::emit_wgsl(&mut w);
-        w.blank();
-    }
-    if ir.render.palette.is_some() {
-        crate::features::looks::tint::emit_palette_fn(&mut w, ir.tint());
-        w.blank();
-    }
+    emit_draw_randomness(&mut w, ir, draws);
     if stateless {
         spawn::emit_emitter_fns(&mut w, ir);
         emit_advance(&mut w, ir);

@@ -11,7 +11,6 @@
 //! Points the particle has not lived long enough to record collapse onto its oldest sample
 //! (zero-area triangles), so a young particle's trail is the head of a full one.
 
-use crate::base::rng;
 use crate::base::writer::{u32_lit, Writer};
 use crate::features::looks::trail::TrailIr;
 use crate::ir::EffectIr;
@@ -96,14 +95,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         draw::emit_soft(&mut w, distance);
     }
     w.blank();
-    if draws {
-        rng::emit_wgsl(&mut w);
-        w.blank();
-    }
-    if ir.render.palette.is_some() {
-        crate::features::looks::tint::emit_palette_fn(&mut w, ir.tint());
-        w.blank();
-    }
+    draw::emit_draw_randomness(&mut w, ir, draws);
     draw::emit_load(&mut w, layout, shape);
     if life {
         w.blank();
