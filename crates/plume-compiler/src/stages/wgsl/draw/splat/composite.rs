@@ -47,8 +47,8 @@ pub(crate) struct RecordBatch {
     pub vec4s: u32,
     /// Records binned at once.
     pub size: u32,
-    /// Whether `load` also writes `diagonal_spans[t]` ([`emit_diagonal_spans`]), so that the
-    /// masks hold the tile's diagonals and anti-diagonals too.
+    /// Whether `load` also writes the record's diagonals and anti-diagonals into
+    /// `record_lines` ([`emit_diagonal_spans`]), so that the masks hold them too.
     pub diagonals: bool,
 }
 
@@ -115,7 +115,6 @@ pub(crate) fn emit_composite(
     // A mask of `batch` bits for each of the tile's columns and rows (and diagonals).
     let lines = 2 * SPLAT_TILE + if diagonals { 2 * TILE_DIAGONALS } else { 0 };
     let line_masks = lines * words;
-    let box_word = format!("{}u * j + {}u", record, record - 1);
     w.line(format!(
         "var<workgroup> batch: array<vec4<u32>, {}>;",
         record * batch
@@ -123,14 +122,19 @@ pub(crate) fn emit_composite(
     w.line("var<workgroup> batch_range: vec2<u32>;");
     if diagonals {
         w.comment(format!(
-            "Per record of the batch, the tile's diagonals (x + y, 0 to {}) and anti-diagonals (x - y + {}) its corners span, a byte each: first, last, first, last.",
+            "Per record of the batch, the tile's lines it crosses, a bit each: columns | rows << {SPLAT_TILE}, then diagonals (x + y, 0 to {}), then anti-diagonals (x - y + {}).",
             TILE_DIAGONALS - 1,
             SPLAT_TILE - 1
         ));
-        w.line(format!(
-            "var<workgroup> diagonal_spans: array<u32, {batch}>;"
+    } else {
+        w.comment(format!(
+            "Per record of the batch, the tile's columns | rows << {SPLAT_TILE} its box crosses, a bit each."
         ));
     }
+    w.line(format!(
+        "var<workgroup> record_lines: array<u32, {}>;",
+        batch * line_words(diagonals)
+    ));
     w.comment(format!(
         "Per column of the tile, then per row, which of the batch's {batch} records' boxes hold it ({words} words of bits): a pixel's records are those of its column and its row."
     ));
@@ -147,6 +151,11 @@ pub(crate) fn emit_composite(
     w.comment("A box's corner, packed as x | y << 16.");
     w.block("fn unpack_corner(b: u32) -> vec2<u32>", |w| {
         w.line("return vec2<u32>(b & 0xffffu, b >> 16u);");
+    });
+    w.blank();
+    w.comment("Bits first to last of a word (none when first > last; both at most 31).");
+    w.block("fn span_bits(first: u32, last: u32) -> u32", |w| {
+        w.line("return (0xffffffffu >> (31u - last)) & (0xffffffffu << first);");
     });
     w.blank();
     w.line(format!(
@@ -184,22 +193,18 @@ pub(crate) fn emit_composite(
                 w.block("if (i < end)", |w| {
                     w.line("let k = tile_sprites[i];");
                     load(w);
+                    emit_box_lines(w, record, diagonals);
+                });
+                w.comment("A record slot past the list's end crosses no line.");
+                w.block(format!("else if (t < {batch}u)"), |w| {
+                    let stride = line_words(diagonals);
+                    w.line(format!("record_lines[{stride}u * t] = 0u;"));
+                    for part in 1..stride {
+                        w.line(format!("record_lines[{stride}u * t + {part}u] = 0u;"));
+                    }
                 });
                 w.line("workgroupBarrier();");
-                if diagonals {
-                    emit_diagonal_masks(w, &box_word, words, line_masks);
-                } else {
-                    w.comment(format!(
-                        "Thread t < {line_masks} builds word t % {words} of line t / {words} (columns {SPLAT_TILE} of them, then rows): no atomics, and a record costs the lines its box crosses, not its pixels."
-                    ));
-                    w.block(format!("if (t < {line_masks}u)"), |w| {
-                        w.line(format!("let word = t % {words}u;"));
-                        w.line(format!("let line = t / {words}u;"));
-                        w.line("var bits = 0u;");
-                        emit_box_line(w, &box_word);
-                        w.line("line_masks[t] = bits;");
-                    });
-                }
+                emit_line_masks(w, words, line_masks, diagonals);
                 w.line("workgroupBarrier();");
                 w.comment("Front to back: the batch's last entry first.");
                 w.line(format!("var m = {words}u;"));
@@ -351,60 +356,76 @@ fn emit_store(w: &mut Writer, shape: &DrawShape, colour: &str, cover: &str) {
     }
 }
 
-/// The bits of word `word` of column or row `line` (columns, then rows) into `bits`: which of
-/// the word's 32 records of the batch have boxes (at `box_word`) that hold it.
-fn emit_box_line(w: &mut Writer, box_word: &str) {
-    w.line(format!("let is_row = line >= {SPLAT_TILE}u;"));
-    w.line(format!(
-        "let at = select(origin.x + line, origin.y + line - {SPLAT_TILE}u, is_row);"
-    ));
-    w.block("for (var r = 0u; r < 32u; r++)", |w| {
-        w.line("let j = word * 32u + r;");
-        w.line(format!("let box = batch[{box_word}];"));
-        w.line("let lo = unpack_corner(box.z);");
-        w.line("let hi = unpack_corner(box.w);");
-        w.line("let holds = start + j < end && select(lo.x, lo.y, is_row) <= at && at <= select(hi.x, hi.y, is_row);");
-        w.line("bits |= select(0u, 1u << r, holds);");
-    });
+/// Words of `record_lines` a record has: its columns and rows, and with `diagonals` its
+/// diagonals and anti-diagonals.
+fn line_words(diagonals: bool) -> u32 {
+    if diagonals {
+        3
+    } else {
+        1
+    }
 }
 
-/// The line masks with diagonals: word q % `words` of line q / `words` (columns, rows,
-/// diagonals, anti-diagonals), built by thread q % 256 from the batch's boxes and
-/// `diagonal_spans`.
-fn emit_diagonal_masks(w: &mut Writer, box_word: &str, words: u32, line_masks: u32) {
-    let tile = SPLAT_TILE;
-    w.comment("Word q % WORDS of line q / WORDS (columns, rows, diagonals, anti-diagonals), built by thread q % 256: no atomics, and a record costs the lines it crosses, not its pixels.");
+/// Writes `record_lines` for the record thread `t` just put in the batch (`vec4s` apart, the box
+/// last): the tile's columns and rows its box crosses, as bits (columns | rows << 16).
+fn emit_box_lines(w: &mut Writer, vec4s: u32, diagonals: bool) {
+    let last = SPLAT_TILE - 1;
+    w.comment("The tile's columns and rows the box crosses, counted from the tile's origin.");
+    w.line(format!("let box = batch[{vec4s}u * t + {}u];", vec4s - 1));
+    w.line(
+        "let box_first = max(vec2<i32>(unpack_corner(box.z)) - vec2<i32>(origin), vec2<i32>(0));",
+    );
+    w.line(format!(
+        "let box_last = min(vec2<i32>(unpack_corner(box.w)) - vec2<i32>(origin), vec2<i32>({last}));"
+    ));
+    w.line("let crossed = select(vec2<u32>(0u), vec2<u32>(span_bits(u32(box_first.x), u32(box_last.x)), span_bits(u32(box_first.y), u32(box_last.y))), box_first <= box_last);");
+    w.line(format!(
+        "record_lines[{}u * t] = crossed.x | crossed.y << {SPLAT_TILE}u;",
+        line_words(diagonals)
+    ));
+}
+
+/// The line masks: word q % `words` of line q / `words` (columns, rows, then with `diagonals`
+/// diagonals and anti-diagonals), built by thread q % 256 from each record's `record_lines`, a
+/// bit taken from each of the word's 32 records. No atomics, and a record's lines were found
+/// once, when it was loaded: comparing every record's box with every line cost sparks 10M 2.7
+/// of its composite's 10.6 ms on an H100 (docs/measurements/h100-splat/masks/).
+fn emit_line_masks(w: &mut Writer, words: u32, line_masks: u32, diagonals: bool) {
+    let stride = line_words(diagonals);
+    let lines = 2 * SPLAT_TILE;
+    w.comment(format!(
+        "Word q % {words} of line q / {words}: bit r for record word * 32 + r."
+    ));
     w.block(format!("for (var q = t; q < {line_masks}u; q += 256u)"), |w| {
         w.line(format!("let word = q % {words}u;"));
         w.line(format!("let line = q / {words}u;"));
+        if diagonals {
+            w.comment("Columns and rows in the record's first word, diagonals in its second, anti-diagonals in its third: which word, and which bit.");
+            w.line(format!(
+                "let part = select(select(2u, 1u, line < {}u), 0u, line < {lines}u);",
+                lines + TILE_DIAGONALS
+            ));
+            w.line(format!(
+                "let bit = line - select(select({}u, {lines}u, line < {}u), 0u, line < {lines}u);",
+                lines + TILE_DIAGONALS,
+                lines + TILE_DIAGONALS
+            ));
+        } else {
+            w.line("let part = 0u;");
+            w.line("let bit = line;");
+        }
         w.line("var bits = 0u;");
-        w.block(format!("if (line < {}u)", 2 * tile), |w| {
-            emit_box_line(w, box_word)
-        });
-        w.block("else", |w| {
-            w.comment(format!(
-                "Diagonal d of the tile's 2 x {TILE_DIAGONALS}: bytes 0 and 1 of the span, or 2 and 3."
-            ));
-            w.line(format!("let d = line - {}u;", 2 * tile));
+        w.block("for (var r = 0u; r < 32u; r++)", |w| {
             w.line(format!(
-                "let shift = select(0u, 16u, d >= {TILE_DIAGONALS}u);"
+                "bits |= ((record_lines[{stride}u * (word * 32u + r) + part] >> bit) & 1u) << r;"
             ));
-            w.line(format!(
-                "let at = select(d, d - {TILE_DIAGONALS}u, d >= {TILE_DIAGONALS}u);"
-            ));
-            w.block("for (var r = 0u; r < 32u; r++)", |w| {
-                w.line("let j = word * 32u + r;");
-                w.line("let span = diagonal_spans[j] >> shift;");
-                w.line("let holds = start + j < end && (span & 0xffu) <= at && at <= ((span >> 8u) & 0xffu);");
-                w.line("bits |= select(0u, 1u << r, holds);");
-            });
         });
         w.line("line_masks[q] = bits;");
     });
 }
 
-/// Writes `diagonal_spans[t]` for the record just loaded: the tile's diagonals and
-/// anti-diagonals that its `corners` span (WGSL vec3s in the record's own coordinates, a
+/// Writes `record_lines[3 t + 1]` and `[3 t + 2]` for the record just loaded: the tile's
+/// diagonals and anti-diagonals that its `corners` span, as bits (WGSL vec3s in the record's own coordinates, a
 /// quad's (u, v, 1)). `rows` are the WGSL of the three rows of the map from a pixel (x, y, 1),
 /// counted from the tile's origin, to those coordinates over 1 / w; a corner's pixel is that
 /// map's inverse (its adjugate's columns, up to a factor) applied to the corner. A corner
@@ -451,5 +472,6 @@ pub(crate) fn emit_diagonal_spans(w: &mut Writer, rows: [&str; 3], corners: &[&s
     w.line(format!(
         "let spans = select(vec4<u32>(0u, {last}u, 0u, {last}u), vec4<u32>(vec4<f32>(first_line.x, last_line.x, first_line.y, last_line.y)), bounded);"
     ));
-    w.line("diagonal_spans[t] = spans.x | spans.y << 8u | spans.z << 16u | spans.w << 24u;");
+    w.line("record_lines[3u * t + 1u] = span_bits(spans.x, spans.y);");
+    w.line("record_lines[3u * t + 2u] = span_bits(spans.z, spans.w);");
 }
