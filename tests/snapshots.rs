@@ -70,3 +70,68 @@ fn every_bad_input_gets_a_located_error_and_matches_its_snapshot() {
         insta::assert_snapshot!("diagnostics", rendered);
     });
 }
+
+/// The splat's composite in both of its forms: with a thread per mask word (every adapter) and
+/// with subgroup transposes (adapters whose subgroups are 32 wide, such as NVIDIA's; llvmpipe
+/// has none, so this is where that form is checked off the GPU). Every example that the
+/// splat draws with a generated composite (quads, ribbons), into an 8-bit and an HDR image,
+/// must give naga-valid WGSL either way, and the subgroup form must really use subgroups.
+#[test]
+fn every_splat_composite_validates_with_and_without_subgroups() {
+    use plume::compiler::wgsl::draw::{self, splat_discs, DrawShape};
+    use plume::compiler::wgsl::trail;
+    let mut composites = 0;
+    insta::glob!("../effects", "*.ron", |path| {
+        let source = std::fs::read_to_string(path).unwrap();
+        let options = CompileOptions {
+            base_dir: path.parent().map(|p| p.to_path_buf()),
+            ..Default::default()
+        };
+        let graph = compile_graph_str(&source, &options).unwrap();
+        for group in &graph.groups {
+            let (ir, layout) = (&group.effect.ir, &group.effect.layout);
+            for hdr in [false, true] {
+                for subgroups in [false, true] {
+                    let shape = DrawShape {
+                        splat: true,
+                        hdr,
+                        subgroups,
+                        ..DrawShape::single(ir)
+                    };
+                    let mut modules = Vec::new();
+                    if !splat_discs(ir, hdr) {
+                        modules.push(draw::emit(ir, layout, &shape));
+                    }
+                    if ir.render.trail.is_some() {
+                        modules.push(trail::emit(ir, layout, &shape));
+                    }
+                    for wgsl in modules {
+                        let what = format!("{} (hdr {hdr}, subgroups {subgroups})", path.display());
+                        let module = naga::front::wgsl::parse_str(&wgsl)
+                            .unwrap_or_else(|e| panic!("{what}: {}", e.emit_to_string(&wgsl)));
+                        naga::valid::Validator::new(
+                            naga::valid::ValidationFlags::all(),
+                            // unpack2x16float, which every wgpu device allows.
+                            naga::valid::Capabilities::SUBGROUP
+                                | naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32,
+                        )
+                        .subgroup_stages(naga::valid::ShaderStages::COMPUTE)
+                        .subgroup_operations(naga::valid::SubgroupOperationSet::all())
+                        .validate(&module)
+                        .unwrap_or_else(|e| panic!("{what}: {}", e.emit_to_string(&wgsl)));
+                        assert!(wgsl.contains("fn composite("), "{what}: no composite");
+                        assert_eq!(
+                            wgsl.contains("subgroupShuffleXor(")
+                                && wgsl.contains("@builtin(subgroup_id)"),
+                            subgroups,
+                            "{what}"
+                        );
+                        composites += 1;
+                    }
+                }
+            }
+        }
+    });
+    // Most examples draw quads (discs are only the plain round untextured ones).
+    assert!(composites >= 20, "only {composites} composites checked");
+}

@@ -120,6 +120,8 @@ impl GroupSplat {
             splat: true,
             hdr,
             host: image.host,
+            // The composite's line masks by subgroup transposes (subgroups of 32 only).
+            subgroups: gpu.has_subgroups_of(32),
             ..draw_shape(effect, res)
         };
         let (module, mut entries, count) = match (&effect.ir.render.trail, ribbons) {

@@ -59,6 +59,10 @@ pub struct DrawShape {
     /// keeps each pixel's coverage for the composite over the host's colour, and tests (and
     /// fades) against the host's depth. Needs `splat` and `hdr`.
     pub host: Option<SplatHost>,
+    /// Whether the splat's composite may use subgroup operations: the adapter's subgroups are
+    /// exactly 32 invocations wide (the runtime checks), and its line masks are then built by
+    /// bit-matrix transposes, a subgroup each, instead of a thread per mask word.
+    pub subgroups: bool,
 }
 
 /// Binding of the host's depth texture in a soft draw module.
@@ -106,6 +110,7 @@ impl DrawShape {
             hdr: false,
             soft: false,
             host: None,
+            subgroups: false,
         }
     }
 }

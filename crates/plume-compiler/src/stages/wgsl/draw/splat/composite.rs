@@ -158,12 +158,33 @@ pub(crate) fn emit_composite(
         w.line("return (0xffffffffu >> (31u - last)) & (0xffffffffu << first);");
     });
     w.blank();
-    w.line(format!(
-        "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
-    ));
+    if shape.subgroups {
+        emit_transpose(w);
+        w.blank();
+        // naga allows the subgroup builtins in one-dimensional workgroups only.
+        w.line(format!(
+            "@compute @workgroup_size({})",
+            SPLAT_TILE * SPLAT_TILE
+        ));
+    } else {
+        w.line(format!(
+            "@compute @workgroup_size({SPLAT_TILE}, {SPLAT_TILE})"
+        ));
+    }
+    let signature = if shape.subgroups {
+        "fn composite(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_index) t: u32, @builtin(subgroup_id) sg: u32, @builtin(subgroup_invocation_id) lane: u32)"
+    } else {
+        "fn composite(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>, @builtin(local_invocation_index) t: u32)"
+    };
     w.block(
-        "fn composite(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) lid: vec3<u32>, @builtin(local_invocation_index) t: u32)",
+        signature,
         |w| {
+            if shape.subgroups {
+                w.comment("The pixel's place in the tile, as a 16 x 16 workgroup would number it.");
+                w.line(format!(
+                    "let lid = vec2<u32>(t % {SPLAT_TILE}u, t / {SPLAT_TILE}u);"
+                ));
+            }
             w.line("let tile = wid.x + wid.y * splat_tiles.tiles_x;");
             w.line(format!("let origin = wid.xy * {SPLAT_TILE}u;"));
             w.line("let px = origin.x + lid.x;");
@@ -204,7 +225,11 @@ pub(crate) fn emit_composite(
                     }
                 });
                 w.line("workgroupBarrier();");
-                emit_line_masks(w, words, line_masks, diagonals);
+                if shape.subgroups {
+                    emit_line_masks_transposed(w, words, diagonals);
+                } else {
+                    emit_line_masks(w, words, line_masks, diagonals);
+                }
                 w.line("workgroupBarrier();");
                 w.comment("Front to back: the batch's last entry first.");
                 w.line(format!("var m = {words}u;"));
@@ -422,6 +447,79 @@ fn emit_line_masks(w: &mut Writer, words: u32, line_masks: u32, diagonals: bool)
         });
         w.line("line_masks[q] = bits;");
     });
+}
+
+/// `transpose32(row, lane)`: lane i of a subgroup of 32 holds row i of a 32 x 32 bit matrix
+/// (bit j: column j) and gets column `lane` back (bit i: row i). Five rounds; round s swaps,
+/// in every 2s x 2s block, the s x s block above the diagonal with the one below it, which
+/// the lane s away holds.
+fn emit_transpose(w: &mut Writer) {
+    w.comment("Lane i holds row i of a 32 x 32 bit matrix (bit j: column j); returns column `lane` (bit i: row i). Round s swaps the off-diagonal s x s blocks of every 2s x 2s block with the lane s away.");
+    w.block("fn transpose32(row: u32, lane: u32) -> u32", |w| {
+        w.line("var v = row;");
+        for (s, low) in [
+            (16u32, 0x0000_ffffu32),
+            (8, 0x00ff_00ff),
+            (4, 0x0f0f_0f0f),
+            (2, 0x3333_3333),
+            (1, 0x5555_5555),
+        ] {
+            let high = !low;
+            w.line(format!("let partner_{s} = subgroupShuffleXor(v, {s}u);"));
+            w.line(format!(
+                "v = select((v & 0x{high:08x}u) | ((partner_{s} & 0x{high:08x}u) >> {s}u), (v & 0x{low:08x}u) | ((partner_{s} & 0x{low:08x}u) << {s}u), (lane & {s}u) == 0u);"
+            ));
+        }
+        w.line("return v;");
+    });
+}
+
+/// The line masks by subgroups of 32 (`shape.subgroups`): subgroup `sg` takes the word's 32
+/// records' `record_lines` (one part: columns and rows, diagonals or anti-diagonals), a lane
+/// each, and a transpose leaves lane L with line L's word. Five shuffles a part and word where
+/// a thread per mask word took 32 loads (H100, sparks 10M's composite 9.1 -> 8.4 ms;
+/// docs/measurements/h100-splat/masks/).
+fn emit_line_masks_transposed(w: &mut Writer, words: u32, diagonals: bool) {
+    let stride = line_words(diagonals);
+    let tasks = words * stride;
+    let subgroups = SPLAT_TILE * SPLAT_TILE / 32;
+    let lines = 2 * SPLAT_TILE;
+    w.comment(format!(
+        "Task word + {words} part: the part's lines of records word * 32 to word * 32 + 31."
+    ));
+    w.block(
+        format!("for (var task = sg; task < {tasks}u; task += {subgroups}u)"),
+        |w| {
+            w.line(format!("let word = task % {words}u;"));
+            w.line(format!("let part = task / {words}u;"));
+            w.line(format!(
+                "let masks = transpose32(record_lines[{stride}u * (word * 32u + lane) + part], lane);"
+            ));
+            if diagonals {
+                w.comment(format!(
+                    "Lines 0 to {} (columns, rows), {lines} to {} (diagonals), {} to {} (anti-diagonals).",
+                    lines - 1,
+                    lines + TILE_DIAGONALS - 1,
+                    lines + TILE_DIAGONALS,
+                    lines + 2 * TILE_DIAGONALS - 1
+                ));
+                w.line(format!(
+                    "let first = select(select({}u, {lines}u, part == 1u), 0u, part == 0u);",
+                    lines + TILE_DIAGONALS
+                ));
+                w.block(
+                    format!("if (lane < select({TILE_DIAGONALS}u, {lines}u, part == 0u))"),
+                    |w| {
+                        w.line(format!(
+                            "line_masks[(first + lane) * {words}u + word] = masks;"
+                        ));
+                    },
+                );
+            } else {
+                w.line(format!("line_masks[lane * {words}u + word] = masks;"));
+            }
+        },
+    );
 }
 
 /// Writes `record_lines[3 t + 1]` and `[3 t + 2]` for the record just loaded: the tile's
