@@ -1,8 +1,10 @@
 // The compute splat's tile kernels (not generated: they are the same for every effect; the
 // effect-specific part, `project`, is in the effect's draw module). After `project` has written
 // each sprite's pixel extent and colour and its tile count, and the counts have been scanned:
-//   clear:  entry keys to the largest key (unused entries sort last), tile ranges to empty;
-//   emit:   one (tile, sprite) entry per tile a sprite touches, at the sprite's scanned offset,
+//   clear:  the keys of entries past those emit writes to the largest key (unused entries
+//           sort last), tile ranges to empty;
+//   emit:   one (tile, sprite) entry per tile a sprite touches, at the sprite's scanned offset
+//           (a thread per entry),
 //           so entries are in draw order; a stable radix sort by tile then keeps that order
 //           within each tile;
 //   ranges: each tile's run of entries;
@@ -46,10 +48,19 @@ fn index2d(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return gid.x + gid.y * groups.x * 256u;
 }
 
+// Entries every sprite's tiles take: the last sprite's scanned offset plus its count.
+fn entries_needed() -> u32 {
+    if (params.count == 0u) {
+        return 0u;
+    }
+    return offsets[params.count - 1u] + tile_counts[params.count - 1u];
+}
+
+// Only the entries `emit` leaves unwritten: emit writes every one below entries_needed().
 @compute @workgroup_size(256)
 fn clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = index2d(gid, groups);
-    if (i < params.entries) {
+    if (i < params.entries && i >= entries_needed()) {
         keys[i] = UNUSED;
         vals[i] = UNUSED;
     }
@@ -76,32 +87,57 @@ fn unpack_splat(w: vec4<u32>) -> Splat {
     return s;
 }
 
+// The workgroup's 256 sprites' scanned offsets (and where the last one's entries end), and
+// their tile boxes.
+var<workgroup> group_offsets: array<u32, 257>;
+var<workgroup> group_boxes: array<vec2<u32>, 256>;
+
+// A workgroup per 256 consecutive sprites writes their entries, which are consecutive too,
+// a thread per entry: entry p is sprite r's (the last whose offset is at most p), its tile
+// the box's (p - offset)th in row order. Neighbouring threads write neighbouring words; a
+// thread per sprite, writing its own run, scattered each warp's stores over 32 runs (H100,
+// sparks 10M: 0.84 ms for 53.7M entries, about a fifth of the copy kernel's bandwidth).
 @compute @workgroup_size(256)
-fn emit(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
-    let k = index2d(gid, groups);
-    if (k >= params.count) {
+fn emit(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+    // Uniform (as the barrier needs): the workgroup's first sprite, index2d's numbering.
+    let first = (wid.x + wid.y * groups.x) * 256u;
+    let k = first + t;
+    if (first >= params.count) {
         return;
     }
-    let n = tile_counts[k];
-    let base = offsets[k];
-    if (k + 1u == params.count) {
-        status[0] = base + n;
-    }
-    if (n == 0u) {
-        return;
-    }
-    let packed = tile_boxes[k];
-    let b = vec4<u32>(packed & vec2<u32>(0xffffu), packed >> vec2<u32>(16u)).xzyw;
-    var i = base;
-    // At most the n entries `project` counted: a sprite never writes into the next one's.
-    for (var ty = b.y; ty <= b.w; ty++) {
-        for (var tx = b.x; tx <= b.z; tx++) {
-            if (i < params.entries && i < base + n) {
-                keys[i] = ty * params.tiles_x + tx;
-                vals[i] = k;
+    let sprites = min(params.count - first, 256u);
+    if (t < sprites) {
+        group_offsets[t] = offsets[k];
+        group_boxes[t] = tile_boxes[k];
+        if (t + 1u == sprites) {
+            group_offsets[sprites] = offsets[k] + tile_counts[k];
+            if (k + 1u == params.count) {
+                status[0] = offsets[k] + tile_counts[k];
             }
-            i++;
         }
+    }
+    workgroupBarrier();
+    let begin = group_offsets[0];
+    let end = min(group_offsets[sprites], params.entries);
+    for (var p = begin + t; p < end; p += 256u) {
+        // The last sprite r whose offset is at most p (sprites with no entries share the next
+        // one's offset, and the search passes them).
+        var lo = 0u;
+        var hi = sprites - 1u;
+        while (lo < hi) {
+            let mid = (lo + hi + 1u) / 2u;
+            if (group_offsets[mid] <= p) {
+                lo = mid;
+            } else {
+                hi = mid - 1u;
+            }
+        }
+        let packed = group_boxes[lo];
+        let b = vec4<u32>(packed & vec2<u32>(0xffffu), packed >> vec2<u32>(16u)).xzyw;
+        let i = p - group_offsets[lo];
+        let columns = b.z - b.x + 1u;
+        keys[p] = (b.y + i / columns) * params.tiles_x + b.x + i % columns;
+        vals[p] = first + lo;
     }
 }
 
