@@ -188,6 +188,17 @@ fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
             w.line("return select(x, s, finite3(s));");
         },
     );
+    if shape.splat {
+        w.blank();
+        w.comment("point_at with ribbon point j's ring entry already loaded (`entry`; any word for j = 0).");
+        w.block(
+            "fn sampled_point(x: vec3<f32>, j: u32, entry: vec4<u32>) -> vec3<f32>",
+            |w| {
+                w.line("let s = bitcast<vec3<f32>>(entry.xyz);");
+                w.line("return select(select(x, s, finite3(s)), x, j == 0u);");
+            },
+        );
+    }
     w.blank();
     w.block("struct TrailVertex", |w| {
         w.line("@builtin(position) clip: vec4<f32>,");
@@ -211,30 +222,56 @@ fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
         w.line("lo: u32,");
     });
     w.blank();
+    w.comment("Instance `instance`'s particle slot (past CAPACITY: none, the order's padding).");
+    w.block("fn ribbon_slot(instance: u32) -> u32", |w| {
+        if shape.through_list {
+            w.line("return order[instance];");
+        } else {
+            w.line("return instance;");
+        }
+    });
+    w.blank();
+    w.comment(
+        "The newest sample: taken at the start of the last step that was a multiple of EVERY.",
+    );
+    w.block("fn newest_sample() -> u32", |w| {
+        w.line("return (draw.steps - 1u) / EVERY;");
+    });
+    w.blank();
+    w.comment("The oldest sample a grown trail owns: ribbon point min(RING, newest + 1).");
+    w.block("fn oldest_entry(slot: u32) -> vec4<u32>", |w| {
+        w.line("let newest = newest_sample();");
+        w.line("return sample_entry(slot, newest, min(RING, newest + 1u));");
+    });
+    w.blank();
     w.comment(
         "Instance `instance`'s ribbon: everything its points share, found once for all of them.",
     );
     w.block("fn ribbon_of(instance: u32) -> Ribbon", |w| {
+        w.line("let slot = ribbon_slot(instance);");
+        if shape.through_list {
+            w.block("if (slot >= CAPACITY)", |w| {
+                w.line("var r: Ribbon;");
+                w.line("r.visible = false;");
+                w.line("return r;");
+            });
+        }
+        w.line("return ribbon_from(slot, load_particle(slot), oldest_entry(slot));");
+    });
+    w.blank();
+    w.comment("The ribbon of the particle `p` in `slot`, given the ring entry of its oldest sample (`oldest_entry`): loaded by the caller, so that a caller can have every load of a segment in flight at once.");
+    w.block("fn ribbon_from(slot: u32, p: Particle, oldest: vec4<u32>) -> Ribbon", |w| {
         w.line("var r: Ribbon;");
         w.line("r.visible = false;");
-        if shape.through_list {
-            w.line("let slot = order[instance];");
-            w.comment("The order's padding past the capacity names no particle.");
-            w.block("if (slot >= CAPACITY)", |w| w.line("return r;"));
-        } else {
-            w.line("let slot = instance;");
-        }
-        w.line("let p = load_particle(slot);");
         w.block("if (p.id == DEAD || draw.steps == 0u)", |w| {
             w.line("return r;")
         });
         w.line("let x = vec3<f32>(p.px, p.py, p.pz);");
         w.block("if (!finite3(x))", |w| w.line("return r;"));
-        w.comment("The newest sample: taken at the start of the last step that was a multiple of EVERY.");
-        w.line("let newest = (draw.steps - 1u) / EVERY;");
+        w.line("let newest = newest_sample();");
         w.comment("How many samples are this particle's: the entries it owns are the newest ones. A grown trail owns the oldest one in the window too; a young one's end is searched for.");
         w.line("var lo = min(RING, newest + 1u);");
-        w.block("if (sample_entry(slot, newest, lo).w != p.id + 1u)", |w| {
+        w.block("if (oldest.w != p.id + 1u)", |w| {
             w.line("var hi = lo - 1u;");
             w.line("lo = 0u;");
             w.block("while (lo < hi)", |w| {
