@@ -271,6 +271,7 @@ fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
             vec4s: stride,
             size: SPLAT_BATCH,
             diagonals: false,
+            prefetch: true,
         },
         &load,
         &evaluate,

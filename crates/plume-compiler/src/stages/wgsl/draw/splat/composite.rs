@@ -50,6 +50,11 @@ pub(crate) struct RecordBatch {
     /// Whether `load` also writes the record's diagonals and anti-diagonals into
     /// `record_lines` ([`emit_diagonal_spans`]), so that the masks hold them too.
     pub diagonals: bool,
+    /// Whether each batch's entries are loaded while the batch before is composited, so that
+    /// making a record waits on its own loads only (ribbon segments: H100, orbit 1M's composite
+    /// 4.92 -> 4.86 ms, three rounds). Quads' records, made from one load each, were slower with it (sparks
+    /// 10M 9.1 -> 9.3 ms: more registers).
+    pub prefetch: bool,
 }
 
 /// Vec4s between the records of a composite's batch in workgroup memory, for records of
@@ -109,6 +114,7 @@ pub(crate) fn emit_composite(
         vec4s: record,
         size: batch,
         diagonals,
+        prefetch,
     } = records;
     let hdr = shape.hdr;
     let words = batch / 32;
@@ -206,13 +212,34 @@ pub(crate) fn emit_composite(
             w.line("let range = vec2<u32>(first, min(first + chunk, whole.y));");
             w.block("if (done)", |w| w.line("atomicAdd(&finished, 1u);"));
             w.line("var end = range.y;");
+            if prefetch {
+                w.comment("The first batch's entry, then each next one's while this one is composited.");
+                w.line("var next_k = 0u;");
+                w.line(format!(
+                    "let start0 = select(range.x, end - {batch}u, end - range.x > {batch}u);"
+                ));
+                w.block("if (start0 + t < end)", |w| {
+                    w.line("next_k = tile_sprites[start0 + t];");
+                });
+            }
             w.block("while (end > range.x)", |w| {
                 w.line(format!(
                     "let start = select(range.x, end - {batch}u, end - range.x > {batch}u);"
                 ));
                 w.line("let i = start + t;");
+                if prefetch {
+                    w.line("let k = next_k;");
+                    w.line(format!(
+                        "let next_start = select(range.x, start - {batch}u, start - range.x > {batch}u);"
+                    ));
+                    w.block("if (start > range.x && next_start + t < start)", |w| {
+                        w.line("next_k = tile_sprites[next_start + t];");
+                    });
+                }
                 w.block("if (i < end)", |w| {
-                    w.line("let k = tile_sprites[i];");
+                    if !prefetch {
+                        w.line("let k = tile_sprites[i];");
+                    }
                     load(w);
                     emit_box_lines(w, record, diagonals);
                 });

@@ -534,6 +534,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
                 composite::SPLAT_BATCH
             },
             diagonals: additive,
+            prefetch: false,
         },
         &load,
         &evaluate,
