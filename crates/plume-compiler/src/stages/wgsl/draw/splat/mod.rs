@@ -11,6 +11,7 @@
 //! them, `composite`, is generated here with the effect's own shading.
 
 mod composite;
+mod masks;
 
 pub(crate) use composite::{batch_stride, emit_composite, RecordBatch, SPLAT_BATCH};
 pub use composite::{splat_slices, SPLAT_PARTIAL_BINDING, SPLAT_SLICES};
@@ -442,7 +443,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         w.line("let bz = b.z - dot(b.xy, shift);");
         w.line("let cz = c.z - dot(c.xy, shift);");
         if additive {
-            composite::emit_diagonal_spans(
+            masks::emit_diagonal_spans(
                 w,
                 [
                     "vec3<f32>(a.xy, az)",
