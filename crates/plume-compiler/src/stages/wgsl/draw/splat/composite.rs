@@ -42,8 +42,8 @@ pub fn splat_slices(ir: &crate::ir::EffectIr) -> u32 {
 /// The pixels a subgroup of 32 composites, where subgroups are used (`shape.subgroups`): a
 /// block 4 wide and 8 tall rather than two rows of 16. A subgroup walks its pixels' records
 /// until its busiest lane is done, and a squarer block's pixels share more of their records
-/// (H100, docs/measurements/h100-splat/scatter/: sparks 10M's composite 8.62 -> 8.25 ms, orbit
-/// 1M's 4.83 -> 4.69; 8 x 4 blocks gave 8.30 and 4.77).
+/// (H100, docs/measurements/h100-splat/scatter/, two rounds: sparks 10M's composite 8.62, 8.69
+/// -> 8.24, 8.22 ms, orbit 1M's 4.83, 4.80 -> 4.69, 4.68; 8 x 4 blocks gave 8.30 and 4.77).
 const SUBGROUP_BLOCK: (u32, u32) = (4, 8);
 
 /// Binding of the slices' partial sums: `SPLAT_SLICES` vec4s a pixel (slice-major).
