@@ -12,7 +12,8 @@ use crate::base::writer::{u32_lit, Writer};
 use crate::features::looks::trail::TrailIr;
 use crate::ir::EffectIr;
 use crate::stages::wgsl::draw::splat::{
-    batch_stride, emit_composite, emit_project_kernel, host_depth, RecordBatch, SPLAT_BATCH,
+    batch_stride, emit_composite, emit_project_kernel, host_depth, Prefetch, RecordBatch,
+    SPLAT_BATCH,
 };
 use crate::stages::wgsl::draw::DrawShape;
 
@@ -68,24 +69,45 @@ pub(super) fn emit(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawS
 /// triangle with a vertex outside the depth range, or without area, draws nothing, as the
 /// triangle-by-triangle splat had it.
 fn emit_segment_record(w: &mut Writer) {
+    w.comment("Every load segment k's record needs: the particle and the ring entries, whose places follow from the slot and the step alone (a slot past the capacity, the order's padding, loads slot CAPACITY - 1's, which the record does not use).");
+    w.block("struct SegmentLoads", |w| {
+        w.line("p: Particle,");
+        w.line("oldest: vec4<u32>,");
+        w.comment("Points s - 1 (or s at the particle), s, s + 1 and s + 2 (or s + 1 at the oldest sample): s < lo, so s + 1 needs no clamp.");
+        w.line("before: vec4<u32>,");
+        w.line("near: vec4<u32>,");
+        w.line("far: vec4<u32>,");
+        w.line("after: vec4<u32>,");
+    });
+    w.blank();
+    w.block("fn segment_loads(k: u32) -> SegmentLoads", |w| {
+        w.line("let instance = k / SEGMENTS;");
+        w.line("let s = k - instance * SEGMENTS;");
+        w.line("let slot = min(ribbon_slot(instance), CAPACITY - 1u);");
+        w.line("let newest = newest_sample();");
+        w.line("return SegmentLoads(load_particle(slot), oldest_entry(slot), sample_entry(slot, newest, max(s, 1u) - 1u), sample_entry(slot, newest, s), sample_entry(slot, newest, s + 1u), sample_entry(slot, newest, s + 2u));");
+    });
+    w.blank();
     w.comment("Segment k as a record; not valid when neither of its triangles draws or its box holds no pixel centre.");
     w.block("fn segment_record(k: u32) -> SegmentRecord", |w| {
+        w.comment("Every load issued before any is tested. Loaded after the particle's tests, they took three round trips to memory, not one (H100, orbit 1M's composite 5.40 -> 4.93 ms).");
+        w.line("return segment_record_from(k, segment_loads(k));");
+    });
+    w.blank();
+    w.comment("Segment k as a record, from its loads (`segment_loads(k)`).");
+    w.block("fn segment_record_from(k: u32, loads: SegmentLoads) -> SegmentRecord", |w| {
         w.line("var rec: SegmentRecord;");
         w.line("rec.valid = false;");
         w.line("let instance = k / SEGMENTS;");
         w.line("let s = k - instance * SEGMENTS;");
         w.line("let slot = ribbon_slot(instance);");
         w.block("if (slot >= CAPACITY)", |w| w.line("return rec;"));
-        w.comment("Every load the record needs, issued before any is tested: the ring entries' places follow from the slot and the step alone. Loaded after the particle's tests, they took three round trips to memory, not one (H100, orbit 1M's composite 5.40 -> 4.93 ms).");
-        w.line("let newest = newest_sample();");
-        w.line("let p = load_particle(slot);");
-        w.line("let oldest = oldest_entry(slot);");
-        w.comment("Points s - 1 (or s at the particle), s, s + 1 and s + 2 (or s + 1 at the oldest sample): s < lo, so s + 1 needs no clamp.");
-        w.line("let e_before = sample_entry(slot, newest, max(s, 1u) - 1u);");
-        w.line("let e_near = sample_entry(slot, newest, s);");
-        w.line("let e_far = sample_entry(slot, newest, s + 1u);");
-        w.line("let e_after = sample_entry(slot, newest, s + 2u);");
-        w.line("let r = ribbon_from(slot, p, oldest);");
+        w.line("let p = loads.p;");
+        w.line("let e_before = loads.before;");
+        w.line("let e_near = loads.near;");
+        w.line("let e_far = loads.far;");
+        w.line("let e_after = loads.after;");
+        w.line("let r = ribbon_from(slot, p, loads.oldest);");
         w.comment("Past the points the particle has lived every vertex sits on its oldest sample: no area.");
         w.block("if (!r.visible || s >= r.lo)", |w| w.line("return rec;"));
         w.line("let before = sampled_point(r.x, max(s, 1u) - 1u, e_before);");
@@ -173,8 +195,8 @@ fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
     let stride = batch_stride(n, additive);
     let load = |w: &mut Writer| {
-        w.comment("Made again from the particle state: the same record `project` made, its weights' rows moved from the box corner to the tile's origin (their constant terms absorb the shift; the fourth vertex's weights do not change).");
-        w.line("let rec = segment_record(k);");
+        w.comment("Made again from the particle state (loaded while the batch before was composited): the same record `project` made, its weights' rows moved from the box corner to the tile's origin (their constant terms absorb the shift; the fourth vertex's weights do not change).");
+        w.line("let rec = segment_record_from(k, loads);");
         w.line(format!(
             "let shift = vec2<f32>(vec2<i32>(unpack_corner(rec.words[{}u].z)) - vec2<i32>(origin));",
             n - 1
@@ -271,7 +293,10 @@ fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
             vec4s: stride,
             size: SPLAT_BATCH,
             diagonals: false,
-            prefetch: true,
+            prefetch: Prefetch::Loads {
+                declare: "var loads: SegmentLoads;",
+                issue: "loads = segment_loads(next_k);",
+            },
         },
         &load,
         &evaluate,

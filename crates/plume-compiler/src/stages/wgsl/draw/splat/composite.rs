@@ -61,11 +61,27 @@ pub(crate) struct RecordBatch {
     /// Whether `load` also writes the record's diagonals and anti-diagonals into
     /// `record_lines` ([`super::masks::emit_diagonal_spans`]), so that the masks hold them too.
     pub diagonals: bool,
-    /// Whether each batch's entries are loaded while the batch before is composited, so that
-    /// making a record waits on its own loads only (ribbon segments: H100, orbit 1M's
-    /// composite 4.92 -> 4.86 ms, three rounds). Quads' records, made from one load each, were
-    /// slower with it (sparks 10M 9.1 -> 9.3 ms: more registers).
-    pub prefetch: bool,
+    /// What of the next batch is loaded while this one is composited ([`Prefetch`]).
+    pub prefetch: Prefetch,
+}
+
+/// What of the next batch a composite loads while it composites this one.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum Prefetch {
+    /// Nothing: each batch loads its entries, then makes its records. Quads' records, made
+    /// from one load each, were slower with their entries loaded ahead (sparks 10M 9.1 -> 9.3
+    /// ms: more registers).
+    None,
+    /// Its entries and what making its records loads: `declare` (WGSL) declares the loads
+    /// before the loop, `issue` (WGSL, reading the next entry `next_k`) issues them, once for
+    /// the first batch and then after each batch's records are made, so that they arrive
+    /// while the masks and the walk run and `load` reads them. Ribbon segments (H100, orbit
+    /// 1M's composite, three rounds: entries ahead 4.92 -> 4.86 ms; the segments' loads too,
+    /// 4.65 to 4.68 -> 4.42 to 4.54, docs/measurements/h100-splat/runs/).
+    Loads {
+        declare: &'static str,
+        issue: &'static str,
+    },
 }
 
 /// Vec4s between the records of a composite's batch in workgroup memory, for records of
@@ -222,8 +238,8 @@ pub(crate) fn emit_composite(
             w.line("let range = vec2<u32>(first, min(first + chunk, whole.y));");
             w.block("if (done)", |w| w.line("atomicAdd(&finished, 1u);"));
             w.line("var end = range.y;");
-            if prefetch {
-                w.comment("The first batch's entry, then each next one's while this one is composited.");
+            if let Prefetch::Loads { declare, issue } = prefetch {
+                w.comment("The first batch's entry and loads, then each next one's while this one is composited.");
                 w.line("var next_k = 0u;");
                 w.line(format!(
                     "let start0 = select(range.x, end - {batch}u, end - range.x > {batch}u);"
@@ -231,13 +247,15 @@ pub(crate) fn emit_composite(
                 w.block("if (start0 + t < end)", |w| {
                     w.line("next_k = tile_sprites[start0 + t];");
                 });
+                w.line(declare);
+                w.block(format!("if (t < {batch}u)"), |w| w.line(issue));
             }
             w.block("while (end > range.x)", |w| {
                 w.line(format!(
                     "let start = select(range.x, end - {batch}u, end - range.x > {batch}u);"
                 ));
                 w.line("let i = start + t;");
-                if prefetch {
+                if let Prefetch::Loads { .. } = prefetch {
                     w.line("let k = next_k;");
                     w.line(format!(
                         "let next_start = select(range.x, start - {batch}u, start - range.x > {batch}u);"
@@ -247,7 +265,7 @@ pub(crate) fn emit_composite(
                     });
                 }
                 w.block("if (i < end)", |w| {
-                    if !prefetch {
+                    if let Prefetch::None = prefetch {
                         w.line("let k = tile_sprites[i];");
                     }
                     load(w);
@@ -262,6 +280,10 @@ pub(crate) fn emit_composite(
                     }
                 });
                 w.line("workgroupBarrier();");
+                if let Prefetch::Loads { issue, .. } = prefetch {
+                    w.comment("The next batch's loads, in flight while this batch's masks are built and walked (a stale next_k, past the slice's front, loads what this batch did).");
+                    w.block(format!("if (t < {batch}u)"), |w| w.line(issue));
+                }
                 if shape.subgroups {
                     emit_line_masks_transposed(w, words, diagonals);
                 } else {

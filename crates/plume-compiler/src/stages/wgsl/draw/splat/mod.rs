@@ -13,7 +13,7 @@
 mod composite;
 mod masks;
 
-pub(crate) use composite::{batch_stride, emit_composite, RecordBatch, SPLAT_BATCH};
+pub(crate) use composite::{batch_stride, emit_composite, Prefetch, RecordBatch, SPLAT_BATCH};
 pub use composite::{splat_slices, SPLAT_PARTIAL_BINDING, SPLAT_SLICES};
 
 use super::{DrawShape, SPLAT_BINDINGS, SPLAT_TILE};
@@ -535,7 +535,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
                 composite::SPLAT_BATCH
             },
             diagonals: additive,
-            prefetch: false,
+            prefetch: composite::Prefetch::None,
         },
         &load,
         &evaluate,
