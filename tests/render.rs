@@ -645,3 +645,88 @@ fn the_splat_grows_its_entry_list_when_a_frame_needs_more() {
     let (mean, max, _) = differences(&draw_gpu(&sim, w, h), &img, 2);
     assert!(mean < 0.5 && max <= 12, "mean {mean}, max {max}");
 }
+
+#[test]
+fn additive_light_composites_the_same_whatever_order_its_lists_hold() {
+    // Additive light's tile lists are placed by atomics in no fixed order (the composite sums
+    // fixed-point light, exactly): the same glowing sprites listed forwards and backwards, 150
+    // of them piled over each other, composite to the same bytes, and the lists hold every
+    // entry.
+    let gpu = gpu();
+    let mut seed = 12345u32;
+    let mut next = || {
+        seed = seed.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+        f64::from(seed >> 8) / f64::from(1u32 << 24) - 0.5
+    };
+    let points: Vec<DVec3> = (0..150)
+        .map(|_| DVec3::new(next() * 1.6, next() * 1.2 + 0.5, next()))
+        .collect();
+    let look = "render: Render(color: [(0.0, (0.9, 0.5, 0.2, 0.35))], size: [(0.0, 4.0)], blend: Additive, background: (0.0, 0.0, 0.0), glow: Some(Glow(threshold: 2.0, strength: 1.5, radius: 0.02))),";
+    let (w, h) = (192, 108);
+    let draw = |points: &[DVec3]| {
+        let sim = simulate(&gpu, compile(&still_points(points, look)), 1);
+        let mut splat = Splat::new(&sim, w, h).unwrap();
+        let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
+        let img = splat.render(&sim, &camera).unwrap();
+        assert!(splat.entries_are_complete().unwrap());
+        (img, draw_gpu_hdr(&sim, w, h))
+    };
+    let (forwards, raster) = draw(&points);
+    let reversed: Vec<DVec3> = points.iter().rev().copied().collect();
+    let (backwards, _) = draw(&reversed);
+    assert!(
+        forwards == backwards,
+        "the order of the sprites changed the image"
+    );
+    // Up to a hundred layers of light, saturated where they pile up, against the raster draw
+    // into a float target (f16 sums, which round each blend: a pixel of many dim layers lands
+    // a few steps off, where a missing sprite would be tens off).
+    let (mean, max, over) = differences(&raster, &forwards, 3);
+    eprintln!("mean {mean}, max {max}, {over} over 3");
+    assert!(
+        mean < 0.5 && max <= 12 && over * 100 < forwards.len(),
+        "mean {mean}, max {max}, {over} over 3"
+    );
+}
+
+#[test]
+fn additive_lists_of_more_tiles_than_a_band_hold_every_entry() {
+    // The additive lists count a workgroup's entries in workgroup memory 4,096 tiles at a
+    // time; a 1,025 x 1,009 image has 65 x 64 = 4,160 tiles (the last column and row a pixel
+    // wide), two bands, and its partial sums stay within llvmpipe's 128 MiB binding. Sprites
+    // spread over the whole image land in both, and the splat draws what the raster draw draws.
+    let gpu = gpu();
+    // Rows of sprites from below the image's bottom edge (the second band's one row of tiles)
+    // to its top.
+    let points: Vec<DVec3> = (0..64)
+        .map(|i| {
+            DVec3::new(
+                f64::from(i % 8) * 1.1 - 3.85,
+                f64::from(i / 8) * 0.95 - 3.4,
+                0.0,
+            )
+        })
+        .collect();
+    let look = "render: Render(color: [(0.0, (0.9, 0.5, 0.2, 0.8))], size: [(0.0, 0.5)], blend: Additive, background: (0.0, 0.0, 0.0), glow: Some(Glow(threshold: 2.0, strength: 1.5, radius: 0.02))),";
+    let sim = simulate(&gpu, compile(&still_points(&points, look)), 1);
+    let (w, h) = (1025, 1009);
+    let mut splat = Splat::new(&sim, w, h).unwrap();
+    let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
+    let img = splat.render(&sim, &camera).unwrap();
+    assert!(splat.entries_are_complete().unwrap());
+    let raster = draw_gpu_hdr(&sim, w, h);
+    let (mean, max, over) = differences(&raster, &img, 3);
+    // Lit pixels in the last row (tiles 4,096 on: the second band) and above it.
+    let last_row = (w * (h - 1) * 4) as usize;
+    let lit = |pixels: &[u8]| pixels.chunks_exact(4).filter(|p| p[0] > 100).count();
+    assert!(
+        lit(&img[last_row..]) > 20,
+        "{} lit in the last row",
+        lit(&img[last_row..])
+    );
+    assert!(lit(&img[..last_row]) > 10_000);
+    assert!(
+        mean < 0.05 && max <= 8 && over * 2000 < img.len(),
+        "mean {mean}, max {max}, {over} over 3"
+    );
+}

@@ -1,5 +1,5 @@
-//! What the splat's groups bind: the tile kernels of `splat.wgsl` and their shared layout, the
-//! bind groups of the generated kernels (buffers, and the sprite texture where there is one),
+//! What the splat's groups bind: the tile kernels of `splat.wgsl` and their shared layout (which
+//! `additive_lists.wgsl` shares too), the bind groups of the generated kernels (buffers, and the sprite texture where there is one),
 //! and the trail module a group's ribbons are drawn from.
 
 use plume_compiler::wgsl::draw::DrawShape;
@@ -11,7 +11,7 @@ use crate::error::RuntimeError;
 
 /// The tile kernels' bindings: (binding, read-only storage?, uniform?), as `splat.wgsl`
 /// declares them.
-const TILE_BINDINGS: [(u32, bool, bool); 10] = [
+const TILE_BINDINGS: [(u32, bool, bool); 11] = [
     (0, true, true),
     (1, true, false),
     (2, true, false),
@@ -22,6 +22,7 @@ const TILE_BINDINGS: [(u32, bool, bool); 10] = [
     (7, false, false),
     (8, false, false),
     (9, true, false),
+    (10, false, false),
 ];
 
 /// The layout every tile kernel shares (each uses a subset).

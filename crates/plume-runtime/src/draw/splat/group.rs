@@ -10,6 +10,7 @@ use plume_compiler::wgsl::draw::{
 };
 use plume_compiler::wgsl::trail;
 
+use super::additive_lists::AdditiveLists;
 use super::binding::{bind, ribbon_module, tile_kernels, tile_layout, uniform};
 use crate::device::buffers::STORAGE;
 use crate::device::gpu::Gpu;
@@ -35,15 +36,17 @@ struct Tiles {
     image: wgpu::Buffer,
     status: wgpu::Buffer,
     boxes: wgpu::Buffer,
+    /// Per tile, the additive lists' counts and then cursors (`additive_lists.wgsl`).
+    cursors: wgpu::Buffer,
 }
 
-/// The entry list of one length: its keys and values, their sort, and the tile kernels'
-/// bind group.
+/// The entry list of one length: its keys and values, their sort (none for additive lists),
+/// and the tile kernels' bind group.
 struct Entries {
     len: u64,
-    /// The sprites of the entries, sorted by tile (kept for [`GroupSplat::entries_are_complete`]).
+    /// The sprites of the entries, by tile (kept for [`GroupSplat::entries_are_complete`]).
     vals: wgpu::Buffer,
-    sort: SortProgram,
+    sort: Option<SortProgram>,
     group: wgpu::BindGroup,
     /// `composite`'s bind group (quads only).
     quads_group: Option<wgpu::BindGroup>,
@@ -95,6 +98,10 @@ pub(crate) struct GroupSplat {
     /// Set for quads that composite; discs use the fixed `raster` kernel.
     quads: Option<QuadRaster>,
     additive: bool,
+    /// Additive light's lists, placed without a sort, where the generated composite sums
+    /// light in fixed point; `None`: sorted lists (alpha, and discs, whose `raster` sums in
+    /// f32).
+    additive_lists: Option<AdditiveLists>,
     background: u32,
 }
 
@@ -211,6 +218,7 @@ impl GroupSplat {
             },
             status: words("splat status", 4),
             boxes: words("tile boxes", 2 * u64::from(count)),
+            cursors: words("tile cursors", u64::from(tiles_x) * u64::from(tiles_y)),
         };
         let [b_view, b_splats, b_counts, b_offsets, b_boxes] = SPLAT_BINDINGS;
         let splat_view = uniform(&gpu, "splat view", &[width, height, tiles_x, count])?;
@@ -282,6 +290,11 @@ impl GroupSplat {
             None => byte(bg.x) | byte(bg.y) << 8 | byte(bg.z) << 16 | 255 << 24,
         };
         let additive = effect.ir.render.blend == plume_compiler::schema::Blend::Additive;
+        // The generated composite sums additive light in fixed point, in any order.
+        let additive_lists = match additive && quads.is_some() {
+            true => Some(AdditiveLists::new(&gpu, &tiles.layout)?),
+            false => None,
+        };
         // A first guess at the entries: a quarter more than the sprites (most touch one tile).
         let first = u64::from(count) + u64::from(count) / 4 + 4096;
         let scan = GpuSorter::new(&gpu).scan_program(&tiles.offsets, u64::from(count))?;
@@ -289,7 +302,7 @@ impl GroupSplat {
             entries: Entries {
                 len: 0,
                 vals: tiles.counts.clone(),
-                sort: GpuSorter::new(&gpu).radix_program(&tiles.counts, &tiles.offsets, 0, 8)?,
+                sort: None,
                 group: project_group.clone(),
                 quads_group: None,
             },
@@ -306,6 +319,7 @@ impl GroupSplat {
             tiles,
             quads,
             additive,
+            additive_lists,
             background,
         };
         splat.resize(first)?;
@@ -331,7 +345,17 @@ impl GroupSplat {
                 mapped_at_creation: false,
             })
         };
-        let (keys, vals) = (make("splat keys"), make("splat vals"));
+        let vals = make("splat vals");
+        // Additive lists have no keys: a word stands in for the binding.
+        let keys = match self.additive_lists {
+            Some(_) => device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("splat keys (unused)"),
+                size: 4,
+                usage: STORAGE,
+                mapped_at_creation: false,
+            }),
+            None => make("splat keys"),
+        };
         let tiles = self.tiles_x * self.tiles_y;
         // Unused entries keep the largest key, whose low bits (all ones) sort after every tile.
         let key_bits = 32 - tiles.leading_zeros();
@@ -359,6 +383,7 @@ impl GroupSplat {
             (7, t.image.clone()),
             (8, t.status.clone()),
             (9, t.boxes.clone()),
+            (10, t.cursors.clone()),
         ];
         let quads_group = self.quads.as_ref().map(|q| {
             let [params, sprites, ranges, _] = SPLAT_RASTER_BINDINGS;
@@ -380,7 +405,10 @@ impl GroupSplat {
         self.entries = Entries {
             len,
             vals: vals.clone(),
-            sort: GpuSorter::new(&self.gpu).radix_program(&keys, &vals, len, key_bits)?,
+            sort: match self.additive_lists {
+                Some(_) => None,
+                None => Some(GpuSorter::new(&self.gpu).radix_program(&keys, &vals, len, key_bits)?),
+            },
             group: bind(&self.gpu, &t.layout, &all),
             quads_group,
         };
@@ -424,6 +452,11 @@ impl GroupSplat {
         let e = &self.entries;
         let (x, y) = self.gpu.grid(u64::from(self.count), 256)?;
         let tiles = u64::from(self.tiles_x) * u64::from(self.tiles_y);
+        if let Some(lists) = &self.additive_lists {
+            if lists.record_stage(&self.gpu, pass, &e.group, stage, self.count, tiles)? {
+                return Ok(());
+            }
+        }
         match stage {
             "project" => {
                 pass.set_pipeline(&self.project);
@@ -439,7 +472,11 @@ impl GroupSplat {
                 pass.set_pipeline(emit);
                 pass.dispatch_workgroups(x, y, 1);
             }
-            "sort" => e.sort.record(pass),
+            "sort" => {
+                if let Some(sort) = &e.sort {
+                    sort.record(pass);
+                }
+            }
             "ranges" => {
                 let (rx, ry) = self.gpu.grid(e.len, 256)?;
                 pass.set_bind_group(0, &e.group, &[]);

@@ -15,7 +15,9 @@
 //! Per group, one compute pass: `project` (each sprite's record and tile count), an exclusive
 //! scan of the counts, one (tile, sprite) entry per tile touched, a stable radix sort of the
 //! entries by tile (so each tile's sprites stay in draw order), each tile's run, then a
-//! workgroup per 16x16 tile composites its sprites front to back ([`group`]). The groups of an
+//! workgroup per 16x16 tile composites its sprites front to back ([`group`]). Additive quads
+//! and ribbons sum their light in fixed point, in any order, so their lists are counted and
+//! placed by tile without a sort ([`additive_lists`]). The groups of an
 //! effect share one image, in group order, each over what the ones before drew. Entries are
 //! sized from the sprites' count and grown when a frame needs more (the frame is then drawn
 //! again). A glowing effect composites into an HDR image and blooms with the raster draw's
@@ -23,6 +25,7 @@
 //! images: an HDR image that keeps each pixel's coverage, every pixel tested against a copy of
 //! the host's depth, put over the host's colour by one full-screen triangle.
 
+mod additive_lists;
 mod binding;
 mod group;
 mod host;

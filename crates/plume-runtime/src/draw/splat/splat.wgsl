@@ -6,7 +6,8 @@
 //   emit:   one (tile, sprite) entry per tile a sprite touches, at the sprite's scanned offset
 //           (a thread per entry),
 //           so entries are in draw order; a stable radix sort by tile then keeps that order
-//           within each tile;
+//           within each tile (additive quads and ribbons, summed in any order, build their
+//           lists with additive_lists.wgsl instead);
 //   ranges: each tile's run of entries;
 //   raster: a workgroup per 16x16 tile, a thread per pixel, composites the tile's sprites
 //           front to back (coverage at the pixel centre, alpha a (1 - r²)², the effect's

@@ -110,7 +110,9 @@ pub(crate) fn batch_stride(vec4s: u32, additive: bool) -> u32 {
 /// rounds to 8 bits once (or stores f16 pairs into an HDR image; for a host's image with each
 /// pixel's coverage, see [`emit_background`]). Alpha: the light that still comes through, T, falls by (1 - a) at each record,
 /// and a pixel stops once T is under half an 8-bit step (what lies behind can no longer change
-/// it); additive into an 8-bit image: a pixel stops once every channel is full. The tile stops
+/// it); additive light is summed in fixed point ([`super::light`]: exact, so the same in any
+/// order, which lets the runtime build additive lists without a sort), and into an 8-bit
+/// image a pixel stops once every channel is full. The tile stops
 /// when all its pixels have. The raster pipeline blends back to front, into an 8-bit target
 /// rounding after every blend; this is the same sum without those roundings (tests/render.rs
 /// measures how far apart they land).
@@ -222,9 +224,13 @@ pub(crate) fn emit_composite(
             w.line("let px = origin.x + lid.x;");
             w.line("let py = origin.y + lid.y;");
             w.line("let centre = vec2<f32>(f32(px) + 0.5, f32(py) + 0.5);");
-            w.comment("Light gathered so far, front to back, and (alpha) the share of what lies behind that still comes through.");
-            w.line("var gathered = vec3<f32>(0.0);");
-            w.line("var through = 1.0;");
+            if additive {
+                super::light::emit_declare(w);
+            } else {
+                w.comment("Light gathered so far, front to back, and the share of what lies behind that still comes through.");
+                w.line("var gathered = vec3<f32>(0.0);");
+                w.line("var through = 1.0;");
+            }
             w.line("var done = px >= splat_tiles.width || py >= splat_tiles.height;");
             w.block("if (t == 0u)", |w| {
                 w.line("batch_range = tile_ranges[tile];");
@@ -318,11 +324,11 @@ pub(crate) fn emit_composite(
                         }
                         if additive && hdr {
                             w.comment("Light adds up past 1 in an HDR image: nothing ever finishes a pixel.");
-                            w.line("gathered += f.rgb * f.a;");
+                            super::light::emit_add(w);
                         } else if additive {
-                            w.line("gathered += f.rgb * f.a;");
+                            super::light::emit_add(w);
                             w.comment("Full on its own: full with whatever else adds to it.");
-                            w.line("done = all(gathered >= vec3<f32>(1.0));");
+                            w.line(format!("done = {};", super::light::full()));
                         } else {
                             w.line("gathered += through * f.a * f.rgb;");
                             w.line("through *= 1.0 - f.a;");
@@ -335,6 +341,9 @@ pub(crate) fn emit_composite(
                         });
                     });
                 });
+                if additive {
+                    super::light::emit_batch_clamp(w, batch);
+                }
                 w.line("end = start;");
                 w.comment("Also the barrier before the next batch overwrites the masks.");
                 w.block(
@@ -347,7 +356,11 @@ pub(crate) fn emit_composite(
             });
             w.block("if (px < splat_tiles.width && py < splat_tiles.height)", |w| {
                 w.line("let pixels = splat_tiles.width * splat_tiles.height;");
-                w.line("partials[wid.z * pixels + py * splat_tiles.width + px] = vec4<f32>(gathered, through);");
+                let partial = match additive {
+                    true => format!("vec4<f32>({}, 1.0)", super::light::as_f32()),
+                    false => "vec4<f32>(gathered, through)".to_string(),
+                };
+                w.line(format!("partials[wid.z * pixels + py * splat_tiles.width + px] = {partial};"));
             });
         },
     );

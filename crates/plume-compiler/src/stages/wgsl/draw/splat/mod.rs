@@ -11,6 +11,7 @@
 //! them, `composite`, is generated here with the effect's own shading.
 
 mod composite;
+mod light;
 mod masks;
 
 pub(crate) use composite::{batch_stride, emit_composite, Prefetch, RecordBatch, SPLAT_BATCH};

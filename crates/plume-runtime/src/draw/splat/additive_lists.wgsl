@@ -1,0 +1,172 @@
+// The tile lists of additive light, built without a sort (not generated: the same for every
+// effect). Additive light is summed in fixed point by the composite, exactly, so the order of a
+// tile's list does not change its pixels; each entry can go wherever its tile's run has room.
+// After `project` has written each sprite's tile box and count:
+//   clear_cursors: every tile's cursor to 0;
+//   count_entries: a workgroup per CHUNK sprites counts their entries per tile in workgroup
+//                  memory, then adds each tile's count to its cursor;
+//   place_runs:    one workgroup turns the counts into each tile's run of entries (in tile
+//                  order: the ranges the composite reads) and each cursor into its run's start;
+//   place:         a workgroup per CHUNK sprites counts again, takes a block of each tile's run
+//                  for them (one atomic add on the cursor a tile), and hands its slots out in
+//                  workgroup memory.
+// Global atomics a tile per workgroup, not per entry: an atomic a (sprite, tile) pair on the
+// cursors took 2.8 ms to count sparks 10M's 53.7M entries on an H100, most tiles' entries
+// falling on a few hundred hot cursors. Workgroup memory holds BAND tiles; an image with more
+// runs the two kernels once per band of tiles (the grid's z).
+// This replaces the sorted lists' scan, emit, radix sort by tile and ranges for additive
+// light (docs/performance.md measures both).
+
+struct Params {
+    width: u32,
+    height: u32,
+    tiles_x: u32,
+    tiles: u32,
+    count: u32,
+    entries: u32,
+    additive: u32,
+    background: u32,
+}
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(3) var<storage, read> tile_counts: array<u32>;
+@group(0) @binding(5) var<storage, read_write> vals: array<u32>;
+@group(0) @binding(6) var<storage, read_write> ranges: array<vec2<u32>>;
+// [0]: entries needed this frame (more than `params.entries` means some were dropped).
+@group(0) @binding(8) var<storage, read_write> status: array<u32>;
+// Each sprite's tiles, as `project` counted them: (x0 | y0 << 16, x1 | y1 << 16).
+@group(0) @binding(9) var<storage, read> tile_boxes: array<vec2<u32>>;
+// Per tile: its entries counted, then where its next entry goes.
+@group(0) @binding(10) var<storage, read_write> cursors: array<atomic<u32>>;
+
+fn index2d(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
+    return gid.x + gid.y * groups.x * 256u;
+}
+
+// Sprite k's tiles, x0, y0, x1, y1 (inclusive); only meaningful where its count is not 0.
+fn tile_box(k: u32) -> vec4<u32> {
+    let packed = tile_boxes[k];
+    return vec4<u32>(packed & vec2<u32>(0xffffu), packed >> vec2<u32>(16u)).xzyw;
+}
+
+@compute @workgroup_size(256)
+fn clear_cursors(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = index2d(gid, groups);
+    if (i < params.tiles) {
+        atomicStore(&cursors[i], 0u);
+    }
+}
+
+// Tiles counted in workgroup memory at once, and sprites a thread (a workgroup's chunk is
+// 256 * PER sprites).
+const BAND: u32 = 4096u;
+const PER: u32 = 4u;
+
+var<workgroup> bins: array<atomic<u32>, 4096>;
+
+// The workgroup's chunk of sprites, counted into `bins` by tile (the band_len tiles from
+// band0 on), after zeroing them.
+fn count_chunk(chunk: u32, t: u32, band0: u32, band_len: u32) {
+    for (var i = t; i < band_len; i += 256u) {
+        atomicStore(&bins[i], 0u);
+    }
+    workgroupBarrier();
+    for (var j = 0u; j < PER; j++) {
+        let k = (chunk * PER + j) * 256u + t;
+        if (k < params.count && tile_counts[k] != 0u) {
+            let b = tile_box(k);
+            for (var y = b.y; y <= b.w; y++) {
+                for (var x = b.x; x <= b.z; x++) {
+                    let bin = y * params.tiles_x + x - band0;
+                    if (bin < band_len) {
+                        atomicAdd(&bins[bin], 1u);
+                    }
+                }
+            }
+        }
+    }
+    workgroupBarrier();
+}
+
+@compute @workgroup_size(256)
+fn count_entries(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+    let band0 = wid.z * BAND;
+    let band_len = min(BAND, params.tiles - band0);
+    count_chunk(wid.x + wid.y * groups.x, t, band0, band_len);
+    for (var i = t; i < band_len; i += 256u) {
+        let n = atomicLoad(&bins[i]);
+        if (n != 0u) {
+            atomicAdd(&cursors[band0 + i], n);
+        }
+    }
+}
+
+var<workgroup> sums: array<u32, 256>;
+
+// Thread t scans its own run of tiles (a 256th of them) and the workgroup scans the 256 sums.
+@compute @workgroup_size(256)
+fn place_runs(@builtin(local_invocation_index) t: u32) {
+    let per = (params.tiles + 255u) / 256u;
+    let first = min(t * per, params.tiles);
+    let last = min(first + per, params.tiles);
+    var own = 0u;
+    for (var i = first; i < last; i++) {
+        own += atomicLoad(&cursors[i]);
+    }
+    sums[t] = own;
+    workgroupBarrier();
+    for (var d = 1u; d < 256u; d *= 2u) {
+        var before = 0u;
+        if (t >= d) {
+            before = sums[t - d];
+        }
+        workgroupBarrier();
+        sums[t] += before;
+        workgroupBarrier();
+    }
+    var start = sums[t] - own;
+    for (var i = first; i < last; i++) {
+        let n = atomicLoad(&cursors[i]);
+        // Entries past the list's end are dropped (and the list grown for the next frame).
+        ranges[i] = vec2<u32>(min(start, params.entries), min(start + n, params.entries));
+        atomicStore(&cursors[i], start);
+        start += n;
+    }
+    if (t == 255u) {
+        status[0] = sums[255];
+    }
+}
+
+@compute @workgroup_size(256)
+fn place(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) t: u32) {
+    let band0 = wid.z * BAND;
+    let band_len = min(BAND, params.tiles - band0);
+    let chunk = wid.x + wid.y * groups.x;
+    count_chunk(chunk, t, band0, band_len);
+    // Each tile's block: where the chunk's entries of it start.
+    for (var i = t; i < band_len; i += 256u) {
+        let n = atomicLoad(&bins[i]);
+        if (n != 0u) {
+            atomicStore(&bins[i], atomicAdd(&cursors[band0 + i], n));
+        }
+    }
+    workgroupBarrier();
+    for (var j = 0u; j < PER; j++) {
+        let k = (chunk * PER + j) * 256u + t;
+        if (k < params.count && tile_counts[k] != 0u) {
+            let b = tile_box(k);
+            for (var y = b.y; y <= b.w; y++) {
+                for (var x = b.x; x <= b.z; x++) {
+                    let bin = y * params.tiles_x + x - band0;
+                    if (bin < band_len) {
+                        let p = atomicAdd(&bins[bin], 1u);
+                        // Entries past the list's end are dropped (the list grows for the next frame).
+                        if (p < params.entries) {
+                            vals[p] = k;
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
