@@ -2,9 +2,10 @@
 //! sort (the runtime places each entry with an atomic, in no fixed order), so the composite
 //! must reach the same sum in any order: each fragment's light is rounded to a whole number of
 //! [`LIGHT_UNITS`] and added as an integer, which is exact and so independent of the order.
-//! It costs four more instructions a fragment than an f32 sum (H100, sparks 10M: the composite
-//! 8.23 -> 8.69 ms) and saves the lists' sort (2.31 -> 1.16 ms; docs/performance.md). Images
-//! move by at most one 8-bit step, in a few hundred of 2.8M channels.
+//! A fragment takes eight instructions where an f32 sum took three (H100, sparks 10M: the
+//! composite 8.23 -> 8.69 ms), and the lists lose their sort (2.31 -> 1.16 ms;
+//! docs/performance.md). Images move by at most one 8-bit step, in a few hundred of 2.8M
+//! channels.
 
 use crate::base::writer::Writer;
 
