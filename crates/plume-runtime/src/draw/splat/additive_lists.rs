@@ -31,7 +31,10 @@ impl AdditiveLists {
         let module = crate::device::gpu::shader_module(
             device,
             "additive lists",
-            include_str!("additive_lists.wgsl"),
+            concat!(
+                include_str!("tiles_shared.wgsl"),
+                include_str!("additive_lists.wgsl")
+            ),
         );
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("additive lists"),

@@ -17,31 +17,8 @@
 // This replaces the sorted lists' scan, emit, radix sort by tile and ranges for additive
 // light (docs/performance.md measures both).
 
-struct Params {
-    width: u32,
-    height: u32,
-    tiles_x: u32,
-    tiles: u32,
-    count: u32,
-    entries: u32,
-    additive: u32,
-    background: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(3) var<storage, read> tile_counts: array<u32>;
-@group(0) @binding(5) var<storage, read_write> vals: array<u32>;
-@group(0) @binding(6) var<storage, read_write> ranges: array<vec2<u32>>;
-// [0]: entries needed this frame (more than `params.entries` means some were dropped).
-@group(0) @binding(8) var<storage, read_write> status: array<u32>;
-// Each sprite's tiles, as `project` counted them: (x0 | y0 << 16, x1 | y1 << 16).
-@group(0) @binding(9) var<storage, read> tile_boxes: array<vec2<u32>>;
 // Per tile: its entries counted, then where its next entry goes.
 @group(0) @binding(10) var<storage, read_write> cursors: array<atomic<u32>>;
-
-fn index2d(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
-    return gid.x + gid.y * groups.x * 256u;
-}
 
 // Sprite k's tiles, x0, y0, x1, y1 (inclusive); only meaningful where its count is not 0.
 fn tile_box(k: u32) -> vec4<u32> {
@@ -64,13 +41,10 @@ const PER: u32 = 4u;
 
 var<workgroup> bins: array<atomic<u32>, 4096>;
 
-// The workgroup's chunk of sprites, counted into `bins` by tile (the band_len tiles from
-// band0 on), after zeroing them.
-fn count_chunk(chunk: u32, t: u32, band0: u32, band_len: u32) {
-    for (var i = t; i < band_len; i += 256u) {
-        atomicStore(&bins[i], 0u);
-    }
-    workgroupBarrier();
+// Each entry of the workgroup's chunk of sprites whose tile is among the band_len tiles from
+// band0 on, in turn: counted into `bins` (`place` false), or (`place` true) given the slot its
+// tile's bin points at, the bin moving on.
+fn sweep_chunk(chunk: u32, t: u32, band0: u32, band_len: u32, place: bool) {
     for (var j = 0u; j < PER; j++) {
         let k = (chunk * PER + j) * 256u + t;
         if (k < params.count && tile_counts[k] != 0u) {
@@ -78,13 +52,31 @@ fn count_chunk(chunk: u32, t: u32, band0: u32, band_len: u32) {
             for (var y = b.y; y <= b.w; y++) {
                 for (var x = b.x; x <= b.z; x++) {
                     let bin = y * params.tiles_x + x - band0;
-                    if (bin < band_len) {
+                    if (bin >= band_len) {
+                        continue;
+                    }
+                    if (!place) {
                         atomicAdd(&bins[bin], 1u);
+                        continue;
+                    }
+                    let p = atomicAdd(&bins[bin], 1u);
+                    // Entries past the list's end are dropped (the list grows for the next frame).
+                    if (p < params.entries) {
+                        vals[p] = k;
                     }
                 }
             }
         }
     }
+}
+
+// The workgroup's chunk counted into `bins` by tile, after zeroing them.
+fn count_chunk(chunk: u32, t: u32, band0: u32, band_len: u32) {
+    for (var i = t; i < band_len; i += 256u) {
+        atomicStore(&bins[i], 0u);
+    }
+    workgroupBarrier();
+    sweep_chunk(chunk, t, band0, band_len, false);
     workgroupBarrier();
 }
 
@@ -151,22 +143,5 @@ fn place(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups:
         }
     }
     workgroupBarrier();
-    for (var j = 0u; j < PER; j++) {
-        let k = (chunk * PER + j) * 256u + t;
-        if (k < params.count && tile_counts[k] != 0u) {
-            let b = tile_box(k);
-            for (var y = b.y; y <= b.w; y++) {
-                for (var x = b.x; x <= b.z; x++) {
-                    let bin = y * params.tiles_x + x - band0;
-                    if (bin < band_len) {
-                        let p = atomicAdd(&bins[bin], 1u);
-                        // Entries past the list's end are dropped (the list grows for the next frame).
-                        if (p < params.entries) {
-                            vals[p] = k;
-                        }
-                    }
-                }
-            }
-        }
-    }
+    sweep_chunk(chunk, t, band0, band_len, true);
 }

@@ -59,7 +59,11 @@ pub(super) fn tile_kernels(
     layout: &wgpu::BindGroupLayout,
 ) -> Result<[wgpu::ComputePipeline; 4], RuntimeError> {
     let device = &gpu.device;
-    let module = crate::device::gpu::shader_module(device, "splat", include_str!("splat.wgsl"));
+    let source = concat!(
+        include_str!("tiles_shared.wgsl"),
+        include_str!("splat.wgsl")
+    );
+    let module = crate::device::gpu::shader_module(device, "splat", source);
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("splat tiles"),
         bind_group_layouts: &[Some(layout)],

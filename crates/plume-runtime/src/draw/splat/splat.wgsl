@@ -16,38 +16,15 @@
 //           dense tile visits its own sprites, not the whole tile's. Quads use the draw
 //           module's generated `composite` and `merge` instead.
 
-struct Params {
-    width: u32,
-    height: u32,
-    tiles_x: u32,
-    tiles: u32,
-    count: u32,
-    entries: u32,
-    additive: u32,
-    background: u32,
-}
-
-@group(0) @binding(0) var<uniform> params: Params;
 // Per sprite (16 bytes): centre x, y in pixels (f32), then (half extent in pixels, alpha) as
 // two f16, then RGB as three 10-bit unorms.
 @group(0) @binding(1) var<storage, read> splats: array<vec4<u32>>;
 @group(0) @binding(2) var<storage, read> offsets: array<u32>;
-@group(0) @binding(3) var<storage, read> tile_counts: array<u32>;
 @group(0) @binding(4) var<storage, read_write> keys: array<u32>;
-@group(0) @binding(5) var<storage, read_write> vals: array<u32>;
-@group(0) @binding(6) var<storage, read_write> ranges: array<vec2<u32>>;
 @group(0) @binding(7) var<storage, read_write> image: array<u32>;
-// [0]: entries needed this frame (more than `params.entries` means some were dropped).
-@group(0) @binding(8) var<storage, read_write> status: array<u32>;
-// Each sprite's tiles, as `project` counted them: (x0 | y0 << 16, x1 | y1 << 16).
-@group(0) @binding(9) var<storage, read> tile_boxes: array<vec2<u32>>;
 
 const TILE: u32 = 16u;
 const UNUSED: u32 = 0xffffffffu;
-
-fn index2d(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
-    return gid.x + gid.y * groups.x * 256u;
-}
 
 // Entries every sprite's tiles take: the last sprite's scanned offset plus its count.
 fn entries_needed() -> u32 {
