@@ -429,8 +429,6 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
     let vec4s = (splat_quad_words(shape.host.is_some()) / 4) as u32;
     let depth = host_depth(shape);
     let stride = composite::batch_stride(vec4s, additive);
-    // The untextured sprite draws only within its disc (`splat_shade` gives nothing outside).
-    let disc = ir.render.texture.is_none();
     let load = |w: &mut Writer| {
         w.comment("The map's rows moved from the record's box corner to the tile's origin (their constant terms absorb the shift) and packed ahead of the colour: (a.xyz, b.x), (b.yz, c.xy), (c.z, rgb), so that a pixel tests the record on nine words, without the corner.");
         w.line(format!("let last = splats[{vec4s}u * k + {}u];", vec4s - 1));
@@ -497,17 +495,10 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         w.comment("s = 1 / w: positive in front of the camera.");
         w.line("let s = dot(r2, p);");
         w.block("if (s <= 0.0)", |w| w.line("continue;"));
-        if disc {
-            w.comment("uv = l / s. The disc (u^2 + v^2 < 1, inside the quad) tested as l . l < s^2: a pixel it misses costs no division, and one in the quad's corners (which adds nothing) is not shaded.");
-            w.line("let l = vec2<f32>(dot(r0, p), dot(r1, p));");
-            w.block("if (dot(l, l) >= s * s)", |w| w.line("continue;"));
-            w.line("let uv = l / s;");
-        } else {
-            w.line("let uv = vec2<f32>(dot(r0, p), dot(r1, p)) / s;");
-            w.block("if (any(abs(uv) >= vec2<f32>(1.0)))", |w| {
-                w.line("continue;")
-            });
-        }
+        w.line("let uv = vec2<f32>(dot(r0, p), dot(r1, p)) / s;");
+        w.block("if (any(abs(uv) >= vec2<f32>(1.0)))", |w| {
+            w.line("continue;")
+        });
         if depth {
             w.comment("NDC depth at the pixel: clip z at uv over w (times s = 1 / w).");
             w.line(format!(
