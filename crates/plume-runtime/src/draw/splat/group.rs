@@ -4,8 +4,8 @@
 //! the groups drawn before it ([`super::Splat`] strings them together).
 
 use plume_compiler::wgsl::draw::{
-    splat_discs, splat_hdr_pitch, splat_quad_words, splat_slices, DrawShape, SplatHost,
-    DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_HOST_DEPTH_BINDING, SPLAT_PARTIAL_BINDING,
+    splat_additive_lists, splat_discs, splat_hdr_pitch, splat_quad_words, splat_slices, DrawShape,
+    SplatHost, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_HOST_DEPTH_BINDING, SPLAT_PARTIAL_BINDING,
     SPLAT_RASTER_BINDINGS, SPLAT_TILE,
 };
 use plume_compiler::wgsl::trail;
@@ -92,7 +92,8 @@ pub(crate) struct GroupSplat {
     draw_view: wgpu::Buffer,
     project: wgpu::ComputePipeline,
     project_group: wgpu::BindGroup,
-    scan: SortProgram,
+    /// The scan of the counts into the entries' offsets (sorted lists only).
+    scan: Option<SortProgram>,
     tiles: Tiles,
     entries: Entries,
     /// Set for quads that composite; discs use the fixed `raster` kernel.
@@ -148,6 +149,9 @@ impl GroupSplat {
             }
         };
         let discs = !ribbons && splat_discs(&effect.ir, hdr);
+        // Additive light summed in fixed point by the generated composite, in any order: its
+        // lists are placed without a sort, from the counts alone (no offsets, no scan).
+        let unsorted = splat_additive_lists(&effect.ir, hdr, ribbons);
         let record_words = match (discs, ribbons) {
             (true, _) => 4,
             // Ribbon segments are made again where they are used, not stored.
@@ -204,7 +208,11 @@ impl GroupSplat {
                 mapped_at_creation: false,
             }),
             splats: words("splats", record_words * u64::from(count)),
-            offsets: words("tile offsets", u64::from(count)),
+            offsets: match unsorted {
+                // A word stands in for the tile kernels' binding.
+                true => words("tile offsets (unused)", 1),
+                false => words("tile offsets", u64::from(count)),
+            },
             counts: words("tile counts", u64::from(count)),
             ranges: words("tile ranges", 2 * u64::from(tiles_x) * u64::from(tiles_y)),
             // An HDR image (the effect glows) holds two words a pixel in rows a copy can take.
@@ -241,9 +249,11 @@ impl GroupSplat {
         }
         entries.extend([
             (b_counts, tiles.counts.clone()),
-            (b_offsets, tiles.offsets.clone()),
             (b_boxes, tiles.boxes.clone()),
         ]);
+        if !unsorted {
+            entries.push((b_offsets, tiles.offsets.clone()));
+        }
         let project = gpu.compute_pipeline(&module, "project", None);
         let texture = match (&effect.ir.render.texture, ribbons, discs) {
             (Some(t), false, false) => Some(SpriteTexture::new(&gpu, t)?),
@@ -290,14 +300,16 @@ impl GroupSplat {
             None => byte(bg.x) | byte(bg.y) << 8 | byte(bg.z) << 16 | 255 << 24,
         };
         let additive = effect.ir.render.blend == plume_compiler::schema::Blend::Additive;
-        // The generated composite sums additive light in fixed point, in any order.
-        let additive_lists = match additive && quads.is_some() {
+        let additive_lists = match unsorted {
             true => Some(AdditiveLists::new(&gpu, &tiles.layout)?),
             false => None,
         };
         // A first guess at the entries: a quarter more than the sprites (most touch one tile).
         let first = u64::from(count) + u64::from(count) / 4 + 4096;
-        let scan = GpuSorter::new(&gpu).scan_program(&tiles.offsets, u64::from(count))?;
+        let scan = match unsorted {
+            true => None,
+            false => Some(GpuSorter::new(&gpu).scan_program(&tiles.offsets, u64::from(count))?),
+        };
         let mut splat = Self {
             entries: Entries {
                 len: 0,
@@ -463,7 +475,11 @@ impl GroupSplat {
                 pass.set_bind_group(0, &self.project_group, &[]);
                 pass.dispatch_workgroups(x, y, 1);
             }
-            "scan" => self.scan.record(pass),
+            "scan" => {
+                if let Some(scan) = &self.scan {
+                    scan.record(pass);
+                }
+            }
             "emit" => {
                 let (cx, cy) = self.gpu.grid(e.len.max(tiles), 256)?;
                 pass.set_bind_group(0, &e.group, &[]);

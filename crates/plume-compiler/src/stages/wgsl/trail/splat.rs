@@ -53,7 +53,9 @@ pub(super) fn emit(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawS
     w.blank();
     emit_segment_record(w);
     w.blank();
-    emit_project_kernel(w, &|w: &mut Writer| {
+    // Additive segments get lists without a sort ([`crate::stages::wgsl::draw::splat_additive_lists`]).
+    let sorted = ir.render.blend != crate::stages::schema::Blend::Additive;
+    emit_project_kernel(w, sorted, &|w: &mut Writer| {
         w.line("let rec = segment_record(k);");
         w.block("if (rec.valid)", |w| {
             w.line("tiles = box_tiles(k, rec.first, rec.last);");

@@ -33,6 +33,14 @@ pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
         && !hdr
 }
 
+/// Whether the splat builds `ir`'s tile lists without a sort, into an `hdr` image or not:
+/// additive light that a generated composite sums in fixed point, the same in any order (quads
+/// and ribbon segments, `ribbons`; not the discs, whose fixed kernel sums in f32 in the lists'
+/// order). Its `project` keeps the counts once, for no scan reads a second copy.
+pub fn splat_additive_lists(ir: &EffectIr, hdr: bool, ribbons: bool) -> bool {
+    ir.render.blend == crate::stages::schema::Blend::Additive && (ribbons || !splat_discs(ir, hdr))
+}
+
 /// Pixels per row of the splat's HDR image (a glowing effect's): the width rounded up to 32,
 /// so that a row of 8-byte pixels is a whole number of 256-byte copy rows and the image can be
 /// copied into the glow's HDR texture as it is.
@@ -231,7 +239,8 @@ pub(crate) fn emit_splat_declarations(
 /// hidden, clipped, or covering no pixel centre). Pixels are square (the projection's aspect is
 /// the image's), so one extent serves both axes.
 pub(crate) fn emit_project(w: &mut Writer) {
-    emit_project_kernel(w, &|w: &mut Writer| {
+    // Discs sum their light in f32, in their sorted lists' order.
+    emit_project_kernel(w, true, &|w: &mut Writer| {
         w.line("let s = sprite_at(k);");
         w.block("if (s.visible)", |w| {
                 w.line("let clip = draw.proj * s.center;");
@@ -258,9 +267,10 @@ pub(crate) fn emit_project(w: &mut Writer) {
 }
 
 /// A `project` kernel: a thread per record k (under `splat_view.count`), `tiles` = 0 until
-/// `body` counts the tiles record k touches (and writes its record), then the count kept twice
-/// (the runtime scans the second copy in place into the entries' offsets).
-pub(crate) fn emit_project_kernel(w: &mut Writer, body: &dyn Fn(&mut Writer)) {
+/// `body` counts the tiles record k touches (and writes its record), then the count kept; for
+/// sorted lists (`offsets`) kept twice: the runtime scans the second copy in place into the
+/// entries' offsets (additive lists are placed from the counts alone, [`splat_additive_lists`]).
+pub(crate) fn emit_project_kernel(w: &mut Writer, offsets: bool, body: &dyn Fn(&mut Writer)) {
     w.line("@compute @workgroup_size(256)");
     w.block(
         "fn project(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
@@ -270,7 +280,9 @@ pub(crate) fn emit_project_kernel(w: &mut Writer, body: &dyn Fn(&mut Writer)) {
             w.line("var tiles = 0u;");
             body(w);
             w.line("tile_counts[k] = tiles;");
-            w.line("tile_offsets[k] = tiles;");
+            if offsets {
+                w.line("tile_offsets[k] = tiles;");
+            }
         },
     );
 }
@@ -354,7 +366,9 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr, host: bool) {
     } else {
         "0u"
     };
-    emit_project_kernel(w, &|w: &mut Writer| {
+    // Quads: additive light gets lists without a sort ([`splat_additive_lists`]).
+    let sorted = ir.render.blend != crate::stages::schema::Blend::Additive;
+    emit_project_kernel(w, sorted, &|w: &mut Writer| {
         w.line("let s = sprite_at(k);");
         w.block("if (s.visible)", |w| {
                 w.line("let size = vec2<f32>(f32(splat_view.width), f32(splat_view.height));");
