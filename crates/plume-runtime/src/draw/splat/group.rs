@@ -5,17 +5,17 @@
 
 use plume_compiler::wgsl::draw::{
     splat_additive_lists, splat_discs, splat_hdr_pitch, splat_quad_words, splat_slices, DrawShape,
-    SplatHost, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_HOST_DEPTH_BINDING, SPLAT_PARTIAL_BINDING,
-    SPLAT_RASTER_BINDINGS, SPLAT_TILE,
+    SplatHost, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_HOST_DEPTH_BINDING, SPLAT_TILE,
 };
 use plume_compiler::wgsl::trail;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::additive_lists::AdditiveLists;
 use super::binding::{bind, ribbon_module, tile_kernels, tile_layout, uniform};
+use super::quad_raster::{MergeTargets, QuadGroups, QuadRaster};
 use crate::device::buffers::STORAGE;
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
-use crate::draw::pipeline::bind_resources;
 use crate::draw::raster::{draw_module, draw_shape, record_draw_view};
 use crate::draw::texture::SpriteTexture;
 use crate::error::RuntimeError;
@@ -48,24 +48,8 @@ struct Entries {
     vals: wgpu::Buffer,
     sort: Option<SortProgram>,
     group: wgpu::BindGroup,
-    /// `composite`'s bind group (quads only).
-    quads_group: Option<wgpu::BindGroup>,
-}
-
-/// What draws quads (every sprite but a round camera-facing one): the effect's generated
-/// `composite` kernel and its texture.
-struct QuadRaster {
-    pipeline: wgpu::ComputePipeline,
-    /// `merge`, which composes the slices' partial sums into the image, and its bind group.
-    merge: (wgpu::ComputePipeline, wgpu::BindGroup),
-    /// Workgroups each tile's list is split over (`splat_slices`).
-    slices: u32,
-    /// The slices' partial sums (a vec4 a pixel and slice).
-    partials: wgpu::Buffer,
-    texture: Option<SpriteTexture>,
-    /// What `composite` reads besides the tile buffers: the records (quads), or what
-    /// `segment_record` reads to make them again (ribbons: the particles, the rings, the view).
-    reads: Vec<(u32, wgpu::Buffer)>,
+    /// `composite`'s bind groups (quads and ribbons only).
+    quads_groups: Option<QuadGroups>,
 }
 
 /// The image a splat draws: its size, whether it is HDR (f16 pairs), and for a host's image
@@ -98,6 +82,9 @@ pub(crate) struct GroupSplat {
     entries: Entries,
     /// Set for quads that composite; discs use the fixed `raster` kernel.
     quads: Option<QuadRaster>,
+    /// Whether the last camera's projection has w independent of view x and y (set by
+    /// `write_view`; picks `QuadRaster::tilted` when not).
+    flat_view: AtomicBool,
     additive: bool,
     /// Additive light's lists, placed without a sort, where the generated composite sums
     /// light in fixed point; `None`: sorted lists (alpha, and discs, whose `raster` sums in
@@ -259,33 +246,16 @@ impl GroupSplat {
             (Some(t), false, false) => Some(SpriteTexture::new(&gpu, t)?),
             _ => None,
         };
-        let quads = match discs {
-            true => None,
-            false => {
-                let pixels = u64::from(width) * u64::from(height);
-                let slices = u64::from(splat_slices(&effect.ir));
-                let partials = words("splat partials", 4 * slices * pixels);
-                let merge = gpu.compute_pipeline(&module, "merge", None);
-                let [params, _, _, image] = SPLAT_RASTER_BINDINGS;
-                let merge_group = bind(
-                    &gpu,
-                    &merge.get_bind_group_layout(0),
-                    &[
-                        (params, tiles.params.clone()),
-                        (SPLAT_PARTIAL_BINDING, partials.clone()),
-                        (image, tiles.image.clone()),
-                    ],
-                );
-                Some(QuadRaster {
-                    slices: splat_slices(&effect.ir),
-                    pipeline: gpu.compute_pipeline(&module, "composite", None),
-                    merge: (merge, merge_group),
-                    partials,
-                    texture,
-                    reads,
-                })
-            }
-        };
+        let quads = (!discs).then(|| {
+            let targets = MergeTargets {
+                params: &tiles.params,
+                image: &tiles.image,
+            };
+            let size = (width, height);
+            QuadRaster::new(
+                &gpu, &module, effect, &shape, ribbons, size, targets, texture, reads,
+            )
+        });
         // `project` uses every binding of its module but `composite`'s, so its derived
         // layout holds the entries above.
         let project_group = bind(&gpu, &project.get_bind_group_layout(0), &entries);
@@ -316,7 +286,7 @@ impl GroupSplat {
                 vals: tiles.counts.clone(),
                 sort: None,
                 group: project_group.clone(),
-                quads_group: None,
+                quads_groups: None,
             },
             gpu,
             width,
@@ -330,6 +300,7 @@ impl GroupSplat {
             scan,
             tiles,
             quads,
+            flat_view: AtomicBool::new(true),
             additive,
             additive_lists,
             background,
@@ -397,23 +368,8 @@ impl GroupSplat {
             (9, t.boxes.clone()),
             (10, t.cursors.clone()),
         ];
-        let quads_group = self.quads.as_ref().map(|q| {
-            let [params, sprites, ranges, _] = SPLAT_RASTER_BINDINGS;
-            let mut buffers = vec![
-                (params, t.params.clone()),
-                (sprites, vals.clone()),
-                (ranges, t.ranges.clone()),
-                (SPLAT_PARTIAL_BINDING, q.partials.clone()),
-            ];
-            buffers.extend(q.reads.iter().cloned());
-            bind_resources(
-                &self.gpu,
-                &q.pipeline.get_bind_group_layout(0),
-                &buffers,
-                q.texture.as_ref(),
-                None,
-            )
-        });
+        let quads_groups =
+            (self.quads.as_ref()).map(|q| q.bind_groups(&self.gpu, &t.params, &vals, &t.ranges));
         self.entries = Entries {
             len,
             vals: vals.clone(),
@@ -422,7 +378,7 @@ impl GroupSplat {
                 None => Some(GpuSorter::new(&self.gpu).radix_program(&keys, &vals, len, key_bits)?),
             },
             group: bind(&self.gpu, &t.layout, &all),
-            quads_group,
+            quads_groups,
         };
         Ok(())
     }
@@ -436,6 +392,8 @@ impl GroupSplat {
         steps: u64,
         size_scale: f32,
     ) -> Result<(), RuntimeError> {
+        let flat = camera.proj.x_axis.w == 0.0 && camera.proj.y_axis.w == 0.0;
+        self.flat_view.store(flat, Ordering::Relaxed);
         record_draw_view(
             &self.gpu,
             encoder,
@@ -499,14 +457,10 @@ impl GroupSplat {
                 pass.set_pipeline(ranges);
                 pass.dispatch_workgroups(rx, ry, 1);
             }
-            "raster" => match (&self.quads, &e.quads_group) {
-                (Some(q), Some(group)) => {
-                    pass.set_bind_group(0, group, &[]);
-                    pass.set_pipeline(&q.pipeline);
-                    pass.dispatch_workgroups(self.tiles_x, self.tiles_y, q.slices);
-                    pass.set_pipeline(&q.merge.0);
-                    pass.set_bind_group(0, &q.merge.1, &[]);
-                    pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
+            "raster" => match (&self.quads, &e.quads_groups) {
+                (Some(q), Some(groups)) => {
+                    let flat = self.flat_view.load(Ordering::Relaxed);
+                    q.record(pass, groups, flat, (self.tiles_x, self.tiles_y));
                 }
                 _ => {
                     pass.set_bind_group(0, &e.group, &[]);

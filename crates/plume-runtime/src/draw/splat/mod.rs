@@ -29,6 +29,7 @@ mod additive_lists;
 mod binding;
 mod group;
 mod host;
+mod quad_raster;
 
 use plume_compiler::wgsl::draw::splat_hdr_pitch;
 use plume_compiler::EffectIr;

@@ -27,9 +27,9 @@ use common::{
 };
 use splat::{emit_project, emit_project_quads, emit_quad_raster, emit_splat_declarations};
 pub use splat::{
-    splat_additive_lists, splat_discs, splat_hdr_pitch, splat_quad_words, splat_slices,
-    HostDepthTest, SplatHost, SPLAT_HOST_DEPTH_BINDING, SPLAT_PARTIAL_BINDING,
-    SPLAT_RASTER_BINDINGS, SPLAT_SLICES,
+    splat_additive_lists, splat_affine_quads, splat_discs, splat_hdr_pitch, splat_quad_words,
+    splat_slices, HostDepthTest, SplatHost, SPLAT_FLAT_VIEW, SPLAT_HOST_DEPTH_BINDING,
+    SPLAT_PARTIAL_BINDING, SPLAT_RASTER_BINDINGS, SPLAT_SLICES,
 };
 
 /// How the runtime binds the particles for drawing. The compiled effect's own draw module is
