@@ -150,3 +150,52 @@ fn the_compute_splat_glows_as_the_raster_draw_does() {
         }
     }
 }
+
+#[test]
+fn the_glows_clamp_bounds_the_halo_and_the_compute_splat_stops_there() {
+    // 400 opaque white sprites stacked: 400 of light at the centre. Unclamped, the halo past
+    // the rim is 400 times the kernel's tail there; with `clamp: 2.0` the stack blooms as light
+    // of 2 does, so a few sigma past the rim it fades out where the unclamped halo is still
+    // full. The splat stops adding light into a pixel at the clamp (the first two sprites
+    // reach it), the raster draw adds all 400 and the bloom clamps what it reads: the same
+    // image either way, to the step the test above allows. (Unclamped, the raster draw's 400
+    // half-float blends round at each one, up to 1/8 of light near 400, and the far halo
+    // takes that error 2 x 400 times the kernel's weight there: 15 steps apart on llvmpipe.)
+    let gpu = gpu();
+    let glow = |clamp: f64| {
+        format!("Some(Glow(threshold: 0.5, strength: 2.0, radius: 0.03, clamp: {clamp:.1}))")
+    };
+    let full = stack(&gpu, 400, 1.0, &glow(65504.0));
+    let clamped = stack(&gpu, 400, 1.0, &glow(2.0));
+    let (full_raster, _) = draw(&full);
+    let (clamped_raster, _) = draw(&clamped);
+    let rim = 7;
+    // Both halos start bright at the rim; 4 pixels (1.3 sigma) further the clamped one fades
+    // while the unclamped one is still saturated.
+    assert!(
+        red(&clamped_raster, rim + 1) > 100,
+        "clamped halo at the rim"
+    );
+    assert_eq!(
+        red(&full_raster, rim + 5),
+        255,
+        "unclamped halo past the rim"
+    );
+    assert!(
+        red(&clamped_raster, rim + 5) < 200,
+        "the clamp bounds the halo: {}",
+        red(&clamped_raster, rim + 5)
+    );
+    let mut splat = Splat::new(&clamped, W, H).unwrap();
+    let camera = clamped.camera(W as f32 / H as f32);
+    let img = splat.render(&clamped, &camera).unwrap();
+    assert!(
+        img == splat.render(&clamped, &camera).unwrap(),
+        "a second frame differs"
+    );
+    let (mean, max, _) = differences(&clamped_raster, &img, 1);
+    eprintln!("clamp 2: splat vs raster: mean {mean:.4}, max {max}");
+    assert!(mean < 0.05 && max <= 2, "clamp 2: mean {mean}, max {max}");
+    // And the splat's halo is the clamped one, not the full one.
+    assert!(red(&img, rim + 5) < 200, "splat: {}", red(&img, rim + 5));
+}

@@ -48,6 +48,7 @@ fn draw_gpu_hdr(sim: &Effect, w: u32, h: u32) -> Vec<u8> {
         threshold: 1e30,
         strength: 0.0,
         radius: 0.01,
+        clamp: 65504.0,
     };
     // A glowing effect blooms as it does in `plume render`.
     let glow = sim.compiled().ir.render.glow.unwrap_or(no_bloom);

@@ -469,6 +469,14 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Re
         c.non_negative(&p.field("strength"), g.strength);
         // A wider blur costs 6 σ texel reads per pixel in each direction.
         c.within(&p.field("radius"), g.radius, 1e-4, 0.05);
+        // Below 1 it would dim the image itself; past f16's largest value the HDR image
+        // clamps anyway.
+        c.within(
+            &p.field("clamp"),
+            g.clamp,
+            1.0,
+            crate::features::looks::glow::GLOW_CLAMP_MOST,
+        );
     }
     if let Some(rotation) = &r.rotation {
         let p = path.field("rotation");

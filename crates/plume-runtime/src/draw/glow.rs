@@ -1,7 +1,7 @@
 //! Bloom for `plume render`'s images (`render.glow`): the effect is drawn into an HDR image
 //! ([`HDR_FORMAT`]); two compute passes ([`glow.wgsl`](glow.wgsl)) blur the light above the
-//! threshold with a separable Gaussian and add it back, clamped, into the RGBA8 image that is
-//! read back. The embedding API leaves post-processing to the host: this is
+//! threshold (at most the glow's clamp) with a separable Gaussian and add it back, clamped,
+//! into the RGBA8 image that is read back. The embedding API leaves post-processing to the host: this is
 //! [`crate::outputs::Offscreen`]'s alone.
 
 use plume_compiler::schema::Glow;
@@ -44,15 +44,18 @@ impl GlowPasses {
     ) -> Result<Self, RuntimeError> {
         let device = &gpu.device;
         let (taps, falloff) = kernel(glow.radius, height);
-        let mut bytes = Vec::with_capacity(16);
+        // `Params` is five words; the buffer is a whole number of 16-byte rows.
+        let mut bytes = Vec::with_capacity(32);
         bytes.extend_from_slice(&(glow.threshold as f32).to_le_bytes());
         bytes.extend_from_slice(&(glow.strength as f32).to_le_bytes());
         bytes.extend_from_slice(&taps.to_le_bytes());
         bytes.extend_from_slice(&falloff.to_le_bytes());
+        bytes.extend_from_slice(&(glow.clamp as f32).to_le_bytes());
+        bytes.resize(32, 0);
         let params = crate::device::buffers::filled_buffer(
             gpu,
             "glow params",
-            16,
+            32,
             wgpu::BufferUsages::UNIFORM,
             |b| b.copy_from_slice(&bytes),
         )?;

@@ -17,6 +17,13 @@ pub struct Glow {
     /// The blur's standard deviation, as a fraction of the image height.
     #[serde(default = "default_glow_radius")]
     pub radius: f64,
+    /// Light above this level (per channel) blooms as this level does (the bloom's clamp):
+    /// where thousands of additive layers pile up, the halo spreads no wider than light at
+    /// this level would. The image shows no light past 1 anyway, so the compute splat stops
+    /// adding light into a pixel once every channel reaches it. The default, f16's largest
+    /// finite value, is the HDR image's own limit: no clamp of its own.
+    #[serde(default = "default_glow_clamp")]
+    pub clamp: f64,
 }
 
 fn default_glow_threshold() -> f64 {
@@ -29,4 +36,11 @@ fn default_glow_strength() -> f64 {
 
 fn default_glow_radius() -> f64 {
     0.01
+}
+
+/// The default `clamp`: f16's largest finite value, the most an HDR image pixel holds.
+pub const GLOW_CLAMP_MOST: f64 = 65504.0;
+
+fn default_glow_clamp() -> f64 {
+    GLOW_CLAMP_MOST
 }

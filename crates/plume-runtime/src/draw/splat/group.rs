@@ -4,8 +4,9 @@
 //! the groups drawn before it ([`super::Splat`] strings them together).
 
 use plume_compiler::wgsl::draw::{
-    splat_additive_lists, splat_discs, splat_hdr_pitch, splat_quad_words, splat_slices, DrawShape,
-    SplatHost, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_HOST_DEPTH_BINDING, SPLAT_TILE,
+    splat_additive_lists, splat_discs, splat_hdr_pitch, splat_light_ceiling, splat_quad_words,
+    splat_slices, DrawShape, SplatHost, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_HOST_DEPTH_BINDING,
+    SPLAT_TILE,
 };
 use plume_compiler::wgsl::trail;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -62,6 +63,9 @@ pub(crate) struct SplatImage {
     pub(crate) host: Option<SplatHost>,
     /// One f32 a pixel (a host whose draw tests depth).
     pub(crate) host_depth: Option<wgpu::Buffer>,
+    /// Light at which an HDR pixel is finished, in the composite's fixed-point units
+    /// (`splat_light_ceiling`: the glow's clamp).
+    pub(crate) light_ceiling: u32,
 }
 
 /// The compute splat of one group into `width` x `height` images.
@@ -91,6 +95,8 @@ pub(crate) struct GroupSplat {
     /// f32).
     additive_lists: Option<AdditiveLists>,
     background: u32,
+    /// [`SplatImage::light_ceiling`].
+    light_ceiling: u32,
 }
 
 /// The splat's stages, in order.
@@ -115,6 +121,8 @@ impl GroupSplat {
             splat: true,
             hdr,
             host: image.host,
+            // Light stops at the glow's clamp where it is below the HDR image's own limit.
+            clamped: hdr && image.light_ceiling < splat_light_ceiling(None),
             // The composite's line masks by subgroup transposes (subgroups of 32 only).
             subgroups: gpu.has_subgroups_of(32),
             ..draw_shape(effect, res)
@@ -190,7 +198,8 @@ impl GroupSplat {
             layout,
             params: device.create_buffer(&wgpu::BufferDescriptor {
                 label: Some("splat params"),
-                size: 32,
+                // Nine words (tiles_shared.wgsl's `Params`), in whole 16-byte rows.
+                size: 48,
                 usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
                 mapped_at_creation: false,
             }),
@@ -304,6 +313,7 @@ impl GroupSplat {
             additive,
             additive_lists,
             background,
+            light_ceiling: image.light_ceiling,
         };
         splat.resize(first)?;
         Ok(splat)
@@ -351,6 +361,7 @@ impl GroupSplat {
             len.min(u64::from(u32::MAX)) as u32,
             u32::from(self.additive),
             self.background,
+            self.light_ceiling,
         ];
         let bytes: Vec<u8> = words.iter().flat_map(|w| w.to_le_bytes()).collect();
         self.gpu.queue.write_buffer(&self.tiles.params, 0, &bytes);

@@ -31,7 +31,7 @@ mod group;
 mod host;
 mod quad_raster;
 
-use plume_compiler::wgsl::draw::splat_hdr_pitch;
+use plume_compiler::wgsl::draw::{splat_hdr_pitch, splat_light_ceiling};
 use plume_compiler::EffectIr;
 
 use crate::device::gpu::Gpu;
@@ -146,6 +146,15 @@ impl Splat {
             hdr,
             host,
             host_depth: host_depth.clone(),
+            // The glow's clamp: light past it blooms as it does, so a pixel there is finished.
+            // A host's image takes the light as it is.
+            light_ceiling: splat_light_ceiling(
+                irs[0]
+                    .render
+                    .glow
+                    .filter(|_| host.is_none())
+                    .map(|g| g.clamp),
+            ),
         };
         let mut parts: Vec<(usize, GroupSplat)> = Vec::with_capacity(irs.len());
         for (g, group) in effect.groups().iter().enumerate() {

@@ -11,6 +11,8 @@ struct Params {
     entries: u32,
     additive: u32,
     background: u32,
+    // Light at which an HDR pixel is finished (the composite's; unused here).
+    light_ceiling: u32,
 }
 
 @group(0) @binding(0) var<uniform> params: Params;

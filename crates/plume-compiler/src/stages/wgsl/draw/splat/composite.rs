@@ -323,7 +323,7 @@ pub(crate) fn emit_composite(
                             w.line("let f = clamp(shaded, vec4<f32>(0.0), vec4<f32>(1.0));");
                         }
                         if additive && hdr {
-                            w.comment("Light adds up past 1 in an HDR image: nothing ever finishes a pixel.");
+                            w.comment("Light adds up past 1 in an HDR image: only the glow's clamp finishes a pixel (tested once a mask word, where there is one).");
                             super::light::emit_add(w);
                         } else if additive {
                             super::light::emit_add(w);
@@ -340,6 +340,10 @@ pub(crate) fn emit_composite(
                             w.line("break;");
                         });
                     });
+                    if additive && hdr && shape.clamped {
+                        super::light::emit_ceiling_test(w);
+                        w.block("if (done)", |w| w.line("atomicAdd(&finished, 1u);"));
+                    }
                 });
                 if additive {
                     super::light::emit_batch_clamp(w, batch);
@@ -434,11 +438,15 @@ fn emit_background(w: &mut Writer, shape: &DrawShape) {
 }
 
 /// Stores `colour` (a WGSL expression) at the pixel: rounded to 8 bits, or as f16 pairs into
-/// an HDR image (clamped to f16's largest finite value: no infinity reaches the bloom), with
+/// an HDR image (clamped to the light's ceiling, [`super::light::splat_light_ceiling`]), with
 /// alpha 1, or for a host's image the pixel's coverage `cover` (a WGSL expression).
 fn emit_store(w: &mut Writer, shape: &DrawShape, colour: &str, cover: &str) {
     if shape.hdr {
-        w.line(format!("let c = min({colour}, vec3<f32>(65504.0));"));
+        w.comment("At most the glow's clamp (or f16's largest finite value: no infinity reaches the bloom): a slice that stopped there leaves the same pixel as one that went on.");
+        w.line(format!(
+            "let c = min({colour}, vec3<f32>({}));",
+            super::light::ceiling_as_f32()
+        ));
         let alpha = match shape.host {
             Some(_) => cover,
             None => "1.0",

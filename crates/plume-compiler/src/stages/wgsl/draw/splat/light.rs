@@ -64,6 +64,35 @@ pub(crate) fn full() -> String {
     format!("all({} >= vec3<u32>({LIGHT_UNITS}u))", units())
 }
 
+/// The light at which an HDR image's pixel is finished, in units (the tile kernels'
+/// `splat_tiles.light_ceiling`): the glow's clamp (`clamp`, at most f16's largest finite
+/// value; validation keeps it in [1, 65504]), past which light blooms as the clamp does and
+/// the image shows 1, so any more light into the pixel changes nothing; or f16's largest
+/// finite value, which the HDR image holds at most (`None`: an image without a glow, such as a
+/// host's, which takes the light as it is).
+pub fn splat_light_ceiling(clamp: Option<f64>) -> u32 {
+    let most = crate::features::looks::glow::GLOW_CLAMP_MOST;
+    let level = clamp.unwrap_or(most).clamp(1.0, most);
+    (level * f64::from(LIGHT_UNITS)).round() as u32
+}
+
+/// Sets `done` when every channel of the pixel's light has reached `splat_tiles.light_ceiling`
+/// ([`splat_light_ceiling`]). Light is never negative, so the pixel's sum over every slice
+/// is past the ceiling too, and the merge's clamp leaves the same pixel whatever the other
+/// records add: the sum stays exact and independent of the order.
+pub(crate) fn emit_ceiling_test(w: &mut Writer) {
+    w.line(format!(
+        "done = all({} >= vec3<u32>(splat_tiles.light_ceiling));",
+        units()
+    ));
+}
+
+/// `splat_tiles.light_ceiling` as f32 light (a WGSL expression). f32 rounding is monotonic, so
+/// a sum of units at or past the ceiling converts to at least this.
+pub(crate) fn ceiling_as_f32() -> String {
+    format!("f32(splat_tiles.light_ceiling) / {LIGHT_UNITS}.0")
+}
+
 /// Clamps `light` after a batch of `batch` records, so that the next batch cannot wrap it.
 pub(crate) fn emit_batch_clamp(w: &mut Writer, batch: u32) {
     w.line(format!(
@@ -108,6 +137,13 @@ mod tests {
             assert!(most <= u64::from(u32::MAX));
             // The ceiling is far past f16's largest finite value.
             assert!(ceiling(batch) / LIGHT_UNITS > 65504);
+            // The light's ceiling stays below the batch clamp: a pixel can reach it.
+            assert!(splat_light_ceiling(None) < ceiling(batch));
         }
+        assert_eq!(splat_light_ceiling(Some(64.0)), 64 * LIGHT_UNITS);
+        assert_eq!(splat_light_ceiling(None), 65504 * LIGHT_UNITS);
+        // Out of range (validation refuses it) is held to [1, 65504], never wraps.
+        assert_eq!(splat_light_ceiling(Some(1e9)), 65504 * LIGHT_UNITS);
+        assert_eq!(splat_light_ceiling(Some(0.0)), LIGHT_UNITS);
     }
 }

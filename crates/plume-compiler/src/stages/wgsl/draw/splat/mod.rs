@@ -17,6 +17,7 @@ mod quads;
 
 pub(crate) use composite::{batch_stride, emit_composite, Prefetch, RecordBatch, SPLAT_BATCH};
 pub use composite::{splat_slices, SPLAT_PARTIAL_BINDING, SPLAT_SLICES};
+pub use light::splat_light_ceiling;
 pub(crate) use quads::{emit_project_quads, emit_quad_raster};
 pub use quads::{splat_affine_quads, SPLAT_FLAT_VIEW};
 
@@ -211,6 +212,7 @@ pub(crate) fn emit_splat_declarations(
             "entries",
             "additive",
             "background",
+            "light_ceiling",
         ] {
             w.line(format!("{field}: u32,"));
         }
