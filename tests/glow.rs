@@ -47,6 +47,20 @@ fn draw(sim: &Effect) -> (Vec<u8>, Vec<u8>) {
     (a, b)
 }
 
+/// The image of `sim` from the compute splat, checked to come out the same in a second frame:
+/// each pixel's light is summed exactly (and stopped at the glow's clamp), whatever the order
+/// of its tile's list.
+fn splat_twice(sim: &Effect) -> Vec<u8> {
+    let mut splat = Splat::new(sim, W, H).unwrap();
+    let camera = sim.camera(W as f32 / H as f32);
+    let img = splat.render(sim, &camera).unwrap();
+    assert!(
+        img == splat.render(sim, &camera).unwrap(),
+        "a second frame differs"
+    );
+    img
+}
+
 /// The red value at `dx` pixels right of the image centre, on its middle row.
 fn red(img: &[u8], dx: u32) -> u8 {
     img[4 * ((H / 2) * W + W / 2 + dx) as usize]
@@ -128,15 +142,7 @@ fn the_compute_splat_glows_as_the_raster_draw_does() {
         );
         assert!(Splat::draws(&sim.compiled().ir));
         let (raster, _) = draw(&sim);
-        let mut splat = Splat::new(&sim, W, H).unwrap();
-        let camera = sim.camera(W as f32 / H as f32);
-        let img = splat.render(&sim, &camera).unwrap();
-        // Each pixel sums its sprites in the tile list's fixed order: the same image every
-        // time.
-        assert!(
-            img == splat.render(&sim, &camera).unwrap(),
-            "a second frame differs"
-        );
+        let img = splat_twice(&sim);
         let (mean, max, _) = differences(&raster, &img, 1);
         eprintln!("{count} x {alpha}: splat vs raster: mean {mean:.4}, max {max}");
         assert!(
@@ -186,13 +192,7 @@ fn the_glows_clamp_bounds_the_halo_and_the_compute_splat_stops_there() {
         "the clamp bounds the halo: {}",
         red(&clamped_raster, rim + 5)
     );
-    let mut splat = Splat::new(&clamped, W, H).unwrap();
-    let camera = clamped.camera(W as f32 / H as f32);
-    let img = splat.render(&clamped, &camera).unwrap();
-    assert!(
-        img == splat.render(&clamped, &camera).unwrap(),
-        "a second frame differs"
-    );
+    let img = splat_twice(&clamped);
     let (mean, max, _) = differences(&clamped_raster, &img, 1);
     eprintln!("clamp 2: splat vs raster: mean {mean:.4}, max {max}");
     assert!(mean < 0.05 && max <= 2, "clamp 2: mean {mean}, max {max}");
