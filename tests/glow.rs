@@ -162,9 +162,10 @@ fn the_glows_clamp_bounds_the_halo_and_the_compute_splat_stops_there() {
     // 400 opaque white sprites stacked: 400 of light at the centre. Unclamped, the halo past
     // the rim is 400 times the kernel's tail there; with `clamp: 2.0` the stack blooms as light
     // of 2 does, so a few sigma past the rim it fades out where the unclamped halo is still
-    // full. The splat stops adding light into a pixel at the clamp (the first two sprites
-    // reach it), the raster draw adds all 400 and the bloom clamps what it reads: the same
-    // image either way, to the step the test above allows. (Unclamped, the raster draw's 400
+    // full. The splat stops adding light into a pixel at the clamp (each slice of a tile's
+    // list once its own sprites reach it), the raster draw adds all 400 and the bloom clamps
+    // what it reads: the same image either way, to the step the test above allows.
+    // (Unclamped, the raster draw's 400
     // half-float blends round at each one, up to 1/8 of light near 400, and the far halo
     // takes that error 2 x 400 times the kernel's weight there: 15 steps apart on llvmpipe.)
     let gpu = gpu();
