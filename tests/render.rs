@@ -649,10 +649,12 @@ fn the_splat_grows_its_entry_list_when_a_frame_needs_more() {
 
 #[test]
 fn additive_light_composites_the_same_whatever_order_its_lists_hold() {
-    // Additive light's tile lists are placed by atomics in no fixed order (the composite sums
-    // fixed-point light, exactly): the same glowing sprites listed forwards and backwards, 150
-    // of them piled over each other, composite to the same bytes, and the lists hold every
-    // entry.
+    // Additive light's tile lists are placed by atomics in no fixed order (the composites sum
+    // fixed-point light, exactly): the same sprites listed forwards and backwards, 150 of them
+    // piled over each other, composite to the same bytes, and the lists hold every entry.
+    // Glowing ones are quads into an HDR image (the generated composite); plain ones are discs
+    // into an 8-bit image (splat.wgsl's raster, each tile's list split over slices whose light
+    // `merge_discs` sums).
     let gpu = gpu();
     let mut seed = 12345u32;
     let mut next = || {
@@ -662,32 +664,46 @@ fn additive_light_composites_the_same_whatever_order_its_lists_hold() {
     let points: Vec<DVec3> = (0..150)
         .map(|_| DVec3::new(next() * 1.6, next() * 1.2 + 0.5, next()))
         .collect();
-    let look = "render: Render(color: [(0.0, (0.9, 0.5, 0.2, 0.35))], size: [(0.0, 4.0)], blend: Additive, background: (0.0, 0.0, 0.0), glow: Some(Glow(threshold: 2.0, strength: 1.5, radius: 0.02))),";
+    let sprites = "render: Render(color: [(0.0, (0.9, 0.5, 0.2, 0.35))], size: [(0.0, 4.0)], blend: Additive, background: (0.0, 0.0, 0.0)";
+    let glowing =
+        format!("{sprites}, glow: Some(Glow(threshold: 2.0, strength: 1.5, radius: 0.02))),");
+    let plain = format!("{sprites}),");
     let (w, h) = (192, 108);
-    let draw = |points: &[DVec3]| {
-        let sim = simulate(&gpu, compile(&still_points(points, look)), 1);
-        let mut splat = Splat::new(&sim, w, h).unwrap();
-        let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
-        let img = splat.render(&sim, &camera).unwrap();
-        assert!(splat.entries_are_complete().unwrap());
-        (img, draw_gpu_hdr(&sim, w, h))
-    };
-    let (forwards, raster) = draw(&points);
-    let reversed: Vec<DVec3> = points.iter().rev().copied().collect();
-    let (backwards, _) = draw(&reversed);
-    assert!(
-        forwards == backwards,
-        "the order of the sprites changed the image"
-    );
-    // Up to a hundred layers of light, saturated where they pile up, against the raster draw
-    // into a float target (f16 sums, which round each blend: a pixel of many dim layers lands
-    // a few steps off, where a missing sprite would be tens off).
-    let (mean, max, over) = differences(&raster, &forwards, 3);
-    eprintln!("mean {mean}, max {max}, {over} over 3");
-    assert!(
-        mean < 0.5 && max <= 12 && over * 100 < forwards.len(),
-        "mean {mean}, max {max}, {over} over 3"
-    );
+    for (look, hdr) in [(glowing, true), (plain, false)] {
+        let draw = |points: &[DVec3]| {
+            let sim = simulate(&gpu, compile(&still_points(points, &look)), 1);
+            let mut splat = Splat::new(&sim, w, h).unwrap();
+            let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
+            let img = splat.render(&sim, &camera).unwrap();
+            assert!(splat.entries_are_complete().unwrap());
+            let raster = match hdr {
+                true => draw_gpu_hdr(&sim, w, h),
+                false => draw_gpu(&sim, w, h),
+            };
+            (img, raster)
+        };
+        let (forwards, raster) = draw(&points);
+        let reversed: Vec<DVec3> = points.iter().rev().copied().collect();
+        let (backwards, _) = draw(&reversed);
+        assert!(
+            forwards == backwards,
+            "the order of the sprites changed the image (hdr {hdr})"
+        );
+        // Up to a hundred layers of light, saturated where they pile up, against the raster
+        // draw, which rounds every blend. Into a float target (f16 sums) a pixel of many dim
+        // layers lands a few steps off. Into an 8-bit one each of those layers is rounded to a
+        // step, and the errors add up: the discs summed in f32 before they were summed in
+        // fixed point landed as far off (mean 0.187, at most 17 steps, 1,486 channels over 3
+        // of 82,944 on llvmpipe), where a missing disc would be about 90 steps off at its
+        // centre and tens around it.
+        let (mean, max, over) = differences(&raster, &forwards, 3);
+        eprintln!("hdr {hdr}: mean {mean}, max {max}, {over} over 3");
+        let (mean_most, max_most, over_share) = if hdr { (0.5, 12, 100) } else { (0.3, 24, 30) };
+        assert!(
+            mean < mean_most && max <= max_most && over * over_share < forwards.len(),
+            "hdr {hdr}: mean {mean}, max {max}, {over} over 3"
+        );
+    }
 }
 
 #[test]

@@ -1,6 +1,7 @@
 //! Additive light's tile lists, placed without a sort: the kernels of `additive_lists.wgsl` and
-//! the stages they take in the splat's order. The generated composite sums additive light in
-//! fixed point (`plume_compiler`'s splat `light`), exactly, so a tile's list may hold its
+//! the stages they take in the splat's order. The composites (the generated one of quads and
+//! ribbon segments, and `splat.wgsl`'s raster of discs) sum additive light in fixed point
+//! (`plume_compiler`'s splat `light`), exactly, so a tile's list may hold its
 //! entries in any order; counting and placing them replaces the scan, emit, radix sort and
 //! ranges of the sorted lists (H100, 1280x720: sparks 10M's lists 2.31 -> 1.16 ms, orbit 1M's
 //! 2.30 -> 1.17; docs/performance.md).

@@ -11,7 +11,7 @@ use crate::error::RuntimeError;
 
 /// The tile kernels' bindings: (binding, read-only storage?, uniform?), as `splat.wgsl`
 /// declares them.
-const TILE_BINDINGS: [(u32, bool, bool); 11] = [
+const TILE_BINDINGS: [(u32, bool, bool); 12] = [
     (0, true, true),
     (1, true, false),
     (2, true, false),
@@ -23,6 +23,7 @@ const TILE_BINDINGS: [(u32, bool, bool); 11] = [
     (8, false, false),
     (9, true, false),
     (10, false, false),
+    (11, false, false),
 ];
 
 /// The layout every tile kernel shares (each uses a subset).
@@ -53,17 +54,20 @@ pub(super) fn tile_layout(gpu: &Gpu) -> wgpu::BindGroupLayout {
         })
 }
 
-/// The four tile kernels of `splat.wgsl` on the shared layout.
+/// The five tile kernels of `splat.wgsl` on the shared layout.
 pub(super) fn tile_kernels(
     gpu: &Gpu,
     layout: &wgpu::BindGroupLayout,
-) -> Result<[wgpu::ComputePipeline; 4], RuntimeError> {
+) -> Result<[wgpu::ComputePipeline; 5], RuntimeError> {
     let device = &gpu.device;
-    let source = concat!(
+    // The fixed point additive discs are summed in, as the generated composites sum light.
+    let source = format!(
+        "{}\n{}{}",
+        plume_compiler::wgsl::draw::splat_light_constants(),
         include_str!("tiles_shared.wgsl"),
         include_str!("splat.wgsl")
     );
-    let module = crate::device::gpu::shader_module(device, "splat", source);
+    let module = crate::device::gpu::shader_module(device, "splat", &source);
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("splat tiles"),
         bind_group_layouts: &[Some(layout)],
@@ -75,6 +79,7 @@ pub(super) fn tile_kernels(
         kernel("emit"),
         kernel("find_ranges"),
         kernel("raster"),
+        kernel("merge_discs"),
     ];
     gpu.take_error()?;
     Ok(kernels)

@@ -6,7 +6,7 @@
 use plume_compiler::wgsl::draw::{
     splat_additive_lists, splat_discs, splat_hdr_pitch, splat_light_ceiling, splat_quad_words,
     splat_slices, DrawShape, SplatHost, DRAW_VIEW_BYTES, SPLAT_BINDINGS, SPLAT_HOST_DEPTH_BINDING,
-    SPLAT_TILE,
+    SPLAT_SLICES, SPLAT_TILE,
 };
 use plume_compiler::wgsl::trail;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -27,8 +27,8 @@ use crate::sort::radix::{GpuSorter, SortProgram};
 /// depend on the number of entries.
 struct Tiles {
     layout: wgpu::BindGroupLayout,
-    /// clear, emit, find_ranges, raster.
-    kernels: [wgpu::ComputePipeline; 4],
+    /// clear, emit, find_ranges, raster, merge_discs.
+    kernels: [wgpu::ComputePipeline; 5],
     params: wgpu::Buffer,
     splats: wgpu::Buffer,
     offsets: wgpu::Buffer,
@@ -39,6 +39,9 @@ struct Tiles {
     boxes: wgpu::Buffer,
     /// Per tile, the additive lists' counts and then cursors (`additive_lists.wgsl`).
     cursors: wgpu::Buffer,
+    /// Additive discs' light from the slices of each tile's list, four words a pixel (a word
+    /// stands in for other groups).
+    disc_light: wgpu::Buffer,
 }
 
 /// The entry list of one length: its keys and values, their sort (none for additive lists),
@@ -90,13 +93,16 @@ pub(crate) struct GroupSplat {
     /// `write_view`; picks `QuadRaster::tilted` when not).
     flat_view: AtomicBool,
     additive: bool,
-    /// Additive light's lists, placed without a sort, where the generated composite sums
-    /// light in fixed point; `None`: sorted lists (alpha, and discs, whose `raster` sums in
-    /// f32).
+    /// Additive light's lists, placed without a sort, where the composites sum light in fixed
+    /// point; `None`: sorted lists (alpha).
     additive_lists: Option<AdditiveLists>,
     background: u32,
     /// [`SplatImage::light_ceiling`].
     light_ceiling: u32,
+    /// Workgroups each tile's list of discs is split over: [`SPLAT_SLICES`] for additive
+    /// discs, whose light `merge_discs` then sums; 1 for alpha discs (and quads, which do not
+    /// use it).
+    disc_slices: u32,
 }
 
 /// The splat's stages, in order.
@@ -144,9 +150,9 @@ impl GroupSplat {
             }
         };
         let discs = !ribbons && splat_discs(&effect.ir, hdr);
-        // Additive light summed in fixed point by the generated composite, in any order: its
+        // Additive light summed in fixed point by the composites, in any order: its
         // lists are placed without a sort, from the counts alone (no offsets, no scan).
-        let unsorted = splat_additive_lists(&effect.ir, hdr, ribbons);
+        let unsorted = splat_additive_lists(&effect.ir);
         let record_words = match (discs, ribbons) {
             (true, _) => 4,
             // Ribbon segments are made again where they are used, not stored.
@@ -154,6 +160,11 @@ impl GroupSplat {
             (false, false) => splat_quad_words(image.host.is_some()),
         };
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
+        // Additive discs: each tile's list split over slices (`splat.wgsl`'s raster), whose
+        // light `merge_discs` sums from four words a pixel.
+        let sliced_discs = discs && unsorted;
+        let disc_slices = if sliced_discs { SPLAT_SLICES } else { 1 };
+        let disc_light_bytes = 16 * u64::from(width) * u64::from(height);
         // Every buffer is bound whole: none may pass the adapter's binding size.
         let limit = gpu.limits.max_storage_buffer_binding_size;
         // Quads and ribbons composite into a vec4 of partial sums a pixel and slice.
@@ -165,7 +176,8 @@ impl GroupSplat {
         };
         let largest = (record_words.max(2) * u64::from(count) * 4)
             .max(8 * u64::from(width) * u64::from(height))
-            .max(partial_bytes);
+            .max(partial_bytes)
+            .max(if sliced_discs { disc_light_bytes } else { 0 });
         if effect.layout.batched {
             return Err(RuntimeError::Unsupported(format!(
                 "{}: a batch is drawn by the raster renderer (Effect::renderer), which turns each instance by its transform",
@@ -223,6 +235,10 @@ impl GroupSplat {
             status: words("splat status", 4),
             boxes: words("tile boxes", 2 * u64::from(count)),
             cursors: words("tile cursors", u64::from(tiles_x) * u64::from(tiles_y)),
+            disc_light: match sliced_discs {
+                true => words("splat disc light", disc_light_bytes / 4),
+                false => words("splat disc light (unused)", 1),
+            },
         };
         let [b_view, b_splats, b_counts, b_offsets, b_boxes] = SPLAT_BINDINGS;
         let splat_view = uniform(&gpu, "splat view", &[width, height, tiles_x, count])?;
@@ -314,6 +330,7 @@ impl GroupSplat {
             additive_lists,
             background,
             light_ceiling: image.light_ceiling,
+            disc_slices,
         };
         splat.resize(first)?;
         Ok(splat)
@@ -378,6 +395,7 @@ impl GroupSplat {
             (8, t.status.clone()),
             (9, t.boxes.clone()),
             (10, t.cursors.clone()),
+            (11, t.disc_light.clone()),
         ];
         let quads_groups =
             (self.quads.as_ref()).map(|q| q.bind_groups(&self.gpu, &t.params, &vals, &t.ranges));
@@ -429,7 +447,7 @@ impl GroupSplat {
         pass: &mut wgpu::ComputePass<'_>,
         stage: &str,
     ) -> Result<(), RuntimeError> {
-        let [clear, emit, ranges, raster] = &self.tiles.kernels;
+        let [clear, emit, ranges, raster, merge_discs] = &self.tiles.kernels;
         let e = &self.entries;
         let (x, y) = self.gpu.grid(u64::from(self.count), 256)?;
         let tiles = u64::from(self.tiles_x) * u64::from(self.tiles_y);
@@ -476,7 +494,12 @@ impl GroupSplat {
                 _ => {
                     pass.set_bind_group(0, &e.group, &[]);
                     pass.set_pipeline(raster);
-                    pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
+                    pass.dispatch_workgroups(self.tiles_x, self.tiles_y, self.disc_slices);
+                    // Additive discs: the slices' light over the image.
+                    if self.additive {
+                        pass.set_pipeline(merge_discs);
+                        pass.dispatch_workgroups(self.tiles_x, self.tiles_y, 1);
+                    }
                 }
             },
             _ => {

@@ -15,9 +15,10 @@
 //! Per group, one compute pass: `project` (each sprite's record and tile count), an exclusive
 //! scan of the counts, one (tile, sprite) entry per tile touched, a stable radix sort of the
 //! entries by tile (so each tile's sprites stay in draw order), each tile's run, then a
-//! workgroup per 16x16 tile composites its sprites front to back ([`group`]). Additive quads
-//! and ribbons sum their light in fixed point, in any order, so their lists are counted and
-//! placed by tile without a sort ([`additive_lists`]). The groups of an
+//! workgroup per 16x16 tile composites its sprites front to back ([`group`]). Additive light
+//! (discs, quads and ribbons) is summed in fixed point, in any order, so its lists are counted
+//! and placed by tile without a sort ([`additive_lists`]), and each tile's list is split over
+//! several workgroups whose sums a merge adds up. The groups of an
 //! effect share one image, in group order, each over what the ones before drew. Entries are
 //! sized from the sprites' count and grown when a frame needs more (the frame is then drawn
 //! again). A glowing effect composites into an HDR image and blooms with the raster draw's

@@ -28,8 +28,9 @@ use common::{
 use splat::{emit_project, emit_project_quads, emit_quad_raster, emit_splat_declarations};
 pub use splat::{
     splat_additive_lists, splat_affine_quads, splat_discs, splat_hdr_pitch, splat_light_ceiling,
-    splat_quad_words, splat_slices, HostDepthTest, SplatHost, SPLAT_FLAT_VIEW,
-    SPLAT_HOST_DEPTH_BINDING, SPLAT_PARTIAL_BINDING, SPLAT_RASTER_BINDINGS, SPLAT_SLICES,
+    splat_light_constants, splat_quad_words, splat_slices, HostDepthTest, SplatHost,
+    SPLAT_FLAT_VIEW, SPLAT_HOST_DEPTH_BINDING, SPLAT_PARTIAL_BINDING, SPLAT_RASTER_BINDINGS,
+    SPLAT_SLICES,
 };
 
 /// How the runtime binds the particles for drawing. The compiled effect's own draw module is
@@ -266,7 +267,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     if shape.splat {
         w.blank();
         if splat_discs(ir, shape.hdr) {
-            emit_project(&mut w);
+            emit_project(&mut w, ir);
         } else {
             emit_project_quads(&mut w, ir, shape.host.is_some());
             w.blank();

@@ -54,7 +54,7 @@ pub(super) fn emit(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawS
     emit_segment_record(w);
     w.blank();
     // Additive segments get lists without a sort ([`crate::stages::wgsl::draw::splat_additive_lists`]).
-    let sorted = ir.render.blend != crate::stages::schema::Blend::Additive;
+    let sorted = !crate::stages::wgsl::draw::splat_additive_lists(ir);
     emit_project_kernel(w, sorted, &|w: &mut Writer| {
         w.line("let rec = segment_record(k);");
         w.block("if (rec.valid)", |w| {

@@ -32,6 +32,20 @@ fn ceiling(batch: u32) -> u32 {
     u32::MAX - batch * (FRAGMENT_MOST + 1)
 }
 
+/// The fixed point's constants as WGSL declarations (`LIGHT_UNITS`, an f32; `ROUNDING` and its
+/// bits `ROUNDING_BITS`), for the runtime's disc kernel (`splat.wgsl`'s raster), which sums
+/// additive discs' light as the generated composites do.
+pub fn splat_light_constants() -> String {
+    let mut w = Writer::new();
+    w.comment(format!(
+        "Additive light in fixed point (the compiler's splat `light`): {LIGHT_UNITS} units a 1.0, each fragment rounded to whole units by adding ROUNDING (1.5 * 2^23) and summed as integers."
+    ));
+    w.line(format!("const LIGHT_UNITS: f32 = {LIGHT_UNITS}.0;"));
+    w.line(format!("const ROUNDING: f32 = {ROUNDING};"));
+    w.line(format!("const ROUNDING_BITS: u32 = {ROUNDING_BITS};"));
+    w.finish()
+}
+
 /// Declares the pixel's light: `var light`, the bits of each fragment's rounded light summed
 /// (three u32s, wrapping), and `var layers`, the fragments summed since the last batch, whose
 /// [`ROUNDING_BITS`] each come off once a batch instead of once a fragment.

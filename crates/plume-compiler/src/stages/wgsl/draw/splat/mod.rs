@@ -17,7 +17,7 @@ mod quads;
 
 pub(crate) use composite::{batch_stride, emit_composite, Prefetch, RecordBatch, SPLAT_BATCH};
 pub use composite::{splat_slices, SPLAT_PARTIAL_BINDING, SPLAT_SLICES};
-pub use light::splat_light_ceiling;
+pub use light::{splat_light_ceiling, splat_light_constants};
 pub(crate) use quads::{emit_project_quads, emit_quad_raster};
 pub use quads::{splat_affine_quads, SPLAT_FLAT_VIEW};
 
@@ -37,12 +37,12 @@ pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
         && !hdr
 }
 
-/// Whether the splat builds `ir`'s tile lists without a sort, into an `hdr` image or not:
-/// additive light that a generated composite sums in fixed point, the same in any order (quads
-/// and ribbon segments, `ribbons`; not the discs, whose fixed kernel sums in f32 in the lists'
-/// order). Its `project` keeps the counts once, for no scan reads a second copy.
-pub fn splat_additive_lists(ir: &EffectIr, hdr: bool, ribbons: bool) -> bool {
-    ir.render.blend == crate::stages::schema::Blend::Additive && (ribbons || !splat_discs(ir, hdr))
+/// Whether the splat builds `ir`'s tile lists without a sort: additive light, which the
+/// composites (the generated one of quads and ribbon segments, and the runtime's disc kernel)
+/// sum in fixed point, the same in any order. Its `project` keeps the counts once, for no
+/// scan reads a second copy.
+pub fn splat_additive_lists(ir: &EffectIr) -> bool {
+    ir.render.blend == crate::stages::schema::Blend::Additive
 }
 
 /// Pixels per row of the splat's HDR image (a glowing effect's): the width rounded up to 32,
@@ -243,9 +243,9 @@ pub(crate) fn emit_splat_declarations(
 /// f16), its RGB (three 10-bit unorms); and how many screen tiles its pixels touch (0 when
 /// hidden, clipped, or covering no pixel centre). Pixels are square (the projection's aspect is
 /// the image's), so one extent serves both axes.
-pub(crate) fn emit_project(w: &mut Writer) {
-    // Discs sum their light in f32, in their sorted lists' order.
-    emit_project_kernel(w, true, &|w: &mut Writer| {
+pub(crate) fn emit_project(w: &mut Writer, ir: &EffectIr) {
+    // Alpha discs blend in their sorted lists' order; additive ones in any.
+    emit_project_kernel(w, !splat_additive_lists(ir), &|w: &mut Writer| {
         w.line("let s = sprite_at(k);");
         w.block("if (s.visible)", |w| {
                 w.line("let clip = draw.proj * s.center;");

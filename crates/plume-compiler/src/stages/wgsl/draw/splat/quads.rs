@@ -50,7 +50,7 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr, host: bool) {
         "0u"
     };
     // Quads: additive light gets lists without a sort ([`splat_additive_lists`]).
-    let sorted = ir.render.blend != crate::stages::schema::Blend::Additive;
+    let sorted = !super::splat_additive_lists(ir);
     emit_project_kernel(w, sorted, &|w: &mut Writer| {
         w.line("let s = sprite_at(k);");
         w.block("if (s.visible)", |w| {
