@@ -59,7 +59,7 @@ fn count_run(n: u32, b: vec4<u32>, band0: u32, band_len: u32) {
 // PER consecutive sprites, in runs whose tile boxes are the same. A ribbon's neighbouring
 // segments mostly share their tiles, and an atomic each on the same bin queued them (H200,
 // orbit 1M: counting 0.375 -> 0.302 ms; placing them in runs too wrote each run's slots in a
-// loop, 0.657 -> 0.727 ms, so `place_chunk` places sprite by sprite).
+// loop, 0.657 -> 0.727 ms, so `place_sweep` places sprite by sprite).
 fn count_sweep(chunk: u32, t: u32, band0: u32, band_len: u32) {
     var run_n = 0u;
     var run_box = vec4<u32>(0u);

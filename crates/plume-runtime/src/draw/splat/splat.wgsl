@@ -167,9 +167,9 @@ var<workgroup> finished: atomic<u32>;
 // comes through, T, falls by (1 - a) at each sprite, and a pixel stops once T is under half an
 // 8-bit step. Additive: light summed in fixed point, in any order, until every channel is full;
 // each tile's list is split over groups.z workgroups (slices), whose light `merge_discs` sums
-// (H200, orbit 1M's discs: the frame 6.19 -> 5.2 ms with 8 slices: a few central tiles hold
-// most of the discs, and one workgroup a tile worked through them alone). The tile stops when
-// all its pixels have.
+// (H200, orbit 1M: the frame 6.19 -> 5.2 ms with 8 slices; its discs pile into the tiles along
+// its rings, and one workgroup a tile worked through each pile alone). The tile stops when all
+// its pixels have.
 // Each batch of 256 sprites is first binned to the pixels their boxes touch (a bit per sprite
 // in each pixel's mask; one tile-wide bit for a box that covers the tile), so a pixel visits
 // only the sprites that may cover it, in descending bit order: front to back.
@@ -300,9 +300,8 @@ fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) l
     }
 }
 
-// Additive discs: a thread per pixel puts the slices' light over the
-// background (or the image the groups before drew), rounds once, and clears the light for the
-// next frame.
+// Additive discs: a thread per pixel puts the slices' light over the background (or the image
+// the groups before drew), rounds once, and clears the light for the next frame.
 @compute @workgroup_size(16, 16)
 fn merge_discs(@builtin(global_invocation_id) gid: vec3<u32>) {
     let px = gid.x;
