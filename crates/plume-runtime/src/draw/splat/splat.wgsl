@@ -281,8 +281,9 @@ fn raster(@builtin(workgroup_id) wid: vec3<u32>, @builtin(local_invocation_id) l
         }
     }
     if (px < params.width && py < params.height && params.additive != 0u) {
-        // The slice's light (at most LIGHT_MOST a channel), summed with the other slices'.
-        let units = light - vec3<u32>(layers * ROUNDING_BITS);
+        // The slice's light in units (each batch took its ROUNDING_BITS off and clamped it to
+        // LIGHT_MOST), summed with the other slices'.
+        let units = light;
         let at = 4u * (py * params.width + px);
         // Most slices of a sparse tile hold nothing for most pixels.
         if (units.x != 0u) {
