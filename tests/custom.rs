@@ -206,6 +206,28 @@ fn stiff_expressions_warn_with_an_estimate() {
 }
 
 #[test]
+fn a_term_that_acts_only_at_spawn_is_no_stiffness_but_one_that_acts_later_is() {
+    // A kick in the first substep: k h = 300 / 120 = 2.5, past the limit, but only once.
+    let kick = compile(&effect(
+        r#"Custom(accel: "select(vec3(0.0, 0.0, 0.0), -300.0 * v, age < 0.5 * dt)")"#,
+        "SemiImplicitEuler",
+        "",
+    ));
+    assert!(kick.warnings.is_empty(), "{}", kick.warnings);
+    // The same damping from half a second of age on acts for the rest of the particle's life.
+    let later = compile(&effect(
+        r#"Custom(accel: "select(vec3(0.0, 0.0, 0.0), -300.0 * v, age > 0.5)")"#,
+        "SemiImplicitEuler",
+        "",
+    ));
+    let text = later.warnings.to_string();
+    assert!(
+        text.contains("k*h = 2.500") && text.contains("estimated"),
+        "{text}"
+    );
+}
+
+#[test]
 fn the_layout_keeps_the_spawn_step_only_for_age_and_life() {
     use plume::compiler::passes::layout::Attribute;
     let plain = compile(&effect(r#"Custom(accel: "-k * x * rand(2)")"#, "Rk4", ""));
