@@ -28,29 +28,9 @@ fn spray_with(shape: &str, count: u32, velocity: &str) -> String {
 }
 
 /// Runs one step on the GPU and in the reference and returns (spawn position, velocity) of
-/// every particle from both, checking that they agree: the triangle is picked by integer
-/// thresholds on both sides, so only the f32 arithmetic of the point differs (a few ulps).
+/// every particle, checking that they agree (see [`common::spawn_states`]).
 fn spawned(src: &str) -> Vec<(DVec3, DVec3)> {
-    let e = compile(src);
-    let (_, gpu) = run_gpu(&e, 1);
-    let (_, cpu) = run_cpu(&e, 1);
-    assert_eq!(gpu.len(), cpu.len());
-    for (g, c) in gpu.iter().zip(&cpu) {
-        assert_eq!(g.id, c.id);
-        assert!(
-            (g.position - c.position).length() <= 16.0 * U32 * (1.0 + c.position.length())
-                && (g.velocity - c.velocity).length() <= 16.0 * U32 * (1.0 + c.velocity.length()),
-            "particle {}: at {:?} moving {:?} on the GPU, at {:?} moving {:?} in f64",
-            g.id,
-            g.position,
-            g.velocity,
-            c.position,
-            c.velocity
-        );
-    }
-    cpu.iter()
-        .map(|c| (c.position - c.velocity * DT, c.velocity))
-        .collect()
+    spawn_states(src, DT)
 }
 
 #[test]

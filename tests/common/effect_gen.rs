@@ -107,12 +107,26 @@ fn shape(flavor: Flavor) -> BoxedStrategy<String> {
     let f = flavor;
     prop_oneof![
         vec3(f, -2.0, 2.0).prop_map(|p| format!("Point({p})")),
-        (vec3(f, -2.0, 2.0), num(f, 0.01, 1.0))
-            .prop_map(|(c, r)| format!("Sphere(center: {c}, radius: {r})")),
-        (vec3(f, -2.0, -0.5), vec3(f, 0.5, 2.0))
-            .prop_map(|(a, b)| format!("Box(min: {a}, max: {b})")),
+        (vec3(f, -2.0, 2.0), num(f, 0.01, 1.0), any::<bool>()).prop_map(|(c, r, on)| format!(
+            "Sphere(center: {c}, radius: {r}, surface: {on})"
+        )),
+        (vec3(f, -2.0, -0.5), vec3(f, 0.5, 2.0), any::<bool>())
+            .prop_map(|(a, b, on)| format!("Box(min: {a}, max: {b}, surface: {on})")),
         (vec3(f, -2.0, 2.0), direction(f), num(f, 0.01, 1.0))
             .prop_map(|(c, n, r)| format!("Disc(center: {c}, normal: {n}, radius: {r})")),
+        (vec3(f, -2.0, 2.0), direction(f), num(f, 0.01, 1.0))
+            .prop_map(|(c, n, r)| format!("Circle(center: {c}, normal: {n}, radius: {r})")),
+        (
+            vec3(f, -2.0, 2.0),
+            direction(f),
+            num(f, 0.0, 2.0),
+            num(f, 0.0, 1.0),
+            num(f, 0.0, 1.0),
+            any::<bool>()
+        )
+            .prop_map(|(b, a, h, r0, r1, on)| format!(
+                "Cone(base: {b}, axis: {a}, height: {h}, base_radius: {r0}, top_radius: {r1}, surface: {on})"
+            )),
         (
             vec3(f, -2.0, -0.5),
             vec3(f, 0.5, 2.0),
@@ -136,6 +150,8 @@ fn velocity(flavor: Flavor) -> BoxedStrategy<String> {
         (direction(f), num(f, 0.0, 60.0), range(f, 0.0, 4.0))
             .prop_map(|(a, ang, s)| format!("Cone(axis: {a}, angle: {ang}, speed: {s})")),
         range(f, 0.0, 4.0).prop_map(|s| format!("Radial(speed: {s})")),
+        (direction(f), range(f, -4.0, 4.0))
+            .prop_map(|(a, s)| format!("Tangent(axis: {a}, speed: {s})")),
     ]
     .boxed()
 }
@@ -146,15 +162,29 @@ fn emitter(flavor: Flavor) -> BoxedStrategy<String> {
         Just(String::new()),
         range(f, 0.5, 3.0).prop_map(|r| format!(", lifetime: Some({r})")),
     ];
+    // When it spawns: mostly from step 0 for ever, sometimes late, for a while, or in
+    // repeating bursts (every >= 0.05 s, above the generated effects' largest dt).
+    let timing = prop_oneof![
+        3 => Just(String::new()),
+        1 => (num(f, 0.0, 0.5), prop::option::of(num(f, 0.05, 1.0))).prop_map(|(start, d)| {
+            let d = d.map_or(String::new(), |d| format!(", duration: Some({d})"));
+            format!(", start: {start}{d}")
+        }),
+        1 => (num(f, 0.05, 0.6), prop::option::of(count(f, 1, 5))).prop_map(|(every, n)| {
+            let n = n.map_or(String::new(), |n| format!(", cycles: Some({n})"));
+            format!(", every: Some({every}){n}")
+        }),
+    ];
     (
         count(f, 1, 24),
         num(f, 0.0, 60.0),
         shape(f),
         velocity(f),
         lifetime,
+        timing,
     )
-        .prop_map(|(burst, rate, shape, vel, life)| {
-            format!("Emitter(burst: {burst}, rate: {rate}, shape: {shape}, velocity: {vel}{life})")
+        .prop_map(|(burst, rate, shape, vel, life, timing)| {
+            format!("Emitter(burst: {burst}, rate: {rate}, shape: {shape}, velocity: {vel}{life}{timing})")
         })
         .boxed()
 }
@@ -715,15 +745,25 @@ pub fn stateless_effect() -> BoxedStrategy<String> {
         velocity(f),
         range(f, 0.05, 2.0),
         any::<bool>(),
+        // Late, for a while, or a burst repeated a few times (every >= dt, below 0.05 s).
+        prop_oneof![
+            2 => Just(String::new()),
+            1 => (num(f, 0.0, 0.5), num(f, 0.05, 1.0))
+                .prop_map(|(start, d)| format!(", start: {start}, duration: Some({d})")),
+            1 => (num(f, 0.05, 0.6), count(f, 1, 5))
+                .prop_map(|(every, n)| format!(", every: Some({every}), cycles: Some({n})")),
+        ],
     )
-        .prop_map(|(burst, rate, shape, vel, life, immortal)| {
+        .prop_map(|(burst, rate, shape, vel, life, immortal, timing)| {
             // Only a burst may live forever: a stream that never dies outgrows any capacity.
             let life = if immortal && rate == "0.0" {
                 String::new()
             } else {
                 format!(", lifetime: Some({life})")
             };
-            format!("Emitter(burst: {burst}, rate: {rate}, shape: {shape}, velocity: {vel}{life})")
+            // A repeating burst needs a burst to repeat.
+            let burst = if timing.contains("every") { burst.max(1) } else { burst };
+            format!("Emitter(burst: {burst}, rate: {rate}, shape: {shape}, velocity: {vel}{life}{timing})")
         });
     (
         any::<u32>(),

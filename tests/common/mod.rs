@@ -122,6 +122,33 @@ pub fn run_gpu(effect: &CompiledEffect, steps: u64) -> (Totals, Vec<ParticleReco
     )
 }
 
+/// Runs one step of `src` (an effect of step `dt`) on the GPU and in the reference and returns
+/// (spawn position, velocity) of every particle, checking that they agree: every spawn draw
+/// is an integer hash, bit-identical on both sides, and a choice between faces or triangles
+/// is made on integers, so only the f32 arithmetic of the point differs (a few ulps).
+pub fn spawn_states(src: &str, dt: f64) -> Vec<(glam::DVec3, glam::DVec3)> {
+    let e = compile(src);
+    let (_, gpu) = run_gpu(&e, 1);
+    let (_, cpu) = run_cpu(&e, 1);
+    assert_eq!(gpu.len(), cpu.len());
+    for (g, c) in gpu.iter().zip(&cpu) {
+        assert_eq!(g.id, c.id);
+        assert!(
+            (g.position - c.position).length() <= 16.0 * U32 * (1.0 + c.position.length())
+                && (g.velocity - c.velocity).length() <= 16.0 * U32 * (1.0 + c.velocity.length()),
+            "particle {}: at {:?} moving {:?} on the GPU, at {:?} moving {:?} in f64",
+            g.id,
+            g.position,
+            g.velocity,
+            c.position,
+            c.velocity
+        );
+    }
+    cpu.iter()
+        .map(|c| (c.position - c.velocity * dt, c.velocity))
+        .collect()
+}
+
 /// Runs `steps` on the CPU reference.
 pub fn run_cpu(effect: &CompiledEffect, steps: u64) -> (Totals, Vec<ParticleRecord>) {
     let mut sim = ReferenceSim::new(&effect.ir);

@@ -46,18 +46,22 @@ impl Checker {
         }
     }
 
-    /// `x` must be finite and > 0.
-    pub fn positive(&mut self, path: &ValuePath, x: f64) {
-        if self.finite(path, x) && x <= 0.0 {
+    /// `x` must be finite and > 0; returns whether it is.
+    pub fn positive(&mut self, path: &ValuePath, x: f64) -> bool {
+        let ok = self.finite(path, x) && x > 0.0;
+        if x.is_finite() && !ok {
             self.error(path, format!("must be > 0, got {x}"));
         }
+        ok
     }
 
-    /// `x` must be finite and >= 0.
-    pub fn non_negative(&mut self, path: &ValuePath, x: f64) {
-        if self.finite(path, x) && x < 0.0 {
+    /// `x` must be finite and >= 0; returns whether it is.
+    pub fn non_negative(&mut self, path: &ValuePath, x: f64) -> bool {
+        let ok = self.finite(path, x) && x >= 0.0;
+        if x.is_finite() && !ok {
             self.error(path, format!("must be >= 0, got {x}"));
         }
+        ok
     }
 
     /// A core radius must be finite, > 0 and no larger than the force's `range`.

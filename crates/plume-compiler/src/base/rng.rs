@@ -51,8 +51,48 @@ pub mod stream {
     pub const PALETTE: u32 = 13;
     /// One draw for the triangle (or the field cell) a mesh spawn shape picks.
     pub const MESH_PICK: u32 = 14;
+    /// One draw for the face a box's surface picks (`Box(surface: true)`).
+    pub const FACE_PICK: u32 = 15;
     /// `rand(k)` in custom expressions draws from stream CUSTOM + k (k <= 255).
     pub const CUSTOM: u32 = 64;
+}
+
+/// One particle's draws, as the f64 twins of the spawn read them: the same words as the WGSL's
+/// `rand_u32(id, stream)` and `rand_unit(id, stream)`.
+#[derive(Clone, Copy, Debug)]
+pub struct ParticleDraws {
+    /// The effect's [`seed_mix`].
+    pub seed_mix: u32,
+    /// The particle's id.
+    pub id: u32,
+}
+
+impl ParticleDraws {
+    /// The raw 32-bit word of `stream`.
+    pub fn word(&self, stream: u32) -> u32 {
+        rand_u32(self.seed_mix, self.id, stream)
+    }
+
+    /// The uniform number in [0, 1) of `stream`.
+    pub fn unit(&self, stream: u32) -> f64 {
+        unit(self.word(stream))
+    }
+
+    /// Three uniform numbers from streams `base`, `base + 1` and `base + 2`.
+    pub fn unit3(&self, base: u32) -> glam::DVec3 {
+        glam::DVec3::new(self.unit(base), self.unit(base + 1), self.unit(base + 2))
+    }
+}
+
+/// The WGSL of three uniform numbers from streams `base` to `base + 2` of particle `id`: the twin
+/// of [`ParticleDraws::unit3`].
+pub fn wgsl_unit3(base: u32) -> String {
+    format!(
+        "vec3<f32>(rand_unit(id, {}u), rand_unit(id, {}u), rand_unit(id, {}u))",
+        base,
+        base + 1,
+        base + 2
+    )
 }
 
 /// Emits the WGSL twin of [`pcg`] as a function called `name` (a module that needs the hash

@@ -152,6 +152,16 @@ pub(crate) fn default_colors() -> Vec<ColorStop> {
     ]
 }
 
+/// `v / |v|`, or zero when `v` is too short to normalise (mirrors the WGSL guard).
+pub fn safe_normalize(v: DVec3) -> DVec3 {
+    let l2 = v.length_squared();
+    if l2 > 1e-20 {
+        v / l2.sqrt()
+    } else {
+        DVec3::ZERO
+    }
+}
+
 /// `(0, 0, 0)`: the serde default of a placement's offset and rotation.
 pub fn origin() -> Vec3 {
     Vec3(0.0, 0.0, 0.0)

@@ -58,8 +58,12 @@ pub const MAX_WINDOW_STEPS: f64 = 20_000.0;
 /// Checks a budget at `path`, for steps of `dt` seconds.
 pub fn check(c: &mut Checker, path: &ValuePath, budget: &Accuracy, dt: f64) {
     match (budget.position, budget.pixels) {
-        (Some(p), None) => c.positive(&path.field("position"), p),
-        (None, Some(p)) => c.positive(&path.field("pixels"), p),
+        (Some(p), None) => {
+            c.positive(&path.field("position"), p);
+        }
+        (None, Some(p)) => {
+            c.positive(&path.field("pixels"), p);
+        }
         (Some(_), Some(_)) => c.error(
             &path.field("pixels"),
             "a budget is in metres (`position`) or on screen (`pixels`), not both",

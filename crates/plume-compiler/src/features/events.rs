@@ -79,13 +79,11 @@ fn at_rest() -> Velocity {
 impl Event {
     /// The spawn rule as an emitter of the target group that never spawns on its own.
     pub fn as_emitter(&self) -> crate::features::emitter::Emitter {
-        crate::features::emitter::Emitter {
-            burst: 0,
-            rate: 0.0,
-            shape: self.shape.clone(),
-            velocity: self.velocity.clone(),
-            lifetime: self.lifetime,
-        }
+        crate::features::emitter::Emitter::idle(
+            self.shape.clone(),
+            self.velocity.clone(),
+            self.lifetime,
+        )
     }
 }
 

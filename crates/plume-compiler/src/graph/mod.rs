@@ -161,7 +161,23 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
     let map = SourceMap::build(source);
     let locate =
         |items: Vec<(Diagnostic, String)>| crate::compile::locate_items(&map, source, items);
-    let effects = group_effects(effect);
+    let mut effects = group_effects(effect);
+    // The events' spawn shapes may name meshes: read before the checks, as the emitters' are.
+    let mut read = Checker::default();
+    for (g, group) in effects.iter_mut().enumerate() {
+        let base_dir = group.base_dir.clone();
+        for (i, ev) in group.events.iter_mut().enumerate() {
+            let at = match g {
+                0 => ValuePath::root(),
+                _ => ValuePath::root().field("groups").index(g - 1),
+            };
+            let path = at.field("events").index(i).field("shape");
+            ev.shape.read_mesh(&path, base_dir.as_deref(), &mut read);
+        }
+    }
+    if !read.errors.is_empty() {
+        return Err(CompileError::Invalid(locate(read.errors)));
+    }
     let (streams, checker, warnings) = check_graph(&effects);
     if !checker.errors.is_empty() {
         return Err(CompileError::Invalid(locate(checker.errors)));
@@ -378,7 +394,7 @@ fn check_event(c: &mut Checker, path: &ValuePath, ev: &Event, group: &Effect) {
         c.positive(&path.field("on").variant("Every").inner(), seconds);
     }
     c.finite(&path.field("inherit_velocity"), ev.inherit_velocity);
-    crate::stages::validate::check_emitter(c, path, &ev.as_emitter(), group.dt);
+    ev.as_emitter().check(c, path, group.dt);
 }
 
 /// A warning when `ev` can never fire in `group`.
@@ -405,6 +421,10 @@ fn never_fires(path: &ValuePath, ev: &Event, group: &Effect) -> Option<(Diagnost
 /// bursts plus its rate over that lifetime (a fed parent: all of it at once); every period,
 /// each live parent once per period.
 fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic, String)> {
+    // A repeating burst counts as a rate of burst / every.
+    let steady_rate = |e: &crate::stages::schema::Emitter| {
+        e.rate + e.every.map_or(0.0, |every| f64::from(e.burst) / every)
+    };
     let longest = |life: Option<crate::stages::schema::Range>| life.map_or(f64::INFINITY, |r| r.1);
     let fed: Vec<bool> = (0..effects.len())
         .map(|g| streams.iter().any(|s| s.child == g))
@@ -413,7 +433,7 @@ fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic,
         let parent = &effects[s.parent];
         let ev = &parent.events[s.out_slot];
         let bursts: f64 = parent.emitters.iter().map(|e| f64::from(e.burst)).sum();
-        let rate: f64 = parent.emitters.iter().map(|e| e.rate).sum();
+        let rate: f64 = parent.emitters.iter().map(steady_rate).sum();
         let child_life = longest(ev.lifetime);
         let firings = match ev.on {
             Trigger::Death | Trigger::Collide if fed[s.parent] => alive[s.parent],
@@ -429,7 +449,7 @@ fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic,
             let own: f64 = e
                 .emitters
                 .iter()
-                .map(|em| f64::from(em.burst) + em.rate * longest(em.lifetime))
+                .map(|em| f64::from(em.burst) + steady_rate(em) * longest(em.lifetime))
                 .sum();
             own.min(f64::from(e.capacity))
         })

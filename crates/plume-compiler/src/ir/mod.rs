@@ -375,6 +375,9 @@ impl fmt::Display for EffectIr {
                 "    [{i}] burst {} rate {}/s lifetime {:?} steps {:?}",
                 e.burst, e.rate, e.lifetime, e.lifetime_steps
             )?;
+            if !e.timing.is_plain() {
+                writeln!(f, "        timing {}", e.timing.describe())?;
+            }
             match &e.shape {
                 // The surface's thresholds and triangles are data, not something to read.
                 ShapeIr::Mesh(m) => writeln!(

@@ -1,14 +1,11 @@
 //! Lowering: a checked [`Effect`] becomes an [`EffectIr`] (f64 vectors, unit directions,
 //! precomputed bases and grid steps, forces as terms). The integrator is still as written.
 
-use glam::DVec3;
-
-use crate::base::lifetime::LifetimeSteps;
 use crate::base::rng::seed_mix;
 use crate::features::accuracy::BudgetCamera;
-use crate::features::forces::{safe_normalize, Force};
-use crate::ir::{Basis, CameraIr, EffectIr, EmitterIr, KillIr, RenderIr, ShapeIr, VelocityIr};
-use crate::stages::schema::{Collider, Effect, KillVolume, Shape, Velocity};
+use crate::features::forces::Force;
+use crate::ir::{CameraIr, EffectIr, KillIr, RenderIr};
+use crate::stages::schema::{Collider, Effect, KillVolume};
 
 /// Lowers a checked effect. Call only after [`crate::stages::validate::check_effect`] found no errors.
 pub fn lower(effect: &Effect) -> EffectIr {
@@ -24,20 +21,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
         seed_mix: seed_mix(effect.seed),
         dt: effect.dt,
         substeps: effect.substeps,
-        emitters: effect
-            .emitters
-            .iter()
-            .map(|e| EmitterIr {
-                burst: e.burst,
-                rate: e.rate,
-                shape: lower_shape(&e.shape),
-                velocity: lower_velocity(&e.velocity),
-                lifetime: e.lifetime.map(|r| (r.0, r.1)),
-                lifetime_steps: e
-                    .lifetime
-                    .and_then(|r| LifetimeSteps::new(r.0, r.1, effect.dt)),
-            })
-            .collect(),
+        emitters: effect.emitters.iter().map(|e| e.lower(effect.dt)).collect(),
         terms: effect
             .forces
             .iter()
@@ -150,73 +134,4 @@ pub fn lower(effect: &Effect) -> EffectIr {
         }
     }
     ir
-}
-
-fn lower_shape(s: &Shape) -> ShapeIr {
-    match s {
-        Shape::Point(p) => ShapeIr::Point(p.d()),
-        Shape::Sphere { center, radius } => ShapeIr::Sphere {
-            center: center.d(),
-            radius: *radius,
-        },
-        Shape::Box { min, max } => ShapeIr::Box {
-            min: min.d(),
-            max: max.d(),
-        },
-        Shape::Disc {
-            center,
-            normal,
-            radius,
-        } => ShapeIr::Disc {
-            center: center.d(),
-            radius: *radius,
-            basis: Basis::around(safe_normalize(normal.d())),
-        },
-        Shape::Grid { min, max, counts } => {
-            let n = [counts.0, counts.1, counts.2];
-            let (lo, hi) = (min.d().to_array(), max.d().to_array());
-            let mut origin = [0.0; 3];
-            let mut step = [0.0; 3];
-            for a in 0..3 {
-                if n[a] == 1 {
-                    origin[a] = 0.5 * (lo[a] + hi[a]);
-                } else {
-                    origin[a] = lo[a];
-                    step[a] = (hi[a] - lo[a]) / f64::from(n[a] - 1);
-                }
-            }
-            ShapeIr::Grid {
-                origin: DVec3::from_array(origin),
-                step: DVec3::from_array(step),
-                counts: n,
-            }
-        }
-        Shape::Points(ps) => ShapeIr::Points(ps.iter().map(|p| p.d()).collect()),
-        Shape::Mesh { surface, .. } => ShapeIr::Mesh(
-            surface
-                .clone()
-                .expect("the checks refuse a Mesh shape whose file was not read"),
-        ),
-    }
-}
-
-fn lower_velocity(v: &Velocity) -> VelocityIr {
-    match v {
-        Velocity::Constant(v) => VelocityIr::Constant(v.d()),
-        Velocity::Cone { axis, angle, speed } => {
-            let axis = safe_normalize(axis.d());
-            VelocityIr::Cone {
-                axis,
-                basis: Basis::around(axis),
-                cos_angle: angle.to_radians().cos(),
-                speed: (speed.0, speed.1),
-            }
-        }
-        Velocity::Radial { speed } => VelocityIr::Radial {
-            speed: (speed.0, speed.1),
-        },
-        Velocity::Normal { speed } => VelocityIr::Normal {
-            speed: (speed.0, speed.1),
-        },
-    }
 }

@@ -1,8 +1,9 @@
 //! The step contract's bookkeeping, shared by the GPU runtime and the CPU reference so both
 //! spawn exactly the same ids at the same steps.
 //!
-//! At step k (time t = k dt): each emitter spawns its burst (k = 0 only) plus the whole part of
-//! its accumulated `rate * dt`, the fractional remainder carried to the next step. Ids are handed
+//! At step k (time t = k dt): each emitter spawns its bursts due at k (its timing's, see
+//! `features/emitter/timing.rs`: the first at its start step) plus, while its rate runs, the
+//! whole part of its accumulated `rate * dt`, the fractional remainder carried to the next step. Ids are handed
 //! out across emitters in the order they are listed, step by step; spawns dropped for lack of
 //! capacity still consume their ids, so ids never depend on what the GPU had free. Bursts
 //! fired from code (`features::bursts`) take the ids after the emitters', up to
@@ -11,6 +12,7 @@
 use std::collections::VecDeque;
 
 use crate::features::bursts::{Burst, PlannedBurst, SLOTS};
+use crate::features::emitter::SpawnTiming;
 use crate::features::forces::noise::TIME_PERIOD;
 use crate::ir::EffectIr;
 
@@ -54,6 +56,9 @@ pub struct Schedule {
     dt: f64,
     bursts: Vec<u32>,
     rates: Vec<f64>,
+    timings: Vec<SpawnTiming>,
+    /// Per emitter, the number of its next burst (how many have fired).
+    next_burst: Vec<u32>,
     carried: Vec<f64>,
     emitted: Vec<u32>,
     next_step: u64,
@@ -76,6 +81,8 @@ impl Schedule {
             dt: ir.dt,
             bursts: ir.emitters.iter().map(|e| e.burst).collect(),
             rates: ir.emitters.iter().map(|e| e.rate).collect(),
+            timings: ir.emitters.iter().map(|e| e.timing).collect(),
+            next_burst: vec![0; ir.emitters.len()],
             carried: vec![0.0; ir.emitters.len()],
             emitted: vec![0; ir.emitters.len()],
             next_step: 0,
@@ -141,15 +148,21 @@ impl Schedule {
         let first_id = self.next_id;
         let mut emitters = Vec::with_capacity(self.rates.len());
         for e in 0..self.rates.len() {
-            let mut count = if step == 0 {
-                u64::from(self.bursts[e])
-            } else {
-                0
-            };
-            self.carried[e] += self.rates[e] * self.dt;
-            let whole = self.carried[e].floor();
-            self.carried[e] -= whole;
-            count = count.saturating_add(whole as u64);
+            let timing = &self.timings[e];
+            let mut count = 0u64;
+            while timing
+                .burst_step(self.next_burst[e])
+                .is_some_and(|due| due <= step)
+            {
+                count = count.saturating_add(u64::from(self.bursts[e]));
+                self.next_burst[e] += 1;
+            }
+            if timing.rate_runs(step) {
+                self.carried[e] += self.rates[e] * self.dt;
+                let whole = self.carried[e].floor();
+                self.carried[e] -= whole;
+                count = count.saturating_add(whole as u64);
+            }
             let count = count.min(u64::from(u32::MAX - self.next_id)) as u32;
             emitters.push((count, self.emitted[e]));
             self.emitted[e] = self.emitted[e].wrapping_add(count);
@@ -189,10 +202,20 @@ impl Schedule {
         }
     }
 
-    /// Skips `n` steps at once when they can spawn nothing (every rate is 0 and step 0's bursts
-    /// are done), as stepping them would; returns false, skipping nothing, otherwise.
+    /// Skips `n` steps at once when no step from now on can spawn anything (every rate is 0 or
+    /// has ended, every burst has fired), as stepping them would; returns false, skipping
+    /// nothing, otherwise.
     pub fn skip_idle(&mut self, n: u64) -> bool {
-        if self.next_step == 0 || !self.pending.is_empty() || self.rates.iter().any(|&r| r > 0.0) {
+        if self.next_step == 0 || !self.pending.is_empty() {
+            return false;
+        }
+        let step = self.next_step;
+        let spawns_later = |e: usize| {
+            let timing = &self.timings[e];
+            (self.rates[e] > 0.0 && timing.rate_runs_after(step))
+                || (self.bursts[e] > 0 && timing.burst_step(self.next_burst[e]).is_some())
+        };
+        if (0..self.rates.len()).any(spawns_later) {
             return false;
         }
         self.next_step = self.next_step.saturating_add(n);

@@ -5,7 +5,7 @@
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::features::forces::force_path;
-use crate::stages::schema::{Effect, Emitter, KillVolume, Orient, Shape, Velocity};
+use crate::stages::schema::{Effect, KillVolume, Orient};
 
 /// The most emitters an effect may have: each takes 16 bytes of the per-step uniform, and
 /// 16 + 16 x 1023 bytes is the 16 KiB every WebGPU adapter must allow in a uniform binding.
@@ -65,7 +65,7 @@ pub fn check_effect(effect: &Effect) -> Checker {
         c.error(&root.field("substeps"), "must be >= 1, got 0");
     }
     for (i, e) in effect.emitters.iter().enumerate() {
-        check_emitter(&mut c, &root.field("emitters").index(i), e, effect.dt);
+        e.check(&mut c, &root.field("emitters").index(i), effect.dt);
     }
     let noisy = effect
         .forces
@@ -194,140 +194,6 @@ fn check_params(c: &mut Checker, path: &ValuePath, effect: &Effect) {
     }
 }
 
-pub(crate) fn check_emitter(c: &mut Checker, path: &ValuePath, e: &Emitter, dt: f64) {
-    c.non_negative(&path.field("rate"), e.rate);
-    let shape = path.field("shape");
-    match &e.shape {
-        Shape::Point(p) => {
-            c.vec3(&shape.variant("Point").inner(), *p);
-        }
-        Shape::Sphere { center, radius } => {
-            let s = shape.variant("Sphere");
-            c.vec3(&s.field("center"), *center);
-            c.non_negative(&s.field("radius"), *radius);
-        }
-        Shape::Box { min, max } => c.box_corners(&shape.variant("Box"), *min, *max),
-        Shape::Disc {
-            center,
-            normal,
-            radius,
-        } => {
-            let s = shape.variant("Disc");
-            c.vec3(&s.field("center"), *center);
-            c.direction(&s.field("normal"), *normal);
-            c.non_negative(&s.field("radius"), *radius);
-        }
-        Shape::Grid { min, max, counts } => {
-            let s = shape.variant("Grid");
-            c.box_corners(&s, *min, *max);
-            let n = [counts.0, counts.1, counts.2];
-            if n.contains(&0) {
-                c.error(
-                    &s.field("counts"),
-                    format!(
-                        "every count must be >= 1, got ({}, {}, {})",
-                        n[0], n[1], n[2]
-                    ),
-                );
-            } else if n
-                .iter()
-                .try_fold(1u64, |acc, &k| acc.checked_mul(u64::from(k)))
-                .is_none_or(|total| total > u64::from(u32::MAX))
-            {
-                c.error(&s.field("counts"), "holds more than 4294967295 points");
-            }
-        }
-        Shape::Points(ps) => {
-            let s = shape.variant("Points");
-            if ps.is_empty() {
-                c.error(&s, "must list at least one point");
-            }
-            for (i, p) in ps.iter().enumerate() {
-                c.vec3(&s.inner().index(i), *p);
-            }
-        }
-        Shape::Mesh {
-            offset,
-            scale,
-            rotation,
-            volume,
-            resolution,
-            surface,
-            ..
-        } => {
-            let s = shape.variant("Mesh");
-            let placed = crate::base::mesh::check_placement(&s, c, (*offset, *scale, *rotation));
-            let max = crate::base::sdf::MAX_RESOLUTION;
-            if *volume && !(4..=max).contains(resolution) {
-                c.error(
-                    &s.field("resolution"),
-                    format!("resolution is the field cells along the mesh's longest side, 4 to {max}, got {resolution}"),
-                );
-            } else if placed && *scale > 0.0 && surface.is_none() {
-                c.error(&s.field("file"), "the mesh was not read");
-            }
-            if *volume && matches!(e.velocity, Velocity::Normal { .. }) {
-                c.error(
-                    &path.field("velocity").variant("Normal"),
-                    "a particle spawned in a mesh's volume has no surface normal: use Radial (away from the mesh's centre) or Cone",
-                );
-            }
-        }
-    }
-    let vel = path.field("velocity");
-    match &e.velocity {
-        Velocity::Constant(v) => {
-            c.vec3(&vel.variant("Constant").inner(), *v);
-        }
-        Velocity::Cone { axis, angle, speed } => {
-            let v = vel.variant("Cone");
-            c.direction(&v.field("axis"), *axis);
-            c.within(&v.field("angle"), *angle, 0.0, 180.0);
-            check_speed(c, &v.field("speed"), *speed);
-        }
-        Velocity::Radial { speed } => {
-            check_speed(c, &vel.variant("Radial").field("speed"), *speed);
-        }
-        Velocity::Normal { speed } => {
-            let v = vel.variant("Normal");
-            check_speed(c, &v.field("speed"), *speed);
-            if !matches!(e.shape, Shape::Mesh { .. }) {
-                c.error(
-                    &v,
-                    "Normal follows the surface a particle spawns on: it needs a `Mesh` shape (use Radial or Cone for other shapes)",
-                );
-            }
-        }
-    }
-    if let Some(life) = e.lifetime {
-        let p = path.field("lifetime");
-        if c.range(&p, life) {
-            if life.0 <= 0.0 {
-                c.error(
-                    &p.component(0, "min"),
-                    format!("must be > 0 seconds, got {}", life.0),
-                );
-            } else if dt > 0.0
-                && crate::base::lifetime::LifetimeSteps::new(life.0, life.1, dt).is_none()
-            {
-                c.error(
-                    &p.component(1, "max"),
-                    format!("is more than 2^31 steps of dt = {dt} s, got {}", life.1),
-                );
-            }
-        }
-    }
-}
-
-fn check_speed(c: &mut Checker, path: &ValuePath, speed: crate::stages::schema::Range) {
-    if c.range(path, speed) && speed.0 < 0.0 {
-        c.error(
-            &path.component(0, "min"),
-            format!("must be >= 0 m/s, got {}", speed.0),
-        );
-    }
-}
-
 fn check_stop_times(c: &mut Checker, path: &ValuePath, times: &[f64]) {
     if times.is_empty() {
         c.error(path, "must list at least one stop");
@@ -451,7 +317,7 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Re
         }
         match t.play {
             crate::stages::schema::Play::Rate(fps) => {
-                c.positive(&texture.field("play").variant("Rate").inner(), fps)
+                c.positive(&texture.field("play").variant("Rate").inner(), fps);
             }
             crate::stages::schema::Play::OverLife if t.random_start => c.error(
                 &texture.field("random_start"),

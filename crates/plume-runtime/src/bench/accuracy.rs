@@ -77,6 +77,7 @@ pub fn measured_effect(effect: &Effect) -> Effect {
             em.burst = ((em.rate * 0.1).round() as u32).max(1);
         }
         em.rate = 0.0;
+        (em.start, em.duration, em.every, em.cycles) = (0.0, None, None, None);
     }
     let total: u64 = e.emitters.iter().map(|em| u64::from(em.burst)).sum();
     e.capacity = e.capacity.max(total.min(u64::from(u32::MAX)) as u32);

@@ -211,18 +211,20 @@ fn plain_graph(big: &Effect, groups: &[(String, u32, u64)]) -> Result<CompiledGr
         plain.capacity = *cap;
         plain.emitters = vec![Emitter {
             burst: (*alive).min(u64::from(*cap)) as u32,
-            rate: 0.0,
-            shape: Shape::Sphere {
-                center: PLAIN_CENTRE,
-                radius: 3.0,
-            },
-            velocity: Velocity::Constant(Vec3(0.0, 0.0, 0.0)),
-            // Mortal (as the groups' particles are, so the same death test runs), but not
-            // within the run.
-            lifetime: Some(plume_compiler::schema::Range(
-                PLAIN_LIFETIME,
-                PLAIN_LIFETIME,
-            )),
+            ..Emitter::idle(
+                Shape::Sphere {
+                    center: PLAIN_CENTRE,
+                    radius: 3.0,
+                    surface: false,
+                },
+                Velocity::Constant(Vec3(0.0, 0.0, 0.0)),
+                // Mortal (as the groups' particles are, so the same death test runs), but not
+                // within the run.
+                Some(plume_compiler::schema::Range(
+                    PLAIN_LIFETIME,
+                    PLAIN_LIFETIME,
+                )),
+            )
         }];
         // Stateful as the original (events made it so).
         plain.state = plume_compiler::schema::State::Stateful;

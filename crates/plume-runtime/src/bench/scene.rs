@@ -58,6 +58,8 @@ pub fn bench_effect_occupied(effect: &Effect, capacity: u32, live: u32) -> Effec
         };
         em.burst = share;
         em.rate = 0.0;
+        // All of it at step 0, once.
+        (em.start, em.duration, em.every, em.cycles) = (0.0, None, None, None);
         given += share;
         if em.lifetime.is_some() {
             em.lifetime = Some(plume_compiler::schema::Range(1.0e6, 1.0e6));
@@ -70,9 +72,12 @@ fn shape_centre(shape: &plume_compiler::schema::Shape) -> glam::DVec3 {
     use plume_compiler::schema::Shape;
     match shape {
         Shape::Sphere { center, .. } => center.d(),
-        Shape::Box { min, max } => (min.d() + max.d()) * 0.5,
+        Shape::Box { min, max, .. } => (min.d() + max.d()) * 0.5,
         Shape::Point(p) => p.d(),
-        Shape::Disc { center, .. } => center.d(),
+        Shape::Disc { center, .. } | Shape::Circle { center, .. } => center.d(),
+        Shape::Cone {
+            base, axis, height, ..
+        } => base.d() + axis.d().normalize_or_zero() * (0.5 * height),
         Shape::Grid { min, max, .. } => (min.d() + max.d()) * 0.5,
         Shape::Points(ps) => ps.iter().map(|p| p.d()).sum::<glam::DVec3>() / ps.len().max(1) as f64,
         Shape::Mesh { offset, .. } => offset.d(),
@@ -88,11 +93,11 @@ fn scale_shape(shape: &mut plume_compiler::schema::Shape, scale: f64, about: gla
         Vec3(q.x, q.y, q.z)
     };
     match shape {
-        Shape::Sphere { center, radius } => {
+        Shape::Sphere { center, radius, .. } => {
             *center = map(center.d());
             *radius *= scale;
         }
-        Shape::Box { min, max } => {
+        Shape::Box { min, max, .. } => {
             *min = map(min.d());
             *max = map(max.d());
         }

@@ -1,9 +1,15 @@
-//! Emitters: where and how fast particles spawn. The schema (`Emitter`, `Shape`, `Velocity`)
-//! and its lowered form (`EmitterIr`, `ShapeIr`, `VelocityIr`), which events reuse for the
-//! particles they spawn and custom forces read for their stiffness estimates.
+//! Emitters: when, where and how fast particles spawn. The schema (`Emitter`, `Shape`,
+//! `Velocity`), its checks and its lowered form (`EmitterIr`, `ShapeIr`, `VelocityIr`), which
+//! events reuse for the particles they spawn and custom forces read for their stiffness
+//! estimates. Each part owns its WGSL and its f64 twin: `shape_ir.rs` where particles start,
+//! `velocity.rs` how they move off, `timing.rs` at which steps they spawn.
+
+mod shape;
+mod shape_ir;
+mod timing;
+mod velocity;
 
 use std::path::Path;
-use std::sync::Arc;
 
 use glam::DVec3;
 use serde::Deserialize;
@@ -11,19 +17,37 @@ use serde::Deserialize;
 use crate::base::check::Checker;
 use crate::base::lifetime::LifetimeSteps;
 use crate::base::path::ValuePath;
-use crate::base::values::{Counts, Range, Vec3};
-use crate::features::mesh_emission::{place, MeshSurface};
+use crate::base::rng::ParticleDraws;
+use crate::base::values::Range;
+use crate::base::writer::Writer;
+
+pub use shape::Shape;
+pub use shape_ir::{box_face_thresholds, ShapeIr};
+pub use timing::SpawnTiming;
+pub use velocity::{Velocity, VelocityIr};
 
 /// One particle source.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Emitter {
-    /// Particles spawned once, at step 0.
+    /// Particles spawned at once when the emitter starts (and again every `every` seconds).
     #[serde(default)]
     pub burst: u32,
     /// Particles per second; the fractional remainder carries to the next step.
     #[serde(default)]
     pub rate: f64,
+    /// Seconds before the emitter starts spawning.
+    #[serde(default)]
+    pub start: f64,
+    /// Seconds it spawns for, from `start`; `None`: for ever.
+    #[serde(default)]
+    pub duration: Option<f64>,
+    /// Seconds between repeats of the burst; `None`: it fires once.
+    #[serde(default)]
+    pub every: Option<f64>,
+    /// How many times a repeating burst fires; `None`: for as long as the emitter runs.
+    #[serde(default)]
+    pub cycles: Option<u32>,
     /// Where particles start.
     pub shape: Shape,
     /// How fast and where they start moving.
@@ -33,110 +57,15 @@ pub struct Emitter {
     pub lifetime: Option<Range>,
 }
 
-/// Spawn positions.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub enum Shape {
-    /// Every particle at one point.
-    Point(Vec3),
-    /// Uniform in the ball's volume.
-    Sphere {
-        /// Centre of the ball.
-        center: Vec3,
-        /// Radius (>= 0).
-        radius: f64,
-    },
-    /// Uniform in an axis-aligned box.
-    Box {
-        /// Lower corner.
-        min: Vec3,
-        /// Upper corner.
-        max: Vec3,
-    },
-    /// Uniform in a flat disc.
-    Disc {
-        /// Centre of the disc.
-        center: Vec3,
-        /// The disc's normal (any length but zero).
-        normal: Vec3,
-        /// Radius (>= 0).
-        radius: f64,
-    },
-    /// Deterministic lattice points, handed out in x-then-y-then-z order.
-    Grid {
-        /// First lattice corner.
-        min: Vec3,
-        /// Last lattice corner.
-        max: Vec3,
-        /// Points per axis (>= 1 each).
-        counts: Counts,
-    },
-    /// Listed points, handed out in order.
-    Points(Vec<Vec3>),
-    /// Uniform by area on a mesh's surface, or in its volume (see
-    /// [`crate::features::mesh_emission`]).
-    Mesh {
-        /// The OBJ file, relative to the effect file.
-        file: String,
-        /// Where the mesh's origin sits in the world (m).
-        #[serde(default = "crate::base::values::origin")]
-        offset: Vec3,
-        /// The mesh's size against the world's (> 0).
-        #[serde(default = "crate::base::values::unit_scale")]
-        scale: f64,
-        /// Degrees about x, then y, then z (the world's axes).
-        #[serde(default = "crate::base::values::origin")]
-        rotation: Vec3,
-        /// Spawn in the closed mesh's volume instead of on its surface.
-        #[serde(default)]
-        volume: bool,
-        /// With `volume`: field cells along the mesh's longest side (4 to 128).
-        #[serde(default = "default_resolution")]
-        resolution: u32,
-        /// The placed triangles, read by [`read_mesh_shapes`] before the checks.
-        #[serde(skip)]
-        surface: Option<Arc<MeshSurface>>,
-    },
-}
-
-fn default_resolution() -> u32 {
-    32
-}
-
-/// Spawn velocities.
-#[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub enum Velocity {
-    /// The same velocity for every particle.
-    Constant(Vec3),
-    /// Uniform directions within a cone around `axis`.
-    Cone {
-        /// Cone axis (any length but zero).
-        axis: Vec3,
-        /// Half-angle in degrees, in [0, 180].
-        angle: f64,
-        /// Speed range (m/s).
-        speed: Range,
-    },
-    /// Away from the shape's centre.
-    Radial {
-        /// Speed range (m/s).
-        speed: Range,
-    },
-    /// Along the surface's normal where the particle spawns (a `Mesh` shape only).
-    Normal {
-        /// Speed range (m/s); negative goes inward.
-        speed: Range,
-    },
-}
-
 /// One emitter.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EmitterIr {
-    /// Spawned at step 0.
+    /// Spawned at each of the timing's bursts.
     pub burst: u32,
-    /// Per second.
+    /// Per second, while the timing lets it run.
     pub rate: f64,
+    /// At which steps it spawns.
+    pub timing: SpawnTiming,
     /// Spawn position.
     pub shape: ShapeIr,
     /// Spawn velocity.
@@ -166,146 +95,102 @@ impl Basis {
     }
 }
 
-/// Spawn shape in the IR.
-#[derive(Clone, Debug, PartialEq)]
-pub enum ShapeIr {
-    /// One point.
-    Point(DVec3),
-    /// Uniform in a ball.
-    Sphere {
-        /// Centre.
-        center: DVec3,
-        /// Radius.
-        radius: f64,
-    },
-    /// Uniform in a box.
-    Box {
-        /// Lower corner.
-        min: DVec3,
-        /// Upper corner.
-        max: DVec3,
-    },
-    /// Uniform in a disc.
-    Disc {
-        /// Centre.
-        center: DVec3,
-        /// Radius.
-        radius: f64,
-        /// Tangents of the disc's plane.
-        basis: Basis,
-    },
-    /// Lattice: point (ix, iy, iz) is `origin + i * step` per axis.
-    Grid {
-        /// Position of lattice point (0, 0, 0).
-        origin: DVec3,
-        /// Spacing per axis (0 on an axis with one point).
-        step: DVec3,
-        /// Points per axis.
-        counts: [u32; 3],
-    },
-    /// Listed points, in order.
-    Points(Vec<DVec3>),
-    /// On a mesh's surface or in its volume.
-    Mesh(Arc<MeshSurface>),
-}
-
-impl ShapeIr {
-    /// The centre that radial velocities point away from.
-    pub fn center(&self) -> DVec3 {
-        match self {
-            ShapeIr::Point(p) => *p,
-            ShapeIr::Sphere { center, .. } | ShapeIr::Disc { center, .. } => *center,
-            ShapeIr::Box { min, max } => (*min + *max) * 0.5,
-            ShapeIr::Grid {
-                origin,
-                step,
-                counts,
-            } => {
-                let n = DVec3::new(
-                    f64::from(counts[0] - 1),
-                    f64::from(counts[1] - 1),
-                    f64::from(counts[2] - 1),
-                );
-                *origin + *step * n * 0.5
-            }
-            ShapeIr::Points(ps) => ps.iter().copied().sum::<DVec3>() / ps.len().max(1) as f64,
-            ShapeIr::Mesh(m) => m.center,
+impl Emitter {
+    /// An emitter of `shape` and `velocity` that never spawns on its own (an event's spawn rule).
+    pub fn idle(shape: Shape, velocity: Velocity, lifetime: Option<Range>) -> Self {
+        Self {
+            burst: 0,
+            rate: 0.0,
+            start: 0.0,
+            duration: None,
+            every: None,
+            cycles: None,
+            shape,
+            velocity,
+            lifetime,
         }
     }
 
-    /// Below this squared distance (m²) from the shape's centre, a Radial velocity has no
-    /// direction and draws a random one. Relative to the shape's size, so that the GPU's f32
-    /// positions (off by a few ulps of the coordinates) and the reference's f64 ones make the
-    /// same choice: a Grid or Points spawn at the centre itself is never pushed by f32 rounding.
-    pub fn radial_center_eps2(&self) -> f64 {
-        (4e-6 * self.extent().max(1.0)).powi(2)
+    /// Records in `c` what is wrong with the emitter at `path`, for steps of `dt`.
+    pub fn check(&self, c: &mut Checker, path: &ValuePath, dt: f64) {
+        c.non_negative(&path.field("rate"), self.rate);
+        timing::check(
+            c,
+            path,
+            (self.start, self.duration, self.every, self.cycles),
+            self.burst,
+            dt,
+        );
+        self.shape.check(c, &path.field("shape"));
+        let on_mesh = matches!(self.shape, Shape::Mesh { .. });
+        self.velocity.check(c, &path.field("velocity"), on_mesh);
+        if matches!(self.shape, Shape::Mesh { volume: true, .. })
+            && matches!(self.velocity, Velocity::Normal { .. })
+        {
+            c.error(
+                &path.field("velocity").variant("Normal"),
+                "a particle spawned in a mesh's volume has no surface normal: use Radial (away from the mesh's centre) or Cone",
+            );
+        }
+        if let Some(life) = self.lifetime {
+            let p = path.field("lifetime");
+            if c.range(&p, life) {
+                if life.0 <= 0.0 {
+                    c.error(
+                        &p.component(0, "min"),
+                        format!("must be > 0 seconds, got {}", life.0),
+                    );
+                } else if dt > 0.0 && LifetimeSteps::new(life.0, life.1, dt).is_none() {
+                    c.error(
+                        &p.component(1, "max"),
+                        format!("is more than 2^31 steps of dt = {dt} s, got {}", life.1),
+                    );
+                }
+            }
+        }
     }
 
-    /// The farthest any spawn position lies from the origin (for precision warnings).
-    pub fn extent(&self) -> f64 {
-        match self {
-            ShapeIr::Point(p) => p.abs().max_element(),
-            ShapeIr::Sphere { center, radius } | ShapeIr::Disc { center, radius, .. } => {
-                center.abs().max_element() + radius
-            }
-            ShapeIr::Box { min, max } => min.abs().max(max.abs()).max_element(),
-            ShapeIr::Grid {
-                origin,
-                step,
-                counts,
-            } => {
-                let last = *origin
-                    + *step
-                        * DVec3::new(
-                            f64::from(counts[0] - 1),
-                            f64::from(counts[1] - 1),
-                            f64::from(counts[2] - 1),
-                        );
-                origin.abs().max(last.abs()).max_element()
-            }
-            ShapeIr::Points(ps) => ps.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max),
-            ShapeIr::Mesh(m) => m.extent,
+    /// The emitter's lowered form for steps of `dt` (after [`Emitter::check`] passed).
+    pub fn lower(&self, dt: f64) -> EmitterIr {
+        EmitterIr {
+            burst: self.burst,
+            rate: self.rate,
+            timing: SpawnTiming::new(self.start, self.duration, self.every, self.cycles, dt),
+            shape: self.shape.lower(),
+            velocity: self.velocity.lower(),
+            lifetime: self.lifetime.map(|r| (r.0, r.1)),
+            lifetime_steps: self.lifetime.and_then(|r| LifetimeSteps::new(r.0, r.1, dt)),
         }
     }
 }
 
-/// Spawn velocity in the IR.
-#[derive(Clone, Debug, PartialEq)]
-pub enum VelocityIr {
-    /// Fixed velocity.
-    Constant(DVec3),
-    /// Uniform in a cone: cos θ uniform in [cos angle, 1].
-    Cone {
-        /// Unit axis.
-        axis: DVec3,
-        /// Tangents of the axis.
-        basis: Basis,
-        /// Cosine of the half-angle.
-        cos_angle: f64,
-        /// Speed range.
-        speed: (f64, f64),
-    },
-    /// Away from the shape's centre.
-    Radial {
-        /// Speed range.
-        speed: (f64, f64),
-    },
-    /// Along the spawn surface's normal.
-    Normal {
-        /// Speed range.
-        speed: (f64, f64),
-    },
-}
+impl EmitterIr {
+    /// Whether the emitter spawns for as long as the effect runs (a rate or a repeating burst
+    /// with no end), rather than once or for a while.
+    pub fn spawns_for_ever(&self) -> bool {
+        let t = &self.timing;
+        t.end_step.is_none() && (self.rate > 0.0 || (self.burst > 0 && t.cycles.is_none()))
+    }
 
-impl VelocityIr {
-    /// The largest spawn speed.
-    pub fn max_speed(&self) -> f64 {
-        match self {
-            VelocityIr::Constant(v) => v.length(),
-            VelocityIr::Cone { speed, .. }
-            | VelocityIr::Radial { speed }
-            | VelocityIr::Normal { speed } => speed.0.abs().max(speed.1.abs()),
-        }
+    /// The state of particle `id`, its `k`-th: position, velocity and, on a mesh, the
+    /// surface's normal where it starts (the f64 twin of [`Self::emit_wgsl`]'s draws).
+    pub fn sample(&self, seed_mix: u32, id: u32, k: u32) -> (DVec3, DVec3) {
+        let d = ParticleDraws { seed_mix, id };
+        let (x, normal) = self.shape.sample(&d, k);
+        (x, self.velocity.sample(&d, &self.shape, x, normal))
+    }
+
+    /// Emits what emitter `e` needs at the module's top level, before its `emit_e` function;
+    /// `data_offset` is where its mesh's data starts in `spawn_data`.
+    pub fn emit_items(&self, w: &mut Writer, e: usize, data_offset: u32) {
+        self.shape.emit_items(w, e, data_offset);
+    }
+
+    /// Emits the statements of emitter `e`'s `emit_e(id, k, step)` that set its position and
+    /// velocity (`s.x`, `s.v`): the WGSL twin of [`Self::sample`].
+    pub fn emit_wgsl(&self, w: &mut Writer, e: usize) {
+        self.shape.emit_wgsl(w, e);
+        self.velocity.emit_wgsl(w, &self.shape);
     }
 }
 
@@ -313,40 +198,16 @@ impl VelocityIr {
 /// `base_dir`), recording what is wrong in `c` at the shape's `file`.
 pub fn read_mesh_shapes(emitters: &mut [Emitter], base_dir: Option<&Path>, c: &mut Checker) {
     for (i, emitter) in emitters.iter_mut().enumerate() {
-        let Shape::Mesh {
-            file,
-            offset,
-            scale,
-            rotation,
-            volume,
-            resolution,
-            surface,
-        } = &mut emitter.shape
-        else {
-            continue;
-        };
-        // A bad placement is reported by the checks, at its field.
-        if !(offset.d().is_finite()
-            && rotation.d().is_finite()
-            && scale.is_finite()
-            && *scale > 0.0)
-            || (*volume && !(4..=crate::base::sdf::MAX_RESOLUTION).contains(resolution))
-        {
-            continue;
-        }
-        let volume = volume.then_some(*resolution);
-        match place(file, base_dir, (*offset, *scale, *rotation), volume) {
-            Ok(placed) => *surface = Some(Arc::new(placed)),
-            Err(message) => c.error(
-                &ValuePath::root()
-                    .field("emitters")
-                    .index(i)
-                    .field("shape")
-                    .variant("Mesh")
-                    .field("file"),
-                message,
-            ),
-        }
+        let path = ValuePath::root().field("emitters").index(i);
+        emitter.read_mesh_shape(&path, base_dir, c);
+    }
+}
+
+impl Emitter {
+    /// Reads the shape's file when it is a `Mesh` ([`Shape::read_mesh`]); `path` is the
+    /// emitter's.
+    pub fn read_mesh_shape(&mut self, path: &ValuePath, base_dir: Option<&Path>, c: &mut Checker) {
+        self.shape.read_mesh(&path.field("shape"), base_dir, c);
     }
 }
 

@@ -339,15 +339,7 @@ impl Term {
     }
 }
 
-/// `v / |v|`, or zero when `v` is too short to normalise (mirrors the WGSL guard).
-pub fn safe_normalize(v: DVec3) -> DVec3 {
-    let l2 = v.length_squared();
-    if l2 > 1e-20 {
-        v / l2.sqrt()
-    } else {
-        DVec3::ZERO
-    }
-}
+pub use crate::base::values::safe_normalize;
 
 /// The samples of the effect's vector field, as the `force_data` binding holds them; None
 /// without one.

@@ -293,7 +293,12 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
             "no emitters: the effect spawns nothing".into(),
         );
     }
-    let burst: u64 = ir.emitters.iter().map(|e| u64::from(e.burst)).sum();
+    let burst: u64 = ir
+        .emitters
+        .iter()
+        .filter(|e| e.timing.start_step == 0)
+        .map(|e| u64::from(e.burst))
+        .sum();
     if burst > u64::from(ir.capacity) {
         warn(
             ValuePath::root().field("capacity"),
@@ -307,10 +312,18 @@ pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, 
     let steady: f64 = ir
         .emitters
         .iter()
-        .map(|e| match e.lifetime {
-            Some((_, max)) => e.rate * max,
-            None if e.rate > 0.0 && ir.kills.is_empty() => f64::INFINITY,
-            None => 0.0,
+        .map(|e| {
+            // A burst repeating for ever is a rate of burst / every.
+            let repeats = match (e.timing.every, e.timing.cycles, e.timing.end_step) {
+                (Some(every), None, None) => f64::from(e.burst) / every,
+                _ => 0.0,
+            };
+            let rate = e.rate + repeats;
+            match e.lifetime {
+                Some((_, max)) => rate * max,
+                None if rate > 0.0 && ir.kills.is_empty() => f64::INFINITY,
+                None => 0.0,
+            }
         })
         .sum();
     if steady > f64::from(ir.capacity) && burst <= u64::from(ir.capacity) {

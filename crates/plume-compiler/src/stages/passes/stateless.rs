@@ -29,9 +29,18 @@ use crate::stages::schema::{Integrator, State};
 fn emitter_bounds(ir: &EffectIr, e: usize) -> Result<(u64, u64, Option<u32>), String> {
     let em = &ir.emitters[e];
     let lives = em.lifetime_steps.map(|l| l.first + l.span - 1);
-    let burst = u64::from(em.burst);
+    // Bursts whose particles may be alive at once, each a segment of its own.
+    let bursts = match em.burst {
+        0 => 0,
+        _ => em.timing.bursts_alive(lives).ok_or_else(|| {
+            format!(
+                "emitters[{e}] repeats its burst for ever and its particles never die, so they would outgrow any capacity and be dropped"
+            )
+        })?,
+    };
+    let burst = u64::from(em.burst).saturating_mul(bursts);
     if em.rate <= 0.0 {
-        return Ok((burst, u64::from(burst > 0), lives));
+        return Ok((burst, bursts, lives));
     }
     let Some(window) = lives else {
         return Err(format!(
@@ -49,7 +58,12 @@ fn emitter_bounds(ir: &EffectIr, e: usize) -> Result<(u64, u64, Option<u32>), St
     let spawns = per_window as u64 + 2;
     Ok((
         burst.saturating_add(spawns),
-        u64::from(window).min(spawns),
+        // A step spawns one segment, bursts and rate alike: at most one a step.
+        u64::from(window).min(match em.timing.is_plain() {
+            // The burst at step 0 is within the rounding's margin of `spawns`.
+            true => spawns,
+            false => spawns.saturating_add(bursts),
+        }),
         lives,
     ))
 }

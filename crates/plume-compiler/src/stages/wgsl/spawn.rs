@@ -4,11 +4,9 @@
 //! `free_list[spawn_base + i]`: its emitter, position, velocity and lifetime come from the
 //! IR and the integer hash of (seed, id, stream), so the CPU reference draws the same.
 
-use std::f64::consts::PI;
-
 use crate::base::rng::stream;
-use crate::base::writer::{f32_lit, u32_lit, vec3_lit, Writer};
-use crate::ir::{EffectIr, EmitterIr, ShapeIr, VelocityIr};
+use crate::base::writer::{f32_lit, Writer};
+use crate::ir::{EffectIr, EmitterIr};
 use crate::stages::passes::layout::{Attribute, Layout};
 
 /// Emits `spawn_prepare` and `spawn`.
@@ -167,27 +165,16 @@ pub fn emit_emitter_fns(w: &mut Writer, ir: &EffectIr) {
 /// A function per emitter: `emit_E(id, k, step) -> Spawned`, k the emitter's own spawn counter
 /// and `step` the step it spawns at.
 fn emit_emitter_fn(w: &mut Writer, ir: &EffectIr, e: usize, em: &EmitterIr) {
-    if let ShapeIr::Mesh(m) = &em.shape {
-        m.emit(
-            w,
-            e,
-            crate::features::emitter::spawn_data_offset(&ir.emitters, e),
-        );
-    }
-    if let ShapeIr::Points(ps) = &em.shape {
-        let items: Vec<String> = ps.iter().map(|p| vec3_lit(*p)).collect();
-        w.line(format!(
-            "const POINTS_{e} = array<vec3<f32>, {}>({});",
-            ps.len(),
-            items.join(", ")
-        ));
-    }
+    em.emit_items(
+        w,
+        e,
+        crate::features::emitter::spawn_data_offset(&ir.emitters, e),
+    );
     w.block(
         format!("fn emit_{e}(id: u32, k: u32, step: u32) -> Spawned"),
         |w| {
             w.line("var s: Spawned;");
-            emit_shape(w, e, &em.shape);
-            emit_velocity(w, &em.shape, &em.velocity);
+            em.emit_wgsl(w, e);
             match em.lifetime_steps {
                 Some(steps) => {
                     w.comment(
@@ -205,166 +192,4 @@ fn emit_emitter_fn(w: &mut Writer, ir: &EffectIr, e: usize, em: &EmitterIr) {
             w.line("return s;");
         },
     );
-}
-
-fn unit3(base: u32) -> String {
-    format!(
-        "vec3<f32>(rand_unit(id, {}u), rand_unit(id, {}u), rand_unit(id, {}u))",
-        base,
-        base + 1,
-        base + 2
-    )
-}
-
-fn emit_shape(w: &mut Writer, e: usize, shape: &ShapeIr) {
-    let two_pi = f32_lit(2.0 * PI);
-    let pi = f32_lit(PI);
-    match shape {
-        ShapeIr::Point(p) => w.line(format!("s.x = {};", vec3_lit(*p))),
-        ShapeIr::Sphere { center, radius } => {
-            w.comment("Uniform in the ball: cos(polar) uniform, radius ~ cube root.");
-            w.line(format!("let u = {};", unit3(stream::POSITION)));
-            w.line("let cz = 1.0 - 2.0 * u.x;");
-            w.line(format!("let phi = {two_pi} * u.y - {pi};"));
-            w.line("let sz = sqrt(max(0.0, 1.0 - cz * cz));");
-            w.line(format!(
-                "let r = {} * pow(max(u.z, 1e-30), {});",
-                f32_lit(*radius),
-                f32_lit(1.0 / 3.0)
-            ));
-            w.line(format!(
-                "s.x = {} + r * vec3<f32>(sz * cos(phi), sz * sin(phi), cz);",
-                vec3_lit(*center)
-            ));
-        }
-        ShapeIr::Box { min, max } => {
-            w.line(format!(
-                "s.x = {} + {} * {};",
-                vec3_lit(*min),
-                vec3_lit(*max - *min),
-                unit3(stream::POSITION)
-            ));
-        }
-        ShapeIr::Disc {
-            center,
-            radius,
-            basis,
-        } => {
-            w.comment("Uniform in the disc: radius ~ sqrt(u).");
-            w.line(format!("let u = {};", unit3(stream::POSITION)));
-            w.line(format!("let r = {} * sqrt(u.x);", f32_lit(*radius)));
-            w.line(format!("let phi = {two_pi} * u.y - {pi};"));
-            w.line(format!(
-                "s.x = {} + r * (cos(phi) * {} + sin(phi) * {});",
-                vec3_lit(*center),
-                vec3_lit(basis.t1),
-                vec3_lit(basis.t2)
-            ));
-        }
-        ShapeIr::Grid {
-            origin,
-            step,
-            counts,
-        } => {
-            let [nx, ny, nz] = *counts;
-            w.comment("Lattice point k (mod the lattice size): x fastest, then y, then z.");
-            w.line(format!(
-                "let g = k % {};",
-                u32_lit(nx.wrapping_mul(ny).wrapping_mul(nz))
-            ));
-            w.line(format!(
-                "let gi = vec3<u32>(g % {nx}u, (g / {nx}u) % {ny}u, g / {});",
-                u32_lit(nx * ny)
-            ));
-            w.line(format!(
-                "s.x = {} + vec3<f32>(gi) * {};",
-                vec3_lit(*origin),
-                vec3_lit(*step)
-            ));
-        }
-        ShapeIr::Points(ps) => {
-            w.line(format!("s.x = POINTS_{e}[k % {}u];", ps.len()));
-        }
-        ShapeIr::Mesh(_) => {
-            w.line(format!(
-                "let on_mesh = mesh_spawn_{e}(rand_u32(id, {}u), {});",
-                stream::MESH_PICK,
-                unit3(stream::POSITION)
-            ));
-            w.line("s.x = on_mesh[0];");
-            w.line("let surface_normal = on_mesh[1];");
-        }
-    }
-}
-
-fn emit_speed(w: &mut Writer, speed: (f64, f64)) {
-    w.line(format!(
-        "let speed = {} + {} * rand_unit(id, {}u);",
-        f32_lit(speed.0),
-        f32_lit(speed.1 - speed.0),
-        stream::VELOCITY + 2
-    ));
-}
-
-fn emit_velocity(w: &mut Writer, shape: &ShapeIr, vel: &VelocityIr) {
-    let two_pi = f32_lit(2.0 * PI);
-    let pi = f32_lit(PI);
-    match vel {
-        VelocityIr::Constant(v) => w.line(format!("s.v = {};", vec3_lit(*v))),
-        VelocityIr::Cone {
-            axis,
-            basis,
-            cos_angle,
-            speed,
-        } => {
-            w.comment("Uniform on the spherical cap: cos(theta) = 1 - w, w uniform in [0, 1 - cos(angle)];");
-            w.comment("sin(theta) = sqrt(w (2 - w)) avoids the cancellation of 1 - cos².");
-            w.line(format!(
-                "let w = rand_unit(id, {}u) * {};",
-                stream::VELOCITY,
-                f32_lit(1.0 - cos_angle)
-            ));
-            w.line("let cos_t = 1.0 - w;");
-            w.line("let sin_t = sqrt(max(0.0, w * (2.0 - w)));");
-            w.line(format!(
-                "let psi = {two_pi} * rand_unit(id, {}u) - {pi};",
-                stream::VELOCITY + 1
-            ));
-            emit_speed(w, *speed);
-            w.line(format!(
-                "s.v = speed * (cos_t * {} + sin_t * (cos(psi) * {} + sin(psi) * {}));",
-                vec3_lit(*axis),
-                vec3_lit(basis.t1),
-                vec3_lit(basis.t2)
-            ));
-        }
-        VelocityIr::Radial { speed } => {
-            emit_speed(w, *speed);
-            w.line(format!("let out = s.x - {};", vec3_lit(shape.center())));
-            w.line("let out2 = dot(out, out);");
-            w.line("var dir: vec3<f32>;");
-            w.block(
-                format!("if (out2 > {})", f32_lit(shape.radial_center_eps2())),
-                |w| w.line("dir = out * inverseSqrt(out2);"),
-            );
-            w.block("else", |w| {
-                w.comment("At the centre itself: a uniformly random direction instead.");
-                w.line(format!(
-                    "let cz = 1.0 - 2.0 * rand_unit(id, {}u);",
-                    stream::FALLBACK_DIRECTION
-                ));
-                w.line(format!(
-                    "let phi = {two_pi} * rand_unit(id, {}u) - {pi};",
-                    stream::FALLBACK_DIRECTION + 1
-                ));
-                w.line("let sz = sqrt(max(0.0, 1.0 - cz * cz));");
-                w.line("dir = vec3<f32>(sz * cos(phi), sz * sin(phi), cz);");
-            });
-            w.line("s.v = speed * dir;");
-        }
-        VelocityIr::Normal { speed } => {
-            emit_speed(w, *speed);
-            w.line("s.v = speed * surface_normal;");
-        }
-    }
 }

@@ -1,0 +1,368 @@
+//! Spawning: the shapes on a sphere's surface, a box's faces, a circle and in or on a cone, the
+//! Tangent velocity, and emitters that start late, stop, and repeat their bursts. Every shape
+//! is drawn on the GPU and in the f64 reference from the same integer hashes, and the two
+//! agree to a few f32 roundings (`common::spawn_states`); the f64 positions are then tested
+//! against the distribution the docs promise.
+//!
+//! Statistical bounds: a fraction p estimated from n independent draws has standard deviation
+//! sqrt(p (1 − p) / n); each check allows 5 of them, which a correct sampler misses with
+//! probability below 1e-6, while the wrong distributions these shapes could be confused with
+//! (a volume for a surface, uniform height in a cone, angle-uniform faces) miss by tens of
+//! deviations at n = 20,000. The draws are fixed by the seed, so a pass is repeatable.
+
+mod common;
+
+use common::meshes::{box_obj, write};
+use common::*;
+use glam::DVec3;
+use plume::compiler::graph::{compile_graph_str, ReferenceGraph};
+use plume::runtime::Effect;
+use plume::CompileOptions;
+
+const DT: f64 = 0.001;
+const N: u32 = 20_000;
+
+/// An effect of one burst of `N` particles from `shape`, moving by `velocity`.
+fn burst(shape: &str, velocity: &str) -> String {
+    format!(
+        r#"Effect(
+    name: "shape",
+    capacity: {N},
+    seed: 5,
+    dt: {DT},
+    emitters: [Emitter(burst: {N}, shape: {shape}, velocity: {velocity})],
+    integrator: SemiImplicitEuler,
+)"#
+    )
+}
+
+/// The spawn positions of a burst from `shape`, at rest, GPU and reference agreeing.
+fn positions(shape: &str) -> Vec<DVec3> {
+    spawn_states(&burst(shape, "Constant((0.0, 0.0, 0.0))"), DT)
+        .into_iter()
+        .map(|(x, _)| x)
+        .collect()
+}
+
+/// Asserts that `hits` of `n` is within 5 standard deviations of the fraction `p`.
+fn assert_fraction(what: &str, hits: usize, n: usize, p: f64) {
+    let got = hits as f64 / n as f64;
+    let sigma = (p * (1.0 - p) / n as f64).sqrt();
+    assert!(
+        (got - p).abs() <= 5.0 * sigma,
+        "{what}: {got:.4} of the particles, expected {p:.4} ± {:.4}",
+        5.0 * sigma
+    );
+}
+
+#[test]
+fn a_sphere_surface_spawns_on_the_sphere_with_every_coordinate_uniform() {
+    let c = DVec3::new(1.0, 2.0, 3.0);
+    let xs = positions("Sphere(center: (1.0, 2.0, 3.0), radius: 0.5, surface: true)");
+    assert_eq!(xs.len(), N as usize);
+    for x in &xs {
+        assert!(
+            ((*x - c).length() - 0.5).abs() < 1e-12,
+            "{x:?} is off the sphere"
+        );
+    }
+    // Archimedes: on a sphere every coordinate is uniform over the diameter.
+    for axis in [0, 2] {
+        for q in [0.1, 0.3, 0.5, 0.7, 0.9] {
+            let below = xs
+                .iter()
+                .filter(|x| x[axis] - c[axis] < 0.5 * (2.0 * q - 1.0))
+                .count();
+            assert_fraction(
+                &format!("axis {axis} below quantile {q}"),
+                below,
+                xs.len(),
+                q,
+            );
+        }
+    }
+}
+
+#[test]
+fn a_box_surface_spawns_on_its_faces_by_area() {
+    // Faces of 0.5, 1 and 2 m² (two each): 1/14, 1/7 and 2/7 of the particles each.
+    let (min, max) = (DVec3::new(-1.0, 0.0, 1.0), DVec3::new(1.0, 1.0, 1.5));
+    let xs = positions("Box(min: (-1.0, 0.0, 1.0), max: (1.0, 1.0, 1.5), surface: true)");
+    let mut on_face = [0usize; 6];
+    for x in &xs {
+        assert!(
+            x.cmpge(min).all() && x.cmple(max).all(),
+            "{x:?} is off the box"
+        );
+        let face = (0..6)
+            .find(|f| {
+                let at = if f % 2 == 0 { min } else { max };
+                (x[f / 2] - at[f / 2]).abs() < 1e-12
+            })
+            .unwrap_or_else(|| panic!("{x:?} is inside the box, on no face"));
+        on_face[face] += 1;
+    }
+    for (face, p) in [1.0, 1.0, 2.0, 2.0, 4.0, 4.0]
+        .iter()
+        .map(|a| a / 14.0)
+        .enumerate()
+    {
+        assert_fraction(&format!("face {face}"), on_face[face], xs.len(), p);
+    }
+    // A flat box's surface is its two sides: every point in the plane.
+    for x in positions("Box(min: (0.0, 0.0, 0.0), max: (1.0, 2.0, 0.0), surface: true)") {
+        assert_eq!(x.z, 0.0);
+        assert!(
+            x.x >= 0.0 && x.x <= 1.0 && x.y >= 0.0 && x.y <= 2.0,
+            "{x:?}"
+        );
+    }
+}
+
+#[test]
+fn a_circle_spawns_on_its_edge_uniformly_by_angle() {
+    let c = DVec3::new(0.0, 1.0, 0.0);
+    let n = DVec3::new(1.0, 1.0, 0.0).normalize();
+    let xs = positions("Circle(center: (0.0, 1.0, 0.0), normal: (1.0, 1.0, 0.0), radius: 2.0)");
+    let (e1, e2) = (DVec3::Z, n.cross(DVec3::Z));
+    let mut bins = [0usize; 8];
+    for x in &xs {
+        let r = *x - c;
+        assert!((r.length() - 2.0).abs() < 1e-12, "{x:?} is off the circle");
+        assert!(r.dot(n).abs() < 1e-12, "{x:?} is off the circle's plane");
+        let angle = r.dot(e2).atan2(r.dot(e1)) + std::f64::consts::PI;
+        bins[((angle / std::f64::consts::TAU * 8.0) as usize).min(7)] += 1;
+    }
+    for (i, &b) in bins.iter().enumerate() {
+        assert_fraction(&format!("angle bin {i}"), b, xs.len(), 1.0 / 8.0);
+    }
+}
+
+/// Heights along the cone's axis (a fraction of its height) and distances from the axis of a
+/// cone along +Y from the origin, `height` 2.
+fn cone(base_radius: f64, top_radius: f64, surface: bool) -> Vec<(f64, f64)> {
+    positions(&format!(
+        "Cone(base: (0.0, 0.0, 0.0), axis: (0.0, 3.0, 0.0), height: 2.0, base_radius: {base_radius:?}, top_radius: {top_radius:?}, surface: {surface})"
+    ))
+    .into_iter()
+    .map(|x| (x.y / 2.0, x.x.hypot(x.z)))
+    .collect()
+}
+
+#[test]
+fn a_cone_fills_its_frustum_by_volume_and_its_side_by_area() {
+    let (r0, r1) = (1.0, 0.25);
+    let radius = |h: f64| r0 + (r1 - r0) * h;
+    // In the volume: within the radius at each height; the volume below height s is
+    // (r0³ − r(s)³) / (r0³ − r1³) of the whole; at each height, uniform in the disc.
+    let volume = cone(r0, r1, false);
+    for &(h, d) in &volume {
+        assert!(
+            (0.0..=1.0).contains(&h) && d <= radius(h) + 1e-12,
+            "height {h}, distance {d}"
+        );
+    }
+    for s in [0.1f64, 0.3, 0.5, 0.7, 0.9] {
+        let below = volume.iter().filter(|(h, _)| *h < s).count();
+        let p = (r0.powi(3) - radius(s).powi(3)) / (r0.powi(3) - r1.powi(3));
+        assert_fraction(&format!("volume below {s}"), below, volume.len(), p);
+    }
+    let inner = volume
+        .iter()
+        .filter(|(h, d)| d * d < 0.5 * radius(*h).powi(2))
+        .count();
+    assert_fraction("inner half of each disc's area", inner, volume.len(), 0.5);
+    // On the side: at the radius of its height; the area below s is (r0² − r(s)²)/(r0² − r1²).
+    let side = cone(r0, r1, true);
+    for &(h, d) in &side {
+        assert!(
+            (d - radius(h)).abs() < 1e-12,
+            "height {h}, distance {d}, off the side"
+        );
+    }
+    for s in [0.1f64, 0.3, 0.5, 0.7, 0.9] {
+        let below = side.iter().filter(|(h, _)| *h < s).count();
+        let p = (r0 * r0 - radius(s).powi(2)) / (r0 * r0 - r1 * r1);
+        assert_fraction(&format!("side below {s}"), below, side.len(), p);
+    }
+}
+
+#[test]
+fn pointed_cones_and_cylinders_are_cones_too() {
+    // Narrow at the base, pointed: the volume below s is s³.
+    let pointed = cone(0.0, 1.0, false);
+    for s in [0.2f64, 0.5, 0.8] {
+        let below = pointed.iter().filter(|(h, _)| *h < s).count();
+        assert_fraction(
+            &format!("pointed, below {s}"),
+            below,
+            pointed.len(),
+            s.powi(3),
+        );
+    }
+    // Equal radii: uniform in height, at the radius on the side.
+    let cylinder = cone(0.5, 0.5, true);
+    for s in [0.2f64, 0.5, 0.8] {
+        let below = cylinder.iter().filter(|(h, _)| *h < s).count();
+        assert_fraction(&format!("cylinder, below {s}"), below, cylinder.len(), s);
+    }
+    assert!(cylinder.iter().all(|(_, d)| (d - 0.5).abs() < 1e-12));
+    // No radius at all: a segment of the axis.
+    assert!(cone(0.0, 0.0, false)
+        .iter()
+        .all(|&(h, d)| d == 0.0 && (0.0..=1.0).contains(&h)));
+}
+
+#[test]
+fn tangent_velocities_turn_about_the_axis_and_rest_on_it() {
+    let axis = DVec3::new(0.0, 2.0, 0.0);
+    let c = DVec3::new(0.0, 1.0, 0.0);
+    // A ring about the axis. (Near the axis the direction is only as precise as the position
+    // over its distance from the axis, as Radial's is near the centre: the ring keeps the
+    // GPU's f32 direction within spawn_states' bound.)
+    let states = spawn_states(
+        &burst(
+            "Circle(center: (0.0, 1.0, 0.0), normal: (0.0, 1.0, 0.0), radius: 2.0)",
+            "Tangent(axis: (0.0, 2.0, 0.0), speed: (1.0, 3.0))",
+        ),
+        DT,
+    );
+    for (x, v) in &states {
+        let around = axis.normalize().cross(*x - c);
+        let speed = v.length();
+        assert!(
+            (1.0 - 1e-12..=3.0 + 1e-12).contains(&speed),
+            "speed {speed}"
+        );
+        // Along axis × (x − c): counter-clockwise seen from the axis's tip.
+        assert!(
+            (v.normalize() - around.normalize()).length() < 1e-9,
+            "{x:?} moves {v:?}"
+        );
+    }
+    // On the axis itself there is no tangent: at rest, never NaN.
+    let on_axis = spawn_states(
+        &burst(
+            "Point((0.0, 4.0, 0.0))",
+            "Tangent(axis: (0.0, 1.0, 0.0), speed: (1.0, 3.0))",
+        ),
+        DT,
+    );
+    assert!(on_axis.iter().all(|(_, v)| *v == DVec3::ZERO));
+}
+
+/// Live particles' counts after each of `steps` steps, on the GPU and in the reference.
+fn spawned_by_step(src: &str, steps: u64) -> Vec<u64> {
+    let effect = compile(src);
+    let gpu = gpu();
+    let mut gsim = Effect::new(&gpu, effect.clone()).expect("GPU sim");
+    let mut csim = plume::compiler::reference::ReferenceSim::new(&effect.ir);
+    let mut out = Vec::new();
+    for step in 1..=steps {
+        gsim.run(1, |_| {}).unwrap();
+        csim.run(1);
+        let (g, c) = (gsim.totals().unwrap(), csim.totals());
+        assert_eq!(g, c, "totals differ after step {step}");
+        out.push(c.spawned);
+    }
+    let (g, c) = (gsim.records().unwrap(), csim.records());
+    let ids = |r: &[plume::compiler::reference::ParticleRecord]| {
+        r.iter().map(|p| p.id).collect::<Vec<_>>()
+    };
+    assert_eq!(ids(&g), ids(&c));
+    out
+}
+
+#[test]
+fn emitters_start_late_stop_and_repeat_their_bursts_on_whole_steps() {
+    // dt 0.05: bursts of 10 at 0.25, 0.75 and 1.25 s (steps 5, 15, 25); a rate of 40/s (two
+    // a step) from 0.1 s for 0.3 s (steps 2 to 7).
+    let src = r#"Effect(
+    name: "timing",
+    capacity: 100,
+    dt: 0.05,
+    emitters: [
+        Emitter(burst: 10, every: Some(0.5), cycles: Some(3), start: 0.25, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 1.0, 0.0))),
+        Emitter(rate: 40.0, start: 0.1, duration: Some(0.3), shape: Point((1.0, 0.0, 0.0)), velocity: Constant((0.0, 1.0, 0.0))),
+    ],
+)"#;
+    let spawned = spawned_by_step(src, 30);
+    let expected: Vec<u64> = (0..30u64)
+        .map(|k| {
+            let bursts = [5, 15, 25].iter().filter(|&&s| s <= k).count() as u64 * 10;
+            let rate = 2 * (k.min(7) + 1).saturating_sub(2);
+            bursts + rate
+        })
+        .collect();
+    assert_eq!(spawned, expected);
+}
+
+#[test]
+fn a_burst_repeating_for_ever_runs_stateless_as_its_stateful_twin_does() {
+    let src = |state: &str| {
+        format!(
+            r#"Effect(
+    name: "pulses",
+    capacity: 1000,
+    dt: 0.02,
+    emitters: [Emitter(burst: 50, every: Some(0.3), start: 0.1, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 1.0, surface: true), velocity: Radial(speed: (1.0, 2.0)), lifetime: Some((0.5, 0.7)))],
+    forces: [Gravity((0.0, -9.81, 0.0))],
+    integrator: Exact,
+    state: {state},
+)"#
+        )
+    };
+    let stateless = compile(&src("Stateless"));
+    assert!(stateless.ir.stateless.is_some());
+    let stateful = compile(&src("Stateful"));
+    for steps in [7u64, 40, 333] {
+        let (ta, a) = run_gpu(&stateless, steps);
+        let (tb, b) = run_gpu(&stateful, steps);
+        let (tc, c) = run_cpu(&stateful, steps);
+        assert_eq!(
+            (ta.alive, ta.spawned),
+            (tc.alive, tc.spawned),
+            "after {steps} steps"
+        );
+        assert_eq!(tb, tc, "after {steps} steps");
+        assert!(tc.alive > 0, "pulses are alive at step {steps}");
+        for ((p, q), r) in a.iter().zip(&b).zip(&c) {
+            assert_eq!((p.id, q.id), (r.id, r.id));
+            assert!((p.position - r.position).length() < 1e-4 * (1.0 + r.position.length()));
+        }
+    }
+}
+
+#[test]
+fn an_event_spawns_its_children_on_a_mesh_around_the_parent() {
+    let file = write(
+        "event-crate.obj",
+        &box_obj([-0.5, -0.5, -0.5], [0.5, 0.5, 0.5]),
+    );
+    let src = format!(
+        r#"Effect(
+    name: "crates",
+    capacity: 4,
+    dt: 0.02,
+    emitters: [Emitter(burst: 4, shape: Points([(0.0, 0.0, 0.0), (3.0, 0.0, 0.0), (0.0, 3.0, 0.0), (0.0, 0.0, 3.0)]), velocity: Constant((0.0, 0.0, 0.0)), lifetime: Some((0.1, 0.1)))],
+    events: [Event(on: Death, target: "shards", count: 200, shape: Mesh(file: {file:?}), velocity: Normal(speed: (1.0, 1.0)))],
+    groups: [Group(name: "shards", capacity: 800)],
+)"#
+    );
+    let graph = compile_graph_str(&src, &CompileOptions::default())
+        .unwrap_or_else(|e| panic!("{}", e.render("crates.ron", &src)));
+    let gpu = gpu();
+    let mut gsim = Effect::from_graph(&gpu, graph.clone()).unwrap();
+    let mut csim = ReferenceGraph::new(&graph);
+    gsim.run(6, |_| {}).unwrap();
+    csim.run(6);
+    assert_eq!(gsim.group_totals(1).unwrap(), csim.totals(1));
+    let (g, c) = (gsim.group_records(1).unwrap(), csim.records(1));
+    assert_eq!(c.len(), 800, "every crate broke into 200 shards");
+    for (p, q) in g.iter().zip(&c) {
+        assert_eq!(p.id, q.id);
+        assert!((p.position - q.position).length() < 1e-5 * (1.0 + q.position.length()));
+        // On a face of the unit box around one of the parents, moving out of it at 1 m/s.
+        assert!((q.velocity.length() - 1.0).abs() < 1e-9);
+    }
+}
