@@ -16,13 +16,18 @@ const H: u32 = 100;
 /// `count` additive white particles stacked at the origin (each of alpha `alpha`), a 1 m
 /// sprite 10 m away, with the glow `glow` (RON, or "None").
 fn stack(gpu: &Gpu, count: u32, alpha: f64, glow: &str) -> Effect {
+    stack_of(gpu, count, 1.0, alpha, glow)
+}
+
+/// [`stack`] of particles whose colour is `white` in every channel (above 1: HDR light).
+fn stack_of(gpu: &Gpu, count: u32, white: f64, alpha: f64, glow: &str) -> Effect {
     let src = format!(
         r#"Effect(
     name: "glow-probe",
     capacity: {count},
     emitters: [Emitter(burst: {count}, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
     camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
-    render: Render(color: [(0.0, (1.0, 1.0, 1.0, {alpha}))], size: [(0.0, 1.0)], blend: Additive,
+    render: Render(color: [(0.0, ({white:?}, {white:?}, {white:?}, {alpha}))], size: [(0.0, 1.0)], blend: Additive,
                    background: (0.0, 0.0, 0.0), glow: {glow}),
 )"#
     );
@@ -97,6 +102,36 @@ fn bright_light_spreads_into_a_halo_that_fades_and_ends_with_the_kernel() {
     }
     // Inside the disc both are saturated.
     assert_eq!((red(&glowing, 0), red(&plain, 0)), (255, 255));
+}
+
+#[test]
+fn a_colour_above_one_glows_as_that_much_stacked_light_does() {
+    // One sprite of colour 40 at alpha 0.1 is 4.0 of light at its centre, as 40 stacked sprites
+    // of colour 1 are: the same HDR image (to the f16 roundings of the stack's 40 blends, under
+    // a 2048th of the value each), so the same bloom, in the raster draw and the compute splat.
+    let gpu = gpu();
+    let glow = "Some(Glow(threshold: 0.5, strength: 1.0, radius: 0.03))";
+    let stacked = stack(&gpu, 40, 0.1, glow);
+    let bright = stack_of(&gpu, 1, 40.0, 0.1, glow);
+    let ((stacked_glow, _), (bright_glow, bright_plain)) = (draw(&stacked), draw(&bright));
+    let (mean, max, _) = differences(&stacked_glow, &bright_glow, 1);
+    assert!(mean < 0.05 && max <= 2, "raster: mean {mean}, max {max}");
+    let (mean, max, _) = differences(&bright_glow, &splat_twice(&bright), 1);
+    assert!(
+        mean < 0.05 && max <= 2,
+        "splat against raster: mean {mean}, max {max}"
+    );
+    assert!(
+        red(&bright_glow, 10) > 5,
+        "a halo past the rim: {}",
+        red(&bright_glow, 10)
+    );
+    // An 8-bit image clamps a sprite's colour to 1 before it blends: 1.0 x 0.1 at the centre.
+    assert!(
+        red(&bright_plain, 0).abs_diff(26) <= 1,
+        "the plain image's centre: {}",
+        red(&bright_plain, 0)
+    );
 }
 
 #[test]

@@ -12,6 +12,7 @@
 
 mod common;
 
+use common::compare::roundings_per_step;
 use common::meshes::{box_obj, write};
 use common::*;
 use glam::DVec3;
@@ -21,6 +22,13 @@ use plume::CompileOptions;
 
 const DT: f64 = 0.001;
 const N: u32 = 20_000;
+
+/// How far the GPU's spawns that take a sine or a cosine may lie from the f64 reference's,
+/// relative to 1 + their size: WGSL leaves trigonometry's f32 accuracy to the driver (2^-11
+/// absolute on [−π, π] is all it requires), and llvmpipe's sine was measured 2.5e-5 off where
+/// the rest of a spawn's arithmetic is a few ulps. A wrong formula moves a point by its whole
+/// scale, far past this.
+const TRIG: f64 = 1e-4;
 
 /// An effect of one burst of `N` particles from `shape`, moving by `velocity`.
 fn burst(shape: &str, velocity: &str) -> String {
@@ -38,7 +46,7 @@ fn burst(shape: &str, velocity: &str) -> String {
 
 /// The spawn positions of a burst from `shape`, at rest, GPU and reference agreeing.
 fn positions(shape: &str) -> Vec<DVec3> {
-    spawn_states(&burst(shape, "Constant((0.0, 0.0, 0.0))"), DT)
+    spawn_states_within(&burst(shape, "Constant((0.0, 0.0, 0.0))"), DT, TRIG)
         .into_iter()
         .map(|(x, _)| x)
         .collect()
@@ -219,13 +227,14 @@ fn tangent_velocities_turn_about_the_axis_and_rest_on_it() {
     let c = DVec3::new(0.0, 1.0, 0.0);
     // A ring about the axis. (Near the axis the direction is only as precise as the position
     // over its distance from the axis, as Radial's is near the centre: the ring keeps the
-    // GPU's f32 direction within spawn_states' bound.)
-    let states = spawn_states(
+    // GPU's f32 direction within the bound.)
+    let states = spawn_states_within(
         &burst(
             "Circle(center: (0.0, 1.0, 0.0), normal: (0.0, 1.0, 0.0), radius: 2.0)",
             "Tangent(axis: (0.0, 2.0, 0.0), speed: (1.0, 3.0))",
         ),
         DT,
+        TRIG,
     );
     for (x, v) in &states {
         let around = axis.normalize().cross(*x - c);
@@ -365,4 +374,173 @@ fn an_event_spawns_its_children_on_a_mesh_around_the_parent() {
         // On a face of the unit box around one of the parents, moving out of it at 1 m/s.
         assert!((q.velocity.length() - 1.0).abs() < 1e-9);
     }
+}
+
+/// A ring that widens with the spawn time, each particle moving out of it and up by its own
+/// rand(1) (times the param `up`).
+const RING: &str = r#"Effect(
+    name: "ring",
+    capacity: 5000,
+    seed: 9,
+    dt: 0.02,
+    params: {"up": 3.0},
+    emitters: [Emitter(burst: 300, rate: 2000.0, lifetime: Some((1.0, 1.0)),
+        shape: Custom("vec3(cos(6.2831853 * rand(0)), 0.0, sin(6.2831853 * rand(0))) * (1.0 + t)"),
+        velocity: Custom("normalize(x) * 2.0 + vec3(0.0, up * rand(1), 0.0)"))],
+    forces: [Gravity((0.0, -9.81, 0.0))],
+    integrator: SemiImplicitEuler,
+)"#;
+
+#[test]
+fn spawn_expressions_set_position_and_velocity_as_the_reference_does() {
+    // At step 0 (t = 0): on the unit circle, moving out at 2 m/s and up by 0 to 3 m/s (less
+    // the step of gravity the records have taken).
+    for (x, v) in spawn_states_within(RING, 0.02, TRIG) {
+        assert!(
+            (x.length() - 1.0).abs() < 1e-9 && x.y.abs() < 1e-12,
+            "{x:?}"
+        );
+        let out = v - DVec3::new(0.0, v.y, 0.0);
+        assert!(
+            (out - 2.0 * x.normalize()).length() < 1e-9,
+            "{x:?} moves {v:?}"
+        );
+        let up = v.y + 9.81 * 0.02;
+        assert!((-1e-12..3.0).contains(&up), "{v:?}");
+    }
+    // Later spawns read their step's time: the ring has widened. Over 40 steps the GPU stays
+    // within the spawn's trigonometry (TRIG) and gpu_vs_reference.rs's bound of a few f32
+    // roundings a step of the f64 run.
+    let effect = compile(RING);
+    let worst = worst_gpu_distance(&effect, 40);
+    let bound = TRIG + 4.0 * 40.0 * roundings_per_step(&effect.ir) * U32;
+    assert!(worst <= bound, "{worst:e} > {bound:e}");
+    let (_, records) = run_cpu(&effect, 40);
+    let widest = records
+        .iter()
+        .map(|r| DVec3::new(r.position.x, 0.0, r.position.z).length())
+        .fold(0.0, f64::max);
+    assert!(
+        widest > 1.5,
+        "spawns late in the run start on a wider ring: {widest}"
+    );
+}
+
+#[test]
+fn a_constant_spawn_expression_is_the_point_or_velocity_it_folds_to() {
+    let src = |shape: &str, velocity: &str| {
+        format!(
+            r#"Effect(name: "same", capacity: 10, params: {{"s": 2.0}},
+            emitters: [Emitter(burst: 10, shape: {shape}, velocity: {velocity})])"#
+        )
+    };
+    let written = compile(&src(
+        r#"Custom("vec3(1.0, 2.0, 0.5) * s")"#,
+        r#"Custom("vec3(0.0, s + 1.0, 0.0)")"#,
+    ));
+    let plain = compile(&src("Point((2.0, 4.0, 1.0))", "Constant((0.0, 3.0, 0.0))"));
+    assert_eq!(written.wgsl, plain.wgsl);
+    assert_eq!(written.ir.emitters, plain.ir.emitters);
+}
+
+#[test]
+fn a_live_param_changes_later_spawns_on_the_gpu_as_in_the_reference() {
+    let compiled = plume::compile_str(
+        RING,
+        &CompileOptions {
+            live_params: true,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let gpu = gpu();
+    let mut gsim = Effect::new(&gpu, compiled.clone()).unwrap();
+    let mut csim = plume::compiler::reference::ReferenceSim::new(&compiled.ir);
+    for (steps, up) in [(5u64, 3.0f32), (5, 10.0), (5, 0.0)] {
+        gsim.set_param("up", up).unwrap();
+        csim.set_param("up", up).unwrap();
+        gsim.run(steps, |_| {}).unwrap();
+        csim.run(steps);
+    }
+    let (g, c) = (gsim.records().unwrap(), csim.records());
+    assert_eq!(g.len(), c.len());
+    let bound = TRIG + 4.0 * 15.0 * roundings_per_step(&compiled.ir) * U32;
+    for (p, q) in g.iter().zip(&c) {
+        assert_eq!(p.id, q.id);
+        assert!((p.position - q.position).length() <= bound * (1.0 + q.position.length()));
+    }
+    // Spawned while `up` was 10, some rise faster than any could at 3.
+    assert!(c.iter().any(|r| r.velocity.y > 3.0));
+}
+
+/// The spawn velocities of a burst from the origin whose velocity is `expression`.
+fn drawn(expression: &str) -> Vec<DVec3> {
+    spawn_states_within(
+        &burst(
+            "Point((0.0, 0.0, 0.0))",
+            &format!("Custom(\"{expression}\")"),
+        ),
+        DT,
+        TRIG,
+    )
+    .into_iter()
+    .map(|(_, v)| v)
+    .collect()
+}
+
+#[test]
+fn random_draws_have_their_distributions_on_the_gpu_as_in_the_reference() {
+    let fraction = |vs: &[DVec3], f: &dyn Fn(&DVec3) -> bool| vs.iter().filter(|v| f(v)).count();
+    // On the sphere: unit length, every coordinate uniform over [-1, 1].
+    let sphere = drawn("rand_sphere(0)");
+    assert!(sphere.iter().all(|v| (v.length() - 1.0).abs() < 1e-9));
+    for axis in [0, 2] {
+        let below = fraction(&sphere, &|v| v[axis] < 0.2);
+        assert_fraction(
+            &format!("sphere axis {axis} below 0.2"),
+            below,
+            sphere.len(),
+            0.6,
+        );
+    }
+    // In the ball: the share within radius r is r³.
+    let ball = drawn("rand_ball(3)");
+    assert!(ball.iter().all(|v| v.length() <= 1.0 + 1e-9));
+    for r in [0.5f64, 0.8] {
+        let inside = fraction(&ball, &|v| v.length() < r);
+        assert_fraction(&format!("ball within {r}"), inside, ball.len(), r.powi(3));
+    }
+    // On the circle and in the disc, in the xy plane: the disc's share within r is r².
+    let circle = drawn("rand_circle(7)");
+    assert!(circle
+        .iter()
+        .all(|v| v.z == 0.0 && (v.length() - 1.0).abs() < 1e-9));
+    let right = fraction(&circle, &|v| v.x > 0.5);
+    assert_fraction("circle at x > 0.5", right, circle.len(), 1.0 / 3.0);
+    let disc = drawn("rand_disc(9)");
+    assert!(disc.iter().all(|v| v.z == 0.0 && v.length() <= 1.0 + 1e-9));
+    let inside = fraction(&disc, &|v| v.length() < 0.5);
+    assert_fraction("disc within 0.5", inside, disc.len(), 0.25);
+    // Normal: mean 0 and variance 1 (within 5 standard errors: 1/√n and √(2/n)), 68.27%
+    // within one deviation; two draws from different streams are uncorrelated.
+    let normal = drawn("vec3(rand_normal(20), rand_normal(22), 0.0)");
+    let n = normal.len() as f64;
+    for axis in [0, 1] {
+        let mean = normal.iter().map(|v| v[axis]).sum::<f64>() / n;
+        let var = normal.iter().map(|v| (v[axis] - mean).powi(2)).sum::<f64>() / n;
+        assert!(mean.abs() < 5.0 / n.sqrt(), "axis {axis}: mean {mean}");
+        assert!(
+            (var - 1.0).abs() < 5.0 * (2.0 / n).sqrt(),
+            "axis {axis}: variance {var}"
+        );
+        let within = fraction(&normal, &|v| v[axis].abs() < 1.0);
+        assert_fraction(
+            &format!("normal axis {axis} within 1"),
+            within,
+            normal.len(),
+            0.6827,
+        );
+    }
+    let covariance = normal.iter().map(|v| v.x * v.y).sum::<f64>() / n;
+    assert!(covariance.abs() < 5.0 / n.sqrt(), "covariance {covariance}");
 }

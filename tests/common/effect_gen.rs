@@ -139,8 +139,32 @@ fn shape(flavor: Flavor) -> BoxedStrategy<String> {
             )),
         prop::collection::vec(vec3(f, -2.0, 2.0), usize::from(f != Flavor::Wild)..4)
             .prop_map(|ps| format!("Points([{}])", ps.join(", "))),
+        spawn_expression(f, false).prop_map(|e| format!("Custom(\"{e}\")")),
     ]
     .boxed()
+}
+
+/// A spawn position (`velocity` false) or velocity written as an expression: smooth and
+/// bounded in the valid flavours, of the names each may read (a velocity also reads `x`);
+/// wild ones also name what spawn expressions may not read.
+fn spawn_expression(flavor: Flavor, velocity: bool) -> BoxedStrategy<String> {
+    let f = flavor;
+    let mut names = vec!["t", "dt", "rand(0)", "rand(7)"];
+    if velocity {
+        names.extend(["x.x", "x.y", "length(x)"]);
+    }
+    if f == Flavor::Wild {
+        names.extend(["v.x", "age", "life", "x.z", "rand(300)"]);
+    }
+    let scalar = || {
+        prop_oneof![
+            num(f, -2.0, 2.0),
+            prop::sample::select(names.clone()).prop_map(str::to_string),
+        ]
+    };
+    (scalar(), scalar(), scalar(), num(f, 0.1, 2.0))
+        .prop_map(|(a, b, c, s)| format!("vec3(sin({a}), cos({b}), sin({c})) * {s}"))
+        .boxed()
 }
 
 fn velocity(flavor: Flavor) -> BoxedStrategy<String> {
@@ -152,6 +176,7 @@ fn velocity(flavor: Flavor) -> BoxedStrategy<String> {
         range(f, 0.0, 4.0).prop_map(|s| format!("Radial(speed: {s})")),
         (direction(f), range(f, -4.0, 4.0))
             .prop_map(|(a, s)| format!("Tangent(axis: {a}, speed: {s})")),
+        spawn_expression(f, true).prop_map(|e| format!("Custom(\"{e}\")")),
     ]
     .boxed()
 }

@@ -53,7 +53,7 @@ pub use compile::{
     compile_effect, compile_str, parse, parse_with, CompileError, CompileOptions, CompiledEffect,
 };
 pub use diagnostics::{Diagnostic, Diagnostics, Severity};
-pub use features::looks::{glow, orient, rotation, texture, tint, trail};
+pub use features::looks::{by_expression, glow, orient, rotation, texture, tint, trail};
 pub use features::{
     accuracy, bursts, colliders, emitter, events, field, forces, mesh_emission, placement,
 };

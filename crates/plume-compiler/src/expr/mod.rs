@@ -9,12 +9,14 @@
 //! `pow` of a non-positive base, `atan2(0, 0)` and `normalize` of a zero vector have finite
 //! documented results (docs/effect-format.md, "Custom forces"). No NaN or Inf can come out.
 
+pub mod draws;
 pub mod emit;
 pub mod eval;
 pub mod fold;
 pub mod lex;
 pub mod parse;
 pub mod typed;
+pub mod vocab;
 
 use std::collections::BTreeMap;
 
@@ -38,6 +40,30 @@ pub const NORMALIZE_FLOOR: f64 = 1.0e-20;
 /// The most tokens an expression may have: keeps the recursive passes' depth small.
 pub const MAX_TOKENS: usize = 1024;
 
+/// What an effect's expressions may name besides their variables: its `params` and `dt`.
+#[derive(Clone, Copy, Debug)]
+pub struct Names<'a> {
+    /// The effect's named constants.
+    pub params: &'a BTreeMap<String, f64>,
+    /// The effect's step (s).
+    pub dt: f64,
+    /// Params are read at run time (`CompileOptions::live_params`), not folded.
+    pub live: bool,
+}
+
+impl<'a> Names<'a> {
+    /// The scope of an expression that may read `vars`, whose value is `role` ("a position").
+    pub fn scope(&self, vars: &'a [Var], role: &'a str) -> typed::Scope<'a> {
+        typed::Scope {
+            params: self.params,
+            dt: self.dt,
+            live: self.live,
+            vars,
+            role,
+        }
+    }
+}
+
 /// A mistake in an expression, at characters `[start, end)` of the string.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ExprError {
@@ -60,8 +86,8 @@ impl ExprError {
     }
 }
 
-/// Parses and type-checks `text` as an expression of type `want`, then folds it. `params` are
-/// the effect's named constants and `dt` its step.
+/// Parses and type-checks `text` as an acceleration of type `want` (reading any variable),
+/// then folds it. `params` are the effect's named constants and `dt` its step.
 pub fn compile(
     text: &str,
     want: Ty,
@@ -75,6 +101,8 @@ pub fn compile(
             params,
             dt,
             live: false,
+            vars: typed::VARIABLES,
+            role: "an acceleration",
         },
     )
 }
@@ -95,8 +123,9 @@ pub fn compile_in(text: &str, want: Ty, scope: &typed::Scope) -> Result<Expr, Ex
     if expr.ty != want {
         return Err(ExprError::new(
             format!(
-                "the expression is a {}, but an acceleration must be a {}{}",
+                "the expression is a {}, but {} must be a {}{}",
                 expr.ty.name(),
+                scope.role,
                 want.name(),
                 if expr.ty == Ty::Scalar {
                     " (write vec3(a, b, c), or multiply a direction by it)"

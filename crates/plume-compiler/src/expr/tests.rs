@@ -162,3 +162,38 @@ fn random_numbers_come_from_the_particle_hash() {
     assert_eq!(draw(3), draw(3));
     assert_ne!(draw(3), draw(4));
 }
+
+#[test]
+fn hsv_gives_the_hues_and_greys_and_folds_when_constant() {
+    let near = |a: DVec3, b: DVec3| (a - b).length() < 1e-6;
+    let rgb = |text: &str| at(text, DVec3::ZERO, DVec3::ZERO);
+    assert!(near(rgb("hsv(0.0, 1.0, 1.0)"), DVec3::X));
+    assert!(near(rgb("hsv(1.0 / 3.0, 1.0, 1.0)"), DVec3::Y));
+    assert!(near(rgb("hsv(2.0 / 3.0, 1.0, 0.5)"), DVec3::Z * 0.5));
+    assert!(near(rgb("hsv(0.25, 0.0, 0.7)"), DVec3::splat(0.7)));
+    // Constant arguments fold the whole helper to a colour.
+    assert!(matches!(
+        c("hsv(0.0, 1.0, 2.0)").unwrap().node,
+        Node::Vector(_)
+    ));
+    // A mistake in an argument is located in the argument; a vec3 where a number goes, at it.
+    let (m, s, e) = err("hsv(x, 1.0, 1.0)");
+    assert!(m.contains("argument 1 of `hsv`"), "{m}");
+    assert_eq!((s, e), (4, 5));
+    let (m, s, _) = err("hsv(0.5, 1.0, nope)");
+    assert!(m.contains("unknown name `nope`"), "{m}");
+    assert_eq!(s, 14);
+}
+
+#[test]
+fn draws_take_a_literal_stream_that_leaves_room_for_theirs() {
+    let (m, s, e) = err("rand_ball(254) * 1.0");
+    assert!(
+        m.contains("rand_ball(k) reads rand(k) to rand(k + 2)") && m.contains("0 to 253"),
+        "{m}"
+    );
+    assert_eq!((s, e), (10, 13));
+    assert!(c("rand_sphere(254)").is_ok());
+    // The expansion reads the particle's own numbers: the same at every evaluation.
+    assert!(c("rand_disc(3)").unwrap().draws_random());
+}

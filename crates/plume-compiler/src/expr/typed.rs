@@ -7,137 +7,8 @@ use std::collections::BTreeMap;
 use glam::DVec3;
 
 use super::parse::{Ast, AstKind, BinOp};
+pub use super::vocab::{Op1, Op2, Op3, Ty, Var, FUNCTIONS, MAX_RAND, VARIABLES};
 use super::ExprError;
-
-/// The type of a value.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Ty {
-    /// A number (f32 on the GPU, f64 in the reference).
-    Scalar,
-    /// Three numbers.
-    Vec3,
-    /// A comparison's result: only `select` takes it.
-    Bool,
-}
-
-impl Ty {
-    /// As written in messages.
-    pub fn name(self) -> &'static str {
-        match self {
-            Ty::Scalar => "f32",
-            Ty::Vec3 => "vec3",
-            Ty::Bool => "bool",
-        }
-    }
-}
-
-/// What an expression may read about the particle and the simulation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Var {
-    /// Position (m), vec3.
-    X,
-    /// Velocity (m/s), vec3.
-    V,
-    /// Simulation time (s).
-    T,
-    /// The particle's age (s).
-    Age,
-    /// The particle's lifetime (s); 0 for particles that never die.
-    Life,
-}
-
-impl Var {
-    /// The name as written.
-    pub fn name(self) -> &'static str {
-        match self {
-            Var::X => "x",
-            Var::V => "v",
-            Var::T => "t",
-            Var::Age => "age",
-            Var::Life => "life",
-        }
-    }
-
-    fn ty(self) -> Ty {
-        match self {
-            Var::X | Var::V => Ty::Vec3,
-            _ => Ty::Scalar,
-        }
-    }
-}
-
-/// Operations of one operand.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Op1 {
-    /// `-a`
-    Neg,
-    /// `abs`
-    Abs,
-    /// `floor`
-    Floor,
-    /// `fract`: a − floor(a).
-    Fract,
-    /// `sqrt` of max(a, 0).
-    Sqrt,
-    /// `exp`, its argument clamped so the result stays within the value bound.
-    Exp,
-    /// `log` of max(a, [`super::LOG_FLOOR`]).
-    Log,
-    /// `sin`
-    Sin,
-    /// `cos`
-    Cos,
-    /// `length` of a vec3.
-    Length,
-    /// `normalize`: zero for a vector too short to normalise.
-    Normalize,
-    /// Component `.x`, `.y` or `.z` (0, 1, 2).
-    Component(u8),
-}
-
-/// Operations of two operands.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Op2 {
-    /// `+`
-    Add,
-    /// `-`
-    Sub,
-    /// `*` (a scalar scales a vec3; two vec3s multiply per component).
-    Mul,
-    /// `/`, zero where the divisor is within [`super::DIV_FLOOR`] of zero.
-    Div,
-    /// `min`
-    Min,
-    /// `max`
-    Max,
-    /// `pow(a, b)`: 0 for a <= 0.
-    Pow,
-    /// `atan2(y, x)`: 0 at (0, 0).
-    Atan2,
-    /// `dot`
-    Dot,
-    /// `cross`
-    Cross,
-    /// `step(edge, a)`: 1 where a >= edge, else 0.
-    Step,
-    /// A comparison (`<` ...), giving a bool.
-    Compare(BinOp),
-}
-
-/// Operations of three operands.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Op3 {
-    /// `vec3(a, b, c)`
-    Vec3,
-    /// `clamp(a, lo, hi)` = min(max(a, lo), hi).
-    Clamp,
-    /// `mix(a, b, s)` = a + (b − a) s.
-    Mix,
-    /// `smoothstep(e0, e1, a)`, 0 where e0 == e1.
-    Smoothstep,
-    /// `select(if_false, if_true, cond)`, as in WGSL.
-    Select,
-}
 
 /// A node of the typed tree.
 #[derive(Clone, Debug, PartialEq)]
@@ -227,40 +98,8 @@ impl Expr {
     }
 }
 
-/// The variables, for messages.
-pub const VARIABLES: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life];
-
-/// Functions and their arities, for messages and the arity check.
-pub const FUNCTIONS: &[(&str, usize)] = &[
-    ("vec3", 3),
-    ("dot", 2),
-    ("cross", 2),
-    ("length", 1),
-    ("normalize", 1),
-    ("abs", 1),
-    ("min", 2),
-    ("max", 2),
-    ("clamp", 3),
-    ("mix", 3),
-    ("step", 2),
-    ("smoothstep", 3),
-    ("sqrt", 1),
-    ("exp", 1),
-    ("log", 1),
-    ("pow", 2),
-    ("sin", 1),
-    ("cos", 1),
-    ("atan2", 2),
-    ("floor", 1),
-    ("fract", 1),
-    ("select", 3),
-    ("rand", 1),
-];
-
-/// The largest `k` in `rand(k)`.
-pub const MAX_RAND: u32 = 255;
-
-/// Names the checker resolves besides variables and parameters: `dt`, the effect's step.
+/// What an expression may name: the variables of where it is evaluated, the effect's params
+/// and `dt`, its step.
 pub struct Scope<'a> {
     /// The effect's `params`.
     pub params: &'a BTreeMap<String, f64>,
@@ -268,6 +107,23 @@ pub struct Scope<'a> {
     pub dt: f64,
     /// Params are read at run time ([`Node::Param`]) instead of folded as constants.
     pub live: bool,
+    /// The variables it may read ([`VARIABLES`] for a force; fewer at spawn).
+    pub vars: &'a [Var],
+    /// What its value is, for messages: "an acceleration".
+    pub role: &'a str,
+}
+
+impl Scope<'_> {
+    /// The variables as messages list them: "x, v, t, age, life and dt".
+    fn names(&self) -> String {
+        let mut names: Vec<&str> = self.vars.iter().map(|v| v.name()).collect();
+        names.push("dt");
+        let last = names.pop().unwrap_or("dt");
+        match names.is_empty() {
+            true => last.to_string(),
+            false => format!("{} and {last}", names.join(", ")),
+        }
+    }
 }
 
 /// Type-checks a syntax tree into a typed tree.
@@ -285,6 +141,13 @@ pub fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
         }
         AstKind::Name(name) => {
             if let Some(v) = VARIABLES.iter().find(|v| v.name() == name) {
+                if !scope.vars.contains(v) {
+                    return Err(err(format!(
+                        "`{name}` is not known here: {} may read {}",
+                        scope.role,
+                        scope.names()
+                    )));
+                }
                 return Ok(Expr::new(Node::Var(*v), v.ty()));
             }
             if name == "dt" {
@@ -306,7 +169,8 @@ pub fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
             }
             let params: Vec<&str> = scope.params.keys().map(String::as_str).collect();
             Err(err(format!(
-                "unknown name `{name}`: the variables are x, v, t, age, life and dt{}",
+                "unknown name `{name}`: the variables are {}{}",
+                scope.names(),
                 if params.is_empty() {
                     ", and the file has no params".to_string()
                 } else {
@@ -443,6 +307,43 @@ fn call(
             ast.start,
             ast.end,
         ));
+    }
+    if name == "hsv" {
+        let typed: Vec<Expr> = args
+            .iter()
+            .map(|a| check(a, scope))
+            .collect::<Result<_, _>>()?;
+        if let Some(i) = typed.iter().position(|e| e.ty != Ty::Scalar) {
+            return Err(ExprError::new(
+                format!(
+                    "argument {} of `hsv` (hue, saturation, value) must be a f32, got a {}",
+                    i + 1,
+                    typed[i].ty.name()
+                ),
+                args[i].start,
+                args[i].end,
+            ));
+        }
+        return check(
+            &super::draws::expand_hsv(args, (ast.start, ast.end))?,
+            scope,
+        );
+    }
+    if let Some(draw) = super::draws::find(name) {
+        let last = MAX_RAND + 1 - draw.streams;
+        return match args[0].kind {
+            AstKind::Num(k) if k.fract() == 0.0 && (0.0..=f64::from(last)).contains(&k) => {
+                check(&draw.expand(k as u32, (ast.start, ast.end))?, scope)
+            }
+            _ => Err(ExprError::new(
+                format!(
+                    "{name}(k) reads rand(k) to rand(k + {}): k is a whole number from 0 to {last}, written as a literal",
+                    draw.streams - 1
+                ),
+                args[0].start,
+                args[0].end,
+            )),
+        };
     }
     if name == "rand" {
         return match args[0].kind {

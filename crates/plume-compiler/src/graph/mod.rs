@@ -394,7 +394,12 @@ fn check_event(c: &mut Checker, path: &ValuePath, ev: &Event, group: &Effect) {
         c.positive(&path.field("on").variant("Every").inner(), seconds);
     }
     c.finite(&path.field("inherit_velocity"), ev.inherit_velocity);
-    ev.as_emitter().check(c, path, group.dt);
+    let names = crate::expr::Names {
+        params: &group.params,
+        dt: group.dt,
+        live: group.live_params,
+    };
+    ev.as_emitter().check(c, path, names);
 }
 
 /// A warning when `ev` can never fire in `group`.

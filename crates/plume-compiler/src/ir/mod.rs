@@ -110,6 +110,8 @@ pub struct RenderIr {
     pub trail: Option<crate::features::looks::trail::TrailIr>,
     /// The colours particles pick their tint from (`tint.rs`).
     pub palette: Option<Vec<DVec3>>,
+    /// What each particle's colour and size are multiplied by (`by_expression.rs`).
+    pub by: crate::features::looks::by_expression::LookBy,
 }
 
 impl RenderIr {
@@ -199,6 +201,9 @@ impl EffectIr {
             if let crate::features::forces::Term::Custom(c) = t {
                 c.expr.set_param(index as u32, f64::from(value));
             }
+        }
+        for e in &mut self.emitters {
+            e.set_param(index as u32, f64::from(value));
         }
     }
 
@@ -467,6 +472,12 @@ impl fmt::Display for EffectIr {
         }
         if let Some(d) = self.render.soft {
             writeln!(f, "  soft {d} m")?;
+        }
+        if let Some(e) = &self.render.by.color {
+            writeln!(f, "  color_by: {} nodes", e.size())?;
+        }
+        if let Some(e) = &self.render.by.size {
+            writeln!(f, "  size_by: {} nodes", e.size())?;
         }
         if let Some(g) = self.render.glow {
             writeln!(f, "  glow {g:?}")?;

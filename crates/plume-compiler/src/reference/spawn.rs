@@ -22,7 +22,7 @@ pub struct Spawned {
 /// The state of particle `id`, the `k`-th of emitter `e`, spawned at `step`.
 pub fn spawn(ir: &EffectIr, e: usize, id: u32, k: u32, step: u64) -> Spawned {
     let em = &ir.emitters[e];
-    let (x, v) = em.sample(ir.seed_mix, id, k);
+    let (x, v) = em.sample(ir.seed_mix, id, k, step);
     let die_at = match em.lifetime_steps {
         Some(l) => {
             let n = l.draw(rand_u32(ir.seed_mix, id, stream::LIFETIME));

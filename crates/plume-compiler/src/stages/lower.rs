@@ -21,7 +21,11 @@ pub fn lower(effect: &Effect) -> EffectIr {
         seed_mix: seed_mix(effect.seed),
         dt: effect.dt,
         substeps: effect.substeps,
-        emitters: effect.emitters.iter().map(|e| e.lower(effect.dt)).collect(),
+        emitters: effect
+            .emitters
+            .iter()
+            .map(|e| e.lower(scope, seed_mix(effect.seed)))
+            .collect(),
         terms: effect
             .forces
             .iter()
@@ -113,6 +117,10 @@ pub fn lower(effect: &Effect) -> EffectIr {
                     .palette
                     .as_ref()
                     .map(|p| p.iter().map(|c| c.d()).collect()),
+                by: crate::features::looks::by_expression::LookBy::lower(
+                    (r.color_by.as_deref(), r.size_by.as_deref()),
+                    scope,
+                ),
             }
         },
         bounds: effect.bounds.map(|b| (b.min.d(), b.max.d())),

@@ -201,6 +201,13 @@ pub struct Render {
     /// multiplied by (and that children of events with `inherit_color` take on).
     #[serde(default)]
     pub palette: Option<Vec<Vec3>>,
+    /// An expression (vec3) of the particle that its colour's RGB is multiplied by
+    /// (`features/looks/by.rs`).
+    #[serde(default)]
+    pub color_by: Option<String>,
+    /// An expression (f32) of the particle that its size is multiplied by.
+    #[serde(default)]
+    pub size_by: Option<String>,
 }
 
 impl Default for Render {
@@ -219,6 +226,8 @@ impl Default for Render {
             glow: None,
             trail: None,
             palette: None,
+            color_by: None,
+            size_by: None,
         }
     }
 }

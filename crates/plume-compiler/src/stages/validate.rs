@@ -64,8 +64,13 @@ pub fn check_effect(effect: &Effect) -> Checker {
     if effect.substeps == 0 {
         c.error(&root.field("substeps"), "must be >= 1, got 0");
     }
+    let scope = crate::features::forces::custom::Scope {
+        params: &effect.params,
+        dt: effect.dt,
+        live: effect.live_params,
+    };
     for (i, e) in effect.emitters.iter().enumerate() {
-        e.check(&mut c, &root.field("emitters").index(i), effect.dt);
+        e.check(&mut c, &root.field("emitters").index(i), scope);
     }
     let noisy = effect
         .forces
@@ -73,11 +78,6 @@ pub fn check_effect(effect: &Effect) -> Checker {
         .position(|f| matches!(f, crate::features::forces::Force::Wind(w) if w.noise != 0.0));
     effect.field.check(&root.field("field"), &mut c, noisy);
     check_params(&mut c, &root.field("params"), effect);
-    let scope = crate::features::forces::custom::Scope {
-        params: &effect.params,
-        dt: effect.dt,
-        live: effect.live_params,
-    };
     // Forces an effect has at most one of, and what to do instead of a second.
     let single = [
         (
@@ -134,6 +134,15 @@ pub fn check_effect(effect: &Effect) -> Checker {
         }
     }
     check_render(&mut c, &root.field("render"), &effect.render);
+    crate::features::looks::by_expression::LookBy::check(
+        &mut c,
+        &root.field("render"),
+        (
+            effect.render.color_by.as_deref(),
+            effect.render.size_by.as_deref(),
+        ),
+        scope,
+    );
     if let Some(bounds) = &effect.bounds {
         c.box_corners(&root.field("bounds"), bounds.min, bounds.max);
     }
@@ -216,11 +225,18 @@ fn check_colors(c: &mut Checker, colors: &ValuePath, stops: &[crate::stages::sch
     check_stop_times(c, colors, &stops.iter().map(|s| s.0).collect::<Vec<_>>());
     for (i, s) in stops.iter().enumerate() {
         let p = colors.index(i).component(1, "color");
-        for (j, (name, x)) in [("r", s.1 .0), ("g", s.1 .1), ("b", s.1 .2), ("a", s.1 .3)]
-            .into_iter()
-            .enumerate()
+        // Colour above 1 is HDR light; opacity is a fraction.
+        let most = crate::features::looks::COLOR_MOST;
+        for (j, (name, x, hi)) in [
+            ("r", s.1 .0, most),
+            ("g", s.1 .1, most),
+            ("b", s.1 .2, most),
+            ("a", s.1 .3, 1.0),
+        ]
+        .into_iter()
+        .enumerate()
         {
-            c.within(&p.component(j, name), x, 0.0, 1.0);
+            c.within(&p.component(j, name), x, 0.0, hi);
         }
     }
 }

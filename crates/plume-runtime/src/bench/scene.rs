@@ -81,6 +81,7 @@ fn shape_centre(shape: &plume_compiler::schema::Shape) -> glam::DVec3 {
         Shape::Grid { min, max, .. } => (min.d() + max.d()) * 0.5,
         Shape::Points(ps) => ps.iter().map(|p| p.d()).sum::<glam::DVec3>() / ps.len().max(1) as f64,
         Shape::Mesh { offset, .. } => offset.d(),
+        Shape::Custom(_) => glam::DVec3::ZERO,
     }
 }
 

@@ -5,6 +5,7 @@
 //! the tests (as the f64 reference serves the simulation), never `plume render`.
 
 use glam::{DVec3, Mat4};
+use plume_compiler::by_expression::Seen;
 use plume_compiler::ir::{EffectIr, RenderIr};
 use plume_compiler::reference::ParticleRecord;
 use plume_compiler::rotation::RotationIr;
@@ -55,12 +56,21 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
                 Some(l) if l > 0.0 => (r.age / l).clamp(0.0, 1.0),
                 _ => 0.0,
             };
+            let seen = Seen {
+                x: r.position,
+                v: r.velocity,
+                age: r.age,
+                life: r.lifetime.unwrap_or(0.0),
+                id: r.id,
+            };
+            let by = render.by.color_factor(&seen, ir.seed_mix) * r.tint;
             let c = render.color_at(t);
-            let c = [c[0] * r.tint.x, c[1] * r.tint.y, c[2] * r.tint.z, c[3]];
+            let c = [c[0] * by.x, c[1] * by.y, c[2] * by.z, c[3]];
             let p = r.position;
+            let scale = render.by.size_factor(&seen, ir.seed_mix);
             let (half_x, half_y) = render.orient.half_axes(
-                render.size_at(t),
-                render.height_at(t),
+                render.size_at(t) * scale,
+                render.height_at(t) * scale,
                 r.velocity,
                 camera_right,
                 camera_up,

@@ -4,6 +4,7 @@
 //! estimates. Each part owns its WGSL and its f64 twin: `shape_ir.rs` where particles start,
 //! `velocity.rs` how they move off, `timing.rs` at which steps they spawn.
 
+mod expression;
 mod shape;
 mod shape_ir;
 mod timing;
@@ -20,6 +21,7 @@ use crate::base::path::ValuePath;
 use crate::base::rng::ParticleDraws;
 use crate::base::values::Range;
 use crate::base::writer::Writer;
+use crate::expr::Names;
 
 pub use shape::Shape;
 pub use shape_ir::{box_face_thresholds, ShapeIr};
@@ -111,8 +113,10 @@ impl Emitter {
         }
     }
 
-    /// Records in `c` what is wrong with the emitter at `path`, for steps of `dt`.
-    pub fn check(&self, c: &mut Checker, path: &ValuePath, dt: f64) {
+    /// Records in `c` what is wrong with the emitter at `path`; `names` are what its
+    /// expressions may name (and the step, `names.dt`).
+    pub fn check(&self, c: &mut Checker, path: &ValuePath, names: Names) {
+        let dt = names.dt;
         c.non_negative(&path.field("rate"), self.rate);
         timing::check(
             c,
@@ -121,9 +125,10 @@ impl Emitter {
             self.burst,
             dt,
         );
-        self.shape.check(c, &path.field("shape"));
+        self.shape.check(c, &path.field("shape"), names);
         let on_mesh = matches!(self.shape, Shape::Mesh { .. });
-        self.velocity.check(c, &path.field("velocity"), on_mesh);
+        self.velocity
+            .check(c, &path.field("velocity"), on_mesh, names);
         if matches!(self.shape, Shape::Mesh { volume: true, .. })
             && matches!(self.velocity, Velocity::Normal { .. })
         {
@@ -150,14 +155,17 @@ impl Emitter {
         }
     }
 
-    /// The emitter's lowered form for steps of `dt` (after [`Emitter::check`] passed).
-    pub fn lower(&self, dt: f64) -> EmitterIr {
+    /// The emitter's lowered form (after [`Emitter::check`] passed) in an effect of
+    /// `seed_mix`.
+    pub fn lower(&self, names: Names, seed_mix: u32) -> EmitterIr {
+        let dt = names.dt;
+        let shape = self.shape.lower(names, seed_mix);
         EmitterIr {
             burst: self.burst,
             rate: self.rate,
             timing: SpawnTiming::new(self.start, self.duration, self.every, self.cycles, dt),
-            shape: self.shape.lower(),
-            velocity: self.velocity.lower(),
+            velocity: self.velocity.lower(names, &shape, seed_mix),
+            shape,
             lifetime: self.lifetime.map(|r| (r.0, r.1)),
             lifetime_steps: self.lifetime.and_then(|r| LifetimeSteps::new(r.0, r.1, dt)),
         }
@@ -172,12 +180,23 @@ impl EmitterIr {
         t.end_step.is_none() && (self.rate > 0.0 || (self.burst > 0 && t.cycles.is_none()))
     }
 
-    /// The state of particle `id`, its `k`-th: position, velocity and, on a mesh, the
-    /// surface's normal where it starts (the f64 twin of [`Self::emit_wgsl`]'s draws).
-    pub fn sample(&self, seed_mix: u32, id: u32, k: u32) -> (DVec3, DVec3) {
+    /// The position and velocity of particle `id`, the emitter's `k`-th, spawned at `step`
+    /// (the f64 twin of [`Self::emit_wgsl`]).
+    pub fn sample(&self, seed_mix: u32, id: u32, k: u32, step: u64) -> (DVec3, DVec3) {
         let d = ParticleDraws { seed_mix, id };
-        let (x, normal) = self.shape.sample(&d, k);
-        (x, self.velocity.sample(&d, &self.shape, x, normal))
+        let t = step as f64 * self.timing.dt;
+        let (x, normal) = self.shape.sample(&d, k, t);
+        (x, self.velocity.sample(&d, &self.shape, (x, normal), t))
+    }
+
+    /// Sets live param `index` to `value` in the emitter's expressions.
+    pub fn set_param(&mut self, index: u32, value: f64) {
+        if let ShapeIr::Custom { expr, .. } = &mut self.shape {
+            expr.set_param(index, value);
+        }
+        if let VelocityIr::Custom { expr, .. } = &mut self.velocity {
+            expr.set_param(index, value);
+        }
     }
 
     /// Emits what emitter `e` needs at the module's top level, before its `emit_e` function;
@@ -189,8 +208,8 @@ impl EmitterIr {
     /// Emits the statements of emitter `e`'s `emit_e(id, k, step)` that set its position and
     /// velocity (`s.x`, `s.v`): the WGSL twin of [`Self::sample`].
     pub fn emit_wgsl(&self, w: &mut Writer, e: usize) {
-        self.shape.emit_wgsl(w, e);
-        self.velocity.emit_wgsl(w, &self.shape);
+        self.shape.emit_wgsl(w, e, self.timing.dt);
+        self.velocity.emit_wgsl(w, &self.shape, self.timing.dt);
     }
 }
 

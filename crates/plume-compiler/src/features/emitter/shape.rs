@@ -10,6 +10,9 @@ use serde::Deserialize;
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::base::values::{safe_normalize, Counts, Vec3};
+use crate::expr::typed::Node;
+use crate::expr::Names;
+use crate::features::emitter::expression::{self, SpawnValue, ESTIMATE_SPAWNS};
 use crate::features::emitter::shape_ir::{box_face_thresholds, ShapeIr};
 use crate::features::emitter::Basis;
 use crate::features::mesh_emission::{place, MeshSurface};
@@ -76,6 +79,9 @@ pub enum Shape {
         #[serde(default)]
         surface: bool,
     },
+    /// A position written as an expression of type vec3 (`features/emitter/expression.rs`): it
+    /// reads `t` (the spawn's time), `rand(k)`, the params and `dt`.
+    Custom(String),
     /// Deterministic lattice points, handed out in x-then-y-then-z order.
     Grid {
         /// First lattice corner.
@@ -149,9 +155,13 @@ impl Shape {
         }
     }
 
-    /// Records in `c` what is wrong with the shape at `path` (the emitter's `shape`).
-    pub fn check(&self, c: &mut Checker, path: &ValuePath) {
+    /// Records in `c` what is wrong with the shape at `path` (the emitter's `shape`); `names`
+    /// are what its expression may name.
+    pub fn check(&self, c: &mut Checker, path: &ValuePath, names: Names) {
         match self {
+            Shape::Custom(text) => {
+                SpawnValue::Position.check(text, &path.variant("Custom").inner(), c, names);
+            }
             Shape::Point(p) => {
                 c.vec3(&path.variant("Point").inner(), *p);
             }
@@ -250,9 +260,25 @@ impl Shape {
         }
     }
 
-    /// The shape's lowered form (after [`Shape::check`] passed).
-    pub fn lower(&self) -> ShapeIr {
+    /// The shape's lowered form (after [`Shape::check`] passed), for an effect of `seed_mix`.
+    pub fn lower(&self, names: Names, seed_mix: u32) -> ShapeIr {
         match self {
+            Shape::Custom(text) => {
+                let expr = SpawnValue::Position
+                    .compile(text, names)
+                    .expect("checked before lowering");
+                // One that folds to a constant is that point.
+                if let Node::Vector(p) = expr.node {
+                    return ShapeIr::Point(p);
+                }
+                // Its extent, for the precision warnings and the stiffness estimates: the
+                // farthest of a sample of spawns at t = 0.
+                let extent = (0..ESTIMATE_SPAWNS)
+                    .map(|id| expression::value(&expr, seed_mix, id, 0.0, DVec3::ZERO))
+                    .map(|x| x.abs().max_element())
+                    .fold(0.0, f64::max);
+                ShapeIr::Custom { expr, extent }
+            }
             Shape::Point(p) => ShapeIr::Point(p.d()),
             Shape::Sphere {
                 center,

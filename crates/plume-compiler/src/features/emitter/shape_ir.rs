@@ -10,6 +10,7 @@ use glam::DVec3;
 
 use crate::base::rng::{stream, wgsl_unit3, ParticleDraws};
 use crate::base::writer::{f32_lit, u32_lit, vec3_lit, Writer};
+use crate::expr::Expr;
 use crate::features::emitter::Basis;
 use crate::features::mesh_emission::MeshSurface;
 
@@ -99,6 +100,13 @@ pub enum ShapeIr {
     Points(Vec<DVec3>),
     /// On a mesh's surface or in its volume.
     Mesh(Arc<MeshSurface>),
+    /// An expression of the spawn's time and random numbers.
+    Custom {
+        /// The typed, folded expression.
+        expr: Expr,
+        /// The farthest a sample of its spawns lies from the origin.
+        extent: f64,
+    },
 }
 
 /// The face thresholds of a box surface between `min` and `max`: for faces −x, +x, −y, +y, −z
@@ -157,6 +165,8 @@ impl ShapeIr {
             }
             ShapeIr::Points(ps) => ps.iter().copied().sum::<DVec3>() / ps.len().max(1) as f64,
             ShapeIr::Mesh(m) => m.center,
+            // Written freely: Radial and Tangent velocities take the origin as its centre.
+            ShapeIr::Custom { .. } => DVec3::ZERO,
         }
     }
 
@@ -207,6 +217,7 @@ impl ShapeIr {
             }
             ShapeIr::Points(ps) => ps.iter().map(|p| p.abs().max_element()).fold(0.0, f64::max),
             ShapeIr::Mesh(m) => m.extent,
+            ShapeIr::Custom { extent, .. } => *extent,
         }
     }
 
@@ -229,11 +240,12 @@ impl ShapeIr {
     }
 
     /// Emits the statements that set `s.x` (and, on a mesh, `surface_normal`) inside emitter
-    /// `e`'s `emit_e(id, k, step)`: the WGSL twin of [`Self::sample`].
-    pub fn emit_wgsl(&self, w: &mut Writer, e: usize) {
+    /// `e`'s `emit_e(id, k, step)`, for steps of `dt`: the WGSL twin of [`Self::sample`].
+    pub fn emit_wgsl(&self, w: &mut Writer, e: usize, dt: f64) {
         let two_pi = f32_lit(2.0 * PI);
         let pi = f32_lit(PI);
         match self {
+            ShapeIr::Custom { expr, .. } => super::expression::emit(w, expr, "s.x", dt),
             ShapeIr::Point(p) => w.line(format!("s.x = {};", vec3_lit(*p))),
             ShapeIr::Sphere { center, radius } => {
                 w.comment("Uniform in the ball: cos(polar) uniform, radius ~ cube root.");
@@ -424,10 +436,14 @@ impl ShapeIr {
         }
     }
 
-    /// The spawn position of the particle drawing `d`, the `k`-th of its emitter, and on a
-    /// mesh the surface's normal there (zero elsewhere): the f64 twin of [`Self::emit_wgsl`].
-    pub fn sample(&self, d: &ParticleDraws, k: u32) -> (DVec3, DVec3) {
+    /// The spawn position of the particle drawing `d`, the `k`-th of its emitter, spawned at
+    /// time `t`, and on a mesh the surface's normal there (zero elsewhere): the f64 twin of
+    /// [`Self::emit_wgsl`].
+    pub fn sample(&self, d: &ParticleDraws, k: u32, t: f64) -> (DVec3, DVec3) {
         let x = match self {
+            ShapeIr::Custom { expr, .. } => {
+                super::expression::value(expr, d.seed_mix, d.id, t, DVec3::ZERO)
+            }
             ShapeIr::Mesh(m) => {
                 return m.spawn(d.word(stream::MESH_PICK), d.unit3(stream::POSITION));
             }

@@ -12,6 +12,9 @@ use crate::base::path::ValuePath;
 use crate::base::rng::{stream, ParticleDraws};
 use crate::base::values::{safe_normalize, Range, Vec3};
 use crate::base::writer::{f32_lit, vec3_lit, Writer};
+use crate::expr::typed::Node;
+use crate::expr::{Expr, Names};
+use crate::features::emitter::expression::{self, SpawnValue, ESTIMATE_SPAWNS};
 use crate::features::emitter::shape_ir::ShapeIr;
 use crate::features::emitter::Basis;
 
@@ -48,6 +51,9 @@ pub enum Velocity {
         /// Speed range (m/s); negative turns the other way.
         speed: Range,
     },
+    /// A velocity written as an expression of type vec3 (`features/emitter/expression.rs`): it
+    /// reads `x` (the spawn position), `t`, `rand(k)`, the params and `dt`.
+    Custom(String),
 }
 
 /// Spawn velocity in the IR.
@@ -83,13 +89,23 @@ pub enum VelocityIr {
         /// Speed range.
         speed: (f64, f64),
     },
+    /// An expression of the spawn position, time and random numbers.
+    Custom {
+        /// The typed, folded expression.
+        expr: Expr,
+        /// The fastest of a sample of its spawns.
+        max_speed: f64,
+    },
 }
 
 impl Velocity {
     /// Records in `c` what is wrong with the velocity at `path` (the emitter's `velocity`),
-    /// given the emitter's shape.
-    pub fn check(&self, c: &mut Checker, path: &ValuePath, on_mesh: bool) {
+    /// given the emitter's shape; `names` are what its expression may name.
+    pub fn check(&self, c: &mut Checker, path: &ValuePath, on_mesh: bool, names: Names) {
         match self {
+            Velocity::Custom(text) => {
+                SpawnValue::Velocity.check(text, &path.variant("Custom").inner(), c, names);
+            }
             Velocity::Constant(v) => {
                 c.vec3(&path.variant("Constant").inner(), *v);
             }
@@ -120,9 +136,28 @@ impl Velocity {
         }
     }
 
-    /// The velocity's lowered form (after [`Velocity::check`] passed).
-    pub fn lower(&self) -> VelocityIr {
+    /// The velocity's lowered form (after [`Velocity::check`] passed), for particles that
+    /// spawn on `shape` in an effect of `seed_mix`.
+    pub fn lower(&self, names: Names, shape: &ShapeIr, seed_mix: u32) -> VelocityIr {
         match self {
+            Velocity::Custom(text) => {
+                let expr = SpawnValue::Velocity
+                    .compile(text, names)
+                    .expect("checked before lowering");
+                // One that folds to a constant is that velocity.
+                if let Node::Vector(v) = expr.node {
+                    return VelocityIr::Constant(v);
+                }
+                // The fastest of a sample of spawns at t = 0, for the stiffness estimates.
+                let max_speed = (0..ESTIMATE_SPAWNS)
+                    .map(|id| {
+                        let d = ParticleDraws { seed_mix, id };
+                        let (x, _) = shape.sample(&d, id, 0.0);
+                        expression::value(&expr, seed_mix, id, 0.0, x).length()
+                    })
+                    .fold(0.0, f64::max);
+                VelocityIr::Custom { expr, max_speed }
+            }
             Velocity::Constant(v) => VelocityIr::Constant(v.d()),
             Velocity::Cone { axis, angle, speed } => {
                 let axis = safe_normalize(axis.d());
@@ -165,15 +200,17 @@ impl VelocityIr {
             | VelocityIr::Radial { speed }
             | VelocityIr::Normal { speed }
             | VelocityIr::Tangent { speed, .. } => speed.0.abs().max(speed.1.abs()),
+            VelocityIr::Custom { max_speed, .. } => *max_speed,
         }
     }
 
     /// Emits the statements that set `s.v` inside an emitter's `emit_e(id, k, step)`, after
-    /// `shape`'s: the WGSL twin of [`Self::sample`].
-    pub fn emit_wgsl(&self, w: &mut Writer, shape: &ShapeIr) {
+    /// `shape`'s, for steps of `dt`: the WGSL twin of [`Self::sample`].
+    pub fn emit_wgsl(&self, w: &mut Writer, shape: &ShapeIr, dt: f64) {
         let two_pi = f32_lit(2.0 * PI);
         let pi = f32_lit(PI);
         match self {
+            VelocityIr::Custom { expr, .. } => expression::emit(w, expr, "s.v", dt),
             VelocityIr::Constant(v) => w.line(format!("s.v = {};", vec3_lit(*v))),
             VelocityIr::Cone {
                 axis,
@@ -247,11 +284,19 @@ impl VelocityIr {
         }
     }
 
-    /// The spawn velocity of the particle drawing `d`, spawned at `x` on `shape` (`normal`: the
-    /// surface's normal there, zero off a mesh): the f64 twin of [`Self::emit_wgsl`].
-    pub fn sample(&self, d: &ParticleDraws, shape: &ShapeIr, x: DVec3, normal: DVec3) -> DVec3 {
+    /// The spawn velocity of the particle drawing `d`, spawned at `x` on `shape` at time `t`
+    /// (`normal`: the surface's normal there, zero off a mesh): the f64 twin of
+    /// [`Self::emit_wgsl`].
+    pub fn sample(
+        &self,
+        d: &ParticleDraws,
+        shape: &ShapeIr,
+        (x, normal): (DVec3, DVec3),
+        t: f64,
+    ) -> DVec3 {
         let speed = |s: (f64, f64)| s.0 + (s.1 - s.0) * d.unit(stream::VELOCITY + 2);
         match self {
+            VelocityIr::Custom { expr, .. } => expression::value(expr, d.seed_mix, d.id, t, x),
             VelocityIr::Constant(v) => *v,
             VelocityIr::Cone {
                 axis,

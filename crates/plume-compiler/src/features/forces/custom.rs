@@ -4,8 +4,6 @@
 //! constant becomes a constant term, so Exact and stateless still apply), its WGSL and its f64
 //! reference, and its stiffness, estimated by sampling the Jacobian over the emitters' region.
 
-use std::collections::BTreeMap;
-
 use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
@@ -23,24 +21,10 @@ pub const FIELDS: &[&str] = &["accel"];
 
 /// What a custom force's expressions may name besides the variables: the effect's `params`
 /// and its `dt`.
-#[derive(Clone, Copy, Debug)]
-pub struct Scope<'a> {
-    /// The effect's named constants.
-    pub params: &'a BTreeMap<String, f64>,
-    /// The effect's step (s).
-    pub dt: f64,
-    /// Params are read at run time (`CompileOptions::live_params`), not folded.
-    pub live: bool,
-}
+pub use crate::expr::Names as Scope;
 
-impl Scope<'_> {
-    fn typed(&self) -> expr::typed::Scope<'_> {
-        expr::typed::Scope {
-            params: self.params,
-            dt: self.dt,
-            live: self.live,
-        }
-    }
+fn typed(scope: Scope<'_>) -> expr::typed::Scope<'_> {
+    scope.scope(expr::typed::VARIABLES, "an acceleration")
 }
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -53,7 +37,7 @@ pub struct Custom {
 impl Custom {
     /// Parses and type-checks the expression; a mistake is an error at its characters.
     pub fn check(&self, path: &ValuePath, c: &mut Checker, scope: Scope) {
-        if let Err(e) = expr::compile_in(&self.accel, Ty::Vec3, &scope.typed()) {
+        if let Err(e) = expr::compile_in(&self.accel, Ty::Vec3, &typed(scope)) {
             c.error_in_string(&path.field("accel"), e.start, e.end, e.message);
         }
     }
@@ -61,7 +45,7 @@ impl Custom {
     /// Lowers to a term: a constant term when the expression folds to a constant, else a
     /// custom term. Call only after [`Custom::check`] found no error.
     pub fn lower(&self, origin: usize, seed_mix: u32, scope: Scope) -> Term {
-        let expr = expr::compile_in(&self.accel, Ty::Vec3, &scope.typed())
+        let expr = expr::compile_in(&self.accel, Ty::Vec3, &typed(scope))
             .expect("checked before lowering");
         if let Node::Vector(accel) = expr.node {
             return Term::Constant(super::constant::ConstantTerm {

@@ -28,7 +28,8 @@ pub fn needs_spawn_step(ir: &EffectIr) -> bool {
     let flipbook = ir.render.texture.as_ref().filter(|t| t.animated());
     let life = (ir.render.varies_over_life() || flipbook.is_some()) && ir.has_lifetimes();
     let age = flipbook.is_some_and(|t| t.needs_age_of_immortals())
-        || ir.render.rotation.is_some_and(|r| r.spins());
+        || ir.render.rotation.is_some_and(|r| r.spins())
+        || ir.render.by.reads_age_or_life();
     let all_mortal = ir.emitters.iter().all(|e| e.lifetime.is_some());
     let shared = shared_lifetime(ir).is_some();
     (life && !shared) || (age && !(all_mortal && shared))

@@ -152,12 +152,15 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     let flipbook = texture.filter(|t| t.animated());
     let rotation = ir.render.rotation;
     let spins = rotation.is_some_and(|r| r.spins());
+    // The look's expressions read the age (in whole steps) as a spin does.
+    let ages = spins || ir.render.by.reads_age_or_life();
     // Random draws: a stateless effect redraws its spawns; a stateful one its lifetimes.
     let draws = stateless
         || ir.render.palette.is_some()
+        || ir.render.by.draws_random()
         || rotation.is_some()
         || flipbook.is_some_and(|t| t.draws_random())
-        || ((life || flipbook.is_some() || spins)
+        || ((life || flipbook.is_some() || ages)
             && ir.has_lifetimes()
             && !layout.has(Attribute::SpawnStep)
             && shared.is_some());
@@ -239,7 +242,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
             w.blank();
             emit_life_fraction(&mut w, layout, shared);
         }
-        if flipbook.is_some() || spins {
+        if flipbook.is_some() || ages {
             w.blank();
             emit_age_steps(&mut w, layout, shared);
         }
@@ -254,6 +257,10 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     }
     w.blank();
     emit_gradients(&mut w, ir);
+    if ir.render.by != Default::default() {
+        w.blank();
+        ir.render.by.emit_fns(&mut w);
+    }
     w.blank();
     emit_sprite_at(&mut w, ir, layout, shape, life);
     if let Some(t) = texture {
@@ -363,11 +370,13 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
             None => w.line("s.color = color_at(f);"),
         }
         w.line("s.size = size_at(f) * draw.size_scale;");
-        let height = if ir.render.size_y.is_some() {
+        if ir.render.size_y.is_some() {
             w.line("s.size_y = height_at(f) * draw.size_scale;");
-            "s.size_y"
-        } else {
-            "s.size"
+        }
+        emit_look_by(w, ir, layout, stateless);
+        let height = match ir.render.size_y.is_some() {
+            true => "s.size_y",
+            false => "s.size",
         };
         w.comment("Nothing to see: blending a zero alpha or a zero-size quad changes no pixel.");
         let height_hidden = if ir.render.size_y.is_some() {
@@ -411,6 +420,53 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
         w.line("s.visible = true;");
         w.line("return s;");
     });
+}
+
+/// Multiplies `s.color`'s RGB and `s.size` (and `s.size_y`) inside `sprite_at` by the look's
+/// expressions (`render.color_by`, `render.size_by`), given the particle as the draw sees it.
+fn emit_look_by(w: &mut Writer, ir: &EffectIr, layout: &Layout, stateless: bool) {
+    let by = &ir.render.by;
+    if by.color.is_none() && by.size.is_none() {
+        return;
+    }
+    let dt = f32_lit(ir.dt);
+    let (id, v) = match stateless {
+        true => ("e.id", "e.now.v".to_string()),
+        false if !by.reads_velocity() => ("p.id", "vec3<f32>(0.0)".to_string()),
+        false if layout.has(Attribute::Velocity) => ("p.id", "vec3<f32>(p.vx, p.vy, p.vz)".into()),
+        false => (
+            "p.id",
+            format!("vec3<f32>(p.dx, p.dy, p.dz) * {}", f32_lit(1.0 / ir.h())),
+        ),
+    };
+    if by.reads_age_or_life() {
+        match stateless {
+            true => {
+                w.line(
+                    "let by_life = select(0u, e.now.die_at - e.born + 1u, e.now.die_at != DEAD);",
+                );
+                w.line(format!(
+                    "let by_age = vec2<f32>(f32(e.age), f32(by_life)) * {dt};"
+                ));
+            }
+            false => w.line(format!("let by_age = vec2<f32>(age_steps(p)) * {dt};")),
+        }
+    } else {
+        w.line("let by_age = vec2<f32>(0.0);");
+    }
+    let args = format!("x, {v}, by_age.x, by_age.y, {id}");
+    if by.color.is_some() {
+        w.line(format!(
+            "s.color = vec4<f32>(s.color.rgb * color_by({args}), s.color.a);"
+        ));
+    }
+    if by.size.is_some() {
+        w.line(format!("let by_size = size_by({args});"));
+        w.line("s.size = s.size * by_size;");
+        if ir.render.size_y.is_some() {
+            w.line("s.size_y = s.size_y * by_size;");
+        }
+    }
 }
 
 /// The vertex shader `vs`: one instance per slot (or list entry), a quad (4-vertex strip) or a

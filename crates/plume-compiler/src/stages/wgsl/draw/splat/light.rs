@@ -13,8 +13,8 @@ use crate::base::writer::Writer;
 /// 131,072, past f16's largest finite value (65,504), which an HDR image keeps.
 pub(crate) const LIGHT_UNITS: u32 = 1 << 15;
 
-/// The most units one fragment adds (128.0 of light): below 2^22, where adding
-/// [`ROUNDING`] rounds an f32 to a whole number exactly (a fragment's light is at most 1.0).
+/// The most units one fragment adds (`features::looks::COLOR_MOST` of light, 128): below
+/// 2^22, where adding [`ROUNDING`] rounds an f32 to a whole number exactly.
 const FRAGMENT_MOST: u32 = (1 << 22) - 1;
 
 /// 1.5 * 2^23: f32 values from 2^23 to 2^24 are whole numbers, so `ROUNDING + x` (x from 0
@@ -57,10 +57,10 @@ pub(crate) fn emit_declare(w: &mut Writer) {
     w.line("var layers = 0u;");
 }
 
-/// Adds fragment `f` (its RGB times its alpha) to `light`. Colours, alphas, palettes and
-/// textures are all 0 to 1, so a fragment's light is too and needs no clamp (a fragment past
-/// [`FRAGMENT_MOST`] would only add the wrong light, never a NaN or an infinity: the sums are
-/// integers); an 8-bit target clamps `f` before.
+/// Adds fragment `f` (its RGB times its alpha) to `light`. Colours are at most `COLOR_MOST`
+/// and alphas, palettes and textures at most 1, so a fragment's light is within
+/// [`FRAGMENT_MOST`] and needs no clamp (one past it would only add the wrong light, never a
+/// NaN or an infinity: the sums are integers); an 8-bit target clamps `f` to 1 before.
 pub(crate) fn emit_add(w: &mut Writer) {
     w.line(format!(
         "light += bitcast<vec3<u32>>(fma(f.rgb, vec3<f32>(f.a * {LIGHT_UNITS}.0), vec3<f32>({ROUNDING})));"

@@ -7,8 +7,9 @@
 use super::composite::{self, emit_composite};
 use super::masks;
 use super::{emit_project_kernel, host_depth, splat_quad_words, splat_slices};
-use crate::base::writer::Writer;
+use crate::base::writer::{f32_lit, Writer};
 use crate::features::looks::orient::OrientIr;
+use crate::features::looks::COLOR_MOST;
 use crate::ir::EffectIr;
 use crate::stages::wgsl::draw::DrawShape;
 
@@ -83,7 +84,9 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr, host: bool) {
                     w.block("if (abs(det) > 1e-30)", |w| {
                         w.line("let rows = inverse_rows(cx, cy, cc, det);");
                         w.line("tiles = box_tiles(k, first, last);");
-                        w.line("let color = clamp(s.color, vec4<f32>(0.0), vec4<f32>(1.0));");
+                        w.comment("Colour up to COLOR_MOST (HDR light; an 8-bit composite clamps to 1), alpha to 1.");
+                        let most = f32_lit(COLOR_MOST);
+                        w.line(format!("let color = clamp(s.color, vec4<f32>(0.0), vec4<f32>({most}, {most}, {most}, 1.0));"));
                         w.line("let box = pack_box(first, last);");
                         w.line(format!("splats[{vec4s}u * k] = bitcast<vec4<u32>>(vec4<f32>(rows[0], color.r));"));
                         w.line(format!("splats[{vec4s}u * k + 1u] = bitcast<vec4<u32>>(vec4<f32>(rows[1], color.g));"));

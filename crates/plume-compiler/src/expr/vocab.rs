@@ -1,0 +1,174 @@
+//! The expression language's vocabulary: its types, the variables it reads, its operations
+//! and the names of its functions (for messages and the arity check).
+
+use super::parse::BinOp;
+
+/// The type of a value.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Ty {
+    /// A number (f32 on the GPU, f64 in the reference).
+    Scalar,
+    /// Three numbers.
+    Vec3,
+    /// A comparison's result: only `select` takes it.
+    Bool,
+}
+
+impl Ty {
+    /// As written in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Ty::Scalar => "f32",
+            Ty::Vec3 => "vec3",
+            Ty::Bool => "bool",
+        }
+    }
+}
+
+/// What an expression may read about the particle and the simulation.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Var {
+    /// Position (m), vec3.
+    X,
+    /// Velocity (m/s), vec3.
+    V,
+    /// Simulation time (s).
+    T,
+    /// The particle's age (s).
+    Age,
+    /// The particle's lifetime (s); 0 for particles that never die.
+    Life,
+}
+
+impl Var {
+    /// The name as written.
+    pub fn name(self) -> &'static str {
+        match self {
+            Var::X => "x",
+            Var::V => "v",
+            Var::T => "t",
+            Var::Age => "age",
+            Var::Life => "life",
+        }
+    }
+
+    /// The type of its value.
+    pub(crate) fn ty(self) -> Ty {
+        match self {
+            Var::X | Var::V => Ty::Vec3,
+            _ => Ty::Scalar,
+        }
+    }
+}
+
+/// Operations of one operand.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Op1 {
+    /// `-a`
+    Neg,
+    /// `abs`
+    Abs,
+    /// `floor`
+    Floor,
+    /// `fract`: a − floor(a).
+    Fract,
+    /// `sqrt` of max(a, 0).
+    Sqrt,
+    /// `exp`, its argument clamped so the result stays within the value bound.
+    Exp,
+    /// `log` of max(a, [`super::LOG_FLOOR`]).
+    Log,
+    /// `sin`
+    Sin,
+    /// `cos`
+    Cos,
+    /// `length` of a vec3.
+    Length,
+    /// `normalize`: zero for a vector too short to normalise.
+    Normalize,
+    /// Component `.x`, `.y` or `.z` (0, 1, 2).
+    Component(u8),
+}
+
+/// Operations of two operands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Op2 {
+    /// `+`
+    Add,
+    /// `-`
+    Sub,
+    /// `*` (a scalar scales a vec3; two vec3s multiply per component).
+    Mul,
+    /// `/`, zero where the divisor is within [`super::DIV_FLOOR`] of zero.
+    Div,
+    /// `min`
+    Min,
+    /// `max`
+    Max,
+    /// `pow(a, b)`: 0 for a <= 0.
+    Pow,
+    /// `atan2(y, x)`: 0 at (0, 0).
+    Atan2,
+    /// `dot`
+    Dot,
+    /// `cross`
+    Cross,
+    /// `step(edge, a)`: 1 where a >= edge, else 0.
+    Step,
+    /// A comparison (`<` ...), giving a bool.
+    Compare(BinOp),
+}
+
+/// Operations of three operands.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Op3 {
+    /// `vec3(a, b, c)`
+    Vec3,
+    /// `clamp(a, lo, hi)` = min(max(a, lo), hi).
+    Clamp,
+    /// `mix(a, b, s)` = a + (b − a) s.
+    Mix,
+    /// `smoothstep(e0, e1, a)`, 0 where e0 == e1.
+    Smoothstep,
+    /// `select(if_false, if_true, cond)`, as in WGSL.
+    Select,
+}
+
+/// The variables, for messages.
+pub const VARIABLES: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life];
+
+/// Functions and their arities, for messages and the arity check.
+pub const FUNCTIONS: &[(&str, usize)] = &[
+    ("vec3", 3),
+    ("dot", 2),
+    ("cross", 2),
+    ("length", 1),
+    ("normalize", 1),
+    ("abs", 1),
+    ("min", 2),
+    ("max", 2),
+    ("clamp", 3),
+    ("mix", 3),
+    ("step", 2),
+    ("smoothstep", 3),
+    ("sqrt", 1),
+    ("exp", 1),
+    ("log", 1),
+    ("pow", 2),
+    ("sin", 1),
+    ("cos", 1),
+    ("atan2", 2),
+    ("floor", 1),
+    ("fract", 1),
+    ("select", 3),
+    ("rand", 1),
+    ("rand_sphere", 1),
+    ("rand_ball", 1),
+    ("rand_circle", 1),
+    ("rand_disc", 1),
+    ("rand_normal", 1),
+    ("hsv", 3),
+];
+
+/// The largest `k` in `rand(k)`.
+pub const MAX_RAND: u32 = 255;
