@@ -99,11 +99,12 @@ fn the_bench_copy_fills_the_capacity_and_keeps_the_layout() {
         .unwrap();
     let e = bench_effect(&parse(&src).unwrap(), 12345);
     assert_eq!(e.capacity, 12345);
-    assert_eq!(e.emitters.iter().map(|em| em.burst).sum::<u32>(), 12345);
+    let bursts = e.emitters.iter().map(|em| em.burst.value(&e.params));
+    assert_eq!(bursts.sum::<u32>(), 12345);
     assert!(e
         .emitters
         .iter()
-        .all(|em| em.rate == 0.0 && em.lifetime.is_some()));
+        .all(|em| em.rate.value(&e.params) == 0.0 && em.lifetime.is_some()));
 }
 
 /// `--profile`: each dispatch of a step timed, labelled by kernel and scope. Times are

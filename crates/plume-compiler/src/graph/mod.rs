@@ -427,8 +427,9 @@ fn never_fires(path: &ValuePath, ev: &Event, group: &Effect) -> Option<(Diagnost
 /// each live parent once per period.
 fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic, String)> {
     // A repeating burst counts as a rate of burst / every.
-    let steady_rate = |e: &crate::stages::schema::Emitter| {
-        e.rate + e.every.map_or(0.0, |every| f64::from(e.burst) / every)
+    let steady_rate = |e: &crate::stages::schema::Emitter, params| {
+        let burst = f64::from(e.burst.value(params));
+        e.rate.value(params) + e.every.map_or(0.0, |every| burst / every)
     };
     let longest = |life: Option<crate::stages::schema::Range>| life.map_or(f64::INFINITY, |r| r.1);
     let fed: Vec<bool> = (0..effects.len())
@@ -437,8 +438,13 @@ fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic,
     let expected_children = |s: &Stream, alive: &[f64]| {
         let parent = &effects[s.parent];
         let ev = &parent.events[s.out_slot];
-        let bursts: f64 = parent.emitters.iter().map(|e| f64::from(e.burst)).sum();
-        let rate: f64 = parent.emitters.iter().map(steady_rate).sum();
+        let params = &parent.params;
+        let bursts: f64 = parent
+            .emitters
+            .iter()
+            .map(|e| f64::from(e.burst.value(params)))
+            .sum();
+        let rate: f64 = parent.emitters.iter().map(|e| steady_rate(e, params)).sum();
         let child_life = longest(ev.lifetime);
         let firings = match ev.on {
             Trigger::Death | Trigger::Collide if fed[s.parent] => alive[s.parent],
@@ -454,7 +460,10 @@ fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic,
             let own: f64 = e
                 .emitters
                 .iter()
-                .map(|em| f64::from(em.burst) + steady_rate(em) * longest(em.lifetime))
+                .map(|em| {
+                    f64::from(em.burst.value(&e.params))
+                        + steady_rate(em, &e.params) * longest(em.lifetime)
+                })
                 .sum();
             own.min(f64::from(e.capacity))
         })

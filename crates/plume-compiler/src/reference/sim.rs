@@ -140,6 +140,7 @@ impl ReferenceSim {
             .position(|p| p.0 == name)
             .ok_or_else(|| format!("the effect reads no live param `{name}`"))?;
         self.ir.set_live_param(index, value);
+        self.schedule.set_param(index, value);
         Ok(())
     }
 

@@ -57,6 +57,8 @@ pub struct Schedule {
     bursts: Vec<u32>,
     rates: Vec<f64>,
     timings: Vec<SpawnTiming>,
+    /// Per emitter, the live params its burst and rate follow ([`Schedule::set_param`]).
+    params: Vec<(Option<usize>, Option<usize>)>,
     /// Per emitter, the number of its next burst (how many have fired).
     next_burst: Vec<u32>,
     carried: Vec<f64>,
@@ -82,6 +84,7 @@ impl Schedule {
             bursts: ir.emitters.iter().map(|e| e.burst).collect(),
             rates: ir.emitters.iter().map(|e| e.rate).collect(),
             timings: ir.emitters.iter().map(|e| e.timing).collect(),
+            params: ir.emitters.iter().map(|e| e.params).collect(),
             next_burst: vec![0; ir.emitters.len()],
             carried: vec![0.0; ir.emitters.len()],
             emitted: vec![0; ir.emitters.len()],
@@ -120,6 +123,21 @@ impl Schedule {
         }
         self.pending.push_back(burst);
         Ok(())
+    }
+
+    /// Sets live param `index` to `value` for the steps planned after this: the bursts and
+    /// rates that follow it take it (a burst rounded to whole particles, neither below 0).
+    pub fn set_param(&mut self, index: usize, value: f32) {
+        use crate::features::emitter::AmountKind;
+        let value = f64::from(value);
+        for (e, &(burst, rate)) in self.params.iter().enumerate() {
+            if burst == Some(index) {
+                self.bursts[e] = u32::from_param(value);
+            }
+            if rate == Some(index) {
+                self.rates[e] = f64::from_param(value);
+            }
+        }
     }
 
     /// Bursts queued and not yet spawned.
@@ -210,10 +228,13 @@ impl Schedule {
             return false;
         }
         let step = self.next_step;
+        // A burst or rate that follows a live param may be set above 0 later.
         let spawns_later = |e: usize| {
             let timing = &self.timings[e];
-            (self.rates[e] > 0.0 && timing.rate_runs_after(step))
-                || (self.bursts[e] > 0 && timing.burst_step(self.next_burst[e]).is_some())
+            let (burst_param, rate_param) = self.params[e];
+            ((self.rates[e] > 0.0 || rate_param.is_some()) && timing.rate_runs_after(step))
+                || ((self.bursts[e] > 0 || burst_param.is_some())
+                    && timing.burst_step(self.next_burst[e]).is_some())
         };
         if (0..self.rates.len()).any(spawns_later) {
             return false;

@@ -11,6 +11,7 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use glam::DVec3;
+use plume_compiler::emitter::Amount;
 use plume_compiler::passes::integrator::exact_blocker;
 use plume_compiler::reference::ReferenceSim;
 use plume_compiler::{compile_effect, CompileError, Effect, Integrator};
@@ -72,14 +73,21 @@ pub enum Engine<'g> {
 /// Makes the measured copy of an effect: bursts only (see the module docs).
 pub fn measured_effect(effect: &Effect) -> Effect {
     let mut e = effect.clone();
+    let params = e.params.clone();
     for em in &mut e.emitters {
-        if em.burst == 0 && em.rate > 0.0 {
-            em.burst = ((em.rate * 0.1).round() as u32).max(1);
-        }
-        em.rate = 0.0;
+        let (burst, rate) = (em.burst.value(&params), em.rate.value(&params));
+        em.burst = Amount::Value(match burst == 0 && rate > 0.0 {
+            true => ((rate * 0.1).round() as u32).max(1),
+            false => burst,
+        });
+        em.rate = Amount::Value(0.0);
         (em.start, em.duration, em.every, em.cycles) = (0.0, None, None, None);
     }
-    let total: u64 = e.emitters.iter().map(|em| u64::from(em.burst)).sum();
+    let total: u64 = e
+        .emitters
+        .iter()
+        .map(|em| u64::from(em.burst.value(&params)))
+        .sum();
     e.capacity = e.capacity.max(total.min(u64::from(u32::MAX)) as u32);
     e
 }

@@ -5,6 +5,7 @@
 //! the same run. The difference is the events' cost: the parents' records, the ordering of
 //! their firings, the children's spawns. Each stream's ordering is also timed alone.
 
+use plume_compiler::emitter::Amount;
 use plume_compiler::graph::{compile_graph, group_effects, CompiledGraph, CompiledGroup};
 use plume_compiler::schema::{Effect, Emitter, Shape, Vec3, Velocity};
 use plume_compiler::{compile_effect, CompileError};
@@ -67,10 +68,11 @@ fn invalid(e: CompileError) -> RuntimeError {
 /// their own, multiplied by `scale`.
 pub fn scaled(effect: &Effect, scale: f64) -> Effect {
     let cap = |c: u32| ((f64::from(c) * scale).round() as u32).max(1);
+    let params = &effect.params;
     let emit = |emitters: &mut Vec<Emitter>| {
         for e in emitters {
-            e.burst = (f64::from(e.burst) * scale).round() as u32;
-            e.rate *= scale;
+            e.burst = Amount::Value((f64::from(e.burst.value(params)) * scale).round() as u32);
+            e.rate = Amount::Value(e.rate.value(params) * scale);
         }
     };
     let mut e = effect.clone();
@@ -210,7 +212,7 @@ fn plain_graph(big: &Effect, groups: &[(String, u32, u64)]) -> Result<CompiledGr
         plain.groups.clear();
         plain.capacity = *cap;
         plain.emitters = vec![Emitter {
-            burst: (*alive).min(u64::from(*cap)) as u32,
+            burst: Amount::Value((*alive).min(u64::from(*cap)) as u32),
             ..Emitter::idle(
                 Shape::Sphere {
                     center: PLAIN_CENTRE,

@@ -2,6 +2,7 @@
 //! and look, at N particles spawned at step 0 with lifetimes that outlast the run (or some of
 //! the slots left free), and its picture scaled to N particles for the draw.
 
+use plume_compiler::emitter::Amount;
 use plume_compiler::schema::State;
 use plume_compiler::{compile_effect, CompileError, CompiledEffect, Effect};
 
@@ -18,7 +19,8 @@ pub fn bench_effect(effect: &Effect, particles: u32) -> Effect {
 /// the capacity): the rest of the slots stay free.
 pub fn bench_effect_occupied(effect: &Effect, capacity: u32, live: u32) -> Effect {
     let mut e = effect.clone();
-    let file_count: u32 = e.emitters.iter().map(|em| em.burst).sum();
+    let params = e.params.clone();
+    let file_count: u32 = e.emitters.iter().map(|em| em.burst.value(&params)).sum();
     e.capacity = capacity.max(1);
     let live = live.min(e.capacity);
     // A flock keeps the file's density: spheres and boxes (and their arrangement) grow with the
@@ -43,7 +45,7 @@ pub fn bench_effect_occupied(effect: &Effect, capacity: u32, live: u32) -> Effec
     let weights: Vec<f64> = e
         .emitters
         .iter()
-        .map(|em| f64::from(em.burst) + em.rate.max(0.0))
+        .map(|em| f64::from(em.burst.value(&params)) + em.rate.value(&params).max(0.0))
         .collect();
     let total: f64 = weights.iter().sum();
     let mut given = 0u32;
@@ -56,8 +58,8 @@ pub fn bench_effect_occupied(effect: &Effect, capacity: u32, live: u32) -> Effec
         } else {
             0
         };
-        em.burst = share;
-        em.rate = 0.0;
+        em.burst = Amount::Value(share);
+        em.rate = Amount::Value(0.0);
         // All of it at step 0, once.
         (em.start, em.duration, em.every, em.cycles) = (0.0, None, None, None);
         given += share;
@@ -119,11 +121,12 @@ fn scale_shape(shape: &mut plume_compiler::schema::Shape, scale: f64, about: gla
 /// randomness of lifetimes drops nothing.
 pub fn draw_scene(effect: &Effect, particles: u32, slots: u32) -> (Effect, u64) {
     let mut e = effect.clone();
+    let params = e.params.clone();
     let mean = |l: &plume_compiler::schema::Range| 0.5 * (l.0 + l.1);
     let streams = e
         .emitters
         .iter()
-        .any(|em| em.rate > 0.0 && em.lifetime.is_some());
+        .any(|em| em.rate.value(&params) > 0.0 && em.lifetime.is_some());
     let t = if streams {
         e.emitters
             .iter()
@@ -144,21 +147,23 @@ pub fn draw_scene(effect: &Effect, particles: u32, slots: u32) -> (Effect, u64) 
         .map(|em| {
             let burst = match &em.lifetime {
                 Some(l) if l.1 < t => 0.0,
-                _ => f64::from(em.burst),
+                _ => f64::from(em.burst.value(&params)),
             };
+            let rate = em.rate.value(&params);
             let stream = match &em.lifetime {
-                Some(l) => em.rate * mean(l).min(t),
-                None => em.rate * t,
+                Some(l) => rate * mean(l).min(t),
+                None => rate * t,
             };
             burst + stream
         })
         .sum();
     let scale = f64::from(particles.max(1)) / alive.max(1.0);
     for em in &mut e.emitters {
-        em.burst = (f64::from(em.burst) * scale)
+        let burst = (f64::from(em.burst.value(&params)) * scale)
             .round()
             .min(f64::from(u32::MAX / 2)) as u32;
-        em.rate *= scale;
+        em.burst = Amount::Value(burst);
+        em.rate = Amount::Value(em.rate.value(&params) * scale);
     }
     e.capacity = (f64::from(particles) * 1.1 + 1024.0)
         .max(f64::from(slots))

@@ -435,6 +435,7 @@ impl Effect {
         };
         for group in &mut self.groups {
             group.live_params[index] = value;
+            group.schedule.set_param(index, value);
         }
         Ok(())
     }

@@ -4,6 +4,7 @@
 //! estimates. Each part owns its WGSL and its f64 twin: `shape_ir.rs` where particles start,
 //! `velocity.rs` how they move off, `timing.rs` at which steps they spawn.
 
+mod amount;
 mod expression;
 mod shape;
 mod shape_ir;
@@ -23,6 +24,7 @@ use crate::base::values::Range;
 use crate::base::writer::Writer;
 use crate::expr::Names;
 
+pub use amount::{Amount, AmountIr, AmountKind};
 pub use shape::Shape;
 pub use shape_ir::{box_face_thresholds, ShapeIr};
 pub use timing::SpawnTiming;
@@ -32,12 +34,14 @@ pub use velocity::{Velocity, VelocityIr};
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Emitter {
-    /// Particles spawned at once when the emitter starts (and again every `every` seconds).
+    /// Particles spawned at once when the emitter starts (and again every `every` seconds):
+    /// a number or a param's name.
     #[serde(default)]
-    pub burst: u32,
-    /// Particles per second; the fractional remainder carries to the next step.
+    pub burst: Amount<u32>,
+    /// Particles per second, a number or a param's name; the fractional remainder carries to
+    /// the next step.
     #[serde(default)]
-    pub rate: f64,
+    pub rate: Amount<f64>,
     /// Seconds before the emitter starts spawning.
     #[serde(default)]
     pub start: f64,
@@ -66,6 +70,8 @@ pub struct EmitterIr {
     pub burst: u32,
     /// Per second, while the timing lets it run.
     pub rate: f64,
+    /// The live params the burst and the rate follow (indices in `EffectIr::live_params`).
+    pub params: (Option<usize>, Option<usize>),
     /// At which steps it spawns.
     pub timing: SpawnTiming,
     /// Spawn position.
@@ -101,8 +107,8 @@ impl Emitter {
     /// An emitter of `shape` and `velocity` that never spawns on its own (an event's spawn rule).
     pub fn idle(shape: Shape, velocity: Velocity, lifetime: Option<Range>) -> Self {
         Self {
-            burst: 0,
-            rate: 0.0,
+            burst: Amount::Value(0),
+            rate: Amount::Value(0.0),
             start: 0.0,
             duration: None,
             every: None,
@@ -117,12 +123,13 @@ impl Emitter {
     /// expressions may name (and the step, `names.dt`).
     pub fn check(&self, c: &mut Checker, path: &ValuePath, names: Names) {
         let dt = names.dt;
-        c.non_negative(&path.field("rate"), self.rate);
+        self.rate.check(c, &path.field("rate"), names);
+        self.burst.check(c, &path.field("burst"), names);
         timing::check(
             c,
             path,
             (self.start, self.duration, self.every, self.cycles),
-            self.burst,
+            self.burst.value(names.params),
             dt,
         );
         self.shape.check(c, &path.field("shape"), names);
@@ -160,9 +167,11 @@ impl Emitter {
     pub fn lower(&self, names: Names, seed_mix: u32) -> EmitterIr {
         let dt = names.dt;
         let shape = self.shape.lower(names, seed_mix);
+        let (burst, rate) = (self.burst.lower(names), self.rate.lower(names));
         EmitterIr {
-            burst: self.burst,
-            rate: self.rate,
+            burst: burst.value,
+            rate: rate.value,
+            params: (burst.param, rate.param),
             timing: SpawnTiming::new(self.start, self.duration, self.every, self.cycles, dt),
             velocity: self.velocity.lower(names, &shape, seed_mix),
             shape,

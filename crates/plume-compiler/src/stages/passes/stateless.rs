@@ -119,6 +119,16 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("state"),
         ));
     }
+    if let Some(e) = ir.emitters.iter().position(|em| em.params != (None, None)) {
+        let field = match ir.emitters[e].params.0 {
+            Some(_) => "burst",
+            None => "rate",
+        };
+        return Err((
+            format!("emitters[{e}].{field} follows a param changed at run time: how many spawn is not known when the effect compiles"),
+            ValuePath::root().field("emitters").index(e).field(field),
+        ));
+    }
     let (mut peak, mut segments, mut lives) = (0u64, 0u64, Vec::new());
     for e in 0..ir.emitters.len() {
         let path = ValuePath::root().field("emitters").index(e);

@@ -358,7 +358,9 @@ impl EffectBatch {
                 names.join(", ")
             ))
         })?;
-        self.state_mut(instance)?.live_params[index] = value;
+        let state = self.state_mut(instance)?;
+        state.live_params[index] = value;
+        state.schedule.set_param(index, value);
         Ok(())
     }
 
