@@ -17,44 +17,91 @@ use common::*;
 use plume::compiler::reference::ReferenceSim;
 use plume::runtime::Effect;
 
+/// The `.ron` files of `dir` (under the repository), in name order.
+fn effect_files(dir: &str) -> Vec<std::path::PathBuf> {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
+    let mut paths: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().and_then(|e| e.to_str()) == Some("ron"))
+        .collect();
+    paths.sort();
+    paths
+}
+
+/// Runs the single-group effect at `path` 50 and 100 steps on the GPU and in the reference
+/// and compares them (see the module docs); returns whether any particle was alive.
+fn matches_the_reference(path: &std::path::Path) -> bool {
+    let name = path.file_name().unwrap().to_string_lossy().to_string();
+    let effect = compile_file(path);
+    let gpu = gpu();
+    let mut gsim = Effect::new(&gpu, effect.clone()).expect("GPU sim");
+    let mut csim = ReferenceSim::new(&effect.ir);
+    let mut seen_alive = false;
+    for steps in [50u64, 100] {
+        gsim.run(50, |_| {}).unwrap();
+        csim.run(50);
+        let (gt, ct) = (gsim.totals().unwrap(), csim.totals());
+        assert_eq!(gt, ct, "{name}: totals differ after {steps} steps");
+        let (g, c) = (gsim.records().unwrap(), csim.records());
+        seen_alive |= !c.is_empty();
+        compare_at(
+            &name,
+            steps,
+            effect.ir.flock.is_some(),
+            curved_colliders(&effect.ir),
+            effect.layout.half_motion.then_some(effect.ir.dt),
+            roundings_per_step(&effect.ir),
+            &g,
+            &c,
+        );
+    }
+    seen_alive
+}
+
 #[test]
 fn every_example_matches_the_reference_after_50_and_100_steps() {
     let mut checked = 0;
-    for entry in std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/effects")).unwrap() {
-        let path = entry.unwrap().path();
-        if path.extension().and_then(|e| e.to_str()) != Some("ron") {
-            continue;
-        }
-        let name = path.file_name().unwrap().to_string_lossy().to_string();
+    for path in effect_files("effects") {
         if is_graph_file(&path) {
             // Effects with groups and events: tests/events.rs, group by group.
             continue;
         }
-        let effect = compile_file(&path);
-        let gpu = gpu();
-        let mut gsim = Effect::new(&gpu, effect.clone()).expect("GPU sim");
-        let mut csim = ReferenceSim::new(&effect.ir);
-        let mut seen_alive = false;
-        for steps in [50u64, 100] {
-            gsim.run(50, |_| {}).unwrap();
-            csim.run(50);
-            let (gt, ct) = (gsim.totals().unwrap(), csim.totals());
-            assert_eq!(gt, ct, "{name}: totals differ after {steps} steps");
-            let (g, c) = (gsim.records().unwrap(), csim.records());
-            seen_alive |= !c.is_empty();
-            compare_at(
-                &name,
-                steps,
-                effect.ir.flock.is_some(),
-                curved_colliders(&effect.ir),
-                effect.layout.half_motion.then_some(effect.ir.dt),
-                roundings_per_step(&effect.ir),
-                &g,
-                &c,
-            );
-        }
-        assert!(seen_alive, "{name}: nothing alive to compare");
+        assert!(
+            matches_the_reference(&path),
+            "{path:?}: nothing alive to compare"
+        );
         checked += 1;
     }
     assert!(checked >= 6, "expected the six examples, checked {checked}");
+}
+
+#[test]
+fn every_bevy_hanabi_port_compiles_without_warnings_and_matches_the_reference() {
+    // effects/hanabi: bevy_hanabi's examples written as Plume effects (docs/from-hanabi.md).
+    let files = effect_files("effects/hanabi");
+    assert!(!files.is_empty(), "no ports in effects/hanabi");
+    for path in files {
+        let graph = compile_graph_file(&path);
+        let warnings = graph.all_warnings();
+        let source = std::fs::read_to_string(&path).unwrap();
+        assert!(
+            warnings.is_empty(),
+            "{}",
+            warnings.render(&path.display().to_string(), &source)
+        );
+        if is_graph_file(&path) {
+            // Groups joined by events: their f64 run is tests/events.rs's kind; here the GPU
+            // graph runs and spawns.
+            let gpu = gpu();
+            let mut sim = Effect::from_graph(&gpu, graph).expect("GPU graph");
+            sim.run(100, |_| {}).unwrap();
+            assert!(
+                sim.group_totals(0).unwrap().spawned > 0,
+                "{path:?} spawns nothing"
+            );
+        } else {
+            matches_the_reference(&path);
+        }
+    }
 }
