@@ -138,6 +138,49 @@ fn a_velocity_aligned_sprite_is_elongated_along_its_projected_velocity() {
 }
 
 #[test]
+fn a_sprite_facing_the_camera_turns_to_the_eye_away_from_the_images_centre() {
+    // A sprite 3 m right of the view's axis, 4 m in front of the eye: 36.87 degrees off it.
+    // Parallel to the image plane (Camera) it projects as a scaled copy: round. Turned to the
+    // eye (FaceCamera) it meets the image plane's rays at that angle: 1 / cos = 1.25 times
+    // wider than tall, to first order in its size over its distance (0.3 / 5: under 0.5%).
+    let gpu = gpu();
+    for (orient, ratio) in [("Camera", 1.0), ("FaceCamera", 1.25)] {
+        let src = format!(
+            r#"Effect(
+    name: "facing-probe",
+    capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((3.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (0.0, 0.0, 4.0), target: (0.0, 0.0, 0.0), fov_y: 90.0),
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 0.3)],
+                   background: (0.0, 0.0, 0.0), orient: {orient}),
+)"#
+        );
+        for state in [State::Stateful, State::Stateless] {
+            let options = CompileOptions {
+                state: Some(state),
+                integrator: Some(Integrator::Exact),
+                ..Default::default()
+            };
+            let effect = compile_str(&src, &options).unwrap();
+            let mut sim = Effect::new(&gpu, effect).unwrap();
+            sim.run(1, |_| {}).unwrap();
+            let what = format!("{orient} {state:?}");
+            let (gpu_img, cpu_img) = draw_both(&sim);
+            let (got, angle) = shape(&gpu_img);
+            assert!(
+                (got / ratio - 1.0).abs() < 0.01,
+                "{what}: ratio {got:.4}, want {ratio}"
+            );
+            if ratio > 1.0 {
+                assert_angle(angle, 0.0, &what);
+            }
+            assert_matches_reference(&gpu_img, &cpu_img, &what);
+            assert_splat_matches_raster(&sim, &gpu_img, &what);
+        }
+    }
+}
+
+#[test]
 fn a_height_curve_of_its_own_makes_the_sprite_that_tall() {
     // Width 0.3 m (`size`), height `size_y`: for Camera and a Fixed plane facing the camera the
     // height runs up the image; for Velocity it is the length before stretching (0.6 + 0.5).

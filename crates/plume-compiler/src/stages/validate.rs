@@ -303,7 +303,7 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Re
     }
     let orient = path.field("orient");
     match r.orient {
-        Orient::Camera => {}
+        Orient::Camera | Orient::FaceCamera => {}
         Orient::Velocity {
             stretch,
             max_length,

@@ -47,6 +47,8 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
     let view = view.as_dmat4();
     let camera_right = DVec3::new(view.x_axis.x, view.y_axis.x, view.z_axis.x);
     let camera_up = DVec3::new(view.x_axis.y, view.y_axis.y, view.z_axis.y);
+    // The eye: the view's inverse applied to the origin.
+    let camera_eye = view.inverse().transform_point3(DVec3::ZERO);
     let f32s = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
     let mut keyed: Vec<(f64, Sprite)> = records
         .iter()
@@ -69,9 +71,8 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
             let p = r.position;
             let scale = render.by.size_factor(&seen, ir.seed_mix);
             let (half_x, half_y) = render.orient.half_axes(
-                render.size_at(t) * scale,
-                render.height_at(t) * scale,
-                r.velocity,
+                (render.size_at(t) * scale, render.height_at(t) * scale),
+                (r.velocity, camera_eye - p),
                 camera_right,
                 camera_up,
             );

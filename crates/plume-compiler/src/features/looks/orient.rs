@@ -31,6 +31,10 @@ pub enum Orient {
     /// Lying in the world plane through the particle perpendicular to this normal (a ripple
     /// on the ground: `Fixed((0.0, 1.0, 0.0))`).
     Fixed(Vec3),
+    /// Turned to face the camera's position: each sprite's normal points at the eye, its x
+    /// axis level with the camera's (up × normal), so sprites away from the image's centre
+    /// turn towards it (bevy_hanabi's `FaceCameraPosition`).
+    FaceCamera,
 }
 
 /// Image-plane speeds at or below this (squared, (m/s)²) have no direction: the sprite stays
@@ -56,13 +60,20 @@ pub enum OrientIr {
         /// The plane's second axis (the sprite's +y).
         up: DVec3,
     },
+    /// Facing the camera's position.
+    FaceCamera,
 }
+
+/// Below this squared length (m²) a sprite is at the eye, or its normal along the camera's up:
+/// it keeps the `Camera` axes (or the camera's right) instead of normalising a zero vector.
+pub const FACING_FLOOR2: f64 = 1e-12;
 
 impl OrientIr {
     /// Lowers the schema's orientation (already checked: a fixed normal is a direction).
     pub fn lower(orient: &Orient) -> Self {
         match *orient {
             Orient::Camera => OrientIr::Camera,
+            Orient::FaceCamera => OrientIr::FaceCamera,
             Orient::Velocity {
                 stretch,
                 max_length,
@@ -93,6 +104,7 @@ impl OrientIr {
             OrientIr::Camera => "Camera",
             OrientIr::Velocity { .. } => "Velocity",
             OrientIr::Fixed { .. } => "Fixed",
+            OrientIr::FaceCamera => "FaceCamera",
         }
     }
 
@@ -103,19 +115,32 @@ impl OrientIr {
 
     /// The f64 twin of [`Self::emit_half_axes`]: the world-space half axes of a sprite of
     /// width `size` and height `height` (for `Velocity`: its length before stretching) moving
-    /// at `velocity`, for a camera whose unit right and up vectors (in world space) are
-    /// `camera_right` and `camera_up`.
+    /// at `velocity`, `to_eye` from the camera's eye, for a camera whose unit right and up
+    /// vectors (in world space) are `camera_right` and `camera_up`.
     pub fn half_axes(
         &self,
-        size: f64,
-        height: f64,
-        velocity: DVec3,
+        (size, height): (f64, f64),
+        (velocity, to_eye): (DVec3, DVec3),
         camera_right: DVec3,
         camera_up: DVec3,
     ) -> (DVec3, DVec3) {
         let half = 0.5 * size;
         match *self {
             OrientIr::Camera => (camera_right * half, camera_up * (0.5 * height)),
+            OrientIr::FaceCamera => {
+                let d2 = to_eye.length_squared();
+                if d2 <= FACING_FLOOR2 {
+                    return (camera_right * half, camera_up * (0.5 * height));
+                }
+                let normal = to_eye / d2.sqrt();
+                let across = camera_up.cross(normal);
+                let a2 = across.length_squared();
+                let right = match a2 > FACING_FLOOR2 {
+                    true => across / a2.sqrt(),
+                    false => camera_right,
+                };
+                (right * half, normal.cross(right) * (0.5 * height))
+            }
             OrientIr::Velocity {
                 stretch,
                 max_length,
@@ -142,6 +167,25 @@ impl OrientIr {
     /// `vel: vec3<f32>` in scope.
     pub fn emit_half_axes(&self, w: &mut Writer, height: &str) {
         match *self {
+            OrientIr::FaceCamera => {
+                let floor = f32_lit(FACING_FLOOR2);
+                w.comment("Facing the eye, at the view's origin: the normal towards it, x level.");
+                w.line("let to_eye = -s.center.xyz;");
+                w.line("let d2 = dot(to_eye, to_eye);");
+                w.line("var right = vec3<f32>(1.0, 0.0, 0.0);");
+                w.line("var up = vec3<f32>(0.0, 1.0, 0.0);");
+                w.block(format!("if (d2 > {floor})"), |w| {
+                    w.line("let normal = to_eye * inverseSqrt(d2);");
+                    w.line("let across = cross(vec3<f32>(0.0, 1.0, 0.0), normal);");
+                    w.line("let a2 = dot(across, across);");
+                    w.block(format!("if (a2 > {floor})"), |w| {
+                        w.line("right = across * inverseSqrt(a2);");
+                    });
+                    w.line("up = cross(normal, right);");
+                });
+                w.line("s.half_x = right * (0.5 * s.size);");
+                w.line(format!("s.half_y = up * (0.5 * {height});"));
+            }
             OrientIr::Camera => {
                 w.line("s.half_x = vec3<f32>(0.5 * s.size, 0.0, 0.0);");
                 w.line(format!("s.half_y = vec3<f32>(0.0, 0.5 * {height}, 0.0);"));
@@ -226,13 +270,23 @@ mod tests {
         });
         let (right, up) = (DVec3::X, DVec3::Y);
         // Moving right at 4 m/s: 0.2 + 0.4 = 0.6 long along x, 0.2 wide along y.
-        let (x, y) = o.half_axes(0.2, 0.2, DVec3::new(4.0, 0.0, -7.0), right, up);
+        let (x, y) = o.half_axes(
+            (0.2, 0.2),
+            (DVec3::new(4.0, 0.0, -7.0), DVec3::Z),
+            right,
+            up,
+        );
         assert!((y - DVec3::new(0.3, 0.0, 0.0)).length() < 1e-12, "{y}");
         assert!((x - DVec3::new(0.0, -0.1, 0.0)).length() < 1e-12, "{x}");
         // Fast: capped at max_length; towards the camera only: no direction, no stretch.
-        let (_, y) = o.half_axes(0.2, 0.2, DVec3::new(0.0, 100.0, 0.0), right, up);
+        let (_, y) = o.half_axes(
+            (0.2, 0.2),
+            (DVec3::new(0.0, 100.0, 0.0), DVec3::Z),
+            right,
+            up,
+        );
         assert!((y.length() - 0.5).abs() < 1e-12);
-        let (x, y) = o.half_axes(0.2, 0.2, DVec3::new(0.0, 0.0, 5.0), right, up);
+        let (x, y) = o.half_axes((0.2, 0.2), (DVec3::new(0.0, 0.0, 5.0), DVec3::Z), right, up);
         assert_eq!(
             (x, y),
             (DVec3::new(0.1, 0.0, 0.0), DVec3::new(0.0, 0.1, 0.0))
@@ -240,9 +294,37 @@ mod tests {
         // A cap below the size never shrinks the sprite.
         assert_eq!(velocity_length(0.5, 10.0, 1.0, 0.1), 0.5);
         // A height of its own is the length before stretching; the width stays the size.
-        let (x, y) = o.half_axes(0.2, 0.4, DVec3::new(4.0, 0.0, -7.0), right, up);
+        let (x, y) = o.half_axes(
+            (0.2, 0.4),
+            (DVec3::new(4.0, 0.0, -7.0), DVec3::Z),
+            right,
+            up,
+        );
         assert!((y - DVec3::new(0.4, 0.0, 0.0)).length() < 1e-12, "{y}");
         assert!((x - DVec3::new(0.0, -0.1, 0.0)).length() < 1e-12, "{x}");
+    }
+
+    #[test]
+    fn a_sprite_facing_the_camera_turns_its_normal_to_the_eye() {
+        let o = OrientIr::FaceCamera;
+        // Straight ahead it is the Camera quad; off to the right it turns about the up axis.
+        let (x, y) = o.half_axes(
+            (0.2, 0.4),
+            (DVec3::ZERO, DVec3::Z * 5.0),
+            DVec3::X,
+            DVec3::Y,
+        );
+        assert!((x - DVec3::X * 0.1).length() < 1e-12 && (y - DVec3::Y * 0.2).length() < 1e-12);
+        let to_eye = DVec3::new(-3.0, 0.0, 4.0);
+        let (x, y) = o.half_axes((0.2, 0.4), (DVec3::ZERO, to_eye), DVec3::X, DVec3::Y);
+        assert!(x.dot(to_eye).abs() < 1e-12 && y.dot(to_eye).abs() < 1e-12);
+        assert!((x.length() - 0.1).abs() < 1e-12 && (y - DVec3::Y * 0.2).length() < 1e-12);
+        assert!(x.cross(y).dot(to_eye) > 0.0, "its front faces the eye");
+        // At the eye, or straight above it: no NaN, the camera's axes.
+        for to_eye in [DVec3::ZERO, DVec3::Y * 3.0] {
+            let (x, y) = o.half_axes((0.2, 0.2), (DVec3::ZERO, to_eye), DVec3::X, DVec3::Y);
+            assert!(x.is_finite() && y.is_finite() && (x - DVec3::X * 0.1).length() < 1e-12);
+        }
     }
 
     #[test]
@@ -253,7 +335,7 @@ mod tests {
                 OrientIr::Fixed { right, up } => (right, up),
                 _ => (DVec3::X, DVec3::Y),
             };
-            let (x, y) = o.half_axes(0.2, 0.6, DVec3::ZERO, DVec3::X, DVec3::Y);
+            let (x, y) = o.half_axes((0.2, 0.6), (DVec3::ZERO, DVec3::Z), DVec3::X, DVec3::Y);
             assert!((x - right * 0.1).length() < 1e-12 && (y - up * 0.3).length() < 1e-12);
         }
     }
