@@ -1,4 +1,5 @@
-//! Colour and size set by expressions (`render.color_by`, `render.size_by`): the raster draw
+//! Colour, opacity and size set by expressions (`render.color_by`, `alpha_by`, `size_by`): the
+//! raster draw
 //! and the compute splat against the CPU-fed reference drawing, which evaluates the same
 //! expression trees in f64, for stateful and stateless effects; and the factors themselves
 //! (a random hue per particle, a size that grows with age, a colour from speed) measured in
@@ -14,9 +15,9 @@ use plume::{compile_str, CompileOptions};
 
 const SIDE: u32 = 256;
 
-/// A spray of 300 particles with `color_by` and `size_by` (RON `Some("...")` strings), run for
-/// 40 steps in `state`.
-fn spray(color_by: &str, size_by: &str, state: State) -> Effect {
+/// A spray of 300 particles with `color_by`, `alpha_by` and `size_by` (RON `Some("...")`
+/// strings), run for 40 steps in `state`.
+fn spray([color_by, alpha_by, size_by]: [&str; 3], state: State) -> Effect {
     let src = format!(
         r#"Effect(
     name: "by",
@@ -30,7 +31,7 @@ fn spray(color_by: &str, size_by: &str, state: State) -> Effect {
     camera: Camera(eye: (0.0, 0.0, 8.0), target: (0.0, 0.0, 0.0), fov_y: 50.0),
     render: Render(color: [(0.0, (1.0, 1.0, 1.0, 0.9)), (1.0, (0.6, 0.6, 0.6, 0.3))],
         size: [(0.0, 0.12), (1.0, 0.06)], background: (0.0, 0.0, 0.0),
-        color_by: {color_by}, size_by: {size_by}),
+        color_by: {color_by}, alpha_by: {alpha_by}, size_by: {size_by}),
 )"#
     );
     let options = CompileOptions {
@@ -46,6 +47,7 @@ fn spray(color_by: &str, size_by: &str, state: State) -> Effect {
 
 const HUE: &str = r#"Some("hsv(rand(0), 0.8, 1.0) * (1.0 + 0.5 * age / max(life, dt))")"#;
 const GROWTH: &str = r#"Some("(0.5 + rand(1)) * (1.0 + age)")"#;
+const FLICKER: &str = r#"Some("0.3 + 0.7 * rand(2)")"#;
 const SPEED: &str =
     r#"Some("mix(vec3(1.0, 0.3, 0.1), vec3(0.2, 0.5, 1.0), clamp(length(v) / 6.0, 0.0, 1.0))")"#;
 
@@ -54,23 +56,29 @@ fn the_draws_colour_and_size_by_expression_as_the_reference_drawing_does() {
     // The same sprites, their colour and size computed in f32 on the GPU and in f64 on the
     // CPU: a channel a step apart where rounding crosses a half, a rim pixel's coverage a few
     // steps where the sizes differ by f32 rounding (as tests/looks.rs allows).
-    for (what, color_by, size_by, state) in [
-        ("hue and growth, stateful", HUE, GROWTH, State::Stateful),
-        ("hue and growth, stateless", HUE, GROWTH, State::Stateless),
+    for (what, by, state) in [
+        (
+            "hue, opacity and growth, stateful",
+            [HUE, FLICKER, GROWTH],
+            State::Stateful,
+        ),
+        (
+            "hue, opacity and growth, stateless",
+            [HUE, FLICKER, GROWTH],
+            State::Stateless,
+        ),
         (
             "colour from speed, stateful",
-            SPEED,
-            "None",
+            [SPEED, "None", "None"],
             State::Stateful,
         ),
         (
             "colour from speed, stateless",
-            SPEED,
-            "None",
+            [SPEED, "None", "None"],
             State::Stateless,
         ),
     ] {
-        let sim = spray(color_by, size_by, state);
+        let sim = spray(by, state);
         assert_eq!(
             sim.compiled().ir.stateless.is_some(),
             state == State::Stateless
@@ -95,7 +103,7 @@ fn the_draws_colour_and_size_by_expression_as_the_reference_drawing_does() {
 
 #[test]
 fn the_factors_are_the_particles_own() {
-    let sim = spray(HUE, GROWTH, State::Stateful);
+    let sim = spray([HUE, FLICKER, GROWTH], State::Stateful);
     let ir = &sim.compiled().ir;
     let records = sim.records().unwrap();
     let seen = |r: &plume::compiler::reference::ParticleRecord| Seen {
@@ -115,6 +123,8 @@ fn the_factors_are_the_particles_own() {
         );
         let hue = plume::compiler::rng::unit(plume::compiler::rng::rand_u32(ir.seed_mix, r.id, 64));
         sixths[(hue * 6.0) as usize] += 1;
+        let a = ir.render.by.alpha_factor(&seen(r), ir.seed_mix);
+        assert!((0.3..=1.0).contains(&a), "{a}");
         // Size: (0.5 + rand(1)) (1 + age), at least half the stops' size.
         let k = ir.render.by.size_factor(&seen(r), ir.seed_mix);
         assert!(

@@ -476,6 +476,9 @@ impl fmt::Display for EffectIr {
         if let Some(e) = &self.render.by.color {
             writeln!(f, "  color_by: {} nodes", e.size())?;
         }
+        if let Some(e) = &self.render.by.alpha {
+            writeln!(f, "  alpha_by: {} nodes", e.size())?;
+        }
         if let Some(e) = &self.render.by.size {
             writeln!(f, "  size_by: {} nodes", e.size())?;
         }

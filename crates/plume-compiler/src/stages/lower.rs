@@ -117,10 +117,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                     .palette
                     .as_ref()
                     .map(|p| p.iter().map(|c| c.d()).collect()),
-                by: crate::features::looks::by_expression::LookBy::lower(
-                    (r.color_by.as_deref(), r.size_by.as_deref()),
-                    scope,
-                ),
+                by: crate::features::looks::by_expression::LookBy::lower(r.written_by(), scope),
             }
         },
         bounds: effect.bounds.map(|b| (b.min.d(), b.max.d())),

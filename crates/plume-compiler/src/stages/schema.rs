@@ -205,9 +205,23 @@ pub struct Render {
     /// (`features/looks/by.rs`).
     #[serde(default)]
     pub color_by: Option<String>,
+    /// An expression (f32) of the particle that its alpha is multiplied by.
+    #[serde(default)]
+    pub alpha_by: Option<String>,
     /// An expression (f32) of the particle that its size is multiplied by.
     #[serde(default)]
     pub size_by: Option<String>,
+}
+
+impl Render {
+    /// The strings of `color_by`, `alpha_by` and `size_by`.
+    pub fn written_by(&self) -> crate::features::looks::by_expression::Written<'_> {
+        [
+            self.color_by.as_deref(),
+            self.alpha_by.as_deref(),
+            self.size_by.as_deref(),
+        ]
+    }
 }
 
 impl Default for Render {
@@ -227,6 +241,7 @@ impl Default for Render {
             trail: None,
             palette: None,
             color_by: None,
+            alpha_by: None,
             size_by: None,
         }
     }

@@ -137,10 +137,7 @@ pub fn check_effect(effect: &Effect) -> Checker {
     crate::features::looks::by_expression::LookBy::check(
         &mut c,
         &root.field("render"),
-        (
-            effect.render.color_by.as_deref(),
-            effect.render.size_by.as_deref(),
-        ),
+        effect.render.written_by(),
         scope,
     );
     if let Some(bounds) = &effect.bounds {

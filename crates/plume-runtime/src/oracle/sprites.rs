@@ -67,7 +67,8 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
             };
             let by = render.by.color_factor(&seen, ir.seed_mix) * r.tint;
             let c = render.color_at(t);
-            let c = [c[0] * by.x, c[1] * by.y, c[2] * by.z, c[3]];
+            let alpha = render.by.alpha_factor(&seen, ir.seed_mix);
+            let c = [c[0] * by.x, c[1] * by.y, c[2] * by.z, c[3] * alpha];
             let p = r.position;
             let scale = render.by.size_factor(&seen, ir.seed_mix);
             let (half_x, half_y) = render.orient.half_axes(

@@ -1,5 +1,6 @@
-//! Colour and size set by expressions (`render.color_by`, `render.size_by`): the colour stops'
-//! RGB multiplied by a vec3 of the particle, and its size (width and height) by an f32, each
+//! Colour, opacity and size set by expressions (`render.color_by`, `alpha_by`, `size_by`): the
+//! colour stops' RGB multiplied by a vec3 of the particle, their alpha by an f32 and its size
+//! (width and height) by an f32, each
 //! written in the custom forces' language ([`crate::expr`]): checked with its mistakes located
 //! inside the string, folded, written into the draw module as a function and interpreted from
 //! the same tree in f64 by the reference drawing (runtime `oracle`).
@@ -7,9 +8,10 @@
 //! They read the particle as the draw sees it: its position `x`, velocity `v`, `age` and
 //! `life` (seconds, whole steps as the kernels count them; `life` 0 for a particle that never
 //! dies), `rand(k)` and the draws built on it, the params (as the file gives them: the draw
-//! reads no live params) and `dt`. A colour factor is kept within [0, [`COLOR_MOST`]] and a size
-//! factor at least 0, so neither can make a NaN, a negative size or more light than the
-//! compute renderer's fixed-point sums hold.
+//! reads no live params) and `dt`. A colour factor is kept within [0, [`COLOR_MOST`]], an
+//! opacity factor within [0, 1] and a size factor at least 0, so none can make a NaN, a
+//! negative size, an alpha past 1 or more light than the compute renderer's fixed-point sums
+//! hold.
 
 use glam::DVec3;
 
@@ -28,6 +30,8 @@ const VARS: &[Var] = &[Var::X, Var::V, Var::Age, Var::Life];
 pub struct LookBy {
     /// Multiplies the colour stops' RGB (a vec3).
     pub color: Option<Expr>,
+    /// Multiplies the colour's alpha.
+    pub alpha: Option<Expr>,
     /// Multiplies the size (and the height, with `size_y`).
     pub size: Option<Expr>,
 }
@@ -57,54 +61,58 @@ fn compile(text: &str, ty: Ty, role: &str, names: Names) -> Result<Expr, expr::E
     expr::compile_in(text, ty, &names.scope(VARS, role))
 }
 
+/// The render section's strings: `color_by`, `alpha_by` and `size_by`.
+pub type Written<'a> = [Option<&'a str>; 3];
+
+/// Each string's field, type and role, in [`Written`]'s order.
+const FIELDS: [(&str, Ty, &str); 3] = [
+    ("color_by", Ty::Vec3, "a colour factor"),
+    ("alpha_by", Ty::Scalar, "an opacity factor"),
+    ("size_by", Ty::Scalar, "a size factor"),
+];
+
 impl LookBy {
-    /// Records mistakes in `color_by` and `size_by` (the render section's strings, at `path`,
-    /// the render section) in `c`.
-    pub fn check(
-        c: &mut Checker,
-        path: &ValuePath,
-        (color_by, size_by): (Option<&str>, Option<&str>),
-        names: Names,
-    ) {
-        if let Some(Err(e)) = color_by.map(|t| compile(t, Ty::Vec3, "a colour factor", names)) {
-            c.error_in_string(&path.field("color_by"), e.start, e.end, e.message);
-        }
-        if let Some(Err(e)) = size_by.map(|t| compile(t, Ty::Scalar, "a size factor", names)) {
-            c.error_in_string(&path.field("size_by"), e.start, e.end, e.message);
+    /// Records mistakes in the strings (at `path`, the render section) in `c`.
+    pub fn check(c: &mut Checker, path: &ValuePath, written: Written, names: Names) {
+        for (text, (field, ty, role)) in written.into_iter().zip(FIELDS) {
+            if let Some(Err(e)) = text.map(|t| compile(t, ty, role, names)) {
+                c.error_in_string(&path.field(field), e.start, e.end, e.message);
+            }
         }
     }
 
     /// Lowers the strings (after [`LookBy::check`] passed).
-    pub fn lower((color_by, size_by): (Option<&str>, Option<&str>), names: Names) -> Self {
-        let checked = "checked before lowering";
-        Self {
-            color: color_by.map(|t| compile(t, Ty::Vec3, "a colour factor", names).expect(checked)),
-            size: size_by.map(|t| compile(t, Ty::Scalar, "a size factor", names).expect(checked)),
-        }
+    pub fn lower(written: Written, names: Names) -> Self {
+        let [color, alpha, size] = std::array::from_fn(|i| {
+            let (_, ty, role) = FIELDS[i];
+            written[i].map(|t| compile(t, ty, role, names).expect("checked before lowering"))
+        });
+        Self { color, alpha, size }
     }
 
     fn exprs(&self) -> impl Iterator<Item = &Expr> {
-        self.color.iter().chain(&self.size)
+        self.color.iter().chain(&self.alpha).chain(&self.size)
     }
 
-    /// Whether either reads the particle's age or lifetime (the draw then needs its ages).
+    /// Whether any reads the particle's age or lifetime (the draw then needs its ages).
     pub fn reads_age_or_life(&self) -> bool {
         self.exprs()
             .any(|e| e.reads(Var::Age) || e.reads(Var::Life))
     }
 
-    /// Whether either draws random numbers.
+    /// Whether any draws random numbers.
     pub fn draws_random(&self) -> bool {
         self.exprs().any(|e| e.draws_random())
     }
 
-    /// Whether either reads the velocity.
+    /// Whether any reads the velocity.
     pub fn reads_velocity(&self) -> bool {
         self.exprs().any(|e| e.reads(Var::V))
     }
 
-    /// Emits `color_by(x, v, age, ctx_life, ctx_id) -> vec3<f32>` and `size_by(...) -> f32`
-    /// for those there are: the WGSL twins of [`Self::color_factor`] and [`Self::size_factor`].
+    /// Emits `color_by(x, v, age, ctx_life, ctx_id) -> vec3<f32>`, `alpha_by(...) -> f32` and
+    /// `size_by(...) -> f32` for those there are: the WGSL twins of [`Self::color_factor`],
+    /// [`Self::alpha_factor`] and [`Self::size_factor`].
     pub fn emit_fns(&self, w: &mut Writer) {
         let bound = f32_lit(expr::VALUE_BOUND);
         let clamp = |w: &mut Writer| {
@@ -126,6 +134,17 @@ impl LookBy {
                         "return clamp({value}, vec3<f32>(0.0), vec3<f32>({}));",
                         f32_lit(COLOR_MOST)
                     ));
+                },
+            );
+        }
+        if let Some(e) = &self.alpha {
+            w.comment("render.alpha_by: multiplies the alpha, within [0, 1].");
+            w.block(
+                "fn alpha_by(x: vec3<f32>, v: vec3<f32>, age: f32, ctx_life: f32, ctx_id: u32) -> f32",
+                |w| {
+                    clamp(w);
+                    let value = expr::emit::Emitter::new(w, stream::CUSTOM).value(e);
+                    w.line(format!("return clamp({value}, 0.0, 1.0);"));
                 },
             );
         }
@@ -162,6 +181,14 @@ impl LookBy {
                 .v()
                 .clamp(DVec3::ZERO, DVec3::splat(COLOR_MOST)),
             None => DVec3::ONE,
+        }
+    }
+
+    /// What the alpha is multiplied by for particle `p` (1 without `alpha_by`).
+    pub fn alpha_factor(&self, p: &Seen, seed_mix: u32) -> f64 {
+        match &self.alpha {
+            Some(e) => eval(e, &Self::inputs(p, seed_mix)).s().clamp(0.0, 1.0),
+            None => 1.0,
         }
     }
 

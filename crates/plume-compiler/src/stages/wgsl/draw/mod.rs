@@ -422,11 +422,12 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
     });
 }
 
-/// Multiplies `s.color`'s RGB and `s.size` (and `s.size_y`) inside `sprite_at` by the look's
-/// expressions (`render.color_by`, `render.size_by`), given the particle as the draw sees it.
+/// Multiplies `s.color`'s RGB and alpha and `s.size` (and `s.size_y`) inside `sprite_at` by the
+/// look's expressions (`render.color_by`, `alpha_by`, `size_by`), given the particle as the
+/// draw sees it.
 fn emit_look_by(w: &mut Writer, ir: &EffectIr, layout: &Layout, stateless: bool) {
     let by = &ir.render.by;
-    if by.color.is_none() && by.size.is_none() {
+    if by == &Default::default() {
         return;
     }
     let dt = f32_lit(ir.dt);
@@ -459,6 +460,9 @@ fn emit_look_by(w: &mut Writer, ir: &EffectIr, layout: &Layout, stateless: bool)
         w.line(format!(
             "s.color = vec4<f32>(s.color.rgb * color_by({args}), s.color.a);"
         ));
+    }
+    if by.alpha.is_some() {
+        w.line(format!("s.color.a = s.color.a * alpha_by({args});"));
     }
     if by.size.is_some() {
         w.line(format!("let by_size = size_by({args});"));
