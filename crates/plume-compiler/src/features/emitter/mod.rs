@@ -26,7 +26,7 @@ use crate::expr::Names;
 
 pub use amount::{Amount, AmountIr, AmountKind};
 pub use shape::Shape;
-pub use shape_ir::{box_face_thresholds, ShapeIr};
+pub use shape_ir::{box_face_thresholds, ConeIr, ShapeIr};
 pub use timing::SpawnTiming;
 pub use velocity::{Velocity, VelocityIr};
 

@@ -13,7 +13,7 @@ use crate::base::values::{safe_normalize, Counts, Vec3};
 use crate::expr::typed::Node;
 use crate::expr::Names;
 use crate::features::emitter::expression::{self, SpawnValue, ESTIMATE_SPAWNS};
-use crate::features::emitter::shape_ir::{box_face_thresholds, ShapeIr};
+use crate::features::emitter::shape_ir::{box_face_thresholds, ConeIr, ShapeIr};
 use crate::features::emitter::Basis;
 use crate::features::mesh_emission::{place, MeshSurface};
 
@@ -175,18 +175,17 @@ impl Shape {
                 center,
                 normal,
                 radius,
-            } => {
-                let s = path.variant("Disc");
-                c.vec3(&s.field("center"), *center);
-                c.direction(&s.field("normal"), *normal);
-                c.non_negative(&s.field("radius"), *radius);
             }
-            Shape::Circle {
+            | Shape::Circle {
                 center,
                 normal,
                 radius,
             } => {
-                let s = path.variant("Circle");
+                let name = match self {
+                    Shape::Disc { .. } => "Disc",
+                    _ => "Circle",
+                };
+                let s = path.variant(name);
                 c.vec3(&s.field("center"), *center);
                 c.direction(&s.field("normal"), *normal);
                 c.non_negative(&s.field("radius"), *radius);
@@ -311,20 +310,27 @@ impl Shape {
                 center,
                 normal,
                 radius,
-            } => ShapeIr::Disc {
-                center: center.d(),
-                radius: *radius,
-                basis: Basis::around(safe_normalize(normal.d())),
-            },
-            Shape::Circle {
+            }
+            | Shape::Circle {
                 center,
                 normal,
                 radius,
-            } => ShapeIr::Circle {
-                center: center.d(),
-                radius: *radius,
-                basis: Basis::around(safe_normalize(normal.d())),
-            },
+            } => {
+                let (center, radius) = (center.d(), *radius);
+                let basis = Basis::around(safe_normalize(normal.d()));
+                match self {
+                    Shape::Disc { .. } => ShapeIr::Disc {
+                        center,
+                        radius,
+                        basis,
+                    },
+                    _ => ShapeIr::Circle {
+                        center,
+                        radius,
+                        basis,
+                    },
+                }
+            }
             Shape::Cone {
                 base,
                 axis,
@@ -335,7 +341,7 @@ impl Shape {
             } => {
                 let axis = safe_normalize(axis.d());
                 let wide = base_radius.max(*top_radius);
-                ShapeIr::Cone {
+                ShapeIr::Cone(ConeIr {
                     base: base.d(),
                     axis,
                     basis: Basis::around(axis),
@@ -347,7 +353,7 @@ impl Shape {
                     },
                     narrow_top: top_radius < base_radius,
                     surface: *surface,
-                }
+                })
             }
             Shape::Grid { min, max, counts } => {
                 let n = [counts.0, counts.1, counts.2];

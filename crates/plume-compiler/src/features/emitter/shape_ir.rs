@@ -69,24 +69,7 @@ pub enum ShapeIr {
         basis: Basis,
     },
     /// Uniform in a cone's volume (a frustum), or on its side.
-    Cone {
-        /// Centre of the base.
-        base: DVec3,
-        /// Unit axis from the base to the top.
-        axis: DVec3,
-        /// Tangents of the axis.
-        basis: Basis,
-        /// Distance from the base to the top.
-        height: f64,
-        /// The larger of the two radii.
-        wide: f64,
-        /// The smaller radius over the larger (1 when both are 0).
-        ratio: f64,
-        /// Whether the narrow end is the top (the base is wider).
-        narrow_top: bool,
-        /// On the side instead of in the volume.
-        surface: bool,
-    },
+    Cone(ConeIr),
     /// Lattice: point (ix, iy, iz) is `origin + i * step` per axis.
     Grid {
         /// Position of lattice point (0, 0, 0).
@@ -148,9 +131,7 @@ impl ShapeIr {
             | ShapeIr::Disc { center, .. }
             | ShapeIr::Circle { center, .. } => *center,
             ShapeIr::Box { min, max } | ShapeIr::BoxSurface { min, max, .. } => (*min + *max) * 0.5,
-            ShapeIr::Cone {
-                base, axis, height, ..
-            } => *base + *axis * (0.5 * height),
+            ShapeIr::Cone(c) => c.base + c.axis * (0.5 * c.height),
             ShapeIr::Grid {
                 origin,
                 step,
@@ -189,17 +170,12 @@ impl ShapeIr {
             ShapeIr::Box { min, max } | ShapeIr::BoxSurface { min, max, .. } => {
                 min.abs().max(max.abs()).max_element()
             }
-            ShapeIr::Cone {
-                base,
-                axis,
-                height,
-                wide,
-                ..
-            } => {
-                base.abs()
-                    .max((*base + *axis * *height).abs())
+            ShapeIr::Cone(c) => {
+                c.base
+                    .abs()
+                    .max((c.base + c.axis * c.height).abs())
                     .max_element()
-                    + wide
+                    + c.wide
             }
             ShapeIr::Grid {
                 origin,
@@ -247,34 +223,8 @@ impl ShapeIr {
         match self {
             ShapeIr::Custom { expr, .. } => super::expression::emit(w, expr, "s.x", dt),
             ShapeIr::Point(p) => w.line(format!("s.x = {};", vec3_lit(*p))),
-            ShapeIr::Sphere { center, radius } => {
-                w.comment("Uniform in the ball: cos(polar) uniform, radius ~ cube root.");
-                w.line(format!("let u = {};", wgsl_unit3(stream::POSITION)));
-                w.line("let cz = 1.0 - 2.0 * u.x;");
-                w.line(format!("let phi = {two_pi} * u.y - {pi};"));
-                w.line("let sz = sqrt(max(0.0, 1.0 - cz * cz));");
-                w.line(format!(
-                    "let r = {} * pow(max(u.z, 1e-30), {});",
-                    f32_lit(*radius),
-                    f32_lit(1.0 / 3.0)
-                ));
-                w.line(format!(
-                    "s.x = {} + r * vec3<f32>(sz * cos(phi), sz * sin(phi), cz);",
-                    vec3_lit(*center)
-                ));
-            }
-            ShapeIr::SphereSurface { center, radius } => {
-                w.comment("Uniform on the sphere: cos(polar) uniform.");
-                w.line(format!("let u = {};", wgsl_unit3(stream::POSITION)));
-                w.line("let cz = 1.0 - 2.0 * u.x;");
-                w.line(format!("let phi = {two_pi} * u.y - {pi};"));
-                w.line("let sz = sqrt(max(0.0, 1.0 - cz * cz));");
-                w.line(format!(
-                    "s.x = {} + {} * vec3<f32>(sz * cos(phi), sz * sin(phi), cz);",
-                    vec3_lit(*center),
-                    f32_lit(*radius)
-                ));
-            }
+            ShapeIr::Sphere { center, radius } => emit_sphere(w, *center, *radius, false),
+            ShapeIr::SphereSurface { center, radius } => emit_sphere(w, *center, *radius, true),
             ShapeIr::Box { min, max } => {
                 w.line(format!(
                     "s.x = {} + {} * {};",
@@ -341,65 +291,7 @@ impl ShapeIr {
                     vec3_lit(basis.t2)
                 ));
             }
-            ShapeIr::Cone {
-                base,
-                axis,
-                basis,
-                height,
-                wide,
-                ratio,
-                narrow_top,
-                surface,
-            } => {
-                let a = f32_lit(*ratio);
-                w.line(format!("let u = {};", wgsl_unit3(stream::POSITION)));
-                if *surface {
-                    w.comment("On the side, uniform by area: the radius (over the wide one) ρ has");
-                    w.comment(
-                        "ρ² uniform in [a², 1]; the height from the narrow end is (ρ − a)/(1 − a),",
-                    );
-                    w.comment("written u (1 + a)/(ρ + a), which has no cancellation as a nears 1.");
-                    w.line(format!(
-                        "let rho = sqrt({a} * {a} + u.x * {});",
-                        f32_lit(1.0 - ratio * ratio)
-                    ));
-                    w.line(format!(
-                        "let t = u.x * {} / max(rho + {a}, 1e-30);",
-                        f32_lit(1.0 + ratio)
-                    ));
-                    w.line(format!("let r = {} * rho;", f32_lit(*wide)));
-                } else {
-                    w.comment("In the volume: the radius (over the wide one) ρ has ρ³ uniform in");
-                    w.comment(
-                        "[a³, 1]; the height from the narrow end is (ρ − a)/(1 − a), written",
-                    );
-                    w.comment("u (1 + a + a²)/(ρ² + aρ + a²); then uniform in that disc.");
-                    w.line(format!(
-                        "let rho = pow(max({} + u.x * {}, 1e-30), {});",
-                        f32_lit(ratio.powi(3)),
-                        f32_lit(1.0 - ratio.powi(3)),
-                        f32_lit(1.0 / 3.0)
-                    ));
-                    w.line(format!(
-                        "let t = u.x * {} / (rho * rho + {a} * rho + {});",
-                        f32_lit(1.0 + ratio + ratio * ratio),
-                        f32_lit(ratio * ratio)
-                    ));
-                    w.line(format!("let r = {} * rho * sqrt(u.z);", f32_lit(*wide)));
-                }
-                let along = match narrow_top {
-                    true => "1.0 - t",
-                    false => "t",
-                };
-                w.line(format!("let phi = {two_pi} * u.y - {pi};"));
-                w.line(format!(
-                    "s.x = {} + ({along}) * {} + r * (cos(phi) * {} + sin(phi) * {});",
-                    vec3_lit(*base),
-                    vec3_lit(*axis * *height),
-                    vec3_lit(basis.t1),
-                    vec3_lit(basis.t2)
-                ));
-            }
+            ShapeIr::Cone(c) => c.emit_wgsl(w),
             ShapeIr::Grid {
                 origin,
                 step,
@@ -493,32 +385,7 @@ impl ShapeIr {
                 let phi = 2.0 * PI * d.unit(stream::POSITION + 1) - PI;
                 *center + *radius * (phi.cos() * basis.t1 + phi.sin() * basis.t2)
             }
-            ShapeIr::Cone {
-                base,
-                axis,
-                basis,
-                height,
-                wide,
-                ratio,
-                narrow_top,
-                surface,
-            } => {
-                let u = d.unit3(stream::POSITION);
-                let a = *ratio;
-                let (t, r) = if *surface {
-                    let rho = (a * a + u.x * (1.0 - a * a)).sqrt();
-                    (u.x * (1.0 + a) / (rho + a).max(1e-30), wide * rho)
-                } else {
-                    let rho = (a.powi(3) + u.x * (1.0 - a.powi(3))).max(1e-30).cbrt();
-                    let t = u.x * (1.0 + a + a * a) / (rho * rho + a * rho + a * a);
-                    (t, wide * rho * u.z.sqrt())
-                };
-                let along = if *narrow_top { 1.0 - t } else { t };
-                let phi = 2.0 * PI * u.y - PI;
-                *base
-                    + along * (*axis * *height)
-                    + r * (phi.cos() * basis.t1 + phi.sin() * basis.t2)
-            }
+            ShapeIr::Cone(c) => c.sample(d),
             ShapeIr::Grid {
                 origin,
                 step,
@@ -536,5 +403,129 @@ impl ShapeIr {
             ShapeIr::Points(ps) => ps[(k % ps.len() as u32) as usize],
         };
         (x, DVec3::ZERO)
+    }
+}
+
+/// Emits the statements that set `s.x` uniform in a ball (`surface` false) or on its sphere:
+/// cos(polar) uniform, and in the ball the radius as a cube root.
+fn emit_sphere(w: &mut Writer, center: DVec3, radius: f64, surface: bool) {
+    w.comment(match surface {
+        false => "Uniform in the ball: cos(polar) uniform, radius ~ cube root.",
+        true => "Uniform on the sphere: cos(polar) uniform.",
+    });
+    w.line(format!("let u = {};", wgsl_unit3(stream::POSITION)));
+    w.line("let cz = 1.0 - 2.0 * u.x;");
+    w.line(format!(
+        "let phi = {} * u.y - {};",
+        f32_lit(2.0 * PI),
+        f32_lit(PI)
+    ));
+    w.line("let sz = sqrt(max(0.0, 1.0 - cz * cz));");
+    let r = match surface {
+        false => {
+            w.line(format!(
+                "let r = {} * pow(max(u.z, 1e-30), {});",
+                f32_lit(radius),
+                f32_lit(1.0 / 3.0)
+            ));
+            "r".to_string()
+        }
+        true => f32_lit(radius),
+    };
+    w.line(format!(
+        "s.x = {} + {r} * vec3<f32>(sz * cos(phi), sz * sin(phi), cz);",
+        vec3_lit(center)
+    ));
+}
+
+/// A cone's spawn volume or side: a frustum along a unit axis from its base.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConeIr {
+    /// Centre of the base.
+    pub base: DVec3,
+    /// Unit axis from the base to the top.
+    pub axis: DVec3,
+    /// Tangents of the axis.
+    pub basis: Basis,
+    /// Distance from the base to the top.
+    pub height: f64,
+    /// The larger of the two radii.
+    pub wide: f64,
+    /// The smaller radius over the larger (1 when both are 0).
+    pub ratio: f64,
+    /// Whether the narrow end is the top (the base is wider).
+    pub narrow_top: bool,
+    /// On the side instead of in the volume.
+    pub surface: bool,
+}
+
+impl ConeIr {
+    /// Emits the statements that set `s.x`: the WGSL twin of [`Self::sample`].
+    fn emit_wgsl(&self, w: &mut Writer) {
+        let two_pi = f32_lit(2.0 * PI);
+        let pi = f32_lit(PI);
+        let a = f32_lit(self.ratio);
+        w.line(format!("let u = {};", wgsl_unit3(stream::POSITION)));
+        if self.surface {
+            w.comment("On the side, uniform by area: the radius (over the wide one) ρ has");
+            w.comment("ρ² uniform in [a², 1]; the height from the narrow end is (ρ − a)/(1 − a),");
+            w.comment("written u (1 + a)/(ρ + a), which has no cancellation as a nears 1.");
+            w.line(format!(
+                "let rho = sqrt({a} * {a} + u.x * {});",
+                f32_lit(1.0 - self.ratio * self.ratio)
+            ));
+            w.line(format!(
+                "let t = u.x * {} / max(rho + {a}, 1e-30);",
+                f32_lit(1.0 + self.ratio)
+            ));
+            w.line(format!("let r = {} * rho;", f32_lit(self.wide)));
+        } else {
+            w.comment("In the volume: the radius (over the wide one) ρ has ρ³ uniform in");
+            w.comment("[a³, 1]; the height from the narrow end is (ρ − a)/(1 − a), written");
+            w.comment("u (1 + a + a²)/(ρ² + aρ + a²); then uniform in that disc.");
+            w.line(format!(
+                "let rho = pow(max({} + u.x * {}, 1e-30), {});",
+                f32_lit(self.ratio.powi(3)),
+                f32_lit(1.0 - self.ratio.powi(3)),
+                f32_lit(1.0 / 3.0)
+            ));
+            w.line(format!(
+                "let t = u.x * {} / (rho * rho + {a} * rho + {});",
+                f32_lit(1.0 + self.ratio + self.ratio * self.ratio),
+                f32_lit(self.ratio * self.ratio)
+            ));
+            w.line(format!("let r = {} * rho * sqrt(u.z);", f32_lit(self.wide)));
+        }
+        let along = match self.narrow_top {
+            true => "1.0 - t",
+            false => "t",
+        };
+        w.line(format!("let phi = {two_pi} * u.y - {pi};"));
+        w.line(format!(
+            "s.x = {} + ({along}) * {} + r * (cos(phi) * {} + sin(phi) * {});",
+            vec3_lit(self.base),
+            vec3_lit(self.axis * self.height),
+            vec3_lit(self.basis.t1),
+            vec3_lit(self.basis.t2)
+        ));
+    }
+
+    /// The spawn position of the particle drawing `d`.
+    fn sample(&self, d: &ParticleDraws) -> DVec3 {
+        let u = d.unit3(stream::POSITION);
+        let a = self.ratio;
+        let (t, r) = if self.surface {
+            let rho = (a * a + u.x * (1.0 - a * a)).sqrt();
+            (u.x * (1.0 + a) / (rho + a).max(1e-30), self.wide * rho)
+        } else {
+            let rho = (a.powi(3) + u.x * (1.0 - a.powi(3))).max(1e-30).cbrt();
+            let t = u.x * (1.0 + a + a * a) / (rho * rho + a * rho + a * a);
+            (t, self.wide * rho * u.z.sqrt())
+        };
+        let along = if self.narrow_top { 1.0 - t } else { t };
+        let phi = 2.0 * PI * u.y - PI;
+        self.base
+            + along * (self.axis * self.height)
+            + r * (phi.cos() * self.basis.t1 + phi.sin() * self.basis.t2)
     }
 }
