@@ -156,7 +156,12 @@ impl Running {
         // With groups, the top group's end is not the effect's (its children live on).
         let top = &loaded.effect;
         let one_shot = top.group_names().len() == 1
-            && top.compiled().ir.emitters.iter().all(|e| e.rate <= 0.0);
+            && top
+                .compiled()
+                .ir
+                .emitters
+                .iter()
+                .all(|e| e.spawns_once_at_start());
         let totals = match top.counters() {
             Some(_) => self.probe.totals,
             None => top.group_totals(0).ok(),

@@ -182,11 +182,13 @@ impl Emitter {
 }
 
 impl EmitterIr {
-    /// Whether the emitter spawns for as long as the effect runs (a rate or a repeating burst
-    /// with no end), rather than once or for a while.
-    pub fn spawns_for_ever(&self) -> bool {
-        let t = &self.timing;
-        t.end_step.is_none() && (self.rate > 0.0 || (self.burst > 0 && t.cycles.is_none()))
+    /// Whether everything it spawns, it spawns at step 0: one burst, no rate, no start delay,
+    /// no param that could open it later (so once its particles are gone, the effect is done).
+    pub fn spawns_once_at_start(&self) -> bool {
+        self.rate <= 0.0
+            && self.params == (None, None)
+            && self.timing.start_step == 0
+            && self.timing.every.is_none()
     }
 
     /// The position and velocity of particle `id`, the emitter's `k`-th, spawned at `step`
