@@ -13,6 +13,24 @@ use crate::base::path::ValuePath;
 use crate::expr::Names;
 
 /// A number, or the name of a param that gives it.
+///
+/// ```
+/// use plume_compiler::emitter::Amount;
+///
+/// let effect = plume_compiler::parse(
+///     r#"Effect(name: "valve", capacity: 100, params: {"flow": 40.0},
+///        emitters: [Emitter(rate: "flow", shape: Point((0.0, 0.0, 0.0)),
+///                           velocity: Constant((0.0, 1.0, 0.0)))])"#,
+/// )
+/// .unwrap();
+/// let rate = &effect.emitters[0].rate;
+/// assert_eq!(rate, &Amount::Param("flow".into()));
+/// assert_eq!(rate.value(&effect.params), 40.0);
+/// // A host writing an emitter in code gives the number itself.
+/// let mut emitter = effect.emitters[0].clone();
+/// emitter.rate = Amount::Value(250.0);
+/// assert_eq!(emitter.rate.value(&effect.params), 250.0);
+/// ```
 #[derive(Clone, Debug, PartialEq)]
 pub enum Amount<T> {
     /// The number itself.
