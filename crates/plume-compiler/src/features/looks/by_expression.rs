@@ -115,47 +115,33 @@ impl LookBy {
     /// [`Self::alpha_factor`] and [`Self::size_factor`].
     pub fn emit_fns(&self, w: &mut Writer) {
         let bound = f32_lit(expr::VALUE_BOUND);
-        let clamp = |w: &mut Writer| {
-            w.line(format!(
-                "let cx = clamp(x, vec3<f32>(-{bound}), vec3<f32>({bound}));"
-            ));
-            w.line(format!(
-                "let cv = clamp(v, vec3<f32>(-{bound}), vec3<f32>({bound}));"
-            ));
-        };
-        if let Some(e) = &self.color {
-            w.comment("render.color_by: multiplies the colour stops' RGB, within [0, 128].");
+        let most = f32_lit(COLOR_MOST);
+        // Each function: its expression, name, what it returns, and its bounds.
+        let fns = [
+            (
+                &self.color,
+                "color_by",
+                "vec3<f32>",
+                format!("clamp(VALUE, vec3<f32>(0.0), vec3<f32>({most}))"),
+            ),
+            (
+                &self.alpha,
+                "alpha_by",
+                "f32",
+                "clamp(VALUE, 0.0, 1.0)".to_string(),
+            ),
+            (&self.size, "size_by", "f32", "max(VALUE, 0.0)".to_string()),
+        ];
+        for (e, name, ty, bounded) in fns {
+            let Some(e) = e else { continue };
+            w.comment(format!("render.{name}: {bounded}, VALUE the expression."));
             w.block(
-                "fn color_by(x: vec3<f32>, v: vec3<f32>, age: f32, ctx_life: f32, ctx_id: u32) -> vec3<f32>",
+                format!("fn {name}(x: vec3<f32>, v: vec3<f32>, age: f32, ctx_life: f32, ctx_id: u32) -> {ty}"),
                 |w| {
-                    clamp(w);
+                    w.line(format!("let cx = clamp(x, vec3<f32>(-{bound}), vec3<f32>({bound}));"));
+                    w.line(format!("let cv = clamp(v, vec3<f32>(-{bound}), vec3<f32>({bound}));"));
                     let value = expr::emit::Emitter::new(w, stream::CUSTOM).value(e);
-                    w.line(format!(
-                        "return clamp({value}, vec3<f32>(0.0), vec3<f32>({}));",
-                        f32_lit(COLOR_MOST)
-                    ));
-                },
-            );
-        }
-        if let Some(e) = &self.alpha {
-            w.comment("render.alpha_by: multiplies the alpha, within [0, 1].");
-            w.block(
-                "fn alpha_by(x: vec3<f32>, v: vec3<f32>, age: f32, ctx_life: f32, ctx_id: u32) -> f32",
-                |w| {
-                    clamp(w);
-                    let value = expr::emit::Emitter::new(w, stream::CUSTOM).value(e);
-                    w.line(format!("return clamp({value}, 0.0, 1.0);"));
-                },
-            );
-        }
-        if let Some(e) = &self.size {
-            w.comment("render.size_by: multiplies the size, at least 0.");
-            w.block(
-                "fn size_by(x: vec3<f32>, v: vec3<f32>, age: f32, ctx_life: f32, ctx_id: u32) -> f32",
-                |w| {
-                    clamp(w);
-                    let value = expr::emit::Emitter::new(w, stream::CUSTOM).value(e);
-                    w.line(format!("return max({value}, 0.0);"));
+                    w.line(format!("return {};", bounded.replace("VALUE", &value)));
                 },
             );
         }
