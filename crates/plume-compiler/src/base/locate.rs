@@ -136,6 +136,8 @@ enum Tok {
     Colon,
     Comma,
     Literal,
+    /// A quoted string, its text between the quotes (a map's key names its entry).
+    Str(String),
 }
 
 #[derive(Clone, Debug)]
@@ -203,6 +205,7 @@ fn tokenize(source: &str) -> Vec<Token> {
             }
             '"' | '\'' => {
                 step(&mut i, &mut line, &mut col);
+                let first = i;
                 while i < chars.len() && chars[i] != c {
                     if chars[i] == '\\' {
                         step(&mut i, &mut line, &mut col);
@@ -211,10 +214,11 @@ fn tokenize(source: &str) -> Vec<Token> {
                         step(&mut i, &mut line, &mut col);
                     }
                 }
+                let text: String = chars[first..i.min(chars.len())].iter().collect();
                 if i < chars.len() {
                     step(&mut i, &mut line, &mut col);
                 }
-                Tok::Literal
+                Tok::Str(text)
             }
             c if c.is_alphabetic() || c == '_' => {
                 let mut name = String::new();
@@ -274,7 +278,7 @@ impl Scanner<'_> {
         }
         let first = self.tokens.get(self.at)?.clone();
         let span = match first.tok {
-            Tok::Literal => {
+            Tok::Literal | Tok::Str(_) => {
                 self.at += 1;
                 first.span
             }
@@ -324,6 +328,16 @@ impl Scanner<'_> {
                 }
                 Tok::Comma => {
                     self.at += 1;
+                }
+                // A map's entry, `"key": value`: the key's span names the entry, its value's
+                // the entry's fields.
+                Tok::Str(key) if open == '{' && self.peek(1) == Some(&Tok::Colon) => {
+                    let child = format!("{path}.{key}");
+                    self.record(&child, self.tokens[self.at].span);
+                    self.at += 2;
+                    if self.value(child, depth + 1).is_none() {
+                        self.skip_one(depth)?;
+                    }
                 }
                 _ if is_struct && open == '(' => {
                     let Some(Tok::Ident(name)) = self.peek(0).cloned() else {
@@ -392,6 +406,18 @@ mod tests {
         assert_eq!((life.start.line, life.start.col), (7, 19));
         // Unknown child falls back to the nearest ancestor.
         assert_eq!(map.find("forces[1].nope"), map.find("forces[1]"));
+    }
+
+    #[test]
+    fn finds_map_entries_by_key() {
+        let src =
+            "Effect(\n  params: {\"k\": 1.0},\n  attributes: {\"heat\": (spawn: \"rand(0)\")},\n)";
+        let map = SourceMap::build(src);
+        let key = map.find("attributes.heat").unwrap();
+        assert_eq!((key.start.line, key.start.col), (3, 17));
+        let spawn = map.find("attributes.heat.spawn").unwrap();
+        assert_eq!((spawn.start.line, spawn.start.col), (3, 33));
+        assert_eq!(map.find("params.k").unwrap().start.col, 13);
     }
 
     #[test]
