@@ -67,6 +67,7 @@ fn run(
                 age0: step as f64 * ir.dt,
                 t0: step as f64 * ir.dt,
                 life: 0.0,
+                ..ParticleCtx::default()
             };
             for s in 0..n {
                 let t = step as f64 * ir.dt + f64::from(s) * h;
@@ -144,6 +145,7 @@ fn main() {
             age0: 0.0,
             t0: 0.0,
             life: 0.0,
+            ..ParticleCtx::default()
         };
         let eps = 1e-4;
         let a0 = plume::compiler::reference::step::accel(&base, None, &ctx, x, v, 0.0);

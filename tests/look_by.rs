@@ -112,6 +112,7 @@ fn the_factors_are_the_particles_own() {
         age: r.age,
         life: r.lifetime.unwrap_or(0.0),
         id: r.id,
+        ..Seen::default()
     };
     // Hues spread over the wheel: every sixth of it is some particle's.
     let mut sixths = [0usize; 6];

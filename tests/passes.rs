@@ -511,14 +511,15 @@ fn bounds_pass_through_and_bad_bounds_are_located() {
     );
 }
 
-/// The update stores only the words holding position and motion (`store_moved`): every field
-/// any example group's update assigns must be one of those, or its change would be lost.
+/// The update stores only the words holding what it changes (`store_moved`: position, motion
+/// and declared attributes that change): every field any example group's update assigns must
+/// be one of those, or its change would be lost.
 #[test]
 fn the_update_assigns_only_the_fields_it_stores() {
     use plume::compiler::graph::compile_graph_str;
-    use plume::compiler::wgsl::MOVED_FIELDS;
     let mut updates = 0;
-    for entry in std::fs::read_dir("effects").unwrap() {
+    let dirs = ["effects", "effects/hanabi"].map(std::fs::read_dir);
+    for entry in dirs.into_iter().flat_map(|d| d.unwrap()) {
         let path = entry.unwrap().path();
         if path.extension().is_none_or(|e| e != "ron") {
             continue;
@@ -531,6 +532,14 @@ fn the_update_assigns_only_the_fields_it_stores() {
         let graph = compile_graph_str(&source, &options).unwrap();
         for group in &graph.groups {
             let wgsl = &group.effect.wgsl;
+            let changed: Vec<&str> = group
+                .effect
+                .layout
+                .attributes
+                .iter()
+                .filter(|a| a.changes())
+                .flat_map(|a| a.fields().0.iter().copied())
+                .collect();
             let Some(start) = wgsl.find("fn update_particle(") else {
                 continue;
             };
@@ -543,7 +552,7 @@ fn the_update_assigns_only_the_fields_it_stores() {
                 };
                 let field = rest.split([' ', '=']).next().unwrap();
                 assert!(
-                    MOVED_FIELDS.contains(&field),
+                    changed.contains(&field),
                     "{}: the update assigns p.{field}, which store_moved does not store",
                     path.display()
                 );

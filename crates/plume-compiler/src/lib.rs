@@ -55,7 +55,8 @@ pub use compile::{
 pub use diagnostics::{Diagnostic, Diagnostics, Severity};
 pub use features::looks::{by_expression, glow, orient, rotation, texture, tint, trail};
 pub use features::{
-    accuracy, bursts, colliders, emitter, events, field, forces, mesh_emission, placement,
+    accuracy, attributes, bursts, colliders, emitter, events, field, forces, mesh_emission,
+    placement,
 };
 pub use ir::EffectIr;
 pub use stages::passes::layout::Layout;

@@ -25,7 +25,26 @@ pub enum Attribute {
     /// The particle's tint, packed 8 bits a channel: `tint`. Only in a group fed by an event
     /// that passes the parent's colour on (`EffectIr::stores_tint`).
     Tint,
+    /// An attribute the effect declares (`features::attributes`), kept because something
+    /// reads it: `uN` for a number, `uN, uN+1, uN+2` for a vec3, N its first word among the
+    /// declared attributes' words.
+    User {
+        /// Its index among the effect's attributes (name order).
+        index: u8,
+        /// Its first word among the declared attributes' words (the field `u{first}`).
+        first: u8,
+        /// Its words: 1 for a number, 3 for a vec3.
+        width: u8,
+        /// Whether it changes after spawn (the update then stores it).
+        changes: bool,
+    },
 }
+
+/// The field names of the declared attributes' words, `u0` to `u15`.
+const USER_FIELDS: [&str; 16] = [
+    "u0", "u1", "u2", "u3", "u4", "u5", "u6", "u7", "u8", "u9", "u10", "u11", "u12", "u13", "u14",
+    "u15",
+];
 
 impl Attribute {
     /// The WGSL field names and their scalar type.
@@ -38,6 +57,20 @@ impl Attribute {
             Attribute::Id => (&["id"], "u32"),
             Attribute::SpawnStep => (&["born"], "u32"),
             Attribute::Tint => (&["tint"], "u32"),
+            Attribute::User { first, width, .. } => {
+                let first = usize::from(first);
+                (&USER_FIELDS[first..first + usize::from(width)], "f32")
+            }
+        }
+    }
+
+    /// Whether the update changes it (the rest the spawn alone writes): position, motion, and
+    /// declared attributes with a rate or an update.
+    pub fn changes(self) -> bool {
+        match self {
+            Attribute::Position | Attribute::Velocity | Attribute::Displacement => true,
+            Attribute::User { changes, .. } => changes,
+            _ => false,
         }
     }
 
@@ -79,6 +112,12 @@ impl Attribute {
             }
             Attribute::Tint => {
                 "colour (8 bits a channel) multiplying the colour over life: the parent's tint times the palette's"
+            }
+            Attribute::User { changes: true, .. } => {
+                "a declared attribute, changed each step (its name: --emit ir)"
+            }
+            Attribute::User { changes: false, .. } => {
+                "a declared attribute, set at spawn (its name: --emit ir)"
             }
         }
     }
@@ -142,6 +181,14 @@ pub struct Layout {
 }
 
 impl Layout {
+    /// The stored fields of declared attribute `index`, when it is kept.
+    pub fn user_fields(&self, index: usize) -> Option<&'static [&'static str]> {
+        self.attributes.iter().find_map(|a| match *a {
+            Attribute::User { index: i, .. } if usize::from(i) == index => Some(a.fields().0),
+            _ => None,
+        })
+    }
+
     /// Offset of attribute `a` in the stored particle, in 4-byte words.
     pub fn word_offset(&self, a: Attribute) -> Option<usize> {
         let mut word = 0;

@@ -80,6 +80,8 @@ impl<'w> Emitter<'w> {
                 Var::Age => "age".into(),
                 Var::Life => "ctx_life".into(),
             },
+            // The place evaluating it binds each attribute it holds as `a{index}`.
+            Node::Attr(i) => format!("a{i}"),
             Node::Rand(k) => self.bind(format!(
                 "rand_unit(ctx_id, {}u)",
                 self.rand_stream.wrapping_add(*k)

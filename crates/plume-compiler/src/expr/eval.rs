@@ -23,7 +23,15 @@ pub struct Inputs {
     pub seed_mix: u32,
     /// The particle's id.
     pub id: u32,
+    /// Its attributes' values, by index (a number in `x`).
+    pub attrs: Attrs,
 }
+
+/// The most attributes an effect may declare.
+pub const MAX_ATTRIBUTES: usize = 16;
+
+/// A particle's attribute values, by index: a vector, or a number in `x`.
+pub type Attrs = [DVec3; MAX_ATTRIBUTES];
 
 /// A value: a number, a vector or a comparison's result.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -139,6 +147,14 @@ pub fn eval(e: &Expr, inp: &Inputs) -> Value {
             Var::Age => Value::S(inp.age),
             Var::Life => Value::S(inp.life),
         },
+        Node::Attr(i) => {
+            let a = inp.attrs[usize::from(*i)]
+                .clamp(DVec3::splat(-VALUE_BOUND), DVec3::splat(VALUE_BOUND));
+            match e.ty {
+                super::Ty::Vec3 => Value::V(a),
+                _ => Value::S(a.x),
+            }
+        }
         Node::Rand(k) => Value::S(crate::base::rng::unit(crate::base::rng::rand_u32(
             inp.seed_mix,
             inp.id,

@@ -13,7 +13,7 @@ use super::DIV_FLOOR;
 pub fn is_constant(e: &Expr) -> bool {
     match &e.node {
         Node::Scalar(_) | Node::Vector(_) => true,
-        Node::Var(_) | Node::Rand(_) | Node::Param { .. } => false,
+        Node::Var(_) | Node::Rand(_) | Node::Param { .. } | Node::Attr(_) => false,
         _ => e.children().into_iter().all(is_constant),
     }
 }

@@ -49,10 +49,13 @@ pub struct Names<'a> {
     pub dt: f64,
     /// Params are read at run time (`CompileOptions::live_params`), not folded.
     pub live: bool,
+    /// The effect's attributes (`features::attributes`), in name order.
+    pub attrs: &'a [typed::AttrName],
 }
 
 impl<'a> Names<'a> {
-    /// The scope of an expression that may read `vars`, whose value is `role` ("a position").
+    /// The scope of an expression evaluated at spawn, before the attributes hold values,
+    /// that may read `vars` and whose value is `role` ("a position").
     pub fn scope(&self, vars: &'a [Var], role: &'a str) -> typed::Scope<'a> {
         typed::Scope {
             params: self.params,
@@ -60,6 +63,16 @@ impl<'a> Names<'a> {
             live: self.live,
             vars,
             role,
+            attrs: self.attrs,
+            reads_attrs: false,
+        }
+    }
+
+    /// [`Names::scope`] for an expression evaluated on a particle that has its attributes.
+    pub fn scope_with_attrs(&self, vars: &'a [Var], role: &'a str) -> typed::Scope<'a> {
+        typed::Scope {
+            reads_attrs: true,
+            ..self.scope(vars, role)
         }
     }
 }
@@ -103,6 +116,8 @@ pub fn compile(
             live: false,
             vars: typed::VARIABLES,
             role: "an acceleration",
+            attrs: &[],
+            reads_attrs: false,
         },
     )
 }

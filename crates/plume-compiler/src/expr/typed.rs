@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use glam::DVec3;
 
 use super::parse::{Ast, AstKind, BinOp};
-pub use super::vocab::{Op1, Op2, Op3, Ty, Var, FUNCTIONS, MAX_RAND, VARIABLES};
+pub use super::vocab::{closest, Op1, Op2, Op3, Ty, Var, FUNCTIONS, MAX_RAND, VARIABLES};
 use super::ExprError;
 
 /// A node of the typed tree.
@@ -21,6 +21,9 @@ pub enum Node {
     Var(Var),
     /// `rand(k)`: the particle's k-th uniform number in [0, 1).
     Rand(u32),
+    /// The value of the effect's `index`-th attribute (in the file's name order), as the
+    /// place evaluating the expression holds it.
+    Attr(u8),
     /// A parameter that the host may change at run time (compiled with live params): the
     /// `index`-th of the effect's `params` in name order, and its value now (f64 of the f32
     /// the GPU reads, which the reference evaluates).
@@ -69,6 +72,23 @@ impl Expr {
             || self.children().iter().any(|c| c.reads(var))
     }
 
+    /// Whether it reads attribute `index` (after folding, only where it matters).
+    pub fn reads_attr(&self, index: u8) -> bool {
+        matches!(self.node, Node::Attr(i) if i == index)
+            || self.children().iter().any(|c| c.reads_attr(index))
+    }
+
+    /// Every attribute it reads, as a bit set of indices.
+    pub fn attrs_read(&self) -> u64 {
+        let own = match self.node {
+            Node::Attr(i) => 1u64 << i,
+            _ => 0,
+        };
+        self.children()
+            .iter()
+            .fold(own, |set, c| set | c.attrs_read())
+    }
+
     /// True when it draws random numbers.
     pub fn draws_random(&self) -> bool {
         matches!(self.node, Node::Rand(_)) || self.children().iter().any(|c| c.draws_random())
@@ -111,6 +131,23 @@ pub struct Scope<'a> {
     pub vars: &'a [Var],
     /// What its value is, for messages: "an acceleration".
     pub role: &'a str,
+    /// The effect's attributes, in name order.
+    pub attrs: &'a [AttrName],
+    /// Whether the attributes hold values where this expression is evaluated (not at spawn,
+    /// where they are being given theirs).
+    pub reads_attrs: bool,
+}
+
+/// An attribute as expressions see it: its name, type, and its value when it never changes
+/// from a constant (then reading it is reading the constant).
+#[derive(Clone, Debug, PartialEq)]
+pub struct AttrName {
+    /// As written in the file.
+    pub name: String,
+    /// Its type.
+    pub ty: Ty,
+    /// Its value for every particle, when it is a constant that never changes.
+    pub constant: Option<DVec3>,
 }
 
 impl Scope<'_> {
@@ -153,6 +190,20 @@ pub fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
             if name == "dt" {
                 return Ok(Expr::new(Node::Scalar(scope.dt), Ty::Scalar));
             }
+            if let Some(i) = scope.attrs.iter().position(|a| a.name == *name) {
+                let attr = &scope.attrs[i];
+                if !scope.reads_attrs {
+                    return Err(err(format!(
+                        "the attribute `{name}` has no value yet: {} is computed at spawn, before the attributes get theirs",
+                        scope.role
+                    )));
+                }
+                return Ok(match attr.constant {
+                    Some(c) if attr.ty == Ty::Vec3 => Expr::new(Node::Vector(c), Ty::Vec3),
+                    Some(c) => Expr::new(Node::Scalar(c.x), Ty::Scalar),
+                    None => Expr::new(Node::Attr(i as u8), attr.ty),
+                });
+            }
             if let Some(value) = scope.params.get(name) {
                 if scope.live {
                     let index = scope.params.keys().position(|k| k == name).unwrap_or(0);
@@ -168,9 +219,29 @@ pub fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
                 )));
             }
             let params: Vec<&str> = scope.params.keys().map(String::as_str).collect();
+            let attrs: Vec<&str> = match scope.reads_attrs {
+                true => scope.attrs.iter().map(|a| a.name.as_str()).collect(),
+                false => Vec::new(),
+            };
+            let known = scope
+                .vars
+                .iter()
+                .map(|v| v.name())
+                .chain(["dt"])
+                .chain(attrs.iter().copied())
+                .chain(params.iter().copied());
+            let hint = match closest(name, known) {
+                Some(near) => format!("did you mean `{near}`? "),
+                None => String::new(),
+            };
             Err(err(format!(
-                "unknown name `{name}`: the variables are {}{}",
+                "unknown name `{name}`: {hint}the variables are {}{}{}",
                 scope.names(),
+                if attrs.is_empty() {
+                    String::new()
+                } else {
+                    format!(", the attributes are {}", attrs.join(", "))
+                },
                 if params.is_empty() {
                     ", and the file has no params".to_string()
                 } else {

@@ -6,6 +6,7 @@
 //! interfaces they expose (`ForceTerm`, the collider functions, `Event`'s kernels).
 
 pub mod accuracy;
+pub mod attributes;
 pub mod bursts;
 pub mod colliders;
 pub mod emitter;

@@ -108,6 +108,7 @@ pub fn group_effects(effect: &Effect) -> Vec<Effect> {
         e.seed = group_seed(effect.seed, i + 1);
         e.emitters.clone_from(&g.emitters);
         e.forces.clone_from(&g.forces);
+        e.attributes.clone_from(&g.attributes);
         e.max_speed = g.max_speed;
         e.integrator = g.integrator;
         e.substeps = g.substeps;
@@ -398,6 +399,7 @@ fn check_event(c: &mut Checker, path: &ValuePath, ev: &Event, group: &Effect) {
         params: &group.params,
         dt: group.dt,
         live: group.live_params,
+        attrs: &[],
     };
     ev.as_emitter().check(c, path, names);
 }

@@ -38,6 +38,9 @@ pub struct EffectIr {
     pub field: Option<crate::features::field::FieldIr>,
     /// Flocking, when the effect has a Flock force.
     pub flock: Option<crate::features::forces::flock::FlockIr>,
+    /// The attributes its particles carry (`features::attributes`), kept or not: which are
+    /// kept is [`EffectIr::kept_attributes`].
+    pub attributes: crate::features::attributes::AttributesIr,
     /// Speed limit after every velocity update.
     pub max_speed: Option<f64>,
     /// The integrator; concrete (never Auto) after the integrator pass.
@@ -190,7 +193,24 @@ impl EffectIr {
         self.terms.iter().any(|t| t.as_dyn().uses_time())
     }
 
-    /// The custom expression terms.
+    /// The attributes kept (a bit set of their indices): those that custom forces or the
+    /// draw read, and what their changes read in turn. An effect that keeps any is stateful (the
+    /// state pass: `stages::passes::stateless`).
+    pub fn kept_attributes(&self) -> u64 {
+        let read = self
+            .custom_terms()
+            .fold(self.render.by.attrs_read(), |set, c| {
+                set | c.expr.attrs_read()
+            });
+        self.attributes.kept(read)
+    }
+
+    /// The attributes custom forces read (a bit set): their context holds them.
+    pub fn attributes_forces_read(&self) -> u64 {
+        self.custom_terms()
+            .fold(0, |set, c| set | c.expr.attrs_read())
+    }
+
     /// Sets live param `index` to `value` in every custom term (the reference's twin of the
     /// host changing it on the GPU; the value is the f32 the GPU reads).
     pub fn set_live_param(&mut self, index: usize, value: f32) {
@@ -205,8 +225,10 @@ impl EffectIr {
         for e in &mut self.emitters {
             e.set_param(index as u32, f64::from(value));
         }
+        self.attributes.set_param(index as u32, f64::from(value));
     }
 
+    /// The custom expression terms.
     pub fn custom_terms(
         &self,
     ) -> impl Iterator<Item = &crate::features::forces::custom::CustomTerm> {
@@ -286,6 +308,7 @@ impl EffectIr {
     /// 2.3 hours).
     pub fn wraps_kernel_time(&self) -> bool {
         !self.terms.iter().any(|t| t.as_dyn().reads_whole_time())
+            && !self.attributes.reads_time(self.kept_attributes())
     }
 }
 
@@ -373,6 +396,13 @@ impl fmt::Display for EffectIr {
             },
             self.state_reason
         )?;
+        let attributes = self.attributes.describe(self.kept_attributes());
+        if !attributes.is_empty() {
+            writeln!(f, "  attributes")?;
+            for line in attributes {
+                writeln!(f, "    {line}")?;
+            }
+        }
         writeln!(f, "  emitters")?;
         for (i, e) in self.emitters.iter().enumerate() {
             writeln!(

@@ -86,6 +86,8 @@ pub fn records(
                     age: tau,
                     lifetime: schedule.lifetime(id, s.die_at),
                     tint: crate::features::looks::tint::own(ir.tint(), id),
+                    // A stateless effect keeps no attributes.
+                    attributes: Default::default(),
                 },
                 closed.term_scale(s.x.length().max(extent), s.v),
             ));

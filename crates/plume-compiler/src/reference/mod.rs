@@ -28,6 +28,9 @@ pub struct ParticleRecord {
     pub lifetime: Option<f64>,
     /// The colour its colour over life is multiplied by (`tint.rs`; white for none).
     pub tint: DVec3,
+    /// Its kept attributes' words (`features::attributes`), in the layout's order: each
+    /// number, and a vec3's three components in turn; 0 past the last.
+    pub attributes: crate::features::attributes::Words,
 }
 
 /// Totals of a run so far.

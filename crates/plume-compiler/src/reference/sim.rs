@@ -30,6 +30,8 @@ struct Particle {
     history: History,
     /// Its tint (`tint.rs`), as its group stores or derives it.
     tint: DVec3,
+    /// Its kept attributes' values (`features::attributes`), by index.
+    attrs: crate::expr::eval::Attrs,
 }
 
 /// An event fired by a particle in the last step: its id, and its position and velocity at
@@ -181,7 +183,8 @@ impl ReferenceSim {
                 DVec3::ONE
             };
             let tint = crate::features::looks::tint::spawned(self.ir.tint(), id, inherited);
-            let v = self.stored(self.initial_v(id, step, time, s.x, s.v, s.die_at));
+            let attrs = self.spawn_attrs(s.x, s.v, time, id);
+            let v = self.stored(self.initial_v(id, step, time, (s.x, s.v), s.die_at, attrs));
             self.particles.push(Particle {
                 id,
                 x: s.x,
@@ -190,6 +193,7 @@ impl ReferenceSim {
                 born: step,
                 history: History::default(),
                 tint,
+                attrs,
             });
         }
     }
@@ -210,7 +214,21 @@ impl ReferenceSim {
         }
     }
 
-    fn initial_v(&self, id: u32, step: u64, time: f64, x: DVec3, v: DVec3, die_at: u32) -> DVec3 {
+    /// The kept attributes' values of particle `id`, spawned at `time` at `x` with velocity `v`.
+    fn spawn_attrs(&self, x: DVec3, v: DVec3, time: f64, id: u32) -> crate::expr::eval::Attrs {
+        let kept = self.ir.kept_attributes();
+        self.ir.attributes.spawn_values(kept, x, v, time, id)
+    }
+
+    fn initial_v(
+        &self,
+        id: u32,
+        step: u64,
+        time: f64,
+        (x, v): (DVec3, DVec3),
+        die_at: u32,
+        attrs: crate::expr::eval::Attrs,
+    ) -> DVec3 {
         if self.ir.integrator != Integrator::Verlet {
             return v;
         }
@@ -220,6 +238,7 @@ impl ReferenceSim {
             age0: 0.0,
             t0: time,
             life: lifetime_of(step, die_at, self.ir.dt),
+            attrs,
         };
         v * h - accel(&self.ir, self.baked.as_deref(), &ctx, x, v, time) * (0.5 * h * h)
     }
@@ -275,13 +294,14 @@ impl ReferenceSim {
                     s.x = self.placement.point(s.x);
                     s.v = self.placement.vector(s.v);
                 }
+                let attrs = self.spawn_attrs(s.x, s.v, plan.time, id + local);
                 let v = self.stored(self.initial_v(
                     id + local,
                     plan.step,
                     plan.time,
-                    s.x,
-                    s.v,
+                    (s.x, s.v),
                     s.die_at,
+                    attrs,
                 ));
                 self.particles.push(Particle {
                     id: id + local,
@@ -295,6 +315,7 @@ impl ReferenceSim {
                         id + local,
                         DVec3::ONE,
                     ),
+                    attrs,
                 });
             }
             id += count;
@@ -322,6 +343,8 @@ impl ReferenceSim {
         let rest_speed = ir.rest_speed();
         let fired = &mut self.fired;
         let halves = self.motion_in_halves;
+        let kept = ir.kept_attributes();
+        let changes = ir.attributes.iter_kept(kept).any(|(_, a)| a.changes());
         self.particles.retain_mut(|p| {
             let flock = frozen.get(index);
             index += 1;
@@ -331,6 +354,7 @@ impl ReferenceSim {
                 age0: plan.step.saturating_sub(born) as f64 * ir.dt,
                 t0: plan.time,
                 life: lifetime_of(born, p.die_at, ir.dt),
+                attrs: p.attrs,
             };
             if let Some(trail) = &ir.render.trail {
                 p.history.record(trail, plan.step, p.x);
@@ -341,6 +365,21 @@ impl ReferenceSim {
                 let x0 = p.x;
                 substep(ir, exact, baked, flock, &ctx, &mut p.x, &mut p.v, t);
                 collided |= resolve(&ir.colliders, rest_speed, x0, &mut p.x, &mut p.v, verlet, h);
+            }
+            if changes {
+                p.attrs = ir.attributes.step_values(
+                    kept,
+                    &crate::expr::eval::Inputs {
+                        x: p.x,
+                        v: if verlet { p.v / h } else { p.v },
+                        t: plan.time,
+                        age: ctx.age0,
+                        life: ctx.life,
+                        seed_mix: ir.seed_mix,
+                        id: p.id,
+                        attrs: p.attrs,
+                    },
+                );
             }
             if halves {
                 p.v = to_halves(p.v);
@@ -378,6 +417,7 @@ impl ReferenceSim {
     /// The live particles in id order, with velocity (Verlet's derived) and age.
     pub fn records(&self) -> Vec<ParticleRecord> {
         let h = self.ir.h();
+        let kept = self.ir.kept_attributes();
         let verlet = self.ir.integrator == Integrator::Verlet;
         self.particles
             .iter()
@@ -389,6 +429,7 @@ impl ReferenceSim {
                 lifetime: (p.die_at != crate::base::lifetime::NEVER)
                     .then(|| lifetime_of(p.born, p.die_at, self.ir.dt)),
                 tint: p.tint,
+                attributes: self.ir.attributes.words(kept, &p.attrs),
             })
             .collect()
     }

@@ -13,6 +13,12 @@ pub fn lower(effect: &Effect) -> EffectIr {
         params: &effect.params,
         dt: effect.dt,
         live: effect.live_params,
+        attrs: &[],
+    };
+    let attrs = crate::features::attributes::names(&effect.attributes, scope);
+    let scope = crate::features::forces::custom::Scope {
+        attrs: &attrs,
+        ..scope
     };
     let mut ir = EffectIr {
         name: effect.name.clone(),
@@ -37,6 +43,11 @@ pub fn lower(effect: &Effect) -> EffectIr {
             Force::Flock(flock) => Some(flock.lower(i)),
             _ => None,
         }),
+        attributes: crate::features::attributes::AttributesIr::lower(
+            &effect.attributes,
+            scope,
+            seed_mix(effect.seed),
+        ),
         max_speed: effect.max_speed,
         integrator: effect.integrator,
         integrator_reason: String::from("chosen in the file"),

@@ -50,6 +50,10 @@ pub struct Effect {
     /// Accelerations, summed.
     #[serde(default)]
     pub forces: Vec<Force>,
+    /// Numbers and vectors each particle carries, by name (see
+    /// [`crate::features::attributes`]).
+    #[serde(default)]
+    pub attributes: crate::features::attributes::Declared,
     /// Named constants that custom expressions may use: `params: {"k": 0.4}`.
     #[serde(default)]
     pub params: std::collections::BTreeMap<String, f64>,
@@ -323,6 +327,9 @@ pub struct Group {
     /// Accelerations, summed.
     #[serde(default)]
     pub forces: Vec<Force>,
+    /// Numbers and vectors each of its particles carries, by name.
+    #[serde(default)]
+    pub attributes: crate::features::attributes::Declared,
     /// Speed limit applied after every velocity update.
     #[serde(default)]
     pub max_speed: Option<f64>,

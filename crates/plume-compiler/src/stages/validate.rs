@@ -68,7 +68,19 @@ pub fn check_effect(effect: &Effect) -> Checker {
         params: &effect.params,
         dt: effect.dt,
         live: effect.live_params,
+        attrs: &[],
     };
+    let attrs = crate::features::attributes::names(&effect.attributes, scope);
+    let scope = crate::features::forces::custom::Scope {
+        attrs: &attrs,
+        ..scope
+    };
+    crate::features::attributes::check(
+        &mut c,
+        &root.field("attributes"),
+        &effect.attributes,
+        scope,
+    );
     for (i, e) in effect.emitters.iter().enumerate() {
         e.check(&mut c, &root.field("emitters").index(i), scope);
     }

@@ -121,6 +121,16 @@ pub fn decode_slots(
         .then(|| plume_compiler::passes::layout::shared_lifetime(&effect.ir))
         .flatten();
     let tint_at = layout.word_offset(Attribute::Tint);
+    // The declared attributes' words, in layout order.
+    let user_words: Vec<usize> = layout
+        .attributes
+        .iter()
+        .filter(|a| matches!(a, Attribute::User { .. }))
+        .flat_map(|a| {
+            let at = layout.word_offset(*a).unwrap_or(0);
+            at..at + a.fields().0.len()
+        })
+        .collect();
     let done = schedule.steps_done() as u32;
     let dt = effect.ir.dt;
     let total: usize = buffers.iter().map(|b| b.len()).sum();
@@ -179,6 +189,13 @@ pub fn decode_slots(
             tint: match tint_at {
                 Some(t) => plume_compiler::tint::unpack(u(t)),
                 None => plume_compiler::tint::own(effect.ir.tint(), id),
+            },
+            attributes: {
+                let mut words = plume_compiler::attributes::Words::default();
+                for (slot, &w) in words.iter_mut().zip(&user_words) {
+                    *slot = f(w);
+                }
+                words
             },
         }));
     }

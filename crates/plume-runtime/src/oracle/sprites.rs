@@ -64,6 +64,9 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
                 age: r.age,
                 life: r.lifetime.unwrap_or(0.0),
                 id: r.id,
+                attrs: ir
+                    .attributes
+                    .from_words(ir.kept_attributes(), &r.attributes),
             };
             let by = render.by.color_factor(&seen, ir.seed_mix) * r.tint;
             let c = render.color_at(t);

@@ -24,7 +24,7 @@ pub const FIELDS: &[&str] = &["accel"];
 pub use crate::expr::Names as Scope;
 
 fn typed(scope: Scope<'_>) -> expr::typed::Scope<'_> {
-    scope.scope(expr::typed::VARIABLES, "an acceleration")
+    scope.scope_with_attrs(expr::typed::VARIABLES, "an acceleration")
 }
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -81,7 +81,10 @@ pub use crate::base::rng::stream::CUSTOM as RAND_STREAM;
 impl CustomTerm {
     /// Whether the term reads the particle context (id, age or lifetime).
     pub fn needs_context(&self) -> bool {
-        self.expr.reads(Var::Age) || self.expr.reads(Var::Life) || self.expr.draws_random()
+        self.expr.reads(Var::Age)
+            || self.expr.reads(Var::Life)
+            || self.expr.draws_random()
+            || self.expr.attrs_read() != 0
     }
 
     /// Whether the term reads the particle's age or lifetime (the layout then keeps the
@@ -248,11 +251,14 @@ impl ForceTerm for CustomTerm {
         &self.origins
     }
     fn describe(&self) -> String {
-        let reads: Vec<&str> = expr::typed::VARIABLES
+        let mut reads: Vec<&str> = expr::typed::VARIABLES
             .iter()
             .filter(|v| self.expr.reads(**v))
             .map(|v| v.name())
             .collect();
+        if self.expr.attrs_read() != 0 {
+            reads.push("attributes");
+        }
         format!(
             "Custom ({} nodes after folding; reads {}{})",
             self.expr.size(),
@@ -281,11 +287,14 @@ impl ForceTerm for CustomTerm {
         self.expr.reads(Var::T)
     }
     fn closed_form_blocker(&self) -> String {
-        let reads: Vec<&str> = [Var::V, Var::T, Var::Age, Var::X]
+        let mut reads: Vec<&str> = [Var::V, Var::T, Var::Age, Var::X]
             .into_iter()
             .filter(|v| self.expr.reads(*v))
             .map(|v| v.name())
             .collect();
+        if self.expr.attrs_read() != 0 {
+            reads.push("the particle's attributes");
+        }
         if reads.is_empty() {
             "draws random numbers per particle".into()
         } else {
@@ -315,6 +324,10 @@ impl ForceTerm for CustomTerm {
             if self.expr.reads(Var::Age) {
                 w.line("let age = ctx_age0 + (t - ctx_t0);");
             }
+            let read = self.expr.attrs_read();
+            for i in (0..64).filter(|i| read & (1u64 << i) != 0) {
+                w.line(format!("let a{i} = ctx_a{i};"));
+            }
             let mut e = expr::emit::Emitter::new(w, RAND_STREAM);
             let value = e.value(&self.expr);
             w.line(format!("a += {value};"));
@@ -332,6 +345,7 @@ impl ForceTerm for CustomTerm {
             life: p.life,
             seed_mix: self.seed_mix,
             id: p.id,
+            attrs: p.attrs,
         };
         eval(&self.expr, &inputs).v()
     }

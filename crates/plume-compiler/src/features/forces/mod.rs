@@ -243,6 +243,8 @@ pub struct ParticleCtx {
     pub t0: f64,
     /// Its lifetime (s), 0 when it never dies.
     pub life: f64,
+    /// Its attributes' values (`features::attributes`) at the step's start, by index.
+    pub attrs: crate::expr::eval::Attrs,
 }
 
 /// What every IR force term provides: WGSL, the f64 reference, and facts for the passes.

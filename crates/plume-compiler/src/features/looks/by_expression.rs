@@ -50,6 +50,8 @@ pub struct Seen {
     pub life: f64,
     /// Its id.
     pub id: u32,
+    /// Its attributes' values (`features::attributes`), by index.
+    pub attrs: crate::expr::eval::Attrs,
 }
 
 fn compile(text: &str, ty: Ty, role: &str, names: Names) -> Result<Expr, expr::ExprError> {
@@ -58,7 +60,7 @@ fn compile(text: &str, ty: Ty, role: &str, names: Names) -> Result<Expr, expr::E
         live: false,
         ..names
     };
-    expr::compile_in(text, ty, &names.scope(VARS, role))
+    expr::compile_in(text, ty, &names.scope_with_attrs(VARS, role))
 }
 
 /// The render section's strings: `color_by`, `alpha_by` and `size_by`.
@@ -105,15 +107,21 @@ impl LookBy {
         self.exprs().any(|e| e.draws_random())
     }
 
+    /// The attributes they read (a bit set of indices).
+    pub fn attrs_read(&self) -> u64 {
+        self.exprs().fold(0, |set, e| set | e.attrs_read())
+    }
+
     /// Whether any reads the velocity.
     pub fn reads_velocity(&self) -> bool {
         self.exprs().any(|e| e.reads(Var::V))
     }
 
-    /// Emits `color_by(x, v, age, ctx_life, ctx_id) -> vec3<f32>`, `alpha_by(...) -> f32` and
-    /// `size_by(...) -> f32` for those there are: the WGSL twins of [`Self::color_factor`],
-    /// [`Self::alpha_factor`] and [`Self::size_factor`].
-    pub fn emit_fns(&self, w: &mut Writer) {
+    /// Emits `color_by(x, v, age, ctx_life, ctx_id, <attributes>) -> vec3<f32>`,
+    /// `alpha_by(...) -> f32` and `size_by(...) -> f32` for those there are: the WGSL twins of
+    /// [`Self::color_factor`], [`Self::alpha_factor`] and [`Self::size_factor`]. `attrs` are
+    /// the kept attributes' parameters (`AttributesIr::params_wgsl`).
+    pub fn emit_fns(&self, w: &mut Writer, attrs: &str) {
         let bound = f32_lit(expr::VALUE_BOUND);
         let most = f32_lit(COLOR_MOST);
         // Each function: its expression, name, what it returns, and its bounds.
@@ -136,7 +144,7 @@ impl LookBy {
             let Some(e) = e else { continue };
             w.comment(format!("render.{name}: {bounded}, VALUE the expression."));
             w.block(
-                format!("fn {name}(x: vec3<f32>, v: vec3<f32>, age: f32, ctx_life: f32, ctx_id: u32) -> {ty}"),
+                format!("fn {name}(x: vec3<f32>, v: vec3<f32>, age: f32, ctx_life: f32, ctx_id: u32{attrs}) -> {ty}"),
                 |w| {
                     w.line(format!("let cx = clamp(x, vec3<f32>(-{bound}), vec3<f32>({bound}));"));
                     w.line(format!("let cv = clamp(v, vec3<f32>(-{bound}), vec3<f32>({bound}));"));
@@ -155,6 +163,7 @@ impl LookBy {
             life: p.life,
             seed_mix,
             id: p.id,
+            attrs: p.attrs,
             ..Inputs::default()
         }
     }

@@ -69,8 +69,10 @@ pub fn decide(ir: &EffectIr) -> Layout {
         .events
         .iter()
         .any(|e| matches!(e.trigger, crate::features::events::TriggerIr::Every(_)));
+    let kept = ir.kept_attributes();
     if needs_spawn_step(ir)
         || ir.custom_terms().any(|c| c.reads_age_or_life())
+        || ir.attributes.reads_age_or_life(kept)
         || (ir.stateless.is_none()
             && (every || (!ir.event_inputs.is_empty() && !fed_ages_derived(ir))))
     {
@@ -78,6 +80,16 @@ pub fn decide(ir: &EffectIr) -> Layout {
     }
     if ir.stores_tint() {
         attributes.push(Attribute::Tint);
+    }
+    let mut first = 0;
+    for (index, a) in ir.attributes.iter_kept(kept) {
+        attributes.push(Attribute::User {
+            index: index as u8,
+            first,
+            width: a.width(),
+            changes: a.changes(),
+        });
+        first += a.width();
     }
     // Padded to a multiple of 16 bytes so kernels move the state as whole vec4 words: scalar
     // accesses at a 28- or 32-byte stride reached under half the copy kernel's bandwidth on an

@@ -79,6 +79,15 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("integrator"),
         ));
     }
+    if let Some((_, a)) = ir.attributes.iter_kept(ir.kept_attributes()).next() {
+        return Err((
+            format!(
+                "attributes.{} is carried by each particle from step to step",
+                a.name
+            ),
+            ValuePath::root().field("attributes").field(&a.name),
+        ));
+    }
     if ir.render.trail.is_some() {
         return Err((
             "render.trail keeps each particle's past positions".into(),

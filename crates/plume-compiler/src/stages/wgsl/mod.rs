@@ -6,6 +6,7 @@
 pub mod batch;
 pub mod counters;
 pub mod draw;
+mod halves;
 pub mod spawn;
 pub mod stateless;
 pub mod trail;
@@ -17,8 +18,10 @@ use crate::base::writer::{u32_lit, Writer};
 use crate::features::forces::noise;
 use crate::ir::EffectIr;
 use crate::stages::integrators;
-use crate::stages::passes::layout::Layout;
+use crate::stages::passes::layout::{Attribute, Layout};
 pub use counters::{counter_word, COUNTER_FIELDS};
+use halves::emit_half_pack;
+pub use halves::emit_half_unpack;
 
 /// Emits the complete WGSL module for a resolved IR and its layout.
 pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
@@ -158,6 +161,16 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         flock.emit_declarations(&mut w, ir.capacity, WORKGROUP);
         w.blank();
     }
+    // The particle context that custom forces and attribute changes read (`ctx_*`).
+    let context = ir.custom_terms().any(|c| c.needs_context())
+        || ir
+            .attributes
+            .iter_kept(ir.kept_attributes())
+            .any(|(_, a)| a.changes());
+    if context && !integrators::needs_accel(ir.integrator) {
+        crate::features::forces::custom::emit_context(&mut w);
+        w.blank();
+    }
     if integrators::needs_accel(ir.integrator) {
         if ir
             .terms
@@ -175,8 +188,10 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             crate::features::forces::turbulence::emit_helpers(&mut w);
             w.blank();
         }
-        if ir.custom_terms().any(|c| c.needs_context()) {
+        if context {
             crate::features::forces::custom::emit_context(&mut w);
+            ir.attributes
+                .emit_context(&mut w, ir.attributes_forces_read());
             w.blank();
         }
         w.comment("Sum of the force terms after folding and pruning.");
@@ -210,6 +225,10 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     }
     if !ir.colliders.is_empty() && !stateless {
         crate::features::colliders::emit_helpers(&mut w, &ir.colliders);
+    }
+    if ir.kept_attributes() != 0 {
+        ir.attributes.emit_fns(&mut w, ir.kept_attributes());
+        w.blank();
     }
     if stateless {
         spawn::emit_emitter_fns(&mut w, ir);
@@ -342,28 +361,32 @@ fn emit_particle_access(w: &mut Writer, layout: &Layout) {
     emit_store_moved(w, layout);
 }
 
-/// The fields the update changes: position and motion (velocity, or Verlet's displacement).
-/// Everything else (id, death and spawn steps, tint) is written by the spawn alone.
-pub const MOVED_FIELDS: [&str; 9] = ["px", "py", "pz", "vx", "vy", "vz", "dx", "dy", "dz"];
-
 /// `store_moved(i, p)`: the update's store, of only the 16-byte words that hold a field it
-/// changes ([`MOVED_FIELDS`]): a word of spawn-time fields alone (a fed group's spawn step and
+/// changes ([`Attribute::changes`]): a word of spawn-time fields alone (a fed group's spawn step and
 /// tint) is neither written back nor, as nothing reads it, loaded (fireworks' embers: 32 of 48
 /// bytes a particle). A half-motion layout's last planes hold motion: they are always written.
 fn emit_store_moved(w: &mut Writer, layout: &Layout) {
-    let words = layout.words();
-    w.comment("The update's store: only the words that hold position or motion (the rest the spawn wrote).");
+    // Each stored word, whether the update changes it.
+    let changed: Vec<bool> = layout
+        .attributes
+        .iter()
+        .flat_map(|a| vec![a.changes(); a.words(layout.half_motion).len()])
+        .collect();
+    let attributes_change = layout
+        .attributes
+        .iter()
+        .any(|a| matches!(a, Attribute::User { changes: true, .. }));
+    match attributes_change {
+        true => w.comment("The update's store: only the words that hold what it changes (the rest the spawn wrote)."),
+        false => w.comment("The update's store: only the words that hold position or motion (the rest the spawn wrote)."),
+    }
     w.block("fn store_moved(i: u32, p: Particle)", |w| {
         if layout.half_motion {
             w.line("store_particle(i, p);");
             return;
         }
         for (k, word) in packed_words(layout).iter().enumerate() {
-            let moved = words
-                .iter()
-                .skip(4 * k)
-                .take(4)
-                .any(|(name, _)| MOVED_FIELDS.contains(name));
+            let moved = changed.iter().skip(4 * k).take(4).any(|c| *c);
             if moved {
                 w.line(format!(
                     "particles[{}] = {word};",
@@ -371,40 +394,6 @@ fn emit_store_moved(w: &mut Writer, layout: &Layout) {
                 ));
             }
         }
-    });
-}
-
-/// `half_to_f32(bits)`: the 16-bit float in the low half of `bits` (a half-motion layout's
-/// loads). Written with integer operations rather than `unpack2x16float`, which naga admits
-/// only with a capability that some adapters lack (llvmpipe's Vulkan without shader-f16).
-pub fn emit_half_unpack(w: &mut Writer) {
-    w.block("fn half_to_f32(bits: u32) -> f32", |w| {
-        w.line("let sign = (bits & 0x8000u) << 16u;");
-        w.line("let exponent = (bits >> 10u) & 0x1fu;");
-        w.line("let mantissa = bits & 0x3ffu;");
-        w.comment(
-            "Normal halves rebias the exponent (15 to 127); subnormals are mantissa · 2^-24.",
-        );
-        w.line("let normal = bitcast<f32>(sign | ((exponent + 112u) << 23u) | (mantissa << 13u));");
-        w.line("let subnormal = bitcast<f32>(sign | bitcast<u32>(f32(mantissa) * 5.9604645e-8));");
-        w.line("return select(normal, subnormal, exponent == 0u);");
-    });
-}
-
-/// `f32_to_half(x)`: `x` as a 16-bit float's bits, rounded to nearest even, its magnitude
-/// clamped to f16's largest finite value (65504) so that a store never makes an infinity
-/// (a NaN's bits clamp to it too).
-fn emit_half_pack(w: &mut Writer) {
-    w.block("fn f32_to_half(x: f32) -> u32", |w| {
-        w.line("let bits = bitcast<u32>(x);");
-        w.line("let sign = (bits >> 16u) & 0x8000u;");
-        w.line("let magnitude = min(bits & 0x7fffffffu, 0x477fe000u);");
-        w.comment("At or above 2^-14 a normal half: rebias (127 to 15) and round off 13 bits.");
-        w.line("let rebiased = magnitude - 0x38000000u;");
-        w.line("let normal = (rebiased + 0xfffu + ((rebiased >> 13u) & 1u)) >> 13u;");
-        w.comment("Below it a subnormal half: x · 2^24 rounded to an integer (exact in f32).");
-        w.line("let subnormal = u32(round(bitcast<f32>(magnitude) * 16777216.0));");
-        w.line("return sign | select(subnormal, normal, magnitude >= 0x38800000u);");
     });
 }
 

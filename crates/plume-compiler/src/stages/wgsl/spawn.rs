@@ -113,6 +113,12 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
 /// global slot this chunk holds), as every spawn kernel ends: Verlet's first displacement,
 /// the lifetime, the id and the spawn step as the layout has them.
 pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+    let kept = ir.kept_attributes();
+    for (i, _) in ir.attributes.iter_kept(kept) {
+        w.line(format!(
+            "let sa{i} = attr_spawn_{i}(s.x, s.v, params.time, id);"
+        ));
+    }
     let motion = if layout.has(Attribute::Displacement) {
         // Verlet: store the displacement that makes step one x0 + v0 h + a h²/2.
         let h = ir.h();
@@ -124,6 +130,8 @@ pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                 layout.has(Attribute::SpawnStep).then_some("params.step"),
                 layout.has(Attribute::DeathStep).then_some("s.die_at"),
             );
+            ir.attributes
+                .emit_set_context(w, ir.attributes_forces_read(), |i| format!("sa{i}"));
         }
         w.line(format!(
             "let d = s.v * {} - accel(s.x, s.v, params.time) * {};",
@@ -135,16 +143,25 @@ pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         ["s.v.x", "s.v.y", "s.v.z"]
     };
     // In the layout's attribute order.
-    let fields: Vec<&str> = layout
+    let fields: Vec<String> = layout
         .attributes
         .iter()
-        .flat_map(|a| match a {
-            Attribute::Position => vec!["s.x.x", "s.x.y", "s.x.z"],
-            Attribute::Velocity | Attribute::Displacement => motion.to_vec(),
-            Attribute::DeathStep => vec!["s.die_at"],
-            Attribute::Id => vec!["id"],
-            Attribute::SpawnStep => vec!["params.step"],
-            Attribute::Tint => vec!["tint"],
+        .flat_map(|a| match *a {
+            Attribute::Position => vec!["s.x.x".into(), "s.x.y".into(), "s.x.z".into()],
+            Attribute::Velocity | Attribute::Displacement => {
+                motion.iter().map(|m| m.to_string()).collect()
+            }
+            Attribute::DeathStep => vec!["s.die_at".into()],
+            Attribute::Id => vec!["id".into()],
+            Attribute::SpawnStep => vec!["params.step".into()],
+            Attribute::Tint => vec!["tint".into()],
+            Attribute::User {
+                index, width: 1, ..
+            } => vec![format!("sa{index}")],
+            Attribute::User { index, .. } => ["x", "y", "z"]
+                .iter()
+                .map(|c| format!("sa{index}.{c}"))
+                .collect(),
         })
         .collect();
     w.line(format!(

@@ -178,7 +178,8 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                 }
                 // A view stores no spawn step or tint (`needs_spawn_step` and `stores_tint` are
                 // for stateful groups only).
-                Attribute::SpawnStep | Attribute::Tint => vec![],
+                // ...nor declared attributes (an effect that keeps any is stateful).
+                Attribute::SpawnStep | Attribute::Tint | Attribute::User { .. } => vec![],
             })
             .collect();
         w.line(format!("return Particle({});", fields.join(", ")));

@@ -157,7 +157,24 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     if let Some(flock) = &ir.flock {
         flock.emit_update_prologue(w);
     }
-    if ir.custom_terms().any(|c| c.needs_context()) {
+    let kept = ir.kept_attributes();
+    // Attribute i's value before the step, from its stored words.
+    let stored = |i: usize| {
+        let fields = layout.user_fields(i).unwrap_or(&[]);
+        match fields.len() {
+            1 => format!("p.{}", fields[0]),
+            _ => format!(
+                "vec3<f32>({})",
+                fields
+                    .iter()
+                    .map(|f| format!("p.{f}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        }
+    };
+    let changes = ir.attributes.iter_kept(kept).any(|(_, a)| a.changes());
+    if ir.custom_terms().any(|c| c.needs_context()) || changes {
         crate::features::forces::custom::emit_set_context(
             w,
             ir.dt,
@@ -165,6 +182,8 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             layout.has(Attribute::SpawnStep).then_some("p.born"),
             lifetimes.then_some("p.die_at"),
         );
+        ir.attributes
+            .emit_set_context(w, ir.attributes_forces_read(), stored);
     }
     w.line("var x = vec3<f32>(p.px, p.py, p.pz);");
     if verlet {
@@ -271,6 +290,29 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             };
             w.line(format!("return vec2<u32>({died}, p.id);"));
         });
+    }
+    if changes {
+        w.comment("The attributes change once a step, all from their values before it (a dying particle's are not needed).");
+        let args = ir.attributes.args_wgsl(kept, |i| {
+            let fields = layout.user_fields(i).unwrap_or(&[]);
+            fields.iter().map(|f| format!("p.{f}")).collect()
+        });
+        for (i, _) in ir.attributes.iter_kept(kept).filter(|(_, a)| a.changes()) {
+            w.line(format!(
+                "let na{i} = attr_change_{i}(x, {vel}, params.time, ctx_age0, ctx_life, p.id{args});"
+            ));
+        }
+        for (i, a) in ir.attributes.iter_kept(kept).filter(|(_, a)| a.changes()) {
+            let fields = layout.user_fields(i).unwrap_or(&[]);
+            match a.width() {
+                1 => w.line(format!("p.{} = na{i};", fields[0])),
+                _ => {
+                    for (f, c) in fields.iter().zip(["x", "y", "z"]) {
+                        w.line(format!("p.{f} = na{i}.{c};"));
+                    }
+                }
+            }
+        }
     }
     w.line("p.px = x.x;");
     w.line("p.py = x.y;");

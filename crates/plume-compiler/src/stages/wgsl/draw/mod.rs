@@ -259,7 +259,10 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     emit_gradients(&mut w, ir);
     if ir.render.by != Default::default() {
         w.blank();
-        ir.render.by.emit_fns(&mut w);
+        let kept = ir.kept_attributes();
+        ir.render
+            .by
+            .emit_fns(&mut w, &ir.attributes.params_wgsl(kept));
     }
     w.blank();
     emit_sprite_at(&mut w, ir, layout, shape, life);
@@ -455,7 +458,11 @@ fn emit_look_by(w: &mut Writer, ir: &EffectIr, layout: &Layout, stateless: bool)
     } else {
         w.line("let by_age = vec2<f32>(0.0);");
     }
-    let args = format!("x, {v}, by_age.x, by_age.y, {id}");
+    let attrs = ir.attributes.args_wgsl(ir.kept_attributes(), |i| {
+        let fields = layout.user_fields(i).unwrap_or(&[]);
+        fields.iter().map(|f| format!("p.{f}")).collect()
+    });
+    let args = format!("x, {v}, by_age.x, by_age.y, {id}{attrs}");
     if by.color.is_some() {
         w.line(format!(
             "s.color = vec4<f32>(s.color.rgb * color_by({args}), s.color.a);"

@@ -1,0 +1,283 @@
+//! Attributes an effect declares (`attributes: {...}`): their values at spawn and after each
+//! step on the GPU against the f64 reference, read by custom forces and the draw; exact
+//! counts and decays where f32 holds them exactly or nearly; what is pruned and folded; and
+//! the refusals.
+
+mod common;
+
+use common::*;
+use plume::compiler::reference::ReferenceSim;
+use plume::{compile_str, CompileOptions};
+
+/// A spray whose particles carry `heat` (a number that cools at a rate), `spin` (a vec3
+/// updated each step from the velocity), `steps` (counts its updates) and `unread` (read by
+/// nothing), with a custom force and the draw reading them, in `integrator`.
+fn spray(integrator: &str) -> String {
+    format!(
+        r#"Effect(
+    name: "attributes",
+    capacity: 800,
+    seed: 11,
+    dt: 0.02,
+    emitters: [Emitter(burst: 200, rate: 300.0, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 0.5),
+        velocity: Radial(speed: (1.0, 4.0)), lifetime: Some((0.8, 1.6)))],
+    attributes: {{
+        "heat": (spawn: "1.0 + rand(0) + 0.1 * length(x)", rate: Some("-0.9 * heat + 0.05 * length(v)")),
+        "spin": (spawn: "vec3(rand(1) - 0.5, rand(2) - 0.5, rand(3) - 0.5)", update: Some("spin * 0.98 + v * 0.01")),
+        "steps": (spawn: "0.0", update: Some("steps + 1.0")),
+        "unread": (spawn: "rand(4)"),
+        "two": (spawn: "2.0"),
+    }},
+    forces: [Gravity((0.0, -9.8, 0.0)), Custom(accel: "spin * heat * two - 0.1 * v")],
+    integrator: {integrator},
+    camera: Camera(eye: (0.0, 0.0, 8.0), target: (0.0, 0.0, 0.0), fov_y: 50.0),
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 0.9)), (1.0, (0.6, 0.6, 0.6, 0.3))],
+        size: [(0.0, 0.12), (1.0, 0.06)], background: (0.0, 0.0, 0.0),
+        color_by: Some("vec3(heat, 0.5 * heat, 0.2)"), size_by: Some("0.5 + steps / 100.0")),
+)"#
+    )
+}
+
+fn compiled(src: &str) -> plume::CompiledEffect {
+    compile_str(src, &CompileOptions::default())
+        .unwrap_or_else(|e| panic!("{}", e.render("attributes.ron", src)))
+}
+
+#[test]
+fn only_what_is_read_is_stored() {
+    let e = compiled(&spray("SemiImplicitEuler"));
+    // heat (1 word), spin (3) and steps (1) are read by the force or the draw; unread is
+    // read by nothing and two is the constant 2 everywhere it is read.
+    let words = |name: &str| {
+        e.layout
+            .words()
+            .iter()
+            .filter(|(n, _)| n.starts_with(name))
+            .count()
+    };
+    assert_eq!(words("u"), 5, "{:?}", e.layout.words());
+    let ir = e.ir.to_string();
+    assert!(
+        ir.contains("unread f32: read by nothing, not stored"),
+        "{ir}"
+    );
+    assert!(ir.contains("two f32: read by nothing, not stored"), "{ir}");
+    assert!(ir.contains("spin vec3 (12 bytes)"), "{ir}");
+    // An attribute read only by an attribute that nothing reads is not kept either.
+    let src = spray("SemiImplicitEuler").replace(
+        r#""unread": (spawn: "rand(4)"),"#,
+        r#""unread": (spawn: "rand(4)"), "chain": (spawn: "0.0", update: Some("unread + chain")),"#,
+    );
+    assert_eq!(compiled(&src).layout.words().len(), e.layout.words().len());
+    // Without the draw and the force reading them, nothing is stored, and the WGSL is the
+    // same as that of the effect without attributes.
+    let plain = |with: bool| {
+        format!(
+            r#"Effect(name: "p", capacity: 10,
+    emitters: [Emitter(burst: 4, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((1.0, 0.0, 0.0)))],
+    {}
+    forces: [Drag(k: 0.5)])"#,
+            if with {
+                r#"attributes: {"heat": (spawn: "rand(0)", rate: Some("-heat"))},"#
+            } else {
+                ""
+            }
+        )
+    };
+    assert_eq!(compiled(&plain(true)).wgsl, compiled(&plain(false)).wgsl);
+}
+
+/// The GPU's attributes against the reference's, word by word.
+fn assert_attributes_match(e: &plume::CompiledEffect, steps: u64, tolerance: f64) {
+    let (gt, gpu) = run_gpu(e, steps);
+    let (ct, cpu) = run_cpu(e, steps);
+    assert_eq!(gt, ct, "totals");
+    assert!(gpu.len() > 100, "{} alive", gpu.len());
+    for (g, c) in gpu.iter().zip(&cpu) {
+        assert_eq!(g.id, c.id);
+        for (w, (a, b)) in g.attributes.iter().zip(&c.attributes).enumerate() {
+            assert!(
+                (a - b).abs() <= tolerance * (1.0 + b.abs()),
+                "particle {} word {w}: {a} on the GPU, {b} in f64",
+                g.id
+            );
+        }
+        assert!(
+            (g.position - c.position).length() <= tolerance * (1.0 + c.position.length()),
+            "particle {}: at {:?} on the GPU, {:?} in f64",
+            g.id,
+            g.position,
+            c.position
+        );
+    }
+}
+
+#[test]
+fn attributes_match_the_reference_on_the_gpu() {
+    // 60 steps of f32 against f64: each step rounds each value a few times (a relative 6e-8
+    // each), and heat's decay and the force that reads it feed those errors back into the
+    // motion at most linearly over so few steps: 8 roundings a step is the same bound as
+    // tests/custom.rs's for a custom force that reads the particle's context.
+    for integrator in ["SemiImplicitEuler", "Verlet", "Midpoint"] {
+        let e = compiled(&spray(integrator));
+        assert_attributes_match(&e, 60, 8.0 * 60.0 * U32);
+    }
+}
+
+#[test]
+fn a_counter_counts_steps_and_a_rate_decays_as_euler_does() {
+    // `steps` adds 1 each step: small integers are exact in f32, so the GPU's count is each
+    // particle's age in steps exactly. A rate of -k·heat integrated once a step is
+    // heat₀ (1 − k dt)ⁿ, with f32's rounding at most n roundings of the product.
+    let src = r#"Effect(
+    name: "count",
+    capacity: 400,
+    dt: 0.02,
+    emitters: [Emitter(burst: 100, rate: 250.0, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 1.0, 0.0)))],
+    attributes: {
+        "steps": (spawn: "0.0", update: Some("steps + 1.0")),
+        "heat": (spawn: "2.0", rate: Some("-0.5 * heat")),
+    },
+    render: Render(size_by: Some("1.0 + 0.001 * steps"), alpha_by: Some("clamp(heat, 0.0, 1.0)")),
+)"#;
+    let e = compiled(src);
+    let (_, gpu) = run_gpu(&e, 50);
+    assert!(gpu.len() > 100);
+    // Words in name order: heat, then steps.
+    for p in &gpu {
+        let n = (p.age / 0.02).round();
+        assert_eq!(p.attributes[1], n, "particle {} aged {} steps", p.id, n);
+        let decayed = 2.0 * (1.0f64 - 0.5 * 0.02).powf(n);
+        assert!(
+            (p.attributes[0] - decayed).abs() <= 4.0 * n.max(1.0) * U32 * decayed,
+            "particle {}: heat {} after {n} steps, Euler gives {decayed}",
+            p.id,
+            p.attributes[0]
+        );
+    }
+    // The reference agrees to the last bit on the count and within rounding on the decay.
+    let mut cpu = ReferenceSim::new(&e.ir);
+    cpu.run(50);
+    for (g, c) in gpu.iter().zip(cpu.records()) {
+        assert_eq!(g.attributes[1], c.attributes[1]);
+    }
+}
+
+#[test]
+fn the_draw_reads_attributes_as_the_reference_drawing_does() {
+    let e = compiled(&spray("SemiImplicitEuler"));
+    let mut sim = plume::runtime::Effect::new(&gpu(), e).unwrap();
+    sim.run(40, |_| {}).unwrap();
+    let (gpu_img, cpu_img) = draw_and_reference(&sim, 256);
+    let lit = gpu_img.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
+    assert!(lit > 500, "{lit} pixels drawn");
+    // As tests/look_by.rs: a channel a step apart where rounding crosses a half, a rim
+    // pixel's coverage a few steps where sizes differ by f32 rounding.
+    let (mean, max, over) = differences(&gpu_img, &cpu_img, 4);
+    assert!(
+        mean < 0.05 && over * 1000 < gpu_img.len(),
+        "GPU and CPU-fed draws differ: mean {mean}, max {max}, {over} over 4"
+    );
+    let splat = splat_image(&sim, 256);
+    let (mean, max, over) = differences(&gpu_img, &splat, 2);
+    assert!(
+        mean < 0.05 && over * 1000 < gpu_img.len(),
+        "splat and raster differ: mean {mean}, max {max}, {over} over 2"
+    );
+}
+
+#[test]
+fn a_stateless_effect_cannot_keep_attributes() {
+    let src = r#"Effect(
+    name: "s",
+    capacity: 100,
+    state: Stateless,
+    emitters: [Emitter(rate: 10.0, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 1.0, 0.0)), lifetime: Some((1.0, 1.0)))],
+    attributes: {"heat": (spawn: "rand(0)")},
+    forces: [Gravity((0.0, -9.8, 0.0))],
+    integrator: Exact,
+    render: Render(alpha_by: Some("heat")),
+)"#;
+    let err = compile_str(src, &CompileOptions::default()).unwrap_err();
+    let text = err.render("s.ron", src);
+    assert!(
+        text.contains("attributes.heat is carried by each particle"),
+        "{text}"
+    );
+    // Auto keeps it stateful, and says why.
+    let auto = compiled(&src.replace("state: Stateless,", ""));
+    assert!(auto.ir.stateless.is_none());
+    assert!(
+        auto.ir.state_reason.contains("attributes.heat"),
+        "{}",
+        auto.ir.state_reason
+    );
+}
+
+#[test]
+fn event_children_spawn_their_attributes() {
+    // A group fed by deaths gives each child its attributes as an emitter's particles get
+    // them, through the same store; the GPU matches the reference.
+    let src = r#"Effect(
+    name: "parents",
+    capacity: 200,
+    dt: 0.02,
+    emitters: [Emitter(burst: 50, shape: Point((0.0, 0.0, 0.0)), velocity: Radial(speed: (1.0, 2.0)), lifetime: Some((0.2, 0.4)))],
+    events: [Event(on: Death, target: "children", count: 4, velocity: Radial(speed: (0.5, 1.0)), lifetime: Some((1.0, 1.0)))],
+    groups: [Group(name: "children", capacity: 400,
+        attributes: {"glow": (spawn: "0.5 + length(x)", rate: Some("-glow"))},
+        render: Render(alpha_by: Some("clamp(glow, 0.0, 1.0)")))],
+)"#;
+    let graph = plume::compiler::graph::compile_graph_str(src, &CompileOptions::default())
+        .unwrap_or_else(|e| panic!("{}", e.render("parents.ron", src)));
+    let child = &graph.groups[1].effect;
+    assert_eq!(
+        child
+            .layout
+            .words()
+            .iter()
+            .filter(|(n, _)| *n == "u0")
+            .count(),
+        1
+    );
+    let mut sim = plume::runtime::Effect::from_graph(&gpu(), graph.clone()).unwrap();
+    sim.run(20, |_| {}).unwrap();
+    let mut cpu = plume::compiler::graph::ReferenceGraph::new(&graph);
+    cpu.run(20);
+    let (g, c) = (sim.group_records(1).unwrap(), cpu.records(1));
+    assert_eq!(g.len(), c.len());
+    assert!(g.len() > 50, "{} children", g.len());
+    for (a, b) in g.iter().zip(&c) {
+        assert_eq!(a.id, b.id);
+        assert!(
+            (a.attributes[0] - b.attributes[0]).abs() <= 1e-5 * (1.0 + b.attributes[0].abs()),
+            "child {}: glow {} on the GPU, {} in f64",
+            a.id,
+            a.attributes[0],
+            b.attributes[0]
+        );
+    }
+}
+
+#[test]
+fn an_attribute_that_reads_the_time_keeps_it_whole() {
+    // dt = 1 s for 300 steps: past 256 s, where the kernels' time wraps unless something reads
+    // it. The attribute takes each step's start time, a whole number, exact in f32.
+    let src = r#"Effect(
+    name: "clock",
+    capacity: 10,
+    dt: 1.0,
+    emitters: [Emitter(burst: 4, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    attributes: {"clock": (spawn: "t", update: Some("t"))},
+    render: Render(alpha_by: Some("clamp(clock, 0.0, 1.0)")),
+)"#;
+    let e = compiled(src);
+    assert!(!e.ir.wraps_kernel_time(), "the attribute reads t");
+    let (_, gpu) = run_gpu(&e, 300);
+    let (_, cpu) = run_cpu(&e, 300);
+    assert_eq!(gpu.len(), 4);
+    for (g, c) in gpu.iter().zip(&cpu) {
+        assert_eq!(c.attributes[0], 299.0);
+        assert_eq!(g.attributes[0], c.attributes[0]);
+    }
+}
