@@ -414,10 +414,10 @@ mod tests {
             "Effect(\n  params: {\"k\": 1.0},\n  attributes: {\"heat\": (spawn: \"rand(0)\")},\n)";
         let map = SourceMap::build(src);
         let key = map.find("attributes.heat").unwrap();
-        assert_eq!((key.start.line, key.start.col), (3, 17));
+        assert_eq!((key.start.line, key.start.col), (3, 16));
         let spawn = map.find("attributes.heat.spawn").unwrap();
-        assert_eq!((spawn.start.line, spawn.start.col), (3, 33));
-        assert_eq!(map.find("params.k").unwrap().start.col, 13);
+        assert_eq!((spawn.start.line, spawn.start.col), (3, 32));
+        assert_eq!(map.find("params.k").unwrap().start.col, 12);
     }
 
     #[test]

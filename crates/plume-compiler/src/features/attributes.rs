@@ -342,6 +342,11 @@ impl AttributesIr {
                         4 * a.width(),
                         a.spawn.size()
                     ),
+                    false if !a.changes() && expr::fold::is_constant(&a.spawn) => format!(
+                        "{} {}: a constant, folded where it is read, not stored",
+                        a.name,
+                        a.ty.name()
+                    ),
                     false => format!("{} {}: read by nothing, not stored", a.name, a.ty.name()),
                 }
             })
