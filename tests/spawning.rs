@@ -601,3 +601,65 @@ fn a_live_param_opens_and_closes_an_emitter_on_the_gpu_as_in_the_reference() {
         assert_eq!(c.spawned, expected, "flow {flow}, puff {puff}");
     }
 }
+
+#[test]
+fn starting_ages_are_uniform_whole_steps_and_shorten_the_life() {
+    // `age: Some((0.0, 0.3))` at dt = 0.01: each particle starts 0 to 30 whole steps into a
+    // 0.5 s life, drawn uniformly (31 values), the same on the GPU and in the reference, its
+    // colour over life starting that far along (the draw reads its stored spawn step).
+    let src = r#"Effect(
+    name: "ages",
+    capacity: 30000,
+    seed: 5,
+    dt: 0.01,
+    emitters: [Emitter(burst: 20000, shape: Point((0.0, 0.0, 0.0)), velocity: Radial(speed: (1.0, 1.0)),
+        lifetime: Some((0.5, 0.5)), age: Some((0.0, 0.3)))],
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0)), (1.0, (1.0, 0.0, 0.0, 0.0))]),
+)"#;
+    let e = compile(src);
+    assert!(e.ir.stateless.is_none(), "{}", e.ir.state_reason);
+    assert!(
+        e.ir.state_reason.contains("emitters[0].age"),
+        "{}",
+        e.ir.state_reason
+    );
+    let (gt, gpu) = run_gpu(&e, 1);
+    let (ct, cpu) = run_cpu(&e, 1);
+    assert_eq!(gt, ct);
+    assert_eq!(gpu.len(), 20000);
+    let mut counts = [0usize; 31];
+    for (g, c) in gpu.iter().zip(&cpu) {
+        assert_eq!((g.id, g.age, g.lifetime), (c.id, c.age, c.lifetime));
+        assert_eq!(g.lifetime, Some(0.5));
+        // One step done: the age is the starting age and that step.
+        let start = (g.age / 0.01).round() as usize - 1;
+        counts[start] += 1;
+    }
+    // Each of the 31 starting ages holds 1/31 of the particles: binomial, 20000 draws, so
+    // each count within 5 standard deviations (sqrt(n p (1 - p)) = 25) of 645.
+    for (k, &n) in counts.iter().enumerate() {
+        assert!(
+            (n as f64 - 20000.0 / 31.0).abs() < 5.0 * 25.0,
+            "{k} steps: {n} particles"
+        );
+    }
+    // They die as their clocks run out: after 20 steps those that started 30 steps in (lived
+    // 50 of 50 steps) are gone, and the totals agree step by step.
+    let (gt, gpu) = run_gpu(&e, 21);
+    let (ct, cpu) = run_cpu(&e, 21);
+    assert_eq!(gt, ct);
+    assert!(gt.died > 0 && gt.died < 20000, "{gt:?}");
+    assert!(gpu
+        .iter()
+        .zip(&cpu)
+        .all(|(g, c)| (g.id, g.age) == (c.id, c.age)));
+    assert!(gpu.iter().all(|g| g.age < 0.5 + 1e-9));
+    // A stateless effect cannot start particles at ages of their own.
+    let bad = src.replace("capacity: 30000,", "capacity: 30000, state: Stateless,");
+    let err = plume::compile_str(&bad, &CompileOptions::default()).unwrap_err();
+    assert!(
+        err.render("ages.ron", &bad).contains("emitters[0].age"),
+        "{}",
+        err.render("ages.ron", &bad)
+    );
+}

@@ -11,7 +11,7 @@
 /// The integer lifetime draw of one emitter.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LifetimeSteps {
-    /// Fewest steps a particle lives (>= 1).
+    /// Fewest steps a particle lives (>= 1; a starting age's draw may start at 0).
     pub first: u32,
     /// Number of possible step counts (>= 1): n in [first, first + span).
     pub span: u32,
@@ -44,6 +44,24 @@ impl LifetimeSteps {
         })
     }
 
+    /// The draw for starting ages uniform in `[min, max]` seconds at step `dt`, as whole steps
+    /// rounded to the nearest (0 allowed). None when they do not fit in 31 bits.
+    pub fn ages(min: f64, max: f64, dt: f64) -> Option<Self> {
+        let lo = (min / dt).round().max(0.0);
+        let hi = (max / dt).round().max(lo);
+        if hi >= f64::from(1u32 << 31) || hi.is_nan() {
+            return None;
+        }
+        let (first, last) = (lo as u32, hi as u32);
+        let span = last - first + 1;
+        let span_bits = 32 - span.leading_zeros();
+        Some(Self {
+            first,
+            span,
+            bits: (32 - span_bits).min(24),
+        })
+    }
+
     /// Steps lived, from the raw random word `u`: first + floor(top `bits` of u * span / 2^bits).
     pub fn draw(&self, u: u32) -> u32 {
         self.first + (((u >> (32 - self.bits)) * self.span) >> self.bits)
@@ -51,8 +69,13 @@ impl LifetimeSteps {
 
     /// The WGSL expression of [`Self::draw`] for a `u32` named `lu`.
     pub fn wgsl(&self) -> String {
+        self.wgsl_of("lu")
+    }
+
+    /// The WGSL expression of [`Self::draw`] for the `u32` named `word`.
+    pub fn wgsl_of(&self, word: &str) -> String {
         format!(
-            "{}u + (((lu >> {}u) * {}u) >> {}u)",
+            "{}u + ((({word} >> {}u) * {}u) >> {}u)",
             self.first,
             32 - self.bits,
             self.span,

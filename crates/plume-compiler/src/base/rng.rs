@@ -53,6 +53,8 @@ pub mod stream {
     pub const MESH_PICK: u32 = 14;
     /// One draw for the face a box's surface picks (`Box(surface: true)`).
     pub const FACE_PICK: u32 = 15;
+    /// One draw for a particle's starting age (an emitter's `age`).
+    pub const START_AGE: u32 = 16;
     /// `rand(k)` in custom expressions draws from stream CUSTOM + k (k <= 255).
     pub const CUSTOM: u32 = 64;
 }

@@ -183,6 +183,12 @@ impl EffectIr {
         self.emitters.iter().any(|e| e.lifetime.is_some())
     }
 
+    /// True when an emitter gives its particles a random starting age (`Emitter::age`): their
+    /// spawn step is then stored, as the step their age counts from.
+    pub fn has_start_ages(&self) -> bool {
+        self.emitters.iter().any(|e| e.age_steps.is_some())
+    }
+
     /// True when any force term reads the velocity.
     pub fn forces_use_velocity(&self) -> bool {
         self.terms.iter().any(|t| t.as_dyn().uses_velocity())

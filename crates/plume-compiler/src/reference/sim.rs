@@ -26,6 +26,8 @@ struct Particle {
     die_at: u32,
     /// The step that spawned it.
     born: u64,
+    /// Its starting age in whole steps (`Emitter::age`): its age counts from `born - start`.
+    start: u32,
     /// Past positions for `render.trail` (empty without one).
     history: History,
     /// Its tint (`tint.rs`), as its group stores or derives it.
@@ -56,6 +58,12 @@ fn lifetime_of(born: u64, die_at: u32, dt: f64) -> f64 {
     } else {
         f64::from(die_at.wrapping_sub(born as u32).wrapping_add(1)) * dt
     }
+}
+
+/// The step a particle's age counts from, spawned at `born` with a starting age of `start`
+/// steps, as the kernels store it: a u32 step index, wrapping below step 0.
+fn clock(born: u64, start: u32) -> u64 {
+    u64::from((born as u32).wrapping_sub(start))
 }
 
 /// `v` rounded to the nearest 16-bit floats, each clamped to f16's largest finite value first,
@@ -184,13 +192,15 @@ impl ReferenceSim {
             };
             let tint = crate::features::looks::tint::spawned(self.ir.tint(), id, inherited);
             let attrs = self.spawn_attrs(s.x, s.v, time, id);
-            let v = self.stored(self.initial_v(id, step, time, (s.x, s.v), s.die_at, attrs));
+            let v =
+                self.stored(self.initial_v(id, (step, s.start), time, (s.x, s.v), s.die_at, attrs));
             self.particles.push(Particle {
                 id,
                 x: s.x,
                 v,
                 die_at: s.die_at,
                 born: step,
+                start: s.start,
                 history: History::default(),
                 tint,
                 attrs,
@@ -223,7 +233,7 @@ impl ReferenceSim {
     fn initial_v(
         &self,
         id: u32,
-        step: u64,
+        (step, start): (u64, u32),
         time: f64,
         (x, v): (DVec3, DVec3),
         die_at: u32,
@@ -235,9 +245,9 @@ impl ReferenceSim {
         let h = self.ir.h();
         let ctx = ParticleCtx {
             id,
-            age0: 0.0,
+            age0: f64::from(start) * self.ir.dt,
             t0: time,
-            life: lifetime_of(step, die_at, self.ir.dt),
+            life: lifetime_of(clock(step, start), die_at, self.ir.dt),
             attrs,
         };
         v * h - accel(&self.ir, self.baked.as_deref(), &ctx, x, v, time) * (0.5 * h * h)
@@ -297,7 +307,7 @@ impl ReferenceSim {
                 let attrs = self.spawn_attrs(s.x, s.v, plan.time, id + local);
                 let v = self.stored(self.initial_v(
                     id + local,
-                    plan.step,
+                    (plan.step, s.start),
                     plan.time,
                     (s.x, s.v),
                     s.die_at,
@@ -309,6 +319,7 @@ impl ReferenceSim {
                     v,
                     die_at: s.die_at,
                     born: plan.step,
+                    start: s.start,
                     history: History::default(),
                     tint: crate::features::looks::tint::spawned(
                         self.ir.tint(),
@@ -348,10 +359,10 @@ impl ReferenceSim {
         self.particles.retain_mut(|p| {
             let flock = frozen.get(index);
             index += 1;
-            let born = p.born;
+            let born = clock(p.born, p.start);
             let ctx = ParticleCtx {
                 id: p.id,
-                age0: plan.step.saturating_sub(born) as f64 * ir.dt,
+                age0: (plan.step.saturating_sub(p.born) + u64::from(p.start)) as f64 * ir.dt,
                 t0: plan.time,
                 life: lifetime_of(born, p.die_at, ir.dt),
                 attrs: p.attrs,
@@ -425,9 +436,9 @@ impl ReferenceSim {
                 id: p.id,
                 position: p.x,
                 velocity: if verlet { p.v / h } else { p.v },
-                age: (self.schedule.steps_done() - p.born) as f64 * self.ir.dt,
+                age: (self.schedule.steps_done() - p.born + u64::from(p.start)) as f64 * self.ir.dt,
                 lifetime: (p.die_at != crate::base::lifetime::NEVER)
-                    .then(|| lifetime_of(p.born, p.die_at, self.ir.dt)),
+                    .then(|| lifetime_of(clock(p.born, p.start), p.die_at, self.ir.dt)),
                 tint: p.tint,
                 attributes: self.ir.attributes.words(kept, &p.attrs),
             })

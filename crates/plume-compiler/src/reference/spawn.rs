@@ -17,18 +17,31 @@ pub struct Spawned {
     pub v: DVec3,
     /// Step index whose update kills it ([`NEVER`] when immortal).
     pub die_at: u32,
+    /// Its starting age in whole steps (`Emitter::age`; 0 without one).
+    pub start: u32,
 }
 
 /// The state of particle `id`, the `k`-th of emitter `e`, spawned at `step`.
 pub fn spawn(ir: &EffectIr, e: usize, id: u32, k: u32, step: u64) -> Spawned {
     let em = &ir.emitters[e];
     let (x, v) = em.sample(ir.seed_mix, id, k, step);
+    let start = em
+        .age_steps
+        .map_or(0, |a| a.draw(rand_u32(ir.seed_mix, id, stream::START_AGE)));
     let die_at = match em.lifetime_steps {
         Some(l) => {
             let n = l.draw(rand_u32(ir.seed_mix, id, stream::LIFETIME));
-            (step as u32).wrapping_add(n).wrapping_sub(1)
+            (step as u32)
+                .wrapping_sub(start)
+                .wrapping_add(n)
+                .wrapping_sub(1)
         }
         None => NEVER,
     };
-    Spawned { x, v, die_at }
+    Spawned {
+        x,
+        v,
+        die_at,
+        start,
+    }
 }

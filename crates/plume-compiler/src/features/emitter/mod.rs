@@ -61,6 +61,11 @@ pub struct Emitter {
     /// Lifetime range in seconds; `None` lives forever.
     #[serde(default)]
     pub lifetime: Option<Range>,
+    /// A starting age range in seconds, drawn per particle in whole steps: a particle starts
+    /// that far into its life (its lifetime counts from its starting age, its colour and size
+    /// over life start that far along); `None` starts at 0.
+    #[serde(default)]
+    pub age: Option<Range>,
 }
 
 /// One emitter.
@@ -82,6 +87,8 @@ pub struct EmitterIr {
     pub lifetime: Option<(f64, f64)>,
     /// The lifetime as whole steps (see [`crate::base::lifetime`]).
     pub lifetime_steps: Option<LifetimeSteps>,
+    /// The starting age's draw in whole steps (stream `START_AGE`), when it has one.
+    pub age_steps: Option<LifetimeSteps>,
 }
 
 /// An orthonormal pair spanning the plane perpendicular to a unit vector.
@@ -116,6 +123,7 @@ impl Emitter {
             shape,
             velocity,
             lifetime,
+            age: None,
         }
     }
 
@@ -160,6 +168,22 @@ impl Emitter {
                 }
             }
         }
+        if let Some(age) = self.age {
+            let p = path.field("age");
+            if c.range(&p, age) {
+                if age.0 < 0.0 {
+                    c.error(
+                        &p.component(0, "min"),
+                        format!("must be >= 0 seconds, got {}", age.0),
+                    );
+                } else if dt > 0.0 && LifetimeSteps::ages(age.0, age.1, dt).is_none() {
+                    c.error(
+                        &p.component(1, "max"),
+                        format!("is more than 2^31 steps of dt = {dt} s, got {}", age.1),
+                    );
+                }
+            }
+        }
     }
 
     /// The emitter's lowered form (after [`Emitter::check`] passed) in an effect of
@@ -177,6 +201,11 @@ impl Emitter {
             shape,
             lifetime: self.lifetime.map(|r| (r.0, r.1)),
             lifetime_steps: self.lifetime.and_then(|r| LifetimeSteps::new(r.0, r.1, dt)),
+            // A range within half a step of 0 starts every particle at 0: no draw.
+            age_steps: self
+                .age
+                .and_then(|r| LifetimeSteps::ages(r.0, r.1, dt))
+                .filter(|a| (a.first, a.span) != (0, 1)),
         }
     }
 }

@@ -71,6 +71,7 @@ pub fn decide(ir: &EffectIr) -> Layout {
         .any(|e| matches!(e.trigger, crate::features::events::TriggerIr::Every(_)));
     let kept = ir.kept_attributes();
     if needs_spawn_step(ir)
+        || (ir.has_start_ages() && ir.stateless.is_none())
         || ir.custom_terms().any(|c| c.reads_age_or_life())
         || ir.attributes.reads_age_or_life(kept)
         || (ir.stateless.is_none()

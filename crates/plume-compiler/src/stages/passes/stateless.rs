@@ -88,6 +88,12 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("attributes").field(&a.name),
         ));
     }
+    if let Some(e) = ir.emitters.iter().position(|em| em.age_steps.is_some()) {
+        return Err((
+            format!("emitters[{e}].age starts each particle at an age of its own, which the closed form's segments do not track"),
+            ValuePath::root().field("emitters").index(e).field("age"),
+        ));
+    }
     if ir.render.trail.is_some() {
         return Err((
             "render.trail keeps each particle's past positions".into(),

@@ -92,6 +92,10 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         w.line("x: vec3<f32>,");
         w.line("v: vec3<f32>,");
         w.line("die_at: u32,");
+        if ir.has_start_ages() {
+            w.comment("The step its age counts from: the spawn step less its starting age.");
+            w.line("born: u32,");
+        }
     });
     w.blank();
     if stateless {

@@ -114,6 +114,11 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
 /// the lifetime, the id and the spawn step as the layout has them.
 pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     let kept = ir.kept_attributes();
+    // The step its age counts from.
+    let born = match ir.has_start_ages() {
+        true => "s.born",
+        false => "params.step",
+    };
     for (i, _) in ir.attributes.iter_kept(kept) {
         w.line(format!(
             "let sa{i} = attr_spawn_{i}(s.x, s.v, params.time, id);"
@@ -127,7 +132,7 @@ pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                 w,
                 ir.dt,
                 "id",
-                layout.has(Attribute::SpawnStep).then_some("params.step"),
+                layout.has(Attribute::SpawnStep).then_some(born),
                 layout.has(Attribute::DeathStep).then_some("s.die_at"),
             );
             ir.attributes
@@ -153,7 +158,7 @@ pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             }
             Attribute::DeathStep => vec!["s.die_at".into()],
             Attribute::Id => vec!["id".into()],
-            Attribute::SpawnStep => vec!["params.step".into()],
+            Attribute::SpawnStep => vec![born.into()],
             Attribute::Tint => vec!["tint".into()],
             Attribute::User {
                 index, width: 1, ..
@@ -192,13 +197,30 @@ fn emit_emitter_fn(w: &mut Writer, ir: &EffectIr, e: usize, em: &EmitterIr) {
         |w| {
             w.line("var s: Spawned;");
             em.emit_wgsl(w, e);
+            // With starting ages, the step a particle's age and lifetime count from.
+            let from = match (ir.has_start_ages(), em.age_steps) {
+                (false, _) => "step",
+                (true, None) => {
+                    w.line("s.born = step;");
+                    "s.born"
+                }
+                (true, Some(ages)) => {
+                    w.comment("Its starting age in whole steps, drawn as a lifetime is.");
+                    w.line(format!(
+                        "let lu_age = rand_u32(id, {}u);",
+                        stream::START_AGE
+                    ));
+                    w.line(format!("s.born = step - ({});", ages.wgsl_of("lu_age")));
+                    "s.born"
+                }
+            };
             match em.lifetime_steps {
                 Some(steps) => {
                     w.comment(
                         "Whole steps lived, drawn with integer arithmetic (see lifetime.rs).",
                     );
                     w.line(format!("let lu = rand_u32(id, {}u);", stream::LIFETIME));
-                    w.line(format!("s.die_at = step + ({}) - 1u;", steps.wgsl()));
+                    w.line(format!("s.die_at = {from} + ({}) - 1u;", steps.wgsl()));
                 }
                 None if ir.has_lifetimes() => {
                     w.comment("Lives forever.");
