@@ -1,7 +1,6 @@
 #!/usr/bin/env bash
 # Figures of docs/performance.md, "Expressions at spawn and in the draw", from one device
 # call. Usage: bench.sh PLUME OUT_DIR
-#   hanabi.jsonl  every effects/hanabi port at 1M particles: the step, and the draw at 1280x720
 #   by.jsonl      effects/fountain.ron and fountain-by.ron (the same fountain, its spawn
 #                 velocity, colour, opacity and size written as expressions) at 1M and 10M,
 #                 alternated: the step and the draw at 1280x720
@@ -10,9 +9,6 @@ plume=$1
 out=$2
 here=$(dirname "$0")
 mkdir -p "$out"
-for f in effects/hanabi/*.ron; do
-    "$plume" bench "$f" --particles 1000000 --steps 50 --render 1280x720 --json
-done >"$out/hanabi.jsonl"
 for round in 1 2; do
     for n in 1000000 10000000; do
         for f in effects/fountain.ron "$here/fountain-by.ron"; do
