@@ -330,10 +330,14 @@ impl Scanner<'_> {
                     self.at += 1;
                 }
                 // A map's entry, `"key": value`: the key's span names the entry, its value's
-                // the entry's fields.
+                // the entry's fields, unless the value is a string.
                 Tok::Str(key) if open == '{' && self.peek(1) == Some(&Tok::Colon) => {
                     let child = format!("{path}.{key}");
-                    self.record(&child, self.tokens[self.at].span);
+                    // A string value names the entry itself (so that a mistake inside it is
+                    // found within it); any other value, the key.
+                    if !matches!(self.peek(2), Some(Tok::Str(_))) {
+                        self.record(&child, self.tokens[self.at].span);
+                    }
                     self.at += 2;
                     if self.value(child, depth + 1).is_none() {
                         self.skip_one(depth)?;

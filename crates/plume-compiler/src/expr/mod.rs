@@ -9,6 +9,7 @@
 //! `pow` of a non-positive base, `atan2(0, 0)` and `normalize` of a zero vector have finite
 //! documented results (docs/effect-format.md, "Custom forces"). No NaN or Inf can come out.
 
+pub mod define;
 pub mod draws;
 pub mod emit;
 pub mod eval;
@@ -51,6 +52,8 @@ pub struct Names<'a> {
     pub live: bool,
     /// The effect's attributes (`features::attributes`), in name order.
     pub attrs: &'a [typed::AttrName],
+    /// The effect's named expressions (`define`).
+    pub defines: &'a [define::Define],
 }
 
 impl<'a> Names<'a> {
@@ -65,6 +68,8 @@ impl<'a> Names<'a> {
             role,
             attrs: self.attrs,
             reads_attrs: false,
+            defines: self.defines,
+            expanded: std::cell::Cell::new(0),
         }
     }
 
@@ -118,6 +123,8 @@ pub fn compile(
             role: "an acceleration",
             attrs: &[],
             reads_attrs: false,
+            defines: &[],
+            expanded: std::cell::Cell::new(0),
         },
     )
 }

@@ -136,6 +136,11 @@ pub struct Scope<'a> {
     /// Whether the attributes hold values where this expression is evaluated (not at spawn,
     /// where they are being given theirs).
     pub reads_attrs: bool,
+    /// The effect's named expressions (`define`), expanded where they are read.
+    pub defines: &'a [super::define::Define],
+    /// Nodes the named expressions read so far have expanded to (at most
+    /// [`super::define::MAX_EXPANDED`]).
+    pub expanded: std::cell::Cell<usize>,
 }
 
 /// An attribute as expressions see it: its name, type, and its value when it never changes
@@ -204,6 +209,29 @@ pub fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
                     None => Expr::new(Node::Attr(i as u8), attr.ty),
                 });
             }
+            if let Some(d) = scope.defines.iter().find(|d| d.name == *name) {
+                let ast = match &d.body {
+                    super::define::Body::Parsed(ast) => ast,
+                    super::define::Body::Broken => {
+                        return Err(err(format!("the named expression `{name}` has a mistake (define.{name})")))
+                    }
+                    super::define::Body::Circular => {
+                        return Err(err(format!("the named expression `{name}` refers to itself in a circle (define.{name})")))
+                    }
+                };
+                let e = check(ast, scope).map_err(|inner| {
+                    err(format!("in `{name}` (define.{name}): {}", inner.message))
+                })?;
+                let total = scope.expanded.get() + e.size();
+                if total > super::define::MAX_EXPANDED {
+                    return Err(err(format!(
+                        "the named expressions read here expand to more than {} nodes: read a shorter one, or fewer",
+                        super::define::MAX_EXPANDED
+                    )));
+                }
+                scope.expanded.set(total);
+                return Ok(e);
+            }
             if let Some(value) = scope.params.get(name) {
                 if scope.live {
                     let index = scope.params.keys().position(|k| k == name).unwrap_or(0);
@@ -229,6 +257,7 @@ pub fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
                 .map(|v| v.name())
                 .chain(["dt"])
                 .chain(attrs.iter().copied())
+                .chain(scope.defines.iter().map(|d| d.name.as_str()))
                 .chain(params.iter().copied());
             let hint = match closest(name, known) {
                 Some(near) => format!("did you mean `{near}`? "),

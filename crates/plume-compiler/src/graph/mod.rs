@@ -395,11 +395,13 @@ fn check_event(c: &mut Checker, path: &ValuePath, ev: &Event, group: &Effect) {
         c.positive(&path.field("on").variant("Every").inner(), seconds);
     }
     c.finite(&path.field("inherit_velocity"), ev.inherit_velocity);
+    let (defines, _) = crate::expr::define::parse_all(&group.define);
     let names = crate::expr::Names {
         params: &group.params,
         dt: group.dt,
         live: group.live_params,
         attrs: &[],
+        defines: &defines,
     };
     ev.as_emitter().check(c, path, names);
 }

@@ -9,11 +9,13 @@ use crate::stages::schema::{Collider, Effect, KillVolume};
 
 /// Lowers a checked effect. Call only after [`crate::stages::validate::check_effect`] found no errors.
 pub fn lower(effect: &Effect) -> EffectIr {
+    let (defines, _) = crate::expr::define::parse_all(&effect.define);
     let scope = crate::features::forces::custom::Scope {
         params: &effect.params,
         dt: effect.dt,
         live: effect.live_params,
         attrs: &[],
+        defines: &defines,
     };
     let attrs = crate::features::attributes::names(&effect.attributes, scope);
     let scope = crate::features::forces::custom::Scope {

@@ -54,6 +54,10 @@ pub struct Effect {
     /// [`crate::features::attributes`]).
     #[serde(default)]
     pub attributes: crate::features::attributes::Declared,
+    /// Named expressions that every expression of the effect may read by name:
+    /// `define: {"r": "length(x)"}` (see [`crate::expr::define`]).
+    #[serde(default)]
+    pub define: std::collections::BTreeMap<String, String>,
     /// Named constants that custom expressions may use: `params: {"k": 0.4}`.
     #[serde(default)]
     pub params: std::collections::BTreeMap<String, f64>,

@@ -64,17 +64,20 @@ pub fn check_effect(effect: &Effect) -> Checker {
     if effect.substeps == 0 {
         c.error(&root.field("substeps"), "must be >= 1, got 0");
     }
+    let (defines, define_errors) = crate::expr::define::parse_all(&effect.define);
     let scope = crate::features::forces::custom::Scope {
         params: &effect.params,
         dt: effect.dt,
         live: effect.live_params,
         attrs: &[],
+        defines: &defines,
     };
     let attrs = crate::features::attributes::names(&effect.attributes, scope);
     let scope = crate::features::forces::custom::Scope {
         attrs: &attrs,
         ..scope
     };
+    check_defines(&mut c, &root.field("define"), effect, define_errors, scope);
     crate::features::attributes::check(
         &mut c,
         &root.field("attributes"),
@@ -173,6 +176,52 @@ pub fn check_effect(effect: &Effect) -> Checker {
         );
     }
     c
+}
+
+/// Named expressions: names that hide no other name, text that parses, refers to no circle,
+/// and type-checks where every variable and attribute is known (a place that knows fewer
+/// reports a name it cannot read where it reads the definition).
+fn check_defines(
+    c: &mut Checker,
+    path: &ValuePath,
+    effect: &Effect,
+    errors: Vec<crate::expr::define::DefineError>,
+    names: crate::expr::Names,
+) {
+    use crate::expr::typed::{FUNCTIONS, VARIABLES};
+    for (name, e) in errors {
+        c.error_in_string(&path.field(&name), e.start, e.end, e.message);
+    }
+    for name in effect.define.keys() {
+        let mut chars = name.chars();
+        let identifier = chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
+            && chars.all(|c| c.is_alphanumeric() || c == '_');
+        if !identifier {
+            c.error(
+                &path.field(name),
+                format!("`{name}` is not a name an expression can use: start with a letter, then letters, digits or _"),
+            );
+        } else if name == "dt"
+            || VARIABLES.iter().any(|v| v.name() == name)
+            || FUNCTIONS.iter().any(|(f, _)| f == name)
+            || effect.params.contains_key(name)
+            || effect.attributes.contains_key(name)
+        {
+            c.error(
+                &path.field(name),
+                format!("`{name}` is already a variable, function, param or attribute in expressions: pick another name"),
+            );
+        }
+    }
+    for d in names.defines {
+        let crate::expr::define::Body::Parsed(ast) = &d.body else {
+            continue;
+        };
+        let scope = names.scope_with_attrs(VARIABLES, "a named expression");
+        if let Err(e) = crate::expr::typed::check(ast, &scope) {
+            c.error_in_string(&path.field(&d.name), e.start, e.end, e.message);
+        }
+    }
 }
 
 /// Params: names that expressions can use (identifiers that hide no variable or function),
