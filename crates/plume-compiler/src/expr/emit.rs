@@ -116,6 +116,14 @@ impl<'w> Emitter<'w> {
                             "select(vec3<f32>(0.0), {a} * inverseSqrt(max({l2}, {floor})), {l2} > {floor})"
                         ))
                     }
+                    Op1::Noise => self.bind(format!(
+                        "grad_noise({}u, {a})",
+                        crate::base::gradient_noise::EXPRESSION_KEY
+                    )),
+                    Op1::Curl => self.bind(format!(
+                        "turb_curl({}u, {a})",
+                        crate::base::gradient_noise::EXPRESSION_KEY
+                    )),
                     Op1::Component(i) => {
                         self.bind(format!("{a}.{}", ["x", "y", "z"][usize::from(*i)]))
                     }

@@ -3,6 +3,8 @@
 
 use glam::DVec3;
 
+use crate::base::gradient_noise;
+
 use super::typed::{Expr, Node, Op1, Op2, Op3, Var};
 use super::{DIV_FLOOR, EXP_MAX, EXP_MIN, LOG_FLOOR, NORMALIZE_FLOOR, VALUE_BOUND};
 
@@ -183,6 +185,13 @@ pub fn eval(e: &Expr, inp: &Inputs) -> Value {
                     })
                 }
                 Op1::Component(i) => Value::S(a.v()[usize::from(*i)]),
+                Op1::Noise => {
+                    Value::S(gradient_noise::noise(gradient_noise::EXPRESSION_KEY, a.v()))
+                }
+                Op1::Curl => Value::V(
+                    gradient_noise::curl(gradient_noise::EXPRESSION_KEY, a.v())
+                        .clamp(DVec3::splat(-VALUE_BOUND), DVec3::splat(VALUE_BOUND)),
+                ),
             }
         }
         Node::Binary(op, a, b) => {

@@ -61,8 +61,9 @@ fn errors_name_the_token_and_its_characters() {
     let (m, s, e) = err("x * frob(1.0)");
     assert!(m.contains("unknown function `frob`"), "{m}");
     assert_eq!((s, e), (4, 8));
-    let (m, _, _) = err("x * noise(x)");
-    assert!(m.contains("Turbulence"), "{m}");
+    let (m, s, e) = err("x * noise(x.x)");
+    assert!(m.contains("argument 1 of `noise` must be a vec3"), "{m}");
+    assert_eq!((s, e), (10, 13));
     let (m, s, _) = err("x * rand(k)");
     assert!(m.contains("literal"), "{m}");
     assert_eq!(s, 9);

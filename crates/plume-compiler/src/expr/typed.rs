@@ -89,6 +89,13 @@ impl Expr {
             .fold(own, |set, c| set | c.attrs_read())
     }
 
+    /// Whether it reads the gradient noise through `op` ([`Op1::Noise`] or [`Op1::Curl`]): the
+    /// module then needs its helpers.
+    pub fn uses(&self, op: Op1) -> bool {
+        matches!(&self.node, Node::Unary(o, _) if *o == op)
+            || self.children().iter().any(|c| c.uses(op))
+    }
+
     /// True when it draws random numbers.
     pub fn draws_random(&self) -> bool {
         matches!(self.node, Node::Rand(_)) || self.children().iter().any(|c| c.draws_random())
@@ -383,14 +390,9 @@ fn call(
 ) -> Result<Expr, ExprError> {
     let Some(&(_, arity)) = FUNCTIONS.iter().find(|(f, _)| *f == name) else {
         let known: Vec<&str> = FUNCTIONS.iter().map(|(f, _)| *f).collect();
-        let hint = if matches!(name, "noise" | "curl") {
-            " (noise and curl come with the Turbulence force, not yet available)"
-        } else {
-            ""
-        };
         return Err(ExprError::new(
             format!(
-                "unknown function `{name}`{hint}; the functions are {}",
+                "unknown function `{name}`; the functions are {}",
                 known.join(", ")
             ),
             ns,
@@ -535,6 +537,14 @@ fn call(
         "length" => {
             want(0, Ty::Vec3)?;
             unary(Op1::Length, Ty::Scalar, next())
+        }
+        "noise" => {
+            want(0, Ty::Vec3)?;
+            unary(Op1::Noise, Ty::Scalar, next())
+        }
+        "curl" => {
+            want(0, Ty::Vec3)?;
+            unary(Op1::Curl, Ty::Vec3, next())
         }
         "normalize" => {
             want(0, Ty::Vec3)?;

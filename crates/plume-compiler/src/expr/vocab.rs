@@ -88,6 +88,10 @@ pub enum Op1 {
     Normalize,
     /// Component `.x`, `.y` or `.z` (0, 1, 2).
     Component(u8),
+    /// `noise(p)`: 3D gradient noise at p (unit cells), within about ±1.
+    Noise,
+    /// `curl(p)`: the curl of a potential of three gradient noises at p: divergence-free.
+    Curl,
 }
 
 /// Operations of two operands.
@@ -158,6 +162,8 @@ pub const FUNCTIONS: &[(&str, usize)] = &[
     ("sin", 1),
     ("cos", 1),
     ("atan2", 2),
+    ("noise", 1),
+    ("curl", 1),
     ("floor", 1),
     ("fract", 1),
     ("select", 3),

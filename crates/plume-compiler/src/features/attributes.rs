@@ -313,6 +313,12 @@ impl AttributesIr {
             .any(|(_, a)| a.spawn.reads(Var::T) || a.change_expr().is_some_and(|e| e.reads(Var::T)))
     }
 
+    /// Whether a kept attribute's spawn value or change reads the gradient noise through `op`.
+    pub fn uses(&self, kept: u64, op: crate::expr::typed::Op1) -> bool {
+        self.iter_kept(kept)
+            .any(|(_, a)| a.spawn.uses(op) || a.change_expr().is_some_and(|e| e.uses(op)))
+    }
+
     /// Sets every live param of index `index` to `value` (the reference's twin of the host).
     pub fn set_param(&mut self, index: u32, value: f64) {
         for a in &mut self.list {

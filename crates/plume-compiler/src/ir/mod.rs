@@ -211,6 +211,14 @@ impl EffectIr {
         self.attributes.kept(read)
     }
 
+    /// Whether an expression of the compute module (a custom force, a kept attribute, a spawn
+    /// expression) reads the gradient noise through `op` (`noise` or `curl`).
+    pub fn compute_uses(&self, op: crate::expr::typed::Op1) -> bool {
+        self.custom_terms().any(|c| c.expr.uses(op))
+            || self.attributes.uses(self.kept_attributes(), op)
+            || self.emitters.iter().any(|e| e.uses(op))
+    }
+
     /// The attributes custom forces read (a bit set): their context holds them.
     pub fn attributes_forces_read(&self) -> u64 {
         self.custom_terms()

@@ -211,6 +211,14 @@ impl Emitter {
 }
 
 impl EmitterIr {
+    /// Whether its spawn expressions (a `Custom` shape or velocity) read the gradient noise
+    /// through `op`.
+    pub fn uses(&self, op: crate::expr::typed::Op1) -> bool {
+        let shape = matches!(&self.shape, ShapeIr::Custom { expr, .. } if expr.uses(op));
+        let velocity = matches!(&self.velocity, VelocityIr::Custom { expr, .. } if expr.uses(op));
+        shape || velocity
+    }
+
     /// Whether everything it spawns, it spawns at step 0: one burst, no rate, no start delay,
     /// no param that could open it later (so once its particles are gone, the effect is done).
     pub fn spawns_once_at_start(&self) -> bool {

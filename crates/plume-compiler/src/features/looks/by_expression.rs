@@ -112,6 +112,11 @@ impl LookBy {
         self.exprs().fold(0, |set, e| set | e.attrs_read())
     }
 
+    /// Whether any reads the gradient noise through `op` (`noise` or `curl`).
+    pub fn uses(&self, op: crate::expr::typed::Op1) -> bool {
+        self.exprs().any(|e| e.uses(op))
+    }
+
     /// Whether any reads the velocity.
     pub fn reads_velocity(&self) -> bool {
         self.exprs().any(|e| e.reads(Var::V))

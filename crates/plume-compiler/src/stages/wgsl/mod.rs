@@ -6,6 +6,7 @@
 pub mod batch;
 pub mod counters;
 pub mod draw;
+mod expression_noise;
 mod halves;
 pub mod spawn;
 pub mod stateless;
@@ -157,6 +158,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     w.blank();
     rng::emit_wgsl(&mut w);
     w.blank();
+    expression_noise::emit(&mut w, ir);
     if ir.render.palette.is_some() {
         crate::features::looks::tint::emit_palette_fn(&mut w, ir.tint());
         w.blank();

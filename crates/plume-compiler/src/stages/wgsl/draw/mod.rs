@@ -155,7 +155,13 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     // The look's expressions read the age (in whole steps) as a spin does.
     let ages = spins || ir.render.by.reads_age_or_life();
     // Random draws: a stateless effect redraws its spawns; a stateful one its lifetimes.
+    let (noise, curl) = (
+        ir.render.by.uses(crate::expr::typed::Op1::Noise),
+        ir.render.by.uses(crate::expr::typed::Op1::Curl),
+    );
     let draws = stateless
+        || noise
+        || curl
         || ir.render.palette.is_some()
         || ir.render.by.draws_random()
         || rotation.is_some()
@@ -231,6 +237,12 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     }
     w.blank();
     emit_draw_randomness(&mut w, ir, draws);
+    if noise || curl {
+        crate::base::gradient_noise::emit_curl_helpers(&mut w);
+        if noise {
+            crate::base::gradient_noise::emit_noise_helper(&mut w);
+        }
+    }
     if stateless {
         spawn::emit_emitter_fns(&mut w, ir);
         emit_advance(&mut w, ir);
