@@ -15,6 +15,7 @@ pub mod emit;
 pub mod eval;
 pub mod fold;
 pub mod lex;
+mod names;
 pub mod parse;
 pub mod typed;
 pub mod vocab;

@@ -164,7 +164,7 @@ pub struct AttrName {
 
 impl Scope<'_> {
     /// The variables as messages list them: "x, v, t, age, life and dt".
-    fn names(&self) -> String {
+    pub(super) fn names(&self) -> String {
         let mut names: Vec<&str> = self.vars.iter().map(|v| v.name()).collect();
         names.push("dt");
         let last = names.pop().unwrap_or("dt");
@@ -188,103 +188,7 @@ pub fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
             }
             Ok(Expr::new(Node::Scalar(*x), Ty::Scalar))
         }
-        AstKind::Name(name) => {
-            if let Some(v) = VARIABLES.iter().find(|v| v.name() == name) {
-                if !scope.vars.contains(v) {
-                    return Err(err(format!(
-                        "`{name}` is not known here: {} may read {}",
-                        scope.role,
-                        scope.names()
-                    )));
-                }
-                return Ok(Expr::new(Node::Var(*v), v.ty()));
-            }
-            if name == "dt" {
-                return Ok(Expr::new(Node::Scalar(scope.dt), Ty::Scalar));
-            }
-            if let Some(i) = scope.attrs.iter().position(|a| a.name == *name) {
-                let attr = &scope.attrs[i];
-                if !scope.reads_attrs {
-                    return Err(err(format!(
-                        "the attribute `{name}` has no value yet: {} is computed at spawn, before the attributes get theirs",
-                        scope.role
-                    )));
-                }
-                return Ok(match attr.constant {
-                    Some(c) if attr.ty == Ty::Vec3 => Expr::new(Node::Vector(c), Ty::Vec3),
-                    Some(c) => Expr::new(Node::Scalar(c.x), Ty::Scalar),
-                    None => Expr::new(Node::Attr(i as u8), attr.ty),
-                });
-            }
-            if let Some(d) = scope.defines.iter().find(|d| d.name == *name) {
-                let ast = match &d.body {
-                    super::define::Body::Parsed(ast) => ast,
-                    super::define::Body::Broken => {
-                        return Err(err(format!("the named expression `{name}` has a mistake (define.{name})")))
-                    }
-                    super::define::Body::Circular => {
-                        return Err(err(format!("the named expression `{name}` refers to itself in a circle (define.{name})")))
-                    }
-                };
-                let e = check(ast, scope).map_err(|inner| {
-                    err(format!("in `{name}` (define.{name}): {}", inner.message))
-                })?;
-                let total = scope.expanded.get() + e.size();
-                if total > super::define::MAX_EXPANDED {
-                    return Err(err(format!(
-                        "the named expressions read here expand to more than {} nodes: read a shorter one, or fewer",
-                        super::define::MAX_EXPANDED
-                    )));
-                }
-                scope.expanded.set(total);
-                return Ok(e);
-            }
-            if let Some(value) = scope.params.get(name) {
-                if scope.live {
-                    let index = scope.params.keys().position(|k| k == name).unwrap_or(0);
-                    let value = f64::from(*value as f32);
-                    let index = index as u32;
-                    return Ok(Expr::new(Node::Param { index, value }, Ty::Scalar));
-                }
-                return Ok(Expr::new(Node::Scalar(*value), Ty::Scalar));
-            }
-            if FUNCTIONS.iter().any(|(f, _)| f == name) {
-                return Err(err(format!(
-                    "`{name}` is a function: call it, `{name}(...)`"
-                )));
-            }
-            let params: Vec<&str> = scope.params.keys().map(String::as_str).collect();
-            let attrs: Vec<&str> = match scope.reads_attrs {
-                true => scope.attrs.iter().map(|a| a.name.as_str()).collect(),
-                false => Vec::new(),
-            };
-            let known = scope
-                .vars
-                .iter()
-                .map(|v| v.name())
-                .chain(["dt"])
-                .chain(attrs.iter().copied())
-                .chain(scope.defines.iter().map(|d| d.name.as_str()))
-                .chain(params.iter().copied());
-            let hint = match closest(name, known) {
-                Some(near) => format!("did you mean `{near}`? "),
-                None => String::new(),
-            };
-            Err(err(format!(
-                "unknown name `{name}`: {hint}the variables are {}{}{}",
-                scope.names(),
-                if attrs.is_empty() {
-                    String::new()
-                } else {
-                    format!(", the attributes are {}", attrs.join(", "))
-                },
-                if params.is_empty() {
-                    ", and the file has no params".to_string()
-                } else {
-                    format!(", and the params are {}", params.join(", "))
-                }
-            )))
-        }
+        AstKind::Name(name) => super::names::resolve(name, ast, scope),
         AstKind::Neg(a) => {
             let a = check(a, scope)?;
             numeric(&a, ast, "-")?;

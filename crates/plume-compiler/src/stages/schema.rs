@@ -19,6 +19,69 @@ pub use crate::features::looks::texture::{Play, Texture};
 pub use crate::features::looks::trail::Trail;
 pub use crate::features::looks::Blend;
 
+/// A param's value as written: a number, or a vector of three.
+enum ParamValue {
+    Number(f64),
+    Vector((f64, f64, f64)),
+}
+
+impl<'de> Deserialize<'de> for ParamValue {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct Visitor;
+        impl<'de> serde::de::Visitor<'de> for Visitor {
+            type Value = ParamValue;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a number, or a vector of three numbers `(x, y, z)`")
+            }
+            fn visit_f64<E: serde::de::Error>(self, x: f64) -> Result<ParamValue, E> {
+                Ok(ParamValue::Number(x))
+            }
+            fn visit_i64<E: serde::de::Error>(self, x: i64) -> Result<ParamValue, E> {
+                Ok(ParamValue::Number(x as f64))
+            }
+            fn visit_u64<E: serde::de::Error>(self, x: u64) -> Result<ParamValue, E> {
+                Ok(ParamValue::Number(x as f64))
+            }
+            fn visit_seq<A: serde::de::SeqAccess<'de>>(
+                self,
+                mut seq: A,
+            ) -> Result<ParamValue, A::Error> {
+                let mut next = |i| {
+                    seq.next_element::<f64>()?
+                        .ok_or_else(|| serde::de::Error::invalid_length(i, &self))
+                };
+                let v = (next(0)?, next(1)?, next(2)?);
+                if seq.next_element::<f64>()?.is_some() {
+                    return Err(serde::de::Error::invalid_length(4, &self));
+                }
+                Ok(ParamValue::Vector(v))
+            }
+        }
+        d.deserialize_any(Visitor)
+    }
+}
+
+/// Reads `params`, each vector as its three components `NAME.x`, `NAME.y` and `NAME.z`.
+fn deserialize_params<'de, D: serde::Deserializer<'de>>(
+    d: D,
+) -> Result<std::collections::BTreeMap<String, f64>, D::Error> {
+    let written = std::collections::BTreeMap::<String, ParamValue>::deserialize(d)?;
+    let mut params = std::collections::BTreeMap::new();
+    for (name, value) in written {
+        match value {
+            ParamValue::Number(x) => {
+                params.insert(name, x);
+            }
+            ParamValue::Vector((x, y, z)) => {
+                for (c, v) in ["x", "y", "z"].into_iter().zip([x, y, z]) {
+                    params.insert(format!("{name}.{c}"), v);
+                }
+            }
+        }
+    }
+    Ok(params)
+}
+
 pub(crate) fn default_dt() -> f64 {
     1.0 / 60.0
 }
@@ -58,8 +121,10 @@ pub struct Effect {
     /// `define: {"r": "length(x)"}` (see [`crate::expr::define`]).
     #[serde(default)]
     pub define: std::collections::BTreeMap<String, String>,
-    /// Named constants that custom expressions may use: `params: {"k": 0.4}`.
-    #[serde(default)]
+    /// Named constants that custom expressions may use: `params: {"k": 0.4}`. A vector,
+    /// `"wind": (1.0, 0.0, 0.0)`, is held as its three components `wind.x`, `wind.y` and
+    /// `wind.z` (each a param a host may set), which expressions read together as `wind`.
+    #[serde(default, deserialize_with = "deserialize_params")]
     pub params: std::collections::BTreeMap<String, f64>,
     /// Speed limit applied after every velocity update.
     #[serde(default)]

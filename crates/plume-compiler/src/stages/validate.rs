@@ -228,19 +228,27 @@ fn check_defines(
 /// values within the range expressions compute in.
 fn check_params(c: &mut Checker, path: &ValuePath, effect: &Effect) {
     use crate::expr::typed::{FUNCTIONS, VARIABLES};
-    for (name, &value) in &effect.params {
+    for (component, &value) in &effect.params {
+        // A vector's components (`wind.x`) are checked by its name.
+        let name = ["x", "y", "z"]
+            .iter()
+            .find_map(|c| component.strip_suffix(&format!(".{c}")))
+            .unwrap_or(component);
         let p = path.field(name);
         let mut chars = name.chars();
         let identifier = chars.next().is_some_and(|c| c.is_alphabetic() || c == '_')
             && chars.all(|c| c.is_alphanumeric() || c == '_');
-        if !identifier {
+        // A vector's name is checked once, with its first component.
+        let named_here = component == name || component.ends_with(".x");
+        if named_here && !identifier {
             c.error(
                 &p,
                 format!("`{name}` is not a name an expression can use: start with a letter, then letters, digits or _"),
             );
-        } else if name == "dt"
-            || VARIABLES.iter().any(|v| v.name() == name)
-            || FUNCTIONS.iter().any(|(f, _)| f == name)
+        } else if named_here
+            && (name == "dt"
+                || VARIABLES.iter().any(|v| v.name() == name)
+                || FUNCTIONS.iter().any(|(f, _)| *f == name))
         {
             c.error(
                 &p,
@@ -249,6 +257,14 @@ fn check_params(c: &mut Checker, path: &ValuePath, effect: &Effect) {
                 ),
             );
         }
+        // A vector's component is named and located as the tuple's element.
+        let p = match ["x", "y", "z"]
+            .iter()
+            .position(|c| component.len() > name.len() && component.ends_with(c))
+        {
+            Some(k) => p.component(k, ["x", "y", "z"][k]),
+            None => p,
+        };
         if c.finite(&p, value) && value.abs() > crate::expr::VALUE_BOUND {
             c.error(
                 &p,
