@@ -65,7 +65,8 @@ pub const AUTO_COMPUTE_CAPACITY: u64 = 65_536;
 ///     commands.spawn((PlumeEffect::new(fountain), Transform::from_xyz(0.0, 0.5, 0.0)));
 /// }
 /// ```
-#[derive(Component, Clone, Debug)]
+#[derive(Component, Clone, Debug, Reflect)]
+#[reflect(Component)]
 #[require(Transform, Visibility, VisibilityClass, SyncToRenderWorld)]
 #[component(on_add = visibility::add_visibility_class::<PlumeEffect>)]
 pub struct PlumeEffect {
@@ -232,6 +233,26 @@ impl PlumeEffect {
     /// Starts the effect again from nothing (its warm-up included) on the next frame.
     pub fn restart(&mut self) {
         self.generation = self.generation.wrapping_add(1);
+    }
+}
+
+/// The bursts fired this frame, by effect entity: taken from the entities in `Last`
+/// ([`take_bursts`]) and read by the render world at extraction.
+#[derive(Resource, Default)]
+pub(crate) struct FiredBursts(pub Vec<(Entity, Vec<PlumeBurst>)>);
+
+/// Takes every effect's fired bursts into [`FiredBursts`] (so each spawns once, whenever in the
+/// frame it was fired). Only effects that fired any are touched, so change detection sees no
+/// others.
+pub(crate) fn take_bursts(
+    mut effects: Query<(Entity, &mut PlumeEffect)>,
+    mut fired: ResMut<FiredBursts>,
+) {
+    fired.0.clear();
+    for (entity, mut effect) in &mut effects {
+        if !effect.bursts.is_empty() {
+            fired.0.push((entity, std::mem::take(&mut effect.bursts)));
+        }
     }
 }
 

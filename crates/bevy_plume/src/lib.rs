@@ -41,6 +41,22 @@ use bevy::asset::io::file::FileAssetReader;
 use bevy::camera::visibility::VisibilitySystems;
 use bevy::prelude::*;
 
+/// What the plugin does in the main world each frame, for game systems to order against. Game
+/// code that fires bursts or sets params does so in `Update` (or anywhere before
+/// [`PlumeSystems::Bursts`]); the render world steps and draws what the frame leaves.
+#[derive(SystemSet, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum PlumeSystems {
+    /// `PostUpdate`, inside `VisibilitySystems::CalculateBounds`: each effect entity's `Aabb`,
+    /// from its file's `bounds` or from the bounds the GPU measured.
+    Bounds,
+    /// `PostUpdate`: the cameras' depth made bindable while an effect may be drawn by the
+    /// compute renderer.
+    Cameras,
+    /// `Last`: the bursts fired this frame ([`PlumeEffect::burst`]) are taken from the effect
+    /// entities into the queue the render world reads at extraction, so each spawns once.
+    Bursts,
+}
+
 /// Adds Plume to an app: the effect asset and its loader (`*.plume.ron`, `*.plume`), and the
 /// render-world systems that step and draw every [`PlumeEffect`]. Add it after
 /// `DefaultPlugins` (it needs the asset, render and core pipeline plugins).
@@ -57,13 +73,26 @@ impl Plugin for PlumePlugin {
         let root = FileAssetReader::get_base_path().join(file_path);
         app.init_asset::<PlumeEffectAsset>()
             .register_asset_loader(PlumeEffectLoader { root: Some(root) })
+            .register_type::<PlumeEffect>()
+            .register_type::<PlumeBurst>()
+            .register_type::<SimulationSpace>()
+            .register_type::<PlumeDraw>()
+            .init_resource::<effect::FiredBursts>()
+            .configure_sets(
+                PostUpdate,
+                PlumeSystems::Bounds.in_set(VisibilitySystems::CalculateBounds),
+            )
             .add_systems(
                 PostUpdate,
                 (bounds::bounds_from_files, bounds::bounds_from_gpu)
                     .chain()
-                    .in_set(VisibilitySystems::CalculateBounds),
+                    .in_set(PlumeSystems::Bounds),
             )
-            .add_systems(PostUpdate, effect::bindable_camera_depth);
+            .add_systems(
+                PostUpdate,
+                effect::bindable_camera_depth.in_set(PlumeSystems::Cameras),
+            )
+            .add_systems(Last, effect::take_bursts.in_set(PlumeSystems::Bursts));
         render::build(app);
     }
 

@@ -776,3 +776,51 @@ fn a_scene_depth_collider_meets_what_the_camera_s_depth_prepass_drew() {
         }
     }
 }
+
+#[test]
+fn an_effect_is_reflected_and_edited_by_path_as_an_inspector_does() {
+    let _one = serial();
+    let (mut h, entity) = pushed_dots("reflect", PlumeEffect::with_bursts);
+    h.update(3);
+    let steps = totals(&h, entity).steps;
+    assert!(steps > 0, "no steps ran");
+    // What bevy-inspector-egui does: find the component through the type registry and set
+    // a field by its path.
+    let registry = h.app.world().resource::<AppTypeRegistry>().clone();
+    {
+        let registry = registry.read();
+        let component = registry
+            .get_type_data::<ReflectComponent>(std::any::TypeId::of::<PlumeEffect>())
+            .expect("PlumeEffect is registered with ReflectComponent");
+        let mut e = h.app.world_mut().entity_mut(entity);
+        let mut reflected = component.reflect_mut(&mut e).expect("the entity has one");
+        *reflected
+            .reflect_path_mut("time_scale")
+            .unwrap()
+            .try_downcast_mut::<f32>()
+            .unwrap() = 0.0;
+    }
+    // Its time stands still: no more steps.
+    h.update(5);
+    let frozen = totals(&h, entity).steps;
+    h.update(5);
+    assert_eq!(
+        totals(&h, entity).steps,
+        frozen,
+        "time_scale 0 set by path did not hold time"
+    );
+    // A burst fired by a game system ordered before the plugin's set spawns at once.
+    h.app.add_systems(
+        PostUpdate,
+        (move |mut effects: Query<&mut PlumeEffect>| {
+            if let Ok(mut e) = effects.get_mut(entity) {
+                e.time_scale = 1.0;
+                e.burst(PlumeBurst::new(7));
+            }
+        })
+        .before(bevy_plume::PlumeSystems::Bursts),
+    );
+    let before = totals(&h, entity).spawned;
+    h.update(1);
+    assert_eq!(totals(&h, entity).spawned, before + 7);
+}

@@ -3,7 +3,7 @@
 
 use bevy::prelude::*;
 use bevy::render::sync_world::RenderEntity;
-use bevy::render::{Extract, MainWorld};
+use bevy::render::Extract;
 
 use crate::asset::PlumeEffectAsset;
 use crate::effect::{PlumeBurst, PlumeEffect};
@@ -60,15 +60,11 @@ pub(crate) fn extract_effects(
 #[derive(Resource, Default)]
 pub(crate) struct ExtractedBursts(pub Vec<(Entity, Vec<PlumeBurst>)>);
 
-/// Takes every effect's fired bursts out of the main world (so each is spawned once, whenever
-/// in the frame it was fired). Only effects that fired any are touched, so change detection
-/// sees no others.
-pub(crate) fn take_bursts(mut main_world: ResMut<MainWorld>, mut taken: ResMut<ExtractedBursts>) {
-    taken.0.clear();
-    let mut effects = main_world.query::<(Entity, &mut PlumeEffect)>();
-    for (entity, mut effect) in effects.iter_mut(&mut main_world) {
-        if !effect.bursts.is_empty() {
-            taken.0.push((entity, std::mem::take(&mut effect.bursts)));
-        }
-    }
+/// Copies the bursts the main world took from its effects this frame
+/// ([`crate::PlumeSystems::Bursts`]): read, never written, as extraction should.
+pub(crate) fn extract_bursts(
+    fired: Extract<Res<crate::effect::FiredBursts>>,
+    mut taken: ResMut<ExtractedBursts>,
+) {
+    taken.0.clone_from(&fired.0);
 }

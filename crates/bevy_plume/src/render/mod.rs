@@ -37,7 +37,7 @@ pub(crate) fn build(app: &mut App) {
         .init_resource::<instances::PlumeRenderStats>()
         .add_systems(
             ExtractSchedule,
-            (extract::extract_effects, extract::take_bursts).chain(),
+            (extract::extract_effects, extract::extract_bursts).chain(),
         )
         .add_systems(
             Render,
