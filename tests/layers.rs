@@ -6,7 +6,9 @@
 //! 3. no source file grows past [`MAX_LINES`] lines (unit tests aside).
 //!
 //! Imports are read the way `../shared/tools/import-circles.py` reads them, so this test and
-//! the script agree on every circle. Std only: Cargo cannot enforce layers inside one crate, and
+//! the script agree on every circle; beyond the script, a `crate::` path through a module the
+//! crate root re-exports under a short name (`pub use features::looks::tint;`) is resolved to
+//! that module, so an upward import cannot hide behind a re-export. Std only: Cargo cannot enforce layers inside one crate, and
 //! a tool like `cargo-modules` would need its own install and a rust-analyzer build on CI.
 
 use std::collections::{BTreeMap, BTreeSet};
@@ -252,6 +254,12 @@ impl ModuleGraph {
             .enumerate()
             .map(|(i, module)| (module.as_slice(), i))
             .collect();
+        // The crate root's re-exports of modules under short names (`pub use features::looks::
+        // tint;`): `crate::tint::...` is an import of that module wherever it is written.
+        let aliases = match index.get(&[][..]) {
+            Some(&root) => reexported_modules(&read(&src.join(&files[root])), &index),
+            None => BTreeMap::new(),
+        };
         let imports = modules
             .iter()
             .zip(&files)
@@ -262,7 +270,7 @@ impl ModuleGraph {
                 };
                 let targets: BTreeSet<usize> = import_paths(&text, is_child)
                     .iter()
-                    .filter_map(|path| resolve(module, path, &index))
+                    .filter_map(|path| resolve(module, path, &index, &aliases))
                     .filter(|&target| !module.starts_with(&modules[target]))
                     .collect();
                 targets.into_iter().collect()
@@ -483,8 +491,60 @@ fn import_paths(text: &str, is_child: impl Fn(&str) -> bool) -> Vec<String> {
     paths
 }
 
-/// The module that `path`, named in `module`, lands in: the longest existing prefix.
-fn resolve(module: &[String], path: &str, index: &BTreeMap<&[String], usize>) -> Option<usize> {
+/// The modules a crate root re-exports under their last name (`pub use a::b::{c, d};`), as
+/// name → module path: only paths that are modules of `index` (a re-exported type is no
+/// module).
+fn reexported_modules(
+    root: &str,
+    index: &BTreeMap<&[String], usize>,
+) -> BTreeMap<String, Vec<String>> {
+    let text = strip_comments_and_tests(root);
+    let mut aliases = BTreeMap::new();
+    for statement in text.split(';') {
+        let Some(at) = statement.find("pub use ") else {
+            continue;
+        };
+        let used: String = statement[at + "pub use ".len()..]
+            .chars()
+            .filter(|c| !c.is_whitespace())
+            .collect();
+        let used = used.strip_prefix("crate::").unwrap_or(&used);
+        // `a::b::{c, d}` or `a::b::c`: each item a path below the prefix.
+        let (prefix, items) = match used.split_once("::{") {
+            Some((prefix, items)) => (prefix, items.trim_end_matches('}').split(',').collect()),
+            None => ("", vec![used]),
+        };
+        for item in items.into_iter().filter(|item| !item.is_empty()) {
+            let (path, alias) = item.split_once("as").unwrap_or((item, ""));
+            let full: Vec<String> = prefix
+                .split("::")
+                .chain(path.split("::"))
+                .filter(|part| !part.is_empty())
+                .map(str::to_owned)
+                .collect();
+            let name = if alias.is_empty() {
+                full.last()
+            } else {
+                Some(&alias.to_owned())
+            };
+            if let (true, Some(name)) =
+                (full.len() > 1 && index.contains_key(full.as_slice()), name)
+            {
+                aliases.insert(name.clone(), full.clone());
+            }
+        }
+    }
+    aliases
+}
+
+/// The module that `path`, named in `module`, lands in: the longest existing prefix, a
+/// `crate::` path through the crate root's re-exports (`aliases`) resolved to the module.
+fn resolve(
+    module: &[String],
+    path: &str,
+    index: &BTreeMap<&[String], usize>,
+    aliases: &BTreeMap<String, Vec<String>>,
+) -> Option<usize> {
     let mut parts = path.split("::").peekable();
     let mut full = Vec::new();
     if parts.next_if_eq(&"crate").is_none() {
@@ -494,6 +554,13 @@ fn resolve(module: &[String], path: &str, index: &BTreeMap<&[String], usize>) ->
                 full.pop();
             }
         }
+    } else if let Some(target) = parts
+        .peek()
+        .filter(|first| !index.contains_key(&[first.to_string()][..]))
+        .and_then(|first| aliases.get(*first))
+    {
+        parts.next();
+        full.extend_from_slice(target);
     }
     full.extend(parts.map(str::to_owned));
     (0..=full.len())
@@ -738,6 +805,37 @@ fn an_upward_import_and_an_unranked_module_are_reported() {
     assert_eq!(
         problems[1],
         "low/mod.rs (`low`, rank 0) imports high.rs (`high`, rank 1)"
+    );
+}
+
+#[test]
+fn an_upward_import_through_a_root_reexport_is_reported() {
+    // `crate::tint` is `high::looks::tint`, re-exported by the root under its short name.
+    let tree = TempTree::new(
+        "reexport",
+        &[
+            (
+                "lib.rs",
+                "mod high;\nmod low;\npub use high::looks::{tint, glow as shine};\n",
+            ),
+            (
+                "low/mod.rs",
+                "fn f() { crate::shine::g(); }\nuse crate::tint::T;\n",
+            ),
+            ("high/mod.rs", "pub mod looks;\n"),
+            ("high/looks/mod.rs", "pub mod tint;\npub mod glow;\n"),
+            ("high/looks/tint.rs", "pub struct T;\n"),
+            ("high/looks/glow.rs", "pub fn g() {}\n"),
+        ],
+    );
+    let problems = layer_problems(&tree.graph(), &[("low", 0), ("high", 1)]);
+    assert_eq!(
+        problems,
+        [
+            "low/mod.rs (`low`, rank 0) imports high/looks/glow.rs (`high`, rank 1)",
+            "low/mod.rs (`low`, rank 0) imports high/looks/tint.rs (`high`, rank 1)"
+        ],
+        "{problems:#?}"
     );
 }
 

@@ -17,6 +17,7 @@ pub mod fold;
 pub mod lex;
 mod names;
 pub mod parse;
+pub mod tree;
 pub mod typed;
 pub mod vocab;
 

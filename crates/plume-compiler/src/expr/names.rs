@@ -6,11 +6,21 @@
 use glam::DVec3;
 
 use super::parse::{Ast, AstKind};
-use super::typed::{check, closest, Expr, Node, Op3, Scope, Ty, FUNCTIONS, VARIABLES};
+use super::tree::{Expr, Node, Scope};
+use super::vocab::{closest, Op3, Ty, FUNCTIONS, VARIABLES};
 use super::ExprError;
 
+/// The type checker, which a named expression is checked with where it is read (passed in,
+/// so that this module does not import the checker that calls it).
+pub(super) type Check = fn(&Ast, &Scope) -> Result<Expr, ExprError>;
+
 /// The typed expression `name` (written at `ast`) stands for in `scope`.
-pub(super) fn resolve(name: &str, ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
+pub(super) fn resolve(
+    name: &str,
+    ast: &Ast,
+    scope: &Scope,
+    check: Check,
+) -> Result<Expr, ExprError> {
     let err = |msg: String| ExprError::new(msg, ast.start, ast.end);
     if let Some(v) = VARIABLES.iter().find(|v| v.name() == name) {
         if !scope.vars.contains(v) {
