@@ -663,3 +663,50 @@ fn starting_ages_are_uniform_whole_steps_and_shorten_the_life() {
         err.render("ages.ron", &bad)
     );
 }
+
+#[test]
+fn drawn_burst_counts_and_gaps_are_uniform_and_the_same_on_the_gpu() {
+    // `burst: (1, 100)` and `every: Some((1.0, 4.0))` at dt = 0.01: each burst's count a
+    // whole number from 1 to 100 and each gap 100 to 400 whole steps, drawn from the
+    // emitter's key by the schedule that the GPU runtime and the reference share.
+    let src = r#"Effect(
+    name: "random",
+    capacity: 20000,
+    seed: 9,
+    dt: 0.01,
+    emitters: [Emitter(burst: (1, 100), every: Some((1.0, 4.0)), shape: Sphere(center: (0.0, 0.0, 0.0), radius: 5.0),
+        velocity: Radial(speed: (2.0, 2.0)), lifetime: Some((5.0, 5.0)))],
+    forces: [Gravity((0.0, 5.0, 0.0))],
+)"#;
+    let e = compile(src);
+    let timing = e.ir.emitters[0].timing;
+    // 4,000 draws of each: the counts' 100 values and the gaps' 301 each near their share
+    // (binomial: within 5 standard deviations).
+    let n = 4000u32;
+    let mut counts = vec![0usize; 101];
+    let mut gaps = vec![0usize; 401];
+    for i in 0..n {
+        counts[timing.burst_count(i, (1, 100)) as usize] += 1;
+        let gap = timing.burst_step(i + 1).unwrap() - timing.burst_step(i).unwrap();
+        gaps[gap as usize] += 1;
+    }
+    assert_eq!(counts[0], 0);
+    for (k, &c) in counts.iter().enumerate().skip(1) {
+        assert_fraction(&format!("a burst of {k}"), c, n as usize, 1.0 / 100.0);
+    }
+    assert!(gaps[..100].iter().all(|&g| g == 0), "a gap under 100 steps");
+    let (short, long) = (
+        gaps[100..250].iter().sum::<usize>(),
+        gaps[250..=400].iter().sum::<usize>(),
+    );
+    assert_fraction("gaps under 2.5 s", short, n as usize, 150.0 / 301.0);
+    assert_eq!(short + long, n as usize);
+    // The GPU spawns what the reference does, step by step: same totals, same particles.
+    let worst = worst_gpu_distance(&e, 1200);
+    assert!(
+        worst < roundings_per_step(&e.ir) * 1200.0 * U32,
+        "{worst:e}"
+    );
+    let (totals, _) = run_cpu(&e, 1200);
+    assert!(totals.spawned > 100, "{totals:?}");
+}

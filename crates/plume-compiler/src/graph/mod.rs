@@ -433,7 +433,7 @@ fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic,
     // A repeating burst counts as a rate of burst / every.
     let steady_rate = |e: &crate::stages::schema::Emitter, params| {
         let burst = f64::from(e.burst.value(params));
-        e.rate.value(params) + e.every.map_or(0.0, |every| burst / every)
+        e.rate.value(params) + e.every.map_or(0.0, |every| burst / every.mean())
     };
     let longest = |life: Option<crate::stages::schema::Range>| life.map_or(f64::INFINITY, |r| r.1);
     let fed: Vec<bool> = (0..effects.len())

@@ -419,10 +419,14 @@ impl fmt::Display for EffectIr {
         }
         writeln!(f, "  emitters")?;
         for (i, e) in self.emitters.iter().enumerate() {
+            let burst = match e.burst_range {
+                Some((lo, hi)) => format!("{lo} to {hi} (drawn)"),
+                None => e.burst.to_string(),
+            };
             writeln!(
                 f,
-                "    [{i}] burst {} rate {}/s lifetime {:?} steps {:?}",
-                e.burst, e.rate, e.lifetime, e.lifetime_steps
+                "    [{i}] burst {burst} rate {}/s lifetime {:?} steps {:?}",
+                e.rate, e.lifetime, e.lifetime_steps
             )?;
             if !e.timing.is_plain() {
                 writeln!(f, "        timing {}", e.timing.describe())?;

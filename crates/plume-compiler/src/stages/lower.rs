@@ -143,6 +143,10 @@ pub fn lower(effect: &Effect) -> EffectIr {
         events: Vec::new(),
         event_inputs: Vec::new(),
     };
+    // Each emitter draws its own gaps and burst counts (`SpawnTiming::draw`).
+    for (i, e) in ir.emitters.iter_mut().enumerate() {
+        e.timing.key = crate::base::rng::pcg(ir.seed_mix ^ (i as u32).wrapping_mul(0x9e37_79b9));
+    }
     // Custom terms estimate their stiffness over the emitters' region, now that it is known.
     let h = ir.h();
     let emitters = ir.emitters.clone();

@@ -59,6 +59,8 @@ pub struct Schedule {
     timings: Vec<SpawnTiming>,
     /// Per emitter, the live params its burst and rate follow ([`Schedule::set_param`]).
     params: Vec<(Option<usize>, Option<usize>)>,
+    /// Per emitter, the range its burst counts are drawn from, when they are drawn.
+    burst_ranges: Vec<Option<(u32, u32)>>,
     /// Per emitter, the number of its next burst (how many have fired).
     next_burst: Vec<u32>,
     carried: Vec<f64>,
@@ -82,6 +84,7 @@ impl Schedule {
         Self {
             dt: ir.dt,
             bursts: ir.emitters.iter().map(|e| e.burst).collect(),
+            burst_ranges: ir.emitters.iter().map(|e| e.burst_range).collect(),
             rates: ir.emitters.iter().map(|e| e.rate).collect(),
             timings: ir.emitters.iter().map(|e| e.timing).collect(),
             params: ir.emitters.iter().map(|e| e.params).collect(),
@@ -172,7 +175,12 @@ impl Schedule {
                 .burst_step(self.next_burst[e])
                 .is_some_and(|due| due <= step)
             {
-                count = count.saturating_add(u64::from(self.bursts[e]));
+                let n = self.next_burst[e];
+                let burst = match self.burst_ranges[e] {
+                    Some(range) => timing.burst_count(n, range),
+                    None => self.bursts[e],
+                };
+                count = count.saturating_add(u64::from(burst));
                 self.next_burst[e] += 1;
             }
             if timing.rate_runs(step) {
@@ -233,7 +241,9 @@ impl Schedule {
             let timing = &self.timings[e];
             let (burst_param, rate_param) = self.params[e];
             ((self.rates[e] > 0.0 || rate_param.is_some()) && timing.rate_runs_after(step))
-                || ((self.bursts[e] > 0 || burst_param.is_some())
+                || ((self.bursts[e] > 0
+                    || burst_param.is_some()
+                    || self.burst_ranges[e].is_some_and(|r| r.1 > 0))
                     && timing.burst_step(self.next_burst[e]).is_some())
         };
         if (0..self.rates.len()).any(spawns_later) {

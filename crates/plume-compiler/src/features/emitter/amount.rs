@@ -37,6 +37,9 @@ pub enum Amount<T> {
     Value(T),
     /// The param of this name.
     Param(String),
+    /// A whole number drawn anew for each burst, uniform from the first to the second
+    /// (`burst: (1, 100)`; a burst count only).
+    Range(T, T),
 }
 
 impl<T: Default> Default for Amount<T> {
@@ -66,6 +69,8 @@ pub trait AmountKind: Copy + Default + PartialEq {
     fn from_written(x: Written) -> Option<Self>;
     /// What the file should write, for messages.
     const EXPECTING: &'static str;
+    /// Whether a range of two may stand for it (drawn anew each time).
+    const RANGES: bool;
 }
 
 /// A number as a file writes it.
@@ -94,6 +99,7 @@ impl AmountKind for f64 {
         })
     }
     const EXPECTING: &'static str = "a number, or the name of a param in quotes";
+    const RANGES: bool = false;
 }
 
 impl AmountKind for u32 {
@@ -110,8 +116,8 @@ impl AmountKind for u32 {
             Written::Float(_) => None,
         }
     }
-    const EXPECTING: &'static str =
-        "a whole number from 0 to 4294967295, or the name of a param in quotes";
+    const EXPECTING: &'static str = "a whole number from 0 to 4294967295, a range of two such `(lo, hi)` drawn anew for each burst, or the name of a param in quotes";
+    const RANGES: bool = true;
 }
 
 struct AmountVisitor<T>(std::marker::PhantomData<T>);
@@ -124,7 +130,7 @@ impl<T: AmountKind> AmountVisitor<T> {
     }
 }
 
-impl<T: AmountKind> Visitor<'_> for AmountVisitor<T> {
+impl<'de, T: AmountKind> Visitor<'de> for AmountVisitor<T> {
     type Value = Amount<T>;
 
     fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
@@ -146,6 +152,21 @@ impl<T: AmountKind> Visitor<'_> for AmountVisitor<T> {
     fn visit_str<E: de::Error>(self, v: &str) -> Result<Self::Value, E> {
         Ok(Amount::Param(v.to_string()))
     }
+
+    fn visit_seq<A: de::SeqAccess<'de>>(self, mut seq: A) -> Result<Self::Value, A::Error> {
+        if !T::RANGES {
+            return Err(de::Error::invalid_type(Unexpected::Seq, &self));
+        }
+        let mut next = |i| -> Result<T, A::Error> {
+            let x: u64 = seq
+                .next_element()?
+                .ok_or_else(|| de::Error::invalid_length(i, &self))?;
+            T::from_written(Written::Unsigned(x))
+                .ok_or_else(|| de::Error::invalid_value(Unexpected::Unsigned(x), &self))
+        };
+        let (lo, hi) = (next(0)?, next(1)?);
+        Ok(Amount::Range(lo, hi))
+    }
 }
 
 impl<'de, T: AmountKind> Deserialize<'de> for Amount<T> {
@@ -161,6 +182,8 @@ impl<T: AmountKind> Amount<T> {
         match self {
             Amount::Value(v) => *v,
             Amount::Param(name) => params.get(name).map_or(T::default(), |&x| T::from_param(x)),
+            // Estimates read a drawn count's mean.
+            Amount::Range(lo, hi) => T::from_param(0.5 * (lo.as_f64() + hi.as_f64())),
         }
     }
 
@@ -184,6 +207,18 @@ impl<T: AmountKind> Amount<T> {
                 );
             }
             Amount::Param(_) => {}
+            Amount::Range(lo, hi) => {
+                if lo.as_f64() > hi.as_f64() {
+                    c.error(
+                        path,
+                        format!(
+                            "a range must be (lo, hi) with lo <= hi, got ({}, {})",
+                            lo.as_f64(),
+                            hi.as_f64()
+                        ),
+                    );
+                }
+            }
         }
     }
 
@@ -201,6 +236,11 @@ impl<T: AmountKind> Amount<T> {
             },
             Amount::Param(_) => AmountIr {
                 value: self.value(names.params),
+                param: None,
+            },
+            // The draw's range is the emitter's (`EmitterIr::burst_range`); the value its low end.
+            Amount::Range(lo, _) => AmountIr {
+                value: *lo,
                 param: None,
             },
         }

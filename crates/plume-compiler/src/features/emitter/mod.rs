@@ -27,7 +27,7 @@ use crate::expr::Names;
 pub use amount::{Amount, AmountIr, AmountKind};
 pub use shape::Shape;
 pub use shape_ir::{box_face_thresholds, ConeIr, ShapeIr};
-pub use timing::SpawnTiming;
+pub use timing::{Every, SpawnTiming};
 pub use velocity::{Velocity, VelocityIr};
 
 /// One particle source.
@@ -48,9 +48,10 @@ pub struct Emitter {
     /// Seconds it spawns for, from `start`; `None`: for ever.
     #[serde(default)]
     pub duration: Option<f64>,
-    /// Seconds between repeats of the burst; `None`: it fires once.
+    /// Seconds between repeats of the burst, or a range of seconds from which each gap is
+    /// drawn; `None`: it fires once.
     #[serde(default)]
-    pub every: Option<f64>,
+    pub every: Option<timing::Every>,
     /// How many times a repeating burst fires; `None`: for as long as the emitter runs.
     #[serde(default)]
     pub cycles: Option<u32>,
@@ -73,6 +74,9 @@ pub struct Emitter {
 pub struct EmitterIr {
     /// Spawned at each of the timing's bursts.
     pub burst: u32,
+    /// A burst count drawn anew for each burst from this range (`burst: (lo, hi)`), when it
+    /// is one; `burst` is then its low end.
+    pub burst_range: Option<(u32, u32)>,
     /// Per second, while the timing lets it run.
     pub rate: f64,
     /// The live params the burst and the rate follow (indices in `EffectIr::live_params`).
@@ -194,6 +198,10 @@ impl Emitter {
         let (burst, rate) = (self.burst.lower(names), self.rate.lower(names));
         EmitterIr {
             burst: burst.value,
+            burst_range: match self.burst {
+                Amount::Range(lo, hi) => Some((lo, hi)),
+                _ => None,
+            },
             rate: rate.value,
             params: (burst.param, rate.param),
             timing: SpawnTiming::new(self.start, self.duration, self.every, self.cycles, dt),

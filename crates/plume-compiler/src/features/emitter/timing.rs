@@ -7,8 +7,71 @@
 //! from rounding up a step). The emitter's rate runs in the steps [start, end), its burst
 //! number n fires at the step of `start + n · every` for n < `cycles`, before the end.
 
+use serde::de::{self, Deserialize, Deserializer, Unexpected, Visitor};
+
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
+use crate::base::rng::pcg;
+
+/// Seconds between a burst's repeats: a number, or a range `(lo, hi)` from which each gap is
+/// drawn anew (in whole steps, uniform from round(lo / dt) to round(hi / dt), at least one).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Every {
+    /// The same gap each time.
+    Fixed(f64),
+    /// A gap drawn for each repeat.
+    Range(f64, f64),
+}
+
+impl Every {
+    /// The shortest gap (s).
+    pub fn shortest(self) -> f64 {
+        match self {
+            Every::Fixed(s) | Every::Range(s, _) => s,
+        }
+    }
+
+    /// The mean gap (s), for estimates.
+    pub fn mean(self) -> f64 {
+        match self {
+            Every::Fixed(s) => s,
+            Every::Range(lo, hi) => 0.5 * (lo + hi),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Every {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        struct EveryVisitor;
+        impl<'de> Visitor<'de> for EveryVisitor {
+            type Value = Every;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("seconds, or a range of seconds `(lo, hi)` drawn anew for each repeat")
+            }
+            fn visit_f64<E: de::Error>(self, x: f64) -> Result<Every, E> {
+                Ok(Every::Fixed(x))
+            }
+            fn visit_u64<E: de::Error>(self, x: u64) -> Result<Every, E> {
+                Ok(Every::Fixed(x as f64))
+            }
+            fn visit_i64<E: de::Error>(self, x: i64) -> Result<Every, E> {
+                Ok(Every::Fixed(x as f64))
+            }
+            fn visit_str<E: de::Error>(self, v: &str) -> Result<Every, E> {
+                Err(E::invalid_type(Unexpected::Str(v), &self))
+            }
+            fn visit_seq<A: de::SeqAccess<'de>>(self, mut seq: A) -> Result<Every, A::Error> {
+                let mut next = |i| -> Result<f64, A::Error> {
+                    seq.next_element()?
+                        .ok_or_else(|| de::Error::invalid_length(i, &self))
+                };
+                let (lo, hi) = (next(0)?, next(1)?);
+                Ok(Every::Range(lo, hi))
+            }
+        }
+        d.deserialize_any(EveryVisitor)
+    }
+}
 
 /// The most steps a time may lie ahead (as for lifetimes): 2^31.
 const MAX_STEPS: f64 = 2_147_483_648.0;
@@ -27,8 +90,14 @@ pub struct SpawnTiming {
     pub start_step: u64,
     /// The first step at which it spawns no more (None: it runs for ever).
     pub end_step: Option<u64>,
-    /// Seconds between its burst's repeats (None: the burst fires once).
+    /// Seconds between its burst's repeats, the shortest when they are drawn (None: the burst
+    /// fires once).
     pub every: Option<f64>,
+    /// Drawn repeats' gaps in whole steps, (fewest, most), drawn with `key`.
+    pub every_steps: Option<(u64, u64)>,
+    /// The key of this emitter's draws of gaps and burst counts (set by the IR's lowering,
+    /// distinct per emitter).
+    pub key: u32,
     /// How many times the burst fires (None: for as long as the emitter runs).
     pub cycles: Option<u32>,
     /// Seconds per step.
@@ -40,15 +109,21 @@ impl SpawnTiming {
     pub fn new(
         start: f64,
         duration: Option<f64>,
-        every: Option<f64>,
+        every: Option<Every>,
         cycles: Option<u32>,
         dt: f64,
     ) -> Self {
+        let gap = |s: f64| ((s / dt).round() as u64).max(1);
         Self {
             start,
             start_step: step_of(start, dt),
             end_step: duration.map(|d| step_of(start + d, dt)),
-            every,
+            every: every.map(Every::shortest),
+            every_steps: match every {
+                Some(Every::Range(lo, hi)) => Some((gap(lo), gap(hi).max(gap(lo)))),
+                _ => None,
+            },
+            key: 0,
             cycles: match every {
                 Some(_) => cycles,
                 None => Some(1),
@@ -81,12 +156,29 @@ impl SpawnTiming {
         if self.cycles.is_some_and(|c| n >= c) {
             return None;
         }
-        let step = match (n, self.every) {
-            (0, _) => self.start_step,
-            (_, Some(every)) => step_of(self.start + f64::from(n) * every, self.dt),
-            (_, None) => return None,
+        let step = match (n, self.every, self.every_steps) {
+            (0, _, _) => self.start_step,
+            // Drawn gaps: whole steps, summed exactly.
+            (_, _, Some((lo, hi))) => (0..n).fold(self.start_step, |step, i| {
+                step.saturating_add(lo + u64::from(self.draw(i, 0)) % (hi - lo + 1))
+            }),
+            (_, Some(every), None) => step_of(self.start + f64::from(n) * every, self.dt),
+            (_, None, _) => return None,
         };
         self.end_step.is_none_or(|end| step < end).then_some(step)
+    }
+
+    /// The emitter's `i`-th draw of purpose `purpose` (0: a gap, 1: a burst count): a PCG hash
+    /// of its key, the number and the purpose, the same for the GPU runtime and the reference,
+    /// which share the schedule.
+    pub fn draw(&self, i: u32, purpose: u32) -> u32 {
+        pcg(pcg(self.key ^ purpose.wrapping_mul(0x9e37_79b9)).wrapping_add(i))
+    }
+
+    /// The count of burst number `n` of an emitter whose burst is drawn from `[lo, hi]`.
+    pub fn burst_count(&self, n: u32, (lo, hi): (u32, u32)) -> u32 {
+        let span = u64::from(hi - lo) + 1;
+        lo + (u64::from(self.draw(n, 1)) % span) as u32
     }
 
     /// The most bursts whose particles can be alive at once when they live at most `life`
@@ -130,7 +222,12 @@ impl SpawnTiming {
                 Some(c) => format!("{c} times"),
                 None => "for ever".into(),
             };
-            parts.push(format!("burst every {every} s, {cycles}"));
+            match self.every_steps {
+                Some((lo, hi)) => {
+                    parts.push(format!("burst every {lo} to {hi} steps (drawn), {cycles}"))
+                }
+                None => parts.push(format!("burst every {every} s, {cycles}")),
+            }
         }
         parts.join(", ")
     }
@@ -141,7 +238,7 @@ impl SpawnTiming {
 pub fn check(
     c: &mut Checker,
     path: &ValuePath,
-    (start, duration, every, cycles): (f64, Option<f64>, Option<f64>, Option<u32>),
+    (start, duration, every, cycles): (f64, Option<f64>, Option<Every>, Option<u32>),
     burst: u32,
     dt: f64,
 ) {
@@ -162,7 +259,25 @@ pub fn check(
             ahead(c, &at, start + d);
         }
     }
-    if let Some(every) = every {
+    if let Some(Every::Range(lo, hi)) = every {
+        let at = path.field("every");
+        let min = at.component(0, "min");
+        if c.range(&at, crate::base::values::Range(lo, hi)) && c.positive(&min, lo) {
+            ahead(c, &at.component(1, "max"), hi);
+            if dt > 0.0 && lo < dt * (1.0 - 1e-9) {
+                c.error(
+                    &min,
+                    format!(
+                        "a burst repeats at most once a step: must be >= dt = {dt} s, got {lo}"
+                    ),
+                );
+            }
+        }
+        if burst == 0 {
+            c.error(&at, "repeats the burst, but `burst` is 0");
+        }
+    }
+    if let Some(Every::Fixed(every)) = every {
         let at = path.field("every");
         if c.positive(&at, every) {
             ahead(c, &at, every);

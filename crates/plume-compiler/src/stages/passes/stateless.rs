@@ -134,6 +134,20 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("state"),
         ));
     }
+    if let Some(e) = ir
+        .emitters
+        .iter()
+        .position(|em| em.burst_range.is_some() || em.timing.every_steps.is_some())
+    {
+        let field = match ir.emitters[e].burst_range {
+            Some(_) => "burst",
+            None => "every",
+        };
+        return Err((
+            format!("emitters[{e}].{field} is drawn anew for each burst, which the closed form's segments do not track"),
+            ValuePath::root().field("emitters").index(e).field(field),
+        ));
+    }
     if let Some(e) = ir.emitters.iter().position(|em| em.params != (None, None)) {
         let field = match ir.emitters[e].params.0 {
             Some(_) => "burst",
