@@ -1,4 +1,5 @@
-//! `plume`: check, compile (and later run, render, bench) particle effects.
+//! `plume`: check, compile, run, render, preview, benchmark and measure the accuracy of
+//! particle effects.
 
 mod accuracy;
 mod bench;

@@ -5,7 +5,8 @@
 //! kernel), and one draw module (a vertex shader that reads the particles from the GPU buffers
 //! and a fragment shader for the sprites), both validated by naga. The pipeline, one module per stage:
 //! parse ([`schema`], with [`diagnostics`] and [`locate`]) → check ([`validate`]) → lower to the
-//! [`ir`] → [`passes`] (fold, prune, integrator, stability, layout) → [`wgsl`] writer →
+//! [`ir`] → [`passes`] (fold, prune, accuracy, integrator, stability, the unused field
+//! dropped, state, layout) → [`wgsl`] writer →
 //! [`naga_check`]. This crate does not depend on wgpu.
 //!
 //! ```
@@ -35,8 +36,9 @@
 
 //!
 //! The crate is layered, every import pointing down (docs/ARCHITECTURE.md draws it):
-//! `base` (leaves) → `expr` → `features` → `ir` → `stages` → `compile` → `graph` →
-//! `reference`. The public modules below re-export each stage under its short name.
+//! `base` (leaves) → `expr` → `features` → `ir` → `stages` and `reference` (side by side) →
+//! `compile` and `batch` → `graph`. The public modules below re-export each stage under its
+//! short name.
 
 mod base;
 pub mod batch;

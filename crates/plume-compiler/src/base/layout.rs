@@ -17,10 +17,11 @@ pub enum Attribute {
     DeathStep,
     /// Global spawn index, or `0xffffffff` for a free slot: `id`.
     Id,
-    /// The step the particle spawned at: `born`. Only when a custom force reads `age` or
-    /// `life`, or when the draw needs a life fraction (colour or size change over life) and
-    /// the emitters with lifetimes draw them from different ranges, so that the draw cannot
-    /// re-derive a particle's lifetime from its id alone (see `stages::passes::layout::needs_spawn_step`).
+    /// The step the particle's age counts from (its spawn step, less a starting age): `born`.
+    /// Only where something needs a particle's age that its id and death step cannot give:
+    /// a custom force or attribute change reading `age` or `life`, a draw needing a life
+    /// fraction or an age (gradients, flipbooks, a spin, expressions) when the lifetimes do not
+    /// come from one shared range, events, or starting ages (`stages::passes::layout::decide`).
     SpawnStep,
     /// The particle's tint, packed 8 bits a channel: `tint`. Only in a group fed by an event
     /// that passes the parent's colour on (`EffectIr::stores_tint`).

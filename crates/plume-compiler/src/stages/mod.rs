@@ -2,7 +2,9 @@
 //! passes, the integrators, the WGSL kernel assembly and the step schedule.
 //!
 //! Architecture invariant: a stage imports features, the IR and `base`, never a driver
-//! (`compile`, `graph`) or the reference simulator; features never import a stage.
+//! (`compile`, `graph`); of the reference simulator, only the accuracy pass imports its
+//! calibration runs (`reference/calibrate.rs`), to choose a budget's scheme; features never
+//! import a stage.
 
 pub mod integrators;
 pub mod lower;
