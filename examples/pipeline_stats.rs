@@ -1,8 +1,8 @@
 //! What the Vulkan driver made of WGSL compute kernels: registers, local and shared memory per
 //! entry point, as `VK_KHR_pipeline_executable_properties` reports them (NVIDIA's driver does;
 //! Mesa's llvmpipe and lavapipe do not). The driver chooses a kernel's register count itself,
-//! and a kernel that needs more spills to local or shared memory: docs/performance.md, "The
-//! flock's cells split along x", shows how the flock's search changed with it.
+//! and a kernel that needs more spills to local or shared memory: docs/performance.md,
+//! "Flocking", shows how the flock's search changed with it.
 //!
 //! ```sh
 //! cargo build --release --example pipeline_stats

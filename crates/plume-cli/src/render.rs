@@ -80,8 +80,8 @@ pub enum DrawMethod {
 }
 
 impl DrawMethod {
-    /// The method `auto` stands for on `gpu` for `graph`, and why. The splat was 7 to 9 times faster than the raster pipeline for 10M
-    /// particles on an H100 (docs/performance.md) and slower on llvmpipe, whose raster path is
+    /// The method `auto` stands for on `gpu` for `graph`, and why. The splat is 18 to 58 times faster than the raster pipeline on an
+    /// H100 or H200 (docs/performance.md, "Drawing") and slower on llvmpipe, whose raster path is
     /// the CPU's; it draws every group's sprites (any texture, orientation, rotation and
     /// height, glowing or not) and ribbons; the scene's meshes are drawn by the raster
     /// pipeline first and the splat tests their depth (`Effect::compute_renderer`).

@@ -19,7 +19,7 @@ use crate::sim::effect::Effect;
 /// - compute ([`Effect::compute_renderer`]): the compute splat composites every group into an
 ///   image of its own, tested against the host's depth, and the host's render pass puts that
 ///   image over its colour with one full-screen triangle. Faster where raster units are few
-///   (an H100 draws 10M sprites about 25x faster so; docs/performance.md).
+///   (18 to 58 times faster on an H100 or H200; docs/performance.md, "Drawing").
 ///
 /// Prepared each frame by [`Effect::prepare_draw`], recorded into a render pass by
 /// [`Self::draw`].

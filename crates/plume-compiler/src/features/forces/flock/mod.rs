@@ -211,7 +211,7 @@ pub const GRID_ONE_LOADS_PER_ROUND: u32 = 3;
 /// (H100, one call, three rounds): 1.071 against 1.130 ms a step (the search 0.879 against
 /// 0.935); 2 sub-cells 1.072, 4 sub-cells 1.081. The neighbours are the same; the order they
 /// are added in changes within a cell (by sub-cell, then slot), so the sums round differently
-/// (docs/performance.md, "The flock's cells split along x"). Rows clipped, sub-cell by sub-cell,
+/// (docs/performance.md, "Flocking"). Rows clipped, sub-cell by sub-cell,
 /// to the sphere of the radius (44% fewer candidates than whole cells) were slower: 1.095.
 pub const GRID_X_SPLIT: u32 = 3;
 
