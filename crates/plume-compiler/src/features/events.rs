@@ -457,9 +457,9 @@ pub fn emit_fire_appended(
 /// the children's slots: the spawn's first thread clears the parent's records header for the
 /// firings of the step to come, and the threads of a fixed grid (the runtime sizes it by the
 /// group's slots, [`SPAWN_WORKGROUPS`] at most) stride over the children, each spawned by
-/// `event_child_J`. (Until 2026-11-27 the ordering wrote the spawn's workgroups for an
-/// indirect dispatch, which an H100 starts about 3 µs later than a direct one after the
-/// kernel that writes them: docs/performance.md, "Events".)
+/// `event_child_J`. (A direct dispatch: an indirect one, its workgroups written by the
+/// ordering, starts about 3 µs later on an H100 after the kernel that writes them:
+/// docs/performance.md, "Events".)
 /// `store` emits the store of the spawned particle `s` with id `id` (and packed tint `tint`,
 /// when the group stores tints) in `slot`: the same code as the group's own spawn. `own` is
 /// the WGSL of the group's own tint for the particle `id` when it stores tints (`tint.rs`).

@@ -25,10 +25,10 @@
 //   bucket_rank:       each staged firing's rank is its run's start plus the staged ids of the
 //                      run smaller than its own; the counts are cleared.
 //
-// Until 2026-11-26 the words' counts were scanned across the device (a reduce and a scan of
-// blocks of 2,048 words, five dispatches, one word an id): each dispatch costs an H100 about
-// 2.7 µs before any work, and the two scans about 13 µs a step for fireworks' sparks and
-// rain's drops at 10M slots (docs/performance.md, "Events").
+// The words' counts are not scanned across the device (a reduce and a scan of blocks of 2,048
+// words, five dispatches, one word an id): each dispatch costs an H100 about 2.7 µs before any
+// work, and the two scans took about 13 µs a step for fireworks' sparks and rain's drops at 10M
+// slots (docs/performance.md, "Events").
 // The work follows the firings and the range of their ids, not the group's slots: each kernel
 // is dispatched on a fixed grid (at most 256 workgroups) whose threads stride over this
 // step's firings, so that a step with few firings launches few threads. Ids are unique, so a

@@ -2,11 +2,10 @@
 // (crate::sim::events; the ordering files follow this one in the module). The firings' count
 // is known from the step's start, so one thread takes it there: it pops the child's free slots
 // for as many children as fit, counts the rest as dropped and hands out the children's ids.
-// The child's kernel did this in a one-thread dispatch of its own until 2026-11-26: about 2.7
-// µs a stream a step on an H100 (docs/performance.md, "Events"). The child's `event_spawn` is
-// a direct dispatch over a fixed grid whose threads stride over the children (it was an
-// indirect one, its workgroups written here, until 2026-11-27: an H100 started it about 3 µs
-// later). The records' header is cleared by the spawn's first thread, after every kernel of
+// A one-thread dispatch of the child's own for this would cost about 2.7 µs a stream a step on
+// an H100 (docs/performance.md, "Events"). The child's `event_spawn` is a direct dispatch over
+// a fixed grid whose threads stride over the children (an indirect one, its workgroups written
+// here, starts about 3 µs later on an H100). The records' header is cleared by the spawn's first thread, after every kernel of
 // the ordering has read it.
 
 // Whether this pipeline prepares the spawn (`plume bench` times the orderings alone, again and

@@ -99,8 +99,7 @@ const SCAN_BLOCK: u64 = 2048;
 
 /// The longest short scan: 256 blocks of 256 words, scanned in a dispatch and added up in
 /// another (sort.wgsl's `scan_blocks`, `add_block_prefix`). Longer ones reduce then scan, eight
-/// words a thread. On the H100 (2026-11-26, third session; the flock grid's bucket counts, ms a
-/// scan, short against long): 8,193 words 0.0063 against 0.0098, 32,769 0.0066 against 0.0101
+/// words a thread. On the H100 (the flock grid's bucket counts, ms a scan, short against long): 8,193 words 0.0063 against 0.0098, 32,769 0.0066 against 0.0101
 /// (their few workgroups wait on their own steps more than on memory); 131,073 0.0128 against
 /// 0.0103, 1,048,577 0.028 against 0.017, 10M 0.129 against 0.098.
 const SCAN_SHORT_MAX: u64 = 65_536;
@@ -228,9 +227,9 @@ impl GpuSorter {
     /// dispatch). Longer, reduce then scan, 2,048 words a workgroup: the blocks' totals
     /// (`scan_reduce`), then each block scanned from its prefix (`scan_apply`), which up to
     /// [`SCAN_PREFIX_MAX`] blocks adds up the totals before its own and past that reads them
-    /// as `scan_totals`, one workgroup, scanned them in a dispatch between. (Long scans were
-    /// short ones applied level by level until 2026-11-26: the splat's 10M-word scan 0.129 ms
-    /// against 0.098 now, docs/performance.md.)
+    /// as `scan_totals`, one workgroup, scanned them in a dispatch between. (Short scans applied
+    /// level by level take the splat's 10M-word scan 0.129 ms against this one's 0.098,
+    /// docs/performance.md.)
     fn scan(
         &self,
         pass: &mut SortProgram,

@@ -3,7 +3,7 @@
 //!
 //! Why a core: the thesis's pull has constant magnitude right up to the centre, so it flips
 //! direction within one step as a particle passes through, and every fixed-step integrator gains
-//! or loses energy at each pass (measured in session 1: a particle released at half range escaped
+//! or loses energy at each pass (without a core, a particle released at half range escapes
 //! within 60 s at every step size tried). Inside `core` the pull falls linearly to zero instead,
 //! so the field is Lipschitz with constant strength / core, the centre is a harmonic well with
 //! ω = sqrt(strength / core), and the integrators' ω*h limits are real limits.

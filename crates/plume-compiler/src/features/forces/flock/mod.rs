@@ -178,8 +178,8 @@ pub const GRID_FASTER_FROM: u32 = 4096;
 /// one thread: 0.055 against 0.059 at 16k, 0.129 against 0.155 at 64k, 0.234 against 0.263 at
 /// 128k (before the PCG bucket hash); with it, 0.355 against 0.359 at 256k (a tie), 0.728
 /// against 0.703 at 512k and 1.54 against 1.37 at 1M, where the GPU is full and nine threads'
-/// partial sums cost more than they hide. With the one-thread search in rounds of 24
-/// (2026-11-26, one call): 0.096 against 0.109 at 64k, 0.167 against 0.179 at 128k; at 256k,
+/// partial sums cost more than they hide. With the one-thread search in rounds of 24 (one
+/// call): 0.096 against 0.109 at 64k, 0.167 against 0.179 at 128k; at 256k,
 /// in an earlier call, 0.329 against 0.320 for rounds of 32.
 pub const GRID_SPLIT_BELOW: u32 = 262_144;
 
