@@ -199,17 +199,31 @@ fn emitter(flavor: Flavor) -> BoxedStrategy<String> {
             let n = n.map_or(String::new(), |n| format!(", cycles: Some({n})"));
             format!(", every: Some({every}){n}")
         }),
+        // Gaps drawn anew for each repeat.
+        1 => (num(f, 0.05, 0.3), num(f, 0.3, 0.9)).prop_map(|(lo, hi)| {
+            format!(", every: Some(({lo}, {hi}))")
+        }),
+    ];
+    // A burst count drawn anew for each burst, sometimes; a starting age, sometimes.
+    let burst = prop_oneof![
+        3 => count(f, 1, 24).prop_map(|n| n.to_string()),
+        1 => (count(f, 1, 24), count(f, 0, 24)).prop_map(|(lo, more)| format!("({lo}, {})", lo.saturating_add(more))),
+    ];
+    let age = prop_oneof![
+        3 => Just(String::new()),
+        1 => range(f, 0.0, 0.5).prop_map(|r| format!(", age: Some({r})")),
     ];
     (
-        count(f, 1, 24),
+        burst,
         num(f, 0.0, 60.0),
         shape(f),
         velocity(f),
         lifetime,
         timing,
+        age,
     )
-        .prop_map(|(burst, rate, shape, vel, life, timing)| {
-            format!("Emitter(burst: {burst}, rate: {rate}, shape: {shape}, velocity: {vel}{life}{timing})")
+        .prop_map(|(burst, rate, shape, vel, life, timing, age)| {
+            format!("Emitter(burst: {burst}, rate: {rate}, shape: {shape}, velocity: {vel}{life}{timing}{age})")
         })
         .boxed()
 }
@@ -624,7 +638,7 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
             num(f, -1.0, 1.0),
         ),
         prop::collection::vec(emitter(f), if tame { 1..3 } else { 0..3 }),
-        prop::collection::vec(force(f), 0..5),
+        (prop::collection::vec(force(f), 0..5), attributes(f)),
         prop::collection::vec(plane(f), planes),
         prop::collection::vec(kill(f), kills),
         (
@@ -642,7 +656,8 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
         ),
     )
         .prop_map(
-            move |((cap, seed, dt, substeps, k), emitters, mut forces, planes, kills, (integ, max_speed, sort, render, field, state))| {
+            move |((cap, seed, dt, substeps, k), emitters, (mut forces, (attributes, reader)), planes, kills, (integ, max_speed, sort, render, field, state))| {
+                forces.extend(reader);
                 if f != Flavor::Wild {
                     // An effect has at most one Flock.
                     let mut flocks = 0;
@@ -652,7 +667,7 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
                     });
                 }
                 format!(
-                    "Effect(\n    name: \"fuzz\",\n    capacity: {cap},\n    seed: {seed},\n    dt: {dt},\n    substeps: {substeps},\n    params: {{\"k\": {k}}},\n    emitters: [{}],\n    forces: [{}],\n    collide: [{}],\n    kill: [{}],\n    integrator: {integ},\n    {max_speed}\n    sort: {sort},\n    {state}\n    {render}\n    {field}\n)\n",
+                    "Effect(\n    name: \"fuzz\",\n    capacity: {cap},\n    seed: {seed},\n    dt: {dt},\n    substeps: {substeps},\n    params: {{\"k\": {k}, \"w\": ({k}, 0.5, -0.25)}},\n    {attributes}\n    emitters: [{}],\n    forces: [{}],\n    collide: [{}],\n    kill: [{}],\n    integrator: {integ},\n    {max_speed}\n    sort: {sort},\n    {state}\n    {render}\n    {field}\n)\n",
                     emitters.join(",\n        "),
                     forces.join(",\n        "),
                     planes.join(", "),
@@ -661,6 +676,32 @@ pub fn effect(flavor: Flavor) -> BoxedStrategy<String> {
             },
         )
         .boxed()
+}
+
+/// Attributes and a named expression, and a custom force that reads them, sometimes: (the
+/// fields' text, the forces to add).
+fn attributes(flavor: Flavor) -> BoxedStrategy<(String, Vec<String>)> {
+    let f = flavor;
+    let scalar = || expression(f, false, 2);
+    let vector = || expression(f, true, 2);
+    prop_oneof![
+        2 => Just((String::new(), Vec::new())),
+        1 => (scalar(), scalar(), vector(), vector(), scalar(), any::<bool>()).prop_map(
+            |(spawn_a, change_a, spawn_b, change_b, define, rate)| {
+                let change = match rate {
+                    true => format!("rate: Some(\"{change_a} - a\")"),
+                    false => format!("update: Some(\"a * 0.5 + {change_a}\")"),
+                };
+                (
+                    format!(
+                        "define: {{\"d\": \"{define}\"}},\n    attributes: {{\"a\": (spawn: \"{spawn_a}\", {change}), \"b\": (spawn: \"{spawn_b}\", update: Some(\"{change_b} * 0.5 + w\"))}},"
+                    ),
+                    vec!["Custom(accel: \"(b - w) * 0.1 + vec3(0.0, a * 0.01, d * 0.01)\")".to_string()],
+                )
+            }
+        ),
+    ]
+    .boxed()
 }
 
 /// An event: a trigger, a target among `targets` (or, wild, any name), a count and a spawn
