@@ -116,14 +116,7 @@ pub fn emit_curl_helpers(w: &mut Writer) {
         w.line("return select(u, -u, (b & 1u) != 0u) + select(v, -v, (b & 2u) != 0u);");
     });
     w.block("fn turb_curl(key: u32, q_in: vec3<f32>) -> vec3<f32>", |w| {
-        w.line(format!(
-            "let q = clamp(q_in, vec3<f32>({}), vec3<f32>({}));",
-            f32_lit(-CELL_LIMIT),
-            f32_lit(CELL_LIMIT)
-        ));
-        w.line("let cell = floor(q);");
-        w.line("let f = q - cell;");
-        w.line("let u = f * f * f * (f * (f * 6.0 - 15.0) + 10.0);");
+        emit_cell(w);
         w.line("let du = 30.0 * f * f * (f - 1.0) * (f - 1.0);");
         w.line("let base = bitcast<vec3<u32>>(vec3<i32>(cell));");
         w.line("var g0 = vec3<f32>(0.0);");
@@ -152,19 +145,24 @@ pub fn emit_curl_helpers(w: &mut Writer) {
     });
 }
 
+/// The lines both helpers open with: `q_in` clamped, its cell, the offset in it and the fades.
+fn emit_cell(w: &mut Writer) {
+    w.line(format!(
+        "let q = clamp(q_in, vec3<f32>({}), vec3<f32>({}));",
+        f32_lit(-CELL_LIMIT),
+        f32_lit(CELL_LIMIT)
+    ));
+    w.line("let cell = floor(q);");
+    w.line("let f = q - cell;");
+    w.line("let u = f * f * f * (f * (f * 6.0 - 15.0) + 10.0);");
+}
+
 /// Emits `grad_noise(key, q)`, the WGSL twin of [`noise`] (after [`emit_curl_helpers`], whose
 /// `turb_gradient` it reads).
 pub fn emit_noise_helper(w: &mut Writer) {
     w.comment("Gradient noise: the value of the first of the curl's three noises.");
     w.block("fn grad_noise(key: u32, q_in: vec3<f32>) -> f32", |w| {
-        w.line(format!(
-            "let q = clamp(q_in, vec3<f32>({}), vec3<f32>({}));",
-            f32_lit(-CELL_LIMIT),
-            f32_lit(CELL_LIMIT)
-        ));
-        w.line("let cell = floor(q);");
-        w.line("let f = q - cell;");
-        w.line("let u = f * f * f * (f * (f * 6.0 - 15.0) + 10.0);");
+        emit_cell(w);
         w.line("let base = bitcast<vec3<u32>>(vec3<i32>(cell));");
         w.line("var sum = 0.0;");
         w.block("for (var c = 0u; c < 8u; c++)", |w| {

@@ -30,7 +30,12 @@ impl LifetimeSteps {
     /// Returns None when the step counts do not fit in 31 bits.
     pub fn new(min: f64, max: f64, dt: f64) -> Option<Self> {
         let lo = (min / dt - MULTIPLE_EPS).ceil().max(1.0);
-        let hi = (max / dt - MULTIPLE_EPS).ceil().max(lo);
+        Self::between(lo, (max / dt - MULTIPLE_EPS).ceil().max(lo))
+    }
+
+    /// The draw of whole step counts from `lo` to `hi` (whole numbers, lo <= hi); None when
+    /// they do not fit in 31 bits.
+    fn between(lo: f64, hi: f64) -> Option<Self> {
         if hi >= f64::from(1u32 << 31) || hi.is_nan() {
             return None;
         }
@@ -48,18 +53,7 @@ impl LifetimeSteps {
     /// rounded to the nearest (0 allowed). None when they do not fit in 31 bits.
     pub fn ages(min: f64, max: f64, dt: f64) -> Option<Self> {
         let lo = (min / dt).round().max(0.0);
-        let hi = (max / dt).round().max(lo);
-        if hi >= f64::from(1u32 << 31) || hi.is_nan() {
-            return None;
-        }
-        let (first, last) = (lo as u32, hi as u32);
-        let span = last - first + 1;
-        let span_bits = 32 - span.leading_zeros();
-        Some(Self {
-            first,
-            span,
-            bits: (32 - span_bits).min(24),
-        })
+        Self::between(lo, (max / dt).round().max(lo))
     }
 
     /// Steps lived, from the raw random word `u`: first + floor(top `bits` of u * span / 2^bits).

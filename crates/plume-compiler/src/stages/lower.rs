@@ -7,21 +7,29 @@ use crate::features::forces::Force;
 use crate::ir::{CameraIr, EffectIr, KillIr, RenderIr};
 use crate::stages::schema::{Collider, Effect, KillVolume};
 
-/// Lowers a checked effect. Call only after [`crate::stages::validate::check_effect`] found no errors.
-pub fn lower(effect: &Effect) -> EffectIr {
-    let (defines, _) = crate::expr::define::parse_all(&effect.define);
-    let scope = crate::features::forces::custom::Scope {
+/// What the effect's expressions may name: its params and dt, its named expressions
+/// (`defines`, parsed from `effect.define`) and its attributes (`attrs`:
+/// `features::attributes::names`).
+pub(crate) fn names<'a>(
+    effect: &'a Effect,
+    defines: &'a [crate::expr::define::Define],
+    attrs: &'a [crate::expr::typed::AttrName],
+) -> crate::expr::Names<'a> {
+    crate::expr::Names {
         params: &effect.params,
         dt: effect.dt,
         live: effect.live_params,
-        attrs: &[],
-        defines: &defines,
-    };
-    let attrs = crate::features::attributes::names(&effect.attributes, scope);
-    let scope = crate::features::forces::custom::Scope {
-        attrs: &attrs,
-        ..scope
-    };
+        attrs,
+        defines,
+    }
+}
+
+/// Lowers a checked effect. Call only after [`crate::stages::validate::check_effect`] found no errors.
+pub fn lower(effect: &Effect) -> EffectIr {
+    let (defines, _) = crate::expr::define::parse_all(&effect.define);
+    let attrs =
+        crate::features::attributes::names(&effect.attributes, names(effect, &defines, &[]));
+    let scope = names(effect, &defines, &attrs);
     let mut ir = EffectIr {
         name: effect.name.clone(),
         capacity: effect.capacity,

@@ -65,18 +65,10 @@ pub fn check_effect(effect: &Effect) -> Checker {
         c.error(&root.field("substeps"), "must be >= 1, got 0");
     }
     let (defines, define_errors) = crate::expr::define::parse_all(&effect.define);
-    let scope = crate::features::forces::custom::Scope {
-        params: &effect.params,
-        dt: effect.dt,
-        live: effect.live_params,
-        attrs: &[],
-        defines: &defines,
-    };
-    let attrs = crate::features::attributes::names(&effect.attributes, scope);
-    let scope = crate::features::forces::custom::Scope {
-        attrs: &attrs,
-        ..scope
-    };
+    let names = crate::stages::lower::names;
+    let attrs =
+        crate::features::attributes::names(&effect.attributes, names(effect, &defines, &[]));
+    let scope = names(effect, &defines, &attrs);
     check_defines(&mut c, &root.field("define"), effect, define_errors, scope);
     crate::features::attributes::check(
         &mut c,

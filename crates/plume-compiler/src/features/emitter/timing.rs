@@ -320,7 +320,7 @@ mod tests {
     fn repeats_start_and_end_land_on_whole_steps() {
         // dt 0.1: start 0.25 s is step 3 (0.3 s is the first step not before it), 1.0 s of
         // duration ends at 1.25 s: step 13. Bursts every 0.5 s: 0.25, 0.75, 1.25 (the end).
-        let t = SpawnTiming::new(0.25, Some(1.0), Some(0.5), None, 0.1);
+        let t = SpawnTiming::new(0.25, Some(1.0), Some(Every::Fixed(0.5)), None, 0.1);
         assert_eq!((t.start_step, t.end_step), (3, Some(13)));
         assert_eq!(t.burst_step(0), Some(3));
         assert_eq!(t.burst_step(1), Some(8));
@@ -328,7 +328,7 @@ mod tests {
         assert!(!t.rate_runs(2) && t.rate_runs(3) && t.rate_runs(12) && !t.rate_runs(13));
         assert!(t.rate_runs_after(12) && !t.rate_runs_after(13));
         // A time that is a whole number of steps, written in decimal, does not round up.
-        let t = SpawnTiming::new(0.3, None, Some(0.7), Some(2), 0.1);
+        let t = SpawnTiming::new(0.3, None, Some(Every::Fixed(0.7)), Some(2), 0.1);
         assert_eq!(
             (t.burst_step(0), t.burst_step(1), t.burst_step(2)),
             (Some(3), Some(10), None)
@@ -337,13 +337,13 @@ mod tests {
 
     #[test]
     fn bursts_alive_at_once_are_bounded_by_cycles_lives_and_the_end() {
-        let t = SpawnTiming::new(0.0, None, Some(1.0), Some(3), 0.1);
+        let t = SpawnTiming::new(0.0, None, Some(Every::Fixed(1.0)), Some(3), 0.1);
         assert_eq!(t.bursts_alive(None), Some(3));
         assert_eq!(t.bursts_alive(Some(15)), Some(3));
-        let t = SpawnTiming::new(0.0, None, Some(1.0), None, 0.1);
+        let t = SpawnTiming::new(0.0, None, Some(Every::Fixed(1.0)), None, 0.1);
         assert_eq!(t.bursts_alive(None), None, "for ever, immortal");
         assert_eq!(t.bursts_alive(Some(25)), Some(4));
-        let t = SpawnTiming::new(0.0, Some(3.0), Some(1.0), None, 0.1);
+        let t = SpawnTiming::new(0.0, Some(3.0), Some(Every::Fixed(1.0)), None, 0.1);
         assert_eq!(t.bursts_alive(None), Some(4));
     }
 }
