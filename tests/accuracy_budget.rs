@@ -364,3 +364,45 @@ fn a_host_camera_that_cannot_measure_pixels_is_an_error() {
         );
     }
 }
+
+#[test]
+fn a_calibration_is_kept_by_content_so_a_second_compile_or_seed_runs_none() {
+    // A budget with no closed form: compiling it calibrates once. The same content again,
+    // or with another seed (only its sample particles differ), takes the choice from memory:
+    // the same scheme, the same kernels.
+    let src = effect(r#"Custom(accel: "-40.0 * x")"#, "", 1e-3)
+        .replace("name: \"budget\"", "name: \"kept\"");
+    let compile = |seed: Option<u32>| {
+        let options = CompileOptions {
+            seed,
+            ..Default::default()
+        };
+        compile_str(&src, &options).unwrap_or_else(|e| panic!("{}", e.render("kept.ron", &src)))
+    };
+    let first = compile(None);
+    assert!(
+        matches!(
+            first.ir.accuracy.as_ref().and_then(|a| a.choice.clone()),
+            Some(Choice::Stepped { .. })
+        ),
+        "{}",
+        first.ir
+    );
+    let remembered = |c: &plume::CompiledEffect| c.ir.accuracy.as_ref().unwrap().remembered;
+    let again = compile(None);
+    let reseeded = compile(Some(77));
+    assert!(
+        remembered(&again) && remembered(&reseeded),
+        "a kept calibration ran again"
+    );
+    assert_eq!(again.wgsl, first.wgsl);
+    assert_eq!(
+        (again.ir.integrator, again.ir.substeps),
+        (first.ir.integrator, first.ir.substeps)
+    );
+    assert_eq!(
+        (reseeded.ir.integrator, reseeded.ir.substeps),
+        (first.ir.integrator, first.ir.substeps)
+    );
+    assert_ne!(reseeded.ir.seed_mix, first.ir.seed_mix);
+}

@@ -282,6 +282,21 @@ pub(crate) fn compile_group(
     let mut ir = lower::lower(effect);
     ir.events.clone_from(&links.events);
     ir.event_inputs.clone_from(&links.inputs);
+    // A budget's calibration is remembered by the effect's content, its seed aside
+    // (`passes::accuracy::choose`): the IR as it would be lowered with seed 0.
+    if ir.accuracy.is_some() {
+        let mut unseeded = lower::lower(&Effect {
+            seed: 0,
+            ..effect.clone()
+        });
+        unseeded.events.clone_from(&links.events);
+        unseeded.event_inputs.clone_from(&links.inputs);
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        std::hash::Hash::hash(&format!("{unseeded:?}"), &mut h);
+        if let Some(a) = &mut ir.accuracy {
+            a.content = Some(std::hash::Hasher::finish(&h));
+        }
+    }
     if let Some(spec) = &effect.render.texture {
         let path = ValuePath::root()
             .field("render")

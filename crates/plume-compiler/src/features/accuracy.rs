@@ -127,6 +127,12 @@ pub struct AccuracyIr {
     /// The camera a pixel budget is measured through when it is not the effect's own (a
     /// host's: `CompileOptions::accuracy_camera`).
     pub host_camera: Option<BudgetCamera>,
+    /// Whether the choice was taken from an earlier calibration of the same content in this
+    /// process (`stages::passes::accuracy::choose`) rather than calibrated here.
+    pub remembered: bool,
+    /// The effect's content, its seed aside, as the key a calibration is remembered by (set
+    /// by the compile driver; None: not remembered).
+    pub content: Option<u64>,
 }
 
 /// A camera a pixel budget is measured through (a pinhole at `eye` looking at `target`,
@@ -162,6 +168,8 @@ impl Accuracy {
             half_estimate: None,
             stand_in: None,
             host_camera: None,
+            remembered: false,
+            content: None,
         }
     }
 }
@@ -401,7 +409,12 @@ impl AccuracyIr {
                     None => String::new(),
                 };
                 line += &format!(
-                    "; calibrated on {samples} particles{sample} in f64 in {millis:.0} ms"
+                    "; calibrated on {samples} particles{sample} in f64 in {millis:.0} ms{}",
+                    if self.remembered {
+                        " (remembered from an earlier compile of the same content)"
+                    } else {
+                        ""
+                    }
                 );
                 line
             }
