@@ -197,7 +197,7 @@ pub const GRID_TILE: u32 = 16;
 /// for 3 x 10, against 1.048 for rounds of 20 loaded at once (80 registers), 1.039 for 2 x 16,
 /// 1.049 for 4 x 8; two mask words for rounds of up to 64 (1.043 to 1.118) and the pair loop's
 /// next loads started before its pair function (1.070 to 1.137) were slower
-/// (docs/measurements/h100-speed/flock-batches/README.md). Before (rounds loaded at once): 1.048
+/// (benchmarks/h100-speed/flock-batches/README.md). Before (rounds loaded at once): 1.048
 /// with 20, 1.051 with 18, 1.073 with 22, 1.067 with 24; with whole cells, every run loaded
 /// first, 1.178 with 24, 1.194 with 32, 1.182 with 20 and 1.270 for the pair function inline.
 pub const GRID_ONE_LOADS: u32 = 10;

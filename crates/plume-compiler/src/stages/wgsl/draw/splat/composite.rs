@@ -19,7 +19,7 @@ pub(crate) const SPLAT_BATCH: u32 = 128;
 /// walks a batch's masks in two words, not four, and a workgroup spends less of its time with
 /// most of its threads waiting at a barrier for a slow mask or load (H100, sparks 10M: the
 /// composite 16.1 -> 15.4 ms; smoke 1M, alpha, 2.07 -> 2.18 and orbit's ribbons 8.4 -> 11.4,
-/// which keep 128; docs/measurements/h100-splat/line-masks/8-batch-64-96/).
+/// which keep 128; benchmarks/h100-splat/line-masks/8-batch-64-96/).
 pub(crate) const SPLAT_ADDITIVE_QUAD_BATCH: u32 = 64;
 
 /// Workgroups a tile's list of additive light is split over ([`splat_slices`]).
@@ -31,7 +31,7 @@ pub const SPLAT_SLICES: u32 = 8;
 /// and a busy tile then keeps eight workgroups busy instead of one (sparks, 10M on an H100:
 /// composite 35.8 -> 28.8 ms). Alpha gets one: a slice behind cannot know that the slices in
 /// front already hide it, so slicing did the work early stopping saves (snow 10M 1.25 ->
-/// 6.79 ms, smoke 1M 3.69 -> 5.84; docs/measurements/h100-splat/slices-8-everywhere.jsonl).
+/// 6.79 ms, smoke 1M 3.69 -> 5.84; benchmarks/h100-splat/slices-8-everywhere.jsonl).
 pub fn splat_slices(ir: &crate::ir::EffectIr) -> u32 {
     match ir.render.blend {
         crate::stages::schema::Blend::Additive => SPLAT_SLICES,
@@ -42,7 +42,7 @@ pub fn splat_slices(ir: &crate::ir::EffectIr) -> u32 {
 /// The pixels a subgroup of 32 composites, where subgroups are used (`shape.subgroups`): a
 /// block 4 wide and 8 tall rather than two rows of 16. A subgroup walks its pixels' records
 /// until its busiest lane is done, and a squarer block's pixels share more of their records
-/// (H100, docs/measurements/h100-splat/scatter/, two rounds: sparks 10M's composite 8.62, 8.69
+/// (H100, benchmarks/h100-splat/scatter/, two rounds: sparks 10M's composite 8.62, 8.69
 /// -> 8.24, 8.22 ms, orbit 1M's 4.83, 4.80 -> 4.69, 4.68; 8 x 4 blocks gave 8.30 and 4.77).
 const SUBGROUP_BLOCK: (u32, u32) = (4, 8);
 
@@ -77,7 +77,7 @@ pub(crate) enum Prefetch {
     /// the first batch and then after each batch's records are made, so that they arrive
     /// while the masks and the walk run and `load` reads them. Ribbon segments (H100, orbit
     /// 1M's composite, three rounds: entries ahead 4.92 -> 4.86 ms; the segments' loads too,
-    /// 4.65 to 4.68 -> 4.42 to 4.54, docs/measurements/h100-splat/runs/).
+    /// 4.65 to 4.68 -> 4.42 to 4.54, benchmarks/h100-splat/runs/).
     Loads {
         declare: &'static str,
         issue: &'static str,
@@ -88,7 +88,7 @@ pub(crate) enum Prefetch {
 /// `vec4s`. For additive light an odd number, so that the eight threads of a quarter warp that
 /// read a vec4 each from different records land on different banks (records 64 bytes apart all
 /// begin on one of two banks' groups of four); the record's last vec4 (the box) goes last in
-/// its stride. H100 (docs/measurements/h100-splat/segments/): sparks 10M's composite 12.3 ->
+/// its stride. H100 (benchmarks/h100-splat/segments/): sparks 10M's composite 12.3 ->
 /// 10.6 ms with quads 80 bytes apart, orbit 1M's ribbons 5.76 -> 5.71 ms 112 bytes apart. Alpha
 /// records keep theirs: few of them shade a pixel before it is opaque, and the larger batch
 /// slowed snow 10M's composite 0.53 -> 0.55 ms and boids 1M's 0.51 -> 0.52.

@@ -42,7 +42,7 @@ pub(super) fn emit_box_lines(w: &mut Writer, vec4s: u32, diagonals: bool) {
 /// diagonals and anti-diagonals), built by thread q % 256 from each record's `record_lines`, a
 /// bit taken from each of the word's 32 records. No atomics, and a record's lines were found
 /// once, when it was loaded: comparing every record's box with every line cost sparks 10M 2.7
-/// of its composite's 10.6 ms on an H100 (docs/measurements/h100-splat/masks/).
+/// of its composite's 10.6 ms on an H100 (benchmarks/h100-splat/masks/).
 pub(super) fn emit_line_masks(w: &mut Writer, words: u32, line_masks: u32, diagonals: bool) {
     let stride = line_words(diagonals);
     let lines = 2 * SPLAT_TILE;
@@ -106,7 +106,7 @@ pub(super) fn emit_transpose(w: &mut Writer) {
 /// records' `record_lines` (one part: columns and rows, diagonals or anti-diagonals), a lane
 /// each, and a transpose leaves lane L with line L's word. Five shuffles a part and word where
 /// a thread per mask word took 32 loads (H100, sparks 10M's composite 9.1 -> 8.4 ms;
-/// docs/measurements/h100-splat/masks/).
+/// benchmarks/h100-splat/masks/).
 pub(super) fn emit_line_masks_transposed(w: &mut Writer, words: u32, diagonals: bool) {
     let stride = line_words(diagonals);
     let tasks = words * stride;
