@@ -501,7 +501,7 @@ fn draw_and_reference(
         .expect("draw");
     let reference = ReferenceRenderer::new(gpu, side, side, &ir.render).expect("reference");
     let expected = reference
-        .draw(&sprites(records, ir, camera.view, false), &camera)
+        .draw(&sprites(records, ir, &camera, false), &camera)
         .expect("reference draw");
     (drawn, expected)
 }

@@ -423,3 +423,63 @@ fn the_compute_splat_divides_at_each_pixel_where_the_projection_tilts() {
         "tilted projection: the splat differs from the raster draw: mean {mean}, max {max}, {over} over 2, 4x4 {local}"
     );
 }
+
+/// A sprite of `size` drawn at `distance` metres from the eye, its size measured in metres or
+/// in the image (`size_in`): the lit pixels' radius of gyration in pixels, after checking the
+/// GPU draw against the CPU-fed reference drawing and the compute splat against the raster.
+fn sprite_radius(gpu: &Gpu, distance: f64, size_in: &str, size: f64) -> f64 {
+    let src = format!(
+        r#"Effect(
+    name: "screen-size",
+    capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (0.0, 0.0, {distance}), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, {size})],
+                   background: (0.0, 0.0, 0.0), size_in: {size_in}),
+)"#
+    );
+    let effect = compile_str(&src, &CompileOptions::default())
+        .unwrap_or_else(|e| panic!("{}", e.render("s.ron", &src)));
+    let mut sim = Effect::new(gpu, effect).unwrap();
+    sim.run(1, |_| {}).unwrap();
+    let (gpu_img, cpu_img) = draw_both(&sim);
+    assert_matches_reference(&gpu_img, &cpu_img, size_in);
+    assert_splat_matches_raster(&sim, &gpu_img, size_in);
+    let (mut w, mut r2) = (0.0, 0.0);
+    let c = f64::from(SIDE) / 2.0 - 0.5;
+    for (k, p) in gpu_img.chunks(4).enumerate() {
+        let v = f64::from(p[0]);
+        let (x, y) = ((k as u32 % SIDE) as f64 - c, (k as u32 / SIDE) as f64 - c);
+        w += v;
+        r2 += v * (x * x + y * y);
+    }
+    assert!(w > 0.0, "{size_in} at {distance} m: nothing drawn");
+    (r2 / w).sqrt()
+}
+
+#[test]
+fn a_size_in_the_image_is_the_same_at_any_distance() {
+    let gpu = gpu();
+    // In the image: 0.1 of its height at 5 m and at 20 m, 40 pixels across in a 400-pixel
+    // image, its disc's radius of gyration the same within a pixel's rounding at the rim.
+    let (near, far) = (
+        sprite_radius(&gpu, 5.0, "Screen", 0.1),
+        sprite_radius(&gpu, 20.0, "Screen", 0.1),
+    );
+    assert!(
+        (near - far).abs() < 0.3,
+        "near {near:.2} px, far {far:.2} px"
+    );
+    // The soft disc's alpha (1 - r²)² weighs a radius-R disc's pixels to a radius of gyration
+    // of R / 2: R = 20 px.
+    assert!((near - 10.0).abs() < 0.5, "{near:.2} px, want 10");
+    // In metres the far one is four times smaller.
+    let (near_m, far_m) = (
+        sprite_radius(&gpu, 5.0, "World", 0.5),
+        sprite_radius(&gpu, 20.0, "World", 0.5),
+    );
+    assert!(
+        (near_m / far_m - 4.0).abs() < 0.2,
+        "near {near_m:.2} px, far {far_m:.2} px"
+    );
+}

@@ -77,12 +77,8 @@ fn draw_reference(sim: &Effect, w: u32, h: u32) -> Vec<u8> {
     let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
     let trails = plume::runtime::oracle::read_trails(sim).unwrap();
     let ribbons = plume::runtime::oracle::ribbons(&records, &trails, ir, camera.view);
-    r.draw_with_ribbons(
-        &ribbons,
-        &sprites(&records, ir, camera.view, false),
-        &camera,
-    )
-    .unwrap()
+    r.draw_with_ribbons(&ribbons, &sprites(&records, ir, &camera, false), &camera)
+        .unwrap()
 }
 
 /// Every example effect file of one group, in name order (tests/events.rs draws the ones
@@ -263,7 +259,7 @@ fn the_gpu_draw_matches_the_cpu_fed_drawing_for_every_example() {
             let ir = &sim.compiled().ir;
             let r = ReferenceRenderer::new(sim.gpu(), w, h, &ir.render).unwrap();
             let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
-            let ids = sprites(&sim.records().unwrap(), ir, camera.view, false);
+            let ids = sprites(&sim.records().unwrap(), ir, &camera, false);
             let wrong = differences(&gpu_img, &r.draw(&ids, &camera).unwrap(), 2);
             assert!(
                 !within(wrong, gpu_img.len()),

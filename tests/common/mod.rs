@@ -90,7 +90,7 @@ pub fn draw_group_and_reference(sim: &Effect, g: usize, side: u32) -> (Vec<u8>, 
     let reference = ReferenceRenderer::new(sim.gpu(), side, side, &ir.render).unwrap();
     let cpu_img = reference
         .draw(
-            &sprites(&sim.group_records(g).unwrap(), ir, camera.view, false),
+            &sprites(&sim.group_records(g).unwrap(), ir, &camera, false),
             &camera,
         )
         .unwrap();

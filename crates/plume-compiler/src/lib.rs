@@ -55,7 +55,9 @@ pub use compile::{
     compile_effect, compile_str, parse, parse_with, CompileError, CompileOptions, CompiledEffect,
 };
 pub use diagnostics::{Diagnostic, Diagnostics, Severity};
-pub use features::looks::{by_expression, glow, orient, rotation, texture, tint, trail};
+pub use features::looks::{
+    by_expression, glow, orient, rotation, screen_size, texture, tint, trail,
+};
 pub use features::{
     accuracy, attributes, bursts, colliders, emitter, events, field, forces, mesh_emission,
     placement,

@@ -101,6 +101,8 @@ pub struct RenderIr {
     pub background: DVec3,
     /// Which way sprites face.
     pub orient: crate::features::looks::orient::OrientIr,
+    /// What the size stops measure (metres, or fractions of the image's height).
+    pub size_in: crate::features::looks::screen_size::SizeIn,
     /// The sprite texture, loaded; None draws the soft round dot.
     pub texture: Option<crate::features::looks::texture::TextureIr>,
     /// Each sprite's turn in its plane, when the effect asks for one.

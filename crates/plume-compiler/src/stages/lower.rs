@@ -122,6 +122,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 blend: r.blend,
                 background: r.background.d(),
                 orient: crate::features::looks::orient::OrientIr::lower(&r.orient),
+                size_in: r.size_in,
                 // Loaded by `compile_effect`, which can report a file it cannot read.
                 texture: None,
                 rotation: r

@@ -253,6 +253,10 @@ pub struct Render {
     /// Which way each sprite faces: the camera, stretched along the velocity, or a fixed plane.
     #[serde(default)]
     pub orient: Orient,
+    /// What the size stops measure: metres (`World`) or fractions of the image's height
+    /// (`Screen`; see `features::looks::screen_size`).
+    #[serde(default)]
+    pub size_in: crate::features::looks::screen_size::SizeIn,
     /// A sprite texture (optionally a flipbook atlas) instead of the soft round dot.
     #[serde(default)]
     pub texture: Option<Texture>,
@@ -307,6 +311,7 @@ impl Default for Render {
             blend: Blend::Alpha,
             background: default_background(),
             orient: Orient::Camera,
+            size_in: Default::default(),
             texture: None,
             rotation: None,
             soft: None,

@@ -4,7 +4,7 @@
 //! a fixed sprite shader. This was Plume's only drawing path before the GPU draw; it now serves
 //! the tests (as the f64 reference serves the simulation), never `plume render`.
 
-use glam::{DVec3, Mat4};
+use glam::DVec3;
 use plume_compiler::by_expression::Seen;
 use plume_compiler::ir::{EffectIr, RenderIr};
 use plume_compiler::reference::ParticleRecord;
@@ -38,13 +38,19 @@ pub struct Sprite {
 
 /// Builds sprites from particle records: colour and size at each particle's life fraction
 /// (age / lifetime; 0 for particles that never die), the quad oriented as `render.orient` says
-/// for a camera with view matrix `view` and turned as `render.rotation` says, the flipbook
-/// frame for its age; back to front from the
+/// for `camera` (its view, and for sizes in the image, its projection) and turned as
+/// `render.rotation` says, the flipbook frame for its age; back to front from the
 /// effect's camera when `sort`. Non-finite particles are skipped.
-pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool) -> Vec<Sprite> {
+pub fn sprites(
+    records: &[ParticleRecord],
+    ir: &EffectIr,
+    camera_used: &crate::Camera,
+    sort: bool,
+) -> Vec<Sprite> {
     let (render, camera) = (&ir.render, &ir.camera);
+    let proj = camera_used.proj.as_dmat4();
     // The camera's right and up in world space: rows 0 and 1 of the view rotation.
-    let view = view.as_dmat4();
+    let view = camera_used.view.as_dmat4();
     let camera_right = DVec3::new(view.x_axis.x, view.y_axis.x, view.z_axis.x);
     let camera_up = DVec3::new(view.x_axis.y, view.y_axis.y, view.z_axis.y);
     // The eye: the view's inverse applied to the origin.
@@ -73,7 +79,13 @@ pub fn sprites(records: &[ParticleRecord], ir: &EffectIr, view: Mat4, sort: bool
             let alpha = render.by.alpha_factor(&seen, ir.seed_mix);
             let c = [c[0] * by.x, c[1] * by.y, c[2] * by.z, c[3] * alpha];
             let p = r.position;
-            let scale = render.by.size_factor(&seen, ir.seed_mix);
+            let scale = render.by.size_factor(&seen, ir.seed_mix)
+                * match render.size_in {
+                    plume_compiler::screen_size::SizeIn::World => 1.0,
+                    plume_compiler::screen_size::SizeIn::Screen => {
+                        plume_compiler::screen_size::metres_per_height(view, proj, r.position)
+                    }
+                };
             let (half_x, half_y) = render.orient.half_axes(
                 (render.size_at(t) * scale, render.height_at(t) * scale),
                 (r.velocity, camera_eye - p),

@@ -6,6 +6,7 @@ pub mod by_expression;
 pub mod glow;
 pub mod orient;
 pub mod rotation;
+pub mod screen_size;
 pub mod texture;
 pub mod tint;
 pub mod trail;

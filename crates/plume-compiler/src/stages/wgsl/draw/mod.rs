@@ -389,6 +389,9 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
             w.line("s.size_y = height_at(f) * draw.size_scale;");
         }
         emit_look_by(w, ir, layout, stateless);
+        if ir.render.size_in == crate::features::looks::screen_size::SizeIn::Screen {
+            crate::features::looks::screen_size::emit_scale(w, ir.render.size_y.is_some());
+        }
         let height = match ir.render.size_y.is_some() {
             true => "s.size_y",
             false => "s.size",
