@@ -135,3 +135,57 @@ fn the_factors_are_the_particles_own() {
     }
     assert!(sixths.iter().all(|&n| n > 10), "{sixths:?}");
 }
+
+#[test]
+fn color_t_reads_the_colour_stops_at_an_expressions_t() {
+    // Colour from speed through the file's own stops: slow particles red, fast ones blue,
+    // whatever their age. The GPU reads the stops where the CPU-fed reference drawing does.
+    let src = r#"Effect(
+    name: "by-speed",
+    capacity: 600,
+    seed: 3,
+    dt: 0.02,
+    emitters: [Emitter(burst: 300, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 0.5),
+        velocity: Radial(speed: (0.5, 6.0)), lifetime: Some((5.0, 5.0)))],
+    integrator: Exact,
+    camera: Camera(eye: (0.0, 0.0, 8.0), target: (0.0, 0.0, 0.0), fov_y: 50.0),
+    render: Render(color: [(0.0, (1.0, 0.0, 0.0, 1.0)), (1.0, (0.0, 0.0, 1.0, 1.0))],
+        size: [(0.0, 0.1)], background: (0.0, 0.0, 0.0), blend: Additive,
+        color_t: Some("clamp(length(v) / 6.0, 0.0, 1.0)")),
+)"#;
+    let effect = compile_str(src, &CompileOptions::default())
+        .unwrap_or_else(|e| panic!("{}", e.render("t.ron", src)));
+    let mut sim = Effect::new(&gpu(), effect).unwrap();
+    sim.run(10, |_| {}).unwrap();
+    let (gpu_img, cpu_img) = draw_and_reference(&sim, SIDE);
+    let (mean, max, over) = differences(&gpu_img, &cpu_img, 4);
+    assert!(
+        mean < 0.05 && over * 1000 < gpu_img.len(),
+        "GPU and CPU-fed draws differ: mean {mean}, max {max}, {over} over 4"
+    );
+    let splat = splat_image(&sim, SIDE);
+    let (mean, max, over) = differences(&gpu_img, &splat, 2);
+    assert!(
+        mean < 0.05 && over * 1000 < gpu_img.len(),
+        "splat: {mean} {max} {over}"
+    );
+    // The t is the speed's: the slowest particles sit near the red end, the fastest near blue.
+    let ir = &sim.compiled().ir;
+    let t: Vec<f64> = sim
+        .records()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            let seen = Seen {
+                v: r.velocity,
+                id: r.id,
+                ..Seen::default()
+            };
+            ir.render.by.color_t_at(&seen, ir.seed_mix).unwrap()
+        })
+        .collect();
+    let (lo, hi) = t
+        .iter()
+        .fold((1.0f64, 0.0f64), |(lo, hi), &t| (lo.min(t), hi.max(t)));
+    assert!(lo < 0.15 && hi > 0.85, "t from {lo} to {hi}");
+}

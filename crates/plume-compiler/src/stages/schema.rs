@@ -288,15 +288,20 @@ pub struct Render {
     /// An expression (f32) of the particle that its size is multiplied by.
     #[serde(default)]
     pub size_by: Option<String>,
+    /// An expression (f32) of the particle: the t at which its colour (and opacity) stops are
+    /// read instead of its life fraction (colour from speed, from heat), kept within [0, 1].
+    #[serde(default)]
+    pub color_t: Option<String>,
 }
 
 impl Render {
-    /// The strings of `color_by`, `alpha_by` and `size_by`.
+    /// The strings of `color_by`, `alpha_by`, `size_by` and `color_t`.
     pub fn written_by(&self) -> crate::features::looks::by_expression::Written<'_> {
         [
             self.color_by.as_deref(),
             self.alpha_by.as_deref(),
             self.size_by.as_deref(),
+            self.color_t.as_deref(),
         ]
     }
 }
@@ -321,6 +326,7 @@ impl Default for Render {
             color_by: None,
             alpha_by: None,
             size_by: None,
+            color_t: None,
         }
     }
 }

@@ -75,7 +75,7 @@ pub fn sprites(
                     .from_words(ir.kept_attributes(), &r.attributes),
             };
             let by = render.by.color_factor(&seen, ir.seed_mix) * r.tint;
-            let c = render.color_at(t);
+            let c = render.color_at(render.by.color_t_at(&seen, ir.seed_mix).unwrap_or(t));
             let alpha = render.by.alpha_factor(&seen, ir.seed_mix);
             let c = [c[0] * by.x, c[1] * by.y, c[2] * by.z, c[3] * alpha];
             let p = r.position;

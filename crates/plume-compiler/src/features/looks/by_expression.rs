@@ -34,6 +34,8 @@ pub struct LookBy {
     pub alpha: Option<Expr>,
     /// Multiplies the size (and the height, with `size_y`).
     pub size: Option<Expr>,
+    /// The t at which the colour (and opacity) stops are read, instead of the life fraction.
+    pub color_t: Option<Expr>,
 }
 
 /// What a particle is, for the f64 twins: position, velocity, age and lifetime (s; 0 for a
@@ -63,14 +65,15 @@ fn compile(text: &str, ty: Ty, role: &str, names: Names) -> Result<Expr, expr::E
     expr::compile_in(text, ty, &names.scope_with_attrs(VARS, role))
 }
 
-/// The render section's strings: `color_by`, `alpha_by` and `size_by`.
-pub type Written<'a> = [Option<&'a str>; 3];
+/// The render section's strings: `color_by`, `alpha_by`, `size_by` and `color_t`.
+pub type Written<'a> = [Option<&'a str>; 4];
 
 /// Each string's field, type and role, in [`Written`]'s order.
-const FIELDS: [(&str, Ty, &str); 3] = [
+const FIELDS: [(&str, Ty, &str); 4] = [
     ("color_by", Ty::Vec3, "a colour factor"),
     ("alpha_by", Ty::Scalar, "an opacity factor"),
     ("size_by", Ty::Scalar, "a size factor"),
+    ("color_t", Ty::Scalar, "a colour stop's t"),
 ];
 
 impl LookBy {
@@ -85,15 +88,24 @@ impl LookBy {
 
     /// Lowers the strings (after [`LookBy::check`] passed).
     pub fn lower(written: Written, names: Names) -> Self {
-        let [color, alpha, size] = std::array::from_fn(|i| {
+        let [color, alpha, size, color_t] = std::array::from_fn(|i| {
             let (_, ty, role) = FIELDS[i];
             written[i].map(|t| compile(t, ty, role, names).expect("checked before lowering"))
         });
-        Self { color, alpha, size }
+        Self {
+            color,
+            alpha,
+            size,
+            color_t,
+        }
     }
 
     fn exprs(&self) -> impl Iterator<Item = &Expr> {
-        self.color.iter().chain(&self.alpha).chain(&self.size)
+        self.color
+            .iter()
+            .chain(&self.alpha)
+            .chain(&self.size)
+            .chain(&self.color_t)
     }
 
     /// Whether any reads the particle's age or lifetime (the draw then needs its ages).
@@ -144,6 +156,12 @@ impl LookBy {
                 "clamp(VALUE, 0.0, 1.0)".to_string(),
             ),
             (&self.size, "size_by", "f32", "max(VALUE, 0.0)".to_string()),
+            (
+                &self.color_t,
+                "color_t",
+                "f32",
+                "clamp(VALUE, 0.0, 1.0)".to_string(),
+            ),
         ];
         for (e, name, ty, bounded) in fns {
             let Some(e) = e else { continue };
@@ -190,6 +208,13 @@ impl LookBy {
             Some(e) => eval(e, &Self::inputs(p, seed_mix)).s().clamp(0.0, 1.0),
             None => 1.0,
         }
+    }
+
+    /// The t at which particle `p`'s colour stops are read, when `color_t` gives one.
+    pub fn color_t_at(&self, p: &Seen, seed_mix: u32) -> Option<f64> {
+        self.color_t
+            .as_ref()
+            .map(|e| eval(e, &Self::inputs(p, seed_mix)).s().clamp(0.0, 1.0))
     }
 
     /// What the size is multiplied by for particle `p` (1 without `size_by`).

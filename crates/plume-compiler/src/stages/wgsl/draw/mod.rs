@@ -14,6 +14,7 @@
 //! frame from the particle's age).
 
 pub(crate) mod common;
+mod look_by;
 pub(crate) mod splat;
 
 use crate::base::writer::{f32_lit, u32_lit, Writer};
@@ -380,15 +381,27 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
         } else {
             crate::features::looks::tint::particle_wgsl(ir.tint(), "p", "p.id")
         };
+        // The look's expressions' arguments, once, before the colour when `color_t` picks its t.
+        let by_args = match ir.render.by.color_t.is_some() {
+            true => look_by::emit_by_args(w, ir, layout, stateless),
+            false => None,
+        };
+        let t = match by_args {
+            Some(ref args) => {
+                w.line(format!("let fc = color_t({args});"));
+                "fc"
+            }
+            None => "f",
+        };
         match tint {
-            Some(tint) => w.line(format!("s.color = color_at(f) * vec4<f32>({tint}, 1.0);")),
-            None => w.line("s.color = color_at(f);"),
+            Some(tint) => w.line(format!("s.color = color_at({t}) * vec4<f32>({tint}, 1.0);")),
+            None => w.line(format!("s.color = color_at({t});")),
         }
         w.line("s.size = size_at(f) * draw.size_scale;");
         if ir.render.size_y.is_some() {
             w.line("s.size_y = height_at(f) * draw.size_scale;");
         }
-        emit_look_by(w, ir, layout, stateless);
+        look_by::emit_look_by(w, ir, layout, stateless, by_args);
         if ir.render.size_in == crate::features::looks::screen_size::SizeIn::Screen {
             crate::features::looks::screen_size::emit_scale(w, ir.render.size_y.is_some());
         }
@@ -438,61 +451,6 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
         w.line("s.visible = true;");
         w.line("return s;");
     });
-}
-
-/// Multiplies `s.color`'s RGB and alpha and `s.size` (and `s.size_y`) inside `sprite_at` by the
-/// look's expressions (`render.color_by`, `alpha_by`, `size_by`), given the particle as the
-/// draw sees it.
-fn emit_look_by(w: &mut Writer, ir: &EffectIr, layout: &Layout, stateless: bool) {
-    let by = &ir.render.by;
-    if by == &Default::default() {
-        return;
-    }
-    let dt = f32_lit(ir.dt);
-    let (id, v) = match stateless {
-        true => ("e.id", "e.now.v".to_string()),
-        false if !by.reads_velocity() => ("p.id", "vec3<f32>(0.0)".to_string()),
-        false if layout.has(Attribute::Velocity) => ("p.id", "vec3<f32>(p.vx, p.vy, p.vz)".into()),
-        false => (
-            "p.id",
-            format!("vec3<f32>(p.dx, p.dy, p.dz) * {}", f32_lit(1.0 / ir.h())),
-        ),
-    };
-    if by.reads_age_or_life() {
-        match stateless {
-            true => {
-                w.line(
-                    "let by_life = select(0u, e.now.die_at - e.born + 1u, e.now.die_at != DEAD);",
-                );
-                w.line(format!(
-                    "let by_age = vec2<f32>(f32(e.age), f32(by_life)) * {dt};"
-                ));
-            }
-            false => w.line(format!("let by_age = vec2<f32>(age_steps(p)) * {dt};")),
-        }
-    } else {
-        w.line("let by_age = vec2<f32>(0.0);");
-    }
-    let attrs = ir.attributes.args_wgsl(ir.kept_attributes(), |i| {
-        let fields = layout.user_fields(i).unwrap_or(&[]);
-        fields.iter().map(|f| format!("p.{f}")).collect()
-    });
-    let args = format!("x, {v}, by_age.x, by_age.y, {id}{attrs}");
-    if by.color.is_some() {
-        w.line(format!(
-            "s.color = vec4<f32>(s.color.rgb * color_by({args}), s.color.a);"
-        ));
-    }
-    if by.alpha.is_some() {
-        w.line(format!("s.color.a = s.color.a * alpha_by({args});"));
-    }
-    if by.size.is_some() {
-        w.line(format!("let by_size = size_by({args});"));
-        w.line("s.size = s.size * by_size;");
-        if ir.render.size_y.is_some() {
-            w.line("s.size_y = s.size_y * by_size;");
-        }
-    }
 }
 
 /// The vertex shader `vs`: one instance per slot (or list entry), a quad (4-vertex strip) or a
