@@ -83,21 +83,9 @@ fn the_draws_colour_and_size_by_expression_as_the_reference_drawing_does() {
             sim.compiled().ir.stateless.is_some(),
             state == State::Stateless
         );
-        let (gpu_img, cpu_img) = draw_and_reference(&sim, SIDE);
+        let gpu_img = assert_draws_agree(&sim, SIDE, true, what);
         let lit = gpu_img.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
         assert!(lit > 500, "{what}: {lit} pixels drawn");
-        let (mean, max, over) = differences(&gpu_img, &cpu_img, 4);
-        assert!(
-            mean < 0.05 && over * 1000 < gpu_img.len(),
-            "{what}: GPU and CPU-fed draws differ: mean {mean}, max {max}, {over} over 4"
-        );
-        // The compute splat draws the same sprites.
-        let splat = splat_image(&sim, SIDE);
-        let (mean, max, over) = differences(&gpu_img, &splat, 2);
-        assert!(
-            mean < 0.05 && over * 1000 < gpu_img.len(),
-            "{what}: splat and raster differ: mean {mean}, max {max}, {over} over 2"
-        );
     }
 }
 
@@ -157,18 +145,7 @@ fn color_t_reads_the_colour_stops_at_an_expressions_t() {
         .unwrap_or_else(|e| panic!("{}", e.render("t.ron", src)));
     let mut sim = Effect::new(&gpu(), effect).unwrap();
     sim.run(10, |_| {}).unwrap();
-    let (gpu_img, cpu_img) = draw_and_reference(&sim, SIDE);
-    let (mean, max, over) = differences(&gpu_img, &cpu_img, 4);
-    assert!(
-        mean < 0.05 && over * 1000 < gpu_img.len(),
-        "GPU and CPU-fed draws differ: mean {mean}, max {max}, {over} over 4"
-    );
-    let splat = splat_image(&sim, SIDE);
-    let (mean, max, over) = differences(&gpu_img, &splat, 2);
-    assert!(
-        mean < 0.05 && over * 1000 < gpu_img.len(),
-        "splat: {mean} {max} {over}"
-    );
+    assert_draws_agree(&sim, SIDE, true, "colour by speed");
     // The t is the speed's: the slowest particles sit near the red end, the fastest near blue.
     let ir = &sim.compiled().ir;
     let t: Vec<f64> = sim
