@@ -710,3 +710,34 @@ fn drawn_burst_counts_and_gaps_are_uniform_and_the_same_on_the_gpu() {
     let (totals, _) = run_cpu(&e, 1200);
     assert!(totals.spawned > 100, "{totals:?}");
 }
+
+#[test]
+fn a_torus_spawns_on_its_surface_by_area_and_in_its_volume_uniformly() {
+    // A ring of radius 1 and tube 0.5 about z, on the GPU as in the reference (the Newton
+    // inversion of θ in f32 against f64 within TRIG). The outer half of the tube (cos θ > 0)
+    // holds 1/2 + r/(π R) of the surface's area and 1/2 + 2r/(3π R) of the volume.
+    let (big, tube) = (1.0, 0.5);
+    for (surface, outer) in [
+        (true, 0.5 + tube / (std::f64::consts::PI * big)),
+        (false, 0.5 + 2.0 * tube / (3.0 * std::f64::consts::PI * big)),
+    ] {
+        let points = positions(&format!(
+            "Torus(center: (0.0, 0.0, 0.0), axis: (0.0, 0.0, 1.0), radius: {big}, tube: {tube}, surface: {surface})"
+        ));
+        let mut outside = 0;
+        for p in &points {
+            let from_circle = (p.x.hypot(p.y) - big).hypot(p.z);
+            match surface {
+                true => assert!((from_circle - tube).abs() < 1e-5, "{p} is off the surface"),
+                false => assert!(from_circle <= tube + 1e-5, "{p} is outside the tube"),
+            }
+            outside += usize::from(p.x.hypot(p.y) > big);
+        }
+        assert_fraction(
+            &format!("outer half, surface: {surface}"),
+            outside,
+            points.len(),
+            outer,
+        );
+    }
+}

@@ -127,6 +127,10 @@ fn shape(flavor: Flavor) -> BoxedStrategy<String> {
             .prop_map(|(b, a, h, r0, r1, on)| format!(
                 "Cone(base: {b}, axis: {a}, height: {h}, base_radius: {r0}, top_radius: {r1}, surface: {on})"
             )),
+        (vec3(f, -2.0, 2.0), direction(f), num(f, 0.5, 2.0), num(f, 0.0, 0.45), any::<bool>())
+            .prop_map(|(c, a, r, t, on)| format!(
+                "Torus(center: {c}, axis: {a}, radius: {r}, tube: {t}, surface: {on})"
+            )),
         (
             vec3(f, -2.0, -0.5),
             vec3(f, 0.5, 2.0),

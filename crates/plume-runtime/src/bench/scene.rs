@@ -76,7 +76,9 @@ fn shape_centre(shape: &plume_compiler::schema::Shape) -> glam::DVec3 {
         Shape::Sphere { center, .. } => center.d(),
         Shape::Box { min, max, .. } => (min.d() + max.d()) * 0.5,
         Shape::Point(p) => p.d(),
-        Shape::Disc { center, .. } | Shape::Circle { center, .. } => center.d(),
+        Shape::Disc { center, .. } | Shape::Circle { center, .. } | Shape::Torus { center, .. } => {
+            center.d()
+        }
         Shape::Cone {
             base, axis, height, ..
         } => base.d() + axis.d().normalize_or_zero() * (0.5 * height),

@@ -9,6 +9,7 @@ mod expression;
 mod shape;
 mod shape_ir;
 mod timing;
+mod torus;
 mod velocity;
 
 use std::path::Path;

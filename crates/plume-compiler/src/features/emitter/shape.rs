@@ -79,6 +79,22 @@ pub enum Shape {
         #[serde(default)]
         surface: bool,
     },
+    /// Uniform in a torus's volume, or by area on its surface: a ring about `axis` through
+    /// `center`, its tube's centre circle `radius` wide and the tube `tube` thick (tube <
+    /// radius).
+    Torus {
+        /// Centre of the ring.
+        center: Vec3,
+        /// The ring's axis (any length but zero).
+        axis: Vec3,
+        /// Radius of the tube's centre circle (> 0).
+        radius: f64,
+        /// Radius of the tube (>= 0, less than `radius`).
+        tube: f64,
+        /// On the surface instead of in the volume.
+        #[serde(default)]
+        surface: bool,
+    },
     /// A position written as an expression of type vec3 (`features/emitter/expression.rs`): it
     /// reads `t` (the spawn's time), `rand(k)`, the params and `dt`.
     Custom(String),
@@ -205,6 +221,26 @@ impl Shape {
                 c.non_negative(&s.field("base_radius"), *base_radius);
                 c.non_negative(&s.field("top_radius"), *top_radius);
             }
+            Shape::Torus {
+                center,
+                axis,
+                radius,
+                tube,
+                ..
+            } => {
+                let s = path.variant("Torus");
+                c.vec3(&s.field("center"), *center);
+                c.direction(&s.field("axis"), *axis);
+                if c.positive(&s.field("radius"), *radius)
+                    && c.non_negative(&s.field("tube"), *tube)
+                    && tube >= radius
+                {
+                    c.error(
+                        &s.field("tube"),
+                        format!("must be less than radius ({radius}), got {tube}: a ring that thick has no hole"),
+                    );
+                }
+            }
             Shape::Grid { min, max, counts } => {
                 let s = path.variant("Grid");
                 c.box_corners(&s, *min, *max);
@@ -330,6 +366,23 @@ impl Shape {
                         basis,
                     },
                 }
+            }
+            Shape::Torus {
+                center,
+                axis,
+                radius,
+                tube,
+                surface,
+            } => {
+                let axis = safe_normalize(axis.d());
+                ShapeIr::Torus(super::torus::TorusIr {
+                    center: center.d(),
+                    axis,
+                    basis: Basis::around(axis),
+                    radius: *radius,
+                    tube: *tube,
+                    surface: *surface,
+                })
             }
             Shape::Cone {
                 base,

@@ -70,6 +70,8 @@ pub enum ShapeIr {
     },
     /// Uniform in a cone's volume (a frustum), or on its side.
     Cone(ConeIr),
+    /// Uniform in a torus's volume, or by area on its surface.
+    Torus(super::torus::TorusIr),
     /// Lattice: point (ix, iy, iz) is `origin + i * step` per axis.
     Grid {
         /// Position of lattice point (0, 0, 0).
@@ -132,6 +134,7 @@ impl ShapeIr {
             | ShapeIr::Circle { center, .. } => *center,
             ShapeIr::Box { min, max } | ShapeIr::BoxSurface { min, max, .. } => (*min + *max) * 0.5,
             ShapeIr::Cone(c) => c.base + c.axis * (0.5 * c.height),
+            ShapeIr::Torus(t) => t.center,
             ShapeIr::Grid {
                 origin,
                 step,
@@ -177,6 +180,7 @@ impl ShapeIr {
                     .max_element()
                     + c.wide
             }
+            ShapeIr::Torus(t) => t.center.abs().max_element() + t.radius + t.tube,
             ShapeIr::Grid {
                 origin,
                 step,
@@ -292,6 +296,7 @@ impl ShapeIr {
                 ));
             }
             ShapeIr::Cone(c) => c.emit_wgsl(w),
+            ShapeIr::Torus(t) => t.emit_wgsl(w),
             ShapeIr::Grid {
                 origin,
                 step,
@@ -386,6 +391,7 @@ impl ShapeIr {
                 *center + *radius * (phi.cos() * basis.t1 + phi.sin() * basis.t2)
             }
             ShapeIr::Cone(c) => c.sample(d),
+            ShapeIr::Torus(t) => t.sample(d),
             ShapeIr::Grid {
                 origin,
                 step,
