@@ -29,7 +29,7 @@ const BUCKET_GROUPS: u64 = 2048;
 /// holds at once: fewer idle workgroups for the usual few thousand firings, and fewer
 /// workgroups scanning the groups' counts in `bucket_place` when a million fire (fireworks at
 /// 10M slots 1.520x → 1.511x, 2M slots all firing 0.0976 → 0.0919 ms a step; 128 was no
-/// better: benchmarks/h100-events/2026-11-27-seventh/).
+/// better: benchmarks/h100-events/ordering-ab/).
 const BUCKET_WORKGROUPS: u64 = 256;
 
 /// One dispatch: a kernel, its bind group and its workgroups.
