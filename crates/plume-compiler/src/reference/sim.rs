@@ -93,6 +93,9 @@ pub struct ReferenceSim {
     /// Whether each particle's motion is rounded to 16-bit floats wherever the GPU would store
     /// it (spawn and the end of each step): the accuracy pass's model of a half-motion layout.
     motion_in_halves: bool,
+    /// The attributes its particles carry (`EffectIr::kept_attributes`, a bit set): fixed by
+    /// the IR's expressions, so found once.
+    kept: u64,
 }
 
 impl ReferenceSim {
@@ -112,6 +115,7 @@ impl ReferenceSim {
             // pass chose them (`AccuracyIr::half_motion`; never in a stateless effect).
             motion_in_halves: ir.stateless.is_none()
                 && ir.accuracy.as_ref().is_some_and(|a| a.half_motion),
+            kept: ir.kept_attributes(),
         }
     }
 
@@ -226,8 +230,7 @@ impl ReferenceSim {
 
     /// The kept attributes' values of particle `id`, spawned at `time` at `x` with velocity `v`.
     fn spawn_attrs(&self, x: DVec3, v: DVec3, time: f64, id: u32) -> crate::expr::eval::Attrs {
-        let kept = self.ir.kept_attributes();
-        self.ir.attributes.spawn_values(kept, x, v, time, id)
+        self.ir.attributes.spawn_values(self.kept, x, v, time, id)
     }
 
     fn initial_v(
@@ -354,7 +357,7 @@ impl ReferenceSim {
         let rest_speed = ir.rest_speed();
         let fired = &mut self.fired;
         let halves = self.motion_in_halves;
-        let kept = ir.kept_attributes();
+        let kept = self.kept;
         let changes = ir.attributes.iter_kept(kept).any(|(_, a)| a.changes());
         self.particles.retain_mut(|p| {
             let flock = frozen.get(index);
@@ -428,7 +431,7 @@ impl ReferenceSim {
     /// The live particles in id order, with velocity (Verlet's derived) and age.
     pub fn records(&self) -> Vec<ParticleRecord> {
         let h = self.ir.h();
-        let kept = self.ir.kept_attributes();
+        let kept = self.kept;
         let verlet = self.ir.integrator == Integrator::Verlet;
         self.particles
             .iter()
