@@ -389,7 +389,8 @@ impl Effect {
     /// group: custom forces read it at run time, with no recompiling. The effect must be
     /// compiled with `CompileOptions::live_params`; an unknown name is refused with the
     /// names there are, a value that is not finite or beyond ±1e18 (the range expressions
-    /// compute in) with why.
+    /// compute in) with why. A vector param (`"wind": (1.0, 0.0, 0.0)`) is set component by
+    /// component: `set_param("wind.x", 2.0)`.
     ///
     /// ```
     /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -407,6 +408,15 @@ impl Effect {
     /// lift.run(10, |_| {})?;
     /// assert!(lift.records()?.iter().all(|r| r.position.y > 0.0));
     /// assert!(lift.set_param("down", 1.0).unwrap_err().to_string().contains("up"));
+    ///
+    /// // A vector param, read whole as a vec3 and set by its components.
+    /// let source = r#"Effect(name: "drift", capacity: 4, params: {"wind": (0.0, 0.0, 0.0)},
+    ///     emitters: [Emitter(burst: 4, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    ///     forces: [Custom(accel: "wind")])"#;
+    /// let mut drift = Effect::from_source(&gpu, source, &live)?;
+    /// drift.set_param("wind.x", 3.0)?;
+    /// drift.run(10, |_| {})?;
+    /// assert!(drift.records()?.iter().all(|r| r.velocity.x > 0.0 && r.velocity.y == 0.0));
     /// # Ok(())
     /// # }
     /// ```
