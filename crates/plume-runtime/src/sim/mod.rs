@@ -4,13 +4,15 @@
 //! kernels, depth sort and spawn schedule) and steps, reads and times it, and [`events`] orders
 //! an event stream's firings for the child group, [`scene_depth`] binds the host's depth image
 //! for a `SceneDepth` collider, [`graph`] steps several groups and their
-//! streams together, and [`effect`] is the public [`effect::Effect`]: one group, or a graph.
+//! streams together, and [`effect`] is the public [`effect::Effect`]: one group, or a graph
+//! ([`effect_read`]: what it tells its host).
 //!
 //! Imports [`crate::device`] and [`crate::sort`]; never the draw.
 
 pub(crate) mod batch;
 pub(crate) mod bounds;
 pub(crate) mod effect;
+pub(crate) mod effect_read;
 pub(crate) mod events;
 pub(crate) mod flock;
 pub(crate) mod graph;
