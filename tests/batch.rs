@@ -499,7 +499,7 @@ fn draw_and_reference(
     let drawn = target
         .render(batch.effect(), &renderer, &camera)
         .expect("draw");
-    let reference = ReferenceRenderer::new(gpu, side, side, &ir.render).expect("reference");
+    let reference = ReferenceRenderer::new(gpu, side, side, ir).expect("reference");
     let expected = reference
         .draw(&sprites(records, ir, &camera, false), &camera)
         .expect("reference draw");

@@ -73,7 +73,7 @@ fn draw_reference(sim: &Effect, w: u32, h: u32) -> Vec<u8> {
             .flatten()
             .collect()
     };
-    let r = ReferenceRenderer::new(sim.gpu(), w, h, &ir.render).unwrap();
+    let r = ReferenceRenderer::new(sim.gpu(), w, h, ir).unwrap();
     let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
     let trails = plume::runtime::oracle::read_trails(sim).unwrap();
     let ribbons = plume::runtime::oracle::ribbons(&records, &trails, ir, camera.view);
@@ -257,7 +257,7 @@ fn the_gpu_draw_matches_the_cpu_fed_drawing_for_every_example() {
         if sim.compiled().ir.sort {
             // The comparison sees the order: the same particles drawn in id order fall outside.
             let ir = &sim.compiled().ir;
-            let r = ReferenceRenderer::new(sim.gpu(), w, h, &ir.render).unwrap();
+            let r = ReferenceRenderer::new(sim.gpu(), w, h, ir).unwrap();
             let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
             let ids = sprites(&sim.records().unwrap(), ir, &camera, false);
             let wrong = differences(&gpu_img, &r.draw(&ids, &camera).unwrap(), 2);

@@ -196,7 +196,7 @@ fn a_ribbon_passes_through_the_particles_previous_positions() {
     assert_eq!(near(&img, (x, y + 10.0)), 0);
     // The CPU-fed drawing of the same points (vertices placed in f64) draws the same ribbon:
     // corners that differ by f32 roundings move an edge pixel's coverage by a step or two.
-    let reference = ReferenceRenderer::new(&gpu, SIDE, SIDE, &effect.ir.render).unwrap();
+    let reference = ReferenceRenderer::new(&gpu, SIDE, SIDE, &effect.ir).unwrap();
     let records = sim.records().unwrap();
     let ribbons = oracle::ribbons(
         &records,

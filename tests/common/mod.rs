@@ -87,7 +87,7 @@ pub fn draw_group_and_reference(sim: &Effect, g: usize, side: u32) -> (Vec<u8>, 
     let target = Offscreen::new(sim.gpu(), side, side).unwrap();
     let renderer = group_renderer(sim, g, &target.target()).unwrap();
     let gpu_img = target.render(sim, &renderer, &camera).unwrap();
-    let reference = ReferenceRenderer::new(sim.gpu(), side, side, &ir.render).unwrap();
+    let reference = ReferenceRenderer::new(sim.gpu(), side, side, ir).unwrap();
     let cpu_img = reference
         .draw(
             &sprites(&sim.group_records(g).unwrap(), ir, &camera, false),

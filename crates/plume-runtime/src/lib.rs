@@ -40,6 +40,8 @@ pub use error::RuntimeError;
 /// The glam of [`Camera`]'s matrices (a host on another glam converts through
 /// `Mat4::from_cols_array`).
 pub use glam;
+/// The lights a lit look is drawn with ([`EffectRenderer::set_lights`]).
+pub use plume_compiler::lights::{LightSource, Lights};
 pub use sim::batch::{BatchInstance, EffectBatch};
 pub use sim::bounds::{BoundsWatch, LiveBounds};
 pub use sim::effect::Effect;

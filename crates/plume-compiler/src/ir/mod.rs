@@ -53,6 +53,9 @@ pub struct EffectIr {
     pub colliders: Vec<crate::features::colliders::ColliderIr>,
     /// Meshes drawn and not simulated (the file's `scene`; the first group's only).
     pub scene: Vec<crate::features::scene::SceneMeshIr>,
+    /// The lights the file names (the default ones when it names none): what a lit look is
+    /// drawn with unless a host passes its own.
+    pub lights: crate::features::lights::Lights,
     /// Kill volumes.
     pub kills: Vec<KillIr>,
     /// Whether a depth sort is requested.
@@ -117,6 +120,8 @@ pub struct RenderIr {
     pub palette: Option<Vec<DVec3>>,
     /// What each particle's colour and size are multiplied by (`by_expression.rs`).
     pub by: crate::features::looks::by_expression::LookBy,
+    /// Shading by the lights, when the sprites are lit (`lit.rs`).
+    pub lit: Option<crate::features::looks::lit::Lit>,
 }
 
 impl RenderIr {
@@ -534,6 +539,13 @@ impl fmt::Display for EffectIr {
         }
         if let Some(g) = self.render.glow {
             writeln!(f, "  glow {g:?}")?;
+        }
+        if let Some(lit) = self.render.lit {
+            writeln!(
+                f,
+                "  lit {:?} normals, wrap {}, emissive {}; {}",
+                lit.normals, lit.wrap, lit.emissive, self.lights
+            )?;
         }
         if let Some(t) = &self.render.trail {
             writeln!(

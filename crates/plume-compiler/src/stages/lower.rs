@@ -73,6 +73,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
         }),
         colliders: effect.collide.iter().map(Collider::lower).collect(),
         scene: effect.scene.iter().map(|m| m.lower()).collect(),
+        lights: crate::features::lights::Lights::lower(&effect.lights),
         kills: effect
             .kill
             .iter()
@@ -140,6 +141,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                     .as_ref()
                     .map(|p| p.iter().map(|c| c.d()).collect()),
                 by: crate::features::looks::by_expression::LookBy::lower(r.written_by(), scope),
+                lit: r.lit,
             }
         },
         bounds: effect.bounds.map(|b| (b.min.d(), b.max.d())),

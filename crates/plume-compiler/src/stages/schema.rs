@@ -149,6 +149,11 @@ pub struct Effect {
     /// in `plume render` and `plume preview` (see [`crate::features::scene`]).
     #[serde(default)]
     pub scene: Vec<crate::features::scene::SceneMesh>,
+    /// What lights the sprites of a lit look (`render.lit`): directional, point and ambient
+    /// lights (see [`crate::features::lights`]); a white sun and some ambient light when none
+    /// is named.
+    #[serde(default)]
+    pub lights: Vec<crate::features::lights::Light>,
     /// Draw back to front as seen from `camera`.
     #[serde(default)]
     pub sort: bool,
@@ -292,6 +297,10 @@ pub struct Render {
     /// read instead of its life fraction (colour from speed, from heat), kept within [0, 1].
     #[serde(default)]
     pub color_t: Option<String>,
+    /// Sprites shaded by the effect's lights, with a normal at every pixel (see
+    /// `features::looks::lit`).
+    #[serde(default)]
+    pub lit: Option<crate::features::looks::lit::Lit>,
 }
 
 impl Render {
@@ -327,6 +336,7 @@ impl Default for Render {
             alpha_by: None,
             size_by: None,
             color_t: None,
+            lit: None,
         }
     }
 }

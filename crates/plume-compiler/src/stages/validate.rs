@@ -108,6 +108,7 @@ pub fn check_effect(effect: &Effect) -> Checker {
         c.positive(&root.field("max_speed"), s);
     }
     crate::features::scene::check(&effect.scene, &mut c);
+    crate::features::lights::check(&effect.lights, &mut c);
     let mut scene_depths = 0;
     for (i, collider) in effect.collide.iter().enumerate() {
         let path = crate::features::colliders::collider_path(i, collider);
@@ -352,6 +353,9 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Re
     }
     if let Some(t) = &r.trail {
         check_trail(c, &path.field("trail"), t);
+    }
+    if let Some(lit) = &r.lit {
+        lit.check(&path.field("lit"), c);
     }
     if let Some(palette) = &r.palette {
         crate::features::looks::tint::check_palette(c, &path.field("palette"), palette);

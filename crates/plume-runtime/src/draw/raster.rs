@@ -16,6 +16,7 @@
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
+use plume_compiler::lights::{Lights, LIGHTS_BINDING, LIGHTS_BYTES};
 use plume_compiler::schema::Blend;
 use plume_compiler::wgsl::batch::INSTANCE_MODELS_BINDING;
 use plume_compiler::wgsl::draw::{DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
@@ -110,6 +111,8 @@ pub(crate) struct GroupDraw {
     soft: bool,
     /// The ribbons (`render.trail`), drawn before the sprites.
     trail: Option<TrailDraw>,
+    /// The lights uniform of a lit look (`render.lit`).
+    lights: Option<wgpu::Buffer>,
     instances: Instances,
     /// Vertices per sprite (4: a quad strip; 3: a triangle).
     vertices: u32,
@@ -174,6 +177,10 @@ impl GroupDraw {
             mapped_at_creation: false,
         });
         entries.push((0, view.clone()));
+        let lights = lights_uniform(gpu, effect)?;
+        if let Some(lights) = &lights {
+            entries.push((LIGHTS_BINDING, lights.clone()));
+        }
         let texture = match &effect.ir.render.texture {
             Some(t) => Some(SpriteTexture::new(gpu, t)?),
             None => None,
@@ -226,6 +233,7 @@ impl GroupDraw {
             texture,
             soft,
             trail,
+            lights,
             instances,
             vertices: options.primitive.vertices(),
             size_scale: 1.0,
@@ -259,6 +267,11 @@ impl GroupDraw {
     /// Scales every sprite's size (1: the effect's own sizes).
     pub(crate) fn set_size_scale(&mut self, scale: f32) {
         self.size_scale = scale;
+    }
+
+    /// Lights a lit look with `lights` from the next frame on; nothing for an unlit one.
+    pub(crate) fn set_lights(&self, lights: &Lights) {
+        write_lights(&self.gpu, self.lights.as_ref(), lights);
     }
 
     /// Records the frame's `DrawView` (camera and steps done) into `encoder`, as a copy, so
@@ -454,6 +467,33 @@ pub(crate) fn draw_module(
         entries.push((INSTANCE_MODELS_BINDING, models.clone()));
     }
     Ok((module, entries))
+}
+
+/// The lights uniform of a lit effect (`render.lit`), holding the effect's own lights; None
+/// for an unlit one.
+pub(crate) fn lights_uniform(
+    gpu: &Gpu,
+    effect: &CompiledEffect,
+) -> Result<Option<wgpu::Buffer>, RuntimeError> {
+    if effect.ir.render.lit.is_none() {
+        return Ok(None);
+    }
+    let bytes = effect.ir.lights.uniform_bytes();
+    let buffer = filled_buffer(
+        gpu,
+        "lights",
+        LIGHTS_BYTES,
+        wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+        |b| b.copy_from_slice(&bytes),
+    )?;
+    Ok(Some(buffer))
+}
+
+/// Writes `lights` into a lights uniform (none: an unlit look, nothing to write).
+pub(crate) fn write_lights(gpu: &Gpu, buffer: Option<&wgpu::Buffer>, lights: &Lights) {
+    if let Some(buffer) = buffer {
+        gpu.queue.write_buffer(buffer, 0, &lights.uniform_bytes());
+    }
 }
 
 /// Records a copy of the `DrawView` uniform (camera, steps done, size scale) into `view` in

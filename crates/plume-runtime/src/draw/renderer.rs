@@ -114,6 +114,41 @@ impl EffectRenderer {
         }
     }
 
+    /// Lights the sprites of every group whose look is lit (`render.lit`) with `lights`, in
+    /// world space, from the next frame on: a host's own lights (the Bevy plugin passes
+    /// Bevy's). Until the first call they are the effect file's `lights` (or, where it names
+    /// none, the default sun and ambient light). Does nothing for unlit groups.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{glam, DrawTarget, Effect, Gpu, LightSource, Lights};
+    /// let source = r#"Effect(name: "puffs", capacity: 8,
+    ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    ///     render: Render(lit: Some(Lit(normals: Sphere))))"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let puffs = Effect::from_source(&gpu, source, &Default::default())?;
+    /// let mut particles = puffs.renderer(&DrawTarget::new(wgpu::TextureFormat::Rgba8Unorm))?;
+    /// // A red lamp 2 m above, and a little grey ambient light.
+    /// particles.set_lights(&Lights {
+    ///     ambient: glam::DVec3::splat(0.1),
+    ///     sources: vec![LightSource::Point {
+    ///         position: glam::DVec3::new(0.0, 2.0, 0.0),
+    ///         color: glam::DVec3::new(4.0, 0.5, 0.5),
+    ///         range: 10.0,
+    ///     }],
+    /// });
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn set_lights(&mut self, lights: &plume_compiler::lights::Lights) {
+        if let Some(compute) = &self.compute {
+            compute.set_lights(lights);
+        }
+        for (_, part) in &self.parts {
+            part.set_lights(lights);
+        }
+    }
+
     /// The first group this renderer draws (the top-level one, unless it draws one group
     /// alone): whose background a headless image is cleared to.
     pub(crate) fn first_group(&self) -> usize {

@@ -5,6 +5,11 @@
 struct Camera {
     view: mat4x4<f32>,
     proj: mat4x4<f32>,
+    // The eye in world space (w = 1), or for an orthographic camera the world direction
+    // toward the viewer (w = 0).
+    eye: vec4<f32>,
+    // A lit look (render.lit): (1 when lit, 1 for sphere normals, wrap, emissive).
+    lit: vec4<f32>,
 }
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -12,11 +17,69 @@ struct Camera {
 @group(0) @binding(1) var sprite_texture: texture_2d<f32>;
 @group(0) @binding(2) var sprite_sampler: sampler;
 
+// The lights in world space: (direction the light travels, 0) or (position, 1), and
+// (colour times intensity, range).
+struct Source {
+    place: vec4<f32>,
+    color: vec4<f32>,
+}
+
+struct Lights {
+    ambient: vec4<f32>,
+    count: vec4<u32>,
+    sources: array<Source, 8>,
+}
+
+@group(0) @binding(3) var<uniform> lights: Lights;
+
 struct Out {
     @builtin(position) clip: vec4<f32>,
     @location(0) uv: vec2<f32>,
     @location(1) color: vec4<f32>,
     @location(2) @interpolate(flat) texels: vec4<f32>,
+    // The pixel's point and the quad's half axes, in world space.
+    @location(3) world: vec3<f32>,
+    @location(4) @interpolate(flat) half_x: vec3<f32>,
+    @location(5) @interpolate(flat) half_y: vec3<f32>,
+}
+
+// A lit sprite's colour at corner coordinates uv, point p (world space): the normal of its
+// flat quad or of a half sphere over it, facing the viewer; ambient light plus each source's
+// light times max((n . l + wrap) / (1 + wrap), 0), a point light's falling off as 1 / d^2
+// (d no less than 10 cm) and to zero at its range; the emissive part unlit.
+fn lit(c: vec4<f32>, uv: vec2<f32>, half_x: vec3<f32>, half_y: vec3<f32>, p: vec3<f32>) -> vec4<f32> {
+    if (camera.lit.x == 0.0) {
+        return c;
+    }
+    let ux = normalize(half_x);
+    let uy = normalize(half_y);
+    var facing = normalize(cross(ux, uy));
+    let toward_eye = select(camera.eye.xyz, camera.eye.xyz - p, camera.eye.w == 1.0);
+    if (dot(facing, toward_eye) < 0.0) {
+        facing = -facing;
+    }
+    var n = facing;
+    if (camera.lit.y == 1.0) {
+        n = normalize(uv.x * ux + uv.y * uy + sqrt(max(1.0 - dot(uv, uv), 0.0)) * facing);
+    }
+    let wrap = camera.lit.z;
+    var light = lights.ambient.rgb;
+    for (var i = 0u; i < min(lights.count.x, 8u); i++) {
+        let s = lights.sources[i];
+        var toward = -s.place.xyz * inverseSqrt(max(dot(s.place.xyz, s.place.xyz), 1e-30));
+        var color = s.color.rgb;
+        if (s.place.w > 0.5) {
+            let d = s.place.xyz - p;
+            let d2 = max(dot(d, d), 0.01);
+            toward = d / sqrt(d2);
+            let q = d2 / (s.color.w * s.color.w);
+            let window = clamp(1.0 - q * q, 0.0, 1.0);
+            color = color * window * window / d2;
+        }
+        light += color * max((dot(n, toward) + wrap) / (1.0 + wrap), 0.0);
+    }
+    let emissive = camera.lit.w;
+    return vec4<f32>(c.rgb * (emissive + (1.0 - emissive) * light), c.a);
 }
 
 @vertex
@@ -42,6 +105,9 @@ fn vs(
     out.uv = uv;
     out.color = color;
     out.texels = texels;
+    out.world = corner;
+    out.half_x = half_x;
+    out.half_y = half_y;
     return out;
 }
 
@@ -60,7 +126,8 @@ fn fs(in: Out) -> @location(0) vec4<f32> {
         let rho = max(length(gx * size), length(gy * size));
         let half_texel = min(0.5 * in.texels.zw, vec2<f32>(0.5 * exp2(ceil(log2(max(rho, 1.0))))));
         let at = in.texels.xy + clamp(local, half_texel, in.texels.zw - half_texel);
-        return in.color * textureSampleGrad(sprite_texture, sprite_sampler, at / size, gx, gy);
+        let texel = in.color * textureSampleGrad(sprite_texture, sprite_sampler, at / size, gx, gy);
+        return lit(texel, in.uv, in.half_x, in.half_y, in.world);
     }
     let r2 = dot(in.uv, in.uv);
     if (r2 >= 1.0) {
@@ -68,5 +135,5 @@ fn fs(in: Out) -> @location(0) vec4<f32> {
     }
     // Soft round falloff: full at the centre, zero at the rim.
     let falloff = (1.0 - r2) * (1.0 - r2);
-    return vec4<f32>(in.color.rgb, in.color.a * falloff);
+    return lit(vec4<f32>(in.color.rgb, in.color.a * falloff), in.uv, in.half_x, in.half_y, in.world);
 }

@@ -129,26 +129,29 @@ pub fn sprites(
 /// Bytes of one sprite instance: three vec3 and two vec4 of f32.
 const SPRITE_BYTES: u64 = 68;
 
+/// Bytes of the reference camera uniform: view and projection (128), the eye and the lit
+/// look's terms (`reference_sprite.wgsl`'s `Camera`).
+const CAMERA_BYTES: u64 = 160;
+
 /// A render target and the reference sprite pipeline for one image size and blend mode.
 pub struct ReferenceRenderer {
     gpu: Gpu,
     target: Offscreen,
     pipeline: wgpu::RenderPipeline,
     camera: wgpu::Buffer,
+    lights: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     ribbons: RibbonPipeline,
     background: DVec3,
+    /// (1 when lit, 1 for sphere normals, wrap, emissive).
+    lit: [f32; 4],
 }
 
 impl ReferenceRenderer {
-    /// A renderer of `width` x `height` images with the blending, background and texture of
-    /// `render`.
-    pub fn new(
-        gpu: &Gpu,
-        width: u32,
-        height: u32,
-        render: &RenderIr,
-    ) -> Result<Self, RuntimeError> {
+    /// A renderer of `width` x `height` images with the blending, background, texture and
+    /// lighting (`render.lit`, by the effect's lights) of `ir`.
+    pub fn new(gpu: &Gpu, width: u32, height: u32, ir: &EffectIr) -> Result<Self, RuntimeError> {
+        let render: &RenderIr = &ir.render;
         let (blend, background) = (render.blend, render.background);
         let target = Offscreen::new(gpu, width, height)?;
         let device = &gpu.device;
@@ -159,10 +162,18 @@ impl ReferenceRenderer {
         );
         let camera = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("camera"),
-            size: 128,
+            size: CAMERA_BYTES,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let lights = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lights"),
+            size: plume_compiler::lights::LIGHTS_BYTES,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        gpu.queue
+            .write_buffer(&lights, 0, &ir.lights.uniform_bytes());
         let texture = match &render.texture {
             Some(t) => SpriteTexture::new(gpu, t)?,
             // Bound but never sampled: the sprites' texel rectangles are empty.
@@ -173,11 +184,23 @@ impl ReferenceRenderer {
             entries: &[
                 wgpu::BindGroupLayoutEntry {
                     binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX,
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: false,
-                        min_binding_size: wgpu::BufferSize::new(128),
+                        min_binding_size: wgpu::BufferSize::new(CAMERA_BYTES),
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 3,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: false,
+                        min_binding_size: wgpu::BufferSize::new(
+                            plume_compiler::lights::LIGHTS_BYTES,
+                        ),
                     },
                     count: None,
                 },
@@ -215,6 +238,10 @@ impl ReferenceRenderer {
                     binding: 2,
                     resource: wgpu::BindingResource::Sampler(&texture.sampler),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 3,
+                    resource: lights.as_entire_binding(),
+                },
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -238,15 +265,34 @@ impl ReferenceRenderer {
         );
         let ribbons = RibbonPipeline::new(gpu, blend, &camera);
         gpu.take_error()?;
+        let lit = render.lit.map_or([0.0; 4], |lit| {
+            let sphere = lit.normals == plume_compiler::lit::Normals::Sphere;
+            [
+                1.0,
+                f32::from(u8::from(sphere)),
+                lit.wrap as f32,
+                lit.emissive as f32,
+            ]
+        });
         Ok(Self {
             gpu: gpu.clone(),
             target,
             pipeline,
             camera,
+            lights,
             bind_group,
             ribbons,
             background,
+            lit,
         })
+    }
+
+    /// Draws a lit look with `lights` instead of the effect's own (as a host's
+    /// `EffectRenderer::set_lights` does).
+    pub fn set_lights(&self, lights: &plume_compiler::lights::Lights) {
+        self.gpu
+            .queue
+            .write_buffer(&self.lights, 0, &lights.uniform_bytes());
     }
 
     /// Draws `sprites` in order over the background as seen from `camera`; returns RGBA8 rows.
@@ -263,11 +309,20 @@ impl ReferenceRenderer {
         camera: &Camera,
     ) -> Result<Vec<u8>, RuntimeError> {
         let device = &self.gpu.device;
-        let mut cam = Vec::with_capacity(128);
+        let mut cam = Vec::with_capacity(CAMERA_BYTES as usize);
         for m in [camera.view, camera.proj] {
             for x in m.to_cols_array() {
                 cam.extend_from_slice(&x.to_le_bytes());
             }
+        }
+        // The eye (perspective), or the world direction toward the viewer (orthographic).
+        let view = camera.view.as_dmat4();
+        let eye = match camera.proj.w_axis.w == 1.0 {
+            true => DVec3::new(view.x_axis.z, view.y_axis.z, view.z_axis.z).extend(0.0),
+            false => view.inverse().transform_point3(DVec3::ZERO).extend(1.0),
+        };
+        for x in eye.to_array().map(|x| x as f32).into_iter().chain(self.lit) {
+            cam.extend_from_slice(&x.to_le_bytes());
         }
         self.gpu.queue.write_buffer(&self.camera, 0, &cam);
         let mut instances = Vec::with_capacity(sprites.len() * SPRITE_BYTES as usize);

@@ -4,6 +4,7 @@
 
 pub mod by_expression;
 pub mod glow;
+pub mod lit;
 pub mod orient;
 pub mod rotation;
 pub mod screen_size;

@@ -17,11 +17,14 @@ use super::quad_raster::{MergeTargets, QuadGroups, QuadRaster};
 use crate::device::buffers::STORAGE;
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
-use crate::draw::raster::{draw_module, draw_shape, record_draw_view};
+use crate::draw::raster::{
+    draw_module, draw_shape, lights_uniform, record_draw_view, write_lights,
+};
 use crate::draw::texture::SpriteTexture;
 use crate::error::RuntimeError;
 use crate::sim::group::Group;
 use crate::sort::radix::{GpuSorter, SortProgram};
+use plume_compiler::lights::{Lights, LIGHTS_BINDING};
 
 /// The tile kernels (`splat.wgsl`), their shared layout, and the buffers whose size does not
 /// depend on the number of entries.
@@ -81,6 +84,8 @@ pub(crate) struct GroupSplat {
     /// Sprites projected: one per slot of the capacity (hidden ones touch no tile).
     count: u32,
     draw_view: wgpu::Buffer,
+    /// The lights uniform of a lit look's quads (`render.lit`).
+    lights: Option<wgpu::Buffer>,
     project: wgpu::ComputePipeline,
     project_group: wgpu::BindGroup,
     /// The scan of the counts into the entries' offsets (sorted lists only).
@@ -157,7 +162,9 @@ impl GroupSplat {
             (true, _) => 4,
             // Ribbon segments are made again where they are used, not stored.
             (false, true) => 0,
-            (false, false) => splat_quad_words(image.host.is_some()),
+            (false, false) => {
+                splat_quad_words(image.host.is_some(), effect.ir.render.lit.is_some())
+            }
         };
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
         // Additive discs: each tile's list split over slices (`splat.wgsl`'s raster), whose
@@ -256,6 +263,17 @@ impl GroupSplat {
                 reads.push((0, draw_view.clone()));
             }
         }
+        // A lit look's composite shades each pixel by the lights, in the view.
+        let lights = match ribbons {
+            true => None,
+            false => lights_uniform(&gpu, effect)?,
+        };
+        if let Some(lights) = &lights {
+            reads.push((LIGHTS_BINDING, lights.clone()));
+            if !reads.iter().any(|(b, _)| *b == 0) {
+                reads.push((0, draw_view.clone()));
+            }
+        }
         if !ribbons {
             entries.push((b_splats, tiles.splats.clone()));
         }
@@ -320,6 +338,7 @@ impl GroupSplat {
             tiles_y,
             count,
             draw_view,
+            lights,
             project,
             project_group,
             scan,
@@ -431,6 +450,11 @@ impl GroupSplat {
             steps,
             size_scale,
         )
+    }
+
+    /// Lights a lit look's quads with `lights` from the next frame on.
+    pub(crate) fn set_lights(&self, lights: &Lights) {
+        write_lights(&self.gpu, self.lights.as_ref(), lights);
     }
 
     /// Records the splat itself into `pass`: project, scan, entries, sort, ranges, raster.

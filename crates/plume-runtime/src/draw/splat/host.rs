@@ -182,6 +182,11 @@ impl HostSplat {
         self.lock().splat.size_scale = scale;
     }
 
+    /// Lights the lit groups' sprites with `lights`.
+    pub(crate) fn set_lights(&self, lights: &plume_compiler::lights::Lights) {
+        self.lock().splat.set_lights(lights);
+    }
+
     /// The image size the renderer draws.
     pub(crate) fn size(&self) -> (u32, u32) {
         (self.width, self.height)

@@ -319,6 +319,14 @@ impl Splat {
         Ok(true)
     }
 
+    /// Lights every lit group's sprites with `lights` from the next frame on (each group
+    /// starts with its effect file's lights).
+    pub fn set_lights(&self, lights: &plume_compiler::lights::Lights) {
+        for (_, part) in &self.parts {
+            part.set_lights(lights);
+        }
+    }
+
     /// The image size.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)

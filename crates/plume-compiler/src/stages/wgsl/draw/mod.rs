@@ -277,6 +277,10 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
             .by
             .emit_fns(&mut w, &ir.attributes.params_wgsl(kept));
     }
+    if let Some(lit) = &ir.render.lit {
+        w.blank();
+        lit.emit_lit_color(&mut w);
+    }
     w.blank();
     emit_sprite_at(&mut w, ir, layout, shape, life);
     if let Some(t) = texture {
@@ -284,9 +288,16 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         t.emit_texel_fn(&mut w);
     }
     w.blank();
-    emit_vertex(&mut w, shape, ir.render.turns_quad(), texture.is_some());
+    let lit = ir.render.lit.is_some();
+    emit_vertex(
+        &mut w,
+        shape,
+        ir.render.turns_quad(),
+        texture.is_some(),
+        lit,
+    );
     w.blank();
-    emit_fragment(&mut w, texture, soft.is_some(), layout.batched);
+    emit_fragment(&mut w, texture, soft.is_some(), lit, layout.batched);
     if shape.splat {
         w.blank();
         if splat_discs(ir, shape.hdr) {
@@ -455,13 +466,19 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
 
 /// The vertex shader `vs`: one instance per slot (or list entry), a quad (4-vertex strip) or a
 /// triangle around the disc per sprite.
-fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool, textured: bool) {
+fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool, textured: bool, lit: bool) {
     w.block("struct Sprite", |w| {
         w.line("@builtin(position) clip: vec4<f32>,");
         w.line("@location(0) uv: vec2<f32>,");
         w.line("@location(1) color: vec4<f32>,");
         if textured {
             w.line("@location(2) @interpolate(flat) frame: u32,");
+        }
+        if lit {
+            w.comment("A lit sprite's point and half axes in view space (render.lit).");
+            w.line("@location(3) view_pos: vec3<f32>,");
+            w.line("@location(4) @interpolate(flat) axis_x: vec3<f32>,");
+            w.line("@location(5) @interpolate(flat) axis_y: vec3<f32>,");
         }
     });
     w.blank();
@@ -475,6 +492,11 @@ fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool, textured: bool
             w.line("out.color = vec4<f32>(0.0);");
             if textured {
                 w.line("out.frame = 0u;");
+            }
+            if lit {
+                w.line("out.view_pos = vec3<f32>(0.0);");
+                w.line("out.axis_x = vec3<f32>(1.0, 0.0, 0.0);");
+                w.line("out.axis_y = vec3<f32>(0.0, 1.0, 0.0);");
             }
             w.line("let s = sprite_at(instance);");
             w.block("if (!s.visible)", |w| w.line("return out;"));
@@ -501,6 +523,16 @@ fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool, textured: bool
             if textured {
                 w.line("out.frame = s.frame;");
             }
+            if lit {
+                if oriented {
+                    w.line("out.axis_x = s.half_x;");
+                    w.line("out.axis_y = s.half_y;");
+                } else {
+                    w.line("out.axis_x = vec3<f32>(0.5 * s.size, 0.0, 0.0);");
+                    w.line("out.axis_y = vec3<f32>(0.0, 0.5 * s.size, 0.0);");
+                }
+                w.line("out.view_pos = s.center.xyz + corner.x * out.axis_x + corner.y * out.axis_y;");
+            }
             w.line("return out;");
         },
     );
@@ -508,11 +540,13 @@ fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool, textured: bool
 
 /// The fragment shader `fs`: the texture's frame times the colour ([`crate::features::looks::texture`]), or a
 /// soft round sprite, alpha a (1 − r²)², nothing at r >= 1.
-/// With `soft`, that colour comes from `shade` and `fs` fades its alpha by `soft_fade`.
+/// With `soft` or `lit`, that colour comes from `shade`, and `fs` shades it by the lights
+/// (`lit_color`) and fades its alpha by `soft_fade`.
 fn emit_fragment(
     w: &mut Writer,
     texture: Option<&crate::features::looks::texture::TextureIr>,
     soft: bool,
+    lit: bool,
     batched: bool,
 ) {
     // A batch's draw reads the camera through its private copy (see `wgsl::batch`).
@@ -521,7 +555,7 @@ fn emit_fragment(
             w.line("draw = draw_uniform;");
         }
     };
-    if soft {
+    if soft || lit {
         w.block("fn shade(in: Sprite) -> vec4<f32>", |w| {
             emit_shade(w, texture)
         });
@@ -529,8 +563,15 @@ fn emit_fragment(
         w.line("@fragment");
         w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
             take_view(w);
-            w.line("let c = shade(in);");
-            w.line("return vec4<f32>(c.rgb, c.a * soft_fade(in.clip));");
+            if lit {
+                w.line("let c = lit_color(shade(in), in.uv, in.axis_x, in.axis_y, in.view_pos);");
+            } else {
+                w.line("let c = shade(in);");
+            }
+            match soft {
+                true => w.line("return vec4<f32>(c.rgb, c.a * soft_fade(in.clip));"),
+                false => w.line("return c;"),
+            }
         });
     } else {
         w.line("@fragment");

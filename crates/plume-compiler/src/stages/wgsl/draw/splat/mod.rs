@@ -34,6 +34,7 @@ pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
     ir.render.orient == OrientIr::Camera
         && ir.render.texture.is_none()
         && ir.render.size_y.is_none()
+        && ir.render.lit.is_none()
         && !hdr
 }
 
@@ -54,14 +55,18 @@ pub fn splat_hdr_pitch(width: u32) -> u32 {
 
 /// 32-bit words of a quad's record: rows of the pixel-to-corner map (xyz) with the colour's
 /// red, green and blue (w); for a host's image (`host`) the quad's clip-space depth terms
-/// (centre, x and y half axes), from which a pixel's depth follows; last, alpha, the flipbook
-/// frame and the pixel box's two corners.
-pub fn splat_quad_words(host: bool) -> u64 {
-    if host {
-        20
-    } else {
-        16
-    }
+/// (centre, x and y half axes), from which a pixel's depth follows; for a lit look (`lit`)
+/// the quad's half axes and centre in view space, which its normal and the light at a pixel
+/// follow from ([`lit_record_row`]); last, alpha, the flipbook frame and the pixel box's two
+/// corners.
+pub fn splat_quad_words(host: bool, lit: bool) -> u64 {
+    16 + if host { 4 } else { 0 } + if lit { 12 } else { 0 }
+}
+
+/// The first of a lit quad record's three vec4s: (half x axis, centre x), (half y axis,
+/// centre y), (centre z, 0, 0, 0), in view space; after the host's depth terms when there are.
+pub(crate) fn lit_record_row(host: bool) -> u32 {
+    3 + u32::from(host)
 }
 
 /// How the splat meets a host's image (the embedding API's compute draw): the image keeps each

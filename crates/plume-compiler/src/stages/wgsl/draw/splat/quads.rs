@@ -6,7 +6,7 @@
 
 use super::composite::{self, emit_composite};
 use super::masks;
-use super::{emit_project_kernel, host_depth, splat_quad_words, splat_slices};
+use super::{emit_project_kernel, host_depth, lit_record_row, splat_quad_words, splat_slices};
 use crate::base::writer::{f32_lit, Writer};
 use crate::features::looks::orient::OrientIr;
 use crate::features::looks::COLOR_MOST;
@@ -36,7 +36,8 @@ pub const SPLAT_FLAT_VIEW: &str = "FLAT_VIEW";
 /// rasteriser would clip it to the part inside). For a host's image (`host`) the record also
 /// holds the clip-space depth terms a pixel's depth is found from (a vec4 before the last).
 pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr, host: bool) {
-    let vec4s = splat_quad_words(host) / 4;
+    let lit = ir.render.lit.is_some();
+    let vec4s = splat_quad_words(host, lit) / 4;
     let (half_x, half_y) = if ir.render.turns_quad() {
         ("s.half_x", "s.half_y")
     } else {
@@ -93,7 +94,14 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr, host: bool) {
                         w.line(format!("splats[{vec4s}u * k + 2u] = bitcast<vec4<u32>>(vec4<f32>(rows[2], color.b));"));
                         if host {
                             w.comment("Clip z at corner coordinates (u, v) is c0.z + u ax.z + v ay.z.");
-                            w.line("splats[5u * k + 3u] = bitcast<vec4<u32>>(vec4<f32>(c0.z, ax.z, ay.z, 0.0));");
+                            w.line(format!("splats[{vec4s}u * k + 3u] = bitcast<vec4<u32>>(vec4<f32>(c0.z, ax.z, ay.z, 0.0));"));
+                        }
+                        if lit {
+                            let row = lit_record_row(host);
+                            w.comment("The half axes and centre in view space: the lit look's normal and light at each pixel.");
+                            w.line(format!("splats[{vec4s}u * k + {row}u] = bitcast<vec4<u32>>(vec4<f32>({half_x}, s.center.x));"));
+                            w.line(format!("splats[{vec4s}u * k + {}u] = bitcast<vec4<u32>>(vec4<f32>({half_y}, s.center.y));", row + 1));
+                            w.line(format!("splats[{vec4s}u * k + {}u] = bitcast<vec4<u32>>(vec4<f32>(s.center.z, 0.0, 0.0, 0.0));", row + 2));
                         }
                         w.line(format!("splats[{vec4s}u * k + {}u] = vec4<u32>(bitcast<u32>(color.a), {frame}, box);", vec4s - 1));
                     });
@@ -125,8 +133,13 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         }
     }
     w.blank();
+    if ir.render.lit.is_some() {
+        emit_lit_record(w);
+        w.blank();
+    }
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
-    let vec4s = (splat_quad_words(shape.host.is_some()) / 4) as u32;
+    let lit = ir.render.lit.is_some();
+    let vec4s = (splat_quad_words(shape.host.is_some(), lit) / 4) as u32;
     let depth = host_depth(shape);
     let stride = composite::batch_stride(vec4s, additive);
     let affine = splat_affine_quads(ir, shape);
@@ -210,7 +223,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
     };
     let evaluate = |w: &mut Writer| {
         if affine {
-            evaluate_affine(w, stride);
+            evaluate_affine(w, stride, &lit_shade(lit, shape.host.is_some(), stride));
             return;
         }
         w.line(format!(
@@ -252,11 +265,12 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
         w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
         w.line("let color = vec4<f32>(rgb, bitcast<f32>(r3.x));");
+        let shade = lit_shade(lit, shape.host.is_some(), stride);
         if depth {
-            w.line("let lit = splat_shade(uv, du, dv, color, r3.y);");
-            w.line("let shaded = vec4<f32>(lit.rgb, lit.a * fade);");
+            w.line(format!("let unfaded = {shade};"));
+            w.line("let shaded = vec4<f32>(unfaded.rgb, unfaded.a * fade);");
         } else {
-            w.line("let shaded = splat_shade(uv, du, dv, color, r3.y);");
+            w.line(format!("let shaded = {shade};"));
         }
     };
     emit_composite(
@@ -266,7 +280,9 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         splat_slices(ir),
         composite::RecordBatch {
             vec4s: stride,
-            size: if additive {
+            // A lit record's three more vec4s fit WebGPU's 16 KiB of workgroup memory in
+            // batches of 64.
+            size: if additive || lit {
                 composite::SPLAT_ADDITIVE_QUAD_BATCH
             } else {
                 composite::SPLAT_BATCH
@@ -283,7 +299,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
 /// never against a host's depth), as the load packed it: in a flat view (FLAT_VIEW) u and v
 /// are affine in the pixel and the colour follows the map; else the projective map of the
 /// other quads, divided at each pixel.
-fn evaluate_affine(w: &mut Writer, stride: u32) {
+fn evaluate_affine(w: &mut Writer, stride: u32, shade: &str) {
     w.line(format!(
         "let q0 = bitcast<vec4<f32>>(batch[{stride}u * j]);"
     ));
@@ -320,5 +336,37 @@ fn evaluate_affine(w: &mut Writer, stride: u32) {
         w.line("du = (du - uv * r2.x) / s;");
         w.line("dv = (dv - uv * r2.y) / s;");
     });
-    w.line("let shaded = splat_shade(uv, du, dv, color, r3.y);");
+    w.line(format!("let shaded = {shade};"));
+}
+
+/// The composite's shading of record j at corner coordinates uv: `splat_shade`'s colour, and
+/// for a lit look that colour lit as the fragment shader lights it (`lit_color`), from the
+/// half axes and centre the record keeps ([`lit_record_row`]).
+fn lit_shade(lit: bool, host: bool, stride: u32) -> String {
+    let unlit = "splat_shade(uv, du, dv, color, r3.y)";
+    if !lit {
+        return unlit.to_string();
+    }
+    let row = lit_record_row(host);
+    let at = |r: u32| format!("bitcast<vec4<f32>>(batch[{stride}u * j + {r}u])");
+    format!(
+        "lit_record({unlit}, uv, {}, {}, {})",
+        at(row),
+        at(row + 1),
+        at(row + 2)
+    )
+}
+
+/// `lit_record(c, uv, a, b, c2)`: colour `c` at corner coordinates uv of a lit quad whose
+/// record keeps (half x axis, centre x) in `a`, (half y axis, centre y) in `b` and centre z in
+/// `c2.x`, lit there as the fragment shader lights it.
+pub(crate) fn emit_lit_record(w: &mut Writer) {
+    w.comment("A lit quad's colour at corner coordinates uv, from its record's half axes and centre (view space).");
+    w.block(
+        "fn lit_record(c: vec4<f32>, uv: vec2<f32>, a: vec4<f32>, b: vec4<f32>, c2: vec4<f32>) -> vec4<f32>",
+        |w| {
+            w.line("let p = vec3<f32>(a.w, b.w, c2.x) + uv.x * a.xyz + uv.y * b.xyz;");
+            w.line("return lit_color(c, uv, a.xyz, b.xyz, p);");
+        },
+    );
 }

@@ -1,0 +1,392 @@
+//! Lights (`lights: [...]` in the file, or a host's): what lights the sprites of an effect whose
+//! look is lit (`render.lit`, [`crate::features::looks::lit`]). Directional lights (the sun),
+//! point lights (a lamp, a fire) and ambient light, each a colour times an intensity. This
+//! module owns their schema, their checks, the uniform the draw reads them from, and the f64
+//! light a surface receives ([`Lights::received`]), the twin of the WGSL `received_light`.
+//!
+//! A point light's intensity is the light it gives a surface facing it 1 m away; it falls off
+//! as 1 / d² (no nearer than 10 cm: closer surfaces get what one 10 cm away gets, so a sprite
+//! through the light never turns infinite) and smoothly to zero at its `range`.
+
+use glam::{DMat4, DVec3};
+use serde::Deserialize;
+
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+use crate::base::values::Vec3;
+use crate::base::writer::{f32_lit, Writer};
+
+/// Most light sources (directional and point) one draw reads.
+pub const LIGHTS_MOST: usize = 8;
+
+/// Bytes of the lights uniform: the ambient light and the source count (32), then
+/// [`LIGHTS_MOST`] sources of two vec4s each.
+pub const LIGHTS_BYTES: u64 = 32 + 32 * LIGHTS_MOST as u64;
+
+/// Binding of the lights uniform in a lit effect's draw module.
+pub const LIGHTS_BINDING: u32 = 36;
+
+/// The nearest a point light counts a surface (m): nearer, the light is what it is here.
+pub const POINT_NEAREST: f64 = 0.1;
+
+/// A light as written in an effect file.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub enum Light {
+    /// Parallel light from far away (the sun).
+    Directional {
+        /// The way the light travels: `(0.0, -1.0, 0.0)` shines straight down.
+        direction: Vec3,
+        /// Its colour, each channel >= 0.
+        #[serde(default = "white")]
+        color: Vec3,
+        /// Its strength: a surface facing it receives colour · intensity.
+        #[serde(default = "one")]
+        intensity: f64,
+    },
+    /// Light from a point, falling off with distance.
+    Point {
+        /// Where the light is (m).
+        position: Vec3,
+        /// Its colour, each channel >= 0.
+        #[serde(default = "white")]
+        color: Vec3,
+        /// The light a surface facing it receives 1 m away.
+        #[serde(default = "one")]
+        intensity: f64,
+        /// The distance (m) at which its light has faded to nothing.
+        #[serde(default = "default_range")]
+        range: f64,
+    },
+    /// Light from every side, on every surface alike.
+    Ambient {
+        /// Its colour, each channel >= 0.
+        #[serde(default = "white")]
+        color: Vec3,
+        /// Its strength.
+        #[serde(default = "one")]
+        intensity: f64,
+    },
+}
+
+fn white() -> Vec3 {
+    Vec3(1.0, 1.0, 1.0)
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+fn default_range() -> f64 {
+    20.0
+}
+
+/// A light source that comes from somewhere (ambient light is [`Lights::ambient`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum LightSource {
+    /// Parallel light travelling along `direction` (a unit vector).
+    Directional {
+        /// The way the light travels (unit length).
+        direction: DVec3,
+        /// Colour times intensity.
+        color: DVec3,
+    },
+    /// Light from `position`, falling off as 1 / d² and to zero at `range`.
+    Point {
+        /// Where the light is (m).
+        position: DVec3,
+        /// Colour times intensity: the light 1 m away.
+        color: DVec3,
+        /// Where its light has faded to nothing (m, > 0).
+        range: f64,
+    },
+}
+
+/// The lights a lit effect is drawn with, in world space: an effect file's `lights`, or a
+/// host's (`EffectRenderer::set_lights` in the runtime; the Bevy plugin passes Bevy's).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lights {
+    /// Ambient light: colour times intensity, summed over the ambient entries.
+    pub ambient: DVec3,
+    /// Directional and point lights, at most [`LIGHTS_MOST`] (the draw reads the first that
+    /// many).
+    pub sources: Vec<LightSource>,
+}
+
+impl Default for Lights {
+    /// What a lit effect that names no lights is drawn with: a white sun from above, a little
+    /// in front and to the left, and a fifth of it as ambient light.
+    fn default() -> Self {
+        Self {
+            ambient: DVec3::splat(0.2),
+            sources: vec![LightSource::Directional {
+                direction: DVec3::new(0.4, -1.0, -0.3).normalize(),
+                color: DVec3::ONE,
+            }],
+        }
+    }
+}
+
+impl Lights {
+    /// The lights an effect file names (the default ones when it names none).
+    pub fn lower(written: &[Light]) -> Self {
+        if written.is_empty() {
+            return Self::default();
+        }
+        let mut lights = Self {
+            ambient: DVec3::ZERO,
+            sources: Vec::new(),
+        };
+        for light in written {
+            match *light {
+                Light::Directional {
+                    direction,
+                    color,
+                    intensity,
+                } => lights.sources.push(LightSource::Directional {
+                    direction: direction.d().normalize_or_zero(),
+                    color: color.d() * intensity,
+                }),
+                Light::Point {
+                    position,
+                    color,
+                    intensity,
+                    range,
+                } => lights.sources.push(LightSource::Point {
+                    position: position.d(),
+                    color: color.d() * intensity,
+                    range,
+                }),
+                Light::Ambient { color, intensity } => lights.ambient += color.d() * intensity,
+            }
+        }
+        lights
+    }
+
+    /// The light (per channel) that a surface at `p` with unit normal `n` receives, both in
+    /// world space: the ambient light plus, for each source, its light times
+    /// max((n · l + wrap) / (1 + wrap), 0), with l the unit vector toward the source. `wrap`
+    /// in [0, 1] lets light reach round the terminator of thin volumes (0: Lambert's law).
+    pub fn received(&self, n: DVec3, p: DVec3, wrap: f64) -> DVec3 {
+        let mut light = self.ambient;
+        for source in self.sources.iter().take(LIGHTS_MOST) {
+            let (toward, color) = match *source {
+                LightSource::Directional { direction, color } => {
+                    (-direction.normalize_or_zero(), color)
+                }
+                LightSource::Point {
+                    position,
+                    color,
+                    range,
+                } => {
+                    let d = position - p;
+                    let d2 = d.length_squared().max(POINT_NEAREST * POINT_NEAREST);
+                    (d / d2.sqrt(), color * range_window(d2, range) / d2)
+                }
+            };
+            let facing = ((n.dot(toward) + wrap) / (1.0 + wrap)).max(0.0);
+            light += color * facing;
+        }
+        light
+    }
+
+    /// The lights uniform's bytes ([`LIGHTS_BYTES`]): the ambient light (w unused), the
+    /// source count, then each source as (direction the light travels or position, 0 for
+    /// directional or 1 for point) and (colour times intensity, range). World space: the
+    /// draw moves them into the view it draws.
+    pub fn uniform_bytes(&self) -> Vec<u8> {
+        let mut words: Vec<f32> = Vec::with_capacity(LIGHTS_BYTES as usize / 4);
+        let f = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+        words.extend(f(self.ambient));
+        words.push(0.0);
+        let count = self.sources.len().min(LIGHTS_MOST) as u32;
+        words.extend([f32::from_bits(count), 0.0, 0.0, 0.0]);
+        for source in self.sources.iter().take(LIGHTS_MOST) {
+            match *source {
+                LightSource::Directional { direction, color } => {
+                    words.extend(f(direction.normalize_or_zero()));
+                    words.extend([0.0]);
+                    words.extend(f(color));
+                    words.extend([0.0]);
+                }
+                LightSource::Point {
+                    position,
+                    color,
+                    range,
+                } => {
+                    words.extend(f(position));
+                    words.extend([1.0]);
+                    words.extend(f(color));
+                    words.extend([range as f32]);
+                }
+            }
+        }
+        words.resize(LIGHTS_BYTES as usize / 4, 0.0);
+        words.iter().flat_map(|x| x.to_le_bytes()).collect()
+    }
+
+    /// The same lights seen through `view` (world to view space): directions turned, positions
+    /// moved. A renderer that shades in view space compares against this.
+    pub fn in_view(&self, view: DMat4) -> Self {
+        Self {
+            ambient: self.ambient,
+            sources: self
+                .sources
+                .iter()
+                .map(|s| match *s {
+                    LightSource::Directional { direction, color } => LightSource::Directional {
+                        direction: view.transform_vector3(direction).normalize_or_zero(),
+                        color,
+                    },
+                    LightSource::Point {
+                        position,
+                        color,
+                        range,
+                    } => LightSource::Point {
+                        position: view.transform_point3(position),
+                        color,
+                        range,
+                    },
+                })
+                .collect(),
+        }
+    }
+}
+
+impl std::fmt::Display for Lights {
+    /// One line: the ambient light, then each source, to four decimals.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v = |v: DVec3| {
+            let c = |x: f64| format!("{}", (x * 1e4).round() / 1e4);
+            format!("({}, {}, {})", c(v.x), c(v.y), c(v.z))
+        };
+        write!(f, "lights: ambient {}", v(self.ambient))?;
+        for source in &self.sources {
+            match *source {
+                LightSource::Directional { direction, color } => write!(
+                    f,
+                    ", directional along {} colour {}",
+                    v(direction),
+                    v(color)
+                )?,
+                LightSource::Point {
+                    position,
+                    color,
+                    range,
+                } => write!(
+                    f,
+                    ", point at {} colour {} range {range} m",
+                    v(position),
+                    v(color)
+                )?,
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A point light's fade to its range: (1 − (d / range)⁴)², clamped to [0, 1]; 1 near the
+/// light, 0 from `range` on, with no step at the range.
+pub fn range_window(d2: f64, range: f64) -> f64 {
+    let q = d2 / (range * range);
+    (1.0 - q * q).clamp(0.0, 1.0).powi(2)
+}
+
+/// Checks the file's lights: colours and intensities >= 0, directions that are not zero,
+/// ranges > 0, at most [`LIGHTS_MOST`] sources.
+pub fn check(lights: &[Light], c: &mut Checker) {
+    let root = ValuePath::root().field("lights");
+    let mut sources = 0;
+    for (i, light) in lights.iter().enumerate() {
+        let at = root.index(i);
+        let (name, color, intensity) = match *light {
+            Light::Directional {
+                direction,
+                color,
+                intensity,
+            } => {
+                c.direction(&at.variant("Directional").field("direction"), direction);
+                ("Directional", color, intensity)
+            }
+            Light::Point {
+                position,
+                color,
+                intensity,
+                range,
+            } => {
+                let p = at.variant("Point");
+                c.vec3(&p.field("position"), position);
+                c.positive(&p.field("range"), range);
+                ("Point", color, intensity)
+            }
+            Light::Ambient { color, intensity } => ("Ambient", color, intensity),
+        };
+        let p = at.variant(name);
+        c.non_negative(&p.field("intensity"), intensity);
+        for (j, (channel, x)) in [("r", color.0), ("g", color.1), ("b", color.2)]
+            .into_iter()
+            .enumerate()
+        {
+            c.non_negative(&p.field("color").component(j, channel), x);
+        }
+        if name != "Ambient" {
+            sources += 1;
+            if sources == LIGHTS_MOST + 1 {
+                c.error(
+                    &at,
+                    format!("a draw reads at most {LIGHTS_MOST} directional and point lights; merge or drop some"),
+                );
+            }
+        }
+    }
+}
+
+/// Emits the lights uniform's declarations (binding [`LIGHTS_BINDING`]) and
+/// `received_light(n, p)`: the light a surface at view-space point `p` with unit normal `n`
+/// receives, the WGSL twin of [`Lights::received`] (each source moved into the view by
+/// `draw.view`; `wrap` a constant of the look).
+pub fn emit_received_light(w: &mut Writer, wrap: f64) {
+    w.comment("A light source: (direction the light travels, 0) or (position, 1); (colour · intensity, range).");
+    w.block("struct LightSource", |w| {
+        w.line("place: vec4<f32>,");
+        w.line("color: vec4<f32>,");
+    });
+    w.block("struct Lights", |w| {
+        w.line("ambient: vec4<f32>,");
+        w.line("count: vec4<u32>,");
+        w.line(format!("sources: array<LightSource, {LIGHTS_MOST}>,"));
+    });
+    w.line(format!(
+        "@group(0) @binding({LIGHTS_BINDING}) var<uniform> lights: Lights;"
+    ));
+    w.line(format!("const LIGHT_WRAP: f32 = {};", f32_lit(wrap)));
+    w.line(format!(
+        "const POINT_NEAREST2: f32 = {};",
+        f32_lit(POINT_NEAREST * POINT_NEAREST)
+    ));
+    w.blank();
+    w.comment("The light a surface at view-space p with unit normal n receives (world-space lights moved into the view).");
+    w.block("fn received_light(n: vec3<f32>, p: vec3<f32>) -> vec3<f32>", |w| {
+        w.line("var light = lights.ambient.rgb;");
+        w.block(
+            format!("for (var i = 0u; i < min(lights.count.x, {LIGHTS_MOST}u); i++)"),
+            |w| {
+                w.line("let source = lights.sources[i];");
+                w.comment("A zero direction (a host's) gives no light rather than NaN.");
+                w.line("let along = (draw.view * vec4<f32>(source.place.xyz, 0.0)).xyz;");
+                w.line("var toward = -along * inverseSqrt(max(dot(along, along), 1e-30));");
+                w.line("var color = source.color.rgb;");
+                w.block("if (source.place.w > 0.5)", |w| {
+                    w.line("let d = (draw.view * vec4<f32>(source.place.xyz, 1.0)).xyz - p;");
+                    w.line("let d2 = max(dot(d, d), POINT_NEAREST2);");
+                    w.line("toward = d * inverseSqrt(d2);");
+                    w.line("let q = d2 / (source.color.w * source.color.w);");
+                    w.line("let window = clamp(1.0 - q * q, 0.0, 1.0);");
+                    w.line("color = color * (window * window / d2);");
+                });
+                w.line("light += color * max((dot(n, toward) + LIGHT_WRAP) / (1.0 + LIGHT_WRAP), 0.0);");
+            },
+        );
+        w.line("return light;");
+    });
+}

@@ -1,0 +1,119 @@
+//! Lit sprites (`render.lit`): each sprite is shaded by the effect's lights
+//! ([`crate::features::lights`]) as a surface with a normal at every pixel: the quad's own
+//! facing (`Flat`), or a half sphere bent over the quad (`Sphere`, for soft volumes: lit on
+//! the side the light comes from, dark on the other). The normal is built from the quad's half
+//! axes, in the sprite's own frame as it turns, and faces the viewer. A part of the colour can
+//! stay unlit (`emissive`), and `wrap` lets light reach round the terminator of thin volumes.
+//!
+//! Both renderers shade each pixel the same way ([`emit_lit_color`]: the fragment shader,
+//! and the compute splat's composite from the quad's half axes and centre it keeps); the
+//! reference drawing shades in world space, and [`Lit::shade`] is the f64 twin the tests
+//! check single pixels against.
+
+use glam::DVec3;
+use serde::Deserialize;
+
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+use crate::base::writer::{f32_lit, Writer};
+
+/// The normal a lit sprite has at each pixel.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Normals {
+    /// The quad's own facing, the same at every pixel (a card, a leaf).
+    Flat,
+    /// A half sphere bent over the quad: the normal leans toward the rim as the corner
+    /// coordinates do (smoke, clouds, dust).
+    #[default]
+    Sphere,
+}
+
+/// `render.lit`: the sprites are shaded by the lights.
+#[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Lit {
+    /// The normal at each pixel.
+    #[serde(default)]
+    pub normals: Normals,
+    /// How far light reaches round the terminator, in [0, 1]: 0 is Lambert's law, 1 lights
+    /// the side facing away at half the strength of the side edge-on.
+    #[serde(default)]
+    pub wrap: f64,
+    /// The part of the colour that glows by itself and is not lit, in [0, 1].
+    #[serde(default)]
+    pub emissive: f64,
+}
+
+impl Lit {
+    /// Checks `wrap` and `emissive` (each in [0, 1]).
+    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+        c.within(&path.field("wrap"), self.wrap, 0.0, 1.0);
+        c.within(&path.field("emissive"), self.emissive, 0.0, 1.0);
+    }
+
+    /// The unit normal at corner coordinates `uv` of a quad with half axes `half_x`, `half_y`,
+    /// facing the side `toward_eye` points to: the f64 twin of the WGSL `sprite_normal`.
+    pub fn normal(&self, uv: (f64, f64), half_x: DVec3, half_y: DVec3, toward_eye: DVec3) -> DVec3 {
+        let (ux, uy) = (half_x.normalize_or_zero(), half_y.normalize_or_zero());
+        let mut facing = ux.cross(uy).normalize_or_zero();
+        if facing.dot(toward_eye) < 0.0 {
+            facing = -facing;
+        }
+        match self.normals {
+            Normals::Flat => facing,
+            Normals::Sphere => {
+                let bulge = (1.0 - uv.0 * uv.0 - uv.1 * uv.1).max(0.0).sqrt();
+                (uv.0 * ux + uv.1 * uy + bulge * facing).normalize_or_zero()
+            }
+        }
+    }
+
+    /// The shaded colour of `rgb` under `light` (what [`crate::features::lights::Lights::received`]
+    /// gives): rgb · (emissive + (1 − emissive) · light).
+    pub fn shade(&self, rgb: DVec3, light: DVec3) -> DVec3 {
+        rgb * (DVec3::splat(self.emissive) + (1.0 - self.emissive) * light)
+    }
+
+    /// Emits the lights' declarations and `received_light`, then `sprite_normal(uv, ax, ay,
+    /// p)` (view space: the half axes and a point of the quad) and `lit_color(c, uv, ax, ay,
+    /// p)`, the colour `c` shaded at that pixel: the WGSL twins of [`Self::normal`] and
+    /// [`Self::shade`].
+    pub fn emit_lit_color(&self, w: &mut Writer) {
+        crate::features::lights::emit_received_light(w, self.wrap);
+        w.line(format!(
+            "const LIT_EMISSIVE: f32 = {};",
+            f32_lit(self.emissive)
+        ));
+        w.blank();
+        w.comment("The sprite's unit normal at corner coordinates uv, in view space, facing the viewer (the eye at the view's origin, or along +z for an orthographic projection).");
+        w.block(
+            "fn sprite_normal(uv: vec2<f32>, ax: vec3<f32>, ay: vec3<f32>, p: vec3<f32>) -> vec3<f32>",
+            |w| {
+                w.line("let ux = normalize(ax);");
+                w.line("let uy = normalize(ay);");
+                w.line("var facing = normalize(cross(ux, uy));");
+                w.line("let eye = select(-p, vec3<f32>(0.0, 0.0, 1.0), draw.proj[3][3] == 1.0);");
+                w.block("if (dot(facing, eye) < 0.0)", |w| {
+                    w.line("facing = -facing;")
+                });
+                match self.normals {
+                    Normals::Flat => w.line("return facing;"),
+                    Normals::Sphere => {
+                        w.comment("A half sphere over the quad: the normal leans out as uv does.");
+                        w.line("let bulge = sqrt(max(1.0 - dot(uv, uv), 0.0));");
+                        w.line("return normalize(uv.x * ux + uv.y * uy + bulge * facing);");
+                    }
+                }
+            },
+        );
+        w.blank();
+        w.comment("Colour c at a pixel of a lit sprite: its unlit (emissive) part plus the rest times the light received.");
+        w.block(
+            "fn lit_color(c: vec4<f32>, uv: vec2<f32>, ax: vec3<f32>, ay: vec3<f32>, p: vec3<f32>) -> vec4<f32>",
+            |w| {
+                w.line("let light = received_light(sprite_normal(uv, ax, ay, p), p);");
+                w.line("return vec4<f32>(c.rgb * (LIT_EMISSIVE + (1.0 - LIT_EMISSIVE) * light), c.a);");
+            },
+        );
+    }
+}
