@@ -1,5 +1,6 @@
 //! A small 3D scene with Plume effects: fireworks (a graph of groups and events), smoke
-//! (textured, sorted, soft) and sparks riding a moving block, under an orbiting camera.
+//! (textured, sorted, soft, lit by the scene's sun) and sparks riding a moving block, under an
+//! orbiting camera.
 //!
 //! In a window: `cargo +nightly run --ignore-rust-version --example scene`.
 //! Headless: `... --example scene -- --headless scene.png --frames 120`.
@@ -74,7 +75,7 @@ fn setup(
         Transform::from_xyz(2.0, 0.0, -6.0),
     ));
     commands.spawn((
-        PlumeEffect::new(assets.load("smoke.ron")).with_warm_up(3.0),
+        PlumeEffect::new(assets.load("lit_smoke.ron")).with_warm_up(3.0),
         Transform::from_xyz(-6.0, 0.0, 0.0).with_scale(Vec3::splat(0.6)),
     ));
     // Sparks on a block that drives back and forth: local space, they ride with it.

@@ -1,4 +1,5 @@
-//! The render app's side of the plugin: extraction ([`extract`]), the instances on Bevy's
+//! The render app's side of the plugin: extraction ([`extract`]; the scene's lights in
+//! [`lights`]), the instances on Bevy's
 //! device ([`instances`]), the compute work: steps before the cameras and each camera's draw
 //! preparation before its main pass ([`simulate`], world-space steps along the entity's
 //! motion in [`motion`]), and the draw in the transparent phase ([`draw`]).
@@ -7,6 +8,7 @@ pub(crate) mod batches;
 pub(crate) mod draw;
 pub(crate) mod extract;
 pub(crate) mod instances;
+pub(crate) mod lights;
 pub(crate) mod motion;
 pub(crate) mod read;
 pub(crate) mod simulate;
@@ -32,12 +34,18 @@ pub(crate) fn build(app: &mut App) {
         .insert_resource(measured)
         .init_resource::<extract::ExtractedEffects>()
         .init_resource::<extract::ExtractedBursts>()
+        .init_resource::<lights::ExtractedLights>()
         .init_resource::<instances::PlumeInstances>()
         .init_resource::<batches::PlumeBatches>()
         .init_resource::<instances::PlumeRenderStats>()
         .add_systems(
             ExtractSchedule,
-            (extract::extract_effects, extract::extract_bursts).chain(),
+            (
+                extract::extract_effects,
+                extract::extract_bursts,
+                lights::extract_lights,
+            )
+                .chain(),
         )
         .add_systems(
             Render,

@@ -15,12 +15,13 @@ use bevy::prelude::*;
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::view::{ExtractedView, ViewDepthStencilTexture};
 use plume_compiler::placement::Placement;
-use plume_runtime::{BoundsWatch, Camera};
+use plume_runtime::{BoundsWatch, Camera, Lights};
 
 use crate::bounds::{MeasuredBounds, MeasuredBox};
 use crate::effect::SimulationSpace;
 use crate::render::batches::PlumeBatches;
 use crate::render::instances::{Instance, PlumeInstances};
+use crate::render::lights::ExtractedLights;
 use crate::render::motion;
 
 /// Steps every instance. An instance whose frame is one part (the usual frame: one place, a
@@ -163,6 +164,7 @@ pub(crate) fn prepare_for_view(
     mut context: RenderContext,
     mut store: ResMut<PlumeInstances>,
     mut batches: ResMut<PlumeBatches>,
+    lights: Res<ExtractedLights>,
 ) {
     let (view_entity, view, prepass) = view.into_inner();
     let encoder = context.command_encoder();
@@ -178,6 +180,7 @@ pub(crate) fn prepare_for_view(
                     renderer.set_scene_depth(depth);
                 }
             }
+            renderer.set_lights(&lights.0);
             let camera = view_camera(view, Mat4::IDENTITY);
             if let Err(err) = batch
                 .batch
@@ -203,6 +206,8 @@ pub(crate) fn prepare_for_view(
                     draw.renderer.set_scene_depth(depth);
                 }
             }
+            draw.renderer
+                .set_lights(&lights_in_space(&lights.0, world_from_local));
             let camera = view_camera(view, world_from_local);
             // A SceneDepth collider meets what this camera's depth prepass drew this frame, in
             // the effect's space, from the next frame's steps on (the runtime copies it).
@@ -276,6 +281,15 @@ pub(crate) fn composite_for_view(
             error!("{}: {err}", instance.effect.compiled().ir.name);
         }
     }
+}
+
+/// The scene's lights in an effect's own space (`world_from_local`: the identity for a
+/// world-space effect).
+fn lights_in_space(lights: &Lights, world_from_local: Mat4) -> Lights {
+    if world_from_local == Mat4::IDENTITY {
+        return lights.clone();
+    }
+    lights.transformed(plume_mat4(world_from_local.inverse()).as_dmat4())
 }
 
 /// Plume's camera for drawing an effect whose space is `world_from_local` from Bevy's view:

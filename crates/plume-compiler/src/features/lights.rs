@@ -225,9 +225,9 @@ impl Lights {
         words.iter().flat_map(|x| x.to_le_bytes()).collect()
     }
 
-    /// The same lights seen through `view` (world to view space): directions turned, positions
-    /// moved. A renderer that shades in view space compares against this.
-    pub fn in_view(&self, view: DMat4) -> Self {
+    /// The same lights moved by `m` (world to an effect's own space, or to a view): directions
+    /// turned, positions moved; colours and ranges kept.
+    pub fn transformed(&self, m: DMat4) -> Self {
         Self {
             ambient: self.ambient,
             sources: self
@@ -235,7 +235,7 @@ impl Lights {
                 .iter()
                 .map(|s| match *s {
                     LightSource::Directional { direction, color } => LightSource::Directional {
-                        direction: view.transform_vector3(direction).normalize_or_zero(),
+                        direction: m.transform_vector3(direction).normalize_or_zero(),
                         color,
                     },
                     LightSource::Point {
@@ -243,7 +243,7 @@ impl Lights {
                         color,
                         range,
                     } => LightSource::Point {
-                        position: view.transform_point3(position),
+                        position: m.transform_point3(position),
                         color,
                         range,
                     },

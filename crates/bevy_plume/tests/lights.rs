@@ -1,0 +1,111 @@
+//! Lit particles (`render.lit`) in a Bevy scene, on llvmpipe (lavapipe): Bevy's own
+//! `DirectionalLight`, `PointLight` and ambient light light the sprites, not the effect
+//! file's lights; turning the light turns the lit side, and a scene with no light leaves them
+//! dark as it leaves a lit mesh.
+
+mod common;
+
+use bevy::prelude::*;
+use bevy_plume::PlumeEffect;
+use common::{project, Harness, HEIGHT, WIDTH};
+
+/// Runs the tests one at a time (two Bevy apps would share two CPU cores and one driver).
+static ONE_APP: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+fn serial() -> std::sync::MutexGuard<'static, ()> {
+    ONE_APP.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+/// One opaque grey puff 4 m across at the origin, shaded as a half sphere. Its file names a
+/// bright white light from straight ahead, which a Bevy scene must not use.
+const PUFF: &str = r#"Effect(name: "puff", capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    lights: [Directional(direction: (0.0, 0.0, -1.0), intensity: 3.0), Ambient(intensity: 1.0)],
+    render: Render(color: [(0.0, (0.6, 0.6, 0.6, 1.0))], size: [(0.0, 4.0)],
+                   lit: Some(Lit(normals: Sphere))))
+"#;
+
+/// The mean brightness (0 to 255, over the three channels) of the puff's left and right
+/// thirds along its horizontal middle row.
+fn sides(image: &image::RgbaImage) -> (f64, f64) {
+    let (cx, cy) = project(0.0, 0.0);
+    let (edge, _) = project(2.0, 0.0);
+    let radius = edge - cx;
+    let y = cy as u32;
+    let mean = |from: f32, to: f32| {
+        let (mut sum, mut n) = (0.0, 0.0);
+        for x in (cx + from * radius) as u32..(cx + to * radius) as u32 {
+            let p = image.get_pixel(x.min(WIDTH - 1), y.min(HEIGHT - 1)).0;
+            sum += (f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2])) / 3.0;
+            n += 1.0;
+        }
+        sum / n
+    };
+    (mean(-0.9, -0.35), mean(0.35, 0.9))
+}
+
+#[test]
+fn bevys_lights_light_the_particles() {
+    let _one = serial();
+    let (mut h, handle) = Harness::with_effect("lights", PUFF);
+    h.app.insert_resource(GlobalAmbientLight::NONE);
+    h.app.world_mut().spawn(PlumeEffect::new(handle));
+    // The sun from the right (+x), travelling toward -x.
+    let sun = h
+        .app
+        .world_mut()
+        .spawn((
+            DirectionalLight {
+                illuminance: 8_000.0,
+                ..default()
+            },
+            Transform::from_xyz(5.0, 0.0, 0.0).looking_at(Vec3::ZERO, Vec3::Y),
+        ))
+        .id();
+    h.update(10);
+    let (left, right) = sides(&h.capture_lit());
+    assert!(
+        right > 60.0 && left < 10.0,
+        "lit from the right: left third {left:.1}, right third {right:.1}"
+    );
+    // The sun moved to the left: the other side lights up.
+    *h.app.world_mut().get_mut::<Transform>(sun).unwrap() =
+        Transform::from_xyz(-5.0, 0.0, 0.0).looking_at(Vec3::ZERO, Vec3::Y);
+    h.update(2);
+    let (left, right) = sides(&h.capture_lit());
+    assert!(
+        left > 60.0 && right < 10.0,
+        "lit from the left: left third {left:.1}, right third {right:.1}"
+    );
+    // No light at all: dark, as a lit mesh would be (the file's own lights are not used).
+    h.app.world_mut().despawn(sun);
+    h.update(2);
+    let image = h.capture();
+    let brightest = image
+        .pixels()
+        .map(|p| *p.0[..3].iter().max().unwrap())
+        .max();
+    assert_eq!(brightest, Some(0), "unlit scene, yet the puff shows");
+}
+
+#[test]
+fn a_point_light_lights_the_side_it_is_on() {
+    let _one = serial();
+    let (mut h, handle) = Harness::with_effect("point-light", PUFF);
+    h.app.insert_resource(GlobalAmbientLight::NONE);
+    h.app.world_mut().spawn(PlumeEffect::new(handle));
+    h.app.world_mut().spawn((
+        PointLight {
+            intensity: 2_000_000.0,
+            range: 20.0,
+            ..default()
+        },
+        Transform::from_xyz(-4.0, 0.0, 1.0),
+    ));
+    h.update(10);
+    let (left, right) = sides(&h.capture_lit());
+    assert!(
+        left > 40.0 && left > 3.0 * right.max(1.0),
+        "a lamp on the left: left third {left:.1}, right third {right:.1}"
+    );
+}
