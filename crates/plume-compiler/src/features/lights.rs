@@ -191,9 +191,9 @@ impl Lights {
     }
 
     /// The lights uniform's bytes ([`LIGHTS_BYTES`]): the ambient light (w unused), the
-    /// source count, then each source as (direction the light travels or position, 0 for
-    /// directional or 1 for point) and (colour times intensity, range). World space: the
-    /// draw moves them into the view it draws.
+    /// source count, then each source as (unit direction the light travels or position, 0
+    /// for directional or 1 for point) and (colour times intensity, range), in whatever space
+    /// they are (a draw's uniform holds them in its view).
     pub fn uniform_bytes(&self) -> Vec<u8> {
         let mut words: Vec<f32> = Vec::with_capacity(LIGHTS_BYTES as usize / 4);
         let f = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
@@ -343,8 +343,9 @@ pub fn check(lights: &[Light], c: &mut Checker) {
 
 /// Emits the lights uniform's declarations (binding [`LIGHTS_BINDING`]) and
 /// `received_light(n, p)`: the light a surface at view-space point `p` with unit normal `n`
-/// receives, the WGSL twin of [`Lights::received`] (each source moved into the view by
-/// `draw.view`; `wrap` a constant of the look).
+/// receives, the WGSL twin of [`Lights::received`]. The runtime writes the uniform in the
+/// view each frame ([`Lights::transformed`] by the camera's view), so no pixel moves a light;
+/// `wrap` is a constant of the look.
 pub fn emit_received_light(w: &mut Writer, wrap: f64) {
     w.comment("A light source: (direction the light travels, 0) or (position, 1); (colour · intensity, range).");
     w.block("struct LightSource", |w| {
@@ -365,19 +366,18 @@ pub fn emit_received_light(w: &mut Writer, wrap: f64) {
         f32_lit(POINT_NEAREST * POINT_NEAREST)
     ));
     w.blank();
-    w.comment("The light a surface at view-space p with unit normal n receives (world-space lights moved into the view).");
+    w.comment("The light a surface at view-space p with unit normal n receives (the lights are in the view).");
     w.block("fn received_light(n: vec3<f32>, p: vec3<f32>) -> vec3<f32>", |w| {
         w.line("var light = lights.ambient.rgb;");
         w.block(
             format!("for (var i = 0u; i < min(lights.count.x, {LIGHTS_MOST}u); i++)"),
             |w| {
                 w.line("let source = lights.sources[i];");
-                w.comment("A zero direction (a host's) gives no light rather than NaN.");
-                w.line("let along = (draw.view * vec4<f32>(source.place.xyz, 0.0)).xyz;");
-                w.line("var toward = -along * inverseSqrt(max(dot(along, along), 1e-30));");
+                w.comment("A unit direction (zero where a host gave none: no light).");
+                w.line("var toward = -source.place.xyz;");
                 w.line("var color = source.color.rgb;");
                 w.block("if (source.place.w > 0.5)", |w| {
-                    w.line("let d = (draw.view * vec4<f32>(source.place.xyz, 1.0)).xyz - p;");
+                    w.line("let d = source.place.xyz - p;");
                     w.line("let d2 = max(dot(d, d), POINT_NEAREST2);");
                     w.line("toward = d * inverseSqrt(d2);");
                     w.line("let q = d2 / (source.color.w * source.color.w);");

@@ -111,8 +111,8 @@ pub(crate) struct GroupDraw {
     soft: bool,
     /// The ribbons (`render.trail`), drawn before the sprites.
     trail: Option<TrailDraw>,
-    /// The lights uniform of a lit look (`render.lit`).
-    lights: Option<wgpu::Buffer>,
+    /// The lights of a lit look (`render.lit`).
+    lights: Option<LightsUniform>,
     instances: Instances,
     /// Vertices per sprite (4: a quad strip; 3: a triangle).
     vertices: u32,
@@ -177,9 +177,9 @@ impl GroupDraw {
             mapped_at_creation: false,
         });
         entries.push((0, view.clone()));
-        let lights = lights_uniform(gpu, effect)?;
+        let lights = LightsUniform::new(gpu, effect);
         if let Some(lights) = &lights {
-            entries.push((LIGHTS_BINDING, lights.clone()));
+            entries.push((LIGHTS_BINDING, lights.buffer.clone()));
         }
         let texture = match &effect.ir.render.texture {
             Some(t) => Some(SpriteTexture::new(gpu, t)?),
@@ -271,7 +271,9 @@ impl GroupDraw {
 
     /// Lights a lit look with `lights` from the next frame on; nothing for an unlit one.
     pub(crate) fn set_lights(&self, lights: &Lights) {
-        write_lights(&self.gpu, self.lights.as_ref(), lights);
+        if let Some(uniform) = &self.lights {
+            uniform.set(lights);
+        }
     }
 
     /// Records the frame's `DrawView` (camera and steps done) into `encoder`, as a copy, so
@@ -282,6 +284,9 @@ impl GroupDraw {
         camera: &Camera,
         steps: u64,
     ) -> Result<(), RuntimeError> {
+        if let Some(lights) = &self.lights {
+            lights.record(&self.gpu, encoder, camera)?;
+        }
         record_draw_view(
             &self.gpu,
             encoder,
@@ -469,30 +474,47 @@ pub(crate) fn draw_module(
     Ok((module, entries))
 }
 
-/// The lights uniform of a lit effect (`render.lit`), holding the effect's own lights; None
-/// for an unlit one.
-pub(crate) fn lights_uniform(
-    gpu: &Gpu,
-    effect: &CompiledEffect,
-) -> Result<Option<wgpu::Buffer>, RuntimeError> {
-    if effect.ir.render.lit.is_none() {
-        return Ok(None);
-    }
-    let bytes = effect.ir.lights.uniform_bytes();
-    let buffer = filled_buffer(
-        gpu,
-        "lights",
-        LIGHTS_BYTES,
-        wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-        |b| b.copy_from_slice(&bytes),
-    )?;
-    Ok(Some(buffer))
+/// A lit draw's lights (`render.lit`): the world-space lights it is drawn with (the effect
+/// file's until a host sets its own) and the uniform that holds them in the view of the frame
+/// being prepared, written with the `DrawView`, so that no pixel moves a light.
+pub(crate) struct LightsUniform {
+    pub(crate) buffer: wgpu::Buffer,
+    world: std::sync::Mutex<Lights>,
 }
 
-/// Writes `lights` into a lights uniform (none: an unlit look, nothing to write).
-pub(crate) fn write_lights(gpu: &Gpu, buffer: Option<&wgpu::Buffer>, lights: &Lights) {
-    if let Some(buffer) = buffer {
-        gpu.queue.write_buffer(buffer, 0, &lights.uniform_bytes());
+impl LightsUniform {
+    /// The lights of `effect`'s draw; None for an unlit effect.
+    pub(crate) fn new(gpu: &Gpu, effect: &CompiledEffect) -> Option<Self> {
+        effect.ir.render.lit?;
+        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("lights"),
+            size: LIGHTS_BYTES,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        Some(Self {
+            buffer,
+            world: std::sync::Mutex::new(effect.ir.lights.clone()),
+        })
+    }
+
+    /// Draws with `lights` (world space) from the next prepared frame on.
+    pub(crate) fn set(&self, lights: &Lights) {
+        *self.world.lock().unwrap_or_else(|p| p.into_inner()) = lights.clone();
+    }
+
+    /// Records a copy of the lights in `camera`'s view into the uniform.
+    pub(crate) fn record(
+        &self,
+        gpu: &Gpu,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+    ) -> Result<(), RuntimeError> {
+        let world = self.world.lock().unwrap_or_else(|p| p.into_inner());
+        let bytes = world.transformed(camera.view.as_dmat4()).uniform_bytes();
+        let src = staging(gpu, "lights", &bytes)?;
+        encoder.copy_buffer_to_buffer(&src, 0, &self.buffer, 0, LIGHTS_BYTES);
+        Ok(())
     }
 }
 

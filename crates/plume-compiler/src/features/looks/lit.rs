@@ -51,11 +51,12 @@ impl Lit {
         c.within(&path.field("emissive"), self.emissive, 0.0, 1.0);
     }
 
-    /// The unit normal at corner coordinates `uv` of a quad with half axes `half_x`, `half_y`,
-    /// facing the side `toward_eye` points to: the f64 twin of the WGSL `sprite_normal`.
+    /// The unit normal at corner coordinates `uv` of a quad with half axes `half_x`, `half_y`
+    /// (at right angles), facing the side `toward_eye` (from its centre) points to: the f64
+    /// twin of the WGSL `sprite_basis` and `lit_color`'s normal.
     pub fn normal(&self, uv: (f64, f64), half_x: DVec3, half_y: DVec3, toward_eye: DVec3) -> DVec3 {
         let (ux, uy) = (half_x.normalize_or_zero(), half_y.normalize_or_zero());
-        let mut facing = ux.cross(uy).normalize_or_zero();
+        let mut facing = ux.cross(uy);
         if facing.dot(toward_eye) < 0.0 {
             facing = -facing;
         }
@@ -63,7 +64,9 @@ impl Lit {
             Normals::Flat => facing,
             Normals::Sphere => {
                 let bulge = (1.0 - uv.0 * uv.0 - uv.1 * uv.1).max(0.0).sqrt();
-                (uv.0 * ux + uv.1 * uy + bulge * facing).normalize_or_zero()
+                let n = uv.0 * ux + uv.1 * uy + bulge * facing;
+                // Unit inside the disc; past its rim (a texture's corners) normalised.
+                n / n.length_squared().max(1.0).sqrt()
             }
         }
     }
@@ -74,44 +77,55 @@ impl Lit {
         rgb * (DVec3::splat(self.emissive) + (1.0 - self.emissive) * light)
     }
 
-    /// Emits the lights' declarations and `received_light`, then `sprite_normal(uv, ax, ay,
-    /// p)` (view space: the half axes and a point of the quad) and `lit_color(c, uv, ax, ay,
-    /// p)`, the colour `c` shaded at that pixel: the WGSL twins of [`Self::normal`] and
-    /// [`Self::shade`].
-    pub fn emit_lit_color(&self, w: &mut Writer) {
+    /// Emits the lights' declarations and `received_light`, then (for a `turned` quad)
+    /// `sprite_basis(ax, ay, c)` (its unit axes and facing toward the viewer, as the columns of
+    /// a matrix, from its half axes and centre in view space: made once a sprite) and `lit_color(c, uv, basis,
+    /// p)`, the colour `c` shaded at corner coordinates `uv`, view-space point `p`: the WGSL
+    /// twins of [`Self::normal`] and [`Self::shade`].
+    pub fn emit_lit_color(&self, w: &mut Writer, turned: bool) {
         crate::features::lights::emit_received_light(w, self.wrap);
         w.line(format!(
             "const LIT_EMISSIVE: f32 = {};",
             f32_lit(self.emissive)
         ));
         w.blank();
-        w.comment("The sprite's unit normal at corner coordinates uv, in view space, facing the viewer (the eye at the view's origin, or along +z for an orthographic projection).");
+        if !turned {
+            w.comment("The basis of an upright sprite facing the camera: the view's own.");
+            w.line("const VIEW_BASIS: mat3x3<f32> = mat3x3<f32>(1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0);");
+            w.blank();
+        }
+        if turned {
+            w.comment("A quad's basis in view space: its unit axes (at right angles) and its facing toward the viewer (the eye at the view's origin, or along +z for an orthographic projection), from its half axes and centre.");
+            w.block(
+                "fn sprite_basis(ax: vec3<f32>, ay: vec3<f32>, c: vec3<f32>) -> mat3x3<f32>",
+                |w| {
+                    w.line("let ux = ax * inverseSqrt(max(dot(ax, ax), 1e-30));");
+                    w.line("let uy = ay * inverseSqrt(max(dot(ay, ay), 1e-30));");
+                    w.line("var facing = cross(ux, uy);");
+                    w.line(
+                        "let eye = select(-c, vec3<f32>(0.0, 0.0, 1.0), draw.proj[3][3] == 1.0);",
+                    );
+                    w.block("if (dot(facing, eye) < 0.0)", |w| {
+                        w.line("facing = -facing;")
+                    });
+                    w.line("return mat3x3<f32>(ux, uy, facing);");
+                },
+            );
+            w.blank();
+        }
+        w.comment("Colour c at corner coordinates uv, view-space point p, of a lit sprite of that basis: its unlit (emissive) part plus the rest times the light received.");
         w.block(
-            "fn sprite_normal(uv: vec2<f32>, ax: vec3<f32>, ay: vec3<f32>, p: vec3<f32>) -> vec3<f32>",
+            "fn lit_color(c: vec4<f32>, uv: vec2<f32>, basis: mat3x3<f32>, p: vec3<f32>) -> vec4<f32>",
             |w| {
-                w.line("let ux = normalize(ax);");
-                w.line("let uy = normalize(ay);");
-                w.line("var facing = normalize(cross(ux, uy));");
-                w.line("let eye = select(-p, vec3<f32>(0.0, 0.0, 1.0), draw.proj[3][3] == 1.0);");
-                w.block("if (dot(facing, eye) < 0.0)", |w| {
-                    w.line("facing = -facing;")
-                });
                 match self.normals {
-                    Normals::Flat => w.line("return facing;"),
+                    Normals::Flat => w.line("let n = basis[2];"),
                     Normals::Sphere => {
-                        w.comment("A half sphere over the quad: the normal leans out as uv does.");
-                        w.line("let bulge = sqrt(max(1.0 - dot(uv, uv), 0.0));");
-                        w.line("return normalize(uv.x * ux + uv.y * uy + bulge * facing);");
+                        w.comment("A half sphere over the quad: unit inside the disc, normalised past its rim.");
+                        w.line("let m = uv.x * basis[0] + uv.y * basis[1] + sqrt(max(1.0 - dot(uv, uv), 0.0)) * basis[2];");
+                        w.line("let n = m * inverseSqrt(max(dot(m, m), 1.0));");
                     }
                 }
-            },
-        );
-        w.blank();
-        w.comment("Colour c at a pixel of a lit sprite: its unlit (emissive) part plus the rest times the light received.");
-        w.block(
-            "fn lit_color(c: vec4<f32>, uv: vec2<f32>, ax: vec3<f32>, ay: vec3<f32>, p: vec3<f32>) -> vec4<f32>",
-            |w| {
-                w.line("let light = received_light(sprite_normal(uv, ax, ay, p), p);");
+                w.line("let light = received_light(n, p);");
                 w.line("return vec4<f32>(c.rgb * (LIT_EMISSIVE + (1.0 - LIT_EMISSIVE) * light), c.a);");
             },
         );

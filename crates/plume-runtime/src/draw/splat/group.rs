@@ -17,9 +17,7 @@ use super::quad_raster::{MergeTargets, QuadGroups, QuadRaster};
 use crate::device::buffers::STORAGE;
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
-use crate::draw::raster::{
-    draw_module, draw_shape, lights_uniform, record_draw_view, write_lights,
-};
+use crate::draw::raster::{draw_module, draw_shape, record_draw_view, LightsUniform};
 use crate::draw::texture::SpriteTexture;
 use crate::error::RuntimeError;
 use crate::sim::group::Group;
@@ -84,8 +82,8 @@ pub(crate) struct GroupSplat {
     /// Sprites projected: one per slot of the capacity (hidden ones touch no tile).
     count: u32,
     draw_view: wgpu::Buffer,
-    /// The lights uniform of a lit look's quads (`render.lit`).
-    lights: Option<wgpu::Buffer>,
+    /// The lights of a lit look's quads (`render.lit`).
+    lights: Option<LightsUniform>,
     project: wgpu::ComputePipeline,
     project_group: wgpu::BindGroup,
     /// The scan of the counts into the entries' offsets (sorted lists only).
@@ -162,9 +160,7 @@ impl GroupSplat {
             (true, _) => 4,
             // Ribbon segments are made again where they are used, not stored.
             (false, true) => 0,
-            (false, false) => {
-                splat_quad_words(image.host.is_some(), effect.ir.render.lit.is_some())
-            }
+            (false, false) => splat_quad_words(&effect.ir, image.host.is_some()),
         };
         let (tiles_x, tiles_y) = (width.div_ceil(SPLAT_TILE), height.div_ceil(SPLAT_TILE));
         // Additive discs: each tile's list split over slices (`splat.wgsl`'s raster), whose
@@ -263,16 +259,13 @@ impl GroupSplat {
                 reads.push((0, draw_view.clone()));
             }
         }
-        // A lit look's composite shades each pixel by the lights, in the view.
+        // A lit look's composite shades each pixel by the lights (in the view: no matrix).
         let lights = match ribbons {
             true => None,
-            false => lights_uniform(&gpu, effect)?,
+            false => LightsUniform::new(&gpu, effect),
         };
         if let Some(lights) = &lights {
-            reads.push((LIGHTS_BINDING, lights.clone()));
-            if !reads.iter().any(|(b, _)| *b == 0) {
-                reads.push((0, draw_view.clone()));
-            }
+            reads.push((LIGHTS_BINDING, lights.buffer.clone()));
         }
         if !ribbons {
             entries.push((b_splats, tiles.splats.clone()));
@@ -442,6 +435,9 @@ impl GroupSplat {
     ) -> Result<(), RuntimeError> {
         let flat = camera.proj.x_axis.w == 0.0 && camera.proj.y_axis.w == 0.0;
         self.flat_view.store(flat, Ordering::Relaxed);
+        if let Some(lights) = &self.lights {
+            lights.record(&self.gpu, encoder, camera)?;
+        }
         record_draw_view(
             &self.gpu,
             encoder,
@@ -454,7 +450,9 @@ impl GroupSplat {
 
     /// Lights a lit look's quads with `lights` from the next frame on.
     pub(crate) fn set_lights(&self, lights: &Lights) {
-        write_lights(&self.gpu, self.lights.as_ref(), lights);
+        if let Some(uniform) = &self.lights {
+            uniform.set(lights);
+        }
     }
 
     /// Records the splat itself into `pass`: project, scan, entries, sort, ranges, raster.

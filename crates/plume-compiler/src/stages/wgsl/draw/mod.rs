@@ -16,6 +16,7 @@
 pub(crate) mod common;
 mod look_by;
 pub(crate) mod splat;
+mod sprite_shaders;
 
 use crate::base::writer::{f32_lit, u32_lit, Writer};
 use crate::ir::EffectIr;
@@ -33,6 +34,7 @@ pub use splat::{
     SPLAT_FLAT_VIEW, SPLAT_HOST_DEPTH_BINDING, SPLAT_PARTIAL_BINDING, SPLAT_RASTER_BINDINGS,
     SPLAT_SLICES,
 };
+use sprite_shaders::{emit_fragment, emit_vertex};
 
 /// How the runtime binds the particles for drawing. The compiled effect's own draw module is
 /// [`DrawShape::single`]; the runtime asks for another shape when its device splits the state
@@ -279,7 +281,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     }
     if let Some(lit) = &ir.render.lit {
         w.blank();
-        lit.emit_lit_color(&mut w);
+        lit.emit_lit_color(&mut w, ir.render.turns_quad());
     }
     w.blank();
     emit_sprite_at(&mut w, ir, layout, shape, life);
@@ -297,7 +299,8 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         lit,
     );
     w.blank();
-    emit_fragment(&mut w, texture, soft.is_some(), lit, layout.batched);
+    let lit_turned = lit.then(|| ir.render.turns_quad());
+    emit_fragment(&mut w, texture, soft.is_some(), lit_turned, layout.batched);
     if shape.splat {
         w.blank();
         if splat_discs(ir, shape.hdr) {
@@ -462,135 +465,4 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
         w.line("s.visible = true;");
         w.line("return s;");
     });
-}
-
-/// The vertex shader `vs`: one instance per slot (or list entry), a quad (4-vertex strip) or a
-/// triangle around the disc per sprite.
-fn emit_vertex(w: &mut Writer, shape: &DrawShape, oriented: bool, textured: bool, lit: bool) {
-    w.block("struct Sprite", |w| {
-        w.line("@builtin(position) clip: vec4<f32>,");
-        w.line("@location(0) uv: vec2<f32>,");
-        w.line("@location(1) color: vec4<f32>,");
-        if textured {
-            w.line("@location(2) @interpolate(flat) frame: u32,");
-        }
-        if lit {
-            w.comment("A lit sprite's point and half axes in view space (render.lit).");
-            w.line("@location(3) view_pos: vec3<f32>,");
-            w.line("@location(4) @interpolate(flat) axis_x: vec3<f32>,");
-            w.line("@location(5) @interpolate(flat) axis_y: vec3<f32>,");
-        }
-    });
-    w.blank();
-    w.line("@vertex");
-    w.block(
-        "fn vs(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance: u32) -> Sprite",
-        |w| {
-            w.line("var out: Sprite;");
-            w.line("out.clip = HIDDEN;");
-            w.line("out.uv = vec2<f32>(0.0);");
-            w.line("out.color = vec4<f32>(0.0);");
-            if textured {
-                w.line("out.frame = 0u;");
-            }
-            if lit {
-                w.line("out.view_pos = vec3<f32>(0.0);");
-                w.line("out.axis_x = vec3<f32>(1.0, 0.0, 0.0);");
-                w.line("out.axis_y = vec3<f32>(0.0, 1.0, 0.0);");
-            }
-            w.line("let s = sprite_at(instance);");
-            w.block("if (!s.visible)", |w| w.line("return out;"));
-            match shape.primitive {
-                Primitive::Quad => {
-                    w.comment("Strip corners (-1,-1), (1,-1), (-1,1), (1,1), offset in view space so the quad faces the camera.");
-                    w.line("let corner = vec2<f32>(f32(vertex & 1u), f32((vertex >> 1u) & 1u)) * 2.0 - 1.0;");
-                }
-                Primitive::Triangle => {
-                    w.comment("Corners (0, 2), (-sqrt 3, -1), (sqrt 3, -1): the triangle whose incircle is the disc.");
-                    w.line(format!(
-                        "let corner = select(vec2<f32>((f32(vertex) - 1.5) * {}, -1.0), vec2<f32>(0.0, 2.0), vertex == 0u);",
-                        f32_lit(2.0 * 3f64.sqrt())
-                    ));
-                }
-            }
-            if oriented {
-                w.line("out.clip = draw.proj * (s.center + vec4<f32>(corner.x * s.half_x + corner.y * s.half_y, 0.0));");
-            } else {
-                w.line("out.clip = draw.proj * (s.center + vec4<f32>(corner * (0.5 * s.size), 0.0, 0.0));");
-            }
-            w.line("out.uv = corner;");
-            w.line("out.color = s.color;");
-            if textured {
-                w.line("out.frame = s.frame;");
-            }
-            if lit {
-                if oriented {
-                    w.line("out.axis_x = s.half_x;");
-                    w.line("out.axis_y = s.half_y;");
-                } else {
-                    w.line("out.axis_x = vec3<f32>(0.5 * s.size, 0.0, 0.0);");
-                    w.line("out.axis_y = vec3<f32>(0.0, 0.5 * s.size, 0.0);");
-                }
-                w.line("out.view_pos = s.center.xyz + corner.x * out.axis_x + corner.y * out.axis_y;");
-            }
-            w.line("return out;");
-        },
-    );
-}
-
-/// The fragment shader `fs`: the texture's frame times the colour ([`crate::features::looks::texture`]), or a
-/// soft round sprite, alpha a (1 − r²)², nothing at r >= 1.
-/// With `soft` or `lit`, that colour comes from `shade`, and `fs` shades it by the lights
-/// (`lit_color`) and fades its alpha by `soft_fade`.
-fn emit_fragment(
-    w: &mut Writer,
-    texture: Option<&crate::features::looks::texture::TextureIr>,
-    soft: bool,
-    lit: bool,
-    batched: bool,
-) {
-    // A batch's draw reads the camera through its private copy (see `wgsl::batch`).
-    let take_view = |w: &mut Writer| {
-        if batched {
-            w.line("draw = draw_uniform;");
-        }
-    };
-    if soft || lit {
-        w.block("fn shade(in: Sprite) -> vec4<f32>", |w| {
-            emit_shade(w, texture)
-        });
-        w.blank();
-        w.line("@fragment");
-        w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
-            take_view(w);
-            if lit {
-                w.line("let c = lit_color(shade(in), in.uv, in.axis_x, in.axis_y, in.view_pos);");
-            } else {
-                w.line("let c = shade(in);");
-            }
-            match soft {
-                true => w.line("return vec4<f32>(c.rgb, c.a * soft_fade(in.clip));"),
-                false => w.line("return c;"),
-            }
-        });
-    } else {
-        w.line("@fragment");
-        w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
-            take_view(w);
-            emit_shade(w, texture)
-        });
-    }
-}
-
-/// The sprite's colour at a fragment: the texture's frame times the colour, or the soft disc.
-fn emit_shade(w: &mut Writer, texture: Option<&crate::features::looks::texture::TextureIr>) {
-    if let Some(t) = texture {
-        t.emit_fragment_body(w);
-        return;
-    }
-    w.line("let r2 = dot(in.uv, in.uv);");
-    w.block("if (r2 >= 1.0)", |w| w.line("discard;"));
-    w.comment("Soft round falloff: full at the centre, zero at the rim.");
-    w.line("let falloff = (1.0 - r2) * (1.0 - r2);");
-    w.line("return vec4<f32>(in.color.rgb, in.color.a * falloff);");
 }

@@ -55,16 +55,27 @@ pub fn splat_hdr_pitch(width: u32) -> u32 {
 
 /// 32-bit words of a quad's record: rows of the pixel-to-corner map (xyz) with the colour's
 /// red, green and blue (w); for a host's image (`host`) the quad's clip-space depth terms
-/// (centre, x and y half axes), from which a pixel's depth follows; for a lit look (`lit`)
-/// the quad's half axes and centre in view space, which its normal and the light at a pixel
-/// follow from ([`lit_record_row`]); last, alpha, the flipbook frame and the pixel box's two
-/// corners.
-pub fn splat_quad_words(host: bool, lit: bool) -> u64 {
-    16 + if host { 4 } else { 0 } + if lit { 12 } else { 0 }
+/// (centre, x and y half axes), from which a pixel's depth follows; for a lit look of `ir`
+/// the quad's place in view space, which its normal and the light at a pixel follow from
+/// ([`lit_record_vec4s`]); last, alpha, the flipbook frame and the pixel box's two corners.
+pub fn splat_quad_words(ir: &EffectIr, host: bool) -> u64 {
+    16 + if host { 4 } else { 0 } + 4 * u64::from(lit_record_vec4s(ir))
 }
 
-/// The first of a lit quad record's three vec4s: (half x axis, centre x), (half y axis,
-/// centre y), (centre z, 0, 0, 0), in view space; after the host's depth terms when there are.
+/// Vec4s of a lit quad's record that place it in view space (after the host's depth terms
+/// when there are, [`lit_record_row`]): for a turned quad (`RenderIr::turns_quad`) four,
+/// (unit x axis, centre x), (unit y axis, centre y), (facing, centre z), (half width, half
+/// height, 0, 0); for an upright camera-facing one, whose basis is the view's own, one,
+/// (centre, half size); none for an unlit look.
+pub(crate) fn lit_record_vec4s(ir: &EffectIr) -> u32 {
+    match (ir.render.lit.is_some(), ir.render.turns_quad()) {
+        (false, _) => 0,
+        (true, true) => 4,
+        (true, false) => 1,
+    }
+}
+
+/// The first vec4 of a lit quad's record that places it ([`lit_record_vec4s`]).
 pub(crate) fn lit_record_row(host: bool) -> u32 {
     3 + u32::from(host)
 }

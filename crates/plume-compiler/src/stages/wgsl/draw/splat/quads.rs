@@ -6,7 +6,10 @@
 
 use super::composite::{self, emit_composite};
 use super::masks;
-use super::{emit_project_kernel, host_depth, lit_record_row, splat_quad_words, splat_slices};
+use super::{
+    emit_project_kernel, host_depth, lit_record_row, lit_record_vec4s, splat_quad_words,
+    splat_slices,
+};
 use crate::base::writer::{f32_lit, Writer};
 use crate::features::looks::orient::OrientIr;
 use crate::features::looks::COLOR_MOST;
@@ -36,8 +39,8 @@ pub const SPLAT_FLAT_VIEW: &str = "FLAT_VIEW";
 /// rasteriser would clip it to the part inside). For a host's image (`host`) the record also
 /// holds the clip-space depth terms a pixel's depth is found from (a vec4 before the last).
 pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr, host: bool) {
-    let lit = ir.render.lit.is_some();
-    let vec4s = splat_quad_words(host, lit) / 4;
+    let lit = lit_record_vec4s(ir);
+    let vec4s = splat_quad_words(ir, host) / 4;
     let (half_x, half_y) = if ir.render.turns_quad() {
         ("s.half_x", "s.half_y")
     } else {
@@ -96,12 +99,21 @@ pub(crate) fn emit_project_quads(w: &mut Writer, ir: &EffectIr, host: bool) {
                             w.comment("Clip z at corner coordinates (u, v) is c0.z + u ax.z + v ay.z.");
                             w.line(format!("splats[{vec4s}u * k + 3u] = bitcast<vec4<u32>>(vec4<f32>(c0.z, ax.z, ay.z, 0.0));"));
                         }
-                        if lit {
-                            let row = lit_record_row(host);
-                            w.comment("The half axes and centre in view space: the lit look's normal and light at each pixel.");
-                            w.line(format!("splats[{vec4s}u * k + {row}u] = bitcast<vec4<u32>>(vec4<f32>({half_x}, s.center.x));"));
-                            w.line(format!("splats[{vec4s}u * k + {}u] = bitcast<vec4<u32>>(vec4<f32>({half_y}, s.center.y));", row + 1));
-                            w.line(format!("splats[{vec4s}u * k + {}u] = bitcast<vec4<u32>>(vec4<f32>(s.center.z, 0.0, 0.0, 0.0));", row + 2));
+                        let row = lit_record_row(host);
+                        match lit {
+                            0 => {}
+                            1 => {
+                                w.comment("The centre and half size in view space (the basis is the view's): the lit look's normal and light at each pixel.");
+                                w.line(format!("splats[{vec4s}u * k + {row}u] = bitcast<vec4<u32>>(vec4<f32>(s.center.xyz, 0.5 * s.size));"));
+                            }
+                            _ => {
+                                w.comment("The basis, centre and half sizes in view space: the lit look's normal and light at each pixel.");
+                                w.line(format!("let basis = sprite_basis({half_x}, {half_y}, s.center.xyz);"));
+                                w.line(format!("splats[{vec4s}u * k + {row}u] = bitcast<vec4<u32>>(vec4<f32>(basis[0], s.center.x));"));
+                                w.line(format!("splats[{vec4s}u * k + {}u] = bitcast<vec4<u32>>(vec4<f32>(basis[1], s.center.y));", row + 1));
+                                w.line(format!("splats[{vec4s}u * k + {}u] = bitcast<vec4<u32>>(vec4<f32>(basis[2], s.center.z));", row + 2));
+                                w.line(format!("splats[{vec4s}u * k + {}u] = bitcast<vec4<u32>>(vec4<f32>(length({half_x}), length({half_y}), 0.0, 0.0));", row + 3));
+                            }
                         }
                         w.line(format!("splats[{vec4s}u * k + {}u] = vec4<u32>(bitcast<u32>(color.a), {frame}, box);", vec4s - 1));
                     });
@@ -133,13 +145,13 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         }
     }
     w.blank();
-    if ir.render.lit.is_some() {
-        emit_lit_record(w);
+    let lit = lit_record_vec4s(ir);
+    if lit > 0 {
+        emit_lit_record(w, lit);
         w.blank();
     }
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
-    let lit = ir.render.lit.is_some();
-    let vec4s = (splat_quad_words(shape.host.is_some(), lit) / 4) as u32;
+    let vec4s = (splat_quad_words(ir, shape.host.is_some()) / 4) as u32;
     let depth = host_depth(shape);
     let stride = composite::batch_stride(vec4s, additive);
     let affine = splat_affine_quads(ir, shape);
@@ -280,9 +292,9 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         splat_slices(ir),
         composite::RecordBatch {
             vec4s: stride,
-            // A lit record's three more vec4s fit WebGPU's 16 KiB of workgroup memory in
-            // batches of 64.
-            size: if additive || lit {
+            // A turned lit quad's four more vec4s fit WebGPU's 16 KiB of workgroup memory
+            // in batches of 64.
+            size: if additive || lit > 1 {
                 composite::SPLAT_ADDITIVE_QUAD_BATCH
             } else {
                 composite::SPLAT_BATCH
@@ -340,33 +352,42 @@ fn evaluate_affine(w: &mut Writer, stride: u32, shade: &str) {
 }
 
 /// The composite's shading of record j at corner coordinates uv: `splat_shade`'s colour, and
-/// for a lit look that colour lit as the fragment shader lights it (`lit_color`), from the
-/// half axes and centre the record keeps ([`lit_record_row`]).
-fn lit_shade(lit: bool, host: bool, stride: u32) -> String {
+/// for a lit look (`lit` vec4s of place, [`lit_record_vec4s`]) that colour lit as the fragment
+/// shader lights it (`lit_color`), from the place the record keeps ([`lit_record_row`]).
+fn lit_shade(lit: u32, host: bool, stride: u32) -> String {
     let unlit = "splat_shade(uv, du, dv, color, r3.y)";
-    if !lit {
+    if lit == 0 {
         return unlit.to_string();
     }
     let row = lit_record_row(host);
     let at = |r: u32| format!("bitcast<vec4<f32>>(batch[{stride}u * j + {r}u])");
-    format!(
-        "lit_record({unlit}, uv, {}, {}, {})",
-        at(row),
-        at(row + 1),
-        at(row + 2)
-    )
+    let place: Vec<String> = (row..row + lit).map(at).collect();
+    format!("lit_record({unlit}, uv, {})", place.join(", "))
 }
 
-/// `lit_record(c, uv, a, b, c2)`: colour `c` at corner coordinates uv of a lit quad whose
-/// record keeps (half x axis, centre x) in `a`, (half y axis, centre y) in `b` and centre z in
-/// `c2.x`, lit there as the fragment shader lights it.
-pub(crate) fn emit_lit_record(w: &mut Writer) {
-    w.comment("A lit quad's colour at corner coordinates uv, from its record's half axes and centre (view space).");
+/// `lit_record(c, uv, ...)`: colour `c` at corner coordinates uv of a lit quad, lit there as
+/// the fragment shader lights it, from the place its record keeps: for `lit` = 1 its centre
+/// and half size `q` (upright, facing the camera: the view's basis), else (unit x axis,
+/// centre x) in `a`, (unit y axis, centre y) in `b`, (facing, centre z) in `f` and its half
+/// sizes in `h.xy`.
+pub(crate) fn emit_lit_record(w: &mut Writer, lit: u32) {
+    if lit == 1 {
+        w.comment("An upright lit quad's colour at corner coordinates uv, from its record's centre and half size (view space).");
+        w.block(
+            "fn lit_record(c: vec4<f32>, uv: vec2<f32>, q: vec4<f32>) -> vec4<f32>",
+            |w| {
+                w.line("let p = q.xyz + vec3<f32>(uv * q.w, 0.0);");
+                w.line("return lit_color(c, uv, VIEW_BASIS, p);");
+            },
+        );
+        return;
+    }
+    w.comment("A lit quad's colour at corner coordinates uv, from its record's basis, centre and half sizes (view space).");
     w.block(
-        "fn lit_record(c: vec4<f32>, uv: vec2<f32>, a: vec4<f32>, b: vec4<f32>, c2: vec4<f32>) -> vec4<f32>",
+        "fn lit_record(c: vec4<f32>, uv: vec2<f32>, a: vec4<f32>, b: vec4<f32>, f: vec4<f32>, h: vec4<f32>) -> vec4<f32>",
         |w| {
-            w.line("let p = vec3<f32>(a.w, b.w, c2.x) + uv.x * a.xyz + uv.y * b.xyz;");
-            w.line("return lit_color(c, uv, a.xyz, b.xyz, p);");
+            w.line("let p = vec3<f32>(a.w, b.w, f.w) + (uv.x * h.x) * a.xyz + (uv.y * h.y) * b.xyz;");
+            w.line("return lit_color(c, uv, mat3x3<f32>(a.xyz, b.xyz, f.xyz), p);");
         },
     );
 }

@@ -1,0 +1,163 @@
+//! The draw module's entry points: the vertex shader `vs`, which places each sprite's quad (or
+//! triangle) from `sprite_at`, and the fragment shader `fs`, which shades it (the soft disc or
+//! the texture's frame, lit by the lights for a lit look, faded near the scene for a soft one).
+
+use super::{DrawShape, Primitive};
+use crate::base::writer::{f32_lit, Writer};
+
+/// The vertex shader `vs`: one instance per slot (or list entry), a quad (4-vertex strip) or a
+/// triangle around the disc per sprite.
+pub(super) fn emit_vertex(
+    w: &mut Writer,
+    shape: &DrawShape,
+    oriented: bool,
+    textured: bool,
+    lit: bool,
+) {
+    w.block("struct Sprite", |w| {
+        w.line("@builtin(position) clip: vec4<f32>,");
+        w.line("@location(0) uv: vec2<f32>,");
+        w.line("@location(1) color: vec4<f32>,");
+        if textured {
+            w.line("@location(2) @interpolate(flat) frame: u32,");
+        }
+        if lit {
+            w.comment("A lit sprite's point in view space (render.lit).");
+            w.line("@location(3) view_pos: vec3<f32>,");
+        }
+        if lit && oriented {
+            w.comment(
+                "Its basis (unit axes, facing) in view space: an upright sprite's is the view's.",
+            );
+            w.line("@location(4) @interpolate(flat) basis_x: vec3<f32>,");
+            w.line("@location(5) @interpolate(flat) basis_y: vec3<f32>,");
+            w.line("@location(6) @interpolate(flat) basis_z: vec3<f32>,");
+        }
+    });
+    w.blank();
+    w.line("@vertex");
+    w.block(
+        "fn vs(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance: u32) -> Sprite",
+        |w| {
+            w.line("var out: Sprite;");
+            w.line("out.clip = HIDDEN;");
+            w.line("out.uv = vec2<f32>(0.0);");
+            w.line("out.color = vec4<f32>(0.0);");
+            if textured {
+                w.line("out.frame = 0u;");
+            }
+            if lit {
+                w.line("out.view_pos = vec3<f32>(0.0);");
+            }
+            if lit && oriented {
+                w.line("out.basis_x = vec3<f32>(1.0, 0.0, 0.0);");
+                w.line("out.basis_y = vec3<f32>(0.0, 1.0, 0.0);");
+                w.line("out.basis_z = vec3<f32>(0.0, 0.0, 1.0);");
+            }
+            w.line("let s = sprite_at(instance);");
+            w.block("if (!s.visible)", |w| w.line("return out;"));
+            match shape.primitive {
+                Primitive::Quad => {
+                    w.comment("Strip corners (-1,-1), (1,-1), (-1,1), (1,1), offset in view space so the quad faces the camera.");
+                    w.line("let corner = vec2<f32>(f32(vertex & 1u), f32((vertex >> 1u) & 1u)) * 2.0 - 1.0;");
+                }
+                Primitive::Triangle => {
+                    w.comment("Corners (0, 2), (-sqrt 3, -1), (sqrt 3, -1): the triangle whose incircle is the disc.");
+                    w.line(format!(
+                        "let corner = select(vec2<f32>((f32(vertex) - 1.5) * {}, -1.0), vec2<f32>(0.0, 2.0), vertex == 0u);",
+                        f32_lit(2.0 * 3f64.sqrt())
+                    ));
+                }
+            }
+            if oriented {
+                w.line("out.clip = draw.proj * (s.center + vec4<f32>(corner.x * s.half_x + corner.y * s.half_y, 0.0));");
+            } else {
+                w.line("out.clip = draw.proj * (s.center + vec4<f32>(corner * (0.5 * s.size), 0.0, 0.0));");
+            }
+            w.line("out.uv = corner;");
+            w.line("out.color = s.color;");
+            if textured {
+                w.line("out.frame = s.frame;");
+            }
+            if lit {
+                let (ax, ay) = match oriented {
+                    true => ("s.half_x", "s.half_y"),
+                    false => (
+                        "vec3<f32>(0.5 * s.size, 0.0, 0.0)",
+                        "vec3<f32>(0.0, 0.5 * s.size, 0.0)",
+                    ),
+                };
+                w.line(format!("out.view_pos = s.center.xyz + corner.x * {ax} + corner.y * {ay};"));
+                if oriented {
+                    w.line(format!("let basis = sprite_basis({ax}, {ay}, s.center.xyz);"));
+                    w.line("out.basis_x = basis[0];");
+                    w.line("out.basis_y = basis[1];");
+                    w.line("out.basis_z = basis[2];");
+                }
+            }
+            w.line("return out;");
+        },
+    );
+}
+
+/// The fragment shader `fs`: the texture's frame times the colour ([`crate::features::looks::texture`]), or a
+/// soft round sprite, alpha a (1 − r²)², nothing at r >= 1.
+/// With `soft` or `lit`, that colour comes from `shade`, and `fs` shades it by the lights
+/// (`lit_color`; `lit` says whether the quad is turned, its basis then a varying) and fades
+/// its alpha by `soft_fade`.
+pub(super) fn emit_fragment(
+    w: &mut Writer,
+    texture: Option<&crate::features::looks::texture::TextureIr>,
+    soft: bool,
+    lit: Option<bool>,
+    batched: bool,
+) {
+    // A batch's draw reads the camera through its private copy (see `wgsl::batch`).
+    let take_view = |w: &mut Writer| {
+        if batched {
+            w.line("draw = draw_uniform;");
+        }
+    };
+    if soft || lit.is_some() {
+        w.block("fn shade(in: Sprite) -> vec4<f32>", |w| {
+            emit_shade(w, texture)
+        });
+        w.blank();
+        w.line("@fragment");
+        w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
+            take_view(w);
+            if let Some(oriented) = lit {
+                match oriented {
+                    true => w.line("let basis = mat3x3<f32>(in.basis_x, in.basis_y, in.basis_z);"),
+                    false => w.line("let basis = VIEW_BASIS;"),
+                }
+                w.line("let c = lit_color(shade(in), in.uv, basis, in.view_pos);");
+            } else {
+                w.line("let c = shade(in);");
+            }
+            match soft {
+                true => w.line("return vec4<f32>(c.rgb, c.a * soft_fade(in.clip));"),
+                false => w.line("return c;"),
+            }
+        });
+    } else {
+        w.line("@fragment");
+        w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
+            take_view(w);
+            emit_shade(w, texture)
+        });
+    }
+}
+
+/// The sprite's colour at a fragment: the texture's frame times the colour, or the soft disc.
+fn emit_shade(w: &mut Writer, texture: Option<&crate::features::looks::texture::TextureIr>) {
+    if let Some(t) = texture {
+        t.emit_fragment_body(w);
+        return;
+    }
+    w.line("let r2 = dot(in.uv, in.uv);");
+    w.block("if (r2 >= 1.0)", |w| w.line("discard;"));
+    w.comment("Soft round falloff: full at the centre, zero at the rim.");
+    w.line("let falloff = (1.0 - r2) * (1.0 - r2);");
+    w.line("return vec4<f32>(in.color.rgb, in.color.a * falloff);");
+}
