@@ -26,6 +26,17 @@ const COLOR: [f64; 4] = [0.8, 0.6, 0.4, 1.0];
 /// One opaque sprite of radius [`RADIUS`] at the origin facing the camera 10 m away along +z,
 /// over black, with `lit` (the `Lit(...)` text) and `lights` (the list's entries).
 fn probe(gpu: &Gpu, lit: &str, lights: &str) -> Effect {
+    probe_with(gpu, lit, lights, "", None)
+}
+
+/// [`probe`] with `render` (more of the render section's fields) and files read from `dir`.
+fn probe_with(
+    gpu: &Gpu,
+    lit: &str,
+    lights: &str,
+    render: &str,
+    dir: Option<&std::path::Path>,
+) -> Effect {
     let [r, g, b, a] = COLOR;
     let src = format!(
         r#"Effect(
@@ -35,11 +46,15 @@ fn probe(gpu: &Gpu, lit: &str, lights: &str) -> Effect {
     camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: {FOV_Y:.1}),
     lights: [{lights}],
     render: Render(color: [(0.0, ({r}, {g}, {b}, {a}))], size: [(0.0, {size:.1})],
-                   background: (0.0, 0.0, 0.0), lit: Some({lit})),
+                   background: (0.0, 0.0, 0.0), lit: Some({lit}){render}),
 )"#,
         size = 2.0 * RADIUS
     );
-    let effect = plume::compile_str(&src, &Default::default())
+    let options = plume::CompileOptions {
+        base_dir: dir.map(std::path::Path::to_path_buf),
+        ..Default::default()
+    };
+    let effect = plume::compile_str(&src, &options)
         .unwrap_or_else(|e| panic!("{}", e.render("probe.ron", &src)));
     let mut sim = Effect::new(gpu, effect).unwrap();
     sim.run(1, |_| {}).unwrap();
@@ -53,23 +68,40 @@ fn radius_pixels() -> f64 {
 
 /// The f64 colour (0 to 255) of the pixel `right` pixels right of and `up` pixels above the
 /// centre: corner coordinates uv exact (the sprite lies parallel to the image plane), the
-/// soft disc's alpha (1 − r²)², the colour lit there, blended over black.
-fn expected(sim: &Effect, lights: &Lights, right: i32, up: i32) -> [f64; 3] {
+/// colour lit there, blended over black. Its alpha is the soft disc's (1 − r²)², or for a
+/// textured sprite whose texel is `texel` (RGBA in [0, 1]) and whose normal map's normal there
+/// is the tangent beside it, the texel's, the colour times the texel.
+fn expected(
+    sim: &Effect,
+    lights: &Lights,
+    right: i32,
+    up: i32,
+    texel: Option<([f64; 4], DVec3)>,
+) -> [f64; 3] {
     let ir = &sim.compiled().ir;
-    let lit: Lit = ir.render.lit.expect("a lit probe");
+    let lit: &Lit = ir.render.lit.as_ref().expect("a lit probe");
     let uv = (
         f64::from(right) / radius_pixels(),
         f64::from(up) / radius_pixels(),
     );
     let (half_x, half_y) = (DVec3::X * RADIUS, DVec3::Y * RADIUS);
     let p = uv.0 * half_x + uv.1 * half_y;
-    let n = lit.normal(uv, half_x, half_y, DVec3::new(0.0, 0.0, 10.0) - p);
-    let rgb = lit.shade(
-        DVec3::new(COLOR[0], COLOR[1], COLOR[2]),
-        lights.received(n, p, lit.wrap),
-    );
-    let r2 = uv.0 * uv.0 + uv.1 * uv.1;
-    let alpha = COLOR[3] * (1.0 - r2).max(0.0).powi(2);
+    let tangent = texel.map_or(DVec3::ZERO, |t| t.1);
+    let n = lit.normal(uv, (half_x, half_y), DVec3::new(0.0, 0.0, 10.0), tangent);
+    let (rgba, alpha) = match texel {
+        Some((t, _)) => (
+            [COLOR[0] * t[0], COLOR[1] * t[1], COLOR[2] * t[2]],
+            COLOR[3] * t[3],
+        ),
+        None => {
+            let r2 = uv.0 * uv.0 + uv.1 * uv.1;
+            (
+                [COLOR[0], COLOR[1], COLOR[2]],
+                COLOR[3] * (1.0 - r2).max(0.0).powi(2),
+            )
+        }
+    };
+    let rgb = lit.shade(DVec3::from_array(rgba), lights.received(n, p, lit.wrap));
     (rgb * alpha)
         .clamp(DVec3::ZERO, DVec3::ONE)
         .to_array()
@@ -118,11 +150,24 @@ fn assert_lit_like_f64(
     host: bool,
     offsets: &[(i32, i32)],
 ) {
+    assert_textured_lit_like_f64(gpu, sim, lights, host, offsets, None);
+}
+
+/// [`assert_lit_like_f64`] for a textured sprite of texel and normal map normal `texel`
+/// everywhere, when given.
+fn assert_textured_lit_like_f64(
+    gpu: &Gpu,
+    sim: &Effect,
+    lights: &Lights,
+    host: bool,
+    offsets: &[(i32, i32)],
+    texel: Option<([f64; 4], DVec3)>,
+) {
     let centre = (SIDE / 2) as i32;
     let mut wrong = Vec::new();
     for (kind, image) in images(gpu, sim, host.then_some(lights)) {
         for &(right, up) in offsets {
-            let want = expected(sim, lights, right, up);
+            let want = expected(sim, lights, right, up, texel);
             let (x, y) = (centre + right, centre - up);
             let at = 4 * (y as usize * SIDE as usize + x as usize);
             let got = &image[at..at + 3];
@@ -253,6 +298,47 @@ fn a_hosts_lights_replace_the_files() {
     );
 }
 
+#[test]
+fn a_normal_map_turns_the_light_as_its_texels_say() {
+    let gpu = gpu();
+    // An 8 x 8 texture of one tint and a normal map of one normal, leaning right: (0.6, 0, 0.8)
+    // as 8-bit texels, (r, g, b) = (n + 1) / 2.
+    let dir = std::env::temp_dir().join(format!("plume-lit-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let tint = [230u8, 204, 255, 255];
+    let leaning = [204u8, 128, 230, 255];
+    for (name, texel) in [("tint.png", tint), ("normals.png", leaning)] {
+        let rgba: Vec<u8> = texel.repeat(64);
+        image::save_buffer(dir.join(name), &rgba, 8, 8, image::ColorType::Rgba8).unwrap();
+    }
+    let decode = |t: [u8; 4]| t.map(|c| f64::from(c) / 255.0);
+    let tangent = DVec3::from_array([0, 1, 2].map(|c| decode(leaning)[c] * 2.0 - 1.0));
+    let texel = Some((decode(tint), tangent));
+    let texture = r#", texture: Some(Texture(file: "tint.png"))"#;
+    let lit = r#"Lit(normals: Map(file: "normals.png"))"#;
+    let offsets = [(0, 0), (12, 0), (-12, 7), (5, -15)];
+    // Light from the right, which the normal leans toward; then from the left, away from it.
+    for lights in [
+        "Directional(direction: (-1.0, 0.0, 0.0)), Ambient(intensity: 0.1)",
+        "Directional(direction: (1.0, 0.0, -0.3)), Ambient(intensity: 0.1)",
+    ] {
+        let sim = probe_with(&gpu, lit, lights, texture, Some(&dir));
+        let ir_lights = sim.compiled().ir.lights.clone();
+        assert_textured_lit_like_f64(&gpu, &sim, &ir_lights, false, &offsets, texel);
+    }
+    // The sphere's own normals would light the centre from the right not at all.
+    let sim = probe_with(
+        &gpu,
+        lit,
+        "Directional(direction: (-1.0, 0.0, 0.0))",
+        texture,
+        Some(&dir),
+    );
+    let centre = expected(&sim, &sim.compiled().ir.lights, 0, 0, texel);
+    assert!(centre[0] > 100.0, "{centre:?}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Many particles, turned, textured and lit by every kind of light, from a camera off to the
 /// side: the raster draw agrees with the reference drawing, which builds each sprite's frame
 /// on the CPU and lights it in world space, and the compute splat with the raster draw.
@@ -264,6 +350,11 @@ fn turned_textured_lit_sprites_agree_with_the_reference_drawing() {
         ("Fixed((0.3, 1.0, 0.2))", "Sphere"),
         ("Camera", "Flat"),
         ("Velocity(stretch: 0.2, max_length: 2.0)", "Sphere"),
+        (
+            "Fixed((0.3, 1.0, 0.2))",
+            r#"Map(file: "textures/smoke_normals.png")"#,
+        ),
+        ("Camera", r#"Map(file: "textures/smoke_normals.png")"#),
     ] {
         let src = format!(
             r#"Effect(

@@ -8,6 +8,9 @@ where a shape wants shading of its own.
 - bird.png: 4 frames (4 x 1) of a bird seen from above, head at the top (the direction of
   flight with `orient: Velocity`), through one wing beat.
 - smoke.png: 16 frames (4 x 4) of a puff of smoke that swells, churns and thins out.
+- smoke_normals.png: smoke.png's normal map (a lit look's `normals: Map`): each puff's surface
+  a half sphere roughened by the noise that shapes it, (r, g, b) = (n + 1) / 2 with x right,
+  y up and z toward the viewer; opaque.
 - snowflake.png: one six-armed flake with side branches.
 """
 
@@ -144,6 +147,31 @@ def smoke(frame, frames):
     return texel
 
 
+def smoke_normal(frame, frames):
+    """Frame `frame` of smoke.png's normal map: the gradient of a height that is a half
+    sphere of the puff's radius, bumped by the puff's own noise."""
+    t = frame / (frames - 1)
+    radius = 0.55 + 0.4 * t
+    turn = 0.6 * t
+
+    def height(u, v):
+        r2 = (u * u + v * v) / (radius * radius)
+        cu = u * math.cos(turn) - v * math.sin(turn)
+        cv = u * math.sin(turn) + v * math.cos(turn)
+        n = fbm(cu * 1.7 + 10.0, cv * 1.7 - 0.8 * t + 10.0, 17)
+        return radius * math.sqrt(max(0.0, 1.0 - r2)) * (0.7 + 0.6 * n)
+
+    def texel(u, v):
+        e = 1.0 / 64.0
+        dx = (height(u + e, v) - height(u - e, v)) / (2 * e)
+        dy = (height(u, v + e) - height(u, v - e)) / (2 * e)
+        n = (-dx, -dy, 1.0)
+        length = math.sqrt(sum(c * c for c in n))
+        return tuple(0.5 * c / length + 0.5 for c in n) + (1.0,)
+
+    return texel
+
+
 def main():
     size = 64
     # bird.png: 4 frames side by side.
@@ -161,6 +189,15 @@ def main():
         return puffs[k](u, v)
 
     write_png(os.path.join(HERE, "smoke.png"), 4 * size, 4 * size, smoke_texel)
+    normals = [smoke_normal(k, 16) for k in range(16)]
+
+    def normal_texel(x, y):
+        k = (y // size) * 4 + x // size
+        u = ((x % size + 0.5) / size) * 2.0 - 1.0
+        v = 1.0 - ((y % size + 0.5) / size) * 2.0
+        return normals[k](u, v)
+
+    write_png(os.path.join(HERE, "smoke_normals.png"), 4 * size, 4 * size, normal_texel)
     write_png(os.path.join(HERE, "snowflake.png"), size, size,
               lambda x, y: (1.0, 1.0, 1.0, supersampled(snowflake, x, y, size)))
 

@@ -122,6 +122,9 @@ pub struct RenderIr {
     pub by: crate::features::looks::by_expression::LookBy,
     /// Shading by the lights, when the sprites are lit (`lit.rs`).
     pub lit: Option<crate::features::looks::lit::Lit>,
+    /// The normal map of a lit look whose normals come from one, loaded: laid out as
+    /// `texture`, whose frames it follows.
+    pub normal_map: Option<crate::features::looks::texture::TextureIr>,
 }
 
 impl RenderIr {
@@ -540,12 +543,15 @@ impl fmt::Display for EffectIr {
         if let Some(g) = self.render.glow {
             writeln!(f, "  glow {g:?}")?;
         }
-        if let Some(lit) = self.render.lit {
+        if let Some(lit) = &self.render.lit {
             writeln!(
                 f,
                 "  lit {:?} normals, wrap {}, emissive {}; {}",
                 lit.normals, lit.wrap, lit.emissive, self.lights
             )?;
+            if let Some(map) = &self.render.normal_map {
+                writeln!(f, "  normal map {map:?}")?;
+            }
         }
         if let Some(t) = &self.render.trail {
             writeln!(

@@ -141,7 +141,9 @@ pub fn lower(effect: &Effect) -> EffectIr {
                     .as_ref()
                     .map(|p| p.iter().map(|c| c.d()).collect()),
                 by: crate::features::looks::by_expression::LookBy::lower(r.written_by(), scope),
-                lit: r.lit,
+                lit: r.lit.clone(),
+                // Loaded by `compile_effect`, as the texture.
+                normal_map: None,
             }
         },
         bounds: effect.bounds.map(|b| (b.min.d(), b.max.d())),

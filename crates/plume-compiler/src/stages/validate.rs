@@ -355,7 +355,7 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Re
         check_trail(c, &path.field("trail"), t);
     }
     if let Some(lit) = &r.lit {
-        lit.check(&path.field("lit"), c);
+        lit.check(&path.field("lit"), r.texture.is_some(), c);
     }
     if let Some(palette) = &r.palette {
         crate::features::looks::tint::check_palette(c, &path.field("palette"), palette);

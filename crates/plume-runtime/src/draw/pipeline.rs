@@ -93,7 +93,7 @@ pub(crate) fn draw_group(
 }
 
 /// A bind group of `layout` (a render pipeline's or the compute splat's): `buffers`, the
-/// sprite texture and sampler when there is one, and the scene depth when there is one.
+/// sprite texture and sampler (and a lit look's normal map) when there is one, and the scene depth when there is one.
 pub(crate) fn bind_resources(
     gpu: &Gpu,
     layout: &wgpu::BindGroupLayout,
@@ -116,6 +116,12 @@ pub(crate) fn bind_resources(
         bindings.push(wgpu::BindGroupEntry {
             binding: SAMPLER_BINDING,
             resource: wgpu::BindingResource::Sampler(&t.sampler),
+        });
+    }
+    if let Some(normals) = texture.and_then(|t| t.normals.as_ref()) {
+        bindings.push(wgpu::BindGroupEntry {
+            binding: plume_compiler::lit::NORMAL_MAP_BINDING,
+            resource: wgpu::BindingResource::TextureView(normals),
         });
     }
     if let Some(depth) = scene_depth {

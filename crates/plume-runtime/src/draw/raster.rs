@@ -181,10 +181,7 @@ impl GroupDraw {
         if let Some(lights) = &lights {
             entries.push((LIGHTS_BINDING, lights.buffer.clone()));
         }
-        let texture = match &effect.ir.render.texture {
-            Some(t) => Some(SpriteTexture::new(gpu, t)?),
-            None => None,
-        };
+        let texture = SpriteTexture::for_render(gpu, &effect.ir.render)?;
         let placeholder = match (soft, &target.depth) {
             (true, Some(test)) => Some(crate::draw::scene_depth::far_placeholder(gpu, test)?),
             _ => None,
@@ -485,7 +482,7 @@ pub(crate) struct LightsUniform {
 impl LightsUniform {
     /// The lights of `effect`'s draw; None for an unlit effect.
     pub(crate) fn new(gpu: &Gpu, effect: &CompiledEffect) -> Option<Self> {
-        effect.ir.render.lit?;
+        effect.ir.render.lit.as_ref()?;
         let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lights"),
             size: LIGHTS_BYTES,

@@ -16,9 +16,28 @@ pub struct SpriteTexture {
     pub view: wgpu::TextureView,
     /// Trilinear filtering (linear within and between levels), clamped to the edge.
     pub sampler: wgpu::Sampler,
+    /// A lit look's normal map (`render.lit.normals: Map`), laid out as the texture and read
+    /// with its sampler.
+    pub normals: Option<wgpu::TextureView>,
 }
 
 impl SpriteTexture {
+    /// The texture of `render` (None without one), with its normal map when a lit look has
+    /// one.
+    pub fn for_render(
+        gpu: &Gpu,
+        render: &plume_compiler::ir::RenderIr,
+    ) -> Result<Option<Self>, RuntimeError> {
+        let Some(texture) = &render.texture else {
+            return Ok(None);
+        };
+        let mut sprite = Self::new(gpu, texture)?;
+        if let Some(map) = &render.normal_map {
+            sprite.normals = Some(Self::new(gpu, map)?.view);
+        }
+        Ok(Some(sprite))
+    }
+
     /// Uploads `texture` (texels stored as they are: `Rgba8Unorm`, no sRGB decoding, as the
     /// effect's colour stops). An error for a texture whose file could not be read when the
     /// effect was compiled to be stepped only (`CompileOptions::step_only`): drawing needs it.
@@ -81,6 +100,7 @@ impl SpriteTexture {
         Ok(Self {
             view: texture.create_view(&Default::default()),
             sampler,
+            normals: None,
         })
     }
 }

@@ -8,7 +8,8 @@ struct Camera {
     // The eye in world space (w = 1), or for an orthographic camera the world direction
     // toward the viewer (w = 0).
     eye: vec4<f32>,
-    // A lit look (render.lit): (1 when lit, 1 for sphere normals, wrap, emissive).
+    // A lit look (render.lit): (1 when lit; normals 0 flat, 1 sphere, 2 a normal map; wrap;
+    // emissive).
     lit: vec4<f32>,
 }
 
@@ -31,6 +32,8 @@ struct Lights {
 }
 
 @group(0) @binding(3) var<uniform> lights: Lights;
+// A lit look's normal map, laid out as the texture (a flat 1x1 one when it has none).
+@group(0) @binding(4) var normal_texture: texture_2d<f32>;
 
 struct Out {
     @builtin(position) clip: vec4<f32>,
@@ -44,10 +47,11 @@ struct Out {
 }
 
 // A lit sprite's colour at corner coordinates uv, point p (world space): the normal of its
-// flat quad or of a half sphere over it, facing the viewer; ambient light plus each source's
+// flat quad, of a half sphere over it, or of its normal map (tangent: the map's normal in the
+// sprite's frame), facing the viewer; ambient light plus each source's
 // light times max((n . l + wrap) / (1 + wrap), 0), a point light's falling off as 1 / d^2
 // (d no less than 10 cm) and to zero at its range; the emissive part unlit.
-fn lit(c: vec4<f32>, uv: vec2<f32>, half_x: vec3<f32>, half_y: vec3<f32>, p: vec3<f32>) -> vec4<f32> {
+fn lit(c: vec4<f32>, uv: vec2<f32>, tangent: vec3<f32>, half_x: vec3<f32>, half_y: vec3<f32>, p: vec3<f32>) -> vec4<f32> {
     if (camera.lit.x == 0.0) {
         return c;
     }
@@ -61,6 +65,9 @@ fn lit(c: vec4<f32>, uv: vec2<f32>, half_x: vec3<f32>, half_y: vec3<f32>, p: vec
     var n = facing;
     if (camera.lit.y == 1.0) {
         n = normalize(uv.x * ux + uv.y * uy + sqrt(max(1.0 - dot(uv, uv), 0.0)) * facing);
+    }
+    if (camera.lit.y == 2.0) {
+        n = normalize(tangent.x * ux + tangent.y * uy + tangent.z * facing);
     }
     let wrap = camera.lit.z;
     var light = lights.ambient.rgb;
@@ -127,7 +134,8 @@ fn fs(in: Out) -> @location(0) vec4<f32> {
         let half_texel = min(0.5 * in.texels.zw, vec2<f32>(0.5 * exp2(ceil(log2(max(rho, 1.0))))));
         let at = in.texels.xy + clamp(local, half_texel, in.texels.zw - half_texel);
         let texel = in.color * textureSampleGrad(sprite_texture, sprite_sampler, at / size, gx, gy);
-        return lit(texel, in.uv, in.half_x, in.half_y, in.world);
+        let tangent = textureSampleGrad(normal_texture, sprite_sampler, at / size, gx, gy).xyz * 2.0 - 1.0;
+        return lit(texel, in.uv, tangent, in.half_x, in.half_y, in.world);
     }
     let r2 = dot(in.uv, in.uv);
     if (r2 >= 1.0) {
@@ -135,5 +143,5 @@ fn fs(in: Out) -> @location(0) vec4<f32> {
     }
     // Soft round falloff: full at the centre, zero at the rim.
     let falloff = (1.0 - r2) * (1.0 - r2);
-    return lit(vec4<f32>(in.color.rgb, in.color.a * falloff), in.uv, in.half_x, in.half_y, in.world);
+    return lit(vec4<f32>(in.color.rgb, in.color.a * falloff), in.uv, vec3<f32>(0.0), in.half_x, in.half_y, in.world);
 }

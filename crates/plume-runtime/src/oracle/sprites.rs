@@ -143,7 +143,7 @@ pub struct ReferenceRenderer {
     bind_group: wgpu::BindGroup,
     ribbons: RibbonPipeline,
     background: DVec3,
-    /// (1 when lit, 1 for sphere normals, wrap, emissive).
+    /// (1 when lit; normals 0 flat, 1 sphere, 2 a normal map; wrap; emissive).
     lit: [f32; 4],
 }
 
@@ -179,6 +179,11 @@ impl ReferenceRenderer {
             // Bound but never sampled: the sprites' texel rectangles are empty.
             None => SpriteTexture::from_rgba(gpu, 1, 1, &[255; 4], 1)?,
         };
+        // A lit look's normal map, laid out as the texture; a flat stand-in when there is none.
+        let normals = match &render.normal_map {
+            Some(map) => SpriteTexture::new(gpu, map)?,
+            None => SpriteTexture::from_rgba(gpu, 1, 1, &[128, 128, 255, 255], 1)?,
+        };
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("camera"),
             entries: &[
@@ -189,6 +194,16 @@ impl ReferenceRenderer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: false,
                         min_binding_size: wgpu::BufferSize::new(CAMERA_BYTES),
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
                     },
                     count: None,
                 },
@@ -242,6 +257,10 @@ impl ReferenceRenderer {
                     binding: 3,
                     resource: lights.as_entire_binding(),
                 },
+                wgpu::BindGroupEntry {
+                    binding: 4,
+                    resource: wgpu::BindingResource::TextureView(&normals.view),
+                },
             ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
@@ -265,14 +284,13 @@ impl ReferenceRenderer {
         );
         let ribbons = RibbonPipeline::new(gpu, blend, &camera);
         gpu.take_error()?;
-        let lit = render.lit.map_or([0.0; 4], |lit| {
-            let sphere = lit.normals == plume_compiler::lit::Normals::Sphere;
-            [
-                1.0,
-                f32::from(u8::from(sphere)),
-                lit.wrap as f32,
-                lit.emissive as f32,
-            ]
+        let lit = render.lit.as_ref().map_or([0.0; 4], |lit| {
+            let normals = match lit.normals {
+                plume_compiler::lit::Normals::Flat => 0.0,
+                plume_compiler::lit::Normals::Sphere => 1.0,
+                plume_compiler::lit::Normals::Map { .. } => 2.0,
+            };
+            [1.0, normals, lit.wrap as f32, lit.emissive as f32]
         });
         Ok(Self {
             gpu: gpu.clone(),

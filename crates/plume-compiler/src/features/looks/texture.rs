@@ -161,6 +161,47 @@ impl TextureIr {
         })
     }
 
+    /// The normal map in `file` of a lit look (`render.lit.normals: Map`), laid out as
+    /// `texture`: its frames, how they play, and its size, which must be the texture's.
+    pub fn load_normal_map(
+        file: &str,
+        texture: &TextureIr,
+        base_dir: Option<&Path>,
+    ) -> Result<Self, String> {
+        let spec = texture.spec_of(file);
+        let map = Self::load(&spec, base_dir)?;
+        if (map.width, map.height) != (texture.width, texture.height) {
+            return Err(format!(
+                "normal map {} is {}x{} texels; it is laid out as the texture {:?}, which is {}x{}",
+                resolve(file, base_dir).display(),
+                map.width,
+                map.height,
+                texture.file,
+                texture.width,
+                texture.height
+            ));
+        }
+        Ok(map)
+    }
+
+    /// A flat normal map (every texel facing the viewer) standing in for `file`, which could
+    /// not be read (`missing` says why), laid out as `texture`.
+    pub fn stand_in_normal_map(file: &str, texture: &TextureIr, missing: String) -> Self {
+        let mut map = Self::stand_in(&texture.spec_of(file), missing);
+        map.rgba = [128, 128, 255, 255].repeat(map.rgba.len() / 4).into();
+        map
+    }
+
+    /// A `Texture` of `file` with this texture's frames and play.
+    fn spec_of(&self, file: &str) -> Texture {
+        Texture {
+            file: file.to_string(),
+            frames: (self.columns, self.rows),
+            play: self.play,
+            random_start: self.random_start,
+        }
+    }
+
     /// The texture `spec` names, standing in for a file that could not be read (`missing`
     /// says why): its frames and how they play, each frame one white texel.
     pub fn stand_in(spec: &Texture, missing: String) -> Self {
@@ -311,15 +352,21 @@ impl TextureIr {
     /// The fragment shader takes those derivatives from the rasteriser (`dpdxFine`), the
     /// compute splat from its quad's projective map, so both sample the same mip levels.
     pub fn emit_texel_fn(&self, w: &mut Writer) {
+        Self::emit_texel_fn_of(w, "frame_texel", "sprite_texture");
+    }
+
+    /// Emits `name(cell, quad, gx, gy)`, [`Self::emit_texel_fn`]'s function for another atlas
+    /// of the same layout bound as `texture` (a lit look's normal map).
+    pub fn emit_texel_fn_of(w: &mut Writer, name: &str, texture: &str) {
         w.block(
-            "fn frame_texel(cell: vec2<f32>, quad: vec2<f32>, gx: vec2<f32>, gy: vec2<f32>) -> vec4<f32>",
+            format!("fn {name}(cell: vec2<f32>, quad: vec2<f32>, gx: vec2<f32>, gy: vec2<f32>) -> vec4<f32>"),
             |w| {
                 w.comment("Sample no nearer the frame's edge than half a texel of the coarser mip level in use, so no neighbouring frame blends in.");
                 w.line("let rho = max(length(gx * ATLAS_TEXELS), length(gy * ATLAS_TEXELS));");
                 w.line("let level = ceil(log2(max(rho, 1.0)));");
                 w.line("let half_texel = min(vec2<f32>(0.5), 0.5 * exp2(level) / FRAME_TEXELS);");
                 w.line("let local = clamp(quad, half_texel, vec2<f32>(1.0) - half_texel);");
-                w.line("return textureSampleGrad(sprite_texture, sprite_sampler, (cell + local) * FRAME_SIZE, gx, gy);");
+                w.line(format!("return textureSampleGrad({texture}, sprite_sampler, (cell + local) * FRAME_SIZE, gx, gy);"));
             },
         );
     }
@@ -327,14 +374,7 @@ impl TextureIr {
     /// Emits the fragment shader's body for a textured sprite: the frame's texel at the
     /// fragment's corner coordinates `in.uv`, times the colour (`frame_texel` in scope).
     pub fn emit_fragment_body(&self, w: &mut Writer) {
-        w.line(
-            "let cell = vec2<f32>(f32(in.frame % FRAME_COLUMNS), f32(in.frame / FRAME_COLUMNS));",
-        );
-        w.line("let quad = vec2<f32>(in.uv.x + 1.0, 1.0 - in.uv.y) * 0.5;");
-        w.comment("The mip level's derivatives, taken before any discard (uniform control flow) and before the half-texel clamp (which would flatten them at the frame's edge).");
-        w.line("let unclamped = (cell + quad) * FRAME_SIZE;");
-        w.line("let gx = dpdxFine(unclamped);");
-        w.line("let gy = dpdyFine(unclamped);");
+        Self::emit_fragment_coordinates(w);
         w.comment(
             "Only the triangle primitive reaches outside the quad: nothing of the frame there.",
         );
@@ -344,6 +384,31 @@ impl TextureIr {
         w.line("return in.color * frame_texel(cell, quad, gx, gy);");
     }
 
+    /// Emits, in a fragment shader's function of `in: Sprite`, the frame's atlas cell `cell`,
+    /// the fragment's place in it `quad`, and the derivatives `gx`, `gy` of its atlas
+    /// coordinate (taken here, before any discard).
+    pub fn emit_fragment_coordinates(w: &mut Writer) {
+        w.line(
+            "let cell = vec2<f32>(f32(in.frame % FRAME_COLUMNS), f32(in.frame / FRAME_COLUMNS));",
+        );
+        w.line("let quad = vec2<f32>(in.uv.x + 1.0, 1.0 - in.uv.y) * 0.5;");
+        w.comment("The mip level's derivatives, taken before any discard (uniform control flow) and before the half-texel clamp (which would flatten them at the frame's edge).");
+        w.line("let unclamped = (cell + quad) * FRAME_SIZE;");
+        w.line("let gx = dpdxFine(unclamped);");
+        w.line("let gy = dpdyFine(unclamped);");
+    }
+
+    /// Emits, in the compute splat's function of `uv`, `du`, `dv` and `frame`, the frame's
+    /// atlas cell `cell`, the pixel's place in it `quad`, and the derivatives `gx`, `gy` of its
+    /// atlas coordinate from those of `uv`.
+    pub fn emit_splat_coordinates(w: &mut Writer) {
+        w.line("let cell = vec2<f32>(f32(frame % FRAME_COLUMNS), f32(frame / FRAME_COLUMNS));");
+        w.line("let quad = vec2<f32>(uv.x + 1.0, 1.0 - uv.y) * 0.5;");
+        w.comment("quad's derivatives are half of uv's, v flipped; the atlas coordinate's are FRAME_SIZE times those.");
+        w.line("let gx = vec2<f32>(du.x, -du.y) * 0.5 * FRAME_SIZE;");
+        w.line("let gy = vec2<f32>(dv.x, -dv.y) * 0.5 * FRAME_SIZE;");
+    }
+
     /// Emits the compute splat's shading of a textured sprite: `splat_shade(uv, du, dv, color,
     /// frame)` is the frame's texel at corner coordinates `uv`, whose derivatives along the
     /// image's x and y are `du` and `dv`, times the colour (as [`Self::emit_fragment_body`]).
@@ -351,11 +416,7 @@ impl TextureIr {
         w.block(
             "fn splat_shade(uv: vec2<f32>, du: vec2<f32>, dv: vec2<f32>, color: vec4<f32>, frame: u32) -> vec4<f32>",
             |w| {
-                w.line("let cell = vec2<f32>(f32(frame % FRAME_COLUMNS), f32(frame / FRAME_COLUMNS));");
-                w.line("let quad = vec2<f32>(uv.x + 1.0, 1.0 - uv.y) * 0.5;");
-                w.comment("quad's derivatives are half of uv's, v flipped; the atlas coordinate's are FRAME_SIZE times those.");
-                w.line("let gx = vec2<f32>(du.x, -du.y) * 0.5 * FRAME_SIZE;");
-                w.line("let gy = vec2<f32>(dv.x, -dv.y) * 0.5 * FRAME_SIZE;");
+                Self::emit_splat_coordinates(w);
                 w.line("return color * frame_texel(cell, quad, gx, gy);");
             },
         );

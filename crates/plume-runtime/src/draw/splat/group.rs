@@ -278,9 +278,9 @@ impl GroupSplat {
             entries.push((b_offsets, tiles.offsets.clone()));
         }
         let project = gpu.compute_pipeline(&module, "project", None);
-        let texture = match (&effect.ir.render.texture, ribbons, discs) {
-            (Some(t), false, false) => Some(SpriteTexture::new(&gpu, t)?),
-            _ => None,
+        let texture = match ribbons || discs {
+            true => None,
+            false => SpriteTexture::for_render(&gpu, &effect.ir.render)?,
         };
         let quads = (!discs).then(|| {
             let targets = MergeTargets {

@@ -289,6 +289,9 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         w.blank();
         t.emit_texel_fn(&mut w);
     }
+    if let Some(lit) = &ir.render.lit {
+        lit.emit_tangent_fns(&mut w, shape.splat);
+    }
     w.blank();
     let lit = ir.render.lit.is_some();
     emit_vertex(
@@ -299,7 +302,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         lit,
     );
     w.blank();
-    let lit_turned = lit.then(|| ir.render.turns_quad());
+    let lit_turned = ir.render.lit.as_ref().map(|l| (l, ir.render.turns_quad()));
     emit_fragment(&mut w, texture, soft.is_some(), lit_turned, layout.batched);
     if shape.splat {
         w.blank();

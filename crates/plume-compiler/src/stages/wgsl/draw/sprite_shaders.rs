@@ -103,13 +103,13 @@ pub(super) fn emit_vertex(
 /// The fragment shader `fs`: the texture's frame times the colour ([`crate::features::looks::texture`]), or a
 /// soft round sprite, alpha a (1 − r²)², nothing at r >= 1.
 /// With `soft` or `lit`, that colour comes from `shade`, and `fs` shades it by the lights
-/// (`lit_color`; `lit` says whether the quad is turned, its basis then a varying) and fades
-/// its alpha by `soft_fade`.
+/// (`lit_color` at the pixel's `surface_normal`; `lit` says too whether the quad is turned,
+/// its basis then a varying) and fades its alpha by `soft_fade`.
 pub(super) fn emit_fragment(
     w: &mut Writer,
     texture: Option<&crate::features::looks::texture::TextureIr>,
     soft: bool,
-    lit: Option<bool>,
+    lit: Option<(&crate::features::looks::lit::Lit, bool)>,
     batched: bool,
 ) {
     // A batch's draw reads the camera through its private copy (see `wgsl::batch`).
@@ -126,12 +126,17 @@ pub(super) fn emit_fragment(
         w.line("@fragment");
         w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
             take_view(w);
-            if let Some(oriented) = lit {
+            if let Some((look, oriented)) = lit {
+                if look.normal_map().is_some() {
+                    w.comment("The normal map's normal first: its derivatives before any discard.");
+                }
+                w.line(format!("let tangent = {};", look.tangent_wgsl()));
                 match oriented {
                     true => w.line("let basis = mat3x3<f32>(in.basis_x, in.basis_y, in.basis_z);"),
                     false => w.line("let basis = VIEW_BASIS;"),
                 }
-                w.line("let c = lit_color(shade(in), in.uv, basis, in.view_pos);");
+                w.line("let n = surface_normal(in.uv, basis, tangent);");
+                w.line("let c = lit_color(shade(in), n, in.view_pos);");
             } else {
                 w.line("let c = shade(in);");
             }
