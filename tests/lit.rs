@@ -9,7 +9,7 @@
 mod common;
 
 use common::*;
-use glam::DVec3;
+use glam::{DVec3, DVec4};
 use plume::compiler::lights::{LightSource, Lights};
 use plume::compiler::lit::Lit;
 use plume::runtime::oracle::{sprites, ReferenceRenderer};
@@ -69,14 +69,14 @@ fn radius_pixels() -> f64 {
 /// The f64 colour (0 to 255) of the pixel `right` pixels right of and `up` pixels above the
 /// centre: corner coordinates uv exact (the sprite lies parallel to the image plane), the
 /// colour lit there, blended over black. Its alpha is the soft disc's (1 − r²)², or for a
-/// textured sprite whose texel is `texel` (RGBA in [0, 1]) and whose normal map's normal there
-/// is the tangent beside it, the texel's, the colour times the texel.
+/// textured sprite whose texel is `texel` (RGBA in [0, 1]) and whose lit maps' texels there
+/// are beside it, the texel's, the colour times the texel.
 fn expected(
     sim: &Effect,
     lights: &Lights,
     right: i32,
     up: i32,
-    texel: Option<([f64; 4], DVec3)>,
+    texel: Option<([f64; 4], [DVec4; 2])>,
 ) -> [f64; 3] {
     let ir = &sim.compiled().ir;
     let lit: &Lit = ir.render.lit.as_ref().expect("a lit probe");
@@ -86,8 +86,9 @@ fn expected(
     );
     let (half_x, half_y) = (DVec3::X * RADIUS, DVec3::Y * RADIUS);
     let p = uv.0 * half_x + uv.1 * half_y;
-    let tangent = texel.map_or(DVec3::ZERO, |t| t.1);
-    let n = lit.normal(uv, (half_x, half_y), DVec3::new(0.0, 0.0, 10.0), tangent);
+    let maps = texel.map_or([DVec4::ZERO; 2], |t| t.1);
+    let eye = DVec3::new(0.0, 0.0, 10.0);
+    let light = lit.light(lights, (uv, (half_x, half_y), eye, p), maps);
     let (rgba, alpha) = match texel {
         Some((t, _)) => (
             [COLOR[0] * t[0], COLOR[1] * t[1], COLOR[2] * t[2]],
@@ -101,7 +102,7 @@ fn expected(
             )
         }
     };
-    let rgb = lit.shade(DVec3::from_array(rgba), lights.received(n, p, lit.wrap));
+    let rgb = lit.shade(DVec3::from_array(rgba), light);
     (rgb * alpha)
         .clamp(DVec3::ZERO, DVec3::ONE)
         .to_array()
@@ -153,15 +154,15 @@ fn assert_lit_like_f64(
     assert_textured_lit_like_f64(gpu, sim, lights, host, offsets, None);
 }
 
-/// [`assert_lit_like_f64`] for a textured sprite of texel and normal map normal `texel`
-/// everywhere, when given.
+/// [`assert_lit_like_f64`] for a textured sprite of one texel and one texel of each lit map
+/// (`texel`) everywhere, when given.
 fn assert_textured_lit_like_f64(
     gpu: &Gpu,
     sim: &Effect,
     lights: &Lights,
     host: bool,
     offsets: &[(i32, i32)],
-    texel: Option<([f64; 4], DVec3)>,
+    texel: Option<([f64; 4], [DVec4; 2])>,
 ) {
     let centre = (SIDE / 2) as i32;
     let mut wrong = Vec::new();
@@ -312,8 +313,10 @@ fn a_normal_map_turns_the_light_as_its_texels_say() {
         image::save_buffer(dir.join(name), &rgba, 8, 8, image::ColorType::Rgba8).unwrap();
     }
     let decode = |t: [u8; 4]| t.map(|c| f64::from(c) / 255.0);
-    let tangent = DVec3::from_array([0, 1, 2].map(|c| decode(leaning)[c] * 2.0 - 1.0));
-    let texel = Some((decode(tint), tangent));
+    let texel = Some((
+        decode(tint),
+        [DVec4::from_array(decode(leaning)), DVec4::ZERO],
+    ));
     let texture = r#", texture: Some(Texture(file: "tint.png"))"#;
     let lit = r#"Lit(normals: Map(file: "normals.png"))"#;
     let offsets = [(0, 0), (12, 0), (-12, 7), (5, -15)];
@@ -339,6 +342,60 @@ fn a_normal_map_turns_the_light_as_its_texels_say() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+#[test]
+fn six_way_lightmaps_weigh_each_light_by_its_direction() {
+    let gpu = gpu();
+    // Six different responses, so a light read from the wrong map or axis shows: right 0.9,
+    // top 0.7, back 0.3 in the first map; left 0.2, bottom 0.5, front 0.6 in the second.
+    let dir = std::env::temp_dir().join(format!("plume-six-way-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let tint = [255u8, 255, 255, 255];
+    let right_top_back = [230u8, 179, 77, 255];
+    let left_bottom_front = [51u8, 128, 153, 255];
+    for (name, texel) in [
+        ("tint.png", tint),
+        ("rtb.png", right_top_back),
+        ("lbf.png", left_bottom_front),
+    ] {
+        let rgba: Vec<u8> = texel.repeat(64);
+        image::save_buffer(dir.join(name), &rgba, 8, 8, image::ColorType::Rgba8).unwrap();
+    }
+    let decode = |t: [u8; 4]| t.map(|c| f64::from(c) / 255.0);
+    let maps = [
+        DVec4::from_array(decode(right_top_back)),
+        DVec4::from_array(decode(left_bottom_front)),
+    ];
+    let texel = Some((decode(tint), maps));
+    let texture = r#", texture: Some(Texture(file: "tint.png"))"#;
+    let lit = r#"Lit(normals: SixWay(right_top_back: "rtb.png", left_bottom_front: "lbf.png"))"#;
+    // From the right and a little above and behind; from the lower left and in front; a lamp
+    // in front to the left; ambient light alone.
+    for lights in [
+        "Directional(direction: (-0.8, -0.3, 0.52))",
+        "Directional(direction: (0.6, 0.5, -0.62)), Ambient(intensity: 0.2)",
+        "Point(position: (-2.0, 0.5, 3.0), intensity: 6.0, range: 12.0)",
+        "Ambient(color: (1.0, 0.5, 0.25), intensity: 0.8)",
+    ] {
+        let sim = probe_with(&gpu, lit, lights, texture, Some(&dir));
+        let ir_lights = sim.compiled().ir.lights.clone();
+        assert_textured_lit_like_f64(&gpu, &sim, &ir_lights, false, &[(0, 0), (10, -6)], texel);
+    }
+    // Light straight from the right reads the right map alone: 0.9 of it.
+    let sim = probe_with(
+        &gpu,
+        lit,
+        "Directional(direction: (-1.0, 0.0, 0.0))",
+        texture,
+        Some(&dir),
+    );
+    let centre = expected(&sim, &sim.compiled().ir.lights, 0, 0, texel);
+    assert!(
+        (centre[0] / 255.0 - COLOR[0] * 230.0 / 255.0).abs() < 1e-9,
+        "{centre:?}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 /// Many particles, turned, textured and lit by every kind of light, from a camera off to the
 /// side: the raster draw agrees with the reference drawing, which builds each sprite's frame
 /// on the CPU and lights it in world space, and the compute splat with the raster draw.
@@ -355,6 +412,10 @@ fn turned_textured_lit_sprites_agree_with_the_reference_drawing() {
             r#"Map(file: "textures/smoke_normals.png")"#,
         ),
         ("Camera", r#"Map(file: "textures/smoke_normals.png")"#),
+        (
+            "Fixed((0.3, 1.0, 0.2))",
+            r#"SixWay(right_top_back: "textures/smoke_rtb.png", left_bottom_front: "textures/smoke_lbf.png")"#,
+        ),
     ] {
         let src = format!(
             r#"Effect(

@@ -11,6 +11,11 @@ where a shape wants shading of its own.
 - smoke_normals.png: smoke.png's normal map (a lit look's `normals: Map`): each puff's surface
   a half sphere roughened by the noise that shapes it, (r, g, b) = (n + 1) / 2 with x right,
   y up and z toward the viewer; opaque.
+- smoke_rtb.png, smoke_lbf.png: smoke.png's six-way lightmaps (`normals: SixWay`), baked
+  from that normal and the puff's density: light from the right, top and back in the first
+  one's red, green and blue, from the left, bottom and front in the second one's. A side
+  lets through 0.15 + 0.85 max(n . d, 0) of a light from direction d; the back, where light
+  comes through the puff, 0.15 + 0.6 (1 - alpha). Opaque.
 - snowflake.png: one six-armed flake with side branches.
 """
 
@@ -198,6 +203,19 @@ def main():
         return normals[k](u, v)
 
     write_png(os.path.join(HERE, "smoke_normals.png"), 4 * size, 4 * size, normal_texel)
+
+    def six_way(first):
+        def texel(x, y):
+            n = [c * 2.0 - 1.0 for c in normal_texel(x, y)[:3]]
+            alpha = smoke_texel(x, y)[3]
+            side = lambda d: 0.15 + 0.85 * max(0.0, sum(a * b for a, b in zip(n, d)))
+            if first:
+                return (side((1, 0, 0)), side((0, 1, 0)), 0.15 + 0.6 * (1.0 - alpha), 1.0)
+            return (side((-1, 0, 0)), side((0, -1, 0)), side((0, 0, 1)), 1.0)
+        return texel
+
+    write_png(os.path.join(HERE, "smoke_rtb.png"), 4 * size, 4 * size, six_way(True))
+    write_png(os.path.join(HERE, "smoke_lbf.png"), 4 * size, 4 * size, six_way(False))
     write_png(os.path.join(HERE, "snowflake.png"), size, size,
               lambda x, y: (1.0, 1.0, 1.0, supersampled(snowflake, x, y, size)))
 

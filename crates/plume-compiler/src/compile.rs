@@ -318,32 +318,31 @@ pub(crate) fn compile_group(
         };
         ir.render.texture = Some(texture);
     }
-    if let (Some(file), Some(texture)) = (
-        effect.render.lit.as_ref().and_then(|l| l.normal_map()),
-        &ir.render.texture,
-    ) {
-        let path = ValuePath::root()
-            .field("render")
-            .field("lit")
-            .field("normals")
-            .variant("Map")
-            .field("file");
-        let map =
-            match texture::TextureIr::load_normal_map(file, texture, effect.base_dir.as_deref()) {
-                Ok(map) => map,
-                Err(message) if effect.step_only => texture::TextureIr::stand_in_normal_map(
-                    file,
-                    texture,
-                    format!("{}: {message}", join(prefix, &path.display)),
-                ),
-                Err(message) => {
-                    return Err(CompileError::Invalid(prefixed(vec![(
-                        Diagnostic::error(path.display, message),
-                        path.lookup,
-                    )])))
-                }
-            };
-        ir.render.normal_map = Some(map);
+    if let (Some(lit), Some(texture)) = (&effect.render.lit, &ir.render.texture) {
+        for (field, file) in lit.map_files() {
+            let path = ValuePath::root()
+                .field("render")
+                .field("lit")
+                .field("normals")
+                .variant(lit.normals_name())
+                .field(field);
+            let map =
+                match texture::TextureIr::load_lit_map(file, texture, effect.base_dir.as_deref()) {
+                    Ok(map) => map,
+                    Err(message) if effect.step_only => texture::TextureIr::stand_in_lit_map(
+                        file,
+                        texture,
+                        format!("{}: {message}", join(prefix, &path.display)),
+                    ),
+                    Err(message) => {
+                        return Err(CompileError::Invalid(prefixed(vec![(
+                            Diagnostic::error(path.display, message),
+                            path.lookup,
+                        )])))
+                    }
+                };
+            ir.render.lit_maps.push(map);
+        }
     }
     let names: Vec<&'static str> = effect.forces.iter().map(|f| f.name()).collect();
     let (layout, warnings) =

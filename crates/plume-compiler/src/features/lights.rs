@@ -169,8 +169,21 @@ impl Lights {
     /// in [0, 1] lets light reach round the terminator of thin volumes (0: Lambert's law).
     pub fn received(&self, n: DVec3, p: DVec3, wrap: f64) -> DVec3 {
         let mut light = self.ambient;
-        for source in self.sources.iter().take(LIGHTS_MOST) {
-            let (toward, color) = match *source {
+        for (toward, color) in self.incoming(p) {
+            let facing = ((n.dot(toward) + wrap) / (1.0 + wrap)).max(0.0);
+            light += color * facing;
+        }
+        light
+    }
+
+    /// Each source's light arriving at `p`: (the unit vector toward the source, its colour
+    /// there: a point light's fallen off with distance and range). The first
+    /// [`LIGHTS_MOST`], as the draw reads them; the twin of [`emit_incoming`]'s WGSL.
+    pub fn incoming(&self, p: DVec3) -> impl Iterator<Item = (DVec3, DVec3)> + '_ {
+        self.sources
+            .iter()
+            .take(LIGHTS_MOST)
+            .map(move |source| match *source {
                 LightSource::Directional { direction, color } => {
                     (-direction.normalize_or_zero(), color)
                 }
@@ -183,11 +196,7 @@ impl Lights {
                     let d2 = d.length_squared().max(POINT_NEAREST * POINT_NEAREST);
                     (d / d2.sqrt(), color * range_window(d2, range) / d2)
                 }
-            };
-            let facing = ((n.dot(toward) + wrap) / (1.0 + wrap)).max(0.0);
-            light += color * facing;
-        }
-        light
+            })
     }
 
     /// The lights uniform's bytes ([`LIGHTS_BYTES`]): the ambient light (w unused), the
@@ -372,21 +381,27 @@ pub fn emit_received_light(w: &mut Writer, wrap: f64) {
         w.block(
             format!("for (var i = 0u; i < min(lights.count.x, {LIGHTS_MOST}u); i++)"),
             |w| {
-                w.line("let source = lights.sources[i];");
-                w.comment("A unit direction (zero where a host gave none: no light).");
-                w.line("var toward = -source.place.xyz;");
-                w.line("var color = source.color.rgb;");
-                w.block("if (source.place.w > 0.5)", |w| {
-                    w.line("let d = source.place.xyz - p;");
-                    w.line("let d2 = max(dot(d, d), POINT_NEAREST2);");
-                    w.line("toward = d * inverseSqrt(d2);");
-                    w.line("let q = d2 / (source.color.w * source.color.w);");
-                    w.line("let window = clamp(1.0 - q * q, 0.0, 1.0);");
-                    w.line("color = color * (window * window / d2);");
-                });
+                emit_incoming(w);
                 w.line("light += color * max((dot(n, toward) + LIGHT_WRAP) / (1.0 + LIGHT_WRAP), 0.0);");
             },
         );
         w.line("return light;");
+    });
+}
+
+/// Emits, inside a loop over the sources (`i`) at view-space point `p`, `toward` (the unit
+/// vector toward source i) and `color` (its light there): the twin of [`Lights::incoming`].
+pub fn emit_incoming(w: &mut Writer) {
+    w.line("let source = lights.sources[i];");
+    w.comment("A unit direction (zero where a host gave none: no light).");
+    w.line("var toward = -source.place.xyz;");
+    w.line("var color = source.color.rgb;");
+    w.block("if (source.place.w > 0.5)", |w| {
+        w.line("let d = source.place.xyz - p;");
+        w.line("let d2 = max(dot(d, d), POINT_NEAREST2);");
+        w.line("toward = d * inverseSqrt(d2);");
+        w.line("let q = d2 / (source.color.w * source.color.w);");
+        w.line("let window = clamp(1.0 - q * q, 0.0, 1.0);");
+        w.line("color = color * (window * window / d2);");
     });
 }

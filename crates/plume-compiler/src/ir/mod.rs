@@ -122,9 +122,9 @@ pub struct RenderIr {
     pub by: crate::features::looks::by_expression::LookBy,
     /// Shading by the lights, when the sprites are lit (`lit.rs`).
     pub lit: Option<crate::features::looks::lit::Lit>,
-    /// The normal map of a lit look whose normals come from one, loaded: laid out as
-    /// `texture`, whose frames it follows.
-    pub normal_map: Option<crate::features::looks::texture::TextureIr>,
+    /// A lit look's maps (its normal map, or its six-way lightmaps), loaded: laid out as
+    /// `texture`, whose frames they follow.
+    pub lit_maps: Vec<crate::features::looks::texture::TextureIr>,
 }
 
 impl RenderIr {
@@ -549,8 +549,8 @@ impl fmt::Display for EffectIr {
                 "  lit {:?} normals, wrap {}, emissive {}; {}",
                 lit.normals, lit.wrap, lit.emissive, self.lights
             )?;
-            if let Some(map) = &self.render.normal_map {
-                writeln!(f, "  normal map {map:?}")?;
+            for map in &self.render.lit_maps {
+                writeln!(f, "  lit map {map:?}")?;
             }
         }
         if let Some(t) = &self.render.trail {

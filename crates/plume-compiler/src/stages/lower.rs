@@ -143,7 +143,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 by: crate::features::looks::by_expression::LookBy::lower(r.written_by(), scope),
                 lit: r.lit.clone(),
                 // Loaded by `compile_effect`, as the texture.
-                normal_map: None,
+                lit_maps: Vec::new(),
             }
         },
         bounds: effect.bounds.map(|b| (b.min.d(), b.max.d())),

@@ -93,7 +93,8 @@ pub(crate) fn draw_group(
 }
 
 /// A bind group of `layout` (a render pipeline's or the compute splat's): `buffers`, the
-/// sprite texture and sampler (and a lit look's normal map) when there is one, and the scene depth when there is one.
+/// sprite texture and sampler (and a lit look's maps) when there is one, and the scene depth
+/// when there is one.
 pub(crate) fn bind_resources(
     gpu: &Gpu,
     layout: &wgpu::BindGroupLayout,
@@ -118,10 +119,11 @@ pub(crate) fn bind_resources(
             resource: wgpu::BindingResource::Sampler(&t.sampler),
         });
     }
-    if let Some(normals) = texture.and_then(|t| t.normals.as_ref()) {
+    let lit_maps = texture.map_or(&[][..], |t| &t.lit_maps[..]);
+    for (map, binding) in lit_maps.iter().zip(plume_compiler::lit::LIT_MAP_BINDINGS) {
         bindings.push(wgpu::BindGroupEntry {
-            binding: plume_compiler::lit::NORMAL_MAP_BINDING,
-            resource: wgpu::BindingResource::TextureView(normals),
+            binding,
+            resource: wgpu::BindingResource::TextureView(map),
         });
     }
     if let Some(depth) = scene_depth {

@@ -16,14 +16,13 @@ pub struct SpriteTexture {
     pub view: wgpu::TextureView,
     /// Trilinear filtering (linear within and between levels), clamped to the edge.
     pub sampler: wgpu::Sampler,
-    /// A lit look's normal map (`render.lit.normals: Map`), laid out as the texture and read
-    /// with its sampler.
-    pub normals: Option<wgpu::TextureView>,
+    /// A lit look's maps (`render.lit.normals`: a normal map, or the six-way lightmaps), laid
+    /// out as the texture and read with its sampler, bound at `LIT_MAP_BINDINGS`.
+    pub lit_maps: Vec<wgpu::TextureView>,
 }
 
 impl SpriteTexture {
-    /// The texture of `render` (None without one), with its normal map when a lit look has
-    /// one.
+    /// The texture of `render` (None without one), with a lit look's maps.
     pub fn for_render(
         gpu: &Gpu,
         render: &plume_compiler::ir::RenderIr,
@@ -32,8 +31,8 @@ impl SpriteTexture {
             return Ok(None);
         };
         let mut sprite = Self::new(gpu, texture)?;
-        if let Some(map) = &render.normal_map {
-            sprite.normals = Some(Self::new(gpu, map)?.view);
+        for map in &render.lit_maps {
+            sprite.lit_maps.push(Self::new(gpu, map)?.view);
         }
         Ok(Some(sprite))
     }
@@ -100,7 +99,7 @@ impl SpriteTexture {
         Ok(Self {
             view: texture.create_view(&Default::default()),
             sampler,
-            normals: None,
+            lit_maps: Vec::new(),
         })
     }
 }

@@ -8,8 +8,8 @@ struct Camera {
     // The eye in world space (w = 1), or for an orthographic camera the world direction
     // toward the viewer (w = 0).
     eye: vec4<f32>,
-    // A lit look (render.lit): (1 when lit; normals 0 flat, 1 sphere, 2 a normal map; wrap;
-    // emissive).
+    // A lit look (render.lit): (1 when lit; normals 0 flat, 1 sphere, 2 a normal map, 3 six-way
+    // lightmaps; wrap; emissive).
     lit: vec4<f32>,
 }
 
@@ -32,8 +32,10 @@ struct Lights {
 }
 
 @group(0) @binding(3) var<uniform> lights: Lights;
-// A lit look's normal map, laid out as the texture (a flat 1x1 one when it has none).
-@group(0) @binding(4) var normal_texture: texture_2d<f32>;
+// A lit look's maps, laid out as the texture (flat 1x1 ones where it has fewer): a normal map,
+// or the six-way lightmaps (right, top, back; left, bottom, front).
+@group(0) @binding(4) var lit_map_0: texture_2d<f32>;
+@group(0) @binding(5) var lit_map_1: texture_2d<f32>;
 
 struct Out {
     @builtin(position) clip: vec4<f32>,
@@ -47,11 +49,13 @@ struct Out {
 }
 
 // A lit sprite's colour at corner coordinates uv, point p (world space): the normal of its
-// flat quad, of a half sphere over it, or of its normal map (tangent: the map's normal in the
-// sprite's frame), facing the viewer; ambient light plus each source's
+// flat quad, of a half sphere over it, or of its normal map (maps[0]: the map's texel, the
+// normal in the sprite's frame), facing the viewer; or six-way lightmaps (maps: their texels),
+// each light weighted t^2 per axis of the sprite's frame, its map by the sign, ambient light by
+// the six maps' mean; ambient light plus each source's
 // light times max((n . l + wrap) / (1 + wrap), 0), a point light's falling off as 1 / d^2
 // (d no less than 10 cm) and to zero at its range; the emissive part unlit.
-fn lit(c: vec4<f32>, uv: vec2<f32>, tangent: vec3<f32>, half_x: vec3<f32>, half_y: vec3<f32>, p: vec3<f32>) -> vec4<f32> {
+fn lit(c: vec4<f32>, uv: vec2<f32>, maps: array<vec3<f32>, 2>, half_x: vec3<f32>, half_y: vec3<f32>, p: vec3<f32>) -> vec4<f32> {
     if (camera.lit.x == 0.0) {
         return c;
     }
@@ -67,10 +71,15 @@ fn lit(c: vec4<f32>, uv: vec2<f32>, tangent: vec3<f32>, half_x: vec3<f32>, half_
         n = normalize(uv.x * ux + uv.y * uy + sqrt(max(1.0 - dot(uv, uv), 0.0)) * facing);
     }
     if (camera.lit.y == 2.0) {
+        let tangent = maps[0] * 2.0 - 1.0;
         n = normalize(tangent.x * ux + tangent.y * uy + tangent.z * facing);
     }
     let wrap = camera.lit.z;
+    let six_way = camera.lit.y == 3.0;
     var light = lights.ambient.rgb;
+    if (six_way) {
+        light = light * (maps[0].x + maps[0].y + maps[0].z + maps[1].x + maps[1].y + maps[1].z) / 6.0;
+    }
     for (var i = 0u; i < min(lights.count.x, 8u); i++) {
         let s = lights.sources[i];
         var toward = -s.place.xyz * inverseSqrt(max(dot(s.place.xyz, s.place.xyz), 1e-30));
@@ -83,7 +92,22 @@ fn lit(c: vec4<f32>, uv: vec2<f32>, tangent: vec3<f32>, half_x: vec3<f32>, half_
             let window = clamp(1.0 - q * q, 0.0, 1.0);
             color = color * window * window / d2;
         }
-        light += color * max((dot(n, toward) + wrap) / (1.0 + wrap), 0.0);
+        if (six_way) {
+            let t = vec3<f32>(dot(toward, ux), dot(toward, uy), dot(toward, facing));
+            var response = maps[1];
+            if (t.x > 0.0) {
+                response.x = maps[0].x;
+            }
+            if (t.y > 0.0) {
+                response.y = maps[0].y;
+            }
+            if (t.z <= 0.0) {
+                response.z = maps[0].z;
+            }
+            light += color * dot(t * t, response);
+        } else {
+            light += color * max((dot(n, toward) + wrap) / (1.0 + wrap), 0.0);
+        }
     }
     let emissive = camera.lit.w;
     return vec4<f32>(c.rgb * (emissive + (1.0 - emissive) * light), c.a);
@@ -134,8 +158,11 @@ fn fs(in: Out) -> @location(0) vec4<f32> {
         let half_texel = min(0.5 * in.texels.zw, vec2<f32>(0.5 * exp2(ceil(log2(max(rho, 1.0))))));
         let at = in.texels.xy + clamp(local, half_texel, in.texels.zw - half_texel);
         let texel = in.color * textureSampleGrad(sprite_texture, sprite_sampler, at / size, gx, gy);
-        let tangent = textureSampleGrad(normal_texture, sprite_sampler, at / size, gx, gy).xyz * 2.0 - 1.0;
-        return lit(texel, in.uv, tangent, in.half_x, in.half_y, in.world);
+        let maps = array<vec3<f32>, 2>(
+            textureSampleGrad(lit_map_0, sprite_sampler, at / size, gx, gy).xyz,
+            textureSampleGrad(lit_map_1, sprite_sampler, at / size, gx, gy).xyz,
+        );
+        return lit(texel, in.uv, maps, in.half_x, in.half_y, in.world);
     }
     let r2 = dot(in.uv, in.uv);
     if (r2 >= 1.0) {
@@ -143,5 +170,6 @@ fn fs(in: Out) -> @location(0) vec4<f32> {
     }
     // Soft round falloff: full at the centre, zero at the rim.
     let falloff = (1.0 - r2) * (1.0 - r2);
-    return lit(vec4<f32>(in.color.rgb, in.color.a * falloff), in.uv, vec3<f32>(0.0), in.half_x, in.half_y, in.world);
+    let none = array<vec3<f32>, 2>(vec3<f32>(0.0), vec3<f32>(0.0));
+    return lit(vec4<f32>(in.color.rgb, in.color.a * falloff), in.uv, none, in.half_x, in.half_y, in.world);
 }

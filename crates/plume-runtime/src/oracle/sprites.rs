@@ -143,7 +143,8 @@ pub struct ReferenceRenderer {
     bind_group: wgpu::BindGroup,
     ribbons: RibbonPipeline,
     background: DVec3,
-    /// (1 when lit; normals 0 flat, 1 sphere, 2 a normal map; wrap; emissive).
+    /// (1 when lit; normals 0 flat, 1 sphere, 2 a normal map, 3 six-way lightmaps; wrap;
+    /// emissive).
     lit: [f32; 4],
 }
 
@@ -179,11 +180,14 @@ impl ReferenceRenderer {
             // Bound but never sampled: the sprites' texel rectangles are empty.
             None => SpriteTexture::from_rgba(gpu, 1, 1, &[255; 4], 1)?,
         };
-        // A lit look's normal map, laid out as the texture; a flat stand-in when there is none.
-        let normals = match &render.normal_map {
-            Some(map) => SpriteTexture::new(gpu, map)?,
-            None => SpriteTexture::from_rgba(gpu, 1, 1, &[128, 128, 255, 255], 1)?,
-        };
+        // A lit look's maps, laid out as the texture; 1x1 stand-ins where it has fewer.
+        let mut lit_maps = Vec::new();
+        for k in 0..2 {
+            lit_maps.push(match render.lit_maps.get(k) {
+                Some(map) => SpriteTexture::new(gpu, map)?,
+                None => SpriteTexture::from_rgba(gpu, 1, 1, &[128, 128, 255, 255], 1)?,
+            });
+        }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("camera"),
             entries: &[
@@ -199,6 +203,16 @@ impl ReferenceRenderer {
                 },
                 wgpu::BindGroupLayoutEntry {
                     binding: 4,
+                    visibility: wgpu::ShaderStages::FRAGMENT,
+                    ty: wgpu::BindingType::Texture {
+                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
+                        view_dimension: wgpu::TextureViewDimension::D2,
+                        multisampled: false,
+                    },
+                    count: None,
+                },
+                wgpu::BindGroupLayoutEntry {
+                    binding: 5,
                     visibility: wgpu::ShaderStages::FRAGMENT,
                     ty: wgpu::BindingType::Texture {
                         sample_type: wgpu::TextureSampleType::Float { filterable: true },
@@ -259,7 +273,11 @@ impl ReferenceRenderer {
                 },
                 wgpu::BindGroupEntry {
                     binding: 4,
-                    resource: wgpu::BindingResource::TextureView(&normals.view),
+                    resource: wgpu::BindingResource::TextureView(&lit_maps[0].view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 5,
+                    resource: wgpu::BindingResource::TextureView(&lit_maps[1].view),
                 },
             ],
         });
@@ -289,6 +307,7 @@ impl ReferenceRenderer {
                 plume_compiler::lit::Normals::Flat => 0.0,
                 plume_compiler::lit::Normals::Sphere => 1.0,
                 plume_compiler::lit::Normals::Map { .. } => 2.0,
+                plume_compiler::lit::Normals::SixWay { .. } => 3.0,
             };
             [1.0, normals, lit.wrap as f32, lit.emissive as f32]
         });

@@ -33,11 +33,24 @@ pub enum Normals {
         /// The PNG file, relative to the effect file's directory.
         file: String,
     },
+    /// Six-way lightmaps (Unity's smoke format): no normal, but how much of a light from each
+    /// of six directions of the sprite's frame the pixel lets through, baked into two PNGs
+    /// laid out as the sprite's texture: light from the right (+x), top (+y) and back (−z, from
+    /// behind the sprite) in the first one's red, green and blue, from the left, bottom and
+    /// front (+z, the viewer's side) in the second one's. A light arriving along unit t (in the
+    /// sprite's frame) is weighted t² per axis (weights that sum to 1), each axis's map chosen
+    /// by the sign; ambient light takes the six maps' mean.
+    SixWay {
+        /// Light from +x, +y and −z in red, green and blue.
+        right_top_back: String,
+        /// Light from −x, −y and +z in red, green and blue.
+        left_bottom_front: String,
+    },
 }
 
-/// Binding of a normal map (`Normals::Map`) in the draw module; it shares the texture's
-/// sampler.
-pub const NORMAL_MAP_BINDING: u32 = 37;
+/// Bindings of a lit look's maps in the draw module (a normal map; or the six-way lightmaps,
+/// right-top-back then left-bottom-front): they share the texture's sampler.
+pub const LIT_MAP_BINDINGS: [u32; 2] = [37, 38];
 
 /// `render.lit`: the sprites are shaded by the lights.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -56,36 +69,57 @@ pub struct Lit {
 }
 
 impl Lit {
-    /// Checks `wrap` and `emissive` (each in [0, 1]), and that a normal map names a file and
-    /// has a texture to follow (`textured`).
+    /// Checks `wrap` and `emissive` (each in [0, 1]), and that each map names a file and has a
+    /// texture to follow (`textured`).
     pub fn check(&self, path: &ValuePath, textured: bool, c: &mut Checker) {
         c.within(&path.field("wrap"), self.wrap, 0.0, 1.0);
         c.within(&path.field("emissive"), self.emissive, 0.0, 1.0);
-        if let Normals::Map { file } = &self.normals {
-            let at = path.field("normals").variant("Map").field("file");
+        for (field, file) in self.map_files() {
+            let at = path
+                .field("normals")
+                .variant(self.normals_name())
+                .field(field);
             if file.trim().is_empty() {
                 c.error(
                     &at,
                     "names no file; give a PNG's path relative to the effect file",
                 );
             } else if !textured {
-                c.error(&at, "a normal map is laid out as the sprite's texture, its frames played with it: give render.texture too");
+                c.error(&at, "a lit look's map is laid out as the sprite's texture, its frames played with it: give render.texture too");
             }
         }
     }
 
-    /// The normal map's file, when the normals come from one.
-    pub fn normal_map(&self) -> Option<&str> {
+    /// The variant of `normals`, as the file writes it.
+    pub fn normals_name(&self) -> &'static str {
+        match self.normals {
+            Normals::Flat => "Flat",
+            Normals::Sphere => "Sphere",
+            Normals::Map { .. } => "Map",
+            Normals::SixWay { .. } => "SixWay",
+        }
+    }
+
+    /// The maps the look reads, in binding order ([`LIT_MAP_BINDINGS`]), each with the field
+    /// that names it: a normal map, or the two six-way lightmaps; none for computed normals.
+    pub fn map_files(&self) -> Vec<(&'static str, &str)> {
         match &self.normals {
-            Normals::Map { file } => Some(file),
-            _ => None,
+            Normals::Map { file } => vec![("file", file)],
+            Normals::SixWay {
+                right_top_back,
+                left_bottom_front,
+            } => vec![
+                ("right_top_back", right_top_back),
+                ("left_bottom_front", left_bottom_front),
+            ],
+            Normals::Flat | Normals::Sphere => Vec::new(),
         }
     }
 
     /// The unit normal at corner coordinates `uv` of a quad with half axes `half_x`, `half_y`
     /// (at right angles), facing the side `toward_eye` (from its centre) points to; for a
     /// normal map, `tangent` is the map's normal there in the quad's frame ((r, g, b) · 2 − 1).
-    /// The f64 twin of the WGSL `sprite_basis` and `surface_normal`.
+    /// The f64 twin of the WGSL `sprite_basis` and `lit_light`'s normal.
     pub fn normal(
         &self,
         uv: (f64, f64),
@@ -93,11 +127,7 @@ impl Lit {
         toward_eye: DVec3,
         tangent: DVec3,
     ) -> DVec3 {
-        let (ux, uy) = (half_x.normalize_or_zero(), half_y.normalize_or_zero());
-        let mut facing = ux.cross(uy);
-        if facing.dot(toward_eye) < 0.0 {
-            facing = -facing;
-        }
+        let (ux, uy, facing) = basis((half_x, half_y), toward_eye);
         match self.normals {
             Normals::Flat => facing,
             Normals::Sphere => {
@@ -110,44 +140,101 @@ impl Lit {
                 let n = tangent.x * ux + tangent.y * uy + tangent.z * facing;
                 n / n.length_squared().max(1e-12).sqrt()
             }
+            // Six-way lightmaps have no normal: the card's facing.
+            Normals::SixWay { .. } => facing,
         }
     }
 
-    /// Emits, for a normal map, `normal_texel` (the map's texel, as `frame_texel` samples the
-    /// texture) and the tangent-space normal at a pixel: `tangent_normal(in)` for the fragment
-    /// shader (its derivatives taken before any discard) and, for the compute splat,
-    /// `splat_tangent(uv, du, dv, frame)`; nothing for other normals.
-    pub fn emit_tangent_fns(&self, w: &mut Writer, splat: bool) {
-        if self.normal_map().is_none() {
+    /// The light (per channel) that the pixel at corner coordinates `uv`, point `p`, of a
+    /// quad with half axes `axes` facing the side `toward_eye` points to receives from
+    /// `lights` (all in one space): by its normal for `Flat`, `Sphere` and `Map` (as
+    /// [`crate::features::lights::Lights::received`]), or through its six-way lightmaps.
+    /// `maps` are the look's map texels there (RGBA in [0, 1], in [`Self::map_files`] order;
+    /// unread without maps). The f64 twin of the WGSL `lit_light`.
+    pub fn light(
+        &self,
+        lights: &crate::features::lights::Lights,
+        (uv, axes, toward_eye, p): ((f64, f64), (DVec3, DVec3), DVec3, DVec3),
+        maps: [glam::DVec4; 2],
+    ) -> DVec3 {
+        let decoded = maps[0].truncate() * 2.0 - DVec3::ONE;
+        if !matches!(self.normals, Normals::SixWay { .. }) {
+            let n = self.normal(uv, axes, toward_eye, decoded);
+            return lights.received(n, p, self.wrap);
+        }
+        let (ux, uy, facing) = basis(axes, toward_eye);
+        let (rtb, lbf) = (maps[0].truncate(), maps[1].truncate());
+        let mut light = lights.ambient * ((rtb.element_sum() + lbf.element_sum()) / 6.0);
+        for (toward, color) in lights.incoming(p) {
+            let t = DVec3::new(toward.dot(ux), toward.dot(uy), toward.dot(facing));
+            let response = DVec3::new(
+                if t.x > 0.0 { rtb.x } else { lbf.x },
+                if t.y > 0.0 { rtb.y } else { lbf.y },
+                // Front (+z, the viewer's side) is the second map's, back the first's.
+                if t.z > 0.0 { lbf.z } else { rtb.z },
+            );
+            light += color * (t * t).dot(response);
+        }
+        light
+    }
+
+    /// Emits, for a look with maps (a normal map, six-way lightmaps), `lit_map_texel_k` for
+    /// each (its texel, as `frame_texel` samples the texture) and the maps' texels at a
+    /// pixel, as the columns of a `mat2x4`: `lit_maps(in)` for the fragment shader (their
+    /// derivatives taken before any discard) and, for the compute splat,
+    /// `splat_lit_maps(uv, du, dv, frame)`; nothing for computed normals.
+    pub fn emit_map_fns(&self, w: &mut Writer, splat: bool) {
+        let maps = self.map_files().len();
+        if maps == 0 {
             return;
         }
         use crate::features::looks::texture::TextureIr;
-        TextureIr::emit_texel_fn_of(w, "normal_texel", "normal_texture");
-        w.blank();
-        w.comment("The normal map's normal at this fragment, in the sprite's frame (texels hold (n + 1) / 2).");
-        w.block("fn tangent_normal(in: Sprite) -> vec3<f32>", |w| {
+        for k in 0..maps {
+            TextureIr::emit_texel_fn_of(w, &format!("lit_map_texel_{k}"), &format!("lit_map_{k}"));
+            w.blank();
+        }
+        let columns = |w: &mut Writer| {
+            let texels: Vec<String> = (0..2)
+                .map(|k| match k < maps {
+                    true => format!("lit_map_texel_{k}(cell, quad, gx, gy)"),
+                    false => "vec4<f32>(0.0)".to_string(),
+                })
+                .collect();
+            w.line(format!("return mat2x4<f32>({});", texels.join(", ")));
+        };
+        w.comment("The lit look's map texels at this fragment (columns: the maps in order).");
+        w.block("fn lit_maps(in: Sprite) -> mat2x4<f32>", |w| {
             TextureIr::emit_fragment_coordinates(w);
-            w.line("return normal_texel(cell, quad, gx, gy).xyz * 2.0 - 1.0;");
+            columns(w);
         });
         if splat {
             w.blank();
-            w.comment("The normal map's normal at corner coordinates uv (their derivatives du, dv), for the compute splat.");
+            w.comment("The lit look's map texels at corner coordinates uv (their derivatives du, dv), for the compute splat.");
             w.block(
-                "fn splat_tangent(uv: vec2<f32>, du: vec2<f32>, dv: vec2<f32>, frame: u32) -> vec3<f32>",
+                "fn splat_lit_maps(uv: vec2<f32>, du: vec2<f32>, dv: vec2<f32>, frame: u32) -> mat2x4<f32>",
                 |w| {
                     TextureIr::emit_splat_coordinates(w);
-                    w.line("return normal_texel(cell, quad, gx, gy).xyz * 2.0 - 1.0;");
+                    columns(w);
                 },
             );
         }
     }
 
-    /// The WGSL of the tangent-space normal at a fragment (`in`): `tangent_normal(in)` for a
-    /// normal map, else a zero vector that `surface_normal` does not read.
-    pub fn tangent_wgsl(&self) -> &'static str {
-        match self.normal_map() {
-            Some(_) => "tangent_normal(in)",
-            None => "vec3<f32>(0.0)",
+    /// The WGSL of the look's map texels at a fragment (`in`): `lit_maps(in)`, or zeros that
+    /// `lit_light` does not read.
+    pub fn maps_wgsl(&self) -> &'static str {
+        match self.map_files().is_empty() {
+            false => "lit_maps(in)",
+            true => "mat2x4<f32>()",
+        }
+    }
+
+    /// The WGSL of the look's map texels at corner coordinates `uv` in the compute splat's
+    /// composite (`du`, `dv`, the frame in `r3.y`), as [`Self::maps_wgsl`].
+    pub fn splat_maps_wgsl(&self) -> &'static str {
+        match self.map_files().is_empty() {
+            false => "splat_lit_maps(uv, du, dv, r3.y)",
+            true => "mat2x4<f32>()",
         }
     }
 
@@ -160,9 +247,9 @@ impl Lit {
     /// Emits the lights' declarations and `received_light`, then (for a `turned` quad)
     /// `sprite_basis(ax, ay, c)` (its unit axes and facing toward the viewer, as the columns of
     /// a matrix, from its half axes and centre in view space: made once a sprite),
-    /// `surface_normal(uv, basis, tangent)` and `lit_color(c, n, p)`, the colour `c` shaded at
-    /// view-space point `p` whose normal is `n`: the WGSL twins of [`Self::normal`] and
-    /// [`Self::shade`]. A normal map's texture is declared here too.
+    /// `lit_light(uv, basis, maps, p)`, the light at corner coordinates `uv`, view-space point
+    /// `p`, and `lit_color(c, light)`: the WGSL twins of [`Self::light`] and [`Self::shade`].
+    /// The look's maps are declared here too.
     pub fn emit_lit_color(&self, w: &mut Writer, turned: bool) {
         crate::features::lights::emit_received_light(w, self.wrap);
         w.line(format!(
@@ -194,39 +281,71 @@ impl Lit {
             );
             w.blank();
         }
-        if self.normal_map().is_some() {
-            w.comment("The normal map, laid out as the sprite texture (its sampler shared).");
+        for (k, binding) in LIT_MAP_BINDINGS
+            .iter()
+            .enumerate()
+            .take(self.map_files().len())
+        {
             w.line(format!(
-                "@group(0) @binding({NORMAL_MAP_BINDING}) var normal_texture: texture_2d<f32>;"
+                "@group(0) @binding({binding}) var lit_map_{k}: texture_2d<f32>;"
             ));
-            w.blank();
         }
-        w.comment("The unit normal at corner coordinates uv of a sprite of that basis (tangent: a normal map's normal there, in the sprite's frame).");
+        w.comment("The light the pixel at corner coordinates uv, view-space point p, of a sprite of that basis receives (maps: its map texels there).");
         w.block(
-            "fn surface_normal(uv: vec2<f32>, basis: mat3x3<f32>, tangent: vec3<f32>) -> vec3<f32>",
+            "fn lit_light(uv: vec2<f32>, basis: mat3x3<f32>, maps: mat2x4<f32>, p: vec3<f32>) -> vec3<f32>",
             |w| match self.normals {
-                Normals::Flat => w.line("return basis[2];"),
+                Normals::Flat => w.line("return received_light(basis[2], p);"),
                 Normals::Sphere => {
                     w.comment("A half sphere over the quad: unit inside the disc, normalised past its rim.");
                     w.line("let m = uv.x * basis[0] + uv.y * basis[1] + sqrt(max(1.0 - dot(uv, uv), 0.0)) * basis[2];");
-                    w.line("return m * inverseSqrt(max(dot(m, m), 1.0));");
+                    w.line("return received_light(m * inverseSqrt(max(dot(m, m), 1.0)), p);");
                 }
                 Normals::Map { .. } => {
-                    w.line("let m = basis * tangent;");
-                    w.line("return m * inverseSqrt(max(dot(m, m), 1e-12));");
+                    w.comment("The normal map's normal, in the sprite's frame (texels hold (n + 1) / 2).");
+                    w.line("let m = basis * (maps[0].xyz * 2.0 - 1.0);");
+                    w.line("return received_light(m * inverseSqrt(max(dot(m, m), 1e-12)), p);");
+                }
+                Normals::SixWay { .. } => {
+                    w.comment("Six-way lightmaps: right, top, back in the first; left, bottom, front in the second.");
+                    w.line("let rtb = maps[0].xyz;");
+                    w.line("let lbf = maps[1].xyz;");
+                    w.line("var light = lights.ambient.rgb * ((dot(rtb, vec3<f32>(1.0)) + dot(lbf, vec3<f32>(1.0))) / 6.0);");
+                    w.block(
+                        format!("for (var i = 0u; i < min(lights.count.x, {}u); i++)", crate::features::lights::LIGHTS_MOST),
+                        |w| {
+                            crate::features::lights::emit_incoming(w);
+                            w.comment("Toward the light in the sprite's frame; each axis weighted t², its map by the sign.");
+                            w.line("let t = toward * basis;");
+                            w.line("let response = select(lbf, rtb, vec3<bool>(t.x > 0.0, t.y > 0.0, t.z <= 0.0));");
+                            w.line("light += color * dot(t * t, response);");
+                        },
+                    );
+                    w.line("return light;");
                 }
             },
         );
         w.blank();
-        w.comment("Colour c at view-space point p of a lit sprite whose normal there is n: its unlit (emissive) part plus the rest times the light received.");
+        w.comment(
+            "Colour c lit by light: its unlit (emissive) part plus the rest times the light.",
+        );
         w.block(
-            "fn lit_color(c: vec4<f32>, n: vec3<f32>, p: vec3<f32>) -> vec4<f32>",
+            "fn lit_color(c: vec4<f32>, light: vec3<f32>) -> vec4<f32>",
             |w| {
-                w.line("let light = received_light(n, p);");
                 w.line(
                     "return vec4<f32>(c.rgb * (LIT_EMISSIVE + (1.0 - LIT_EMISSIVE) * light), c.a);",
                 );
             },
         );
+    }
+}
+
+/// A quad's basis: its unit axes (`axes` at right angles) and its facing, toward the side
+/// `toward_eye` points to. The f64 twin of the WGSL `sprite_basis`.
+fn basis((half_x, half_y): (DVec3, DVec3), toward_eye: DVec3) -> (DVec3, DVec3, DVec3) {
+    let (ux, uy) = (half_x.normalize_or_zero(), half_y.normalize_or_zero());
+    let facing = ux.cross(uy);
+    match facing.dot(toward_eye) < 0.0 {
+        true => (ux, uy, -facing),
+        false => (ux, uy, facing),
     }
 }

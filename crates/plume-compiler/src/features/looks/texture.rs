@@ -161,9 +161,10 @@ impl TextureIr {
         })
     }
 
-    /// The normal map in `file` of a lit look (`render.lit.normals: Map`), laid out as
-    /// `texture`: its frames, how they play, and its size, which must be the texture's.
-    pub fn load_normal_map(
+    /// A lit look's map in `file` (`render.lit.normals`: a normal map, a six-way lightmap),
+    /// laid out as `texture`: its frames, how they play, and its size, which must be the
+    /// texture's.
+    pub fn load_lit_map(
         file: &str,
         texture: &TextureIr,
         base_dir: Option<&Path>,
@@ -172,7 +173,7 @@ impl TextureIr {
         let map = Self::load(&spec, base_dir)?;
         if (map.width, map.height) != (texture.width, texture.height) {
             return Err(format!(
-                "normal map {} is {}x{} texels; it is laid out as the texture {:?}, which is {}x{}",
+                "{} is {}x{} texels; a lit look's map is laid out as the texture {:?}, which is {}x{}",
                 resolve(file, base_dir).display(),
                 map.width,
                 map.height,
@@ -184,9 +185,9 @@ impl TextureIr {
         Ok(map)
     }
 
-    /// A flat normal map (every texel facing the viewer) standing in for `file`, which could
-    /// not be read (`missing` says why), laid out as `texture`.
-    pub fn stand_in_normal_map(file: &str, texture: &TextureIr, missing: String) -> Self {
+    /// A lit look's map standing in for `file`, which could not be read (`missing` says why),
+    /// laid out as `texture`: every texel (0.5, 0.5, 1), a flat normal.
+    pub fn stand_in_lit_map(file: &str, texture: &TextureIr, missing: String) -> Self {
         let mut map = Self::stand_in(&texture.spec_of(file), missing);
         map.rgba = [128, 128, 255, 255].repeat(map.rgba.len() / 4).into();
         map

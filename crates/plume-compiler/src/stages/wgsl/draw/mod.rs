@@ -290,7 +290,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         t.emit_texel_fn(&mut w);
     }
     if let Some(lit) = &ir.render.lit {
-        lit.emit_tangent_fns(&mut w, shape.splat);
+        lit.emit_map_fns(&mut w, shape.splat);
     }
     w.blank();
     let lit = ir.render.lit.is_some();

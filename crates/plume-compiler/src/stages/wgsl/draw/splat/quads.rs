@@ -146,7 +146,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
     }
     w.blank();
     let lit = lit_record_vec4s(ir);
-    let mapped = ir.render.normal_map.is_some();
+    let maps = ir.render.lit.as_ref().map_or("", |l| l.splat_maps_wgsl());
     if lit > 0 {
         emit_lit_record(w, lit);
         w.blank();
@@ -239,7 +239,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
             evaluate_affine(
                 w,
                 stride,
-                &lit_shade(lit, mapped, shape.host.is_some(), stride),
+                &lit_shade(lit, maps, shape.host.is_some(), stride),
             );
             return;
         }
@@ -282,7 +282,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
         w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
         w.line("let color = vec4<f32>(rgb, bitcast<f32>(r3.x));");
-        let shade = lit_shade(lit, mapped, shape.host.is_some(), stride);
+        let shade = lit_shade(lit, maps, shape.host.is_some(), stride);
         if depth {
             w.line(format!("let unfaded = {shade};"));
             w.line("let shaded = vec4<f32>(unfaded.rgb, unfaded.a * fade);");
@@ -358,9 +358,9 @@ fn evaluate_affine(w: &mut Writer, stride: u32, shade: &str) {
 
 /// The composite's shading of record j at corner coordinates uv: `splat_shade`'s colour, and
 /// for a lit look (`lit` vec4s of place, [`lit_record_vec4s`]) that colour lit as the fragment
-/// shader lights it, from the place the record keeps ([`lit_record_row`]) and, for a normal
-/// map (`mapped`), the map's normal there.
-fn lit_shade(lit: u32, mapped: bool, host: bool, stride: u32) -> String {
+/// shader lights it, from the place the record keeps ([`lit_record_row`]) and the look's map
+/// texels there (`maps`, WGSL).
+fn lit_shade(lit: u32, maps: &str, host: bool, stride: u32) -> String {
     let unlit = "splat_shade(uv, du, dv, color, r3.y)";
     if lit == 0 {
         return unlit.to_string();
@@ -368,15 +368,11 @@ fn lit_shade(lit: u32, mapped: bool, host: bool, stride: u32) -> String {
     let row = lit_record_row(host);
     let at = |r: u32| format!("bitcast<vec4<f32>>(batch[{stride}u * j + {r}u])");
     let place: Vec<String> = (row..row + lit).map(at).collect();
-    let tangent = match mapped {
-        true => "splat_tangent(uv, du, dv, r3.y)",
-        false => "vec3<f32>(0.0)",
-    };
-    format!("lit_record({unlit}, uv, {tangent}, {})", place.join(", "))
+    format!("lit_record({unlit}, uv, {maps}, {})", place.join(", "))
 }
 
-/// `lit_record(c, uv, tangent, ...)`: colour `c` at corner coordinates uv of a lit quad, lit
-/// there as the fragment shader lights it (`tangent`: a normal map's normal there), from the
+/// `lit_record(c, uv, maps, ...)`: colour `c` at corner coordinates uv of a lit quad, lit
+/// there as the fragment shader lights it (`maps`: the look's map texels there), from the
 /// place its record keeps: for `lit` = 1 its centre and half size `q` (upright, facing the
 /// camera: the view's basis), else (unit x axis, centre x) in `a`, (unit y axis, centre y) in
 /// `b`, (facing, centre z) in `f` and its half sizes in `h.xy`.
@@ -384,21 +380,21 @@ pub(crate) fn emit_lit_record(w: &mut Writer, lit: u32) {
     if lit == 1 {
         w.comment("An upright lit quad's colour at corner coordinates uv, from its record's centre and half size (view space).");
         w.block(
-            "fn lit_record(c: vec4<f32>, uv: vec2<f32>, tangent: vec3<f32>, q: vec4<f32>) -> vec4<f32>",
+            "fn lit_record(c: vec4<f32>, uv: vec2<f32>, maps: mat2x4<f32>, q: vec4<f32>) -> vec4<f32>",
             |w| {
                 w.line("let p = q.xyz + vec3<f32>(uv * q.w, 0.0);");
-                w.line("return lit_color(c, surface_normal(uv, VIEW_BASIS, tangent), p);");
+                w.line("return lit_color(c, lit_light(uv, VIEW_BASIS, maps, p));");
             },
         );
         return;
     }
     w.comment("A lit quad's colour at corner coordinates uv, from its record's basis, centre and half sizes (view space).");
     w.block(
-        "fn lit_record(c: vec4<f32>, uv: vec2<f32>, tangent: vec3<f32>, a: vec4<f32>, b: vec4<f32>, f: vec4<f32>, h: vec4<f32>) -> vec4<f32>",
+        "fn lit_record(c: vec4<f32>, uv: vec2<f32>, maps: mat2x4<f32>, a: vec4<f32>, b: vec4<f32>, f: vec4<f32>, h: vec4<f32>) -> vec4<f32>",
         |w| {
             w.line("let p = vec3<f32>(a.w, b.w, f.w) + (uv.x * h.x) * a.xyz + (uv.y * h.y) * b.xyz;");
             w.line("let basis = mat3x3<f32>(a.xyz, b.xyz, f.xyz);");
-            w.line("return lit_color(c, surface_normal(uv, basis, tangent), p);");
+            w.line("return lit_color(c, lit_light(uv, basis, maps, p));");
         },
     );
 }
