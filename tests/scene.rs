@@ -102,3 +102,53 @@ fn the_scene_hides_particles_behind_its_meshes_and_not_those_in_front() {
         white(pixel(&shown, ox as u32, oy as u32)) && white(pixel(&plain, ox as u32, oy as u32))
     );
 }
+
+/// The wall's face toward the camera (normal +z) at its centre pixel, lit by the scene's plain
+/// light and then by a lit effect's own (set as `plume render` sets them): the grey times the
+/// light Lambert's law gives, within one 8-bit step.
+#[test]
+fn the_scene_is_lit_by_a_lit_effects_lights() {
+    use plume::compiler::lights::{LightSource, Lights};
+    use plume::runtime::outputs::SCENE_GREY;
+    let e = compile(&effect());
+    let triangles = e.ir.scene_triangles();
+    let gpu = gpu();
+    let mut sim = Effect::new(&gpu, e).unwrap();
+    sim.run(1, |_| {}).unwrap();
+    let target = Offscreen::new(&gpu, W, H).unwrap();
+    let camera = target.effect_camera(&sim);
+    let scene = Scene::new(&gpu, &triangles, target.target().color_format, (W, H))
+        .unwrap()
+        .expect("a scene with triangles");
+    let renderer = sim.renderer(&Scene::target(target.target())).unwrap();
+    // A point of the wall's face that no particle covers: its lower right, in front of the
+    // sheet behind (hidden) and right of the sheet in front.
+    let (x, y) = camera
+        .project(W, H, glam::DVec3::new(0.8, -0.8, 0.1))
+        .unwrap();
+    let face = |lights: &Lights| {
+        let received = lights.received(glam::DVec3::Z, glam::DVec3::new(0.8, -0.8, 0.1), 0.0);
+        [0, 1, 2].map(|c| f64::from(SCENE_GREY[c]) * received[c] * 255.0)
+    };
+    let red_sun = Lights {
+        ambient: glam::DVec3::new(0.0, 0.0, 0.1),
+        sources: vec![LightSource::Directional {
+            direction: glam::DVec3::new(0.3, 0.0, -1.0),
+            color: glam::DVec3::new(1.5, 0.4, 0.0),
+        }],
+    };
+    for (name, lights) in [("plain", None), ("the effect's", Some(&red_sun))] {
+        if let Some(lights) = lights {
+            scene.set_lights(lights);
+        }
+        let img = target
+            .render_over_scene(&sim, &renderer, &camera, &scene)
+            .unwrap();
+        let got = pixel(&img, x as u32, y as u32);
+        let want = face(lights.unwrap_or(&Scene::plain_lights()));
+        assert!(
+            (0..3).all(|c| (f64::from(got[c]) - want[c].min(255.0)).abs() <= 1.0),
+            "{name} light: the wall is {got:?}, Lambert's law gives {want:.2?}"
+        );
+    }
+}

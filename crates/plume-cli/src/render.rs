@@ -139,11 +139,16 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         false => Scene::new(&gpu, &triangles, target.target().color_format, (w, h))?,
         true => None,
     };
-    if scene.is_some() {
+    if let Some(scene) = &scene {
         eprintln!(
             "scene: {} triangles of the meshes the effect names (--no-scene leaves them out)",
             triangles.len()
         );
+        // A lit look's lights light what its particles meet too.
+        let top = &graph.groups[0].effect.ir;
+        if top.render.lit.is_some() {
+            scene.set_lights(&top.lights);
+        }
     }
     let mut sim = Effect::from_graph(&gpu, graph)?;
     // Over the scene's meshes the splat is the embedding API's compute renderer, which tests

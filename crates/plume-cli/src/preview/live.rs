@@ -85,6 +85,11 @@ impl Running {
         let size = (self.config.width.max(1), self.config.height.max(1));
         let meshes = plume_runtime::outputs::Scene::new(&self.gpu, &triangles, format, size)
             .map_err(|e| e.to_string())?;
+        // A lit look's lights light what its particles meet too.
+        let top = &compiled.groups[0].effect.ir;
+        if let (Some(meshes), Some(_)) = (&meshes, &top.render.lit) {
+            meshes.set_lights(&top.lights);
+        }
         let (method, why) = self.draw.resolve(&self.gpu, &compiled);
         let effect = Effect::from_graph(&self.gpu, compiled).map_err(|e| e.to_string())?;
         let target = match &meshes {

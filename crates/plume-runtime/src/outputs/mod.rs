@@ -19,4 +19,4 @@ pub use export::{
 };
 pub use images::{contact_sheet, gif, png, Frame8};
 pub use offscreen::{Offscreen, FORMAT};
-pub use scene::{Scene, DEPTH_FORMAT};
+pub use scene::{Scene, DEPTH_FORMAT, SCENE_GREY};

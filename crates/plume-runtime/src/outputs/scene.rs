@@ -1,10 +1,13 @@
 //! The scene around an effect in `plume render` and `plume preview`: the meshes the effect
 //! names (its mesh colliders and mesh emitters, [`plume_compiler::EffectIr::scene_triangles`]),
-//! drawn plainly (one grey, flat per triangle, lit by a fixed light from above) into the colour
-//! image and a depth buffer before the particles, so that an author sees what the particles
-//! hit: meshes hide the particles behind them, and soft particles fade against them.
+//! drawn plainly (one grey, flat per triangle) into the colour image and a depth buffer before
+//! the particles, so that an author sees what the particles hit: meshes hide the particles
+//! behind them, and soft particles fade against them. They are lit by a plain light from
+//! above ([`Scene::plain_lights`]), or by a lit effect's own lights ([`Scene::set_lights`]), so
+//! that the particles and what they meet are lit alike.
 
-use glam::{DVec3, Mat4, Vec3};
+use glam::{DVec3, Mat4};
+use plume_compiler::lights::{LightSource, Lights, LIGHTS_BYTES};
 
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
@@ -15,10 +18,13 @@ use crate::error::RuntimeError;
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
 /// The surfaces' grey (linear RGB).
-const GREY: [f32; 3] = [0.42, 0.40, 0.38];
+pub const SCENE_GREY: [f32; 3] = [0.42, 0.40, 0.38];
 
 /// Bytes of one vertex: position and normal.
 const VERTEX_BYTES: u64 = 24;
+
+/// Bytes of the scene's uniforms: the view-projection, the eye and the surfaces' colour.
+const UNIFORM_BYTES: u64 = 96;
 
 /// Meshes ready to draw, and the depth buffer they are drawn into.
 pub struct Scene {
@@ -26,6 +32,8 @@ pub struct Scene {
     vertices: wgpu::Buffer,
     count: u32,
     uniforms: wgpu::Buffer,
+    /// The lights, world space (`plume_compiler::lights`' uniform).
+    lights: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     pipeline: wgpu::RenderPipeline,
     depth_texture: wgpu::Texture,
@@ -75,15 +83,23 @@ impl Scene {
         gpu.queue.write_buffer(&vertices, 0, &bytes);
         let uniforms = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("scene uniforms"),
-            size: 112,
+            size: UNIFORM_BYTES,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let lights = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("scene lights"),
+            size: LIGHTS_BYTES,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        gpu.queue
+            .write_buffer(&lights, 0, &Self::plain_lights().uniform_bytes());
         let module = crate::device::gpu::shader_module(device, "scene", include_str!("scene.wgsl"));
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
+            entries: &[0, 1].map(|binding| wgpu::BindGroupLayoutEntry {
+                binding,
                 visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                 ty: wgpu::BindingType::Buffer {
                     ty: wgpu::BufferBindingType::Uniform,
@@ -91,15 +107,21 @@ impl Scene {
                     min_binding_size: None,
                 },
                 count: None,
-            }],
+            }),
         });
         let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene"),
             layout: &layout,
-            entries: &[wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniforms.as_entire_binding(),
-            }],
+            entries: &[
+                wgpu::BindGroupEntry {
+                    binding: 0,
+                    resource: uniforms.as_entire_binding(),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 1,
+                    resource: lights.as_entire_binding(),
+                },
+            ],
         });
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("scene"),
@@ -148,6 +170,7 @@ impl Scene {
             vertices,
             count: (triangles.len() * 3) as u32,
             uniforms,
+            lights,
             bind_group,
             pipeline,
             depth_texture,
@@ -194,6 +217,26 @@ impl Scene {
         gpu.queue.submit([encoder.finish()]);
         gpu.take_error()?;
         Ok(Some(scene))
+    }
+
+    /// The scene's light unless a lit effect brings its own: 0.3 of ambient light and 0.7 of a
+    /// white light from above, a little behind and to the right ((0.35, 1, 0.5), toward it).
+    pub fn plain_lights() -> Lights {
+        Lights {
+            ambient: DVec3::splat(0.3),
+            sources: vec![LightSource::Directional {
+                direction: -DVec3::new(0.35, 1.0, 0.5).normalize(),
+                color: DVec3::splat(0.7),
+            }],
+        }
+    }
+
+    /// Lights the meshes with `lights` (world space) from the next pass on: a lit effect's, so
+    /// that its particles and what they meet are lit alike.
+    pub fn set_lights(&self, lights: &Lights) {
+        self.gpu
+            .queue
+            .write_buffer(&self.lights, 0, &lights.uniform_bytes());
     }
 
     /// Makes the depth buffer `size` (a window resized); returns whether it changed, and with
@@ -270,15 +313,13 @@ impl Scene {
         camera: &Camera,
     ) {
         let eye = camera.view.inverse().w_axis.truncate();
-        let light = Vec3::new(0.35, 1.0, 0.5).normalize();
-        let mut uniforms = Vec::with_capacity(112);
+        let mut uniforms = Vec::with_capacity(UNIFORM_BYTES as usize);
         let view_proj: Mat4 = camera.proj * camera.view;
         for x in view_proj
             .to_cols_array()
             .into_iter()
             .chain(eye.extend(1.0).to_array())
-            .chain(light.extend(0.0).to_array())
-            .chain(GREY.into_iter().chain([1.0]))
+            .chain(SCENE_GREY.into_iter().chain([1.0]))
         {
             uniforms.extend_from_slice(&x.to_le_bytes());
         }
