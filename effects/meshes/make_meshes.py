@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes the example meshes next to this script: rock.obj (a lumpy boulder: a sphere of 20
 rings and 40 segments whose radius follows a few fixed waves), crystal.obj (a hexagonal
-prism with pointed ends) and steps.obj (a flight of four stone steps on a ground slab). Deterministic: run it again and the files come out the same."""
+prism with pointed ends), steps.obj (a flight of four stone steps on a ground slab) and
+floor.obj (a flat 12 m square at y = 0, facing up). Deterministic: run it again and the files come out the same."""
 
 import math
 import os
@@ -83,6 +84,13 @@ def steps(count=4, rise=0.3, tread=0.5, width=3.0):
     write("steps.obj", vertices, faces, "Four stone steps climbing towards -z on a 12 m ground slab.")
 
 
+def floor(half=6.0):
+    vertices = [(-half, 0.0, -half), (half, 0.0, -half), (half, 0.0, half), (-half, 0.0, half)]
+    # Wound counter-clockwise seen from above: the face points up.
+    write("floor.obj", vertices, [(0, 3, 2, 1)], "A flat 12 m square at y = 0, facing up.")
+
+
 rock()
 crystal()
 steps()
+floor()

@@ -65,6 +65,7 @@ fn draw_json(d: &plume_runtime::bench::DrawTimes) -> serde_json::Value {
         "opaque_ms": d.opaque * 1e3,
         "vertex_only_ms": d.vertex_only * 1e3,
         "prepare_ms": d.prepare.map(|s| s * 1e3),
+        "light_ms": d.light.map(|s| s * 1e3),
         "compaction_ms": d.compacted.map(|(c, _)| c * 1e3),
         "triangle_ms": d.triangle * 1e3,
         "splat_ms": d.splat.map(|s| s.0 * 1e3),
@@ -445,6 +446,12 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 println!(
                     "    prepare           {:.3} ms before the draw: depth keys and the radix sort",
                     p * 1e3
+                );
+            }
+            if let Some(l) = d.light {
+                println!(
+                    "    particle light    {:.3} ms to pick the lights the particles give off (render.light)",
+                    l * 1e3
                 );
             }
             if let Some((compact, draw)) = d.compacted {

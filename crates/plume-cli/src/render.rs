@@ -139,16 +139,22 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         false => Scene::new(&gpu, &triangles, target.target().color_format, (w, h))?,
         true => None,
     };
-    if let Some(scene) = &scene {
+    if scene.is_some() {
         eprintln!(
             "scene: {} triangles of the meshes the effect names (--no-scene leaves them out)",
             triangles.len()
         );
-        // A lit look's lights light what its particles meet too.
-        let top = &graph.groups[0].effect.ir;
-        if top.render.lit.is_some() {
-            scene.set_lights(&top.lights);
-        }
+    }
+    // The scene's lights: the file's when it names any or its look is lit (they light what its
+    // particles meet too), else the plain ones; particles that give off light add theirs each
+    // frame.
+    let top = &graph.groups[0].effect.ir;
+    let scene_lights = match top.render.lit.is_some() || top.lights_named {
+        true => top.lights.clone(),
+        false => Scene::plain_lights(),
+    };
+    if let Some(scene) = &scene {
+        scene.set_lights(&scene_lights);
     }
     let mut sim = Effect::from_graph(&gpu, graph)?;
     // Over the scene's meshes the splat is the embedding API's compute renderer, which tests
@@ -194,10 +200,17 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
             None
         }
     };
+    let particle_lights = match &scene {
+        Some(_) => Some(sim.particle_lights()?).filter(|p| !p.is_empty()),
+        None => None,
+    };
     let bar = frames_bar(args.frames);
     let mut frames = Vec::with_capacity(args.frames as usize);
     for _ in 0..args.frames {
         sim.run(u64::from(args.every), |_| {})?;
+        if let (Some(scene), Some(particles)) = (&scene, &particle_lights) {
+            scene.set_lights(&scene_lights.with_sources(particles.read(&sim)?));
+        }
         // Drawn from the GPU buffers (sorted on the GPU with sort: true); only the image is
         // read back.
         let pixels = match &mut splat {

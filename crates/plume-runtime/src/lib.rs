@@ -34,6 +34,7 @@ mod sort;
 
 pub use device::gpu::{Gpu, GpuChoice};
 pub use draw::camera::Camera;
+pub use draw::particle_light::ParticleLights;
 pub use draw::renderer::EffectRenderer;
 pub use draw::target::{DepthTest, DrawTarget};
 pub use error::RuntimeError;

@@ -87,7 +87,10 @@ impl Running {
             .map_err(|e| e.to_string())?;
         // A lit look's lights light what its particles meet too.
         let top = &compiled.groups[0].effect.ir;
-        if let (Some(meshes), Some(_)) = (&meshes, &top.render.lit) {
+        if let Some(meshes) = meshes
+            .as_ref()
+            .filter(|_| top.render.lit.is_some() || top.lights_named)
+        {
             meshes.set_lights(&top.lights);
         }
         let (method, why) = self.draw.resolve(&self.gpu, &compiled);

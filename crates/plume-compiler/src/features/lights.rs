@@ -234,6 +234,17 @@ impl Lights {
         words.iter().flat_map(|x| x.to_le_bytes()).collect()
     }
 
+    /// These lights and `more` sources after them, as many as a draw reads ([`LIGHTS_MOST`]).
+    pub fn with_sources(&self, more: Vec<LightSource>) -> Self {
+        let mut sources = self.sources.clone();
+        sources.extend(more);
+        sources.truncate(LIGHTS_MOST);
+        Self {
+            ambient: self.ambient,
+            sources,
+        }
+    }
+
     /// The same lights moved by `m` (world to an effect's own space, or to a view): directions
     /// turned, positions moved; colours and ranges kept.
     pub fn transformed(&self, m: DMat4) -> Self {

@@ -56,6 +56,9 @@ pub struct EffectIr {
     /// The lights the file names (the default ones when it names none): what a lit look is
     /// drawn with unless a host passes its own.
     pub lights: crate::features::lights::Lights,
+    /// Whether the file names its `lights` (else `lights` are the default ones): then they
+    /// light the scene's meshes in `plume render` even when the look is unlit.
+    pub lights_named: bool,
     /// Kill volumes.
     pub kills: Vec<KillIr>,
     /// Whether a depth sort is requested.
@@ -125,6 +128,8 @@ pub struct RenderIr {
     /// A lit look's maps (its normal map, or its six-way lightmaps), loaded: laid out as
     /// `texture`, whose frames they follow.
     pub lit_maps: Vec<crate::features::looks::texture::TextureIr>,
+    /// The light the brightest particles give off, when they do (`particle_light.rs`).
+    pub light: Option<crate::features::looks::particle_light::ParticleLight>,
 }
 
 impl RenderIr {
@@ -552,6 +557,9 @@ impl fmt::Display for EffectIr {
             for map in &self.render.lit_maps {
                 writeln!(f, "  lit map {map:?}")?;
             }
+        }
+        if let Some(light) = &self.render.light {
+            writeln!(f, "  gives off light {light:?}")?;
         }
         if let Some(t) = &self.render.trail {
             writeln!(

@@ -74,6 +74,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
         colliders: effect.collide.iter().map(Collider::lower).collect(),
         scene: effect.scene.iter().map(|m| m.lower()).collect(),
         lights: crate::features::lights::Lights::lower(&effect.lights),
+        lights_named: !effect.lights.is_empty(),
         kills: effect
             .kill
             .iter()
@@ -144,6 +145,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 lit: r.lit.clone(),
                 // Loaded by `compile_effect`, as the texture.
                 lit_maps: Vec::new(),
+                light: r.light,
             }
         },
         bounds: effect.bounds.map(|b| (b.min.d(), b.max.d())),

@@ -301,6 +301,9 @@ pub struct Render {
     /// `features::looks::lit`).
     #[serde(default)]
     pub lit: Option<crate::features::looks::lit::Lit>,
+    /// The brightest particles give off light (`features::looks::particle_light`).
+    #[serde(default)]
+    pub light: Option<crate::features::looks::particle_light::ParticleLight>,
 }
 
 impl Render {
@@ -337,6 +340,7 @@ impl Default for Render {
             size_by: None,
             color_t: None,
             lit: None,
+            light: None,
         }
     }
 }

@@ -354,6 +354,9 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Re
     if let Some(t) = &r.trail {
         check_trail(c, &path.field("trail"), t);
     }
+    if let Some(light) = &r.light {
+        light.check(&path.field("light"), c);
+    }
     if let Some(lit) = &r.lit {
         lit.check(&path.field("lit"), r.texture.is_some(), c);
     }

@@ -58,6 +58,9 @@ pub struct DrawTimes {
     /// For a glowing effect (`render.glow`): (the same draw into the HDR image instead of
     /// RGBA8, the two blur passes that bloom it).
     pub glow: Option<(f64, f64)>,
+    /// For particles that give off light (`render.light`): the two kernels that pick the
+    /// lights, in one compute pass (their readback of a few bytes excluded).
+    pub light: Option<f64>,
 }
 
 /// Frames timed per draw figure (the median is reported).
@@ -237,6 +240,22 @@ pub(crate) fn time_draws(
         }
         None => None,
     };
+    let light = match sim.compiled().ir.render.light {
+        Some(_) => {
+            let lights = sim.particle_lights()?;
+            lights.read(sim)?;
+            let mut times: Vec<f64> = (0..DRAW_REPEATS)
+                .map(|_| {
+                    timer.time(|pass| {
+                        lights.dispatch(pass);
+                        Ok(())
+                    })
+                })
+                .collect::<Result<_, _>>()?;
+            Some(median(&mut times))
+        }
+        None => None,
+    };
     let stateless = match compile(State::Auto)? {
         c if c.ir.stateless.is_some() => {
             let mut s = RunningEffect::new(gpu, c)?;
@@ -260,5 +279,6 @@ pub(crate) fn time_draws(
         splat_stages,
         stateless,
         glow,
+        light,
     })
 }

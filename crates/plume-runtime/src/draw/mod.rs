@@ -15,6 +15,7 @@ pub(crate) mod camera;
 pub(crate) mod frame;
 pub(crate) mod glow;
 pub(crate) mod live_list;
+pub(crate) mod particle_light;
 pub(crate) mod pipeline;
 pub(crate) mod raster;
 pub(crate) mod renderer;

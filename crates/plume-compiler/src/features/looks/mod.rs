@@ -6,6 +6,7 @@ pub mod by_expression;
 pub mod glow;
 pub mod lit;
 pub mod orient;
+pub mod particle_light;
 pub mod rotation;
 pub mod screen_size;
 pub mod texture;

@@ -94,6 +94,12 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("emitters").index(e).field("age"),
         ));
     }
+    if ir.render.light.is_some() {
+        return Err((
+            "render.light picks its brightest particles from the particle buffers".into(),
+            ValuePath::root().field("render").field("light"),
+        ));
+    }
     if ir.render.trail.is_some() {
         return Err((
             "render.trail keeps each particle's past positions".into(),

@@ -69,6 +69,10 @@ pub struct DrawShape {
     /// pixel's light against `splat_tiles.light_ceiling` once a mask word. Without a clamp
     /// the test would never pass, and it costs (H200, sparks 10M: composite 6.87 -> 7.26 ms).
     pub clamped: bool,
+    /// Whether the module also holds the light kernels of `render.light`
+    /// (`light_keys_pass`, `light_pick_pass`; the runtime draws them with an identity view
+    /// and no slot list).
+    pub particle_light: bool,
     /// Whether the splat's composite may use subgroup operations: the adapter's subgroups are
     /// exactly 32 invocations wide (the runtime checks), and its line masks are then built by
     /// bit-matrix transposes, a subgroup each, instead of a thread per mask word.
@@ -122,6 +126,7 @@ impl DrawShape {
             host: None,
             clamped: false,
             subgroups: false,
+            particle_light: false,
         }
     }
 }
@@ -304,6 +309,10 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.blank();
     let lit_turned = ir.render.lit.as_ref().map(|l| (l, ir.render.turns_quad()));
     emit_fragment(&mut w, texture, soft.is_some(), lit_turned, layout.batched);
+    if let Some(light) = ir.render.light.filter(|_| shape.particle_light) {
+        w.blank();
+        light.emit_kernels(&mut w, ir.capacity);
+    }
     if shape.splat {
         w.blank();
         if splat_discs(ir, shape.hdr) {
