@@ -27,10 +27,12 @@ mod asset;
 mod bounds;
 mod effect;
 pub mod headless;
+mod particle_lights;
 mod render;
 
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
 pub use effect::{PlumeBurst, PlumeDraw, PlumeEffect, SimulationSpace, AUTO_COMPUTE_CAPACITY};
+pub use particle_lights::PlumeLightOf;
 pub use plume_compiler;
 pub use plume_runtime;
 pub use render::batches::BATCH_FROM;
@@ -77,6 +79,7 @@ impl Plugin for PlumePlugin {
             .register_type::<PlumeBurst>()
             .register_type::<SimulationSpace>()
             .register_type::<PlumeDraw>()
+            .register_type::<PlumeLightOf>()
             .init_resource::<effect::FiredBursts>()
             .configure_sets(
                 PostUpdate,
@@ -92,7 +95,8 @@ impl Plugin for PlumePlugin {
                 PostUpdate,
                 effect::bindable_camera_depth.in_set(PlumeSystems::Cameras),
             )
-            .add_systems(Last, effect::take_bursts.in_set(PlumeSystems::Bursts));
+            .add_systems(Last, effect::take_bursts.in_set(PlumeSystems::Bursts))
+            .add_systems(PostUpdate, particle_lights::given_lights_to_point_lights);
         render::build(app);
     }
 

@@ -109,3 +109,73 @@ fn a_point_light_lights_the_side_it_is_on() {
         "a lamp on the left: left third {left:.1}, right third {right:.1}"
     );
 }
+
+/// Bright embers hovering at the origin that give off 4 lights (`render.light`), in front of a
+/// lit grey wall 1.5 m behind them.
+const EMBERS: &str = r#"Effect(name: "embers", capacity: 200, seed: 2,
+    emitters: [Emitter(burst: 200, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 0.3),
+                       velocity: Constant((0.0, 0.0, 0.0)))],
+    render: Render(color: [(0.0, (1.0, 0.6, 0.2, 1.0))], size: [(0.0, 0.08)], blend: Additive,
+                   light: Some(ParticleLight(count: 4, intensity: 3.0, range: 6.0))))
+"#;
+
+#[test]
+fn particles_that_give_off_light_light_the_scene_with_point_lights() {
+    let _one = serial();
+    let (mut h, handle) = Harness::with_effect("particle-light", EMBERS);
+    h.app.insert_resource(GlobalAmbientLight::NONE);
+    let embers = h.app.world_mut().spawn(PlumeEffect::new(handle)).id();
+    let world = h.app.world_mut();
+    let mesh = world
+        .resource_mut::<Assets<Mesh>>()
+        .add(Cuboid::new(8.0, 8.0, 0.2));
+    let grey = world
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(Color::srgb(0.6, 0.6, 0.6));
+    world.spawn((
+        Mesh3d(mesh),
+        MeshMaterial3d(grey),
+        Transform::from_xyz(0.0, 0.0, -1.5),
+    ));
+    h.wait_for_pipelines();
+    h.update(10);
+    // Four point lights of the embers' colour where the embers are.
+    let mut query = h
+        .app
+        .world_mut()
+        .query::<(&bevy_plume::PlumeLightOf, &PointLight, &Transform)>();
+    let lights: Vec<_> = query
+        .iter(h.app.world())
+        .map(|(of, light, at)| (of.0, light.color.to_linear(), at.translation))
+        .collect();
+    assert_eq!(lights.len(), 4, "{lights:?}");
+    for (of, color, at) in &lights {
+        assert_eq!(*of, embers);
+        assert!(
+            at.length() < 0.31,
+            "a light at {at}, outside the embers' sphere"
+        );
+        assert!(
+            (color.green / color.red - 0.6).abs() < 0.01
+                && (color.blue / color.red - 0.2).abs() < 0.01,
+            "{color:?}"
+        );
+    }
+    // The wall beside the embers is lit by them; its far corner much less.
+    let image = h.capture_lit();
+    let brightness = |x: f32, y: f32| {
+        let (px, py) = project(x, y);
+        let p = image.get_pixel(px as u32, py as u32).0;
+        (u32::from(p[0]) + u32::from(p[1]) + u32::from(p[2])) / 3
+    };
+    let (near, far) = (brightness(1.2, 0.0), brightness(3.4, 1.7));
+    assert!(
+        near > 40 && near > 3 * far.max(1),
+        "the wall beside the embers {near}, at its corner {far}"
+    );
+    // The effect gone, its lights go with it.
+    h.app.world_mut().despawn(embers);
+    h.update(3);
+    let left = query.iter(h.app.world()).count();
+    assert_eq!(left, 0, "lights outlived their effect");
+}

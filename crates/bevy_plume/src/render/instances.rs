@@ -90,6 +90,9 @@ pub(crate) struct Instance {
     pub render_entity: Entity,
     /// Its draws, by the camera's render-world entity.
     pub views: HashMap<Entity, ViewDraw>,
+    /// The kernels that pick the lights its particles give off (`render.light`), made on the
+    /// first frame that needs them.
+    pub particle_lights: Option<plume_runtime::ParticleLights>,
     /// Bytes of particle state it holds on the GPU.
     particle_bytes: u64,
     /// Targets its draw could not be made for (the error was logged).
@@ -306,6 +309,7 @@ fn build(
         placed_at: None,
         render_entity: e.render,
         views: HashMap::new(),
+        particle_lights: None,
         particle_bytes,
         undrawable: Vec::new(),
         params: BTreeMap::new(),

@@ -26,12 +26,17 @@ pub(crate) fn build(app: &mut App) {
     // One map both worlds hold: the render world's readings, the main world's `Aabb`s.
     let measured = crate::bounds::MeasuredBounds::default();
     app.insert_resource(measured.clone());
+    // And the lights particles give off: the render world's readings, the main world's
+    // point lights.
+    let given = crate::particle_lights::GivenLights::default();
+    app.insert_resource(given.clone());
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         warn!("bevy_plume: no render app (RenderPlugin missing): effects will not run");
         return;
     };
     render_app
         .insert_resource(measured)
+        .insert_resource(given)
         .init_resource::<extract::ExtractedEffects>()
         .init_resource::<extract::ExtractedBursts>()
         .init_resource::<lights::ExtractedLights>()

@@ -19,6 +19,7 @@ use plume_runtime::{BoundsWatch, Camera, Lights};
 
 use crate::bounds::{MeasuredBounds, MeasuredBox};
 use crate::effect::SimulationSpace;
+use crate::particle_lights::GivenLights;
 use crate::render::batches::PlumeBatches;
 use crate::render::instances::{Instance, PlumeInstances};
 use crate::render::lights::ExtractedLights;
@@ -33,6 +34,7 @@ pub(crate) fn simulate(
     mut store: ResMut<PlumeInstances>,
     mut batches: ResMut<PlumeBatches>,
     measured: Res<MeasuredBounds>,
+    given: Res<GivenLights>,
 ) {
     let encoder = context.command_encoder();
     batches.record_steps(encoder);
@@ -133,6 +135,65 @@ pub(crate) fn simulate(
         }
         match instance.effect.watch_live_bounds(encoder) {
             Ok(watch) => note_bounds(&mut boxes, *entity, instance, watch),
+            Err(err) => warn_once!("{}: {err}", instance.effect.compiled().ir.name),
+        }
+    }
+    drop(boxes);
+    watch_particle_lights(encoder, &mut store, &given);
+}
+
+/// Records each instance's light pick after its steps (`render.light`), and puts the lights
+/// that came back, in world space, into `given` for the main world's point lights.
+fn watch_particle_lights(
+    encoder: &mut wgpu::CommandEncoder,
+    store: &mut PlumeInstances,
+    given: &GivenLights,
+) {
+    let mut lights = given.lock();
+    lights.retain(|entity, _| store.instances.contains_key(entity));
+    for (entity, instance) in store.instances.iter_mut() {
+        let gives = instance
+            .effect
+            .group_names()
+            .iter()
+            .enumerate()
+            .any(|(g, _)| {
+                instance
+                    .effect
+                    .group_compiled(g)
+                    .is_ok_and(|c| c.ir.render.light.is_some())
+            });
+        if !gives {
+            continue;
+        }
+        if instance.particle_lights.is_none() {
+            match instance.effect.particle_lights() {
+                Ok(probe) => instance.particle_lights = Some(probe),
+                Err(err) => {
+                    warn_once!("{}: {err}", instance.effect.compiled().ir.name);
+                    continue;
+                }
+            }
+        }
+        let Some(probe) = &instance.particle_lights else {
+            continue;
+        };
+        match probe.watch(&instance.effect, encoder) {
+            Ok(Some(read)) => {
+                // A local-space effect's lights are in its own space.
+                let world = match instance.space {
+                    SimulationSpace::World => Mat4::IDENTITY,
+                    SimulationSpace::Local => instance.world_from_local,
+                };
+                let to_world = plume_runtime::glam::Mat4::from_cols_array(&world.to_cols_array());
+                let in_world = plume_runtime::Lights {
+                    ambient: plume_runtime::glam::DVec3::ZERO,
+                    sources: read,
+                }
+                .transformed(to_world.as_dmat4());
+                lights.insert(*entity, in_world.sources);
+            }
+            Ok(None) => {}
             Err(err) => warn_once!("{}: {err}", instance.effect.compiled().ir.name),
         }
     }
