@@ -90,6 +90,7 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
             ("asset", 0),
             ("effect", 0),
             ("bounds", 0),
+            ("particle_lights", 0),
             // 1: the render world, which reads them; the headless runner, which waits on them.
             ("render", 1),
             ("headless", 1),

@@ -299,19 +299,26 @@ fn a_hosts_lights_replace_the_files() {
     );
 }
 
+/// A fresh folder `name` under the temporary directory holding, for each (file, texel), an
+/// 8 x 8 PNG of that one RGBA8 texel.
+fn uniform_pngs(name: &str, files: &[(&str, [u8; 4])]) -> std::path::PathBuf {
+    let dir = std::env::temp_dir().join(format!("{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (file, texel) in files {
+        let rgba: Vec<u8> = texel.repeat(64);
+        image::save_buffer(dir.join(file), &rgba, 8, 8, image::ColorType::Rgba8).unwrap();
+    }
+    dir
+}
+
 #[test]
 fn a_normal_map_turns_the_light_as_its_texels_say() {
     let gpu = gpu();
     // An 8 x 8 texture of one tint and a normal map of one normal, leaning right: (0.6, 0, 0.8)
     // as 8-bit texels, (r, g, b) = (n + 1) / 2.
-    let dir = std::env::temp_dir().join(format!("plume-lit-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     let tint = [230u8, 204, 255, 255];
     let leaning = [204u8, 128, 230, 255];
-    for (name, texel) in [("tint.png", tint), ("normals.png", leaning)] {
-        let rgba: Vec<u8> = texel.repeat(64);
-        image::save_buffer(dir.join(name), &rgba, 8, 8, image::ColorType::Rgba8).unwrap();
-    }
+    let dir = uniform_pngs("plume-lit", &[("tint.png", tint), ("normals.png", leaning)]);
     let decode = |t: [u8; 4]| t.map(|c| f64::from(c) / 255.0);
     let texel = Some((
         decode(tint),
@@ -347,19 +354,17 @@ fn six_way_lightmaps_weigh_each_light_by_its_direction() {
     let gpu = gpu();
     // Six different responses, so a light read from the wrong map or axis shows: right 0.9,
     // top 0.7, back 0.3 in the first map; left 0.2, bottom 0.5, front 0.6 in the second.
-    let dir = std::env::temp_dir().join(format!("plume-six-way-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
     let tint = [255u8, 255, 255, 255];
     let right_top_back = [230u8, 179, 77, 255];
     let left_bottom_front = [51u8, 128, 153, 255];
-    for (name, texel) in [
-        ("tint.png", tint),
-        ("rtb.png", right_top_back),
-        ("lbf.png", left_bottom_front),
-    ] {
-        let rgba: Vec<u8> = texel.repeat(64);
-        image::save_buffer(dir.join(name), &rgba, 8, 8, image::ColorType::Rgba8).unwrap();
-    }
+    let dir = uniform_pngs(
+        "plume-six-way",
+        &[
+            ("tint.png", tint),
+            ("rtb.png", right_top_back),
+            ("lbf.png", left_bottom_front),
+        ],
+    );
     let decode = |t: [u8; 4]| t.map(|c| f64::from(c) / 255.0);
     let maps = [
         DVec4::from_array(decode(right_top_back)),

@@ -187,19 +187,23 @@ def main():
     # smoke.png: 4 x 4 frames, left to right, top to bottom.
     puffs = [smoke(k, 16) for k in range(16)]
 
-    def smoke_texel(x, y):
+    def frame_of(x, y):
+        """Texel (x, y) of a 4 x 4 atlas of size-texel frames: its frame k and its (u, v) in
+        [-1, 1] across the frame, v up."""
         k = (y // size) * 4 + x // size
         u = ((x % size + 0.5) / size) * 2.0 - 1.0
         v = 1.0 - ((y % size + 0.5) / size) * 2.0
+        return k, u, v
+
+    def smoke_texel(x, y):
+        k, u, v = frame_of(x, y)
         return puffs[k](u, v)
 
     write_png(os.path.join(HERE, "smoke.png"), 4 * size, 4 * size, smoke_texel)
     normals = [smoke_normal(k, 16) for k in range(16)]
 
     def normal_texel(x, y):
-        k = (y // size) * 4 + x // size
-        u = ((x % size + 0.5) / size) * 2.0 - 1.0
-        v = 1.0 - ((y % size + 0.5) / size) * 2.0
+        k, u, v = frame_of(x, y)
         return normals[k](u, v)
 
     write_png(os.path.join(HERE, "smoke_normals.png"), 4 * size, 4 * size, normal_texel)

@@ -18,19 +18,7 @@ struct Camera {
 @group(0) @binding(1) var sprite_texture: texture_2d<f32>;
 @group(0) @binding(2) var sprite_sampler: sampler;
 
-// The lights in world space: (direction the light travels, 0) or (position, 1), and
-// (colour times intensity, range).
-struct Source {
-    place: vec4<f32>,
-    color: vec4<f32>,
-}
-
-struct Lights {
-    ambient: vec4<f32>,
-    count: vec4<u32>,
-    sources: array<Source, 8>,
-}
-
+// The lights in world space (outputs/world_lights.wgsl, put before this shader).
 @group(0) @binding(3) var<uniform> lights: Lights;
 // A lit look's maps, laid out as the texture (flat 1x1 ones where it has fewer): a normal map,
 // or the six-way lightmaps (right, top, back; left, bottom, front).
@@ -80,18 +68,10 @@ fn lit(c: vec4<f32>, uv: vec2<f32>, maps: array<vec3<f32>, 2>, half_x: vec3<f32>
     if (six_way) {
         light = light * (maps[0].x + maps[0].y + maps[0].z + maps[1].x + maps[1].y + maps[1].z) / 6.0;
     }
-    for (var i = 0u; i < min(lights.count.x, 8u); i++) {
-        let s = lights.sources[i];
-        var toward = -s.place.xyz * inverseSqrt(max(dot(s.place.xyz, s.place.xyz), 1e-30));
-        var color = s.color.rgb;
-        if (s.place.w > 0.5) {
-            let d = s.place.xyz - p;
-            let d2 = max(dot(d, d), 0.01);
-            toward = d / sqrt(d2);
-            let q = d2 / (s.color.w * s.color.w);
-            let window = clamp(1.0 - q * q, 0.0, 1.0);
-            color = color * window * window / d2;
-        }
+    for (var i = 0u; i < light_count(); i++) {
+        let a = arriving(i, p);
+        let toward = a.toward;
+        let color = a.color;
         if (six_way) {
             let t = vec3<f32>(dot(toward, ux), dot(toward, uy), dot(toward, facing));
             var response = maps[1];

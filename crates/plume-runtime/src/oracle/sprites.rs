@@ -129,6 +129,20 @@ pub fn sprites(
 /// Bytes of one sprite instance: three vec3 and two vec4 of f32.
 const SPRITE_BYTES: u64 = 68;
 
+/// A filterable 2D texture the fragment shader reads, at `binding`.
+fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::FRAGMENT,
+        ty: wgpu::BindingType::Texture {
+            sample_type: wgpu::TextureSampleType::Float { filterable: true },
+            view_dimension: wgpu::TextureViewDimension::D2,
+            multisampled: false,
+        },
+        count: None,
+    }
+}
+
 /// Bytes of the reference camera uniform: view and projection (128), the eye and the lit
 /// look's terms (`reference_sprite.wgsl`'s `Camera`).
 const CAMERA_BYTES: u64 = 160;
@@ -156,11 +170,12 @@ impl ReferenceRenderer {
         let (blend, background) = (render.blend, render.background);
         let target = Offscreen::new(gpu, width, height)?;
         let device = &gpu.device;
-        let module = crate::device::gpu::shader_module(
-            device,
-            "sprites",
+        let source = [
+            include_str!("../outputs/world_lights.wgsl"),
             include_str!("reference_sprite.wgsl"),
-        );
+        ]
+        .concat();
+        let module = crate::device::gpu::shader_module(device, "sprites", source);
         let camera = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("camera"),
             size: CAMERA_BYTES,
@@ -201,26 +216,8 @@ impl ReferenceRenderer {
                     },
                     count: None,
                 },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 4,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 5,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                texture_entry(4),
+                texture_entry(5),
                 wgpu::BindGroupLayoutEntry {
                     binding: 3,
                     visibility: wgpu::ShaderStages::FRAGMENT,
@@ -233,16 +230,7 @@ impl ReferenceRenderer {
                     },
                     count: None,
                 },
-                wgpu::BindGroupLayoutEntry {
-                    binding: 1,
-                    visibility: wgpu::ShaderStages::FRAGMENT,
-                    ty: wgpu::BindingType::Texture {
-                        sample_type: wgpu::TextureSampleType::Float { filterable: true },
-                        view_dimension: wgpu::TextureViewDimension::D2,
-                        multisampled: false,
-                    },
-                    count: None,
-                },
+                texture_entry(1),
                 wgpu::BindGroupLayoutEntry {
                     binding: 2,
                     visibility: wgpu::ShaderStages::FRAGMENT,

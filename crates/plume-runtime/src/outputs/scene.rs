@@ -95,7 +95,12 @@ impl Scene {
         });
         gpu.queue
             .write_buffer(&lights, 0, &Self::plain_lights().uniform_bytes());
-        let module = crate::device::gpu::shader_module(device, "scene", include_str!("scene.wgsl"));
+        let source = [
+            include_str!("world_lights.wgsl"),
+            include_str!("scene.wgsl"),
+        ]
+        .concat();
+        let module = crate::device::gpu::shader_module(device, "scene", source);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
             entries: &[0, 1].map(|binding| wgpu::BindGroupLayoutEntry {

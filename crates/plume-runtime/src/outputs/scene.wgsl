@@ -12,19 +12,7 @@ struct Uniforms {
 
 @group(0) @binding(0) var<uniform> u: Uniforms;
 
-// The lights in world space, as a lit look reads them (plume_compiler::lights): (direction the
-// light travels, 0) or (position, 1), and (colour times intensity, range).
-struct Source {
-    place: vec4<f32>,
-    color: vec4<f32>,
-}
-
-struct Lights {
-    ambient: vec4<f32>,
-    count: vec4<u32>,
-    sources: array<Source, 8>,
-}
-
+// The lights in world space (world_lights.wgsl, put before this shader).
 @group(0) @binding(1) var<uniform> lights: Lights;
 
 struct Out {
@@ -49,22 +37,11 @@ fn fs(in: Out) -> @location(0) vec4<f32> {
     n = select(vec3<f32>(0.0, 1.0, 0.0), n / l, l > 0.0);
     // The side the camera sees is lit as the front.
     n = select(n, -n, dot(n, u.eye.xyz - in.world) < 0.0);
-    // Lambert's law: the ambient light plus each source's light times max(n . l, 0), a point
-    // light's falling off as 1 / d^2 (d no less than 10 cm) and to nothing at its range.
+    // Lambert's law: the ambient light plus each source's light times max(n . l, 0).
     var light = lights.ambient.rgb;
-    for (var i = 0u; i < min(lights.count.x, 8u); i++) {
-        let s = lights.sources[i];
-        var toward = -s.place.xyz * inverseSqrt(max(dot(s.place.xyz, s.place.xyz), 1e-30));
-        var color = s.color.rgb;
-        if (s.place.w > 0.5) {
-            let d = s.place.xyz - in.world;
-            let d2 = max(dot(d, d), 0.01);
-            toward = d * inverseSqrt(d2);
-            let q = d2 / (s.color.w * s.color.w);
-            let window = clamp(1.0 - q * q, 0.0, 1.0);
-            color = color * window * window / d2;
-        }
-        light += color * max(dot(n, toward), 0.0);
+    for (var i = 0u; i < light_count(); i++) {
+        let a = arriving(i, in.world);
+        light += a.color * max(dot(n, a.toward), 0.0);
     }
     return vec4<f32>(u.color.rgb * light, 1.0);
 }
