@@ -75,6 +75,16 @@ impl Running {
                 if meshes.resize((w, h)) {
                     loaded.renderer.set_scene_depth(meshes.depth_view());
                 }
+                // Particles that give off light light the meshes as a recent frame's reading
+                // says (read back without waiting).
+                if let Some(particles) = &loaded.particle_lights {
+                    let read = particles
+                        .watch(&loaded.effect, &mut encoder)
+                        .map_err(|e| e.to_string())?;
+                    if let Some(read) = read {
+                        meshes.set_lights(&loaded.scene_lights.with_sources(read));
+                    }
+                }
                 meshes.record(&mut encoder, color.clone(), &camera);
                 // A SceneDepth collider meets the meshes as this frame draws them, from the
                 // next frame's steps on (this frame's were recorded above).

@@ -85,13 +85,15 @@ impl Running {
         let size = (self.config.width.max(1), self.config.height.max(1));
         let meshes = plume_runtime::outputs::Scene::new(&self.gpu, &triangles, format, size)
             .map_err(|e| e.to_string())?;
-        // A lit look's lights light what its particles meet too.
+        // The file's lights light what its particles meet too, when it names any or its look
+        // is lit.
         let top = &compiled.groups[0].effect.ir;
-        if let Some(meshes) = meshes
-            .as_ref()
-            .filter(|_| top.render.lit.is_some() || top.lights_named)
-        {
-            meshes.set_lights(&top.lights);
+        let scene_lights = match top.render.lit.is_some() || top.lights_named {
+            true => top.lights.clone(),
+            false => plume_runtime::outputs::Scene::plain_lights(),
+        };
+        if let Some(meshes) = &meshes {
+            meshes.set_lights(&scene_lights);
         }
         let (method, why) = self.draw.resolve(&self.gpu, &compiled);
         let effect = Effect::from_graph(&self.gpu, compiled).map_err(|e| e.to_string())?;
@@ -114,6 +116,12 @@ impl Running {
         if let Some(meshes) = &meshes {
             renderer.set_scene_depth(meshes.depth_view());
         }
+        let particle_lights = match &meshes {
+            Some(_) => {
+                Some(effect.particle_lights().map_err(|e| e.to_string())?).filter(|p| !p.is_empty())
+            }
+            None => None,
+        };
         // Last, and all or nothing: the old effect keeps drawing into a matching scene if this
         // fails.
         self.scene.set_glow(&self.gpu, glow)?;
@@ -122,6 +130,8 @@ impl Running {
             renderer,
             target,
             meshes,
+            scene_lights,
+            particle_lights,
             about,
             warnings,
         });

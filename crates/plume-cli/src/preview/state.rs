@@ -25,6 +25,10 @@ pub(super) struct Loaded {
     pub(super) target: plume_runtime::DrawTarget,
     /// The meshes the effect names, drawn around it (None: it names none).
     pub(super) meshes: Option<plume_runtime::outputs::Scene>,
+    /// The meshes' lights (the file's, or the plain ones), and the pick of the lights its
+    /// particles give off (`render.light`), added to them as readings come back.
+    pub(super) scene_lights: plume_runtime::Lights,
+    pub(super) particle_lights: Option<plume_runtime::ParticleLights>,
     /// What the compiler chose, for the figures.
     pub(super) about: String,
     /// Its warnings, rendered.
