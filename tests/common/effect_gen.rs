@@ -538,6 +538,26 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
                 c.join(", ")
             ),
         });
+    // Lit by the lights (flat or sphere normals, a wrap and an emissive part), and the light the
+    // brightest particles give off; or neither.
+    let lit =
+        prop::option::of((any::<bool>(), num(f, 0.0, 1.0), num(f, 0.0, 1.0))).prop_map(
+            |l| match l {
+                None => "None".to_string(),
+                Some((flat, wrap, emissive)) => format!(
+                    "Some(Lit(normals: {}, wrap: {wrap}, emissive: {emissive}))",
+                    if flat { "Flat" } else { "Sphere" }
+                ),
+            },
+        );
+    let light = prop::option::of((count(f, 1, 8), num(f, 0.0, 3.0), num(f, 0.1, 10.0))).prop_map(
+        |l| match l {
+            None => "None".to_string(),
+            Some((n, intensity, range)) => {
+                format!("Some(ParticleLight(count: {n}, intensity: {intensity}, range: {range}))")
+            }
+        },
+    );
     (
         stops,
         sizes,
@@ -554,8 +574,9 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
             alphas,
             palette,
         ),
+        (lit, light),
     )
-        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow, trail, heights, alphas, palette))| {
+        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow, trail, heights, alphas, palette), (lit, light))| {
             let list = |stops: Option<Vec<String>>| {
                 stops.map_or("None".to_string(), |s| format!("Some([{}])", s.join(", ")))
             };
@@ -569,7 +590,7 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
                 _ => "None".to_string(),
             };
             format!(
-                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}, trail: {trail}, size_y: {heights}, alpha: {alphas}, palette: {palette}),",
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}, trail: {trail}, size_y: {heights}, alpha: {alphas}, palette: {palette}, lit: {lit}, light: {light}),",
                 c.join(", "),
                 s.join(", ")
             )
