@@ -140,18 +140,13 @@ fn images(gpu: &Gpu, sim: &Effect, lights: Option<&Lights>) -> Vec<(&'static str
     out
 }
 
-/// Asserts that every draw of `sim` (lit by `lights`, the host's when `host`) colours the
-/// pixels at `offsets` (right, up) from the centre as the f64 lighting does, within one 8-bit
-/// step: each image is rounded to 8 bits once, and its f32 arithmetic lands far nearer than
-/// a step (the light's terms are sums of a few products of numbers near 1).
-fn assert_lit_like_f64(
-    gpu: &Gpu,
-    sim: &Effect,
-    lights: &Lights,
-    host: bool,
-    offsets: &[(i32, i32)],
-) {
-    assert_textured_lit_like_f64(gpu, sim, lights, host, offsets, None);
+/// Asserts that every draw of `sim` (lit by its file's lights, or by a host's `host` set on
+/// each renderer) colours the pixels at `offsets` (right, up) from the centre as the f64
+/// lighting does, within one 8-bit step: each image is rounded to 8 bits once, and its f32
+/// arithmetic lands far nearer than a step (the light's terms are sums of a few products of
+/// numbers near 1).
+fn assert_lit_like_f64(gpu: &Gpu, sim: &Effect, host: Option<&Lights>, offsets: &[(i32, i32)]) {
+    assert_textured_lit_like_f64(gpu, sim, host, offsets, None);
 }
 
 /// [`assert_lit_like_f64`] for a textured sprite of one texel and one texel of each lit map
@@ -159,14 +154,14 @@ fn assert_lit_like_f64(
 fn assert_textured_lit_like_f64(
     gpu: &Gpu,
     sim: &Effect,
-    lights: &Lights,
-    host: bool,
+    host: Option<&Lights>,
     offsets: &[(i32, i32)],
     texel: Option<([f64; 4], [DVec4; 2])>,
 ) {
+    let lights = host.unwrap_or(&sim.compiled().ir.lights);
     let centre = (SIDE / 2) as i32;
     let mut wrong = Vec::new();
-    for (kind, image) in images(gpu, sim, host.then_some(lights)) {
+    for (kind, image) in images(gpu, sim, host) {
         for &(right, up) in offsets {
             let want = expected(sim, lights, right, up, texel);
             let (x, y) = (centre + right, centre - up);
@@ -198,13 +193,7 @@ fn a_flat_card_is_lit_by_lamberts_law() {
         (received - DVec3::splat(0.6)).length() < 1e-12,
         "{received}"
     );
-    assert_lit_like_f64(
-        &gpu,
-        &sim,
-        &ir_lights,
-        false,
-        &[(0, 0), (8, 0), (-8, 5), (0, -12)],
-    );
+    assert_lit_like_f64(&gpu, &sim, None, &[(0, 0), (8, 0), (-8, 5), (0, -12)]);
 }
 
 #[test]
@@ -216,10 +205,9 @@ fn a_sphere_sprite_is_lit_on_the_side_the_light_comes_from() {
         "Lit(normals: Sphere)",
         "Directional(direction: (-1.0, 0.0, 0.0))",
     );
-    let lights = sim.compiled().ir.lights.clone();
     let across: Vec<(i32, i32)> = (-18..=18).step_by(3).map(|x| (x, 0)).collect();
-    assert_lit_like_f64(&gpu, &sim, &lights, false, &across);
-    assert_lit_like_f64(&gpu, &sim, &lights, false, &[(6, 6), (-6, -6), (10, -4)]);
+    assert_lit_like_f64(&gpu, &sim, None, &across);
+    assert_lit_like_f64(&gpu, &sim, None, &[(6, 6), (-6, -6), (10, -4)]);
     // The left half, facing away, is black (no ambient light in the list); the right lit.
     let image = &images(&gpu, &sim, None)[0].1;
     let red = |x: u32| image[4 * ((SIDE / 2) * SIDE + x) as usize];
@@ -236,12 +224,10 @@ fn a_point_light_falls_off_with_distance_and_range() {
         "Lit(normals: Sphere)",
         "Point(position: (0.5, 0.0, 2.0), intensity: 3.0, range: 3.0)",
     );
-    let lights = sim.compiled().ir.lights.clone();
     assert_lit_like_f64(
         &gpu,
         &sim,
-        &lights,
-        false,
+        None,
         &[(0, 0), (5, 0), (-5, 0), (0, 10), (14, 3), (-14, -3)],
     );
 }
@@ -264,7 +250,7 @@ fn wrap_and_the_emissive_part_shade_as_written() {
     let facing = ((c + 0.5) / 1.5).max(0.0);
     let received = ir_lights.received(DVec3::Z, DVec3::ZERO, 0.5);
     assert!((received.x - 2.0 * facing).abs() < 1e-12);
-    assert_lit_like_f64(&gpu, &sim, &ir_lights, false, &[(0, 0), (7, 7)]);
+    assert_lit_like_f64(&gpu, &sim, None, &[(0, 0), (7, 7)]);
 }
 
 #[test]
@@ -293,8 +279,7 @@ fn a_hosts_lights_replace_the_files() {
     assert_lit_like_f64(
         &gpu,
         &sim,
-        &host,
-        true,
+        Some(&host),
         &[(0, 0), (-9, 9), (9, -9), (15, 0)],
     );
 }
@@ -333,8 +318,7 @@ fn a_normal_map_turns_the_light_as_its_texels_say() {
         "Directional(direction: (1.0, 0.0, -0.3)), Ambient(intensity: 0.1)",
     ] {
         let sim = probe_with(&gpu, lit, lights, texture, Some(&dir));
-        let ir_lights = sim.compiled().ir.lights.clone();
-        assert_textured_lit_like_f64(&gpu, &sim, &ir_lights, false, &offsets, texel);
+        assert_textured_lit_like_f64(&gpu, &sim, None, &offsets, texel);
     }
     // The sphere's own normals would light the centre from the right not at all.
     let sim = probe_with(
@@ -382,8 +366,7 @@ fn six_way_lightmaps_weigh_each_light_by_its_direction() {
         "Ambient(color: (1.0, 0.5, 0.25), intensity: 0.8)",
     ] {
         let sim = probe_with(&gpu, lit, lights, texture, Some(&dir));
-        let ir_lights = sim.compiled().ir.lights.clone();
-        assert_textured_lit_like_f64(&gpu, &sim, &ir_lights, false, &[(0, 0), (10, -6)], texel);
+        assert_textured_lit_like_f64(&gpu, &sim, None, &[(0, 0), (10, -6)], texel);
     }
     // Light straight from the right reads the right map alone: 0.9 of it.
     let sim = probe_with(

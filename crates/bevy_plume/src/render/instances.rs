@@ -90,8 +90,8 @@ pub(crate) struct Instance {
     pub render_entity: Entity,
     /// Its draws, by the camera's render-world entity.
     pub views: HashMap<Entity, ViewDraw>,
-    /// The kernels that pick the lights its particles give off (`render.light`), made on the
-    /// first frame that needs them.
+    /// The kernels that pick the lights its particles give off (`render.light`; empty when
+    /// they give off none), made on its first frame.
     pub particle_lights: Option<plume_runtime::ParticleLights>,
     /// Bytes of particle state it holds on the GPU.
     particle_bytes: u64,

@@ -152,20 +152,7 @@ fn watch_particle_lights(
     let mut lights = given.lock();
     lights.retain(|entity, _| store.instances.contains_key(entity));
     for (entity, instance) in store.instances.iter_mut() {
-        let gives = instance
-            .effect
-            .group_names()
-            .iter()
-            .enumerate()
-            .any(|(g, _)| {
-                instance
-                    .effect
-                    .group_compiled(g)
-                    .is_ok_and(|c| c.ir.render.light.is_some())
-            });
-        if !gives {
-            continue;
-        }
+        // Made once: empty for an effect whose particles give off no light.
         if instance.particle_lights.is_none() {
             match instance.effect.particle_lights() {
                 Ok(probe) => instance.particle_lights = Some(probe),
@@ -175,7 +162,7 @@ fn watch_particle_lights(
                 }
             }
         }
-        let Some(probe) = &instance.particle_lights else {
+        let Some(probe) = instance.particle_lights.as_ref().filter(|p| !p.is_empty()) else {
             continue;
         };
         match probe.watch(&instance.effect, encoder) {
