@@ -88,12 +88,21 @@ pub fn draw_group_and_reference(sim: &Effect, g: usize, side: u32) -> (Vec<u8>, 
     let renderer = group_renderer(sim, g, &target.target()).unwrap();
     let gpu_img = target.render(sim, &renderer, &camera).unwrap();
     let reference = ReferenceRenderer::new(sim.gpu(), side, side, ir).unwrap();
-    let cpu_img = reference
-        .draw(
-            &sprites(&sim.group_records(g).unwrap(), ir, &camera, false),
-            &camera,
-        )
-        .unwrap();
+    let records = sim.group_records(g).unwrap();
+    let cpu_img = match ir.render.ribbon {
+        // Ribbons joining particles: the chains of the GPU's table, placed in f64.
+        Some(_) => {
+            let table = plume::runtime::oracle::read_ribbon_table(sim, g)
+                .unwrap()
+                .into_iter()
+                .map(|e| e.map(|(id, link, _)| (id, link)))
+                .collect();
+            let ribbons = plume::runtime::oracle::joined_ribbons(&records, &table, ir, &camera);
+            reference.draw_with_ribbons(&ribbons, &[], &camera)
+        }
+        None => reference.draw(&sprites(&records, ir, &camera, false), &camera),
+    }
+    .unwrap();
     (gpu_img, cpu_img)
 }
 

@@ -96,7 +96,11 @@ pub(crate) fn queue_effects(
             let compute = match instance.draw {
                 PlumeDraw::Raster => false,
                 PlumeDraw::Compute => true,
-                PlumeDraw::Auto => gpu_adapter && instance.capacity >= AUTO_COMPUTE_CAPACITY,
+                PlumeDraw::Auto => {
+                    gpu_adapter
+                        && instance.capacity >= AUTO_COMPUTE_CAPACITY
+                        && instance.compute_draws()
+                }
             };
             let (target, size) = match compute.then(|| compute_size(view, camera)) {
                 // The compute renderer reads the main pass's depth (sample 0 of a multisampled

@@ -354,6 +354,16 @@ impl Instance {
         }
     }
 
+    /// Whether the compute renderer draws every group of the effect (it draws no ribbons
+    /// joining particles): `PlumeDraw::Auto` picks it only then.
+    pub fn compute_draws(&self) -> bool {
+        let groups: Vec<&plume_compiler::EffectIr> = (0..self.effect.group_names().len())
+            .filter_map(|g| self.effect.group_compiled(g).ok())
+            .map(|c| &c.ir)
+            .collect();
+        plume_runtime::outputs::Splat::why_not(&groups).is_none()
+    }
+
     /// The draw for the camera `view` into `target`, made (or remade, when the camera's
     /// format, samples or size changed) as needed: by the compute renderer into a target of
     /// `compute_size` when that is given and the effect takes it (else the raster one, the

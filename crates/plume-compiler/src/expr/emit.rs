@@ -79,6 +79,7 @@ impl<'w> Emitter<'w> {
                 Var::T => "t".into(),
                 Var::Age => "age".into(),
                 Var::Life => "ctx_life".into(),
+                Var::Index => "index".into(),
             },
             // The place evaluating it binds each attribute it holds as `a{index}`.
             Node::Attr(i) => format!("a{i}"),

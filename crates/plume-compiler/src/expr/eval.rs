@@ -25,6 +25,8 @@ pub struct Inputs {
     pub seed_mix: u32,
     /// The particle's id.
     pub id: u32,
+    /// Its index among its emitter's spawns, as the GPU's f32 holds it.
+    pub index: f64,
     /// Its attributes' values, by index (a number in `x`).
     pub attrs: Attrs,
 }
@@ -148,6 +150,7 @@ pub fn eval(e: &Expr, inp: &Inputs) -> Value {
             Var::T => Value::S(inp.t),
             Var::Age => Value::S(inp.age),
             Var::Life => Value::S(inp.life),
+            Var::Index => Value::S(inp.index),
         },
         Node::Attr(i) => {
             let a = inp.attrs[usize::from(*i)]

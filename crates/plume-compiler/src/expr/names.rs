@@ -7,7 +7,7 @@ use glam::DVec3;
 
 use super::parse::{Ast, AstKind};
 use super::tree::{Expr, Node, Scope};
-use super::vocab::{closest, Op3, Ty, FUNCTIONS, VARIABLES};
+use super::vocab::{closest, Op3, Ty, EVERY_VARIABLE, FUNCTIONS};
 use super::ExprError;
 
 /// The type checker, which a named expression is checked with where it is read (passed in,
@@ -22,7 +22,7 @@ pub(super) fn resolve(
     check: Check,
 ) -> Result<Expr, ExprError> {
     let err = |msg: String| ExprError::new(msg, ast.start, ast.end);
-    if let Some(v) = VARIABLES.iter().find(|v| v.name() == name) {
+    if let Some(v) = EVERY_VARIABLE.iter().find(|v| v.name() == name) {
         if !scope.vars.contains(v) {
             return Err(err(format!(
                 "`{name}` is not known here: {} may read {}",

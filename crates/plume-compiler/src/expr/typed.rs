@@ -4,7 +4,9 @@
 
 use super::parse::{Ast, AstKind, BinOp};
 pub use super::tree::{AttrName, Expr, Node, Scope};
-pub use super::vocab::{closest, Op1, Op2, Op3, Ty, Var, FUNCTIONS, MAX_RAND, VARIABLES};
+pub use super::vocab::{
+    closest, Op1, Op2, Op3, Ty, Var, EVERY_VARIABLE, FUNCTIONS, MAX_RAND, VARIABLES,
+};
 use super::ExprError;
 
 /// Type-checks a syntax tree into a typed tree.

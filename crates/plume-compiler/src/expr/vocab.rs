@@ -38,6 +38,9 @@ pub enum Var {
     Age,
     /// The particle's lifetime (s); 0 for particles that never die.
     Life,
+    /// The particle's index among its emitter's spawns (an event's children: among its
+    /// firing's), as a number: spawn positions only.
+    Index,
 }
 
 impl Var {
@@ -49,6 +52,7 @@ impl Var {
             Var::T => "t",
             Var::Age => "age",
             Var::Life => "life",
+            Var::Index => "index",
         }
     }
 
@@ -138,8 +142,12 @@ pub enum Op3 {
     Select,
 }
 
-/// The variables, for messages.
+/// The variables of a particle as it steps (a custom force's, an attribute's change).
 pub const VARIABLES: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life];
+
+/// Every variable some expression reads: names a param, attribute or definition may not
+/// take, and what a definition may read (checked again where it is read).
+pub const EVERY_VARIABLE: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life, Var::Index];
 
 /// Functions and their arities, for messages and the arity check.
 pub const FUNCTIONS: &[(&str, usize)] = &[

@@ -175,7 +175,7 @@ pub fn names(declared: &Declared, names: Names) -> Vec<AttrName> {
 /// expression cannot use or that hide another name, too many, expressions that do not
 /// compile, a rate and an update both given. `names.attrs` is [`names`]'s result.
 pub fn check(c: &mut Checker, path: &ValuePath, declared: &Declared, names: Names) {
-    use crate::expr::typed::{FUNCTIONS, VARIABLES};
+    use crate::expr::typed::{EVERY_VARIABLE, FUNCTIONS};
     if declared.len() > MAX_ATTRIBUTES {
         c.error(
             path,
@@ -204,7 +204,7 @@ pub fn check(c: &mut Checker, path: &ValuePath, declared: &Declared, names: Name
                 format!("`{name}` is not a name an expression can use: start with a letter, then letters, digits or _"),
             );
         } else if name == "dt"
-            || VARIABLES.iter().any(|v| v.name() == name)
+            || EVERY_VARIABLE.iter().any(|v| v.name() == name)
             || FUNCTIONS.iter().any(|(f, _)| f == name)
             || names.params.contains_key(name)
         {

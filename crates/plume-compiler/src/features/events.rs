@@ -151,6 +151,9 @@ pub struct EventIr {
     pub target: usize,
     /// The event's index among every event of the effect (the order children are spawned in).
     pub stream: usize,
+    /// Whether the record passes the firing particle's id (in its velocity's w): its target
+    /// group joins children by their parent (`render.ribbon`).
+    pub passes_id: bool,
 }
 
 /// An event this group receives: its spawns come from another group's records.
@@ -168,6 +171,9 @@ pub struct EventInputIr {
     pub inherit_color: bool,
     /// The parent group's capacity (how many records there can be).
     pub parent_capacity: u32,
+    /// Steps between a parent's firings (`Every`), else 1: a ribbon's children's ordinals
+    /// count in them (`ribbon.rs`).
+    pub period: u32,
 }
 
 const OUT_KEYS: [&str; MAX_EVENTS] = [
@@ -295,6 +301,15 @@ pub fn fired_bit(j: usize) -> u32 {
     2 << j
 }
 
+/// The record's fourth velocity word: the firing particle's id (`id`, WGSL) as f32 bits when
+/// the event passes it, else 0.
+fn passed_id(e: &EventIr, id: &str) -> String {
+    match e.passes_id {
+        true => format!("bitcast<f32>({id})"),
+        false => "0.0".into(),
+    }
+}
+
 /// Emits the firing of every event whose trigger `fires_here` accepts, by the particle being
 /// updated, with its position `x`, velocity `vel` and packed tint `tint` (WGSL expressions):
 /// its record, in its slot, and its bit in `fired` (the kernel appends its id and slot with
@@ -315,8 +330,9 @@ pub fn emit_fire(
         let body = |w: &mut Writer| {
             w.line(format!("fired = fired | {};", u32_lit(fired_bit(j))));
             w.line(format!(
-                "{}.records[chunk.base + i] = EventRecord({x}, {tint}, vec4<f32>({vel}, 0.0));",
-                OUT_RECORDS[j]
+                "{}.records[chunk.base + i] = EventRecord({x}, {tint}, vec4<f32>({vel}, {}));",
+                OUT_RECORDS[j],
+                passed_id(e, "p.id")
             ));
         };
         match e.trigger {
@@ -445,8 +461,9 @@ pub fn emit_fire_appended(
                 w.line(format!("atomicMax(&{}.max_id, {id});", OUT_RECORDS[j]));
             }
             w.line(format!(
-                "{}.records[at_{j}] = EventRecord({x}, {tint}, vec4<f32>({vel}, 0.0));",
-                OUT_RECORDS[j]
+                "{}.records[at_{j}] = EventRecord({x}, {tint}, vec4<f32>({vel}, {}));",
+                OUT_RECORDS[j],
+                passed_id(e, id)
             ));
         });
     }
@@ -468,6 +485,7 @@ pub fn emit_kernels(
     inputs: &[EventInputIr],
     own: Option<&str>,
     store: &dyn Fn(&mut Writer),
+    ribbon: Option<&crate::features::looks::ribbon::Ribbon>,
 ) {
     for (j, input) in inputs.iter().enumerate() {
         let records = IN_RECORDS[j];
@@ -506,6 +524,15 @@ pub fn emit_kernels(
                 None => {}
             }
             store(w);
+            if let Some(ribbon) = ribbon {
+                // The parent's id, passed in its record (`EventIr::passes_id`).
+                let ordinal = format!(
+                    "(params.step / {}) * {} + c",
+                    u32_lit(input.period),
+                    u32_lit(input.count)
+                );
+                ribbon.emit_write(w, "bitcast<u32>(r.v.w)", &ordinal);
+            }
         });
         w.blank();
         w.comment(format!(

@@ -196,6 +196,7 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
             ordering: Ordering::for_capacity(effects[stream.parent].capacity),
             target: stream.child,
             stream: s,
+            passes_id: effects[stream.child].render.ribbon.is_some(),
         });
         let child = &mut links[stream.child];
         child.inputs.push(EventInputIr {
@@ -205,6 +206,10 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
             inherit_velocity: event.inherit_velocity,
             inherit_color: event.inherit_color,
             parent_capacity: effects[stream.parent].capacity,
+            period: match trigger {
+                TriggerIr::Every(steps) => steps,
+                _ => 1,
+            },
         });
         child.input_emitters.push(event.as_emitter());
     }

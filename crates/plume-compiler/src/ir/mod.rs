@@ -130,6 +130,8 @@ pub struct RenderIr {
     pub lit_maps: Vec<crate::features::looks::texture::TextureIr>,
     /// The light the brightest particles give off, when they do (`particle_light.rs`).
     pub light: Option<crate::features::looks::particle_light::ParticleLight>,
+    /// Ribbons joining the particles, drawn instead of sprites (`ribbon.rs`).
+    pub ribbon: Option<crate::features::looks::ribbon::Ribbon>,
 }
 
 impl RenderIr {
@@ -560,6 +562,9 @@ impl fmt::Display for EffectIr {
         }
         if let Some(light) = &self.render.light {
             writeln!(f, "  gives off light {light:?}")?;
+        }
+        if let Some(r) = &self.render.ribbon {
+            writeln!(f, "  {r:?}, a {}-byte table", r.table_bytes())?;
         }
         if let Some(t) = &self.render.trail {
             writeln!(

@@ -10,6 +10,7 @@ use crate::features::colliders::resolve;
 use crate::features::events::TriggerIr;
 use crate::features::forces::flock::Frozen;
 use crate::features::forces::ParticleCtx;
+use crate::features::looks::ribbon::Ribbon;
 use crate::features::looks::trail::History;
 use crate::features::placement::Placement;
 use crate::ir::EffectIr;
@@ -96,6 +97,8 @@ pub struct ReferenceSim {
     /// The attributes its particles carry (`EffectIr::kept_attributes`, a bit set): fixed by
     /// the IR's expressions, so found once.
     kept: u64,
+    /// The ribbon table the spawns write (`render.ribbon`; empty without one).
+    ribbon_table: crate::features::looks::ribbon::Table,
 }
 
 impl ReferenceSim {
@@ -116,6 +119,7 @@ impl ReferenceSim {
             motion_in_halves: ir.stateless.is_none()
                 && ir.accuracy.as_ref().is_some_and(|a| a.half_motion),
             kept: ir.kept_attributes(),
+            ribbon_table: ir.render.ribbon.map(|r| r.table()).unwrap_or_default(),
         }
     }
 
@@ -186,6 +190,10 @@ impl ReferenceSim {
             let parent = order[(i / u64::from(inp.count)) as usize];
             let c = (i % u64::from(inp.count)) as u32;
             let id = first.wrapping_add(i as u32);
+            if let Some(ribbon) = &self.ir.render.ribbon {
+                let link = Ribbon::child(parent.id, step, inp.period, inp.count, c);
+                ribbon.write(&mut self.ribbon_table, id, link);
+            }
             let mut s = spawn(&self.ir, inp.emitter, id, c, step);
             s.x += parent.x;
             s.v += inp.inherit_velocity * parent.v;
@@ -299,7 +307,12 @@ impl ReferenceSim {
                     break;
                 }
                 budget -= 1;
-                let mut s = spawn(&self.ir, e, id + local, k0.wrapping_add(local), plan.step);
+                let k = k0.wrapping_add(local);
+                if let Some(ribbon) = &self.ir.render.ribbon {
+                    let link = ribbon.emitted(e as u32, self.ir.emitters.len() as u32, k);
+                    ribbon.write(&mut self.ribbon_table, id + local, link);
+                }
+                let mut s = spawn(&self.ir, e, id + local, k, plan.step);
                 if let Some(burst) = burst {
                     (s.x, s.v) = burst.apply(s.x, s.v);
                 }
@@ -392,6 +405,7 @@ impl ReferenceSim {
                         seed_mix: ir.seed_mix,
                         id: p.id,
                         attrs: p.attrs,
+                        ..Default::default()
                     },
                 );
             }
@@ -459,6 +473,12 @@ impl ReferenceSim {
             .iter()
             .map(|p| (p.id, p.history.ribbon(p.x)))
             .collect()
+    }
+
+    /// The ribbon table the spawns wrote (`render.ribbon`; empty without one): what
+    /// [`Ribbon::chains`] joins.
+    pub fn ribbon_table(&self) -> &crate::features::looks::ribbon::Table {
+        &self.ribbon_table
     }
 
     /// The spawn schedule (for ages).

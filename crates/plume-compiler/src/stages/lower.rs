@@ -146,6 +146,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 // Loaded by `compile_effect`, as the texture.
                 lit_maps: Vec::new(),
                 light: r.light,
+                ribbon: r.ribbon,
             }
         },
         bounds: effect.bounds.map(|b| (b.min.d(), b.max.d())),

@@ -304,6 +304,10 @@ pub struct Render {
     /// The brightest particles give off light (`features::looks::particle_light`).
     #[serde(default)]
     pub light: Option<crate::features::looks::particle_light::ParticleLight>,
+    /// The particles drawn as ribbons joining each to the one spawned before it
+    /// (`features::looks::ribbon`), instead of sprites.
+    #[serde(default)]
+    pub ribbon: Option<crate::features::looks::ribbon::Ribbon>,
 }
 
 impl Render {
@@ -341,6 +345,7 @@ impl Default for Render {
             color_t: None,
             lit: None,
             light: None,
+            ribbon: None,
         }
     }
 }

@@ -142,6 +142,19 @@ pub fn check_effect(effect: &Effect) -> Checker {
         }
     }
     check_render(&mut c, &root.field("render"), &effect.render);
+    if let Some(ribbon) = &effect.render.ribbon {
+        let r = &effect.render;
+        let set = |field: &str| match field {
+            "trail" => r.trail.is_some(),
+            "texture" => r.texture.is_some(),
+            "lit" => r.lit.is_some(),
+            "size_y" => r.size_y.is_some(),
+            "rotation" => r.rotation.is_some(),
+            "orient" => !matches!(r.orient, Orient::Camera),
+            _ => false,
+        };
+        ribbon.check(&root, &set, effect.sort, &mut c);
+    }
     crate::features::looks::by_expression::LookBy::check(
         &mut c,
         &root.field("render"),
@@ -181,7 +194,7 @@ fn check_defines(
     errors: Vec<crate::expr::define::DefineError>,
     names: crate::expr::Names,
 ) {
-    use crate::expr::typed::{FUNCTIONS, VARIABLES};
+    use crate::expr::typed::{EVERY_VARIABLE, FUNCTIONS};
     for (name, e) in errors {
         c.error_in_string(&path.field(&name), e.start, e.end, e.message);
     }
@@ -195,7 +208,7 @@ fn check_defines(
                 format!("`{name}` is not a name an expression can use: start with a letter, then letters, digits or _"),
             );
         } else if name == "dt"
-            || VARIABLES.iter().any(|v| v.name() == name)
+            || EVERY_VARIABLE.iter().any(|v| v.name() == name)
             || FUNCTIONS.iter().any(|(f, _)| f == name)
             || effect.params.contains_key(name)
             || effect.attributes.contains_key(name)
@@ -210,7 +223,7 @@ fn check_defines(
         let crate::expr::define::Body::Parsed(ast) = &d.body else {
             continue;
         };
-        let scope = names.scope_with_attrs(VARIABLES, "a named expression");
+        let scope = names.scope_with_attrs(EVERY_VARIABLE, "a named expression");
         if let Err(e) = crate::expr::typed::check(ast, &scope) {
             c.error_in_string(&path.field(&d.name), e.start, e.end, e.message);
         }
@@ -220,7 +233,7 @@ fn check_defines(
 /// Params: names that expressions can use (identifiers that hide no variable or function),
 /// values within the range expressions compute in.
 fn check_params(c: &mut Checker, path: &ValuePath, effect: &Effect) {
-    use crate::expr::typed::{FUNCTIONS, VARIABLES};
+    use crate::expr::typed::{EVERY_VARIABLE, FUNCTIONS};
     for (component, &value) in &effect.params {
         // A vector's components (`wind.x`) are checked by its name.
         let name = ["x", "y", "z"]
@@ -240,7 +253,7 @@ fn check_params(c: &mut Checker, path: &ValuePath, effect: &Effect) {
             );
         } else if named_here
             && (name == "dt"
-                || VARIABLES.iter().any(|v| v.name() == name)
+                || EVERY_VARIABLE.iter().any(|v| v.name() == name)
                 || FUNCTIONS.iter().any(|(f, _)| *f == name))
         {
             c.error(

@@ -186,7 +186,7 @@ pub fn bench(
     };
     let flock = match &sim.effect.ir.flock {
         Some(f) => {
-            let words = sim.read_flock_buffer("flock_out")?;
+            let words = sim.read_extra_buffer("flock_out")?;
             // Word 7 of every 12 is the slot's neighbour count (0 for free slots).
             let total: f64 = words
                 .chunks_exact(48)

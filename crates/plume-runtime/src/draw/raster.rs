@@ -144,7 +144,9 @@ impl GroupDraw {
             DeadSlots::Compacted => true,
             DeadSlots::BySize => effect.ir.capacity >= COMPACT_FROM_SLOTS,
         } && !stateless
-            && !effect.ir.sort;
+            && !effect.ir.sort
+            // Ribbons draw every table entry, reading slots from it.
+            && effect.ir.render.ribbon.is_none();
         let live = match compacted {
             true => Some(LiveList::new(gpu, res, effect, options.primitive)?),
             false => None,
@@ -169,7 +171,15 @@ impl GroupDraw {
             Primitive::Quad => wgpu::PrimitiveTopology::TriangleStrip,
             Primitive::Triangle => wgpu::PrimitiveTopology::TriangleList,
         };
-        let pipeline = render_pipeline(gpu, &module, ("vs", "fs"), topology, target, blend);
+        let ribbon = effect.ir.render.ribbon;
+        let (entry_points, topology) = match ribbon {
+            Some(_) => (
+                ("vs_ribbon", "fs_ribbon"),
+                wgpu::PrimitiveTopology::TriangleStrip,
+            ),
+            None => (("vs", "fs"), topology),
+        };
+        let pipeline = render_pipeline(gpu, &module, entry_points, topology, target, blend);
         let view = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("draw view"),
             size: DRAW_VIEW_BYTES,
@@ -177,6 +187,14 @@ impl GroupDraw {
             mapped_at_creation: false,
         });
         entries.push((0, view.clone()));
+        if ribbon.is_some() {
+            let table = res.extra_named(effect, "ribbon_table").ok_or_else(|| {
+                RuntimeError::Gpu(
+                    "a ribbon group has no ribbon table (a bug in the compiler)".into(),
+                )
+            })?;
+            entries.push((plume_compiler::ribbon::RIBBON_DRAW_BINDING, table.clone()));
+        }
         let lights = LightsUniform::new(gpu, effect);
         if let Some(lights) = &lights {
             entries.push((LIGHTS_BINDING, lights.buffer.clone()));
@@ -212,7 +230,10 @@ impl GroupDraw {
             )?),
             _ => None,
         };
-        let instances = if let Some(live) = live {
+        let instances = if let Some(ribbon) = ribbon {
+            // A segment per table entry.
+            Instances::Slots(ribbon.entries())
+        } else if let Some(live) = live {
             Instances::Compacted(Box::new(live))
         } else if stateless {
             Instances::Frame(AtomicU32::new(0))
@@ -232,7 +253,10 @@ impl GroupDraw {
             trail,
             lights,
             instances,
-            vertices: options.primitive.vertices(),
+            vertices: match ribbon {
+                Some(_) => plume_compiler::ribbon::SEGMENT_VERTICES,
+                None => options.primitive.vertices(),
+            },
             size_scale: 1.0,
             gpu: gpu.clone(),
         })

@@ -29,7 +29,7 @@ pub fn draw_order(
 /// Reads a flocking buffer of the top-level group back by its layout name (`boids`,
 /// `flock_out`, ...).
 pub fn read_flock_buffer(effect: &Effect, name: &str) -> Result<Vec<u8>, RuntimeError> {
-    effect.groups()[0].read_flock_buffer(name)
+    effect.groups()[0].read_extra_buffer(name)
 }
 
 /// Number of particle buffers group `g`'s state is split into.

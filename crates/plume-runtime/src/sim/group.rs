@@ -448,14 +448,12 @@ impl Group {
         decode_slots(&self.effect, &self.schedule, &bytes)
     }
 
-    /// Reads a flocking buffer back by its layout name (`boids`, `flock_out`, ...), for tests.
-    pub(crate) fn read_flock_buffer(&self, name: &str) -> Result<Vec<u8>, RuntimeError> {
+    /// Reads a buffer of the layout beside the particles back by its name (`boids`,
+    /// `ribbon_table`, ...), for tests and benchmarks.
+    pub(crate) fn read_extra_buffer(&self, name: &str) -> Result<Vec<u8>, RuntimeError> {
         let buffer = self
-            .effect
-            .ir
-            .flock
-            .as_ref()
-            .and_then(|_| self.res.extra_named(&self.effect, name))
+            .res
+            .extra_named(&self.effect, name)
             .ok_or_else(|| RuntimeError::Output(format!("this effect has no buffer {name}")))?;
         read_buffer(&self.gpu, buffer)
     }

@@ -26,7 +26,7 @@ pub enum SpawnValue {
 impl SpawnValue {
     fn vars(self) -> &'static [Var] {
         match self {
-            SpawnValue::Position => &[Var::T],
+            SpawnValue::Position => &[Var::T, Var::Index],
             SpawnValue::Velocity => &[Var::X, Var::T],
         }
     }
@@ -62,6 +62,9 @@ pub fn emit(w: &mut Writer, e: &Expr, target: &str, dt: f64) {
         if e.reads(Var::T) {
             w.line(format!("let t = f32(step) * {};", f32_lit(dt)));
         }
+        if e.reads(Var::Index) {
+            w.line("let index = f32(k);");
+        }
         if e.reads(Var::X) {
             let bound = f32_lit(expr::VALUE_BOUND);
             w.line(format!(
@@ -74,9 +77,9 @@ pub fn emit(w: &mut Writer, e: &Expr, target: &str, dt: f64) {
     });
 }
 
-/// The f64 twin of [`emit`]: `e` for particle `id` of an effect of `seed_mix`, spawned at time
-/// `t` at position `x`.
-pub fn value(e: &Expr, seed_mix: u32, id: u32, t: f64, x: DVec3) -> DVec3 {
+/// The f64 twin of [`emit`]: `e` for particle `id` of an effect of `seed_mix`, the `k`-th
+/// of its emitter, spawned at time `t` at position `x`.
+pub fn value(e: &Expr, seed_mix: u32, (id, k): (u32, u32), t: f64, x: DVec3) -> DVec3 {
     eval(
         e,
         &Inputs {
@@ -84,6 +87,8 @@ pub fn value(e: &Expr, seed_mix: u32, id: u32, t: f64, x: DVec3) -> DVec3 {
             t,
             seed_mix,
             id,
+            // The kernel's `f32(k)`.
+            index: f64::from(k as f32),
             ..Inputs::default()
         },
     )

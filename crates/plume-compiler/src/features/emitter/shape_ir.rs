@@ -339,7 +339,7 @@ impl ShapeIr {
     pub fn sample(&self, d: &ParticleDraws, k: u32, t: f64) -> (DVec3, DVec3) {
         let x = match self {
             ShapeIr::Custom { expr, .. } => {
-                super::expression::value(expr, d.seed_mix, d.id, t, DVec3::ZERO)
+                super::expression::value(expr, d.seed_mix, (d.id, k), t, DVec3::ZERO)
             }
             ShapeIr::Mesh(m) => {
                 return m.spawn(d.word(stream::MESH_PICK), d.unit3(stream::POSITION));

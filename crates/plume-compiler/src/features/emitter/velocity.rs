@@ -153,7 +153,7 @@ impl Velocity {
                     .map(|id| {
                         let d = ParticleDraws { seed_mix, id };
                         let (x, _) = shape.sample(&d, id, 0.0);
-                        expression::value(&expr, seed_mix, id, 0.0, x).length()
+                        expression::value(&expr, seed_mix, (id, 0), 0.0, x).length()
                     })
                     .fold(0.0, f64::max);
                 VelocityIr::Custom { expr, max_speed }
@@ -296,7 +296,7 @@ impl VelocityIr {
     ) -> DVec3 {
         let speed = |s: (f64, f64)| s.0 + (s.1 - s.0) * d.unit(stream::VELOCITY + 2);
         match self {
-            VelocityIr::Custom { expr, .. } => expression::value(expr, d.seed_mix, d.id, t, x),
+            VelocityIr::Custom { expr, .. } => expression::value(expr, d.seed_mix, (d.id, 0), t, x),
             VelocityIr::Constant(v) => *v,
             VelocityIr::Cone {
                 axis,

@@ -346,6 +346,7 @@ impl ForceTerm for CustomTerm {
             seed_mix: self.seed_mix,
             id: p.id,
             attrs: p.attrs,
+            ..Inputs::default()
         };
         eval(&self.expr, &inputs).v()
     }

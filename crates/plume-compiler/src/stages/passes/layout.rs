@@ -193,6 +193,15 @@ pub fn decide(ir: &EffectIr) -> Layout {
             meaning: "trail ring, points - 1 entries per slot (entry r of slot i at i * (points - 1) + r; split into chunks with the particles): the position's f32 bits and id + 1 (0: never written)",
         });
     }
+    if let Some(ribbon) = &ir.render.ribbon {
+        layout.bindings.push(Binding {
+            binding: crate::features::looks::ribbon::RIBBON_TABLE_BINDING,
+            name: "ribbon_table",
+            space: "storage, read_write",
+            bytes: ribbon.table_bytes(),
+            meaning: "the ribbon table (render.ribbon), points entries per ribbon: per particle spawned, its slot, id + 1 (0: never written), key and ordinal, at entry (key mod ribbons) * points + ordinal mod points",
+        });
+    }
     if let Some(field) = &ir.field {
         layout.bindings.push(Binding {
             binding: 13,

@@ -100,6 +100,12 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
             ValuePath::root().field("render").field("light"),
         ));
     }
+    if ir.render.ribbon.is_some() {
+        return Err((
+            "render.ribbon joins particles through the slots they hold".into(),
+            ValuePath::root().field("render").field("ribbon"),
+        ));
+    }
     if ir.render.trail.is_some() {
         return Err((
             "render.trail keeps each particle's past positions".into(),
@@ -225,7 +231,7 @@ pub fn decide(ir: &mut EffectIr) -> Result<(), Checker> {
             c.error(
                 &ValuePath::root().field("state"),
                 format!(
-                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes, no render.trail, no events fed in, and a capacity no spawn can overflow (use Auto)"
+                    "Stateless is not possible because {why}; it needs the Exact integrator, no kill volumes, no render.trail or render.ribbon, no events fed in, and a capacity no spawn can overflow (use Auto)"
                 ),
             );
             return Err(c);

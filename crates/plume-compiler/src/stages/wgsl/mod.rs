@@ -124,7 +124,7 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             name if crate::features::events::binding_type(name).is_some() => {
                 crate::features::events::binding_type(name).unwrap_or_default()
             }
-            "particles" | "trail" => "array<vec4<u32>>",
+            "particles" | "trail" | "ribbon_table" => "array<vec4<u32>>",
             "free_list" => "array<u32>",
             "counters" if layout.batched => "array<Counters>",
             "counters" => "Counters",

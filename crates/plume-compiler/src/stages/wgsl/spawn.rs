@@ -94,6 +94,10 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                     ));
                 }
                 emit_store_spawned(w, ir, layout);
+                if let Some(ribbon) = &ir.render.ribbon {
+                    let (key, ordinal) = ribbon.emitted_wgsl(ir.emitters.len() as u32);
+                    ribbon.emit_write(w, &key, &ordinal);
+                }
             }
         },
     );
@@ -105,6 +109,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             &ir.event_inputs,
             layout.has(Attribute::Tint).then_some(own.as_str()),
             &|w| emit_store_spawned(w, ir, layout),
+            ir.render.ribbon.as_ref(),
         );
     }
 }

@@ -90,9 +90,10 @@ pub struct Splat {
 
 impl Splat {
     /// Whether the splat can draw `ir`: any sprite (textured or round, any orientation,
-    /// rotation and height, glowing or not) and ribbons (`trail`) of a stateful effect.
+    /// rotation and height, glowing or not) and trails of a stateful effect; not ribbons
+    /// joining particles (`render.ribbon`), which the raster draw draws.
     pub fn draws(ir: &EffectIr) -> bool {
-        ir.render.trail.is_none() || ir.stateless.is_none()
+        (ir.render.trail.is_none() || ir.stateless.is_none()) && ir.render.ribbon.is_none()
     }
 
     /// Why the splat cannot draw an effect whose groups are `groups`, or `None` when it can.
@@ -100,7 +101,7 @@ impl Splat {
         groups
             .iter()
             .any(|ir| !Self::draws(ir))
-            .then_some("the compute splat draws the ribbons of stateful effects only")
+            .then_some("the compute splat draws neither ribbons joining particles (render.ribbon) nor trails of stateless effects")
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot

@@ -309,6 +309,15 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.blank();
     let lit_turned = ir.render.lit.as_ref().map(|l| (l, ir.render.turns_quad()));
     emit_fragment(&mut w, texture, soft.is_some(), lit_turned, layout.batched);
+    // Ribbons read slots straight from their table: never through a slot list.
+    if let Some(ribbon) = ir
+        .render
+        .ribbon
+        .filter(|_| !shape.through_list && !shape.splat)
+    {
+        w.blank();
+        ribbon.emit_draw(&mut w, ir.capacity);
+    }
     if let Some(light) = ir.render.light.filter(|_| shape.particle_light) {
         w.blank();
         light.emit_kernels(&mut w, ir.capacity);

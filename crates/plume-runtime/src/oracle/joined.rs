@@ -1,0 +1,98 @@
+//! The reference drawing of ribbons that join particles (`render.ribbon`), beside
+//! [`crate::oracle::ribbons`]' trails: the chains the table joins
+//! ([`plume_compiler::ribbon::Ribbon::chains`], f64), each point where its particle's sprite
+//! would be, as wide and of the colour the sprite would have ([`crate::oracle::sprites`]), its
+//! vertices placed on the CPU in f64, drawn by the reference ribbon shader. And the GPU's table
+//! read back, to compare with the reference simulator's.
+
+use std::collections::HashMap;
+
+use glam::{DVec3, Vec3};
+use plume_compiler::ir::EffectIr;
+use plume_compiler::reference::ParticleRecord;
+use plume_compiler::ribbon::{Link, Table};
+
+use crate::draw::camera::Camera;
+use crate::error::RuntimeError;
+use crate::oracle::ribbons::RibbonVertex;
+use crate::sim::effect::Effect;
+
+/// One entry of the GPU's ribbon table: the id and link of the particle that wrote it last,
+/// and the slot it was given.
+pub type GpuEntry = Option<(u32, Link, u32)>;
+
+/// Group `g`'s ribbon table as the GPU holds it, per entry (None where no spawn has written).
+/// An error for a group without ribbons.
+pub fn read_ribbon_table(effect: &Effect, g: usize) -> Result<Vec<GpuEntry>, RuntimeError> {
+    let bytes = effect.group(g)?.read_extra_buffer("ribbon_table")?;
+    let word =
+        |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
+    Ok((0..bytes.len() / 16)
+        .map(|e| {
+            let [slot, id_1, key, ordinal] = std::array::from_fn(|j| word(16 * e + 4 * j));
+            // The id is stored plus one: 0 was never written.
+            (id_1 != 0).then_some((id_1.wrapping_sub(1), Link { key, ordinal }, slot))
+        })
+        .collect())
+}
+
+/// The joined ribbons of the particles `records` (all of one group, live), whose spawns wrote
+/// `table`, as the GPU's `vs_ribbon` draws them for `camera`: a triangle list, two triangles a
+/// segment. A point's half width is its sprite's half size, its colour the sprite's; its
+/// direction runs from the point before it to the point after it in its chain (itself at an
+/// end), and its vertices lie half a width to either side across that direction and the line
+/// of sight.
+pub fn joined_ribbons(
+    records: &[ParticleRecord],
+    table: &Table,
+    ir: &EffectIr,
+    camera: &Camera,
+) -> Vec<RibbonVertex> {
+    let Some(ribbon) = &ir.render.ribbon else {
+        return Vec::new();
+    };
+    // Each live particle's sprite: centre, half width, colour; None when it would not show.
+    let shown: HashMap<u32, (DVec3, f64, [f32; 4])> = records
+        .iter()
+        .filter_map(|r| {
+            let s = crate::oracle::sprites(std::slice::from_ref(r), ir, camera, false).pop()?;
+            let half = f64::from(Vec3::from(s.half_x).length());
+            (s.color[3] > 0.0 && half > 0.0).then_some((r.id, (r.position, half, s.color)))
+        })
+        .collect();
+    let eye = camera
+        .view
+        .as_dmat4()
+        .inverse()
+        .transform_point3(DVec3::ZERO);
+    let f32s = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
+    let mut out = Vec::new();
+    for chain in ribbon.chains(table, &|id| shown.contains_key(&id)) {
+        let points: Vec<(DVec3, f64, [f32; 4])> = chain.iter().map(|id| shown[id]).collect();
+        let n = points.len();
+        let sides: Vec<[RibbonVertex; 2]> = (0..n)
+            .map(|j| {
+                let (here, half, color) = points[j];
+                let before = points[j.saturating_sub(1)].0;
+                let after = points[(j + 1).min(n - 1)].0;
+                let side = (before - after).cross(here - eye);
+                let len2 = side.length_squared();
+                let offset = if len2 > 1e-30 {
+                    side * (half / len2.sqrt())
+                } else {
+                    DVec3::ZERO
+                };
+                [-1.0, 1.0].map(|sign| RibbonVertex {
+                    position: f32s(here + sign * offset),
+                    across: sign as f32,
+                    color,
+                })
+            })
+            .collect();
+        for pair in sides.windows(2) {
+            let ([a, b], [c, d]) = (pair[0], pair[1]);
+            out.extend([a, b, c, b, c, d]);
+        }
+    }
+    out
+}
