@@ -60,8 +60,8 @@ pub use features::looks::{
     trail,
 };
 pub use features::{
-    accuracy, attributes, bursts, colliders, emitter, events, field, forces, lights, mesh_emission,
-    placement,
+    accuracy, attributes, bursts, colliders, emitter, events, field, forces, inherit, lights,
+    mesh_emission, placement,
 };
 pub use ir::EffectIr;
 pub use stages::passes::layout::Layout;

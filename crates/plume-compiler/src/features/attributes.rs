@@ -53,6 +53,10 @@ pub struct Attribute {
     /// Its new value, computed once a step.
     #[serde(default)]
     pub update: Option<String>,
+    /// In a group fed by events, its children start with the firing particle's attribute of
+    /// the same name instead of `spawn` (`features::inherit`).
+    #[serde(default)]
+    pub inherit: bool,
 }
 
 /// The file's `attributes`, by name.
@@ -157,7 +161,7 @@ pub fn names(declared: &Declared, names: Names) -> Vec<AttrName> {
         .map(|(name, a)| {
             let spawn = compile_spawn(&a.spawn, names).ok();
             let constant = spawn.as_ref().and_then(|e| match e.node {
-                _ if a.rate.is_some() || a.update.is_some() => None,
+                _ if a.rate.is_some() || a.update.is_some() || a.inherit => None,
                 Node::Scalar(x) => Some(DVec3::splat(x)),
                 Node::Vector(v) => Some(v),
                 _ => None,

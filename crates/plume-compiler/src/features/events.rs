@@ -154,6 +154,9 @@ pub struct EventIr {
     /// Whether the record passes the firing particle's id (in its velocity's w): its target
     /// group joins children by their parent (`render.ribbon`).
     pub passes_id: bool,
+    /// The attributes (indices) it passes to its children, which inherit them
+    /// ([`crate::features::inherit`]).
+    pub passes: Vec<usize>,
 }
 
 /// An event this group receives: its spawns come from another group's records.
@@ -174,6 +177,9 @@ pub struct EventInputIr {
     /// Steps between a parent's firings (`Every`), else 1: a ribbon's children's ordinals
     /// count in them (`ribbon.rs`).
     pub period: u32,
+    /// The attributes children take from the parent, as (parent's index, child's index), in
+    /// the order the parent passes them ([`crate::features::inherit`]).
+    pub inherits: Vec<(usize, usize)>,
 }
 
 const OUT_KEYS: [&str; MAX_EVENTS] = [
@@ -277,6 +283,11 @@ pub fn binding_type(name: &str) -> Option<&'static str> {
     }
 }
 
+/// The WGSL name of the `j`-th received event's slot order (the parent's firing slots).
+pub fn in_order(j: usize) -> &'static str {
+    IN_ORDER[j]
+}
+
 /// Emits the record structs (when the group fires or receives events).
 pub fn emit_declarations(w: &mut Writer) {
     w.comment("An event's record: the firing particle's position, its tint (tint.rs, packed) and velocity.");
@@ -311,7 +322,8 @@ fn passed_id(e: &EventIr, id: &str) -> String {
 }
 
 /// Emits the firing of every event whose trigger `fires_here` accepts, by the particle being
-/// updated, with its position `x`, velocity `vel` and packed tint `tint` (WGSL expressions):
+/// updated, with its position `x`, velocity `vel` and packed tint `tint` (WGSL expressions),
+/// and what `passed` writes beside event j's record (the attributes it passes):
 /// its record, in its slot, and its bit in `fired` (the kernel appends its id and slot with
 /// the rest of its workgroup's: [`emit_workgroup_appends`]). An `Every` event's firing is
 /// guarded by its period.
@@ -319,9 +331,8 @@ pub fn emit_fire(
     w: &mut Writer,
     events: &[EventIr],
     fires_here: impl Fn(TriggerIr) -> bool,
-    x: &str,
-    vel: &str,
-    tint: &str,
+    (x, vel, tint): (&str, &str, &str),
+    passed: &dyn Fn(&mut Writer, usize),
 ) {
     for (j, e) in events.iter().enumerate() {
         if !fires_here(e.trigger) {
@@ -334,6 +345,7 @@ pub fn emit_fire(
                 OUT_RECORDS[j],
                 passed_id(e, "p.id")
             ));
+            passed(w, j);
         };
         match e.trigger {
             TriggerIr::Every(period) => w.block(
@@ -477,14 +489,14 @@ pub fn emit_fire_appended(
 /// `event_child_J`. (A direct dispatch: an indirect one, its workgroups written by the
 /// ordering, starts about 3 µs later on an H100 after the kernel that writes them:
 /// docs/performance.md, "Events".)
-/// `store` emits the store of the spawned particle `s` with id `id` (and packed tint `tint`,
+/// `store` emits (for input j) the store of the spawned particle `s` with id `id` (and packed tint `tint`,
 /// when the group stores tints) in `slot`: the same code as the group's own spawn. `own` is
 /// the WGSL of the group's own tint for the particle `id` when it stores tints (`tint.rs`).
 pub fn emit_kernels(
     w: &mut Writer,
     inputs: &[EventInputIr],
     own: Option<&str>,
-    store: &dyn Fn(&mut Writer),
+    store: &dyn Fn(&mut Writer, usize),
     ribbon: Option<&crate::features::looks::ribbon::Ribbon>,
 ) {
     for (j, input) in inputs.iter().enumerate() {
@@ -523,7 +535,7 @@ pub fn emit_kernels(
                 Some(own) => w.line(format!("let tint = pack4x8unorm(vec4<f32>({own}, 1.0));")),
                 None => {}
             }
-            store(w);
+            store(w, j);
             if let Some(ribbon) = ribbon {
                 // The parent's id, passed in its record (`EventIr::passes_id`).
                 let ordinal = format!(

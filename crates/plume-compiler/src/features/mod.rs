@@ -13,6 +13,7 @@ pub mod emitter;
 pub mod events;
 pub mod field;
 pub mod forces;
+pub mod inherit;
 pub mod lights;
 pub mod looks;
 pub mod mesh_emission;

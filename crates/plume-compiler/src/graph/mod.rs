@@ -5,6 +5,7 @@
 //! `camera`. Each group compiles to a [`CompiledEffect`] of its own, with the bindings its
 //! events need; [`CompiledGraph`] ties them together with the event streams.
 
+mod inherit;
 pub mod reference;
 
 pub use reference::ReferenceGraph;
@@ -184,6 +185,8 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
         return Err(CompileError::Invalid(locate(checker.errors)));
     }
     let mut links: Vec<GroupLinks> = vec![GroupLinks::default(); effects.len()];
+    let inherits =
+        inherit::wire(&effects, &streams).map_err(|e| CompileError::Invalid(locate(e)))?;
     for (s, stream) in streams.iter().enumerate() {
         let event = &effects[stream.parent].events[stream.out_slot];
         let trigger = match event.on {
@@ -197,6 +200,7 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
             target: stream.child,
             stream: s,
             passes_id: effects[stream.child].render.ribbon.is_some(),
+            passes: inherits[s].iter().map(|p| p.0).collect(),
         });
         let child = &mut links[stream.child];
         child.inputs.push(EventInputIr {
@@ -210,6 +214,7 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
                 TriggerIr::Every(steps) => steps,
                 _ => 1,
             },
+            inherits: inherits[s].clone(),
         });
         child.input_emitters.push(event.as_emitter());
     }
@@ -228,6 +233,8 @@ pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, Com
     if !errors.is_empty() {
         return Err(CompileError::Invalid(Diagnostics { items: errors }));
     }
+    inherit::check_types(&effects, &streams, &inherits, &groups)
+        .map_err(|e| CompileError::Invalid(locate(e)))?;
     let mut graph = CompiledGraph {
         groups,
         streams,
@@ -384,7 +391,7 @@ fn check_graph(effects: &[Effect]) -> (Vec<Stream>, Checker, Vec<(Diagnostic, St
     }
     if c.errors.is_empty() {
         warnings.extend(overflow_warnings(effects, &streams));
-        warnings.extend(colourless_inheritance(effects, &streams));
+        warnings.extend(inherit::colourless_inheritance(effects, &streams));
     }
     (streams, c, warnings)
 }
@@ -519,45 +526,6 @@ fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic,
         }
     }
     out
-}
-
-/// Warnings for events that pass on the colour of particles that have none: no palette, and no
-/// colour inherited from a group that has one.
-fn colourless_inheritance(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic, String)> {
-    let passes = |s: &Stream| effects[s.parent].events[s.out_slot].inherit_color;
-    let mut tinted: Vec<bool> = effects.iter().map(|e| e.render.palette.is_some()).collect();
-    // The graph is acyclic: as many passes as groups settle it.
-    for _ in 0..effects.len() {
-        for s in streams.iter().filter(|s| passes(s)) {
-            tinted[s.child] |= tinted[s.parent];
-        }
-    }
-    streams
-        .iter()
-        .filter(|s| passes(s) && !tinted[s.parent])
-        .map(|s| {
-            let root = ValuePath::root();
-            let group = if s.parent == 0 {
-                root
-            } else {
-                root.field("groups").index(s.parent - 1)
-            };
-            let at = group
-                .field("events")
-                .index(s.out_slot)
-                .field("inherit_color");
-            (
-                Diagnostic::warning(
-                    at.display,
-                    format!(
-                        "passes on the colour of {:?}'s particles, which have none (no render.palette, and none inherited): {:?}'s particles keep their own",
-                        effects[s.parent].name, effects[s.child].name
-                    ),
-                ),
-                at.lookup,
-            )
-        })
-        .collect()
 }
 
 /// The first stream that closes a cycle of groups, and the cycle's groups (first repeated).

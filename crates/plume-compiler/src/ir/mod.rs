@@ -225,7 +225,8 @@ impl EffectIr {
             .fold(self.render.by.attrs_read(), |set, c| {
                 set | c.expr.attrs_read()
             });
-        self.attributes.kept(read)
+        let moved = crate::features::inherit::kept(&self.events, &self.event_inputs);
+        self.attributes.kept(read | moved)
     }
 
     /// Whether an expression of the compute module (a custom force, a kept attribute, a spawn

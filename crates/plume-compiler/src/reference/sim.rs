@@ -49,6 +49,8 @@ pub struct Fired {
     pub v: DVec3,
     /// Its tint, as its children may inherit it.
     pub tint: DVec3,
+    /// Its attributes' values as the step began, as its children may inherit them.
+    pub attrs: crate::expr::eval::Attrs,
 }
 
 /// The lifetime (s) of a particle born at step `born` that dies at the update of `die_at`
@@ -203,7 +205,11 @@ impl ReferenceSim {
                 DVec3::ONE
             };
             let tint = crate::features::looks::tint::spawned(self.ir.tint(), id, inherited);
-            let attrs = self.spawn_attrs(s.x, s.v, time, id);
+            let mut attrs = self.spawn_attrs(s.x, s.v, time, id);
+            // What it inherits, as the GPU passes it: f32 words (`features::inherit`).
+            for &(pa, ca) in &inp.inherits {
+                attrs[ca] = parent.attrs[pa].as_vec3().as_dvec3();
+            }
             let v =
                 self.stored(self.initial_v(id, (step, s.start), time, (s.x, s.v), s.die_at, attrs));
             self.particles.push(Particle {
@@ -419,6 +425,7 @@ impl ReferenceSim {
                 x: p.x,
                 v: if verlet { p.v / h } else { p.v },
                 tint: p.tint,
+                attrs: ctx.attrs,
             };
             for (j, e) in ir.events.iter().enumerate() {
                 let fires = match e.trigger {

@@ -99,6 +99,17 @@ impl Events {
             ]);
             let at = in_binding(s.in_slot);
             shared[s.child].extend([(at, order.clone()), (at + 1, records.clone())]);
+            // The attributes the stream passes, where its children inherit some.
+            let passes = &graph.groups[s.parent].effect.ir.events[s.out_slot].passes;
+            if !passes.is_empty() {
+                let stride = u64::from(plume_compiler::inherit::stride(passes.len()));
+                let attrs = buffer("event attributes", parent * stride * 4);
+                shared[s.parent].push((
+                    plume_compiler::inherit::out_binding(s.out_slot),
+                    attrs.clone(),
+                ));
+                shared[s.child].push((plume_compiler::inherit::in_binding(s.in_slot), attrs));
+            }
             let stateless_parent = graph.groups[s.parent].effect.ir.stateless.is_some();
             let counted = (s.ordering == Ordering::Bucketed && stateless_parent)
                 .then(|| {

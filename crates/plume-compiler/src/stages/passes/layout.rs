@@ -348,6 +348,11 @@ pub fn decide(ir: &EffectIr) -> Layout {
         &ir.event_inputs,
         ir.capacity,
     ));
+    layout.bindings.extend(crate::features::inherit::bindings(
+        &ir.events,
+        &ir.event_inputs,
+        ir.capacity,
+    ));
     if let (Some(plan), false) = (&ir.stateless, ir.events.is_empty()) {
         // A stateless group that fires events: its `fire` kernel's table and step.
         layout.bindings.extend([

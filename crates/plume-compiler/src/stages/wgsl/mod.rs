@@ -124,6 +124,9 @@ pub fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             name if crate::features::events::binding_type(name).is_some() => {
                 crate::features::events::binding_type(name).unwrap_or_default()
             }
+            name if crate::features::inherit::binding_type(name).is_some() => {
+                crate::features::inherit::binding_type(name).unwrap_or_default()
+            }
             "particles" | "trail" | "ribbon_table" => "array<vec4<u32>>",
             "free_list" => "array<u32>",
             "counters" if layout.batched => "array<Counters>",

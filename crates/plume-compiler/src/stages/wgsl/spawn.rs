@@ -93,7 +93,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                         crate::features::looks::tint::own_wgsl(ir.tint(), "id")
                     ));
                 }
-                emit_store_spawned(w, ir, layout);
+                emit_store_spawned(w, ir, layout, None);
                 if let Some(ribbon) = &ir.render.ribbon {
                     let (key, ordinal) = ribbon.emitted_wgsl(ir.emitters.len() as u32);
                     ribbon.emit_write(w, &key, &ordinal);
@@ -108,7 +108,14 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             w,
             &ir.event_inputs,
             layout.has(Attribute::Tint).then_some(own.as_str()),
-            &|w| emit_store_spawned(w, ir, layout),
+            &|w, j| {
+                crate::features::inherit::emit_find(
+                    w,
+                    &ir.event_inputs[j],
+                    crate::features::events::in_order(j),
+                );
+                emit_store_spawned(w, ir, layout, Some(j))
+            },
             ir.render.ribbon.as_ref(),
         );
     }
@@ -117,17 +124,24 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
 /// Emits the store of the spawned particle `s` (a `Spawned`) with id `id` into `slot` (a
 /// global slot this chunk holds), as every spawn kernel ends: Verlet's first displacement,
 /// the lifetime, the id and the spawn step as the layout has them.
-pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout, input: Option<usize>) {
     let kept = ir.kept_attributes();
     // The step its age counts from.
     let born = match ir.has_start_ages() {
         true => "s.born",
         false => "params.step",
     };
-    for (i, _) in ir.attributes.iter_kept(kept) {
-        w.line(format!(
-            "let sa{i} = attr_spawn_{i}(s.x, s.v, params.time, id);"
-        ));
+    for (i, a) in ir.attributes.iter_kept(kept) {
+        // A child of an event takes what it inherits from its parent (`inherit.rs`).
+        let inherited = input.and_then(|j| {
+            crate::features::inherit::taken(j, &ir.event_inputs[j], i, a.width() == 3)
+        });
+        match inherited {
+            Some(value) => w.line(format!("let sa{i} = {value};")),
+            None => w.line(format!(
+                "let sa{i} = attr_spawn_{i}(s.x, s.v, params.time, id);"
+            )),
+        }
     }
     let motion = if layout.has(Attribute::Displacement) {
         // Verlet: store the displacement that makes step one x0 + v0 h + a h²/2.

@@ -244,15 +244,27 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     };
     // ...and the tint their children may inherit.
     let tint = crate::features::looks::tint::packed_wgsl(ir.tint(), "p");
+    // ...and the attributes their children inherit, as the step began.
+    let words = |a: usize| {
+        let fields = layout.user_fields(a).unwrap_or(&[]);
+        let word = |c: usize| {
+            fields
+                .get(c)
+                .map_or("0.0".to_string(), |f| format!("p.{f}"))
+        };
+        [word(0), word(1), word(2)]
+    };
+    let passed = |w: &mut Writer, j: usize| {
+        crate::features::inherit::emit_pass(w, j, &ir.events[j], &words);
+    };
     if collide_events && !ir.colliders.is_empty() {
         w.block("if (collided)", |w| {
             crate::features::events::emit_fire(
                 w,
                 &ir.events,
                 |t| t == TriggerIr::Collide,
-                "x",
-                &vel,
-                &tint,
+                ("x", &vel, &tint),
+                &passed,
             )
         });
     }
@@ -260,9 +272,8 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         w,
         &ir.events,
         |t| matches!(t, TriggerIr::Every(_)),
-        "x",
-        &vel,
-        &tint,
+        ("x", &vel, &tint),
+        &passed,
     );
     // Only effects with lifetimes or kill volumes get the death code.
     if lifetimes || !ir.kills.is_empty() {
@@ -278,9 +289,8 @@ fn emit_body(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
                 w,
                 &ir.events,
                 |t| t == TriggerIr::Death,
-                "x",
-                &vel,
-                &tint,
+                ("x", &vel, &tint),
+                &passed,
             );
             w.line("mark_free(i);");
             let died = if ir.events.is_empty() {
