@@ -315,3 +315,55 @@ fn noise_and_curl_in_expressions_match_the_reference_on_the_gpu() {
     sim.run(20, |_| {}).unwrap();
     assert_draws_agree(&sim, 256, false, "noise in the draw");
 }
+
+#[test]
+fn rounding_trigonometry_and_remainders_match_the_reference_on_the_gpu() {
+    // ceil, round, sign, tan, asin, acos, atan, log2 and rem of a value each particle draws
+    // in [-3.5, 3.5) (asin and acos past their domain, clamped; a remainder by zero, 0), set
+    // at spawn and once a step: the GPU's f32 functions against f64. Vulkan lets atan be 4096
+    // ulps off (5e-4 relative), asin and acos inherit that through atan2, and tan inherits
+    // sin's and cos's 2^-11 absolute: 2e-3 of 1 + |value| bounds those (llvmpipe: 2.2e-4 for
+    // asin). log2, rem and the rest are within a few ulps (1e-5). ceil, round and sign agree
+    // exactly unless the f32 argument lands on the other side of a whole number (or a half)
+    // from the f64 one, which no particle here comes near.
+    let src = r#"Effect(
+    name: "functions",
+    capacity: 512,
+    seed: 5,
+    emitters: [Emitter(burst: 300, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)),
+        lifetime: Some((5.0, 5.0)))],
+    define: {"q": "(rand(0) - 0.5) * 7.0", "p": "q + 0.01 * age"},
+    attributes: {
+        "a": (spawn: "vec3(ceil(q), round(2.0 * q), sign(q))", update: Some("vec3(ceil(p), round(2.0 * p), sign(p))")),
+        "b": (spawn: "vec3(tan(0.4 * q), asin(0.3 * q), acos(0.3 * q))", update: Some("vec3(tan(0.4 * p), asin(p), acos(-p))")),
+        "c": (spawn: "vec3(atan(q), log2(abs(q)), rem(3.0 * q, 1.7))", update: Some("vec3(atan(p), log2(abs(p)), rem(p, 0.0) + rem(-7.5, 2.0))")),
+    },
+    render: Render(color_by: Some("a + b + c")),
+)"#;
+    let e = compiled(src);
+    let (_, on_gpu) = run_gpu(&e, 1);
+    let (_, cpu) = run_cpu(&e, 1);
+    // Words: a (ceil, round, sign), b (tan, asin, acos), c (atan, log2, rem).
+    let tolerance = |w: usize| if (3..=6).contains(&w) { 2e-3 } else { 1e-5 };
+    for (g, c) in on_gpu.iter().zip(&cpu) {
+        for (w, (a, b)) in g.attributes.iter().zip(&c.attributes).take(9).enumerate() {
+            assert!(
+                (a - b).abs() <= tolerance(w) * (1.0 + b.abs()),
+                "particle {} word {w}: gpu {a}, f64 {b}",
+                g.id
+            );
+        }
+    }
+    // Each function's range is met: whole numbers, halves, signs both ways, a clamped asin.
+    let words = |w: usize| cpu.iter().map(move |r| r.attributes[w]);
+    assert!(words(0).all(|x| x == x.round()) && words(0).any(|x| x < 0.0));
+    assert!(words(2).any(|x| x == -1.0) && words(2).any(|x| x == 1.0));
+    assert_attributes_match(&e, 30, 2e-3);
+    let (_, later) = run_cpu(&e, 30);
+    for r in &later {
+        // asin and acos of |p| > 1 are clamped; rem by 0 is 0, and rem(-7.5, 2) is -1.5.
+        assert!(r.attributes[4].abs() <= std::f64::consts::FRAC_PI_2);
+        assert!((0.0..=std::f64::consts::PI).contains(&r.attributes[5]));
+        assert_eq!(r.attributes[8], -1.5);
+    }
+}

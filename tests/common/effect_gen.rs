@@ -349,10 +349,11 @@ pub fn expression(flavor: Flavor, vector: bool, depth: u32) -> BoxedStrategy<Str
         };
     }
     let unary = prop::sample::select(vec![
-        "-", "abs", "floor", "fract", "sqrt", "exp", "log", "sin", "cos",
+        "-", "abs", "floor", "fract", "sqrt", "exp", "log", "sin", "cos", "ceil", "round", "sign",
+        "tan", "asin", "acos", "atan", "log2",
     ]);
     let binary = prop::sample::select(vec![
-        "+", "-", "*", "/", "min", "max", "pow", "atan2", "step",
+        "+", "-", "*", "/", "min", "max", "pow", "atan2", "step", "rem",
     ]);
     let ternary = prop::sample::select(vec!["clamp", "mix", "smoothstep"]);
     let compare = prop::sample::select(vec!["<", "<=", ">", ">=", "==", "!="]);

@@ -92,16 +92,38 @@ impl<'w> Emitter<'w> {
                 let a = self.value(a);
                 match op {
                     Op1::Neg => self.bind(format!("-({a})")),
-                    Op1::Abs | Op1::Floor | Op1::Fract | Op1::Sin | Op1::Cos => {
+                    Op1::Abs
+                    | Op1::Floor
+                    | Op1::Fract
+                    | Op1::Sin
+                    | Op1::Cos
+                    | Op1::Ceil
+                    | Op1::Round
+                    | Op1::Sign
+                    | Op1::Atan => {
                         let f = match op {
                             Op1::Abs => "abs",
                             Op1::Floor => "floor",
                             Op1::Fract => "fract",
                             Op1::Sin => "sin",
+                            Op1::Ceil => "ceil",
+                            Op1::Round => "round",
+                            Op1::Sign => "sign",
+                            Op1::Atan => "atan",
                             _ => "cos",
                         };
                         self.bind(format!("{f}({a})"))
                     }
+                    Op1::Tan => self.bounded(at, format!("tan({a})")),
+                    Op1::Asin | Op1::Acos => {
+                        let f = if *op == Op1::Asin { "asin" } else { "acos" };
+                        self.bind(format!(
+                            "{f}(clamp({a}, {}, {}))",
+                            lit(at, -1.0),
+                            lit(at, 1.0)
+                        ))
+                    }
+                    Op1::Log2 => self.bind(format!("log2(max({a}, {}))", lit(at, LOG_FLOOR))),
                     Op1::Sqrt => self.bind(format!("sqrt(max({a}, {}))", lit(at, 0.0))),
                     Op1::Exp => self.bind(format!(
                         "exp(clamp({a}, {}, {}))",
@@ -165,6 +187,14 @@ impl<'w> Emitter<'w> {
                         ))
                     }
                     Op2::Step => self.bind(format!("step({wa}, {wb})")),
+                    Op2::Rem => {
+                        let ok = self.bind(format!("abs({wb}) >= {}", lit(ty, DIV_FLOOR)));
+                        let q = self.bind(format!(
+                            "trunc({wa} / select({}, {wb}, {ok}))",
+                            lit(ty, 1.0)
+                        ));
+                        self.bind(format!("select({}, {wa} - {wb} * {q}, {ok})", lit(ty, 0.0)))
+                    }
                     Op2::Dot => self.bounded(Ty::Scalar, format!("dot({a}, {b})")),
                     Op2::Cross => self.bounded(Ty::Vec3, format!("cross({a}, {b})")),
                     Op2::Compare(c) => self.bind(format!("{a} {} {b}", c.symbol())),

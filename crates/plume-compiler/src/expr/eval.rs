@@ -172,6 +172,22 @@ pub fn eval(e: &Expr, inp: &Inputs) -> Value {
                 Op1::Abs => map(a, f64::abs),
                 Op1::Floor => map(a, f64::floor),
                 Op1::Fract => map(a, |x| x - x.floor()),
+                Op1::Ceil => map(a, f64::ceil),
+                Op1::Round => map(a, f64::round_ties_even),
+                Op1::Sign => map(a, |x| {
+                    if x > 0.0 {
+                        1.0
+                    } else if x < 0.0 {
+                        -1.0
+                    } else {
+                        0.0
+                    }
+                }),
+                Op1::Tan => map(a, |x| bound(x.tan())),
+                Op1::Asin => map(a, |x| x.clamp(-1.0, 1.0).asin()),
+                Op1::Acos => map(a, |x| x.clamp(-1.0, 1.0).acos()),
+                Op1::Atan => map(a, f64::atan),
+                Op1::Log2 => map(a, |x| x.max(LOG_FLOOR).log2()),
                 Op1::Sqrt => map(a, |x| x.max(0.0).sqrt()),
                 Op1::Exp => map(a, |x| x.clamp(EXP_MIN, EXP_MAX).exp()),
                 Op1::Log => map(a, |x| x.max(LOG_FLOOR).ln()),
@@ -215,6 +231,13 @@ pub fn eval(e: &Expr, inp: &Inputs) -> Value {
                     }
                 }),
                 Op2::Step => zip(a, b, |edge, x| if x >= edge { 1.0 } else { 0.0 }),
+                Op2::Rem => zip(a, b, |x, y| {
+                    if y.abs() >= DIV_FLOOR {
+                        x - y * (x / y).trunc()
+                    } else {
+                        0.0
+                    }
+                }),
                 Op2::Dot => Value::S(bound(a.v().dot(b.v()))),
                 Op2::Cross => {
                     let c = a.v().cross(b.v());

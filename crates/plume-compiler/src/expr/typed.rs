@@ -288,7 +288,8 @@ fn call(
             want(0, Ty::Vec3)?;
             unary(Op1::Normalize, Ty::Vec3, next())
         }
-        "abs" | "sqrt" | "exp" | "log" | "sin" | "cos" | "floor" | "fract" => {
+        "abs" | "sqrt" | "exp" | "log" | "sin" | "cos" | "floor" | "fract" | "ceil" | "round"
+        | "sign" | "tan" | "asin" | "acos" | "atan" | "log2" => {
             let a = next();
             let ty = a.ty;
             let op = match name {
@@ -299,17 +300,26 @@ fn call(
                 "sin" => Op1::Sin,
                 "cos" => Op1::Cos,
                 "floor" => Op1::Floor,
+                "ceil" => Op1::Ceil,
+                "round" => Op1::Round,
+                "sign" => Op1::Sign,
+                "tan" => Op1::Tan,
+                "asin" => Op1::Asin,
+                "acos" => Op1::Acos,
+                "atan" => Op1::Atan,
+                "log2" => Op1::Log2,
                 _ => Op1::Fract,
             };
             unary(op, ty, a)
         }
-        "min" | "max" | "pow" | "atan2" | "step" => {
+        "min" | "max" | "pow" | "atan2" | "step" | "rem" => {
             let ty = same_or_scalar()?;
             let op = match name {
                 "min" => Op2::Min,
                 "max" => Op2::Max,
                 "pow" => Op2::Pow,
                 "atan2" => Op2::Atan2,
+                "rem" => Op2::Rem,
                 _ => Op2::Step,
             };
             Ok(Expr::new(Node::Binary(op, next(), next()), ty))

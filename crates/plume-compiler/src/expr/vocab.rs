@@ -76,6 +76,22 @@ pub enum Op1 {
     Floor,
     /// `fract`: a − floor(a).
     Fract,
+    /// `ceil`
+    Ceil,
+    /// `round`: to the nearest whole number, halves to even (WGSL's rule).
+    Round,
+    /// `sign`: −1, 0 or 1.
+    Sign,
+    /// `tan`, within the value bound.
+    Tan,
+    /// `asin` of a clamped to [−1, 1].
+    Asin,
+    /// `acos` of a clamped to [−1, 1].
+    Acos,
+    /// `atan`
+    Atan,
+    /// `log2` of max(a, [`super::LOG_FLOOR`]).
+    Log2,
     /// `sqrt` of max(a, 0).
     Sqrt,
     /// `exp`, its argument clamped so the result stays within the value bound.
@@ -117,6 +133,9 @@ pub enum Op2 {
     Pow,
     /// `atan2(y, x)`: 0 at (0, 0).
     Atan2,
+    /// `rem(a, b)`: a − b · trunc(a / b), the remainder with a's sign; 0 where the divisor is
+    /// within [`super::DIV_FLOOR`] of zero.
+    Rem,
     /// `dot`
     Dot,
     /// `cross`
@@ -174,6 +193,15 @@ pub const FUNCTIONS: &[(&str, usize)] = &[
     ("curl", 1),
     ("floor", 1),
     ("fract", 1),
+    ("ceil", 1),
+    ("round", 1),
+    ("sign", 1),
+    ("tan", 1),
+    ("asin", 1),
+    ("acos", 1),
+    ("atan", 1),
+    ("log2", 1),
+    ("rem", 2),
     ("select", 3),
     ("rand", 1),
     ("rand_sphere", 1),
