@@ -273,3 +273,26 @@ fn a_sorted_stateless_effect_draws_back_to_front() {
     assert_eq!(by_id, sim.records().unwrap());
     assert_back_to_front(&e, &ordered);
 }
+
+#[test]
+fn a_stateless_effect_whose_spawn_reads_the_noise_draws_it_from_the_closed_form() {
+    // The vertex shader of a stateless effect evaluates the spawn expressions again, so its
+    // module needs the gradient noise as the compute module does.
+    let e = compile(
+        r#"Effect(
+    name: "noisy-stateless",
+    capacity: 2000,
+    seed: 2,
+    emitters: [Emitter(rate: 600.0, shape: Custom("vec3(2.0 * noise(vec3(index * 0.1, 0.5, 0.5)), 0.02 * index - 2.0, curl(vec3(index * 0.05, 0.3, 0.7)).x)"),
+        velocity: Constant((0.0, 0.5, 0.0)), lifetime: Some((2.0, 2.0)))],
+    integrator: Exact,
+    camera: Camera(eye: (0.0, 0.0, 8.0), target: (0.0, 0.0, 0.0), fov_y: 50.0),
+    render: Render(size: [(0.0, 0.08)]),
+)"#,
+    );
+    assert!(e.ir.stateless.is_some(), "stateless");
+    let gpu = gpu();
+    let mut sim = Effect::new(&gpu, e).unwrap();
+    sim.run(60, |_| {}).unwrap();
+    assert_draws_agree(&sim, 200, false, "noise in a stateless spawn");
+}

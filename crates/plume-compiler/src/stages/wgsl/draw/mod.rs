@@ -163,9 +163,12 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     // The look's expressions read the age (in whole steps) as a spin does.
     let ages = spins || ir.render.by.reads_age_or_life();
     // Random draws: a stateless effect redraws its spawns; a stateful one its lifetimes.
+    // The gradient noise: for the look's expressions, and a stateless effect's spawn
+    // expressions, which its vertex shader evaluates again.
+    let uses = |op| ir.render.by.uses(op) || (stateless && ir.emitters.iter().any(|e| e.uses(op)));
     let (noise, curl) = (
-        ir.render.by.uses(crate::expr::typed::Op1::Noise),
-        ir.render.by.uses(crate::expr::typed::Op1::Curl),
+        uses(crate::expr::typed::Op1::Noise),
+        uses(crate::expr::typed::Op1::Curl),
     );
     let draws = stateless
         || noise
