@@ -13,3 +13,5 @@ for round in 1 2 3; do
         "$plume" bench "$f" --particles 1000000 --steps 50 --render 1280x720 --json
     done
 done >"$out/bolts.jsonl"
+# hanabi-graphs.jsonl (h100/) came from the same build in one call before it:
+#   for f in worms firework; do PLUME bench effects/hanabi/$f.ron --particles 1000000 --steps 50 --json; done
