@@ -352,6 +352,14 @@ fn check_trail(c: &mut Checker, path: &ValuePath, t: &crate::stages::schema::Tra
 }
 
 fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Render) {
+    if let crate::stages::schema::Blend::Mask(cutoff) = r.blend {
+        c.within(
+            &path.field("blend").variant("Mask").inner(),
+            cutoff,
+            0.0,
+            1.0,
+        );
+    }
     check_colors(c, &path.field("color"), &r.color);
     check_sizes(c, &path.field("size"), &r.size, "size");
     if let Some(heights) = &r.size_y {

@@ -420,9 +420,24 @@ fn alive_instances(
 }
 
 /// The blend state of an effect's `Blend`: non-premultiplied "over" for `Alpha`; for
-/// `Additive`, src · α added to the target (alpha composited over, so it stays 1).
+/// `Additive`, src · α added to the target (alpha composited over, so it stays 1); for
+/// `Multiply` (whose fragments write rgb · α), target · (src + 1 − α); for `Mask` (opaque
+/// fragments or none), the fragment replaces the target.
 pub(crate) fn blend_state(blend: Blend) -> wgpu::BlendState {
     match blend {
+        Blend::Multiply => wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Dst,
+                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+        },
+        Blend::Mask(_) => wgpu::BlendState::REPLACE,
         Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
         Blend::Additive => wgpu::BlendState {
             color: wgpu::BlendComponent {

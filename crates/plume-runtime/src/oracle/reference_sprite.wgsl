@@ -11,6 +11,24 @@ struct Camera {
     // A lit look (render.lit): (1 when lit; normals 0 flat, 1 sphere, 2 a normal map, 3 six-way
     // lightmaps; wrap; emissive).
     lit: vec4<f32>,
+    // The blend's fragment output (render.blend): (0 as written; 1 Multiply; 2 Mask; the
+    // Mask's cutoff).
+    blend: vec4<f32>,
+}
+
+// What a fragment of colour c (straight alpha) writes for the blend: Multiply, the colour
+// times its opacity; Mask, the colour opaque, or nothing below the cutoff.
+fn blend_out(c: vec4<f32>) -> vec4<f32> {
+    if (camera.blend.x == 1.0) {
+        return vec4<f32>(c.rgb * c.a, c.a);
+    }
+    if (camera.blend.x == 2.0) {
+        if (c.a < camera.blend.y) {
+            discard;
+        }
+        return vec4<f32>(c.rgb, 1.0);
+    }
+    return c;
 }
 
 @group(0) @binding(0) var<uniform> camera: Camera;
@@ -124,6 +142,10 @@ fn vs(
 
 @fragment
 fn fs(in: Out) -> @location(0) vec4<f32> {
+    return blend_out(shade(in));
+}
+
+fn shade(in: Out) -> vec4<f32> {
     // Corner (-1, 1) is the frame's top-left texel corner.
     let local = vec2<f32>(in.uv.x + 1.0, 1.0 - in.uv.y) * 0.5 * in.texels.zw;
     let size = vec2<f32>(textureDimensions(sprite_texture));

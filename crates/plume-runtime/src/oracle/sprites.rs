@@ -143,9 +143,9 @@ fn texture_entry(binding: u32) -> wgpu::BindGroupLayoutEntry {
     }
 }
 
-/// Bytes of the reference camera uniform: view and projection (128), the eye and the lit
-/// look's terms (`reference_sprite.wgsl`'s `Camera`).
-const CAMERA_BYTES: u64 = 160;
+/// Bytes of the reference camera uniform: view and projection (128), the eye, the lit
+/// look's terms and the blend's (`reference_sprite.wgsl`'s `Camera`).
+const CAMERA_BYTES: u64 = 176;
 
 /// A render target and the reference sprite pipeline for one image size and blend mode.
 pub struct ReferenceRenderer {
@@ -160,6 +160,8 @@ pub struct ReferenceRenderer {
     /// (1 when lit; normals 0 flat, 1 sphere, 2 a normal map, 3 six-way lightmaps; wrap;
     /// emissive).
     lit: [f32; 4],
+    /// The blend's fragment output (0 as written, 1 Multiply, 2 Mask; the Mask's cutoff).
+    blend: [f32; 4],
 }
 
 impl ReferenceRenderer {
@@ -309,6 +311,11 @@ impl ReferenceRenderer {
             ribbons,
             background,
             lit,
+            blend: match blend {
+                plume_compiler::schema::Blend::Multiply => [1.0, 0.0, 0.0, 0.0],
+                plume_compiler::schema::Blend::Mask(cutoff) => [2.0, cutoff as f32, 0.0, 0.0],
+                _ => [0.0; 4],
+            },
         })
     }
 
@@ -346,7 +353,8 @@ impl ReferenceRenderer {
             true => DVec3::new(view.x_axis.z, view.y_axis.z, view.z_axis.z).extend(0.0),
             false => view.inverse().transform_point3(DVec3::ZERO).extend(1.0),
         };
-        for x in eye.to_array().map(|x| x as f32).into_iter().chain(self.lit) {
+        let terms = self.lit.into_iter().chain(self.blend);
+        for x in eye.to_array().map(|x| x as f32).into_iter().chain(terms) {
             cam.extend_from_slice(&x.to_le_bytes());
         }
         self.gpu.queue.write_buffer(&self.camera, 0, &cam);

@@ -22,11 +22,48 @@ use serde::Deserialize;
 pub const COLOR_MOST: f64 = 128.0;
 
 /// How sprites combine with what is behind them.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
 pub enum Blend {
     /// `over` compositing: order matters, so use `sort: true`.
     #[default]
     Alpha,
     /// Colours add up (fire, sparks); order does not matter.
     Additive,
+    /// What lies behind is multiplied by the colour, as far as the opacity goes: behind ·
+    /// (1 − a + a · rgb) (soot, shadows, tinted glass); order does not matter.
+    Multiply,
+    /// Cut-outs: a fragment whose opacity is below the cutoff (0 to 1) is not drawn, the rest
+    /// is drawn opaque (leaves, paper, hard-edged sparks). Depth is not written: overlapping
+    /// cut-outs need `sort: true` to show the nearest.
+    Mask(f64),
+}
+
+impl Blend {
+    /// Whether the fragment's colour is changed before blending ([`Self::emit_blend_out`]).
+    pub fn changes_output(self) -> bool {
+        matches!(self, Blend::Multiply | Blend::Mask(_))
+    }
+
+    /// Emits `blend_out(c)`, what a fragment of colour `c` (straight alpha) writes for this
+    /// blend: for `Multiply` the colour times its opacity (the blend multiplies what lies
+    /// behind by it and adds what lies behind times 1 − a); for `Mask` the colour, opaque, or
+    /// nothing below the cutoff. Nothing for a blend that needs none.
+    pub fn emit_blend_out(self, w: &mut crate::base::writer::Writer) {
+        if !self.changes_output() {
+            return;
+        }
+        w.comment(
+            "What the fragment writes for the effect's blend (features/looks/mod.rs, Blend).",
+        );
+        w.block("fn blend_out(c: vec4<f32>) -> vec4<f32>", |w| match self {
+            Blend::Mask(cutoff) => {
+                w.block(
+                    format!("if (c.a < {})", crate::base::writer::f32_lit(cutoff)),
+                    |w| w.line("discard;"),
+                );
+                w.line("return vec4<f32>(c.rgb, 1.0);");
+            }
+            _ => w.line("return vec4<f32>(c.rgb * c.a, c.a);"),
+        });
+    }
 }

@@ -258,7 +258,7 @@ impl Ribbon {
 
     /// Emits the draw module's ribbon shaders, `vs_ribbon` and `fs_ribbon`, after `sprite_at`
     /// (which, with no slot list, takes a slot), `load_particle` and `DrawView`.
-    pub fn emit_draw(&self, w: &mut Writer, capacity: u32) {
+    pub fn emit_draw(&self, w: &mut Writer, capacity: u32, blend: crate::features::looks::Blend) {
         w.line(format!(
             "@group(0) @binding({RIBBON_DRAW_BINDING}) var<storage, read> ribbon_table: array<vec4<u32>>;"
         ));
@@ -357,7 +357,12 @@ impl Ribbon {
             |w| {
                 w.comment("Soft across the strip: full on the centre line, zero at the edges.");
                 w.line("let across = 1.0 - in.across * in.across;");
-                w.line("return vec4<f32>(in.color.rgb, in.color.a * across);");
+                match blend.changes_output() {
+                    true => {
+                        w.line("return blend_out(vec4<f32>(in.color.rgb, in.color.a * across));")
+                    }
+                    false => w.line("return vec4<f32>(in.color.rgb, in.color.a * across);"),
+                }
             },
         );
     }

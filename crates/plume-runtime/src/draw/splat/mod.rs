@@ -90,10 +90,14 @@ pub struct Splat {
 
 impl Splat {
     /// Whether the splat can draw `ir`: any sprite (textured or round, any orientation,
-    /// rotation and height, glowing or not) and trails of a stateful effect; not ribbons
-    /// joining particles (`render.ribbon`), which the raster draw draws.
+    /// rotation and height, glowing or not), alpha or additive, and trails of a stateful
+    /// effect; not ribbons joining particles (`render.ribbon`), nor `Multiply` or `Mask`
+    /// blending, which the raster draw draws.
     pub fn draws(ir: &EffectIr) -> bool {
-        (ir.render.trail.is_none() || ir.stateless.is_none()) && ir.render.ribbon.is_none()
+        use plume_compiler::schema::Blend;
+        (ir.render.trail.is_none() || ir.stateless.is_none())
+            && ir.render.ribbon.is_none()
+            && matches!(ir.render.blend, Blend::Alpha | Blend::Additive)
     }
 
     /// Why the splat cannot draw an effect whose groups are `groups`, or `None` when it can.
@@ -101,7 +105,7 @@ impl Splat {
         groups
             .iter()
             .any(|ir| !Self::draws(ir))
-            .then_some("the compute splat draws neither ribbons joining particles (render.ribbon) nor trails of stateless effects")
+            .then_some("the compute splat draws neither ribbons joining particles (render.ribbon), Multiply or Mask blending, nor trails of stateless effects")
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot

@@ -311,7 +311,13 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     );
     w.blank();
     let lit_turned = ir.render.lit.as_ref().map(|l| (l, ir.render.turns_quad()));
-    emit_fragment(&mut w, texture, soft.is_some(), lit_turned, layout.batched);
+    emit_fragment(
+        &mut w,
+        texture,
+        soft.is_some(),
+        lit_turned,
+        (layout.batched, ir.render.blend),
+    );
     // Ribbons read slots straight from their table: never through a slot list.
     if let Some(ribbon) = ir
         .render
@@ -319,7 +325,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         .filter(|_| !shape.through_list && !shape.splat)
     {
         w.blank();
-        ribbon.emit_draw(&mut w, ir.capacity);
+        ribbon.emit_draw(&mut w, ir.capacity, ir.render.blend);
     }
     if let Some(light) = ir.render.light.filter(|_| shape.particle_light) {
         w.blank();

@@ -110,7 +110,7 @@ pub(super) fn emit_fragment(
     texture: Option<&crate::features::looks::texture::TextureIr>,
     soft: bool,
     lit: Option<(&crate::features::looks::lit::Lit, bool)>,
-    batched: bool,
+    (batched, blend): (bool, crate::features::looks::Blend),
 ) {
     // A batch's draw reads the camera through its private copy (see `wgsl::batch`).
     let take_view = |w: &mut Writer| {
@@ -118,7 +118,13 @@ pub(super) fn emit_fragment(
             w.line("draw = draw_uniform;");
         }
     };
-    if soft || lit.is_some() {
+    // The blend's last word on what a fragment writes (`Blend::emit_blend_out`).
+    let out = |c: &str| match blend.changes_output() {
+        true => format!("blend_out({c})"),
+        false => c.to_string(),
+    };
+    if soft || lit.is_some() || blend.changes_output() {
+        blend.emit_blend_out(w);
         w.block("fn shade(in: Sprite) -> vec4<f32>", |w| {
             emit_shade(w, texture)
         });
@@ -142,8 +148,11 @@ pub(super) fn emit_fragment(
                 w.line("let c = shade(in);");
             }
             match soft {
-                true => w.line("return vec4<f32>(c.rgb, c.a * soft_fade(in.clip));"),
-                false => w.line("return c;"),
+                true => w.line(format!(
+                    "return {};",
+                    out("vec4<f32>(c.rgb, c.a * soft_fade(in.clip))")
+                )),
+                false => w.line(format!("return {};", out("c"))),
             }
         });
     } else {

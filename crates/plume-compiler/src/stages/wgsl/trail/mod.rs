@@ -116,6 +116,12 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.blank();
     emit_vertex(&mut w, ir, shape, life);
     w.blank();
+    let blend = ir.render.blend;
+    blend.emit_blend_out(&mut w);
+    let out = |c: &str| match blend.changes_output() {
+        true => format!("return blend_out({c});"),
+        false => format!("return {c};"),
+    };
     w.line("@fragment");
     w.block(
         "fn fs_trail(in: TrailVertex) -> @location(0) vec4<f32>",
@@ -123,9 +129,11 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
             w.comment("Soft across the strip: full on the centre line, zero at the edges.");
             w.line("let across = 1.0 - in.across * in.across;");
             if soft.is_some() {
-                w.line("return vec4<f32>(in.color.rgb, in.color.a * across * soft_fade(in.clip));");
+                w.line(out(
+                    "vec4<f32>(in.color.rgb, in.color.a * across * soft_fade(in.clip))",
+                ));
             } else {
-                w.line("return vec4<f32>(in.color.rgb, in.color.a * across);");
+                w.line(out("vec4<f32>(in.color.rgb, in.color.a * across)"));
             }
         },
     );

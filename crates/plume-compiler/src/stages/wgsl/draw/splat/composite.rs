@@ -35,7 +35,8 @@ pub const SPLAT_SLICES: u32 = 8;
 pub fn splat_slices(ir: &crate::ir::EffectIr) -> u32 {
     match ir.render.blend {
         crate::stages::schema::Blend::Additive => SPLAT_SLICES,
-        crate::stages::schema::Blend::Alpha => 1,
+        // The splat composites alpha and additive light only (`Splat::draws`).
+        _ => 1,
     }
 }
 
