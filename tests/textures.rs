@@ -435,3 +435,33 @@ fn an_effect_compiled_to_step_only_runs_without_its_texture_and_its_draw_says_wh
         "{refused}"
     );
 }
+
+#[test]
+fn a_frame_chosen_by_an_expression_is_the_frame_shown() {
+    // frame_by: hanabi circle's ping-pong over the age, |fract(age / 0.2) * 2 - 1| * 4, whole
+    // part wrapped around 4 frames: frames 3, 2, 1, 0, 0, 1, 2, 3 over every 0.2 s, in both
+    // states, and the reference drawing alike.
+    let gpu = gpu();
+    let dir = scratch("frame-by");
+    let frames = [RED, GREEN, BLUE, YELLOW];
+    write_blocks(&dir.join("f.png"), 4, 1, 4, &frames);
+    let texture = r#"texture: Some(Texture(file: "f.png", frames: (4, 1))), frame_by: Some("abs(fract(age * 5.0) * 2.0 - 1.0) * 4.0")"#;
+    for state in [State::Stateful, State::Stateless] {
+        let mut sim = probe(&gpu, &dir, (0.0, 0.0, 0.0), Some(2.0), texture, state);
+        let mut shown = [0; 4];
+        for (colour, age, _) in centre_over_time(&mut sim, 24) {
+            let v = ((age * 5.0).fract() * 2.0 - 1.0).abs() * 4.0;
+            // Away from a whole number, where the GPU's f32 and the f64 could floor apart.
+            if (v - v.round()).abs() < 1e-4 {
+                continue;
+            }
+            let k = (v.floor() as usize).min(4) % 4;
+            assert_close(colour, frames[k], &format!("{state:?} at age {age:.4}"));
+            shown[k] += 1;
+        }
+        assert!(
+            shown.iter().all(|&n| n > 0),
+            "{state:?}: every frame shows: {shown:?}"
+        );
+    }
+}

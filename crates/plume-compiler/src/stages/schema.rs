@@ -297,6 +297,10 @@ pub struct Render {
     /// read instead of its life fraction (colour from speed, from heat), kept within [0, 1].
     #[serde(default)]
     pub color_t: Option<String>,
+    /// An expression (f32) of the particle: the flipbook frame it shows (its whole part,
+    /// wrapped around the frames), instead of the texture's `play`.
+    #[serde(default)]
+    pub frame_by: Option<String>,
     /// Sprites shaded by the effect's lights, with a normal at every pixel (see
     /// `features::looks::lit`).
     #[serde(default)]
@@ -318,6 +322,7 @@ impl Render {
             self.alpha_by.as_deref(),
             self.size_by.as_deref(),
             self.color_t.as_deref(),
+            self.frame_by.as_deref(),
         ]
     }
 }
@@ -343,6 +348,7 @@ impl Default for Render {
             alpha_by: None,
             size_by: None,
             color_t: None,
+            frame_by: None,
             lit: None,
             light: None,
             ribbon: None,

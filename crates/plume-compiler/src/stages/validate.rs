@@ -352,6 +352,16 @@ fn check_trail(c: &mut Checker, path: &ValuePath, t: &crate::stages::schema::Tra
 }
 
 fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Render) {
+    let flipbook = r
+        .texture
+        .as_ref()
+        .is_some_and(|t| u64::from(t.frames.0) * u64::from(t.frames.1) > 1);
+    if r.frame_by.is_some() && !flipbook {
+        c.error(
+            &path.field("frame_by"),
+            "picks a flipbook frame, but there is no flipbook: give render.texture with frames: (columns, rows) of more than one",
+        );
+    }
     if let crate::stages::schema::Blend::Mask(cutoff) = r.blend {
         c.within(
             &path.field("blend").variant("Mask").inner(),

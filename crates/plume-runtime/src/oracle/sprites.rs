@@ -103,7 +103,10 @@ pub fn sprites(
             };
             let texels = render.texture.as_ref().map_or([0.0; 4], |texture| {
                 let life = r.lifetime.map_or(0, steps);
-                let frame = texture.frame(r.id, ir.seed_mix, steps(r.age), life, ir.dt);
+                let frame = render
+                    .by
+                    .frame_at(&seen, ir.seed_mix, texture.frames())
+                    .unwrap_or_else(|| texture.frame(r.id, ir.seed_mix, steps(r.age), life, ir.dt));
                 texture.frame_texels(frame).map(|x| x as f32)
             });
             let depth = (p - camera.eye).dot((camera.target - camera.eye).normalize_or_zero());

@@ -36,7 +36,20 @@ pub struct LookBy {
     pub size: Option<Expr>,
     /// The t at which the colour (and opacity) stops are read, instead of the life fraction.
     pub color_t: Option<Expr>,
+    /// The flipbook frame shown, instead of the texture's `play`: its whole part, wrapped
+    /// around the frames ([`frame_of`]).
+    pub frame: Option<Expr>,
 }
+
+/// The frame a `frame_by` value shows of `frames`: its whole part (at least 0, at most 2^24,
+/// where an f32 still counts whole numbers) wrapped around the frames; the f64 twin of the
+/// draw's.
+pub fn frame_of(value: f64, frames: u32) -> u32 {
+    ((value.floor().clamp(0.0, FRAME_MOST)) as u32) % frames.max(1)
+}
+
+/// The largest whole value `frame_by` counts up to (2^24).
+const FRAME_MOST: f64 = 16_777_216.0;
 
 /// What a particle is, for the f64 twins: position, velocity, age and lifetime (s; 0 for a
 /// particle that never dies), and its id.
@@ -65,15 +78,16 @@ fn compile(text: &str, ty: Ty, role: &str, names: Names) -> Result<Expr, expr::E
     expr::compile_in(text, ty, &names.scope_with_attrs(VARS, role))
 }
 
-/// The render section's strings: `color_by`, `alpha_by`, `size_by` and `color_t`.
-pub type Written<'a> = [Option<&'a str>; 4];
+/// The render section's strings: `color_by`, `alpha_by`, `size_by`, `color_t` and `frame_by`.
+pub type Written<'a> = [Option<&'a str>; 5];
 
 /// Each string's field, type and role, in [`Written`]'s order.
-const FIELDS: [(&str, Ty, &str); 4] = [
+const FIELDS: [(&str, Ty, &str); 5] = [
     ("color_by", Ty::Vec3, "a colour factor"),
     ("alpha_by", Ty::Scalar, "an opacity factor"),
     ("size_by", Ty::Scalar, "a size factor"),
     ("color_t", Ty::Scalar, "a colour stop's t"),
+    ("frame_by", Ty::Scalar, "a flipbook frame"),
 ];
 
 impl LookBy {
@@ -88,7 +102,7 @@ impl LookBy {
 
     /// Lowers the strings (after [`LookBy::check`] passed).
     pub fn lower(written: Written, names: Names) -> Self {
-        let [color, alpha, size, color_t] = std::array::from_fn(|i| {
+        let [color, alpha, size, color_t, frame] = std::array::from_fn(|i| {
             let (_, ty, role) = FIELDS[i];
             written[i].map(|t| compile(t, ty, role, names).expect("checked before lowering"))
         });
@@ -97,6 +111,7 @@ impl LookBy {
             alpha,
             size,
             color_t,
+            frame,
         }
     }
 
@@ -106,6 +121,7 @@ impl LookBy {
             .chain(&self.alpha)
             .chain(&self.size)
             .chain(&self.color_t)
+            .chain(&self.frame)
     }
 
     /// Whether any reads the particle's age or lifetime (the draw then needs its ages).
@@ -162,6 +178,12 @@ impl LookBy {
                 "f32",
                 "clamp(VALUE, 0.0, 1.0)".to_string(),
             ),
+            (
+                &self.frame,
+                "frame_by",
+                "f32",
+                format!("clamp(floor(VALUE), 0.0, {})", f32_lit(FRAME_MOST)),
+            ),
         ];
         for (e, name, ty, bounded) in fns {
             let Some(e) = e else { continue };
@@ -215,6 +237,13 @@ impl LookBy {
         self.color_t
             .as_ref()
             .map(|e| eval(e, &Self::inputs(p, seed_mix)).s().clamp(0.0, 1.0))
+    }
+
+    /// The flipbook frame particle `p` shows of `frames`, when `frame_by` gives one.
+    pub fn frame_at(&self, p: &Seen, seed_mix: u32, frames: u32) -> Option<u32> {
+        self.frame
+            .as_ref()
+            .map(|e| frame_of(eval(e, &Self::inputs(p, seed_mix)).s(), frames))
     }
 
     /// What the size is multiplied by for particle `p` (1 without `size_by`).

@@ -79,4 +79,11 @@ pub(super) fn emit_look_by(
             w.line("s.size_y = s.size_y * by_size;");
         }
     }
+    if let (Some(_), Some(t)) = (&by.frame, &ir.render.texture) {
+        // frame_by's whole part (floored and clamped in the function), wrapped around.
+        w.line(format!(
+            "s.frame = u32(frame_by({args})) % {}u;",
+            t.frames().max(1)
+        ));
+    }
 }
