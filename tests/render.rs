@@ -76,8 +76,8 @@ fn draw_reference(sim: &Effect, w: u32, h: u32) -> Vec<u8> {
     let r = ReferenceRenderer::new(sim.gpu(), w, h, ir).unwrap();
     let camera = Camera::from_effect(&ir.camera, w as f32 / h as f32);
     let trails = plume::runtime::oracle::read_trails(sim).unwrap();
-    let ribbons = plume::runtime::oracle::ribbons(&records, &trails, ir, camera.view);
-    r.draw_with_ribbons(&ribbons, &sprites(&records, ir, &camera, false), &camera)
+    let ribbons = plume::runtime::oracle::trail_strips(&records, &trails, ir, camera.view);
+    r.draw_with_strips(&ribbons, &sprites(&records, ir, &camera, false), &camera)
         .unwrap()
 }
 

@@ -198,14 +198,14 @@ fn a_ribbon_passes_through_the_particles_previous_positions() {
     // corners that differ by f32 roundings move an edge pixel's coverage by a step or two.
     let reference = ReferenceRenderer::new(&gpu, SIDE, SIDE, &effect.ir).unwrap();
     let records = sim.records().unwrap();
-    let ribbons = oracle::ribbons(
+    let ribbons = oracle::trail_strips(
         &records,
         &read_trails(&sim).unwrap(),
         &effect.ir,
         camera.view,
     );
     assert_eq!(ribbons.len(), 15 * 6, "15 segments of two triangles");
-    let cpu = reference.draw_with_ribbons(&ribbons, &[], &camera).unwrap();
+    let cpu = reference.draw_with_strips(&ribbons, &[], &camera).unwrap();
     let (mean, max, _) = differences(&img, &cpu, 4);
     assert!(
         mean < 0.01 && max <= 4,

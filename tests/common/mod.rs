@@ -97,14 +97,14 @@ pub fn draw_group_and_reference(sim: &Effect, g: usize, side: u32) -> (Vec<u8>, 
                 .into_iter()
                 .map(|e| e.map(|(id, link, _)| (id, link)))
                 .collect();
-            let ribbons = plume::runtime::oracle::joined_ribbons(&records, &table, ir, &camera);
-            reference.draw_with_ribbons(&ribbons, &[], &camera)
+            let ribbons = plume::runtime::oracle::ribbon_strips(&records, &table, ir, &camera);
+            reference.draw_with_strips(&ribbons, &[], &camera)
         }
         // Trails (the top-level group's, which read_trails reads) before the sprites.
         None if ir.render.trail.is_some() && g == 0 => {
             let trails = plume::runtime::oracle::read_trails(sim).unwrap();
-            let ribbons = plume::runtime::oracle::ribbons(&records, &trails, ir, camera.view);
-            reference.draw_with_ribbons(&ribbons, &sprites(&records, ir, &camera, false), &camera)
+            let ribbons = plume::runtime::oracle::trail_strips(&records, &trails, ir, camera.view);
+            reference.draw_with_strips(&ribbons, &sprites(&records, ir, &camera, false), &camera)
         }
         None => reference.draw(&sprites(&records, ir, &camera, false), &camera),
     }

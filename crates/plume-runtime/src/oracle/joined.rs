@@ -1,5 +1,5 @@
 //! The reference drawing of ribbons that join particles (`render.ribbon`), beside
-//! [`crate::oracle::ribbons`]' trails: the chains the table joins
+//! [`crate::oracle::strips`]' trails: the chains the table joins
 //! ([`plume_compiler::ribbon::Ribbon::chains`], f64), each point where its particle's sprite
 //! would be, as wide and of the colour the sprite would have ([`crate::oracle::sprites`]), its
 //! vertices placed on the CPU in f64, drawn by the reference ribbon shader. And the GPU's table
@@ -14,7 +14,7 @@ use plume_compiler::ribbon::{Link, Table};
 
 use crate::draw::camera::Camera;
 use crate::error::RuntimeError;
-use crate::oracle::ribbons::RibbonVertex;
+use crate::oracle::strips::StripVertex;
 use crate::sim::effect::Effect;
 
 /// One entry of the GPU's ribbon table: the id and link of the particle that wrote it last,
@@ -42,12 +42,12 @@ pub fn read_ribbon_table(effect: &Effect, g: usize) -> Result<Vec<GpuEntry>, Run
 /// direction runs from the point before it to the point after it in its chain (itself at an
 /// end), and its vertices lie half a width to either side across that direction and the line
 /// of sight.
-pub fn joined_ribbons(
+pub fn ribbon_strips(
     records: &[ParticleRecord],
     table: &Table,
     ir: &EffectIr,
     camera: &Camera,
-) -> Vec<RibbonVertex> {
+) -> Vec<StripVertex> {
     let Some(ribbon) = &ir.render.ribbon else {
         return Vec::new();
     };
@@ -70,7 +70,7 @@ pub fn joined_ribbons(
     for chain in ribbon.chains(table, &|id| shown.contains_key(&id)) {
         let points: Vec<(DVec3, f64, [f32; 4])> = chain.iter().map(|id| shown[id]).collect();
         let n = points.len();
-        let sides: Vec<[RibbonVertex; 2]> = (0..n)
+        let sides: Vec<[StripVertex; 2]> = (0..n)
             .map(|j| {
                 let (here, half, color) = points[j];
                 let before = points[j.saturating_sub(1)].0;
@@ -82,7 +82,7 @@ pub fn joined_ribbons(
                 } else {
                     DVec3::ZERO
                 };
-                [-1.0, 1.0].map(|sign| RibbonVertex {
+                [-1.0, 1.0].map(|sign| StripVertex {
                     position: f32s(here + sign * offset),
                     across: sign as f32,
                     color,

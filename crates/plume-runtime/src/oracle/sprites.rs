@@ -16,7 +16,7 @@ use crate::draw::pipeline::vertex_pipeline;
 use crate::draw::raster::blend_state;
 use crate::draw::texture::SpriteTexture;
 use crate::error::RuntimeError;
-use crate::oracle::ribbons::{RibbonPipeline, RibbonVertex};
+use crate::oracle::strips::{StripPipeline, StripVertex};
 use crate::outputs::offscreen::{Offscreen, FORMAT};
 
 /// One sprite: centre (m), the quad's half axes (m), colour (RGBA in [0, 1]). Corner
@@ -158,7 +158,7 @@ pub struct ReferenceRenderer {
     camera: wgpu::Buffer,
     lights: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
-    ribbons: RibbonPipeline,
+    strips: StripPipeline,
     background: DVec3,
     /// (1 when lit; normals 0 flat, 1 sphere, 2 a normal map, 3 six-way lightmaps; wrap;
     /// emissive).
@@ -293,7 +293,7 @@ impl ReferenceRenderer {
                 attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32x3, 2 => Float32x3, 3 => Float32x4, 4 => Float32x4],
             })],
         );
-        let ribbons = RibbonPipeline::new(gpu, blend, &camera);
+        let strips = StripPipeline::new(gpu, blend, &camera);
         gpu.take_error()?;
         let lit = render.lit.as_ref().map_or([0.0; 4], |lit| {
             let normals = match lit.normals {
@@ -311,7 +311,7 @@ impl ReferenceRenderer {
             camera,
             lights,
             bind_group,
-            ribbons,
+            strips,
             background,
             lit,
             blend: match blend {
@@ -332,14 +332,15 @@ impl ReferenceRenderer {
 
     /// Draws `sprites` in order over the background as seen from `camera`; returns RGBA8 rows.
     pub fn draw(&self, sprites: &[Sprite], camera: &Camera) -> Result<Vec<u8>, RuntimeError> {
-        self.draw_with_ribbons(&[], sprites, camera)
+        self.draw_with_strips(&[], sprites, camera)
     }
 
-    /// Draws the `ribbons` (triangles, [`crate::oracle::ribbons::ribbons`]), then `sprites`
-    /// in order, as the GPU draw records an effect with trails; returns RGBA8 rows.
-    pub fn draw_with_ribbons(
+    /// Draws the `strips` (triangles: [`crate::oracle::trail_strips`] or
+    /// [`crate::oracle::ribbon_strips`]), then `sprites` in order, as the GPU draw records an
+    /// effect with trails; returns RGBA8 rows.
+    pub fn draw_with_strips(
         &self,
-        ribbons: &[RibbonVertex],
+        strips: &[StripVertex],
         sprites: &[Sprite],
         camera: &Camera,
     ) -> Result<Vec<u8>, RuntimeError> {
@@ -384,7 +385,7 @@ impl ReferenceRenderer {
             self.gpu.queue.write_buffer(&b, 0, &instances);
             b
         });
-        let ribbon_buffer = RibbonPipeline::upload(&self.gpu, ribbons);
+        let strip_buffer = StripPipeline::upload(&self.gpu, strips);
         let mut encoder = device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
@@ -395,8 +396,8 @@ impl ReferenceRenderer {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            if let Some(b) = &ribbon_buffer {
-                self.ribbons.record(&mut pass, b, ribbons.len() as u32);
+            if let Some(b) = &strip_buffer {
+                self.strips.record(&mut pass, b, strips.len() as u32);
             }
             if let Some(b) = &instance_buffer {
                 pass.set_pipeline(&self.pipeline);

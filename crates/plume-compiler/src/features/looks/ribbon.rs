@@ -304,7 +304,7 @@ impl Ribbon {
             },
         );
         w.blank();
-        w.block("struct RibbonVertex", |w| {
+        w.block("struct StripVertex", |w| {
             w.line("@builtin(position) clip: vec4<f32>,");
             w.line("@location(0) across: f32,");
             w.line("@location(1) color: vec4<f32>,");
@@ -313,9 +313,9 @@ impl Ribbon {
         w.comment("Instance i: the segment from the entry before entry i in its row to entry i; vertices 0 and 1 at its first end, 2 and 3 at its second, on sides -1 and +1.");
         w.line("@vertex");
         w.block(
-            "fn vs_ribbon(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance: u32) -> RibbonVertex",
+            "fn vs_ribbon(@builtin(vertex_index) vertex: u32, @builtin(instance_index) instance: u32) -> StripVertex",
             |w| {
-                w.line("var out: RibbonVertex;");
+                w.line("var out: StripVertex;");
                 w.line("out.clip = HIDDEN;");
                 w.line("out.across = 0.0;");
                 w.line("out.color = vec4<f32>(0.0);");
@@ -353,7 +353,7 @@ impl Ribbon {
         w.blank();
         w.line("@fragment");
         w.block(
-            "fn fs_ribbon(in: RibbonVertex) -> @location(0) vec4<f32>",
+            "fn fs_ribbon(in: StripVertex) -> @location(0) vec4<f32>",
             |w| {
                 w.comment("Soft across the strip: full on the centre line, zero at the edges.");
                 w.line("let across = 1.0 - in.across * in.across;");

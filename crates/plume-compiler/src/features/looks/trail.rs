@@ -133,12 +133,7 @@ impl TrailIr {
     /// +1), half the width at its trail fraction (times `size_scale`) to either side across
     /// the trail's direction there and the line of sight from `eye`; a point with no direction
     /// gets both vertices on it.
-    pub fn ribbon_vertices(
-        &self,
-        points: &[DVec3],
-        eye: DVec3,
-        size_scale: f64,
-    ) -> Vec<[DVec3; 2]> {
+    pub fn strip_vertices(&self, points: &[DVec3], eye: DVec3, size_scale: f64) -> Vec<[DVec3; 2]> {
         let last = points.len().saturating_sub(1);
         (0..points.len())
             .map(|j| {
@@ -247,19 +242,19 @@ mod tests {
     }
 
     #[test]
-    fn ribbon_vertices_lie_across_the_trail_and_the_line_of_sight() {
+    fn strip_vertices_lie_across_the_trail_and_the_line_of_sight() {
         let t = trail(3, 1);
         // A trail along +x seen from +z: the ribbon spans y, 0.1 m wide at every point.
         let eye = DVec3::new(0.0, 0.0, 10.0);
         let points = [DVec3::new(2.0, 0.0, 0.0), DVec3::X, DVec3::ZERO];
-        let v = t.ribbon_vertices(&points, eye, 1.0);
+        let v = t.strip_vertices(&points, eye, 1.0);
         for (j, [a, b]) in v.iter().enumerate() {
             assert!(((*a - *b).length() - 0.1).abs() < 1e-12, "point {j}");
             assert!(((*a + *b) * 0.5 - points[j]).length() < 1e-12);
             assert!((*a - *b).normalize().abs().y > 1.0 - 1e-12);
         }
         // A trail that has not moved draws nothing.
-        let still = t.ribbon_vertices(&[DVec3::ONE; 3], eye, 1.0);
+        let still = t.strip_vertices(&[DVec3::ONE; 3], eye, 1.0);
         assert!(still.iter().all(|[a, b]| a == b));
     }
 

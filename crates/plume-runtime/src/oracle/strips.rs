@@ -1,6 +1,6 @@
 //! The reference drawing of trails (`render.trail`), beside [`crate::oracle::sprites`]'s
-//! sprites: each particle's ribbon points (read back from the GPU's rings, or the f64
-//! reference's), their vertices placed on the CPU in f64 by `TrailIr::ribbon_vertices` and
+//! sprites: each particle's strip points (read back from the GPU's rings, or the f64
+//! reference's), their vertices placed on the CPU in f64 by `TrailIr::strip_vertices` and
 //! coloured there, drawn as triangles by a fixed shader before the sprites.
 
 use std::collections::HashMap;
@@ -15,9 +15,10 @@ use crate::draw::raster::blend_state;
 use crate::draw::target::DrawTarget;
 use crate::outputs::offscreen::FORMAT;
 
-/// One ribbon vertex: world position, side (−1 or +1 across the strip), colour.
+/// One strip vertex (of a trail, or of a ribbon joining particles): world position, side (−1
+/// or +1 across the strip), colour.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RibbonVertex {
+pub struct StripVertex {
     /// Position in world space.
     pub position: [f32; 3],
     /// −1 or +1: which edge of the strip.
@@ -27,18 +28,18 @@ pub struct RibbonVertex {
 }
 
 /// Bytes of one vertex: a vec3, a float and a vec4 of f32.
-pub const RIBBON_VERTEX_BYTES: u64 = 32;
+pub const STRIP_VERTEX_BYTES: u64 = 32;
 
-/// The ribbons of `records` (in draw order) whose points `trails` holds by id, facing a camera
+/// The trail strips of `records` (in draw order) whose points `trails` holds by id, facing a camera
 /// with view matrix `view`, as a triangle list: each segment the two triangles the GPU's strip
 /// makes of it. Colours are the particle's at its life fraction times the trail's at each
 /// point's fraction.
-pub fn ribbons(
+pub fn trail_strips(
     records: &[ParticleRecord],
     trails: &[(u32, Vec<DVec3>)],
     ir: &EffectIr,
     view: Mat4,
-) -> Vec<RibbonVertex> {
+) -> Vec<StripVertex> {
     let Some(trail) = &ir.render.trail else {
         return Vec::new();
     };
@@ -60,10 +61,10 @@ pub fn ribbons(
         };
         let c = ir.render.color_at(life);
         let particle = [c[0] * r.tint.x, c[1] * r.tint.y, c[2] * r.tint.z, c[3]];
-        let sides = trail.ribbon_vertices(points, eye, 1.0);
+        let sides = trail.strip_vertices(points, eye, 1.0);
         let vertex = |j: usize, side: usize| {
             let tint = trail.color_at(j as f64 / f64::from(trail.ring()));
-            RibbonVertex {
+            StripVertex {
                 position: f32s(sides[j][side]),
                 across: if side == 0 { -1.0 } else { 1.0 },
                 color: std::array::from_fn(|c| (particle[c] * tint[c]) as f32),
@@ -82,13 +83,13 @@ pub fn ribbons(
     out
 }
 
-/// The reference ribbon pipeline, drawing into [`FORMAT`] with one blend mode.
-pub(crate) struct RibbonPipeline {
+/// The reference strip pipeline, drawing into [`FORMAT`] with one blend mode.
+pub(crate) struct StripPipeline {
     pipeline: wgpu::RenderPipeline,
     group: wgpu::BindGroup,
 }
 
-impl RibbonPipeline {
+impl StripPipeline {
     /// The pipeline, reading the reference renderer's `camera` uniform (view, projection).
     pub(crate) fn new(
         gpu: &Gpu,
@@ -98,8 +99,8 @@ impl RibbonPipeline {
         let device = &gpu.device;
         let module = crate::device::gpu::shader_module(
             device,
-            "reference ribbons",
-            include_str!("reference_ribbon.wgsl"),
+            "reference strips",
+            include_str!("reference_strip.wgsl"),
         );
         let pipeline = vertex_pipeline(
             gpu,
@@ -110,13 +111,13 @@ impl RibbonPipeline {
             blend_state(blend),
             None,
             &[Some(wgpu::VertexBufferLayout {
-                array_stride: RIBBON_VERTEX_BYTES,
+                array_stride: STRIP_VERTEX_BYTES,
                 step_mode: wgpu::VertexStepMode::Vertex,
                 attributes: &wgpu::vertex_attr_array![0 => Float32x3, 1 => Float32, 2 => Float32x4],
             })],
         );
         let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("reference ribbons"),
+            label: Some("reference strips"),
             layout: &pipeline.get_bind_group_layout(0),
             entries: &[wgpu::BindGroupEntry {
                 binding: 0,
@@ -127,11 +128,11 @@ impl RibbonPipeline {
     }
 
     /// A vertex buffer of `vertices` (None when there are none).
-    pub(crate) fn upload(gpu: &Gpu, vertices: &[RibbonVertex]) -> Option<wgpu::Buffer> {
+    pub(crate) fn upload(gpu: &Gpu, vertices: &[StripVertex]) -> Option<wgpu::Buffer> {
         if vertices.is_empty() {
             return None;
         }
-        let mut bytes = Vec::with_capacity(vertices.len() * RIBBON_VERTEX_BYTES as usize);
+        let mut bytes = Vec::with_capacity(vertices.len() * STRIP_VERTEX_BYTES as usize);
         for v in vertices {
             let fields = [&v.position[..], &[v.across][..], &v.color[..]];
             for x in fields.into_iter().flatten() {
@@ -139,7 +140,7 @@ impl RibbonPipeline {
             }
         }
         let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("reference ribbons"),
+            label: Some("reference strips"),
             size: bytes.len() as u64,
             usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
