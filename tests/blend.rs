@@ -1,7 +1,9 @@
-//! `Multiply` and `Mask` blending (`render.blend`) in the raster draw (llvmpipe in CI): a
-//! sprite multiplies what lies behind by its colour as far as its opacity goes, a cut-out is
-//! its colour, opaque, where its opacity reaches the cutoff and nothing elsewhere; both draw
-//! what the CPU-fed reference drawing draws; the compute splat leaves them to the raster draw.
+//! `Multiply`, `Mask` and `Premultiplied` blending (`render.blend`) in the raster draw
+//! (llvmpipe in CI): a sprite multiplies what lies behind by its colour as far as its opacity
+//! goes, a cut-out is its colour, opaque, where its opacity reaches the cutoff and nothing
+//! elsewhere, a premultiplied colour adds its light and dims what is behind by its opacity;
+//! all draw what the CPU-fed reference drawing draws; the compute splat leaves them to the
+//! raster draw.
 
 mod common;
 
@@ -74,6 +76,38 @@ fn multiply_darkens_what_lies_behind_by_the_colour_as_far_as_the_opacity_goes() 
 }
 
 #[test]
+fn a_premultiplied_colour_adds_its_light_and_dims_behind_by_its_opacity() {
+    // At the centre (coverage 1): rgb + behind · (1 − a). Opacity 0 is light alone, which an
+    // alpha blend would not draw at all.
+    for (color, want) in [
+        (
+            (0.6, 0.3, 0.0, 0.0),
+            [0.8 + 0.6, 0.8 + 0.3, 0.8].map(|x: f64| x.min(1.0)),
+        ),
+        ((0.3, 0.1, 0.0, 0.5), [0.3 + 0.4, 0.1 + 0.4, 0.4]),
+    ] {
+        let (img, reference) = drawn(&one("Premultiplied", &format!("{color:?}")));
+        let want = want.map(byte);
+        near(
+            pixel(&img, SIDE / 2, SIDE / 2),
+            want,
+            &format!("{color:?} at the centre"),
+        );
+        near(
+            pixel(&reference, SIDE / 2, SIDE / 2),
+            want,
+            "the reference's centre",
+        );
+        near(pixel(&img, 5, 5), [byte(0.8); 3], "a corner");
+        let (mean, max, _) = differences(&img, &reference, 1);
+        assert!(
+            mean < 0.01 && max <= 2,
+            "GPU and reference differ: {mean} {max}"
+        );
+    }
+}
+
+#[test]
 fn a_mask_draws_its_colour_opaque_where_the_opacity_reaches_the_cutoff() {
     // The dot's opacity (1 − r²)² reaches 0.5 out to r = 0.54 of its radius: there the colour,
     // opaque; from there out, nothing (the background). The radius on screen: 1 m at 5 m
@@ -97,7 +131,7 @@ fn a_mask_draws_its_colour_opaque_where_the_opacity_reaches_the_cutoff() {
 
 #[test]
 fn many_multiplied_and_masked_sprites_draw_as_the_reference_does() {
-    for blend in ["Multiply", "Mask(0.3)"] {
+    for blend in ["Multiply", "Mask(0.3)", "Premultiplied"] {
         let source = format!(
             r#"Effect(
     name: "many",
@@ -165,6 +199,11 @@ fn trails_and_ribbons_blend_as_their_sprites_do() {
         ),
         ("Multiply", "ribbon: Some(Ribbon(points: 64))"),
         ("Mask(0.4)", "ribbon: Some(Ribbon(points: 64))"),
+        (
+            "Premultiplied",
+            "trail: Some(Trail(points: 12, width: [(0.0, 0.2)]))",
+        ),
+        ("Premultiplied", "ribbon: Some(Ribbon(points: 64))"),
     ] {
         let source = format!(
             r#"Effect(

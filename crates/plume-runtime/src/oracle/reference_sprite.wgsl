@@ -11,8 +11,8 @@ struct Camera {
     // A lit look (render.lit): (1 when lit; normals 0 flat, 1 sphere, 2 a normal map, 3 six-way
     // lightmaps; wrap; emissive).
     lit: vec4<f32>,
-    // The blend's fragment output (render.blend): (0 as written; 1 Multiply; 2 Mask; the
-    // Mask's cutoff).
+    // The blend's fragment output (render.blend): (0 as written; 1 Multiply; 2 Mask; 3
+    // Premultiplied; the Mask's cutoff).
     blend: vec4<f32>,
 }
 
@@ -142,6 +142,13 @@ fn vs(
 
 @fragment
 fn fs(in: Out) -> @location(0) vec4<f32> {
+    if (camera.blend.x == 3.0) {
+        // Premultiplied: the coverage shaded at opacity 1, the colour written times it.
+        var pin = in;
+        pin.color.a = 1.0;
+        let c = shade(pin);
+        return vec4<f32>(c.rgb * c.a, in.color.a * c.a);
+    }
     return blend_out(shade(in));
 }
 

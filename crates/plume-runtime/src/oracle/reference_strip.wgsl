@@ -45,5 +45,8 @@ fn blend_out(c: vec4<f32>) -> vec4<f32> {
 fn fs(in: Out) -> @location(0) vec4<f32> {
     // Soft across the strip: full on the centre line, zero at the edges.
     let across = 1.0 - in.across * in.across;
+    if (camera.blend.x == 3.0) {
+        return vec4<f32>(in.color.rgb * across, in.color.a * across);
+    }
     return blend_out(vec4<f32>(in.color.rgb, in.color.a * across));
 }

@@ -317,6 +317,7 @@ impl ReferenceRenderer {
             blend: match blend {
                 plume_compiler::schema::Blend::Multiply => [1.0, 0.0, 0.0, 0.0],
                 plume_compiler::schema::Blend::Mask(cutoff) => [2.0, cutoff as f32, 0.0, 0.0],
+                plume_compiler::schema::Blend::Premultiplied => [3.0, 0.0, 0.0, 0.0],
                 _ => [0.0; 4],
             },
         })

@@ -36,12 +36,28 @@ pub enum Blend {
     /// is drawn opaque (leaves, paper, hard-edged sparks). Depth is not written: overlapping
     /// cut-outs need `sort: true` to show the nearest.
     Mask(f64),
+    /// The colour is premultiplied: rgb is added as it is and what lies behind is dimmed by
+    /// the opacity, rgb + behind · (1 − a), each times the sprite's coverage; opacity 0 adds
+    /// light as `Additive` does, and one sprite can glow at its core and cover at its rim.
+    Premultiplied,
 }
 
 impl Blend {
-    /// Whether the fragment's colour is changed before blending ([`Self::emit_blend_out`]).
+    /// Whether the fragment's colour is changed before blending ([`Self::emit_blend_out`];
+    /// `Premultiplied` shades its coverage apart from its opacity instead).
     pub fn changes_output(self) -> bool {
         matches!(self, Blend::Multiply | Blend::Mask(_))
+    }
+
+    /// Whether a sprite of colour `rgba` draws nothing: alpha 0 but for `Premultiplied`, where
+    /// light with no opacity still adds (WGSL, of `s.color`).
+    pub fn hidden_wgsl(self) -> &'static str {
+        match self {
+            Blend::Premultiplied => {
+                "max(max(s.color.r, s.color.g), max(s.color.b, s.color.a)) <= 0.0"
+            }
+            _ => "s.color.a <= 0.0",
+        }
     }
 
     /// Emits `blend_out(c)`, what a fragment of colour `c` (straight alpha) writes for this

@@ -460,7 +460,10 @@ fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawSh
             ""
         };
         w.block(
-            format!("if (s.color.a <= 0.0 || s.size <= 0.0{height_hidden})"),
+            format!(
+                "if ({} || s.size <= 0.0{height_hidden})",
+                ir.render.blend.hidden_wgsl()
+            ),
             |w| w.line("return s;"),
         );
         w.line("s.center = draw.view * vec4<f32>(x, 1.0);");

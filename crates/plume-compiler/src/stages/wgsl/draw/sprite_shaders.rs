@@ -123,8 +123,26 @@ pub(super) fn emit_fragment(
         true => format!("blend_out({c})"),
         false => c.to_string(),
     };
-    if soft || lit.is_some() || blend.changes_output() {
+    let premultiplied = blend == crate::features::looks::Blend::Premultiplied;
+    // Premultiplied: the coverage is shaded at opacity 1 and the colour written times it.
+    let (shaded, out) = match premultiplied {
+        true => (
+            "pin",
+            &(|c: &str| format!("premultiplied({c}, in.color.a)")) as &dyn Fn(&str) -> String,
+        ),
+        false => ("in", &out as &dyn Fn(&str) -> String),
+    };
+    if soft || lit.is_some() || blend.changes_output() || premultiplied {
         blend.emit_blend_out(w);
+        if premultiplied {
+            w.comment("Premultiplied blending (Blend): the colour c shaded at opacity 1 (its alpha the coverage), written times the coverage, with the opacity alpha times it.");
+            w.block(
+                "fn premultiplied(c: vec4<f32>, alpha: f32) -> vec4<f32>",
+                |w| {
+                    w.line("return vec4<f32>(c.rgb * c.a, alpha * c.a);");
+                },
+            );
+        }
         w.block("fn shade(in: Sprite) -> vec4<f32>", |w| {
             emit_shade(w, texture)
         });
@@ -132,20 +150,24 @@ pub(super) fn emit_fragment(
         w.line("@fragment");
         w.block("fn fs(in: Sprite) -> @location(0) vec4<f32>", |w| {
             take_view(w);
+            if premultiplied {
+                w.line("var pin = in;");
+                w.line("pin.color.a = 1.0;");
+            }
             if let Some((look, oriented)) = lit {
                 if !look.map_files().is_empty() {
                     w.comment("The lit maps first: their derivatives before any discard.");
                 }
                 w.line(format!("let maps = {};", look.maps_wgsl()));
                 w.comment("The texel before the light: its fetch is under way while the light is worked out (the H100's raster draw of lit_smoke 1M: 101 -> 91 ms a frame).");
-                w.line("let unlit = shade(in);");
+                w.line(format!("let unlit = shade({shaded});"));
                 match oriented {
                     true => w.line("let basis = mat3x3<f32>(in.basis_x, in.basis_y, in.basis_z);"),
                     false => w.line("let basis = VIEW_BASIS;"),
                 }
                 w.line("let c = lit_color(unlit, lit_light(in.uv, basis, maps, in.view_pos));");
             } else {
-                w.line("let c = shade(in);");
+                w.line(format!("let c = shade({shaded});"));
             }
             match soft {
                 true => w.line(format!(

@@ -128,12 +128,18 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         |w| {
             w.comment("Soft across the strip: full on the centre line, zero at the edges.");
             w.line("let across = 1.0 - in.across * in.across;");
-            if soft.is_some() {
-                w.line(out(
-                    "vec4<f32>(in.color.rgb, in.color.a * across * soft_fade(in.clip))",
+            let cover = match soft {
+                Some(_) => "across * soft_fade(in.clip)",
+                None => "across",
+            };
+            if blend == crate::features::looks::Blend::Premultiplied {
+                w.line(format!(
+                    "return vec4<f32>(in.color.rgb * {cover}, in.color.a * {cover});"
                 ));
             } else {
-                w.line(out("vec4<f32>(in.color.rgb, in.color.a * across)"));
+                w.line(out(&format!(
+                    "vec4<f32>(in.color.rgb, in.color.a * {cover})"
+                )));
             }
         },
     );
