@@ -1,7 +1,7 @@
 //! Lit particles (`render.lit`) in a Bevy scene, on llvmpipe (lavapipe): Bevy's own
-//! `DirectionalLight`, `PointLight` and ambient light light the sprites, not the effect
-//! file's lights; turning the light turns the lit side, and a scene with no light leaves them
-//! dark as it leaves a lit mesh.
+//! `DirectionalLight`, `PointLight` and ambient light (global, or a camera's own) light the
+//! sprites, not the effect file's lights; turning the light turns the lit side, and a scene
+//! with no light leaves them dark as it leaves a lit mesh.
 
 mod common;
 
@@ -86,6 +86,38 @@ fn bevys_lights_light_the_particles() {
         .map(|p| *p.0[..3].iter().max().unwrap())
         .max();
     assert_eq!(brightest, Some(0), "unlit scene, yet the puff shows");
+}
+
+#[test]
+fn a_cameras_own_ambient_light_lights_the_particles_it_draws() {
+    // No sun and no global ambient light: dark. The camera's own AmbientLight (Bevy 0.20's
+    // per-camera override) lights the puff, both sides alike (within a tenth: the sides
+    // sampled are a pixel or so apart), and more of it, more light.
+    let _one = serial();
+    let (mut h, handle) = Harness::with_effect("camera-ambient", PUFF);
+    h.app.insert_resource(GlobalAmbientLight::NONE);
+    h.app.world_mut().spawn(PlumeEffect::new(handle));
+    let camera = h.camera();
+    let mut brightness = Vec::new();
+    for ambient in [0.0, 300.0, 900.0] {
+        h.app.world_mut().entity_mut(camera).insert(AmbientLight {
+            color: Color::WHITE,
+            brightness: ambient,
+            ..default()
+        });
+        h.update(3);
+        let (left, right) = sides(&h.capture());
+        assert!(
+            (left - right).abs() <= 3.0 + 0.1 * left.max(right),
+            "ambient {ambient}: even light, left {left:.1} right {right:.1}"
+        );
+        brightness.push(0.5 * (left + right));
+    }
+    assert!(brightness[0] < 1.0, "no light, yet {:.1}", brightness[0]);
+    assert!(
+        brightness[1] > 10.0 && brightness[2] > brightness[1] + 10.0,
+        "more ambient light, brighter: {brightness:?}"
+    );
 }
 
 #[test]

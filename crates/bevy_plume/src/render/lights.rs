@@ -4,35 +4,83 @@
 //! × the camera's exposure through a Lambertian surface's 1/π, a point light's lumens spread
 //! over 4π steradians, ambient light as colour × brightness × exposure. So a grey puff and a
 //! grey wall under the same sun come out the same grey. At most `LIGHTS_MOST` sources are
-//! kept: the directional lights first, then the point lights, brightest first.
+//! kept: the directional lights first, then the point lights, brightest first. Each camera
+//! sees them at its own `Exposure`, with its own `AmbientLight` where it has one (as Bevy
+//! lights its meshes), else the `GlobalAmbientLight`.
 
 use bevy::camera::Exposure;
+use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
+use bevy::render::sync_world::RenderEntity;
 use bevy::render::Extract;
 use plume_runtime::glam::DVec3;
 use plume_runtime::{LightSource, Lights};
 
-/// The lights of the main world this frame, in world space and Plume's units.
+/// The lights of the main world this frame, in world space and Plume's units before a
+/// camera's exposure, and what each camera sees them through.
 #[derive(Resource, Clone, Debug, Default)]
-pub(crate) struct ExtractedLights(pub Lights);
+pub(crate) struct ExtractedLights {
+    /// The sources, at an exposure of 1, and the global ambient light.
+    scene: Lights,
+    /// Per camera (its render-world entity): its exposure and its own ambient light.
+    views: HashMap<Entity, (f64, Option<DVec3>)>,
+}
 
-/// Copies the scene's visible lights and ambient light into [`ExtractedLights`], at the
-/// exposure of the first camera that has an `Exposure` (Bevy's default otherwise).
+impl ExtractedLights {
+    /// The lights as the camera `view` (a render-world entity) sees them: at its exposure
+    /// (Bevy's default for a camera not extracted), with its own ambient light if it has one.
+    pub(crate) fn for_view(&self, view: Entity) -> Lights {
+        let default_exposure = f64::from(Exposure::default().exposure());
+        let (exposure, own) = self
+            .views
+            .get(&view)
+            .copied()
+            .unwrap_or((default_exposure, None));
+        let scaled = |c: DVec3| c * exposure;
+        Lights {
+            ambient: scaled(own.unwrap_or(self.scene.ambient)),
+            sources: self
+                .scene
+                .sources
+                .iter()
+                .map(|s| match *s {
+                    LightSource::Directional { direction, color } => LightSource::Directional {
+                        direction,
+                        color: scaled(color),
+                    },
+                    LightSource::Point {
+                        position,
+                        color,
+                        range,
+                    } => LightSource::Point {
+                        position,
+                        color: scaled(color),
+                        range,
+                    },
+                })
+                .collect(),
+        }
+    }
+}
+
+/// What a camera's lighting is made of: its render-world twin, exposure and own ambient light.
+type CameraLighting = (
+    RenderEntity,
+    Option<&'static Exposure>,
+    Option<&'static AmbientLight>,
+);
+
+/// Copies the scene's visible lights and ambient light into [`ExtractedLights`], and each
+/// camera's exposure and own ambient light.
 pub(crate) fn extract_lights(
     mut extracted: ResMut<ExtractedLights>,
     directional: Extract<Query<(&DirectionalLight, &GlobalTransform, &InheritedVisibility)>>,
     points: Extract<Query<(&PointLight, &GlobalTransform, &InheritedVisibility)>>,
     ambient: Extract<Option<Res<GlobalAmbientLight>>>,
-    exposures: Extract<Query<&Exposure, With<Camera>>>,
+    cameras: Extract<Query<CameraLighting, With<Camera>>>,
 ) {
-    let exposure = f64::from(
-        exposures
-            .iter()
-            .next()
-            .copied()
-            .unwrap_or_default()
-            .exposure(),
-    );
+    // Scaled by each camera's exposure when drawn (`for_view`).
+    let exposure = 1.0;
     let linear = |c: Color| {
         let c = c.to_linear();
         DVec3::new(f64::from(c.red), f64::from(c.green), f64::from(c.blue))
@@ -72,11 +120,19 @@ pub(crate) fn extract_lights(
     }
     sources.sort_by(|a, b| b.0.total_cmp(&a.0));
     sources.truncate(plume_compiler::lights::LIGHTS_MOST);
-    let ambient = ambient.as_ref().map_or(DVec3::ZERO, |a| {
-        linear(a.color) * f64::from(a.brightness) * exposure
-    });
-    extracted.0 = Lights {
+    let ambient = ambient
+        .as_ref()
+        .map_or(DVec3::ZERO, |a| linear(a.color) * f64::from(a.brightness));
+    extracted.scene = Lights {
         ambient,
         sources: sources.into_iter().map(|(_, s)| s).collect(),
     };
+    extracted.views = cameras
+        .iter()
+        .map(|(view, exposure, own)| {
+            let exposure = f64::from(exposure.copied().unwrap_or_default().exposure());
+            let own = own.map(|a| linear(a.color) * f64::from(a.brightness));
+            (view, (exposure, own))
+        })
+        .collect();
 }

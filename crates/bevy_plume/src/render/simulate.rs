@@ -215,6 +215,8 @@ pub(crate) fn prepare_for_view(
     lights: Res<ExtractedLights>,
 ) {
     let (view_entity, view, prepass) = view.into_inner();
+    // The scene's lights as this camera sees them (its exposure, its own ambient light).
+    let lights = lights.for_view(view_entity);
     let encoder = context.command_encoder();
     let frame = store.frame;
     // A batch is in world space: drawn through the camera alone.
@@ -228,7 +230,7 @@ pub(crate) fn prepare_for_view(
                     renderer.set_scene_depth(depth);
                 }
             }
-            renderer.set_lights(&lights.0);
+            renderer.set_lights(&lights);
             let camera = view_camera(view, Mat4::IDENTITY);
             if let Err(err) = batch
                 .batch
@@ -255,7 +257,7 @@ pub(crate) fn prepare_for_view(
                 }
             }
             draw.renderer
-                .set_lights(&lights_in_space(&lights.0, world_from_local));
+                .set_lights(&lights_in_space(&lights, world_from_local));
             let camera = view_camera(view, world_from_local);
             // A SceneDepth collider meets what this camera's depth prepass drew this frame, in
             // the effect's space, from the next frame's steps on (the runtime copies it).
