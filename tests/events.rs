@@ -704,3 +704,52 @@ fn a_stateless_group_that_never_dies_fires_every_period_as_its_stateful_twin_doe
     // 64 firings a step, each spawning its dot the step after.
     assert_eq!(ta.spawned, 64 * 299, "{ta:?}");
 }
+
+#[test]
+fn an_event_spawn_reads_where_its_parent_fired_as_origin() {
+    // Children whose velocity adds the firing particle's position (hanabi's firework streaks)
+    // and whose offset grows with its height, against the reference in every group; and an
+    // emitter's origin is the effect's (0, 0, 0).
+    let source = r#"Effect(
+    name: "rockets",
+    capacity: 16,
+    seed: 6,
+    dt: 0.016666666666666666,
+    emitters: [Emitter(rate: 20.0, shape: Custom("origin + vec3(rand(0) - 0.5, 0.0, 0.0)"),
+                       velocity: Custom("vec3(0.0, 8.0, 0.0) + origin"), lifetime: Some((0.3, 0.5)))],
+    forces: [Gravity((0.0, -9.81, 0.0))],
+    integrator: Euler,
+    events: [Event(on: Death, target: "sparks", count: 20,
+                   shape: Custom("normalize(vec3(rand(0) - 0.5, rand(1) - 0.5, rand(2) - 0.5)) * 0.1 * origin.y"),
+                   velocity: Custom("origin * 0.5 + vec3(rand(3) - 0.5, 0.0, rand(4) - 0.5)"),
+                   lifetime: Some((0.5, 0.5)))],
+    groups: [Group(name: "sparks", capacity: 2000, forces: [Gravity((0.0, -9.81, 0.0))], integrator: Euler)],
+)"#;
+    let sim = compare_runs("origin", &graph(source), &[20, 45, 70]);
+    let sparks = sim.group_records(1).unwrap();
+    assert!(sparks.len() > 100, "{} sparks", sparks.len());
+    // The origin matters: the rockets die about 2.4 m up, so half of that is added to every
+    // spark's upward speed, against the same effect with the origin at zero.
+    let mean_up = |records: &[plume::compiler::reference::ParticleRecord]| {
+        records.iter().map(|r| r.velocity.y).sum::<f64>() / records.len() as f64
+    };
+    let zero = graph(&source.replace("origin", "vec3(0.0, 0.0, 0.0)"));
+    let mut without = Effect::from_graph(&gpu(), zero).unwrap();
+    without.run(70, |_| {}).unwrap();
+    let (with, plain) = (
+        mean_up(&sparks),
+        mean_up(&without.group_records(1).unwrap()),
+    );
+    assert!(
+        with - plain > 0.8,
+        "mean upward speed {with} with the origin, {plain} without"
+    );
+    // An emitter's origin is the effect's: the rockets spawn within half a metre of x = 0.
+    for r in sim.group_records(0).unwrap() {
+        assert!(
+            r.position.x.abs() <= 0.5 + 1e-6,
+            "rocket at {:?}",
+            r.position
+        );
+    }
+}

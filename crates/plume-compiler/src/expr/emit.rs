@@ -80,6 +80,8 @@ impl<'w> Emitter<'w> {
                 Var::Age => "age".into(),
                 Var::Life => "ctx_life".into(),
                 Var::Index => "index".into(),
+                // A private variable the event spawn sets before `emit_E` (zero otherwise).
+                Var::Origin => "spawn_origin".into(),
             },
             // The place evaluating it binds each attribute it holds as `a{index}`.
             Node::Attr(i) => format!("a{i}"),

@@ -27,6 +27,8 @@ pub struct Inputs {
     pub id: u32,
     /// Its index among its emitter's spawns, as the GPU's f32 holds it.
     pub index: f64,
+    /// Where its spawn's frame sits in the world (an event's firing particle; zero else).
+    pub origin: DVec3,
     /// Its attributes' values, by index (a number in `x`).
     pub attrs: Attrs,
 }
@@ -151,6 +153,10 @@ pub fn eval(e: &Expr, inp: &Inputs) -> Value {
             Var::Age => Value::S(inp.age),
             Var::Life => Value::S(inp.life),
             Var::Index => Value::S(inp.index),
+            Var::Origin => Value::V(
+                inp.origin
+                    .clamp(DVec3::splat(-VALUE_BOUND), DVec3::splat(VALUE_BOUND)),
+            ),
         },
         Node::Attr(i) => {
             let a = inp.attrs[usize::from(*i)]

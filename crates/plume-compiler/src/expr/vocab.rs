@@ -41,6 +41,9 @@ pub enum Var {
     /// The particle's index among its emitter's spawns (an event's children: among its
     /// firing's), as a number: spawn positions only.
     Index,
+    /// Where the spawn's frame sits in the world: the firing particle's position for an
+    /// event's spawn, (0, 0, 0) for an emitter's; spawn positions and velocities only.
+    Origin,
 }
 
 impl Var {
@@ -53,13 +56,14 @@ impl Var {
             Var::Age => "age",
             Var::Life => "life",
             Var::Index => "index",
+            Var::Origin => "origin",
         }
     }
 
     /// The type of its value.
     pub(crate) fn ty(self) -> Ty {
         match self {
-            Var::X | Var::V => Ty::Vec3,
+            Var::X | Var::V | Var::Origin => Ty::Vec3,
             _ => Ty::Scalar,
         }
     }
@@ -166,7 +170,15 @@ pub const VARIABLES: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life];
 
 /// Every variable some expression reads: names a param, attribute or definition may not
 /// take, and what a definition may read (checked again where it is read).
-pub const EVERY_VARIABLE: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life, Var::Index];
+pub const EVERY_VARIABLE: &[Var] = &[
+    Var::X,
+    Var::V,
+    Var::T,
+    Var::Age,
+    Var::Life,
+    Var::Index,
+    Var::Origin,
+];
 
 /// Functions and their arities, for messages and the arity check.
 pub const FUNCTIONS: &[(&str, usize)] = &[

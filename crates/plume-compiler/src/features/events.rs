@@ -489,6 +489,7 @@ pub fn emit_fire_appended(
 /// `event_child_J`. (A direct dispatch: an indirect one, its workgroups written by the
 /// ordering, starts about 3 µs later on an H100 after the kernel that writes them:
 /// docs/performance.md, "Events".)
+/// `reads_origin(j)` says whether input j's spawn reads `origin` (set from the record first).
 /// `store` emits (for input j) the store of the spawned particle `s` with id `id` (and packed tint `tint`,
 /// when the group stores tints) in `slot`: the same code as the group's own spawn. `own` is
 /// the WGSL of the group's own tint for the particle `id` when it stores tints (`tint.rs`).
@@ -496,6 +497,7 @@ pub fn emit_kernels(
     w: &mut Writer,
     inputs: &[EventInputIr],
     own: Option<&str>,
+    reads_origin: &dyn Fn(usize) -> bool,
     store: &dyn Fn(&mut Writer, usize),
     ribbon: Option<&crate::features::looks::ribbon::Ribbon>,
 ) {
@@ -517,6 +519,9 @@ pub fn emit_kernels(
                 |w| w.line("return;"),
             );
             w.line("let id = counters.event_first_id + i;");
+            if reads_origin(j) {
+                w.line("spawn_origin = r.x;");
+            }
             w.line(format!(
                 "var s = emit_{}(id, c, params.step);",
                 input.emitter

@@ -196,7 +196,8 @@ impl ReferenceSim {
                 let link = Ribbon::child(parent.id, step, inp.period, inp.count, c);
                 ribbon.write(&mut self.ribbon_table, id, link);
             }
-            let mut s = spawn(&self.ir, inp.emitter, id, c, step);
+            let mut s =
+                crate::reference::spawn::spawn_at(&self.ir, inp.emitter, (id, c), step, parent.x);
             s.x += parent.x;
             s.v += inp.inherit_velocity * parent.v;
             let inherited = if inp.inherit_color {

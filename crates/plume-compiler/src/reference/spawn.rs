@@ -21,10 +21,16 @@ pub struct Spawned {
     pub start: u32,
 }
 
-/// The state of particle `id`, the `k`-th of emitter `e`, spawned at `step`.
+/// The state of particle `id`, the `k`-th of emitter `e`, spawned at `step` (an emitter's:
+/// its spawn frame at the origin).
 pub fn spawn(ir: &EffectIr, e: usize, id: u32, k: u32, step: u64) -> Spawned {
+    spawn_at(ir, e, (id, k), step, DVec3::ZERO)
+}
+
+/// [`spawn`] in a frame at `origin` (an event's spawn: the firing particle's position).
+pub fn spawn_at(ir: &EffectIr, e: usize, (id, k): (u32, u32), step: u64, origin: DVec3) -> Spawned {
     let em = &ir.emitters[e];
-    let (x, v) = em.sample(ir.seed_mix, id, k, step);
+    let (x, v) = em.sample(ir.seed_mix, (id, k), step, origin);
     let start = em
         .age_steps
         .map_or(0, |a| a.draw(rand_u32(ir.seed_mix, id, stream::START_AGE)));

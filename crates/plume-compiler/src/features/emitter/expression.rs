@@ -26,8 +26,8 @@ pub enum SpawnValue {
 impl SpawnValue {
     fn vars(self) -> &'static [Var] {
         match self {
-            SpawnValue::Position => &[Var::T, Var::Index],
-            SpawnValue::Velocity => &[Var::X, Var::T],
+            SpawnValue::Position => &[Var::T, Var::Index, Var::Origin],
+            SpawnValue::Velocity => &[Var::X, Var::T, Var::Origin],
         }
     }
 
@@ -78,8 +78,14 @@ pub fn emit(w: &mut Writer, e: &Expr, target: &str, dt: f64) {
 }
 
 /// The f64 twin of [`emit`]: `e` for particle `id` of an effect of `seed_mix`, the `k`-th
-/// of its emitter, spawned at time `t` at position `x`.
-pub fn value(e: &Expr, seed_mix: u32, (id, k): (u32, u32), t: f64, x: DVec3) -> DVec3 {
+/// of its emitter, spawned at time `t` at position `x` in a frame at `origin`.
+pub fn value(
+    e: &Expr,
+    seed_mix: u32,
+    (id, k): (u32, u32),
+    (t, origin): (f64, DVec3),
+    x: DVec3,
+) -> DVec3 {
     eval(
         e,
         &Inputs {
@@ -89,6 +95,7 @@ pub fn value(e: &Expr, seed_mix: u32, (id, k): (u32, u32), t: f64, x: DVec3) -> 
             id,
             // The kernel's `f32(k)`.
             index: f64::from(k as f32),
+            origin,
             ..Inputs::default()
         },
     )

@@ -237,13 +237,30 @@ impl EmitterIr {
             && self.timing.every.is_none()
     }
 
-    /// The position and velocity of particle `id`, the emitter's `k`-th, spawned at `step`
-    /// (the f64 twin of [`Self::emit_wgsl`]).
-    pub fn sample(&self, seed_mix: u32, id: u32, k: u32, step: u64) -> (DVec3, DVec3) {
+    /// The position and velocity of particle `id`, the emitter's `k`-th, spawned at `step` in
+    /// a frame at `origin` (the f64 twin of [`Self::emit_wgsl`]).
+    pub fn sample(
+        &self,
+        seed_mix: u32,
+        (id, k): (u32, u32),
+        step: u64,
+        origin: DVec3,
+    ) -> (DVec3, DVec3) {
         let d = ParticleDraws { seed_mix, id };
         let t = step as f64 * self.timing.dt;
-        let (x, normal) = self.shape.sample(&d, k, t);
-        (x, self.velocity.sample(&d, &self.shape, (x, normal), t))
+        let (x, normal) = self.shape.sample(&d, k, (t, origin));
+        (
+            x,
+            self.velocity
+                .sample(&d, &self.shape, (x, normal), (t, origin)),
+        )
+    }
+
+    /// Whether its spawn position or velocity reads `origin` (an event's firing particle).
+    pub fn reads_origin(&self) -> bool {
+        let reads = |e: &crate::expr::Expr| e.reads(crate::expr::Var::Origin);
+        matches!(&self.shape, ShapeIr::Custom { expr, .. } if reads(expr))
+            || matches!(&self.velocity, VelocityIr::Custom { expr, .. } if reads(expr))
     }
 
     /// Sets live param `index` to `value` in the emitter's expressions.

@@ -309,7 +309,15 @@ impl Shape {
                 // Its extent, for the precision warnings and the stiffness estimates: the
                 // farthest of a sample of spawns at t = 0.
                 let extent = (0..ESTIMATE_SPAWNS)
-                    .map(|id| expression::value(&expr, seed_mix, (id, id), 0.0, DVec3::ZERO))
+                    .map(|id| {
+                        expression::value(
+                            &expr,
+                            seed_mix,
+                            (id, id),
+                            (0.0, DVec3::ZERO),
+                            DVec3::ZERO,
+                        )
+                    })
                     .map(|x| x.abs().max_element())
                     .fold(0.0, f64::max);
                 ShapeIr::Custom { expr, extent }

@@ -334,12 +334,12 @@ impl ShapeIr {
     }
 
     /// The spawn position of the particle drawing `d`, the `k`-th of its emitter, spawned at
-    /// time `t`, and on a mesh the surface's normal there (zero elsewhere): the f64 twin of
+    /// time `t` in a frame at `origin`, and on a mesh the surface's normal there (zero elsewhere): the f64 twin of
     /// [`Self::emit_wgsl`].
-    pub fn sample(&self, d: &ParticleDraws, k: u32, t: f64) -> (DVec3, DVec3) {
+    pub fn sample(&self, d: &ParticleDraws, k: u32, (t, origin): (f64, DVec3)) -> (DVec3, DVec3) {
         let x = match self {
             ShapeIr::Custom { expr, .. } => {
-                super::expression::value(expr, d.seed_mix, (d.id, k), t, DVec3::ZERO)
+                super::expression::value(expr, d.seed_mix, (d.id, k), (t, origin), DVec3::ZERO)
             }
             ShapeIr::Mesh(m) => {
                 return m.spawn(d.word(stream::MESH_PICK), d.unit3(stream::POSITION));

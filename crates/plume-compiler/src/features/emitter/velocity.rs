@@ -152,8 +152,8 @@ impl Velocity {
                 let max_speed = (0..ESTIMATE_SPAWNS)
                     .map(|id| {
                         let d = ParticleDraws { seed_mix, id };
-                        let (x, _) = shape.sample(&d, id, 0.0);
-                        expression::value(&expr, seed_mix, (id, 0), 0.0, x).length()
+                        let (x, _) = shape.sample(&d, id, (0.0, DVec3::ZERO));
+                        expression::value(&expr, seed_mix, (id, 0), (0.0, DVec3::ZERO), x).length()
                     })
                     .fold(0.0, f64::max);
                 VelocityIr::Custom { expr, max_speed }
@@ -285,18 +285,20 @@ impl VelocityIr {
     }
 
     /// The spawn velocity of the particle drawing `d`, spawned at `x` on `shape` at time `t`
-    /// (`normal`: the surface's normal there, zero off a mesh): the f64 twin of
-    /// [`Self::emit_wgsl`].
+    /// in a frame at `origin` (`normal`: the surface's normal there, zero off a mesh): the
+    /// f64 twin of [`Self::emit_wgsl`].
     pub fn sample(
         &self,
         d: &ParticleDraws,
         shape: &ShapeIr,
         (x, normal): (DVec3, DVec3),
-        t: f64,
+        (t, origin): (f64, DVec3),
     ) -> DVec3 {
         let speed = |s: (f64, f64)| s.0 + (s.1 - s.0) * d.unit(stream::VELOCITY + 2);
         match self {
-            VelocityIr::Custom { expr, .. } => expression::value(expr, d.seed_mix, (d.id, 0), t, x),
+            VelocityIr::Custom { expr, .. } => {
+                expression::value(expr, d.seed_mix, (d.id, 0), (t, origin), x)
+            }
             VelocityIr::Constant(v) => *v,
             VelocityIr::Cone {
                 axis,

@@ -108,6 +108,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             w,
             &ir.event_inputs,
             layout.has(Attribute::Tint).then_some(own.as_str()),
+            &|j| ir.emitters[ir.event_inputs[j].emitter].reads_origin(),
             &|w, j| {
                 crate::features::inherit::emit_find(
                     w,
@@ -197,6 +198,11 @@ pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout, input:
 /// Emits `emit_E(id, k, step) -> Spawned` for every emitter (shared by `spawn` and the
 /// stateless `evaluate`), each followed by a blank line.
 pub fn emit_emitter_fns(w: &mut Writer, ir: &EffectIr) {
+    if ir.emitters.iter().any(|e| e.reads_origin()) {
+        w.comment("Where the spawn's frame sits (`origin`): an event spawn sets the firing particle's position before emit_E; zero for an emitter's.");
+        w.line("var<private> spawn_origin: vec3<f32>;");
+        w.blank();
+    }
     for (e, em) in ir.emitters.iter().enumerate() {
         emit_emitter_fn(w, ir, e, em);
         w.blank();
