@@ -465,3 +465,69 @@ fn a_frame_chosen_by_an_expression_is_the_frame_shown() {
         );
     }
 }
+
+#[test]
+fn a_texture_can_give_colour_alone_or_opacity_from_its_red_channel() {
+    // A frame whose left half is (0.8, 0.2, 0.6) at alpha 0.5 and right half black at alpha
+    // 1, under an orange sprite: Modulate multiplies all four; ModulateRgb only the colour
+    // (the sprite stays opaque); OpacityFromRed keeps the colour and takes the opacity from
+    // the red channel (0.8 on the left, none on the right). The raster draw, the compute
+    // splat and the reference drawing alike.
+    let gpu = gpu();
+    let dir = scratch("sample");
+    let image = image::RgbaImage::from_fn(8, 8, |x, _| match x < 4 {
+        true => image::Rgba([204, 51, 153, 128]),
+        false => image::Rgba([0, 0, 0, 255]),
+    });
+    image.save(dir.join("halves.png")).unwrap();
+    let colour = [1.0, 0.5, 0.25];
+    for (mapping, left, right) in [
+        ("Modulate", [0.8, 0.1, 0.15, 0.502], [0.0, 0.0, 0.0, 1.0]),
+        ("ModulateRgb", [0.8, 0.1, 0.15, 1.0], [0.0, 0.0, 0.0, 1.0]),
+        (
+            "OpacityFromRed",
+            [1.0, 0.5, 0.25, 0.8],
+            [1.0, 0.5, 0.25, 0.0],
+        ),
+    ] {
+        let src = format!(
+            r#"Effect(
+    name: "sample",
+    capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    render: Render(color: [(0.0, ({}, {}, {}, 1.0))], size: [(0.0, 4.0)], background: (0.0, 0.0, 0.0),
+                   texture: Some(Texture(file: "halves.png", sample: {mapping}))),
+)"#,
+            colour[0], colour[1], colour[2]
+        );
+        let options = CompileOptions {
+            base_dir: Some(dir.clone()),
+            ..Default::default()
+        };
+        let effect =
+            compile_str(&src, &options).unwrap_or_else(|e| panic!("{}", e.render("s.ron", &src)));
+        let mut sim = Effect::new(&gpu, effect).unwrap();
+        sim.run(1, |_| {}).unwrap();
+        let (gpu_img, cpu_img) = draw_both(&sim);
+        assert_matches_reference(&gpu_img, &cpu_img, mapping);
+        // Over black the pixel is colour times alpha. The sprite, 4 m at 10 m with a 40-degree
+        // view, is 110 pixels across: 1 m either side of its centre is 27.5 pixels.
+        let got = [
+            pixel(&gpu_img, 72, SIDE / 2),
+            pixel(&gpu_img, 128, SIDE / 2),
+        ];
+        for (seen, want, side) in [(got[0], left, "left"), (got[1], right, "right")] {
+            let expect = [0, 1, 2].map(|c| (255.0_f64 * want[c] * want[3]).round() as u8);
+            assert_close(seen, expect, &format!("{mapping}, {side} half"));
+        }
+        let mut splat = Splat::new(&sim, SIDE, SIDE).unwrap();
+        let camera = plume::runtime::Camera::from_effect(&sim.compiled().ir.camera, 1.0);
+        let splatted = splat.render(&sim, &camera).unwrap();
+        let (mean, max, _) = differences(&gpu_img, &splatted, 2);
+        assert!(
+            mean < 0.05 && max <= 6,
+            "{mapping}: splat and raster differ: {mean} {max}"
+        );
+    }
+}

@@ -12,7 +12,8 @@ struct Camera {
     // lightmaps; wrap; emissive).
     lit: vec4<f32>,
     // The blend's fragment output (render.blend): (0 as written; 1 Multiply; 2 Mask; 3
-    // Premultiplied; the Mask's cutoff).
+    // Premultiplied; the Mask's cutoff; the texture's sample mapping: 0 Modulate, 1
+    // ModulateRgb, 2 OpacityFromRed).
     blend: vec4<f32>,
 }
 
@@ -166,7 +167,14 @@ fn shade(in: Out) -> vec4<f32> {
         let rho = max(length(gx * size), length(gy * size));
         let half_texel = min(0.5 * in.texels.zw, vec2<f32>(0.5 * exp2(ceil(log2(max(rho, 1.0))))));
         let at = in.texels.xy + clamp(local, half_texel, in.texels.zw - half_texel);
-        let texel = in.color * textureSampleGrad(sprite_texture, sprite_sampler, at / size, gx, gy);
+        let raw = textureSampleGrad(sprite_texture, sprite_sampler, at / size, gx, gy);
+        var mapped = raw;
+        if (camera.blend.z == 1.0) {
+            mapped = vec4<f32>(raw.rgb, 1.0);
+        } else if (camera.blend.z == 2.0) {
+            mapped = vec4<f32>(1.0, 1.0, 1.0, raw.r);
+        }
+        let texel = in.color * mapped;
         let maps = array<vec3<f32>, 2>(
             textureSampleGrad(lit_map_0, sprite_sampler, at / size, gx, gy).xyz,
             textureSampleGrad(lit_map_1, sprite_sampler, at / size, gx, gy).xyz,

@@ -163,7 +163,9 @@ pub struct ReferenceRenderer {
     /// (1 when lit; normals 0 flat, 1 sphere, 2 a normal map, 3 six-way lightmaps; wrap;
     /// emissive).
     lit: [f32; 4],
-    /// The blend's fragment output (0 as written, 1 Multiply, 2 Mask; the Mask's cutoff).
+    /// The blend's fragment output (0 as written, 1 Multiply, 2 Mask, 3 Premultiplied; the
+    /// Mask's cutoff; the texture's sample mapping: 0 Modulate, 1 ModulateRgb, 2
+    /// OpacityFromRed).
     blend: [f32; 4],
 }
 
@@ -314,11 +316,21 @@ impl ReferenceRenderer {
             strips,
             background,
             lit,
-            blend: match blend {
-                plume_compiler::schema::Blend::Multiply => [1.0, 0.0, 0.0, 0.0],
-                plume_compiler::schema::Blend::Mask(cutoff) => [2.0, cutoff as f32, 0.0, 0.0],
-                plume_compiler::schema::Blend::Premultiplied => [3.0, 0.0, 0.0, 0.0],
-                _ => [0.0; 4],
+            blend: {
+                use plume_compiler::schema::Blend;
+                use plume_compiler::texture::Sample;
+                let (mode, cutoff) = match blend {
+                    Blend::Multiply => (1.0, 0.0),
+                    Blend::Mask(cutoff) => (2.0, cutoff as f32),
+                    Blend::Premultiplied => (3.0, 0.0),
+                    Blend::Alpha | Blend::Additive => (0.0, 0.0),
+                };
+                let sample = match render.texture.as_ref().map(|t| t.sample) {
+                    Some(Sample::ModulateRgb) => 1.0,
+                    Some(Sample::OpacityFromRed) => 2.0,
+                    _ => 0.0,
+                };
+                [mode, cutoff, sample, 0.0]
             },
         })
     }

@@ -34,6 +34,43 @@ pub struct Texture {
     /// born together do not play in step (a flock's wing beats).
     #[serde(default)]
     pub random_start: bool,
+    /// What a texel does to the sprite's colour.
+    #[serde(default)]
+    pub sample: Sample,
+}
+
+/// What a texel does to the sprite's colour (`render.texture.sample`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum Sample {
+    /// The colour times the texel, RGBA.
+    #[default]
+    Modulate,
+    /// The colour's RGB times the texel's; its opacity as it is (the texel's alpha unused).
+    ModulateRgb,
+    /// The texel's red channel is the sprite's shape: the opacity times it, the colour as it
+    /// is (a greyscale mask).
+    OpacityFromRed,
+}
+
+impl Sample {
+    /// The texel `t` (WGSL) as this mapping makes it, to multiply the colour by; None for
+    /// `Modulate` (the texel itself).
+    fn mapped_wgsl(self) -> Option<&'static str> {
+        match self {
+            Sample::Modulate => None,
+            Sample::ModulateRgb => Some("vec4<f32>(t.rgb, 1.0)"),
+            Sample::OpacityFromRed => Some("vec4<f32>(1.0, 1.0, 1.0, t.r)"),
+        }
+    }
+
+    /// The f64 twin of [`Self::mapped_wgsl`]: what multiplies the colour for texel `t`.
+    pub fn mapped(self, t: [f64; 4]) -> [f64; 4] {
+        match self {
+            Sample::Modulate => t,
+            Sample::ModulateRgb => [t[0], t[1], t[2], 1.0],
+            Sample::OpacityFromRed => [1.0, 1.0, 1.0, t[0]],
+        }
+    }
 }
 
 fn one_frame() -> (u32, u32) {
@@ -84,6 +121,8 @@ pub struct TextureIr {
     pub play: Play,
     /// Whether each particle's loop starts at a frame drawn from its id (with `Rate`).
     pub random_start: bool,
+    /// What a texel does to the colour.
+    pub sample: Sample,
     /// Why the file could not be read, for an effect compiled to be stepped, not drawn
     /// (`CompileOptions::step_only`): the image is then a white stand-in, and a draw refuses
     /// with this message (the field's path, then what went wrong with the file).
@@ -157,6 +196,7 @@ impl TextureIr {
             rows,
             play: spec.play,
             random_start: spec.random_start,
+            sample: spec.sample,
             missing: None,
         })
     }
@@ -200,6 +240,7 @@ impl TextureIr {
             frames: (self.columns, self.rows),
             play: self.play,
             random_start: self.random_start,
+            sample: self.sample,
         }
     }
 
@@ -216,6 +257,7 @@ impl TextureIr {
             rows,
             play: spec.play,
             random_start: spec.random_start,
+            sample: spec.sample,
             missing: Some(missing),
         }
     }
@@ -353,7 +395,23 @@ impl TextureIr {
     /// The fragment shader takes those derivatives from the rasteriser (`dpdxFine`), the
     /// compute splat from its quad's projective map, so both sample the same mip levels.
     pub fn emit_texel_fn(&self, w: &mut Writer) {
-        Self::emit_texel_fn_of(w, "frame_texel", "sprite_texture");
+        match self.sample.mapped_wgsl() {
+            None => Self::emit_texel_fn_of(w, "frame_texel", "sprite_texture"),
+            Some(mapped) => {
+                Self::emit_texel_fn_of(w, "frame_texel_raw", "sprite_texture");
+                w.comment(format!(
+                    "The texel as render.texture.sample ({:?}) maps it.",
+                    self.sample
+                ));
+                w.block(
+                    "fn frame_texel(cell: vec2<f32>, quad: vec2<f32>, gx: vec2<f32>, gy: vec2<f32>) -> vec4<f32>",
+                    |w| {
+                        w.line("let t = frame_texel_raw(cell, quad, gx, gy);");
+                        w.line(format!("return {mapped};"));
+                    },
+                );
+            }
+        }
     }
 
     /// Emits `name(cell, quad, gx, gy)`, [`Self::emit_texel_fn`]'s function for another atlas
@@ -446,6 +504,7 @@ mod tests {
             rows,
             play,
             random_start: false,
+            sample: Sample::Modulate,
             missing: None,
         }
     }
@@ -476,6 +535,7 @@ mod tests {
     fn a_random_start_shifts_each_loop_by_its_own_frame() {
         let t = TextureIr {
             random_start: true,
+            sample: Sample::Modulate,
             ..atlas(4, 1, Play::Rate(10.0))
         };
         let mut starts = [0; 4];
