@@ -48,6 +48,9 @@ fn spray([color_by, alpha_by, size_by]: [&str; 3], state: State) -> Effect {
 const HUE: &str = r#"Some("hsv(rand(0), 0.8, 1.0) * (1.0 + 0.5 * age / max(life, dt))")"#;
 const GROWTH: &str = r#"Some("(0.5 + rand(1)) * (1.0 + age)")"#;
 const FLICKER: &str = r#"Some("0.3 + 0.7 * rand(2)")"#;
+/// A colour and an opacity that change with the frame's time (s), the same for every particle.
+const PULSE: &str = r#"Some("vec3(0.5 + 0.5 * sin(6.0 * t), 0.5 + 0.5 * cos(4.0 * t), 1.0)")"#;
+const BLINK: &str = r#"Some("0.55 + 0.45 * sin(9.0 * t)")"#;
 const SPEED: &str =
     r#"Some("mix(vec3(1.0, 0.3, 0.1), vec3(0.2, 0.5, 1.0), clamp(length(v) / 6.0, 0.0, 1.0))")"#;
 
@@ -75,6 +78,16 @@ fn the_draws_colour_and_size_by_expression_as_the_reference_drawing_does() {
         (
             "colour from speed, stateless",
             [SPEED, "None", "None"],
+            State::Stateless,
+        ),
+        (
+            "colour and opacity over the frame's time, stateful",
+            [PULSE, BLINK, "None"],
+            State::Stateful,
+        ),
+        (
+            "colour and opacity over the frame's time, stateless",
+            [PULSE, BLINK, "None"],
             State::Stateless,
         ),
     ] {
@@ -165,4 +178,29 @@ fn color_t_reads_the_colour_stops_at_an_expressions_t() {
         .iter()
         .fold((1.0f64, 0.0f64), |(lo, hi), &t| (lo.min(t), hi.max(t)));
     assert!(lo < 0.15 && hi > 0.85, "t from {lo} to {hi}");
+}
+
+#[test]
+fn t_is_the_time_of_the_frame_drawn() {
+    // Every sprite's colour follows the frame's time: drawn after 40 and after 55 steps, the
+    // same particles' mean colour moves as (0.5 + 0.5 sin 6t, 0.5 + 0.5 cos 4t) does.
+    let mut sim = spray([PULSE, "None", "None"], State::Stateful);
+    let mean = |sim: &Effect| {
+        let (img, _) = draw_and_reference(sim, SIDE);
+        let lit: Vec<&[u8]> = img.chunks(4).filter(|p| p[2] > 60).collect();
+        let avg = |c: usize| lit.iter().map(|p| f64::from(p[c])).sum::<f64>() / lit.len() as f64;
+        // Red and green relative to blue (1.0 in the colour: the same falloff and blending).
+        (avg(0) / avg(2), avg(1) / avg(2))
+    };
+    let first = mean(&sim);
+    sim.run(15, |_| {}).unwrap();
+    let second = mean(&sim);
+    let want = |t: f64| (0.5 + 0.5 * (6.0 * t).sin(), 0.5 + 0.5 * (4.0 * t).cos());
+    for (got, t) in [(first, 0.8), (second, 1.1)] {
+        let w = want(t);
+        assert!(
+            (got.0 - w.0).abs() < 0.06 && (got.1 - w.1).abs() < 0.06,
+            "at t = {t}: red and green over blue {got:?}, want {w:?}"
+        );
+    }
 }

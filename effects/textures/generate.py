@@ -17,6 +17,8 @@ where a shape wants shading of its own.
   lets through 0.15 + 0.85 max(n . d, 0) of a light from direction d; the back, where light
   comes through the puff, 0.15 + 0.6 (1 - alpha). Opaque.
 - snowflake.png: one six-armed flake with side branches.
+- cloud.png: a soft, lumpy cloud as a greyscale mask: its density in red, green and blue,
+  opaque (for `sample: OpacityFromRed`, where the red channel is the sprite's shape).
 """
 
 import math
@@ -222,6 +224,16 @@ def main():
     write_png(os.path.join(HERE, "smoke_lbf.png"), 4 * size, 4 * size, six_way(False))
     write_png(os.path.join(HERE, "snowflake.png"), size, size,
               lambda x, y: (1.0, 1.0, 1.0, supersampled(snowflake, x, y, size)))
+
+    def cloud(x, y):
+        u = ((x + 0.5) / size) * 2.0 - 1.0
+        v = ((y + 0.5) / size) * 2.0 - 1.0
+        r = math.sqrt(u * u + v * v)
+        lumps = fbm(u * 2.5 + 7.0, v * 2.5 + 3.0, 41)
+        density = max(0.0, min(1.0, (1.0 - r * (0.8 + 0.6 * lumps)) * 1.8))
+        return (density, density, density, 1.0)
+
+    write_png(os.path.join(HERE, "cloud.png"), size, size, cloud)
 
 
 if __name__ == "__main__":

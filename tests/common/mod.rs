@@ -79,7 +79,7 @@ pub fn draw_and_reference(sim: &Effect, side: u32) -> (Vec<u8>, Vec<u8>) {
 
 /// [`draw_and_reference`] of group `g` of `sim` alone, from the effect's camera.
 pub fn draw_group_and_reference(sim: &Effect, g: usize, side: u32) -> (Vec<u8>, Vec<u8>) {
-    use plume::runtime::oracle::{group_renderer, sprites, ReferenceRenderer};
+    use plume::runtime::oracle::{group_renderer, sprites_at, ReferenceRenderer};
     use plume::runtime::outputs::Offscreen;
     let ir = &sim.group_compiled(g).unwrap().ir;
     // The group's own camera (the top-level one's, for group 0) on a square image.
@@ -89,6 +89,8 @@ pub fn draw_group_and_reference(sim: &Effect, g: usize, side: u32) -> (Vec<u8>, 
     let gpu_img = target.render(sim, &renderer, &camera).unwrap();
     let reference = ReferenceRenderer::new(sim.gpu(), side, side, ir).unwrap();
     let records = sim.group_records(g).unwrap();
+    // The frame's time, as the draw's `t` reads it.
+    let time = sim.steps_done() as f64 * ir.dt;
     let cpu_img = match ir.render.ribbon {
         // Ribbons joining particles: the chains of the GPU's table, placed in f64.
         Some(_) => {
@@ -97,16 +99,21 @@ pub fn draw_group_and_reference(sim: &Effect, g: usize, side: u32) -> (Vec<u8>, 
                 .into_iter()
                 .map(|e| e.map(|(id, link, _)| (id, link)))
                 .collect();
-            let ribbons = plume::runtime::oracle::ribbon_strips(&records, &table, ir, &camera);
+            let ribbons =
+                plume::runtime::oracle::ribbon_strips(&records, &table, ir, (&camera, time));
             reference.draw_with_strips(&ribbons, &[], &camera)
         }
         // Trails (the top-level group's, which read_trails reads) before the sprites.
         None if ir.render.trail.is_some() && g == 0 => {
             let trails = plume::runtime::oracle::read_trails(sim).unwrap();
             let ribbons = plume::runtime::oracle::trail_strips(&records, &trails, ir, camera.view);
-            reference.draw_with_strips(&ribbons, &sprites(&records, ir, &camera, false), &camera)
+            reference.draw_with_strips(
+                &ribbons,
+                &sprites_at(&records, ir, &camera, false, time),
+                &camera,
+            )
         }
-        None => reference.draw(&sprites(&records, ir, &camera, false), &camera),
+        None => reference.draw(&sprites_at(&records, ir, &camera, false, time), &camera),
     }
     .unwrap();
     (gpu_img, cpu_img)

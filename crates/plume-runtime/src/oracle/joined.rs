@@ -37,7 +37,7 @@ pub fn read_ribbon_table(effect: &Effect, g: usize) -> Result<Vec<GpuEntry>, Run
 }
 
 /// The joined ribbons of the particles `records` (all of one group, live), whose spawns wrote
-/// `table`, as the GPU's `vs_ribbon` draws them for `camera`: a triangle list, two triangles a
+/// `table`, as the GPU's `vs_ribbon` draws them for `camera` at simulation time `time`: a triangle list, two triangles a
 /// segment. A point's half width is its sprite's half size, its colour the sprite's; its
 /// direction runs from the point before it to the point after it in its chain (itself at an
 /// end), and its vertices lie half a width to either side across that direction and the line
@@ -46,7 +46,7 @@ pub fn ribbon_strips(
     records: &[ParticleRecord],
     table: &Table,
     ir: &EffectIr,
-    camera: &Camera,
+    (camera, time): (&Camera, f64),
 ) -> Vec<StripVertex> {
     let Some(ribbon) = &ir.render.ribbon else {
         return Vec::new();
@@ -55,7 +55,8 @@ pub fn ribbon_strips(
     let shown: HashMap<u32, (DVec3, f64, [f32; 4])> = records
         .iter()
         .filter_map(|r| {
-            let s = crate::oracle::sprites(std::slice::from_ref(r), ir, camera, false).pop()?;
+            let s = crate::oracle::sprites_at(std::slice::from_ref(r), ir, camera, false, time)
+                .pop()?;
             let half = f64::from(Vec3::from(s.half_x).length());
             (s.color[3] > 0.0 && half > 0.0).then_some((r.id, (r.position, half, s.color)))
         })

@@ -19,6 +19,6 @@ pub use inspect::{
     records_by_slot,
 };
 pub use joined::{read_ribbon_table, ribbon_strips};
-pub use sprites::{sprites, ReferenceRenderer, Sprite};
+pub use sprites::{sprites, sprites_at, ReferenceRenderer, Sprite};
 pub use strips::{trail_strips, StripVertex};
 pub use trails::read_trails;

@@ -40,12 +40,30 @@ pub struct Sprite {
 /// (age / lifetime; 0 for particles that never die), the quad oriented as `render.orient` says
 /// for `camera` (its view, and for sizes in the image, its projection) and turned as
 /// `render.rotation` says, the flipbook frame for its age; back to front from the
-/// effect's camera when `sort`. Non-finite particles are skipped.
+/// effect's camera when `sort`. Non-finite particles are skipped. For a look whose
+/// expressions read the time `t`, use [`sprites_at`].
 pub fn sprites(
     records: &[ParticleRecord],
     ir: &EffectIr,
     camera_used: &crate::Camera,
     sort: bool,
+) -> Vec<Sprite> {
+    assert!(
+        !ir.render.by.reads_time(),
+        "{}: its look reads the time: draw it with sprites_at and the frame's time",
+        ir.name
+    );
+    sprites_at(records, ir, camera_used, sort, 0.0)
+}
+
+/// [`sprites`] of a frame at simulation time `time` (s: steps done × dt), which the look's
+/// expressions read as `t`.
+pub fn sprites_at(
+    records: &[ParticleRecord],
+    ir: &EffectIr,
+    camera_used: &crate::Camera,
+    sort: bool,
+    time: f64,
 ) -> Vec<Sprite> {
     let (render, camera) = (&ir.render, &ir.camera);
     let proj = camera_used.proj.as_dmat4();
@@ -73,6 +91,8 @@ pub fn sprites(
                 attrs: ir
                     .attributes
                     .from_words(ir.kept_attributes(), &r.attributes),
+                // The GPU's f32(steps) * dt: steps are whole, so their f32 is exact.
+                t: time,
             };
             let by = render.by.color_factor(&seen, ir.seed_mix) * r.tint;
             let c = render.color_at(render.by.color_t_at(&seen, ir.seed_mix).unwrap_or(t));

@@ -7,7 +7,7 @@
 //!
 //! They read the particle as the draw sees it: its position `x`, velocity `v`, `age` and
 //! `life` (seconds, whole steps as the kernels count them; `life` 0 for a particle that never
-//! dies), `rand(k)` and the draws built on it, the params (as the file gives them: the draw
+//! dies), the frame's time `t` (steps done × dt), `rand(k)` and the draws built on it, the params (as the file gives them: the draw
 //! reads no live params) and `dt`. A colour factor is kept within [0, [`COLOR_MOST`]], an
 //! opacity factor within [0, 1] and a size factor at least 0, so none can make a NaN, a
 //! negative size, an alpha past 1 or more light than the compute renderer's fixed-point sums
@@ -23,7 +23,7 @@ use crate::expr::eval::{eval, Inputs};
 use crate::expr::{self, Expr, Names, Ty, Var};
 use crate::features::looks::COLOR_MOST;
 
-const VARS: &[Var] = &[Var::X, Var::V, Var::Age, Var::Life];
+const VARS: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life];
 
 /// What the draw multiplies a particle's colour and size by.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -67,6 +67,8 @@ pub struct Seen {
     pub id: u32,
     /// Its attributes' values (`features::attributes`), by index.
     pub attrs: crate::expr::eval::Attrs,
+    /// The simulation time of the frame drawn (s): steps done × dt.
+    pub t: f64,
 }
 
 fn compile(text: &str, ty: Ty, role: &str, names: Names) -> Result<Expr, expr::ExprError> {
@@ -130,6 +132,11 @@ impl LookBy {
             .any(|e| e.reads(Var::Age) || e.reads(Var::Life))
     }
 
+    /// Whether any reads the time (the functions then take it).
+    pub fn reads_time(&self) -> bool {
+        self.exprs().any(|e| e.reads(Var::T))
+    }
+
     /// Whether any draws random numbers.
     pub fn draws_random(&self) -> bool {
         self.exprs().any(|e| e.draws_random())
@@ -185,11 +192,16 @@ impl LookBy {
                 format!("clamp(floor(VALUE), 0.0, {})", f32_lit(FRAME_MOST)),
             ),
         ];
+        // The time, only where an expression reads it (the functions are unchanged otherwise).
+        let t = match self.reads_time() {
+            true => ", t: f32",
+            false => "",
+        };
         for (e, name, ty, bounded) in fns {
             let Some(e) = e else { continue };
             w.comment(format!("render.{name}: {bounded}, VALUE the expression."));
             w.block(
-                format!("fn {name}(x: vec3<f32>, v: vec3<f32>, age: f32, ctx_life: f32, ctx_id: u32{attrs}) -> {ty}"),
+                format!("fn {name}(x: vec3<f32>, v: vec3<f32>, age: f32, ctx_life: f32, ctx_id: u32{attrs}{t}) -> {ty}"),
                 |w| {
                     w.line(format!("let cx = clamp(x, vec3<f32>(-{bound}), vec3<f32>({bound}));"));
                     w.line(format!("let cv = clamp(v, vec3<f32>(-{bound}), vec3<f32>({bound}));"));
@@ -209,6 +221,7 @@ impl LookBy {
             seed_mix,
             id: p.id,
             attrs: p.attrs,
+            t: p.t,
             ..Inputs::default()
         }
     }

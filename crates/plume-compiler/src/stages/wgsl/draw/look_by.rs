@@ -47,7 +47,12 @@ pub(super) fn emit_by_args(
         let fields = layout.user_fields(i).unwrap_or(&[]);
         fields.iter().map(|f| format!("p.{f}")).collect()
     });
-    Some(format!("x, {v}, by_age.x, by_age.y, {id}{attrs}"))
+    // The frame's time: the steps done in f32 (exact below 2^24 steps) times dt.
+    let t = match by.reads_time() {
+        true => format!(", f32(draw.steps) * {dt}"),
+        false => String::new(),
+    };
+    Some(format!("x, {v}, by_age.x, by_age.y, {id}{attrs}{t}"))
 }
 
 /// Multiplies `s.color`'s RGB and alpha and `s.size` (and `s.size_y`) inside `sprite_at` by the
