@@ -559,10 +559,31 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
             }
         },
     );
+    // What a texel does; a frame by expression (on the atlas); and the group drawn as ribbons
+    // (`Wild` only: they refuse trails, textures and a depth sort, which the other flavours
+    // would have accepted; the render fields they refuse are then left out).
+    let sample = prop::sample::select(vec!["Modulate", "ModulateRgb", "OpacityFromRed"]);
+    let ribbon = prop::option::of((
+        count(f, 2, 256),
+        count(f, 1, 64),
+        prop::option::of(count(f, 1, 50)),
+    ))
+    .prop_map(move |r| match r {
+        Some((points, rows, split)) if f == Flavor::Wild => Some(format!(
+            "Some(Ribbon(points: {points}, ribbons: {rows}, split: {}))",
+            split.map_or("None".to_string(), |n| format!("Some({n})"))
+        )),
+        _ => None,
+    });
+    let extra = (sample, any::<bool>(), ribbon);
     (
         stops,
         sizes,
-        prop::sample::select(vec!["Alpha", "Additive"]),
+        prop_oneof![
+            prop::sample::select(vec!["Alpha", "Additive", "Multiply", "Premultiplied"])
+                .prop_map(str::to_string),
+            num(f, 0.0, 1.0).prop_map(|c| format!("Mask({c})")),
+        ],
         vec3(f, 0.0, 1.0),
         orient,
         (
@@ -575,9 +596,9 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
             alphas,
             palette,
         ),
-        (lit, light),
+        (lit, light, extra),
     )
-        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow, trail, heights, alphas, palette), (lit, light))| {
+        .prop_map(|(c, s, b, bg, o, (t, r, soft, glow, trail, heights, alphas, palette), (lit, light, (sample, by_frame, ribbon)))| {
             let list = |stops: Option<Vec<String>>| {
                 stops.map_or("None".to_string(), |s| format!("Some([{}])", s.join(", ")))
             };
@@ -590,8 +611,26 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
                 Some(r) if !o.starts_with("Velocity") => r,
                 _ => "None".to_string(),
             };
+            // The texture's sample mapping, and on the atlas a frame from the age and time.
+            let frame_by = match by_frame && t.contains("frames") {
+                true => r#"Some("age * 4.0 + t")"#,
+                false => "None",
+            };
+            let t = match t.as_str() {
+                "None" => t,
+                _ => format!("{}, sample: {sample}))", t.trim_end_matches("))")),
+            };
+            let looks = match ribbon {
+                // A ribbon draws no trail, texture, lit shading, turned sprite or height.
+                Some(ribbon) => format!(
+                    "orient: Camera, texture: None, rotation: None, soft: {soft}, glow: {glow}, trail: None, size_y: None, alpha: {alphas}, palette: {palette}, lit: None, light: {light}, ribbon: {ribbon}"
+                ),
+                None => format!(
+                    "orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}, trail: {trail}, size_y: {heights}, alpha: {alphas}, palette: {palette}, lit: {lit}, light: {light}, frame_by: {frame_by}"
+                ),
+            };
             format!(
-                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}, trail: {trail}, size_y: {heights}, alpha: {alphas}, palette: {palette}, lit: {lit}, light: {light}),",
+                "render: Render(color: [{}], size: [{}], blend: {b}, background: {bg}, {looks}),",
                 c.join(", "),
                 s.join(", ")
             )

@@ -1,16 +1,7 @@
-// Ribbons whose vertices the CPU placed (in f64, world space): the reference drawing of
+// Strips whose vertices the CPU placed (in f64, world space): the reference drawing of
 // render.trail and render.ribbon. Not generated: the same for every effect.
 
-// The reference sprite shader's camera (reference_sprite.wgsl), whose blend terms it reads.
-struct Camera {
-    view: mat4x4<f32>,
-    proj: mat4x4<f32>,
-    eye: vec4<f32>,
-    lit: vec4<f32>,
-    blend: vec4<f32>,
-}
-
-@group(0) @binding(0) var<uniform> camera: Camera;
+// The camera uniform and blend_out: reference_camera.wgsl, put before this shader.
 
 struct Out {
     @builtin(position) clip: vec4<f32>,
@@ -25,20 +16,6 @@ fn vs(@location(0) position: vec3<f32>, @location(1) across: f32, @location(2) c
     out.across = across;
     out.color = color;
     return out;
-}
-
-// What a fragment writes for the blend, as reference_sprite.wgsl's blend_out.
-fn blend_out(c: vec4<f32>) -> vec4<f32> {
-    if (camera.blend.x == 1.0) {
-        return vec4<f32>(c.rgb * c.a, c.a);
-    }
-    if (camera.blend.x == 2.0) {
-        if (c.a < camera.blend.y) {
-            discard;
-        }
-        return vec4<f32>(c.rgb, 1.0);
-    }
-    return c;
 }
 
 @fragment

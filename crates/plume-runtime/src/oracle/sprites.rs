@@ -199,6 +199,7 @@ impl ReferenceRenderer {
         let device = &gpu.device;
         let source = [
             include_str!("../outputs/world_lights.wgsl"),
+            include_str!("reference_camera.wgsl"),
             include_str!("reference_sprite.wgsl"),
         ]
         .concat();

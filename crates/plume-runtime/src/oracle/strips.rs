@@ -97,11 +97,12 @@ impl StripPipeline {
         camera: &wgpu::Buffer,
     ) -> Self {
         let device = &gpu.device;
-        let module = crate::device::gpu::shader_module(
-            device,
-            "reference strips",
+        let source = [
+            include_str!("reference_camera.wgsl"),
             include_str!("reference_strip.wgsl"),
-        );
+        ]
+        .concat();
+        let module = crate::device::gpu::shader_module(device, "reference strips", source);
         let pipeline = vertex_pipeline(
             gpu,
             &module,
