@@ -1,7 +1,8 @@
 //! `Multiply`, `Mask` and `Premultiplied` blending (`render.blend`) in the raster draw
 //! (llvmpipe in CI): a sprite multiplies what lies behind by its colour as far as its opacity
 //! goes, a cut-out is its colour, opaque, where its opacity reaches the cutoff and nothing
-//! elsewhere, a premultiplied colour adds its light and dims what is behind by its opacity;
+//! elsewhere, a premultiplied colour adds its light and dims what is behind by its opacity,
+//! an opaque one covers its whole disc;
 //! all draw what the CPU-fed reference drawing draws; the compute splat leaves them to the
 //! raster draw.
 
@@ -130,8 +131,31 @@ fn a_mask_draws_its_colour_opaque_where_the_opacity_reaches_the_cutoff() {
 }
 
 #[test]
+fn an_opaque_sprite_covers_its_whole_disc_with_its_colour() {
+    // Half opacity, unused: the colour itself out to the rim (r = 0.9 of the radius), where
+    // the round dot's falloff would have faded an alpha-blended sprite to nearly nothing.
+    let (img, reference) = drawn(&one("Opaque", "(0.2, 0.6, 1.0, 0.5)"));
+    let radius = 0.5 * SIDE as f64 * (1.0 / (5.0 * (25f64).to_radians().tan()));
+    let want = [0.2, 0.6, 1.0].map(byte);
+    for r in [0.0, 0.5, 0.9] {
+        let at = pixel(&img, SIDE / 2 + (r * radius) as u32, SIDE / 2);
+        near(at, want, &format!("r = {r}"));
+    }
+    near(
+        pixel(&img, SIDE / 2 + (1.1 * radius) as u32, SIDE / 2),
+        [byte(0.8); 3],
+        "outside",
+    );
+    let (mean, _, over) = differences(&img, &reference, 2);
+    assert!(
+        mean < 0.05 && over < 40,
+        "GPU and reference differ: {mean} {over}"
+    );
+}
+
+#[test]
 fn many_multiplied_and_masked_sprites_draw_as_the_reference_does() {
-    for blend in ["Multiply", "Mask(0.3)", "Premultiplied"] {
+    for blend in ["Multiply", "Mask(0.3)", "Premultiplied", "Opaque"] {
         let source = format!(
             r#"Effect(
     name: "many",

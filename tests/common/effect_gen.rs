@@ -580,7 +580,7 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
         stops,
         sizes,
         prop_oneof![
-            prop::sample::select(vec!["Alpha", "Additive", "Multiply", "Premultiplied"])
+            prop::sample::select(vec!["Alpha", "Additive", "Multiply", "Premultiplied", "Opaque"])
                 .prop_map(str::to_string),
             num(f, 0.0, 1.0).prop_map(|c| format!("Mask({c})")),
         ],

@@ -422,7 +422,7 @@ fn alive_instances(
 /// The blend state of an effect's `Blend`: non-premultiplied "over" for `Alpha`; for
 /// `Additive`, src · α added to the target (alpha composited over, so it stays 1); for
 /// `Multiply` (whose fragments write rgb · α), target · (src + 1 − α); for `Mask` (opaque
-/// fragments or none), the fragment replaces the target; for `Premultiplied` (fragments of
+/// fragments or none) and `Opaque`, the fragment replaces the target; for `Premultiplied` (fragments of
 /// rgb · coverage), src + target · (1 − α).
 pub(crate) fn blend_state(blend: Blend) -> wgpu::BlendState {
     match blend {
@@ -438,7 +438,7 @@ pub(crate) fn blend_state(blend: Blend) -> wgpu::BlendState {
                 operation: wgpu::BlendOperation::Add,
             },
         },
-        Blend::Mask(_) => wgpu::BlendState::REPLACE,
+        Blend::Mask(_) | Blend::Opaque => wgpu::BlendState::REPLACE,
         Blend::Premultiplied => wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING,
         Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
         Blend::Additive => wgpu::BlendState {

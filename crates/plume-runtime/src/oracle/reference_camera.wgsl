@@ -12,7 +12,7 @@ struct Camera {
     // lightmaps; wrap; emissive).
     lit: vec4<f32>,
     // The blend's fragment output (render.blend): (0 as written; 1 Multiply; 2 Mask; 3
-    // Premultiplied; the Mask's cutoff; the texture's sample mapping: 0 Modulate, 1
+    // Premultiplied; 4 Opaque; the Mask's cutoff; the texture's sample mapping: 0 Modulate, 1
     // ModulateRgb, 2 OpacityFromRed).
     blend: vec4<f32>,
 }
@@ -20,7 +20,7 @@ struct Camera {
 @group(0) @binding(0) var<uniform> camera: Camera;
 
 // What a fragment of colour c (straight alpha) writes for the blend: Multiply, the colour
-// times its opacity; Mask, the colour opaque, or nothing below the cutoff.
+// times its opacity; Mask, the colour opaque, or nothing below the cutoff; Opaque, the colour.
 fn blend_out(c: vec4<f32>) -> vec4<f32> {
     if (camera.blend.x == 1.0) {
         return vec4<f32>(c.rgb * c.a, c.a);
@@ -29,6 +29,9 @@ fn blend_out(c: vec4<f32>) -> vec4<f32> {
         if (c.a < camera.blend.y) {
             discard;
         }
+        return vec4<f32>(c.rgb, 1.0);
+    }
+    if (camera.blend.x == 4.0) {
         return vec4<f32>(c.rgb, 1.0);
     }
     return c;

@@ -183,7 +183,8 @@ pub struct ReferenceRenderer {
     /// (1 when lit; normals 0 flat, 1 sphere, 2 a normal map, 3 six-way lightmaps; wrap;
     /// emissive).
     lit: [f32; 4],
-    /// The blend's fragment output (0 as written, 1 Multiply, 2 Mask, 3 Premultiplied; the
+    /// The blend's fragment output (0 as written, 1 Multiply, 2 Mask, 3 Premultiplied, 4
+    /// Opaque; the
     /// Mask's cutoff; the texture's sample mapping: 0 Modulate, 1 ModulateRgb, 2
     /// OpacityFromRed).
     blend: [f32; 4],
@@ -344,6 +345,7 @@ impl ReferenceRenderer {
                     Blend::Multiply => (1.0, 0.0),
                     Blend::Mask(cutoff) => (2.0, cutoff as f32),
                     Blend::Premultiplied => (3.0, 0.0),
+                    Blend::Opaque => (4.0, 0.0),
                     Blend::Alpha | Blend::Additive => (0.0, 0.0),
                 };
                 let sample = match render.texture.as_ref().map(|t| t.sample) {

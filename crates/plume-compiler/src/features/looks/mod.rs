@@ -36,6 +36,10 @@ pub enum Blend {
     /// is drawn opaque (leaves, paper, hard-edged sparks). Depth is not written: overlapping
     /// cut-outs need `sort: true` to show the nearest.
     Mask(f64),
+    /// Opaque: the colour replaces what lies behind wherever the sprite covers (the round
+    /// dot's disc, a texture's whole frame), its opacity unused. Depth is not written:
+    /// overlapping opaque sprites need `sort: true` to show the nearest.
+    Opaque,
     /// The colour is premultiplied: rgb is added as it is and what lies behind is dimmed by
     /// the opacity, rgb + behind · (1 − a), each times the sprite's coverage; opacity 0 adds
     /// light as `Additive` does, and one sprite can glow at its core and cover at its rim.
@@ -46,7 +50,7 @@ impl Blend {
     /// Whether the fragment's colour is changed before blending ([`Self::emit_blend_out`];
     /// `Premultiplied` shades its coverage apart from its opacity instead).
     pub fn changes_output(self) -> bool {
-        matches!(self, Blend::Multiply | Blend::Mask(_))
+        matches!(self, Blend::Multiply | Blend::Mask(_) | Blend::Opaque)
     }
 
     /// Whether a sprite of colour `rgba` draws nothing: alpha 0 but for `Premultiplied`, where
@@ -79,6 +83,7 @@ impl Blend {
                 );
                 w.line("return vec4<f32>(c.rgb, 1.0);");
             }
+            Blend::Opaque => w.line("return vec4<f32>(c.rgb, 1.0);"),
             _ => w.line("return vec4<f32>(c.rgb * c.a, c.a);"),
         });
     }
