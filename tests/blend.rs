@@ -54,58 +54,54 @@ fn drawn(source: &str) -> (Vec<u8>, Vec<u8>) {
     draw_and_reference(&sim, SIDE)
 }
 
+/// Draws one sprite of `color` (RON) blended by `blend` and checks its centre (where the
+/// round dot's falloff is 1) against `want` (0 to 1) in the GPU's image and the reference's,
+/// a corner against the background, and the two images against each other.
+fn assert_centre(blend: &str, color: &str, want: [f64; 3]) {
+    let (img, reference) = drawn(&one(blend, color));
+    let want = want.map(byte);
+    let what = format!("{blend} {color}");
+    near(
+        pixel(&img, SIDE / 2, SIDE / 2),
+        want,
+        &format!("{what} at the centre"),
+    );
+    near(
+        pixel(&reference, SIDE / 2, SIDE / 2),
+        want,
+        &format!("{what}, the reference"),
+    );
+    near(
+        pixel(&img, 5, 5),
+        [byte(0.8); 3],
+        &format!("{what}, a corner"),
+    );
+    let (mean, max, _) = differences(&img, &reference, 1);
+    assert!(
+        mean < 0.01 && max <= 2,
+        "{what}: GPU and reference differ: {mean} {max}"
+    );
+}
+
 #[test]
 fn multiply_darkens_what_lies_behind_by_the_colour_as_far_as_the_opacity_goes() {
-    // At the sprite's centre the round dot's falloff is 1: behind · (1 − a + a · rgb).
+    // behind · (1 − a + a · rgb).
     for alpha in [1.0, 0.5] {
-        let (img, reference) = drawn(&one("Multiply", &format!("(0.5, 0.25, 1.0, {alpha})")));
-        let want = [0.5, 0.25, 1.0].map(|c| byte(0.8 * (1.0 - alpha + alpha * c)));
-        near(pixel(&img, SIDE / 2, SIDE / 2), want, "the centre");
-        near(
-            pixel(&reference, SIDE / 2, SIDE / 2),
-            want,
-            "the reference's centre",
-        );
-        // Outside the sprite, the background.
-        near(pixel(&img, 5, 5), [byte(0.8); 3], "a corner");
-        let (mean, max, _) = differences(&img, &reference, 1);
-        assert!(
-            mean < 0.01 && max <= 2,
-            "GPU and reference differ: {mean} {max}"
-        );
+        let want = [0.5, 0.25, 1.0].map(|c| 0.8 * (1.0 - alpha + alpha * c));
+        assert_centre("Multiply", &format!("(0.5, 0.25, 1.0, {alpha})"), want);
     }
 }
 
 #[test]
 fn a_premultiplied_colour_adds_its_light_and_dims_behind_by_its_opacity() {
-    // At the centre (coverage 1): rgb + behind · (1 − a). Opacity 0 is light alone, which an
-    // alpha blend would not draw at all.
-    for (color, want) in [
-        (
-            (0.6, 0.3, 0.0, 0.0),
-            [0.8 + 0.6, 0.8 + 0.3, 0.8].map(|x: f64| x.min(1.0)),
-        ),
-        ((0.3, 0.1, 0.0, 0.5), [0.3 + 0.4, 0.1 + 0.4, 0.4]),
-    ] {
-        let (img, reference) = drawn(&one("Premultiplied", &format!("{color:?}")));
-        let want = want.map(byte);
-        near(
-            pixel(&img, SIDE / 2, SIDE / 2),
-            want,
-            &format!("{color:?} at the centre"),
-        );
-        near(
-            pixel(&reference, SIDE / 2, SIDE / 2),
-            want,
-            "the reference's centre",
-        );
-        near(pixel(&img, 5, 5), [byte(0.8); 3], "a corner");
-        let (mean, max, _) = differences(&img, &reference, 1);
-        assert!(
-            mean < 0.01 && max <= 2,
-            "GPU and reference differ: {mean} {max}"
-        );
-    }
+    // rgb + behind · (1 − a). Opacity 0 is light alone, which an alpha blend would not draw.
+    let light = [0.8 + 0.6, 0.8 + 0.3, 0.8].map(|x: f64| x.min(1.0));
+    assert_centre("Premultiplied", "(0.6, 0.3, 0.0, 0.0)", light);
+    assert_centre(
+        "Premultiplied",
+        "(0.3, 0.1, 0.0, 0.5)",
+        [0.3 + 0.4, 0.1 + 0.4, 0.4],
+    );
 }
 
 #[test]
