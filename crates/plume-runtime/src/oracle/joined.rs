@@ -14,7 +14,7 @@ use plume_compiler::ribbon::{Link, Table};
 
 use crate::draw::camera::Camera;
 use crate::error::RuntimeError;
-use crate::oracle::strips::StripVertex;
+use crate::oracle::strips::{push_triangles, StripVertex};
 use crate::sim::effect::Effect;
 
 /// One entry of the GPU's ribbon table: the id and link of the particle that wrote it last,
@@ -66,34 +66,12 @@ pub fn ribbon_strips(
         .as_dmat4()
         .inverse()
         .transform_point3(DVec3::ZERO);
-    let f32s = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
     let mut out = Vec::new();
     for chain in ribbon.chains(table, &|id| shown.contains_key(&id)) {
         let points: Vec<(DVec3, f64, [f32; 4])> = chain.iter().map(|id| shown[id]).collect();
-        let n = points.len();
-        let sides: Vec<[StripVertex; 2]> = (0..n)
-            .map(|j| {
-                let (here, half, color) = points[j];
-                let before = points[j.saturating_sub(1)].0;
-                let after = points[(j + 1).min(n - 1)].0;
-                let side = (before - after).cross(here - eye);
-                let len2 = side.length_squared();
-                let offset = if len2 > 1e-30 {
-                    side * (half / len2.sqrt())
-                } else {
-                    DVec3::ZERO
-                };
-                [-1.0, 1.0].map(|sign| StripVertex {
-                    position: f32s(here + sign * offset),
-                    across: sign as f32,
-                    color,
-                })
-            })
-            .collect();
-        for pair in sides.windows(2) {
-            let ([a, b], [c, d]) = (pair[0], pair[1]);
-            out.extend([a, b, c, b, c, d]);
-        }
+        let centres: Vec<DVec3> = points.iter().map(|p| p.0).collect();
+        let sides = plume_compiler::trail::strip_sides(&centres, eye, &|j| points[j].1);
+        push_triangles(&mut out, &sides, &|j| points[j].2);
     }
     out
 }

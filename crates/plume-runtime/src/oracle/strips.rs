@@ -46,7 +46,6 @@ pub fn trail_strips(
     // The eye: where the view matrix takes the origin from.
     let eye = view.as_dmat4().inverse().transform_point3(DVec3::ZERO);
     let by_id: HashMap<u32, &Vec<DVec3>> = trails.iter().map(|(id, p)| (*id, p)).collect();
-    let f32s = |v: DVec3| [v.x as f32, v.y as f32, v.z as f32];
     let mut out = Vec::new();
     for r in records {
         let Some(points) = by_id.get(&r.id) else {
@@ -62,25 +61,36 @@ pub fn trail_strips(
         let c = ir.render.color_at(life);
         let particle = [c[0] * r.tint.x, c[1] * r.tint.y, c[2] * r.tint.z, c[3]];
         let sides = trail.strip_vertices(points, eye, 1.0);
-        let vertex = |j: usize, side: usize| {
+        push_triangles(&mut out, &sides, &|j| {
             let tint = trail.color_at(j as f64 / f64::from(trail.ring()));
-            StripVertex {
-                position: f32s(sides[j][side]),
-                across: if side == 0 { -1.0 } else { 1.0 },
-                color: std::array::from_fn(|c| (particle[c] * tint[c]) as f32),
-            }
-        };
-        for j in 0..points.len() - 1 {
-            let (a, b, c, d) = (
-                vertex(j, 0),
-                vertex(j, 1),
-                vertex(j + 1, 0),
-                vertex(j + 1, 1),
-            );
-            out.extend([a, b, c, b, c, d]);
-        }
+            std::array::from_fn(|c| (particle[c] * tint[c]) as f32)
+        });
     }
     out
+}
+
+/// Appends the triangles of a strip whose points' vertices are `sides` (side −1, then +1) and
+/// whose point j is of colour `color(j)`: each segment the two triangles the GPU's strip makes
+/// of it.
+pub(crate) fn push_triangles(
+    out: &mut Vec<StripVertex>,
+    sides: &[[DVec3; 2]],
+    color: &dyn Fn(usize) -> [f32; 4],
+) {
+    let vertex = |j: usize, side: usize| StripVertex {
+        position: sides[j][side].as_vec3().to_array(),
+        across: if side == 0 { -1.0 } else { 1.0 },
+        color: color(j),
+    };
+    for j in 0..sides.len().saturating_sub(1) {
+        let (a, b, c, d) = (
+            vertex(j, 0),
+            vertex(j, 1),
+            vertex(j + 1, 0),
+            vertex(j + 1, 1),
+        );
+        out.extend([a, b, c, b, c, d]);
+    }
 }
 
 /// The reference strip pipeline, drawing into [`FORMAT`] with one blend mode.

@@ -64,6 +64,21 @@ impl Blend {
         }
     }
 
+    /// What a strip's fragment (a trail's, a ribbon's) of colour `in.color` covering `cover`
+    /// of the pixel (WGSL) returns: its colour at opacity × coverage through `blend_out`, or
+    /// for `Premultiplied` its colour and opacity each times the coverage.
+    pub fn strip_out_wgsl(self, cover: &str) -> String {
+        match self {
+            Blend::Premultiplied => {
+                format!("vec4<f32>(in.color.rgb * {cover}, in.color.a * {cover})")
+            }
+            _ if self.changes_output() => {
+                format!("blend_out(vec4<f32>(in.color.rgb, in.color.a * {cover}))")
+            }
+            _ => format!("vec4<f32>(in.color.rgb, in.color.a * {cover})"),
+        }
+    }
+
     /// Emits `blend_out(c)`, what a fragment of colour `c` (straight alpha) writes for this
     /// blend: for `Multiply` the colour times its opacity (the blend multiplies what lies
     /// behind by it and adds what lies behind times 1 − a); for `Mask` the colour, opaque, or

@@ -357,15 +357,7 @@ impl Ribbon {
             |w| {
                 w.comment("Soft across the strip: full on the centre line, zero at the edges.");
                 w.line("let across = 1.0 - in.across * in.across;");
-                match blend {
-                    crate::features::looks::Blend::Premultiplied => {
-                        w.line("return vec4<f32>(in.color.rgb * across, in.color.a * across);")
-                    }
-                    _ if blend.changes_output() => {
-                        w.line("return blend_out(vec4<f32>(in.color.rgb, in.color.a * across));")
-                    }
-                    _ => w.line("return vec4<f32>(in.color.rgb, in.color.a * across);"),
-                }
+                w.line(format!("return {};", blend.strip_out_wgsl("across")));
             },
         );
     }

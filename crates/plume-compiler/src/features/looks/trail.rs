@@ -55,6 +55,31 @@ fn default_trail_width() -> Vec<SizeStop> {
     vec![SizeStop(0.0, 0.05), SizeStop(1.0, 0.0)]
 }
 
+/// The f64 twin of how a strip's vertices are placed, by the trail module and by a ribbon's
+/// `vs_ribbon` alike: for each of `points` its two vertices (side −1, then +1), `half(j)` to
+/// either side across the strip's direction there (from the point before to the point after,
+/// the point itself at an end) and the line of sight from `eye`; a point with no direction
+/// gets both vertices on it.
+pub fn strip_sides(points: &[DVec3], eye: DVec3, half: &dyn Fn(usize) -> f64) -> Vec<[DVec3; 2]> {
+    let last = points.len().saturating_sub(1);
+    (0..points.len())
+        .map(|j| {
+            let here = points[j];
+            let along = points[j.saturating_sub(1)] - points[(j + 1).min(last)];
+            // In view space the GPU crosses the direction with the point's position from the
+            // eye; a rotation keeps cross products, so world space gives the same axis.
+            let side = along.cross(here - eye);
+            let len2 = side.length_squared();
+            let offset = if len2 > 1e-30 {
+                side * (half(j) / len2.sqrt())
+            } else {
+                DVec3::ZERO
+            };
+            [here - offset, here + offset]
+        })
+        .collect()
+}
+
 /// Bytes of one ring entry: the position's three f32 bit patterns and the id + 1.
 pub const ENTRY_BYTES: u32 = 16;
 
@@ -134,25 +159,9 @@ impl TrailIr {
     /// the trail's direction there and the line of sight from `eye`; a point with no direction
     /// gets both vertices on it.
     pub fn strip_vertices(&self, points: &[DVec3], eye: DVec3, size_scale: f64) -> Vec<[DVec3; 2]> {
-        let last = points.len().saturating_sub(1);
-        (0..points.len())
-            .map(|j| {
-                let here = points[j];
-                let along = points[j.saturating_sub(1)] - points[(j + 1).min(last)];
-                // In view space the GPU crosses the direction with the point's position from the
-                // eye; a rotation keeps cross products, so world space gives the same axis.
-                let side = along.cross(here - eye);
-                let len2 = side.length_squared();
-                let t = j as f64 / f64::from(self.ring());
-                let half = 0.5 * self.width_at(t) * size_scale;
-                let offset = if len2 > 1e-30 {
-                    side * (half / len2.sqrt())
-                } else {
-                    DVec3::ZERO
-                };
-                [here - offset, here + offset]
-            })
-            .collect()
+        strip_sides(points, eye, &|j| {
+            0.5 * self.width_at(j as f64 / f64::from(self.ring())) * size_scale
+        })
     }
 
     /// Emits the update's record of the position `x` at the step's start into the ring

@@ -118,19 +118,14 @@ pub(super) fn emit_fragment(
             w.line("draw = draw_uniform;");
         }
     };
-    // The blend's last word on what a fragment writes (`Blend::emit_blend_out`).
-    let out = |c: &str| match blend.changes_output() {
-        true => format!("blend_out({c})"),
-        false => c.to_string(),
-    };
+    // The blend's last word on what a fragment writes (`Blend::emit_blend_out`). Premultiplied:
+    // the coverage is shaded at opacity 1 (`pin`) and the colour written times it.
     let premultiplied = blend == crate::features::looks::Blend::Premultiplied;
-    // Premultiplied: the coverage is shaded at opacity 1 and the colour written times it.
-    let (shaded, out) = match premultiplied {
-        true => (
-            "pin",
-            &(|c: &str| format!("premultiplied({c}, in.color.a)")) as &dyn Fn(&str) -> String,
-        ),
-        false => ("in", &out as &dyn Fn(&str) -> String),
+    let shaded = if premultiplied { "pin" } else { "in" };
+    let out = |c: &str| match blend {
+        crate::features::looks::Blend::Premultiplied => format!("premultiplied({c}, in.color.a)"),
+        _ if blend.changes_output() => format!("blend_out({c})"),
+        _ => c.to_string(),
     };
     if soft || lit.is_some() || blend.changes_output() || premultiplied {
         blend.emit_blend_out(w);

@@ -118,10 +118,6 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     w.blank();
     let blend = ir.render.blend;
     blend.emit_blend_out(&mut w);
-    let out = |c: &str| match blend.changes_output() {
-        true => format!("return blend_out({c});"),
-        false => format!("return {c};"),
-    };
     w.line("@fragment");
     w.block(
         "fn fs_trail(in: TrailVertex) -> @location(0) vec4<f32>",
@@ -132,15 +128,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
                 Some(_) => "across * soft_fade(in.clip)",
                 None => "across",
             };
-            if blend == crate::features::looks::Blend::Premultiplied {
-                w.line(format!(
-                    "return vec4<f32>(in.color.rgb * {cover}, in.color.a * {cover});"
-                ));
-            } else {
-                w.line(out(&format!(
-                    "vec4<f32>(in.color.rgb, in.color.a * {cover})"
-                )));
-            }
+            w.line(format!("return {};", blend.strip_out_wgsl(cover)));
         },
     );
     if shape.splat {
