@@ -23,6 +23,31 @@ pub type GpuEntry = Option<(u32, Link, u32)>;
 
 /// Group `g`'s ribbon table as the GPU holds it, per entry (None where no spawn has written).
 /// An error for a group without ribbons.
+///
+/// ```
+/// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// use plume_compiler::reference::ReferenceSim;
+/// use plume_runtime::{oracle::read_ribbon_table, Effect, Gpu};
+/// let source = r#"Effect(name: "stream", capacity: 16,
+///     emitters: [Emitter(rate: 60.0, shape: Custom("vec3(t, 0.0, 0.0)"),
+///                        velocity: Constant((0.0, 0.0, 0.0)), lifetime: Some((0.1, 0.1)))],
+///     render: Render(ribbon: Some(Ribbon(points: 8))))"#;
+/// let effect = plume_compiler::compile_str(source, &Default::default())?;
+/// let gpu = Gpu::new(&Default::default())?;
+/// let mut stream = Effect::new(&gpu, effect.clone())?;
+/// stream.run(5, |_| {})?;
+/// let mut reference = ReferenceSim::new(&effect.ir);
+/// reference.run(5);
+/// // The same ids and links in every entry, the GPU's slots aside.
+/// let on_gpu: Vec<_> = read_ribbon_table(&stream, 0)?
+///     .into_iter()
+///     .map(|e| e.map(|(id, link, _slot)| (id, link)))
+///     .collect();
+/// assert_eq!(&on_gpu, reference.ribbon_table());
+/// assert_eq!(on_gpu.iter().flatten().count(), 5);
+/// # Ok(())
+/// # }
+/// ```
 pub fn read_ribbon_table(effect: &Effect, g: usize) -> Result<Vec<GpuEntry>, RuntimeError> {
     let bytes = effect.group(g)?.read_extra_buffer("ribbon_table")?;
     let word =
