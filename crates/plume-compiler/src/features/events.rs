@@ -542,13 +542,8 @@ pub fn emit_kernels(
             }
             store(w, j);
             if let Some(ribbon) = ribbon {
-                // The parent's id, passed in its record (`EventIr::passes_id`).
-                let ordinal = format!(
-                    "(params.step / {}) * {} + c",
-                    u32_lit(input.period),
-                    u32_lit(input.count)
-                );
-                ribbon.emit_write(w, "bitcast<u32>(r.v.w)", &ordinal);
+                let (key, ordinal) = ribbon.child_wgsl(input.period, input.count);
+                ribbon.emit_write(w, &key, &ordinal);
             }
         });
         w.blank();

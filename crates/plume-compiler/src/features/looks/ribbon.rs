@@ -256,6 +256,21 @@ impl Ribbon {
         }
     }
 
+    /// The WGSL of an event child's link (the twin of [`Self::child`]), in the child spawn
+    /// where the record `r` (whose velocity's w holds the parent's id, `EventIr::passes_id`),
+    /// the child's place `c` in its firing and `params.step` are in scope, for an event of
+    /// `count` children fired every `period` steps.
+    pub fn child_wgsl(&self, period: u32, count: u32) -> (String, String) {
+        (
+            "bitcast<u32>(r.v.w)".into(),
+            format!(
+                "(params.step / {}) * {} + c",
+                u32_lit(period.max(1)),
+                u32_lit(count)
+            ),
+        )
+    }
+
     /// Emits the draw module's ribbon shaders, `vs_ribbon` and `fs_ribbon`, after `sprite_at`
     /// (which, with no slot list, takes a slot), `load_particle` and `DrawView`.
     pub fn emit_draw(&self, w: &mut Writer, capacity: u32, blend: crate::features::looks::Blend) {
