@@ -471,8 +471,10 @@ fn a_texture_can_give_colour_alone_or_opacity_from_its_red_channel() {
     // A frame whose left half is (0.8, 0.2, 0.6) at alpha 0.5 and right half black at alpha
     // 1, under an orange sprite: Modulate multiplies all four; ModulateRgb only the colour
     // (the sprite stays opaque); OpacityFromRed keeps the colour and takes the opacity from
-    // the red channel (0.8 on the left, none on the right). The raster draw, the compute
-    // splat and the reference drawing alike.
+    // the red channel (0.8 on the left, none on the right). A second image laid out as the
+    // first, (0.4, 1, 0.6) on the left, multiplies the colour too as its own mapping says
+    // (ModulateRgb: its colour). The raster draw, the compute splat and the reference drawing
+    // alike.
     let gpu = gpu();
     let dir = scratch("sample");
     let image = image::RgbaImage::from_fn(8, 8, |x, _| match x < 4 {
@@ -480,6 +482,11 @@ fn a_texture_can_give_colour_alone_or_opacity_from_its_red_channel() {
         false => image::Rgba([0, 0, 0, 255]),
     });
     image.save(dir.join("halves.png")).unwrap();
+    let image = image::RgbaImage::from_fn(8, 8, |x, _| match x < 4 {
+        true => image::Rgba([102, 255, 153, 64]),
+        false => image::Rgba([128, 128, 128, 255]),
+    });
+    image.save(dir.join("tint.png")).unwrap();
     let colour = [1.0, 0.5, 0.25];
     for (mapping, left, right) in [
         ("Modulate", [0.8, 0.1, 0.15, 0.502], [0.0, 0.0, 0.0, 1.0]),
@@ -488,6 +495,11 @@ fn a_texture_can_give_colour_alone_or_opacity_from_its_red_channel() {
             "OpacityFromRed",
             [1.0, 0.5, 0.25, 0.8],
             [1.0, 0.5, 0.25, 0.0],
+        ),
+        (
+            r#"OpacityFromRed, second: Some(SecondTexture(file: "tint.png", sample: ModulateRgb))"#,
+            [0.4, 0.5, 0.15, 0.8],
+            [0.5, 0.25, 0.125, 0.0],
         ),
     ] {
         let src = format!(

@@ -19,6 +19,11 @@ where a shape wants shading of its own.
 - snowflake.png: one six-armed flake with side branches.
 - cloud.png: a soft, lumpy cloud as a greyscale mask: its density in red, green and blue,
   opaque (for `sample: OpacityFromRed`, where the red channel is the sprite's shape).
+- blobs.png: 64 frames (8 x 8) of a noisy blob whose lumps shift from frame to frame, its
+  density in red, green and blue, opaque (a shape for `sample: OpacityFromRed`).
+- ramp.png: a colour ramp across the image, blobs.png's size, opaque: blobs.png's second image
+  (`second: Some(SecondTexture(file: "ramp.png", sample: ModulateRgb))`), so each column of
+  frames takes its own colours.
 """
 
 import math
@@ -234,6 +239,36 @@ def main():
         return (density, density, density, 1.0)
 
     write_png(os.path.join(HERE, "cloud.png"), size, size, cloud)
+
+    blob, grid = 64, 8
+
+    def blobs(x, y):
+        k = (y // blob) * grid + x // blob
+        u = ((x % blob + 0.5) / blob) * 2.0 - 1.0
+        v = ((y % blob + 0.5) / blob) * 2.0 - 1.0
+        # The lumps drift through time: noise of the frame's slice, blended between the two
+        # lattice slices it lies between.
+        z = k * 0.15
+        z0, f = math.floor(z), z - math.floor(z)
+        f = f * f * (3.0 - 2.0 * f)
+        n = (1.0 - f) * fbm(u * 3.0 + 5.0, v * 3.0 + 5.0, 100 + 7 * z0) + f * fbm(
+            u * 3.0 + 5.0, v * 3.0 + 5.0, 107 + 7 * z0)
+        falloff = max(0.0, 1.0 - math.hypot(u, v) / 0.9)
+        density = max(0.0, min(1.0, n * 1.6 * falloff))
+        return (density, density, density, 1.0)
+
+    write_png(os.path.join(HERE, "blobs.png"), grid * blob, grid * blob, blobs)
+
+    def ramp(x, y):
+        h = 0.75 * (x + 0.5) / (grid * blob)
+        w = 0.6 + 0.4 * (y + 0.5) / (grid * blob)
+        # A hue from red through yellow and green to blue, lighter down the image.
+        r = max(0.0, min(1.0, abs(h * 6.0 - 3.0) - 1.0))
+        g = max(0.0, min(1.0, 2.0 - abs(h * 6.0 - 2.0)))
+        b = max(0.0, min(1.0, 2.0 - abs(h * 6.0 - 4.0)))
+        return (r * w + (1.0 - w) * 0.5, g * w + (1.0 - w) * 0.5, b * w + (1.0 - w) * 0.5, 1.0)
+
+    write_png(os.path.join(HERE, "ramp.png"), grid * blob, grid * blob, ramp)
 
 
 if __name__ == "__main__":

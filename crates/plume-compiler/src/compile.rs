@@ -316,6 +316,29 @@ pub(crate) fn compile_group(
                 )])))
             }
         };
+        let mut texture = texture;
+        if let Some(second) = &spec.second {
+            let path = ValuePath::root()
+                .field("render")
+                .field("texture")
+                .field("second")
+                .field("file");
+            texture.second = Some(Box::new(
+                match texture.load_second(second, effect.base_dir.as_deref()) {
+                    Ok(loaded) => loaded,
+                    Err(message) if effect.step_only => texture.stand_in_second(
+                        second,
+                        format!("{}: {message}", join(prefix, &path.display)),
+                    ),
+                    Err(message) => {
+                        return Err(CompileError::Invalid(prefixed(vec![(
+                            Diagnostic::error(path.display, message),
+                            path.lookup,
+                        )])))
+                    }
+                },
+            ));
+        }
         ir.render.texture = Some(texture);
     }
     if let (Some(lit), Some(texture)) = (&effect.render.lit, &ir.render.texture) {

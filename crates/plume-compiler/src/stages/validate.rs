@@ -426,6 +426,12 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Re
                 "names no file; give a PNG's path relative to the effect file",
             );
         }
+        if t.second.as_ref().is_some_and(|s| s.file.trim().is_empty()) {
+            c.error(
+                &texture.field("second").field("file"),
+                "names no file; give a PNG's path relative to the effect file",
+            );
+        }
         let frames = texture.field("frames");
         for (i, (name, n)) in [("columns", t.frames.0), ("rows", t.frames.1)]
             .into_iter()

@@ -93,7 +93,7 @@ pub(crate) fn draw_group(
 }
 
 /// A bind group of `layout` (a render pipeline's or the compute splat's): `buffers`, the
-/// sprite texture and sampler (and a lit look's maps) when there is one, and the scene depth
+/// sprite texture and sampler (and a lit look's maps, a second image) when there is one, and the scene depth
 /// when there is one.
 pub(crate) fn bind_resources(
     gpu: &Gpu,
@@ -124,6 +124,12 @@ pub(crate) fn bind_resources(
         bindings.push(wgpu::BindGroupEntry {
             binding,
             resource: wgpu::BindingResource::TextureView(map),
+        });
+    }
+    if let Some(second) = texture.and_then(|t| t.second.as_ref()) {
+        bindings.push(wgpu::BindGroupEntry {
+            binding: plume_compiler::texture::SECOND_TEXTURE_BINDING,
+            resource: wgpu::BindingResource::TextureView(second),
         });
     }
     if let Some(depth) = scene_depth {

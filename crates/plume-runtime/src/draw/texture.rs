@@ -19,6 +19,9 @@ pub struct SpriteTexture {
     /// A lit look's maps (`render.lit.normals`: a normal map, or the six-way lightmaps), laid
     /// out as the texture and read with its sampler, bound at `LIT_MAP_BINDINGS`.
     pub lit_maps: Vec<wgpu::TextureView>,
+    /// The second image (`render.texture.second`), laid out as the texture and read with its
+    /// sampler, bound at `SECOND_TEXTURE_BINDING`.
+    pub second: Option<wgpu::TextureView>,
 }
 
 impl SpriteTexture {
@@ -46,13 +49,17 @@ impl SpriteTexture {
                 "{why} (the effect was compiled to be stepped, not drawn; drawing it needs its texture)"
             )));
         }
-        Self::from_rgba(
+        let mut uploaded = Self::from_rgba(
             gpu,
             texture.width,
             texture.height,
             &texture.rgba,
             texture.mip_levels(),
-        )
+        )?;
+        if let Some(second) = &texture.second {
+            uploaded.second = Some(Self::new(gpu, second)?.view);
+        }
+        Ok(uploaded)
     }
 
     /// Uploads `width` x `height` RGBA8 texels, rows top to bottom, with `levels` mip levels
@@ -100,6 +107,7 @@ impl SpriteTexture {
             view: texture.create_view(&Default::default()),
             sampler,
             lit_maps: Vec::new(),
+            second: None,
         })
     }
 }

@@ -13,7 +13,7 @@ struct Camera {
     lit: vec4<f32>,
     // The blend's fragment output (render.blend): (0 as written; 1 Multiply; 2 Mask; 3
     // Premultiplied; 4 Opaque; the Mask's cutoff; the texture's sample mapping: 0 Modulate, 1
-    // ModulateRgb, 2 OpacityFromRed).
+    // ModulateRgb, 2 OpacityFromRed; its second image's, alike).
     blend: vec4<f32>,
 }
 

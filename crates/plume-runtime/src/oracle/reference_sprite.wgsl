@@ -13,6 +13,19 @@
 // or the six-way lightmaps (right, top, back; left, bottom, front).
 @group(0) @binding(4) var lit_map_0: texture_2d<f32>;
 @group(0) @binding(5) var lit_map_1: texture_2d<f32>;
+// The texture's second image, laid out as it (a white 1x1 one when it has none).
+@group(0) @binding(6) var second_texture: texture_2d<f32>;
+
+// A texel as a sample mapping makes it (0 Modulate, 1 ModulateRgb, 2 OpacityFromRed).
+fn mapped(raw: vec4<f32>, sample: f32) -> vec4<f32> {
+    if (sample == 1.0) {
+        return vec4<f32>(raw.rgb, 1.0);
+    }
+    if (sample == 2.0) {
+        return vec4<f32>(1.0, 1.0, 1.0, raw.r);
+    }
+    return raw;
+}
 
 struct Out {
     @builtin(position) clip: vec4<f32>,
@@ -137,14 +150,9 @@ fn shade(in: Out) -> vec4<f32> {
         let rho = max(length(gx * size), length(gy * size));
         let half_texel = min(0.5 * in.texels.zw, vec2<f32>(0.5 * exp2(ceil(log2(max(rho, 1.0))))));
         let at = in.texels.xy + clamp(local, half_texel, in.texels.zw - half_texel);
-        let raw = textureSampleGrad(sprite_texture, sprite_sampler, at / size, gx, gy);
-        var mapped = raw;
-        if (camera.blend.z == 1.0) {
-            mapped = vec4<f32>(raw.rgb, 1.0);
-        } else if (camera.blend.z == 2.0) {
-            mapped = vec4<f32>(1.0, 1.0, 1.0, raw.r);
-        }
-        let texel = in.color * mapped;
+        let first = textureSampleGrad(sprite_texture, sprite_sampler, at / size, gx, gy);
+        let second = textureSampleGrad(second_texture, sprite_sampler, at / size, gx, gy);
+        let texel = in.color * mapped(first, camera.blend.z) * mapped(second, camera.blend.w);
         let maps = array<vec3<f32>, 2>(
             textureSampleGrad(lit_map_0, sprite_sampler, at / size, gx, gy).xyz,
             textureSampleGrad(lit_map_1, sprite_sampler, at / size, gx, gy).xyz,

@@ -224,6 +224,8 @@ impl ReferenceRenderer {
             // Bound but never sampled: the sprites' texel rectangles are empty.
             None => SpriteTexture::from_rgba(gpu, 1, 1, &[255; 4], 1)?,
         };
+        // Where the texture has no second image: a white one, which multiplies by 1.
+        let white = SpriteTexture::from_rgba(gpu, 1, 1, &[255; 4], 1)?;
         // A lit look's maps, laid out as the texture; 1x1 stand-ins where it has fewer.
         let mut lit_maps = Vec::new();
         for k in 0..2 {
@@ -247,6 +249,7 @@ impl ReferenceRenderer {
                 },
                 texture_entry(4),
                 texture_entry(5),
+                texture_entry(6),
                 wgpu::BindGroupLayoutEntry {
                     binding: 3,
                     visibility: wgpu::ShaderStages::FRAGMENT,
@@ -295,6 +298,12 @@ impl ReferenceRenderer {
                 wgpu::BindGroupEntry {
                     binding: 5,
                     resource: wgpu::BindingResource::TextureView(&lit_maps[1].view),
+                },
+                wgpu::BindGroupEntry {
+                    binding: 6,
+                    resource: wgpu::BindingResource::TextureView(
+                        texture.second.as_ref().unwrap_or(&white.view),
+                    ),
                 },
             ],
         });
@@ -348,12 +357,18 @@ impl ReferenceRenderer {
                     Blend::Opaque => (4.0, 0.0),
                     Blend::Alpha | Blend::Additive => (0.0, 0.0),
                 };
-                let sample = match render.texture.as_ref().map(|t| t.sample) {
+                let code = |sample: Option<Sample>| match sample {
                     Some(Sample::ModulateRgb) => 1.0,
                     Some(Sample::OpacityFromRed) => 2.0,
                     _ => 0.0,
                 };
-                [mode, cutoff, sample, 0.0]
+                let texture = render.texture.as_ref();
+                [
+                    mode,
+                    cutoff,
+                    code(texture.map(|t| t.sample)),
+                    code(texture.and_then(|t| t.second.as_ref()).map(|s| s.sample)),
+                ]
             },
         })
     }

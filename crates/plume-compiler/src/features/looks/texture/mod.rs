@@ -7,8 +7,9 @@
 //! component by component (no sRGB decoding, as the colour stops are written straight to the
 //! image). The sprite's corner coordinates (cx, cy) in [-1, 1]² (see [`crate::features::looks::orient`]) map to
 //! the frame's (u, v) = ((cx + 1) / 2, (1 − cy) / 2): the image's top row at the quad's +y
-//! side, its left column at −x. Texels are filtered linearly, clamped half a texel inside the
-//! frame so that no neighbouring frame of the atlas bleeds in; there are no mipmaps.
+//! side, its left column at −x. Texels are filtered trilinearly over mip levels that keep every
+//! frame whole, clamped half a texel inside the frame so that no neighbouring frame of the atlas
+//! bleeds in. A second image laid out as the first may multiply the colour too ([`second`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -16,6 +17,9 @@ use std::sync::Arc;
 use crate::base::rng::{rand_u32, stream};
 use crate::base::writer::{f32_lit, u32_lit, Writer};
 use serde::Deserialize;
+
+mod second;
+pub use second::{SecondTexture, SECOND_TEXTURE_BINDING};
 
 /// A sprite texture (`render.texture`): a PNG whose texels multiply the sprite's colour, or an
 /// atlas of flipbook frames played over each particle's life or at a fixed rate.
@@ -37,6 +41,10 @@ pub struct Texture {
     /// What a texel does to the sprite's colour.
     #[serde(default)]
     pub sample: Sample,
+    /// A second image laid out as this one, sampled at the same place; its texel multiplies
+    /// the colour too, as its own `sample` maps it.
+    #[serde(default)]
+    pub second: Option<SecondTexture>,
 }
 
 /// What a texel does to the sprite's colour (`render.texture.sample`).
@@ -123,6 +131,8 @@ pub struct TextureIr {
     pub random_start: bool,
     /// What a texel does to the colour.
     pub sample: Sample,
+    /// A second image laid out as this one (`render.texture.second`), its `sample` its own.
+    pub second: Option<Box<TextureIr>>,
     /// Why the file could not be read, for an effect compiled to be stepped, not drawn
     /// (`CompileOptions::step_only`): the image is then a white stand-in, and a draw refuses
     /// with this message (the field's path, then what went wrong with the file).
@@ -146,8 +156,11 @@ impl std::fmt::Debug for TextureIr {
                 ""
             }
         )?;
-        match &self.missing {
-            Some(_) => write!(f, " (missing: a white stand-in)"),
+        if self.missing.is_some() {
+            write!(f, " (missing: a white stand-in)")?;
+        }
+        match &self.second {
+            Some(second) => write!(f, ", times {:?} {second:?}", second.sample),
             None => Ok(()),
         }
     }
@@ -197,6 +210,7 @@ impl TextureIr {
             play: spec.play,
             random_start: spec.random_start,
             sample: spec.sample,
+            second: None,
             missing: None,
         })
     }
@@ -209,11 +223,22 @@ impl TextureIr {
         texture: &TextureIr,
         base_dir: Option<&Path>,
     ) -> Result<Self, String> {
+        Self::load_laid_out_as(file, texture, base_dir, "a lit look's map")
+    }
+
+    /// The image in `file` (`what` it is, for the error), laid out as `texture`: its frames,
+    /// how they play, and its size, which must be the texture's.
+    fn load_laid_out_as(
+        file: &str,
+        texture: &TextureIr,
+        base_dir: Option<&Path>,
+        what: &str,
+    ) -> Result<Self, String> {
         let spec = texture.spec_of(file);
         let map = Self::load(&spec, base_dir)?;
         if (map.width, map.height) != (texture.width, texture.height) {
             return Err(format!(
-                "{} is {}x{} texels; a lit look's map is laid out as the texture {:?}, which is {}x{}",
+                "{} is {}x{} texels; {what} is laid out as the texture {:?}, which is {}x{}",
                 resolve(file, base_dir).display(),
                 map.width,
                 map.height,
@@ -241,6 +266,7 @@ impl TextureIr {
             play: self.play,
             random_start: self.random_start,
             sample: self.sample,
+            second: None,
         }
     }
 
@@ -258,6 +284,7 @@ impl TextureIr {
             play: spec.play,
             random_start: spec.random_start,
             sample: spec.sample,
+            second: None,
             missing: Some(missing),
         }
     }
@@ -323,6 +350,9 @@ impl TextureIr {
         w.line(format!(
             "@group(0) @binding({SAMPLER_BINDING}) var sprite_sampler: sampler;"
         ));
+        if let Some(second) = &self.second {
+            second.emit_second_declaration(w);
+        }
         w.line(format!(
             "const FRAME_COLUMNS: u32 = {};",
             u32_lit(self.columns)
@@ -395,6 +425,9 @@ impl TextureIr {
     /// The fragment shader takes those derivatives from the rasteriser (`dpdxFine`), the
     /// compute splat from its quad's projective map, so both sample the same mip levels.
     pub fn emit_texel_fn(&self, w: &mut Writer) {
+        if let Some(second) = &self.second {
+            return self.emit_texel_product_fn(second, w);
+        }
         match self.sample.mapped_wgsl() {
             None => Self::emit_texel_fn_of(w, "frame_texel", "sprite_texture"),
             Some(mapped) => {
@@ -491,80 +524,4 @@ impl TextureIr {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn atlas(columns: u32, rows: u32, play: Play) -> TextureIr {
-        TextureIr {
-            file: "t.png".into(),
-            width: 4 * columns,
-            height: 4 * rows,
-            rgba: vec![0; (16 * columns * rows * 4) as usize].into(),
-            columns,
-            rows,
-            play,
-            random_start: false,
-            sample: Sample::Modulate,
-            missing: None,
-        }
-    }
-
-    #[test]
-    fn over_life_frames_split_the_life_evenly() {
-        let t = atlas(2, 2, Play::OverLife);
-        // 8 steps of life, 4 frames: 2 steps each; the last frame holds at the end.
-        let frames: Vec<u32> = (0..=9).map(|lived| t.frame(0, 0, lived, 8, 0.1)).collect();
-        assert_eq!(frames, [0, 0, 1, 1, 2, 2, 3, 3, 3, 3]);
-        assert_eq!(
-            t.frame(0, 0, 5, 0, 0.1),
-            0,
-            "a particle that never dies shows frame 0"
-        );
-    }
-
-    #[test]
-    fn rate_frames_loop_and_start_on_their_step() {
-        // 0.1 s steps at 5 frames per second: a frame every 2 steps; 0.1 * 5 is not exact in
-        // binary, and the epsilon keeps step 2 on frame 1.
-        let t = atlas(3, 1, Play::Rate(5.0));
-        let frames: Vec<u32> = (0..8).map(|lived| t.frame(0, 0, lived, 0, 0.1)).collect();
-        assert_eq!(frames, [0, 0, 1, 1, 2, 2, 0, 0]);
-    }
-
-    #[test]
-    fn a_random_start_shifts_each_loop_by_its_own_frame() {
-        let t = TextureIr {
-            random_start: true,
-            sample: Sample::Modulate,
-            ..atlas(4, 1, Play::Rate(10.0))
-        };
-        let mut starts = [0; 4];
-        for id in 0..400 {
-            let start = t.frame(id, 7, 0, 0, 0.1);
-            starts[start as usize] += 1;
-            // Still one frame per step at 10 frames per second, in order, wrapping.
-            for lived in 1..6 {
-                assert_eq!(t.frame(id, 7, lived, 0, 0.1), (start + lived as u32) % 4);
-            }
-        }
-        assert!(
-            starts.iter().all(|&n| n > 60),
-            "starts spread over the frames: {starts:?}"
-        );
-    }
-
-    #[test]
-    fn frame_rectangles_read_left_to_right_top_to_bottom() {
-        let t = atlas(3, 2, Play::OverLife);
-        assert_eq!(t.frame_texels(0), [0, 0, 4, 4]);
-        assert_eq!(t.frame_texels(2), [8, 0, 4, 4]);
-        assert_eq!(t.frame_texels(4), [4, 4, 4, 4]);
-    }
-
-    #[test]
-    fn a_single_image_never_animates() {
-        let t = atlas(1, 1, Play::Rate(30.0));
-        assert!(!t.animated() && !t.needs_age_of_immortals());
-        assert_eq!(t.frame(0, 0, 1000, 0, 0.1), 0);
-    }
-}
+mod tests;
