@@ -2,7 +2,9 @@
 """Writes the example meshes next to this script: rock.obj (a lumpy boulder: a sphere of 20
 rings and 40 segments whose radius follows a few fixed waves), crystal.obj (a hexagonal
 prism with pointed ends), steps.obj (a flight of four stone steps on a ground slab) and
-floor.obj (a flat 12 m square at y = 0, facing up). Deterministic: run it again and the files come out the same."""
+floor.obj (a flat 12 m square at y = 0, facing up) and ico.obj (a sphere of radius 0.5, an
+icosahedron whose faces are split in four three times: 1280 triangles, a mesh particle's
+shape). Deterministic: run it again and the files come out the same."""
 
 import math
 import os
@@ -90,7 +92,37 @@ def floor(half=6.0):
     write("floor.obj", vertices, [(0, 3, 2, 1)], "A flat 12 m square at y = 0, facing up.")
 
 
+def ico(splits=3, radius=0.5):
+    t = (1.0 + math.sqrt(5.0)) / 2.0
+    vertices = [(-1, t, 0), (1, t, 0), (-1, -t, 0), (1, -t, 0), (0, -1, t), (0, 1, t),
+                (0, -1, -t), (0, 1, -t), (t, 0, -1), (t, 0, 1), (-t, 0, -1), (-t, 0, 1)]
+    vertices = [tuple(c / math.sqrt(1 + t * t) for c in v) for v in vertices]
+    faces = [(0, 11, 5), (0, 5, 1), (0, 1, 7), (0, 7, 10), (0, 10, 11), (1, 5, 9), (5, 11, 4),
+             (11, 10, 2), (10, 7, 6), (7, 1, 8), (3, 9, 4), (3, 4, 2), (3, 2, 6), (3, 6, 8),
+             (3, 8, 9), (4, 9, 5), (2, 4, 11), (6, 2, 10), (8, 6, 7), (9, 8, 1)]
+    for _ in range(splits):
+        middle = {}
+
+        def mid(a, b):
+            key = (min(a, b), max(a, b))
+            if key not in middle:
+                m = [(x + y) / 2.0 for x, y in zip(vertices[a], vertices[b])]
+                n = math.sqrt(sum(c * c for c in m))
+                vertices.append(tuple(c / n for c in m))
+                middle[key] = len(vertices) - 1
+            return middle[key]
+
+        split = []
+        for a, b, c in faces:
+            ab, bc, ca = mid(a, b), mid(b, c), mid(c, a)
+            split += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+        faces = split
+    vertices = [tuple(c * radius for c in v) for v in vertices]
+    write("ico.obj", vertices, faces, f"A sphere of radius {radius}: an icosahedron split {splits} times.")
+
+
 rock()
 crystal()
 steps()
 floor()
+ico()

@@ -113,6 +113,12 @@ pub fn draw_group_and_reference(sim: &Effect, g: usize, side: u32) -> (Vec<u8>, 
                 &camera,
             )
         }
+        // Mesh particles: each sprite's mesh placed and lit in f64, in the draw's order.
+        None if ir.render.mesh.is_some() => {
+            let sprites = sprites_at(&records, ir, &camera, ir.sort, time);
+            let triangles = plume::runtime::oracle::mesh_triangles(&sprites, ir, &camera);
+            reference.draw_with_strips(&triangles, &[], &camera)
+        }
         None => reference.draw(&sprites_at(&records, ir, &camera, false, time), &camera),
     }
     .unwrap();

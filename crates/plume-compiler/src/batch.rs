@@ -29,6 +29,8 @@ pub fn unbatchable(compiled: &CompiledEffect) -> Option<&'static str> {
         Some("it fires or takes events")
     } else if ir.render.trail.is_some() {
         Some("it draws trails")
+    } else if ir.render.mesh.is_some() {
+        Some("it draws meshes (`render.mesh`)")
     } else if ir.render.ribbon.is_some() {
         Some("it draws ribbons (`render.ribbon`)")
     } else if ir.render.light.is_some() {

@@ -7,7 +7,7 @@ use crate::base::locate::SourceMap;
 use crate::base::naga_check;
 use crate::base::path::ValuePath;
 use crate::features::events::{EventInputIr, EventIr};
-use crate::features::looks::texture;
+use crate::features::looks::{particle_mesh, texture};
 use crate::ir::EffectIr;
 use crate::stages::passes::layout::Layout;
 use crate::stages::schema::{Effect, Emitter, Integrator};
@@ -340,6 +340,27 @@ pub(crate) fn compile_group(
             ));
         }
         ir.render.texture = Some(texture);
+    }
+    if let Some(spec) = &effect.render.mesh {
+        let path = ValuePath::root()
+            .field("render")
+            .field("mesh")
+            .field("file");
+        ir.render.mesh = Some(
+            match particle_mesh::MeshIr::load(spec, effect.base_dir.as_deref()) {
+                Ok(mesh) => mesh,
+                Err(message) if effect.step_only => particle_mesh::MeshIr::stand_in(
+                    spec,
+                    format!("{}: {message}", join(prefix, &path.display)),
+                ),
+                Err(message) => {
+                    return Err(CompileError::Invalid(prefixed(vec![(
+                        Diagnostic::error(path.display, message),
+                        path.lookup,
+                    )])))
+                }
+            },
+        );
     }
     if let (Some(lit), Some(texture)) = (&effect.render.lit, &ir.render.texture) {
         for (field, file) in lit.map_files() {

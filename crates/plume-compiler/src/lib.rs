@@ -56,8 +56,8 @@ pub use compile::{
 };
 pub use diagnostics::{Diagnostic, Diagnostics, Severity};
 pub use features::looks::{
-    by_expression, glow, lit, orient, particle_light, ribbon, rotation, screen_size, texture, tint,
-    trail,
+    by_expression, glow, lit, orient, particle_light, particle_mesh, ribbon, rotation, screen_size,
+    texture, tint, trail,
 };
 pub use features::{
     accuracy, attributes, bursts, colliders, emitter, events, field, forces, inherit, lights,

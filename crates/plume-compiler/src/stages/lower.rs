@@ -147,6 +147,7 @@ pub fn lower(effect: &Effect) -> EffectIr {
                 lit_maps: Vec::new(),
                 light: r.light,
                 ribbon: r.ribbon,
+                mesh: None,
             }
         },
         bounds: effect.bounds.map(|b| (b.min.d(), b.max.d())),

@@ -312,6 +312,10 @@ pub struct Render {
     /// (`features::looks::ribbon`), instead of sprites.
     #[serde(default)]
     pub ribbon: Option<crate::features::looks::ribbon::Ribbon>,
+    /// The particles drawn as a triangle mesh from an OBJ file
+    /// (`features::looks::particle_mesh`), instead of sprites.
+    #[serde(default)]
+    pub mesh: Option<crate::features::looks::particle_mesh::ParticleMesh>,
 }
 
 impl Render {
@@ -352,6 +356,7 @@ impl Default for Render {
             lit: None,
             light: None,
             ribbon: None,
+            mesh: None,
         }
     }
 }

@@ -155,6 +155,17 @@ pub fn check_effect(effect: &Effect) -> Checker {
         };
         ribbon.check(&root, &set, effect.sort, &mut c);
     }
+    if let Some(mesh) = &effect.render.mesh {
+        let r = &effect.render;
+        let set = |field: &str| match field {
+            "trail" => r.trail.is_some(),
+            "texture" => r.texture.is_some(),
+            "ribbon" => r.ribbon.is_some(),
+            "soft" => r.soft.is_some(),
+            _ => false,
+        };
+        mesh.check(&root.field("render"), &set, &mut c);
+    }
     crate::features::looks::by_expression::LookBy::check(
         &mut c,
         &root.field("render"),

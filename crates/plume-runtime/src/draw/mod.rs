@@ -4,7 +4,7 @@
 //! recorded into the caller's render pass, with the compacted [`live_list`] of live slots),
 //! after the frame's preparation ([`frame`]: the depth sort along the camera, and the draw
 //! order it gives); the ribbons drawn before it ([`trail`]), the sprite
-//! texture ([`texture`]), the scene depth a soft draw reads ([`scene_depth`]), and what they
+//! texture ([`texture`]), a lit draw's lights ([`lights`]), the scene depth a soft draw reads ([`scene_depth`]), and what they
 //! share ([`pipeline`], [`target`], [`camera`]); then the two image-only ways of drawing that
 //! `plume render` uses: the compute splat ([`splat`]) and the bloom of a glowing effect
 //! ([`glow`]).
@@ -14,6 +14,7 @@
 pub(crate) mod camera;
 pub(crate) mod frame;
 pub(crate) mod glow;
+pub(crate) mod lights;
 pub(crate) mod live_list;
 pub(crate) mod particle_light;
 pub(crate) mod pipeline;

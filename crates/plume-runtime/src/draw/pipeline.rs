@@ -14,11 +14,19 @@ pub(crate) fn render_pipeline(
     gpu: &Gpu,
     module: &wgpu::ShaderModule,
     entries: (&str, &str),
-    topology: wgpu::PrimitiveTopology,
+    primitive: wgpu::PrimitiveState,
     target: &DrawTarget,
     blend: wgpu::BlendState,
 ) -> wgpu::RenderPipeline {
-    vertex_pipeline(gpu, module, entries, topology, target, blend, None, &[])
+    vertex_pipeline(gpu, module, entries, primitive, target, blend, None, &[])
+}
+
+/// Primitives of `topology`, both faces drawn.
+pub(crate) fn plain(topology: wgpu::PrimitiveTopology) -> wgpu::PrimitiveState {
+    wgpu::PrimitiveState {
+        topology,
+        ..Default::default()
+    }
 }
 
 /// [`render_pipeline`] with a pipeline layout of the caller's (None: derived) and vertex
@@ -28,7 +36,7 @@ pub(crate) fn vertex_pipeline(
     gpu: &Gpu,
     module: &wgpu::ShaderModule,
     (vs, fs): (&str, &str),
-    topology: wgpu::PrimitiveTopology,
+    primitive: wgpu::PrimitiveState,
     target: &DrawTarget,
     blend: wgpu::BlendState,
     layout: Option<&wgpu::PipelineLayout>,
@@ -44,10 +52,7 @@ pub(crate) fn vertex_pipeline(
                 compilation_options: Default::default(),
                 buffers,
             },
-            primitive: wgpu::PrimitiveState {
-                topology,
-                ..Default::default()
-            },
+            primitive,
             depth_stencil: target.depth.map(|d| wgpu::DepthStencilState {
                 format: d.format,
                 depth_write_enabled: Some(false),

@@ -16,7 +16,7 @@
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use plume_compiler::lights::{Lights, LIGHTS_BINDING, LIGHTS_BYTES};
+use plume_compiler::lights::{Lights, LIGHTS_BINDING};
 use plume_compiler::schema::Blend;
 use plume_compiler::wgsl::batch::INSTANCE_MODELS_BINDING;
 use plume_compiler::wgsl::draw::{DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
@@ -26,8 +26,9 @@ use crate::device::buffers::{filled_buffer, staging, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::device::resources::Resources;
 use crate::draw::camera::Camera;
+use crate::draw::lights::LightsUniform;
 use crate::draw::live_list::LiveList;
-use crate::draw::pipeline::{draw_group, render_pipeline};
+use crate::draw::pipeline::{draw_group, plain, render_pipeline};
 use crate::draw::texture::SpriteTexture;
 use crate::draw::trail::TrailDraw;
 use crate::error::RuntimeError;
@@ -145,8 +146,10 @@ impl GroupDraw {
             DeadSlots::BySize => effect.ir.capacity >= COMPACT_FROM_SLOTS,
         } && !stateless
             && !effect.ir.sort
-            // Ribbons draw every table entry, reading slots from it.
-            && effect.ir.render.ribbon.is_none();
+            // Ribbons draw every table entry, reading slots from it; a mesh's instances draw
+            // its vertices, not a sprite's.
+            && effect.ir.render.ribbon.is_none()
+            && effect.ir.render.mesh.is_none();
         let live = match compacted {
             true => Some(LiveList::new(gpu, res, effect, options.primitive)?),
             false => None,
@@ -172,14 +175,33 @@ impl GroupDraw {
             Primitive::Triangle => wgpu::PrimitiveTopology::TriangleList,
         };
         let ribbon = effect.ir.render.ribbon;
-        let (entry_points, topology) = match ribbon {
-            Some(_) => (
+        let mesh = effect.ir.render.mesh.as_ref();
+        if let Some(why) = mesh.and_then(|m| m.missing.as_ref()) {
+            return Err(RuntimeError::Compile(format!(
+                "{why} (the effect was compiled to be stepped, not drawn; drawing it needs its mesh)"
+            )));
+        }
+        let (entry_points, primitive) = match (ribbon, mesh) {
+            (Some(_), _) => (
                 ("vs_ribbon", "fs_ribbon"),
-                wgpu::PrimitiveTopology::TriangleStrip,
+                plain(wgpu::PrimitiveTopology::TriangleStrip),
             ),
-            None => (("vs", "fs"), topology),
+            // Closed meshes: their back faces are hidden behind their front ones.
+            (None, Some(_)) => (
+                ("vs_mesh", "fs_mesh"),
+                wgpu::PrimitiveState {
+                    cull_mode: Some(wgpu::Face::Back),
+                    ..plain(wgpu::PrimitiveTopology::TriangleList)
+                },
+            ),
+            (None, None) => (("vs", "fs"), plain(topology)),
         };
-        let pipeline = render_pipeline(gpu, &module, entry_points, topology, target, blend);
+        let vertices = match (ribbon, mesh) {
+            (Some(_), _) => plume_compiler::ribbon::SEGMENT_VERTICES,
+            (None, Some(mesh)) => mesh.vertices(),
+            (None, None) => options.primitive.vertices(),
+        };
+        let pipeline = render_pipeline(gpu, &module, entry_points, primitive, target, blend);
         let view = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("draw view"),
             size: DRAW_VIEW_BYTES,
@@ -194,6 +216,21 @@ impl GroupDraw {
                 )
             })?;
             entries.push((plume_compiler::ribbon::RIBBON_DRAW_BINDING, table.clone()));
+        }
+        if let Some(mesh) = mesh {
+            let words = mesh.vertex_words();
+            let buffer = filled_buffer(
+                gpu,
+                "mesh vertices",
+                (words.len() * 4).max(16) as u64,
+                STORAGE,
+                |b| {
+                    for (chunk, word) in b.chunks_exact_mut(4).zip(&words) {
+                        chunk.copy_from_slice(&word.to_le_bytes());
+                    }
+                },
+            )?;
+            entries.push((plume_compiler::particle_mesh::MESH_VERTICES_BINDING, buffer));
         }
         let lights = LightsUniform::new(gpu, effect);
         if let Some(lights) = &lights {
@@ -238,7 +275,7 @@ impl GroupDraw {
         } else if stateless {
             Instances::Frame(AtomicU32::new(0))
         } else if effect.ir.sort {
-            alive_instances(gpu, res, effect.ir.capacity, options.primitive)?
+            alive_instances(gpu, res, effect.ir.capacity, vertices)?
         } else {
             Instances::Slots(effect.ir.capacity)
         };
@@ -253,10 +290,7 @@ impl GroupDraw {
             trail,
             lights,
             instances,
-            vertices: match ribbon {
-                Some(_) => plume_compiler::ribbon::SEGMENT_VERTICES,
-                None => options.primitive.vertices(),
-            },
+            vertices,
             size_scale: 1.0,
             gpu: gpu.clone(),
         })
@@ -379,7 +413,7 @@ fn alive_instances(
     gpu: &Gpu,
     res: &Resources,
     capacity: u32,
-    primitive: Primitive,
+    vertices: u32,
 ) -> Result<Instances, RuntimeError> {
     let device = &gpu.device;
     let args = filled_buffer(
@@ -388,7 +422,7 @@ fn alive_instances(
         32,
         STORAGE | wgpu::BufferUsages::INDIRECT,
         |b| {
-            b[..4].copy_from_slice(&primitive.vertices().to_le_bytes());
+            b[..4].copy_from_slice(&vertices.to_le_bytes());
             b[16..20].copy_from_slice(&capacity.to_le_bytes());
         },
     )?;
@@ -510,50 +544,6 @@ pub(crate) fn draw_module(
         entries.push((INSTANCE_MODELS_BINDING, models.clone()));
     }
     Ok((module, entries))
-}
-
-/// A lit draw's lights (`render.lit`): the world-space lights it is drawn with (the effect
-/// file's until a host sets its own) and the uniform that holds them in the view of the frame
-/// being prepared, written with the `DrawView`, so that no pixel moves a light.
-pub(crate) struct LightsUniform {
-    pub(crate) buffer: wgpu::Buffer,
-    world: std::sync::Mutex<Lights>,
-}
-
-impl LightsUniform {
-    /// The lights of `effect`'s draw; None for an unlit effect.
-    pub(crate) fn new(gpu: &Gpu, effect: &CompiledEffect) -> Option<Self> {
-        effect.ir.render.lit.as_ref()?;
-        let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("lights"),
-            size: LIGHTS_BYTES,
-            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
-            mapped_at_creation: false,
-        });
-        Some(Self {
-            buffer,
-            world: std::sync::Mutex::new(effect.ir.lights.clone()),
-        })
-    }
-
-    /// Draws with `lights` (world space) from the next prepared frame on.
-    pub(crate) fn set(&self, lights: &Lights) {
-        *self.world.lock().unwrap_or_else(|p| p.into_inner()) = lights.clone();
-    }
-
-    /// Records a copy of the lights in `camera`'s view into the uniform.
-    pub(crate) fn record(
-        &self,
-        gpu: &Gpu,
-        encoder: &mut wgpu::CommandEncoder,
-        camera: &Camera,
-    ) -> Result<(), RuntimeError> {
-        let world = self.world.lock().unwrap_or_else(|p| p.into_inner());
-        let bytes = world.transformed(camera.view.as_dmat4()).uniform_bytes();
-        let src = staging(gpu, "lights", &bytes)?;
-        encoder.copy_buffer_to_buffer(&src, 0, &self.buffer, 0, LIGHTS_BYTES);
-        Ok(())
-    }
 }
 
 /// Records a copy of the `DrawView` uniform (camera, steps done, size scale) into `view` in

@@ -52,7 +52,7 @@ impl TrailDraw {
             gpu,
             &module,
             ("vs_trail", "fs_trail"),
-            wgpu::PrimitiveTopology::TriangleStrip,
+            crate::draw::pipeline::plain(wgpu::PrimitiveTopology::TriangleStrip),
             target,
             blend,
         );

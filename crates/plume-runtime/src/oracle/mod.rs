@@ -1,6 +1,6 @@
 //! Test oracles: what the tests compare the GPU's results against, and the readbacks they
 //! compare. The CPU-fed reference drawing ([`ReferenceRenderer`] of [`sprites`], with
-//! [`trail_strips`] for trails and [`ribbon_strips`] for ribbons joining particles: particles read back, coloured and sized in f64, drawn by a fixed
+//! [`trail_strips`] for trails, [`ribbon_strips`] for ribbons joining particles and [`mesh_triangles`] for mesh particles: particles read back, coloured and sized in f64, drawn by a fixed
 //! shader) is to the GPU draw what the f64 reference simulator (`plume_compiler::reference`)
 //! is to the kernels. The readbacks ([`records_by_slot`], [`draw_order`], [`read_trails`],
 //! [`read_flock_buffer`], [`chunk_count`], ...) expose what the public [`crate::Effect`]
@@ -10,6 +10,7 @@
 
 pub(crate) mod inspect;
 pub(crate) mod joined;
+pub(crate) mod meshes;
 pub(crate) mod sprites;
 pub(crate) mod strips;
 pub(crate) mod trails;
@@ -19,6 +20,7 @@ pub use inspect::{
     records_by_slot,
 };
 pub use joined::{read_ribbon_table, ribbon_strips};
+pub use meshes::mesh_triangles;
 pub use sprites::{sprites, sprites_at, ReferenceRenderer, Sprite};
 pub use strips::{trail_strips, StripVertex};
 pub use trails::read_trails;

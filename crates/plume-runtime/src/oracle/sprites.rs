@@ -316,7 +316,7 @@ impl ReferenceRenderer {
             gpu,
             &module,
             ("vs", "fs"),
-            wgpu::PrimitiveTopology::TriangleList,
+            crate::draw::pipeline::plain(wgpu::PrimitiveTopology::TriangleList),
             &crate::draw::target::DrawTarget::new(FORMAT),
             blend_state(blend),
             Some(&pipeline_layout),

@@ -117,7 +117,7 @@ impl StripPipeline {
             gpu,
             &module,
             ("vs", "fs"),
-            wgpu::PrimitiveTopology::TriangleList,
+            crate::draw::pipeline::plain(wgpu::PrimitiveTopology::TriangleList),
             &DrawTarget::new(FORMAT),
             blend_state(blend),
             None,

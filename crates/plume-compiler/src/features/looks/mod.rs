@@ -7,6 +7,7 @@ pub mod glow;
 pub mod lit;
 pub mod orient;
 pub mod particle_light;
+pub mod particle_mesh;
 pub mod ribbon;
 pub mod rotation;
 pub mod screen_size;

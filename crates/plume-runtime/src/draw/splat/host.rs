@@ -110,7 +110,7 @@ impl HostSplat {
             &gpu,
             &module,
             ("vs", "fs"),
-            wgpu::PrimitiveTopology::TriangleList,
+            crate::draw::pipeline::plain(wgpu::PrimitiveTopology::TriangleList),
             &blit_target,
             wgpu::BlendState {
                 color: premultiplied,

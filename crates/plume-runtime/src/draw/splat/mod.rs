@@ -91,12 +91,13 @@ pub struct Splat {
 impl Splat {
     /// Whether the splat can draw `ir`: any sprite (textured or round, any orientation,
     /// rotation and height, glowing or not), alpha or additive, and trails of a stateful
-    /// effect; not ribbons joining particles (`render.ribbon`), nor `Multiply`, `Mask`,
+    /// effect; not ribbons joining particles (`render.ribbon`), meshes (`render.mesh`), nor `Multiply`, `Mask`,
     /// `Premultiplied` or `Opaque` blending, which the raster draw draws.
     pub fn draws(ir: &EffectIr) -> bool {
         use plume_compiler::schema::Blend;
         (ir.render.trail.is_none() || ir.stateless.is_none())
             && ir.render.ribbon.is_none()
+            && ir.render.mesh.is_none()
             && matches!(ir.render.blend, Blend::Alpha | Blend::Additive)
     }
 
@@ -105,7 +106,7 @@ impl Splat {
         groups
             .iter()
             .any(|ir| !Self::draws(ir))
-            .then_some("the compute splat draws neither ribbons joining particles (render.ribbon), Multiply, Mask, Premultiplied or Opaque blending, nor trails of stateless effects")
+            .then_some("the compute splat draws neither ribbons joining particles (render.ribbon), meshes (render.mesh), Multiply, Mask, Premultiplied or Opaque blending, nor trails of stateless effects")
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot

@@ -327,6 +327,15 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         w.blank();
         ribbon.emit_draw(&mut w, ir.capacity, ir.render.blend);
     }
+    if let Some(mesh) = ir.render.mesh.as_ref().filter(|_| !shape.splat) {
+        w.blank();
+        mesh.emit_draw(
+            &mut w,
+            ir.render.turns_quad(),
+            ir.render.lit.is_some(),
+            ir.render.blend,
+        );
+    }
     if let Some(light) = ir.render.light.filter(|_| shape.particle_light) {
         w.blank();
         light.emit_kernels(&mut w, ir.capacity);

@@ -1,0 +1,77 @@
+//! Mesh particles (`render.mesh`) in Bevy's view, headless on lavapipe: a particle drawn as a
+//! square plate covers the square its corners project to, by the raster renderer even where
+//! the compute one is asked for (it draws no meshes: the effect falls back, as `Auto` picks the
+//! raster one for it). `BEVY_PLUME_TEST_IMAGES=DIR` keeps the image.
+
+mod common;
+
+use bevy::prelude::*;
+use bevy::render::RenderApp;
+use bevy_plume::{PlumeDraw, PlumeEffect, PlumeRenderStats};
+use common::{asset_dir, project, Harness};
+
+/// One particle at (0.5, 0.25, 0) drawn as `plate.obj` 2 m across.
+const PLATE: &str = r#"Effect(
+    name: "plate",
+    capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((0.5, 0.25, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    render: Render(color: [(0.0, (1.0, 0.4, 0.2, 1.0))], size: [(0.0, 2.0)], blend: Opaque,
+                   background: (0.0, 0.0, 0.0), mesh: Some(ParticleMesh(file: "plate.obj"))),
+)"#;
+
+/// A unit square in the xy plane facing +z (toward the camera), as two triangles.
+const PLATE_OBJ: &str = "v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\nf 1 2 3\nf 1 3 4\n";
+
+#[test]
+fn a_mesh_particle_covers_where_its_mesh_projects() {
+    let dir = asset_dir("meshes");
+    std::fs::write(dir.join("plate.plume.ron"), PLATE).unwrap();
+    std::fs::write(dir.join("plate.obj"), PLATE_OBJ).unwrap();
+    let mut h = Harness::new(&dir);
+    h.camera();
+    h.wait_for_pipelines();
+    let plate = h.load("plate.plume.ron");
+    h.app.world_mut().spawn((
+        PlumeEffect::new(plate).with_draw(PlumeDraw::Compute),
+        Transform::IDENTITY,
+    ));
+    h.update(5);
+    let image = h.capture_lit();
+    if let Ok(out) = std::env::var("BEVY_PLUME_TEST_IMAGES") {
+        image
+            .save(std::path::Path::new(&out).join("mesh.png"))
+            .unwrap();
+    }
+    let lit: Vec<(u32, u32)> = image
+        .enumerate_pixels()
+        .filter(|(_, _, p)| p.0[0] > 128)
+        .map(|(x, y, _)| (x, y))
+        .collect();
+    assert!(lit.len() > 100, "only {} pixels lit", lit.len());
+    let (x0, y0) = project(-0.5, 1.25);
+    let (x1, y1) = project(1.5, -0.75);
+    let xs = lit.iter().map(|p| p.0 as f32 + 0.5);
+    let ys = lit.iter().map(|p| p.1 as f32 + 0.5);
+    let (left, right) = (xs.clone().fold(f32::MAX, f32::min), xs.fold(0.0, f32::max));
+    let (top, bottom) = (ys.clone().fold(f32::MAX, f32::min), ys.fold(0.0, f32::max));
+    for (got, want, edge) in [
+        (left, x0, "left"),
+        (right, x1, "right"),
+        (top, y0, "top"),
+        (bottom, y1, "bottom"),
+    ] {
+        assert!(
+            (got - want).abs() < 1.5,
+            "the plate's {edge} edge at {got} px, its corners project to {want}"
+        );
+    }
+    // Filled: every pixel inside the square.
+    let inside = ((x1 - x0 - 2.0) * (y1 - y0 - 2.0)) as usize;
+    assert!(lit.len() >= inside, "{} pixels lit of {inside}", lit.len());
+    let stats = *h
+        .app
+        .sub_app(RenderApp)
+        .world()
+        .resource::<PlumeRenderStats>();
+    assert_eq!(stats.compute_draws, 0, "the raster renderer draws meshes");
+}
