@@ -20,7 +20,8 @@ const PLATE: &str = r#"Effect(
 )"#;
 
 /// A unit square in the xy plane facing +z (toward the camera), as two triangles.
-const PLATE_OBJ: &str = "v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\nf 1 2 3\nf 1 3 4\n";
+const PLATE_OBJ: &str =
+    "v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 0\nv -0.5 0.5 0\nf 1 2 3\nf 1 3 4\n";
 
 #[test]
 fn a_mesh_particle_covers_where_its_mesh_projects() {

@@ -1,11 +1,13 @@
-//! Drawing instances in Bevy's transparent 3D phase: each camera that sees an effect gets one
-//! phase item for it, sorted with the rest of the transparent phase by the effect's distance
-//! (the particles within it in Plume's own order, back to front when the file says `sort`),
-//! and drawn with Plume's pipelines straight into Bevy's render pass.
+//! Drawing instances in Bevy's transparent phases: each camera that sees an effect gets one
+//! phase item for it, sorted with the rest of the transparent phase (by the effect's distance
+//! in 3D, by its z in 2D; the particles within it in Plume's own order, back to front when the
+//! file says `sort`), and drawn with Plume's pipelines straight into Bevy's render pass.
 
 use std::collections::HashMap;
 
+use bevy::core_pipeline::core_2d::{Transparent2d, CORE_2D_DEPTH_FORMAT};
 use bevy::core_pipeline::core_3d::{Transparent3d, TransparentSortingInfo3d, CORE_3D_DEPTH_FORMAT};
+use bevy::math::FloatOrd;
 use bevy::prelude::*;
 use bevy::render::camera::ExtractedCamera;
 use bevy::render::render_phase::{
@@ -13,6 +15,7 @@ use bevy::render::render_phase::{
 };
 use bevy::render::render_resource::CachedRenderPipelineId;
 use bevy::render::renderer::RenderAdapterInfo;
+use bevy::render::sync_world::MainEntity;
 use bevy::render::view::{ExtractedView, RenderVisibleEntities};
 use plume_runtime::DrawTarget;
 
@@ -41,8 +44,8 @@ fn compute_size(view: &ExtractedView, camera: Option<&ExtractedCamera>) -> Optio
     whole.then_some((size.x, size.y))
 }
 
-/// What [`queue_effects`] reads of each camera: its entity, view, camera, MSAA, the entities it
-/// sees and whether it has a depth prepass.
+/// What the queue systems read of each camera: its entity, view, camera, MSAA, the entities
+/// it sees and whether it has a depth prepass.
 type ViewItem = (
     Entity,
     &'static ExtractedView,
@@ -52,8 +55,16 @@ type ViewItem = (
     Has<bevy::core_pipeline::prepass::DepthPrepass>,
 );
 
-/// Queues one transparent item per visible effect per camera, making each camera's draw of
-/// it first where there is none yet.
+/// What the queue systems share: the instances, the batches, the statistics and the adapter.
+type Shared<'a> = (
+    &'a mut PlumeInstances,
+    &'a mut PlumeBatches,
+    &'a mut PlumeRenderStats,
+    bool,
+);
+
+/// Queues one transparent item per visible effect per 3D camera (`Camera3d`), sorted by its
+/// centre's distance, making each camera's draw of it first where there is none yet.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn queue_effects(
     draw_functions: Res<DrawFunctions<Transparent3d>>,
@@ -72,120 +83,184 @@ pub(crate) fn queue_effects(
     let Some(draw_function) = draw_functions.read().get_id::<DrawPlume>() else {
         return;
     };
-    let store = &mut *store;
-    let frame = store.frame;
+    let mut shared = (&mut *store, &mut *batches, &mut *stats, gpu_adapter);
     for (view_entity, view, camera, msaa, visible, depth_prepass) in &views {
         let Some(phase) = phases.get_mut(&view.retained_view_entity) else {
             continue;
         };
-        let Some(visible) = visible.get::<PlumeEffect>() else {
+        let target = view_target(view, msaa, depth_prepass);
+        let size = compute_size(view, camera);
+        queue_view(
+            &mut shared,
+            (view_entity, target, Some(size)),
+            visible,
+            &mut |entity, center| {
+                phase.add_transient(Transparent3d {
+                    sorting_info: TransparentSortingInfo3d::Sorted {
+                        mesh_center: center,
+                        depth_bias: 0.0,
+                    },
+                    distance: 0.0,
+                    pipeline: CachedRenderPipelineId::INVALID,
+                    entity,
+                    draw_function,
+                    batch_range: 0..1,
+                    extra_index: PhaseItemExtraIndex::None,
+                    indexed: false,
+                });
+            },
+        );
+    }
+}
+
+/// Queues one item per visible effect per 2D camera (`Camera2d`) into Bevy's transparent 2D
+/// phase, sorted with the sprites by its entity's z (larger in front), drawn by the raster
+/// renderer (the compute one reads a 3D camera's depth) and tested against the 2D depth
+/// buffer as sprites are.
+pub(crate) fn queue_effects_2d(
+    draw_functions: Option<Res<DrawFunctions<Transparent2d>>>,
+    phases: Option<ResMut<ViewSortedRenderPhases<Transparent2d>>>,
+    views: Query<ViewItem>,
+    mut store: ResMut<PlumeInstances>,
+    mut batches: ResMut<PlumeBatches>,
+    mut stats: ResMut<PlumeRenderStats>,
+) {
+    let (Some(draw_functions), Some(mut phases)) = (draw_functions, phases) else {
+        return;
+    };
+    let Some(draw_function) = draw_functions.read().get_id::<DrawPlume>() else {
+        return;
+    };
+    let mut shared = (&mut *store, &mut *batches, &mut *stats, false);
+    for (view_entity, view, _, msaa, visible, _) in &views {
+        let Some(phase) = phases.get_mut(&view.retained_view_entity) else {
             continue;
         };
-        let target = view_target(view, msaa, depth_prepass);
-        // The batches this camera sees an entity of, each with the first such entity.
-        let mut seen_batches = HashMap::new();
-        for &(render_entity, main_entity) in &visible.entities_cpu_culling {
-            let Some(instance) = store.instances.get_mut(&main_entity.id()) else {
-                if let Some(id) = batches.batch_id(main_entity.id()) {
-                    seen_batches
-                        .entry(id)
-                        .or_insert((render_entity, main_entity));
-                }
-                continue;
-            };
-            let compute = match instance.draw {
-                PlumeDraw::Raster => false,
-                PlumeDraw::Compute => true,
-                PlumeDraw::Auto => {
-                    gpu_adapter
-                        && instance.capacity >= AUTO_COMPUTE_CAPACITY
-                        && instance.compute_draws()
-                }
-            };
-            let (target, size) = match compute.then(|| compute_size(view, camera)) {
-                // The compute renderer reads the main pass's depth (sample 0 of a multisampled
-                // one): soft particles fade with MSAA too.
-                Some(Some(size)) => (target.with_soft(true), Some(size)),
-                Some(None) => {
-                    warn_once!("bevy_plume: a camera whose viewport is not its whole target draws effects with the raster renderer");
-                    (target, None)
-                }
-                None => (target, None),
-            };
-            if instance
-                .view_draw(view_entity, target, size, frame)
-                .is_none()
-            {
-                continue;
-            }
-            stats.draws += 1;
-            if instance
-                .views
-                .get(&view_entity)
-                .is_some_and(|d| d.renderer.is_compute())
-            {
-                stats.compute_draws += 1;
-            }
-            phase.add_transient(Transparent3d {
-                sorting_info: TransparentSortingInfo3d::Sorted {
-                    mesh_center: instance.world_from_local.w_axis.truncate(),
-                    depth_bias: 0.0,
-                },
-                distance: 0.0,
-                pipeline: CachedRenderPipelineId::INVALID,
-                entity: (render_entity, main_entity),
-                draw_function,
-                batch_range: 0..1,
-                extra_index: PhaseItemExtraIndex::None,
-                indexed: false,
-            });
-        }
-        for (id, entity) in seen_batches {
-            let Some(batch) = batches.batch_mut(id) else {
-                continue;
-            };
-            if !batch
-                .views
-                .get(&view_entity)
-                .is_some_and(|(t, _, _)| *t == target)
-            {
-                match batch.batch.effect().renderer(&target) {
-                    Ok(renderer) => {
-                        batch.views.insert(view_entity, (target, renderer, frame));
-                    }
-                    Err(err) => {
-                        warn_once!(
-                            "{}: a batch cannot be drawn: {err}",
-                            batch.batch.compiled().ir.name
-                        );
-                        continue;
-                    }
-                }
-            }
-            if let Some(draw) = batch.views.get_mut(&view_entity) {
-                draw.2 = frame;
-            }
-            stats.draws += 1;
-            let center = batches
-                .members
-                .get(&entity.1.id())
-                .map_or(Vec3::ZERO, |m| m.world_from_local().w_axis.truncate());
-            phase.add_transient(Transparent3d {
-                sorting_info: TransparentSortingInfo3d::Sorted {
-                    mesh_center: center,
-                    depth_bias: 0.0,
-                },
-                distance: 0.0,
-                pipeline: CachedRenderPipelineId::INVALID,
-                entity,
-                draw_function,
-                batch_range: 0..1,
-                extra_index: PhaseItemExtraIndex::None,
-                indexed: false,
-            });
-        }
+        let target = DrawTarget::new(view.target_format)
+            .with_depth_compare(CORE_2D_DEPTH_FORMAT, wgpu::CompareFunction::GreaterEqual)
+            .with_samples(msaa.samples())
+            .with_soft(false);
+        queue_view(
+            &mut shared,
+            (view_entity, target, None),
+            visible,
+            &mut |entity, center| {
+                phase.add_transient(Transparent2d {
+                    sort_key: FloatOrd(center.z),
+                    entity,
+                    pipeline: CachedRenderPipelineId::INVALID,
+                    draw_function,
+                    batch_range: 0..1,
+                    extracted_index: usize::MAX,
+                    extra_index: PhaseItemExtraIndex::None,
+                    indexed: false,
+                });
+            },
+        );
     }
-    // A camera that no longer sees an effect (or is gone) drops its draw of it.
+}
+
+/// Makes (or keeps) each visible effect's draw for one camera `(view, target, compute)` and
+/// hands `add` each to queue, with its centre: the camera's compute image size in `compute`
+/// (`Some(None)`: a viewport the compute renderer cannot fill), None where the camera draws
+/// with the raster renderer alone.
+fn queue_view(
+    (store, batches, stats, gpu_adapter): &mut Shared<'_>,
+    (view_entity, target, compute_image): (Entity, DrawTarget, Option<Option<(u32, u32)>>),
+    visible: &RenderVisibleEntities,
+    add: &mut dyn FnMut((Entity, MainEntity), Vec3),
+) {
+    let Some(visible) = visible.get::<PlumeEffect>() else {
+        return;
+    };
+    let frame = store.frame;
+    // The batches this camera sees an entity of, each with the first such entity.
+    let mut seen_batches = HashMap::new();
+    for &(render_entity, main_entity) in &visible.entities_cpu_culling {
+        let Some(instance) = store.instances.get_mut(&main_entity.id()) else {
+            if let Some(id) = batches.batch_id(main_entity.id()) {
+                seen_batches
+                    .entry(id)
+                    .or_insert((render_entity, main_entity));
+            }
+            continue;
+        };
+        let compute = match instance.draw {
+            PlumeDraw::Raster => false,
+            PlumeDraw::Compute => true,
+            PlumeDraw::Auto => {
+                *gpu_adapter
+                    && instance.capacity >= AUTO_COMPUTE_CAPACITY
+                    && instance.compute_draws()
+            }
+        };
+        let (target, size) = match compute_image.filter(|_| compute) {
+            // The compute renderer reads the main pass's depth (sample 0 of a multisampled
+            // one): soft particles fade with MSAA too.
+            Some(Some(size)) => (target.with_soft(true), Some(size)),
+            Some(None) => {
+                warn_once!("bevy_plume: a camera whose viewport is not its whole target draws effects with the raster renderer");
+                (target, None)
+            }
+            None => (target, None),
+        };
+        if instance
+            .view_draw(view_entity, target, size, frame)
+            .is_none()
+        {
+            continue;
+        }
+        stats.draws += 1;
+        if instance
+            .views
+            .get(&view_entity)
+            .is_some_and(|d| d.renderer.is_compute())
+        {
+            stats.compute_draws += 1;
+        }
+        add(
+            (render_entity, main_entity),
+            instance.world_from_local.w_axis.truncate(),
+        );
+    }
+    for (id, entity) in seen_batches {
+        let Some(batch) = batches.batch_mut(id) else {
+            continue;
+        };
+        if !batch
+            .views
+            .get(&view_entity)
+            .is_some_and(|(t, _, _)| *t == target)
+        {
+            match batch.batch.effect().renderer(&target) {
+                Ok(renderer) => {
+                    batch.views.insert(view_entity, (target, renderer, frame));
+                }
+                Err(err) => {
+                    warn_once!(
+                        "{}: a batch cannot be drawn: {err}",
+                        batch.batch.compiled().ir.name
+                    );
+                    continue;
+                }
+            }
+        }
+        if let Some(draw) = batch.views.get_mut(&view_entity) {
+            draw.2 = frame;
+        }
+        stats.draws += 1;
+        let center = batches
+            .members
+            .get(&entity.1.id())
+            .map_or(Vec3::ZERO, |m| m.world_from_local().w_axis.truncate());
+        add(entity, center);
+    }
+}
+
+/// Drops the draws of cameras that no longer see an effect (or are gone): run once a frame,
+/// after every camera of every phase has queued.
+pub(crate) fn retire_unseen(mut store: ResMut<PlumeInstances>, mut batches: ResMut<PlumeBatches>) {
+    let frame = store.frame;
     for instance in store.instances.values_mut() {
         instance.views.retain(|_, draw| draw.frame == frame);
     }
@@ -206,19 +281,41 @@ impl Draw<Transparent3d> for DrawPlume {
         view: Entity,
         item: &Transparent3d,
     ) -> Result<(), DrawError> {
-        let store = world.resource::<PlumeInstances>();
-        let entity = item.entity.1.id();
-        let draw = store
-            .instances
-            .get(&entity)
-            .and_then(|instance| instance.views.get(&view));
-        if let Some(draw) = draw {
-            draw.renderer.draw(pass.wgpu_pass());
-        } else if let Some(batch) = world.resource::<PlumeBatches>().batch_of(entity) {
-            if let Some((_, renderer, _)) = batch.views.get(&view) {
-                renderer.draw(pass.wgpu_pass());
-            }
-        }
+        draw_entity(world, pass, view, item.entity.1.id());
         Ok(())
+    }
+}
+
+impl Draw<Transparent2d> for DrawPlume {
+    fn draw<'w>(
+        &mut self,
+        world: &'w World,
+        pass: &mut TrackedRenderPass<'w>,
+        view: Entity,
+        item: &Transparent2d,
+    ) -> Result<(), DrawError> {
+        draw_entity(world, pass, view, item.entity.1.id());
+        Ok(())
+    }
+}
+
+/// Records `entity`'s draw for `view` (its own, or its batch's) into `pass`.
+fn draw_entity<'w>(
+    world: &'w World,
+    pass: &mut TrackedRenderPass<'w>,
+    view: Entity,
+    entity: Entity,
+) {
+    let store = world.resource::<PlumeInstances>();
+    let draw = store
+        .instances
+        .get(&entity)
+        .and_then(|instance| instance.views.get(&view));
+    if let Some(draw) = draw {
+        draw.renderer.draw(pass.wgpu_pass());
+    } else if let Some(batch) = world.resource::<PlumeBatches>().batch_of(entity) {
+        if let Some((_, renderer, _)) = batch.views.get(&view) {
+            renderer.draw(pass.wgpu_pass());
+        }
     }
 }

@@ -2,7 +2,7 @@
 //! [`lights`]), the instances on Bevy's
 //! device ([`instances`]), the compute work: steps before the cameras and each camera's draw
 //! preparation before its main pass ([`simulate`], world-space steps along the entity's
-//! motion in [`motion`]), and the draw in the transparent phase ([`draw`]).
+//! motion in [`motion`]), and the draw in the transparent phases, 3D and 2D ([`draw`]).
 
 pub(crate) mod batches;
 pub(crate) mod draw;
@@ -13,9 +13,10 @@ pub(crate) mod motion;
 pub(crate) mod read;
 pub(crate) mod simulate;
 
+use bevy::core_pipeline::core_2d::Transparent2d;
 use bevy::core_pipeline::core_3d::{main_opaque_pass_3d, main_transparent_pass_3d, Transparent3d};
 use bevy::core_pipeline::schedule::camera_driver;
-use bevy::core_pipeline::{Core3d, Core3dSystems};
+use bevy::core_pipeline::{Core2d, Core2dSystems, Core3d, Core3dSystems};
 use bevy::prelude::*;
 use bevy::render::render_phase::DrawFunctions;
 use bevy::render::renderer::{RenderGraph, RenderGraphSystems};
@@ -58,6 +59,8 @@ pub(crate) fn build(app: &mut App) {
                 batches::sync_batches,
                 instances::sync_instances,
                 draw::queue_effects,
+                draw::queue_effects_2d,
+                draw::retire_unseen,
             )
                 .chain()
                 .in_set(RenderSystems::Queue),
@@ -78,6 +81,10 @@ pub(crate) fn build(app: &mut App) {
                     .after(main_opaque_pass_3d)
                     .before(main_transparent_pass_3d),
             ),
+        )
+        .add_systems(
+            Core2d,
+            simulate::prepare_for_view.before(Core2dSystems::MainPass),
         );
 }
 
@@ -97,4 +104,13 @@ pub(crate) fn finish(app: &mut App) {
         return;
     };
     functions.write().add(draw::DrawPlume);
+    match render_app
+        .world()
+        .get_resource::<DrawFunctions<Transparent2d>>()
+    {
+        Some(functions) => {
+            functions.write().add(draw::DrawPlume);
+        }
+        None => debug!("bevy_plume: no 2D transparent phase (Core2dPlugin missing): 2D cameras draw no effects"),
+    }
 }

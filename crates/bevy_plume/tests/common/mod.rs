@@ -194,6 +194,19 @@ impl Harness {
 }
 
 impl Harness {
+    /// Swaps the harness's 3D camera for a `Camera2d` drawing into the same image: Bevy's
+    /// default orthographic view, one world unit a pixel, the origin at the image's centre,
+    /// y up. MSAA off.
+    pub fn use_2d(&mut self) {
+        let camera = self.camera();
+        self.app.world_mut().despawn(camera);
+        self.app.world_mut().spawn((
+            Camera2d,
+            Msaa::Off,
+            RenderTarget::Image(self.image.clone().into()),
+        ));
+    }
+
     /// The harness's camera (its one `Camera3d`).
     pub fn camera(&mut self) -> Entity {
         self.app

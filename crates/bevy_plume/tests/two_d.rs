@@ -1,0 +1,111 @@
+//! Effects in 2D views (`Camera2d`), headless on lavapipe: a particle is drawn where Bevy's
+//! orthographic 2D camera puts it, and in the transparent 2D phase (where Bevy's sprites are
+//! drawn) effects sort by their entity's z: a larger blue one in front (larger z) covers the
+//! dot, one behind does not, whichever was spawned first.
+//! `BEVY_PLUME_TEST_IMAGES=DIR` keeps the images.
+
+mod common;
+
+use bevy::prelude::*;
+use bevy_plume::PlumeEffect;
+use common::{asset_dir, lit_pixels, Harness, HEIGHT, WIDTH};
+
+/// One orange particle at (20, 10), 16 units across, that never dies.
+const DOT: &str = r#"Effect(
+    name: "dot",
+    capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((20.0, 10.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    render: Render(color: [(0.0, (1.0, 0.5, 0.2, 1.0))], size: [(0.0, 16.0)], background: (0.0, 0.0, 0.0)),
+)"#;
+
+/// A blue particle at the same place, 40 units across, that never dies.
+const DISC: &str = r#"Effect(
+    name: "disc",
+    capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((20.0, 10.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    render: Render(color: [(0.0, (0.0, 0.0, 1.0, 1.0))], size: [(0.0, 40.0)], background: (0.0, 0.0, 0.0)),
+)"#;
+
+/// The particle's centre in the image: the 2D camera puts the origin at the centre, y up.
+fn centre() -> (f32, f32) {
+    (WIDTH as f32 / 2.0 + 20.0, HEIGHT as f32 / 2.0 - 10.0)
+}
+
+/// A 2D app with the dot at z = 0 and, when `disc_z` is given, the blue disc at that z
+/// (spawned before the dot when `disc_first`); the image after a few frames.
+fn draw(name: &str, disc_z: Option<f32>, disc_first: bool) -> image::RgbaImage {
+    let dir = asset_dir(name);
+    std::fs::write(dir.join("dot.plume.ron"), DOT).unwrap();
+    std::fs::write(dir.join("disc.plume.ron"), DISC).unwrap();
+    let mut h = Harness::new(&dir);
+    h.use_2d();
+    h.wait_for_pipelines();
+    let dot = h.load("dot.plume.ron");
+    let disc = h.load("disc.plume.ron");
+    let spawn_disc = |h: &mut Harness| {
+        if let Some(z) = disc_z {
+            h.app.world_mut().spawn((
+                PlumeEffect::new(disc.clone()),
+                Transform::from_xyz(0.0, 0.0, z),
+            ));
+        }
+    };
+    if disc_first {
+        spawn_disc(&mut h);
+    }
+    h.app
+        .world_mut()
+        .spawn((PlumeEffect::new(dot), Transform::IDENTITY));
+    if !disc_first {
+        spawn_disc(&mut h);
+    }
+    h.update(5);
+    let image = h.capture_lit();
+    if let Ok(out) = std::env::var("BEVY_PLUME_TEST_IMAGES") {
+        image
+            .save(std::path::Path::new(&out).join(format!("{name}.png")))
+            .unwrap();
+    }
+    image
+}
+
+#[test]
+fn a_camera2d_draws_a_particle_where_its_projection_puts_it() {
+    let image = draw("2d-dot", None, false);
+    let (n, x, y) = lit_pixels(&image, 40);
+    let (cx, cy) = centre();
+    // The soft dot fades to nothing at its rim: the pixels over 40 lie within its 8 units.
+    assert!(
+        (40..=201).contains(&n),
+        "{n} pixels lit, the dot covers at most 201"
+    );
+    assert!(
+        (x - cx).abs() < 0.5 && (y - cy).abs() < 0.5,
+        "the dot's pixels centre on ({x}, {y}), its projection on ({cx}, {cy})"
+    );
+    // (1, 0.5, 0.2) written to an sRGB image: (255, 188, 124).
+    let p = image.get_pixel(cx as u32, cy as u32).0;
+    assert!(
+        p[0] > 240 && (170..200).contains(&p[1]) && (110..140).contains(&p[2]),
+        "the dot's centre is {p:?}, not orange"
+    );
+}
+
+#[test]
+fn in_2d_effects_sort_by_z_whatever_their_spawn_order() {
+    let (cx, cy) = centre();
+    for disc_first in [true, false] {
+        let behind = draw(&format!("2d-behind-{disc_first}"), Some(-1.0), disc_first);
+        let p = behind.get_pixel(cx as u32, cy as u32).0;
+        assert!(
+            p[0] > 200,
+            "disc behind (z -1), spawned first: {disc_first}: the dot's centre is {p:?}, not orange"
+        );
+        let front = draw(&format!("2d-front-{disc_first}"), Some(1.0), disc_first);
+        let p = front.get_pixel(cx as u32, cy as u32).0;
+        assert!(
+            p[0] < 20 && p[2] > 200,
+            "disc in front (z 1), spawned first: {disc_first}: the dot's centre is {p:?}, not blue"
+        );
+    }
+}
