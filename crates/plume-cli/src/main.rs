@@ -136,8 +136,21 @@ pub(crate) fn parse_state(s: &str) -> Result<State, String> {
         .ok_or_else(|| format!("unknown state `{s}`; expected Auto, Stateful or Stateless"))
 }
 
+/// Where `plume` remembers accuracy calibrations between runs: `$PLUME_CACHE_DIR` (empty:
+/// nowhere), else `$XDG_CACHE_HOME/plume`, else `$HOME/.cache/plume`.
+fn cache_dir() -> Option<PathBuf> {
+    let var = |name| std::env::var_os(name).filter(|v| !v.is_empty());
+    if let Some(dir) = std::env::var_os("PLUME_CACHE_DIR") {
+        return (!dir.is_empty()).then(|| PathBuf::from(dir));
+    }
+    var("XDG_CACHE_HOME")
+        .map(|d| PathBuf::from(d).join("plume"))
+        .or_else(|| var("HOME").map(|h| PathBuf::from(h).join(".cache").join("plume")))
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    plume_compiler::passes::calibration_cache::remember_calibrations_in(cache_dir());
     match cli.command {
         Command::Check { files } => check(&files),
         Command::Compile {

@@ -37,7 +37,7 @@ pub struct ColorStop(pub f64, pub Rgba);
 pub struct SizeStop(pub f64, pub f64);
 
 /// The integration scheme.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
 pub enum Integrator {
     /// Explicit (forward) Euler: first order, unstable for oscillation.
     Euler,

@@ -242,7 +242,7 @@ impl Screen {
 }
 
 /// One way of stepping: an integrator and its substeps per step.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Scheme {
     /// The integrator.
     pub integrator: Integrator,
@@ -275,7 +275,7 @@ pub fn stages(integrator: Integrator) -> u32 {
 }
 
 /// What the accuracy pass decided.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum Choice {
     /// The closed form: exact at any step, so the budget costs nothing.
     Exact,

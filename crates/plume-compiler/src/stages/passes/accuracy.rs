@@ -27,6 +27,7 @@ use crate::base::values::Integrator;
 use crate::features::accuracy::{AccuracyIr, Choice, Measure, Scheme, Screen};
 use crate::ir::EffectIr;
 use crate::reference::calibrate::{self, Metric, MAX_SUBSTEPS};
+use crate::stages::passes::calibration_cache;
 
 /// The share of the budget the f64 error may take: the rest is f32's.
 const F64_SHARE: f64 = 0.5;
@@ -87,7 +88,11 @@ pub fn choose(
     let Some(key) = content_key(ir, exact_possible) else {
         return calibrate_choice(ir, exact_possible);
     };
-    let known = decided().lock().ok().and_then(|d| d.get(&key).cloned());
+    let known = decided()
+        .lock()
+        .ok()
+        .and_then(|d| d.get(&key).cloned())
+        .or_else(|| from_disk(ir, key));
     if let Some(d) = known {
         ir.accuracy = d.accuracy.map(|a| AccuracyIr {
             remembered: true,
@@ -99,22 +104,61 @@ pub fn choose(
         return Ok(d.warning);
     }
     let warning = calibrate_choice(ir, exact_possible)?;
+    let made = Decided {
+        accuracy: ir.accuracy.clone(),
+        integrator: ir.integrator,
+        substeps: ir.substeps,
+        integrator_reason: ir.integrator_reason.clone(),
+        warning: warning.clone(),
+    };
+    calibration_cache::store(
+        key,
+        &calibration_cache::Stored {
+            choice: made.accuracy.as_ref().and_then(|a| a.choice.clone()),
+            half_motion: made.accuracy.as_ref().is_some_and(|a| a.half_motion),
+            half_estimate: made.accuracy.as_ref().and_then(|a| a.half_estimate),
+            integrator: made.integrator,
+            substeps: made.substeps,
+            integrator_reason: made.integrator_reason.clone(),
+            warning: made
+                .warning
+                .as_ref()
+                .map(|(d, lookup)| (d.path.clone(), d.message.clone(), lookup.clone())),
+        },
+    );
+    remember(key, made);
+    Ok(warning)
+}
+
+/// Keeps `made` in memory for `key`.
+fn remember(key: u64, made: Decided) {
     if let Ok(mut d) = decided().lock() {
         if d.len() >= CACHED_MOST {
             d.clear();
         }
-        d.insert(
-            key,
-            Decided {
-                accuracy: ir.accuracy.clone(),
-                integrator: ir.integrator,
-                substeps: ir.substeps,
-                integrator_reason: ir.integrator_reason.clone(),
-                warning: warning.clone(),
-            },
-        );
+        d.insert(key, made);
     }
-    Ok(warning)
+}
+
+/// The choice stored on disk for `key` (see [`calibration_cache`]), applied to `ir`'s budget,
+/// and kept in memory too.
+fn from_disk(ir: &EffectIr, key: u64) -> Option<Decided> {
+    let stored = calibration_cache::load(key)?;
+    let accuracy = ir.accuracy.clone().map(|a| AccuracyIr {
+        choice: stored.choice.clone(),
+        half_motion: stored.half_motion,
+        half_estimate: stored.half_estimate,
+        ..a
+    });
+    let made = Decided {
+        accuracy,
+        integrator: stored.integrator,
+        substeps: stored.substeps,
+        integrator_reason: stored.integrator_reason.clone(),
+        warning: stored.warning(),
+    };
+    remember(key, made.clone());
+    Some(made)
 }
 
 /// [`choose`] itself: the calibration runs.

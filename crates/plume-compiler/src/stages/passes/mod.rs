@@ -4,6 +4,7 @@
 //! decide whether particles need state at all, and decide the particle layout.
 
 pub mod accuracy;
+pub mod calibration_cache;
 pub mod fold;
 pub mod integrator;
 pub mod layout;
