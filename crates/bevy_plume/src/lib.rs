@@ -25,12 +25,14 @@
 
 mod asset;
 mod bounds;
+mod diagnostics;
 mod effect;
 pub mod headless;
 mod particle_lights;
 mod render;
 
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
+pub use diagnostics::PlumeDiagnosticsPlugin;
 pub use effect::{PlumeBurst, PlumeDraw, PlumeEffect, SimulationSpace, AUTO_COMPUTE_CAPACITY};
 pub use particle_lights::PlumeLightOf;
 pub use plume_compiler;

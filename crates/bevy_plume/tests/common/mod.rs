@@ -54,6 +54,15 @@ impl Harness {
 
     /// [`Self::new`], watching the files for changes (hot reload) when `watch`.
     pub fn with_watching(asset_dir: &Path, watch: bool) -> Self {
+        Self::built(asset_dir, watch, |_| {})
+    }
+
+    /// [`Self::new`] with `extra` done to the app before it is finished (more plugins).
+    pub fn with_app(asset_dir: &Path, extra: impl FnOnce(&mut App)) -> Self {
+        Self::built(asset_dir, false, extra)
+    }
+
+    fn built(asset_dir: &Path, watch: bool, extra: impl FnOnce(&mut App)) -> Self {
         let headless = Headless {
             out: "unused.png".into(),
             frames: 0,
@@ -84,6 +93,7 @@ impl Harness {
                 }
             },
         );
+        extra(&mut app);
         app.finish();
         app.cleanup();
         let image = Image::new_target_texture(WIDTH, HEIGHT, TextureFormat::Rgba8UnormSrgb, None);
