@@ -1,13 +1,17 @@
 //! The render world's effect instances: one Plume [`Effect`] per effect entity, made on Bevy's
 //! render device, rebuilt when its file changes (hot reload), its seed or its generation
 //! (restart), and dropped (with its GPU buffers) when the entity goes. Each instance keeps one
-//! [`EffectRenderer`] per camera that draws it.
+//! [`EffectRenderer`] per camera that draws it. A variant of a file (a seed, world space) is
+//! compiled on Bevy's async compute task pool, not on the render thread: the entity draws
+//! nothing until it is ready (an older version of it goes on drawing meanwhile), then starts
+//! with the time it waited caught up.
 
 use std::collections::{BTreeMap, HashMap};
 use std::sync::Arc;
 
 use bevy::prelude::*;
 use bevy::render::renderer::{RenderDevice, RenderQueue};
+use bevy::tasks::{AsyncComputeTaskPool, Task};
 use plume_compiler::graph::CompiledGraph;
 use plume_runtime::{DrawTarget, Effect, EffectRenderer, Gpu};
 
@@ -142,6 +146,11 @@ impl StepClock {
 /// version (kept alive so the address stays its own) and the variant.
 pub(crate) type Variants = HashMap<(usize, Variant), (Arc<CompiledGraph>, Arc<CompiledGraph>)>;
 
+/// Variants being compiled on Bevy's async compute task pool, by the same key as
+/// [`Variants`]: the file version and the task.
+pub(crate) type Compiling =
+    HashMap<(usize, Variant), (Arc<CompiledGraph>, Task<Result<CompiledGraph, String>>)>;
+
 /// What the plugin holds in the render world, for a game's diagnostics and the tests: read it
 /// with `app.sub_app(RenderApp).world().resource::<PlumeRenderStats>()`.
 #[derive(Resource, Default, Clone, Copy, Debug, PartialEq, Eq)]
@@ -174,6 +183,11 @@ pub(crate) struct PlumeInstances {
     /// instances of one file compile it once: by (the file version's address, seed, placed),
     /// with that version kept alive beside it (dropped once no instance uses it).
     pub variants: Variants,
+    /// Variants being compiled off the render thread.
+    compiling: Compiling,
+    /// Effect time (s) that entities waiting for their variant have let pass, caught up by
+    /// their instance's first frame, so that it runs as if it had started when spawned.
+    waiting: HashMap<Entity, f64>,
     /// Frames seen (ages views' draws).
     pub frame: u64,
 }
@@ -205,13 +219,25 @@ pub(crate) fn sync_instances(
             .is_some_and(|i| i.key.same(&key));
         let known_bad = store.failed.get(&e.main).is_some_and(|k| k.same(&key));
         if !current && !known_bad {
-            match build(&gpu, e, key.clone(), &mut store.variants) {
-                Ok(instance) => {
+            let graph = variant_graph_soon(e, &key, &mut store.variants, &mut store.compiling);
+            match graph.and_then(|g| g.map(|g| build(&gpu, e, key.clone(), g)).transpose()) {
+                Ok(Some(mut instance)) => {
                     store.failed.remove(&e.main);
+                    if let Some(waited) = store.waiting.remove(&e.main) {
+                        instance.clock.advance_time(waited);
+                    }
                     store.instances.insert(e.main, instance);
+                }
+                // Still compiling: a running instance of an older key goes on meanwhile.
+                Ok(None) => {
+                    if e.control.playing {
+                        let scale = f64::from(e.control.time_scale.max(0.0));
+                        *store.waiting.entry(e.main).or_default() += extracted.delta * scale;
+                    }
                 }
                 Err(message) => {
                     error!("{message}");
+                    store.waiting.remove(&e.main);
                     store.failed.insert(e.main, key);
                 }
             }
@@ -235,9 +261,14 @@ pub(crate) fn sync_instances(
     }
     store.instances.retain(|entity, _| alive.contains(entity));
     store.failed.retain(|entity, _| alive.contains(entity));
-    // A variant whose file version no asset or instance holds any more goes.
+    store.waiting.retain(|entity, _| alive.contains(entity));
+    // A variant whose file version no asset or instance holds any more goes (a task
+    // dropped is cancelled).
     store
         .variants
+        .retain(|_, (source, _)| Arc::strong_count(source) > 1);
+    store
+        .compiling
         .retain(|_, (source, _)| Arc::strong_count(source) > 1);
     *stats = PlumeRenderStats {
         instances: store.instances.len(),
@@ -272,15 +303,50 @@ pub(crate) fn variant_graph(
     })
 }
 
-/// A new instance of `e`'s effect on `gpu`, with its warm-up steps due this frame: the file as
-/// written, or its variant for the instance's seed and space (compiled once, then shared).
+/// [`variant_graph`] without waiting: a variant not compiled yet is compiled on Bevy's async
+/// compute task pool (at once where there is none), and None says it is not ready this frame.
+fn variant_graph_soon(
+    e: &ExtractedEffect,
+    key: &BuildKey,
+    variants: &mut Variants,
+    compiling: &mut Compiling,
+) -> Result<Option<Arc<CompiledGraph>>, String> {
+    let wanted = key.variant;
+    let id = (Arc::as_ptr(&e.asset.graph) as usize, wanted);
+    if wanted == Variant::default() || variants.contains_key(&id) {
+        return variant_graph(e, key, variants).map(Some);
+    }
+    let Some(pool) = AsyncComputeTaskPool::try_get() else {
+        return variant_graph(e, key, variants).map(Some);
+    };
+    match compiling.get_mut(&id) {
+        Some((_, task)) if task.is_finished() => {
+            let Some((source, task)) = compiling.remove(&id) else {
+                return Ok(None);
+            };
+            let variant = Arc::new(bevy::tasks::block_on(task)?);
+            variants.insert(id, (source, variant.clone()));
+            Ok(Some(variant))
+        }
+        Some(_) => Ok(None),
+        None => {
+            let asset = e.asset.clone();
+            let task = pool.spawn(async move { asset.compile_with(wanted) });
+            compiling.insert(id, (e.asset.graph.clone(), task));
+            Ok(None)
+        }
+    }
+}
+
+/// A new instance of `e`'s effect on `gpu` running `graph` (the file as written, or its
+/// variant for the instance's seed and space), with its warm-up steps due this frame.
 fn build(
     gpu: &Gpu,
     e: &ExtractedEffect,
     key: BuildKey,
-    variants: &mut Variants,
+    graph: Arc<CompiledGraph>,
 ) -> Result<Instance, String> {
-    let graph = (*variant_graph(e, &key, variants)?).clone();
+    let graph = (*graph).clone();
     let particle_bytes = graph
         .groups
         .iter()
