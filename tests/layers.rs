@@ -94,6 +94,8 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
             // 1: the render world, which reads them; the headless runner, which waits on them.
             ("render", 1),
             ("headless", 1),
+            // 2: the diagnostics, which read the render world's counts.
+            ("diagnostics", 2),
         ],
     ),
 ];

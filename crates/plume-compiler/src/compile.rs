@@ -297,47 +297,24 @@ pub(crate) fn compile_group(
             a.content = Some(std::hash::Hasher::finish(&h));
         }
     }
+    let base = effect.base_dir.as_deref();
+    let look = (prefix, effect.step_only);
     if let Some(spec) = &effect.render.texture {
-        let path = ValuePath::root()
-            .field("render")
-            .field("texture")
-            .field("file");
-        let texture = match texture::TextureIr::load(spec, effect.base_dir.as_deref()) {
-            Ok(texture) => texture,
-            // Nothing will be drawn: the draw, if one is asked for after all, says why not.
-            Err(message) if effect.step_only => texture::TextureIr::stand_in(
-                spec,
-                format!("{}: {message}", join(prefix, &path.display)),
-            ),
-            Err(message) => {
-                return Err(CompileError::Invalid(prefixed(vec![(
-                    Diagnostic::error(path.display, message),
-                    path.lookup,
-                )])))
-            }
-        };
-        let mut texture = texture;
+        let path = ValuePath::root().field("render").field("texture");
+        let read = texture::TextureIr::load(spec, base);
+        let mut texture = look_file(path.field("file"), look, read, located, |why| {
+            texture::TextureIr::stand_in(spec, why)
+        })?;
         if let Some(second) = &spec.second {
-            let path = ValuePath::root()
-                .field("render")
-                .field("texture")
-                .field("second")
-                .field("file");
-            texture.second = Some(Box::new(
-                match texture.load_second(second, effect.base_dir.as_deref()) {
-                    Ok(loaded) => loaded,
-                    Err(message) if effect.step_only => texture.stand_in_second(
-                        second,
-                        format!("{}: {message}", join(prefix, &path.display)),
-                    ),
-                    Err(message) => {
-                        return Err(CompileError::Invalid(prefixed(vec![(
-                            Diagnostic::error(path.display, message),
-                            path.lookup,
-                        )])))
-                    }
-                },
-            ));
+            let read = texture.load_second(second, base);
+            let loaded = look_file(
+                path.field("second").field("file"),
+                look,
+                read,
+                located,
+                |why| texture.stand_in_second(second, why),
+            )?;
+            texture.second = Some(Box::new(loaded));
         }
         ir.render.texture = Some(texture);
     }
@@ -346,21 +323,10 @@ pub(crate) fn compile_group(
             .field("render")
             .field("mesh")
             .field("file");
-        ir.render.mesh = Some(
-            match particle_mesh::MeshIr::load(spec, effect.base_dir.as_deref()) {
-                Ok(mesh) => mesh,
-                Err(message) if effect.step_only => particle_mesh::MeshIr::stand_in(
-                    spec,
-                    format!("{}: {message}", join(prefix, &path.display)),
-                ),
-                Err(message) => {
-                    return Err(CompileError::Invalid(prefixed(vec![(
-                        Diagnostic::error(path.display, message),
-                        path.lookup,
-                    )])))
-                }
-            },
-        );
+        let read = particle_mesh::MeshIr::load(spec, base);
+        ir.render.mesh = Some(look_file(path, look, read, located, |why| {
+            particle_mesh::MeshIr::stand_in(spec, why)
+        })?);
     }
     if let (Some(lit), Some(texture)) = (&effect.render.lit, &ir.render.texture) {
         for (field, file) in lit.map_files() {
@@ -370,21 +336,10 @@ pub(crate) fn compile_group(
                 .field("normals")
                 .variant(lit.normals_name())
                 .field(field);
-            let map =
-                match texture::TextureIr::load_lit_map(file, texture, effect.base_dir.as_deref()) {
-                    Ok(map) => map,
-                    Err(message) if effect.step_only => texture::TextureIr::stand_in_lit_map(
-                        file,
-                        texture,
-                        format!("{}: {message}", join(prefix, &path.display)),
-                    ),
-                    Err(message) => {
-                        return Err(CompileError::Invalid(prefixed(vec![(
-                            Diagnostic::error(path.display, message),
-                            path.lookup,
-                        )])))
-                    }
-                };
+            let read = texture::TextureIr::load_lit_map(file, texture, base);
+            let map = look_file(path, look, read, located, |why| {
+                texture::TextureIr::stand_in_lit_map(file, texture, why)
+            })?;
             ir.render.lit_maps.push(map);
         }
     }
@@ -441,6 +396,30 @@ pub fn graph_field(effect: &Effect) -> Option<ValuePath> {
         Some(ValuePath::root().field("events"))
     } else {
         None
+    }
+}
+
+/// A file the look names (a texture, a lit map, a mesh) at `path`, as `read` gave it; for an
+/// effect compiled to be stepped only (`look.1`), `stand_in(why)` where it could not be read:
+/// nothing will be drawn, and a draw asked for after all says why not. Otherwise the located
+/// error, its path put after `look.0` (the group's prefix).
+fn look_file<T>(
+    path: ValuePath,
+    (prefix, step_only): (&str, bool),
+    read: Result<T, String>,
+    located: &dyn Fn(Vec<(Diagnostic, String)>) -> Diagnostics,
+    stand_in: impl FnOnce(String) -> T,
+) -> Result<T, CompileError> {
+    match read {
+        Ok(loaded) => Ok(loaded),
+        Err(message) if step_only => Ok(stand_in(format!(
+            "{}: {message}",
+            join(prefix, &path.display)
+        ))),
+        Err(message) => Err(CompileError::Invalid(located(prefixed(
+            vec![(Diagnostic::error(path.display, message), path.lookup)],
+            prefix,
+        )))),
     }
 }
 
