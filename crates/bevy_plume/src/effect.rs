@@ -45,6 +45,19 @@ pub enum PlumeDraw {
     Compute,
 }
 
+/// When an effect's time runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect)]
+pub enum PlumeSimulate {
+    /// Every frame, seen or not.
+    #[default]
+    Always,
+    /// Only in frames where some camera sees the entity (its `ViewVisibility`, from its
+    /// bounds: declared in the file, or measured on the GPU). Unseen, it freezes: no steps, no
+    /// spawns, its particles held where they were, and it takes up where it stopped when seen
+    /// again (the time it was unseen is not caught up).
+    WhenVisible,
+}
+
 /// The capacity from which `PlumeDraw::Auto` draws an effect with the compute renderer on a GPU
 /// adapter. The compute renderer costs a few passes over the camera's image per effect
 /// whatever its particles (clearing, merging and putting an image of 8 bytes a pixel over the
@@ -78,6 +91,8 @@ pub struct PlumeEffect {
     pub draw: PlumeDraw,
     /// Whether time runs for this effect (false: it freezes, still drawn).
     pub playing: bool,
+    /// Whether its time runs while no camera sees it (default: always).
+    pub simulate: PlumeSimulate,
     /// How fast the effect's time runs against the app's (1: real time).
     pub time_scale: f32,
     /// Replaces the file's `seed` for this instance (the effect is compiled again for it,
@@ -161,6 +176,7 @@ impl PlumeEffect {
             space: SimulationSpace::World,
             draw: PlumeDraw::Auto,
             playing: true,
+            simulate: PlumeSimulate::Always,
             time_scale: 1.0,
             seed: None,
             warm_up: 0.0,
@@ -199,6 +215,11 @@ impl PlumeEffect {
     /// With its particles in `space`.
     pub fn with_space(self, space: SimulationSpace) -> Self {
         Self { space, ..self }
+    }
+
+    /// Simulated as `simulate` says (only while seen: [`PlumeSimulate::WhenVisible`]).
+    pub fn with_simulate(self, simulate: PlumeSimulate) -> Self {
+        Self { simulate, ..self }
     }
 
     /// Drawn by `draw`'s renderer.

@@ -33,7 +33,9 @@ mod render;
 
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
 pub use diagnostics::PlumeDiagnosticsPlugin;
-pub use effect::{PlumeBurst, PlumeDraw, PlumeEffect, SimulationSpace, AUTO_COMPUTE_CAPACITY};
+pub use effect::{
+    PlumeBurst, PlumeDraw, PlumeEffect, PlumeSimulate, SimulationSpace, AUTO_COMPUTE_CAPACITY,
+};
 pub use particle_lights::PlumeLightOf;
 pub use plume_compiler;
 pub use plume_runtime;
@@ -81,6 +83,7 @@ impl Plugin for PlumePlugin {
             .register_type::<PlumeBurst>()
             .register_type::<SimulationSpace>()
             .register_type::<PlumeDraw>()
+            .register_type::<PlumeSimulate>()
             .register_type::<PlumeLightOf>()
             .init_resource::<effect::FiredBursts>()
             .configure_sets(

@@ -224,10 +224,7 @@ pub(crate) fn sync_batches(
                 }
             }
         }
-        if e.control.playing {
-            let scale = f64::from(e.control.time_scale.max(0.0));
-            member.clock.advance_time(delta * scale);
-        }
+        member.clock.advance_time(e.effect_time(delta));
     }
     for (entity, fired) in &bursts.0 {
         let Some((batch, member)) = batches.lookup_mut(*entity) else {

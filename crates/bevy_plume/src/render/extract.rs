@@ -21,6 +21,21 @@ pub(crate) struct ExtractedEffect {
     pub world_from_local: Mat4,
     /// The component's controls.
     pub control: PlumeEffect,
+    /// Whether a camera saw the entity in the main world's last frame.
+    pub visible: bool,
+}
+
+impl ExtractedEffect {
+    /// Seconds of the effect's time this frame of `delta` app seconds: scaled, and none while
+    /// paused, or unseen when it simulates only while visible.
+    pub(crate) fn effect_time(&self, delta: f64) -> f64 {
+        let runs = self.control.playing
+            && (self.visible || self.control.simulate == crate::effect::PlumeSimulate::Always);
+        match runs {
+            true => delta * f64::from(self.control.time_scale.max(0.0)),
+            false => 0.0,
+        }
+    }
 }
 
 /// Every effect entity whose file has loaded, and the app's time step, this frame.
@@ -32,17 +47,26 @@ pub(crate) struct ExtractedEffects {
     pub delta: f64,
 }
 
+/// What [`extract_effects`] reads of each effect entity.
+type EffectItem = (
+    Entity,
+    RenderEntity,
+    &'static PlumeEffect,
+    &'static GlobalTransform,
+    &'static ViewVisibility,
+);
+
 /// Copies the effect entities and the time step into [`ExtractedEffects`]. Entities whose
 /// file has not loaded (or never compiled) are left out: they simulate nothing yet.
 pub(crate) fn extract_effects(
     mut extracted: ResMut<ExtractedEffects>,
-    effects: Extract<Query<(Entity, RenderEntity, &PlumeEffect, &GlobalTransform)>>,
+    effects: Extract<Query<EffectItem>>,
     assets: Extract<Res<Assets<PlumeEffectAsset>>>,
     time: Extract<Res<Time>>,
 ) {
     extracted.effects.clear();
     extracted.delta = time.delta_secs_f64();
-    for (main, render, control, transform) in &effects {
+    for (main, render, control, transform, seen) in &effects {
         let Some(asset) = assets.get(&control.handle) else {
             continue;
         };
@@ -52,6 +76,7 @@ pub(crate) fn extract_effects(
             asset: asset.clone(),
             world_from_local: transform.to_matrix(),
             control: control.clone(),
+            visible: seen.get(),
         });
     }
 }

@@ -230,10 +230,7 @@ pub(crate) fn sync_instances(
                 }
                 // Still compiling: a running instance of an older key goes on meanwhile.
                 Ok(None) => {
-                    if e.control.playing {
-                        let scale = f64::from(e.control.time_scale.max(0.0));
-                        *store.waiting.entry(e.main).or_default() += extracted.delta * scale;
-                    }
+                    *store.waiting.entry(e.main).or_default() += e.effect_time(extracted.delta);
                 }
                 Err(message) => {
                     error!("{message}");
@@ -248,10 +245,7 @@ pub(crate) fn sync_instances(
             instance.draw = e.control.draw;
             instance.render_entity = e.render;
             instance.control_from_code(e);
-            if e.control.playing {
-                let scale = f64::from(e.control.time_scale.max(0.0));
-                instance.clock.advance_time(extracted.delta * scale);
-            }
+            instance.clock.advance_time(e.effect_time(extracted.delta));
         }
     }
     for (entity, fired) in &bursts.0 {
