@@ -51,6 +51,22 @@ fn folder() -> &'static Mutex<Option<PathBuf>> {
 /// None stops. `plume` uses `$PLUME_CACHE_DIR`, else `$XDG_CACHE_HOME/plume`, else
 /// `~/.cache/plume`. Compiling reads and writes there only for files with an `accuracy`
 /// budget.
+///
+/// ```
+/// use plume_compiler::passes::calibration_cache::remember_calibrations_in;
+/// let dir = std::env::temp_dir().join(format!("plume-doc-cache-{}", std::process::id()));
+/// remember_calibrations_in(Some(dir.clone()));
+/// let src = r#"Effect(name: "pulled", capacity: 64,
+///     emitters: [Emitter(burst: 64, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 1.0),
+///                        velocity: Radial(speed: (0.5, 1.0)))],
+///     forces: [Attractor(center: (0.0, 0.0, 0.0), strength: 2.0, range: 5.0)],
+///     accuracy: (position: 0.05, over: 1.0))"#;
+/// plume_compiler::compile_str(src, &Default::default()).unwrap();
+/// // One choice stored, under this build's folder.
+/// let builds: Vec<_> = std::fs::read_dir(dir.join("calibrations")).unwrap().collect();
+/// assert_eq!(builds.len(), 1);
+/// remember_calibrations_in(None);
+/// ```
 pub fn remember_calibrations_in(dir: Option<PathBuf>) {
     if let Ok(mut f) = folder().lock() {
         *f = dir;
