@@ -25,13 +25,8 @@ pub fn mesh_triangles(sprites: &[Sprite], ir: &EffectIr, camera: &Camera) -> Vec
     let d = |v: [f32; 3]| DVec3::new(v[0].into(), v[1].into(), v[2].into());
     let mut out = Vec::new();
     for s in sprites {
-        // What the draw hides (Blend::hidden_wgsl): no opacity, or for premultiplied colour
-        // nothing at all.
-        let shown = match ir.render.blend {
-            plume_compiler::schema::Blend::Premultiplied => s.color.iter().any(|&c| c > 0.0),
-            _ => s.color[3] > 0.0,
-        };
-        if !shown {
+        // What the draw hides: no opacity, or for premultiplied colour nothing at all.
+        if ir.render.blend.hides(s.color.map(f64::from)) {
             continue;
         }
         let rgb = d([s.color[0], s.color[1], s.color[2]]);

@@ -65,6 +65,14 @@ impl Blend {
         }
     }
 
+    /// The f64 twin of [`Self::hidden_wgsl`]: whether a sprite of colour `rgba` draws nothing.
+    pub fn hides(self, rgba: [f64; 4]) -> bool {
+        match self {
+            Blend::Premultiplied => rgba.iter().all(|&c| c <= 0.0),
+            _ => rgba[3] <= 0.0,
+        }
+    }
+
     /// What a strip's fragment (a trail's, a ribbon's) of colour `in.color` covering `cover`
     /// of the pixel (WGSL) returns: its colour at opacity × coverage through `blend_out`, or
     /// for `Premultiplied` its colour and opacity each times the coverage.
