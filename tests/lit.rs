@@ -275,6 +275,7 @@ fn a_hosts_lights_replace_the_files() {
                 color: DVec3::splat(0.3),
             },
         ],
+        shadow: None,
     };
     assert_lit_like_f64(
         &gpu,

@@ -136,6 +136,7 @@ fn the_scene_is_lit_by_a_lit_effects_lights() {
             direction: glam::DVec3::new(0.3, 0.0, -1.0),
             color: glam::DVec3::new(1.5, 0.4, 0.0),
         }],
+        shadow: None,
     };
     for (name, lights) in [("plain", None), ("the effect's", Some(&red_sun))] {
         if let Some(lights) = lights {

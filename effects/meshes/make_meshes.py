@@ -2,7 +2,9 @@
 """Writes the example meshes next to this script: rock.obj (a lumpy boulder: a sphere of 20
 rings and 40 segments whose radius follows a few fixed waves), crystal.obj (a hexagonal
 prism with pointed ends), steps.obj (a flight of four stone steps on a ground slab) and
-floor.obj (a flat 12 m square at y = 0, facing up) and ico.obj (a sphere of radius 0.5, an
+floor.obj (a flat 12 m square at y = 0, facing up), wall.obj (a stone wall 4 m high, 5 m
+long and 0.3 m thick, standing on y = 0 across x = -2: what casts the shadow in
+shadowed_smoke.ron) and ico.obj (a sphere of radius 0.5, an
 icosahedron whose faces are split in four three times: 1280 triangles, a mesh particle's
 shape). Deterministic: run it again and the files come out the same."""
 
@@ -71,12 +73,7 @@ def steps(count=4, rise=0.3, tread=0.5, width=3.0):
     vertices, faces = [], []
 
     def box(lo, hi):
-        base = len(vertices)
-        for k in range(8):
-            vertices.append(tuple(hi[a] if k >> a & 1 else lo[a] for a in range(3)))
-        # Corner k has x from bit 0, y from bit 1, z from bit 2; faces wind outward.
-        for q in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 4, 6, 2), (1, 3, 7, 5), (0, 1, 5, 4), (2, 6, 7, 3)):
-            faces.append(tuple(base + i for i in q))
+        box_faces(vertices, faces, lo, hi)
 
     box((-6.0, -0.1, -6.0), (6.0, 0.0, 6.0))
     for k in range(count):
@@ -84,6 +81,21 @@ def steps(count=4, rise=0.3, tread=0.5, width=3.0):
         # every step reaches back to z = -2 (the boxes overlap: this is drawn, not filled).
         box((-width / 2, 0.0, -2.0), (width / 2, rise * (k + 1), 1.0 - tread * k))
     write("steps.obj", vertices, faces, "Four stone steps climbing towards -z on a 12 m ground slab.")
+
+
+def box_faces(vertices, faces, lo, hi):
+    base = len(vertices)
+    for k in range(8):
+        vertices.append(tuple(hi[a] if k >> a & 1 else lo[a] for a in range(3)))
+    # Corner k has x from bit 0, y from bit 1, z from bit 2; faces wind outward.
+    for q in ((0, 2, 3, 1), (4, 5, 7, 6), (0, 4, 6, 2), (1, 3, 7, 5), (0, 1, 5, 4), (2, 6, 7, 3)):
+        faces.append(tuple(base + i for i in q))
+
+
+def wall():
+    vertices, faces = [], []
+    box_faces(vertices, faces, (-2.15, 0.0, -2.5), (-1.85, 4.0, 2.5))
+    write("wall.obj", vertices, faces, "A stone wall 4 m high and 5 m long across x = -2.")
 
 
 def floor(half=6.0):
@@ -125,4 +137,5 @@ rock()
 crystal()
 steps()
 floor()
+wall()
 ico()

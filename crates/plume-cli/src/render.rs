@@ -135,7 +135,7 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         .iter()
         .flat_map(|g| g.effect.ir.scene_triangles())
         .collect();
-    let scene = match args.no_scene {
+    let mut scene = match args.no_scene {
         false => Scene::new(&gpu, &triangles, target.target().color_format, (w, h))?,
         true => None,
     };
@@ -153,6 +153,11 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         true => top.lights.clone(),
         false => Scene::plain_lights(),
     };
+    // A light that casts a shadow is blocked by the meshes' shadow map.
+    let scene_lights = match &mut scene {
+        Some(scene) => scene.cast_shadow(&scene_lights)?,
+        None => scene_lights,
+    };
     if let Some(scene) = &scene {
         scene.set_lights(&scene_lights);
     }
@@ -167,8 +172,8 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         (None, _) => sim.renderer(&target.target())?,
     };
     if let Some(scene) = &scene {
-        // Soft particles fade where they meet the meshes.
-        renderer.set_scene_depth(scene.depth_view());
+        // Soft particles fade where they meet the meshes, and lit ones are in their shadow.
+        scene.bind_to(&mut renderer, &scene_lights)?;
     }
     let mut splat = match (draw, &scene) {
         (DrawMethod::Splat, None) => Some(Splat::new(&sim, w, h)?),

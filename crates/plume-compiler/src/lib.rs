@@ -61,7 +61,7 @@ pub use features::looks::{
 };
 pub use features::{
     accuracy, attributes, bursts, colliders, emitter, events, field, forces, inherit, lights,
-    mesh_emission, placement,
+    mesh_emission, placement, shadow,
 };
 pub use ir::EffectIr;
 pub use stages::passes::layout::Layout;

@@ -43,6 +43,7 @@ pub use error::RuntimeError;
 pub use glam;
 /// The lights a lit look is drawn with ([`EffectRenderer::set_lights`]).
 pub use plume_compiler::lights::{LightSource, Lights};
+pub use plume_compiler::shadow::{Shadow, ShadowDepths};
 pub use sim::batch::{BatchInstance, EffectBatch};
 pub use sim::bounds::{BoundsWatch, LiveBounds};
 pub use sim::effect::Effect;

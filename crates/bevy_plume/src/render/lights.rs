@@ -59,6 +59,7 @@ impl ExtractedLights {
                     },
                 })
                 .collect(),
+            shadow: None,
         }
     }
 }
@@ -126,6 +127,7 @@ pub(crate) fn extract_lights(
     extracted.scene = Lights {
         ambient,
         sources: sources.into_iter().map(|(_, s)| s).collect(),
+        shadow: None,
     };
     extracted.views = cameras
         .iter()

@@ -176,6 +176,7 @@ fn watch_particle_lights(
                 let in_world = plume_runtime::Lights {
                     ambient: plume_runtime::glam::DVec3::ZERO,
                     sources: read,
+                    shadow: None,
                 }
                 .transformed(to_world.as_dmat4());
                 lights.insert(*entity, in_world.sources);

@@ -50,7 +50,9 @@ impl Running {
                     .compute_renderer(&loaded.target, w, h)
                     .map_err(|e| e.to_string())?;
                 if let Some(meshes) = &loaded.meshes {
-                    loaded.renderer.set_scene_depth(meshes.depth_view());
+                    meshes
+                        .bind_to(&mut loaded.renderer, &loaded.scene_lights)
+                        .map_err(|e| e.to_string())?;
                 }
             }
             let bg = loaded.effect.compiled().ir.render.background;
@@ -73,7 +75,9 @@ impl Running {
             let mut depth = None;
             if let Some(meshes) = &mut loaded.meshes {
                 if meshes.resize((w, h)) {
-                    loaded.renderer.set_scene_depth(meshes.depth_view());
+                    meshes
+                        .bind_to(&mut loaded.renderer, &loaded.scene_lights)
+                        .map_err(|e| e.to_string())?;
                 }
                 // Particles that give off light light the meshes as a recent frame's reading
                 // says (read back without waiting).

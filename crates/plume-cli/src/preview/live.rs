@@ -83,7 +83,7 @@ impl Running {
             .collect();
         let format = Scene::draw_format(glow.as_ref());
         let size = (self.config.width.max(1), self.config.height.max(1));
-        let meshes = plume_runtime::outputs::Scene::new(&self.gpu, &triangles, format, size)
+        let mut meshes = plume_runtime::outputs::Scene::new(&self.gpu, &triangles, format, size)
             .map_err(|e| e.to_string())?;
         // The file's lights light what its particles meet too, when it names any or its look
         // is lit.
@@ -91,6 +91,13 @@ impl Running {
         let scene_lights = match top.render.lit.is_some() || top.lights_named {
             true => top.lights.clone(),
             false => plume_runtime::outputs::Scene::plain_lights(),
+        };
+        // A light that casts a shadow is blocked by the meshes' shadow map.
+        let scene_lights = match &mut meshes {
+            Some(meshes) => meshes
+                .cast_shadow(&scene_lights)
+                .map_err(|e| e.to_string())?,
+            None => scene_lights,
         };
         if let Some(meshes) = &meshes {
             meshes.set_lights(&scene_lights);
@@ -114,7 +121,9 @@ impl Running {
         about.push_str(&format!("; drawn by {drawn_by} ({why})"));
         eprintln!("{}: drawn by {drawn_by} ({why})", top_name);
         if let Some(meshes) = &meshes {
-            renderer.set_scene_depth(meshes.depth_view());
+            meshes
+                .bind_to(&mut renderer, &scene_lights)
+                .map_err(|e| e.to_string())?;
         }
         let particle_lights = match &meshes {
             Some(_) => {

@@ -15,13 +15,16 @@ use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::base::values::Vec3;
 use crate::base::writer::{f32_lit, Writer};
+use crate::features::shadow::{
+    Shadow, SHADOW_BYTES, SHADOW_FIELDS_WGSL, SHADOW_MAP_BINDING, SHADOW_WGSL,
+};
 
 /// Most light sources (directional and point) one draw reads.
 pub const LIGHTS_MOST: usize = 8;
 
-/// Bytes of the lights uniform: the ambient light and the source count (32), then
-/// [`LIGHTS_MOST`] sources of two vec4s each.
-pub const LIGHTS_BYTES: u64 = 32 + 32 * LIGHTS_MOST as u64;
+/// Bytes of the lights uniform: the ambient light and the source count (32),
+/// [`LIGHTS_MOST`] sources of two vec4s each, then the shadow ([`SHADOW_BYTES`]).
+pub const LIGHTS_BYTES: u64 = 32 + 32 * LIGHTS_MOST as u64 + SHADOW_BYTES;
 
 /// Binding of the lights uniform in a lit effect's draw module.
 pub const LIGHTS_BINDING: u32 = 36;
@@ -43,6 +46,9 @@ pub enum Light {
         /// Its strength: a surface facing it receives colour · intensity.
         #[serde(default = "one")]
         intensity: f64,
+        /// Whether the scene's meshes cast its shadow (at most one light of a file).
+        #[serde(default)]
+        shadow: bool,
     },
     /// Light from a point, falling off with distance.
     Point {
@@ -111,6 +117,8 @@ pub struct Lights {
     /// Directional and point lights, at most [`LIGHTS_MOST`] (the draw reads the first that
     /// many).
     pub sources: Vec<LightSource>,
+    /// The shadow map that blocks one directional light, if any.
+    pub shadow: Option<Shadow>,
 }
 
 impl Default for Lights {
@@ -123,6 +131,7 @@ impl Default for Lights {
                 direction: DVec3::new(0.4, -1.0, -0.3).normalize(),
                 color: DVec3::ONE,
             }],
+            shadow: None,
         }
     }
 }
@@ -136,6 +145,7 @@ impl Lights {
         let mut lights = Self {
             ambient: DVec3::ZERO,
             sources: Vec::new(),
+            shadow: None,
         };
         for light in written {
             match *light {
@@ -143,10 +153,16 @@ impl Lights {
                     direction,
                     color,
                     intensity,
-                } => lights.sources.push(LightSource::Directional {
-                    direction: direction.d().normalize_or_zero(),
-                    color: color.d() * intensity,
-                }),
+                    shadow,
+                } => {
+                    if shadow && lights.shadow.is_none() {
+                        lights.shadow = Some(Shadow::of_source(lights.sources.len()));
+                    }
+                    lights.sources.push(LightSource::Directional {
+                        direction: direction.d().normalize_or_zero(),
+                        color: color.d() * intensity,
+                    })
+                }
                 Light::Point {
                     position,
                     color,
@@ -177,15 +193,22 @@ impl Lights {
     }
 
     /// Each source's light arriving at `p`: (the unit vector toward the source, its colour
-    /// there: a point light's fallen off with distance and range). The first
-    /// [`LIGHTS_MOST`], as the draw reads them; the twin of [`emit_incoming`]'s WGSL.
+    /// there: a point light's fallen off with distance and range, the shadowed one's times
+    /// [`Shadow::visibility`]). The first [`LIGHTS_MOST`], as the draw reads them; the twin
+    /// of [`emit_incoming`]'s WGSL.
     pub fn incoming(&self, p: DVec3) -> impl Iterator<Item = (DVec3, DVec3)> + '_ {
+        let shadowed = self.shadow.as_ref().map(|s| (s.source, s.visibility(p)));
         self.sources
             .iter()
             .take(LIGHTS_MOST)
-            .map(move |source| match *source {
+            .enumerate()
+            .map(move |(i, source)| match *source {
                 LightSource::Directional { direction, color } => {
-                    (-direction.normalize_or_zero(), color)
+                    let seen = match shadowed {
+                        Some((source, seen)) if source == i => seen,
+                        _ => 1.0,
+                    };
+                    (-direction.normalize_or_zero(), color * seen)
                 }
                 LightSource::Point {
                     position,
@@ -230,7 +253,8 @@ impl Lights {
                 }
             }
         }
-        words.resize(LIGHTS_BYTES as usize / 4, 0.0);
+        words.resize((LIGHTS_BYTES - SHADOW_BYTES) as usize / 4, 0.0);
+        words.extend(Shadow::uniform_words(self.shadow.as_ref()));
         words.iter().flat_map(|x| x.to_le_bytes()).collect()
     }
 
@@ -242,14 +266,17 @@ impl Lights {
         Self {
             ambient: self.ambient,
             sources,
+            shadow: self.shadow.clone(),
         }
     }
 
     /// The same lights moved by `m` (world to an effect's own space, or to a view): directions
-    /// turned, positions moved; colours and ranges kept.
+    /// turned, positions moved, the shadow map's projections made to start from the new
+    /// space; colours and ranges kept.
     pub fn transformed(&self, m: DMat4) -> Self {
         Self {
             ambient: self.ambient,
+            shadow: self.shadow.as_ref().map(|s| s.transformed(m)),
             sources: self
                 .sources
                 .iter()
@@ -301,6 +328,9 @@ impl std::fmt::Display for Lights {
                 )?,
             }
         }
+        if let Some(shadow) = &self.shadow {
+            write!(f, ", source {} casts a shadow", shadow.source)?;
+        }
         Ok(())
     }
 }
@@ -317,6 +347,7 @@ pub fn range_window(d2: f64, range: f64) -> f64 {
 pub fn check(lights: &[Light], c: &mut Checker) {
     let root = ValuePath::root().field("lights");
     let mut sources = 0;
+    let mut shadows = 0;
     for (i, light) in lights.iter().enumerate() {
         let at = root.index(i);
         let (name, color, intensity) = match *light {
@@ -324,8 +355,16 @@ pub fn check(lights: &[Light], c: &mut Checker) {
                 direction,
                 color,
                 intensity,
+                shadow,
             } => {
                 c.direction(&at.variant("Directional").field("direction"), direction);
+                shadows += usize::from(shadow);
+                if shadow && shadows == 2 {
+                    c.error(
+                        &at.variant("Directional").field("shadow"),
+                        "only one light casts a shadow; set `shadow: true` on one directional light",
+                    );
+                }
                 ("Directional", color, intensity)
             }
             Light::Point {
@@ -376,10 +415,20 @@ pub fn emit_received_light(w: &mut Writer, wrap: f64) {
         w.line("ambient: vec4<f32>,");
         w.line("count: vec4<u32>,");
         w.line(format!("sources: array<LightSource, {LIGHTS_MOST}>,"));
+        for field in SHADOW_FIELDS_WGSL.lines() {
+            w.line(field.trim());
+        }
     });
     w.line(format!(
         "@group(0) @binding({LIGHTS_BINDING}) var<uniform> lights: Lights;"
     ));
+    w.line(format!(
+        "@group(0) @binding({SHADOW_MAP_BINDING}) var shadow_map: texture_depth_2d_array;"
+    ));
+    w.blank();
+    for line in SHADOW_WGSL.lines() {
+        w.line(line);
+    }
     w.line(format!("const LIGHT_WRAP: f32 = {};", f32_lit(wrap)));
     w.line(format!(
         "const POINT_NEAREST2: f32 = {};",
@@ -407,6 +456,9 @@ pub fn emit_incoming(w: &mut Writer) {
     w.comment("A unit direction (zero where a host gave none: no light).");
     w.line("var toward = -source.place.xyz;");
     w.line("var color = source.color.rgb;");
+    w.block("if (i == lights.shadow.x)", |w| {
+        w.line("color = color * shadow_visibility(p);");
+    });
     w.block("if (source.place.w > 0.5)", |w| {
         w.line("let d = source.place.xyz - p;");
         w.line("let d2 = max(dot(d, d), POINT_NEAREST2);");

@@ -19,3 +19,4 @@ pub mod looks;
 pub mod mesh_emission;
 pub mod placement;
 pub mod scene;
+pub mod shadow;

@@ -1,5 +1,6 @@
 //! The lights of a lit draw (`render.lit`, lit mesh particles): the uniform the draw module
-//! reads them from, written in the view of each prepared frame.
+//! reads them from, written in the view of each prepared frame, and the shadow map it reads
+//! (`plume_compiler::shadow`): a host's, or until one is given a 1x1 stand-in.
 
 use plume_compiler::lights::{Lights, LIGHTS_BYTES};
 use plume_compiler::CompiledEffect;
@@ -10,10 +11,13 @@ use crate::draw::camera::Camera;
 use crate::error::RuntimeError;
 
 /// A lit draw's lights (`render.lit`): the world-space lights it is drawn with (the effect
-/// file's until a host sets its own) and the uniform that holds them in the view of the frame
-/// being prepared, written with the `DrawView`, so that no pixel moves a light.
+/// file's until a host sets its own), the uniform that holds them in the view of the frame
+/// being prepared, written with the `DrawView`, so that no pixel moves a light, and the
+/// shadow map bound beside it.
 pub(crate) struct LightsUniform {
     pub(crate) buffer: wgpu::Buffer,
+    /// The shadow map's view (`texture_depth_2d_array`): a host's, or a 1x1 stand-in.
+    pub(crate) shadow_map: wgpu::TextureView,
     world: std::sync::Mutex<Lights>,
 }
 
@@ -29,6 +33,7 @@ impl LightsUniform {
         });
         Some(Self {
             buffer,
+            shadow_map: no_shadow_map(gpu),
             world: std::sync::Mutex::new(effect.ir.lights.clone()),
         })
     }
@@ -51,4 +56,47 @@ impl LightsUniform {
         encoder.copy_buffer_to_buffer(&src, 0, &self.buffer, 0, LIGHTS_BYTES);
         Ok(())
     }
+}
+
+/// A 1x1 one-layer depth texture's array view: what a lit draw binds until a shadow map is
+/// given (never read: the lights' shadow names no cascade then).
+pub(crate) fn no_shadow_map(gpu: &Gpu) -> wgpu::TextureView {
+    let texture = gpu.texture_2d(
+        "no shadow map",
+        (1, 1),
+        wgpu::TextureFormat::Depth32Float,
+        wgpu::TextureUsages::TEXTURE_BINDING,
+    );
+    array_view(&texture)
+}
+
+/// The depth-only array view of `map` that a lit draw reads, or why `map` cannot be a shadow
+/// map: a depth format, 2D (its layers the cascades), single-sampled, with `TEXTURE_BINDING`.
+pub(crate) fn shadow_map_view(map: &wgpu::Texture) -> Result<wgpu::TextureView, RuntimeError> {
+    let refuse = |why: String| Err(RuntimeError::Control(format!("shadow map: {why}")));
+    if !map.format().has_depth_aspect() {
+        return refuse(format!(
+            "the texture is {:?}, not a depth format",
+            map.format()
+        ));
+    }
+    if map.dimension() != wgpu::TextureDimension::D2 {
+        return refuse("the texture must be 2D (its layers the cascades)".into());
+    }
+    if map.sample_count() != 1 {
+        return refuse("the texture must be single-sampled".into());
+    }
+    if !map.usage().contains(wgpu::TextureUsages::TEXTURE_BINDING) {
+        return refuse("the texture needs TextureUsages::TEXTURE_BINDING to be read".into());
+    }
+    Ok(array_view(map))
+}
+
+fn array_view(map: &wgpu::Texture) -> wgpu::TextureView {
+    map.create_view(&wgpu::TextureViewDescriptor {
+        label: Some("shadow map"),
+        dimension: Some(wgpu::TextureViewDimension::D2Array),
+        aspect: wgpu::TextureAspect::DepthOnly,
+        ..Default::default()
+    })
 }

@@ -2,7 +2,6 @@
 //! into a target, and bind group 0 of the buffers, texture and scene depth it binds.
 
 use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
-use plume_compiler::wgsl::draw::SCENE_DEPTH_BINDING;
 
 use crate::device::gpu::Gpu;
 use crate::draw::target::DrawTarget;
@@ -80,32 +79,32 @@ pub(crate) fn vertex_pipeline(
 }
 
 /// Bind group 0 of a draw: its buffers, the sprite texture and sampler when it has one, and
-/// the scene depth when it is soft.
+/// its other texture `views` (the scene depth when it is soft, a lit draw's shadow map).
 pub(crate) fn draw_group(
     gpu: &Gpu,
     pipeline: &wgpu::RenderPipeline,
     buffers: &[(u32, wgpu::Buffer)],
     texture: Option<&SpriteTexture>,
-    scene_depth: Option<&wgpu::TextureView>,
+    views: &[(u32, &wgpu::TextureView)],
 ) -> wgpu::BindGroup {
     bind_resources(
         gpu,
         &pipeline.get_bind_group_layout(0),
         buffers,
         texture,
-        scene_depth,
+        views,
     )
 }
 
 /// A bind group of `layout` (a render pipeline's or the compute splat's): `buffers`, the
-/// sprite texture and sampler (and a lit look's maps, a second image) when there is one, and the scene depth
-/// when there is one.
+/// sprite texture and sampler (and a lit look's maps, a second image) when there is one, and
+/// the texture `views` at their bindings (the scene depth, a shadow map).
 pub(crate) fn bind_resources(
     gpu: &Gpu,
     layout: &wgpu::BindGroupLayout,
     buffers: &[(u32, wgpu::Buffer)],
     texture: Option<&SpriteTexture>,
-    scene_depth: Option<&wgpu::TextureView>,
+    views: &[(u32, &wgpu::TextureView)],
 ) -> wgpu::BindGroup {
     let mut bindings: Vec<wgpu::BindGroupEntry<'_>> = buffers
         .iter()
@@ -137,10 +136,10 @@ pub(crate) fn bind_resources(
             resource: wgpu::BindingResource::TextureView(second),
         });
     }
-    if let Some(depth) = scene_depth {
+    for (binding, view) in views {
         bindings.push(wgpu::BindGroupEntry {
-            binding: SCENE_DEPTH_BINDING,
-            resource: wgpu::BindingResource::TextureView(depth),
+            binding: *binding,
+            resource: wgpu::BindingResource::TextureView(view),
         });
     }
     gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -18,8 +18,11 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use plume_compiler::lights::{Lights, LIGHTS_BINDING};
 use plume_compiler::schema::Blend;
+use plume_compiler::shadow::SHADOW_MAP_BINDING;
 use plume_compiler::wgsl::batch::INSTANCE_MODELS_BINDING;
-use plume_compiler::wgsl::draw::{DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
+use plume_compiler::wgsl::draw::{
+    DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING, SCENE_DEPTH_BINDING,
+};
 use plume_compiler::CompiledEffect;
 
 use crate::device::buffers::{filled_buffer, staging, STORAGE};
@@ -105,9 +108,12 @@ pub(crate) struct GroupDraw {
     pipeline: wgpu::RenderPipeline,
     view: wgpu::Buffer,
     group: wgpu::BindGroup,
-    /// What bind group 0 holds besides the scene depth, to rebuild it with another one.
+    /// What bind group 0 holds besides the scene depth and the shadow map, to rebuild it
+    /// with other ones.
     buffers: Vec<(u32, wgpu::Buffer)>,
     texture: Option<SpriteTexture>,
+    /// The scene depth a soft draw reads (the host's, or a stand-in at the far plane).
+    scene_depth: Option<wgpu::TextureView>,
     /// Whether the draw module fades sprites near the scene depth (`render.soft`).
     soft: bool,
     /// The ribbons (`render.trail`), drawn before the sprites.
@@ -246,7 +252,7 @@ impl GroupDraw {
             &pipeline,
             &entries,
             texture.as_ref(),
-            placeholder.as_ref(),
+            &bound_views(placeholder.as_ref(), lights.as_ref()),
         );
         let trail = match &effect.ir.render.trail {
             Some(_) if !stateless => Some(TrailDraw::new(
@@ -286,6 +292,7 @@ impl GroupDraw {
             group,
             buffers: entries,
             texture,
+            scene_depth: placeholder,
             soft,
             trail,
             lights,
@@ -306,17 +313,32 @@ impl GroupDraw {
     /// [`crate::EffectRenderer::set_scene_depth`]); does nothing for a draw that is not soft.
     pub(crate) fn set_scene_depth(&mut self, depth: &wgpu::TextureView) {
         if self.soft {
-            self.group = draw_group(
-                &self.gpu,
-                &self.pipeline,
-                &self.buffers,
-                self.texture.as_ref(),
-                Some(depth),
-            );
+            self.scene_depth = Some(depth.clone());
+            self.rebind();
             if let Some(trail) = &mut self.trail {
                 trail.set_scene_depth(&self.gpu, depth);
             }
         }
+    }
+
+    /// Reads `map` (an array view of a depth texture) as a lit look's shadow map; nothing for
+    /// an unlit draw.
+    pub(crate) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
+        if let Some(lights) = &mut self.lights {
+            lights.shadow_map = map.clone();
+            self.rebind();
+        }
+    }
+
+    /// Makes bind group 0 again with the scene depth and shadow map held now.
+    fn rebind(&mut self) {
+        self.group = draw_group(
+            &self.gpu,
+            &self.pipeline,
+            &self.buffers,
+            self.texture.as_ref(),
+            &bound_views(self.scene_depth.as_ref(), self.lights.as_ref()),
+        );
     }
 
     /// Scales every sprite's size (1: the effect's own sizes).
@@ -405,6 +427,17 @@ impl GroupDraw {
             Instances::Compacted(live) => pass.draw_indirect(&live.args, 0),
         }
     }
+}
+
+/// The texture views a draw binds besides its texture: the scene depth (a soft draw's) and
+/// the shadow map (a lit one's).
+fn bound_views<'a>(
+    scene_depth: Option<&'a wgpu::TextureView>,
+    lights: Option<&'a LightsUniform>,
+) -> Vec<(u32, &'a wgpu::TextureView)> {
+    let depth = scene_depth.map(|d| (SCENE_DEPTH_BINDING, d));
+    let shadow = lights.map(|l| (SHADOW_MAP_BINDING, &l.shadow_map));
+    depth.into_iter().chain(shadow).collect()
 }
 
 /// An indirect draw of the live particles (a sorted stateful effect: they come first in the

@@ -136,6 +136,7 @@ impl EffectRenderer {
     ///         color: glam::DVec3::new(4.0, 0.5, 0.5),
     ///         range: 10.0,
     ///     }],
+    ///     shadow: None,
     /// });
     /// # Ok(())
     /// # }
@@ -147,6 +148,49 @@ impl EffectRenderer {
         for (_, part) in &self.parts {
             part.set_lights(lights);
         }
+    }
+
+    /// Reads `map` as the shadow map of the lights' shadow ([`plume_compiler::shadow`]):
+    /// the directional light that [`Lights::shadow`](plume_compiler::lights::Lights) names
+    /// gives a lit sprite or mesh only as much light as the map lets through. `map` is a
+    /// single-sampled 2D depth texture with `TEXTURE_BINDING`, layer k holding cascade k of
+    /// the shadow's `cascades` (one layer for a single map); its depths are read as they are
+    /// when the frame is drawn. Call it again when the texture changes; until the first call,
+    /// or while the lights name no shadow, nothing is shadowed. Does nothing for unlit
+    /// groups; an error for a texture that cannot be read so.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{glam, DrawTarget, Effect, Gpu, LightSource, Lights, Shadow};
+    /// let source = r#"Effect(name: "puffs", capacity: 8,
+    ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    ///     render: Render(lit: Some(Lit(normals: Sphere))))"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let puffs = Effect::from_source(&gpu, source, &Default::default())?;
+    /// let mut particles = puffs.renderer(&DrawTarget::new(wgpu::TextureFormat::Rgba8Unorm))?;
+    /// // The host's shadow map of the sun, drawn by the host from the sun's view.
+    /// let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    /// let map = gpu.texture_2d("sun shadow", (1024, 1024), wgpu::TextureFormat::Depth32Float, usage);
+    /// let sun_view = glam::DMat4::look_at_rh(glam::DVec3::new(0.0, 10.0, 0.0), glam::DVec3::ZERO, glam::DVec3::Z);
+    /// let sun_clip = glam::DMat4::orthographic_rh(-5.0, 5.0, -5.0, 5.0, 0.0, 20.0) * sun_view;
+    /// particles.set_lights(&Lights {
+    ///     ambient: glam::DVec3::splat(0.2),
+    ///     sources: vec![LightSource::Directional { direction: -glam::DVec3::Y, color: glam::DVec3::ONE }],
+    ///     shadow: Some(Shadow { cascades: vec![sun_clip], ..Shadow::of_source(0) }),
+    /// });
+    /// particles.set_shadow_map(&map)?;
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn set_shadow_map(&mut self, map: &wgpu::Texture) -> Result<(), RuntimeError> {
+        let view = crate::draw::lights::shadow_map_view(map)?;
+        if let Some(compute) = &self.compute {
+            compute.set_shadow_map(&view);
+        }
+        for (_, part) in &mut self.parts {
+            part.set_shadow_map(&view);
+        }
+        Ok(())
     }
 
     /// The first group this renderer draws (the top-level one, unless it draws one group

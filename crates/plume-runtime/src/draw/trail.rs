@@ -3,7 +3,9 @@
 //! it reads. [`crate::draw::raster::EffectRenderer`] draws it before its sprites, in the same pass
 //! and with the same blending, one instance per slot (a free slot's ribbon is degenerate).
 
-use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
+use plume_compiler::wgsl::draw::{
+    DrawShape, DRAW_VIEW_BYTES, FIRST_DATA_BINDING, SCENE_DEPTH_BINDING,
+};
 use plume_compiler::wgsl::trail::{self, FIRST_TRAIL_BINDING};
 use plume_compiler::CompiledEffect;
 
@@ -59,7 +61,11 @@ impl TrailDraw {
         debug_assert_eq!(view.size(), DRAW_VIEW_BYTES);
         let mut buffers = vec![(0, view.clone())];
         buffers.extend(trail_buffers(effect, res, shape.through_list)?);
-        let group = draw_group(gpu, &pipeline, &buffers, None, scene_depth);
+        let views: Vec<_> = scene_depth
+            .map(|d| (SCENE_DEPTH_BINDING, d))
+            .into_iter()
+            .collect();
+        let group = draw_group(gpu, &pipeline, &buffers, None, &views);
         Ok(Self {
             pipeline,
             buffers,
@@ -71,7 +77,8 @@ impl TrailDraw {
 
     /// Binds the host's depth for soft ribbons (see `EffectRenderer::set_scene_depth`).
     pub(crate) fn set_scene_depth(&mut self, gpu: &Gpu, depth: &wgpu::TextureView) {
-        self.group = draw_group(gpu, &self.pipeline, &self.buffers, None, Some(depth));
+        let views = [(SCENE_DEPTH_BINDING, depth)];
+        self.group = draw_group(gpu, &self.pipeline, &self.buffers, None, &views);
     }
 
     /// Records the ribbons into `pass`.

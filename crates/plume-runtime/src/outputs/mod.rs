@@ -1,7 +1,7 @@
 //! Headless outputs, for the `plume` command and tools: images drawn offscreen ([`Offscreen`],
 //! through the same [`crate::EffectRenderer`] a host records; or the compute [`Splat`]),
 //! bloomed when the effect glows ([`GlowPasses`] into [`HDR_FORMAT`]), encoded as PNG, contact
-//! sheet or GIF ([`Frame8`]), over the meshes the effect names ([`Scene`]); the particle exports (`.csv`, `.ply`) and their [`Summary`].
+//! sheet or GIF ([`Frame8`]), over the meshes the effect names ([`Scene`], shadowed by [`SceneShadow`]); the particle exports (`.csv`, `.ply`) and their [`Summary`].
 //! Every file is written atomically ([`write_atomically`]).
 //!
 //! An embedding application needs none of it: it draws into its own render pass.
@@ -10,6 +10,7 @@ pub(crate) mod export;
 pub(crate) mod images;
 pub(crate) mod offscreen;
 pub(crate) mod scene;
+pub(crate) mod scene_shadow;
 
 pub use crate::device::readback::read_texture;
 pub use crate::draw::glow::{GlowPasses, HDR_FORMAT};
@@ -20,3 +21,4 @@ pub use export::{
 pub use images::{contact_sheet, gif, png, Frame8};
 pub use offscreen::{Offscreen, FORMAT};
 pub use scene::{Scene, DEPTH_FORMAT, SCENE_GREY};
+pub use scene_shadow::{SceneShadow, SHADOW_MAP_SIZE};

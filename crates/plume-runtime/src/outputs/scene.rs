@@ -4,15 +4,19 @@
 //! the particles, so that an author sees what the particles hit: meshes hide the particles
 //! behind them, and soft particles fade against them. They are lit by a plain light from
 //! above ([`Scene::plain_lights`]), or by a lit effect's own lights ([`Scene::set_lights`]), so
-//! that the particles and what they meet are lit alike.
+//! that the particles and what they meet are lit alike; a directional light that casts a
+//! shadow is blocked by the meshes' shadow map ([`Scene::cast_shadow`]), on them and on the
+//! particles.
 
 use glam::{DVec3, Mat4};
 use plume_compiler::lights::{LightSource, Lights, LIGHTS_BYTES};
+use plume_compiler::shadow::SHADOW_WGSL;
 
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
 use crate::draw::target::DrawTarget;
 use crate::error::RuntimeError;
+use crate::outputs::scene_shadow::SceneShadow;
 
 /// The scene's depth buffer format.
 pub const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
@@ -34,8 +38,13 @@ pub struct Scene {
     uniforms: wgpu::Buffer,
     /// The lights, world space (`plume_compiler::lights`' uniform).
     lights: wgpu::Buffer,
+    layout: wgpu::BindGroupLayout,
     bind_group: wgpu::BindGroup,
     pipeline: wgpu::RenderPipeline,
+    /// The box around the triangles (world space).
+    bounds: (DVec3, DVec3),
+    /// The meshes' shadow map, once a light casts one.
+    shadow: Option<SceneShadow>,
     depth_texture: wgpu::Texture,
     depth: wgpu::TextureView,
     size: (u32, u32),
@@ -97,13 +106,13 @@ impl Scene {
             .write_buffer(&lights, 0, &Self::plain_lights().uniform_bytes());
         let source = [
             include_str!("world_lights.wgsl"),
+            SHADOW_WGSL,
             include_str!("scene.wgsl"),
         ]
         .concat();
         let module = crate::device::gpu::shader_module(device, "scene", source);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("scene"),
-            entries: &[0, 1].map(|binding| wgpu::BindGroupLayoutEntry {
+        let mut entries = [0, 1]
+            .map(|binding| wgpu::BindGroupLayoutEntry {
                 binding,
                 visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                 ty: wgpu::BindingType::Buffer {
@@ -112,22 +121,24 @@ impl Scene {
                     min_binding_size: None,
                 },
                 count: None,
-            }),
+            })
+            .to_vec();
+        entries.push(wgpu::BindGroupLayoutEntry {
+            binding: 2,
+            visibility: wgpu::ShaderStages::FRAGMENT,
+            ty: wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Depth,
+                view_dimension: wgpu::TextureViewDimension::D2Array,
+                multisampled: false,
+            },
+            count: None,
         });
-        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
-            layout: &layout,
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: uniforms.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: lights.as_entire_binding(),
-                },
-            ],
+            entries: &entries,
         });
+        let no_shadow = crate::draw::lights::no_shadow_map(gpu);
+        let bind_group = scene_group(gpu, &layout, (&uniforms, &lights), &no_shadow);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("scene"),
             bind_group_layouts: &[Some(&layout)],
@@ -170,14 +181,22 @@ impl Scene {
         });
         let (depth_texture, depth) = depth_buffer(gpu, (width, height));
         gpu.take_error()?;
+        let corners = triangles.iter().flatten();
+        let bounds = (
+            corners.clone().fold(DVec3::INFINITY, |a, p| a.min(*p)),
+            corners.fold(DVec3::NEG_INFINITY, |a, p| a.max(*p)),
+        );
         Ok(Some(Self {
             gpu: gpu.clone(),
             vertices,
             count: (triangles.len() * 3) as u32,
             uniforms,
             lights,
+            layout,
             bind_group,
             pipeline,
+            bounds,
+            shadow: None,
             depth_texture,
             depth,
             size: (width, height),
@@ -233,7 +252,63 @@ impl Scene {
                 direction: -DVec3::new(0.35, 1.0, 0.5).normalize(),
                 color: DVec3::splat(0.7),
             }],
+            shadow: None,
         }
+    }
+
+    /// `lights` with their shadow ([`Lights::shadow`], a directional light's) cast by the
+    /// meshes: the meshes' shadow map is drawn (again only for another direction), bound to
+    /// the scene's own pass, and its projection put in the lights returned. Give those to
+    /// [`Self::set_lights`] and to the particles' renderer (`EffectRenderer::set_lights`,
+    /// with [`Self::shadow_map`] to `EffectRenderer::set_shadow_map`). Lights without a
+    /// shadow come back as they are.
+    pub fn cast_shadow(&mut self, lights: &Lights) -> Result<Lights, RuntimeError> {
+        let Some(shadow) = &lights.shadow else {
+            return Ok(lights.clone());
+        };
+        let Some(LightSource::Directional { direction, .. }) = lights.sources.get(shadow.source)
+        else {
+            return Ok(lights.clone());
+        };
+        if !self.shadow.as_ref().is_some_and(|s| s.is_along(*direction)) {
+            let map = SceneShadow::draw(
+                &self.gpu,
+                (&self.vertices, self.count),
+                self.bounds,
+                *direction,
+            )?;
+            let view = crate::draw::lights::shadow_map_view(map.texture())?;
+            let buffers = (&self.uniforms, &self.lights);
+            self.bind_group = scene_group(&self.gpu, &self.layout, buffers, &view);
+            self.shadow = Some(map);
+        }
+        let map = self.shadow.as_ref().expect("drawn above");
+        Ok(Lights {
+            shadow: Some(map.shadow(shadow.source)),
+            ..lights.clone()
+        })
+    }
+
+    /// Binds what a particle `renderer` drawn over this scene reads of it: the depth buffer
+    /// (soft particles fade against it) and, once the meshes cast a shadow, `lights` (what
+    /// [`Self::cast_shadow`] gave) with the shadow map. Call it again after
+    /// [`Self::resize`].
+    pub fn bind_to(
+        &self,
+        renderer: &mut crate::EffectRenderer,
+        lights: &Lights,
+    ) -> Result<(), RuntimeError> {
+        renderer.set_scene_depth(self.depth_view());
+        if let Some(map) = &self.shadow {
+            renderer.set_lights(lights);
+            renderer.set_shadow_map(map.texture())?;
+        }
+        Ok(())
+    }
+
+    /// The meshes' shadow map, once [`Self::cast_shadow`] has drawn one.
+    pub fn shadow_map(&self) -> Option<&SceneShadow> {
+        self.shadow.as_ref()
     }
 
     /// Lights the meshes with `lights` (world space) from the next pass on: a lit effect's, so
@@ -349,4 +424,31 @@ impl Scene {
         pass.set_vertex_buffer(0, self.vertices.slice(..));
         pass.draw(0..self.count, 0..1);
     }
+}
+
+/// The scene pass's bind group: its uniforms, its lights and the shadow map's array view.
+fn scene_group(
+    gpu: &Gpu,
+    layout: &wgpu::BindGroupLayout,
+    (uniforms, lights): (&wgpu::Buffer, &wgpu::Buffer),
+    shadow_map: &wgpu::TextureView,
+) -> wgpu::BindGroup {
+    gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("scene"),
+        layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: uniforms.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: lights.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: wgpu::BindingResource::TextureView(shadow_map),
+            },
+        ],
+    })
 }

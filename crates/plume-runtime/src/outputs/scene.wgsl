@@ -1,6 +1,6 @@
 // The scene around an effect (outputs/scene.rs): triangles in world space, one flat grey lit
 // by the scene's lights (a lit effect's own, else a plain light from above), both sides of each
-// triangle lit as its front.
+// triangle lit as its front, and shadowed by the map of the light that casts one.
 
 struct Uniforms {
     view_proj: mat4x4<f32>,
@@ -12,8 +12,10 @@ struct Uniforms {
 
 @group(0) @binding(0) var<uniform> u: Uniforms;
 
-// The lights in world space (world_lights.wgsl, put before this shader).
+// The lights in world space (world_lights.wgsl and the shadow lookup, put before this shader).
 @group(0) @binding(1) var<uniform> lights: Lights;
+// The shadow map of the light that casts one (a 1x1 stand-in while none does).
+@group(0) @binding(2) var shadow_map: texture_depth_2d_array;
 
 struct Out {
     @builtin(position) clip: vec4<f32>,
@@ -37,11 +39,16 @@ fn fs(in: Out) -> @location(0) vec4<f32> {
     n = select(vec3<f32>(0.0, 1.0, 0.0), n / l, l > 0.0);
     // The side the camera sees is lit as the front.
     n = select(n, -n, dot(n, u.eye.xyz - in.world) < 0.0);
-    // Lambert's law: the ambient light plus each source's light times max(n . l, 0).
+    // Lambert's law: the ambient light plus each source's light times max(n . l, 0), the
+    // shadowed one's times what its map lets through.
     var light = lights.ambient.rgb;
     for (var i = 0u; i < light_count(); i++) {
         let a = arriving(i, in.world);
-        light += a.color * max(dot(n, a.toward), 0.0);
+        var color = a.color;
+        if (i == lights.shadow.x) {
+            color = color * shadow_visibility(in.world);
+        }
+        light += color * max(dot(n, a.toward), 0.0);
     }
     return vec4<f32>(u.color.rgb * light, 1.0);
 }

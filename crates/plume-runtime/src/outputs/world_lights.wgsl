@@ -8,10 +8,14 @@ struct Source {
     color: vec4<f32>,
 }
 
+// The shadow (plume_compiler::shadow): (source, cascades, reversed, unused), then each
+// cascade's projection; shadow_visibility reads them where a shader declares `shadow_map`.
 struct Lights {
     ambient: vec4<f32>,
     count: vec4<u32>,
     sources: array<Source, 8>,
+    shadow: vec4<u32>,
+    cascades: array<mat4x4<f32>, 4>,
 }
 
 // Source i's light at world point p: the unit vector toward it (zero for a zero direction) and

@@ -24,6 +24,7 @@ use crate::error::RuntimeError;
 use crate::sim::group::Group;
 use crate::sort::radix::{GpuSorter, SortProgram};
 use plume_compiler::lights::{Lights, LIGHTS_BINDING};
+use plume_compiler::shadow::SHADOW_MAP_BINDING;
 
 /// The tile kernels (`splat.wgsl`), their shared layout, and the buffers whose size does not
 /// depend on the number of entries.
@@ -289,8 +290,20 @@ impl GroupSplat {
                 image: &tiles.image,
             };
             let size = (width, height);
+            let views = lights
+                .iter()
+                .map(|l| (SHADOW_MAP_BINDING, l.shadow_map.clone()))
+                .collect();
             QuadRaster::new(
-                &gpu, &module, effect, &shape, ribbons, size, targets, texture, reads,
+                &gpu,
+                &module,
+                effect,
+                &shape,
+                ribbons,
+                size,
+                targets,
+                texture,
+                (reads, views),
             )
         });
         // `project` uses every binding of its module but `composite`'s, so its derived
@@ -453,6 +466,23 @@ impl GroupSplat {
     pub(crate) fn set_lights(&self, lights: &Lights) {
         if let Some(uniform) = &self.lights {
             uniform.set(lights);
+        }
+    }
+
+    /// Reads `map` (an array view of a depth texture) as a lit look's shadow map from the
+    /// next frame on; nothing for an unlit group.
+    pub(crate) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
+        let (Some(lights), Some(quads)) = (&mut self.lights, &mut self.quads) else {
+            return;
+        };
+        lights.shadow_map = map.clone();
+        quads.set_view(SHADOW_MAP_BINDING, map);
+        // Groups made before (the entry lists' own) are made again; the first are made with
+        // the lists.
+        if self.entries.quads_groups.is_some() {
+            let t = &self.tiles;
+            self.entries.quads_groups =
+                Some(quads.bind_groups(&self.gpu, &t.params, &self.entries.vals, &t.ranges));
         }
     }
 

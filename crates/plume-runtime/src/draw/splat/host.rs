@@ -187,6 +187,11 @@ impl HostSplat {
         self.lock().splat.set_lights(lights);
     }
 
+    /// Reads `map` (an array view of a depth texture) as the lit groups' shadow map.
+    pub(crate) fn set_shadow_map(&self, map: &wgpu::TextureView) {
+        self.lock().splat.set_shadow_map(map);
+    }
+
     /// The image size the renderer draws.
     pub(crate) fn size(&self) -> (u32, u32) {
         (self.width, self.height)

@@ -333,6 +333,14 @@ impl Splat {
         }
     }
 
+    /// Reads `map` (an array view of a depth texture) as every lit group's shadow map from the
+    /// next frame on.
+    pub(crate) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
+        for (_, part) in &mut self.parts {
+            part.set_shadow_map(map);
+        }
+    }
+
     /// The image size.
     pub fn size(&self) -> (u32, u32) {
         (self.width, self.height)

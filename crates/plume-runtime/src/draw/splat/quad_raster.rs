@@ -29,7 +29,12 @@ pub(super) struct QuadRaster {
     /// What `composite` reads besides the tile buffers: the records (quads), or what
     /// `segment_record` reads to make them again (ribbons: the particles, the rings, the view).
     reads: Vec<(u32, wgpu::Buffer)>,
+    /// The texture views it reads besides the sprite's texture (a lit look's shadow map).
+    views: Views,
 }
+
+/// Texture views at their bindings.
+pub(super) type Views = Vec<(u32, wgpu::TextureView)>;
 
 /// The composite's bind groups for one entry list: one for each of its pipelines (their
 /// derived layouts differ).
@@ -57,7 +62,7 @@ impl QuadRaster {
         (width, height): (u32, u32),
         targets: MergeTargets<'_>,
         texture: Option<SpriteTexture>,
-        reads: Vec<(u32, wgpu::Buffer)>,
+        (reads, views): (Vec<(u32, wgpu::Buffer)>, Views),
     ) -> Self {
         let pixels = u64::from(width) * u64::from(height);
         let slices = splat_slices(&effect.ir);
@@ -91,7 +96,14 @@ impl QuadRaster {
             partials,
             texture,
             reads,
+            views,
         }
+    }
+
+    /// Reads `view` at `binding` from the next [`Self::bind_groups`] on.
+    pub(super) fn set_view(&mut self, binding: u32, view: &wgpu::TextureView) {
+        self.views.retain(|(b, _)| *b != binding);
+        self.views.push((binding, view.clone()));
     }
 
     /// The composite's bind groups over the tiles' parameters, the list of sprites by tile
@@ -113,7 +125,8 @@ impl QuadRaster {
             ];
             buffers.extend(self.reads.iter().cloned());
             let layout = pipeline.get_bind_group_layout(0);
-            bind_resources(gpu, &layout, &buffers, self.texture.as_ref(), None)
+            let views: Vec<_> = self.views.iter().map(|(b, v)| (*b, v)).collect();
+            bind_resources(gpu, &layout, &buffers, self.texture.as_ref(), &views)
         };
         QuadGroups {
             flat: group(&self.pipeline),

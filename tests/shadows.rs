@@ -1,0 +1,327 @@
+//! Received shadows (`plume_compiler::shadow`) on llvmpipe: a lit sprite or surface gets of
+//! the shadowed light exactly what its shadow map lets through. A host's map through the
+//! embedding API (standard and reversed depth), pixel by pixel across the shadow's edge, and
+//! the map `plume render` draws from the scene's meshes, on the ground and on lit particles;
+//! each pixel against the f64 light ([`Shadow::visibility`] on the map's depths read back) in
+//! both renderers: within one 8-bit step for an opaque surface, two for a sprite's blended
+//! pixel (llvmpipe blends an 8-bit target in 8-bit fixed point: the source colour and its
+//! alpha are each rounded to a step before they multiply, then the result).
+
+mod common;
+
+use common::meshes::{box_obj, write};
+use common::*;
+use glam::{DMat4, DVec3};
+use plume::compiler::lights::{LightSource, Lights};
+use plume::compiler::shadow::{Shadow, ShadowDepths};
+use plume::runtime::outputs::{Offscreen, Scene, SCENE_GREY};
+use plume::runtime::{Camera, Effect, Gpu};
+
+const COLOR: [f64; 3] = [0.8, 0.6, 0.4];
+
+/// The images of `sim` from `camera`, over `scene` when given, by the raster draw and the
+/// compute renderer, each given `lights` and `map` first when given (a host's).
+fn images(
+    gpu: &Gpu,
+    sim: &Effect,
+    camera: &Camera,
+    (w, h): (u32, u32),
+    scene: Option<(&Scene, &Lights)>,
+    host: Option<(&Lights, &wgpu::Texture)>,
+) -> Vec<(&'static str, Vec<u8>)> {
+    let target = Offscreen::new(gpu, w, h).unwrap();
+    let draw_target = match scene {
+        Some(_) => Scene::target(target.target()),
+        None => target.target(),
+    };
+    let mut out = Vec::new();
+    for (kind, compute) in [("raster", false), ("compute renderer", true)] {
+        let mut renderer = match compute {
+            true => sim.compute_renderer(&draw_target, w, h).unwrap(),
+            false => sim.renderer(&draw_target).unwrap(),
+        };
+        if let Some((lights, map)) = host {
+            renderer.set_lights(lights);
+            renderer.set_shadow_map(map).unwrap();
+        }
+        let image = match scene {
+            Some((scene, lights)) => {
+                scene.bind_to(&mut renderer, lights).unwrap();
+                target
+                    .render_over_scene(sim, &renderer, camera, scene)
+                    .unwrap()
+            }
+            None => target.render(sim, &renderer, camera).unwrap(),
+        };
+        out.push((kind, image));
+    }
+    out
+}
+
+/// A `side` x `side` depth texture holding `far` but in its left half, which holds `near`.
+fn half_map(gpu: &Gpu, side: u32, (near, far): (f32, f32)) -> wgpu::Texture {
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    let format = wgpu::TextureFormat::Depth32Float;
+    let map = gpu.texture_2d("host shadow", (side, side), format, usage);
+    let source = format!(
+        "@vertex fn vs(@builtin(vertex_index) i: u32) -> @builtin(position) vec4<f32> {{
+            let p = vec2<f32>(f32(i & 1u) * 4.0 - 1.0, f32(i >> 1u) * 4.0 - 1.0);
+            return vec4<f32>(p, {near:?}, 1.0);
+        }}"
+    );
+    let module = gpu
+        .device
+        .create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("half map"),
+            source: wgpu::ShaderSource::Wgsl(source.into()),
+        });
+    let pipeline = gpu
+        .device
+        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("half map"),
+            layout: None,
+            vertex: wgpu::VertexState {
+                module: &module,
+                entry_point: Some("vs"),
+                compilation_options: Default::default(),
+                buffers: &[],
+            },
+            primitive: Default::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format,
+                depth_write_enabled: Some(true),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: Default::default(),
+                bias: Default::default(),
+            }),
+            multisample: Default::default(),
+            fragment: None,
+            multiview_mask: None,
+            cache: None,
+        });
+    let view = map.create_view(&Default::default());
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("half map"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(far),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        pass.set_pipeline(&pipeline);
+        pass.set_viewport(0.0, 0.0, (side / 2) as f32, side as f32, 0.0, 1.0);
+        pass.draw(0..3, 0..1);
+    }
+    gpu.queue.submit([encoder.finish()]);
+    map
+}
+
+/// How far (8-bit steps) a sprite's blended pixel may be from the f64 one (see the top).
+const BLENDED: f64 = 2.0;
+
+/// The Alpha-blended colour (0 to 255) over black of a soft round sprite of `COLOR` lit by
+/// `light`, at the pixel whose centre is `offset` pixels from its centre, `radius` pixels
+/// across.
+fn sprite_pixel(light: DVec3, offset: (f64, f64), radius: f64) -> [f64; 3] {
+    let r2 = (offset.0 * offset.0 + offset.1 * offset.1) / (radius * radius);
+    let alpha = (1.0 - r2).max(0.0).powi(2);
+    (DVec3::from_array(COLOR) * light * alpha)
+        .clamp(DVec3::ZERO, DVec3::ONE)
+        .to_array()
+        .map(|x| x * 255.0)
+}
+
+fn pixel(image: &[u8], w: u32, (x, y): (u32, u32)) -> [u8; 3] {
+    let at = 4 * (y * w + x) as usize;
+    [image[at], image[at + 1], image[at + 2]]
+}
+
+/// One flat lit sprite 2.5 m across its radius at the origin, facing the camera 10 m away
+/// along +z and the light travelling along −z; the host's map seen from 5 m along +z,
+/// orthographic over x and y in [−4, 4] and depth over [0, 10] m, its left half (x < 0)
+/// holding a surface 2.5 m from the light (in front of the sprite), its right half nothing.
+/// Each pixel of two rows across the sprite, the shadow's edge among them, is the f64 light
+/// with the map's verdict, in both renderers, for a standard and a reversed map.
+#[test]
+fn a_hosts_shadow_map_darkens_a_lit_sprite_by_its_verdict() {
+    const SIDE: u32 = 65;
+    const MAP: u32 = 16;
+    let gpu = gpu();
+    let [r, g, b] = COLOR;
+    let src = format!(
+        r#"Effect(name: "shadowed", capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    render: Render(color: [(0.0, ({r}, {g}, {b}, 1.0))], size: [(0.0, 5.0)],
+                   background: (0.0, 0.0, 0.0), lit: Some(Lit(normals: Flat))))"#
+    );
+    let mut sim = Effect::new(&gpu, compile(&src)).unwrap();
+    sim.run(1, |_| {}).unwrap();
+    let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
+    let radius = 2.5 / (10.0 * 20f64.to_radians().tan()) * f64::from(SIDE) / 2.0;
+    let sun_view = DMat4::look_at_rh(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, DVec3::Y);
+    for reversed in [false, true] {
+        // Depth 0.25 is 2.5 m from the light; the sprite is at 5 m (0.5).
+        let (near, far, projection) = match reversed {
+            false => (
+                0.25,
+                1.0,
+                DMat4::orthographic_rh(-4.0, 4.0, -4.0, 4.0, 0.0, 10.0),
+            ),
+            true => (
+                0.75,
+                0.0,
+                DMat4::orthographic_rh(-4.0, 4.0, -4.0, 4.0, 10.0, 0.0),
+            ),
+        };
+        let map = half_map(&gpu, MAP, (near, far));
+        let layer = (0..MAP * MAP)
+            .map(|i| if i % MAP < MAP / 2 { near } else { far })
+            .collect();
+        let lights = Lights {
+            ambient: DVec3::splat(0.1),
+            sources: vec![LightSource::Directional {
+                direction: -DVec3::Z,
+                color: DVec3::ONE,
+            }],
+            shadow: Some(Shadow {
+                source: 0,
+                cascades: vec![projection * sun_view],
+                reversed,
+                depths: Some(ShadowDepths {
+                    width: MAP,
+                    height: MAP,
+                    layers: vec![layer],
+                }),
+            }),
+        };
+        let metres = 2.5 / radius;
+        let shadowed = lights.received(DVec3::Z, DVec3::new(-1.0, 0.0, 0.0), 0.0);
+        let lit = lights.received(DVec3::Z, DVec3::new(1.0, 0.0, 0.0), 0.0);
+        assert_eq!((shadowed.x, lit.x), (0.1, 1.1), "the map's verdicts");
+        let mut wrong = Vec::new();
+        let mut ramp = 0;
+        for (kind, image) in images(
+            &gpu,
+            &sim,
+            &camera,
+            (SIDE, SIDE),
+            None,
+            Some((&lights, &map)),
+        ) {
+            for up in [0, 6] {
+                for right in -8..=8 {
+                    let p = DVec3::new(f64::from(right), f64::from(up), 0.0) * metres;
+                    let light = lights.received(DVec3::Z, p, 0.0);
+                    ramp += usize::from(light.x > 0.1 && light.x < 1.1);
+                    let offset = (f64::from(right), f64::from(up));
+                    let want = sprite_pixel(light, offset, radius);
+                    let c = (SIDE / 2) as i32;
+                    let xy = ((c + right) as u32, (c - up) as u32);
+                    let got = pixel(&image, SIDE, xy);
+                    if (0..3).any(|k| (f64::from(got[k]) - want[k]).abs() > BLENDED) {
+                        wrong.push(format!("{kind}, reversed {reversed}: pixel ({right}, {up}) is {got:?}, the f64 light gives {want:.2?}"));
+                    }
+                }
+            }
+        }
+        assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+        assert!(
+            ramp >= 4,
+            "the rows cross the edge's ramp ({ramp} pixels in it)"
+        );
+    }
+}
+
+/// A wall 4 m high on a floor, a sun low from the left and toward the camera that casts its
+/// shadow (`shadow: true`), and two lit sprites beside the wall: one low (in the wall's
+/// shadow), one high (in the sun). The map `plume render` draws from the scene's meshes says
+/// so (its f64 verdicts), and the floor in and out of the shadow, and each sprite's centre,
+/// are the f64 light with those verdicts, in both renderers.
+#[test]
+fn the_scenes_meshes_shadow_the_ground_and_lit_particles() {
+    const W: u32 = 320;
+    const H: u32 = 180;
+    let wall = write(
+        "shadow-wall.obj",
+        &box_obj([-2.15, 0.0, -2.5], [-1.85, 4.0, 2.5]),
+    );
+    let floor = write(
+        "shadow-floor.obj",
+        &box_obj([-6.0, -0.1, -6.0], [6.0, 0.0, 6.0]),
+    );
+    let [r, g, b] = COLOR;
+    let (low, high) = (DVec3::new(1.0, 1.0, 0.0), DVec3::new(1.0, 3.5, 0.0));
+    let src = format!(
+        r#"Effect(name: "beside the wall", capacity: 2,
+    emitters: [
+        Emitter(burst: 1, shape: Point(({}, {}, {})), velocity: Constant((0.0, 0.0, 0.0))),
+        Emitter(burst: 1, shape: Point(({}, {}, {})), velocity: Constant((0.0, 0.0, 0.0))),
+    ],
+    camera: Camera(eye: (0.0, 2.0, 12.0), target: (0.0, 2.0, 0.0), fov_y: 45.0),
+    scene: [Mesh(file: {wall:?}), Mesh(file: {floor:?})],
+    lights: [Directional(direction: (1.0, -0.5, -0.5), shadow: true), Ambient(intensity: 0.2)],
+    render: Render(color: [(0.0, ({r}, {g}, {b}, 1.0))], size: [(0.0, 2.0)],
+                   background: (0.0, 0.0, 0.0), lit: Some(Lit(normals: Flat))))"#,
+        low.x, low.y, low.z, high.x, high.y, high.z
+    );
+    let effect = compile(&src);
+    let triangles = effect.ir.scene_triangles();
+    let gpu = gpu();
+    let mut sim = Effect::new(&gpu, effect).unwrap();
+    sim.run(1, |_| {}).unwrap();
+    let camera = Camera::from_effect(&sim.compiled().ir.camera, W as f32 / H as f32);
+    let format = Offscreen::new(&gpu, 1, 1).unwrap().target().color_format;
+    let mut scene = Scene::new(&gpu, &triangles, format, (W, H))
+        .unwrap()
+        .expect("a scene");
+    let lights = scene.cast_shadow(&sim.compiled().ir.lights).unwrap();
+    scene.set_lights(&lights);
+    let mut with_depths = lights.clone();
+    let map = scene.shadow_map().expect("a shadow map");
+    with_depths.shadow.as_mut().unwrap().depths = Some(map.read_depths().unwrap());
+    let seen = |p: DVec3| with_depths.shadow.as_ref().unwrap().visibility(p);
+    // Back toward the light, (3, 0, −2) and the low sprite meet the wall; the others pass.
+    let (shadowed_floor, lit_floor) = (DVec3::new(3.0, 0.0, -2.0), DVec3::new(-4.0, 0.0, -2.0));
+    let verdicts = [shadowed_floor, lit_floor, low, high].map(seen);
+    assert_eq!(verdicts, [0.0, 1.0, 0.0, 1.0], "the map's verdicts");
+    let mut wrong = Vec::new();
+    for (kind, image) in images(&gpu, &sim, &camera, (W, H), Some((&scene, &lights)), None) {
+        for floor_point in [shadowed_floor, lit_floor] {
+            let (x, y) = camera.project(W, H, floor_point).unwrap();
+            let got = pixel(&image, W, (x as u32, y as u32));
+            let light = with_depths.received(DVec3::Y, floor_point, 0.0);
+            let want = [0, 1, 2].map(|c| f64::from(SCENE_GREY[c]) * light[c] * 255.0);
+            if (0..3).any(|k| (f64::from(got[k]) - want[k]).abs() > 1.0) {
+                wrong.push(format!(
+                    "{kind}: the floor at {floor_point} is {got:?}, the f64 light gives {want:.2?}"
+                ));
+            }
+        }
+        for centre in [low, high] {
+            let (x, y) = camera.project(W, H, centre).unwrap();
+            let (px, py) = (x.floor(), y.floor());
+            // 12 m away: the image's half height spans 12 tan 22.5° m.
+            let radius = 1.0 / (12.0 * 22.5f64.to_radians().tan()) * f64::from(H) / 2.0;
+            let offset = (f64::from(px + 0.5 - x), f64::from(y - py - 0.5));
+            let light = with_depths.received(DVec3::Z, centre, 0.0);
+            let want = sprite_pixel(light, offset, radius);
+            let got = pixel(&image, W, (px as u32, py as u32));
+            if (0..3).any(|k| (f64::from(got[k]) - want[k]).abs() > BLENDED) {
+                wrong.push(format!(
+                    "{kind}: the sprite at {centre} is {got:?}, the f64 light gives {want:.2?}"
+                ));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
