@@ -211,3 +211,85 @@ fn particles_that_give_off_light_light_the_scene_with_point_lights() {
     let left = query.iter(h.app.world()).count();
     assert_eq!(left, 0, "lights outlived their effect");
 }
+
+/// Two flat lit puffs 1.5 m across, side by side at x = -2.5 and 2.5.
+const PAIR: &str = r#"Effect(name: "pair", capacity: 2,
+    emitters: [
+        Emitter(burst: 1, shape: Point((-2.5, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0))),
+        Emitter(burst: 1, shape: Point((2.5, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0))),
+    ],
+    render: Render(color: [(0.0, (0.6, 0.6, 0.6, 1.0))], size: [(0.0, 1.5)],
+                   lit: Some(Lit(normals: Flat))))
+"#;
+
+/// The mean brightness (0 to 255, over the three channels) of the 3 x 3 pixels around the
+/// point (x, 0, 0).
+fn brightness_at(image: &image::RgbaImage, x: f32) -> f64 {
+    let (cx, cy) = project(x, 0.0);
+    let mut sum = 0.0;
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            let p = image
+                .get_pixel((cx as i32 + dx) as u32, (cy as i32 + dy) as u32)
+                .0;
+            sum += (f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2])) / 3.0;
+        }
+    }
+    sum / 9.0
+}
+
+#[test]
+fn a_mesh_in_the_suns_way_shadows_the_particles_behind_it() {
+    // The sun shines down and away from the camera, along (0, -1, -1); a slab 3 m above and
+    // in front of the left puff is in its way, nothing is in the right one's. With Bevy's
+    // shadow maps the left puff gets no sunlight (and there is no other light); without them
+    // both get the same.
+    let _one = serial();
+    let (mut h, handle) = Harness::with_effect("shadowed", PAIR);
+    h.app.insert_resource(GlobalAmbientLight::NONE);
+    h.app.world_mut().spawn(PlumeEffect::new(handle));
+    let sun = h
+        .app
+        .world_mut()
+        .spawn((
+            DirectionalLight {
+                illuminance: 3_000.0,
+                shadow_maps_enabled: true,
+                ..default()
+            },
+            Transform::from_xyz(0.0, 5.0, 5.0).looking_at(Vec3::ZERO, Vec3::Y),
+        ))
+        .id();
+    let world = h.app.world_mut();
+    let slab = world
+        .resource_mut::<Assets<Mesh>>()
+        .add(Cuboid::new(2.0, 0.2, 2.0));
+    let grey = world
+        .resource_mut::<Assets<StandardMaterial>>()
+        .add(StandardMaterial::from_color(Color::srgb(0.3, 0.3, 0.3)));
+    world.spawn((
+        Mesh3d(slab),
+        MeshMaterial3d(grey),
+        Transform::from_xyz(-2.5, 3.0, 3.0),
+    ));
+    h.wait_for_pipelines();
+    h.update(5);
+    let image = h.capture_lit();
+    let (left, right) = (brightness_at(&image, -2.5), brightness_at(&image, 2.5));
+    assert!(
+        right > 60.0 && left < 3.0,
+        "the left puff in the slab's shadow: left {left:.1}, right {right:.1}"
+    );
+    h.app
+        .world_mut()
+        .get_mut::<DirectionalLight>(sun)
+        .unwrap()
+        .shadow_maps_enabled = false;
+    h.update(3);
+    let image = h.capture_lit();
+    let (left, right) = (brightness_at(&image, -2.5), brightness_at(&image, 2.5));
+    assert!(
+        right > 60.0 && (left - right).abs() <= 3.0,
+        "no shadow maps, both in the sun: left {left:.1}, right {right:.1}"
+    );
+}

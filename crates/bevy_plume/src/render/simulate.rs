@@ -11,6 +11,7 @@
 use std::collections::HashMap;
 
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::pbr::ViewShadowBindings;
 use bevy::prelude::*;
 use bevy::render::renderer::{RenderContext, ViewQuery};
 use bevy::render::view::{ExtractedView, ViewDepthStencilTexture};
@@ -209,15 +210,24 @@ fn note_bounds(
 /// Prepares every draw the current camera queued this frame, in the camera's schedule before
 /// its main pass.
 pub(crate) fn prepare_for_view(
-    view: ViewQuery<(Entity, &ExtractedView, Option<&ViewPrepassTextures>)>,
+    view: ViewQuery<(
+        Entity,
+        &ExtractedView,
+        Option<&ViewPrepassTextures>,
+        Option<&ViewShadowBindings>,
+    )>,
     mut context: RenderContext,
     mut store: ResMut<PlumeInstances>,
     mut batches: ResMut<PlumeBatches>,
     lights: Res<ExtractedLights>,
 ) {
-    let (view_entity, view, prepass) = view.into_inner();
+    let (view_entity, view, prepass, shadows) = view.into_inner();
     // The scene's lights as this camera sees them (its exposure, its own ambient light).
     let lights = lights.for_view(view_entity);
+    // Bevy's directional shadow map of this camera, when a light casts shadows.
+    let shadow_map = shadows
+        .filter(|_| lights.shadow.is_some())
+        .map(|s| &*s.directional_light_depth_texture);
     let encoder = context.command_encoder();
     let frame = store.frame;
     // A batch is in world space: drawn through the camera alone.
@@ -232,6 +242,11 @@ pub(crate) fn prepare_for_view(
                 }
             }
             renderer.set_lights(&lights);
+            if let Some(map) = shadow_map {
+                if let Err(err) = renderer.set_shadow_map(map) {
+                    warn_once!("{}: {err}", batch.batch.compiled().ir.name);
+                }
+            }
             let camera = view_camera(view, Mat4::IDENTITY);
             if let Err(err) = batch
                 .batch
@@ -259,6 +274,11 @@ pub(crate) fn prepare_for_view(
             }
             draw.renderer
                 .set_lights(&lights_in_space(&lights, world_from_local));
+            if let Some(map) = shadow_map {
+                if let Err(err) = draw.renderer.set_shadow_map(map) {
+                    warn_once!("{}: {err}", instance.effect.compiled().ir.name);
+                }
+            }
             let camera = view_camera(view, world_from_local);
             // A SceneDepth collider meets what this camera's depth prepass drew this frame, in
             // the effect's space, from the next frame's steps on (the runtime copies it).

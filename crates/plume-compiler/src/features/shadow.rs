@@ -77,10 +77,9 @@ impl Shadow {
     }
 
     /// How much of its light the shadowed source gives point `p` (in the lights' space): 1
-    /// lit, 0 in shadow, between at an edge. The first cascade whose x and y hold `p` decides
-    /// (a point in none is lit); its depth is clamped to [0, 1], so a point nearer the light
-    /// than the map's near plane is lit and one past its far plane is shadowed by what the
-    /// map holds there. The f64 twin of the WGSL `shadow_visibility`; 1 without `depths`.
+    /// lit, 0 in shadow, between at an edge. The first cascade whose box holds `p` (x and y
+    /// in [-1, 1], depth in [0, 1]) decides; a point in none is lit. The f64 twin of the WGSL
+    /// `shadow_visibility`; 1 without `depths`.
     pub fn visibility(&self, p: DVec3) -> f64 {
         let Some(depths) = &self.depths else {
             return 1.0;
@@ -96,10 +95,10 @@ impl Shadow {
                 continue;
             }
             let ndc = q.truncate() / q.w;
-            if ndc.x.abs() > 1.0 || ndc.y.abs() > 1.0 {
+            if ndc.x.abs() > 1.0 || ndc.y.abs() > 1.0 || !(0.0..=1.0).contains(&ndc.z) {
                 continue;
             }
-            let z = ndc.z.clamp(0.0, 1.0);
+            let z = ndc.z;
             let (w, h) = (i64::from(depths.width), i64::from(depths.height));
             let tx = (ndc.x * 0.5 + 0.5) * w as f64 - 0.5;
             let ty = (0.5 - ndc.y * 0.5) * h as f64 - 0.5;
@@ -165,7 +164,8 @@ fn shadow_lit(z: f32, d: f32) -> f32 {
 }
 
 // How much of the shadowed source's light reaches point p (in the lights' space): the first
-// cascade holding p decides, from its four nearest texels blended bilinearly; 1 in none.
+// cascade whose box holds p decides, from its four nearest texels blended bilinearly; 1 in
+// none.
 fn shadow_visibility(p: vec3<f32>) -> f32 {
     let size = vec2<i32>(textureDimensions(shadow_map));
     let hi = size - vec2<i32>(1);
@@ -175,10 +175,10 @@ fn shadow_visibility(p: vec3<f32>) -> f32 {
             continue;
         }
         let ndc = q.xyz / q.w;
-        if (abs(ndc.x) > 1.0 || abs(ndc.y) > 1.0) {
+        if (abs(ndc.x) > 1.0 || abs(ndc.y) > 1.0 || ndc.z < 0.0 || ndc.z > 1.0) {
             continue;
         }
-        let z = clamp(ndc.z, 0.0, 1.0);
+        let z = ndc.z;
         let t = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * vec2<f32>(size) - 0.5;
         let t0 = floor(t);
         let f = t - t0;
@@ -234,8 +234,9 @@ mod tests {
             // Texel centres at x = -0.75, -0.25, 0.25, 0.75; depth 0.5 is behind 0.25.
             assert_eq!(s.visibility(DVec3::new(-0.75, 0.0, -0.5)), 0.0);
             assert_eq!(s.visibility(DVec3::new(0.75, 0.0, -0.5)), 1.0);
-            // In front of the near half: lit.
+            // In front of the near half: lit; beyond the map's depths, in no cascade: lit.
             assert_eq!(s.visibility(DVec3::new(-0.75, 0.0, -0.1)), 1.0);
+            assert_eq!(s.visibility(DVec3::new(-0.75, 0.0, -1.5)), 1.0);
             // Halfway between the last shadowing and the first lit texel centre: half lit.
             assert!((s.visibility(DVec3::new(0.0, 0.0, -0.5)) - 0.5).abs() < 1e-12);
             // Outside the map: lit.

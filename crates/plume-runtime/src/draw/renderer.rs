@@ -28,6 +28,8 @@ pub struct EffectRenderer {
     parts: Vec<(usize, GroupDraw)>,
     /// The compute splat into the host's images (compute).
     compute: Option<HostSplat>,
+    /// The shadow map bound last ([`Self::set_shadow_map`]), so that binding it again is free.
+    shadow_map: Option<wgpu::Texture>,
 }
 
 impl EffectRenderer {
@@ -157,7 +159,8 @@ impl EffectRenderer {
     /// the shadow's `cascades` (one layer for a single map); its depths are read as they are
     /// when the frame is drawn. Call it again when the texture changes; until the first call,
     /// or while the lights name no shadow, nothing is shadowed. Does nothing for unlit
-    /// groups; an error for a texture that cannot be read so.
+    /// groups; an error for a texture that cannot be read so. Giving the texture bound
+    /// already costs nothing, so a host may give it every frame.
     ///
     /// ```
     /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -183,7 +186,11 @@ impl EffectRenderer {
     /// # }
     /// ```
     pub fn set_shadow_map(&mut self, map: &wgpu::Texture) -> Result<(), RuntimeError> {
+        if self.shadow_map.as_ref() == Some(map) {
+            return Ok(());
+        }
         let view = crate::draw::lights::shadow_map_view(map)?;
+        self.shadow_map = Some(map.clone());
         if let Some(compute) = &self.compute {
             compute.set_shadow_map(&view);
         }
@@ -232,6 +239,7 @@ impl Effect {
         Ok(EffectRenderer {
             parts,
             compute: None,
+            shadow_map: None,
         })
     }
 
@@ -253,6 +261,7 @@ impl Effect {
         Ok(EffectRenderer {
             parts: Vec::new(),
             compute: Some(HostSplat::new(self, target, width, height)?),
+            shadow_map: None,
         })
     }
 
@@ -266,6 +275,7 @@ impl Effect {
         Ok(EffectRenderer {
             parts: vec![(g, part)],
             compute: None,
+            shadow_map: None,
         })
     }
 

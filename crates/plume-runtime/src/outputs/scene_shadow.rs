@@ -1,6 +1,7 @@
 //! The shadow map of the scene's meshes (`outputs/scene.rs`) for the directional light that
 //! casts a shadow (`Directional(.., shadow: true)`): the meshes' depth seen from the light by
-//! an orthographic projection that holds their bounding sphere, one 2048 x 2048 layer. The
+//! an orthographic projection that holds their bounding sphere and reaches far past it, one
+//! 2048 x 2048 layer. The
 //! scene's own pass and the particles' lit draws read it (`plume_compiler::shadow`).
 
 use glam::{DMat4, DVec3};
@@ -188,9 +189,14 @@ impl SceneShadow {
     }
 }
 
+/// How far past the meshes' bounding sphere the map reaches, in radii: a point beyond it is
+/// in no cascade, and lit.
+const REACH: f64 = 100.0;
+
 /// The light's orthographic projection of the sphere around `bounds`: looking along
-/// `direction` from outside it, the sphere filling the square and the depths from its near
-/// side (0) to its far side (1).
+/// `direction` from outside it, the sphere filling the square, depth 0 at its near side and
+/// 1 [`REACH`] radii past its far side (a particle below the meshes is still in their
+/// shadow).
 fn projection((min, max): (DVec3, DVec3), direction: DVec3) -> DMat4 {
     let centre = (min + max) * 0.5;
     let radius = ((max - min).length() * 0.5).max(1e-3) * 1.01;
@@ -201,7 +207,8 @@ fn projection((min, max): (DVec3, DVec3), direction: DVec3) -> DMat4 {
         false => DVec3::Y,
     };
     let view = DMat4::look_at_rh(eye, centre, up);
-    DMat4::orthographic_rh(-radius, radius, -radius, radius, radius, 3.0 * radius) * view
+    let far = (3.0 + REACH) * radius;
+    DMat4::orthographic_rh(-radius, radius, -radius, radius, radius, far) * view
 }
 
 #[cfg(test)]
