@@ -1,6 +1,6 @@
 //! A small 3D scene with Plume effects: fireworks (a graph of groups and events), smoke
-//! (textured, sorted, soft, lit by the scene's sun) and sparks riding a moving block, under an
-//! orbiting camera.
+//! (textured, sorted, soft, lit by the scene's sun and shadowed by a wall) and sparks riding a
+//! moving block, under an orbiting camera.
 //!
 //! In a window: `cargo +nightly run --ignore-rust-version --example scene`.
 //! Headless: `... --example scene -- --headless scene.png --frames 120`.
@@ -57,7 +57,13 @@ fn setup(
             shadow_maps_enabled: true,
             ..default()
         },
-        Transform::from_xyz(4.0, 10.0, 6.0).looking_at(Vec3::ZERO, Vec3::Y),
+        Transform::from_xyz(10.0, 8.0, -2.0).looking_at(Vec3::ZERO, Vec3::Y),
+    ));
+    // A wall between the sun and the smoke: the plume rises out of its shadow.
+    commands.spawn((
+        Mesh3d(meshes.add(Cuboid::new(0.4, 4.5, 4.0))),
+        MeshMaterial3d(materials.add(Color::srgb(0.5, 0.47, 0.42))),
+        Transform::from_xyz(-3.5, 2.25, 0.0),
     ));
     // The depth prepass, single-sampled, lets soft particles (the smoke) fade where they meet
     // the ground instead of cutting into it.
