@@ -16,7 +16,7 @@ use crate::base::path::ValuePath;
 use crate::base::values::Vec3;
 use crate::base::writer::{f32_lit, Writer};
 use crate::features::shadow::{
-    Shadow, SHADOW_BYTES, SHADOW_FIELDS_WGSL, SHADOW_MAP_BINDING, SHADOW_WGSL,
+    shadow_declarations_wgsl, Shadow, SHADOW_BYTES, SHADOW_FIELDS_WGSL, SHADOW_WGSL,
 };
 
 /// Most light sources (directional and point) one draw reads.
@@ -422,9 +422,9 @@ pub fn emit_received_light(w: &mut Writer, wrap: f64) {
     w.line(format!(
         "@group(0) @binding({LIGHTS_BINDING}) var<uniform> lights: Lights;"
     ));
-    w.line(format!(
-        "@group(0) @binding({SHADOW_MAP_BINDING}) var shadow_map: texture_depth_2d_array;"
-    ));
+    for line in shadow_declarations_wgsl().lines() {
+        w.line(line);
+    }
     w.blank();
     for line in SHADOW_WGSL.lines() {
         w.line(line);

@@ -6,10 +6,10 @@
 //! cascades. This module owns the map's description in the lights uniform, the WGSL lookup
 //! ([`SHADOW_WGSL`]) that every lit shader shares, and its f64 twin ([`Shadow::visibility`]).
 //!
-//! The lookup filters 2 x 2 texels (percentage-closer filtering): each of the four texels
-//! nearest the point's place says lit (1) or not (0) by comparing its depth with the
-//! point's, and the four verdicts are blended bilinearly, so a shadow's edge is a texel wide
-//! ramp rather than a staircase.
+//! The lookup filters 2 x 2 texels (percentage-closer filtering, by the GPU's comparison
+//! sampler): each of the four texels nearest the point's place says lit (1) or not (0) by
+//! comparing its depth with the point's, and the four verdicts are blended bilinearly, so a
+//! shadow's edge is a texel wide ramp rather than a staircase.
 
 use glam::{DMat4, DVec3, DVec4};
 
@@ -22,6 +22,20 @@ pub const SHADOW_BYTES: u64 = 16 + 64 * SHADOW_CASCADES_MOST as u64;
 
 /// Binding of the shadow map (`texture_depth_2d_array`) in a lit draw module.
 pub const SHADOW_MAP_BINDING: u32 = 52;
+
+/// Bindings of the shadow map's comparison samplers in a lit draw module: standard depth
+/// (`LessEqual`), then reversed (`GreaterEqual`).
+pub const SHADOW_SAMPLER_BINDINGS: [u32; 2] = [53, 54];
+
+/// A draw module's declarations of the shadow map and its samplers.
+pub fn shadow_declarations_wgsl() -> String {
+    let [standard, reversed] = SHADOW_SAMPLER_BINDINGS;
+    format!(
+        "@group(0) @binding({SHADOW_MAP_BINDING}) var shadow_map: texture_depth_2d_array;\n\
+         @group(0) @binding({standard}) var shadow_standard: sampler_comparison;\n\
+         @group(0) @binding({reversed}) var shadow_reversed: sampler_comparison;"
+    )
+}
 
 /// The source index in the uniform that no light has: no shadow.
 const NO_SOURCE: u32 = u32::MAX;
@@ -152,23 +166,16 @@ impl Shadow {
 pub const SHADOW_FIELDS_WGSL: &str = "    shadow: vec4<u32>,\n    cascades: array<mat4x4<f32>, 4>,";
 
 /// `shadow_visibility(p)`, the WGSL twin of [`Shadow::visibility`], shared by the generated
-/// draw modules (in the view) and the fixed world-space shaders (the scene's meshes, the
-/// reference drawing). It reads `lights.shadow`, `lights.cascades` and `shadow_map` (a
-/// `texture_depth_2d_array`), which each shader declares at its own bindings.
-pub const SHADOW_WGSL: &str = r#"// Whether a point at map depth z is lit by a texel holding depth d (no farther from the light).
-fn shadow_lit(z: f32, d: f32) -> f32 {
-    if (lights.shadow.z == 1u) {
-        return select(0.0, 1.0, z >= d);
-    }
-    return select(0.0, 1.0, z <= d);
-}
-
-// How much of the shadowed source's light reaches point p (in the lights' space): the first
-// cascade whose box holds p decides, from its four nearest texels blended bilinearly; 1 in
-// none.
+/// draw modules (in the view) and the scene's meshes' shader (in the world). It reads
+/// `lights.shadow`, `lights.cascades`, `shadow_map` (a `texture_depth_2d_array`) and the
+/// comparison samplers `shadow_standard` (`LessEqual`) and `shadow_reversed`
+/// (`GreaterEqual`), both linear and clamped to the edge, which each shader declares at its
+/// own bindings ([`shadow_declarations_wgsl`] in a draw module). The sampler's bilinear
+/// weights are the hardware's, a step of 1/256 of a texel on most GPUs.
+pub const SHADOW_WGSL: &str = r#"// How much of the shadowed source's light reaches point p (in the lights' space): the first
+// cascade whose box holds p decides, by the comparison sampler of the map's depth convention
+// (its four nearest texels' verdicts blended bilinearly); 1 in none.
 fn shadow_visibility(p: vec3<f32>) -> f32 {
-    let size = vec2<i32>(textureDimensions(shadow_map));
-    let hi = size - vec2<i32>(1);
     for (var c = 0u; c < min(lights.shadow.y, 4u); c++) {
         let q = lights.cascades[c] * vec4<f32>(p, 1.0);
         if (q.w <= 0.0) {
@@ -178,16 +185,11 @@ fn shadow_visibility(p: vec3<f32>) -> f32 {
         if (abs(ndc.x) > 1.0 || abs(ndc.y) > 1.0 || ndc.z < 0.0 || ndc.z > 1.0) {
             continue;
         }
-        let z = ndc.z;
-        let t = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5) * vec2<f32>(size) - 0.5;
-        let t0 = floor(t);
-        let f = t - t0;
-        let i0 = vec2<i32>(t0);
-        let a = shadow_lit(z, textureLoad(shadow_map, clamp(i0, vec2<i32>(0), hi), c, 0));
-        let b = shadow_lit(z, textureLoad(shadow_map, clamp(i0 + vec2<i32>(1, 0), vec2<i32>(0), hi), c, 0));
-        let d = shadow_lit(z, textureLoad(shadow_map, clamp(i0 + vec2<i32>(0, 1), vec2<i32>(0), hi), c, 0));
-        let e = shadow_lit(z, textureLoad(shadow_map, clamp(i0 + vec2<i32>(1, 1), vec2<i32>(0), hi), c, 0));
-        return mix(mix(a, b, f.x), mix(d, e, f.x), f.y);
+        let uv = vec2<f32>(ndc.x * 0.5 + 0.5, 0.5 - ndc.y * 0.5);
+        if (lights.shadow.z == 1u) {
+            return textureSampleCompareLevel(shadow_map, shadow_reversed, uv, c, ndc.z);
+        }
+        return textureSampleCompareLevel(shadow_map, shadow_standard, uv, c, ndc.z);
     }
     return 1.0;
 }

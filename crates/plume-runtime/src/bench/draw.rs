@@ -13,6 +13,7 @@ use crate::draw::renderer::EffectRenderer;
 use crate::draw::splat::{Splat, STAGES};
 use crate::error::RuntimeError;
 use crate::outputs::offscreen::Offscreen;
+use crate::outputs::scene::Scene;
 use crate::sim::effect::Effect as RunningEffect;
 use crate::sort::radix::SortAlgorithm;
 
@@ -109,7 +110,15 @@ pub(crate) fn time_draws(
         dead_slots: DeadSlots::Hidden,
         ..Default::default()
     };
-    let draw = time(sim, &sim.renderer_with(&target.target(), &hidden_slots)?)?;
+    // A light that casts a shadow is blocked by the shadow map of the effect's scene meshes,
+    // as `plume render` draws it: bound to the draw and the splat.
+    let shadow = shadow_of_scene(gpu, sim, target.target().color_format, (width, height))?;
+    let mut shadowed = sim.renderer_with(&target.target(), &hidden_slots)?;
+    if let Some((lights, scene)) = &shadow {
+        shadowed.set_lights(lights);
+        shadowed.set_shadow_map(scene_map(scene))?;
+    }
+    let draw = time(sim, &shadowed)?;
     let opaque = time(
         sim,
         &sim.renderer_with(
@@ -142,6 +151,10 @@ pub(crate) fn time_draws(
         false => None,
     };
     let (splat, splat_stages) = if let Some(mut splat) = made {
+        if let Some((lights, scene)) = &shadow {
+            splat.set_lights(lights);
+            splat.set_shadow_map(scene_map(scene))?;
+        }
         // Draws once, growing the entry list to what the frame needs, then times the pass.
         splat.render(sim, &camera)?;
         let mut times = Vec::with_capacity(DRAW_REPEATS);
@@ -281,4 +294,32 @@ pub(crate) fn time_draws(
         glow,
         light,
     })
+}
+
+/// The effect's lights with the shadow its scene meshes cast, and the scene holding the map,
+/// when a light casts one and the effect names meshes (said on stderr); None otherwise.
+fn shadow_of_scene(
+    gpu: &Gpu,
+    sim: &RunningEffect,
+    color_format: wgpu::TextureFormat,
+    size: (u32, u32),
+) -> Result<Option<(plume_compiler::lights::Lights, Scene)>, RuntimeError> {
+    let ir = &sim.compiled().ir;
+    if ir.lights.shadow.is_none() {
+        return Ok(None);
+    }
+    let Some(mut scene) = Scene::new(gpu, &ir.scene_triangles(), color_format, size)? else {
+        return Ok(None);
+    };
+    let lights = scene.cast_shadow(&ir.lights)?;
+    eprintln!("draw: shadowed by the map of the effect's scene meshes");
+    Ok(Some((lights, scene)))
+}
+
+/// The shadow map of a scene that has cast one.
+fn scene_map(scene: &Scene) -> &wgpu::Texture {
+    scene
+        .shadow_map()
+        .expect("shadow_of_scene returns scenes that cast a shadow")
+        .texture()
 }

@@ -3,6 +3,7 @@
 //! (`plume_compiler::shadow`): a host's, or until one is given a 1x1 stand-in.
 
 use plume_compiler::lights::{Lights, LIGHTS_BYTES};
+use plume_compiler::shadow::{SHADOW_MAP_BINDING, SHADOW_SAMPLER_BINDINGS};
 use plume_compiler::CompiledEffect;
 
 use crate::device::buffers::staging;
@@ -16,9 +17,52 @@ use crate::error::RuntimeError;
 /// shadow map bound beside it.
 pub(crate) struct LightsUniform {
     pub(crate) buffer: wgpu::Buffer,
-    /// The shadow map's view (`texture_depth_2d_array`): a host's, or a 1x1 stand-in.
-    pub(crate) shadow_map: wgpu::TextureView,
+    /// The shadow map and its samplers.
+    pub(crate) shadow: ShadowBinding,
     world: std::sync::Mutex<Lights>,
+}
+
+/// What a lit draw reads a shadow map through: the map's view (`texture_depth_2d_array`: a
+/// host's, or a 1x1 stand-in) and the comparison samplers that filter it, for standard depth
+/// (`LessEqual`: lit where the point is no deeper than the map) and reversed (`GreaterEqual`).
+#[derive(Clone)]
+pub(crate) struct ShadowBinding {
+    pub(crate) map: wgpu::TextureView,
+    samplers: [wgpu::Sampler; 2],
+}
+
+impl ShadowBinding {
+    /// The stand-in map and the samplers.
+    pub(crate) fn new(gpu: &Gpu) -> Self {
+        let sampler = |compare| {
+            gpu.device.create_sampler(&wgpu::SamplerDescriptor {
+                label: Some("shadow"),
+                mag_filter: wgpu::FilterMode::Linear,
+                min_filter: wgpu::FilterMode::Linear,
+                compare: Some(compare),
+                ..Default::default()
+            })
+        };
+        Self {
+            map: no_shadow_map(gpu),
+            samplers: [
+                sampler(wgpu::CompareFunction::LessEqual),
+                sampler(wgpu::CompareFunction::GreaterEqual),
+            ],
+        }
+    }
+
+    /// The bind group entries: the map and the two samplers at their bindings.
+    pub(crate) fn entries(&self) -> Vec<(u32, wgpu::BindingResource<'_>)> {
+        let mut entries = vec![(
+            SHADOW_MAP_BINDING,
+            wgpu::BindingResource::TextureView(&self.map),
+        )];
+        for (binding, sampler) in SHADOW_SAMPLER_BINDINGS.into_iter().zip(&self.samplers) {
+            entries.push((binding, wgpu::BindingResource::Sampler(sampler)));
+        }
+        entries
+    }
 }
 
 impl LightsUniform {
@@ -33,7 +77,7 @@ impl LightsUniform {
         });
         Some(Self {
             buffer,
-            shadow_map: no_shadow_map(gpu),
+            shadow: ShadowBinding::new(gpu),
             world: std::sync::Mutex::new(effect.ir.lights.clone()),
         })
     }

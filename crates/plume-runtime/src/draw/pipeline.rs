@@ -79,32 +79,32 @@ pub(crate) fn vertex_pipeline(
 }
 
 /// Bind group 0 of a draw: its buffers, the sprite texture and sampler when it has one, and
-/// its other texture `views` (the scene depth when it is soft, a lit draw's shadow map).
+/// its `extra` resources (the scene depth when it is soft, a lit draw's shadow map).
 pub(crate) fn draw_group(
     gpu: &Gpu,
     pipeline: &wgpu::RenderPipeline,
     buffers: &[(u32, wgpu::Buffer)],
     texture: Option<&SpriteTexture>,
-    views: &[(u32, &wgpu::TextureView)],
+    extra: &[(u32, wgpu::BindingResource<'_>)],
 ) -> wgpu::BindGroup {
     bind_resources(
         gpu,
         &pipeline.get_bind_group_layout(0),
         buffers,
         texture,
-        views,
+        extra,
     )
 }
 
 /// A bind group of `layout` (a render pipeline's or the compute splat's): `buffers`, the
 /// sprite texture and sampler (and a lit look's maps, a second image) when there is one, and
-/// the texture `views` at their bindings (the scene depth, a shadow map).
+/// the `extra` resources at their bindings (the scene depth, a shadow map and its samplers).
 pub(crate) fn bind_resources(
     gpu: &Gpu,
     layout: &wgpu::BindGroupLayout,
     buffers: &[(u32, wgpu::Buffer)],
     texture: Option<&SpriteTexture>,
-    views: &[(u32, &wgpu::TextureView)],
+    extra: &[(u32, wgpu::BindingResource<'_>)],
 ) -> wgpu::BindGroup {
     let mut bindings: Vec<wgpu::BindGroupEntry<'_>> = buffers
         .iter()
@@ -136,10 +136,10 @@ pub(crate) fn bind_resources(
             resource: wgpu::BindingResource::TextureView(second),
         });
     }
-    for (binding, view) in views {
+    for (binding, resource) in extra {
         bindings.push(wgpu::BindGroupEntry {
             binding: *binding,
-            resource: wgpu::BindingResource::TextureView(view),
+            resource: resource.clone(),
         });
     }
     gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {

@@ -18,7 +18,6 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use plume_compiler::lights::{Lights, LIGHTS_BINDING};
 use plume_compiler::schema::Blend;
-use plume_compiler::shadow::SHADOW_MAP_BINDING;
 use plume_compiler::wgsl::batch::INSTANCE_MODELS_BINDING;
 use plume_compiler::wgsl::draw::{
     DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING, SCENE_DEPTH_BINDING,
@@ -325,7 +324,7 @@ impl GroupDraw {
     /// an unlit draw.
     pub(crate) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
         if let Some(lights) = &mut self.lights {
-            lights.shadow_map = map.clone();
+            lights.shadow.map = map.clone();
             self.rebind();
         }
     }
@@ -429,14 +428,14 @@ impl GroupDraw {
     }
 }
 
-/// The texture views a draw binds besides its texture: the scene depth (a soft draw's) and
-/// the shadow map (a lit one's).
+/// The resources a draw binds besides its buffers and texture: the scene depth (a soft
+/// draw's) and the shadow map with its samplers (a lit one's).
 fn bound_views<'a>(
     scene_depth: Option<&'a wgpu::TextureView>,
     lights: Option<&'a LightsUniform>,
-) -> Vec<(u32, &'a wgpu::TextureView)> {
-    let depth = scene_depth.map(|d| (SCENE_DEPTH_BINDING, d));
-    let shadow = lights.map(|l| (SHADOW_MAP_BINDING, &l.shadow_map));
+) -> Vec<(u32, wgpu::BindingResource<'a>)> {
+    let depth = scene_depth.map(|d| (SCENE_DEPTH_BINDING, wgpu::BindingResource::TextureView(d)));
+    let shadow = lights.map_or(Vec::new(), |l| l.shadow.entries());
     depth.into_iter().chain(shadow).collect()
 }
 

@@ -61,11 +61,11 @@ impl TrailDraw {
         debug_assert_eq!(view.size(), DRAW_VIEW_BYTES);
         let mut buffers = vec![(0, view.clone())];
         buffers.extend(trail_buffers(effect, res, shape.through_list)?);
-        let views: Vec<_> = scene_depth
-            .map(|d| (SCENE_DEPTH_BINDING, d))
+        let extra: Vec<_> = scene_depth
+            .map(|d| (SCENE_DEPTH_BINDING, wgpu::BindingResource::TextureView(d)))
             .into_iter()
             .collect();
-        let group = draw_group(gpu, &pipeline, &buffers, None, &views);
+        let group = draw_group(gpu, &pipeline, &buffers, None, &extra);
         Ok(Self {
             pipeline,
             buffers,
@@ -77,8 +77,11 @@ impl TrailDraw {
 
     /// Binds the host's depth for soft ribbons (see `EffectRenderer::set_scene_depth`).
     pub(crate) fn set_scene_depth(&mut self, gpu: &Gpu, depth: &wgpu::TextureView) {
-        let views = [(SCENE_DEPTH_BINDING, depth)];
-        self.group = draw_group(gpu, &self.pipeline, &self.buffers, None, &views);
+        let extra = [(
+            SCENE_DEPTH_BINDING,
+            wgpu::BindingResource::TextureView(depth),
+        )];
+        self.group = draw_group(gpu, &self.pipeline, &self.buffers, None, &extra);
     }
 
     /// Records the ribbons into `pass`.

@@ -14,6 +14,7 @@ use plume_compiler::shadow::SHADOW_WGSL;
 
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
+use crate::draw::lights::ShadowBinding;
 use crate::draw::target::DrawTarget;
 use crate::error::RuntimeError;
 use crate::outputs::scene_shadow::SceneShadow;
@@ -43,6 +44,8 @@ pub struct Scene {
     pipeline: wgpu::RenderPipeline,
     /// The box around the triangles (world space).
     bounds: (DVec3, DVec3),
+    /// The shadow map the pass reads (a stand-in until a light casts one) and its samplers.
+    shadow_binding: ShadowBinding,
     /// The meshes' shadow map, once a light casts one.
     shadow: Option<SceneShadow>,
     depth_texture: wgpu::Texture,
@@ -133,12 +136,20 @@ impl Scene {
             },
             count: None,
         });
+        for binding in [3, 4] {
+            entries.push(wgpu::BindGroupLayoutEntry {
+                binding,
+                visibility: wgpu::ShaderStages::FRAGMENT,
+                ty: wgpu::BindingType::Sampler(wgpu::SamplerBindingType::Comparison),
+                count: None,
+            });
+        }
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
             label: Some("scene"),
             entries: &entries,
         });
-        let no_shadow = crate::draw::lights::no_shadow_map(gpu);
-        let bind_group = scene_group(gpu, &layout, (&uniforms, &lights), &no_shadow);
+        let shadow = ShadowBinding::new(gpu);
+        let bind_group = scene_group(gpu, &layout, (&uniforms, &lights), &shadow);
         let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("scene"),
             bind_group_layouts: &[Some(&layout)],
@@ -196,6 +207,7 @@ impl Scene {
             bind_group,
             pipeline,
             bounds,
+            shadow_binding: shadow,
             shadow: None,
             depth_texture,
             depth,
@@ -277,9 +289,9 @@ impl Scene {
                 self.bounds,
                 *direction,
             )?;
-            let view = crate::draw::lights::shadow_map_view(map.texture())?;
+            self.shadow_binding.map = crate::draw::lights::shadow_map_view(map.texture())?;
             let buffers = (&self.uniforms, &self.lights);
-            self.bind_group = scene_group(&self.gpu, &self.layout, buffers, &view);
+            self.bind_group = scene_group(&self.gpu, &self.layout, buffers, &self.shadow_binding);
             self.shadow = Some(map);
         }
         let map = self.shadow.as_ref().expect("drawn above");
@@ -426,29 +438,31 @@ impl Scene {
     }
 }
 
-/// The scene pass's bind group: its uniforms, its lights and the shadow map's array view.
+/// The scene pass's bind group: its uniforms, its lights and the shadow map with its
+/// samplers.
 fn scene_group(
     gpu: &Gpu,
     layout: &wgpu::BindGroupLayout,
     (uniforms, lights): (&wgpu::Buffer, &wgpu::Buffer),
-    shadow_map: &wgpu::TextureView,
+    shadow: &ShadowBinding,
 ) -> wgpu::BindGroup {
+    let mut entries = vec![
+        wgpu::BindGroupEntry {
+            binding: 0,
+            resource: uniforms.as_entire_binding(),
+        },
+        wgpu::BindGroupEntry {
+            binding: 1,
+            resource: lights.as_entire_binding(),
+        },
+    ];
+    // The draw modules' bindings of the map and samplers, in order, are 2, 3 and 4 here.
+    for (binding, (_, resource)) in (2..).zip(shadow.entries()) {
+        entries.push(wgpu::BindGroupEntry { binding, resource });
+    }
     gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("scene"),
         layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: uniforms.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: lights.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: wgpu::BindingResource::TextureView(shadow_map),
-            },
-        ],
+        entries: &entries,
     })
 }

@@ -16,6 +16,8 @@ struct Uniforms {
 @group(0) @binding(1) var<uniform> lights: Lights;
 // The shadow map of the light that casts one (a 1x1 stand-in while none does).
 @group(0) @binding(2) var shadow_map: texture_depth_2d_array;
+@group(0) @binding(3) var shadow_standard: sampler_comparison;
+@group(0) @binding(4) var shadow_reversed: sampler_comparison;
 
 struct Out {
     @builtin(position) clip: vec4<f32>,

@@ -24,7 +24,6 @@ use crate::error::RuntimeError;
 use crate::sim::group::Group;
 use crate::sort::radix::{GpuSorter, SortProgram};
 use plume_compiler::lights::{Lights, LIGHTS_BINDING};
-use plume_compiler::shadow::SHADOW_MAP_BINDING;
 
 /// The tile kernels (`splat.wgsl`), their shared layout, and the buffers whose size does not
 /// depend on the number of entries.
@@ -290,10 +289,7 @@ impl GroupSplat {
                 image: &tiles.image,
             };
             let size = (width, height);
-            let views = lights
-                .iter()
-                .map(|l| (SHADOW_MAP_BINDING, l.shadow_map.clone()))
-                .collect();
+            let shadow = lights.as_ref().map(|l| l.shadow.clone());
             QuadRaster::new(
                 &gpu,
                 &module,
@@ -303,7 +299,7 @@ impl GroupSplat {
                 size,
                 targets,
                 texture,
-                (reads, views),
+                (reads, shadow),
             )
         });
         // `project` uses every binding of its module but `composite`'s, so its derived
@@ -475,8 +471,8 @@ impl GroupSplat {
         let (Some(lights), Some(quads)) = (&mut self.lights, &mut self.quads) else {
             return;
         };
-        lights.shadow_map = map.clone();
-        quads.set_view(SHADOW_MAP_BINDING, map);
+        lights.shadow.map = map.clone();
+        quads.set_shadow_map(map);
         // Groups made before (the entry lists' own) are made again; the first are made with
         // the lists.
         if self.entries.quads_groups.is_some() {

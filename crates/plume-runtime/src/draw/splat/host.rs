@@ -189,7 +189,7 @@ impl HostSplat {
 
     /// Reads `map` (an array view of a depth texture) as the lit groups' shadow map.
     pub(crate) fn set_shadow_map(&self, map: &wgpu::TextureView) {
-        self.lock().splat.set_shadow_map(map);
+        self.lock().splat.bind_shadow_map(map);
     }
 
     /// The image size the renderer draws.

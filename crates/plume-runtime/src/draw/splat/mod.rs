@@ -333,9 +333,18 @@ impl Splat {
         }
     }
 
+    /// Reads `map` as every lit group's shadow map from the next frame on, as
+    /// [`crate::EffectRenderer::set_shadow_map`] does (give the lights' shadow with
+    /// [`Self::set_lights`]).
+    pub fn set_shadow_map(&mut self, map: &wgpu::Texture) -> Result<(), RuntimeError> {
+        let view = crate::draw::lights::shadow_map_view(map)?;
+        self.bind_shadow_map(&view);
+        Ok(())
+    }
+
     /// Reads `map` (an array view of a depth texture) as every lit group's shadow map from the
     /// next frame on.
-    pub(crate) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
+    pub(crate) fn bind_shadow_map(&mut self, map: &wgpu::TextureView) {
         for (_, part) in &mut self.parts {
             part.set_shadow_map(map);
         }

@@ -10,6 +10,7 @@ use plume_compiler::wgsl::draw::{
 use super::binding::bind;
 use crate::device::buffers::STORAGE;
 use crate::device::gpu::Gpu;
+use crate::draw::lights::ShadowBinding;
 use crate::draw::pipeline::bind_resources;
 use crate::draw::texture::SpriteTexture;
 
@@ -29,12 +30,9 @@ pub(super) struct QuadRaster {
     /// What `composite` reads besides the tile buffers: the records (quads), or what
     /// `segment_record` reads to make them again (ribbons: the particles, the rings, the view).
     reads: Vec<(u32, wgpu::Buffer)>,
-    /// The texture views it reads besides the sprite's texture (a lit look's shadow map).
-    views: Views,
+    /// A lit look's shadow map and its samplers.
+    shadow: Option<ShadowBinding>,
 }
-
-/// Texture views at their bindings.
-pub(super) type Views = Vec<(u32, wgpu::TextureView)>;
 
 /// The composite's bind groups for one entry list: one for each of its pipelines (their
 /// derived layouts differ).
@@ -62,7 +60,7 @@ impl QuadRaster {
         (width, height): (u32, u32),
         targets: MergeTargets<'_>,
         texture: Option<SpriteTexture>,
-        (reads, views): (Vec<(u32, wgpu::Buffer)>, Views),
+        (reads, shadow): (Vec<(u32, wgpu::Buffer)>, Option<ShadowBinding>),
     ) -> Self {
         let pixels = u64::from(width) * u64::from(height);
         let slices = splat_slices(&effect.ir);
@@ -96,14 +94,15 @@ impl QuadRaster {
             partials,
             texture,
             reads,
-            views,
+            shadow,
         }
     }
 
-    /// Reads `view` at `binding` from the next [`Self::bind_groups`] on.
-    pub(super) fn set_view(&mut self, binding: u32, view: &wgpu::TextureView) {
-        self.views.retain(|(b, _)| *b != binding);
-        self.views.push((binding, view.clone()));
+    /// Reads `map` as the shadow map from the next [`Self::bind_groups`] on.
+    pub(super) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
+        if let Some(shadow) = &mut self.shadow {
+            shadow.map = map.clone();
+        }
     }
 
     /// The composite's bind groups over the tiles' parameters, the list of sprites by tile
@@ -125,8 +124,11 @@ impl QuadRaster {
             ];
             buffers.extend(self.reads.iter().cloned());
             let layout = pipeline.get_bind_group_layout(0);
-            let views: Vec<_> = self.views.iter().map(|(b, v)| (*b, v)).collect();
-            bind_resources(gpu, &layout, &buffers, self.texture.as_ref(), &views)
+            let extra = self
+                .shadow
+                .as_ref()
+                .map_or(Vec::new(), ShadowBinding::entries);
+            bind_resources(gpu, &layout, &buffers, self.texture.as_ref(), &extra)
         };
         QuadGroups {
             flat: group(&self.pipeline),
