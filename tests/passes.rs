@@ -311,6 +311,7 @@ fn overrides_replace_file_values() {
             bursts: true,
             live_params: true,
             step_only: true,
+            files: None,
             accuracy_camera: None,
         },
     )

@@ -2,14 +2,22 @@
 //! file with Plume's compiler, so an error is reported where the file is (Plume's located
 //! diagnostic, file:line:col with a caret) and no broken effect ever reaches the GPU; on a
 //! failed hot reload Bevy keeps the last good asset, so the effect keeps running.
+//!
+//! The files an effect names (textures and maps, meshes, height images, vector fields) are
+//! read through the loader's `LoadContext`, from the effect's own asset source, relative to
+//! the effect's path: they load from embedded and custom sources alike, and as the loader's
+//! dependencies an edit to one reloads the effect. The loader asks the compiler which files
+//! it needs (a first compile that reads none), reads them, and compiles with their bytes.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 use bevy::asset::io::Reader;
 use bevy::asset::{AssetLoader, LoadContext};
 use bevy::prelude::*;
 use bevy::reflect::TypePath;
+use plume_compiler::files::{FileSource, Files};
 use plume_compiler::graph::{compile_graph_str, CompiledGraph};
 use plume_compiler::CompileOptions;
 
@@ -20,8 +28,11 @@ pub struct PlumeEffectAsset {
     pub path: Arc<str>,
     /// The file's text (compiled again for an instance with its own seed).
     pub source: Arc<str>,
-    /// The directory the effect's own files (a texture) are read from.
+    /// The directory the effect's own files (a texture) are resolved against.
     pub base_dir: Option<Arc<Path>>,
+    /// Where those files are read from: the bytes the loader read through Bevy's asset
+    /// server; None for an effect compiled from code, whose files are read from disk.
+    pub files: Option<Files>,
     /// The compiled effect as written (local space, the file's seed), shared with the render
     /// world (cloning the asset is cheap). Instances in world space or with their own seed
     /// run a variant compiled from `source` once per distinct (seed, space).
@@ -31,20 +42,39 @@ pub struct PlumeEffectAsset {
 impl PlumeEffectAsset {
     /// Compiles `source` (read from `path`, whose files, a texture, are resolved from
     /// `base_dir`), or returns the located diagnostic as text.
+    /// Its files are read from disk.
     pub fn compile(path: &str, source: &str, base_dir: Option<PathBuf>) -> Result<Self, String> {
+        Self::compile_from(path, source, base_dir, None)
+    }
+
+    /// [`Self::compile`] with the effect's files read from `files` (by their paths resolved
+    /// against `base_dir`) instead of from disk.
+    fn compile_from(
+        path: &str,
+        source: &str,
+        base_dir: Option<PathBuf>,
+        files: Option<Files>,
+    ) -> Result<Self, String> {
         let base_dir: Option<Arc<Path>> = base_dir.map(Arc::from);
-        let graph = compile_source(path, source, base_dir.as_deref(), Variant::default())?;
+        let graph = compile_source(
+            path,
+            source,
+            (base_dir.as_deref(), &files),
+            Variant::default(),
+        )?;
         Ok(Self {
             path: path.into(),
             source: source.into(),
             base_dir,
+            files,
             graph: Arc::new(graph),
         })
     }
 
     /// The file compiled again for `variant`, or the located diagnostic as text.
     pub fn compile_with(&self, variant: Variant) -> Result<CompiledGraph, String> {
-        compile_source(&self.path, &self.source, self.base_dir.as_deref(), variant)
+        let place = (self.base_dir.as_deref(), &self.files);
+        compile_source(&self.path, &self.source, place, variant)
     }
 
     /// The step of the top-level group, in seconds.
@@ -70,11 +100,12 @@ pub struct Variant {
 fn compile_source(
     path: &str,
     source: &str,
-    base_dir: Option<&Path>,
+    (base_dir, files): (Option<&Path>, &Option<Files>),
     variant: Variant,
 ) -> Result<CompiledGraph, String> {
     let options = CompileOptions {
         base_dir: base_dir.map(Path::to_path_buf),
+        files: files.clone(),
         seed: variant.seed,
         placed: variant.placed,
         bursts: variant.bursts,
@@ -107,12 +138,10 @@ pub enum PlumeLoadError {
 }
 
 /// Loads `*.plume.ron` and `*.plume` files (and any file loaded with the type
-/// `PlumeEffectAsset`, whatever its extension, such as the examples' `effects/*.ron`).
+/// `PlumeEffectAsset`, whatever its extension, such as the examples' `effects/*.ron`), with
+/// the files they name read through the asset server.
 #[derive(Default, TypePath)]
-pub struct PlumeEffectLoader {
-    /// The directory asset paths are relative to, for an effect's own files (a texture).
-    pub(crate) root: Option<PathBuf>,
-}
+pub struct PlumeEffectLoader;
 
 impl AssetLoader for PlumeEffectLoader {
     type Asset = PlumeEffectAsset;
@@ -137,16 +166,88 @@ impl AssetLoader for PlumeEffectLoader {
             })?;
         let source =
             String::from_utf8(bytes).map_err(|_| PlumeLoadError::NotText { path: path.clone() })?;
-        let base_dir = self
-            .root
-            .as_deref()
-            .map(|root| root.join(asset_path.parent().unwrap_or(Path::new(""))));
+        // The compiler resolves a file against the effect's directory in its source; the
+        // loader reads it back as the asset path the name gives relative to the effect.
+        let base_dir = asset_path.parent().unwrap_or(Path::new("")).to_path_buf();
+        let asked = Arc::new(Asked::default());
+        let first = PlumeEffectAsset::compile_from(
+            &path,
+            &source,
+            Some(base_dir.clone()),
+            Some(Files(asked.clone())),
+        );
+        let wanted = asked.paths();
+        if wanted.is_empty() {
+            // It names no file: the first compile is the effect (or its located error).
+            return first.map_err(PlumeLoadError::Compile);
+        }
+        let mut read = HashMap::new();
+        for wanted in wanted {
+            let name = wanted.strip_prefix(&base_dir).unwrap_or(&wanted);
+            let bytes = match load_context
+                .path()
+                .resolve_embed_str(&name.to_string_lossy())
+            {
+                Ok(file) => match load_context.read_asset_bytes(&file).await {
+                    Ok(bytes) => Ok(bytes),
+                    Err(e) => Err(format!("{file}: {e}")),
+                },
+                Err(e) => Err(e.to_string()),
+            };
+            read.insert(wanted, bytes);
+        }
+        let files = Some(Files(Arc::new(Read(read))));
         // Bevy's asset server logs the error, the located diagnostic whole, and keeps the last
         // good version of the asset (on a hot reload) in use.
-        PlumeEffectAsset::compile(&path, &source, base_dir).map_err(PlumeLoadError::Compile)
+        PlumeEffectAsset::compile_from(&path, &source, Some(base_dir), files)
+            .map_err(PlumeLoadError::Compile)
     }
 
     fn extensions(&self) -> &[&str] {
         &["plume.ron", "plume"]
+    }
+}
+
+/// The files a compile asked for, none of them given: what the loader must read.
+#[derive(Default)]
+struct Asked(Mutex<Vec<PathBuf>>);
+
+impl Asked {
+    fn paths(&self) -> Vec<PathBuf> {
+        let mut paths = self.0.lock().unwrap_or_else(|p| p.into_inner()).clone();
+        paths.sort();
+        paths.dedup();
+        paths
+    }
+}
+
+impl FileSource for Asked {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        let mut asked = self.0.lock().unwrap_or_else(|p| p.into_inner());
+        asked.push(path.to_path_buf());
+        Err(std::io::Error::new(
+            std::io::ErrorKind::NotFound,
+            "not read yet",
+        ))
+    }
+}
+
+/// The files the loader read through the asset server, by the paths the compiler asks for
+/// (or why one could not be read).
+struct Read(HashMap<PathBuf, Result<Vec<u8>, String>>);
+
+impl FileSource for Read {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        match self.0.get(path) {
+            Some(Ok(bytes)) => Ok(bytes.clone()),
+            Some(Err(why)) => Err(std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                why.clone(),
+            )),
+            None => Err(std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                "not among the files the effect named when it was loaded",
+            )),
+        }
     }
 }

@@ -43,7 +43,6 @@ pub use render::batches::BATCH_FROM;
 pub use render::instances::PlumeRenderStats;
 pub use render::read::{read_particles, read_totals};
 
-use bevy::asset::io::file::FileAssetReader;
 use bevy::camera::visibility::VisibilitySystems;
 use bevy::prelude::*;
 
@@ -71,14 +70,8 @@ pub struct PlumePlugin;
 
 impl Plugin for PlumePlugin {
     fn build(&self, app: &mut App) {
-        // Effects' own files (a texture) are read from the file system next to the effect.
-        let file_path = app
-            .get_added_plugins::<AssetPlugin>()
-            .first()
-            .map_or_else(|| "assets".to_string(), |plugin| plugin.file_path.clone());
-        let root = FileAssetReader::get_base_path().join(file_path);
         app.init_asset::<PlumeEffectAsset>()
-            .register_asset_loader(PlumeEffectLoader { root: Some(root) })
+            .register_asset_loader(PlumeEffectLoader)
             .register_type::<PlumeEffect>()
             .register_type::<PlumeBurst>()
             .register_type::<SimulationSpace>()

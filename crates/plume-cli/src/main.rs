@@ -120,6 +120,7 @@ impl Overrides {
             bursts: false,
             live_params: false,
             step_only: false,
+            files: None,
             accuracy_camera: None,
         }
     }

@@ -67,6 +67,9 @@ pub struct CompileOptions {
     /// one texel a frame, and any draw of it is refused with the reason, naming the file and
     /// the field (`TextureIr::missing`).
     pub step_only: bool,
+    /// Where the files the effect names are read from: a host's source (the Bevy plugin's
+    /// asset server), each file by its path resolved against `base_dir`. None: the disk.
+    pub files: Option<crate::base::files::Files>,
     /// The camera a pixel budget (`accuracy: (pixels: ...)`) is measured through: a host's, or
     /// the preview's, instead of the file's `camera`, so that the integration is chosen for
     /// the view the effect is seen in. None: the file's camera.
@@ -168,6 +171,7 @@ pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, Comp
         effect.state = s;
     }
     effect.base_dir.clone_from(&options.base_dir);
+    effect.files.clone_from(&options.files);
     effect.placed = options.placed;
     effect.bursts = options.bursts;
     effect.live_params = options.live_params;
@@ -194,6 +198,11 @@ pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, Comp
 /// locate diagnostics. An effect with `groups` or `events` is a graph: compile it with
 /// [`graph::compile_graph`].
 pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, CompileError> {
+    crate::base::files::with_source(effect.files.clone(), || compile_one(effect, source))
+}
+
+/// [`compile_effect`] with the effect's files being read from its source.
+fn compile_one(effect: &Effect, source: &str) -> Result<CompiledEffect, CompileError> {
     let map = SourceMap::build(source);
     let locate = |items: Vec<(Diagnostic, String)>| locate_items(&map, source, items);
     if let Some(path) = graph_field(effect) {

@@ -50,7 +50,9 @@ pub mod ir;
 pub mod reference;
 mod stages;
 
-pub use base::{check, diagnostics, lifetime, locate, naga_check, path, rng, values, writer};
+pub use base::{
+    check, diagnostics, files, lifetime, locate, naga_check, path, rng, values, writer,
+};
 pub use compile::{
     compile_effect, compile_str, parse, parse_with, CompileError, CompileOptions, CompiledEffect,
 };

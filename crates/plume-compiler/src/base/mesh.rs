@@ -10,6 +10,8 @@
 use std::collections::HashMap;
 use std::path::Path;
 
+use crate::base::files::ReadError;
+
 use glam::{DMat3, DVec3, EulerRot};
 
 /// The largest mesh file read.
@@ -31,15 +33,13 @@ pub struct TriMesh {
 /// Reads the OBJ file at `path`, or says what is wrong with it.
 pub fn read_obj(path: &Path) -> Result<(TriMesh, Vec<u8>), String> {
     let shown = path.display();
-    let size = std::fs::metadata(path)
-        .map_err(|e| format!("cannot open mesh `{shown}`: {e}"))?
-        .len();
-    if size > MAX_FILE_BYTES {
-        return Err(format!(
+    let bytes = crate::base::files::read(path, MAX_FILE_BYTES).map_err(|e| match e {
+        ReadError::Open(e) => format!("cannot open mesh `{shown}`: {e}"),
+        ReadError::Read(e) => format!("cannot read mesh `{shown}`: {e}"),
+        ReadError::TooLarge(size) => format!(
             "mesh `{shown}` is {size} bytes, more than the {MAX_FILE_BYTES} a mesh file may have: simplify it"
-        ));
-    }
-    let bytes = std::fs::read(path).map_err(|e| format!("cannot read mesh `{shown}`: {e}"))?;
+        ),
+    })?;
     let options = tobj::LoadOptions {
         triangulate: true,
         ignore_points: true,

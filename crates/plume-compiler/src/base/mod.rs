@@ -7,6 +7,7 @@
 
 pub mod check;
 pub mod diagnostics;
+pub mod files;
 pub mod gradient_noise;
 pub mod kernel;
 pub mod layout;

@@ -351,6 +351,10 @@ pub fn cached_or_baked(
     mesh_bytes: &[u8],
     resolution: u32,
 ) -> Sdf {
+    // A host's files (not on disk) have no folder to keep a cache in: baked each time.
+    if !crate::base::files::on_disk() {
+        return bake(mesh, resolution);
+    }
     let key = cache_key(mesh_bytes, resolution);
     let cache = cache_path(mesh_path);
     if let Some(sdf) = std::fs::read(&cache).ok().and_then(|b| decode(&b, key)) {

@@ -160,6 +160,11 @@ pub fn compile_graph_str(
 
 /// Compiles a parsed effect of any number of groups; `source` locates diagnostics.
 pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, CompileError> {
+    crate::base::files::with_source(effect.files.clone(), || compile_all(effect, source))
+}
+
+/// [`compile_graph`] with the effect's files being read from its source.
+fn compile_all(effect: &Effect, source: &str) -> Result<CompiledGraph, CompileError> {
     let map = SourceMap::build(source);
     let locate =
         |items: Vec<(Diagnostic, String)>| crate::compile::locate_items(&map, source, items);

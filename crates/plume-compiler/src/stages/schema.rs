@@ -185,6 +185,10 @@ pub struct Effect {
     /// effect file's directory, set by whoever read the file; the current directory when None.
     #[serde(skip)]
     pub base_dir: Option<std::path::PathBuf>,
+    /// Where those files are read from: a host's source, or the disk when None; set by
+    /// `CompileOptions::files`, never by the file.
+    #[serde(skip)]
+    pub files: Option<crate::base::files::Files>,
     /// Placed in a host's world by a transform set at run time (world space; see
     /// `features::placement`): set by `CompileOptions::placed`, never by the file.
     #[serde(skip)]

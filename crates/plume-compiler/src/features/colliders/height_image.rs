@@ -21,9 +21,18 @@ pub fn read(
 ) -> Result<Vec<Vec<f64>>, String> {
     let path = base_dir.map_or_else(|| PathBuf::from(file), |dir| dir.join(file));
     let shown = path.display();
+    use crate::base::files::ReadError;
+    let most = crate::features::looks::texture::MAX_FILE_BYTES;
+    let bytes = crate::base::files::read(&path, most).map_err(|e| match e {
+        ReadError::Open(e) => format!("cannot open height image `{shown}`: {e}"),
+        ReadError::Read(e) => format!("cannot read height image `{shown}`: {e}"),
+        ReadError::TooLarge(size) => {
+            format!("height image `{shown}` is {size} bytes, more than the {most} read")
+        }
+    })?;
     let open = || {
-        image::ImageReader::open(&path)
-            .and_then(|r| r.with_guessed_format())
+        image::ImageReader::new(std::io::Cursor::new(bytes.as_slice()))
+            .with_guessed_format()
             .map_err(|e| format!("cannot open height image `{shown}`: {e}"))
     };
     // The size first, from the header: a huge image is refused before it is decoded.

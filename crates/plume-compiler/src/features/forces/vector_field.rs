@@ -186,16 +186,16 @@ pub fn read_vector_fields(forces: &mut [Force], base_dir: Option<&Path>, c: &mut
 fn read_file(file: &str, base_dir: Option<&Path>) -> Result<Grid, String> {
     let path = base_dir.map_or_else(|| PathBuf::from(file), |dir| dir.join(file));
     let shown = path.display();
-    let bytes = std::fs::metadata(&path)
-        .map_err(|e| format!("cannot open vector field `{shown}`: {e}"))?
-        .len();
-    if bytes > MAX_FILE_BYTES {
-        return Err(format!(
-            "vector field `{shown}` is {bytes} bytes, more than the {MAX_FILE_BYTES} read: resample it coarser"
-        ));
-    }
-    let text = std::fs::read_to_string(&path)
-        .map_err(|e| format!("cannot read vector field `{shown}`: {e}"))?;
+    use crate::base::files::ReadError;
+    let bytes = crate::base::files::read(&path, MAX_FILE_BYTES).map_err(|e| match e {
+        ReadError::Open(e) => format!("cannot open vector field `{shown}`: {e}"),
+        ReadError::Read(e) => format!("cannot read vector field `{shown}`: {e}"),
+        ReadError::TooLarge(size) => format!(
+            "vector field `{shown}` is {size} bytes, more than the {MAX_FILE_BYTES} read: resample it coarser"
+        ),
+    })?;
+    let text = String::from_utf8(bytes)
+        .map_err(|e| format!("cannot read vector field `{shown}`: not UTF-8 text ({e})"))?;
     parse_fga(&text).map_err(|why| format!("vector field `{shown}`: {why}"))
 }
 

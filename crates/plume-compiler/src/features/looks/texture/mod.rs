@@ -14,6 +14,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+use crate::base::files::ReadError;
 use crate::base::rng::{rand_u32, stream};
 use crate::base::writer::{f32_lit, u32_lit, Writer};
 use serde::Deserialize;
@@ -166,6 +167,9 @@ impl std::fmt::Debug for TextureIr {
     }
 }
 
+/// The most bytes a texture file may have (an 8192 x 8192 RGBA image stored raw).
+pub const MAX_FILE_BYTES: u64 = 1 << 28;
+
 /// Where `file` lies: relative to `base_dir` (the effect file's directory) when given.
 pub fn resolve(file: &str, base_dir: Option<&Path>) -> PathBuf {
     match base_dir {
@@ -179,8 +183,17 @@ impl TextureIr {
     /// The error says what is wrong with the file, for `render.texture.file`.
     pub fn load(spec: &Texture, base_dir: Option<&Path>) -> Result<Self, String> {
         let path = resolve(&spec.file, base_dir);
-        let image = image::ImageReader::open(&path)
-            .map_err(|e| format!("cannot open texture {}: {e}", path.display()))?
+        let bytes = crate::base::files::read(&path, MAX_FILE_BYTES).map_err(|e| {
+            let shown = path.display();
+            match e {
+                ReadError::Open(e) => format!("cannot open texture {shown}: {e}"),
+                ReadError::Read(e) => format!("cannot read texture {shown}: {e}"),
+                ReadError::TooLarge(size) => format!(
+                    "texture {shown} is {size} bytes, more than the {MAX_FILE_BYTES} a texture file may have"
+                ),
+            }
+        })?;
+        let image = image::ImageReader::new(std::io::Cursor::new(bytes))
             .with_guessed_format()
             .map_err(|e| format!("cannot read texture {}: {e}", path.display()))?
             .decode()
