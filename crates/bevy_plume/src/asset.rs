@@ -33,6 +33,9 @@ pub struct PlumeEffectAsset {
     /// Where those files are read from: the bytes the loader read through Bevy's asset
     /// server; None for an effect compiled from code, whose files are read from disk.
     pub files: Option<Files>,
+    /// A Bevy mesh (as OBJ text) that every particle of the top group is drawn as
+    /// ([`crate::PlumeEffect::with_mesh`]), whatever the file's look says.
+    pub particle_mesh: Option<Arc<[u8]>>,
     /// The compiled effect as written (local space, the file's seed), shared with the render
     /// world (cloning the asset is cheap). Instances in world space or with their own seed
     /// run a variant compiled from `source` once per distinct (seed, space).
@@ -67,14 +70,42 @@ impl PlumeEffectAsset {
             source: source.into(),
             base_dir,
             files,
+            particle_mesh: None,
             graph: Arc::new(graph),
         })
     }
 
+    /// The file compiled again with every particle of its top group drawn as the mesh `obj`
+    /// (OBJ text, [`crate::mesh_particles::obj_of`]), or the located diagnostic as text.
+    pub fn with_mesh(&self, obj: Vec<u8>) -> Result<Self, String> {
+        let mut meshed = Self {
+            particle_mesh: Some(obj.into()),
+            ..self.clone()
+        };
+        meshed.graph = Arc::new(meshed.compile_with(Variant::default())?);
+        Ok(meshed)
+    }
+
     /// The file compiled again for `variant`, or the located diagnostic as text.
     pub fn compile_with(&self, variant: Variant) -> Result<CompiledGraph, String> {
-        let place = (self.base_dir.as_deref(), &self.files);
-        compile_source(&self.path, &self.source, place, variant)
+        let Some(obj) = &self.particle_mesh else {
+            let place = (self.base_dir.as_deref(), &self.files);
+            return compile_source(&self.path, &self.source, place, variant);
+        };
+        // The mesh stands as a file of its own beside the effect, which the look names.
+        let base_dir = self.base_dir.as_deref().unwrap_or(Path::new(""));
+        let files = Some(Files(Arc::new(WithMesh {
+            path: base_dir.join(BEVY_MESH),
+            obj: obj.clone(),
+            others: self.files.clone(),
+        })));
+        let options = options_for((Some(base_dir), &files), variant);
+        let render = |e: plume_compiler::CompileError| e.render(&self.path, &self.source);
+        let mut effect = plume_compiler::parse_with(&self.source, &options).map_err(render)?;
+        effect.render.mesh = Some(plume_compiler::particle_mesh::ParticleMesh {
+            file: BEVY_MESH.into(),
+        });
+        plume_compiler::graph::compile_graph(&effect, &self.source).map_err(render)
     }
 
     /// The step of the top-level group, in seconds.
@@ -100,10 +131,23 @@ pub struct Variant {
 fn compile_source(
     path: &str,
     source: &str,
-    (base_dir, files): (Option<&Path>, &Option<Files>),
+    place: (Option<&Path>, &Option<Files>),
     variant: Variant,
 ) -> Result<CompiledGraph, String> {
-    let options = CompileOptions {
+    let options = options_for(place, variant);
+    compile_graph_str(source, &options).map_err(|e| e.render(path, source))
+}
+
+/// The name a Bevy mesh particle's mesh stands under beside the effect.
+const BEVY_MESH: &str = "(bevy mesh).obj";
+
+/// The options that compile an effect for `variant`, its files resolved against `base_dir`
+/// and read from `files` (disk when None).
+fn options_for(
+    (base_dir, files): (Option<&Path>, &Option<Files>),
+    variant: Variant,
+) -> CompileOptions {
+    CompileOptions {
         base_dir: base_dir.map(Path::to_path_buf),
         files: files.clone(),
         seed: variant.seed,
@@ -111,8 +155,24 @@ fn compile_source(
         bursts: variant.bursts,
         live_params: variant.live_params,
         ..Default::default()
-    };
-    compile_graph_str(source, &options).map_err(|e| e.render(path, source))
+    }
+}
+
+/// A Bevy mesh at `path` (OBJ text), and the effect's other files.
+struct WithMesh {
+    path: PathBuf,
+    obj: Arc<[u8]>,
+    others: Option<Files>,
+}
+
+impl FileSource for WithMesh {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        match (path == self.path, &self.others) {
+            (true, _) => Ok(self.obj.to_vec()),
+            (false, Some(others)) => others.0.read(path),
+            (false, None) => plume_compiler::files::Disk.read(path),
+        }
+    }
 }
 
 /// Why an effect file did not load. The compile error carries Plume's whole diagnostic.

@@ -116,6 +116,9 @@ pub struct PlumeEffect {
     /// the frame's extraction and spawns them at the effect's next step. Bursts fired before
     /// the effect's file has loaded are dropped.
     pub bursts: Vec<PlumeBurst>,
+    /// A Bevy mesh every particle of the file's top group is drawn as, instead of its sprite
+    /// or its file's mesh ([`Self::with_mesh`]).
+    pub mesh: Option<Handle<Mesh>>,
 }
 
 /// Particles fired from game code (an impact, a footstep): `count` particles of one of the
@@ -184,6 +187,19 @@ impl PlumeEffect {
             params: BTreeMap::new(),
             takes_bursts: false,
             bursts: Vec::new(),
+            mesh: None,
+        }
+    }
+
+    /// With every particle of the file's top group drawn as `mesh` (a triangle list with
+    /// positions in the main world, such as `meshes.add(Sphere::new(0.5))`): placed, turned,
+    /// sized, coloured and lit as the file's `render.mesh` draws an OBJ file's, one unit of
+    /// the mesh the particle's size. The file is compiled again with it, off the main thread;
+    /// the entity draws nothing until that is done.
+    pub fn with_mesh(self, mesh: Handle<Mesh>) -> Self {
+        Self {
+            mesh: Some(mesh),
+            ..self
         }
     }
 

@@ -28,6 +28,7 @@ mod bounds;
 mod diagnostics;
 mod effect;
 pub mod headless;
+mod mesh_particles;
 mod particle_lights;
 mod render;
 
@@ -36,6 +37,7 @@ pub use diagnostics::PlumeDiagnosticsPlugin;
 pub use effect::{
     PlumeBurst, PlumeDraw, PlumeEffect, PlumeSimulate, SimulationSpace, AUTO_COMPUTE_CAPACITY,
 };
+pub use mesh_particles::obj_of;
 pub use particle_lights::PlumeLightOf;
 pub use plume_compiler;
 pub use plume_runtime;
@@ -57,6 +59,9 @@ pub enum PlumeSystems {
     /// `PostUpdate`: the cameras' depth made bindable while an effect may be drawn by the
     /// compute renderer.
     Cameras,
+    /// `PostUpdate`: effect files compiled again with the Bevy mesh their entities draw
+    /// particles as ([`PlumeEffect::with_mesh`]), on the async compute pool.
+    Meshes,
     /// `Last`: the bursts fired this frame ([`PlumeEffect::burst`]) are taken from the effect
     /// entities into the queue the render world reads at extraction, so each spawns once.
     Bursts,
@@ -79,6 +84,7 @@ impl Plugin for PlumePlugin {
             .register_type::<PlumeSimulate>()
             .register_type::<PlumeLightOf>()
             .init_resource::<effect::FiredBursts>()
+            .init_resource::<mesh_particles::MeshedEffects>()
             .configure_sets(
                 PostUpdate,
                 PlumeSystems::Bounds.in_set(VisibilitySystems::CalculateBounds),
@@ -92,6 +98,10 @@ impl Plugin for PlumePlugin {
             .add_systems(
                 PostUpdate,
                 effect::bindable_camera_depth.in_set(PlumeSystems::Cameras),
+            )
+            .add_systems(
+                PostUpdate,
+                mesh_particles::compile_meshed_effects.in_set(PlumeSystems::Meshes),
             )
             .add_systems(Last, effect::take_bursts.in_set(PlumeSystems::Bursts))
             .add_systems(PostUpdate, particle_lights::given_lights_to_point_lights);

@@ -76,3 +76,57 @@ fn a_mesh_particle_covers_where_its_mesh_projects() {
         .resource::<PlumeRenderStats>();
     assert_eq!(stats.compute_draws, 0, "the raster renderer draws meshes");
 }
+
+/// The same particle with no mesh in its file, drawn as a Bevy mesh given in code
+/// (`PlumeEffect::with_mesh`): a `Rectangle` 1 m wide and 0.5 m tall, so at size 2 a plate
+/// 2 m by 1 m, not the 2 m square its sprite would be.
+#[test]
+fn a_bevy_mesh_draws_the_particles_of_a_file_without_one() {
+    let dir = asset_dir("bevy-mesh");
+    let sprites = PLATE.replace(", mesh: Some(ParticleMesh(file: \"plate.obj\"))", "");
+    assert!(!sprites.contains("mesh"));
+    std::fs::write(dir.join("plate.plume.ron"), sprites).unwrap();
+    let mut h = Harness::new(&dir);
+    h.camera();
+    h.wait_for_pipelines();
+    let plate = h.load("plate.plume.ron");
+    let rectangle = h
+        .app
+        .world_mut()
+        .resource_mut::<Assets<Mesh>>()
+        .add(Rectangle::new(1.0, 0.5));
+    h.app.world_mut().spawn((
+        PlumeEffect::new(plate).with_mesh(rectangle),
+        Transform::IDENTITY,
+    ));
+    // The file is compiled again with the mesh off the main thread: a few frames.
+    let drawn = h.update_until(300, std::time::Duration::from_millis(10), |h| {
+        h.capture().pixels().filter(|p| p.0[0] > 128).count() > 100
+    });
+    assert!(drawn, "the particle was never drawn as the Bevy mesh");
+    let image = h.capture_lit();
+    let lit: Vec<(u32, u32)> = image
+        .enumerate_pixels()
+        .filter(|(_, _, p)| p.0[0] > 128)
+        .map(|(x, y, _)| (x, y))
+        .collect();
+    let (x0, y0) = project(-0.5, 0.75);
+    let (x1, y1) = project(1.5, -0.25);
+    let xs = lit.iter().map(|p| p.0 as f32 + 0.5);
+    let ys = lit.iter().map(|p| p.1 as f32 + 0.5);
+    let (left, right) = (xs.clone().fold(f32::MAX, f32::min), xs.fold(0.0, f32::max));
+    let (top, bottom) = (ys.clone().fold(f32::MAX, f32::min), ys.fold(0.0, f32::max));
+    for (got, want, edge) in [
+        (left, x0, "left"),
+        (right, x1, "right"),
+        (top, y0, "top"),
+        (bottom, y1, "bottom"),
+    ] {
+        assert!(
+            (got - want).abs() < 1.5,
+            "the rectangle's {edge} edge at {got} px, its corners project to {want}"
+        );
+    }
+    let inside = ((x1 - x0 - 2.0) * (y1 - y0 - 2.0)) as usize;
+    assert!(lit.len() >= inside, "{} pixels lit of {inside}", lit.len());
+}

@@ -57,17 +57,27 @@ type EffectItem = (
 );
 
 /// Copies the effect entities and the time step into [`ExtractedEffects`]. Entities whose
-/// file has not loaded (or never compiled) are left out: they simulate nothing yet.
+/// file has not loaded (or never compiled), or not yet with their Bevy mesh, are left out:
+/// they simulate nothing yet.
 pub(crate) fn extract_effects(
     mut extracted: ResMut<ExtractedEffects>,
     effects: Extract<Query<EffectItem>>,
     assets: Extract<Res<Assets<PlumeEffectAsset>>>,
+    meshed: Extract<Res<crate::mesh_particles::MeshedEffects>>,
     time: Extract<Res<Time>>,
 ) {
     extracted.effects.clear();
     extracted.delta = time.delta_secs_f64();
     for (main, render, control, transform, seen) in &effects {
-        let Some(asset) = assets.get(&control.handle) else {
+        // Drawn as a Bevy mesh: the file compiled with it, once that is done.
+        let handle = match &control.mesh {
+            Some(mesh) => match meshed.get(&control.handle, mesh) {
+                Some(handle) => handle,
+                None => continue,
+            },
+            None => &control.handle,
+        };
+        let Some(asset) = assets.get(handle) else {
             continue;
         };
         extracted.effects.push(ExtractedEffect {

@@ -62,6 +62,16 @@ impl PartialEq for Files {
     }
 }
 
+/// The disk as a [`FileSource`]: for a host's source that serves some files itself and
+/// leaves the rest where they lie.
+pub struct Disk;
+
+impl FileSource for Disk {
+    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
+        std::fs::read(path)
+    }
+}
+
 thread_local! {
     static CURRENT: RefCell<Option<Files>> = const { RefCell::new(None) };
 }

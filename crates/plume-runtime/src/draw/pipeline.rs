@@ -1,6 +1,7 @@
 //! What the sprite and trail draws share: a render pipeline of a draw module's entry points
 //! into a target, and bind group 0 of the buffers, texture and scene depth it binds.
 
+use plume_compiler::schema::Blend;
 use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
 
 use crate::device::gpu::Gpu;
@@ -147,4 +148,37 @@ pub(crate) fn bind_resources(
         layout,
         entries: &bindings,
     })
+}
+
+/// The blend state of an effect's `Blend`: non-premultiplied "over" for `Alpha`; for
+/// `Additive`, src · α added to the target (alpha composited over, so it stays 1); for
+/// `Multiply` (whose fragments write rgb · α), target · (src + 1 − α); for `Mask` (opaque
+/// fragments or none) and `Opaque`, the fragment replaces the target; for `Premultiplied` (fragments of
+/// rgb · coverage), src + target · (1 − α).
+pub(crate) fn blend_state(blend: Blend) -> wgpu::BlendState {
+    match blend {
+        Blend::Multiply => wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Dst,
+                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::Zero,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+        },
+        Blend::Mask(_) | Blend::Opaque => wgpu::BlendState::REPLACE,
+        Blend::Premultiplied => wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING,
+        Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
+        Blend::Additive => wgpu::BlendState {
+            color: wgpu::BlendComponent {
+                src_factor: wgpu::BlendFactor::SrcAlpha,
+                dst_factor: wgpu::BlendFactor::One,
+                operation: wgpu::BlendOperation::Add,
+            },
+            alpha: wgpu::BlendComponent::OVER,
+        },
+    }
 }

@@ -17,7 +17,6 @@
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use plume_compiler::lights::{Lights, LIGHTS_BINDING};
-use plume_compiler::schema::Blend;
 use plume_compiler::wgsl::batch::INSTANCE_MODELS_BINDING;
 use plume_compiler::wgsl::draw::{
     DrawShape, Primitive, DRAW_VIEW_BYTES, FIRST_DATA_BINDING, SCENE_DEPTH_BINDING,
@@ -30,7 +29,7 @@ use crate::device::resources::Resources;
 use crate::draw::camera::Camera;
 use crate::draw::lights::LightsUniform;
 use crate::draw::live_list::LiveList;
-use crate::draw::pipeline::{draw_group, plain, render_pipeline};
+use crate::draw::pipeline::{blend_state, draw_group, plain, render_pipeline};
 use crate::draw::texture::SpriteTexture;
 use crate::draw::trail::TrailDraw;
 use crate::error::RuntimeError;
@@ -483,39 +482,6 @@ fn alive_instances(
         kernel,
         group,
     })
-}
-
-/// The blend state of an effect's `Blend`: non-premultiplied "over" for `Alpha`; for
-/// `Additive`, src · α added to the target (alpha composited over, so it stays 1); for
-/// `Multiply` (whose fragments write rgb · α), target · (src + 1 − α); for `Mask` (opaque
-/// fragments or none) and `Opaque`, the fragment replaces the target; for `Premultiplied` (fragments of
-/// rgb · coverage), src + target · (1 − α).
-pub(crate) fn blend_state(blend: Blend) -> wgpu::BlendState {
-    match blend {
-        Blend::Multiply => wgpu::BlendState {
-            color: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::Dst,
-                dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
-                operation: wgpu::BlendOperation::Add,
-            },
-            alpha: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::Zero,
-                dst_factor: wgpu::BlendFactor::One,
-                operation: wgpu::BlendOperation::Add,
-            },
-        },
-        Blend::Mask(_) | Blend::Opaque => wgpu::BlendState::REPLACE,
-        Blend::Premultiplied => wgpu::BlendState::PREMULTIPLIED_ALPHA_BLENDING,
-        Blend::Alpha => wgpu::BlendState::ALPHA_BLENDING,
-        Blend::Additive => wgpu::BlendState {
-            color: wgpu::BlendComponent {
-                src_factor: wgpu::BlendFactor::SrcAlpha,
-                dst_factor: wgpu::BlendFactor::One,
-                operation: wgpu::BlendOperation::Add,
-            },
-            alpha: wgpu::BlendComponent::OVER,
-        },
-    }
 }
 
 /// The draw module's shape on this device: how many particle buffers it binds (a stateless

@@ -12,8 +12,8 @@ use plume_compiler::rotation::RotationIr;
 
 use crate::device::gpu::Gpu;
 use crate::draw::camera::Camera;
+use crate::draw::pipeline::blend_state;
 use crate::draw::pipeline::vertex_pipeline;
-use crate::draw::raster::blend_state;
 use crate::draw::texture::SpriteTexture;
 use crate::error::RuntimeError;
 use crate::oracle::strips::{StripPipeline, StripVertex};

@@ -10,8 +10,8 @@ use plume_compiler::ir::EffectIr;
 use plume_compiler::reference::ParticleRecord;
 
 use crate::device::gpu::Gpu;
+use crate::draw::pipeline::blend_state;
 use crate::draw::pipeline::vertex_pipeline;
-use crate::draw::raster::blend_state;
 use crate::draw::target::DrawTarget;
 use crate::outputs::offscreen::FORMAT;
 

@@ -1,6 +1,7 @@
 //! What the splat's groups bind: the tile kernels of `splat.wgsl` and their shared layout (which
 //! `additive_lists.wgsl` shares too), the bind groups of the generated kernels (buffers, and the sprite texture where there is one),
-//! and the trail module a group's ribbons are drawn from.
+//! the trail module a group's ribbons are drawn from, and the check that a frame's entry lists are
+//! complete.
 
 use plume_compiler::wgsl::draw::DrawShape;
 use plume_compiler::wgsl::trail;
@@ -128,4 +129,24 @@ pub(super) fn ribbon_module(
     let module = crate::device::gpu::shader_module(&gpu.device, "splat ribbons", source);
     let entries = crate::draw::trail::trail_buffers(effect, res, shape.through_list)?;
     Ok((module, entries))
+}
+
+/// Whether a frame's sorted entries hold every sprite exactly as many times as `project`
+/// counted tiles for it, from `[status, counts, entries]` read back (for tests).
+pub(super) fn entries_are_complete(
+    gpu: &crate::device::gpu::Gpu,
+    [status, counts, entries]: [&wgpu::Buffer; 3],
+) -> Result<bool, crate::error::RuntimeError> {
+    let read = |b: &wgpu::Buffer| crate::device::readback::read_words(gpu, b, usize::MAX);
+    let needed = read(status)?[0] as usize;
+    let counts = read(counts)?;
+    let sprites = read(entries)?;
+    let mut seen = vec![0u32; counts.len()];
+    for &k in sprites.iter().take(needed) {
+        match seen.get_mut(k as usize) {
+            Some(n) => *n += 1,
+            None => return Ok(false),
+        }
+    }
+    Ok(needed <= sprites.len() && seen == counts[..seen.len()])
 }

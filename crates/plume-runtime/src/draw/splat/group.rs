@@ -289,17 +289,9 @@ impl GroupSplat {
                 image: &tiles.image,
             };
             let size = (width, height);
-            let shadow = lights.as_ref().map(|l| l.shadow.clone());
+            let reads = (reads, lights.as_ref().map(|l| l.shadow.clone()));
             QuadRaster::new(
-                &gpu,
-                &module,
-                effect,
-                &shape,
-                ribbons,
-                size,
-                targets,
-                texture,
-                (reads, shadow),
+                &gpu, &module, effect, &shape, ribbons, size, targets, texture, reads,
             )
         });
         // `project` uses every binding of its module but `composite`'s, so its derived
@@ -473,8 +465,7 @@ impl GroupSplat {
         };
         lights.shadow.map = map.clone();
         quads.set_shadow_map(map);
-        // Groups made before (the entry lists' own) are made again; the first are made with
-        // the lists.
+        // Made again if made already (else with the first entry lists).
         if self.entries.quads_groups.is_some() {
             let t = &self.tiles;
             self.entries.quads_groups =
@@ -589,18 +580,9 @@ impl GroupSplat {
     /// Whether the last frame's sorted entries hold every sprite exactly as many times as
     /// `project` counted tiles for it (reads the buffers back; for tests).
     pub(crate) fn entries_are_complete(&self) -> Result<bool, RuntimeError> {
-        let read = |b: &wgpu::Buffer| crate::device::readback::read_words(&self.gpu, b, usize::MAX);
-        let needed = read(&self.tiles.status)?[0] as usize;
-        let counts = read(&self.tiles.counts)?;
-        let sprites = read(&self.entries.vals)?;
-        let mut seen = vec![0u32; counts.len()];
-        for &k in sprites.iter().take(needed) {
-            match seen.get_mut(k as usize) {
-                Some(n) => *n += 1,
-                None => return Ok(false),
-            }
-        }
-        Ok(needed <= sprites.len() && seen == counts[..seen.len()])
+        let t = &self.tiles;
+        let lists = [&t.status, &t.counts, &self.entries.vals];
+        super::binding::entries_are_complete(&self.gpu, lists)
     }
 
     /// The image this group composites into.
