@@ -28,7 +28,8 @@ pub enum SimulationSpace {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect)]
 pub enum PlumeDraw {
     /// The compute renderer for an effect of 65,536 particles or more on a GPU adapter,
-    /// where compute beats the raster units (an H100 draws 10M sprites about 25x faster so);
+    /// where compute beats the raster units, by far on GPUs that have few of them
+    /// (docs/performance.md, "The compute splat");
     /// the raster one for smaller effects (the compute one costs a few passes over the whole
     /// image per effect), on a CPU adapter (lavapipe, llvmpipe) and wherever the compute one
     /// cannot draw.

@@ -80,11 +80,12 @@ pub enum DrawMethod {
 }
 
 impl DrawMethod {
-    /// The method `auto` stands for on `gpu` for `graph`, and why. The splat is 18 to 58 times faster than the raster pipeline on an
-    /// H100 or H200 (docs/performance.md, "Drawing") and slower on llvmpipe, whose raster path is
-    /// the CPU's; it draws every group's sprites (any texture, orientation, rotation and
-    /// height, glowing or not) and ribbons; the scene's meshes are drawn by the raster
-    /// pipeline first and the splat tests their depth (`Effect::compute_renderer`).
+    /// The method `auto` stands for on `gpu` for `graph`, and why. The splat is far faster than
+    /// the raster pipeline on GPUs whose raster units are few (docs/performance.md, "The compute
+    /// splat") and slower on llvmpipe, whose raster path is the CPU's; it draws every group's
+    /// sprites (any texture, orientation, rotation and height, glowing or not) and ribbons; the
+    /// scene's meshes are drawn by the raster pipeline first and the splat tests their depth
+    /// (`Effect::compute_renderer`).
     pub(crate) fn resolve(self, gpu: &Gpu, graph: &CompiledGraph) -> (Self, String) {
         if self != DrawMethod::Auto {
             return (self, "as asked".into());

@@ -487,8 +487,7 @@ pub fn emit_fire_appended(
 /// firings of the step to come, and the threads of a fixed grid (the runtime sizes it by the
 /// group's slots, [`SPAWN_WORKGROUPS`] at most) stride over the children, each spawned by
 /// `event_child_J`. (A direct dispatch: an indirect one, its workgroups written by the
-/// ordering, starts about 3 µs later on an H100 after the kernel that writes them:
-/// docs/performance.md, "Events".)
+/// ordering, starts later after the kernel that writes them: docs/performance.md, "Events".)
 /// `reads_origin(j)` says whether input j's spawn reads `origin` (set from the record first).
 /// `store` emits (for input j) the store of the spawned particle `s` with id `id` (and packed tint `tint`,
 /// when the group stores tints) in `slot`: the same code as the group's own spawn. `own` is
@@ -576,6 +575,6 @@ pub fn emit_kernels(
 
 /// The most workgroups of an event spawn's grid (of `WORKGROUP` threads each): about the
 /// threads an H100 holds at once; a group of fewer slots gets one workgroup per `WORKGROUP`
-/// slots (at least one: its first thread clears the header). 256 took rain's splashes (four
-/// children a firing) 1.4% longer a step on an H100.
+/// slots (at least one: its first thread clears the header). 256 made rain's splashes (four
+/// children a firing) slower (docs/performance.md, "Events").
 pub const SPAWN_WORKGROUPS: u32 = 1024;

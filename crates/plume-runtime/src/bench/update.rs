@@ -312,9 +312,8 @@ fn time_stateless(
 
 /// Rounds in which `plume bench` times the update and the copy kernels in turn, keeping each
 /// one's fastest: on the lent H100 the memory bandwidth every kernel gets switches between two
-/// levels (about 3.0 and 1.7 TB/s for the copy) for seconds at a time, whatever the buffers
-/// (docs/performance.md, "The update at large sizes"), so a single timing of each can compare
-/// kernels measured at different levels.
+/// levels for seconds at a time, whatever the buffers (docs/performance.md, "The update at
+/// large sizes"), so a single timing of each can compare kernels measured at different levels.
 pub const ROUNDS: u32 = 5;
 
 /// For an effect with a `SceneDepth` collider, its scene drawn from its camera at `size` and

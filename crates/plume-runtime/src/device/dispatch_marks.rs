@@ -4,7 +4,7 @@
 //! resolves them into each label's time since the mark before it. A thread-local collection
 //! (like a tracing span) keeps the recording functions' signatures as they are: with none
 //! open, a mark is one thread-local check. Each timestamp also costs the GPU a few
-//! microseconds (about 6.6 µs on an H100, docs/performance.md), so the times are relative:
+//! microseconds (docs/performance.md, "Events"), so the times are relative:
 //! they show where a step's time goes, not what it costs without them.
 
 use std::cell::RefCell;

@@ -38,10 +38,10 @@ use crate::draw::target::DrawTarget;
 
 /// How a stateful, unsorted draw skips the free slots (a sorted draw and a stateless draw
 /// already issue only the live instances). The default compacts the list of an effect of
-/// [`COMPACT_FROM_SLOTS`] slots or more: on an H100 the list was faster at every occupancy
-/// measured, 1% to 75% alive of 10M slots (docs/performance.md), because a hidden quad still
-/// costs its vertices (about 3 ns a slot) while listing 10M slots costs 0.4 ms. A small effect
-/// draws every slot instead: its hidden quads cost microseconds, and the list would cost a
+/// [`COMPACT_FROM_SLOTS`] slots or more, where the list costs less at any occupancy: a hidden
+/// quad still costs its four vertices, while listing the slots is one short compute pass
+/// (docs/performance.md, "Free slots: hidden quads or a compacted list"). A small effect
+/// draws every slot instead: its hidden quads cost little, and the list would cost a
 /// compute pass of three dispatches a frame, which a game with hundreds of small effects pays
 /// on the CPU for each.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -57,7 +57,8 @@ pub enum DeadSlots {
 }
 
 /// The capacity from which [`DeadSlots::BySize`] compacts the list of live slots: about where
-/// 4 hidden vertices a slot (3 ns on an H100) cost what the list's three small dispatches do.
+/// 4 hidden vertices a slot cost what the list's three small dispatches do (docs/performance.md,
+/// "Free slots: hidden quads or a compacted list").
 pub const COMPACT_FROM_SLOTS: u32 = 4096;
 
 /// Choices of a draw beyond its target.

@@ -18,8 +18,9 @@ use crate::sim::effect::Effect;
 ///   target, drawn in the host's render pass;
 /// - compute ([`Effect::compute_renderer`]): the compute splat composites every group into an
 ///   image of its own, tested against the host's depth, and the host's render pass puts that
-///   image over its colour with one full-screen triangle. Faster where raster units are few
-///   (18 to 58 times faster on an H100 or H200; docs/performance.md, "Drawing").
+///   image over its colour with one full-screen triangle. Faster where raster units are few,
+///   as on data-centre GPUs, by far for large effects (docs/performance.md, "The compute
+///   splat").
 ///
 /// Prepared each frame by [`Effect::prepare_draw`], recorded into a render pass by
 /// [`Self::draw`].

@@ -26,9 +26,9 @@
 //                      run smaller than its own; the counts are cleared.
 //
 // The words' counts are not scanned across the device (a reduce and a scan of blocks of 2,048
-// words, five dispatches, one word an id): each dispatch costs an H100 about 2.7 µs before any
-// work, and the two scans took about 13 µs a step for fireworks' sparks and rain's drops at 10M
-// slots (docs/performance.md, "Events").
+// words, five dispatches, one word an id): each dispatch costs its launch before any work, and
+// the step with those scans was slower for fireworks' sparks and rain's drops at 10M slots
+// (docs/performance.md, "Events").
 // The work follows the firings and the range of their ids, not the group's slots: each kernel
 // is dispatched on a fixed grid (at most 256 workgroups) whose threads stride over this
 // step's firings, so that a step with few firings launches few threads. Ids are unique, so a
@@ -182,7 +182,7 @@ fn count_local(array: u32, at: u32, base: u32, amount: u32) {
 // gathers its 256 firings' in workgroup memory first, in windows of 256 entries around its
 // first firing's, and adds each window entry it used to the arrays once: the firings of one
 // parent's cohort have consecutive ids, and their atomics on the same few words serialised
-// (fireworks' count took 7.5 µs a step on an H100 with three global atomics a firing).
+// when each firing made its three global atomics itself.
 @compute @workgroup_size(256)
 fn bucket_count(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
                 @builtin(local_invocation_index) lane: u32) {
@@ -343,7 +343,7 @@ fn bucket_rank(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) g
     let stride = workgroups(groups) * THREADS;
     // A bit an id, with fewer words than firings: the words, quads and groups in use are
     // cleared in turn, a store each, rather than by each firing (the firings of one word or
-    // group storing to it together took an H100 3 µs longer for fireworks' sparks).
+    // group storing to it together were slower for fireworks' sparks).
     if (w.shift == 0u && w.words <= w.count) {
         for (var at = first; at < w.words; at += stride) {
             atomicStore(&counts[at], 0u);

@@ -2,11 +2,11 @@
 // (crate::sim::events; the ordering files follow this one in the module). The firings' count
 // is known from the step's start, so one thread takes it there: it pops the child's free slots
 // for as many children as fit, counts the rest as dropped and hands out the children's ids.
-// A one-thread dispatch of the child's own for this would cost about 2.7 µs a stream a step on
-// an H100 (docs/performance.md, "Events"). The child's `event_spawn` is a direct dispatch over
-// a fixed grid whose threads stride over the children (an indirect one, its workgroups written
-// here, starts about 3 µs later on an H100). The records' header is cleared by the spawn's first thread, after every kernel of
-// the ordering has read it.
+// A one-thread dispatch of the child's own for this would cost a dispatch's launch a stream a
+// step. The child's `event_spawn` is a direct dispatch over a fixed grid whose threads stride
+// over the children (an indirect one, its workgroups written here, would start later than a
+// direct one; docs/performance.md, "Events", measures both). The records' header is cleared by
+// the spawn's first thread, after every kernel of the ordering has read it.
 
 // Whether this pipeline prepares the spawn (`plume bench` times the orderings alone, again and
 // again over the same firings, with it off).

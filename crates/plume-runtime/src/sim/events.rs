@@ -8,9 +8,9 @@
 //! ids) and each firing's place is counted from the words' counts (event_buckets.wgsl: a stream
 //! compaction in id order, three dispatches, no sort). A stateless firing group's stream may
 //! take the counting kernel in steps whose firings the host bounds (crate::sim::graph).
-//!
-//! (Until 2026-11 a large group wrote a key per slot and the radix sort ordered every slot:
-//! four passes of 8 bits whether 5 or 50,000 fired; docs/performance.md, "Events", has both.)
+//! Either costs what fired, not the firing group's slots: a radix sort of a key per slot
+//! would take its passes over every slot whether 5 or 50,000 fired (docs/performance.md,
+//! "Events", measures both).
 
 use plume_compiler::events::Ordering;
 use plume_compiler::wgsl::counter_word;
@@ -27,9 +27,8 @@ const BUCKET_GROUPS: u64 = 2048;
 /// The most workgroups of a bucket kernel: its threads stride over the firings (a grid over
 /// every slot launched millions that had nothing to do). 256 rather than the 1,024 an H100
 /// holds at once: fewer idle workgroups for the usual few thousand firings, and fewer
-/// workgroups scanning the groups' counts in `bucket_place` when a million fire (fireworks at
-/// 10M slots 1.520x → 1.511x, 2M slots all firing 0.0976 → 0.0919 ms a step; 128 was no
-/// better: benchmarks/h100-events/ordering-ab/).
+/// workgroups scanning the groups' counts in `bucket_place` when a million fire; 128 was no
+/// better (docs/performance.md, "Events"; benchmarks/h100-events/ordering-ab/).
 const BUCKET_WORKGROUPS: u64 = 256;
 
 /// One dispatch: a kernel, its bind group and its workgroups.

@@ -99,16 +99,16 @@ const SCAN_BLOCK: u64 = 2048;
 
 /// The longest short scan: 256 blocks of 256 words, scanned in a dispatch and added up in
 /// another (sort.wgsl's `scan_blocks`, `add_block_prefix`). Longer ones reduce then scan, eight
-/// words a thread. On the H100 (the flock grid's bucket counts, ms a scan, short against long): 8,193 words 0.0063 against 0.0098, 32,769 0.0066 against 0.0101
-/// (their few workgroups wait on their own steps more than on memory); 131,073 0.0128 against
-/// 0.0103, 1,048,577 0.028 against 0.017, 10M 0.129 against 0.098.
+/// words a thread. Up to this length the short scan is the faster (the long one's few
+/// workgroups wait on their own steps more than on memory); past it the long one is
+/// (docs/performance.md, "Depth sort and the radix sort").
 const SCAN_SHORT_MAX: u64 = 65_536;
 
 /// The most blocks whose scan adds up the totals before each block in the block's own
 /// workgroup (sort.wgsl's `scan_apply`, params.shift 0) instead of scanning the totals in a
-/// dispatch of their own first: 4M words, each workgroup reading at most 2,048 totals. The
-/// flock grid's 2M + 1 bucket counts (1M boids, H100, one call, three rounds): 0.9975, 0.9967,
-/// 0.9990 ms a step against 1.0018, 0.9965, 0.9994 with at most 1,024 blocks (a dispatch more).
+/// dispatch of their own first: 4M words, each workgroup reading at most 2,048 totals. For the
+/// flock grid's 2M + 1 bucket counts, reading up to 2,048 totals a workgroup cost no more than
+/// the extra dispatch that a limit of 1,024 blocks needs.
 const SCAN_PREFIX_MAX: u64 = 2048;
 
 /// Keys per radix partition (radix.wgsl's PART).
@@ -228,8 +228,8 @@ impl GpuSorter {
     /// (`scan_reduce`), then each block scanned from its prefix (`scan_apply`), which up to
     /// [`SCAN_PREFIX_MAX`] blocks adds up the totals before its own and past that reads them
     /// as `scan_totals`, one workgroup, scanned them in a dispatch between. (Short scans applied
-    /// level by level take the splat's 10M-word scan 0.129 ms against this one's 0.098,
-    /// docs/performance.md.)
+    /// level by level are slower on long scans such as the splat's: docs/performance.md, "Depth
+    /// sort and the radix sort".)
     fn scan(
         &self,
         pass: &mut SortProgram,

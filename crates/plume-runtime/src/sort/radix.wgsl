@@ -18,10 +18,9 @@
 const THREADS: u32 = 256u;
 // Keys per thread and per partition. PART keys staged in workgroup memory, the subgroup
 // downsweep's per-subgroup digit counts and two 256-word scan buffers take 14 of WebGPU's
-// guaranteed 16 KiB of workgroup memory. Measured on the H100 (16.7M keys, one device call;
-// docs/performance.md): the downsweep took 0.26 ms a pass with 8 keys a thread, 0.36 with 10,
-// 0.43 with 15 and 0.73 with 20 (fewer workgroups fit an SM at once), 0.26 with 6, whose
-// digit scan over more partitions cost more.
+// guaranteed 16 KiB of workgroup memory. 8 keys a thread gave the fastest downsweep: with
+// more, fewer workgroups fit an SM at once; with fewer, the digit scan over more partitions
+// costs what the downsweep saves (docs/performance.md, "Depth sort and the radix sort").
 const KPT: u32 = 8u;
 const PART: u32 = 2048u;
 

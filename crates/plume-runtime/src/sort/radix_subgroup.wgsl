@@ -83,9 +83,9 @@ fn rank_partition(part: u32, len: u32, t: u32, sg: u32, lane: u32, map: KeyMap) 
     var keys: array<u32, KPT>;
     var pos: array<u32, KPT>;
     // Every key load first, so that they are all in flight before the ranking needs them
-    // (measured on the H100, 16M keys: the downsweep took 0.46 ms loading each key as it
-    // ranked it, 0.33 ms loading the keys first, and 0.42 ms loading the values first too: the
-    // values' registers cost more than their early loads save).
+    // rather than each key loaded as it is ranked. The values are not loaded here too: their
+    // registers cost more than their early loads save (docs/performance.md, "Depth sort and the
+    // radix sort").
     for (var k = 0u; k < KPT; k++) {
         let local = first + k * 32u + lane;
         keys[k] = 0u;

@@ -268,9 +268,9 @@ fn scan_apply_from(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroup
         var v = 0u;
         if (i < params.n) {
             v = source[i];
-            // Only where it is not zero already: writing zeros back over zeros took the flock's
-            // scan of 4M + 1 bucket counts (a boid for every 4 buckets) from 0.083 to 0.043 ms
-            // on the H100 (docs/performance.md, "Flocking").
+            // Only where it is not zero already: the flock's bucket counts are mostly zeros,
+            // and writing zeros back over zeros made its scan much slower (docs/performance.md,
+            // "Depth sort and the radix sort").
             if (v != 0u) {
                 source[i] = 0u;
             }

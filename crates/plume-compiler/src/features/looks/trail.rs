@@ -8,8 +8,8 @@
 //! R = points − 1, with the particle's id + 1 beside it. A slot's R entries are consecutive
 //! (entry r of slot i at i · R + r), so the draw reads one ribbon's points from a cache line or
 //! two, while the update's stores land 16 · R bytes apart. Laid out entry-major instead (one
-//! step's samples consecutive, the stores coalesced), the update was cheaper by 0.02 ms per
-//! million particles but the draw's vertex stage slower by up to 27 ms per million on an H100
+//! step's samples consecutive, the stores coalesced), the update was slightly cheaper but the
+//! draw's vertex stage far slower, as each ribbon's points then lie a step's samples apart
 //! (docs/performance.md, "Trails").
 //!
 //! The draw joins the particle's position now and its samples newest first; an entry whose id

@@ -77,7 +77,8 @@ fn content_key(ir: &EffectIr, exact_possible: bool) -> Option<u64> {
 /// Returns a warning (with its lookup path) when the file's own scheme misses the budget; an
 /// error when no scheme meets it. A choice made once is kept by the effect's content, its seed
 /// aside: compiling the same effect again, or a variant with another seed (a Bevy instance's),
-/// takes it from memory instead of calibrating again (0.1 to 0.45 s).
+/// takes it from memory instead of calibrating again (docs/performance.md, "The compiler's own
+/// speed").
 pub fn choose(
     ir: &mut EffectIr,
     exact_possible: bool,

@@ -1,12 +1,12 @@
 //! Calibrations remembered on disk (when a host asks: [`remember_calibrations_in`]), so that a
 //! budgeted file compiled again in another process (`plume check` run twice, a game started
-//! again) takes its choice back instead of calibrating for 0.1 to 0.45 s. Each choice is a
-//! small RON file named by the effect's content key (its lowered IR, seed aside, and whether
-//! the closed form applies: the accuracy pass's in-memory key), in a folder named by the
-//! compiler's build (a hash of its sources), so no build reuses another's choices; folders of
-//! other builds are removed when a new one is made. A file that cannot be read or parsed is
-//! no error: the effect is calibrated again and the file rewritten. Files are written aside
-//! and renamed, so a reader never sees half of one.
+//! again) takes its choice back instead of calibrating again, most of a first compile's time
+//! (docs/performance.md, "The compiler's own speed"). Each choice is a small RON file named by the
+//! effect's content key (its lowered IR, seed aside, and whether the closed form applies: the
+//! accuracy pass's in-memory key), in a folder named by the compiler's build (a hash of its
+//! sources), so no build reuses another's choices; folders of other builds are removed when a new
+//! one is made. A file that cannot be read or parsed is no error: the effect is calibrated again
+//! and the file rewritten. Files are written aside and renamed, so a reader never sees half of one.
 
 use std::path::{Path, PathBuf};
 use std::sync::{Mutex, OnceLock};

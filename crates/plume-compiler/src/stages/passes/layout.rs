@@ -55,8 +55,9 @@ pub fn decide(ir: &EffectIr) -> Layout {
     };
     // The id sits beside the position, in the first 16-byte word: what reads only where live
     // particles are (the depth keys, the live bounds, the live list, freeing a slot) touches
-    // that word alone. With the id in the second word, the depth keys of 16.7M particles read
-    // both words (0.20 ms on an H100, at the copy kernel's bandwidth; docs/performance.md).
+    // that word alone. With the id in the second word, the depth keys read both words, twice
+    // the bytes at the copy kernel's bandwidth (docs/performance.md, "Depth sort and the radix
+    // sort").
     let mut attributes = vec![Attribute::Position, Attribute::Id, motion];
     if ir.has_lifetimes() {
         attributes.push(Attribute::DeathStep);
@@ -93,10 +94,10 @@ pub fn decide(ir: &EffectIr) -> Layout {
         first += a.width();
     }
     // Padded to a multiple of 16 bytes so kernels move the state as whole vec4 words: scalar
-    // accesses at a 28- or 32-byte stride reached under half the copy kernel's bandwidth on an
-    // H100 (docs/performance.md). Motion in halves exists to save bytes, so its layout keeps
-    // its last words in planes of 8 and 4 bytes a slot instead (`Layout::planes`): word-major,
-    // every access stays coalesced.
+    // accesses at a 28- or 32-byte stride fell far short of the copy kernel's bandwidth
+    // (docs/performance.md, "The update at large sizes"). Motion in halves exists to save
+    // bytes, so its layout keeps its last words in planes of 8 and 4 bytes a slot instead
+    // (`Layout::planes`): word-major, every access stays coalesced.
     let words = attributes.iter().map(|a| a.bytes(half_motion)).sum::<u32>();
     let bytes_per_particle = if half_motion {
         words

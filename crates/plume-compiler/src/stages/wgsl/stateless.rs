@@ -143,9 +143,9 @@ fn emit_spawn_draws(w: &mut Writer, ir: &EffectIr, id: &str, born: &str, none: &
 /// Emits `evaluate_slot` (one particle of the view) and `evaluate`, which writes the view: each
 /// thread stores its own particle's words, which the word-major layout puts where a warp's
 /// stores cover contiguous memory ([`crate::base::kernel::word_index`]). (With particle-major words,
-/// a thread storing its own particle left every store half-coalesced, 66% of a write-only
-/// kernel's bandwidth on an H100, and staging them through workgroup memory cost a barrier
-/// that CPU adapters pay dearly for: docs/performance.md.)
+/// a thread storing its own particle left every store half-coalesced, well short of a
+/// write-only kernel's bandwidth, and staging them through workgroup memory cost a barrier
+/// that CPU adapters pay dearly for: docs/performance.md, "Stateless effects".)
 pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     let dead_fields: Vec<&str> = layout
         .words()

@@ -7,8 +7,8 @@
 //! the word-major layout puts them ([`crate::base::kernel::word_index`]): across a warp every access
 //! covers contiguous memory, as in a copy kernel, and no thread waits for another. The update
 //! of an earlier version staged a workgroup's particle-major words through workgroup memory
-//! to coalesce them: 0.88 of the copy kernel from 10M particles up on an H100, with a barrier
-//! on each side of the arithmetic (docs/performance.md, "The update at large sizes").
+//! to coalesce them, and fell short of the copy kernel's bandwidth, with a barrier on each
+//! side of the arithmetic (docs/performance.md, "The update at large sizes").
 
 use crate::base::writer::{f32_lit, vec3_lit, Writer};
 use crate::features::events::TriggerIr;

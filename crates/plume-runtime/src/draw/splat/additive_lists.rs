@@ -3,8 +3,8 @@
 //! ribbon segments, and `splat.wgsl`'s raster of discs) sum additive light in fixed point
 //! (`plume_compiler`'s splat `light`), exactly, so a tile's list may hold its
 //! entries in any order; counting and placing them replaces the scan, emit, radix sort and
-//! ranges of the sorted lists (H100, 1280x720: sparks 10M's lists 2.31 -> 1.16 ms, orbit 1M's
-//! 2.30 -> 1.17; docs/performance.md).
+//! ranges of the sorted lists, and costs less than they did (docs/performance.md, "What bounds
+//! sparks and orbit").
 
 use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;

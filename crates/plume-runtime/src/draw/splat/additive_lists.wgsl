@@ -10,10 +10,10 @@
 //   place:         a workgroup per CHUNK sprites counts again, takes a block of each tile's run
 //                  for them (one atomic add on the cursor a tile), and hands its slots out in
 //                  workgroup memory.
-// Global atomics a tile per workgroup, not per entry: an atomic a (sprite, tile) pair on the
-// cursors took 2.8 ms to count sparks 10M's 53.7M entries on an H100, most tiles' entries
-// falling on a few hundred hot cursors. Workgroup memory holds BAND tiles; an image with more
-// runs the two kernels once per band of tiles (the grid's z).
+// Global atomics a tile per workgroup, not per entry: with an atomic a (sprite, tile) pair on
+// the cursors, most tiles' entries fell on a few hundred hot cursors and queued there
+// (docs/performance.md, "What bounds sparks and orbit"). Workgroup memory holds BAND tiles;
+// an image with more runs the two kernels once per band of tiles (the grid's z).
 // This replaces the sorted lists' scan, emit, radix sort by tile and ranges for additive
 // light (docs/performance.md measures both).
 
@@ -57,9 +57,9 @@ fn count_run(n: u32, b: vec4<u32>, band0: u32, band_len: u32) {
 
 // The entries of the workgroup's chunk of sprites counted into `bins` by tile: thread t takes
 // PER consecutive sprites, in runs whose tile boxes are the same. A ribbon's neighbouring
-// segments mostly share their tiles, and an atomic each on the same bin queued them (H200,
-// orbit 1M: counting 0.375 -> 0.302 ms; placing them in runs too wrote each run's slots in a
-// loop, 0.657 -> 0.727 ms, so `place_sweep` places sprite by sprite).
+// segments mostly share their tiles, and an atomic each on the same bin queued them. Placing
+// them in runs too wrote each run's slots in a loop, which was slower, so `place_sweep` places
+// sprite by sprite (docs/performance.md, "What bounds sparks and orbit").
 fn count_sweep(chunk: u32, t: u32, band0: u32, band_len: u32) {
     var run_n = 0u;
     var run_box = vec4<u32>(0u);

@@ -86,8 +86,8 @@ var<workgroup> group_boxes: array<vec2<u32>, 256>;
 // A workgroup per 256 consecutive sprites writes their entries, which are consecutive too,
 // a thread per entry: entry p is sprite r's (the last whose offset is at most p), its tile
 // the box's (p - offset)th in row order. Neighbouring threads write neighbouring words; a
-// thread per sprite, writing its own run, scattered each warp's stores over 32 runs (H100,
-// sparks 10M: 0.84 ms for 53.7M entries, about a fifth of the copy kernel's bandwidth).
+// thread per sprite, writing its own run, scattered each warp's stores over 32 runs, far below
+// the copy kernel's bandwidth (docs/performance.md, "What bounds sparks and orbit").
 @compute @workgroup_size(256)
 fn emit(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>, @builtin(local_invocation_index) t: u32) {
     // Uniform (as the barrier needs): the workgroup's first sprite, index2d's numbering.
@@ -155,8 +155,9 @@ var<workgroup> shared_splats: array<vec4<u32>, 256>;
 var<workgroup> tile_range: vec2<u32>;
 // Per pixel of the tile, which of the batch's 256 sprites may cover it: 8 words of bits; and
 // the sprites whose boxes cover the whole tile. (The quads' composite builds a mask per column
-// and per row instead, 32 box tests a thread; discs are small, a few atomics each, and that
-// took fountain 10M's raster stage from 0.34 to 0.74 ms on an H100.)
+// and per row instead, 32 box tests a thread; discs are small, a few atomics each, and the
+// masks' tests cost them more than they saved: docs/performance.md, "What bounds sparks and
+// orbit".)
 var<workgroup> masks: array<atomic<u32>, 2048>;
 var<workgroup> tile_masks: array<atomic<u32>, 8>;
 // Pixels of the tile that are finished (or outside the image).
@@ -167,9 +168,9 @@ var<workgroup> finished: atomic<u32>;
 // comes through, T, falls by (1 - a) at each sprite, and a pixel stops once T is under half an
 // 8-bit step. Additive: light summed in fixed point, in any order, until every channel is full;
 // each tile's list is split over groups.z workgroups (slices), whose light `merge_discs` sums
-// (H200, orbit 1M: the frame 6.19 -> 5.2 ms with 8 slices; its discs pile into the tiles along
-// its rings, and one workgroup a tile worked through each pile alone). The tile stops when all
-// its pixels have.
+// (orbit's discs pile into the tiles along its rings, and one workgroup a tile worked through
+// each pile alone; docs/performance.md, "What bounds sparks and orbit"). The tile stops when
+// all its pixels have.
 // Each batch of 256 sprites is first binned to the pixels their boxes touch (a bit per sprite
 // in each pixel's mask; one tile-wide bit for a box that covers the tile), so a pixel visits
 // only the sprites that may cover it, in descending bit order: front to back.

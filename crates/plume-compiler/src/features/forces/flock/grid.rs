@@ -14,9 +14,8 @@ impl FlockIr {
     /// reads the sorted boids (`boids`), the run starts (`cell_start`) and the sorted order
     /// (`grid_vals`) through read-only bindings and writes `flock_out`, at the bindings the
     /// effect's `layout` gives them. The main module writes those buffers, so there they must
-    /// be read-write; read through read-only bindings, the same search ran 7 to 8% faster on the
-    /// H100 at every size (1M boids 1.744 against 1.606 ms a step, 16k 0.0644 against 0.0616;
-    /// docs/performance.md, "Flocking"), as a driver may cache loads it knows no thread writes.
+    /// be read-write; read through read-only bindings, the same search ran faster at every size
+    /// (docs/performance.md, "Flocking"), as a driver may cache loads it knows no thread writes.
     pub fn emit_search_module(&self, name: &str, capacity: u32, layout: &Layout) -> Option<String> {
         let Neighbors::Grid { cell } = self.neighbors else {
             return None;
@@ -279,8 +278,8 @@ fn emit_run_masked(w: &mut Writer, loads: u32, per_round: u32) {
 /// `flock_grid`, one thread a boid: its nine rows in turn, each `2 x_split + 1` cells (or
 /// sub-cells) along x around the boid's own, in rounds of [`GRID_ONE_LOADS_PER_ROUND`] loads
 /// of [`GRID_ONE_LOADS`] candidates ([`emit_run_masked`]), the next row's run loaded while a
-/// row is walked (1M boids, H100, one call, three rounds: 1.048 against 1.067 ms a step for
-/// every row's run loaded first into an array, which the driver kept in local memory).
+/// row is walked: loading every row's run first into an array was slower, as the driver kept
+/// the array in local memory.
 pub(super) fn emit_search(w: &mut Writer, x_split: u32) {
     w.line("@compute @workgroup_size(WORKGROUP)");
     w.block(

@@ -166,21 +166,16 @@ pub struct Frozen {
     pub weight: f64,
 }
 
-/// From this many boids the grid was measured faster than all pairs (H200, effects/boids.ron
-/// at its own density: 0.418 against 0.571 ms/step at 4,096; all pairs wins at 2,048 and below;
-/// docs/performance.md).
+/// From this many boids the grid beat all pairs (effects/boids.ron at its own density), which
+/// won at 2,048 and below (docs/performance.md, "Flocking").
 pub const GRID_FASTER_FROM: u32 = 4096;
 
 /// Below this capacity the grid's search splits each boid over nine threads, one row of 3
 /// cells each, [`GRID_TILE`] boids a workgroup, and marks neighbours in masks before running
-/// the pair function on them; from it on, one thread a boid walks all nine rows. Measured on
-/// the H100 with effects/boids.ron (docs/performance.md, "Flocking"), ms a step split against
-/// one thread: 0.055 against 0.059 at 16k, 0.129 against 0.155 at 64k, 0.234 against 0.263 at
-/// 128k (before the PCG bucket hash); with it, 0.355 against 0.359 at 256k (a tie), 0.728
-/// against 0.703 at 512k and 1.54 against 1.37 at 1M, where the GPU is full and nine threads'
-/// partial sums cost more than they hide. With the one-thread search in rounds of 24 (one
-/// call): 0.096 against 0.109 at 64k, 0.167 against 0.179 at 128k; at 256k,
-/// in an earlier call, 0.329 against 0.320 for rounds of 32.
+/// the pair function on them; from it on, one thread a boid walks all nine rows. With
+/// effects/boids.ron the split search was the faster below this size and the two tie at it;
+/// above it the GPU is full and nine threads' partial sums cost more than they hide
+/// (docs/performance.md, "Flocking").
 pub const GRID_SPLIT_BELOW: u32 = 262_144;
 
 /// Boids per workgroup of the split search. Its threads are laid out row by row (thread t:
@@ -193,13 +188,10 @@ pub const GRID_TILE: u32 = 16;
 /// times a round; a round's neighbours are marked in one mask, and the pair function runs on
 /// them after its last loads. In a warp the pair loop runs as often as the busiest thread has
 /// neighbours in the round, so a longer round wastes less of it; loaded 10 at a time, the
-/// kernel keeps its registers (57). 1M boids (H100, one call, three rounds): 1.032 ms a step
-/// for 3 x 10, against 1.048 for rounds of 20 loaded at once (80 registers), 1.039 for 2 x 16,
-/// 1.049 for 4 x 8; two mask words for rounds of up to 64 (1.043 to 1.118) and the pair loop's
-/// next loads started before its pair function (1.070 to 1.137) were slower
-/// (benchmarks/h100-speed/flock-batches/README.md). Before (rounds loaded at once): 1.048
-/// with 20, 1.051 with 18, 1.073 with 22, 1.067 with 24; with whole cells, every run loaded
-/// first, 1.178 with 24, 1.194 with 32, 1.182 with 20 and 1.270 for the pair function inline.
+/// kernel keeps its registers (57). At 1M boids rounds of 3 x 10 beat rounds of 20 loaded at
+/// once (80 registers), 2 x 16 and 4 x 8; two mask words for rounds of up to 64 and the pair
+/// loop's next loads started before its pair function were slower (docs/performance.md,
+/// "Flocking"; benchmarks/h100-speed/flock-batches/README.md).
 pub const GRID_ONE_LOADS: u32 = 10;
 
 /// Loads of [`GRID_ONE_LOADS`] candidates in a round of the one-thread search.
@@ -207,16 +199,16 @@ pub const GRID_ONE_LOADS_PER_ROUND: u32 = 3;
 
 /// Sub-cells along x of each cell where the one-thread search runs (from [`GRID_SPLIT_BELOW`]):
 /// a row is then 2 x 3 + 1 = 7 sub-cells, 7/3 of a cell, where a boid reaches 2 cells of it
-/// (its radius either way), instead of 3 whole cells: 22% fewer candidates walked. 1M boids
-/// (H100, one call, three rounds): 1.071 against 1.130 ms a step (the search 0.879 against
-/// 0.935); 2 sub-cells 1.072, 4 sub-cells 1.081. The neighbours are the same; the order they
-/// are added in changes within a cell (by sub-cell, then slot), so the sums round differently
-/// (docs/performance.md, "Flocking"). Rows clipped, sub-cell by sub-cell,
-/// to the sphere of the radius (44% fewer candidates than whole cells) were slower: 1.095.
+/// (its radius either way), instead of 3 whole cells: 22% fewer candidates walked, and at 1M
+/// boids a faster step than whole cells or 2 or 4 sub-cells gave. The neighbours are the same;
+/// the order they are added in changes within a cell (by sub-cell, then slot), so the sums
+/// round differently. Rows clipped, sub-cell by sub-cell, to the sphere of the radius (44%
+/// fewer candidates than whole cells) were slower: the clipping cost more than it saved
+/// (docs/performance.md, "Flocking").
 pub const GRID_X_SPLIT: u32 = 3;
 
 /// Candidates the split search loads and tests a round (one bit each in the round's mask):
-/// 16k boids 0.0457 ms a step, against 0.0457 with 8 and 0.0478 with 32 (H100).
+/// at 16k boids as fast as 8 and faster than 32.
 pub const GRID_ROUND: u32 = 16;
 
 /// Spare entries of the sorted snapshot past its last boid, for the loads past a run (up to
@@ -271,12 +263,11 @@ impl FlockIr {
     /// most 2^31 (so that the count fits the shaders' u32). The boids of other rows that share
     /// a row's buckets are loaded and rejected: about one a bucket with as many buckets as
     /// boids, half as many with twice as many. At 16k boids: 681 candidates a boid against 443
-    /// in its own 27 cells with as many buckets as boids, and twice as many took the step from
-    /// 0.0615 to 0.0585 ms. At 1M boids (H100, one call, three rounds): 2 buckets a boid took
-    /// the search from 0.843 to 0.805 ms and the scan from 0.017 to 0.028 (its zeros no longer
-    /// written back over zeros: 0.045 before), the step 1.031 to 1.000; 4 a boid took the
-    /// search to 0.783 and the scan to 0.044, the step to 1.000 as well (docs/performance.md,
-    /// "Flocking"). Until then the one-thread search had one bucket a boid.
+    /// in its own 27 cells with as many buckets as boids, and twice as many made the step
+    /// faster. At 1M boids, 2 buckets a boid shorten the search by more than they lengthen the
+    /// scan (whose zeros are not written back over zeros), where one a boid was slower; 4 a
+    /// boid shorten the search further but lengthen the scan as much (docs/performance.md,
+    /// "Flocking").
     pub fn grid_buckets(capacity: u32) -> u64 {
         (2 * u64::from(capacity.max(1)))
             .next_power_of_two()

@@ -67,7 +67,8 @@ pub struct DrawShape {
     /// Whether the splat's HDR light stops at a ceiling below f16's largest value (the
     /// top-level group's glow clamp, `render.glow.clamp`): its composite then tests each
     /// pixel's light against `splat_tiles.light_ceiling` once a mask word. Without a clamp
-    /// the test would never pass, and it costs (H200, sparks 10M: composite 6.87 -> 7.26 ms).
+    /// the test would never pass, and it costs time in every HDR composite (docs/performance.md,
+    /// "What bounds sparks and orbit").
     pub clamped: bool,
     /// Whether the module also holds the light kernels of `render.light`
     /// (`light_keys_pass`, `light_pick_pass`; the runtime draws them with an identity view

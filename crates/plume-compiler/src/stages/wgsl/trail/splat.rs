@@ -5,8 +5,8 @@
 //!
 //! A segment, not a triangle, is the record: its two triangles cover nearly the same tiles, so
 //! a record for each triangle put each tile entry in the list twice, and made the ribbon's
-//! particle, its samples and its points again for each (H100, orbit 1M: 87.8M entries, now
-//! 46.7M, and 13.9 -> 8.7 ms a frame).
+//! particle, its samples and its points again for each, a far slower frame
+//! (docs/performance.md, "What bounds sparks and orbit").
 
 use crate::base::writer::{u32_lit, Writer};
 use crate::features::looks::trail::TrailIr;

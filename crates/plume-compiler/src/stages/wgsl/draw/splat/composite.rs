@@ -17,9 +17,9 @@ pub(crate) const SPLAT_BATCH: u32 = 128;
 
 /// Records a composite workgroup bins at once for additive quads: half a batch. A pixel then
 /// walks a batch's masks in two words, not four, and a workgroup spends less of its time with
-/// most of its threads waiting at a barrier for a slow mask or load (H100, sparks 10M: the
-/// composite 16.1 -> 15.4 ms; smoke 1M, alpha, 2.07 -> 2.18 and orbit's ribbons 8.4 -> 11.4,
-/// which keep 128; benchmarks/h100-splat/line-masks/8-batch-64-96/).
+/// most of its threads waiting at a barrier for a slow mask or load. Alpha records and ribbon
+/// segments keep 128: half a batch slowed them (docs/performance.md, "What bounds sparks and
+/// orbit"; benchmarks/h100-splat/line-masks/8-batch-64-96/).
 pub(crate) const SPLAT_ADDITIVE_QUAD_BATCH: u32 = 64;
 
 /// Workgroups a tile's list of additive light is split over ([`splat_slices`]).
@@ -28,10 +28,10 @@ pub const SPLAT_SLICES: u32 = 8;
 /// Workgroups each tile's list is split over: each composites a contiguous slice of it front
 /// to back into partial sums (light gathered, light let through), and `merge` composes the
 /// slices front to back per pixel. Additive light gets [`SPLAT_SLICES`]: it seldom stops early,
-/// and a busy tile then keeps eight workgroups busy instead of one (sparks, 10M on an H100:
-/// composite 35.8 -> 28.8 ms). Alpha gets one: a slice behind cannot know that the slices in
-/// front already hide it, so slicing did the work early stopping saves (snow 10M 1.25 ->
-/// 6.79 ms, smoke 1M 3.69 -> 5.84; benchmarks/h100-splat/slices-8-everywhere.jsonl).
+/// and a busy tile then keeps eight workgroups busy instead of one. Alpha gets one: a slice
+/// behind cannot know that the slices in front already hide it, so slicing did the work early
+/// stopping saves (docs/performance.md, "What bounds sparks and orbit";
+/// benchmarks/h100-splat/slices-8-everywhere.jsonl).
 pub fn splat_slices(ir: &crate::ir::EffectIr) -> u32 {
     match ir.render.blend {
         crate::stages::schema::Blend::Additive => SPLAT_SLICES,
@@ -42,9 +42,9 @@ pub fn splat_slices(ir: &crate::ir::EffectIr) -> u32 {
 
 /// The pixels a subgroup of 32 composites, where subgroups are used (`shape.subgroups`): a
 /// block 4 wide and 8 tall rather than two rows of 16. A subgroup walks its pixels' records
-/// until its busiest lane is done, and a squarer block's pixels share more of their records
-/// (H100, benchmarks/h100-splat/scatter/, two rounds: sparks 10M's composite 8.62, 8.69
-/// -> 8.24, 8.22 ms, orbit 1M's 4.83, 4.80 -> 4.69, 4.68; 8 x 4 blocks gave 8.30 and 4.77).
+/// until its busiest lane is done, and a squarer block's pixels share more of their records,
+/// so its lanes wait less on each other (docs/performance.md, "What bounds sparks and orbit",
+/// also measures 8 x 4 and 2 x 16; benchmarks/h100-splat/scatter/).
 const SUBGROUP_BLOCK: (u32, u32) = (4, 8);
 
 /// Binding of the slices' partial sums: `SPLAT_SLICES` vec4s a pixel (slice-major).
@@ -70,15 +70,15 @@ pub(crate) struct RecordBatch {
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Prefetch {
     /// Nothing: each batch loads its entries, then makes its records. Quads' records, made
-    /// from one load each, were slower with their entries loaded ahead (sparks 10M 9.1 -> 9.3
-    /// ms: more registers).
+    /// from one load each, were slower with their entries loaded ahead: the loads held more
+    /// registers (docs/performance.md, "What bounds sparks and orbit").
     None,
     /// Its entries and what making its records loads: `declare` (WGSL) declares the loads
     /// before the loop, `issue` (WGSL, reading the next entry `next_k`) issues them, once for
     /// the first batch and then after each batch's records are made, so that they arrive
-    /// while the masks and the walk run and `load` reads them. Ribbon segments (H100, orbit
-    /// 1M's composite, three rounds: entries ahead 4.92 -> 4.86 ms; the segments' loads too,
-    /// 4.65 to 4.68 -> 4.42 to 4.54, benchmarks/h100-splat/runs/).
+    /// while the masks and the walk run and `load` reads them. Ribbon segments, each made from
+    /// several scattered loads, gained from their entries loaded ahead and more from the
+    /// segments' loads too (docs/performance.md, "The compute splat"; benchmarks/h100-splat/runs/).
     Loads {
         declare: &'static str,
         issue: &'static str,
@@ -89,10 +89,10 @@ pub(crate) enum Prefetch {
 /// `vec4s`. For additive light an odd number, so that the eight threads of a quarter warp that
 /// read a vec4 each from different records land on different banks (records 64 bytes apart all
 /// begin on one of two banks' groups of four); the record's last vec4 (the box) goes last in
-/// its stride. H100 (benchmarks/h100-splat/segments/): sparks 10M's composite 12.3 ->
-/// 10.6 ms with quads 80 bytes apart, orbit 1M's ribbons 5.76 -> 5.71 ms 112 bytes apart. Alpha
-/// records keep theirs: few of them shade a pixel before it is opaque, and the larger batch
-/// slowed snow 10M's composite 0.53 -> 0.55 ms and boids 1M's 0.51 -> 0.52.
+/// its stride: sparks' quads 80 bytes apart and orbit's ribbons 112 bytes apart composite
+/// faster so (benchmarks/h100-splat/segments/). Alpha records keep theirs: few of them shade a
+/// pixel before it is opaque, and the larger batch slowed snow's and boids' composites
+/// (docs/performance.md, "What bounds sparks and orbit").
 pub(crate) fn batch_stride(vec4s: u32, additive: bool) -> u32 {
     if additive {
         vec4s | 1
@@ -123,11 +123,10 @@ pub(crate) fn batch_stride(vec4s: u32, additive: bool) -> u32 {
 /// per column of the tile and one per row (built from each record's lines with no atomics:
 /// [`super::masks`]) give each pixel its records as the AND of its column's and its row's. The
 /// masks cost the same whatever the boxes' sizes; binning each record into a mask per pixel
-/// cost its box's area in workgroup atomics (H100: smoke 1M's composite 3.06 -> 2.08 ms, snow
-/// 10M 1.04 -> 0.54, sparks 10M 24.7 -> 16.1; docs/performance.md). With
-/// `records.diagonals` (additive quads) the masks hold the tile's diagonals and anti-diagonals
-/// too, so that a slanted streak is visited within an octagon rather than its box (sparks 10M
-/// with the batches of 64: 14.1 -> 12.3 ms).
+/// cost its box's area in workgroup atomics (docs/performance.md, "What bounds sparks and
+/// orbit"). With `records.diagonals` (additive quads) the masks hold the tile's diagonals and
+/// anti-diagonals too, so that a slanted streak is visited within an octagon rather than its
+/// box, and fewer of a streak's pixels test it.
 pub(crate) fn emit_composite(
     w: &mut Writer,
     shape: &DrawShape,

@@ -2,10 +2,9 @@
 //! sort (the runtime places each entry with an atomic, in no fixed order), so the composite
 //! must reach the same sum in any order: each fragment's light is rounded to a whole number of
 //! [`LIGHT_UNITS`] and added as an integer, which is exact and so independent of the order.
-//! A fragment takes eight instructions where an f32 sum took three (H100, sparks 10M: the
-//! composite 8.23 -> 8.69 ms), and the lists lose their sort (2.31 -> 1.16 ms;
-//! docs/performance.md). Images move by at most one 8-bit step, in a few hundred of 2.8M
-//! channels.
+//! A fragment takes eight instructions where an f32 sum took three, which costs the composite
+//! less than the lists save by losing their sort (docs/performance.md, "What bounds sparks and
+//! orbit"). Images move by at most one 8-bit step, in a few hundred of 2.8M channels.
 
 use crate::base::writer::Writer;
 

@@ -41,8 +41,8 @@ pub(super) fn emit_box_lines(w: &mut Writer, vec4s: u32, diagonals: bool) {
 /// The line masks: word q % `words` of line q / `words` (columns, rows, then with `diagonals`
 /// diagonals and anti-diagonals), built by thread q % 256 from each record's `record_lines`, a
 /// bit taken from each of the word's 32 records. No atomics, and a record's lines were found
-/// once, when it was loaded: comparing every record's box with every line cost sparks 10M 2.7
-/// of its composite's 10.6 ms on an H100 (benchmarks/h100-splat/masks/).
+/// once, when it was loaded: comparing every record's box with every line instead took a
+/// large share of sparks' composite (benchmarks/h100-splat/masks/).
 pub(super) fn emit_line_masks(w: &mut Writer, words: u32, line_masks: u32, diagonals: bool) {
     let stride = line_words(diagonals);
     let lines = 2 * SPLAT_TILE;
@@ -105,8 +105,8 @@ pub(super) fn emit_transpose(w: &mut Writer) {
 /// The line masks by subgroups of 32 (`shape.subgroups`): subgroup `sg` takes the word's 32
 /// records' `record_lines` (one part: columns and rows, diagonals or anti-diagonals), a lane
 /// each, and a transpose leaves lane L with line L's word. Five shuffles a part and word where
-/// a thread per mask word took 32 loads (H100, sparks 10M's composite 9.1 -> 8.4 ms;
-/// benchmarks/h100-splat/masks/).
+/// a thread per mask word took 32 loads, a slower composite (docs/performance.md, "What bounds
+/// sparks and orbit"; benchmarks/h100-splat/masks/).
 pub(super) fn emit_line_masks_transposed(w: &mut Writer, words: u32, diagonals: bool) {
     let stride = line_words(diagonals);
     let tasks = words * stride;
