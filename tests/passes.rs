@@ -312,6 +312,7 @@ fn overrides_replace_file_values() {
             live_params: true,
             step_only: true,
             files: None,
+            receive_shadows: false,
             accuracy_camera: None,
         },
     )

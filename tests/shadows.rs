@@ -164,7 +164,13 @@ fn a_hosts_shadow_map_darkens_a_lit_sprite_by_its_verdict() {
     render: Render(color: [(0.0, ({r}, {g}, {b}, 1.0))], size: [(0.0, 5.0)],
                    background: (0.0, 0.0, 0.0), lit: Some(Lit(normals: Flat))))"#
     );
-    let mut sim = Effect::new(&gpu, compile(&src)).unwrap();
+    // No light of the file casts a shadow: the host's map is read because it asks for it.
+    let options = plume::CompileOptions {
+        receive_shadows: true,
+        ..Default::default()
+    };
+    let effect = plume::compile_str(&src, &options).unwrap();
+    let mut sim = Effect::new(&gpu, effect).unwrap();
     sim.run(1, |_| {}).unwrap();
     let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
     let radius = 2.5 / (10.0 * 20f64.to_radians().tan()) * f64::from(SIDE) / 2.0;
@@ -324,4 +330,41 @@ fn the_scenes_meshes_shadow_the_ground_and_lit_particles() {
         }
     }
     assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+/// A lit look whose file casts no shadow, compiled without `receive_shadows`, holds no shadow
+/// lookup (its draw is what it was before shadows existed), and a host's map is refused with
+/// the reason rather than silently ignored; an unlit effect takes one and ignores it.
+#[test]
+fn a_lit_look_reads_shadows_only_where_asked() {
+    let gpu = gpu();
+    let lit = r#"Effect(name: "plain", capacity: 4,
+    emitters: [Emitter(burst: 4, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    render: Render(lit: Some(Lit(normals: Sphere))))"#;
+    let plain = compile(lit);
+    assert!(!plain.draw_wgsl.contains("shadow_map"), "an unasked lookup");
+    let sim = Effect::new(&gpu, plain).unwrap();
+    let target = Offscreen::new(&gpu, 8, 8).unwrap();
+    let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
+    let format = wgpu::TextureFormat::Depth32Float;
+    let map = gpu.texture_2d("map", (4, 4), format, usage);
+    for mut renderer in [
+        sim.renderer(&target.target()).unwrap(),
+        sim.compute_renderer(&target.target(), 8, 8).unwrap(),
+    ] {
+        let error = renderer.set_shadow_map(&map).unwrap_err().to_string();
+        assert!(error.contains("receive_shadows"), "{error}");
+    }
+    let asked = plume::CompileOptions {
+        receive_shadows: true,
+        ..Default::default()
+    };
+    let shadowed = plume::compile_str(lit, &asked).unwrap();
+    assert!(shadowed.draw_wgsl.contains("shadow_visibility"));
+    let unlit = lit.replace(",\n    render: Render(lit: Some(Lit(normals: Sphere)))", "");
+    assert!(!unlit.contains("Lit"), "{unlit}");
+    let unlit = compile(&unlit);
+    let sim = Effect::new(&gpu, unlit).unwrap();
+    let mut renderer = sim.renderer(&target.target()).unwrap();
+    renderer.set_shadow_map(&map).unwrap();
 }

@@ -154,6 +154,8 @@ fn options_for(
         placed: variant.placed,
         bursts: variant.bursts,
         live_params: variant.live_params,
+        // A lit look reads Bevy's shadow maps where a light casts them.
+        receive_shadows: true,
         ..Default::default()
     }
 }

@@ -121,6 +121,7 @@ impl Overrides {
             live_params: false,
             step_only: false,
             files: None,
+            receive_shadows: false,
             accuracy_camera: None,
         }
     }

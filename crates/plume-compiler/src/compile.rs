@@ -67,6 +67,12 @@ pub struct CompileOptions {
     /// one texel a frame, and any draw of it is refused with the reason, naming the file and
     /// the field (`TextureIr::missing`).
     pub step_only: bool,
+    /// Compiles a lit look to read a shadow map a host gives at run time
+    /// (`EffectRenderer::set_shadow_map`) even where no light of the file casts one: the Bevy
+    /// plugin sets it, so that Bevy's shadows fall on lit particles. Without it, and without
+    /// a `shadow: true` light, the draw holds no shadow lookup (it costs a lit draw a few
+    /// percent: docs/performance.md, "Received shadows").
+    pub receive_shadows: bool,
     /// Where the files the effect names are read from: a host's source (the Bevy plugin's
     /// asset server), each file by its path resolved against `base_dir`. None: the disk.
     pub files: Option<crate::base::files::Files>,
@@ -172,6 +178,7 @@ pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, Comp
     }
     effect.base_dir.clone_from(&options.base_dir);
     effect.files.clone_from(&options.files);
+    effect.receive_shadows = options.receive_shadows;
     effect.placed = options.placed;
     effect.bursts = options.bursts;
     effect.live_params = options.live_params;

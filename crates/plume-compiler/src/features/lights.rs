@@ -179,6 +179,13 @@ impl Lights {
         lights
     }
 
+    /// Whether one of the lights a file names casts a shadow (`shadow: true`).
+    pub fn casts_shadow(written: &[Light]) -> bool {
+        written
+            .iter()
+            .any(|l| matches!(l, Light::Directional { shadow: true, .. }))
+    }
+
     /// The light (per channel) that a surface at `p` with unit normal `n` receives, both in
     /// world space: the ambient light plus, for each source, its light times
     /// max((n · l + wrap) / (1 + wrap), 0), with l the unit vector toward the source. `wrap`
@@ -405,7 +412,7 @@ pub fn check(lights: &[Light], c: &mut Checker) {
 /// receives, the WGSL twin of [`Lights::received`]. The runtime writes the uniform in the
 /// view each frame ([`Lights::transformed`] by the camera's view), so no pixel moves a light;
 /// `wrap` is a constant of the look.
-pub fn emit_received_light(w: &mut Writer, wrap: f64) {
+pub fn emit_received_light(w: &mut Writer, wrap: f64, shadows: bool) {
     w.comment("A light source: (direction the light travels, 0) or (position, 1); (colour · intensity, range).");
     w.block("struct LightSource", |w| {
         w.line("place: vec4<f32>,");
@@ -422,12 +429,14 @@ pub fn emit_received_light(w: &mut Writer, wrap: f64) {
     w.line(format!(
         "@group(0) @binding({LIGHTS_BINDING}) var<uniform> lights: Lights;"
     ));
-    for line in shadow_declarations_wgsl().lines() {
-        w.line(line);
-    }
-    w.blank();
-    for line in SHADOW_WGSL.lines() {
-        w.line(line);
+    if shadows {
+        for line in shadow_declarations_wgsl().lines() {
+            w.line(line);
+        }
+        w.blank();
+        for line in SHADOW_WGSL.lines() {
+            w.line(line);
+        }
     }
     w.line(format!("const LIGHT_WRAP: f32 = {};", f32_lit(wrap)));
     w.line(format!(
@@ -441,7 +450,7 @@ pub fn emit_received_light(w: &mut Writer, wrap: f64) {
         w.block(
             format!("for (var i = 0u; i < min(lights.count.x, {LIGHTS_MOST}u); i++)"),
             |w| {
-                emit_incoming(w);
+                emit_incoming(w, shadows);
                 w.line("light += color * max((dot(n, toward) + LIGHT_WRAP) / (1.0 + LIGHT_WRAP), 0.0);");
             },
         );
@@ -450,15 +459,18 @@ pub fn emit_received_light(w: &mut Writer, wrap: f64) {
 }
 
 /// Emits, inside a loop over the sources (`i`) at view-space point `p`, `toward` (the unit
-/// vector toward source i) and `color` (its light there): the twin of [`Lights::incoming`].
-pub fn emit_incoming(w: &mut Writer) {
+/// vector toward source i) and `color` (its light there, the shadowed source's through its
+/// map when the draw reads `shadows`): the twin of [`Lights::incoming`].
+pub fn emit_incoming(w: &mut Writer, shadows: bool) {
     w.line("let source = lights.sources[i];");
     w.comment("A unit direction (zero where a host gave none: no light).");
     w.line("var toward = -source.place.xyz;");
     w.line("var color = source.color.rgb;");
-    w.block("if (i == lights.shadow.x)", |w| {
-        w.line("color = color * shadow_visibility(p);");
-    });
+    if shadows {
+        w.block("if (i == lights.shadow.x)", |w| {
+            w.line("color = color * shadow_visibility(p);");
+        });
+    }
     w.block("if (source.place.w > 0.5)", |w| {
         w.line("let d = source.place.xyz - p;");
         w.line("let d2 = max(dot(d, d), POINT_NEAREST2);");

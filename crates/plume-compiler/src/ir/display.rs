@@ -171,8 +171,16 @@ impl fmt::Display for EffectIr {
         if let Some(lit) = &self.render.lit {
             writeln!(
                 f,
-                "  lit {:?} normals, wrap {}, emissive {}; {}",
-                lit.normals, lit.wrap, lit.emissive, self.lights
+                "  lit {:?} normals, wrap {}, emissive {}{}; {}",
+                lit.normals,
+                lit.wrap,
+                lit.emissive,
+                if lit.shadows {
+                    ", reads a shadow map"
+                } else {
+                    ""
+                },
+                self.lights
             )?;
             for map in &self.render.lit_maps {
                 writeln!(f, "  lit map {map:?}")?;

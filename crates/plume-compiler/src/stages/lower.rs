@@ -142,7 +142,11 @@ pub fn lower(effect: &Effect) -> EffectIr {
                     .as_ref()
                     .map(|p| p.iter().map(|c| c.d()).collect()),
                 by: crate::features::looks::by_expression::LookBy::lower(r.written_by(), scope),
-                lit: r.lit.clone(),
+                lit: r.lit.clone().map(|lit| crate::features::looks::lit::Lit {
+                    shadows: effect.receive_shadows
+                        || crate::features::lights::Lights::casts_shadow(&effect.lights),
+                    ..lit
+                }),
                 // Loaded by `compile_effect`, as the texture.
                 lit_maps: Vec::new(),
                 light: r.light,

@@ -189,6 +189,10 @@ pub struct Effect {
     /// `CompileOptions::files`, never by the file.
     #[serde(skip)]
     pub files: Option<crate::base::files::Files>,
+    /// Lit looks read a shadow map given at run time: set by
+    /// `CompileOptions::receive_shadows`, never by the file.
+    #[serde(skip)]
+    pub receive_shadows: bool,
     /// Placed in a host's world by a transform set at run time (world space; see
     /// `features::placement`): set by `CompileOptions::placed`, never by the file.
     #[serde(skip)]

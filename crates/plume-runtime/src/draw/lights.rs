@@ -17,8 +17,8 @@ use crate::error::RuntimeError;
 /// shadow map bound beside it.
 pub(crate) struct LightsUniform {
     pub(crate) buffer: wgpu::Buffer,
-    /// The shadow map and its samplers.
-    pub(crate) shadow: ShadowBinding,
+    /// The shadow map and its samplers, for a look that reads one (`Lit::shadows`).
+    pub(crate) shadow: Option<ShadowBinding>,
     world: std::sync::Mutex<Lights>,
 }
 
@@ -68,7 +68,7 @@ impl ShadowBinding {
 impl LightsUniform {
     /// The lights of `effect`'s draw; None for an unlit effect.
     pub(crate) fn new(gpu: &Gpu, effect: &CompiledEffect) -> Option<Self> {
-        effect.ir.render.lit.as_ref()?;
+        let lit = effect.ir.render.lit.as_ref()?;
         let buffer = gpu.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("lights"),
             size: LIGHTS_BYTES,
@@ -77,7 +77,7 @@ impl LightsUniform {
         });
         Some(Self {
             buffer,
-            shadow: ShadowBinding::new(gpu),
+            shadow: lit.shadows.then(|| ShadowBinding::new(gpu)),
             world: std::sync::Mutex::new(effect.ir.lights.clone()),
         })
     }
@@ -134,6 +134,20 @@ pub(crate) fn shadow_map_view(map: &wgpu::Texture) -> Result<wgpu::TextureView, 
         return refuse("the texture needs TextureUsages::TEXTURE_BINDING to be read".into());
     }
     Ok(array_view(map))
+}
+
+/// An error where draws are lit and none reads a shadow map (each part: whether it is lit,
+/// whether it reads one): the effect was compiled without the lookup.
+pub(crate) fn check_reads_shadows(
+    parts: impl Iterator<Item = (bool, bool)>,
+) -> Result<(), RuntimeError> {
+    let (lit, shadowed) = parts.fold((false, false), |a, p| (a.0 || p.0, a.1 || p.1));
+    match lit && !shadowed {
+        true => Err(RuntimeError::Control(
+            "shadow map: the effect's lit look was compiled without the shadow lookup; compile it with CompileOptions::receive_shadows (or give a light of its file `shadow: true`)".into(),
+        )),
+        false => Ok(()),
+    }
 }
 
 fn array_view(map: &wgpu::Texture) -> wgpu::TextureView {

@@ -27,7 +27,7 @@ use crate::device::buffers::{filled_buffer, staging, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::device::resources::Resources;
 use crate::draw::camera::Camera;
-use crate::draw::lights::LightsUniform;
+use crate::draw::lights::{LightsUniform, ShadowBinding};
 use crate::draw::live_list::LiveList;
 use crate::draw::pipeline::{blend_state, draw_group, plain, render_pipeline};
 use crate::draw::texture::SpriteTexture;
@@ -321,12 +321,18 @@ impl GroupDraw {
     }
 
     /// Reads `map` (an array view of a depth texture) as a lit look's shadow map; nothing for
-    /// an unlit draw.
+    /// a draw that reads none.
     pub(crate) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
-        if let Some(lights) = &mut self.lights {
-            lights.shadow.map = map.clone();
+        if let Some(shadow) = self.lights.as_mut().and_then(|l| l.shadow.as_mut()) {
+            shadow.map = map.clone();
             self.rebind();
         }
+    }
+
+    /// (Whether the draw is lit, whether it reads a shadow map.)
+    pub(crate) fn lit_and_shadowed(&self) -> (bool, bool) {
+        let lights = self.lights.as_ref();
+        (lights.is_some(), lights.is_some_and(|l| l.shadow.is_some()))
     }
 
     /// Makes bind group 0 again with the scene depth and shadow map held now.
@@ -435,7 +441,9 @@ fn bound_views<'a>(
     lights: Option<&'a LightsUniform>,
 ) -> Vec<(u32, wgpu::BindingResource<'a>)> {
     let depth = scene_depth.map(|d| (SCENE_DEPTH_BINDING, wgpu::BindingResource::TextureView(d)));
-    let shadow = lights.map_or(Vec::new(), |l| l.shadow.entries());
+    let shadow = lights
+        .and_then(|l| l.shadow.as_ref())
+        .map_or(Vec::new(), ShadowBinding::entries);
     depth.into_iter().chain(shadow).collect()
 }
 

@@ -160,8 +160,10 @@ impl EffectRenderer {
     /// the shadow's `cascades` (one layer for a single map); its depths are read as they are
     /// when the frame is drawn. Call it again when the texture changes; until the first call,
     /// or while the lights name no shadow, nothing is shadowed. Does nothing for unlit
-    /// groups; an error for a texture that cannot be read so. Giving the texture bound
-    /// already costs nothing, so a host may give it every frame.
+    /// groups; an error for a texture that cannot be read so, and for a lit effect compiled
+    /// without the lookup (compile it with `CompileOptions::receive_shadows`, or give a light
+    /// of its file `shadow: true`). Giving the texture bound already costs nothing, so a host
+    /// may give it every frame.
     ///
     /// ```
     /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -191,6 +193,9 @@ impl EffectRenderer {
             return Ok(());
         }
         let view = crate::draw::lights::shadow_map_view(map)?;
+        let parts = self.parts.iter().map(|(_, p)| p.lit_and_shadowed());
+        let compute = self.compute.as_ref().map(HostSplat::lit_and_shadowed);
+        crate::draw::lights::check_reads_shadows(parts.chain(compute))?;
         self.shadow_map = Some(map.clone());
         if let Some(compute) = &self.compute {
             compute.set_shadow_map(&view);

@@ -66,6 +66,11 @@ pub struct Lit {
     /// The part of the colour that glows by itself and is not lit, in [0, 1].
     #[serde(default)]
     pub emissive: f64,
+    /// Whether the draw reads a shadow map (`features::shadow`): set by the compiler where a
+    /// light of the file casts a shadow or `CompileOptions::receive_shadows` asks for it, never
+    /// by the file. Without it the draw module holds no lookup.
+    #[serde(skip)]
+    pub shadows: bool,
 }
 
 impl Lit {
@@ -251,7 +256,7 @@ impl Lit {
     /// `p`, and `lit_color(c, light)`: the WGSL twins of [`Self::light`] and [`Self::shade`].
     /// The look's maps are declared here too.
     pub fn emit_lit_color(&self, w: &mut Writer, turned: bool) {
-        crate::features::lights::emit_received_light(w, self.wrap);
+        crate::features::lights::emit_received_light(w, self.wrap, self.shadows);
         w.line(format!(
             "const LIT_EMISSIVE: f32 = {};",
             f32_lit(self.emissive)
@@ -313,7 +318,7 @@ impl Lit {
                     w.block(
                         format!("for (var i = 0u; i < min(lights.count.x, {}u); i++)", crate::features::lights::LIGHTS_MOST),
                         |w| {
-                            crate::features::lights::emit_incoming(w);
+                            crate::features::lights::emit_incoming(w, self.shadows);
                             w.comment("Toward the light in the sprite's frame; each axis weighted t², its map by the sign.");
                             w.line("let t = toward * basis;");
                             w.line("let response = select(lbf, rtb, vec3<bool>(t.x > 0.0, t.y > 0.0, t.z <= 0.0));");

@@ -289,7 +289,7 @@ impl GroupSplat {
                 image: &tiles.image,
             };
             let size = (width, height);
-            let reads = (reads, lights.as_ref().map(|l| l.shadow.clone()));
+            let reads = (reads, lights.as_ref().and_then(|l| l.shadow.clone()));
             QuadRaster::new(
                 &gpu, &module, effect, &shape, ribbons, size, targets, texture, reads,
             )
@@ -460,10 +460,9 @@ impl GroupSplat {
     /// Reads `map` (an array view of a depth texture) as a lit look's shadow map from the
     /// next frame on; nothing for an unlit group.
     pub(crate) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
-        let (Some(lights), Some(quads)) = (&mut self.lights, &mut self.quads) else {
+        let Some(quads) = self.quads.as_mut().filter(|q| q.reads_shadows()) else {
             return;
         };
-        lights.shadow.map = map.clone();
         quads.set_shadow_map(map);
         // Made again if made already (else with the first entry lists).
         if self.entries.quads_groups.is_some() {
@@ -471,6 +470,12 @@ impl GroupSplat {
             self.entries.quads_groups =
                 Some(quads.bind_groups(&self.gpu, &t.params, &self.entries.vals, &t.ranges));
         }
+    }
+
+    /// (Whether the group is lit, whether it reads a shadow map.)
+    pub(crate) fn lit_and_shadowed(&self) -> (bool, bool) {
+        let shadowed = self.quads.as_ref().is_some_and(QuadRaster::reads_shadows);
+        (self.lights.is_some(), shadowed)
     }
 
     /// Records the splat itself into `pass`: project, scan, entries, sort, ranges, raster.

@@ -192,6 +192,11 @@ impl HostSplat {
         self.lock().splat.bind_shadow_map(map);
     }
 
+    /// (Whether a group is lit, whether one reads a shadow map.)
+    pub(crate) fn lit_and_shadowed(&self) -> (bool, bool) {
+        self.lock().splat.lit_and_shadowed()
+    }
+
     /// The image size the renderer draws.
     pub(crate) fn size(&self) -> (u32, u32) {
         (self.width, self.height)

@@ -338,8 +338,16 @@ impl Splat {
     /// [`Self::set_lights`]).
     pub fn set_shadow_map(&mut self, map: &wgpu::Texture) -> Result<(), RuntimeError> {
         let view = crate::draw::lights::shadow_map_view(map)?;
+        let parts = self.parts.iter().map(|(_, p)| p.lit_and_shadowed());
+        crate::draw::lights::check_reads_shadows(parts)?;
         self.bind_shadow_map(&view);
         Ok(())
+    }
+
+    /// (Whether a group is lit, whether one reads a shadow map.)
+    pub(crate) fn lit_and_shadowed(&self) -> (bool, bool) {
+        let parts = self.parts.iter().map(|(_, p)| p.lit_and_shadowed());
+        parts.fold((false, false), |a, p| (a.0 || p.0, a.1 || p.1))
     }
 
     /// Reads `map` (an array view of a depth texture) as every lit group's shadow map from the

@@ -98,6 +98,11 @@ impl QuadRaster {
         }
     }
 
+    /// Whether the composite reads a shadow map.
+    pub(super) fn reads_shadows(&self) -> bool {
+        self.shadow.is_some()
+    }
+
     /// Reads `map` as the shadow map from the next [`Self::bind_groups`] on.
     pub(super) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
         if let Some(shadow) = &mut self.shadow {
