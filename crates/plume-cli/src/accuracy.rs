@@ -77,7 +77,7 @@ pub fn accuracy(args: &AccuracyArgs) -> ExitCode {
 fn accuracy_of_groups(
     args: &AccuracyArgs,
     name: &str,
-    effect: &plume_compiler::Effect,
+    effect: &plume_compiler::EffectSpec,
 ) -> ExitCode {
     let mut failed = false;
     let groups = plume_compiler::graph::group_effects(effect);
@@ -145,7 +145,7 @@ fn accuracy_of_groups(
 fn accuracy_of(
     args: &AccuracyArgs,
     name: &str,
-    effect: &plume_compiler::Effect,
+    effect: &plume_compiler::EffectSpec,
     plot: Option<PathBuf>,
 ) -> ExitCode {
     let name = name.to_string();
@@ -339,7 +339,7 @@ fn accuracy_of(
 fn field_sweep_report(
     args: &AccuracyArgs,
     name: &str,
-    effect: &plume_compiler::Effect,
+    effect: &plume_compiler::EffectSpec,
     engine: &Engine,
     bar: &ProgressBar,
     duration: f64,

@@ -116,7 +116,11 @@ fn sort_json(s: &plume_runtime::bench::SortBench) -> serde_json::Value {
 }
 
 /// `plume bench` of an effect with groups and events: its steps with and without events.
-fn bench_graph_command(args: &BenchArgs, name: &str, effect: &plume_compiler::Effect) -> ExitCode {
+fn bench_graph_command(
+    args: &BenchArgs,
+    name: &str,
+    effect: &plume_compiler::EffectSpec,
+) -> ExitCode {
     let gpu = match load::gpu(&args.backend) {
         Ok(g) => g,
         Err(code) => return code,

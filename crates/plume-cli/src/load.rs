@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use plume_compiler::graph::{compile_graph_str, CompiledGraph};
-use plume_compiler::{compile_effect, parse, CompileOptions, Effect};
+use plume_compiler::{compile_effect, parse, CompileOptions, EffectSpec};
 use plume_runtime::{Gpu, GpuChoice};
 
 /// An effect file's display name and text.
@@ -67,7 +67,10 @@ pub fn compiled_graph(
 /// written (errors printed; Err holds the exit code). None for a file of one group, or one
 /// that does not parse (the single-group path reports that). `step_only`: compiled to be
 /// stepped, not drawn (`CompileOptions::step_only`: a missing sprite texture is no error).
-pub fn graph_effect(file: &Path, step_only: bool) -> Option<(String, Result<Effect, ExitCode>)> {
+pub fn graph_effect(
+    file: &Path,
+    step_only: bool,
+) -> Option<(String, Result<EffectSpec, ExitCode>)> {
     let src = read(file).ok()?;
     let mut effect = parse(&src.text).ok()?;
     plume_compiler::graph::graph_field(&effect)?;
@@ -91,7 +94,7 @@ pub fn single(graph: &CompiledGraph) -> bool {
 /// Reads and parses `file`, and checks it compiles as written (so errors point at the file),
 /// for commands that derive their own variants of the effect. `step_only`: as for
 /// [`graph_effect`].
-pub fn checked(file: &Path, step_only: bool) -> Result<(Source, Effect), ExitCode> {
+pub fn checked(file: &Path, step_only: bool) -> Result<(Source, EffectSpec), ExitCode> {
     let src = read(file)?;
     let mut effect = match parse(&src.text) {
         Ok(e) => e,

@@ -10,7 +10,7 @@ use crate::features::events::{EventInputIr, EventIr};
 use crate::features::looks::{particle_mesh, texture};
 use crate::ir::EffectIr;
 use crate::stages::passes::layout::Layout;
-use crate::stages::schema::{Effect, Emitter, Integrator};
+use crate::stages::schema::{EffectSpec, Emitter, Integrator};
 use crate::stages::{lower, passes, validate, wgsl};
 
 /// Overrides applied on top of the effect file (as `plume run --dt` etc. do), and where the
@@ -126,9 +126,9 @@ impl CompileError {
 }
 
 /// Parses RON text into the effect schema, with syntax errors located.
-pub fn parse(source: &str) -> Result<Effect, Diagnostics> {
+pub fn parse(source: &str) -> Result<EffectSpec, Diagnostics> {
     ron::Options::default()
-        .from_str::<Effect>(source)
+        .from_str::<EffectSpec>(source)
         .map_err(|e| {
             let start = diagnostics::Pos {
                 line: e.span.start.line.max(1),
@@ -156,7 +156,7 @@ pub fn compile_str(source: &str, options: &CompileOptions) -> Result<CompiledEff
 }
 
 /// Parses `source` and applies `options`' overrides (to every group of a graph).
-pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, CompileError> {
+pub fn parse_with(source: &str, options: &CompileOptions) -> Result<EffectSpec, CompileError> {
     let mut effect = parse(source).map_err(CompileError::Invalid)?;
     if let Some(dt) = options.dt {
         effect.dt = dt;
@@ -204,12 +204,12 @@ pub fn parse_with(source: &str, options: &CompileOptions) -> Result<Effect, Comp
 /// Compiles an already-parsed effect of one group; `source` (may be empty) is used only to
 /// locate diagnostics. An effect with `groups` or `events` is a graph: compile it with
 /// [`graph::compile_graph`].
-pub fn compile_effect(effect: &Effect, source: &str) -> Result<CompiledEffect, CompileError> {
+pub fn compile_effect(effect: &EffectSpec, source: &str) -> Result<CompiledEffect, CompileError> {
     crate::base::files::with_source(effect.files.clone(), || compile_one(effect, source))
 }
 
 /// [`compile_effect`] with the effect's files being read from its source.
-fn compile_one(effect: &Effect, source: &str) -> Result<CompiledEffect, CompileError> {
+fn compile_one(effect: &EffectSpec, source: &str) -> Result<CompiledEffect, CompileError> {
     let map = SourceMap::build(source);
     let locate = |items: Vec<(Diagnostic, String)>| locate_items(&map, source, items);
     if let Some(path) = graph_field(effect) {
@@ -253,7 +253,7 @@ pub(crate) fn locate_items(
 /// events, and `prefix` (`groups[1].`, or empty for the top level) is put before every path
 /// its diagnostics name.
 pub(crate) fn compile_group(
-    effect: &Effect,
+    effect: &EffectSpec,
     links: &GroupLinks,
     prefix: &str,
     located: &dyn Fn(Vec<(Diagnostic, String)>) -> Diagnostics,
@@ -301,7 +301,7 @@ pub(crate) fn compile_group(
     // A budget's calibration is remembered by the effect's content, its seed aside
     // (`passes::accuracy::choose`): the IR as it would be lowered with seed 0.
     if ir.accuracy.is_some() {
-        let mut unseeded = lower::lower(&Effect {
+        let mut unseeded = lower::lower(&EffectSpec {
             seed: 0,
             ..effect.clone()
         });
@@ -405,7 +405,7 @@ pub struct GroupLinks {
 }
 
 /// The path of the first graph field an effect uses (`groups` or `events`), if any.
-pub fn graph_field(effect: &Effect) -> Option<ValuePath> {
+pub fn graph_field(effect: &EffectSpec) -> Option<ValuePath> {
     if !effect.groups.is_empty() {
         Some(ValuePath::root().field("groups"))
     } else if !effect.events.is_empty() {

@@ -67,5 +67,5 @@ pub use features::{
 };
 pub use ir::EffectIr;
 pub use stages::passes::layout::Layout;
-pub use stages::schema::{Effect, Integrator};
+pub use stages::schema::{EffectSpec, Integrator};
 pub use stages::{integrators, lower, passes, schedule, schema, validate, wgsl};

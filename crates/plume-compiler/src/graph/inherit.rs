@@ -7,14 +7,14 @@ use crate::base::check::Checker;
 use crate::base::diagnostics::Diagnostic;
 use crate::base::path::ValuePath;
 use crate::features::inherit::Pair;
-use crate::stages::schema::Effect;
+use crate::stages::schema::EffectSpec;
 
 /// Errors, located by the graph.
 type Errors = Vec<(Diagnostic, String)>;
 
 /// Per stream, the attributes its children inherit ([`pairs`]); the errors of [`pairs`] and
 /// [`check_fed`] otherwise.
-pub(super) fn wire(effects: &[Effect], streams: &[Stream]) -> Result<Vec<Vec<Pair>>, Errors> {
+pub(super) fn wire(effects: &[EffectSpec], streams: &[Stream]) -> Result<Vec<Vec<Pair>>, Errors> {
     let mut c = Checker::default();
     let mut fed = vec![false; effects.len()];
     let pairs: Vec<Vec<Pair>> = streams
@@ -50,7 +50,7 @@ fn inherit_path(g: usize, name: &str) -> ValuePath {
 /// For a stream from group `parent` into group `child`: the attributes the child inherits, as
 /// (the parent's index, the child's index), in the child's name order. A name the parent does
 /// not declare is an error at the child's `inherit`.
-fn pairs(effects: &[Effect], parent: usize, child: usize, c: &mut Checker) -> Vec<Pair> {
+fn pairs(effects: &[EffectSpec], parent: usize, child: usize, c: &mut Checker) -> Vec<Pair> {
     let names: Vec<&String> = effects[parent].attributes.keys().collect();
     let mut out = Vec::new();
     for (ci, (name, a)) in effects[child].attributes.iter().enumerate() {
@@ -77,7 +77,7 @@ fn pairs(effects: &[Effect], parent: usize, child: usize, c: &mut Checker) -> Ve
 }
 
 /// An attribute that inherits in a group no event feeds is an error at its `inherit`.
-fn check_fed(effects: &[Effect], fed: &[bool], c: &mut Checker) {
+fn check_fed(effects: &[EffectSpec], fed: &[bool], c: &mut Checker) {
     for (g, e) in effects.iter().enumerate() {
         for (name, a) in &e.attributes {
             if a.inherit && !fed[g] {
@@ -93,7 +93,7 @@ fn check_fed(effects: &[Effect], fed: &[bool], c: &mut Checker) {
 /// After the groups compiled: an inherited attribute whose type is not its parent's is an
 /// error at the child's `inherit`.
 pub(super) fn check_types(
-    effects: &[Effect],
+    effects: &[EffectSpec],
     streams: &[Stream],
     pairs: &[Vec<Pair>],
     groups: &[CompiledGroup],
@@ -129,7 +129,7 @@ pub(super) fn check_types(
 /// Warnings for events that pass on the colour of particles that have none: no palette, and no
 /// colour inherited from a group that has one.
 pub(super) fn colourless_inheritance(
-    effects: &[Effect],
+    effects: &[EffectSpec],
     streams: &[Stream],
 ) -> Vec<(Diagnostic, String)> {
     let passes = |s: &Stream| effects[s.parent].events[s.out_slot].inherit_color;

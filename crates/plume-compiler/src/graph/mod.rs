@@ -19,7 +19,7 @@ use crate::compile::{CompileError, CompileOptions, CompiledEffect, GroupLinks};
 use crate::features::events::{
     Event, EventInputIr, EventIr, Ordering, Trigger, TriggerIr, MAX_COUNT, MAX_EVENTS,
 };
-use crate::stages::schema::Effect;
+use crate::stages::schema::EffectSpec;
 
 /// One event stream between two groups.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -98,7 +98,7 @@ fn group_seed(seed: u32, g: usize) -> u32 {
 }
 
 /// Each group as an effect of its own: the file's shared fields with the group's.
-pub fn group_effects(effect: &Effect) -> Vec<Effect> {
+pub fn group_effects(effect: &EffectSpec) -> Vec<EffectSpec> {
     let mut root = effect.clone();
     root.groups.clear();
     let mut out = vec![root.clone()];
@@ -159,12 +159,12 @@ pub fn compile_graph_str(
 }
 
 /// Compiles a parsed effect of any number of groups; `source` locates diagnostics.
-pub fn compile_graph(effect: &Effect, source: &str) -> Result<CompiledGraph, CompileError> {
+pub fn compile_graph(effect: &EffectSpec, source: &str) -> Result<CompiledGraph, CompileError> {
     crate::base::files::with_source(effect.files.clone(), || compile_all(effect, source))
 }
 
 /// [`compile_graph`] with the effect's files being read from its source.
-fn compile_all(effect: &Effect, source: &str) -> Result<CompiledGraph, CompileError> {
+fn compile_all(effect: &EffectSpec, source: &str) -> Result<CompiledGraph, CompileError> {
     let map = SourceMap::build(source);
     let locate =
         |items: Vec<(Diagnostic, String)>| crate::compile::locate_items(&map, source, items);
@@ -270,7 +270,7 @@ pub fn every_steps(seconds: f64, dt: f64) -> u32 {
 
 /// The graph's own checks: names, targets, loops, counts; returns the streams (in spawn order),
 /// the errors and the warnings.
-fn check_graph(effects: &[Effect]) -> (Vec<Stream>, Checker, Vec<(Diagnostic, String)>) {
+fn check_graph(effects: &[EffectSpec]) -> (Vec<Stream>, Checker, Vec<(Diagnostic, String)>) {
     let mut c = Checker::default();
     let mut warnings = Vec::new();
     let group_path = |g: usize| {
@@ -401,7 +401,7 @@ fn check_graph(effects: &[Effect]) -> (Vec<Stream>, Checker, Vec<(Diagnostic, St
     (streams, c, warnings)
 }
 
-fn check_event(c: &mut Checker, path: &ValuePath, ev: &Event, group: &Effect) {
+fn check_event(c: &mut Checker, path: &ValuePath, ev: &Event, group: &EffectSpec) {
     if ev.count == 0 || ev.count > MAX_COUNT {
         c.error(
             &path.field("count"),
@@ -424,7 +424,7 @@ fn check_event(c: &mut Checker, path: &ValuePath, ev: &Event, group: &Effect) {
 }
 
 /// A warning when `ev` can never fire in `group`.
-fn never_fires(path: &ValuePath, ev: &Event, group: &Effect) -> Option<(Diagnostic, String)> {
+fn never_fires(path: &ValuePath, ev: &Event, group: &EffectSpec) -> Option<(Diagnostic, String)> {
     let why = match ev.on {
         Trigger::Death
             if group.kill.is_empty() && group.emitters.iter().all(|e| e.lifetime.is_none()) =>
@@ -446,7 +446,7 @@ fn never_fires(path: &ValuePath, ev: &Event, group: &Effect) -> Option<(Diagnost
 /// one wave of firings for the child's longest lifetime: on death or collision, the parent's
 /// bursts plus its rate over that lifetime (a fed parent: all of it at once); every period,
 /// each live parent once per period.
-fn overflow_warnings(effects: &[Effect], streams: &[Stream]) -> Vec<(Diagnostic, String)> {
+fn overflow_warnings(effects: &[EffectSpec], streams: &[Stream]) -> Vec<(Diagnostic, String)> {
     // A repeating burst counts as a rate of burst / every.
     let steady_rate = |e: &crate::stages::schema::Emitter, params| {
         let burst = f64::from(e.burst.value(params));

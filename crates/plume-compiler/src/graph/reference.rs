@@ -144,11 +144,11 @@ pub fn stand_in(
 /// (`Effect::stand_in`, which the budget check and `plume accuracy`'s sweep fire at their first
 /// step). None when no event into it fires within [`STAND_IN_STEPS`].
 pub fn stand_in_group(
-    groups: &[crate::stages::schema::Effect],
+    groups: &[crate::stages::schema::EffectSpec],
     graph: &CompiledGraph,
     g: usize,
     particles: u32,
-) -> Option<crate::stages::schema::Effect> {
+) -> Option<crate::stages::schema::EffectSpec> {
     let burst = stand_in(graph, g, particles)?;
     let stream = graph.streams.iter().find(|s| s.child == g)?;
     let event = &groups[stream.parent].events[stream.out_slot];

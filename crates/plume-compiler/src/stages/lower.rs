@@ -1,17 +1,17 @@
-//! Lowering: a checked [`Effect`] becomes an [`EffectIr`] (f64 vectors, unit directions,
+//! Lowering: a checked [`EffectSpec`] becomes an [`EffectIr`] (f64 vectors, unit directions,
 //! precomputed bases and grid steps, forces as terms). The integrator is still as written.
 
 use crate::base::rng::seed_mix;
 use crate::features::accuracy::BudgetCamera;
 use crate::features::forces::Force;
 use crate::ir::{CameraIr, EffectIr, KillIr, RenderIr};
-use crate::stages::schema::{Collider, Effect, KillVolume};
+use crate::stages::schema::{Collider, EffectSpec, KillVolume};
 
 /// What the effect's expressions may name: its params and dt, its named expressions
 /// (`defines`, parsed from `effect.define`) and its attributes (`attrs`:
 /// `features::attributes::names`).
 pub(crate) fn names<'a>(
-    effect: &'a Effect,
+    effect: &'a EffectSpec,
     defines: &'a [crate::expr::define::Define],
     attrs: &'a [crate::expr::typed::AttrName],
 ) -> crate::expr::Names<'a> {
@@ -25,7 +25,7 @@ pub(crate) fn names<'a>(
 }
 
 /// Lowers a checked effect. Call only after [`crate::stages::validate::check_effect`] found no errors.
-pub fn lower(effect: &Effect) -> EffectIr {
+pub fn lower(effect: &EffectSpec) -> EffectIr {
     let (defines, _) = crate::expr::define::parse_all(&effect.define);
     let attrs =
         crate::features::attributes::names(&effect.attributes, names(effect, &defines, &[]));

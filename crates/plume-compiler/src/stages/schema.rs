@@ -90,10 +90,11 @@ pub(crate) fn default_substeps() -> u32 {
     1
 }
 
-/// A whole effect file.
+/// A whole effect file as parsed (`Effect(...)` in RON), before it is checked and lowered:
+/// what the file says, not a running effect (the runtime's `Effect`).
 #[derive(Clone, Debug, PartialEq, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Effect {
+#[serde(deny_unknown_fields, rename = "Effect")]
+pub struct EffectSpec {
     /// A name for messages and outputs.
     pub name: String,
     /// Most live particles at once.

@@ -5,7 +5,7 @@
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::features::forces::force_path;
-use crate::stages::schema::{Effect, KillVolume, Orient};
+use crate::stages::schema::{EffectSpec, KillVolume, Orient};
 
 /// The most emitters an effect may have: each takes 16 bytes of the per-step uniform, and
 /// 16 + 16 x 1023 bytes is the 16 KiB every WebGPU adapter must allow in a uniform binding.
@@ -18,7 +18,7 @@ pub const MAX_FORCES: usize = 512;
 pub const MAX_VOLUMES: usize = 256;
 
 /// Checks the whole effect; returns the checker holding every error found.
-pub fn check_effect(effect: &Effect) -> Checker {
+pub fn check_effect(effect: &EffectSpec) -> Checker {
     let mut c = Checker::default();
     let root = ValuePath::root();
     for (field, len, max, why) in [
@@ -201,7 +201,7 @@ pub fn check_effect(effect: &Effect) -> Checker {
 fn check_defines(
     c: &mut Checker,
     path: &ValuePath,
-    effect: &Effect,
+    effect: &EffectSpec,
     errors: Vec<crate::expr::define::DefineError>,
     names: crate::expr::Names,
 ) {
@@ -243,7 +243,7 @@ fn check_defines(
 
 /// Params: names that expressions can use (identifiers that hide no variable or function),
 /// values within the range expressions compute in.
-fn check_params(c: &mut Checker, path: &ValuePath, effect: &Effect) {
+fn check_params(c: &mut Checker, path: &ValuePath, effect: &EffectSpec) {
     use crate::expr::typed::{EVERY_VARIABLE, FUNCTIONS};
     for (component, &value) in &effect.params {
         // A vector's components (`wind.x`) are checked by its name.

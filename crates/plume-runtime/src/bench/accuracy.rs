@@ -14,7 +14,7 @@ use glam::DVec3;
 use plume_compiler::emitter::Amount;
 use plume_compiler::passes::integrator::exact_blocker;
 use plume_compiler::reference::ReferenceSim;
-use plume_compiler::{compile_effect, CompileError, Effect, Integrator};
+use plume_compiler::{compile_effect, CompileError, EffectSpec, Integrator};
 
 use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;
@@ -71,7 +71,7 @@ pub enum Engine<'g> {
 }
 
 /// Makes the measured copy of an effect: bursts only (see the module docs).
-pub fn measured_effect(effect: &Effect) -> Effect {
+pub fn measured_effect(effect: &EffectSpec) -> EffectSpec {
     let mut e = effect.clone();
     let params = e.params.clone();
     for em in &mut e.emitters {
@@ -93,7 +93,7 @@ pub fn measured_effect(effect: &Effect) -> Effect {
 }
 
 fn compile(
-    effect: &Effect,
+    effect: &EffectSpec,
     integrator: Integrator,
     dt: f64,
 ) -> Result<plume_compiler::CompiledEffect, RuntimeError> {
@@ -124,7 +124,7 @@ fn steps_for(duration: f64, dt: f64) -> Result<u64, RuntimeError> {
 
 /// The reference positions at `duration`, by id, and what they are.
 pub fn reference(
-    effect: &Effect,
+    effect: &EffectSpec,
     plan: &AccuracyPlan,
 ) -> Result<(HashMap<u32, DVec3>, ReferenceKind), RuntimeError> {
     let finest = plan.dts.iter().copied().fold(f64::INFINITY, f64::min);
@@ -201,7 +201,7 @@ fn timed_run(
 /// Runs the plan; `progress(done, total)` after each run.
 pub fn measure(
     engine: &Engine,
-    effect: &Effect,
+    effect: &EffectSpec,
     plan: &AccuracyPlan,
     mut progress: impl FnMut(usize, usize),
 ) -> Result<(Vec<AccuracyRow>, ReferenceKind), RuntimeError> {
@@ -287,7 +287,7 @@ pub struct FieldRow {
 /// Returns the rows and the evaluated run's wall time per step.
 pub fn field_sweep(
     engine: &Engine,
-    effect: &Effect,
+    effect: &EffectSpec,
     resolutions: &[u32],
     duration: f64,
     mut progress: impl FnMut(usize, usize),
@@ -309,7 +309,7 @@ pub fn field_sweep(
         Refresh::Once
     };
     let steps = steps_for(duration, effect.dt)?;
-    let run = |e: &Effect| -> Result<(Vec<(u32, DVec3)>, f64), RuntimeError> {
+    let run = |e: &EffectSpec| -> Result<(Vec<(u32, DVec3)>, f64), RuntimeError> {
         let c = compile_effect(e, "").map_err(|err| RuntimeError::Output(err.to_string()))?;
         let (records, seconds) = timed_run(engine, c, steps, effect.stand_in)?;
         Ok((

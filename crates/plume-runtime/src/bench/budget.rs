@@ -7,7 +7,7 @@
 use plume_compiler::accuracy::{Choice, Scheme};
 use plume_compiler::passes::accuracy::measures;
 use plume_compiler::reference::calibrate::{self, Trajectories};
-use plume_compiler::{compile_effect, Effect, Integrator};
+use plume_compiler::{compile_effect, EffectSpec, Integrator};
 
 use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;
@@ -45,7 +45,7 @@ impl BudgetCheck {
 }
 
 /// Checks `effect`'s budget on `gpu`; None for an effect without one.
-pub fn check_budget(gpu: &Gpu, effect: &Effect) -> Result<Option<BudgetCheck>, RuntimeError> {
+pub fn check_budget(gpu: &Gpu, effect: &EffectSpec) -> Result<Option<BudgetCheck>, RuntimeError> {
     if effect.accuracy.is_none() {
         return Ok(None);
     }

@@ -3,7 +3,7 @@
 //! compacted list, the compute splat stage by stage, into an HDR image to glow, stateless).
 
 use plume_compiler::schema::State;
-use plume_compiler::{compile_effect, Effect};
+use plume_compiler::{compile_effect, EffectSpec};
 
 use crate::bench::scene::draw_scene;
 use crate::bench::timer::PassTimer;
@@ -72,7 +72,7 @@ pub const DRAW_REPEATS: usize = 5;
 pub(crate) fn time_draws(
     gpu: &Gpu,
     timer: &PassTimer<'_>,
-    effect: &Effect,
+    effect: &EffectSpec,
     (particles, slots): (u32, u32),
     (width, height): (u32, u32),
 ) -> Result<DrawTimes, RuntimeError> {

@@ -7,7 +7,7 @@
 
 use plume_compiler::emitter::Amount;
 use plume_compiler::graph::{compile_graph, group_effects, CompiledGraph, CompiledGroup};
-use plume_compiler::schema::{Effect, Emitter, Shape, Vec3, Velocity};
+use plume_compiler::schema::{EffectSpec, Emitter, Shape, Vec3, Velocity};
 use plume_compiler::{compile_effect, CompileError};
 
 use crate::bench::profile::{profiled, DispatchTime};
@@ -66,7 +66,7 @@ fn invalid(e: CompileError) -> RuntimeError {
 
 /// `effect` with every group's capacity, and the bursts and rates of the groups that spawn on
 /// their own, multiplied by `scale`.
-pub fn scaled(effect: &Effect, scale: f64) -> Effect {
+pub fn scaled(effect: &EffectSpec, scale: f64) -> EffectSpec {
     let cap = |c: u32| ((f64::from(c) * scale).round() as u32).max(1);
     let params = &effect.params;
     let emit = |emitters: &mut Vec<Emitter>| {
@@ -111,7 +111,7 @@ fn requested(sim: &RunningEffect, fed: &[bool]) -> Result<Vec<u64>, RuntimeError
 /// batches of `steps` timed; with `profile`, one batch more of each with every dispatch timed.
 pub fn bench_graph(
     gpu: &Gpu,
-    effect: &Effect,
+    effect: &EffectSpec,
     particles: u32,
     warm_steps: u64,
     steps: u32,
@@ -204,7 +204,10 @@ const PLAIN_LIFETIME: f64 = 86_400.0;
 /// `alive` particles from one burst that outlives the run, and no events. (A group fed by
 /// events may also store its particles' spawn step or tint, which the copy does not: that is
 /// part of what events cost.)
-fn plain_graph(big: &Effect, groups: &[(String, u32, u64)]) -> Result<CompiledGraph, RuntimeError> {
+fn plain_graph(
+    big: &EffectSpec,
+    groups: &[(String, u32, u64)],
+) -> Result<CompiledGraph, RuntimeError> {
     let mut out = Vec::new();
     for (e, (name, cap, alive)) in group_effects(big).into_iter().zip(groups) {
         let mut plain = e;

@@ -4,20 +4,20 @@
 
 use plume_compiler::emitter::Amount;
 use plume_compiler::schema::State;
-use plume_compiler::{compile_effect, CompileError, CompiledEffect, Effect};
+use plume_compiler::{compile_effect, CompileError, CompiledEffect, EffectSpec};
 
 use crate::error::RuntimeError;
 
 /// The benchmark's copy of an effect: capacity N and all N spawned at step 0 (split over the
 /// emitters in proportion to their bursts and rates), lifetimes long enough to outlast the run.
 /// Forces, integrator, collisions and kills are the effect's own, so the layout is too.
-pub fn bench_effect(effect: &Effect, particles: u32) -> Effect {
+pub fn bench_effect(effect: &EffectSpec, particles: u32) -> EffectSpec {
     bench_effect_occupied(effect, particles, particles)
 }
 
 /// Like [`bench_effect`] with capacity `capacity` of which only `live` are spawned (at most
 /// the capacity): the rest of the slots stay free.
-pub fn bench_effect_occupied(effect: &Effect, capacity: u32, live: u32) -> Effect {
+pub fn bench_effect_occupied(effect: &EffectSpec, capacity: u32, live: u32) -> EffectSpec {
     let mut e = effect.clone();
     let params = e.params.clone();
     let file_count: u32 = e.emitters.iter().map(|em| em.burst.value(&params)).sum();
@@ -121,7 +121,7 @@ fn scale_shape(shape: &mut plume_compiler::schema::Shape, scale: f64, about: gla
 ///
 /// The capacity is `slots`, or a tenth more than `particles` if that is more, so the
 /// randomness of lifetimes drops nothing.
-pub fn draw_scene(effect: &Effect, particles: u32, slots: u32) -> (Effect, u64) {
+pub fn draw_scene(effect: &EffectSpec, particles: u32, slots: u32) -> (EffectSpec, u64) {
     let mut e = effect.clone();
     let params = e.params.clone();
     let mean = |l: &plume_compiler::schema::Range| 0.5 * (l.0 + l.1);
@@ -175,13 +175,13 @@ pub fn draw_scene(effect: &Effect, particles: u32, slots: u32) -> (Effect, u64) 
 }
 
 /// Compiles the bench copy of `effect` (with its own `state`).
-pub fn compile_bench(effect: &Effect, particles: u32) -> Result<CompiledEffect, RuntimeError> {
+pub fn compile_bench(effect: &EffectSpec, particles: u32) -> Result<CompiledEffect, RuntimeError> {
     compile_bench_as(effect, particles, effect.state)
 }
 
 /// Compiles the bench copy of `effect` with `state` in place of the file's.
 pub(crate) fn compile_bench_as(
-    effect: &Effect,
+    effect: &EffectSpec,
     particles: u32,
     state: State,
 ) -> Result<CompiledEffect, RuntimeError> {
@@ -190,7 +190,7 @@ pub(crate) fn compile_bench_as(
 
 /// Compiles [`bench_effect_occupied`] with `state` in place of the file's.
 pub(crate) fn compile_occupied(
-    effect: &Effect,
+    effect: &EffectSpec,
     capacity: u32,
     live: u32,
     state: State,

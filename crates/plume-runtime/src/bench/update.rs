@@ -4,7 +4,7 @@
 //! the ratio copy time / update time says how close the update gets.
 
 use plume_compiler::schema::State;
-use plume_compiler::{CompiledEffect, Effect};
+use plume_compiler::{CompiledEffect, EffectSpec};
 
 use crate::bench::copy::CopyKernel;
 use crate::bench::draw::{time_draws, DrawTimes};
@@ -124,7 +124,7 @@ impl BenchOptions {
 /// kernel); an effect that can be stateless also has its `evaluate` timed on the same N.
 pub fn bench(
     gpu: &Gpu,
-    effect: &Effect,
+    effect: &EffectSpec,
     options: &BenchOptions,
 ) -> Result<BenchResult, RuntimeError> {
     let particles = options.particles;
@@ -296,7 +296,7 @@ fn field_error(
 fn time_stateless(
     gpu: &Gpu,
     timer: &PassTimer<'_>,
-    effect: &Effect,
+    effect: &EffectSpec,
     (capacity, live): (u32, u32),
     steps: u32,
 ) -> Result<Result<f64, String>, RuntimeError> {
