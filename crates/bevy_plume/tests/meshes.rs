@@ -1,7 +1,8 @@
 //! Mesh particles (`render.mesh`) in Bevy's view, headless on lavapipe: a particle drawn as a
 //! square plate covers the square its corners project to, by the raster renderer even where
 //! the compute one is asked for (it draws no meshes: the effect falls back, as `Auto` picks the
-//! raster one for it). `BEVY_PLUME_TEST_IMAGES=DIR` keeps the image.
+//! raster one for it); and a file with no mesh, given a Bevy mesh in code, draws that mesh.
+//! `BEVY_PLUME_TEST_IMAGES=DIR` keeps the image.
 
 mod common;
 
@@ -43,32 +44,7 @@ fn a_mesh_particle_covers_where_its_mesh_projects() {
             .save(std::path::Path::new(&out).join("mesh.png"))
             .unwrap();
     }
-    let lit: Vec<(u32, u32)> = image
-        .enumerate_pixels()
-        .filter(|(_, _, p)| p.0[0] > 128)
-        .map(|(x, y, _)| (x, y))
-        .collect();
-    assert!(lit.len() > 100, "only {} pixels lit", lit.len());
-    let (x0, y0) = project(-0.5, 1.25);
-    let (x1, y1) = project(1.5, -0.75);
-    let xs = lit.iter().map(|p| p.0 as f32 + 0.5);
-    let ys = lit.iter().map(|p| p.1 as f32 + 0.5);
-    let (left, right) = (xs.clone().fold(f32::MAX, f32::min), xs.fold(0.0, f32::max));
-    let (top, bottom) = (ys.clone().fold(f32::MAX, f32::min), ys.fold(0.0, f32::max));
-    for (got, want, edge) in [
-        (left, x0, "left"),
-        (right, x1, "right"),
-        (top, y0, "top"),
-        (bottom, y1, "bottom"),
-    ] {
-        assert!(
-            (got - want).abs() < 1.5,
-            "the plate's {edge} edge at {got} px, its corners project to {want}"
-        );
-    }
-    // Filled: every pixel inside the square.
-    let inside = ((x1 - x0 - 2.0) * (y1 - y0 - 2.0)) as usize;
-    assert!(lit.len() >= inside, "{} pixels lit of {inside}", lit.len());
+    assert_covers(&image, (-0.5, 1.25), (1.5, -0.75), "plate");
     let stats = *h
         .app
         .sub_app(RenderApp)
@@ -105,13 +81,26 @@ fn a_bevy_mesh_draws_the_particles_of_a_file_without_one() {
     });
     assert!(drawn, "the particle was never drawn as the Bevy mesh");
     let image = h.capture_lit();
+    assert_covers(&image, (-0.5, 0.75), (1.5, -0.25), "rectangle");
+}
+
+/// Asserts that the pixels of `image` with red over 128 fill the rectangle between the
+/// projections of the world points (x, y, 0) `top_left` and `bottom_right`, edges within
+/// 1.5 px, every pixel inside lit; `what` names it.
+fn assert_covers(
+    image: &image::RgbaImage,
+    top_left: (f32, f32),
+    bottom_right: (f32, f32),
+    what: &str,
+) {
     let lit: Vec<(u32, u32)> = image
         .enumerate_pixels()
         .filter(|(_, _, p)| p.0[0] > 128)
         .map(|(x, y, _)| (x, y))
         .collect();
-    let (x0, y0) = project(-0.5, 0.75);
-    let (x1, y1) = project(1.5, -0.25);
+    assert!(lit.len() > 100, "only {} pixels lit", lit.len());
+    let (x0, y0) = project(top_left.0, top_left.1);
+    let (x1, y1) = project(bottom_right.0, bottom_right.1);
     let xs = lit.iter().map(|p| p.0 as f32 + 0.5);
     let ys = lit.iter().map(|p| p.1 as f32 + 0.5);
     let (left, right) = (xs.clone().fold(f32::MAX, f32::min), xs.fold(0.0, f32::max));
@@ -124,9 +113,10 @@ fn a_bevy_mesh_draws_the_particles_of_a_file_without_one() {
     ] {
         assert!(
             (got - want).abs() < 1.5,
-            "the rectangle's {edge} edge at {got} px, its corners project to {want}"
+            "the {what}'s {edge} edge at {got} px, its corners project to {want}"
         );
     }
+    // Filled: every pixel inside.
     let inside = ((x1 - x0 - 2.0) * (y1 - y0 - 2.0)) as usize;
     assert!(lit.len() >= inside, "{} pixels lit of {inside}", lit.len());
 }

@@ -37,6 +37,26 @@ pub(crate) fn check_texture(depth: &wgpu::Texture) -> Result<(), RuntimeError> {
     Ok(())
 }
 
+/// The depths of `depth` (a single-sampled or multisampled 2D depth texture with
+/// `TEXTURE_BINDING`), row by row from the top, read back (waits for the GPU).
+pub(crate) fn read_depths(gpu: &Gpu, depth: &wgpu::Texture) -> Result<Vec<f32>, RuntimeError> {
+    let out = gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("depth read"),
+        size: copy_bytes(depth),
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        mapped_at_creation: false,
+    });
+    let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    DepthCopy::default().record(gpu, &mut encoder, depth, &out);
+    gpu.queue.submit([encoder.finish()]);
+    let bytes = crate::device::readback::read_buffer(gpu, &out)?;
+    gpu.take_error()?;
+    Ok(bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect())
+}
+
 /// Bytes of the copy of `depth`.
 pub(crate) fn copy_bytes(depth: &wgpu::Texture) -> u64 {
     u64::from(depth.width()) * u64::from(depth.height()) * 4

@@ -362,27 +362,7 @@ impl Scene {
     /// The depth buffer read back, row by row from the top (waits for the GPU): what a
     /// `SceneDepth` collider's f64 reference collides with.
     pub fn read_depth(&self) -> Result<Vec<f32>, RuntimeError> {
-        let gpu = &self.gpu;
-        let out = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("depth read"),
-            size: crate::device::depth_copy::copy_bytes(&self.depth_texture),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        crate::device::depth_copy::DepthCopy::default().record(
-            gpu,
-            &mut encoder,
-            &self.depth_texture,
-            &out,
-        );
-        gpu.queue.submit([encoder.finish()]);
-        let bytes = crate::device::readback::read_buffer(gpu, &out)?;
-        gpu.take_error()?;
-        Ok(bytes
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect())
+        crate::device::depth_copy::read_depths(&self.gpu, &self.depth_texture)
     }
 
     /// The depth attachment of a particle pass over the scene: tested, not written, so that

@@ -160,27 +160,7 @@ impl SceneShadow {
     /// The map's depths read back (waits for the GPU), for the f64 light
     /// ([`Shadow::visibility`]).
     pub fn read_depths(&self) -> Result<ShadowDepths, RuntimeError> {
-        let gpu = &self.gpu;
-        let out = gpu.device.create_buffer(&wgpu::BufferDescriptor {
-            label: Some("shadow map read"),
-            size: crate::device::depth_copy::copy_bytes(&self.texture),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            mapped_at_creation: false,
-        });
-        let mut encoder = gpu.device.create_command_encoder(&Default::default());
-        crate::device::depth_copy::DepthCopy::default().record(
-            gpu,
-            &mut encoder,
-            &self.texture,
-            &out,
-        );
-        gpu.queue.submit([encoder.finish()]);
-        let bytes = crate::device::readback::read_buffer(gpu, &out)?;
-        gpu.take_error()?;
-        let depths = bytes
-            .chunks_exact(4)
-            .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-            .collect();
+        let depths = crate::device::depth_copy::read_depths(&self.gpu, &self.texture)?;
         Ok(ShadowDepths {
             width: SHADOW_MAP_SIZE,
             height: SHADOW_MAP_SIZE,

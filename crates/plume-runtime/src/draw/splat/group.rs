@@ -294,14 +294,12 @@ impl GroupSplat {
                 &gpu, &module, effect, &shape, ribbons, size, targets, texture, reads,
             )
         });
-        // `project` uses every binding of its module but `composite`'s, so its derived
-        // layout holds the entries above.
+        // `project` binds all its module's bindings but `composite`'s: its layout holds these.
         let project_group = bind(&gpu, &project.get_bind_group_layout(0), &entries);
         let bg = effect.ir.render.background;
         // As a clear colour reaches an 8-bit target: each channel rounded to the nearest step.
         let byte = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u32;
-        // Alpha 0 tells the composite to start from the image (the groups drawn before; for a
-        // host's image, cleared each frame, always).
+        // Alpha 0: the composite starts from the image (the groups drawn before; a host's, always).
         let background = match under {
             _ if image.host.is_some() => 0,
             Some(_) => 0,
@@ -457,15 +455,13 @@ impl GroupSplat {
         }
     }
 
-    /// Reads `map` (an array view of a depth texture) as a lit look's shadow map from the
-    /// next frame on; nothing for an unlit group.
+    /// Reads `map` (a depth texture's array view) as the shadow map from the next frame on.
     pub(crate) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
-        let Some(quads) = self.quads.as_mut().filter(|q| q.reads_shadows()) else {
+        let Some(quads) = &mut self.quads else {
             return;
         };
-        quads.set_shadow_map(map);
         // Made again if made already (else with the first entry lists).
-        if self.entries.quads_groups.is_some() {
+        if quads.set_shadow_map(map) && self.entries.quads_groups.is_some() {
             let t = &self.tiles;
             self.entries.quads_groups =
                 Some(quads.bind_groups(&self.gpu, &t.params, &self.entries.vals, &t.ranges));

@@ -103,11 +103,13 @@ impl QuadRaster {
         self.shadow.is_some()
     }
 
-    /// Reads `map` as the shadow map from the next [`Self::bind_groups`] on.
-    pub(super) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
+    /// Reads `map` as the shadow map from the next [`Self::bind_groups`] on; whether the
+    /// composite reads one.
+    pub(super) fn set_shadow_map(&mut self, map: &wgpu::TextureView) -> bool {
         if let Some(shadow) = &mut self.shadow {
             shadow.map = map.clone();
         }
+        self.shadow.is_some()
     }
 
     /// The composite's bind groups over the tiles' parameters, the list of sprites by tile
