@@ -25,23 +25,28 @@ const PUFF: &str = r#"Effect(name: "puff", capacity: 1,
                    lit: Some(Lit(normals: Sphere))))
 "#;
 
-/// The mean brightness (0 to 255, over the three channels) of the puff's left and right
-/// thirds along its horizontal middle row.
+/// The mean brightness (0 to 255, over the three channels) of `pixels` of `image` (clamped
+/// to it).
+fn mean_brightness(image: &image::RgbaImage, pixels: impl Iterator<Item = (u32, u32)>) -> f64 {
+    let (mut sum, mut n) = (0.0, 0.0);
+    for (x, y) in pixels {
+        let p = image.get_pixel(x.min(WIDTH - 1), y.min(HEIGHT - 1)).0;
+        sum += (f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2])) / 3.0;
+        n += 1.0;
+    }
+    sum / n
+}
+
+/// The mean brightness of the puff's left and right thirds along its horizontal middle row.
 fn sides(image: &image::RgbaImage) -> (f64, f64) {
     let (cx, cy) = project(0.0, 0.0);
     let (edge, _) = project(2.0, 0.0);
     let radius = edge - cx;
-    let y = cy as u32;
-    let mean = |from: f32, to: f32| {
-        let (mut sum, mut n) = (0.0, 0.0);
-        for x in (cx + from * radius) as u32..(cx + to * radius) as u32 {
-            let p = image.get_pixel(x.min(WIDTH - 1), y.min(HEIGHT - 1)).0;
-            sum += (f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2])) / 3.0;
-            n += 1.0;
-        }
-        sum / n
+    let row = |from: f32, to: f32| {
+        let xs = (cx + from * radius) as u32..(cx + to * radius) as u32;
+        mean_brightness(image, xs.map(|x| (x, cy as u32)))
     };
-    (mean(-0.9, -0.35), mean(0.35, 0.9))
+    (row(-0.9, -0.35), row(0.35, 0.9))
 }
 
 #[test]
@@ -222,20 +227,12 @@ const PAIR: &str = r#"Effect(name: "pair", capacity: 2,
                    lit: Some(Lit(normals: Flat))))
 "#;
 
-/// The mean brightness (0 to 255, over the three channels) of the 3 x 3 pixels around the
-/// point (x, 0, 0).
+/// The mean brightness of the 3 x 3 pixels around the point (x, 0, 0).
 fn brightness_at(image: &image::RgbaImage, x: f32) -> f64 {
     let (cx, cy) = project(x, 0.0);
-    let mut sum = 0.0;
-    for dy in -1..=1 {
-        for dx in -1..=1 {
-            let p = image
-                .get_pixel((cx as i32 + dx) as u32, (cy as i32 + dy) as u32)
-                .0;
-            sum += (f64::from(p[0]) + f64::from(p[1]) + f64::from(p[2])) / 3.0;
-        }
-    }
-    sum / 9.0
+    let (cx, cy) = (cx as u32, cy as u32);
+    let around = (0..9).map(|k| (cx + k % 3 - 1, cy + k / 3 - 1));
+    mean_brightness(image, around)
 }
 
 #[test]
