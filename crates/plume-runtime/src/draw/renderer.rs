@@ -172,7 +172,9 @@ impl EffectRenderer {
     ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
     ///     render: Render(lit: Some(Lit(normals: Sphere))))"#;
     /// let gpu = Gpu::new(&Default::default())?;
-    /// let puffs = Effect::from_source(&gpu, source, &Default::default())?;
+    /// // Its file casts no shadow: compiled to read the host's map.
+    /// let options = plume_compiler::CompileOptions { receive_shadows: true, ..Default::default() };
+    /// let puffs = Effect::from_source(&gpu, source, &options)?;
     /// let mut particles = puffs.renderer(&DrawTarget::new(wgpu::TextureFormat::Rgba8Unorm))?;
     /// // The host's shadow map of the sun, drawn by the host from the sun's view.
     /// let usage = wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING;
