@@ -261,7 +261,7 @@ impl GroupSplat {
             }
         }
         // A lit look's composite shades each pixel by the lights (in the view: no matrix).
-        let lights = match ribbons {
+        let mut lights = match ribbons {
             true => None,
             false => LightsUniform::new(&gpu, effect),
         };
@@ -283,13 +283,15 @@ impl GroupSplat {
             true => None,
             false => SpriteTexture::for_render(&gpu, &effect.ir.render)?,
         };
+        // The composite owns the shadow map's binding (the lights keep none of their own).
+        let shadow = lights.as_mut().and_then(|l| l.shadow.take());
         let quads = (!discs).then(|| {
             let targets = MergeTargets {
                 params: &tiles.params,
                 image: &tiles.image,
             };
             let size = (width, height);
-            let reads = (reads, lights.as_ref().and_then(|l| l.shadow.clone()));
+            let reads = (reads, shadow);
             QuadRaster::new(
                 &gpu, &module, effect, &shape, ribbons, size, targets, texture, reads,
             )
