@@ -62,7 +62,8 @@ pub use features::looks::{
     texture, tint, trail,
 };
 pub use features::{
-    accuracy, attributes, bursts, colliders, emitter, events, field, forces, inherit, lights,
+    accuracy, attributes, bursts, colliders, emitter, event_report, events, field, forces, inherit,
+    lights,
     mesh_emission, placement, shadow,
 };
 pub use ir::EffectIr;

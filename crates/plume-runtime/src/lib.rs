@@ -48,5 +48,6 @@ pub use sim::batch::{BatchInstance, EffectBatch};
 pub use sim::bounds::{BoundsWatch, LiveBounds};
 pub use sim::effect::Effect;
 pub use sim::planned::PlannedSteps;
+pub use sim::reports::{EventReport, Firing};
 /// The wgpu this crate is built against: a host must use the same version.
 pub use wgpu;

@@ -41,16 +41,22 @@ pub enum Trigger {
 
 /// An event: `count` particles spawned in group `target` each time a particle fires it, placed
 /// by `shape` around the parent's position, moving by `velocity` plus `inherit_velocity` times
-/// the parent's velocity, and living `lifetime`.
+/// the parent's velocity, and living `lifetime`; and, with a `report` bound, its firings handed
+/// to the host (`event_report.rs`). An event names a target, reports, or both.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Event {
     /// What fires it.
     pub on: Trigger,
-    /// The name of the group the new particles join.
-    pub target: String,
-    /// Particles spawned per firing.
+    /// The name of the group the new particles join; None for an event that only reports.
+    #[serde(default, deserialize_with = "crate::features::event_report::some_name")]
+    pub target: Option<String>,
+    /// Particles spawned per firing (1 unless given; unused without a target).
+    #[serde(default = "one")]
     pub count: u32,
+    /// The most firings kept for the host between two readbacks (0: not reported).
+    #[serde(default)]
+    pub report: u32,
     /// Where they start, relative to the parent's position.
     #[serde(default = "origin")]
     pub shape: Shape,
@@ -66,6 +72,10 @@ pub struct Event {
     /// Whether they take on the parent's colour (its tint: `tint.rs`).
     #[serde(default)]
     pub inherit_color: bool,
+}
+
+fn one() -> u32 {
+    1
 }
 
 fn origin() -> Shape {
@@ -147,10 +157,13 @@ pub struct EventIr {
     pub trigger: TriggerIr,
     /// How its firings are put in order.
     pub ordering: Ordering,
-    /// The index of the target group.
-    pub target: usize,
-    /// The event's index among every event of the effect (the order children are spawned in).
-    pub stream: usize,
+    /// The index of the target group (None: the event only reports).
+    pub target: Option<usize>,
+    /// The event's stream, its index among every event with a target (the order children are
+    /// spawned in); None for an event that only reports.
+    pub stream: Option<usize>,
+    /// The most firings kept for the host between two readbacks (0: not reported).
+    pub report: u32,
     /// Whether the record passes the firing particle's id (in its velocity's w): its target
     /// group joins children by their parent (`render.ribbon`).
     pub passes_id: bool,

@@ -10,6 +10,7 @@ pub mod attributes;
 pub mod bursts;
 pub mod colliders;
 pub mod emitter;
+pub mod event_report;
 pub mod events;
 pub mod field;
 pub mod forces;

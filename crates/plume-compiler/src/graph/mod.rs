@@ -192,21 +192,31 @@ fn compile_all(effect: &EffectSpec, source: &str) -> Result<CompiledGraph, Compi
     let mut links: Vec<GroupLinks> = vec![GroupLinks::default(); effects.len()];
     let inherits =
         inherit::wire(&effects, &streams).map_err(|e| CompileError::Invalid(locate(e)))?;
+    let trigger_of = |event: &Event| match event.on {
+        Trigger::Death => TriggerIr::Death,
+        Trigger::Collide => TriggerIr::Collide,
+        Trigger::Every(seconds) => TriggerIr::Every(every_steps(seconds, effect.dt)),
+    };
+    // Every event a group fires, in file order (its bindings' order), with its stream if it
+    // has a target.
+    for (g, group) in effects.iter().enumerate() {
+        for (j, event) in group.events.iter().enumerate() {
+            let s = streams.iter().position(|s| s.parent == g && s.out_slot == j);
+            let child = s.map(|s| streams[s].child);
+            links[g].events.push(EventIr {
+                trigger: trigger_of(event),
+                ordering: Ordering::for_capacity(group.capacity),
+                target: child,
+                stream: s,
+                report: event.report,
+                passes_id: child.is_some_and(|c| effects[c].render.ribbon.is_some()),
+                passes: s.map_or_else(Vec::new, |s| inherits[s].iter().map(|p| p.0).collect()),
+            });
+        }
+    }
     for (s, stream) in streams.iter().enumerate() {
         let event = &effects[stream.parent].events[stream.out_slot];
-        let trigger = match event.on {
-            Trigger::Death => TriggerIr::Death,
-            Trigger::Collide => TriggerIr::Collide,
-            Trigger::Every(seconds) => TriggerIr::Every(every_steps(seconds, effect.dt)),
-        };
-        links[stream.parent].events.push(EventIr {
-            trigger,
-            ordering: Ordering::for_capacity(effects[stream.parent].capacity),
-            target: stream.child,
-            stream: s,
-            passes_id: effects[stream.child].render.ribbon.is_some(),
-            passes: inherits[s].iter().map(|p| p.0).collect(),
-        });
+        let trigger = trigger_of(event);
         let child = &mut links[stream.child];
         child.inputs.push(EventInputIr {
             stream: s,
@@ -314,12 +324,18 @@ fn check_graph(effects: &[EffectSpec]) -> (Vec<Stream>, Checker, Vec<(Diagnostic
         for (j, ev) in e.events.iter().enumerate() {
             let path = events.index(j);
             check_event(&mut c, &path, ev, e);
-            let Some(target) = names.iter().position(|n| *n == ev.target) else {
+            crate::features::event_report::check(&mut c, &path, ev.report, ev.target.is_some());
+            // An event without a target only reports: no stream.
+            let Some(name) = ev.target.as_deref() else {
+                warnings.extend(never_fires(&path, ev, e));
+                continue;
+            };
+            let Some(target) = names.iter().position(|n| *n == name) else {
                 c.error(
                     &path.field("target"),
                     format!(
                         "no group is named {:?} (the groups are {})",
-                        ev.target,
+                        name,
                         names
                             .iter()
                             .map(|n| format!("{n:?}"))
@@ -334,7 +350,7 @@ fn check_graph(effects: &[EffectSpec]) -> (Vec<Stream>, Checker, Vec<(Diagnostic
                     &path.field("target"),
                     format!(
                         "{:?} fires into itself: each firing would spawn particles that fire again, without bound (spawn into another group)",
-                        ev.target
+                        name
                     ),
                 );
                 continue;

@@ -203,11 +203,18 @@ impl fmt::Display for EffectIr {
             )?;
         }
         for e in &self.events {
-            writeln!(
-                f,
-                "  fires event {} on {:?} into group {} (firings {:?})",
-                e.stream, e.trigger, e.target, e.ordering
-            )?;
+            match (e.stream, e.target) {
+                (Some(stream), Some(target)) => write!(
+                    f,
+                    "  fires event {stream} on {:?} into group {target} (firings {:?})",
+                    e.trigger, e.ordering
+                )?,
+                _ => write!(f, "  fires an event on {:?}", e.trigger)?,
+            }
+            match e.report {
+                0 => writeln!(f)?,
+                most => writeln!(f, ", reported (at most {most} a readback)")?,
+            }
         }
         for e in &self.event_inputs {
             writeln!(

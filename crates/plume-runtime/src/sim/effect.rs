@@ -164,7 +164,11 @@ impl Effect {
         max_chunk_slots: Option<u64>,
     ) -> Result<Self, RuntimeError> {
         let warnings = graph.all_warnings();
-        let alone = graph.groups.len() == 1 && graph.streams.is_empty();
+        let reports = graph
+            .groups
+            .iter()
+            .any(|g| g.effect.ir.events.iter().any(|e| e.report > 0));
+        let alone = graph.groups.len() == 1 && graph.streams.is_empty() && !reports;
         let (mut events, shared) = match alone {
             true => (None, vec![Vec::new()]),
             false => {

@@ -19,6 +19,7 @@ use crate::device::resources::STEPS_PER_SUBMIT;
 use crate::error::RuntimeError;
 use crate::sim::events::EventOrder;
 use crate::sim::group::Group;
+use crate::sim::reports::ReportGather;
 
 /// One event stream and the ordering of its firings.
 pub(crate) struct StreamOrder {
@@ -45,9 +46,11 @@ impl StreamOrder {
 /// Buffers a group binds instead of allocating them, by binding index.
 pub(crate) type SharedBuffers = Vec<(u32, wgpu::Buffer)>;
 
-/// The event streams of an effect graph, in the order children are spawned each step.
+/// The event streams of an effect graph, in the order children are spawned each step, and the
+/// gathers of its reported events.
 pub(crate) struct Events {
     pub(crate) orders: Vec<StreamOrder>,
+    pub(crate) reports: Vec<ReportGather>,
 }
 
 impl Events {
@@ -130,7 +133,66 @@ impl Events {
                 counted,
             });
         }
-        Ok((Self { orders }, shared))
+        let reports = Self::reports(gpu, graph, &mut shared, &orders)?;
+        Ok((Self { orders, reports }, shared))
+    }
+
+    /// The gathers of every reported event, in group order then event order. An event that
+    /// only reports has no stream: its firings' buffers are made here, for its group to bind.
+    fn reports(
+        gpu: &Gpu,
+        graph: &CompiledGraph,
+        shared: &mut [SharedBuffers],
+        orders: &[StreamOrder],
+    ) -> Result<Vec<ReportGather>, RuntimeError> {
+        let mut reports = Vec::new();
+        for (g, group) in graph.groups.iter().enumerate() {
+            let n = u64::from(group.effect.ir.capacity);
+            for (j, event) in group.effect.ir.events.iter().enumerate() {
+                if event.stream.is_some() && event.report == 0 {
+                    continue;
+                }
+                let at = out_binding(j);
+                let bound = |k: u32| {
+                    shared[g]
+                        .iter()
+                        .find(|(b, _)| *b == at + k)
+                        .map(|(_, buffer)| buffer.clone())
+                };
+                let buffers = match (bound(0), bound(1), bound(2)) {
+                    (Some(keys), Some(slots), Some(records)) => [keys, slots, records],
+                    _ => {
+                        let buffer = |label: &str, size: u64| {
+                            gpu.device.create_buffer(&wgpu::BufferDescriptor {
+                                label: Some(label),
+                                size,
+                                usage: STORAGE,
+                                mapped_at_creation: false,
+                            })
+                        };
+                        let made = [
+                            buffer("event keys", n * 4),
+                            buffer("event slots", n * 4),
+                            buffer("event records", RECORDS_HEADER_BYTES + n * RECORD_BYTES),
+                        ];
+                        for (k, b) in made.iter().enumerate() {
+                            shared[g].push((at + k as u32, b.clone()));
+                        }
+                        made
+                    }
+                };
+                if event.report > 0 {
+                    let clears = !orders.iter().any(|o| o.stream.parent == g && o.stream.out_slot == j);
+                    reports.push(ReportGather::new(
+                        gpu,
+                        (g, j, event.report),
+                        (&buffers[0], &buffers[1], &buffers[2]),
+                        clears,
+                    )?);
+                }
+            }
+        }
+        Ok(reports)
     }
 
     /// Binds each stream's ordering to its child group's counters (its first kernel prepares
@@ -207,6 +269,10 @@ impl Events {
             for (g, group) in groups.iter().enumerate() {
                 crate::device::dispatch_marks::scope('g', g);
                 group.record_graph_step(pass, &plans[g], j)?;
+            }
+            for (k, report) in self.reports.iter().enumerate() {
+                crate::device::dispatch_marks::scope('r', k);
+                report.record(pass);
             }
         }
         Ok(())

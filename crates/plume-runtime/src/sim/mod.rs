@@ -4,7 +4,7 @@
 //! kernels, depth sort and spawn schedule) and steps, reads and times it, and [`events`] orders
 //! an event stream's firings for the child group, [`scene_depth`] binds the host's depth image
 //! for a `SceneDepth` collider, [`graph`] steps several groups and their
-//! streams together, and [`effect`] is the public [`effect::Effect`]: one group, or a graph
+//! streams together, [`reports`] gathers reported events' firings for the host, and [`effect`] is the public [`effect::Effect`]: one group, or a graph
 //! ([`effect_read`]: what it tells its host).
 //!
 //! Imports [`crate::device`] and [`crate::sort`]; never the draw.
@@ -18,6 +18,7 @@ pub(crate) mod flock;
 pub(crate) mod graph;
 pub(crate) mod group;
 pub(crate) mod planned;
+pub(crate) mod reports;
 pub(crate) mod scene_depth;
 pub(crate) mod steps;
 pub(crate) mod watch;
