@@ -92,6 +92,7 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
             ("bounds", 0),
             ("particle_lights", 0),
             ("mesh_particles", 0),
+            ("event_reports", 0),
             // 1: the render world, which reads them; the headless runner, which waits on them.
             ("render", 1),
             ("headless", 1),

@@ -164,17 +164,30 @@ fn a_stateless_group_reports_its_deaths() {
         forces: [Gravity((0.0, -2.0, 0.0))],
         events: [Event(on: Death, report: 1024)])"#;
     let graph = compile_graph_str(source, &CompileOptions::default()).unwrap();
-    assert!(graph.groups[0].effect.ir.stateless.is_some(), "runs stateless");
+    assert!(
+        graph.groups[0].effect.ir.stateless.is_some(),
+        "runs stateless"
+    );
     let steps = 50;
     let frames = run_reported(&graph, steps);
     let mut reference = ReferenceGraph::new(&graph);
     let mut want = Vec::new();
     for step in 0..steps as u64 {
         reference.step();
-        want.extend(reference.group(0).fired(0).iter().map(|f| (step, f.id, f.x)));
+        want.extend(
+            reference
+                .group(0)
+                .fired(0)
+                .iter()
+                .map(|f| (step, f.id, f.x)),
+        );
     }
     want.sort_by_key(|w| (w.0, w.1));
-    let got: Vec<Firing> = frames.into_iter().flatten().flat_map(|r| r.firings).collect();
+    let got: Vec<Firing> = frames
+        .into_iter()
+        .flatten()
+        .flat_map(|r| r.firings)
+        .collect();
     assert!(want.len() > 50);
     assert_eq!(
         got.iter().map(|f| (f.step, f.id)).collect::<Vec<_>>(),
@@ -183,6 +196,9 @@ fn a_stateless_group_reports_its_deaths() {
     // The closed form's position, in f32 from step 0: a few roundings of its terms.
     for (g, (_, _, x)) in got.iter().zip(&want) {
         let p = glam::DVec3::from(g.position.map(f64::from));
-        assert!((p - *x).length() <= 64.0 * U32 * (1.0 + x.length()), "{p:?} vs {x:?}");
+        assert!(
+            (p - *x).length() <= 64.0 * U32 * (1.0 + x.length()),
+            "{p:?} vs {x:?}"
+        );
     }
 }

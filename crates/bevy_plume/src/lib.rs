@@ -27,6 +27,7 @@ mod asset;
 mod bounds;
 mod diagnostics;
 mod effect;
+mod event_reports;
 pub mod headless;
 mod mesh_particles;
 mod particle_lights;
@@ -37,6 +38,7 @@ pub use diagnostics::PlumeDiagnosticsPlugin;
 pub use effect::{
     PlumeBurst, PlumeDraw, PlumeEffect, PlumeSimulate, SimulationSpace, AUTO_COMPUTE_CAPACITY,
 };
+pub use event_reports::{PlumeEventFired, PlumeEventsMissed};
 pub use mesh_particles::obj_of;
 pub use particle_lights::PlumeLightOf;
 pub use plume_compiler;
@@ -62,6 +64,9 @@ pub enum PlumeSystems {
     /// `PostUpdate`: effect files compiled again with the Bevy mesh their entities draw
     /// particles as ([`PlumeEffect::with_mesh`]), on the async compute pool.
     Meshes,
+    /// `PreUpdate`: the firings of reported events that the render world read back, written as
+    /// [`PlumeEventFired`] (and [`PlumeEventsMissed`]) messages for `Update` to read.
+    Reports,
     /// `Last`: the bursts fired this frame ([`PlumeEffect::burst`]) are taken from the effect
     /// entities into the queue the render world reads at extraction, so each spawns once.
     Bursts,
@@ -85,6 +90,12 @@ impl Plugin for PlumePlugin {
             .register_type::<PlumeLightOf>()
             .init_resource::<effect::FiredBursts>()
             .init_resource::<mesh_particles::MeshedEffects>()
+            .add_message::<PlumeEventFired>()
+            .add_message::<PlumeEventsMissed>()
+            .add_systems(
+                PreUpdate,
+                event_reports::send_fired_events.in_set(PlumeSystems::Reports),
+            )
             .configure_sets(
                 PostUpdate,
                 PlumeSystems::Bounds.in_set(VisibilitySystems::CalculateBounds),

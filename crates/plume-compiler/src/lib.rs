@@ -63,8 +63,7 @@ pub use features::looks::{
 };
 pub use features::{
     accuracy, attributes, bursts, colliders, emitter, event_report, events, field, forces, inherit,
-    lights,
-    mesh_emission, placement, shadow,
+    lights, mesh_emission, placement, shadow,
 };
 pub use ir::EffectIr;
 pub use stages::passes::layout::Layout;

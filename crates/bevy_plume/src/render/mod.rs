@@ -31,6 +31,10 @@ pub(crate) fn build(app: &mut App) {
     // point lights.
     let given = crate::particle_lights::GivenLights::default();
     app.insert_resource(given.clone());
+    // And the firings of reported events: the render world's readings, the main world's
+    // messages.
+    let fired = crate::event_reports::FiredEvents::default();
+    app.insert_resource(fired.clone());
     let Some(render_app) = app.get_sub_app_mut(RenderApp) else {
         warn!("bevy_plume: no render app (RenderPlugin missing): effects will not run");
         return;
@@ -38,6 +42,7 @@ pub(crate) fn build(app: &mut App) {
     render_app
         .insert_resource(measured)
         .insert_resource(given)
+        .insert_resource(fired)
         .init_resource::<extract::ExtractedEffects>()
         .init_resource::<extract::ExtractedBursts>()
         .init_resource::<lights::ExtractedLights>()

@@ -20,6 +20,7 @@ use plume_runtime::{BoundsWatch, Camera, Lights};
 
 use crate::bounds::{MeasuredBounds, MeasuredBox};
 use crate::effect::SimulationSpace;
+use crate::event_reports::FiredEvents;
 use crate::particle_lights::GivenLights;
 use crate::render::batches::PlumeBatches;
 use crate::render::instances::{Instance, PlumeInstances};
@@ -36,6 +37,7 @@ pub(crate) fn simulate(
     mut batches: ResMut<PlumeBatches>,
     measured: Res<MeasuredBounds>,
     given: Res<GivenLights>,
+    fired: Res<FiredEvents>,
 ) {
     let encoder = context.command_encoder();
     batches.record_steps(encoder);
@@ -141,6 +143,29 @@ pub(crate) fn simulate(
     }
     drop(boxes);
     watch_particle_lights(encoder, &mut store, &given);
+    watch_reports(encoder, &store, &fired);
+}
+
+/// Records each reporting instance's readback after its steps, and queues the firings that
+/// came back, in world space, for the main world's messages.
+fn watch_reports(encoder: &mut wgpu::CommandEncoder, store: &PlumeInstances, fired: &FiredEvents) {
+    for (entity, instance) in &store.instances {
+        if !instance.effect.reports_events() {
+            continue;
+        }
+        match instance.effect.watch_reports(encoder) {
+            Ok(reports) if !reports.is_empty() => {
+                // A local-space effect reports in its own space.
+                let to_world = match instance.space {
+                    SimulationSpace::World => Mat4::IDENTITY,
+                    SimulationSpace::Local => instance.world_from_local,
+                };
+                fired.push(*entity, reports, to_world);
+            }
+            Ok(_) => {}
+            Err(err) => warn_once!("{}: {err}", instance.effect.compiled().ir.name),
+        }
+    }
 }
 
 /// Records each instance's light pick after its steps (`render.light`), and puts the lights

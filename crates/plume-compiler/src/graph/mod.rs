@@ -201,7 +201,9 @@ fn compile_all(effect: &EffectSpec, source: &str) -> Result<CompiledGraph, Compi
     // has a target.
     for (g, group) in effects.iter().enumerate() {
         for (j, event) in group.events.iter().enumerate() {
-            let s = streams.iter().position(|s| s.parent == g && s.out_slot == j);
+            let s = streams
+                .iter()
+                .position(|s| s.parent == g && s.out_slot == j);
             let child = s.map(|s| streams[s].child);
             links[g].events.push(EventIr {
                 trigger: trigger_of(event),

@@ -182,7 +182,9 @@ impl Events {
                     }
                 };
                 if event.report > 0 {
-                    let clears = !orders.iter().any(|o| o.stream.parent == g && o.stream.out_slot == j);
+                    let clears = !orders
+                        .iter()
+                        .any(|o| o.stream.parent == g && o.stream.out_slot == j);
                     reports.push(ReportGather::new(
                         gpu,
                         (g, j, event.report),

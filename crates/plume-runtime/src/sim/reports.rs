@@ -2,8 +2,8 @@
 //! one-workgroup kernel (`event_report.wgsl`) appends each reported event's firings of that
 //! step (their id, position, velocity and step, from the records the firing group's update
 //! wrote) to the event's report buffer, up to the event's bound, and counts them all. A host
-//! reads the buffers back without waiting ([`Effect::watch_reports`]): each readback copies a
-//! buffer and starts it again, so a firing is reported once.
+//! reads the buffers back without waiting (`Effect::watch_reports`, in `watch.rs`): each
+//! readback copies a buffer and starts it again, so a firing is reported once.
 
 use plume_compiler::event_report::{buffer_bytes, REPORT_BYTES, REPORT_HEADER_BYTES};
 
@@ -11,7 +11,6 @@ use crate::device::async_read::AsyncRead;
 use crate::device::buffers::{filled_buffer, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;
-use crate::sim::effect::Effect;
 
 /// One kept firing of a reported event.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -30,7 +29,7 @@ pub struct Firing {
 /// What one readback of a reported event brought back: the firings since the readback before.
 #[derive(Clone, Debug, PartialEq)]
 pub struct EventReport {
-    /// The firing group (an index into [`Effect::group_names`]).
+    /// The firing group (an index into `Effect::group_names`).
     pub group: usize,
     /// The event's index among the group's `events`.
     pub event: usize,
@@ -107,7 +106,7 @@ impl ReportGather {
 
     /// Takes a reading that came back, and records the next copy (and the restart of the
     /// count) into `encoder` when the last reading was taken. `steps_done` dates the firings.
-    fn watch(
+    pub(crate) fn watch(
         &self,
         encoder: &mut wgpu::CommandEncoder,
         steps_done: u64,
@@ -146,62 +145,5 @@ impl ReportGather {
             fired: u64::from(fired),
             firings,
         }
-    }
-}
-
-impl Effect {
-    /// The firings of the effect's reported events (`Event(.., report: N)`), read back without
-    /// waiting: takes each reading that has come back and records into `encoder` (after the
-    /// frame's steps, where the host puts it) the copy of what the steps since the last copy
-    /// gathered. A reading comes back a frame or two after its copy (the host submits its
-    /// encoder and polls the device in between, as a renderer does every frame). Each firing is
-    /// reported once; an event keeps at most its bound between two copies and counts the rest
-    /// ([`EventReport::missed`]). Empty for an effect without reported events.
-    ///
-    /// ```
-    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
-    /// use plume_runtime::{Effect, Gpu};
-    /// let source = r#"Effect(name: "drops", capacity: 64, dt: 0.01,
-    ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 1.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
-    ///     forces: [Gravity((0.0, -9.81, 0.0))],
-    ///     collide: [Plane(point: (0.0, 0.0, 0.0), normal: (0.0, 1.0, 0.0), restitution: 0.5, friction: 0.0)],
-    ///     events: [Event(on: Collide, report: 16)])"#;
-    /// let gpu = Gpu::new(&Default::default())?;
-    /// let mut drops = Effect::from_source(&gpu, source, &Default::default())?;
-    /// let mut firings = Vec::new();
-    /// for _ in 0..60 {
-    ///     let mut encoder = gpu.device.create_command_encoder(&Default::default());
-    ///     drops.advance(&mut encoder, 1)?;
-    ///     for report in drops.watch_reports(&mut encoder)? {
-    ///         firings.extend(report.firings);
-    ///     }
-    ///     gpu.queue.submit([encoder.finish()]);
-    ///     gpu.device.poll(wgpu::PollType::wait_indefinitely())?;
-    /// }
-    /// // The eight drops reach the floor together, 0.45 s after they start.
-    /// let first = firings.first().expect("the drops hit the floor");
-    /// assert_eq!(firings.iter().filter(|f| f.step == first.step).count(), 8);
-    /// assert!(first.velocity[1] > 0.0 && first.position[1].abs() < 0.1);
-    /// # Ok(())
-    /// # }
-    /// ```
-    pub fn watch_reports(
-        &self,
-        encoder: &mut wgpu::CommandEncoder,
-    ) -> Result<Vec<EventReport>, RuntimeError> {
-        let Some(events) = &self.events else {
-            return Ok(Vec::new());
-        };
-        let steps_done = self.steps_done();
-        let mut out = Vec::new();
-        for gather in &events.reports {
-            out.extend(gather.watch(encoder, steps_done)?);
-        }
-        Ok(out)
-    }
-
-    /// Whether any event of the effect is reported.
-    pub fn reports_events(&self) -> bool {
-        self.events.as_ref().is_some_and(|e| !e.reports.is_empty())
     }
 }

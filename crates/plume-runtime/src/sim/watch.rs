@@ -1,10 +1,13 @@
-//! The box of an effect's live particles measured without waiting, for a host that culls by
-//! it every frame ([`Effect::watch_live_bounds`], or in three parts inside a compute pass the
-//! host shares between effects); the reduction itself is [`crate::sim::bounds`]'s.
+//! What a host reads from an effect every frame without waiting: the box of its live
+//! particles, for a host that culls by it ([`Effect::watch_live_bounds`], or in three parts
+//! inside a compute pass the host shares between effects; the reduction itself is
+//! [`crate::sim::bounds`]'s), and the firings of its reported events
+//! ([`Effect::watch_reports`]; the gather is [`crate::sim::reports`]'s).
 
 use crate::error::RuntimeError;
 use crate::sim::bounds::{BoundsProbe, BoundsWatch};
 use crate::sim::effect::Effect;
+use crate::sim::reports::EventReport;
 
 impl Effect {
     /// The reduction over every group's particle buffers (made on first use).
@@ -99,5 +102,62 @@ impl Effect {
     pub fn watch_bounds_end(&self, encoder: &mut wgpu::CommandEncoder) -> Result<(), RuntimeError> {
         self.bounds_probe()?.watch_end(encoder);
         Ok(())
+    }
+}
+
+impl Effect {
+    /// The firings of the effect's reported events (`Event(.., report: N)`), read back without
+    /// waiting: takes each reading that has come back and records into `encoder` (after the
+    /// frame's steps, where the host puts it) the copy of what the steps since the last copy
+    /// gathered. A reading comes back a frame or two after its copy (the host submits its
+    /// encoder and polls the device in between, as a renderer does every frame). Each firing is
+    /// reported once; an event keeps at most its bound between two copies and counts the rest
+    /// ([`EventReport::missed`](crate::EventReport::missed)). Empty for an effect without reported events.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{Effect, Gpu};
+    /// let source = r#"Effect(name: "drops", capacity: 64, dt: 0.01,
+    ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 1.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    ///     forces: [Gravity((0.0, -9.81, 0.0))],
+    ///     collide: [Plane(point: (0.0, 0.0, 0.0), normal: (0.0, 1.0, 0.0), restitution: 0.5, friction: 0.0)],
+    ///     events: [Event(on: Collide, report: 16)])"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let mut drops = Effect::from_source(&gpu, source, &Default::default())?;
+    /// let mut firings = Vec::new();
+    /// for _ in 0..60 {
+    ///     let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    ///     drops.advance(&mut encoder, 1)?;
+    ///     for report in drops.watch_reports(&mut encoder)? {
+    ///         firings.extend(report.firings);
+    ///     }
+    ///     gpu.queue.submit([encoder.finish()]);
+    ///     gpu.device.poll(wgpu::PollType::wait_indefinitely())?;
+    /// }
+    /// // The eight drops reach the floor together, 0.45 s after they start.
+    /// let first = firings.first().expect("the drops hit the floor");
+    /// assert_eq!(firings.iter().filter(|f| f.step == first.step).count(), 8);
+    /// assert!(first.velocity[1] > 0.0 && first.position[1].abs() < 0.1);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn watch_reports(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<Vec<EventReport>, RuntimeError> {
+        let Some(events) = &self.events else {
+            return Ok(Vec::new());
+        };
+        let steps_done = self.steps_done();
+        let mut out = Vec::new();
+        for gather in &events.reports {
+            out.extend(gather.watch(encoder, steps_done)?);
+        }
+        Ok(out)
+    }
+
+    /// Whether any event of the effect is reported.
+    pub fn reports_events(&self) -> bool {
+        self.events.as_ref().is_some_and(|e| !e.reports.is_empty())
     }
 }
