@@ -79,6 +79,26 @@ impl AsyncRead {
         self.state.load(Ordering::Acquire) == IDLE
     }
 
+    /// Records the copies of `parts` (each a buffer and how many of its first bytes), one after
+    /// another, into `encoder` when the last reading was taken; whether it did.
+    pub(crate) fn record_copies(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        parts: &[(&wgpu::Buffer, u64)],
+    ) -> bool {
+        if !self.is_free() {
+            return false;
+        }
+        let mut at = 0;
+        for (source, len) in parts {
+            encoder.copy_buffer_to_buffer(source, 0, &self.buffer, at, *len);
+            at += len;
+        }
+        debug_assert!(at <= self.len);
+        self.state.store(COPIED, Ordering::Release);
+        true
+    }
+
     /// Records the copy of `source`'s first bytes into `encoder` when the last reading was
     /// taken; whether it did.
     pub(crate) fn record_copy(

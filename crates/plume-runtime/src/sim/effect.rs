@@ -93,6 +93,8 @@ pub struct Effect {
     pub(crate) depth_copy: crate::device::depth_copy::DepthCopy,
     /// The live-bounds reduction (made on first use: [`Self::live_bounds`]).
     pub(crate) bounds: std::sync::OnceLock<crate::sim::bounds::BoundsProbe>,
+    /// The totals read without waiting (made on first use: `Effect::watch_totals`).
+    pub(crate) totals: std::sync::OnceLock<crate::sim::counts::TotalsWatch>,
 }
 
 impl Effect {
@@ -194,6 +196,7 @@ impl Effect {
             warnings,
             depth_copy: Default::default(),
             bounds: std::sync::OnceLock::new(),
+            totals: std::sync::OnceLock::new(),
         })
     }
 

@@ -405,9 +405,13 @@ impl Group {
             .as_ref()
             .expect("a stateful effect has counters");
         let bytes = read_buffer(&self.gpu, counters)?;
-        let steps = self.schedule.steps_done();
+        Ok(self.decode_counters(&bytes, self.schedule.steps_done()))
+    }
+
+    /// The totals in a copy of a stateful group's counters made when `steps` steps were done.
+    pub(crate) fn decode_counters(&self, bytes: &[u8], steps: u64) -> Totals {
         if !self.effect.layout.batched {
-            return Ok(decode_totals(&bytes, self.effect.ir.capacity, steps));
+            return decode_totals(bytes, self.effect.ir.capacity, steps);
         }
         // A batch (`sim::batch`): every instance's counters, added up.
         let size = plume_compiler::passes::layout::COUNTERS_BYTES as usize;
@@ -427,7 +431,7 @@ impl Group {
             sum.died += t.died;
             sum.dropped += t.dropped;
         }
-        Ok(sum)
+        sum
     }
 
     /// The live particles in id order, velocity as the integrator knows it (Verlet's derived).

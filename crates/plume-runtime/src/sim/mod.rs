@@ -11,6 +11,7 @@
 
 pub(crate) mod batch;
 pub(crate) mod bounds;
+pub(crate) mod counts;
 pub(crate) mod effect;
 pub(crate) mod effect_read;
 pub(crate) mod events;

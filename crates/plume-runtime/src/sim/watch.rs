@@ -1,7 +1,7 @@
 //! What a host reads from an effect every frame without waiting: the box of its live
 //! particles, for a host that culls by it ([`Effect::watch_live_bounds`], or in three parts
 //! inside a compute pass the host shares between effects; the reduction itself is
-//! [`crate::sim::bounds`]'s), and the firings of its reported events
+//! [`crate::sim::bounds`]'s), its totals ([`Effect::watch_totals`]), and the firings of its reported events
 //! ([`Effect::watch_reports`]; the gather is [`crate::sim::reports`]'s).
 
 use crate::error::RuntimeError;
@@ -159,5 +159,42 @@ impl Effect {
     /// Whether any event of the effect is reported.
     pub fn reports_events(&self) -> bool {
         self.events.as_ref().is_some_and(|e| !e.reports.is_empty())
+    }
+}
+
+impl Effect {
+    /// [`Self::totals`] without waiting, for a host that shows live counts every frame: takes
+    /// the reading that has come back (the totals when its copy was recorded, a frame or two
+    /// ago; a stateless group's as of now, which the CPU knows) and records into `encoder`
+    /// (after the frame's steps) the next copy of the counters when the last was taken.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{Effect, Gpu};
+    /// let source = r#"Effect(name: "puff", capacity: 64, state: Stateful,
+    ///     emitters: [Emitter(burst: 40, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 1.0, 0.0)))])"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let mut puff = Effect::from_source(&gpu, source, &Default::default())?;
+    /// let mut counted = None;
+    /// for _ in 0..4 {
+    ///     let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    ///     puff.advance(&mut encoder, 1)?;
+    ///     counted = puff.watch_totals(&mut encoder)?.or(counted);
+    ///     gpu.queue.submit([encoder.finish()]);
+    ///     gpu.device.poll(wgpu::PollType::wait_indefinitely())?;
+    /// }
+    /// let totals = counted.expect("a reading came back");
+    /// assert_eq!((totals.alive, totals.spawned, totals.steps), (40, 40, 1));
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn watch_totals(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+    ) -> Result<Option<plume_compiler::reference::Totals>, RuntimeError> {
+        let watch = self
+            .totals
+            .get_or_init(|| crate::sim::counts::TotalsWatch::new(self.gpu(), self.groups()));
+        watch.watch(self.groups(), encoder, self.steps_done())
     }
 }

@@ -177,6 +177,7 @@ impl EffectBatch {
                 warnings: batched.warnings.clone(),
                 depth_copy: Default::default(),
                 bounds: std::sync::OnceLock::new(),
+                totals: std::sync::OnceLock::new(),
             },
             batched,
             instances: (0..instances).map(|_| None).collect(),
