@@ -1,6 +1,7 @@
 //! Bevy diagnostics of the plugin ([`PlumeDiagnosticsPlugin`]): what the render world's
 //! [`PlumeRenderStats`] counts each frame, as measurements in Bevy's `DiagnosticsStore`, where
-//! `LogDiagnosticsPlugin` or an on-screen overlay of the game's finds them.
+//! `LogDiagnosticsPlugin` or an on-screen overlay of the game's finds them; and each effect
+//! entity's particle counts as its [`PlumeParticleCounts`] component.
 
 use std::sync::{Arc, Mutex};
 
@@ -8,11 +9,45 @@ use bevy::diagnostic::{Diagnostic, DiagnosticPath, Diagnostics, RegisterDiagnost
 use bevy::prelude::*;
 use bevy::render::{Render, RenderApp, RenderSystems};
 
+use crate::render::counts::{SharedCounts, WatchedCounts};
 use crate::render::instances::PlumeRenderStats;
 
+/// An effect entity's particles, as last read back from the GPU without waiting (a frame or
+/// two old), kept up to date while [`PlumeDiagnosticsPlugin`] is added. A batched entity has
+/// none (its batch's particles count in [`PlumeDiagnosticsPlugin::LIVE_PARTICLES`]).
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, Eq, Reflect)]
+#[reflect(Component)]
+pub struct PlumeParticleCounts {
+    /// Steps done when they were read.
+    pub steps: u64,
+    /// Particles alive.
+    pub alive: u64,
+    /// Particles spawned since the start.
+    pub spawned: u64,
+    /// Particles that died.
+    pub died: u64,
+    /// Particles dropped for want of room.
+    pub dropped: u64,
+}
+
+impl From<plume_compiler::reference::Totals> for PlumeParticleCounts {
+    fn from(t: plume_compiler::reference::Totals) -> Self {
+        Self {
+            steps: t.steps,
+            alive: t.alive,
+            spawned: t.spawned,
+            died: t.died,
+            dropped: t.dropped,
+        }
+    }
+}
+
 /// Adds Plume's diagnostics (add it beside [`crate::PlumePlugin`]): effect instances, batches,
-/// camera draws (and of them the compute renderer's) and particle state on the GPU, measured
-/// every frame from the render world's [`PlumeRenderStats`] of the frame before.
+/// camera draws (and of them the compute renderer's), particle state on the GPU, live
+/// particles and the GPU time of the steps, measured every frame from the render world's
+/// [`PlumeRenderStats`] of the frame before; and each effect entity's [`PlumeParticleCounts`].
+/// The live counts and the timestamps are read back without waiting (a copy of a few bytes per
+/// effect a frame), only while this plugin is added.
 #[derive(Default)]
 pub struct PlumeDiagnosticsPlugin;
 
@@ -27,6 +62,11 @@ impl PlumeDiagnosticsPlugin {
     pub const COMPUTE_DRAWS: DiagnosticPath = DiagnosticPath::const_new("plume/compute_draws");
     /// Particle state on the GPU, in MiB.
     pub const PARTICLE_MIB: DiagnosticPath = DiagnosticPath::const_new("plume/particle_mib");
+    /// Particles alive in every effect, as last read back.
+    pub const LIVE_PARTICLES: DiagnosticPath = DiagnosticPath::const_new("plume/live_particles");
+    /// GPU time of a frame's steps (every effect's), in ms; not measured where the device has
+    /// no timestamp queries.
+    pub const STEP_GPU_MS: DiagnosticPath = DiagnosticPath::const_new("plume/step_gpu_ms");
 }
 
 /// The render world's last counts, shared with the main world.
@@ -42,9 +82,15 @@ impl Plugin for PlumeDiagnosticsPlugin {
             .register_diagnostic(Diagnostic::new(Self::DRAWS))
             .register_diagnostic(Diagnostic::new(Self::COMPUTE_DRAWS))
             .register_diagnostic(Diagnostic::new(Self::PARTICLE_MIB).with_suffix(" MiB"))
-            .add_systems(Update, measure);
+            .register_diagnostic(Diagnostic::new(Self::LIVE_PARTICLES))
+            .register_diagnostic(Diagnostic::new(Self::STEP_GPU_MS).with_suffix(" ms"))
+            .register_type::<PlumeParticleCounts>()
+            .add_systems(Update, (measure, particle_counts));
+        let watched = WatchedCounts::default();
+        app.insert_resource(watched.shared.clone());
         if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
             render_app
+                .insert_resource(watched)
                 .insert_resource(shared)
                 .add_systems(Render, share_stats.in_set(RenderSystems::Cleanup));
         }
@@ -72,4 +118,34 @@ fn measure(mut diagnostics: Diagnostics, shared: Res<SharedStats>) {
     diagnostics.add_measurement(&PlumeDiagnosticsPlugin::PARTICLE_MIB, || {
         s.particle_bytes as f64 / f64::from(1 << 20)
     });
+    diagnostics.add_measurement(&PlumeDiagnosticsPlugin::LIVE_PARTICLES, || {
+        s.live_particles as f64
+    });
+    if let Some(ns) = s.step_gpu_ns {
+        diagnostics.add_measurement(&PlumeDiagnosticsPlugin::STEP_GPU_MS, || ns as f64 * 1e-6);
+    }
+}
+
+/// Gives each effect entity its last counts.
+fn particle_counts(
+    mut commands: Commands,
+    shared: Res<SharedCounts>,
+    mut counted: Query<(Entity, &mut PlumeParticleCounts)>,
+) {
+    let shared = shared.lock();
+    for (entity, mut counts) in &mut counted {
+        if !shared.contains_key(&entity) {
+            commands.entity(entity).remove::<PlumeParticleCounts>();
+        } else {
+            counts.set_if_neq(shared[&entity].into());
+        }
+    }
+    for (entity, t) in shared.iter() {
+        if counted.contains(*entity) {
+            continue;
+        }
+        if let Ok(mut e) = commands.get_entity(*entity) {
+            e.insert(PlumeParticleCounts::from(*t));
+        }
+    }
 }

@@ -34,7 +34,7 @@ mod particle_lights;
 mod render;
 
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
-pub use diagnostics::PlumeDiagnosticsPlugin;
+pub use diagnostics::{PlumeDiagnosticsPlugin, PlumeParticleCounts};
 pub use effect::{
     PlumeBurst, PlumeDraw, PlumeEffect, PlumeSimulate, SimulationSpace, AUTO_COMPUTE_CAPACITY,
 };

@@ -70,6 +70,8 @@ pub(crate) struct RenderBatch {
     pub views: HashMap<Entity, (DrawTarget, EffectRenderer, u64)>,
     /// Bytes of particle state it holds.
     pub particle_bytes: u64,
+    /// Its particles alive, as last read back (`PlumeDiagnosticsPlugin` reads them).
+    pub alive: u64,
 }
 
 /// One batched entity.
@@ -339,6 +341,7 @@ impl PlumeBatches {
                     slots: vec![None; instances as usize],
                     views: HashMap::new(),
                     particle_bytes: per_instance * u64::from(instances),
+                    alive: 0,
                 };
                 match set.batches.iter().position(Option::is_none) {
                     Some(free) => {

@@ -97,6 +97,8 @@ pub(crate) struct Instance {
     /// The kernels that pick the lights its particles give off (`render.light`; empty when
     /// they give off none), made on its first frame.
     pub particle_lights: Option<plume_runtime::ParticleLights>,
+    /// Its particles' counts last read back (`PlumeDiagnosticsPlugin` reads them; None before).
+    pub counts: Option<plume_compiler::reference::Totals>,
     /// Bytes of particle state it holds on the GPU.
     particle_bytes: u64,
     /// Targets its draw could not be made for (the error was logged).
@@ -168,6 +170,13 @@ pub struct PlumeRenderStats {
     /// Batches of instances running (a crowd of one file's effects shares one; see
     /// `bevy_plume::BATCH_FROM`). Their instances are counted in `instances`.
     pub batches: usize,
+    /// Particles alive in every instance and batch, as last read back (a frame or two old);
+    /// counted only with `PlumeDiagnosticsPlugin` added, else 0.
+    pub live_particles: u64,
+    /// GPU time of the last timed frame's steps (every instance's and batch's, with the
+    /// readbacks recorded beside them), in nanoseconds; None without `PlumeDiagnosticsPlugin`
+    /// or where the device has no timestamp queries.
+    pub step_gpu_ns: Option<u64>,
 }
 
 /// Every instance, by main-world entity, and the device they run on.
@@ -271,6 +280,9 @@ pub(crate) fn sync_instances(
         draws: 0,
         compute_draws: 0,
         batches: 0,
+        // Read back after the steps (`render::counts`).
+        live_particles: 0,
+        step_gpu_ns: None,
     };
 }
 
@@ -370,6 +382,7 @@ fn build(
         render_entity: e.render,
         views: HashMap::new(),
         particle_lights: None,
+        counts: None,
         particle_bytes,
         undrawable: Vec::new(),
         params: BTreeMap::new(),

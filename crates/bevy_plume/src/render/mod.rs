@@ -5,6 +5,7 @@
 //! motion in [`motion`]), and the draw in the transparent phases, 3D and 2D ([`draw`]).
 
 pub(crate) mod batches;
+pub(crate) mod counts;
 pub(crate) mod draw;
 pub(crate) mod extract;
 pub(crate) mod instances;

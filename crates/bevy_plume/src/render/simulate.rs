@@ -11,6 +11,7 @@
 use std::collections::HashMap;
 
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::ecs::system::SystemParam;
 use bevy::pbr::ViewShadowBindings;
 use bevy::prelude::*;
 use bevy::render::renderer::{RenderContext, ViewQuery};
@@ -23,9 +24,19 @@ use crate::effect::SimulationSpace;
 use crate::event_reports::FiredEvents;
 use crate::particle_lights::GivenLights;
 use crate::render::batches::PlumeBatches;
-use crate::render::instances::{Instance, PlumeInstances};
+use crate::render::counts::WatchedCounts;
+use crate::render::instances::{Instance, PlumeInstances, PlumeRenderStats};
 use crate::render::lights::ExtractedLights;
 use crate::render::motion;
+
+/// What the render world reads back after the steps for the main world: measured bounds,
+/// the lights particles give off, the firings of reported events.
+#[derive(SystemParam)]
+pub(crate) struct Readings<'w> {
+    measured: Res<'w, MeasuredBounds>,
+    given: Res<'w, GivenLights>,
+    fired: Res<'w, FiredEvents>,
+}
 
 /// Steps every instance. An instance whose frame is one part (the usual frame: one place, a
 /// few steps) has its steps planned, and all of those are recorded in one compute pass: a pass
@@ -35,11 +46,19 @@ pub(crate) fn simulate(
     mut context: RenderContext,
     mut store: ResMut<PlumeInstances>,
     mut batches: ResMut<PlumeBatches>,
-    measured: Res<MeasuredBounds>,
-    given: Res<GivenLights>,
-    fired: Res<FiredEvents>,
+    readings: Readings,
+    mut watched: Option<ResMut<WatchedCounts>>,
+    mut stats: ResMut<PlumeRenderStats>,
 ) {
+    let Readings {
+        measured,
+        given,
+        fired,
+    } = readings;
     let encoder = context.command_encoder();
+    if let (Some(watched), Some(gpu)) = (watched.as_deref_mut(), store.gpu.as_ref()) {
+        watched.begin(gpu, encoder);
+    }
     batches.record_steps(encoder);
     let mut planned = Vec::new();
     for (entity, instance) in store.instances.iter_mut() {
@@ -144,6 +163,9 @@ pub(crate) fn simulate(
     drop(boxes);
     watch_particle_lights(encoder, &mut store, &given);
     watch_reports(encoder, &store, &fired);
+    if let Some(watched) = watched.as_deref_mut() {
+        watched.end(encoder, &mut store, &mut batches, &mut stats);
+    }
 }
 
 /// Records each reporting instance's readback after its steps, and queues the firings that
