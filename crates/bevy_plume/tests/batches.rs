@@ -118,7 +118,7 @@ fn a_crowd_of_one_file_runs_as_one_batch_each_entity_its_own() {
         assert_eq!(totals.spawned, expected, "entity {k}");
     }
     // Drawn where each stands.
-    let image = h.capture_lit();
+    let image = h.capture_running();
     for k in 0..crowd {
         assert!(lit_near(&image, x_of(k)) > 0, "entity {k} is drawn");
     }
@@ -129,7 +129,7 @@ fn a_crowd_of_one_file_runs_as_one_batch_each_entity_its_own() {
     h.update(2);
     let now = stats(&h);
     assert_eq!((now.instances, now.batches), (crowd / 2, 1), "{now:?}");
-    let image = h.capture_lit();
+    let image = h.capture_running();
     for k in 0..crowd {
         let lit = lit_near(&image, x_of(k));
         assert_eq!(lit > 0, k % 2 == 1, "entity {k} ({lit} lit pixels)");
@@ -175,7 +175,7 @@ fn a_batched_crowd_in_local_space_moves_with_its_entities() {
             .y = 1.5;
     }
     h.update(2);
-    let image = h.capture_lit();
+    let image = h.capture_running();
     let (lit, x, y) = lit_pixels(&image, 40);
     let (_, up) = project(0.0, 1.5);
     let (_, down) = project(0.0, 0.0);

@@ -46,12 +46,7 @@ fn measured_bounds_hold_the_particles_and_cull_an_effect_out_of_view() {
         ))
         .id();
     // Its world-space variant compiles off the render thread: it runs from a frame or so on.
-    for _ in 0..10 {
-        h.update(1);
-        if stats(&h).instances == 1 {
-            break;
-        }
-    }
+    h.wait_for_effects();
     assert_eq!(stats(&h).draws, 1, "before any reading the effect is drawn");
     let aabb = measured_aabb(&mut h, entity);
     let dots = read_particles(h.app.sub_app(RenderApp).world(), entity, 0)

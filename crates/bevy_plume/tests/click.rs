@@ -68,6 +68,7 @@ fn a_click_bursts_where_the_cursor_s_ray_meets_the_ground() {
         .id();
     h.app.add_systems(Update, burst_on_click);
     h.update(3);
+    h.wait_for_effects();
     let count = |h: &Harness| {
         read_particles(h.app.sub_app(RenderApp).world(), impacts, 0)
             .expect("the instance runs")

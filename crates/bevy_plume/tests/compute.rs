@@ -47,7 +47,7 @@ fn wall_and_dots(draw: PlumeDraw, msaa: Msaa, wall: bool) -> image::RgbaImage {
         ));
     }
     h.update(10);
-    let image = h.capture_lit();
+    let image = h.capture_running();
     let stats = *h
         .app
         .sub_app(RenderApp)

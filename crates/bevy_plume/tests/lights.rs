@@ -68,7 +68,7 @@ fn bevys_lights_light_the_particles() {
         ))
         .id();
     h.update(10);
-    let (left, right) = sides(&h.capture_lit());
+    let (left, right) = sides(&h.capture_running());
     assert!(
         right > 60.0 && left < 10.0,
         "lit from the right: left third {left:.1}, right third {right:.1}"
@@ -77,7 +77,7 @@ fn bevys_lights_light_the_particles() {
     *h.app.world_mut().get_mut::<Transform>(sun).unwrap() =
         Transform::from_xyz(-5.0, 0.0, 0.0).looking_at(Vec3::ZERO, Vec3::Y);
     h.update(2);
-    let (left, right) = sides(&h.capture_lit());
+    let (left, right) = sides(&h.capture_running());
     assert!(
         left > 60.0 && right < 10.0,
         "lit from the left: left third {left:.1}, right third {right:.1}"
@@ -140,7 +140,7 @@ fn a_point_light_lights_the_side_it_is_on() {
         Transform::from_xyz(-4.0, 0.0, 1.0),
     ));
     h.update(10);
-    let (left, right) = sides(&h.capture_lit());
+    let (left, right) = sides(&h.capture_running());
     assert!(
         left > 40.0 && left > 3.0 * right.max(1.0),
         "a lamp on the left: left third {left:.1}, right third {right:.1}"
@@ -199,7 +199,7 @@ fn particles_that_give_off_light_light_the_scene_with_point_lights() {
         );
     }
     // The wall beside the embers is lit by them; its far corner much less.
-    let image = h.capture_lit();
+    let image = h.capture_running();
     let brightness = |x: f32, y: f32| {
         let (px, py) = project(x, y);
         let p = image.get_pixel(px as u32, py as u32).0;
@@ -271,7 +271,7 @@ fn a_mesh_in_the_suns_way_shadows_the_particles_behind_it() {
     ));
     h.wait_for_pipelines();
     h.update(5);
-    let image = h.capture_lit();
+    let image = h.capture_running();
     let (left, right) = (brightness_at(&image, -2.5), brightness_at(&image, 2.5));
     assert!(
         right > 60.0 && left < 3.0,
@@ -283,7 +283,7 @@ fn a_mesh_in_the_suns_way_shadows_the_particles_behind_it() {
         .unwrap()
         .shadow_maps_enabled = false;
     h.update(3);
-    let image = h.capture_lit();
+    let image = h.capture_running();
     let (left, right) = (brightness_at(&image, -2.5), brightness_at(&image, 2.5));
     assert!(
         right > 60.0 && (left - right).abs() <= 3.0,

@@ -38,7 +38,7 @@ fn a_mesh_particle_covers_where_its_mesh_projects() {
         Transform::IDENTITY,
     ));
     h.update(5);
-    let image = h.capture_lit();
+    let image = h.capture_running();
     if let Ok(out) = std::env::var("BEVY_PLUME_TEST_IMAGES") {
         image
             .save(std::path::Path::new(&out).join("mesh.png"))
@@ -80,7 +80,7 @@ fn a_bevy_mesh_draws_the_particles_of_a_file_without_one() {
         h.capture().pixels().filter(|p| p.0[0] > 128).count() > 100
     });
     assert!(drawn, "the particle was never drawn as the Bevy mesh");
-    let image = h.capture_lit();
+    let image = h.capture_running();
     assert_covers(&image, (-0.5, 0.75), (1.5, -0.25), "rectangle");
 }
 

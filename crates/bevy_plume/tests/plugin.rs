@@ -33,7 +33,7 @@ fn an_effect_is_drawn_where_its_entity_is() {
         .world_mut()
         .spawn((PlumeEffect::new(handle), Transform::from_xyz(2.0, 1.0, 0.0)));
     h.update(10);
-    let image = h.capture_lit();
+    let image = h.capture_running();
     let (n, x, y) = lit_pixels(&image, 40);
     let (ex, ey) = project(2.0, 1.0);
     assert!(n >= 4, "only {n} lit pixels");
@@ -62,7 +62,7 @@ fn a_graph_effect_runs_its_groups_and_events() {
         Transform::from_xyz(0.0, -4.0, -8.0),
     ));
     h.update(30);
-    let image = h.capture_lit();
+    let image = h.capture_running();
     let (n, _, y) = lit_pixels(&image, 60);
     assert!(n > 20, "only {n} lit pixels: the fireworks did not draw");
     // Everything drawn is above the launch point (the entity at y = -4 m).
@@ -83,7 +83,7 @@ fn a_broken_file_keeps_the_last_good_effect_and_a_fix_reloads() {
     let handle = h.load("dots.plume.ron");
     h.app.world_mut().spawn(PlumeEffect::new(handle));
     h.update(10);
-    let red = h.capture_lit();
+    let red = h.capture_running();
     assert!(
         lit_pixels(&red, 40).0 >= 4,
         "the first version did not draw"
@@ -135,13 +135,13 @@ fn move_parent(name: &str, space: SimulationSpace) -> ((u32, f32), (u32, f32)) {
         .with_child(PlumeEffect::new(handle).with_space(space))
         .id();
     h.update(10);
-    let (n, before, _) = lit_pixels(&h.capture_lit(), 40);
+    let (n, before, _) = lit_pixels(&h.capture_running(), 40);
     h.app
         .world_mut()
         .entity_mut(parent)
         .insert(Transform::from_xyz(3.0, 0.0, 0.0));
     h.update(3);
-    let (m, after, _) = lit_pixels(&h.capture_lit(), 40);
+    let (m, after, _) = lit_pixels(&h.capture_running(), 40);
     ((n, before), (m, after))
 }
 
@@ -207,7 +207,10 @@ fn restart_and_pause_control_an_instance() {
         .unwrap()
         .playing = false;
     h.update(70);
-    assert!(lit_pixels(&h.capture_lit(), 40).0 >= 4, "paused dots died");
+    assert!(
+        lit_pixels(&h.capture_running(), 40).0 >= 4,
+        "paused dots died"
+    );
 }
 
 #[test]
@@ -375,7 +378,7 @@ fn churn_never_leaks_loses_or_draws_the_gone() {
     // The survivor lost none of its 64 particles through it all.
     let survivor_totals = totals(&h, survivor);
     assert_eq!((survivor_totals.spawned, survivor_totals.alive), (64, 64));
-    let image = h.capture_lit();
+    let image = h.capture_running();
     // The survivor is still drawn, where it stands; nothing is left on the left.
     let (n, x, _) = lit_pixels(&image, 40);
     let right = project(4.0, 0.0).0;
@@ -493,7 +496,7 @@ fn a_fast_world_space_emitter_spawns_along_its_way_within_a_frame() {
         .entity_mut(fx)
         .insert(Transform::from_xyz(3.0, 0.0, 0.0));
     h.update(1);
-    let image = h.capture_lit();
+    let image = h.capture_running();
     let lit_near = |x: f32| {
         let (cx, cy) = project(x, 0.0);
         image
@@ -584,7 +587,7 @@ fn a_burst_from_code_emits_exactly_its_count_where_it_is_fired() {
         .count();
     assert_eq!((fired.len(), far), (137, 0));
     // Drawn where they were fired.
-    let (n, x, y) = lit_pixels(&h.capture_lit(), 40);
+    let (n, x, y) = lit_pixels(&h.capture_running(), 40);
     let (ex, ey) = project(-2.0, 1.0);
     assert!(
         n >= 4 && (x - ex).abs() < PLACE_TOLERANCE_PX && (y - ey).abs() < PLACE_TOLERANCE_PX,
@@ -662,7 +665,10 @@ fn declared_bounds_cull_an_effect_out_of_view() {
         .get::<bevy::camera::primitives::Aabb>(entity)
         .expect("the file's bounds became the entity's Aabb");
     assert_eq!(aabb.half_extents, Vec3::splat(0.5).into());
-    assert!(lit_pixels(&h.capture_lit(), 40).0 >= 4, "in view: drawn");
+    assert!(
+        lit_pixels(&h.capture_running(), 40).0 >= 4,
+        "in view: drawn"
+    );
     h.app.world_mut().despawn(entity);
     let entity = h.app.world_mut().spawn(PlumeEffect::new(aside)).id();
     h.update(5);
@@ -679,7 +685,10 @@ fn declared_bounds_cull_an_effect_out_of_view() {
         .entity_mut(entity)
         .insert(bevy::camera::visibility::NoFrustumCulling);
     h.update(2);
-    assert!(lit_pixels(&h.capture_lit(), 40).0 >= 4, "unculled: drawn");
+    assert!(
+        lit_pixels(&h.capture_running(), 40).0 >= 4,
+        "unculled: drawn"
+    );
 }
 
 /// Two opaque discs 1 m apart on the z axis, drawn with `sort: true` and alpha blending: the
@@ -713,7 +722,7 @@ fn each_camera_sees_a_sorted_effect_in_its_own_depth_order() {
     // 0.3 s: the back disc has turned green (its life at 0.15 of 2 s).
     h.update(18);
     let centre = |image: &image::RgbaImage| image.get_pixel(WIDTH / 2, common::HEIGHT / 2).0;
-    let front = centre(&h.capture_lit());
+    let front = centre(&h.capture_running());
     let back = centre(&h.capture_of(behind));
     // From +z the red disc is nearer; from −z the green one.
     assert!(

@@ -35,7 +35,7 @@ fn a_ribbon_is_drawn_along_the_path_its_particles_were_spawned_on() {
     ));
     // 60 frames of 1/60 s: the ribbon runs from x = -3 to about x = 1.
     h.update(60);
-    let image = h.capture_lit();
+    let image = h.capture_running();
     if let Ok(out) = std::env::var("BEVY_PLUME_TEST_IMAGES") {
         image
             .save(std::path::Path::new(&out).join("ribbon.png"))

@@ -60,7 +60,7 @@ fn draw(name: &str, disc_z: Option<f32>, disc_first: bool) -> image::RgbaImage {
         spawn_disc(&mut h);
     }
     h.update(5);
-    let image = h.capture_lit();
+    let image = h.capture_running();
     if let Ok(out) = std::env::var("BEVY_PLUME_TEST_IMAGES") {
         image
             .save(std::path::Path::new(&out).join(format!("{name}.png")))

@@ -15,7 +15,7 @@ use bevy::render::render_resource::TextureFormat;
 use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
 use bevy::time::TimeUpdateStrategy;
 use bevy_plume::headless::{default_plugins, Headless};
-use bevy_plume::{PlumeEffectAsset, PlumePlugin};
+use bevy_plume::{PlumeEffect, PlumeEffectAsset, PlumePlugin};
 
 /// Image size of every test.
 pub const WIDTH: u32 = 160;
@@ -266,19 +266,29 @@ impl Harness {
         assert!(ready, "Bevy's pipelines were not ready within 600 frames");
     }
 
-    /// The first captured frame with anything lit (channel over 40), trying up to 10 frames
-    /// (each capture runs at least one). Known issue (docs/bevy.md): now and then, on
-    /// llvmpipe, the frame a screenshot captures lacks the particles that the frames around it
-    /// have; tests that check where particles are drawn look at the next frame that has them.
-    pub fn capture_lit(&mut self) -> image::RgbaImage {
-        let mut image = self.capture();
-        for _ in 0..10 {
-            if lit_pixels(&image, 40).0 > 0 {
-                break;
-            }
-            image = self.capture();
-        }
-        image
+    /// Runs frames until every effect entity has a running instance (a world-space effect,
+    /// one with a seed or params of its own, compiles its variant on Bevy's async pool first:
+    /// a frame or two, many more on a busy machine, where a fixed count of frames was not
+    /// always enough); fails the test after 600 frames. For tests whose effects all load.
+    pub fn wait_for_effects(&mut self) {
+        let ready = self.update_until(600, Duration::from_millis(2), |h| {
+            let world = h.app.world_mut();
+            let effects: Vec<Entity> = world
+                .query_filtered::<Entity, With<PlumeEffect>>()
+                .iter(world)
+                .collect();
+            let render = h.app.sub_app(bevy::render::RenderApp).world();
+            effects
+                .iter()
+                .all(|&e| bevy_plume::read_totals(render, e, 0).is_some())
+        });
+        assert!(ready, "the effects did not start within 600 frames");
+    }
+
+    /// The next frame's image once every effect entity runs ([`Self::wait_for_effects`]).
+    pub fn capture_running(&mut self) -> image::RgbaImage {
+        self.wait_for_effects();
+        self.capture()
     }
 }
 
