@@ -15,18 +15,25 @@
 //!   and recorded into the host's render pass by [`EffectRenderer::draw`];
 //! - [`RuntimeError`]: what went wrong, and where it can, what to do.
 //!
-//! Three named modules serve the `plume` command, the tools and the tests, not an embedding
-//! application: [`outputs`] (headless images, GIF, contact sheets, exports), [`bench`](mod@bench)
-//! (benchmarks and measurements) and [`oracle`] (the CPU reference drawing and the readbacks
-//! the tests compare). Everything else is private to the crate, in folders by job: `device`,
-//! `sort`, `sim`, `draw` (see docs/ARCHITECTURE.md, "Runtime and outputs").
+//! Without waiting, for a host that reads every frame: [`Effect::watch_totals`],
+//! [`Effect::watch_live_bounds`] and [`Effect::watch_reports`] (an effect's reported events,
+//! [`EventReport`]).
+//!
+//! The named module [`outputs`] (headless images, GIF, contact sheets, exports) serves the
+//! `plume` command and any host that wants files. With the `tools` feature, two more serve the
+//! tools and the tests, not an embedding application: `bench` (benchmarks and measurements)
+//! and `oracle` (the CPU reference drawing and the readbacks the tests compare). Everything
+//! else is private to the crate, in folders by job: `device`, `sort`, `sim`, `draw` (see
+//! docs/ARCHITECTURE.md, "Runtime and outputs").
 //!
 //! The CPU f64 reference simulator lives in `plume_compiler::reference`.
 
+#[cfg(feature = "tools")]
 pub mod bench;
 mod device;
 mod draw;
 mod error;
+#[cfg(feature = "tools")]
 pub mod oracle;
 pub mod outputs;
 mod sim;

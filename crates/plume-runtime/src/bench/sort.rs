@@ -21,7 +21,7 @@ pub struct SortTime {
     pub key_bits: u32,
     /// Median seconds per sort over the timed repeats.
     pub seconds: f64,
-    /// Median seconds of the first stages ([`first_stages`]), timed by difference: (name,
+    /// Median seconds of the first stages (`first_stages`), timed by difference: (name,
     /// seconds).
     pub stages: [(&'static str, f64); 3],
 }

@@ -7,6 +7,9 @@
 //! microseconds (docs/performance.md, "Events"), so the times are relative:
 //! they show where a step's time goes, not what it costs without them.
 
+// Only the benchmarks (feature `tools`) open a collection; without them every mark is a no-op.
+#![cfg_attr(not(feature = "tools"), allow(dead_code))]
+
 use std::cell::RefCell;
 
 use crate::device::gpu::Gpu;

@@ -207,6 +207,7 @@ pub struct ParticleLights {
 
 impl ParticleLights {
     /// Records every group's light kernels into `pass` (the benchmark times them alone).
+    #[cfg(feature = "tools")]
     pub(crate) fn dispatch(&self, pass: &mut wgpu::ComputePass<'_>) {
         for probe in &self.probes {
             probe.dispatch(pass);

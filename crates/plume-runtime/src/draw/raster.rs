@@ -38,12 +38,14 @@ use crate::draw::target::DrawTarget;
 
 /// How a stateful, unsorted draw skips the free slots (a sorted draw and a stateless draw
 /// already issue only the live instances). The default compacts the list of an effect of
-/// [`COMPACT_FROM_SLOTS`] slots or more, where the list costs less at any occupancy: a hidden
+/// `COMPACT_FROM_SLOTS` slots or more, where the list costs less at any occupancy: a hidden
 /// quad still costs its four vertices, while listing the slots is one short compute pass
 /// (docs/performance.md, "Free slots: hidden quads or a compacted list"). A small effect
 /// draws every slot instead: its hidden quads cost little, and the list would cost a
 /// compute pass of three dispatches a frame, which a game with hundreds of small effects pays
 /// on the CPU for each.
+// The benchmarks (feature `tools`) try each; the draw takes the default.
+#[cfg_attr(not(feature = "tools"), allow(dead_code))]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum DeadSlots {
     /// One instance per slot; the vertex shader turns a free slot into a degenerate quad.
@@ -51,7 +53,7 @@ pub enum DeadSlots {
     /// A compacted list of the live slots first (three compute passes),
     /// then an indirect draw of exactly those.
     Compacted,
-    /// Compacted from [`COMPACT_FROM_SLOTS`] slots, hidden below.
+    /// Compacted from `COMPACT_FROM_SLOTS` slots, hidden below.
     #[default]
     BySize,
 }

@@ -216,6 +216,7 @@ impl EffectRenderer {
 
     /// Records what decides every part's instances on the GPU (the live count, or the
     /// compacted list), as [`Effect::prepare_draw`] does (the benchmark times it alone).
+    #[cfg(feature = "tools")]
     pub(crate) fn record_instance_counts(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
@@ -274,6 +275,7 @@ impl Effect {
     }
 
     /// A renderer that draws group `g` alone (the tests compare each group's draw).
+    #[cfg(feature = "tools")]
     pub(crate) fn group_renderer(
         &self,
         g: usize,

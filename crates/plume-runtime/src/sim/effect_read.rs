@@ -8,6 +8,7 @@ use crate::device::gpu::Gpu;
 use crate::device::readback::decode_totals;
 use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
+#[cfg(feature = "tools")]
 use crate::sim::graph::Events;
 use crate::sim::group::Group;
 
@@ -140,6 +141,7 @@ impl Effect {
     }
 
     /// The event streams (None: one group that steps alone).
+    #[cfg(feature = "tools")]
     pub(crate) fn events(&self) -> Option<&Events> {
         self.events.as_ref()
     }

@@ -228,6 +228,7 @@ impl EventOrder {
 
     /// Records the ordering alone (the children's spawn not prepared: the state does not
     /// change), for timing it.
+    #[cfg(feature = "tools")]
     pub(crate) fn record_alone(&self, pass: &mut wgpu::ComputePass<'_>) {
         self.record_with(pass, false);
     }

@@ -93,6 +93,7 @@ impl FlockPass {
     }
 
     /// The pass's stages in recording order, for timing them one by one.
+    #[cfg(feature = "tools")]
     pub fn stage_names(&self) -> &'static [&'static str] {
         match (&self.grid, &self.reduce) {
             (Some(_), None) => &["bucket counts", "scan", "scatter", "rank", "search"],

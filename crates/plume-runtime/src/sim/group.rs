@@ -346,6 +346,7 @@ impl Group {
 
     /// Writes a stateless effect's segment table now, with the queue (for timed passes, which
     /// record into an encoder of their own; a frame's draw copies it in its encoder instead).
+    #[cfg(feature = "tools")]
     pub(crate) fn write_frame_now(&self, stateless: &StatelessSteps) -> Result<(), RuntimeError> {
         let frame = self
             .res
@@ -454,6 +455,7 @@ impl Group {
 
     /// Reads a buffer of the layout beside the particles back by its name (`boids`,
     /// `ribbon_table`, ...), for tests and benchmarks.
+    #[cfg(feature = "tools")]
     pub(crate) fn read_extra_buffer(&self, name: &str) -> Result<Vec<u8>, RuntimeError> {
         let buffer = self
             .res
@@ -487,12 +489,14 @@ impl Group {
     }
 
     /// Number of particle buffers the state is split into.
+    #[cfg(feature = "tools")]
     pub(crate) fn chunk_count(&self) -> usize {
         self.res.chunk_count()
     }
 
     /// Bytes of particle buffers allocated now: the state (stateful), or the view a readback
     /// made (stateless; 0 for an effect that has only been drawn).
+    #[cfg(feature = "tools")]
     pub(crate) fn particle_buffer_bytes(&self) -> u64 {
         if !self.res.has_chunks() {
             return 0;

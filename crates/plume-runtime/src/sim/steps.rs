@@ -216,6 +216,7 @@ impl StatefulSteps {
 
 impl StatefulSteps {
     /// The flocking pass, when the effect flocks.
+    #[cfg(feature = "tools")]
     pub fn flock(&self) -> Option<&FlockPass> {
         self.flock.as_ref()
     }

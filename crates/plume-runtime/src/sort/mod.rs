@@ -11,4 +11,5 @@ pub(crate) mod onesweep;
 pub(crate) mod program;
 pub(crate) mod quantise;
 pub(crate) mod radix;
+#[cfg(feature = "tools")]
 pub(crate) mod words;

@@ -18,6 +18,8 @@ use crate::sort::program;
 pub use crate::sort::program::SortProgram;
 
 /// Which sort.
+// The benchmarks (feature `tools`) choose the sort and its ranking; the draw takes the defaults.
+#[cfg_attr(not(feature = "tools"), allow(dead_code))]
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SortAlgorithm {
     /// Stable LSD radix sort, 4 passes of 8 bits.
@@ -67,6 +69,7 @@ impl Ranking {
 const NVIDIA: u32 = 0x10de;
 
 /// The sort kernels.
+#[cfg_attr(not(feature = "tools"), allow(dead_code))]
 pub struct GpuSorter {
     pub(super) gpu: Gpu,
     ranking: Ranking,
@@ -133,6 +136,7 @@ impl GpuSorter {
     }
 
     /// Builds the kernels with the given ranking; an error when `gpu` cannot run it.
+    #[cfg(feature = "tools")]
     pub fn with_ranking(gpu: &Gpu, ranking: Ranking) -> Result<Self, RuntimeError> {
         if !Ranking::runnable_on(gpu).contains(&ranking) {
             return Err(RuntimeError::Gpu(format!(
@@ -144,6 +148,7 @@ impl GpuSorter {
     }
 
     /// The ranking this sorter's radix sort uses.
+    #[cfg(feature = "tools")]
     pub fn ranking(&self) -> Ranking {
         self.ranking
     }
@@ -314,7 +319,7 @@ impl GpuSorter {
     /// `depth_keys`) mapped to 16 bits over the live range `depth_range` (8 bytes: the smallest
     /// and largest live key, as depth_quantise.wgsl's `range_reduce` leaves them) as the first
     /// pass reads them, then two 8-bit passes. The keys end quantised, as
-    /// [`crate::sort::quantise::DepthQuantise`]'s map would leave them; no pass of its own
+    /// `DepthQuantise`'s map would leave them; no pass of its own
     /// rewrites them first.
     pub fn depth_program(
         &self,

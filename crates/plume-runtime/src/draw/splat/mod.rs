@@ -40,6 +40,7 @@ use crate::draw::camera::Camera;
 use crate::draw::glow::GlowPasses;
 use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
+#[cfg(feature = "tools")]
 pub use group::STAGES;
 use group::{GroupSplat, SplatImage};
 pub(crate) use host::HostSplat;

@@ -23,7 +23,7 @@ impl EffectBatch {
         ))
     }
 
-    /// `instance`'s live particles, by id (waits for the GPU), as [`Effect::records`] gives
+    /// `instance`'s live particles, by id (waits for the GPU), as [`Effect::records`](crate::Effect::records) gives
     /// an effect's: ages and lifetimes in the instance's own steps.
     pub fn records(&self, instance: BatchInstance) -> Result<Vec<ParticleRecord>, RuntimeError> {
         let state = self.state(instance)?;

@@ -15,7 +15,7 @@ impl EffectBatch {
     /// Records this frame's steps into `encoder`: `steps(instance)` steps for each instance (0
     /// for one that is paused). The batch takes as many steps as the instance that takes
     /// most; the others sit out the rest, held. First the slots of instances added, restarted
-    /// or removed since the last call are freed. Then, per [`BATCH_STEPS`] steps, one upload
+    /// or removed since the last call are freed. Then, per `BATCH_STEPS` steps, one upload
     /// of every instance's rows and one compute pass. The schedules advance now.
     pub fn advance(
         &mut self,
