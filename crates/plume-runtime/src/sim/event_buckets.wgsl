@@ -78,7 +78,6 @@ struct Window {
 }
 
 var<workgroup> shared_window: Window;
-var<workgroup> scan_buf: array<u32, 256>;
 // The groups' starts (bucket_place).
 var<workgroup> group_starts: array<u32, GROUPS>;
 // bucket_count's windows: 256 words' bits, then 256 quads' and 256 groups' counts, from the
@@ -141,23 +140,7 @@ fn workgroups(groups: vec3<u32>) -> u32 {
     return groups.x * groups.y;
 }
 
-// Exclusive prefix sum of `v` over the workgroup's 256 threads (Hillis-Steele); every thread
-// calls it.
-fn exclusive_scan_256(t: u32, v: u32) -> u32 {
-    workgroupBarrier();
-    scan_buf[t] = v;
-    workgroupBarrier();
-    for (var off = 1u; off < THREADS; off <<= 1u) {
-        var add = 0u;
-        if (t >= off) {
-            add = scan_buf[t - off];
-        }
-        workgroupBarrier();
-        scan_buf[t] += add;
-        workgroupBarrier();
-    }
-    return scan_buf[t] - v;
-}
+// `exclusive_scan_256` is the shared workgroup scan (device/workgroup_scan.wgsl).
 
 // Counts `amount` at `at`: of the words (`array` 0, bits or'd) or of the group counts (1: a
 // quad's, 2: a group's, added), through the workgroup's window of THREADS entries from `base`

@@ -133,6 +133,7 @@ impl EventOrder {
                 let module = module(
                     "event buckets",
                     concat!(
+                        include_str!("../device/workgroup_scan.wgsl"),
                         include_str!("event_prepare.wgsl"),
                         include_str!("event_buckets.wgsl")
                     ),

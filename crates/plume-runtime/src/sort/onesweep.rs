@@ -21,10 +21,12 @@ pub struct SweepKernels {
 }
 
 impl SweepKernels {
-    /// The module's source: the shared radix kernels, the subgroup ranking, OneSweep.
+    /// The module's source: the workgroup scan, the shared radix kernels, the subgroup
+    /// ranking, OneSweep.
     pub(super) fn source() -> String {
         format!(
-            "{}\n{}\n{}",
+            "{}\n{}\n{}\n{}",
+            include_str!("../device/workgroup_scan.wgsl"),
             include_str!("radix.wgsl"),
             include_str!("radix_subgroup.wgsl"),
             include_str!("radix_onesweep.wgsl")

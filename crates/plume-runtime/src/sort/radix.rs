@@ -157,7 +157,14 @@ impl GpuSorter {
         let module = |label: &str, source: String| {
             crate::device::gpu::shader_module(&gpu.device, label, source)
         };
-        let sort = module("sort", include_str!("sort.wgsl").to_owned());
+        let sort = module(
+            "sort",
+            format!(
+                "{}\n{}",
+                include_str!("../device/workgroup_scan.wgsl"),
+                include_str!("sort.wgsl")
+            ),
+        );
         // The shared kernels and one downsweep: a subgroup module only on adapters with them.
         let radix = match ranking {
             Ranking::Subgroup => module(
@@ -165,7 +172,8 @@ impl GpuSorter {
                 // naga 30 takes subgroup builtins without WGSL's `enable subgroups;` (it refuses
                 // the directive); the device's SUBGROUP feature is what allows them.
                 format!(
-                    "{}\n{}",
+                    "{}\n{}\n{}",
+                    include_str!("../device/workgroup_scan.wgsl"),
                     include_str!("radix.wgsl"),
                     include_str!("radix_subgroup.wgsl")
                 ),
@@ -174,7 +182,8 @@ impl GpuSorter {
             Ranking::Portable => module(
                 "radix (portable ranking)",
                 format!(
-                    "{}\n{}",
+                    "{}\n{}\n{}",
+                    include_str!("../device/workgroup_scan.wgsl"),
                     include_str!("radix.wgsl"),
                     include_str!("radix_portable.wgsl")
                 ),
@@ -524,12 +533,14 @@ mod tests {
     #[test]
     fn both_radix_modules_validate() {
         validate(&format!(
-            "{}\n{}",
+            "{}\n{}\n{}",
+            include_str!("../device/workgroup_scan.wgsl"),
             include_str!("radix.wgsl"),
             include_str!("radix_portable.wgsl")
         ));
         validate(&format!(
-            "{}\n{}",
+            "{}\n{}\n{}",
+            include_str!("../device/workgroup_scan.wgsl"),
             include_str!("radix.wgsl"),
             include_str!("radix_subgroup.wgsl")
         ));

@@ -43,7 +43,6 @@ struct RadixParams {
 @group(0) @binding(7) var<storage, read> depth_range: array<u32, 2>;
 
 var<workgroup> counts: array<atomic<u32>, 256>;
-var<workgroup> scan_buf: array<u32, 256>;
 
 fn partition_of(wid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return wid.x + wid.y * groups.x;
@@ -53,23 +52,7 @@ fn digit_of(key: u32) -> u32 {
     return (key >> params.shift) & 255u;
 }
 
-// Exclusive prefix sum of `v` over the workgroup's 256 threads (Hillis-Steele). Every thread
-// must call it (it has barriers).
-fn exclusive_scan_256(t: u32, v: u32) -> u32 {
-    workgroupBarrier();
-    scan_buf[t] = v;
-    workgroupBarrier();
-    for (var off = 1u; off < THREADS; off <<= 1u) {
-        var add = 0u;
-        if (t >= off) {
-            add = scan_buf[t - off];
-        }
-        workgroupBarrier();
-        scan_buf[t] += add;
-        workgroupBarrier();
-    }
-    return scan_buf[t] - v;
-}
+// `exclusive_scan_256` is the shared workgroup scan (device/workgroup_scan.wgsl).
 
 // How a pass reads its keys: as they are, or (the first pass of a depth sort) mapped to 16
 // bits over the live depth range (`quantised`), so that no pass of its own rewrites them.

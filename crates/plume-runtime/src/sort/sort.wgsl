@@ -66,13 +66,12 @@ fn scan_blocks_from(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgrou
 // Block `block`'s exclusive scan of the values `v` its threads hold into counts[i], and its
 // total into keys_out[block]. Every thread must call it.
 fn scan_block(block: u32, i: u32, t: u32, v: u32) {
-    start[t] = v;
-    scan_start(t);
+    let inclusive = inclusive_scan_256(t, v);
     if (i < params.n) {
-        counts[i] = start[t] - v;
+        counts[i] = inclusive - v;
     }
     if (t == 255u && block < params.tiles) {
-        keys_out[block] = start[255];
+        keys_out[block] = inclusive;
     }
 }
 
@@ -119,20 +118,8 @@ fn padded(e: u32) -> u32 {
     return e + (e >> 5u);
 }
 
-// start[0..256] replaced by its inclusive scan (Hillis-Steele). Every thread must call it, after
-// writing start[t].
-fn scan_start(t: u32) {
-    workgroupBarrier();
-    for (var off = 1u; off < 256u; off <<= 1u) {
-        var add = 0u;
-        if (t >= off) {
-            add = start[t - off];
-        }
-        workgroupBarrier();
-        start[t] += add;
-        workgroupBarrier();
-    }
-}
+// `inclusive_scan_256` and `exclusive_scan_256` are the shared workgroup scan
+// (device/workgroup_scan.wgsl).
 
 // The sum of the threads' `v`, returned to every thread. Every thread must call it.
 fn workgroup_sum(t: u32, v: u32) -> u32 {
@@ -194,9 +181,7 @@ fn scan_totals(@builtin(local_invocation_index) t: u32) {
     for (var b = lo; b < hi; b++) {
         s += keys_out[b];
     }
-    start[t] = s;
-    scan_start(t);
-    var run = start[t] - s;
+    var run = exclusive_scan_256(t, s);
     for (var b = lo; b < hi; b++) {
         let v = keys_out[b];
         keys_out[b] = run;
@@ -223,9 +208,7 @@ fn apply_block(block: u32, t: u32) {
         mine[r] = staged[padded(SCAN_PER * t + r)];
         s += mine[r];
     }
-    start[t] = s;
-    scan_start(t);
-    var run = before + start[t] - s;
+    var run = before + exclusive_scan_256(t, s);
     for (var r = 0u; r < SCAN_PER; r++) {
         staged[padded(SCAN_PER * t + r)] = run;
         run += mine[r];

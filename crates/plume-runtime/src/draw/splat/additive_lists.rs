@@ -33,6 +33,7 @@ impl AdditiveLists {
             device,
             "additive lists",
             concat!(
+                include_str!("../../device/workgroup_scan.wgsl"),
                 include_str!("tiles_shared.wgsl"),
                 include_str!("additive_lists.wgsl")
             ),

@@ -131,9 +131,8 @@ fn count_entries(@builtin(workgroup_id) wid: vec3<u32>, @builtin(num_workgroups)
     }
 }
 
-var<workgroup> sums: array<u32, 256>;
-
-// Thread t scans its own run of tiles (a 256th of them) and the workgroup scans the 256 sums.
+// Thread t scans its own run of tiles (a 256th of them) and the workgroup scans the 256 sums
+// (the shared workgroup scan, device/workgroup_scan.wgsl).
 @compute @workgroup_size(256)
 fn place_runs(@builtin(local_invocation_index) t: u32) {
     let per = (params.tiles + 255u) / 256u;
@@ -143,18 +142,8 @@ fn place_runs(@builtin(local_invocation_index) t: u32) {
     for (var i = first; i < last; i++) {
         own += atomicLoad(&cursors[i]);
     }
-    sums[t] = own;
-    workgroupBarrier();
-    for (var d = 1u; d < 256u; d *= 2u) {
-        var before = 0u;
-        if (t >= d) {
-            before = sums[t - d];
-        }
-        workgroupBarrier();
-        sums[t] += before;
-        workgroupBarrier();
-    }
-    var start = sums[t] - own;
+    let inclusive = inclusive_scan_256(t, own);
+    var start = inclusive - own;
     for (var i = first; i < last; i++) {
         let n = atomicLoad(&cursors[i]);
         // Entries past the list's end are dropped (and the list grown for the next frame).
@@ -163,7 +152,7 @@ fn place_runs(@builtin(local_invocation_index) t: u32) {
         start += n;
     }
     if (t == 255u) {
-        status[0] = sums[255];
+        status[0] = inclusive;
     }
 }
 
