@@ -154,7 +154,7 @@ pub(super) fn emit_fragment(
                     w.comment("The lit maps first: their derivatives before any discard.");
                 }
                 w.line(format!("let maps = {};", look.maps_wgsl()));
-                w.comment("The texel before the light: its fetch is under way while the light is worked out (the H100's raster draw of lit_smoke 1M: 101 -> 91 ms a frame).");
+                w.comment("The texel before the light: its fetch is under way while the light is worked out (docs/performance.md, \"Lit sprites\").");
                 w.line(format!("let unlit = shade({shaded});"));
                 match oriented {
                     true => w.line("let basis = mat3x3<f32>(in.basis_x, in.basis_y, in.basis_z);"),

@@ -92,7 +92,7 @@ fn emit_segment_record(w: &mut Writer) {
     w.blank();
     w.comment("Segment k as a record; not valid when neither of its triangles draws or its box holds no pixel centre.");
     w.block("fn segment_record(k: u32) -> SegmentRecord", |w| {
-        w.comment("Every load issued before any is tested. Loaded after the particle's tests, they took three round trips to memory, not one (H100, orbit 1M's composite 5.40 -> 4.93 ms).");
+        w.comment("Every load issued before any is tested. Loaded after the particle's tests, they would take three round trips to memory, not one.");
         w.line("return segment_record_from(k, segment_loads(k));");
     });
     w.blank();
