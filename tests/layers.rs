@@ -71,9 +71,10 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
         "plume-cli",
         &[
             // 0: reading and compiling an effect file, with located errors; the scene depth a
-            // SceneDepth collider meets where a command draws no scene.
+            // SceneDepth collider meets where a command draws no scene; reported events' rows.
             ("load", 0),
             ("scene_depth", 0),
+            ("reports", 0),
             // 1: the commands that only load and run.
             ("run", 1),
             ("render", 1),

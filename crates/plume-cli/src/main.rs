@@ -6,6 +6,7 @@ mod bench;
 mod load;
 mod preview;
 mod render;
+mod reports;
 mod run;
 mod scene_depth;
 

@@ -14,6 +14,7 @@ use plume_compiler::reference::{ParticleRecord, ReferenceSim, Totals};
 use plume_runtime::outputs::{export, export_groups, summarize};
 use plume_runtime::{Effect, Gpu, GpuChoice, RuntimeError};
 
+use crate::reports::Reported;
 use crate::{load, Overrides};
 
 /// Options of `plume run`.
@@ -47,6 +48,11 @@ pub struct RunArgs {
     /// host culls the effect by).
     #[arg(long)]
     pub(crate) bounds: bool,
+    /// Write every firing of the effect's reported events (`Event(.., report: N)`) to a .csv
+    /// file: group, event, step, particle id, position and velocity, read back from the GPU
+    /// after every step (or the f64 reference's firings with --cpu-reference).
+    #[arg(long, value_name = "FILE")]
+    pub(crate) reports: Option<PathBuf>,
 }
 
 /// The order of exported particles.
@@ -72,6 +78,8 @@ struct Outcome {
     seconds: f64,
     /// With `--bounds`: the union over the steps of the boxes of every group's live particles.
     bounds: Option<Bounds>,
+    /// With `--reports`: the firings of the reported events.
+    reported: Option<Reported>,
 }
 
 /// A box: its corners (m).
@@ -117,13 +125,17 @@ fn simulate_cpu(args: &RunArgs, graph: &CompiledGraph, bar: &ProgressBar) -> Out
     bar.set_message("cpu reference");
     let start = Instant::now();
     let mut bounds = None;
+    let mut reported = args.reports.as_ref().map(|_| Reported::default());
     let groups = if load::single(graph) {
         let effect = &graph.groups[0].effect;
         let mut sim = ReferenceSim::new(&effect.ir);
-        for _ in 0..args.steps {
+        for step in 0..args.steps {
             sim.step();
             if args.bounds {
                 bounds = union(bounds, box_of(&sim.records()));
+            }
+            if let Some(r) = &mut reported {
+                r.take_reference(graph, |_, j| sim.fired(j), step);
             }
             bar.inc(1);
         }
@@ -145,12 +157,15 @@ fn simulate_cpu(args: &RunArgs, graph: &CompiledGraph, bar: &ProgressBar) -> Out
         }]
     } else {
         let mut sim = ReferenceGraph::new(graph);
-        for _ in 0..args.steps {
+        for step in 0..args.steps {
             sim.step();
             if args.bounds {
                 for g in 0..graph.groups.len() {
                     bounds = union(bounds, box_of(&sim.records(g)));
                 }
+            }
+            if let Some(r) = &mut reported {
+                r.take_reference(graph, |g, j| sim.group(g).fired(j), step);
             }
             bar.inc(1);
         }
@@ -168,6 +183,7 @@ fn simulate_cpu(args: &RunArgs, graph: &CompiledGraph, bar: &ProgressBar) -> Out
         groups,
         seconds: start.elapsed().as_secs_f64(),
         bounds,
+        reported,
     }
 }
 
@@ -190,7 +206,21 @@ fn simulate(args: &RunArgs, graph: CompiledGraph) -> Result<Outcome, RuntimeErro
     let _scene = crate::scene_depth::bind_effect_scene(&gpu, &mut sim, &camera, size)?;
     let start = Instant::now();
     let mut bounds = None;
-    if args.bounds {
+    let mut reported = None;
+    if args.reports.is_some() {
+        // A step at a time, its firings read back after it (and the box measured).
+        reported = Some(crate::reports::run_gpu(
+            &mut sim,
+            args.steps,
+            |sim, done| {
+                if args.bounds {
+                    bounds = union(bounds, sim.live_bounds()?);
+                }
+                bar.set_position(done);
+                Ok(())
+            },
+        )?);
+    } else if args.bounds {
         // A step at a time, the box measured after each (24 bytes read back a step).
         for done in 1..=args.steps {
             sim.run(1, |_| {})?;
@@ -218,6 +248,7 @@ fn simulate(args: &RunArgs, graph: CompiledGraph) -> Result<Outcome, RuntimeErro
         groups,
         seconds,
         bounds,
+        reported,
     })
 }
 
@@ -234,6 +265,10 @@ pub fn run(args: &RunArgs) -> ExitCode {
         Err(code) => return code,
     };
     let single = load::single(&graph);
+    if args.reports.is_some() && !crate::reports::any(&graph) {
+        eprintln!("{name}: error: --reports: no event of this effect is reported (give an event `report: N`, docs/effect-format.md, \"Reported events\")");
+        return ExitCode::FAILURE;
+    }
     if !single && args.order == Order::Draw {
         eprintln!("{name}: error: --order draw: an effect with groups exports by group and id (each group sorts its own draw)");
         return ExitCode::FAILURE;
@@ -269,6 +304,26 @@ pub fn run(args: &RunArgs) -> ExitCode {
         if let Err(e) = written {
             eprintln!("error: {e}");
             return ExitCode::FAILURE;
+        }
+    }
+    if let (Some(path), Some(reported)) = (&args.reports, &outcome.reported) {
+        let names: Vec<String> = outcome.groups.iter().map(|g| g.name.clone()).collect();
+        if let Err(e) = crate::reports::write(path, reported, &names, &args.file) {
+            eprintln!("error: {e}");
+            return ExitCode::FAILURE;
+        }
+        for (g, j, missed) in &reported.missed {
+            eprintln!(
+                "{name}: warning: {}.events[{j}]: {missed} firings past its report bound in one step were counted, not kept",
+                names[*g]
+            );
+        }
+        if !args.json {
+            println!(
+                "reported: {} firings written to {}",
+                reported.rows.len(),
+                path.display()
+            );
         }
     }
     match (single, args.json) {
