@@ -312,10 +312,16 @@ pub fn run(args: &RunArgs) -> ExitCode {
             eprintln!("error: {e}");
             return ExitCode::FAILURE;
         }
-        for (g, j, missed) in &reported.missed {
+        // One warning per event: its firings past the bound, over the steps that had some.
+        let mut missed = std::collections::BTreeMap::<(usize, usize), (u64, u64)>::new();
+        for &(g, j, n) in &reported.missed {
+            let entry = missed.entry((g, j)).or_default();
+            *entry = (entry.0 + n, entry.1 + 1);
+        }
+        for ((g, j), (n, steps)) in missed {
             eprintln!(
-                "{name}: warning: {}.events[{j}]: {missed} firings past its report bound in one step were counted, not kept",
-                names[*g]
+                "{name}: warning: {}.events[{j}]: {n} firings past its report bound, in {steps} steps, were counted, not kept",
+                names[g]
             );
         }
         if !args.json {
