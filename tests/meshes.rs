@@ -184,3 +184,61 @@ fn a_mesh_effect_steps_without_its_file_and_its_draw_says_why_not() {
         "{error}"
     );
 }
+
+#[test]
+fn opaque_meshes_write_depth_so_the_nearest_shows_whatever_the_draw_order() {
+    // Two cubes on the camera's axis, coloured by depth: a red one 2 m nearer and a larger
+    // blue one 2 m farther, the near one spawned first and then last. With written depth the
+    // red one is in front either way; without, whichever is drawn last covers the other.
+    let gpu = gpu();
+    let dir = cube_dir("depth");
+    let mut plain_centres = Vec::new();
+    for zs in [(2.0, -2.0), (-2.0, 2.0)] {
+        let src = format!(
+            r#"Effect(
+    name: "cubes",
+    capacity: 2,
+    emitters: [
+        Emitter(burst: 1, shape: Point((0.0, 0.0, {:?})), velocity: Constant((0.0, 0.0, 0.0))),
+        Emitter(burst: 1, shape: Point((0.0, 0.0, {:?})), velocity: Constant((0.0, 0.0, 0.0))),
+    ],
+    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 2.0)], blend: Opaque,
+                   background: (0.0, 0.0, 0.0), mesh: Some(ParticleMesh(file: "cube.obj")),
+                   size_by: Some("1.5 - 0.25 * x.z"),
+                   color_by: Some("vec3(0.25 * (x.z + 2.0), 0.0, 0.25 * (2.0 - x.z))")),
+)"#,
+            zs.0, zs.1
+        );
+        let mut sim = Effect::new(&gpu, compile_in(&dir, &src)).unwrap();
+        sim.run(1, |_| {}).unwrap();
+        let target = Offscreen::new(&gpu, SIDE, SIDE).unwrap();
+        let camera = target.effect_camera(&sim);
+        let pixel = |image: &[u8], dx: u32| {
+            let k = 4 * ((SIDE / 2) * SIDE + SIDE / 2 + dx) as usize;
+            [image[k], image[k + 1], image[k + 2]]
+        };
+        let with_depth = target.target_for(&sim);
+        assert!(with_depth.writes_depth && with_depth.depth.is_some());
+        let renderer = sim.renderer(&with_depth).unwrap();
+        assert!(renderer.writes_depth());
+        let image = target.render(&sim, &renderer, &camera).unwrap();
+        assert_eq!(
+            pixel(&image, 0),
+            [255, 0, 0],
+            "{zs:?}: the near red cube in front"
+        );
+        // The far cube's rim, outside the near one's image, is drawn too: at 10 m the 4 m
+        // cube spans ±17.8 pixels, the near 2 m one at 7 m ±12.7.
+        assert_eq!(pixel(&image, 15), [0, 0, 255], "{zs:?}: the far cube's rim");
+        // Without depth writes (the plain target), in the order drawn.
+        let plain = sim.renderer(&target.target()).unwrap();
+        assert!(!plain.writes_depth());
+        plain_centres.push(pixel(&target.render(&sim, &plain, &camera).unwrap(), 0));
+    }
+    assert_eq!(
+        plain_centres.iter().filter(|c| **c == [0, 0, 255]).count(),
+        1,
+        "without depth, one order shows the far cube over the near one: {plain_centres:?}"
+    );
+}

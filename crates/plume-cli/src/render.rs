@@ -170,7 +170,8 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
             sim.compute_renderer(&Scene::target(target.target()), w, h)?
         }
         (Some(_), _) => sim.renderer(&Scene::target(target.target()))?,
-        (None, _) => sim.renderer(&target.target())?,
+        // Opaque meshes write depth into a buffer of the frame's own (Offscreen::target_for).
+        (None, _) => sim.renderer(&target.target_for(&sim))?,
     };
     if let Some(scene) = &scene {
         // Soft particles fade where they meet the meshes, and lit ones are in their shadow.

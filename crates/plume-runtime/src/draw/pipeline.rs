@@ -9,7 +9,8 @@ use crate::draw::target::DrawTarget;
 use crate::draw::texture::SpriteTexture;
 
 /// A render pipeline of `module`'s (vertex, fragment) entry points into `target`, with its
-/// layout derived from the module (only the bindings the shaders use) and no depth writes.
+/// layout derived from the module (only the bindings the shaders use), writing depth where
+/// `target` has a depth test and `writes_depth`.
 pub(crate) fn render_pipeline(
     gpu: &Gpu,
     module: &wgpu::ShaderModule,
@@ -55,7 +56,7 @@ pub(crate) fn vertex_pipeline(
             primitive,
             depth_stencil: target.depth.map(|d| wgpu::DepthStencilState {
                 format: d.format,
-                depth_write_enabled: Some(false),
+                depth_write_enabled: Some(target.writes_depth),
                 depth_compare: Some(d.compare),
                 stencil: Default::default(),
                 bias: Default::default(),

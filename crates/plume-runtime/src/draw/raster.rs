@@ -117,6 +117,8 @@ pub(crate) struct GroupDraw {
     scene_depth: Option<wgpu::TextureView>,
     /// Whether the draw module fades sprites near the scene depth (`render.soft`).
     soft: bool,
+    /// Whether it writes depth (opaque or cut-out meshes into a target that lets them).
+    writes_depth: bool,
     /// The ribbons (`render.trail`), drawn before the sprites.
     trail: Option<TrailDraw>,
     /// The lights of a lit look (`render.lit`).
@@ -208,7 +210,23 @@ impl GroupDraw {
             (None, Some(mesh)) => mesh.vertices(),
             (None, None) => options.primitive.vertices(),
         };
-        let pipeline = render_pipeline(gpu, &module, entry_points, primitive, target, blend);
+        // Opaque and cut-out meshes write depth where the target lets them; nothing else does.
+        let solid = matches!(
+            effect.ir.render.blend,
+            plume_compiler::schema::Blend::Opaque | plume_compiler::schema::Blend::Mask(_)
+        );
+        let pipeline_target = DrawTarget {
+            writes_depth: target.writes_depth && mesh.is_some() && solid,
+            ..*target
+        };
+        let pipeline = render_pipeline(
+            gpu,
+            &module,
+            entry_points,
+            primitive,
+            &pipeline_target,
+            blend,
+        );
         let view = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("draw view"),
             size: DRAW_VIEW_BYTES,
@@ -295,6 +313,7 @@ impl GroupDraw {
             texture,
             scene_depth: placeholder,
             soft,
+            writes_depth: pipeline_target.writes_depth,
             trail,
             lights,
             instances,
@@ -308,6 +327,11 @@ impl GroupDraw {
     /// the target a depth buffer): then bind the host's depth with [`Self::set_scene_depth`].
     pub(crate) fn is_soft(&self) -> bool {
         self.soft
+    }
+
+    /// Whether this draw writes depth.
+    pub(crate) fn writes_depth(&self) -> bool {
+        self.writes_depth
     }
 
     /// Binds the host's depth buffer for soft particles (see

@@ -53,6 +53,12 @@ impl EffectRenderer {
             || self.parts.iter().any(|(_, part)| part.is_soft())
     }
 
+    /// Whether a group writes depth: opaque or cut-out mesh particles drawn into a target made
+    /// [`DrawTarget::with_depth_writes`], whose pass then needs a writable depth attachment.
+    pub fn writes_depth(&self) -> bool {
+        self.parts.iter().any(|(_, part)| part.writes_depth())
+    }
+
     /// Whether this is the compute renderer ([`Effect::compute_renderer`]).
     pub fn is_compute(&self) -> bool {
         self.compute.is_some()

@@ -25,6 +25,12 @@ pub struct DrawTarget {
     /// sample). False draws them hard: a host whose depth is multisampled, or not bindable,
     /// draws them that way rather than not at all.
     pub soft: bool,
+    /// Whether opaque and cut-out mesh particles (`render.mesh` with `Blend::Opaque` or
+    /// `Blend::Mask`) write the depth they are drawn at, so that they hide one another, and
+    /// what is drawn after them, with no sort. Needs a depth test and a pass whose depth
+    /// attachment is writable (not read-only, so not bound for soft particles at once).
+    /// Sprites never write depth.
+    pub writes_depth: bool,
 }
 
 impl DrawTarget {
@@ -35,6 +41,7 @@ impl DrawTarget {
             depth: None,
             sample_count: 1,
             soft: true,
+            writes_depth: false,
         }
     }
 
@@ -58,6 +65,15 @@ impl DrawTarget {
     /// With soft particles faded against the scene's depth (`true`, the default) or drawn hard.
     pub fn with_soft(self, soft: bool) -> Self {
         Self { soft, ..self }
+    }
+
+    /// With opaque and cut-out mesh particles writing depth (`true`) or not (the default); see
+    /// [`Self::writes_depth`].
+    pub fn with_depth_writes(self, writes: bool) -> Self {
+        Self {
+            writes_depth: writes,
+            ..self
+        }
     }
 
     /// With `count` samples per pixel.

@@ -55,7 +55,11 @@ impl TrailDraw {
             &module,
             ("vs_trail", "fs_trail"),
             crate::draw::pipeline::plain(wgpu::PrimitiveTopology::TriangleStrip),
-            target,
+            // Trails blend: they never write depth.
+            &DrawTarget {
+                writes_depth: false,
+                ..*target
+            },
             blend,
         );
         debug_assert_eq!(view.size(), DRAW_VIEW_BYTES);

@@ -28,6 +28,8 @@ pub struct Offscreen {
     view: wgpu::TextureView,
     /// With glow: the HDR image drawn into and the bloom passes that turn it into `texture`.
     glow: Option<GlowPasses>,
+    /// The depth buffer of a draw that writes depth (opaque mesh particles), made on first use.
+    depth: std::sync::OnceLock<wgpu::TextureView>,
 }
 
 impl Offscreen {
@@ -94,6 +96,7 @@ impl Offscreen {
             texture,
             view,
             glow,
+            depth: std::sync::OnceLock::new(),
         })
     }
 
@@ -104,6 +107,41 @@ impl Offscreen {
             Some(_) => HDR_FORMAT,
             None => FORMAT,
         })
+    }
+
+    /// [`Self::target`] for `effect`: with a depth buffer its opaque and cut-out mesh particles
+    /// write ([`DrawTarget::with_depth_writes`]), so that the nearest shows where they overlap,
+    /// when any group draws them; the plain target otherwise.
+    pub fn target_for(&self, effect: &Effect) -> DrawTarget {
+        match draws_solid_meshes(effect) {
+            true => self
+                .target()
+                .with_depth(crate::outputs::scene::DEPTH_FORMAT)
+                .with_depth_writes(true),
+            false => self.target(),
+        }
+    }
+
+    /// The depth attachment of a draw that writes depth, cleared to the far plane.
+    fn depth_attachment(&self) -> wgpu::RenderPassDepthStencilAttachment<'_> {
+        let view = self.depth.get_or_init(|| {
+            self.gpu
+                .texture_2d(
+                    "frame depth",
+                    (self.width, self.height),
+                    crate::outputs::scene::DEPTH_FORMAT,
+                    wgpu::TextureUsages::RENDER_ATTACHMENT,
+                )
+                .create_view(&Default::default())
+        });
+        wgpu::RenderPassDepthStencilAttachment {
+            view,
+            depth_ops: Some(wgpu::Operations {
+                load: wgpu::LoadOp::Clear(1.0),
+                store: wgpu::StoreOp::Discard,
+            }),
+            stencil_ops: None,
+        }
     }
 
     /// The bloom passes, when the target glows.
@@ -161,7 +199,7 @@ impl Offscreen {
         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
             label: Some("particles"),
             color_attachments: &[Some(self.attachment(background))],
-            depth_stencil_attachment: None,
+            depth_stencil_attachment: renderer.writes_depth().then(|| self.depth_attachment()),
             timestamp_writes: timestamps,
             occlusion_query_set: None,
             multiview_mask: None,
@@ -253,4 +291,17 @@ impl Offscreen {
     pub fn read(&self) -> Result<Vec<u8>, RuntimeError> {
         read_texture(&self.gpu, &self.texture, self.width, self.height)
     }
+}
+
+/// Whether a group of `effect` draws opaque or cut-out mesh particles.
+fn draws_solid_meshes(effect: &Effect) -> bool {
+    (0..effect.group_names().len()).any(|g| {
+        effect.group_compiled(g).is_ok_and(|c| {
+            c.ir.render.mesh.is_some()
+                && matches!(
+                    c.ir.render.blend,
+                    plume_compiler::schema::Blend::Opaque | plume_compiler::schema::Blend::Mask(_)
+                )
+        })
+    })
 }

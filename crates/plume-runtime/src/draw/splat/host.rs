@@ -100,7 +100,8 @@ impl HostSplat {
         let blit_target = match target.depth {
             Some(d) => target.with_depth_compare(d.format, wgpu::CompareFunction::Always),
             None => *target,
-        };
+        }
+        .with_depth_writes(false);
         let premultiplied = wgpu::BlendComponent {
             src_factor: wgpu::BlendFactor::One,
             dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
