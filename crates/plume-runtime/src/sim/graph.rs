@@ -43,6 +43,16 @@ impl StreamOrder {
     }
 }
 
+/// A storage buffer of `size` bytes for an event stream (zeroed, as wgpu makes them).
+fn storage_buffer(gpu: &Gpu, label: &str, size: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size,
+        usage: STORAGE,
+        mapped_at_creation: false,
+    })
+}
+
 /// Buffers a group binds instead of allocating them, by binding index.
 pub(crate) type SharedBuffers = Vec<(u32, wgpu::Buffer)>;
 
@@ -78,14 +88,7 @@ impl Events {
                     (limit - RECORDS_HEADER_BYTES) / RECORD_BYTES
                 )));
             }
-            let buffer = |label: &str, size: u64| {
-                gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                    label: Some(label),
-                    size,
-                    usage: STORAGE,
-                    mapped_at_creation: false,
-                })
-            };
+            let buffer = |label: &str, size: u64| storage_buffer(gpu, label, size);
             let keys = buffer("event keys", parent * 4);
             let vals = buffer("event slots", parent * 4);
             // Where the child reads the firing slots in id order.
@@ -162,14 +165,7 @@ impl Events {
                 let buffers = match (bound(0), bound(1), bound(2)) {
                     (Some(keys), Some(slots), Some(records)) => [keys, slots, records],
                     _ => {
-                        let buffer = |label: &str, size: u64| {
-                            gpu.device.create_buffer(&wgpu::BufferDescriptor {
-                                label: Some(label),
-                                size,
-                                usage: STORAGE,
-                                mapped_at_creation: false,
-                            })
-                        };
+                        let buffer = |label: &str, size: u64| storage_buffer(gpu, label, size);
                         let made = [
                             buffer("event keys", n * 4),
                             buffer("event slots", n * 4),
