@@ -4,6 +4,11 @@
 
 use glam::{DVec3, Mat4, Vec3};
 use plume_compiler::ir::CameraIr;
+use plume_compiler::wgsl::draw::DRAW_VIEW_BYTES;
+
+use crate::device::buffers::staging;
+use crate::device::gpu::Gpu;
+use crate::error::RuntimeError;
 
 /// View and projection matrices (column-major, right-handed view space looking down −z; the
 /// projection maps into wgpu's clip space).
@@ -83,4 +88,38 @@ pub(crate) fn camera_matrices(camera: &CameraIr, aspect: f32) -> (Mat4, Mat4) {
         Camera::FAR,
     );
     (view, proj)
+}
+
+/// Records a copy of the `DrawView` uniform (camera, steps done, size scale) into `view` in
+/// `encoder`, so that several frames prepared in one submission each draw with their own.
+pub(crate) fn record_draw_view(
+    gpu: &Gpu,
+    encoder: &mut wgpu::CommandEncoder,
+    view: &wgpu::Buffer,
+    camera: &Camera,
+    steps: u64,
+    size_scale: f32,
+) -> Result<(), RuntimeError> {
+    let src = staging(
+        gpu,
+        "draw view",
+        &draw_view_bytes(camera, steps, size_scale),
+    )?;
+    encoder.copy_buffer_to_buffer(&src, 0, view, 0, DRAW_VIEW_BYTES);
+    Ok(())
+}
+
+/// The `DrawView` uniform's bytes: view and projection matrices, steps done (mod 2^32, as the
+/// kernels' step index and die_at wrap), the size scale.
+pub(crate) fn draw_view_bytes(camera: &Camera, steps: u64, size_scale: f32) -> Vec<u8> {
+    let mut bytes = Vec::with_capacity(DRAW_VIEW_BYTES as usize);
+    for m in [camera.view, camera.proj] {
+        for x in m.to_cols_array() {
+            bytes.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    bytes.extend_from_slice(&(steps as u32).to_le_bytes());
+    bytes.extend_from_slice(&size_scale.to_le_bytes());
+    bytes.extend_from_slice(&[0; 8]);
+    bytes
 }

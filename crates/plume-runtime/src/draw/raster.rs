@@ -1,6 +1,7 @@
 //! Drawing particles straight from the GPU buffers: the render pipeline of an effect's
 //! generated draw module (`plume_compiler::wgsl::draw`) for one render target, its per-frame
-//! `DrawView` uniform, and how many instances a draw issues.
+//! `DrawView` uniform (written by `camera::record_draw_view`), and how many instances a draw
+//! issues.
 //!
 //! - A stateful effect draws its live slots: by default through a compacted list of them
 //!   (order kept) from 4096 slots, below that one instance per slot with free slots as
@@ -11,8 +12,9 @@
 //!   vertex computes its particle from the closed form, so no compute pass runs (a sorted one
 //!   still computes keys and sorts them).
 //!
-//! The draw tests depth against the host's depth buffer when the target has one, and never
-//! writes it: particles are translucent.
+//! The draw tests depth against the host's depth buffer when the target has one, and writes
+//! it only for opaque and cut-out mesh particles into a target that asks
+//! (`DrawTarget::with_depth_writes`): sprites are translucent.
 
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -23,10 +25,10 @@ use plume_compiler::wgsl::draw::{
 };
 use plume_compiler::CompiledEffect;
 
-use crate::device::buffers::{filled_buffer, staging, STORAGE};
+use crate::device::buffers::{filled_buffer, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::device::resources::Resources;
-use crate::draw::camera::Camera;
+use crate::draw::camera::{record_draw_view, Camera};
 use crate::draw::lights::{LightsUniform, ShadowBinding};
 use crate::draw::live_list::LiveList;
 use crate::draw::pipeline::{blend_state, draw_group, plain, render_pipeline};
@@ -577,38 +579,4 @@ pub(crate) fn draw_module(
         entries.push((INSTANCE_MODELS_BINDING, models.clone()));
     }
     Ok((module, entries))
-}
-
-/// Records a copy of the `DrawView` uniform (camera, steps done, size scale) into `view` in
-/// `encoder`, so that several frames prepared in one submission each draw with their own.
-pub(crate) fn record_draw_view(
-    gpu: &Gpu,
-    encoder: &mut wgpu::CommandEncoder,
-    view: &wgpu::Buffer,
-    camera: &Camera,
-    steps: u64,
-    size_scale: f32,
-) -> Result<(), RuntimeError> {
-    let src = staging(
-        gpu,
-        "draw view",
-        &draw_view_bytes(camera, steps, size_scale),
-    )?;
-    encoder.copy_buffer_to_buffer(&src, 0, view, 0, DRAW_VIEW_BYTES);
-    Ok(())
-}
-
-/// The `DrawView` uniform's bytes: view and projection matrices, steps done (mod 2^32, as the
-/// kernels' step index and die_at wrap), the size scale.
-pub(crate) fn draw_view_bytes(camera: &Camera, steps: u64, size_scale: f32) -> Vec<u8> {
-    let mut bytes = Vec::with_capacity(DRAW_VIEW_BYTES as usize);
-    for m in [camera.view, camera.proj] {
-        for x in m.to_cols_array() {
-            bytes.extend_from_slice(&x.to_le_bytes());
-        }
-    }
-    bytes.extend_from_slice(&(steps as u32).to_le_bytes());
-    bytes.extend_from_slice(&size_scale.to_le_bytes());
-    bytes.extend_from_slice(&[0; 8]);
-    bytes
 }
