@@ -17,7 +17,7 @@
 //!
 //! Without waiting, for a host that reads every frame: [`Effect::watch_totals`],
 //! [`Effect::watch_live_bounds`] and [`Effect::watch_reports`] (an effect's reported events,
-//! [`EventReport`]).
+//! [`EventReport`]); [`GpuTimer`] times the host's own recorded work the same way.
 //!
 //! The named module [`outputs`] (headless images, GIF, contact sheets, exports) serves the
 //! `plume` command and any host that wants files. With the `tools` feature, two more serve the
@@ -40,6 +40,7 @@ mod sim;
 mod sort;
 
 pub use device::gpu::{Gpu, GpuChoice};
+pub use device::gpu_timer::GpuTimer;
 pub use draw::camera::Camera;
 pub use draw::particle_light::ParticleLights;
 pub use draw::renderer::EffectRenderer;
