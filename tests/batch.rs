@@ -126,14 +126,19 @@ fn each_batched_instance_has_the_particles_of_the_same_effect_alone() {
     let mut batch = EffectBatch::new(&gpu, &compiled, 8).expect("batch");
     let mut instances = Vec::new();
     let mut effects = Vec::new();
-    for part in &parts {
+    for (k, part) in parts.iter().enumerate() {
         let instance = batch.add().expect("room");
         batch
             .set_placement(instance, part.placement)
             .expect("placement");
         batch.set_param(instance, "push", part.push).expect("param");
+        // Thinned instances thin as alone: the first keeps every spawn, the next fewer.
+        let scale = 1.0 - 0.3 * k as f32;
+        batch.set_spawn_scale(instance, scale).expect("scale");
         instances.push(instance);
-        effects.push(alone(&gpu, &compiled, part));
+        let mut effect = alone(&gpu, &compiled, part);
+        effect.set_spawn_scale(scale);
+        effects.push(effect);
     }
     for frame in 0..40u32 {
         for (k, part) in parts.iter().enumerate() {

@@ -62,6 +62,14 @@ impl ReferenceGraph {
         Ok(())
     }
 
+    /// Keeps `scale` of every group's own spawns from the next step on (see
+    /// [`ReferenceSim::set_spawn_scale`]); children fed by events follow their parents.
+    pub fn set_spawn_scale(&mut self, scale: f32) {
+        for g in &mut self.groups {
+            g.set_spawn_scale(scale);
+        }
+    }
+
     /// Queues a burst fired from code in group `group` (see [`ReferenceSim::burst`]).
     pub fn burst(
         &mut self,

@@ -201,6 +201,35 @@ impl EffectIr {
         self.emitters.iter().any(|e| e.lifetime.is_some())
     }
 
+    /// About how many particles the emitters keep alive at once: per emitter its burst (the
+    /// largest of a drawn range) plus its steady rate (a burst repeating for ever counts as
+    /// burst / every) times its longest lifetime; the capacity where that is more, where a
+    /// particle may live for ever, or where events feed the group. An estimate for a host
+    /// that shares a particle budget among effects, not a bound.
+    pub fn expected_alive(&self) -> u64 {
+        if !self.event_inputs.is_empty() {
+            return u64::from(self.capacity);
+        }
+        let alive: f64 = self
+            .emitters
+            .iter()
+            .map(|e| {
+                let burst = f64::from(e.burst_range.map_or(e.burst, |r| r.1));
+                let repeating = match (e.timing.every, e.timing.cycles, e.timing.end_step) {
+                    (Some(every), None, None) if every > 0.0 => burst / every,
+                    _ => 0.0,
+                };
+                let rate = e.rate + repeating;
+                match e.lifetime {
+                    Some((_, longest)) => burst + rate * longest,
+                    None if rate > 0.0 => f64::INFINITY,
+                    None => burst,
+                }
+            })
+            .sum();
+        alive.min(f64::from(self.capacity)) as u64
+    }
+
     /// True when an emitter gives its particles a random starting age (`Emitter::age`): their
     /// spawn step is then stored, as the step their age counts from.
     pub fn has_start_ages(&self) -> bool {

@@ -164,6 +164,12 @@ impl ReferenceSim {
         Ok(())
     }
 
+    /// Keeps `scale` of every spawn from the next step on (the f64 twin of
+    /// `Effect::set_spawn_scale`; see [`Schedule::set_spawn_scale`]).
+    pub fn set_spawn_scale(&mut self, scale: f32) {
+        self.schedule.set_spawn_scale(scale);
+    }
+
     /// Queues a burst fired from code for the next steps (the f64 twin of `Effect::burst`; an
     /// effect compiled with `CompileOptions::bursts`); refused, with why, for a missing
     /// emitter or a coordinate that is not finite.

@@ -76,6 +76,10 @@ pub struct Schedule {
     keeps: Option<u64>,
     /// Bursts fired from code that no step has spawned yet, oldest first.
     pending: VecDeque<Burst>,
+    /// The fraction of every spawn kept ([`Schedule::set_spawn_scale`]), 1 for all.
+    spawn_scale: f64,
+    /// Per emitter, the fraction of a particle its scaled bursts owe the next one.
+    burst_carried: Vec<f64>,
 }
 
 impl Schedule {
@@ -104,7 +108,38 @@ impl Schedule {
                 .try_fold(0, |most, life| life.map(|l| most.max(l)))
                 .filter(|_| ir.event_inputs.is_empty()),
             pending: VecDeque::new(),
+            spawn_scale: 1.0,
+            burst_carried: vec![0.0; ir.emitters.len()],
         }
+    }
+
+    /// Keeps `scale` (clamped to 0..=1; 0 for NaN) of every spawn planned from now on: each
+    /// rate runs at `scale` times its value and each burst, the emitters' and those fired
+    /// from code, spawns `scale` times its count, a fraction carried to the emitter's next
+    /// burst. So a thinned effect spawns fewer particles, each spawned as any other; those
+    /// alive live on. At 1 (the start) the plan is exactly the unscaled one.
+    pub fn set_spawn_scale(&mut self, scale: f32) {
+        self.spawn_scale = if scale.is_nan() {
+            0.0
+        } else {
+            f64::from(scale.clamp(0.0, 1.0))
+        };
+    }
+
+    /// The fraction of every spawn kept ([`Schedule::set_spawn_scale`]).
+    pub fn spawn_scale(&self) -> f32 {
+        self.spawn_scale as f32
+    }
+
+    /// `count` particles of emitter `e`'s bursts, thinned by the spawn scale.
+    fn scaled_burst(&mut self, e: usize, count: u64) -> u64 {
+        if self.spawn_scale >= 1.0 || count == 0 {
+            return count;
+        }
+        let kept = count as f64 * self.spawn_scale + self.burst_carried[e];
+        let whole = kept.floor();
+        self.burst_carried[e] = kept - whole;
+        whole as u64
     }
 
     /// Queues `burst` for the next step that has a burst slot free (the next step, unless
@@ -169,7 +204,7 @@ impl Schedule {
         let first_id = self.next_id;
         let mut emitters = Vec::with_capacity(self.rates.len());
         for e in 0..self.rates.len() {
-            let timing = &self.timings[e];
+            let timing = self.timings[e];
             let mut count = 0u64;
             while timing
                 .burst_step(self.next_burst[e])
@@ -183,8 +218,9 @@ impl Schedule {
                 count = count.saturating_add(u64::from(burst));
                 self.next_burst[e] += 1;
             }
+            let mut count = self.scaled_burst(e, count);
             if timing.rate_runs(step) {
-                self.carried[e] += self.rates[e] * self.dt;
+                self.carried[e] += self.rates[e] * self.spawn_scale * self.dt;
                 let whole = self.carried[e].floor();
                 self.carried[e] -= whole;
                 count = count.saturating_add(whole as u64);
@@ -200,7 +236,8 @@ impl Schedule {
                 break;
             };
             let e = burst.emitter as usize;
-            burst.count = burst.count.min(u32::MAX - self.next_id);
+            let kept = self.scaled_burst(e, u64::from(burst.count)) as u32;
+            burst.count = kept.min(u32::MAX - self.next_id);
             bursts.push(PlannedBurst {
                 burst,
                 k0: self.emitted[e],

@@ -455,6 +455,33 @@ impl Effect {
         Ok(())
     }
 
+    /// Keeps `scale` (0 to 1) of every spawn from the next step on: each emitter's rate and
+    /// bursts, and bursts fired from code, spawn that fraction (fractions of a particle
+    /// carried to the next), in every group; children spawned by events follow their
+    /// parents. The particles alive live on, so a thinned effect thins over a lifetime. This
+    /// is how a host keeps a budget or draws less of a far effect; the f64 reference does the
+    /// same (`ReferenceSim::set_spawn_scale`), and 1, the start, is the unscaled effect.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{Effect, Gpu};
+    /// let source = r#"Effect(name: "mist", capacity: 1000,
+    ///     emitters: [Emitter(rate: 600.0, lifetime: Some((1.0, 1.0)), shape: Point((0.0, 0.0, 0.0)),
+    ///                        velocity: Constant((0.0, 1.0, 0.0)))])"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let mut mist = Effect::from_source(&gpu, source, &Default::default())?;
+    /// mist.set_spawn_scale(0.25);
+    /// mist.run(30, |_| {})?; // half a second at 60 steps a second
+    /// assert_eq!(mist.totals()?.spawned, 75); // a quarter of 300
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn set_spawn_scale(&mut self, scale: f32) {
+        for group in &mut self.groups {
+            group.schedule.set_spawn_scale(scale);
+        }
+    }
+
     /// Runs `steps` steps in submissions of 256 steps, calling `progress(done)`
     /// after each is submitted. Returns when the GPU has finished.
     pub fn run(&mut self, steps: u64, mut progress: impl FnMut(u64)) -> Result<(), RuntimeError> {

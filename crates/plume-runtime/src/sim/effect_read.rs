@@ -60,6 +60,20 @@ impl Effect {
         &self.names
     }
 
+    /// About how many particles the effect keeps alive unthinned, every group's together
+    /// (`EffectIr::expected_alive`): what a host sharing a particle budget weighs it by.
+    pub fn expected_alive(&self) -> u64 {
+        self.groups
+            .iter()
+            .map(|g| g.effect.ir.expected_alive())
+            .sum()
+    }
+
+    /// The fraction of its spawns the effect keeps ([`Effect::set_spawn_scale`]).
+    pub fn spawn_scale(&self) -> f32 {
+        self.groups[0].schedule.spawn_scale()
+    }
+
     /// Group `g`'s totals (its spawned and dropped count its event spawns).
     pub fn group_totals(&self, g: usize) -> Result<Totals, RuntimeError> {
         self.group(g)?.totals()

@@ -365,6 +365,17 @@ impl EffectBatch {
         Ok(())
     }
 
+    /// Keeps `scale` of `instance`'s spawns from its next step on, as
+    /// [`Effect::set_spawn_scale`] does for an effect.
+    pub fn set_spawn_scale(
+        &mut self,
+        instance: BatchInstance,
+        scale: f32,
+    ) -> Result<(), RuntimeError> {
+        self.state_mut(instance)?.schedule.set_spawn_scale(scale);
+        Ok(())
+    }
+
     /// Queues a burst for `instance`'s next step (an effect compiled with `bursts`), as
     /// [`Effect::burst`] does for an effect.
     pub fn burst(&mut self, instance: BatchInstance, burst: Burst) -> Result<(), RuntimeError> {
