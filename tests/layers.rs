@@ -87,13 +87,14 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
     (
         "bevy_plume",
         &[
-            // 0: the main world's types: the asset and the component.
+            // 0: the main world: the asset, the component and what the plugin sets on it.
             ("asset", 0),
             ("effect", 0),
             ("bounds", 0),
             ("particle_lights", 0),
             ("mesh_particles", 0),
             ("event_reports", 0),
+            ("thinning", 0),
             // 1: the render world, which reads them; the headless runner, which waits on them.
             ("render", 1),
             ("headless", 1),

@@ -81,7 +81,13 @@ pub const AUTO_COMPUTE_CAPACITY: u64 = 65_536;
 /// ```
 #[derive(Component, Clone, Debug, Reflect)]
 #[reflect(Component)]
-#[require(Transform, Visibility, VisibilityClass, SyncToRenderWorld)]
+#[require(
+    Transform,
+    Visibility,
+    VisibilityClass,
+    SyncToRenderWorld,
+    PlumeThinning
+)]
 #[component(on_add = visibility::add_visibility_class::<PlumeEffect>)]
 pub struct PlumeEffect {
     /// The effect file.
@@ -96,6 +102,10 @@ pub struct PlumeEffect {
     pub simulate: PlumeSimulate,
     /// How fast the effect's time runs against the app's (1: real time).
     pub time_scale: f32,
+    /// The fraction of its spawns this instance keeps (0 to 1; default 1, all): fewer
+    /// particles, each as the file makes it, from the next step on. Its level of detail and
+    /// the game's budget thin it further ([`PlumeThinning`]).
+    pub spawn_scale: f32,
     /// Replaces the file's `seed` for this instance (the effect is compiled again for it,
     /// once per distinct seed), so two instances of one file need not look alike.
     pub seed: Option<u32>,
@@ -182,6 +192,7 @@ impl PlumeEffect {
             playing: true,
             simulate: PlumeSimulate::Always,
             time_scale: 1.0,
+            spawn_scale: 1.0,
             seed: None,
             warm_up: 0.0,
             generation: 0,
@@ -237,6 +248,14 @@ impl PlumeEffect {
     /// Simulated as `simulate` says (only while seen: [`PlumeSimulate::WhenVisible`]).
     pub fn with_simulate(self, simulate: PlumeSimulate) -> Self {
         Self { simulate, ..self }
+    }
+
+    /// Keeping `spawn_scale` (0 to 1) of its spawns ([`Self::spawn_scale`]).
+    pub fn with_spawn_scale(self, spawn_scale: f32) -> Self {
+        Self {
+            spawn_scale,
+            ..self
+        }
     }
 
     /// Drawn by `draw`'s renderer.
@@ -309,6 +328,32 @@ pub(crate) fn bindable_camera_depth(
         let usages = TextureUsages::from(camera.depth_texture_usages);
         if !usages.contains(TextureUsages::TEXTURE_BINDING) {
             camera.depth_texture_usages = (usages | TextureUsages::TEXTURE_BINDING).into();
+        }
+    }
+}
+
+/// How much of its spawns an effect keeps this frame, and why: written by the plugin each
+/// frame ([`crate::PlumeSystems::Thinning`]) on every effect entity, reflected so an inspector
+/// shows it.
+#[derive(Component, Clone, Copy, Debug, PartialEq, Reflect)]
+#[reflect(Component)]
+pub struct PlumeThinning {
+    /// The fraction of every spawn kept: the entity's `spawn_scale`, times its level of
+    /// detail, times its share of the budget.
+    pub scale: f32,
+    /// Logical pixels across its bounds on the camera where they are largest: 0 when no
+    /// camera sees it, infinite when it has no bounds or a camera is inside them.
+    pub pixels: f32,
+    /// Particles its file keeps alive unthinned (estimated: `Effect::expected_alive`).
+    pub expected_alive: u64,
+}
+
+impl Default for PlumeThinning {
+    fn default() -> Self {
+        Self {
+            scale: 1.0,
+            pixels: f32::INFINITY,
+            expected_alive: 0,
         }
     }
 }

@@ -32,11 +32,13 @@ pub mod headless;
 mod mesh_particles;
 mod particle_lights;
 mod render;
+mod thinning;
 
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
 pub use diagnostics::{PlumeDiagnosticsPlugin, PlumeParticleCounts};
 pub use effect::{
-    PlumeBurst, PlumeDraw, PlumeEffect, PlumeSimulate, SimulationSpace, AUTO_COMPUTE_CAPACITY,
+    PlumeBurst, PlumeDraw, PlumeEffect, PlumeSimulate, PlumeThinning, SimulationSpace,
+    AUTO_COMPUTE_CAPACITY,
 };
 pub use event_reports::{PlumeEventFired, PlumeEventsMissed};
 pub use mesh_particles::obj_of;
@@ -46,6 +48,7 @@ pub use plume_runtime;
 pub use render::batches::BATCH_FROM;
 pub use render::instances::PlumeRenderStats;
 pub use render::read::{read_particles, read_totals};
+pub use thinning::{PlumeBudget, PlumeLod};
 
 use bevy::camera::visibility::VisibilitySystems;
 use bevy::prelude::*;
@@ -67,6 +70,10 @@ pub enum PlumeSystems {
     /// `PreUpdate`: the firings of reported events that the render world read back, written as
     /// [`PlumeEventFired`] (and [`PlumeEventsMissed`]) messages for `Update` to read.
     Reports,
+    /// `PostUpdate`, after Bevy's visibility checks: each effect entity's [`PlumeThinning`],
+    /// the fraction of its spawns it keeps from its spawn scale, its level of detail
+    /// ([`PlumeLod`]) and the game's [`PlumeBudget`].
+    Thinning,
     /// `Last`: the bursts fired this frame ([`PlumeEffect::burst`]) are taken from the effect
     /// entities into the queue the render world reads at extraction, so each spawns once.
     Bursts,
@@ -88,6 +95,9 @@ impl Plugin for PlumePlugin {
             .register_type::<PlumeDraw>()
             .register_type::<PlumeSimulate>()
             .register_type::<PlumeLightOf>()
+            .register_type::<PlumeLod>()
+            .register_type::<PlumeThinning>()
+            .register_type::<PlumeBudget>()
             .init_resource::<effect::FiredBursts>()
             .init_resource::<mesh_particles::MeshedEffects>()
             .add_message::<PlumeEventFired>()
@@ -113,6 +123,14 @@ impl Plugin for PlumePlugin {
             .add_systems(
                 PostUpdate,
                 mesh_particles::compile_meshed_effects.in_set(PlumeSystems::Meshes),
+            )
+            .configure_sets(
+                PostUpdate,
+                PlumeSystems::Thinning.after(VisibilitySystems::CheckVisibility),
+            )
+            .add_systems(
+                PostUpdate,
+                thinning::thin_effects.in_set(PlumeSystems::Thinning),
             )
             .add_systems(Last, effect::take_bursts.in_set(PlumeSystems::Bursts))
             .add_systems(PostUpdate, particle_lights::given_lights_to_point_lights);

@@ -218,6 +218,9 @@ pub(crate) fn sync_batches(
                 warn_once!("{}: {err}", e.asset.path);
             }
         }
+        if let Err(err) = batch.batch.set_spawn_scale(member.instance, e.spawn_scale) {
+            warn_once!("{}: {err}", e.asset.path);
+        }
         for (param, &value) in &e.control.params {
             if member.params.get(param) != Some(&value) {
                 member.params.insert(param.clone(), value);

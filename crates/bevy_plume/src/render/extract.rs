@@ -6,7 +6,7 @@ use bevy::render::sync_world::RenderEntity;
 use bevy::render::Extract;
 
 use crate::asset::PlumeEffectAsset;
-use crate::effect::{PlumeBurst, PlumeEffect};
+use crate::effect::{PlumeBurst, PlumeEffect, PlumeThinning};
 
 /// One effect entity as the render world sees it this frame.
 #[derive(Clone)]
@@ -23,6 +23,8 @@ pub(crate) struct ExtractedEffect {
     pub control: PlumeEffect,
     /// Whether a camera saw the entity in the main world's last frame.
     pub visible: bool,
+    /// The fraction of its spawns it keeps ([`crate::PlumeThinning::scale`]).
+    pub spawn_scale: f32,
 }
 
 impl ExtractedEffect {
@@ -54,6 +56,7 @@ type EffectItem = (
     &'static PlumeEffect,
     &'static GlobalTransform,
     &'static ViewVisibility,
+    Option<&'static PlumeThinning>,
 );
 
 /// Copies the effect entities and the time step into [`ExtractedEffects`]. Entities whose
@@ -68,7 +71,7 @@ pub(crate) fn extract_effects(
 ) {
     extracted.effects.clear();
     extracted.delta = time.delta_secs_f64();
-    for (main, render, control, transform, seen) in &effects {
+    for (main, render, control, transform, seen, thinning) in &effects {
         // Drawn as a Bevy mesh: the file compiled with it, once that is done.
         let handle = match &control.mesh {
             Some(mesh) => match meshed.get(&control.handle, mesh) {
@@ -87,6 +90,7 @@ pub(crate) fn extract_effects(
             world_from_local: transform.to_matrix(),
             control: control.clone(),
             visible: seen.get(),
+            spawn_scale: thinning.map_or(control.spawn_scale, |t| t.scale),
         });
     }
 }

@@ -391,9 +391,10 @@ fn build(
 }
 
 impl Instance {
-    /// Applies the params whose value game code changed. What the effect refuses is logged,
-    /// once per value.
+    /// Applies the frame's spawn scale and the params whose value game code changed. What the
+    /// effect refuses is logged, once per value.
     fn control_from_code(&mut self, e: &ExtractedEffect) {
+        self.effect.set_spawn_scale(e.spawn_scale);
         let name = &e.asset.path;
         for (param, &value) in &e.control.params {
             if self.params.get(param) == Some(&value) {
