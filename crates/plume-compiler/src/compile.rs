@@ -401,7 +401,7 @@ pub struct GroupLinks {
     /// Events the group is fed by.
     pub inputs: Vec<EventInputIr>,
     /// Their spawn rules, appended to the group's emitters.
-    pub input_emitters: Vec<Emitter>,
+    pub(crate) input_emitters: Vec<Emitter>,
 }
 
 /// The path of the first graph field an effect uses (`groups` or `events`), if any.

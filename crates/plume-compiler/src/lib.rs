@@ -4,10 +4,9 @@
 //! fused `update` kernel and `spawn` kernels (or, for a stateless effect, one `evaluate`
 //! kernel), and one draw module (a vertex shader that reads the particles from the GPU buffers
 //! and a fragment shader for the sprites), both validated by naga. The pipeline, one module per stage:
-//! parse ([`schema`], with [`diagnostics`] and [`locate`]) → check ([`validate`]) → lower to the
-//! [`ir`] → [`passes`] (fold, prune, accuracy, integrator, stability, the unused field
-//! dropped, state, layout) → [`wgsl`] writer →
-//! [`naga_check`]. This crate does not depend on wgpu.
+//! parse ([`schema`], located [`Diagnostics`]) → check ([`validate`]) → lower to the [`ir`] →
+//! [`passes`] (fold, prune, accuracy, integrator, stability, the unused field dropped, state,
+//! layout) → [`wgsl`] writer → naga's validation. This crate does not depend on wgpu.
 //!
 //! ```
 //! let source = r#"Effect(
@@ -37,8 +36,11 @@
 //!
 //! The crate is layered, every import pointing down (docs/ARCHITECTURE.md draws it):
 //! `base` (leaves) → `expr` → `features` → `ir` → `stages` and `reference` (side by side) →
-//! `compile` and `batch` → `graph`. The public modules below re-export each stage under its
-//! short name.
+//! `compile` and `batch` → `graph`. The public API: compiling a file or a string
+//! ([`compile_str`], [`compile_effect`], [`graph`]), the diagnostics, the IR and layout to
+//! inspect, and the modules the runtime, the Bevy plugin and the tests share with the compiler
+//! (the step [`schedule`], the f64 [`reference`](mod@reference), the WGSL contract in [`wgsl`], the features'
+//! IR types), re-exported under their short names. Everything else is `pub(crate)`.
 
 mod base;
 pub mod batch;
@@ -50,22 +52,20 @@ pub mod ir;
 pub mod reference;
 mod stages;
 
-pub use base::{
-    check, diagnostics, files, lifetime, locate, naga_check, path, rng, values, writer,
-};
+pub use base::diagnostics::{Diagnostic, Diagnostics, Severity, Span};
+pub use base::{files, lifetime, rng};
 pub use compile::{
     compile_effect, compile_str, parse, parse_with, CompileError, CompileOptions, CompiledEffect,
 };
-pub use diagnostics::{Diagnostic, Diagnostics, Severity};
 pub use features::looks::{
-    by_expression, glow, lit, orient, particle_light, particle_mesh, ribbon, rotation, screen_size,
+    by_expression, lit, orient, particle_light, particle_mesh, ribbon, rotation, screen_size,
     texture, tint, trail,
 };
 pub use features::{
     accuracy, attributes, bursts, colliders, emitter, event_report, events, field, forces, inherit,
-    lights, mesh_emission, placement, shadow,
+    lights, placement, shadow,
 };
 pub use ir::EffectIr;
 pub use stages::passes::layout::Layout;
 pub use stages::schema::{EffectSpec, Integrator};
-pub use stages::{integrators, lower, passes, schedule, schema, validate, wgsl};
+pub use stages::{passes, schedule, schema, validate, wgsl};

@@ -23,7 +23,7 @@ impl Checker {
     /// Records an error at characters `[start, end)` of the string at `path` (an expression's
     /// mistake): the lookup path carries the range as `path@start..end`, which
     /// [`crate::base::locate::SourceMap::find_in_string`] resolves to a line and column.
-    pub fn error_in_string(
+    pub(crate) fn error_in_string(
         &mut self,
         path: &ValuePath,
         start: usize,
@@ -56,7 +56,7 @@ impl Checker {
     }
 
     /// `x` must be finite and >= 0; returns whether it is.
-    pub fn non_negative(&mut self, path: &ValuePath, x: f64) -> bool {
+    pub(crate) fn non_negative(&mut self, path: &ValuePath, x: f64) -> bool {
         let ok = self.finite(path, x) && x >= 0.0;
         if x.is_finite() && !ok {
             self.error(path, format!("must be >= 0, got {x}"));
@@ -65,7 +65,7 @@ impl Checker {
     }
 
     /// A core radius must be finite, > 0 and no larger than the force's `range`.
-    pub fn core_radius(&mut self, path: &ValuePath, core: f64, range: f64) {
+    pub(crate) fn core_radius(&mut self, path: &ValuePath, core: f64, range: f64) {
         if self.finite(path, core) {
             if core <= 0.0 {
                 self.error(path, format!("must be > 0, got {core}"));
@@ -116,7 +116,7 @@ impl Checker {
     }
 
     /// Box corners: finite, and `min <= max` on every axis.
-    pub fn box_corners(&mut self, path: &ValuePath, min: Vec3, max: Vec3) {
+    pub(crate) fn box_corners(&mut self, path: &ValuePath, min: Vec3, max: Vec3) {
         let ok = self.vec3(&path.field("min"), min) & self.vec3(&path.field("max"), max);
         if ok && (min.0 > max.0 || min.1 > max.1 || min.2 > max.2) {
             self.error(
@@ -131,7 +131,7 @@ impl Checker {
 }
 
 /// True when `v` is long enough to normalise in f32 without underflow (and all finite).
-pub fn is_normalizable(v: Vec3) -> bool {
+pub(crate) fn is_normalizable(v: Vec3) -> bool {
     let l2 = v.0 * v.0 + v.1 * v.1 + v.2 * v.2;
     l2.is_finite() && l2 > 1e-20
 }

@@ -158,11 +158,6 @@ pub struct Diagnostics {
 }
 
 impl Diagnostics {
-    /// True when any item is an error.
-    pub fn has_errors(&self) -> bool {
-        self.items.iter().any(|d| d.severity == Severity::Error)
-    }
-
     /// Adds one diagnostic.
     pub fn push(&mut self, d: Diagnostic) {
         self.items.push(d);

@@ -106,7 +106,7 @@ pub fn read(path: &Path, most: u64) -> Result<Vec<u8>, ReadError> {
 
 /// Whether files are read from disk (no host source), where the compiler may keep caches
 /// beside them.
-pub fn on_disk() -> bool {
+pub(crate) fn on_disk() -> bool {
     CURRENT.with(|c| c.borrow().is_none())
 }
 

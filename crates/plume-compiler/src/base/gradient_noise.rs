@@ -20,7 +20,7 @@ const HASH_Z: u32 = 0xcb1a_b31f;
 
 /// The key of the noise that expressions read (`noise`, `curl`): one field for every effect,
 /// whatever its seed (an author moves through it by offsetting the point).
-pub const EXPRESSION_KEY: u32 = 0x6e6f_6973;
+pub(crate) const EXPRESSION_KEY: u32 = 0x6e6f_6973;
 
 /// One of Perlin's 12 edge gradients (4 of them twice) from the low 4 bits of `h`.
 fn gradient(h: u32) -> DVec3 {
@@ -159,7 +159,7 @@ fn emit_cell(w: &mut Writer) {
 
 /// Emits `grad_noise(key, q)`, the WGSL twin of [`noise`] (after [`emit_curl_helpers`], whose
 /// `turb_gradient` it reads).
-pub fn emit_noise_helper(w: &mut Writer) {
+pub(crate) fn emit_noise_helper(w: &mut Writer) {
     w.comment("Gradient noise: the value of the first of the curl's three noises.");
     w.block("fn grad_noise(key: u32, q_in: vec3<f32>) -> f32", |w| {
         emit_cell(w);

@@ -77,7 +77,7 @@ impl Attribute {
 
     /// Whether the attribute is the particle's motion (velocity, or Verlet's displacement):
     /// the one an accuracy budget may store in 16-bit floats (`Layout::half_motion`).
-    pub fn is_motion(self) -> bool {
+    pub(crate) fn is_motion(self) -> bool {
         matches!(self, Attribute::Velocity | Attribute::Displacement)
     }
 
@@ -178,12 +178,12 @@ pub struct Layout {
     /// read from the dispatch's z.
     pub batched: bool,
     /// A batched layout's slots per instance (`CAPACITY` of its compute module; 0 otherwise).
-    pub instance_slots: u32,
+    pub(crate) instance_slots: u32,
 }
 
 impl Layout {
     /// The stored fields of declared attribute `index`, when it is kept.
-    pub fn user_fields(&self, index: usize) -> Option<&'static [&'static str]> {
+    pub(crate) fn user_fields(&self, index: usize) -> Option<&'static [&'static str]> {
         self.attributes.iter().find_map(|a| match *a {
             Attribute::User { index: i, .. } if usize::from(i) == index => Some(a.fields().0),
             _ => None,

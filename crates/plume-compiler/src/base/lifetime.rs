@@ -67,7 +67,7 @@ impl LifetimeSteps {
     }
 
     /// The WGSL expression of [`Self::draw`] for the `u32` named `word`.
-    pub fn wgsl_of(&self, word: &str) -> String {
+    pub(crate) fn wgsl_of(&self, word: &str) -> String {
         format!(
             "{}u + ((({word} >> {}u) * {}u) >> {}u)",
             self.first,

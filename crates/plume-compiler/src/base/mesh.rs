@@ -15,10 +15,10 @@ use crate::base::files::ReadError;
 use glam::{DMat3, DVec3, EulerRot};
 
 /// The largest mesh file read.
-pub const MAX_FILE_BYTES: u64 = 256 << 20;
+pub(crate) const MAX_FILE_BYTES: u64 = 256 << 20;
 
 /// The most triangles a mesh may have.
-pub const MAX_TRIANGLES: usize = 1 << 21;
+pub(crate) const MAX_TRIANGLES: usize = 1 << 21;
 
 /// A triangle mesh: welded vertices and triangles of vertex indices (counter-clockwise seen
 /// from outside, as OBJ writes them; nothing here depends on it).
@@ -31,7 +31,7 @@ pub struct TriMesh {
 }
 
 /// Reads the OBJ file at `path`, or says what is wrong with it.
-pub fn read_obj(path: &Path) -> Result<(TriMesh, Vec<u8>), String> {
+pub(crate) fn read_obj(path: &Path) -> Result<(TriMesh, Vec<u8>), String> {
     let shown = path.display();
     let bytes = crate::base::files::read(path, MAX_FILE_BYTES).map_err(|e| match e {
         ReadError::Open(e) => format!("cannot open mesh `{shown}`: {e}"),
@@ -108,7 +108,7 @@ impl TriMesh {
     }
 
     /// The triangles placed in the world: a mesh point p at `offset` + `scale` · `rotation` p.
-    pub fn placed_triangles(
+    pub(crate) fn placed_triangles(
         &self,
         offset: DVec3,
         scale: f64,
@@ -151,7 +151,7 @@ impl TriMesh {
 
 /// Checks a mesh's placement in the world at `path`: `offset` and `rotation` finite, `scale`
 /// finite and positive; returns whether the offset and rotation are finite.
-pub fn check_placement(
+pub(crate) fn check_placement(
     path: &crate::base::path::ValuePath,
     c: &mut crate::base::check::Checker,
     (offset, scale, rotation): (crate::base::values::Vec3, f64, crate::base::values::Vec3),
@@ -163,7 +163,7 @@ pub fn check_placement(
 
 /// The rotation that `degrees` (about x, then y, then z, the world's axes) stands for, as
 /// meshes are placed.
-pub fn rotation_degrees(degrees: DVec3) -> DMat3 {
+pub(crate) fn rotation_degrees(degrees: DVec3) -> DMat3 {
     let r = degrees * (std::f64::consts::PI / 180.0);
     // Intrinsic ZYX of (z, y, x) is x first, then y, then z about the world's axes.
     DMat3::from_euler(EulerRot::ZYX, r.z, r.y, r.x)
@@ -171,7 +171,7 @@ pub fn rotation_degrees(degrees: DVec3) -> DMat3 {
 
 /// FNV-1a, 64 bits: a stable hash of bytes (the standard library's may change between
 /// releases, and a cache keyed on it must not).
-pub fn fnv1a(bytes: &[u8], mut hash: u64) -> u64 {
+pub(crate) fn fnv1a(bytes: &[u8], mut hash: u64) -> u64 {
     for &b in bytes {
         hash ^= u64::from(b);
         hash = hash.wrapping_mul(0x0100_0000_01b3);
@@ -180,7 +180,7 @@ pub fn fnv1a(bytes: &[u8], mut hash: u64) -> u64 {
 }
 
 /// FNV-1a's starting value.
-pub const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
+pub(crate) const FNV_OFFSET: u64 = 0xcbf2_9ce4_8422_2325;
 
 #[cfg(test)]
 mod tests {

@@ -42,7 +42,7 @@ pub mod stream {
     /// Three draws for a fallback direction (radial velocity from the exact centre).
     pub const FALLBACK_DIRECTION: u32 = 7;
     /// One draw for a flipbook's first frame (`render.texture.random_start`).
-    pub const FLIPBOOK: u32 = 10;
+    pub(crate) const FLIPBOOK: u32 = 10;
     /// One draw for a sprite's starting angle (`render.rotation.angle`).
     pub const ROTATION_ANGLE: u32 = 11;
     /// One draw for a sprite's spin (`render.rotation.spin`).
@@ -50,9 +50,9 @@ pub mod stream {
     /// One draw for a particle's palette colour (`render.palette`).
     pub const PALETTE: u32 = 13;
     /// One draw for the triangle (or the field cell) a mesh spawn shape picks.
-    pub const MESH_PICK: u32 = 14;
+    pub(crate) const MESH_PICK: u32 = 14;
     /// One draw for the face a box's surface picks (`Box(surface: true)`).
-    pub const FACE_PICK: u32 = 15;
+    pub(crate) const FACE_PICK: u32 = 15;
     /// One draw for a particle's starting age (an emitter's `age`).
     pub const START_AGE: u32 = 16;
     /// `rand(k)` in custom expressions draws from stream CUSTOM + k (k <= 255).
@@ -88,7 +88,7 @@ impl ParticleDraws {
 
 /// The WGSL of three uniform numbers from streams `base` to `base + 2` of particle `id`: the twin
 /// of [`ParticleDraws::unit3`].
-pub fn wgsl_unit3(base: u32) -> String {
+pub(crate) fn wgsl_unit3(base: u32) -> String {
     format!(
         "vec3<f32>(rand_unit(id, {}u), rand_unit(id, {}u), rand_unit(id, {}u))",
         base,
@@ -99,7 +99,7 @@ pub fn wgsl_unit3(base: u32) -> String {
 
 /// Emits the WGSL twin of [`pcg`] as a function called `name` (a module that needs the hash
 /// for two purposes, e.g. draws and the flock's grid, names each its own).
-pub fn emit_pcg(w: &mut Writer, name: &str) {
+pub(crate) fn emit_pcg(w: &mut Writer, name: &str) {
     w.block(format!("fn {name}(x: u32) -> u32"), |w| {
         w.line("let state = x * 747796405u + 2891336453u;");
         w.line("let word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;");

@@ -31,7 +31,7 @@ use crate::base::mesh::{fnv1a, read_obj, TriMesh, FNV_OFFSET};
 pub const PAD: u32 = 3;
 
 /// The most cells along a mesh's longest side.
-pub const MAX_RESOLUTION: u32 = 128;
+pub(crate) const MAX_RESOLUTION: u32 = 128;
 
 /// Bumped whenever the baker's output changes, so that old caches are baked again.
 const BAKE_VERSION: u32 = 1;
@@ -337,7 +337,7 @@ fn decode(bytes: &[u8], key: u64) -> Option<Sdf> {
 }
 
 /// Where the field of the mesh at `mesh_path` is cached.
-pub fn cache_path(mesh_path: &Path) -> std::path::PathBuf {
+pub(crate) fn cache_path(mesh_path: &Path) -> std::path::PathBuf {
     let mut name = mesh_path.as_os_str().to_owned();
     name.push(".plume-sdf");
     name.into()
@@ -345,7 +345,7 @@ pub fn cache_path(mesh_path: &Path) -> std::path::PathBuf {
 
 /// The field of `mesh` (read from `mesh_path`, whose bytes are `mesh_bytes`) at
 /// `resolution`: from the cache when it is current, else baked and cached.
-pub fn cached_or_baked(
+pub(crate) fn cached_or_baked(
     mesh: &TriMesh,
     mesh_path: &Path,
     mesh_bytes: &[u8],
@@ -377,7 +377,7 @@ pub fn cached_or_baked(
 /// Reads the closed OBJ mesh at `path` and bakes (or loads from the cache) its field at
 /// `resolution`; says what is wrong otherwise: the file's problems, a mesh that is not closed
 /// (it has no inside) or flat (no volume).
-pub fn read_and_bake(path: &Path, resolution: u32) -> Result<(Sdf, TriMesh), String> {
+pub(crate) fn read_and_bake(path: &Path, resolution: u32) -> Result<(Sdf, TriMesh), String> {
     let (mesh, bytes) = read_obj(path)?;
     let (open, first) = mesh.open_edges();
     if let Some((a, b)) = first {

@@ -168,6 +168,6 @@ pub fn origin() -> Vec3 {
 }
 
 /// `1.0`: the serde default of a placement's scale.
-pub fn unit_scale() -> f64 {
+pub(crate) fn unit_scale() -> f64 {
     1.0
 }

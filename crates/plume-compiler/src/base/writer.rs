@@ -65,7 +65,7 @@ impl Writer {
 /// Formats an f64 as a WGSL f32 literal: always with a decimal point or exponent, never
 /// NaN or Inf (the compiler validates finiteness before code generation; a value beyond
 /// f32's range is clamped so the module still validates).
-pub fn f32_lit(x: f64) -> String {
+pub(crate) fn f32_lit(x: f64) -> String {
     let x = if x.is_finite() { x } else { 0.0 };
     let v = (x as f32).clamp(-f32::MAX, f32::MAX);
     // `{:?}` prints the shortest text that round-trips the f32, e.g. `0.1`, `1e-7`.
@@ -78,7 +78,7 @@ pub fn f32_lit(x: f64) -> String {
 }
 
 /// Formats a vector as `vec3<f32>(x, y, z)`.
-pub fn vec3_lit(v: DVec3) -> String {
+pub(crate) fn vec3_lit(v: DVec3) -> String {
     format!(
         "vec3<f32>({}, {}, {})",
         f32_lit(v.x),
@@ -88,7 +88,7 @@ pub fn vec3_lit(v: DVec3) -> String {
 }
 
 /// Formats a u32 as a WGSL literal (`7u`).
-pub fn u32_lit(x: u32) -> String {
+pub(crate) fn u32_lit(x: u32) -> String {
     format!("{x}u")
 }
 

@@ -35,12 +35,12 @@ pub enum Body {
 
 /// A mistake in a named expression: its name and the mistake (ranges within its string; a
 /// circle of references spans the whole string).
-pub type DefineError = (String, ExprError);
+pub(crate) type DefineError = (String, ExprError);
 
 /// Parses `written` (name → text). Returns every definition, those that do not parse or that
 /// take part in a circle of references without a tree (so that a place reading one says
 /// so), and their mistakes.
-pub fn parse_all(written: &BTreeMap<String, String>) -> (Vec<Define>, Vec<DefineError>) {
+pub(crate) fn parse_all(written: &BTreeMap<String, String>) -> (Vec<Define>, Vec<DefineError>) {
     let mut defines = Vec::new();
     let mut errors = Vec::new();
     for (name, text) in written {

@@ -65,7 +65,7 @@ const HSV: &str = "mix(vec3(1.0, 1.0, 1.0), clamp(abs(fract(vec3(a0 + 1.0, a0 + 
 
 /// Expands `hsv(h, s, v)` at the call's characters `[start, end)`, its arguments `args`
 /// standing for `a0`, `a1` and `a2`.
-pub fn expand_hsv(args: &[Ast], (start, end): (usize, usize)) -> Result<Ast, ExprError> {
+pub(crate) fn expand_hsv(args: &[Ast], (start, end): (usize, usize)) -> Result<Ast, ExprError> {
     let mut ast = parse(&tokenize(HSV)?)?;
     place(&mut ast, start, end);
     substitute(&mut ast, args);

@@ -16,7 +16,7 @@ pub struct Emitter<'w> {
     /// places) is bound once, since operands are named canonically.
     bound: std::collections::HashMap<String, String>,
     /// The stream base `rand(k)` draws from.
-    pub rand_stream: u32,
+    pub(crate) rand_stream: u32,
 }
 
 fn lit(ty: Ty, x: f64) -> String {

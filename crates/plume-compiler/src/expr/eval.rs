@@ -37,7 +37,7 @@ pub struct Inputs {
 pub const MAX_ATTRIBUTES: usize = 16;
 
 /// A particle's attribute values, by index: a vector, or a number in `x`.
-pub type Attrs = [DVec3; MAX_ATTRIBUTES];
+pub(crate) type Attrs = [DVec3; MAX_ATTRIBUTES];
 
 /// A value: a number, a vector or a comparison's result.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -111,7 +111,7 @@ pub fn bound(x: f64) -> f64 {
 }
 
 /// Guarded division: 0 where |b| < [`DIV_FLOOR`].
-pub fn div(a: f64, b: f64) -> f64 {
+pub(crate) fn div(a: f64, b: f64) -> f64 {
     if b.abs() < DIV_FLOOR {
         0.0
     } else {

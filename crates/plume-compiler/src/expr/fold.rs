@@ -10,7 +10,7 @@ use super::typed::{Expr, Node, Op1, Op2, Op3, Ty};
 use super::DIV_FLOOR;
 
 /// True for a subtree with no variables and no random numbers.
-pub fn is_constant(e: &Expr) -> bool {
+pub(crate) fn is_constant(e: &Expr) -> bool {
     match &e.node {
         Node::Scalar(_) | Node::Vector(_) => true,
         Node::Var(_) | Node::Rand(_) | Node::Param { .. } | Node::Attr(_) => false,
@@ -112,11 +112,11 @@ fn simplify(e: Expr) -> Expr {
 }
 
 /// True when `e` is a constant whose every component passes the division guard.
-pub fn is_safe_divisor(e: &Expr) -> bool {
+pub(crate) fn is_safe_divisor(e: &Expr) -> bool {
     leaf(e).is_some_and(|d| d.abs().min_element() >= DIV_FLOOR)
 }
 
 /// True when `e` is the zero vector: an acceleration that cannot act.
-pub fn is_zero(e: &Expr) -> bool {
+pub(crate) fn is_zero(e: &Expr) -> bool {
     matches!(e.node, Node::Vector(v) if v == DVec3::ZERO)
 }

@@ -20,7 +20,7 @@ pub enum Tok {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Token {
     /// What it is.
-    pub tok: Tok,
+    pub(crate) tok: Tok,
     /// First character (0-based, in characters).
     pub start: usize,
     /// One past the last character.
@@ -32,7 +32,7 @@ const OPERATORS: &[&str] = &[
 ];
 
 /// Splits `text` into tokens, ending with [`Tok::End`].
-pub fn tokenize(text: &str) -> Result<Vec<Token>, ExprError> {
+pub(crate) fn tokenize(text: &str) -> Result<Vec<Token>, ExprError> {
     let chars: Vec<char> = text.chars().collect();
     let mut out = Vec::new();
     let mut i = 0;

@@ -39,9 +39,9 @@ pub const EXP_MAX: f64 = 41.446_531_673_892_82;
 /// See [`EXP_MAX`].
 pub const EXP_MIN: f64 = -87.0;
 /// `normalize(v)` is zero when |v|² is at most this (the same guard as the built-in forces').
-pub const NORMALIZE_FLOOR: f64 = 1.0e-20;
+pub(crate) const NORMALIZE_FLOOR: f64 = 1.0e-20;
 /// The most tokens an expression may have: keeps the recursive passes' depth small.
-pub const MAX_TOKENS: usize = 1024;
+pub(crate) const MAX_TOKENS: usize = 1024;
 
 /// What an effect's expressions may name besides their variables: its `params` and `dt`.
 #[derive(Clone, Copy, Debug)]
@@ -76,7 +76,7 @@ impl<'a> Names<'a> {
     }
 
     /// [`Names::scope`] for an expression evaluated on a particle that has its attributes.
-    pub fn scope_with_attrs(&self, vars: &'a [Var], role: &'a str) -> typed::Scope<'a> {
+    pub(crate) fn scope_with_attrs(&self, vars: &'a [Var], role: &'a str) -> typed::Scope<'a> {
         typed::Scope {
             reads_attrs: true,
             ..self.scope(vars, role)

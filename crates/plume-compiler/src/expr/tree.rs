@@ -68,14 +68,8 @@ impl Expr {
             || self.children().iter().any(|c| c.reads(var))
     }
 
-    /// Whether it reads attribute `index` (after folding, only where it matters).
-    pub fn reads_attr(&self, index: u8) -> bool {
-        matches!(self.node, Node::Attr(i) if i == index)
-            || self.children().iter().any(|c| c.reads_attr(index))
-    }
-
     /// Every attribute it reads, as a bit set of indices.
-    pub fn attrs_read(&self) -> u64 {
+    pub(crate) fn attrs_read(&self) -> u64 {
         let own = match self.node {
             Node::Attr(i) => 1u64 << i,
             _ => 0,
@@ -93,7 +87,7 @@ impl Expr {
     }
 
     /// True when it draws random numbers.
-    pub fn draws_random(&self) -> bool {
+    pub(crate) fn draws_random(&self) -> bool {
         matches!(self.node, Node::Rand(_)) || self.children().iter().any(|c| c.draws_random())
     }
 
@@ -138,7 +132,7 @@ pub struct Scope<'a> {
     pub attrs: &'a [AttrName],
     /// Whether the attributes hold values where this expression is evaluated (not at spawn,
     /// where they are being given theirs).
-    pub reads_attrs: bool,
+    pub(crate) reads_attrs: bool,
     /// The effect's named expressions (`define`), expanded where they are read.
     pub defines: &'a [super::define::Define],
     /// Nodes the named expressions read so far have expanded to (at most

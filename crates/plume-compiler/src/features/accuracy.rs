@@ -47,13 +47,15 @@ fn plain_some<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> 
 
 /// Reads `accuracy: (position: .., over: ..)` (or `Accuracy(..)`) as a budget: the field is
 /// optional, but written without `Some`.
-pub fn deserialize_budget<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Accuracy>, D::Error> {
+pub(crate) fn deserialize_budget<'de, D: Deserializer<'de>>(
+    d: D,
+) -> Result<Option<Accuracy>, D::Error> {
     Accuracy::deserialize(d).map(Some)
 }
 
 /// The most steps a budget's window may span: the compiler runs its samples through every one
 /// of them for each scheme it tries (20,000 steps of 1/60 s are 5.5 minutes).
-pub const MAX_WINDOW_STEPS: f64 = 20_000.0;
+pub(crate) const MAX_WINDOW_STEPS: f64 = 20_000.0;
 
 /// Checks a budget at `path`, for steps of `dt` seconds.
 pub fn check(c: &mut Checker, path: &ValuePath, budget: &Accuracy, dt: f64) {
@@ -126,7 +128,7 @@ pub struct AccuracyIr {
     pub stand_in: Option<crate::features::bursts::Burst>,
     /// The camera a pixel budget is measured through when it is not the effect's own (a
     /// host's: `CompileOptions::accuracy_camera`).
-    pub host_camera: Option<BudgetCamera>,
+    pub(crate) host_camera: Option<BudgetCamera>,
     /// Whether the choice was taken from an earlier calibration of the same content in this
     /// process (`stages::passes::accuracy::choose`) rather than calibrated here.
     pub remembered: bool,
@@ -138,7 +140,7 @@ pub struct AccuracyIr {
 /// A camera a pixel budget is measured through (a pinhole at `eye` looking at `target`,
 /// `fov_y` degrees tall).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BudgetCamera {
+pub(crate) struct BudgetCamera {
     /// Where it is (m).
     pub eye: DVec3,
     /// What it looks at (m).
@@ -231,7 +233,7 @@ impl Screen {
     }
 
     /// Pixels a lateral shift of `metres` at `x` moves its image by (0 behind the camera).
-    pub fn pixels_of(&self, metres: f64, x: DVec3) -> f64 {
+    pub(crate) fn pixels_of(&self, metres: f64, x: DVec3) -> f64 {
         let z = self.depth(x);
         if z > 1e-6 {
             self.scale * metres / z

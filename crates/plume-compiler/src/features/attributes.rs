@@ -32,7 +32,7 @@ use crate::expr::{self, Expr, ExprError, Names, Ty, Var};
 /// The most 4-byte words the declared attributes may take together (a vec3 takes 3): 64
 /// bytes, on top of the built-in ones, keeps a particle within a few cache lines and its
 /// struct well inside what every adapter's storage binding holds at the largest capacities.
-pub const MAX_WORDS: u32 = 16;
+pub(crate) const MAX_WORDS: u32 = 16;
 
 /// The kept attributes' stored words of one particle, in the layout's order; 0 past the last.
 pub type Words = [f64; MAX_WORDS as usize];
@@ -60,7 +60,7 @@ pub struct Attribute {
 }
 
 /// The file's `attributes`, by name.
-pub type Declared = BTreeMap<String, Attribute>;
+pub(crate) type Declared = BTreeMap<String, Attribute>;
 
 /// How an attribute changes over a particle's life.
 #[derive(Clone, Debug, PartialEq)]
@@ -295,7 +295,7 @@ impl AttributesIr {
     }
 
     /// The kept attributes with their indices.
-    pub fn iter_kept(&self, kept: u64) -> impl Iterator<Item = (usize, &AttributeIr)> {
+    pub(crate) fn iter_kept(&self, kept: u64) -> impl Iterator<Item = (usize, &AttributeIr)> {
         self.list
             .iter()
             .enumerate()
@@ -304,7 +304,7 @@ impl AttributesIr {
 
     /// Whether a kept attribute's change reads the particle's age or lifetime (the layout
     /// then keeps the spawn step).
-    pub fn reads_age_or_life(&self, kept: u64) -> bool {
+    pub(crate) fn reads_age_or_life(&self, kept: u64) -> bool {
         self.iter_kept(kept)
             .filter_map(|(_, a)| a.change_expr())
             .any(|e| e.reads(Var::Age) || e.reads(Var::Life))
@@ -449,7 +449,7 @@ impl AttributesIr {
 
     /// `, v0, vec3<f32>(v1, v2, v3)`: the kept attributes as trailing arguments, from their
     /// stored words `field(i)` (the WGSL names of attribute i's words).
-    pub fn args_wgsl(&self, kept: u64, field: impl Fn(usize) -> Vec<String>) -> String {
+    pub(crate) fn args_wgsl(&self, kept: u64, field: impl Fn(usize) -> Vec<String>) -> String {
         self.iter_kept(kept)
             .map(|(i, a)| {
                 let words = field(i);
@@ -464,7 +464,7 @@ impl AttributesIr {
     /// Emits `attr_spawn_I(x, v, t, ctx_id)` and, for those that change,
     /// `attr_change_I(x, v, t, age, ctx_life, ctx_id, <attributes>)` (the new value) for each
     /// kept attribute: the WGSL twins of [`Self::spawn_values`] and [`Self::step_values`].
-    pub fn emit_fns(&self, w: &mut Writer, kept: u64) {
+    pub(crate) fn emit_fns(&self, w: &mut Writer, kept: u64) {
         let bound = f32_lit(expr::VALUE_BOUND);
         let clamps = |w: &mut Writer| {
             w.line(format!(

@@ -23,7 +23,8 @@ use crate::base::writer::Writer;
 pub const SLOTS: u32 = 8;
 
 /// Bytes the bursts add to the step parameters: per slot one entry and two motion vectors.
-pub const PARAMS_BYTES: u64 = SLOTS as u64 * 48;
+#[cfg(test)]
+const PARAMS_BYTES: u64 = SLOTS as u64 * 48;
 
 /// One burst: `count` particles of emitter `emitter`, spawned at the next step with `offset`
 /// added to their positions and `velocity` to their velocities.
@@ -105,7 +106,7 @@ pub fn words(planned: &[PlannedBurst]) -> Vec<u32> {
 }
 
 /// Emits the step parameters' fields (after the emitters').
-pub fn emit_params_fields(w: &mut Writer) {
+pub(crate) fn emit_params_fields(w: &mut Writer) {
     w.line(format!(
         "bursts: array<vec4<u32>, {SLOTS}>, // (count, emitter's counter before, emitter, 0)"
     ));
@@ -117,7 +118,7 @@ pub fn emit_params_fields(w: &mut Writer) {
 
 /// Emits the search of spawn `local` (an index past every emitter's spawns) among the bursts:
 /// sets `burst` to its slot, `e` to its emitter and `k` to its emitter counter.
-pub fn emit_find(w: &mut Writer) {
+pub(crate) fn emit_find(w: &mut Writer) {
     w.comment("Past every emitter's spawns come the bursts fired from code, in order.");
     w.line("var b = 0u;");
     w.block(format!("for (; b < {}u; b++)", SLOTS - 1), |w| {
@@ -131,7 +132,7 @@ pub fn emit_find(w: &mut Writer) {
 
 /// Emits the burst's motion applied to the spawned `s` when `burst` names a slot (the f32
 /// twin of [`Burst::apply`]).
-pub fn emit_apply(w: &mut Writer) {
+pub(crate) fn emit_apply(w: &mut Writer) {
     w.block(format!("if (burst < {SLOTS}u)"), |w| {
         w.line("s.x = s.x + params.burst_motion[2u * burst].xyz;");
         w.line("s.v = s.v + params.burst_motion[2u * burst + 1u].xyz;");

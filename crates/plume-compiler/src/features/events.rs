@@ -22,10 +22,10 @@ use crate::features::emitter::{Shape, Velocity};
 
 /// The most events a group may fire, and the most it may be fed by: each takes bindings of the
 /// compute module (three per event fired, two per event received).
-pub const MAX_EVENTS: usize = 4;
+pub(crate) const MAX_EVENTS: usize = 4;
 
 /// The most particles one event may spawn per firing particle.
-pub const MAX_COUNT: u32 = 65_536;
+pub(crate) const MAX_COUNT: u32 = 65_536;
 
 /// When a particle fires an event.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -111,7 +111,7 @@ pub enum TriggerIr {
 impl TriggerIr {
     /// Whether an `Every(period)` event fires at the end of step `step` for a particle born at
     /// `born` (the f64 reference and the kernel use the same u32 arithmetic).
-    pub fn every_fires(period: u32, born: u64, step: u64) -> bool {
+    pub(crate) fn every_fires(period: u32, born: u64, step: u64) -> bool {
         (step as u32)
             .wrapping_add(1)
             .wrapping_sub(born as u32)
@@ -141,7 +141,7 @@ pub enum Ordering {
 
 impl Ordering {
     /// The ordering of the events of a firing group of `capacity` slots.
-    pub fn for_capacity(capacity: u32) -> Self {
+    pub(crate) fn for_capacity(capacity: u32) -> Self {
         if capacity <= COUNTED_MAX {
             Ordering::Counted
         } else {
@@ -186,7 +186,7 @@ pub struct EventInputIr {
     /// Whether the children's tint includes the parent's.
     pub inherit_color: bool,
     /// The parent group's capacity (how many records there can be).
-    pub parent_capacity: u32,
+    pub(crate) parent_capacity: u32,
     /// Steps between a parent's firings (`Every`), else 1: a ribbon's children's ordinals
     /// count in them (`ribbon.rs`).
     pub period: u32,
@@ -286,7 +286,7 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
 }
 
 /// The WGSL type of an event binding, by name; None for other bindings.
-pub fn binding_type(name: &str) -> Option<&'static str> {
+pub(crate) fn binding_type(name: &str) -> Option<&'static str> {
     if OUT_KEYS.contains(&name) || OUT_VALS.contains(&name) || IN_ORDER.contains(&name) {
         Some("array<u32>")
     } else if OUT_RECORDS.contains(&name) || IN_RECORDS.contains(&name) {
@@ -297,12 +297,12 @@ pub fn binding_type(name: &str) -> Option<&'static str> {
 }
 
 /// The WGSL name of the `j`-th received event's slot order (the parent's firing slots).
-pub fn in_order(j: usize) -> &'static str {
+pub(crate) fn in_order(j: usize) -> &'static str {
     IN_ORDER[j]
 }
 
 /// Emits the record structs (when the group fires or receives events).
-pub fn emit_declarations(w: &mut Writer) {
+pub(crate) fn emit_declarations(w: &mut Writer) {
     w.comment("An event's record: the firing particle's position, its tint (tint.rs, packed) and velocity.");
     w.block("struct EventRecord", |w| {
         w.line("x: vec3<f32>,");
@@ -321,7 +321,7 @@ pub fn emit_declarations(w: &mut Writer) {
 
 /// The bit of an update's outcome (`update.rs`) that says the particle fired its group's
 /// `j`-th event; bit 0 says it died.
-pub fn fired_bit(j: usize) -> u32 {
+pub(crate) fn fired_bit(j: usize) -> u32 {
     2 << j
 }
 
@@ -457,7 +457,7 @@ pub fn emit_workgroup_appends(w: &mut Writer, events: &[EventIr], part: AppendPa
 /// (u32) its whole steps lived at its end, `x`, `vel` and `tint` (packed) as for
 /// [`emit_fire`]. The firings are appended with their records, the record's index standing
 /// for the firing's slot (and, for [`Ordering::Bucketed`], the id range widened).
-pub fn emit_fire_appended(
+pub(crate) fn emit_fire_appended(
     w: &mut Writer,
     events: &[EventIr],
     id: &str,

@@ -65,7 +65,7 @@ pub enum Field {
 
 /// The most nodes a grid may have: 256³ (256 MiB of vec4<f32>), past every binding limit
 /// anyway on most adapters.
-pub const MAX_NODES: u64 = 256 * 256 * 256;
+pub(crate) const MAX_NODES: u64 = 256 * 256 * 256;
 
 impl Field {
     /// Checks resolution, bounds, and that a time-dependent force is baked every step.
@@ -185,7 +185,7 @@ impl FieldIr {
     }
 
     /// The position of node (i, j, k).
-    pub fn node_position(&self, i: u32, j: u32, k: u32) -> DVec3 {
+    pub(crate) fn node_position(&self, i: u32, j: u32, k: u32) -> DVec3 {
         self.min + DVec3::new(f64::from(i), f64::from(j), f64::from(k)) / self.scale()
     }
 

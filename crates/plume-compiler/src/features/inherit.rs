@@ -13,7 +13,7 @@ use crate::base::writer::{u32_lit, Writer};
 use crate::features::events::{EventInputIr, EventIr, MAX_EVENTS};
 
 /// Words a passed attribute takes in the buffer, whatever its type.
-pub const WORDS: u32 = 3;
+pub(crate) const WORDS: u32 = 3;
 
 const OUT: [&str; MAX_EVENTS] = [
     "event_attrs_out_0",
@@ -87,14 +87,19 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
 }
 
 /// The WGSL type of a binding of this module's, or None for another's.
-pub fn binding_type(name: &str) -> Option<&'static str> {
+pub(crate) fn binding_type(name: &str) -> Option<&'static str> {
     (OUT.contains(&name) || IN.contains(&name)).then_some("array<f32>")
 }
 
 /// Emits, where the parent's update writes event `j`'s record for the particle in slot
 /// `chunk.base + i`, the words of the attributes it passes; `words(a)` is attribute a's three
 /// words as the step began (WGSL; a number's last two 0.0).
-pub fn emit_pass(w: &mut Writer, j: usize, event: &EventIr, words: &dyn Fn(usize) -> [String; 3]) {
+pub(crate) fn emit_pass(
+    w: &mut Writer,
+    j: usize,
+    event: &EventIr,
+    words: &dyn Fn(usize) -> [String; 3],
+) {
     if event.passes.is_empty() {
         return;
     }
@@ -112,7 +117,7 @@ pub fn emit_pass(w: &mut Writer, j: usize, event: &EventIr, words: &dyn Fn(usize
 
 /// Emits, in the child spawn of an input (with `rank`, the firing's place, in scope; `order`
 /// the input's slot order), where the firing's words start.
-pub fn emit_find(w: &mut Writer, input: &EventInputIr, order: &str) {
+pub(crate) fn emit_find(w: &mut Writer, input: &EventInputIr, order: &str) {
     if !input.inherits.is_empty() {
         w.line(format!(
             "let inherited_at = {order}[rank] * {};",

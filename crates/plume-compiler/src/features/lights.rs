@@ -30,7 +30,7 @@ pub const LIGHTS_BYTES: u64 = 32 + 32 * LIGHTS_MOST as u64 + SHADOW_BYTES;
 pub const LIGHTS_BINDING: u32 = 36;
 
 /// The nearest a point light counts a surface (m): nearer, the light is what it is here.
-pub const POINT_NEAREST: f64 = 0.1;
+pub(crate) const POINT_NEAREST: f64 = 0.1;
 
 /// A light as written in an effect file.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -180,7 +180,7 @@ impl Lights {
     }
 
     /// Whether one of the lights a file names casts a shadow (`shadow: true`).
-    pub fn casts_shadow(written: &[Light]) -> bool {
+    pub(crate) fn casts_shadow(written: &[Light]) -> bool {
         written
             .iter()
             .any(|l| matches!(l, Light::Directional { shadow: true, .. }))
@@ -344,7 +344,7 @@ impl std::fmt::Display for Lights {
 
 /// A point light's fade to its range: (1 − (d / range)⁴)², clamped to [0, 1]; 1 near the
 /// light, 0 from `range` on, with no step at the range.
-pub fn range_window(d2: f64, range: f64) -> f64 {
+pub(crate) fn range_window(d2: f64, range: f64) -> f64 {
     let q = d2 / (range * range);
     (1.0 - q * q).clamp(0.0, 1.0).powi(2)
 }
@@ -412,7 +412,7 @@ pub fn check(lights: &[Light], c: &mut Checker) {
 /// receives, the WGSL twin of [`Lights::received`]. The runtime writes the uniform in the
 /// view each frame ([`Lights::transformed`] by the camera's view), so no pixel moves a light;
 /// `wrap` is a constant of the look.
-pub fn emit_received_light(w: &mut Writer, wrap: f64, shadows: bool) {
+pub(crate) fn emit_received_light(w: &mut Writer, wrap: f64, shadows: bool) {
     w.comment("A light source: (direction the light travels, 0) or (position, 1); (colour · intensity, range).");
     w.block("struct LightSource", |w| {
         w.line("place: vec4<f32>,");

@@ -201,7 +201,7 @@ impl MeshSurface {
     }
 
     /// The triangles as placed (from the f32 values the GPU holds).
-    pub fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+    pub(crate) fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
         self.triangles.iter().map(|t| {
             let [a, e1, e2, _] = t.map(|v| DVec3::from_array(v.map(f64::from)));
             [a, a + e1, a + e2]
@@ -232,7 +232,7 @@ impl MeshSurface {
     }
 
     /// How many u32 values [`MeshSurface::data`] gives.
-    pub fn data_len(&self) -> u32 {
+    pub(crate) fn data_len(&self) -> u32 {
         match &self.volume {
             Some(v) => v.cells.len() as u32,
             None => (self.thresholds.len() * 13) as u32,

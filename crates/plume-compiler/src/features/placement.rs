@@ -76,18 +76,15 @@ impl Placement {
     }
 }
 
-/// Bytes the placement adds to a placed effect's step parameters.
-pub const PARAMS_BYTES: u64 = 48;
-
 /// Emits the step parameters' field (after the header's four words).
-pub fn emit_params_field(w: &mut Writer) {
+pub(crate) fn emit_params_field(w: &mut Writer) {
     w.line("placement: array<vec4<f32>, 3>,");
 }
 
 /// Emits the placement of the spawned `Spawned` named `s`: its position through the whole
 /// transform, its velocity through the linear part (the f32 twin of [`Placement::point`] and
 /// [`Placement::vector`]).
-pub fn emit_apply(w: &mut Writer) {
+pub(crate) fn emit_apply(w: &mut Writer) {
     w.comment("Placed in the host's world (world space): position by the transform, velocity by its linear part.");
     w.line("let row0 = params.placement[0];");
     w.line("let row1 = params.placement[1];");

@@ -112,7 +112,7 @@ impl SceneMesh {
 
 impl SceneMeshIr {
     /// The mesh's triangles placed in the world.
-    pub fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+    pub(crate) fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
         self.mesh
             .placed_triangles(self.offset, self.scale, self.rotation)
     }

@@ -138,7 +138,7 @@ impl Shadow {
     /// The shadow's words in the lights uniform ([`SHADOW_BYTES`]): (source, cascade count,
     /// reversed, 0) as u32 bits, then the cascades' matrices column by column (unused ones
     /// zero). `None`: no shadow.
-    pub fn uniform_words(shadow: Option<&Shadow>) -> Vec<f32> {
+    pub(crate) fn uniform_words(shadow: Option<&Shadow>) -> Vec<f32> {
         let mut words = vec![0.0f32; SHADOW_BYTES as usize / 4];
         let (source, count, reversed) = match shadow {
             Some(s) => (
@@ -163,7 +163,8 @@ impl Shadow {
 }
 
 /// The lights uniform's shadow fields, as the struct `Lights` ends in every lit shader.
-pub const SHADOW_FIELDS_WGSL: &str = "    shadow: vec4<u32>,\n    cascades: array<mat4x4<f32>, 4>,";
+pub(crate) const SHADOW_FIELDS_WGSL: &str =
+    "    shadow: vec4<u32>,\n    cascades: array<mat4x4<f32>, 4>,";
 
 /// `shadow_visibility(p)`, the WGSL twin of [`Shadow::visibility`], shared by the generated
 /// draw modules (in the view) and the scene's meshes' shader (in the world). It reads

@@ -276,7 +276,7 @@ fn compile_all(effect: &EffectSpec, source: &str) -> Result<CompiledGraph, Compi
 }
 
 /// An `Every` period in whole steps (at least one).
-pub fn every_steps(seconds: f64, dt: f64) -> u32 {
+pub(crate) fn every_steps(seconds: f64, dt: f64) -> u32 {
     (seconds / dt).round().clamp(1.0, f64::from(u32::MAX)) as u32
 }
 

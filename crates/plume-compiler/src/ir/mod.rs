@@ -165,7 +165,7 @@ impl RenderIr {
 
     /// Whether colour or size change over a particle's life (some stop differs from the first);
     /// if not, the draw needs no life fraction at all.
-    pub fn varies_over_life(&self) -> bool {
+    pub(crate) fn varies_over_life(&self) -> bool {
         let colour = self.color.iter().any(|(_, c)| *c != self.color[0].1);
         let varies = |stops: &[(f64, f64)]| stops.iter().any(|(_, s)| *s != stops[0].1);
         let size = varies(&self.size);
@@ -197,7 +197,7 @@ impl EffectIr {
     }
 
     /// True when any emitter gives its particles a lifetime.
-    pub fn has_lifetimes(&self) -> bool {
+    pub(crate) fn has_lifetimes(&self) -> bool {
         self.emitters.iter().any(|e| e.lifetime.is_some())
     }
 
@@ -232,18 +232,8 @@ impl EffectIr {
 
     /// True when an emitter gives its particles a random starting age (`Emitter::age`): their
     /// spawn step is then stored, as the step their age counts from.
-    pub fn has_start_ages(&self) -> bool {
+    pub(crate) fn has_start_ages(&self) -> bool {
         self.emitters.iter().any(|e| e.age_steps.is_some())
-    }
-
-    /// True when any force term reads the velocity.
-    pub fn forces_use_velocity(&self) -> bool {
-        self.terms.iter().any(|t| t.as_dyn().uses_velocity())
-    }
-
-    /// True when any force term reads the time.
-    pub fn forces_use_time(&self) -> bool {
-        self.terms.iter().any(|t| t.as_dyn().uses_time())
     }
 
     /// The attributes kept (a bit set of their indices): those that custom forces or the
@@ -261,21 +251,21 @@ impl EffectIr {
 
     /// Whether an expression of the compute module (a custom force, a kept attribute, a spawn
     /// expression) reads the gradient noise through `op` (`noise` or `curl`).
-    pub fn compute_uses(&self, op: crate::expr::typed::Op1) -> bool {
+    pub(crate) fn compute_uses(&self, op: crate::expr::typed::Op1) -> bool {
         self.custom_terms().any(|c| c.expr.uses(op))
             || self.attributes.uses(self.kept_attributes(), op)
             || self.emitters.iter().any(|e| e.uses(op))
     }
 
     /// The attributes custom forces read (a bit set): their context holds them.
-    pub fn attributes_forces_read(&self) -> u64 {
+    pub(crate) fn attributes_forces_read(&self) -> u64 {
         self.custom_terms()
             .fold(0, |set, c| set | c.expr.attrs_read())
     }
 
     /// Sets live param `index` to `value` in every custom term (the reference's twin of the
     /// host changing it on the GPU; the value is the f32 the GPU reads).
-    pub fn set_live_param(&mut self, index: usize, value: f32) {
+    pub(crate) fn set_live_param(&mut self, index: usize, value: f32) {
         if let Some(p) = self.live_params.get_mut(index) {
             p.1 = f64::from(value);
         }
@@ -360,7 +350,7 @@ impl EffectIr {
 
     /// Whether any collider needs the `collider_data` binding (a height field's samples, a
     /// mesh's field).
-    pub fn has_collider_data(&self) -> bool {
+    pub(crate) fn has_collider_data(&self) -> bool {
         self.colliders.iter().any(|c| c.surface.data_len() > 0)
     }
 

@@ -41,7 +41,7 @@ impl Trajectories {
     }
 
     /// The largest `f` of any followed position.
-    pub fn max_of(&self, f: &dyn Fn(DVec3) -> f64) -> f64 {
+    pub(crate) fn max_of(&self, f: &dyn Fn(DVec3) -> f64) -> f64 {
         self.steps
             .iter()
             .flat_map(|s| s.values())
@@ -64,7 +64,7 @@ impl Trajectories {
 }
 
 /// How far apart two positions are, in a budget's unit (metres, or pixels on screen).
-pub type Metric = dyn Fn(DVec3, DVec3) -> f64 + Send + Sync;
+pub(crate) type Metric = dyn Fn(DVec3, DVec3) -> f64 + Send + Sync;
 
 /// The trajectories' positions, step by step, for a run made elsewhere (the GPU's).
 impl FromIterator<HashMap<u32, DVec3>> for Trajectories {
@@ -88,7 +88,7 @@ pub fn run(ir: &EffectIr, scheme: Scheme, steps: u64, particles: u32) -> Traject
 
 /// [`run`], with each particle's motion rounded to 16-bit floats wherever the GPU stores it
 /// when `halves` (a half-motion layout's model).
-pub fn run_stored(
+pub(crate) fn run_stored(
     ir: &EffectIr,
     scheme: Scheme,
     steps: u64,

@@ -14,7 +14,7 @@ use crate::stages::schedule::{LiveSegments, Schedule};
 /// The closed form at one age τ (s) under the Exact integrator's forces: the exact step of
 /// length τ, and the sizes of its terms.
 #[derive(Clone, Copy, Debug)]
-pub struct AtAge {
+pub(crate) struct AtAge {
     step: ExactStep,
     /// (τ - F) |u|.
     wind: f64,
@@ -49,7 +49,7 @@ impl AtAge {
     /// shape's extent, since a point drawn in a box from -2 to 2 carries the rounding of 2
     /// even where it lands near 0). A position computed in f32 is accurate relative to this;
     /// it is |x| unless terms cancel.
-    pub fn term_scale(&self, x0_size: f64, v0: DVec3) -> f64 {
+    pub(crate) fn term_scale(&self, x0_size: f64, v0: DVec3) -> f64 {
         x0_size + self.step.f * v0.length() + self.wind + self.gravity
     }
 }

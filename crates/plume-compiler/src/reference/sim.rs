@@ -71,7 +71,7 @@ fn clock(born: u64, start: u32) -> u64 {
 
 /// `v` rounded to the nearest 16-bit floats, each clamped to f16's largest finite value first,
 /// as a half-motion layout's store does (`pack2x16float` of the clamped value).
-pub fn to_halves(v: DVec3) -> DVec3 {
+pub(crate) fn to_halves(v: DVec3) -> DVec3 {
     let half = |x: f64| half::f16::from_f64(x.clamp(-65504.0, 65504.0)).to_f64();
     DVec3::new(half(v.x), half(v.y), half(v.z))
 }
@@ -129,7 +129,7 @@ impl ReferenceSim {
     /// to 16-bit floats where the GPU would store it, from now on: by default, as the
     /// effect's layout stores it. The accuracy pass sets it either way to compare the two, and
     /// the truth a budget is measured against never rounds.
-    pub fn set_motion_in_halves(&mut self, on: bool) {
+    pub(crate) fn set_motion_in_halves(&mut self, on: bool) {
         self.motion_in_halves = on;
     }
 
@@ -181,7 +181,7 @@ impl ReferenceSim {
     /// firings of the last step, at the start of the next step (before [`Self::step`]): in
     /// parent id order, `count` each, ids consecutive, the last ones dropped when there is no
     /// room (their ids consumed all the same), as the GPU's event spawn does.
-    pub fn spawn_events(&mut self, input: usize, fired: &[Fired]) {
+    pub(crate) fn spawn_events(&mut self, input: usize, fired: &[Fired]) {
         let inp = self.ir.event_inputs[input].clone();
         let mut order: Vec<&Fired> = fired.iter().collect();
         order.sort_by_key(|f| f.id);

@@ -28,7 +28,13 @@ pub fn spawn(ir: &EffectIr, e: usize, id: u32, k: u32, step: u64) -> Spawned {
 }
 
 /// [`spawn`] in a frame at `origin` (an event's spawn: the firing particle's position).
-pub fn spawn_at(ir: &EffectIr, e: usize, (id, k): (u32, u32), step: u64, origin: DVec3) -> Spawned {
+pub(crate) fn spawn_at(
+    ir: &EffectIr,
+    e: usize,
+    (id, k): (u32, u32),
+    step: u64,
+    origin: DVec3,
+) -> Spawned {
     let em = &ir.emitters[e];
     let (x, v) = em.sample(ir.seed_mix, (id, k), step, origin);
     let start = em

@@ -44,7 +44,7 @@ impl ExactStep {
     }
 
     /// The exact step for acceleration `g - k (v - u)` over `h`.
-    pub fn for_drag(g: DVec3, k: f64, u: DVec3, h: f64) -> Self {
+    pub(crate) fn for_drag(g: DVec3, k: f64, u: DVec3, h: f64) -> Self {
         let z = k * h;
         let e = (-z).exp();
         // f = (1 - e^{-z}) / k and q = (h - f) / k, by series where they would cancel.
@@ -68,7 +68,7 @@ impl ExactStep {
 
 /// The Exact integrator's acceleration `g - k (v - u)`: constants summed into g, and the sum of
 /// drags -k_i (v - u_i) written -k (v - u) with k = Σk_i, u = Σ(k_i u_i) / k. Returns (g, k, u).
-pub fn merged_drag(ir: &EffectIr) -> (DVec3, f64, DVec3) {
+pub(crate) fn merged_drag(ir: &EffectIr) -> (DVec3, f64, DVec3) {
     let (mut g, mut k, mut ku) = (DVec3::ZERO, 0.0, DVec3::ZERO);
     for t in &ir.terms {
         match t {
@@ -87,13 +87,13 @@ pub fn merged_drag(ir: &EffectIr) -> (DVec3, f64, DVec3) {
 /// Below this z = k τ the closed form's coefficients are summed as series: the direct
 /// `1 - exp(-z)` cancels (WGSL has no expm1), and past it the alternating series does.
 /// At z = 1 both lose under 3 ulps of f32.
-pub const SERIES_BELOW: f64 = 1.0;
+pub(crate) const SERIES_BELOW: f64 = 1.0;
 
 /// Emits `advance(s, tau)`, the Exact closed form for any age `tau` (s), in f32:
 /// x = x0 + F v0 + (τ - F) u + Q g and v = e v0 + (1 - e) u + F g, with e = e^{-kτ},
 /// F = (1 - e)/k and Q = (τ - F)/k (so τ - F = k Q and 1 - e = k F). The stateless kernel
 /// calls it once per particle with its age, so nothing accumulates: no drift at any t.
-pub fn emit_advance(w: &mut Writer, ir: &EffectIr) {
+pub(crate) fn emit_advance(w: &mut Writer, ir: &EffectIr) {
     let (g, k, u) = merged_drag(ir);
     w.comment("The Exact closed form at age tau: gravity g plus drag k toward u (integrators.rs).");
     w.block("fn advance(s: Spawned, tau: f32) -> Spawned", |w| {
@@ -160,7 +160,7 @@ pub fn emit_advance(w: &mut Writer, ir: &EffectIr) {
 }
 
 /// Emits one substep of `ir.integrator` (x, v or d, and t in scope as `var`s / `let`).
-pub fn emit_step(w: &mut Writer, ir: &EffectIr) {
+pub(crate) fn emit_step(w: &mut Writer, ir: &EffectIr) {
     let h = ir.h();
     let hh = f32_lit(h);
     let half = f32_lit(0.5 * h);
@@ -251,7 +251,7 @@ fn emit_clamp(w: &mut Writer, var: &str, limit: f64) {
 }
 
 /// True when the integrator needs the `accel` function (all but Exact).
-pub fn needs_accel(i: Integrator) -> bool {
+pub(crate) fn needs_accel(i: Integrator) -> bool {
     i != Integrator::Exact
 }
 

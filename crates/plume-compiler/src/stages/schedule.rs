@@ -178,11 +178,6 @@ impl Schedule {
         }
     }
 
-    /// Bursts queued and not yet spawned.
-    pub fn bursts_pending(&self) -> usize {
-        self.pending.len()
-    }
-
     /// Steps whose spawns it still remembers (for ages): those that may have live particles.
     pub fn steps_remembered(&self) -> usize {
         self.first_ids.len()
@@ -398,7 +393,7 @@ impl LiveSegments {
 
     /// Moves to `steps_done` steps with no spawns since the last recorded step (after
     /// [`Schedule::skip_idle`]), dropping the segments whose particles have all died.
-    pub fn advance_to(&mut self, steps_done: u64) {
+    pub(crate) fn advance_to(&mut self, steps_done: u64) {
         self.steps_done = steps_done;
         for (segments, life) in self.per_emitter.iter_mut().zip(&self.lives) {
             if let Some(life) = life {

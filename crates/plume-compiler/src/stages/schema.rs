@@ -329,7 +329,7 @@ pub struct Render {
 
 impl Render {
     /// The strings of `color_by`, `alpha_by`, `size_by` and `color_t`.
-    pub fn written_by(&self) -> crate::features::looks::by_expression::Written<'_> {
+    pub(crate) fn written_by(&self) -> crate::features::looks::by_expression::Written<'_> {
         [
             self.color_by.as_deref(),
             self.alpha_by.as_deref(),

@@ -15,7 +15,7 @@ pub const MAX_EMITTERS: usize = 1023;
 /// compilers slow down sharply and drivers may refuse the kernel.
 pub const MAX_FORCES: usize = 512;
 /// The most colliders, and separately the most kill volumes (same reason as forces).
-pub const MAX_VOLUMES: usize = 256;
+pub(crate) const MAX_VOLUMES: usize = 256;
 
 /// Checks the whole effect; returns the checker holding every error found.
 pub fn check_effect(effect: &EffectSpec) -> Checker {

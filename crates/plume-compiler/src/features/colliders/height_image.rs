@@ -81,7 +81,11 @@ pub fn read(
 /// Reads every height field's `image` into its `heights` (files relative to `base_dir`),
 /// recording what is wrong, located at the field, in `c`: an unreadable image, `image` and
 /// `heights` both given, or `image` and `height` without each other.
-pub fn read_height_images(collide: &mut [Collider], base_dir: Option<&Path>, c: &mut Checker) {
+pub(crate) fn read_height_images(
+    collide: &mut [Collider],
+    base_dir: Option<&Path>,
+    c: &mut Checker,
+) {
     for (i, collider) in collide.iter_mut().enumerate() {
         let path = collider_path(i, collider);
         let Collider::HeightField {

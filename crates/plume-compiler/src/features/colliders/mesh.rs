@@ -31,10 +31,10 @@ use crate::base::values::Vec3;
 use crate::base::writer::{f32_lit, Writer};
 
 /// The resolution when the file gives none.
-pub const DEFAULT_RESOLUTION: u32 = 32;
+pub(crate) const DEFAULT_RESOLUTION: u32 = 32;
 
 /// The fewest cells along the mesh's longest side.
-pub const MIN_RESOLUTION: u32 = 4;
+pub(crate) const MIN_RESOLUTION: u32 = 4;
 
 /// Bisection halvings of a crossing.
 const BISECTIONS: u32 = 20;
@@ -73,7 +73,7 @@ pub struct MeshIr {
 }
 
 /// The rotation `rotation` (degrees about x, then y, then z) stands for.
-pub fn rotation_matrix(rotation: Vec3) -> DMat3 {
+pub(crate) fn rotation_matrix(rotation: Vec3) -> DMat3 {
     crate::base::mesh::rotation_degrees(rotation.d())
 }
 
@@ -130,7 +130,7 @@ fn bake_file(path: &Path, resolution: u32) -> Result<Baked, String> {
 
 impl MeshIr {
     /// The mesh's triangles placed in the world.
-    pub fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
+    pub(crate) fn world_triangles(&self) -> impl Iterator<Item = [DVec3; 3]> + '_ {
         self.baked
             .mesh
             .placed_triangles(self.offset, self.scale, self.rotation)

@@ -191,7 +191,7 @@ impl Surface {
     }
 
     /// How many f32 values the surface keeps in the `collider_data` binding.
-    pub fn data_len(&self) -> u32 {
+    pub(crate) fn data_len(&self) -> u32 {
         match self {
             Surface::HeightField(f) => f.heights.len() as u32,
             Surface::Mesh(m) => m.baked.sdf.values.len() as u32,
@@ -204,7 +204,7 @@ impl ColliderIr {
     /// Latta's response to a contact with normal `n`: v' = (1 - mu) v_t - e v_n when moving
     /// into the surface; a contact slower than `rest_speed` does not bounce (e = 0) so that
     /// resting particles stay put instead of hopping by e·g·h² every step.
-    pub fn respond(&self, v: DVec3, n: DVec3, rest_speed: f64) -> DVec3 {
+    pub(crate) fn respond(&self, v: DVec3, n: DVec3, rest_speed: f64) -> DVec3 {
         let vn = v.dot(n);
         if vn >= 0.0 {
             return v;
@@ -293,7 +293,7 @@ pub fn resolve(
 
 /// Emits each collider's functions; a height field's heights and a mesh's field live in the
 /// `collider_data` binding, one after the other in collider order.
-pub fn emit_helpers(w: &mut Writer, colliders: &[ColliderIr]) {
+pub(crate) fn emit_helpers(w: &mut Writer, colliders: &[ColliderIr]) {
     let mut offset = 0;
     for (i, c) in colliders.iter().enumerate() {
         w.comment(format!("collide[{i}]: {}", c.surface.name()));
@@ -320,7 +320,7 @@ pub fn data(colliders: &[ColliderIr]) -> Vec<f32> {
 /// Emits the swept resolution in the update kernel's substep, with `x_start` (where the
 /// substep began), `x` and `v` (or Verlet's `d`) in scope. Mirrors [`resolve`]; sets the
 /// variable `touched_flag` names to true after a contact, when one is given.
-pub fn emit_resolve(
+pub(crate) fn emit_resolve(
     w: &mut Writer,
     colliders: &[ColliderIr],
     rest_speed: f64,

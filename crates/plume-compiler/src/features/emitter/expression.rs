@@ -16,7 +16,7 @@ use crate::expr::{self, Expr, Names, Ty, Var};
 
 /// Which spawn value an expression sets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SpawnValue {
+pub(crate) enum SpawnValue {
     /// The position (m).
     Position,
     /// The velocity (m/s).
@@ -103,4 +103,4 @@ pub fn value(
 }
 
 /// The spawns an expression's extent or speed is estimated from.
-pub const ESTIMATE_SPAWNS: u32 = 256;
+pub(crate) const ESTIMATE_SPAWNS: u32 = 256;

@@ -77,7 +77,7 @@ pub struct EmitterIr {
     pub burst: u32,
     /// A burst count drawn anew for each burst from this range (`burst: (lo, hi)`), when it
     /// is one; `burst` is then its low end.
-    pub burst_range: Option<(u32, u32)>,
+    pub(crate) burst_range: Option<(u32, u32)>,
     /// Per second, while the timing lets it run.
     pub rate: f64,
     /// The live params the burst and the rate follow (indices in `EffectIr::live_params`).
@@ -275,7 +275,7 @@ impl EmitterIr {
 
     /// Emits what emitter `e` needs at the module's top level, before its `emit_e` function;
     /// `data_offset` is where its mesh's data starts in `spawn_data`.
-    pub fn emit_items(&self, w: &mut Writer, e: usize, data_offset: u32) {
+    pub(crate) fn emit_items(&self, w: &mut Writer, e: usize, data_offset: u32) {
         self.shape.emit_items(w, e, data_offset);
     }
 
@@ -299,14 +299,19 @@ pub fn read_mesh_shapes(emitters: &mut [Emitter], base_dir: Option<&Path>, c: &m
 impl Emitter {
     /// Reads the shape's file when it is a `Mesh` ([`Shape::read_mesh`]); `path` is the
     /// emitter's.
-    pub fn read_mesh_shape(&mut self, path: &ValuePath, base_dir: Option<&Path>, c: &mut Checker) {
+    pub(crate) fn read_mesh_shape(
+        &mut self,
+        path: &ValuePath,
+        base_dir: Option<&Path>,
+        c: &mut Checker,
+    ) {
         self.shape.read_mesh(&path.field("shape"), base_dir, c);
     }
 }
 
 /// Where emitter `e`'s mesh surface starts in the `spawn_data` binding (the surfaces of the
 /// emitters before it come first).
-pub fn spawn_data_offset(emitters: &[EmitterIr], e: usize) -> u32 {
+pub(crate) fn spawn_data_offset(emitters: &[EmitterIr], e: usize) -> u32 {
     emitters[..e]
         .iter()
         .map(|em| match &em.shape {

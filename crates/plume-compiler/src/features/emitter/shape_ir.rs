@@ -158,7 +158,7 @@ impl ShapeIr {
     /// direction and draws a random one. Relative to the shape's size, so that the GPU's f32
     /// positions (off by a few ulps of the coordinates) and the reference's f64 ones make the
     /// same choice: a Grid or Points spawn at the centre itself is never pushed by f32 rounding.
-    pub fn radial_center_eps2(&self) -> f64 {
+    pub(crate) fn radial_center_eps2(&self) -> f64 {
         (4e-6 * self.extent().max(1.0)).powi(2)
     }
 
@@ -204,7 +204,7 @@ impl ShapeIr {
     /// Emits what emitter `e`'s shape needs at the module's top level, before its `emit_e`
     /// function: a mesh's picking function (its data at `data_offset` in `spawn_data`) or the
     /// listed points.
-    pub fn emit_items(&self, w: &mut Writer, e: usize, data_offset: u32) {
+    pub(crate) fn emit_items(&self, w: &mut Writer, e: usize, data_offset: u32) {
         match self {
             ShapeIr::Mesh(m) => m.emit(w, e, data_offset),
             ShapeIr::Points(ps) => {
@@ -460,7 +460,7 @@ pub struct ConeIr {
     /// The smaller radius over the larger (1 when both are 0).
     pub ratio: f64,
     /// Whether the narrow end is the top (the base is wider).
-    pub narrow_top: bool,
+    pub(crate) narrow_top: bool,
     /// On the side instead of in the volume.
     pub surface: bool,
 }

@@ -87,14 +87,14 @@ pub struct SpawnTiming {
     /// Seconds before the emitter starts.
     pub start: f64,
     /// The first step at which it spawns.
-    pub start_step: u64,
+    pub(crate) start_step: u64,
     /// The first step at which it spawns no more (None: it runs for ever).
-    pub end_step: Option<u64>,
+    pub(crate) end_step: Option<u64>,
     /// Seconds between its burst's repeats, the shortest when they are drawn (None: the burst
     /// fires once).
     pub every: Option<f64>,
     /// Drawn repeats' gaps in whole steps, (fewest, most), drawn with `key`.
-    pub every_steps: Option<(u64, u64)>,
+    pub(crate) every_steps: Option<(u64, u64)>,
     /// The key of this emitter's draws of gaps and burst counts (set by the IR's lowering,
     /// distinct per emitter).
     pub key: u32,
@@ -141,12 +141,12 @@ impl SpawnTiming {
     }
 
     /// Whether the rate runs at `step`.
-    pub fn rate_runs(&self, step: u64) -> bool {
+    pub(crate) fn rate_runs(&self, step: u64) -> bool {
         step >= self.start_step && self.end_step.is_none_or(|end| step < end)
     }
 
     /// Whether the rate runs at `step` or any later step.
-    pub fn rate_runs_after(&self, step: u64) -> bool {
+    pub(crate) fn rate_runs_after(&self, step: u64) -> bool {
         self.end_step.is_none_or(|end| step < end)
     }
 
@@ -184,7 +184,7 @@ impl SpawnTiming {
     /// The most bursts whose particles can be alive at once when they live at most `life`
     /// steps (None: for ever); None when that is unbounded (bursts for ever of immortal
     /// particles).
-    pub fn bursts_alive(&self, life: Option<u32>) -> Option<u64> {
+    pub(crate) fn bursts_alive(&self, life: Option<u32>) -> Option<u64> {
         let total = match (self.cycles, self.every, self.end_step) {
             (Some(c), _, _) => Some(u64::from(c)),
             (None, Some(every), Some(end)) => {

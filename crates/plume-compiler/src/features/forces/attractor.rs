@@ -21,7 +21,7 @@ use crate::base::writer::{f32_lit, vec3_lit, Writer};
 pub const DEFAULT_CORE_DIVISOR: f64 = 10.0;
 
 /// Field names, as written in effect files.
-pub const FIELDS: &[&str] = &["center", "range", "strength", "core"];
+pub(crate) const FIELDS: &[&str] = &["center", "range", "strength", "core"];
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]

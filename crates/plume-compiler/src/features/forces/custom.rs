@@ -17,7 +17,7 @@ use crate::expr::{self, Expr, Ty, Var};
 use crate::features::emitter::EmitterIr;
 
 /// Field names, as written in effect files.
-pub const FIELDS: &[&str] = &["accel"];
+pub(crate) const FIELDS: &[&str] = &["accel"];
 
 /// What a custom force's expressions may name besides the variables: the effect's `params`
 /// and its `dt`.
@@ -80,7 +80,7 @@ pub use crate::base::rng::stream::CUSTOM as RAND_STREAM;
 
 impl CustomTerm {
     /// Whether the term reads the particle context (id, age or lifetime).
-    pub fn needs_context(&self) -> bool {
+    pub(crate) fn needs_context(&self) -> bool {
         self.expr.reads(Var::Age)
             || self.expr.reads(Var::Life)
             || self.expr.draws_random()
@@ -89,7 +89,7 @@ impl CustomTerm {
 
     /// Whether the term reads the particle's age or lifetime (the layout then keeps the
     /// spawn step).
-    pub fn reads_age_or_life(&self) -> bool {
+    pub(crate) fn reads_age_or_life(&self) -> bool {
         self.expr.reads(Var::Age) || self.expr.reads(Var::Life)
     }
 

@@ -16,7 +16,7 @@ fn still() -> Vec3 {
 
 /// `Drag(k, fluid)` as written.
 /// Field names, as written in effect files.
-pub const FIELDS: &[&str] = &["k", "fluid"];
+pub(crate) const FIELDS: &[&str] = &["k", "fluid"];
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]

@@ -353,6 +353,6 @@ pub fn force_data(terms: &[Term]) -> Option<Vec<f32>> {
 }
 
 /// Path of the `i`-th force, with its variant named.
-pub fn force_path(i: usize, f: &Force) -> ValuePath {
+pub(crate) fn force_path(i: usize, f: &Force) -> ValuePath {
     ValuePath::root().field("forces").index(i).variant(f.name())
 }

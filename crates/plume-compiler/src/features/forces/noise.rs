@@ -13,7 +13,7 @@ use crate::base::rng::pcg;
 use crate::base::writer::{f32_lit, Writer};
 
 /// Period of the field in time (seconds); simulation time is passed to kernels modulo this.
-pub const TIME_PERIOD: f64 = 256.0;
+pub(crate) const TIME_PERIOD: f64 = 256.0;
 
 /// Coordinates (in cells) are clamped to this magnitude before conversion to integers.
 const CELL_LIMIT: f64 = 1.0e9;
@@ -94,7 +94,7 @@ pub fn value_noise(key: u32, p: DVec3, tau: f64) -> DVec3 {
 }
 
 /// Emits the WGSL twin of [`value_noise`] (once per module, shared by all noise terms).
-pub fn emit_helpers(w: &mut Writer) {
+pub(crate) fn emit_helpers(w: &mut Writer) {
     w.comment("4D value noise, periodic in time (256 s); lattice values from the PCG hash.");
     w.block("fn noise_corner(key: u32, i: vec4<i32>) -> vec3<f32>", |w| {
         w.line("let h = pcg(pcg(pcg(pcg(bitcast<u32>(i.x) ^ key) + bitcast<u32>(i.y)) + bitcast<u32>(i.z)) + bitcast<u32>(i.w & 255));");

@@ -21,7 +21,7 @@ use crate::base::rng::pcg;
 use crate::base::writer::{f32_lit, Writer};
 
 /// The most octaves.
-pub const MAX_OCTAVES: u32 = 8;
+pub(crate) const MAX_OCTAVES: u32 = 8;
 
 /// An upper bound of |∂(∇ × ψ)/∂q| (spectral norm) for one octave, measured over 100,000
 /// points by the test `jacobian_bound_holds` (largest seen: 17.7); the stability pass
@@ -36,7 +36,7 @@ fn default_octaves() -> u32 {
 }
 
 /// Field names, as written in effect files.
-pub const FIELDS: &[&str] = &["strength", "scale", "octaves", "evolution"];
+pub(crate) const FIELDS: &[&str] = &["strength", "scale", "octaves", "evolution"];
 
 /// `Turbulence(strength, scale, octaves, evolution)` as written.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -129,7 +129,7 @@ impl TurbulenceTerm {
 
 /// Emits the WGSL twins of [`curl`] (`base::gradient_noise`) and the octave / slice sum (once
 /// per module).
-pub fn emit_helpers(w: &mut Writer) {
+pub(crate) fn emit_helpers(w: &mut Writer) {
     crate::base::gradient_noise::emit_curl_helpers(w);
     w.block(
         "fn turb_octaves(key: u32, slice: i32, q: vec3<f32>, octaves: u32) -> vec3<f32>",

@@ -28,13 +28,13 @@ use crate::base::values::Vec3;
 use crate::base::writer::{f32_lit, vec3_lit, Writer};
 
 /// Field names, as written in effect files.
-pub const FIELDS: &[&str] = &["file", "strength", "offset", "scale", "outside"];
+pub(crate) const FIELDS: &[&str] = &["file", "strength", "offset", "scale", "outside"];
 
 /// The most nodes a vector field may have (2²², 48 MiB of f32 on the GPU).
-pub const MAX_NODES: u64 = 1 << 22;
+pub(crate) const MAX_NODES: u64 = 1 << 22;
 
 /// The largest FGA file read (a text line a node, well under 64 bytes each).
-pub const MAX_FILE_BYTES: u64 = 256 << 20;
+pub(crate) const MAX_FILE_BYTES: u64 = 256 << 20;
 
 /// What the field is outside its box.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
@@ -93,7 +93,7 @@ pub struct Grid {
 }
 
 /// Parses FGA text into a grid, or says what is wrong with it (which number, where).
-pub fn parse_fga(text: &str) -> Result<Grid, String> {
+pub(crate) fn parse_fga(text: &str) -> Result<Grid, String> {
     let mut numbers = text
         .split(|c: char| c == ',' || c.is_whitespace())
         .filter(|s| !s.is_empty())

@@ -22,7 +22,7 @@ use crate::base::writer::{f32_lit, vec3_lit, Writer};
 pub const DEFAULT_CORE_DIVISOR: f64 = 10.0;
 
 /// Field names, as written in effect files.
-pub const FIELDS: &[&str] = &[
+pub(crate) const FIELDS: &[&str] = &[
     "center", "axis", "range", "height", "spin", "pull", "down", "curve", "core",
 ];
 

@@ -16,7 +16,7 @@ fn default_noise_scale() -> f64 {
 
 /// `Wind(direction, strength, noise)` as written (`noise_scale` is an optional extension).
 /// Field names, as written in effect files.
-pub const FIELDS: &[&str] = &["direction", "strength", "noise", "noise_scale"];
+pub(crate) const FIELDS: &[&str] = &["direction", "strength", "noise", "noise_scale"];
 
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]

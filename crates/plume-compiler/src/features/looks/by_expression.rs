@@ -127,7 +127,7 @@ impl LookBy {
     }
 
     /// Whether any reads the particle's age or lifetime (the draw then needs its ages).
-    pub fn reads_age_or_life(&self) -> bool {
+    pub(crate) fn reads_age_or_life(&self) -> bool {
         self.exprs()
             .any(|e| e.reads(Var::Age) || e.reads(Var::Life))
     }
@@ -138,12 +138,12 @@ impl LookBy {
     }
 
     /// Whether any draws random numbers.
-    pub fn draws_random(&self) -> bool {
+    pub(crate) fn draws_random(&self) -> bool {
         self.exprs().any(|e| e.draws_random())
     }
 
     /// The attributes they read (a bit set of indices).
-    pub fn attrs_read(&self) -> u64 {
+    pub(crate) fn attrs_read(&self) -> u64 {
         self.exprs().fold(0, |set, e| set | e.attrs_read())
     }
 
@@ -153,7 +153,7 @@ impl LookBy {
     }
 
     /// Whether any reads the velocity.
-    pub fn reads_velocity(&self) -> bool {
+    pub(crate) fn reads_velocity(&self) -> bool {
         self.exprs().any(|e| e.reads(Var::V))
     }
 
@@ -161,7 +161,7 @@ impl LookBy {
     /// `alpha_by(...) -> f32` and `size_by(...) -> f32` for those there are: the WGSL twins of
     /// [`Self::color_factor`], [`Self::alpha_factor`] and [`Self::size_factor`]. `attrs` are
     /// the kept attributes' parameters (`AttributesIr::params_wgsl`).
-    pub fn emit_fns(&self, w: &mut Writer, attrs: &str) {
+    pub(crate) fn emit_fns(&self, w: &mut Writer, attrs: &str) {
         let bound = f32_lit(expr::VALUE_BOUND);
         let most = f32_lit(COLOR_MOST);
         // Each function: its expression, name, what it returns, and its bounds.

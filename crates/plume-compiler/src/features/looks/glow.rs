@@ -39,7 +39,7 @@ fn default_glow_radius() -> f64 {
 }
 
 /// The default `clamp`: f16's largest finite value, the most an HDR image pixel holds.
-pub const GLOW_CLAMP_MOST: f64 = 65504.0;
+pub(crate) const GLOW_CLAMP_MOST: f64 = 65504.0;
 
 fn default_glow_clamp() -> f64 {
     GLOW_CLAMP_MOST

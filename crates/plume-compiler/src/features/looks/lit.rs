@@ -96,7 +96,7 @@ impl Lit {
     }
 
     /// The variant of `normals`, as the file writes it.
-    pub fn normals_name(&self) -> &'static str {
+    pub(crate) fn normals_name(&self) -> &'static str {
         match self.normals {
             Normals::Flat => "Flat",
             Normals::Sphere => "Sphere",
@@ -188,7 +188,7 @@ impl Lit {
     /// pixel, as the columns of a `mat2x4`: `lit_maps(in)` for the fragment shader (their
     /// derivatives taken before any discard) and, for the compute splat,
     /// `splat_lit_maps(uv, du, dv, frame)`; nothing for computed normals.
-    pub fn emit_map_fns(&self, w: &mut Writer, splat: bool) {
+    pub(crate) fn emit_map_fns(&self, w: &mut Writer, splat: bool) {
         let maps = self.map_files().len();
         if maps == 0 {
             return;
@@ -236,7 +236,7 @@ impl Lit {
 
     /// The WGSL of the look's map texels at corner coordinates `uv` in the compute splat's
     /// composite (`du`, `dv`, the frame in `r3.y`), as [`Self::maps_wgsl`].
-    pub fn splat_maps_wgsl(&self) -> &'static str {
+    pub(crate) fn splat_maps_wgsl(&self) -> &'static str {
         match self.map_files().is_empty() {
             false => "splat_lit_maps(uv, du, dv, r3.y)",
             true => "mat2x4<f32>()",

@@ -50,7 +50,7 @@ pub enum Blend {
 impl Blend {
     /// Whether the fragment's colour is changed before blending ([`Self::emit_blend_out`];
     /// `Premultiplied` shades its coverage apart from its opacity instead).
-    pub fn changes_output(self) -> bool {
+    pub(crate) fn changes_output(self) -> bool {
         matches!(self, Blend::Multiply | Blend::Mask(_) | Blend::Opaque)
     }
 
@@ -76,7 +76,7 @@ impl Blend {
     /// What a strip's fragment (a trail's, a ribbon's) of colour `in.color` covering `cover`
     /// of the pixel (WGSL) returns: its colour at opacity × coverage through `blend_out`, or
     /// for `Premultiplied` its colour and opacity each times the coverage.
-    pub fn strip_out_wgsl(self, cover: &str) -> String {
+    pub(crate) fn strip_out_wgsl(self, cover: &str) -> String {
         match self {
             Blend::Premultiplied => {
                 format!("vec4<f32>(in.color.rgb * {cover}, in.color.a * {cover})")

@@ -39,7 +39,7 @@ pub enum Orient {
 
 /// Image-plane speeds at or below this (squared, (m/s)²) have no direction: the sprite stays
 /// upright and unstretched instead of normalising a zero vector.
-pub const STILL_SPEED2: f64 = 1e-30;
+pub(crate) const STILL_SPEED2: f64 = 1e-30;
 
 /// The orientation, lowered: the fixed plane's axes computed once in f64.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,7 +66,7 @@ pub enum OrientIr {
 
 /// Below this squared length (m²) a sprite is at the eye, or its normal along the camera's up:
 /// it keeps the `Camera` axes (or the camera's right) instead of normalising a zero vector.
-pub const FACING_FLOOR2: f64 = 1e-12;
+pub(crate) const FACING_FLOOR2: f64 = 1e-12;
 
 impl OrientIr {
     /// Lowers the schema's orientation (already checked: a fixed normal is a direction).
@@ -109,7 +109,7 @@ impl OrientIr {
     }
 
     /// Whether placing the quad reads the particle's velocity.
-    pub fn needs_velocity(&self) -> bool {
+    pub(crate) fn needs_velocity(&self) -> bool {
         matches!(self, OrientIr::Velocity { .. })
     }
 
@@ -236,7 +236,7 @@ impl OrientIr {
 
 /// A velocity-aligned sprite's length: the size plus `stretch` per m/s, capped at
 /// `max_length`, never shorter than the size.
-pub fn velocity_length(size: f64, speed: f64, stretch: f64, max_length: f64) -> f64 {
+pub(crate) fn velocity_length(size: f64, speed: f64, stretch: f64, max_length: f64) -> f64 {
     size.max((size + stretch * speed).min(max_length))
 }
 

@@ -35,10 +35,10 @@ pub struct ParticleMesh {
 pub const MESH_VERTICES_BINDING: u32 = 28;
 
 /// The most triangles a particle's mesh may have: every particle draws all of them.
-pub const TRIANGLES_MOST: usize = 1 << 16;
+pub(crate) const TRIANGLES_MOST: usize = 1 << 16;
 
 /// What a mesh look leaves out: (the `render` field, what it would draw).
-pub const CLASHES: [(&str, &str); 4] = [
+pub(crate) const CLASHES: [(&str, &str); 4] = [
     ("trail", "trails"),
     ("texture", "texture"),
     ("ribbon", "ribbons"),
@@ -240,7 +240,7 @@ impl MeshIr {
 
 /// A triangle's unit normal by the right-hand rule (counter-clockwise corners face it); zero
 /// for a triangle of no area.
-pub fn face_normal(t: &[DVec3; 3]) -> DVec3 {
+pub(crate) fn face_normal(t: &[DVec3; 3]) -> DVec3 {
     (t[1] - t[0]).cross(t[2] - t[0]).normalize_or_zero()
 }
 

@@ -59,16 +59,16 @@ fn default_ribbons() -> u32 {
 }
 
 /// Binding of the ribbon table in the compute module (the spawn kernels write it).
-pub const RIBBON_TABLE_BINDING: u32 = 17;
+pub(crate) const RIBBON_TABLE_BINDING: u32 = 17;
 
 /// Binding of the ribbon table in the draw module (`vs_ribbon` reads it).
 pub const RIBBON_DRAW_BINDING: u32 = 39;
 
 /// Bytes of one table entry: slot, id + 1 (0: never written), key, ordinal.
-pub const ENTRY_BYTES: u64 = 16;
+pub(crate) const ENTRY_BYTES: u64 = 16;
 
 /// Most entries of a table (rows × points): 64 MiB of them.
-pub const TABLE_MOST: u64 = 1 << 22;
+pub(crate) const TABLE_MOST: u64 = 1 << 22;
 
 /// Vertices of one segment: a 4-vertex strip, two at each end.
 pub const SEGMENT_VERTICES: u32 = 4;
@@ -77,7 +77,7 @@ pub const SEGMENT_VERTICES: u32 = 4;
 pub type Table = Vec<Option<(u32, Link)>>;
 
 /// The render fields a ribbon does not draw, and what each would draw.
-pub const CLASHES: [(&str, &str); 6] = [
+pub(crate) const CLASHES: [(&str, &str); 6] = [
     ("trail", "trails"),
     ("texture", "texture"),
     ("lit", "lit shading"),
@@ -246,7 +246,7 @@ impl Ribbon {
     }
 
     /// The WGSL of emitter spawn k's link, with `e` and `k` in scope.
-    pub fn emitted_wgsl(&self, emitters: u32) -> (String, String) {
+    pub(crate) fn emitted_wgsl(&self, emitters: u32) -> (String, String) {
         match self.split {
             Some(n) => (
                 format!("e + {} * (k / {})", u32_lit(emitters), u32_lit(n)),
@@ -260,7 +260,7 @@ impl Ribbon {
     /// where the record `r` (whose velocity's w holds the parent's id, `EventIr::passes_id`),
     /// the child's place `c` in its firing and `params.step` are in scope, for an event of
     /// `count` children fired every `period` steps.
-    pub fn child_wgsl(&self, period: u32, count: u32) -> (String, String) {
+    pub(crate) fn child_wgsl(&self, period: u32, count: u32) -> (String, String) {
         (
             "bitcast<u32>(r.v.w)".into(),
             format!(

@@ -48,7 +48,7 @@ impl RotationIr {
     }
 
     /// Whether the angle changes with age (so the draw needs every particle's age).
-    pub fn spins(&self) -> bool {
+    pub(crate) fn spins(&self) -> bool {
         self.spin != (0.0, 0.0)
     }
 
@@ -72,7 +72,7 @@ impl RotationIr {
     /// Emits `sprite_angle(id, lived)`: the angle (rad) of particle `id` after `lived` whole
     /// steps, as [`Self::angle`]. The spin's part is reduced to whole turns first, so that the
     /// f32 sine of an old, fast-spinning particle stays accurate.
-    pub fn emit_angle_fn(&self, w: &mut Writer, dt: f64) {
+    pub(crate) fn emit_angle_fn(&self, w: &mut Writer, dt: f64) {
         let tau = std::f64::consts::TAU;
         w.block("fn sprite_angle(id: u32, lived: u32) -> f32", |w| {
             w.line(format!(
@@ -102,7 +102,7 @@ impl RotationIr {
     }
 
     /// WGSL lines that turn `s.half_x` and `s.half_y` by `angle: f32` in scope.
-    pub fn emit_turn(w: &mut Writer) {
+    pub(crate) fn emit_turn(w: &mut Writer) {
         w.comment(
             "Turned within the sprite's plane, from half_x towards half_y (render.rotation).",
         );

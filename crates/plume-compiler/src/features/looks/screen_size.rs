@@ -24,7 +24,7 @@ pub enum SizeIn {
 /// Emits, inside `sprite_at` (after the sizes are set, `x` the particle's position), the scaling
 /// of `s.size` (and `s.size_y`, when `height` says the sprite has one) from fractions of the
 /// image's height to metres at the particle's depth: the WGSL twin of [`metres_per_height`].
-pub fn emit_scale(w: &mut Writer, height: bool) {
+pub(crate) fn emit_scale(w: &mut Writer, height: bool) {
     w.comment("render.size_in: Screen: the sizes are fractions of the image's height.");
     w.line("let clip_w = (draw.proj * (draw.view * vec4<f32>(x, 1.0))).w;");
     w.line("let per_height = 2.0 * max(clip_w, 0.0) / draw.proj[1][1];");

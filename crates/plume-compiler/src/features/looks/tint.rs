@@ -35,7 +35,7 @@ pub const MAX_PALETTE: usize = 256;
 pub const WHITE: u32 = 0xffff_ffff;
 
 /// Checks `render.palette`: 1 to [`MAX_PALETTE`] colours, each component finite in [0, 1].
-pub fn check_palette(c: &mut Checker, path: &ValuePath, palette: &[Vec3]) {
+pub(crate) fn check_palette(c: &mut Checker, path: &ValuePath, palette: &[Vec3]) {
     if palette.is_empty() || palette.len() > MAX_PALETTE {
         c.error(
             path,
@@ -101,7 +101,7 @@ pub fn stored(c: DVec3) -> DVec3 {
 
 /// Emits `palette_tint(id) -> vec3<f32>` (the f32 twin of [`pick`]) when the group has a
 /// palette; it needs the rng functions and `SEED_MIX`.
-pub fn emit_palette_fn(w: &mut Writer, tint: TintSource<'_>) {
+pub(crate) fn emit_palette_fn(w: &mut Writer, tint: TintSource<'_>) {
     let Some(palette) = tint.palette else {
         return;
     };
@@ -134,7 +134,7 @@ pub fn emit_palette_fn(w: &mut Writer, tint: TintSource<'_>) {
 
 /// The WGSL of the group's own tint (vec3<f32>) for a particle of id `id`: its palette pick,
 /// or white.
-pub fn own_wgsl(tint: TintSource<'_>, id: &str) -> String {
+pub(crate) fn own_wgsl(tint: TintSource<'_>, id: &str) -> String {
     if tint.palette.is_some() {
         format!("palette_tint({id})")
     } else {
@@ -144,7 +144,7 @@ pub fn own_wgsl(tint: TintSource<'_>, id: &str) -> String {
 
 /// The WGSL of particle `p`'s tint (vec3<f32>) as the draw applies it, or None when the group
 /// has no colour of its own (its sprites keep their colour over life). `id` names its id.
-pub fn particle_wgsl(tint: TintSource<'_>, p: &str, id: &str) -> Option<String> {
+pub(crate) fn particle_wgsl(tint: TintSource<'_>, p: &str, id: &str) -> Option<String> {
     if tint.stored {
         Some(format!("unpack4x8unorm({p}.tint).rgb"))
     } else if tint.palette.is_some() {
@@ -156,7 +156,7 @@ pub fn particle_wgsl(tint: TintSource<'_>, p: &str, id: &str) -> Option<String> 
 
 /// The WGSL of a stateless particle's tint packed for an event record (u32), from its `id`: a
 /// stateless group stores no tint (nothing feeds it).
-pub fn packed_wgsl_of_id(tint: TintSource<'_>, id: &str) -> String {
+pub(crate) fn packed_wgsl_of_id(tint: TintSource<'_>, id: &str) -> String {
     if tint.palette.is_some() {
         format!("pack4x8unorm(vec4<f32>(palette_tint({id}), 1.0))")
     } else {
@@ -165,7 +165,7 @@ pub fn packed_wgsl_of_id(tint: TintSource<'_>, id: &str) -> String {
 }
 
 /// The WGSL of particle `p`'s tint packed for an event record (u32): what its children inherit.
-pub fn packed_wgsl(tint: TintSource<'_>, p: &str) -> String {
+pub(crate) fn packed_wgsl(tint: TintSource<'_>, p: &str) -> String {
     if tint.stored {
         format!("{p}.tint")
     } else if tint.palette.is_some() {

@@ -81,7 +81,7 @@ pub fn strip_sides(points: &[DVec3], eye: DVec3, half: &dyn Fn(usize) -> f64) ->
 }
 
 /// Bytes of one ring entry: the position's three f32 bit patterns and the id + 1.
-pub const ENTRY_BYTES: u32 = 16;
+pub(crate) const ENTRY_BYTES: u32 = 16;
 
 /// A trail, lowered.
 #[derive(Clone, Debug, PartialEq)]
@@ -122,7 +122,7 @@ impl TrailIr {
     }
 
     /// Whether the update of step `step` records the position at its start.
-    pub fn samples_at(&self, step: u64) -> bool {
+    pub(crate) fn samples_at(&self, step: u64) -> bool {
         step.is_multiple_of(u64::from(self.every))
     }
 
@@ -166,7 +166,7 @@ impl TrailIr {
 
     /// Emits the update's record of the position `x` at the step's start into the ring
     /// (`trail`, binding 16) for particle `p` in chunk slot `i`.
-    pub fn emit_record(&self, w: &mut Writer) {
+    pub(crate) fn emit_record(&self, w: &mut Writer) {
         let ring = u32_lit(self.ring());
         w.comment("Trail: the position at this step's start into the ring (render.trail).");
         let store = |w: &mut Writer, sample: &str| {

@@ -389,7 +389,7 @@ fn search(
 }
 
 /// How large a shift of some metres at a position is, in a budget's unit.
-pub type Scale = dyn Fn(f64, glam::DVec3) -> f64 + Send + Sync;
+pub(crate) type Scale = dyn Fn(f64, glam::DVec3) -> f64 + Send + Sync;
 
 /// How a budget measures an error between two positions, and how large a shift of some metres
 /// at a position is in its unit: metres themselves, or pixels through the effect's camera, or

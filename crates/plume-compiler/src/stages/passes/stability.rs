@@ -25,12 +25,12 @@ use crate::stages::schema::Integrator;
 /// Horizon (s) for growth warnings when some particles never die.
 pub const IMMORTAL_HORIZON: f64 = 60.0;
 /// Growth factor over the horizon that triggers a warning.
-pub const GROWTH_LIMIT: f64 = 2.0;
+pub(crate) const GROWTH_LIMIT: f64 = 2.0;
 /// The largest fall speed x h / core before passes through a soft core lose energy accuracy
 /// (measured: docs/accuracy.md, "Passing through a core").
-pub const TRANSIT_LIMIT: f64 = 1.0;
+pub(crate) const TRANSIT_LIMIT: f64 = 1.0;
 /// Coordinates beyond this (m) lose visible precision in f32.
-pub const PRECISION_LIMIT: f64 = 1.0e5;
+pub(crate) const PRECISION_LIMIT: f64 = 1.0e5;
 
 /// The largest stable k*h for linear drag, or None when unconditionally stable.
 pub fn drag_limit(i: Integrator) -> Option<f64> {

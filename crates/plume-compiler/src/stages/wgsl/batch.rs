@@ -37,7 +37,7 @@ pub fn counters(layout: &Layout) -> &'static str {
 
 /// Where the kernel's instance's free list begins, as the start of an index expression: a
 /// batched instance's segment is `CAPACITY` entries at `inst * CAPACITY`.
-pub fn free_list_base(layout: &Layout) -> &'static str {
+pub(crate) fn free_list_base(layout: &Layout) -> &'static str {
     match layout.batched {
         true => "inst * CAPACITY + ",
         false => "",

@@ -29,7 +29,7 @@ pub fn counter_word(name: &str) -> Option<u32> {
 }
 
 /// Emits `struct Counters`, with the event fields where the group is `fed` by events.
-pub fn emit_struct(w: &mut Writer, fed: bool) {
+pub(crate) fn emit_struct(w: &mut Writer, fed: bool) {
     let fields = match fed {
         true => &COUNTER_FIELDS[..],
         false => &COUNTER_FIELDS[..OWN_FIELDS],

@@ -125,7 +125,12 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
 /// Emits the store of the spawned particle `s` (a `Spawned`) with id `id` into `slot` (a
 /// global slot this chunk holds), as every spawn kernel ends: Verlet's first displacement,
 /// the lifetime, the id and the spawn step as the layout has them.
-pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout, input: Option<usize>) {
+pub(crate) fn emit_store_spawned(
+    w: &mut Writer,
+    ir: &EffectIr,
+    layout: &Layout,
+    input: Option<usize>,
+) {
     let kept = ir.kept_attributes();
     // The step its age counts from.
     let born = match ir.has_start_ages() {
@@ -197,7 +202,7 @@ pub fn emit_store_spawned(w: &mut Writer, ir: &EffectIr, layout: &Layout, input:
 
 /// Emits `emit_E(id, k, step) -> Spawned` for every emitter (shared by `spawn` and the
 /// stateless `evaluate`), each followed by a blank line.
-pub fn emit_emitter_fns(w: &mut Writer, ir: &EffectIr) {
+pub(crate) fn emit_emitter_fns(w: &mut Writer, ir: &EffectIr) {
     if ir.emitters.iter().any(|e| e.reads_origin()) {
         w.comment("Where the spawn's frame sits (`origin`): an event spawn sets the firing particle's position before emit_E; zero for an emitter's.");
         w.line("var<private> spawn_origin: vec3<f32>;");

@@ -10,7 +10,7 @@ use crate::stages::passes::layout::{Attribute, Layout};
 /// Emits the segment table's types. A segment is a run of consecutive ids one emitter spawned at
 /// one step: `a` = (first thread, first id, emitter's own counter at the first id, emitter),
 /// `b` = (age in steps, spawn step, age in seconds as f32 bits, 0).
-pub fn emit_declarations(w: &mut Writer) {
+pub(crate) fn emit_declarations(w: &mut Writer) {
     w.block("struct Segment", |w| {
         w.line("a: vec4<u32>,");
         w.line("b: vec4<u32>,");
@@ -30,7 +30,7 @@ pub fn emit_declarations(w: &mut Writer) {
 /// spawn draws and its age (whether it is alive, its position and velocity now, its `die_at`,
 /// id, spawn step and whole steps lived). Shared by the compute `evaluate` and `depth_keys`
 /// kernels and by the draw module's vertex shader, so all three see the same particle.
-pub fn emit_evaluate_at(w: &mut Writer, ir: &EffectIr) {
+pub(crate) fn emit_evaluate_at(w: &mut Writer, ir: &EffectIr) {
     w.comment("A slot of this frame: alive or not, and if alive its state now (x, v, die_at), id,");
     w.comment("spawn step and whole steps lived.");
     w.block("struct Evaluated", |w| {

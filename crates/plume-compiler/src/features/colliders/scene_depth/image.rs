@@ -9,15 +9,15 @@ use glam::{DMat4, Mat4};
 #[derive(Clone, Debug, PartialEq)]
 pub struct DepthCamera {
     /// World to clip: projection · view, multiplied in f64 and rounded once.
-    pub view_projection: [f32; 16],
+    pub(crate) view_projection: [f32; 16],
     /// World to view (right-handed, looking down −z).
     pub view: [f32; 16],
     /// View to clip (wgpu's clip space, depth in [0, 1], standard or reversed).
     pub projection: [f32; 16],
     /// Clip to view.
-    pub inverse_projection: [f32; 16],
+    pub(crate) inverse_projection: [f32; 16],
     /// View to world.
-    pub inverse_view: [f32; 16],
+    pub(crate) inverse_view: [f32; 16],
 }
 
 /// f32 words of [`DepthCamera::words`], in vec4s: (width, height, 0, 0); view · projection's
@@ -33,15 +33,15 @@ pub mod at {
     /// (width, height, 0, 0).
     pub const SIZE: usize = 0;
     /// The view-projection's columns.
-    pub const VIEW_PROJECTION: usize = 1;
+    pub(crate) const VIEW_PROJECTION: usize = 1;
     /// The view's row 2.
-    pub const VIEW_ROW_Z: usize = 5;
+    pub(crate) const VIEW_ROW_Z: usize = 5;
     /// The inverse projection's columns.
-    pub const INVERSE_PROJECTION: usize = 6;
+    pub(crate) const INVERSE_PROJECTION: usize = 6;
     /// The inverse view's columns.
-    pub const INVERSE_VIEW: usize = 10;
+    pub(crate) const INVERSE_VIEW: usize = 10;
     /// The view's columns.
-    pub const VIEW: usize = 14;
+    pub(crate) const VIEW: usize = 14;
 }
 
 impl DepthCamera {

@@ -48,7 +48,7 @@ use crate::base::path::ValuePath;
 pub use image::{at, DepthCamera, DepthImage, CAMERA_VEC4S, CAMERA_WORDS};
 
 /// The thickness when the file gives none (m).
-pub const DEFAULT_THICKNESS: f64 = 0.5;
+pub(crate) const DEFAULT_THICKNESS: f64 = 0.5;
 
 /// The most points a substep's segment is sampled at.
 pub const MAX_SAMPLES: u32 = 32;

@@ -10,7 +10,7 @@ use crate::base::writer::{f32_lit, u32_lit, Writer};
 impl FlockIr {
     /// Module-scope declarations: constants, the per-invocation frozen values and the
     /// acceleration added to `accel`.
-    pub fn emit_declarations(&self, w: &mut Writer, capacity: u32, workgroup: u32) {
+    pub(crate) fn emit_declarations(&self, w: &mut Writer, capacity: u32, workgroup: u32) {
         if let Neighbors::Grid { .. } = self.neighbors {
             w.line(format!(
                 "const GRID_BUCKETS: u32 = {}; // a power of two; cell_start has one more entry",
@@ -52,7 +52,7 @@ impl FlockIr {
     }
 
     /// Statements at the start of `update` (slot `i`, single chunk) that load the frozen values.
-    pub fn emit_update_prologue(&self, w: &mut Writer) {
+    pub(crate) fn emit_update_prologue(&self, w: &mut Writer) {
         w.line("let fo = flock_out[3u * i];");
         w.line("flock_push = fo.xyz;");
         match self.scope {

@@ -34,7 +34,7 @@ use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 
 /// Field names, as written in effect files.
-pub const FIELDS: &[&str] = &[
+pub(crate) const FIELDS: &[&str] = &[
     "radius",
     "separation",
     "avoidance",
@@ -209,7 +209,7 @@ pub const GRID_X_SPLIT: u32 = 3;
 
 /// Candidates the split search loads and tests a round (one bit each in the round's mask):
 /// at 16k boids as fast as 8 and faster than 32.
-pub const GRID_ROUND: u32 = 16;
+pub(crate) const GRID_ROUND: u32 = 16;
 
 /// Spare entries of the sorted snapshot past its last boid, for the loads past a run (up to
 /// one fewer than the longer of the two searches' loads at a time).
@@ -227,7 +227,7 @@ const _: () = assert!(GRID_ROUND <= 32 && GRID_ONE_LOADS * GRID_ONE_LOADS_PER_RO
 pub const SEARCH_BUFFERS: [&str; 4] = ["boids", "flock_out", "grid_vals", "cell_start"];
 
 /// Below this speed (m/s) a boid has no heading, so no avoidance.
-pub const MIN_HEADING_SPEED: f64 = 1e-6;
+pub(crate) const MIN_HEADING_SPEED: f64 = 1e-6;
 
 impl FlockIr {
     /// The soft core (m) of separation and avoidance.

@@ -99,7 +99,7 @@ pub enum Play {
 
 /// Largest texture side accepted (texels): ample for a sprite atlas, and within wgpu's default
 /// limits (8192) with room to spare.
-pub const MAX_SIDE: u32 = 4096;
+pub(crate) const MAX_SIDE: u32 = 4096;
 
 /// Binding of the texture in the draw module.
 pub const TEXTURE_BINDING: u32 = 30;
@@ -109,7 +109,7 @@ pub const SAMPLER_BINDING: u32 = 31;
 
 /// Added to the frame clock before taking its floor (in frames), so that a frame starting
 /// exactly on a step starts on that step in f32 (GPU) and f64 (reference) alike.
-pub const FRAME_EPSILON: f64 = 1.0 / 1024.0;
+pub(crate) const FRAME_EPSILON: f64 = 1.0 / 1024.0;
 
 /// The texture, loaded and lowered.
 #[derive(Clone, PartialEq)]
@@ -168,7 +168,7 @@ impl std::fmt::Debug for TextureIr {
 }
 
 /// The most bytes a texture file may have (an 8192 x 8192 RGBA image stored raw).
-pub const MAX_FILE_BYTES: u64 = 1 << 28;
+pub(crate) const MAX_FILE_BYTES: u64 = 1 << 28;
 
 /// Where `file` lies: relative to `base_dir` (the effect file's directory) when given.
 pub fn resolve(file: &str, base_dir: Option<&Path>) -> PathBuf {
@@ -231,7 +231,7 @@ impl TextureIr {
     /// A lit look's map in `file` (`render.lit.normals`: a normal map, a six-way lightmap),
     /// laid out as `texture`: its frames, how they play, and its size, which must be the
     /// texture's.
-    pub fn load_lit_map(
+    pub(crate) fn load_lit_map(
         file: &str,
         texture: &TextureIr,
         base_dir: Option<&Path>,
@@ -265,7 +265,7 @@ impl TextureIr {
 
     /// A lit look's map standing in for `file`, which could not be read (`missing` says why),
     /// laid out as `texture`: every texel (0.5, 0.5, 1), a flat normal.
-    pub fn stand_in_lit_map(file: &str, texture: &TextureIr, missing: String) -> Self {
+    pub(crate) fn stand_in_lit_map(file: &str, texture: &TextureIr, missing: String) -> Self {
         let mut map = Self::stand_in(&texture.spec_of(file), missing);
         map.rgba = [128, 128, 255, 255].repeat(map.rgba.len() / 4).into();
         map
@@ -313,12 +313,12 @@ impl TextureIr {
     }
 
     /// Whether choosing the frame needs the age of particles that never die (a rate).
-    pub fn needs_age_of_immortals(&self) -> bool {
+    pub(crate) fn needs_age_of_immortals(&self) -> bool {
         self.animated() && matches!(self.play, Play::Rate(_))
     }
 
     /// Whether choosing the frame draws a random number (a random first frame).
-    pub fn draws_random(&self) -> bool {
+    pub(crate) fn draws_random(&self) -> bool {
         self.animated() && self.random_start
     }
 
@@ -352,7 +352,7 @@ impl TextureIr {
     }
 
     /// Emits the texture's bindings and constants.
-    pub fn emit_declarations(&self, w: &mut Writer) {
+    pub(crate) fn emit_declarations(&self, w: &mut Writer) {
         w.comment(format!(
             "render.texture {:?}: {}x{} texels, {} x {} frames.",
             self.file, self.width, self.height, self.columns, self.rows
@@ -390,7 +390,7 @@ impl TextureIr {
 
     /// Emits `sprite_frame(id, lived, life)` for an animated texture: the frame of particle
     /// `id` that has lived `lived` whole steps of `life` (0: it never dies), as [`Self::frame`].
-    pub fn emit_frame_fn(&self, w: &mut Writer, dt: f64) {
+    pub(crate) fn emit_frame_fn(&self, w: &mut Writer, dt: f64) {
         let n = self.frames();
         w.block(
             "fn sprite_frame(id: u32, lived: u32, life: u32) -> u32",
@@ -462,7 +462,7 @@ impl TextureIr {
 
     /// Emits `name(cell, quad, gx, gy)`, [`Self::emit_texel_fn`]'s function for another atlas
     /// of the same layout bound as `texture` (a lit look's normal map).
-    pub fn emit_texel_fn_of(w: &mut Writer, name: &str, texture: &str) {
+    pub(crate) fn emit_texel_fn_of(w: &mut Writer, name: &str, texture: &str) {
         w.block(
             format!("fn {name}(cell: vec2<f32>, quad: vec2<f32>, gx: vec2<f32>, gy: vec2<f32>) -> vec4<f32>"),
             |w| {
@@ -492,7 +492,7 @@ impl TextureIr {
     /// Emits, in a fragment shader's function of `in: Sprite`, the frame's atlas cell `cell`,
     /// the fragment's place in it `quad`, and the derivatives `gx`, `gy` of its atlas
     /// coordinate (taken here, before any discard).
-    pub fn emit_fragment_coordinates(w: &mut Writer) {
+    pub(crate) fn emit_fragment_coordinates(w: &mut Writer) {
         w.line(
             "let cell = vec2<f32>(f32(in.frame % FRAME_COLUMNS), f32(in.frame / FRAME_COLUMNS));",
         );
@@ -506,7 +506,7 @@ impl TextureIr {
     /// Emits, in the compute splat's function of `uv`, `du`, `dv` and `frame`, the frame's
     /// atlas cell `cell`, the pixel's place in it `quad`, and the derivatives `gx`, `gy` of its
     /// atlas coordinate from those of `uv`.
-    pub fn emit_splat_coordinates(w: &mut Writer) {
+    pub(crate) fn emit_splat_coordinates(w: &mut Writer) {
         w.line("let cell = vec2<f32>(f32(frame % FRAME_COLUMNS), f32(frame / FRAME_COLUMNS));");
         w.line("let quad = vec2<f32>(uv.x + 1.0, 1.0 - uv.y) * 0.5;");
         w.comment("quad's derivatives are half of uv's, v flipped; the atlas coordinate's are FRAME_SIZE times those.");
@@ -517,7 +517,7 @@ impl TextureIr {
     /// Emits the compute splat's shading of a textured sprite: `splat_shade(uv, du, dv, color,
     /// frame)` is the frame's texel at corner coordinates `uv`, whose derivatives along the
     /// image's x and y are `du` and `dv`, times the colour (as [`Self::emit_fragment_body`]).
-    pub fn emit_splat_shade(&self, w: &mut Writer) {
+    pub(crate) fn emit_splat_shade(&self, w: &mut Writer) {
         w.block(
             "fn splat_shade(uv: vec2<f32>, du: vec2<f32>, dv: vec2<f32>, color: vec4<f32>, frame: u32) -> vec4<f32>",
             |w| {

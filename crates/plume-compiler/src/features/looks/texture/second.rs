@@ -28,7 +28,7 @@ pub const SECOND_TEXTURE_BINDING: u32 = 29;
 impl TextureIr {
     /// Loads `spec`, laid out as `self` (the texture); the error says what is wrong with the
     /// file, for `render.texture.second.file`.
-    pub fn load_second(
+    pub(crate) fn load_second(
         &self,
         spec: &SecondTexture,
         base_dir: Option<&Path>,
@@ -40,7 +40,7 @@ impl TextureIr {
 
     /// The second image `spec` names, standing in for a file that could not be read
     /// (`missing` says why): laid out as `self`, every texel white.
-    pub fn stand_in_second(&self, spec: &SecondTexture, missing: String) -> Self {
+    pub(crate) fn stand_in_second(&self, spec: &SecondTexture, missing: String) -> Self {
         let mut second = Self::stand_in(&self.spec_of(&spec.file), missing);
         second.sample = spec.sample;
         second

@@ -63,7 +63,7 @@ pub(crate) struct RecordBatch {
     /// `record_lines` ([`super::masks::emit_diagonal_spans`]), so that the masks hold them too.
     pub diagonals: bool,
     /// What of the next batch is loaded while this one is composited ([`Prefetch`]).
-    pub prefetch: Prefetch,
+    pub(crate) prefetch: Prefetch,
 }
 
 /// What of the next batch a composite loads while it composites this one.
