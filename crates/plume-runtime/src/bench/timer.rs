@@ -77,7 +77,7 @@ impl<'g> PassTimer<'g> {
     /// Records with `record`, which must pass the given timestamp writes (None without
     /// timestamps) to the one render pass it times; submits, waits, and returns the render
     /// pass's duration (s), or the whole submission's without timestamps.
-    pub fn time_render(
+    pub(crate) fn time_render(
         &self,
         record: impl FnOnce(
             &mut wgpu::CommandEncoder,

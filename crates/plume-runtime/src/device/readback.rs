@@ -12,7 +12,7 @@ use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;
 
 /// Marks a free slot (the `id` field) and a particle that never dies.
-pub const DEAD: u32 = u32::MAX;
+pub(crate) const DEAD: u32 = u32::MAX;
 
 /// Copies a GPU buffer to host memory (waits for the GPU).
 pub fn read_buffer(gpu: &Gpu, buffer: &wgpu::Buffer) -> Result<Vec<u8>, RuntimeError> {
@@ -55,7 +55,11 @@ fn submit_and_map<T>(
 }
 
 /// Reads a buffer of u32 words and returns the first `n`.
-pub fn read_words(gpu: &Gpu, buffer: &wgpu::Buffer, n: usize) -> Result<Vec<u32>, RuntimeError> {
+pub(crate) fn read_words(
+    gpu: &Gpu,
+    buffer: &wgpu::Buffer,
+    n: usize,
+) -> Result<Vec<u32>, RuntimeError> {
     Ok(read_buffer(gpu, buffer)?
         .chunks_exact(4)
         .take(n)
@@ -88,7 +92,7 @@ pub fn decode_totals(counters: &[u8], capacity: u32, steps: u64) -> Totals {
 /// displacement divided by h) and age and lifetime from the schedule. Each buffer holds its
 /// slots word-major ([`plume_compiler::wgsl::word_index`]): 16-byte word k of its slot i at
 /// k · slots + i.
-pub fn decode_slots(
+pub(crate) fn decode_slots(
     effect: &CompiledEffect,
     schedule: &Schedule,
     buffers: &[Vec<u8>],

@@ -26,7 +26,7 @@ pub const BATCH_STEPS: u32 = 8;
 
 /// Bytes of the `params` binding: one step's parameters (a batch's: every instance's rows,
 /// as the batch sized the binding).
-pub fn params_binding_bytes(effect: &CompiledEffect) -> u64 {
+pub(crate) fn params_binding_bytes(effect: &CompiledEffect) -> u64 {
     match effect.layout.batched {
         true => binding_bytes(effect, "params"),
         false => effect.layout.params_bytes(),
@@ -51,12 +51,12 @@ pub struct Chunk {
     /// The chunk's trail ring (`render.trail`): entry r of chunk slot i at i · (points − 1) + r.
     pub trail: Option<wgpu::Buffer>,
     /// Group 0 of the compute module, for this chunk.
-    pub bind_group: wgpu::BindGroup,
+    pub(crate) bind_group: wgpu::BindGroup,
 }
 
 /// The depth sort's buffers (for `sort: true`): one key and one slot per padded slot, and the
 /// depth axis uniform the keys are measured along.
-pub struct SortBuffers {
+pub(crate) struct SortBuffers {
     /// Depth keys, farthest first after the sort; padding holds the largest key.
     pub keys: wgpu::Buffer,
     /// Slots, in draw order after the sort.
@@ -66,7 +66,7 @@ pub struct SortBuffers {
 }
 
 /// The buffers and bind groups of one effect on one device.
-pub struct Resources {
+pub(crate) struct Resources {
     gpu: Gpu,
     /// Slots per particle buffer (all but the last).
     pub chunk_slots: u64,
@@ -362,7 +362,7 @@ impl Resources {
 
     /// Whether the particle buffers exist yet (always for a stateful effect; for a stateless
     /// one, once something has read particles back).
-    pub fn has_chunks(&self) -> bool {
+    pub(crate) fn has_chunks(&self) -> bool {
         self.chunks.get().is_some()
     }
 
@@ -495,7 +495,12 @@ impl Resources {
 
     /// Puts `buffer` in the place of the extra buffer at `binding` (one that grew: the scene
     /// depth's copy), rebuilding the chunks' bind groups.
-    pub fn replace_extra(&mut self, effect: &CompiledEffect, binding: u32, buffer: wgpu::Buffer) {
+    pub(crate) fn replace_extra(
+        &mut self,
+        effect: &CompiledEffect,
+        binding: u32,
+        buffer: wgpu::Buffer,
+    ) {
         match self.extra.iter_mut().find(|(b, _)| *b == binding) {
             Some(slot) => slot.1 = buffer,
             None => self.extra.push((binding, buffer)),
@@ -510,7 +515,7 @@ impl Resources {
     }
 
     /// The extra buffer at `binding` (flocking's or the baked field's).
-    pub fn extra_buffer(&self, binding: u32) -> Option<&wgpu::Buffer> {
+    pub(crate) fn extra_buffer(&self, binding: u32) -> Option<&wgpu::Buffer> {
         self.extra
             .iter()
             .find(|(b, _)| *b == binding)
@@ -518,7 +523,7 @@ impl Resources {
     }
 
     /// The extra buffer the layout calls `name`.
-    pub fn extra_named(&self, effect: &CompiledEffect, name: &str) -> Option<&wgpu::Buffer> {
+    pub(crate) fn extra_named(&self, effect: &CompiledEffect, name: &str) -> Option<&wgpu::Buffer> {
         let binding = effect.layout.bindings.iter().find(|b| b.name == name)?;
         self.extra_buffer(binding.binding)
     }
@@ -532,7 +537,7 @@ impl Resources {
     /// A compute pipeline of `entry` with a layout of only the bindings it uses, and a bind
     /// group for it from this effect's buffers: for kernels that run with no particle buffer
     /// bound (a stateless effect's depth keys).
-    pub fn standalone(
+    pub(crate) fn standalone(
         &self,
         effect: &CompiledEffect,
         entry: &str,

@@ -110,7 +110,7 @@ impl GlowPasses {
     }
 
     /// The HDR image as a texture (a copy destination).
-    pub fn hdr_texture(&self) -> &wgpu::Texture {
+    pub(crate) fn hdr_texture(&self) -> &wgpu::Texture {
         &self.hdr_texture
     }
 
@@ -125,7 +125,7 @@ impl GlowPasses {
 
     /// Records both passes' dispatches into the caller's compute pass (the benchmark times
     /// them so).
-    pub fn record_into(&self, pass: &mut wgpu::ComputePass<'_>) {
+    pub(crate) fn record_into(&self, pass: &mut wgpu::ComputePass<'_>) {
         for (pipeline, group) in [&self.blur_x, &self.blur_y] {
             pass.set_pipeline(pipeline);
             pass.set_bind_group(0, group, &[]);

@@ -68,7 +68,7 @@ fn scatter(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroup
 "#;
 
 /// The live list's buffers and passes.
-pub struct LiveList {
+pub(crate) struct LiveList {
     /// The live slots, in slot order (the first `args[1]` entries).
     pub list: wgpu::Buffer,
     /// The indirect draw's arguments: the vertices per sprite, the live count of instances.

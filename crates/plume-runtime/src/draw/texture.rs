@@ -11,14 +11,14 @@ use crate::device::gpu::{texture_2d_descriptor, Gpu};
 use crate::error::RuntimeError;
 
 /// The texture's view and its sampler, ready to bind.
-pub struct SpriteTexture {
+pub(crate) struct SpriteTexture {
     /// The whole image, with its mip levels.
     pub view: wgpu::TextureView,
     /// Trilinear filtering (linear within and between levels), clamped to the edge.
     pub sampler: wgpu::Sampler,
     /// A lit look's maps (`render.lit.normals`: a normal map, or the six-way lightmaps), laid
     /// out as the texture and read with its sampler, bound at `LIT_MAP_BINDINGS`.
-    pub lit_maps: Vec<wgpu::TextureView>,
+    pub(crate) lit_maps: Vec<wgpu::TextureView>,
     /// The second image (`render.texture.second`), laid out as the texture and read with its
     /// sampler, bound at `SECOND_TEXTURE_BINDING`.
     pub second: Option<wgpu::TextureView>,
@@ -26,7 +26,7 @@ pub struct SpriteTexture {
 
 impl SpriteTexture {
     /// The texture of `render` (None without one), with a lit look's maps.
-    pub fn for_render(
+    pub(crate) fn for_render(
         gpu: &Gpu,
         render: &plume_compiler::ir::RenderIr,
     ) -> Result<Option<Self>, RuntimeError> {
@@ -64,7 +64,7 @@ impl SpriteTexture {
 
     /// Uploads `width` x `height` RGBA8 texels, rows top to bottom, with `levels` mip levels
     /// (each dimension must halve exactly `levels - 1` times).
-    pub fn from_rgba(
+    pub(crate) fn from_rgba(
         gpu: &Gpu,
         width: u32,
         height: u32,
@@ -115,7 +115,7 @@ impl SpriteTexture {
 /// `rgba` (`width` x `height`) followed by `levels - 1` halvings, each texel the 2x2 average of
 /// the level above in premultiplied alpha: colour weighted by alpha, then divided by the
 /// block's alpha again (a fully transparent block keeps the plain average of its colours).
-pub fn mip_chain(width: u32, height: u32, rgba: &[u8], levels: u32) -> Vec<u8> {
+pub(crate) fn mip_chain(width: u32, height: u32, rgba: &[u8], levels: u32) -> Vec<u8> {
     let mut chain = rgba.to_vec();
     let (mut w, mut h) = (width as usize, height as usize);
     let mut level = rgba.to_vec();

@@ -19,7 +19,7 @@ use crate::sim::effect::Effect;
 
 /// One entry of the GPU's ribbon table: the id and link of the particle that wrote it last,
 /// and the slot it was given.
-pub type GpuEntry = Option<(u32, Link, u32)>;
+pub(crate) type GpuEntry = Option<(u32, Link, u32)>;
 
 /// Group `g`'s ribbon table as the GPU holds it, per entry (None where no spawn has written).
 /// An error for a group without ribbons.

@@ -28,7 +28,7 @@ pub struct StripVertex {
 }
 
 /// Bytes of one vertex: a vec3, a float and a vec4 of f32.
-pub const STRIP_VERTEX_BYTES: u64 = 32;
+pub(crate) const STRIP_VERTEX_BYTES: u64 = 32;
 
 /// The trail strips of `records` (in draw order) whose points `trails` holds by id, facing a camera
 /// with view matrix `view`, as a triangle list: each segment the two triangles the GPU's strip

@@ -125,7 +125,7 @@ impl FlockPass {
     /// Records only the first `stages` stages of [`FlockPass::stage_names`] (the benchmark
     /// times each stage by difference; the pass writes only its own buffers, so it can be
     /// recorded again without changing the simulation).
-    pub fn record_stages(
+    pub(crate) fn record_stages(
         &self,
         gpu: &Gpu,
         pass: &mut wgpu::ComputePass<'_>,

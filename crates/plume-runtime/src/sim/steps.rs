@@ -28,7 +28,7 @@ pub enum Steps {
 }
 
 /// A stateful effect's kernels.
-pub struct StatefulSteps {
+pub(crate) struct StatefulSteps {
     pub(crate) init: wgpu::ComputePipeline,
     pub(crate) prepare: wgpu::ComputePipeline,
     pub(crate) spawn: wgpu::ComputePipeline,
@@ -109,7 +109,7 @@ impl Steps {
 impl StatefulSteps {
     /// Records the initial state: every slot free and the free list full (on the GPU: no host
     /// copy of the state), and a field baked once at time 0 (the params buffer starts zeroed).
-    pub fn record_init(
+    pub(crate) fn record_init(
         &self,
         gpu: &Gpu,
         pass: &mut wgpu::ComputePass<'_>,
@@ -149,7 +149,7 @@ impl StatefulSteps {
     }
 
     /// Records one step (see [`Self::record`]) whose parameters are at `offset`.
-    pub fn record_step(
+    pub(crate) fn record_step(
         &self,
         gpu: &Gpu,
         pass: &mut wgpu::ComputePass<'_>,
@@ -197,7 +197,7 @@ impl StatefulSteps {
     /// firings in id order (as the stream's ordering left them, having popped the children's
     /// slots), with the step's parameters at `offset`: `event_spawn` runs per chunk over
     /// `grid`'s workgroups, whose threads stride over the children.
-    pub fn record_event_spawn(
+    pub(crate) fn record_event_spawn(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         chunks: &[Chunk],
@@ -245,7 +245,7 @@ pub fn params_bytes(
 /// One step's parameters (see [`params_bytes`]) into `row`, whose bytes past them are left as
 /// they are. Allocates nothing unless the step fires bursts: a batch writes a row per
 /// instance per step.
-pub fn write_params_row(
+pub(crate) fn write_params_row(
     row: &mut [u8],
     plan: &StepPlan,
     layout: &Layout,
@@ -302,7 +302,7 @@ impl StatelessSteps {
 
     /// The segment table of the steps done, as the `frame` binding holds it, and the number of
     /// slots it covers (the threads, which is also how many instances a draw needs).
-    pub fn frame_bytes(
+    pub(crate) fn frame_bytes(
         &self,
         effect: &CompiledEffect,
         table_bytes: u64,
@@ -387,7 +387,7 @@ impl StatelessSteps {
     }
 
     /// Sets the current batch's table size ([`Self::fire_table`]'s threads).
-    pub fn set_fire_threads(&mut self, threads: u64) {
+    pub(crate) fn set_fire_threads(&mut self, threads: u64) {
         if let Some(f) = &mut self.firing {
             f.previous_threads = f.threads;
             f.threads = threads;
@@ -409,7 +409,7 @@ impl StatelessSteps {
 
     /// Records the firings of step `j` of the batch (its step, in `fire_state` at the offset
     /// `Group::plan_graph_batch` wrote it, bound at that dynamic offset).
-    pub fn record_fire(
+    pub(crate) fn record_fire(
         &self,
         gpu: &Gpu,
         pass: &mut wgpu::ComputePass<'_>,
@@ -431,7 +431,7 @@ impl StatelessSteps {
     }
 
     /// Records one evaluation of the whole view into `pass`.
-    pub fn record_evaluate(
+    pub(crate) fn record_evaluate(
         &self,
         gpu: &Gpu,
         pass: &mut wgpu::ComputePass<'_>,
@@ -449,12 +449,12 @@ impl StatelessSteps {
     }
 
     /// Whether the view already holds the steps done.
-    pub fn view_is_current(&self) -> bool {
+    pub(crate) fn view_is_current(&self) -> bool {
         self.evaluated_at.load(Ordering::Relaxed) == self.segments.steps_done()
     }
 
     /// Records that the view now holds the steps done.
-    pub fn mark_view_current(&self) {
+    pub(crate) fn mark_view_current(&self) {
         self.evaluated_at
             .store(self.segments.steps_done(), Ordering::Relaxed);
     }

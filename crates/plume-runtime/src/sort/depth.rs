@@ -29,7 +29,7 @@ enum Keys {
 }
 
 /// The depth keys and sorts of one effect.
-pub struct DepthSort {
+pub(crate) struct DepthSort {
     keys: Keys,
     /// The keys to 16 bits, built once.
     quantise: DepthQuantise,
@@ -134,7 +134,7 @@ impl DepthSort {
 }
 
 /// The effect's sort buffers, or the error of asking a `sort: false` effect for its order.
-pub fn sort_buffers(res: &Resources) -> Result<&SortBuffers, RuntimeError> {
+pub(crate) fn sort_buffers(res: &Resources) -> Result<&SortBuffers, RuntimeError> {
     res.sort
         .as_ref()
         .ok_or_else(|| RuntimeError::Output("this effect has no sort stage (sort: false)".into()))

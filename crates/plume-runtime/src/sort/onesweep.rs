@@ -13,7 +13,7 @@ use crate::sort::program::{self, SortProgram};
 const HIST_PARTS: u64 = 4;
 
 /// The OneSweep kernels of a sorter.
-pub struct SweepKernels {
+pub(crate) struct SweepKernels {
     clear: wgpu::ComputePipeline,
     histogram: wgpu::ComputePipeline,
     offsets: wgpu::ComputePipeline,

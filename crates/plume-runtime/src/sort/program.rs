@@ -29,7 +29,7 @@ impl SortProgram {
 
     /// Records only the first `count` dispatches (the benchmark times the radix sort's
     /// stages by difference: a pass is upsweep, digit scan, downsweep).
-    pub fn record_first(&self, pass: &mut wgpu::ComputePass<'_>, count: usize) {
+    pub(crate) fn record_first(&self, pass: &mut wgpu::ComputePass<'_>, count: usize) {
         for d in self.dispatches.iter().take(count) {
             pass.set_pipeline(&d.pipeline);
             pass.set_bind_group(0, &d.group, &[]);

@@ -40,7 +40,7 @@ const WORKGROUP: u64 = 256;
 const RANGE_KEYS_PER_WORKGROUP: u64 = 16 * WORKGROUP;
 
 /// The bits of a quantised key the radix sort must order.
-pub const KEY_BITS: u32 = 16;
+pub(crate) const KEY_BITS: u32 = 16;
 
 impl DepthQuantise {
     /// The kernels that quantise the first `n` keys of `keys` in place (and, for the bitonic
@@ -118,7 +118,7 @@ impl DepthQuantise {
     }
 
     /// Records the range's reset and reduction into `pass`.
-    pub fn record_range(&self, pass: &mut wgpu::ComputePass<'_>) {
+    pub(crate) fn record_range(&self, pass: &mut wgpu::ComputePass<'_>) {
         for dispatch in &self.range_dispatches {
             record(pass, dispatch);
         }
@@ -126,7 +126,7 @@ impl DepthQuantise {
 
     /// Records the range, then the map of every key in place and the slots as values into
     /// `pass` (before a sort that does not map the keys itself).
-    pub fn record_in_place(&self, pass: &mut wgpu::ComputePass<'_>) {
+    pub(crate) fn record_in_place(&self, pass: &mut wgpu::ComputePass<'_>) {
         self.record_range(pass);
         for dispatch in &self.map {
             record(pass, dispatch);

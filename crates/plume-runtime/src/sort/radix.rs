@@ -294,7 +294,7 @@ impl GpuSorter {
     /// A program that writes the exclusive prefix sum of the first `len` words of `from` into
     /// `data` and zeroes them in `from` (counts scanned and cleared for the next counting, with
     /// no dispatch of their own to clear them); in place when `from` is `None`.
-    pub fn scan_program_from(
+    pub(crate) fn scan_program_from(
         &self,
         from: Option<&wgpu::Buffer>,
         data: &wgpu::Buffer,
@@ -309,7 +309,7 @@ impl GpuSorter {
 
     /// A stable LSD radix sort of the first `n` pairs ordering only the low `key_bits` bits of
     /// the keys (8 bits a pass, an even number of passes so the result ends in `keys`/`vals`).
-    pub fn radix_program(
+    pub(crate) fn radix_program(
         &self,
         keys: &wgpu::Buffer,
         vals: &wgpu::Buffer,

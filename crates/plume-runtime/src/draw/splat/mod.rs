@@ -233,7 +233,8 @@ impl Splat {
 
     /// Records one stage of the splat into `pass`, for every group in order (the benchmark
     /// times them one by one).
-    pub fn record_stage(
+    #[cfg(feature = "tools")]
+    pub(crate) fn record_stage(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
         stage: &str,
@@ -246,7 +247,7 @@ impl Splat {
 
     /// Records the bloom of a glowing effect after the splat's pass: its HDR image copied into
     /// the glow's texture, then the two blur passes (nothing for an effect that does not glow).
-    pub fn record_glow(&self, encoder: &mut wgpu::CommandEncoder) {
+    pub(crate) fn record_glow(&self, encoder: &mut wgpu::CommandEncoder) {
         let Some(glow) = &self.glow else {
             return;
         };
@@ -270,13 +271,14 @@ impl Splat {
     }
 
     /// The bloom's passes, for a glowing effect (the benchmark times them).
-    pub fn glow_passes(&self) -> Option<&GlowPasses> {
+    #[cfg(feature = "tools")]
+    pub(crate) fn glow_passes(&self) -> Option<&GlowPasses> {
         self.glow.as_ref().map(|g| &g.passes)
     }
 
     /// Whether every group's entry list held every entry the last frame needed (read after
     /// it ran); the lists that did not are grown, and the frame must be drawn again.
-    pub fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
+    pub(crate) fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
         let mut fits = true;
         for (_, part) in &mut self.parts {
             fits &= part.fits_or_grow()?;
