@@ -5,6 +5,7 @@ mod common;
 
 use common::*;
 use glam::DVec3;
+use plume::compiler::passes::layout::Role;
 
 /// Noisy wind (smooth in space) plus an attractor, baked on a grid over [-2, 2]³.
 fn effect(resolution: u32, filter: &str, refresh: &str) -> String {
@@ -135,5 +136,5 @@ fn a_field_with_nothing_to_bake_is_dropped_with_a_warning() {
         .items
         .iter()
         .any(|w| w.path == "field" && w.message.contains("nothing to bake")));
-    assert!(!e.layout.binds("field"));
+    assert!(!e.layout.binds(Role::Field));
 }

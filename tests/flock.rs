@@ -34,7 +34,8 @@ fn flock_out(src: &str) -> Vec<[f32; 12]> {
     let g = gpu();
     let mut sim = Effect::new(&g, e).unwrap();
     sim.run(1, |_| {}).unwrap();
-    let bytes = oracle::read_flock_buffer(&sim, "flock_out").unwrap();
+    let bytes =
+        oracle::read_flock_buffer(&sim, plume::compiler::passes::layout::Role::FlockOut).unwrap();
     bytes
         .chunks_exact(48)
         .map(|c| {

@@ -8,6 +8,7 @@ mod common;
 
 use common::*;
 use plume::compiler::graph::{compile_graph_str, ReferenceGraph};
+use plume::compiler::passes::layout::Role;
 use plume::runtime::Effect;
 use plume::CompileOptions;
 
@@ -100,6 +101,6 @@ fn a_parent_passes_only_what_a_child_inherits() {
             .layout
             .bindings
             .iter()
-            .all(|b| !b.name.starts_with("event_attrs")));
+            .all(|b| !matches!(b.role, Role::AttrsOut(_) | Role::AttrsIn(_))));
     }
 }

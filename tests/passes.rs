@@ -4,6 +4,7 @@
 use glam::DVec3;
 use plume::compiler::forces::Term;
 use plume::compiler::passes::layout::Attribute;
+use plume::compiler::passes::layout::Role;
 use plume::{compile_str, CompileError, CompileOptions, CompiledEffect, Integrator, Severity};
 
 /// An effect with one emitter around the given forces and extra top-level fields.
@@ -421,7 +422,9 @@ fn stateless_only_where_nothing_needs_state() {
         (2052, 200, vec![Some(200)])
     );
     assert_eq!(ok.layout.state_bytes_per_particle(), 0);
-    assert!(ok.layout.stateless() && !ok.layout.binds("free_list") && !ok.layout.binds("params"));
+    assert!(
+        ok.layout.stateless() && !ok.layout.binds(Role::FreeList) && !ok.layout.binds(Role::Params)
+    );
     assert!(ok
         .layout
         .to_string()

@@ -8,6 +8,7 @@ mod common;
 
 use common::*;
 use plume::compiler::graph::{compile_graph_str, CompiledGraph, ReferenceGraph};
+use plume::compiler::passes::layout::Role;
 use plume::compiler::reference::ReferenceSim;
 use plume::compiler::ribbon::{Link, Table};
 use plume::runtime::oracle;
@@ -173,7 +174,7 @@ fn only_a_group_drawn_as_ribbons_keeps_a_table() {
         .layout
         .bindings
         .iter()
-        .any(|b| b.name == "ribbon_table"));
+        .any(|b| b.role == Role::RibbonTable));
     assert_eq!(
         with.ir.render.ribbon.unwrap().table_bytes(),
         2 * 12 * 16,
@@ -187,7 +188,7 @@ fn only_a_group_drawn_as_ribbons_keeps_a_table() {
         .layout
         .bindings
         .iter()
-        .any(|b| b.name == "ribbon_table"));
+        .any(|b| b.role == Role::RibbonTable));
     assert!(!without.draw_wgsl.contains("ribbon"));
     assert!(!without.wgsl.contains("ribbon"));
 }

@@ -8,6 +8,7 @@ mod common;
 
 use common::*;
 use glam::DVec3;
+use plume::compiler::passes::layout::Role;
 use plume::compiler::reference::ReferenceSim;
 use plume::runtime::oracle;
 use plume::runtime::oracle::read_trails;
@@ -257,7 +258,7 @@ fn only_an_effect_with_a_trail_stores_history() {
     );
     assert_eq!(with.layout.trail_bytes_per_particle, 5 * 16);
     assert_eq!(without.layout.trail_bytes_per_particle, 0);
-    assert!(with.layout.binds("trail") && !without.layout.binds("trail"));
+    assert!(with.layout.binds(Role::Trail) && !without.layout.binds(Role::Trail));
     assert!(with.wgsl.contains("trail[") && !without.wgsl.contains("trail["));
     assert!(with.trail_wgsl.is_some() && without.trail_wgsl.is_none());
     assert!(with.layout.to_string().contains("trail history: 80 bytes"));

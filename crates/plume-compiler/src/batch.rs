@@ -13,6 +13,7 @@
 //! slower than the others) has its particles held: their death and spawn steps move on with
 //! the batch's, so their ages stay (`update.rs`, `hold_particle`).
 
+use crate::base::layout::{Role, Space};
 use crate::base::naga_check;
 use crate::compile::{CompileError, CompiledEffect};
 use crate::stages::wgsl;
@@ -22,7 +23,6 @@ use crate::stages::wgsl;
 pub fn unbatchable(compiled: &CompiledEffect) -> Option<&'static str> {
     let ir = &compiled.ir;
     let layout = &compiled.layout;
-    let has = |name: &str| layout.bindings.iter().any(|b| b.name == name);
     if layout.stateless() {
         Some("it is stateless (its particles are computed, not stepped)")
     } else if !ir.events.is_empty() || !ir.event_inputs.is_empty() {
@@ -43,7 +43,7 @@ pub fn unbatchable(compiled: &CompiledEffect) -> Option<&'static str> {
         Some("it bakes a force field")
     } else if layout.half_motion {
         Some("it stores its motion in halves")
-    } else if has("scene_camera") {
+    } else if layout.binds(Role::SceneCamera) {
         Some("it collides with a scene's depth")
     } else if layout.batched {
         Some("it is batched already")
@@ -64,23 +64,23 @@ pub fn compile_batched(compiled: &CompiledEffect) -> Result<CompiledEffect, Batc
     batched.layout.instance_slots = compiled.ir.capacity;
     batched.layout.bindings.push(crate::base::layout::Binding {
         binding: wgsl::batch::INSTANCE_MODELS_BINDING,
-        name: "instance_models",
-        space: "storage, read",
+        role: Role::InstanceModels,
+        space: Space::Read,
         bytes: 64,
         meaning: "per instance, its transform from its own space to the world, column-major (the draw's; identity for an instance in world space)",
     });
     let params_bytes = batched.layout.params_bytes();
     for binding in &mut batched.layout.bindings {
-        match binding.name {
-            "params" => {
-                binding.space = "storage, read";
+        match binding.role {
+            Role::Params => {
+                binding.space = Space::Read;
                 binding.bytes = params_bytes;
                 binding.meaning = "per step, a row per instance: first id, spawns requested, the instance's time, the batch's step index, per-emitter counts, (active, 0, 0, 0)";
             }
-            "counters" => {
+            Role::Counters => {
                 binding.meaning = "per instance: free count, this step's spawn base and count, totals spawned, dropped, died";
             }
-            "free_list" => {
+            Role::FreeList => {
                 binding.meaning = "per instance, a stack of its free slots (CAPACITY entries each)";
             }
             _ => {}

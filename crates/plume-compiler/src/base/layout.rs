@@ -134,14 +134,208 @@ pub const HALF1: &str = "f16";
 pub struct Binding {
     /// Binding index.
     pub binding: u32,
-    /// WGSL variable name.
-    pub name: &'static str,
-    /// Address space and access, as in WGSL.
-    pub space: &'static str,
+    /// What it holds: the runtime makes, fills and binds its buffer by this.
+    pub role: Role,
+    /// Address space and access, as the module declares it.
+    pub space: Space,
     /// Size in bytes for this effect's capacity.
     pub bytes: u64,
-    /// What it holds.
+    /// What it holds, in words (`plume compile --emit layout`).
     pub meaning: &'static str,
+}
+
+impl Binding {
+    /// Its WGSL variable's name.
+    pub fn name(&self) -> &'static str {
+        self.role.name()
+    }
+}
+
+/// What a binding of the compute module holds: the contract between the layout the compiler
+/// writes and the buffers the runtime makes, fills and binds, so neither side matches a
+/// binding by its name or number. Each role has one WGSL name ([`Role::name`]); the roles of
+/// events and inherited attributes carry the event's slot (0 to 3).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Role {
+    /// The particle records (a stateless effect's view of them).
+    Particles,
+    /// A stateless effect's spawn bookkeeping, written by the CPU each frame.
+    Frame,
+    /// The stack of free slots.
+    FreeList,
+    /// The free count, spawn base and totals.
+    Counters,
+    /// The step parameters (a row per step; per instance too when batched).
+    Params,
+    /// The slots one dispatch's particle buffer holds.
+    Chunk,
+    /// The trail history ring.
+    Trail,
+    /// The ribbons' slot table by id.
+    RibbonTable,
+    /// A baked vector field's cells.
+    Field,
+    /// The vector-field forces' samples, written once.
+    ForceData,
+    /// The mesh emitters' surfaces, written once.
+    SpawnData,
+    /// The height fields' samples and mesh colliders' distance fields, written once.
+    ColliderData,
+    /// The host's depth image that a `SceneDepth` collider meets.
+    SceneDepth,
+    /// That depth image's camera, written by the host.
+    SceneCamera,
+    /// Flocking: the boids' positions and velocities.
+    Boids,
+    /// Flocking: each boid's steering.
+    FlockOut,
+    /// Flocking: the neighbour sums.
+    FlockSums,
+    /// Flocking's grid: cell keys.
+    GridKeys,
+    /// Flocking's grid: slot values.
+    GridVals,
+    /// Flocking's grid: slots in cell order.
+    GridPlaced,
+    /// Flocking's grid: boids per cell.
+    CellCounts,
+    /// Flocking's grid: each cell's first boid.
+    CellStart,
+    /// The depth sort's keys.
+    SortKeys,
+    /// The depth sort's values.
+    SortVals,
+    /// The axis the depth sort measures along.
+    DepthAxis,
+    /// A stateless group's bookkeeping for the steps whose events fire.
+    FireFrame,
+    /// The step a stateless group's firing kernel fires for.
+    FireState,
+    /// A batch's per-instance transforms.
+    InstanceModels,
+    /// An event's firing keys (to order the firings).
+    EventKeys(u8),
+    /// An event's firing values.
+    EventVals(u8),
+    /// An event's firing records, as its parent writes them.
+    EventOut(u8),
+    /// The order a child group takes an event's firings in.
+    EventOrder(u8),
+    /// An event's firing records, as the child group reads them.
+    EventIn(u8),
+    /// The attributes an event's firings pass on, as the parent writes them.
+    AttrsOut(u8),
+    /// Those attributes, as the child group reads them.
+    AttrsIn(u8),
+}
+
+impl Role {
+    /// The WGSL variable's name.
+    pub fn name(self) -> &'static str {
+        let slot = |names: [&'static str; 4], j: u8| names[usize::from(j).min(3)];
+        match self {
+            Role::Particles => "particles",
+            Role::Frame => "frame",
+            Role::FreeList => "free_list",
+            Role::Counters => "counters",
+            Role::Params => "params",
+            Role::Chunk => "chunk",
+            Role::Trail => "trail",
+            Role::RibbonTable => "ribbon_table",
+            Role::Field => "field",
+            Role::ForceData => "force_data",
+            Role::SpawnData => "spawn_data",
+            Role::ColliderData => "collider_data",
+            Role::SceneDepth => "scene_depth",
+            Role::SceneCamera => "scene_camera",
+            Role::Boids => "boids",
+            Role::FlockOut => "flock_out",
+            Role::FlockSums => "flock_sums",
+            Role::GridKeys => "grid_keys",
+            Role::GridVals => "grid_vals",
+            Role::GridPlaced => "grid_placed",
+            Role::CellCounts => "cell_counts",
+            Role::CellStart => "cell_start",
+            Role::SortKeys => "sort_keys",
+            Role::SortVals => "sort_vals",
+            Role::DepthAxis => "depth_axis",
+            Role::FireFrame => "fire_frame",
+            Role::FireState => "fire_state",
+            Role::InstanceModels => "instance_models",
+            Role::EventKeys(j) => slot(
+                [
+                    "event_keys_0",
+                    "event_keys_1",
+                    "event_keys_2",
+                    "event_keys_3",
+                ],
+                j,
+            ),
+            Role::EventVals(j) => slot(
+                [
+                    "event_vals_0",
+                    "event_vals_1",
+                    "event_vals_2",
+                    "event_vals_3",
+                ],
+                j,
+            ),
+            Role::EventOut(j) => slot(
+                ["event_out_0", "event_out_1", "event_out_2", "event_out_3"],
+                j,
+            ),
+            Role::EventOrder(j) => slot(
+                [
+                    "event_order_0",
+                    "event_order_1",
+                    "event_order_2",
+                    "event_order_3",
+                ],
+                j,
+            ),
+            Role::EventIn(j) => slot(["event_in_0", "event_in_1", "event_in_2", "event_in_3"], j),
+            Role::AttrsOut(j) => slot(
+                [
+                    "event_attrs_out_0",
+                    "event_attrs_out_1",
+                    "event_attrs_out_2",
+                    "event_attrs_out_3",
+                ],
+                j,
+            ),
+            Role::AttrsIn(j) => slot(
+                [
+                    "event_attrs_in_0",
+                    "event_attrs_in_1",
+                    "event_attrs_in_2",
+                    "event_attrs_in_3",
+                ],
+                j,
+            ),
+        }
+    }
+}
+
+/// A binding's address space and access.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Space {
+    /// `var<uniform>`.
+    Uniform,
+    /// `var<storage, read>`.
+    Read,
+    /// `var<storage, read_write>`.
+    ReadWrite,
+}
+
+impl Space {
+    /// As WGSL writes it between `var<` and `>`.
+    pub fn wgsl(self) -> &'static str {
+        match self {
+            Space::Uniform => "uniform",
+            Space::Read => "storage, read",
+            Space::ReadWrite => "storage, read_write",
+        }
+    }
 }
 
 /// The particle struct and the bindings of an effect.
@@ -269,14 +463,19 @@ impl Layout {
         }
     }
 
-    /// Whether the layout has a binding called `name`.
-    pub fn binds(&self, name: &str) -> bool {
-        self.bindings.iter().any(|b| b.name == name)
+    /// Whether the layout has a binding of `role`.
+    pub fn binds(&self, role: Role) -> bool {
+        self.bindings.iter().any(|b| b.role == role)
+    }
+
+    /// The binding of `role`, if the layout has one.
+    pub fn binding_of(&self, role: Role) -> Option<&Binding> {
+        self.bindings.iter().find(|b| b.role == role)
     }
 
     /// Whether the effect is stateless: one `evaluate` kernel, no state kept between steps.
     pub fn stateless(&self) -> bool {
-        self.binds("frame")
+        self.binds(Role::Frame)
     }
 
     /// Bytes per particle carried from step to step: `bytes_per_particle`, or 0 when the
@@ -291,7 +490,7 @@ impl Layout {
 
     /// Whether the effect has a sort stage (bindings 5 and 6).
     pub fn sorts(&self) -> bool {
-        self.bindings.iter().any(|b| b.name == "sort_keys")
+        self.binds(Role::SortKeys)
     }
 
     /// Whether the layout has `a`.

@@ -15,7 +15,7 @@
 
 use serde::Deserialize;
 
-use crate::base::layout::Binding;
+use crate::base::layout::{Binding, Role, Space};
 use crate::base::values::{Range, Vec3};
 use crate::base::writer::{f32_lit, u32_lit, Writer};
 use crate::features::emitter::{Shape, Velocity};
@@ -195,28 +195,6 @@ pub struct EventInputIr {
     pub inherits: Vec<(usize, usize)>,
 }
 
-const OUT_KEYS: [&str; MAX_EVENTS] = [
-    "event_keys_0",
-    "event_keys_1",
-    "event_keys_2",
-    "event_keys_3",
-];
-const OUT_VALS: [&str; MAX_EVENTS] = [
-    "event_vals_0",
-    "event_vals_1",
-    "event_vals_2",
-    "event_vals_3",
-];
-const OUT_RECORDS: [&str; MAX_EVENTS] =
-    ["event_out_0", "event_out_1", "event_out_2", "event_out_3"];
-const IN_ORDER: [&str; MAX_EVENTS] = [
-    "event_order_0",
-    "event_order_1",
-    "event_order_2",
-    "event_order_3",
-];
-const IN_RECORDS: [&str; MAX_EVENTS] = ["event_in_0", "event_in_1", "event_in_2", "event_in_3"];
-
 /// Bytes of one event record: position and velocity, each padded to a vec4.
 pub const RECORD_BYTES: u64 = 32;
 /// Bytes before the records: the count of records this step, padded to 16.
@@ -241,22 +219,22 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
         out.extend([
             Binding {
                 binding: out_binding(j),
-                name: OUT_KEYS[j],
-                space: "storage, read_write",
+                role: Role::EventKeys(j as u8),
+                space: Space::ReadWrite,
                 bytes: cap * 4,
                 meaning: "the ids of the particles that fired this event in the last update, appended (the first `count`)",
             },
             Binding {
                 binding: out_binding(j) + 1,
-                name: OUT_VALS[j],
-                space: "storage, read_write",
+                role: Role::EventVals(j as u8),
+                space: Space::ReadWrite,
                 bytes: cap * 4,
                 meaning: "the slot of each id in event_keys, appended with it",
             },
             Binding {
                 binding: out_binding(j) + 2,
-                name: OUT_RECORDS[j],
-                space: "storage, read_write",
+                role: Role::EventOut(j as u8),
+                space: Space::ReadWrite,
                 bytes: RECORDS_HEADER_BYTES + cap * RECORD_BYTES,
                 meaning: "the number of firings, the complement of the smallest firing id and the largest, then per slot the position and velocity it fired with",
             },
@@ -267,16 +245,16 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
         out.extend([
             Binding {
                 binding: in_binding(j),
-                name: IN_ORDER[j],
-                space: "storage, read_write",
+                role: Role::EventOrder(j as u8),
+                space: Space::ReadWrite,
                 bytes: parent * 4,
                 meaning:
                     "the parent group's firing slots in parent id order (ordered by the runtime at the step's start)",
             },
             Binding {
                 binding: in_binding(j) + 1,
-                name: IN_RECORDS[j],
-                space: "storage, read_write",
+                role: Role::EventIn(j as u8),
+                space: Space::ReadWrite,
                 bytes: RECORDS_HEADER_BYTES + parent * RECORD_BYTES,
                 meaning: "the parent group's event records (count, then per parent slot)",
             },
@@ -285,20 +263,18 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
     out
 }
 
-/// The WGSL type of an event binding, by name; None for other bindings.
-pub(crate) fn binding_type(name: &str) -> Option<&'static str> {
-    if OUT_KEYS.contains(&name) || OUT_VALS.contains(&name) || IN_ORDER.contains(&name) {
-        Some("array<u32>")
-    } else if OUT_RECORDS.contains(&name) || IN_RECORDS.contains(&name) {
-        Some("EventRecords")
-    } else {
-        None
+/// The WGSL type of an event binding; None for other bindings.
+pub(crate) fn binding_type(role: Role) -> Option<&'static str> {
+    match role {
+        Role::EventKeys(_) | Role::EventVals(_) | Role::EventOrder(_) => Some("array<u32>"),
+        Role::EventOut(_) | Role::EventIn(_) => Some("EventRecords"),
+        _ => None,
     }
 }
 
 /// The WGSL name of the `j`-th received event's slot order (the parent's firing slots).
 pub(crate) fn in_order(j: usize) -> &'static str {
-    IN_ORDER[j]
+    Role::EventOrder(j as u8).name()
 }
 
 /// Emits the record structs (when the group fires or receives events).
@@ -355,7 +331,7 @@ pub fn emit_fire(
             w.line(format!("fired = fired | {};", u32_lit(fired_bit(j))));
             w.line(format!(
                 "{}.records[chunk.base + i] = EventRecord({x}, {tint}, vec4<f32>({vel}, {}));",
-                OUT_RECORDS[j],
+                Role::EventOut(j as u8).name(),
                 passed_id(e, "p.id")
             ));
             passed(w, j);
@@ -396,7 +372,7 @@ pub enum AppendPart {
 pub fn emit_workgroup_appends(w: &mut Writer, events: &[EventIr], part: AppendPart) {
     for (j, e) in events.iter().enumerate() {
         let bucketed = e.ordering == Ordering::Bucketed;
-        let out = OUT_RECORDS[j];
+        let out = Role::EventOut(j as u8).name();
         let fired = format!("(outcome.x & {}) != 0u", u32_lit(fired_bit(j)));
         match part {
             AppendPart::Declarations => {
@@ -444,8 +420,14 @@ pub fn emit_workgroup_appends(w: &mut Writer, events: &[EventIr], part: AppendPa
             AppendPart::Write => {
                 w.block(format!("if ({fired})"), |w| {
                     w.line(format!("let at_{j} = wg_fired_base_{j} + fired_at_{j};"));
-                    w.line(format!("{}[at_{j}] = outcome.y;", OUT_KEYS[j]));
-                    w.line(format!("{}[at_{j}] = chunk.base + i;", OUT_VALS[j]));
+                    w.line(format!(
+                        "{}[at_{j}] = outcome.y;",
+                        Role::EventKeys(j as u8).name()
+                    ));
+                    w.line(format!(
+                        "{}[at_{j}] = chunk.base + i;",
+                        Role::EventVals(j as u8).name()
+                    ));
                 });
             }
         }
@@ -476,18 +458,30 @@ pub(crate) fn emit_fire_appended(
         w.block(format!("if ({fires})"), |w| {
             w.line(format!(
                 "let at_{j} = atomicAdd(&{}.count, 1u);",
-                OUT_RECORDS[j]
+                Role::EventOut(j as u8).name()
             ));
-            w.line(format!("{}[at_{j}] = {id};", OUT_KEYS[j]));
-            w.line(format!("{}[at_{j}] = at_{j};", OUT_VALS[j]));
+            w.line(format!(
+                "{}[at_{j}] = {id};",
+                Role::EventKeys(j as u8).name()
+            ));
+            w.line(format!(
+                "{}[at_{j}] = at_{j};",
+                Role::EventVals(j as u8).name()
+            ));
             if bucketed {
                 // The ids' range sets the buckets' width.
-                w.line(format!("atomicMax(&{}.not_min_id, ~{id});", OUT_RECORDS[j]));
-                w.line(format!("atomicMax(&{}.max_id, {id});", OUT_RECORDS[j]));
+                w.line(format!(
+                    "atomicMax(&{}.not_min_id, ~{id});",
+                    Role::EventOut(j as u8).name()
+                ));
+                w.line(format!(
+                    "atomicMax(&{}.max_id, {id});",
+                    Role::EventOut(j as u8).name()
+                ));
             }
             w.line(format!(
                 "{}.records[at_{j}] = EventRecord({x}, {tint}, vec4<f32>({vel}, {}));",
-                OUT_RECORDS[j],
+                Role::EventOut(j as u8).name(),
                 passed_id(e, id)
             ));
         });
@@ -514,7 +508,7 @@ pub fn emit_kernels(
     ribbon: Option<&crate::features::looks::ribbon::Ribbon>,
 ) {
     for (j, input) in inputs.iter().enumerate() {
-        let records = IN_RECORDS[j];
+        let records = Role::EventIn(j as u8).name();
         w.comment(format!(
             "Event {}: child i of the parent's firings of the last step ({} particles each), in parent id order, spawned into the slot the ordering popped for it (the children past the free slots were dropped and counted; ids consumed either way).",
             input.stream, input.count
@@ -525,7 +519,10 @@ pub fn emit_kernels(
             w.line(format!("let c = i % {};", u32_lit(input.count)));
             // Loaded before the slot is tested, so that the free list's load and the order's
             // wait together (a test between them made them two latencies in turn).
-            w.line(format!("let r = {records}.records[{}[rank]];", IN_ORDER[j]));
+            w.line(format!(
+                "let r = {records}.records[{}[rank]];",
+                Role::EventOrder(j as u8).name()
+            ));
             w.block(
                 "if (slot < chunk.base || slot - chunk.base >= chunk.len)",
                 |w| w.line("return;"),

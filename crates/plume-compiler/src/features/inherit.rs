@@ -8,25 +8,12 @@
 //! update where it writes the record and read by the child's spawn at the record's index. A
 //! stream that passes none has no buffer and its kernels are unchanged.
 
-use crate::base::layout::Binding;
+use crate::base::layout::{Binding, Role, Space};
 use crate::base::writer::{u32_lit, Writer};
-use crate::features::events::{EventInputIr, EventIr, MAX_EVENTS};
+use crate::features::events::{EventInputIr, EventIr};
 
 /// Words a passed attribute takes in the buffer, whatever its type.
 pub(crate) const WORDS: u32 = 3;
-
-const OUT: [&str; MAX_EVENTS] = [
-    "event_attrs_out_0",
-    "event_attrs_out_1",
-    "event_attrs_out_2",
-    "event_attrs_out_3",
-];
-const IN: [&str; MAX_EVENTS] = [
-    "event_attrs_in_0",
-    "event_attrs_in_1",
-    "event_attrs_in_2",
-    "event_attrs_in_3",
-];
 
 /// Binding of the passed attributes of the `j`-th event a group fires.
 pub fn out_binding(j: usize) -> u32 {
@@ -64,8 +51,8 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
     {
         out.push(Binding {
             binding: out_binding(j),
-            name: OUT[j],
-            space: "storage, read_write",
+            role: Role::AttrsOut(j as u8),
+            space: Space::ReadWrite,
             bytes: u64::from(capacity) * u64::from(stride(e.passes.len())) * 4,
             meaning: "the attributes this event passes to its children (inherit: true), three words each, per slot, as the step that fired began",
         });
@@ -77,8 +64,8 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
     {
         out.push(Binding {
             binding: in_binding(j),
-            name: IN[j],
-            space: "storage, read_write",
+            role: Role::AttrsIn(j as u8),
+            space: Space::ReadWrite,
             bytes: u64::from(input.parent_capacity) * u64::from(stride(input.inherits.len())) * 4,
             meaning: "the parent's attributes its children inherit (inherit: true), three words each, per parent slot",
         });
@@ -87,8 +74,8 @@ pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> V
 }
 
 /// The WGSL type of a binding of this module's, or None for another's.
-pub(crate) fn binding_type(name: &str) -> Option<&'static str> {
-    (OUT.contains(&name) || IN.contains(&name)).then_some("array<f32>")
+pub(crate) fn binding_type(role: Role) -> Option<&'static str> {
+    matches!(role, Role::AttrsOut(_) | Role::AttrsIn(_)).then_some("array<f32>")
 }
 
 /// Emits, where the parent's update writes event `j`'s record for the particle in slot
@@ -108,7 +95,7 @@ pub(crate) fn emit_pass(
         for (c, word) in words(a).iter().enumerate() {
             w.line(format!(
                 "{}[{at} + {}] = {word};",
-                OUT[j],
+                Role::AttrsOut(j as u8).name(),
                 u32_lit(WORDS * k as u32 + c as u32)
             ));
         }
@@ -130,7 +117,13 @@ pub(crate) fn emit_find(w: &mut Writer, input: &EventInputIr, order: &str) {
 /// in input `j`, or None when it does not inherit there.
 pub fn taken(j: usize, input: &EventInputIr, child: usize, vec3: bool) -> Option<String> {
     let k = input.inherits.iter().position(|&(_, c)| c == child)? as u32;
-    let word = |c: u32| format!("{}[inherited_at + {}]", IN[j], u32_lit(WORDS * k + c));
+    let word = |c: u32| {
+        format!(
+            "{}[inherited_at + {}]",
+            Role::AttrsIn(j as u8).name(),
+            u32_lit(WORDS * k + c)
+        )
+    };
     Some(match vec3 {
         true => format!("vec3<f32>({}, {}, {})", word(0), word(1), word(2)),
         false => word(0),

@@ -3,6 +3,7 @@
 //! once). A state-preserving update streams particle state, so the copy kernel is its ceiling;
 //! the ratio copy time / update time says how close the update gets.
 
+use plume_compiler::passes::layout::Role;
 use plume_compiler::schema::State;
 use plume_compiler::{CompiledEffect, EffectSpec};
 
@@ -186,7 +187,7 @@ pub fn bench(
     };
     let flock = match &sim.effect.ir.flock {
         Some(f) => {
-            let words = sim.read_extra_buffer("flock_out")?;
+            let words = sim.read_extra_buffer(Role::FlockOut)?;
             // Word 7 of every 12 is the slot's neighbour count (0 for free slots).
             let total: f64 = words
                 .chunks_exact(48)

@@ -1,6 +1,7 @@
 //! The compute module's bind group layout: one entry per binding of the compiled layout, typed
 //! by what it holds (uniforms, read-only and read-write storage).
 
+use plume_compiler::passes::layout::{Role, Space};
 use plume_compiler::CompiledEffect;
 
 /// A compute-visible buffer entry.
@@ -22,49 +23,32 @@ pub(crate) fn buffer_entry(
     }
 }
 
-/// The entries of `effect`'s shared bind group layout.
+/// The entries of `effect`'s shared bind group layout: each binding typed by the address
+/// space the module declares it in, bound at a dynamic offset where the runtime moves it per
+/// step.
 pub(crate) fn entries(effect: &CompiledEffect) -> Vec<wgpu::BindGroupLayoutEntry> {
-    let rw = wgpu::BufferBindingType::Storage { read_only: false };
     effect
         .layout
         .bindings
         .iter()
-        .map(|b| match b.name {
-            "params" => buffer_entry(
-                b.binding,
-                match effect.layout.batched {
-                    // A row per instance: more than a uniform binding may hold.
-                    true => wgpu::BufferBindingType::Storage { read_only: true },
-                    false => wgpu::BufferBindingType::Uniform,
-                },
-                true,
-                Some(effect.layout.params_bytes()),
-            ),
-            "chunk" | "depth_axis" => {
-                buffer_entry(b.binding, wgpu::BufferBindingType::Uniform, false, Some(16))
+        .map(|b| {
+            let ty = match b.space {
+                Space::Uniform => wgpu::BufferBindingType::Uniform,
+                Space::Read => wgpu::BufferBindingType::Storage { read_only: true },
+                Space::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
+            };
+            match b.role {
+                // A step's parameters (a batch's: a row per instance), at the step's offset.
+                Role::Params => {
+                    buffer_entry(b.binding, ty, true, Some(effect.layout.params_bytes()))
+                }
+                // The step a stateless group's `fire` fires for: one a step of the batch, each
+                // at its own offset (`StatelessSteps::record_fire`).
+                Role::FireState => buffer_entry(b.binding, ty, true, Some(b.bytes)),
+                Role::Chunk | Role::DepthAxis => buffer_entry(b.binding, ty, false, Some(16)),
+                Role::SceneCamera => buffer_entry(b.binding, ty, false, Some(b.bytes)),
+                _ => buffer_entry(b.binding, ty, false, None),
             }
-            // The step a stateless group's `fire` fires for: one a step of the batch, each at
-            // its own offset (`StatelessSteps::record_fire`).
-            "fire_state" => buffer_entry(
-                b.binding,
-                wgpu::BufferBindingType::Storage { read_only: true },
-                true,
-                Some(b.bytes),
-            ),
-            "scene_camera" => buffer_entry(
-                b.binding,
-                wgpu::BufferBindingType::Uniform,
-                false,
-                Some(b.bytes),
-            ),
-            "frame" | "fire_frame" | "collider_data" | "force_data" | "spawn_data"
-            | "scene_depth" | "instance_models" => buffer_entry(
-                b.binding,
-                wgpu::BufferBindingType::Storage { read_only: true },
-                false,
-                None,
-            ),
-            _ => buffer_entry(b.binding, rw, false, None),
         })
         .collect()
 }

@@ -7,6 +7,7 @@
 //! readback needs, so the view is allocated the first time something reads particles back, and
 //! never for an effect that is only drawn.
 
+use plume_compiler::passes::layout::Role;
 use std::sync::OnceLock;
 
 use plume_compiler::passes::layout::COUNTERS_BYTES;
@@ -28,15 +29,14 @@ pub const BATCH_STEPS: u32 = 8;
 /// as the batch sized the binding).
 pub(crate) fn params_binding_bytes(effect: &CompiledEffect) -> u64 {
     match effect.layout.batched {
-        true => binding_bytes(effect, "params"),
+        true => binding_bytes(effect, Role::Params),
         false => effect.layout.params_bytes(),
     }
 }
 
-/// Bytes of `effect`'s binding `name` (0 when it has none).
-pub(crate) fn binding_bytes(effect: &CompiledEffect, name: &str) -> u64 {
-    let binding = effect.layout.bindings.iter().find(|b| b.name == name);
-    binding.map_or(0, |b| b.bytes)
+/// Bytes of `effect`'s binding of `role` (0 when it has none).
+pub(crate) fn binding_bytes(effect: &CompiledEffect, role: Role) -> u64 {
+    effect.layout.binding_of(role).map_or(0, |b| b.bytes)
 }
 
 /// One particle buffer: global slots `base .. base + len`, and the compute bind group that
@@ -177,7 +177,7 @@ impl Resources {
         });
         // A batch's counters are an array, one per instance, filled by its `init`.
         let counters_bytes = match effect.layout.batched {
-            true => binding_bytes(effect, "counters"),
+            true => binding_bytes(effect, Role::Counters),
             false => COUNTERS_BYTES,
         };
         let counters = (!stateless)
@@ -247,18 +247,18 @@ impl Resources {
             }
             false => None,
         };
-        // The buffers past the core bindings (7 up, 14 excepted: flocking's and the baked
-        // field's), sized by the layout and shared by every chunk. Boids index slots
+        // The buffers past those made above (flocking's, the baked field's, the colliders'
+        // data, ...), sized by the layout and shared by every chunk. Boids index slots
         // globally, so a flocking effect must fit in one particle buffer.
         let extra: Vec<(u32, wgpu::Buffer)> = effect
             .layout
             .bindings
             .iter()
-            .filter(|b| b.binding >= 7 && b.name != "depth_axis" && b.name != "trail")
+            .filter(|b| !made_apart(b.role))
             .map(|b| {
-                let size = match b.name {
+                let size = match b.role {
                     // A step of the batch at each storage offset (`fire_state_stride`).
-                    "fire_state" => {
+                    Role::FireState => {
                         plume_compiler::passes::stateless::FIRE_BATCH_STEPS * fire_state_stride(gpu)
                     }
                     _ => b.bytes.max(16),
@@ -266,40 +266,42 @@ impl Resources {
                 if let Some((_, buffer)) = shared.iter().find(|(at, _)| *at == b.binding) {
                     return Ok((b.binding, buffer.clone()));
                 }
-                if b.name == "spawn_data" {
+                if b.role == Role::SpawnData {
                     // The mesh emitters' surfaces, written once here.
                     let data = plume_compiler::emitter::spawn_data(&effect.ir.emitters)
                         .unwrap_or_default();
-                    let buffer = filled_buffer(gpu, b.name, size, STORAGE, |bytes| {
+                    let buffer = filled_buffer(gpu, b.name(), size, STORAGE, |bytes| {
                         for (dst, v) in bytes.chunks_exact_mut(4).zip(&data) {
                             dst.copy_from_slice(&v.to_le_bytes());
                         }
                     })?;
                     return Ok((b.binding, buffer));
                 }
-                let samples = match b.name {
+                let samples = match b.role {
                     // The height fields' samples and the mesh colliders' fields, written once here.
-                    "collider_data" => Some(plume_compiler::colliders::data(&effect.ir.colliders)),
+                    Role::ColliderData => {
+                        Some(plume_compiler::colliders::data(&effect.ir.colliders))
+                    }
                     // The vector field's, likewise.
-                    "force_data" => plume_compiler::forces::force_data(&effect.ir.terms),
+                    Role::ForceData => plume_compiler::forces::force_data(&effect.ir.terms),
                     _ => None,
                 };
                 let buffer = if let Some(data) = samples {
-                    filled_buffer(gpu, b.name, size, STORAGE, |bytes| {
+                    filled_buffer(gpu, b.name(), size, STORAGE, |bytes| {
                         for (dst, h) in bytes.chunks_exact_mut(4).zip(&data) {
                             dst.copy_from_slice(&h.to_le_bytes());
                         }
                     })?
                 } else {
-                    let usage = match b.name {
+                    let usage = match b.role {
                         // Written by Effect::set_scene_depth, read as a uniform.
-                        "scene_camera" => {
+                        Role::SceneCamera => {
                             wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST
                         }
                         _ => STORAGE,
                     };
                     device.create_buffer(&wgpu::BufferDescriptor {
-                        label: Some(b.name),
+                        label: Some(b.name()),
                         size,
                         usage,
                         mapped_at_creation: false,
@@ -446,37 +448,37 @@ impl Resources {
             .iter()
             .map(|b| wgpu::BindGroupEntry {
                 binding: b.binding,
-                resource: match b.name {
-                    "particles" => particles.as_entire_binding(),
-                    "trail" => trail
+                resource: match b.role {
+                    Role::Particles => particles.as_entire_binding(),
+                    Role::Trail => trail
                         .expect("a layout with a trail gets trail rings")
                         .as_entire_binding(),
-                    "free_list" => self
+                    Role::FreeList => self
                         .free_list
                         .as_ref()
                         .expect("stateful")
                         .as_entire_binding(),
-                    "counters" => self
+                    Role::Counters => self
                         .counters
                         .as_ref()
                         .expect("stateful")
                         .as_entire_binding(),
-                    "params" => sized(
+                    Role::Params => sized(
                         self.params.as_ref().expect("stateful"),
                         0,
                         params_binding_bytes(effect),
                     ),
-                    "chunk" => sized(&self.chunk_params, k * self.uniform_align, 16),
+                    Role::Chunk => sized(&self.chunk_params, k * self.uniform_align, 16),
                     // Bound at a dynamic offset: the step's (`fire_state_stride`).
-                    "fire_state" => sized(
+                    Role::FireState => sized(
                         self.extra_buffer(b.binding).expect("a firing group's step"),
                         0,
                         b.bytes,
                     ),
-                    "frame" => self.frame.as_ref().expect("stateless").as_entire_binding(),
-                    "sort_keys" => sort.expect("sorts").keys.as_entire_binding(),
-                    "sort_vals" => sort.expect("sorts").vals.as_entire_binding(),
-                    "depth_axis" => sort.expect("sorts").depth_axis.as_entire_binding(),
+                    Role::Frame => self.frame.as_ref().expect("stateless").as_entire_binding(),
+                    Role::SortKeys => sort.expect("sorts").keys.as_entire_binding(),
+                    Role::SortVals => sort.expect("sorts").vals.as_entire_binding(),
+                    Role::DepthAxis => sort.expect("sorts").depth_axis.as_entire_binding(),
                     _ => self
                         .extra_buffer(b.binding)
                         .expect("every other binding is an extra buffer")
@@ -522,10 +524,9 @@ impl Resources {
             .map(|(_, buffer)| buffer)
     }
 
-    /// The extra buffer the layout calls `name`.
-    pub(crate) fn extra_named(&self, effect: &CompiledEffect, name: &str) -> Option<&wgpu::Buffer> {
-        let binding = effect.layout.bindings.iter().find(|b| b.name == name)?;
-        self.extra_buffer(binding.binding)
+    /// The extra buffer of the layout's binding of `role`.
+    pub(crate) fn extra_of(&self, effect: &CompiledEffect, role: Role) -> Option<&wgpu::Buffer> {
+        self.extra_buffer(effect.layout.binding_of(role)?.binding)
     }
 
     /// A compute pipeline of the module's entry point `entry`, on the shared layout.
@@ -545,17 +546,17 @@ impl Resources {
         let device = &self.gpu.device;
         let pipeline = self.gpu.compute_pipeline(&self.module, entry, None);
         let sort = self.sort.as_ref();
-        let used = ["frame", "sort_keys", "depth_axis"];
+        let used = [Role::Frame, Role::SortKeys, Role::DepthAxis];
         let entries: Vec<wgpu::BindGroupEntry<'_>> = effect
             .layout
             .bindings
             .iter()
-            .filter(|b| used.contains(&b.name))
+            .filter(|b| used.contains(&b.role))
             .map(|b| wgpu::BindGroupEntry {
                 binding: b.binding,
-                resource: match b.name {
-                    "frame" => self.frame.as_ref().expect("stateless").as_entire_binding(),
-                    "sort_keys" => sort.expect("sorts").keys.as_entire_binding(),
+                resource: match b.role {
+                    Role::Frame => self.frame.as_ref().expect("stateless").as_entire_binding(),
+                    Role::SortKeys => sort.expect("sorts").keys.as_entire_binding(),
                     _ => sort.expect("sorts").depth_axis.as_entire_binding(),
                 },
             })
@@ -567,4 +568,23 @@ impl Resources {
         });
         (pipeline, group)
     }
+}
+
+/// Whether the buffer of a binding of `role` is one [`Resources`] makes in a field of its own
+/// (the particles, the bookkeeping, the sort's, the trails), not among the extra buffers the
+/// layout sizes.
+fn made_apart(role: Role) -> bool {
+    matches!(
+        role,
+        Role::Particles
+            | Role::Frame
+            | Role::FreeList
+            | Role::Counters
+            | Role::Params
+            | Role::Chunk
+            | Role::Trail
+            | Role::SortKeys
+            | Role::SortVals
+            | Role::DepthAxis
+    )
 }

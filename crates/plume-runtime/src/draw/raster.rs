@@ -16,6 +16,7 @@
 //! it only for opaque and cut-out mesh particles into a target that asks
 //! (`DrawTarget::with_depth_writes`): sprites are translucent.
 
+use plume_compiler::passes::layout::Role;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use plume_compiler::lights::{Lights, LIGHTS_BINDING};
@@ -237,7 +238,7 @@ impl GroupDraw {
         });
         entries.push((0, view.clone()));
         if ribbon.is_some() {
-            let table = res.extra_named(effect, "ribbon_table").ok_or_else(|| {
+            let table = res.extra_of(effect, Role::RibbonTable).ok_or_else(|| {
                 RuntimeError::Gpu(
                     "a ribbon group has no ribbon table (a bug in the compiler)".into(),
                 )
@@ -573,7 +574,7 @@ pub(crate) fn draw_module(
     }
     if effect.layout.batched {
         // A batch's instances' transforms (`sim::batch`).
-        let models = res.extra_named(effect, "instance_models").ok_or_else(|| {
+        let models = res.extra_of(effect, Role::InstanceModels).ok_or_else(|| {
             RuntimeError::Gpu("a batch has no instance transforms (a bug in the compiler)".into())
         })?;
         entries.push((INSTANCE_MODELS_BINDING, models.clone()));

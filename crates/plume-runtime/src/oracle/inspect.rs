@@ -26,10 +26,13 @@ pub fn draw_order(
     effect.groups()[0].draw_order(algorithm)
 }
 
-/// Reads a flocking buffer of the top-level group back by its layout name (`boids`,
-/// `flock_out`, ...).
-pub fn read_flock_buffer(effect: &Effect, name: &str) -> Result<Vec<u8>, RuntimeError> {
-    effect.groups()[0].read_extra_buffer(name)
+/// Reads a flocking buffer of the top-level group back by its role (`Role::Boids`,
+/// `Role::FlockOut`, ...).
+pub fn read_flock_buffer(
+    effect: &Effect,
+    role: plume_compiler::passes::layout::Role,
+) -> Result<Vec<u8>, RuntimeError> {
+    effect.groups()[0].read_extra_buffer(role)
 }
 
 /// Number of particle buffers group `g`'s state is split into.

@@ -5,6 +5,7 @@
 //! vertices placed on the CPU in f64, drawn by the reference ribbon shader. And the GPU's table
 //! read back, to compare with the reference simulator's.
 
+use plume_compiler::passes::layout::Role;
 use std::collections::HashMap;
 
 use glam::{DVec3, Vec3};
@@ -49,7 +50,7 @@ pub(crate) type GpuEntry = Option<(u32, Link, u32)>;
 /// # }
 /// ```
 pub fn read_ribbon_table(effect: &Effect, g: usize) -> Result<Vec<GpuEntry>, RuntimeError> {
-    let bytes = effect.group(g)?.read_extra_buffer("ribbon_table")?;
+    let bytes = effect.group(g)?.read_extra_buffer(Role::RibbonTable)?;
     let word =
         |at: usize| u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]]);
     Ok((0..bytes.len() / 16)

@@ -6,6 +6,7 @@
 //! dispatches them.
 
 use plume_compiler::forces::flock::{FlockIr, Neighbors, Scope, GRID_TILE, SEARCH_BUFFERS};
+use plume_compiler::passes::layout::Role;
 use plume_compiler::CompiledEffect;
 
 use crate::device::gpu::Gpu;
@@ -47,8 +48,8 @@ impl FlockPass {
     ) -> Result<Self, RuntimeError> {
         let grid = match flock.neighbors {
             Neighbors::Grid { .. } => {
-                let find = |name: &str| {
-                    res.extra_named(effect, name)
+                let find = |role| {
+                    res.extra_of(effect, role)
                         .expect("the layout binds the grid's buffers")
                 };
                 let source = effect
@@ -61,8 +62,8 @@ impl FlockPass {
                     .layout
                     .bindings
                     .iter()
-                    .filter(|b| SEARCH_BUFFERS.contains(&b.name))
-                    .map(|b| (b.binding, find(b.name)))
+                    .filter(|b| SEARCH_BUFFERS.contains(&b.role))
+                    .map(|b| (b.binding, find(b.role)))
                     .collect();
                 let search_group =
                     gpu.bind_buffers("flock search", &search.get_bind_group_layout(0), &entries);
@@ -74,8 +75,8 @@ impl FlockPass {
                     rank: res.pipeline("grid_rank"),
                     split_search: FlockIr::split_search(effect.ir.capacity),
                     scan: GpuSorter::new(gpu).scan_program_from(
-                        Some(find("cell_counts")),
-                        find("cell_start"),
+                        Some(find(Role::CellCounts)),
+                        find(Role::CellStart),
                         FlockIr::grid_buckets(effect.ir.capacity) + 1,
                     )?,
                 })

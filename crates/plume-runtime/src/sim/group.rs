@@ -7,6 +7,7 @@
 //! several steps, prepares and draws can share one submission. The draw of a group, and its
 //! frame's preparation, are [`crate::draw`]'s; its timings, [`crate::bench`]'s.
 
+use plume_compiler::passes::layout::Role;
 use plume_compiler::placement::Placement;
 use plume_compiler::reference::{ParticleRecord, Totals};
 use plume_compiler::schedule::{Schedule, StepPlan};
@@ -222,8 +223,12 @@ impl Group {
                 for (j, word) in state.chunks_exact_mut(stride).enumerate() {
                     word[..4].copy_from_slice(&((first_step + j as u64) as u32).to_le_bytes());
                 }
-                for (name, bytes) in [("fire_frame", table.as_slice()), ("fire_state", &state)] {
-                    let dst = self.res.extra_named(&self.effect, name).ok_or_else(|| {
+                for (role, bytes) in [
+                    (Role::FireFrame, table.as_slice()),
+                    (Role::FireState, &state),
+                ] {
+                    let name = role.name();
+                    let dst = self.res.extra_of(&self.effect, role).ok_or_else(|| {
                         RuntimeError::Gpu(format!("a firing stateless group has no {name}"))
                     })?;
                     let src = staging(&self.gpu, name, bytes)?;
@@ -416,7 +421,7 @@ impl Group {
         }
         // A batch (`sim::batch`): every instance's counters, added up.
         let size = plume_compiler::passes::layout::COUNTERS_BYTES as usize;
-        let instances = (binding_bytes(&self.effect, "counters") as usize / size).max(1);
+        let instances = (binding_bytes(&self.effect, Role::Counters) as usize / size).max(1);
         let capacity = self.effect.ir.capacity / instances as u32;
         let mut sum = Totals {
             steps,
@@ -453,14 +458,13 @@ impl Group {
         decode_slots(&self.effect, &self.schedule, &bytes)
     }
 
-    /// Reads a buffer of the layout beside the particles back by its name (`boids`,
-    /// `ribbon_table`, ...), for tests and benchmarks.
+    /// Reads a buffer of the layout beside the particles back by its role (`Role::Boids`,
+    /// `Role::RibbonTable`, ...), for tests and benchmarks.
     #[cfg(feature = "tools")]
-    pub(crate) fn read_extra_buffer(&self, name: &str) -> Result<Vec<u8>, RuntimeError> {
-        let buffer = self
-            .res
-            .extra_named(&self.effect, name)
-            .ok_or_else(|| RuntimeError::Output(format!("this effect has no buffer {name}")))?;
+    pub(crate) fn read_extra_buffer(&self, role: Role) -> Result<Vec<u8>, RuntimeError> {
+        let buffer = self.res.extra_of(&self.effect, role).ok_or_else(|| {
+            RuntimeError::Output(format!("this effect has no buffer {}", role.name()))
+        })?;
         read_buffer(&self.gpu, buffer)
     }
 

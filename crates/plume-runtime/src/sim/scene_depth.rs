@@ -5,6 +5,7 @@
 
 use glam::Mat4;
 use plume_compiler::colliders::scene_depth::DepthCamera;
+use plume_compiler::passes::layout::Role;
 
 use crate::device::buffers::staging;
 use crate::device::depth_copy::{copy_bytes, DepthCopy};
@@ -30,17 +31,15 @@ pub(crate) fn record(
     if !group.effect.ir.collides_with_scene_depth() {
         return Ok(());
     }
-    let binding = |name: &str| {
+    let binding = |role| {
         group
             .effect
             .layout
-            .bindings
-            .iter()
-            .find(|b| b.name == name)
+            .binding_of(role)
             .map(|b| b.binding)
             .expect("a SceneDepth collider has its bindings")
     };
-    let (image_at, camera_at) = (binding("scene_depth"), binding("scene_camera"));
+    let (image_at, camera_at) = (binding(Role::SceneDepth), binding(Role::SceneCamera));
     let bytes = copy_bytes(depth);
     let held = group.res.extra_buffer(image_at).map_or(0, |b| b.size());
     if held < bytes {

@@ -247,6 +247,16 @@ pub struct ParticleCtx {
     pub attrs: crate::expr::eval::Attrs,
 }
 
+/// WGSL functions that force terms share ([`ForceTerm::wgsl_helpers`]): the module writes
+/// each set once, in the order of their keys.
+#[derive(Clone, Copy, Debug)]
+pub struct WgslHelpers {
+    /// Names the set: terms that return the same key share one copy.
+    pub key: &'static str,
+    /// Writes the functions.
+    pub emit: fn(&mut Writer),
+}
+
 /// What every IR force term provides: WGSL, the f64 reference, and facts for the passes.
 pub trait ForceTerm {
     /// Indices in the file's `forces` list that this term came from.
@@ -291,6 +301,17 @@ pub trait ForceTerm {
     }
     /// The soft-cored well particles can fall through, if the term has one.
     fn core_well(&self) -> Option<CoreWell> {
+        None
+    }
+    /// The WGSL functions this term's statements call, written once per module however many
+    /// terms call them; None for a term that calls none of its own.
+    fn wgsl_helpers(&self) -> Option<WgslHelpers> {
+        None
+    }
+    /// The f32 words this term reads on the GPU from the `force_data` binding
+    /// (`Role::ForceData`, written once when the effect is made); None for a term that reads
+    /// none. One term of an effect at most has data.
+    fn gpu_data(&self) -> Option<Vec<f32>> {
         None
     }
     /// WGSL statements that add this term's acceleration to `a`, with `x`, `v` (vec3<f32>) and
@@ -346,10 +367,7 @@ pub use crate::base::values::safe_normalize;
 /// The samples of the effect's vector field, as the `force_data` binding holds them; None
 /// without one.
 pub fn force_data(terms: &[Term]) -> Option<Vec<f32>> {
-    terms.iter().find_map(|t| match t {
-        Term::VectorField(field) => Some(field.data()),
-        _ => None,
-    })
+    terms.iter().find_map(|t| t.as_dyn().gpu_data())
 }
 
 /// Path of the `i`-th force, with its variant named.

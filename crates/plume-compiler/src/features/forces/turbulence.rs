@@ -163,6 +163,12 @@ pub(crate) fn emit_helpers(w: &mut Writer) {
 }
 
 impl ForceTerm for TurbulenceTerm {
+    fn wgsl_helpers(&self) -> Option<super::WgslHelpers> {
+        Some(super::WgslHelpers {
+            key: "turbulence",
+            emit: emit_helpers,
+        })
+    }
     fn origins(&self) -> &[usize] {
         &self.origins
     }

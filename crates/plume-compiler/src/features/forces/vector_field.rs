@@ -281,6 +281,9 @@ impl VectorFieldTerm {
 }
 
 impl ForceTerm for VectorFieldTerm {
+    fn gpu_data(&self) -> Option<Vec<f32>> {
+        Some(self.data())
+    }
     fn origins(&self) -> &[usize] {
         &self.origins
     }

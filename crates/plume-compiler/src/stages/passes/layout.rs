@@ -4,7 +4,7 @@
 
 use std::fmt;
 
-pub use crate::base::layout::{Attribute, Binding, Layout, Planes, COUNTERS_BYTES};
+pub use crate::base::layout::{Attribute, Binding, Layout, Planes, Role, Space, COUNTERS_BYTES};
 use crate::ir::EffectIr;
 use crate::stages::schema::Integrator;
 
@@ -137,38 +137,38 @@ pub fn decide(ir: &EffectIr) -> Layout {
     };
     layout.bindings.push(Binding {
         binding: 0,
-        name: "particles",
-        space: "storage, read_write",
+        role: Role::Particles,
+        space: Space::ReadWrite,
         bytes: layout.buffer_bytes(cap),
         meaning: particles,
     });
     match &ir.stateless {
         Some(plan) => layout.bindings.push(Binding {
             binding: 1,
-            name: "frame",
-            space: "storage, read",
+            role: Role::Frame,
+            space: Space::Read,
             bytes: plan.table_bytes(),
             meaning: "bookkeeping, written by the CPU per frame: threads, segment count, steps done; per spawning (step, emitter) with live particles: first thread, first id, emitter counter, emitter, age in steps, spawn step, age in s",
         }),
         None => layout.bindings.extend([
             Binding {
                 binding: 1,
-                name: "free_list",
-                space: "storage, read_write",
+                role: Role::FreeList,
+                space: Space::ReadWrite,
                 bytes: cap * 4,
                 meaning: "stack of free slot indices (pushed on death, popped on spawn)",
             },
             Binding {
                 binding: 2,
-                name: "counters",
-                space: "storage, read_write",
+                role: Role::Counters,
+                space: Space::ReadWrite,
                 bytes: COUNTERS_BYTES + if ir.event_inputs.is_empty() { 0 } else { 8 },
                 meaning: "free count, this step's spawn base and count, totals spawned, dropped, died",
             },
             Binding {
                 binding: 3,
-                name: "params",
-                space: "uniform",
+                role: Role::Params,
+                space: Space::Uniform,
                 bytes: layout.params_bytes(),
                 meaning: if ir.wraps_kernel_time() {
                     "per step: first id, spawns requested, time mod 256 s, step index, per-emitter counts"
@@ -180,16 +180,16 @@ pub fn decide(ir: &EffectIr) -> Layout {
     }
     layout.bindings.push(Binding {
         binding: 4,
-        name: "chunk",
-        space: "uniform",
+        role: Role::Chunk,
+        space: Space::Uniform,
         bytes: 16,
         meaning: chunk,
     });
     if let Some(trail) = &ir.render.trail {
         layout.bindings.push(Binding {
             binding: 16,
-            name: "trail",
-            space: "storage, read_write",
+            role: Role::Trail,
+            space: Space::ReadWrite,
             bytes: cap * u64::from(trail.bytes_per_particle()),
             meaning: "trail ring, points - 1 entries per slot (entry r of slot i at i * (points - 1) + r; split into chunks with the particles): the position's f32 bits and id + 1 (0: never written)",
         });
@@ -197,8 +197,8 @@ pub fn decide(ir: &EffectIr) -> Layout {
     if let Some(ribbon) = &ir.render.ribbon {
         layout.bindings.push(Binding {
             binding: crate::features::looks::ribbon::RIBBON_TABLE_BINDING,
-            name: "ribbon_table",
-            space: "storage, read_write",
+            role: Role::RibbonTable,
+            space: Space::ReadWrite,
             bytes: ribbon.table_bytes(),
             meaning: "the ribbon table (render.ribbon), points entries per ribbon: per particle spawned, its slot, id + 1 (0: never written), key and ordinal, at entry (key mod ribbons) * points + ordinal mod points",
         });
@@ -206,8 +206,8 @@ pub fn decide(ir: &EffectIr) -> Layout {
     if let Some(field) = &ir.field {
         layout.bindings.push(Binding {
             binding: 13,
-            name: "field",
-            space: "storage, read_write",
+            role: Role::Field,
+            space: Space::ReadWrite,
             bytes: field.nodes() * 16,
             meaning: "the baked force field: one (a, 0) per node, x fastest",
         });
@@ -215,8 +215,8 @@ pub fn decide(ir: &EffectIr) -> Layout {
     if let Some(data) = crate::features::forces::force_data(&ir.terms) {
         layout.bindings.push(Binding {
             binding: 21,
-            name: "force_data",
-            space: "storage, read",
+            role: Role::ForceData,
+            space: Space::Read,
             bytes: data.len() as u64 * 4,
             meaning: "the vector field's samples: x, y, z of each node, x fastest, then y, then z",
         });
@@ -224,8 +224,8 @@ pub fn decide(ir: &EffectIr) -> Layout {
     if let Some(data) = crate::features::emitter::spawn_data(&ir.emitters) {
         layout.bindings.push(Binding {
             binding: 22,
-            name: "spawn_data",
-            space: "storage, read",
+            role: Role::SpawnData,
+            space: Space::Read,
             bytes: data.len() as u64 * 4,
             meaning: "the mesh emitters' surfaces: per emitter, a 32-bit area threshold per triangle, then its a, b - a, c - a and normal (f32 bits)",
         });
@@ -233,8 +233,8 @@ pub fn decide(ir: &EffectIr) -> Layout {
     if ir.has_collider_data() {
         layout.bindings.push(Binding {
             binding: 15,
-            name: "collider_data",
-            space: "storage, read",
+            role: Role::ColliderData,
+            space: Space::Read,
             bytes: crate::features::colliders::data(&ir.colliders).len() as u64 * 4,
             meaning: "the height fields' samples (row by row, x fastest) and the mesh colliders' distance fields (x fastest, then y, then z), in collider order",
         });
@@ -242,15 +242,15 @@ pub fn decide(ir: &EffectIr) -> Layout {
     if ir.collides_with_scene_depth() {
         layout.bindings.push(Binding {
             binding: 23,
-            name: "scene_depth",
-            space: "storage, read",
+            role: Role::SceneDepth,
+            space: Space::Read,
             bytes: 0,
             meaning: "the depth image SceneDepth collides with, row by row from the top: the runtime's copy of the host's depth texture, sized when it is given",
         });
         layout.bindings.push(Binding {
             binding: 24,
-            name: "scene_camera",
-            space: "uniform",
+            role: Role::SceneCamera,
+            space: Space::Uniform,
             bytes: crate::features::colliders::scene_depth::CAMERA_WORDS as u64 * 4,
             meaning: "the depth image's size (width, height, 0, 0; width 0: no image yet) and camera: view-projection, the view's row 2, the inverse projection, the inverse view and the view, column-major",
         });
@@ -259,23 +259,23 @@ pub fn decide(ir: &EffectIr) -> Layout {
         let groups = u64::from(ir.capacity.div_ceil(crate::base::kernel::WORKGROUP));
         layout.bindings.push(Binding {
             binding: 7,
-            name: "boids",
-            space: "storage, read_write",
+            role: Role::Boids,
+            space: Space::ReadWrite,
             bytes: (cap + u64::from(crate::features::forces::flock::GRID_SPARE)) * 32,
             meaning: "flock snapshot at the step's start: (x, alive), (v, 0) per slot; the grid's: per boid in bucket order, (x, row key), (v, 0), then spare entries that a search's last round reads past its run",
         });
         layout.bindings.push(Binding {
             binding: 8,
-            name: "flock_out",
-            space: "storage, read_write",
+            role: Role::FlockOut,
+            space: Space::ReadWrite,
             bytes: cap * 48,
             meaning: "per slot: (separation + avoidance, total weight), (weighted position sum, neighbours), (weighted velocity sum, 0)",
         });
         if flock.scope == crate::features::forces::flock::Scope::Global {
             layout.bindings.push(Binding {
                 binding: 9,
-                name: "flock_sums",
-                space: "storage, read_write",
+                role: Role::FlockSums,
+                space: Space::ReadWrite,
                 bytes: (2 * groups + 2) * 16,
                 meaning: "per-workgroup sums of x and v, then the global means",
             });
@@ -284,36 +284,36 @@ pub fn decide(ir: &EffectIr) -> Layout {
             let buckets = crate::features::forces::flock::FlockIr::grid_buckets(ir.capacity);
             layout.bindings.push(Binding {
                 binding: 10,
-                name: "grid_keys",
-                space: "storage, read_write",
+                role: Role::GridKeys,
+                space: Space::ReadWrite,
                 bytes: cap * 4,
                 meaning: "each slot's grid bucket (free slots: 0xffffffff)",
             });
             layout.bindings.push(Binding {
                 binding: 11,
-                name: "grid_vals",
-                space: "storage, read_write",
+                role: Role::GridVals,
+                space: Space::ReadWrite,
                 bytes: cap * 4,
                 meaning: "the live boids' slots sorted by bucket, then by slot (before the scatter: each slot's place among its bucket's boids)",
             });
             layout.bindings.push(Binding {
                 binding: 18,
-                name: "grid_placed",
-                space: "storage, read_write",
+                role: Role::GridPlaced,
+                space: Space::ReadWrite,
                 bytes: cap * 4,
                 meaning: "the live boids' slots by bucket, in the order their threads counted them (ranked into grid_vals)",
             });
             layout.bindings.push(Binding {
                 binding: 25,
-                name: "cell_counts",
-                space: "storage, read_write",
+                role: Role::CellCounts,
+                space: Space::ReadWrite,
                 bytes: (buckets + 1) * 4,
                 meaning: "per bucket: its live boids this step (zeroed by the scan that reads them into cell_start)",
             });
             layout.bindings.push(Binding {
                 binding: 12,
-                name: "cell_start",
-                space: "storage, read_write",
+                role: Role::CellStart,
+                space: Space::ReadWrite,
                 bytes: (buckets + 1) * 4,
                 meaning: "per bucket: where its run starts in the sorted slots (the scan of cell_counts); one past the last: the live boids",
             });
@@ -324,22 +324,22 @@ pub fn decide(ir: &EffectIr) -> Layout {
         let padded = cap.next_power_of_two() * 4;
         layout.bindings.push(Binding {
             binding: 5,
-            name: "sort_keys",
-            space: "storage, read_write",
+            role: Role::SortKeys,
+            space: Space::ReadWrite,
             bytes: padded,
             meaning: "depth keys, farthest first; free slots sort last",
         });
         layout.bindings.push(Binding {
             binding: 6,
-            name: "sort_vals",
-            space: "storage, read_write",
+            role: Role::SortVals,
+            space: Space::ReadWrite,
             bytes: padded,
             meaning: "slot indices, in draw order after the sort",
         });
         layout.bindings.push(Binding {
             binding: 14,
-            name: "depth_axis",
-            space: "uniform",
+            role: Role::DepthAxis,
+            space: Space::Uniform,
             bytes: 16,
             meaning: "the camera's forward axis and offset: depth = dot(axis.xyz, x) + axis.w, written before each sort",
         });
@@ -359,15 +359,15 @@ pub fn decide(ir: &EffectIr) -> Layout {
         layout.bindings.extend([
             Binding {
                 binding: 19,
-                name: "fire_frame",
-                space: "storage, read",
+                role: Role::FireFrame,
+                space: Space::Read,
                 bytes: plan.fire_table_bytes(),
                 meaning: "written by the CPU per batch of steps: the segments that may hold live particles at any of its steps (as `frame`), for the `fire` kernel",
             },
             Binding {
                 binding: 20,
-                name: "fire_state",
-                space: "storage, read",
+                role: Role::FireState,
+                space: Space::Read,
                 bytes: 16,
                 meaning: "the step `fire` fires for: the CPU writes each step of the batch at an offset of its own and binds it at that dynamic offset",
             },
@@ -456,7 +456,11 @@ impl fmt::Display for Layout {
             writeln!(
                 f,
                 "  @binding({}) {:<10} var<{}>  {} bytes  {}",
-                b.binding, b.name, b.space, b.bytes, b.meaning
+                b.binding,
+                b.name(),
+                b.space.wgsl(),
+                b.bytes,
+                b.meaning
             )?;
         }
         Ok(())

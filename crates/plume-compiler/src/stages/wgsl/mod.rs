@@ -16,10 +16,9 @@ pub mod update;
 pub use crate::base::kernel::{emit_thread_index, word_index, WORKGROUP};
 use crate::base::rng;
 use crate::base::writer::{u32_lit, Writer};
-use crate::features::forces::noise;
 use crate::ir::EffectIr;
 use crate::stages::integrators;
-use crate::stages::passes::layout::{Attribute, Layout};
+use crate::stages::passes::layout::{Attribute, Layout, Role};
 pub use counters::{counter_word, COUNTER_FIELDS};
 use halves::emit_half_pack;
 pub use halves::emit_half_unpack;
@@ -112,7 +111,7 @@ pub(crate) fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         w.blank();
     }
     for b in &layout.bindings {
-        if b.name == "scene_camera" {
+        if b.role == Role::SceneCamera {
             w.line(format!(
                 "@group(0) @binding({}) var<uniform> scene_camera: array<vec4<f32>, {}>;",
                 b.binding,
@@ -120,40 +119,47 @@ pub(crate) fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
             ));
             continue;
         }
-        let ty = match b.name {
-            name if crate::features::events::binding_type(name).is_some() => {
-                crate::features::events::binding_type(name).unwrap_or_default()
+        let ty = match b.role {
+            role if crate::features::events::binding_type(role).is_some() => {
+                crate::features::events::binding_type(role).unwrap_or_default()
             }
-            name if crate::features::inherit::binding_type(name).is_some() => {
-                crate::features::inherit::binding_type(name).unwrap_or_default()
+            role if crate::features::inherit::binding_type(role).is_some() => {
+                crate::features::inherit::binding_type(role).unwrap_or_default()
             }
-            "particles" | "trail" | "ribbon_table" => "array<vec4<u32>>",
-            "free_list" => "array<u32>",
-            "counters" if layout.batched => "array<Counters>",
-            "counters" => "Counters",
-            "chunk" => "Chunk",
-            "sort_keys" | "sort_vals" | "grid_keys" | "grid_vals" | "grid_placed" => "array<u32>",
-            "boids" | "flock_out" | "flock_sums" => "array<vec4<f32>>",
+            Role::Particles | Role::Trail | Role::RibbonTable => "array<vec4<u32>>",
+            Role::FreeList => "array<u32>",
+            Role::Counters if layout.batched => "array<Counters>",
+            Role::Counters => "Counters",
+            Role::Chunk => "Chunk",
+            Role::SortKeys
+            | Role::SortVals
+            | Role::GridKeys
+            | Role::GridVals
+            | Role::GridPlaced => "array<u32>",
+            Role::Boids | Role::FlockOut | Role::FlockSums => "array<vec4<f32>>",
             // The main module only reads cell_start (the scan writes it): plain loads, which
             // may be cached where atomic ones go to memory.
-            "cell_counts" => "array<atomic<u32>>",
-            "cell_start" => "array<u32>",
-            "field" => "array<vec4<f32>>",
-            "frame" | "fire_frame" => "Frame",
-            "fire_state" => "array<u32, 4>",
-            "depth_axis" => "DepthAxis",
-            "collider_data" | "force_data" | "scene_depth" => "array<f32>",
-            "spawn_data" => "array<u32>",
-            "instance_models" => "array<mat4x4<f32>>",
+            Role::CellCounts => "array<atomic<u32>>",
+            Role::CellStart => "array<u32>",
+            Role::Field => "array<vec4<f32>>",
+            Role::Frame | Role::FireFrame => "Frame",
+            Role::FireState => "array<u32, 4>",
+            Role::DepthAxis => "DepthAxis",
+            Role::ColliderData | Role::ForceData | Role::SceneDepth => "array<f32>",
+            Role::SpawnData => "array<u32>",
+            Role::InstanceModels => "array<mat4x4<f32>>",
             _ => "StepParams",
         };
-        if b.name == "params" && layout.batched {
+        if b.role == Role::Params && layout.batched {
             batch::emit_declarations(&mut w, b.binding);
             continue;
         }
         w.line(format!(
             "@group(0) @binding({}) var<{}> {}: {};",
-            b.binding, b.space, b.name, ty
+            b.binding,
+            b.space.wgsl(),
+            b.name(),
+            ty
         ));
     }
     w.blank();
@@ -181,20 +187,16 @@ pub(crate) fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         w.blank();
     }
     if integrators::needs_accel(ir.integrator) {
-        if ir
+        // Each set of helper functions the terms call, once, in the order of their keys.
+        let mut helpers: Vec<_> = ir
             .terms
             .iter()
-            .any(|t| matches!(t, crate::features::forces::Term::Noise(_)))
-        {
-            noise::emit_helpers(&mut w);
-            w.blank();
-        }
-        if ir
-            .terms
-            .iter()
-            .any(|t| matches!(t, crate::features::forces::Term::Turbulence(_)))
-        {
-            crate::features::forces::turbulence::emit_helpers(&mut w);
+            .filter_map(|t| t.as_dyn().wgsl_helpers())
+            .collect();
+        helpers.sort_by_key(|h| h.key);
+        helpers.dedup_by_key(|h| h.key);
+        for h in helpers {
+            (h.emit)(&mut w);
             w.blank();
         }
         if context {

@@ -16,7 +16,7 @@ mod steps;
 
 use plume_compiler::batch::compile_batched;
 use plume_compiler::bursts::Burst;
-use plume_compiler::passes::layout::COUNTERS_BYTES;
+use plume_compiler::passes::layout::{Role, COUNTERS_BYTES};
 use plume_compiler::placement::Placement;
 use plume_compiler::schedule::Schedule;
 use plume_compiler::wgsl::WORKGROUP;
@@ -128,10 +128,10 @@ impl EffectBatch {
         let mut whole = batched.clone();
         whole.ir.capacity = total;
         for binding in &mut whole.layout.bindings {
-            match binding.name {
-                "counters" => binding.bytes = COUNTERS_BYTES * u64::from(instances),
-                "params" => binding.bytes = row_bytes * u64::from(instances),
-                "instance_models" => binding.bytes = 64 * u64::from(instances),
+            match binding.role {
+                Role::Counters => binding.bytes = COUNTERS_BYTES * u64::from(instances),
+                Role::Params => binding.bytes = row_bytes * u64::from(instances),
+                Role::InstanceModels => binding.bytes = 64 * u64::from(instances),
                 _ => {}
             }
         }

@@ -2,6 +2,7 @@
 //! uploaded as needed, then per [`BATCH_STEPS`] steps one upload of every instance's row of
 //! step parameters and one compute pass of three dispatches a step over every instance.
 
+use plume_compiler::passes::layout::Role;
 use plume_compiler::placement::Placement;
 use plume_compiler::wgsl::WORKGROUP;
 
@@ -79,7 +80,7 @@ impl EffectBatch {
         let group = &self.effect.groups[0];
         let models = group
             .res
-            .extra_named(&group.effect, "instance_models")
+            .extra_of(&group.effect, Role::InstanceModels)
             .ok_or_else(|| RuntimeError::Gpu("a batch has no instance transforms".into()))?;
         let src = staging(&self.effect.gpu, "batch transforms", &bytes)?;
         encoder.copy_buffer_to_buffer(&src, 0, models, 0, bytes.len() as u64);

@@ -20,11 +20,9 @@ impl FlockIr {
         let Neighbors::Grid { cell } = self.neighbors else {
             return None;
         };
-        let binding = |name: &str| {
+        let binding = |role| {
             layout
-                .bindings
-                .iter()
-                .find(|b| b.name == name)
+                .binding_of(role)
                 .map(|b| b.binding)
                 .expect("a grid flock's layout binds the grid's buffers")
         };
@@ -50,8 +48,9 @@ impl FlockIr {
             ("read", "u32"),
         ]) {
             w.line(format!(
-                "@group(0) @binding({}) var<storage, {access}> {buffer}: array<{ty}>;",
-                binding(buffer)
+                "@group(0) @binding({}) var<storage, {access}> {}: array<{ty}>;",
+                binding(buffer),
+                buffer.name()
             ));
         }
         w.blank();

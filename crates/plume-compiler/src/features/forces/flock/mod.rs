@@ -31,6 +31,7 @@ mod grid;
 mod kernels;
 
 use crate::base::check::Checker;
+use crate::base::layout::Role;
 use crate::base::path::ValuePath;
 
 /// Field names, as written in effect files.
@@ -224,7 +225,8 @@ const _: () = assert!(GRID_ROUND <= 32 && GRID_ONE_LOADS * GRID_ONE_LOADS_PER_RO
 
 /// The main module's buffers that the grid's search module binds (at the layout's binding
 /// numbers): the sorted snapshot, the results, the sorted order and the run starts.
-pub const SEARCH_BUFFERS: [&str; 4] = ["boids", "flock_out", "grid_vals", "cell_start"];
+pub const SEARCH_BUFFERS: [Role; 4] =
+    [Role::Boids, Role::FlockOut, Role::GridVals, Role::CellStart];
 
 /// Below this speed (m/s) a boid has no heading, so no avoidance.
 pub(crate) const MIN_HEADING_SPEED: f64 = 1e-6;
