@@ -98,7 +98,7 @@ pub struct CompiledEffect {
     /// one particle buffer; None for an effect without trails.
     pub trail_wgsl: Option<String>,
     /// The naga-validated WGSL module of the flock's grid search (`Flock(neighbors: Grid)`;
-    /// see [`forces::flock::FlockIr::emit_search_module`]); None for any other effect.
+    /// see [`crate::forces::flock::FlockIr::emit_search_module`]); None for any other effect.
     pub flock_search_wgsl: Option<String>,
     /// Warnings from the stability analysis and other checks, located in the source.
     pub warnings: Diagnostics,
@@ -203,7 +203,7 @@ pub fn parse_with(source: &str, options: &CompileOptions) -> Result<EffectSpec, 
 
 /// Compiles an already-parsed effect of one group; `source` (may be empty) is used only to
 /// locate diagnostics. An effect with `groups` or `events` is a graph: compile it with
-/// [`graph::compile_graph`].
+/// [`crate::graph::compile_graph`].
 pub fn compile_effect(effect: &EffectSpec, source: &str) -> Result<CompiledEffect, CompileError> {
     crate::base::files::with_source(effect.files.clone(), || compile_one(effect, source))
 }

@@ -19,7 +19,7 @@ pub fn emit_thread_index(w: &mut Writer, var: &str, bound: Option<&str>) {
 
 /// The index, in a buffer of `slots` particles, of 16-byte word `k` of local slot `i`. The
 /// state is stored **word-major**: word k of every slot of a buffer, then word k + 1 (a
-/// buffer's words are `slots` vec4<u32> per struct word). A thread that loads its own
+/// buffer's words are `slots` `vec4<u32>` per struct word). A thread that loads its own
 /// particle's words then reads, across a warp, 512 contiguous bytes per load, as a copy kernel
 /// does, with no exchange through workgroup memory and no barrier; particle-major words
 /// (slot i's at i · VEC4S + k) left every load half-coalesced, and staging them through

@@ -396,8 +396,8 @@ impl Layout {
         None
     }
 
-    /// The stored 4-byte words in order, as (name, kind: `f32`, `u32`, [`HALF2`] or
-    /// [`HALF1`]), without padding.
+    /// The stored 4-byte words in order, as (name, kind: `f32`, `u32`, `HALF2` or
+    /// `HALF1`), without padding.
     pub fn words(&self) -> Vec<(&'static str, &'static str)> {
         self.attributes
             .iter()

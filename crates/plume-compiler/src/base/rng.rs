@@ -107,7 +107,7 @@ pub(crate) fn emit_pcg(w: &mut Writer, name: &str) {
     });
 }
 
-/// Emits the WGSL twins of [`pcg`], [`rand_u32`] and [`unit`].
+/// Emits the WGSL twins of [`pcg`], [`rand_u32`] and [`unit()`].
 pub fn emit_wgsl(w: &mut Writer) {
     w.comment("PCG hash (integer, bit-identical to the CPU reference).");
     emit_pcg(w, "pcg");

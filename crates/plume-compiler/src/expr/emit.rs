@@ -6,7 +6,7 @@ use super::typed::{Expr, Node, Op1, Op2, Op3, Ty, Var};
 use super::{DIV_FLOOR, EXP_MAX, EXP_MIN, LOG_FLOOR, NORMALIZE_FLOOR, VALUE_BOUND};
 use crate::base::writer::{f32_lit, vec3_lit, Writer};
 
-/// Names the WGSL in scope must provide for the variables: position and velocity (vec3<f32>),
+/// Names the WGSL in scope must provide for the variables: position and velocity (`vec3<f32>`),
 /// the time `t`, and for age, life and rand the module's particle context
 /// ([`crate::features::forces::custom::emit_context`]).
 pub struct Emitter<'w> {

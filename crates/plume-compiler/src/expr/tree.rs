@@ -124,7 +124,7 @@ pub struct Scope<'a> {
     pub dt: f64,
     /// Params are read at run time ([`Node::Param`]) instead of folded as constants.
     pub live: bool,
-    /// The variables it may read ([`VARIABLES`] for a force; fewer at spawn).
+    /// The variables it may read (`VARIABLES` for a force; fewer at spawn).
     pub vars: &'a [Var],
     /// What its value is, for messages: "an acceleration".
     pub role: &'a str,

@@ -1,5 +1,5 @@
 //! The type checker: the syntax tree becomes the typed tree ([`super::tree`]), names resolved
-//! to variables, parameters and functions ([`super::names`]), every node given a type, and
+//! to variables, parameters and functions (`names`), every node given a type, and
 //! every mistake reported at its characters.
 
 use super::parse::{Ast, AstKind, BinOp};

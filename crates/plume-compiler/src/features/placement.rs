@@ -18,7 +18,7 @@ use glam::DVec3;
 use crate::base::writer::Writer;
 
 /// An affine transform as three rows of a 3x4 matrix: `p' = R p + t` with row `i` holding
-/// (R[i][0], R[i][1], R[i][2], t[i]).
+/// `(R[i][0], R[i][1], R[i][2], t[i])`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Placement {
     /// The rows, in f32 as the GPU reads them.

@@ -6,10 +6,10 @@
 /// particle count.
 pub const MAX_SEGMENTS: u64 = 65_536;
 
-/// Bytes of one segment entry (two vec4<u32>).
+/// Bytes of one segment entry (two `vec4<u32>`).
 pub const SEGMENT_BYTES: u64 = 32;
 
-/// Bytes of the segment table's header (one vec4<u32>).
+/// Bytes of the segment table's header (one `vec4<u32>`).
 pub const FRAME_HEADER_BYTES: u64 = 16;
 
 /// How a stateless effect is evaluated.

@@ -147,7 +147,7 @@ pub struct EffectSpec {
     #[serde(default)]
     pub kill: Vec<KillVolume>,
     /// Meshes drawn around the effect and not simulated: what a `SceneDepth` collider meets
-    /// in `plume render` and `plume preview` (see [`crate::features::scene`]).
+    /// in `plume render` and `plume preview` (see `features::scene`).
     #[serde(default)]
     pub scene: Vec<crate::features::scene::SceneMesh>,
     /// What lights the sprites of a lit look (`render.lit`): directional, point and ambient

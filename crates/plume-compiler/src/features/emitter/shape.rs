@@ -110,7 +110,7 @@ pub enum Shape {
     /// Listed points, handed out in order.
     Points(Vec<Vec3>),
     /// Uniform by area on a mesh's surface, or in its volume (see
-    /// [`crate::features::mesh_emission`]).
+    /// `features::mesh_emission`).
     Mesh {
         /// The OBJ file, relative to the effect file.
         file: String,
@@ -129,7 +129,7 @@ pub enum Shape {
         /// With `volume`: field cells along the mesh's longest side (4 to 128).
         #[serde(default = "default_resolution")]
         resolution: u32,
-        /// The placed triangles, read by [`read_mesh_shapes`] before the checks.
+        /// The placed triangles, read by `read_mesh_shapes` before the checks.
         #[serde(skip)]
         surface: Option<Arc<MeshSurface>>,
     },

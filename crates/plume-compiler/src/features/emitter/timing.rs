@@ -105,7 +105,7 @@ pub struct SpawnTiming {
 }
 
 impl SpawnTiming {
-    /// The timing of the file's fields (after [`check`] passed), for steps of `dt`.
+    /// The timing of the file's fields (after `check` passed), for steps of `dt`.
     pub fn new(
         start: f64,
         duration: Option<f64>,

@@ -283,7 +283,7 @@ pub trait ForceTerm {
     fn bakeable(&self) -> bool {
         false
     }
-    /// Why the Exact integrator cannot integrate this term (after "forces[i] (Name) ").
+    /// Why the Exact integrator cannot integrate this term (after `"forces[i] (Name) "`).
     fn closed_form_blocker(&self) -> String {
         "has no closed form".into()
     }
@@ -314,7 +314,7 @@ pub trait ForceTerm {
     fn gpu_data(&self) -> Option<Vec<f32>> {
         None
     }
-    /// WGSL statements that add this term's acceleration to `a`, with `x`, `v` (vec3<f32>) and
+    /// WGSL statements that add this term's acceleration to `a`, with `x`, `v` (`vec3<f32>`) and
     /// `t` (f32, seconds mod the noise period) in scope. Locals go in a `{ }` block.
     fn emit_wgsl(&self, w: &mut Writer);
     /// The same acceleration in f64: the CPU reference.

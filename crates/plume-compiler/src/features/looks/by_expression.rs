@@ -8,7 +8,7 @@
 //! They read the particle as the draw sees it: its position `x`, velocity `v`, `age` and
 //! `life` (seconds, whole steps as the kernels count them; `life` 0 for a particle that never
 //! dies), the frame's time `t` (steps done × dt), `rand(k)` and the draws built on it, the
-//! params (as the file gives them: the draw reads no live params) and `dt`. A colour factor is kept within [0, [`COLOR_MOST`]], an
+//! params (as the file gives them: the draw reads no live params) and `dt`. A colour factor is kept within 0 to `COLOR_MOST`, an
 //! opacity factor within [0, 1] and a size factor at least 0, so none can make a NaN, a
 //! negative size, an alpha past 1 or more light than the compute renderer's fixed-point sums
 //! hold.

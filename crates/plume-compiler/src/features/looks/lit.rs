@@ -5,7 +5,7 @@
 //! axes, in the sprite's own frame as it turns, and faces the viewer. A part of the colour can
 //! stay unlit (`emissive`), and `wrap` lets light reach round the terminator of thin volumes.
 //!
-//! Both renderers shade each pixel the same way ([`emit_lit_color`]: the fragment shader,
+//! Both renderers shade each pixel the same way (`emit_lit_color`: the fragment shader,
 //! and the compute splat's composite from the quad's half axes and centre it keeps); the
 //! reference drawing shades in world space, and [`Lit::shade`] is the f64 twin the tests
 //! check single pixels against.

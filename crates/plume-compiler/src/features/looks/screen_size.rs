@@ -35,7 +35,7 @@ pub(crate) fn emit_scale(w: &mut Writer, height: bool) {
 }
 
 /// Metres at `x` that one image height spans, for a camera of view `view` and projection
-/// `proj`: 2 w / P[1][1] (0 behind a perspective camera, where the sprite is not drawn).
+/// `proj`: `2 w / P[1][1]` (0 behind a perspective camera, where the sprite is not drawn).
 pub fn metres_per_height(view: DMat4, proj: DMat4, x: DVec3) -> f64 {
     let clip: DVec4 = proj * (view * x.extend(1.0));
     2.0 * clip.w.max(0.0) / proj.y_axis.y

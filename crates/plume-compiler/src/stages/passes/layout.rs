@@ -1,6 +1,6 @@
 //! The layout pass: the particle struct holds only the attributes this effect needs, as scalar
 //! f32/u32 fields (no vec3 padding), so bytes per particle are the fewest the kernels read and
-//! write. The types live in [`crate::base::layout`], below the features that read them.
+//! write. The types live in `base::layout`, below the features that read them.
 
 use std::fmt;
 

@@ -17,7 +17,7 @@ use crate::base::diagnostics::Diagnostic;
 use crate::ir::EffectIr;
 use layout::Layout;
 
-/// Runs every pass. Errors come back in a [`Checker`] (with lookup paths); on success the
+/// Runs every pass. Errors come back in a `Checker` (with lookup paths); on success the
 /// layout and the warnings (each with its lookup path) come back.
 pub fn run(
     ir: &mut EffectIr,

@@ -423,7 +423,7 @@ fn single_index(layout: &Layout, i: &str, slots: &str) -> String {
     format!("{}u * {slots}{pair} + {i} / 4u", layout.vec4s())
 }
 
-/// The loads of slot `i`'s stored words from `buffer` (an array<vec4<u32>> of `slots` slots),
+/// The loads of slot `i`'s stored words from `buffer` (an `array<vec4<u32>>` of `slots` slots),
 /// as (name, WGSL type, expression): `w0`, `w1`, ... its 16-byte words, then `t2` (its
 /// 8-byte pair) and `t1` (its 4-byte word) where the layout has those planes: the names
 /// [`particle_from_words`] reads. Shared by the compute module and the draw modules.

@@ -11,7 +11,7 @@
 //! bilinearly between the four nearest pixel centres (d is affine across a triangle on screen,
 //! so a plane comes out exact but for the depth's rounding; where one of the four is empty,
 //! the nearest pixel's d), unprojected, and taken nearer by what 8 ulps of d are worth there
-//! ([`Place::behind`]). A point is *behind* the surface when its view depth (−z in view space)
+//! (`Place::behind`). A point is *behind* the surface when its view depth (−z in view space)
 //! exceeds the surface's, and *inside* it when behind by no more than `thickness`: past that it
 //! passes freely (behind an object, not in it). Off screen, behind the camera or over an empty
 //! pixel, it passes freely too: depth collision only knows what the camera sees.
@@ -20,8 +20,8 @@
 //! (at most [`MAX_SAMPLES`]); a crossing is a sample in front of its surface followed by one
 //! inside it, or behind it by at most `thickness` plus how much deeper the particle went
 //! between the two, so a particle moving fast along the view ray does not pass through. The
-//! crossing is bisected to the last point in front, until known to [`CONTACT_PRECISION`] of
-//! the view depth (at most [`BISECTIONS`] halvings). The normal comes from the nearest pixel's
+//! crossing is bisected to the last point in front, until known to `CONTACT_PRECISION` of
+//! the view depth (at most `BISECTIONS` halvings). The normal comes from the nearest pixel's
 //! neighbours' surface points (of the left and right neighbours, the one nearer in depth,
 //! likewise up and down), turned to face the side the particle came from.
 //!

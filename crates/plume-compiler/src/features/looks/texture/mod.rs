@@ -9,7 +9,7 @@
 //! the frame's (u, v) = ((cx + 1) / 2, (1 − cy) / 2): the image's top row at the quad's +y
 //! side, its left column at −x. Texels are filtered trilinearly over mip levels that keep every
 //! frame whole, clamped half a texel inside the frame so that no neighbouring frame of the atlas
-//! bleeds in. A second image laid out as the first may multiply the colour too ([`second`]).
+//! bleeds in. A second image laid out as the first may multiply the colour too (`second`).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -72,7 +72,7 @@ impl Sample {
         }
     }
 
-    /// The f64 twin of [`Self::mapped_wgsl`]: what multiplies the colour for texel `t`.
+    /// The f64 twin of `mapped_wgsl`: what multiplies the colour for texel `t`.
     pub fn mapped(self, t: [f64; 4]) -> [f64; 4] {
         match self {
             Sample::Modulate => t,

@@ -57,7 +57,7 @@ pub fn splat_hdr_pitch(width: u32) -> u32 {
 /// red, green and blue (w); for a host's image (`host`) the quad's clip-space depth terms
 /// (centre, x and y half axes), from which a pixel's depth follows; for a lit look of `ir`
 /// the quad's place in view space, which its normal and the light at a pixel follow from
-/// ([`lit_record_vec4s`]); last, alpha, the flipbook frame and the pixel box's two corners.
+/// (`lit_record_vec4s`); last, alpha, the flipbook frame and the pixel box's two corners.
 pub fn splat_quad_words(ir: &EffectIr, host: bool) -> u64 {
     16 + if host { 4 } else { 0 } + 4 * u64::from(lit_record_vec4s(ir))
 }
