@@ -420,14 +420,12 @@ pub fn emit_workgroup_appends(w: &mut Writer, events: &[EventIr], part: AppendPa
             AppendPart::Write => {
                 w.block(format!("if ({fired})"), |w| {
                     w.line(format!("let at_{j} = wg_fired_base_{j} + fired_at_{j};"));
-                    w.line(format!(
-                        "{}[at_{j}] = outcome.y;",
-                        Role::EventKeys(j as u8).name()
-                    ));
-                    w.line(format!(
-                        "{}[at_{j}] = chunk.base + i;",
-                        Role::EventVals(j as u8).name()
-                    ));
+                    let (keys, vals) = (
+                        Role::EventKeys(j as u8).name(),
+                        Role::EventVals(j as u8).name(),
+                    );
+                    w.line(format!("{keys}[at_{j}] = outcome.y;"));
+                    w.line(format!("{vals}[at_{j}] = chunk.base + i;"));
                 });
             }
         }
@@ -455,33 +453,23 @@ pub(crate) fn emit_fire_appended(
             TriggerIr::Collide => continue,
         };
         let bucketed = e.ordering == Ordering::Bucketed;
+        let slot = j as u8;
+        let (out, keys, vals) = (
+            Role::EventOut(slot).name(),
+            Role::EventKeys(slot).name(),
+            Role::EventVals(slot).name(),
+        );
         w.block(format!("if ({fires})"), |w| {
-            w.line(format!(
-                "let at_{j} = atomicAdd(&{}.count, 1u);",
-                Role::EventOut(j as u8).name()
-            ));
-            w.line(format!(
-                "{}[at_{j}] = {id};",
-                Role::EventKeys(j as u8).name()
-            ));
-            w.line(format!(
-                "{}[at_{j}] = at_{j};",
-                Role::EventVals(j as u8).name()
-            ));
+            w.line(format!("let at_{j} = atomicAdd(&{out}.count, 1u);"));
+            w.line(format!("{keys}[at_{j}] = {id};"));
+            w.line(format!("{vals}[at_{j}] = at_{j};"));
             if bucketed {
                 // The ids' range sets the buckets' width.
-                w.line(format!(
-                    "atomicMax(&{}.not_min_id, ~{id});",
-                    Role::EventOut(j as u8).name()
-                ));
-                w.line(format!(
-                    "atomicMax(&{}.max_id, {id});",
-                    Role::EventOut(j as u8).name()
-                ));
+                w.line(format!("atomicMax(&{out}.not_min_id, ~{id});"));
+                w.line(format!("atomicMax(&{out}.max_id, {id});"));
             }
             w.line(format!(
-                "{}.records[at_{j}] = EventRecord({x}, {tint}, vec4<f32>({vel}, {}));",
-                Role::EventOut(j as u8).name(),
+                "{out}.records[at_{j}] = EventRecord({x}, {tint}, vec4<f32>({vel}, {}));",
                 passed_id(e, id)
             ));
         });
