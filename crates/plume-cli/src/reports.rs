@@ -108,8 +108,8 @@ pub(crate) fn run_gpu(
     // A copy comes back two frames after it was recorded (mapped in the next, taken in the
     // one after), and the last step's copy is recorded in its own frame.
     const FLUSH: u64 = 3;
+    let gpu = sim.gpu().clone();
     for done in 1..=steps + FLUSH {
-        let gpu = sim.gpu().clone();
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         sim.advance(&mut encoder, u64::from(done <= steps))?;
         reported.take_gpu(sim.watch_reports(&mut encoder)?);
