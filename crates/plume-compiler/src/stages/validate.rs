@@ -5,6 +5,7 @@
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::features::forces::force_path;
+use crate::features::looks;
 use crate::stages::schema::{EffectSpec, KillVolume, Orient};
 
 /// The most emitters an effect may have: each takes 16 bytes of the per-step uniform, and
@@ -294,74 +295,6 @@ fn check_params(c: &mut Checker, path: &ValuePath, effect: &EffectSpec) {
     }
 }
 
-fn check_stop_times(c: &mut Checker, path: &ValuePath, times: &[f64]) {
-    if times.is_empty() {
-        c.error(path, "must list at least one stop");
-    }
-    for (i, &t) in times.iter().enumerate() {
-        c.within(&path.index(i).component(0, "t"), t, 0.0, 1.0);
-        if i > 0 && t < times[i - 1] {
-            c.error(
-                &path.index(i).component(0, "t"),
-                format!(
-                    "stops must be in increasing t, got {t} after {}",
-                    times[i - 1]
-                ),
-            );
-        }
-    }
-}
-
-fn check_colors(c: &mut Checker, colors: &ValuePath, stops: &[crate::stages::schema::ColorStop]) {
-    check_stop_times(c, colors, &stops.iter().map(|s| s.0).collect::<Vec<_>>());
-    for (i, s) in stops.iter().enumerate() {
-        let p = colors.index(i).component(1, "color");
-        // Colour above 1 is HDR light; opacity is a fraction.
-        let most = crate::features::looks::COLOR_MOST;
-        for (j, (name, x, hi)) in [
-            ("r", s.1 .0, most),
-            ("g", s.1 .1, most),
-            ("b", s.1 .2, most),
-            ("a", s.1 .3, 1.0),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            c.within(&p.component(j, name), x, 0.0, hi);
-        }
-    }
-}
-
-fn check_sizes(
-    c: &mut Checker,
-    sizes: &ValuePath,
-    stops: &[crate::stages::schema::SizeStop],
-    name: &str,
-) {
-    check_stop_times(c, sizes, &stops.iter().map(|s| s.0).collect::<Vec<_>>());
-    for (i, s) in stops.iter().enumerate() {
-        c.non_negative(&sizes.index(i).component(1, name), s.1);
-    }
-}
-
-fn check_trail(c: &mut Checker, path: &ValuePath, t: &crate::stages::schema::Trail) {
-    // 64 points keep a ribbon's vertex count (128) and its history (1 KiB) bounded.
-    if !(2..=64).contains(&t.points) {
-        c.error(
-            &path.field("points"),
-            format!(
-                "must be 2 to 64 (the particle and up to 63 past positions), got {}",
-                t.points
-            ),
-        );
-    }
-    if t.every == 0 {
-        c.error(&path.field("every"), "must be at least 1 step");
-    }
-    check_sizes(c, &path.field("width"), &t.width, "width");
-    check_colors(c, &path.field("color"), &t.color);
-}
-
 fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Render) {
     let flipbook = r
         .texture
@@ -381,20 +314,20 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Re
             1.0,
         );
     }
-    check_colors(c, &path.field("color"), &r.color);
-    check_sizes(c, &path.field("size"), &r.size, "size");
+    looks::check_colors(c, &path.field("color"), &r.color);
+    looks::check_sizes(c, &path.field("size"), &r.size, "size");
     if let Some(heights) = &r.size_y {
-        check_sizes(c, &path.field("size_y"), heights, "size");
+        looks::check_sizes(c, &path.field("size_y"), heights, "size");
     }
     if let Some(alpha) = &r.alpha {
         let p = path.field("alpha");
-        check_stop_times(c, &p, &alpha.iter().map(|s| s.0).collect::<Vec<_>>());
+        looks::check_stop_times(c, &p, &alpha.iter().map(|s| s.0).collect::<Vec<_>>());
         for (i, s) in alpha.iter().enumerate() {
             c.within(&p.index(i).component(1, "alpha"), s.1, 0.0, 1.0);
         }
     }
     if let Some(t) = &r.trail {
-        check_trail(c, &path.field("trail"), t);
+        t.check(c, &path.field("trail"));
     }
     if let Some(light) = &r.light {
         light.check(&path.field("light"), c);

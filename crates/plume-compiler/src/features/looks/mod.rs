@@ -17,6 +17,10 @@ pub mod trail;
 
 use serde::Deserialize;
 
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+use crate::base::values::{ColorStop, SizeStop};
+
 /// The brightest colour channel an effect may ask for, in its stops and from `color_by`:
 /// above 1 is HDR light, which blooms with glow or on an HDR host. The compute renderer's
 /// fixed-point light holds this much from one fragment (`stages/wgsl/draw/splat/light.rs`).
@@ -110,5 +114,54 @@ impl Blend {
             Blend::Opaque => w.line("return vec4<f32>(c.rgb, 1.0);"),
             _ => w.line("return vec4<f32>(c.rgb * c.a, c.a);"),
         });
+    }
+}
+
+/// Checks a curve's stop times: at least one, each in 0 to 1, in increasing order.
+pub(crate) fn check_stop_times(c: &mut Checker, path: &ValuePath, times: &[f64]) {
+    if times.is_empty() {
+        c.error(path, "must list at least one stop");
+    }
+    for (i, &t) in times.iter().enumerate() {
+        c.within(&path.index(i).component(0, "t"), t, 0.0, 1.0);
+        if i > 0 && t < times[i - 1] {
+            c.error(
+                &path.index(i).component(0, "t"),
+                format!(
+                    "stops must be in increasing t, got {t} after {}",
+                    times[i - 1]
+                ),
+            );
+        }
+    }
+}
+
+/// Checks a colour curve: its stop times, each channel from 0 (colour up to `COLOR_MOST`, HDR
+/// light; opacity up to 1).
+pub(crate) fn check_colors(c: &mut Checker, colors: &ValuePath, stops: &[ColorStop]) {
+    check_stop_times(c, colors, &stops.iter().map(|s| s.0).collect::<Vec<_>>());
+    for (i, s) in stops.iter().enumerate() {
+        let p = colors.index(i).component(1, "color");
+        // Colour above 1 is HDR light; opacity is a fraction.
+        let most = COLOR_MOST;
+        for (j, (name, x, hi)) in [
+            ("r", s.1 .0, most),
+            ("g", s.1 .1, most),
+            ("b", s.1 .2, most),
+            ("a", s.1 .3, 1.0),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            c.within(&p.component(j, name), x, 0.0, hi);
+        }
+    }
+}
+
+/// Checks a size curve: its stop times, each size (called `name` in errors) at least 0.
+pub(crate) fn check_sizes(c: &mut Checker, sizes: &ValuePath, stops: &[SizeStop], name: &str) {
+    check_stop_times(c, sizes, &stops.iter().map(|s| s.0).collect::<Vec<_>>());
+    for (i, s) in stops.iter().enumerate() {
+        c.non_negative(&sizes.index(i).component(1, name), s.1);
     }
 }

@@ -18,6 +18,8 @@
 
 use glam::DVec3;
 
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
 use crate::base::values::{default_colors, ColorStop, SizeStop};
 use crate::base::writer::{u32_lit, Writer};
 use serde::Deserialize;
@@ -41,6 +43,27 @@ pub struct Trail {
     /// Colour along the trail, `(t, (r, g, b, a))`, multiplying the particle's own colour.
     #[serde(default = "default_colors")]
     pub color: Vec<ColorStop>,
+}
+
+impl Trail {
+    /// Its checks: 2 to 64 points, every at least 1 step, and its width and colour curves.
+    pub(crate) fn check(&self, c: &mut Checker, path: &ValuePath) {
+        // 64 points keep a ribbon's vertex count (128) and its history (1 KiB) bounded.
+        if !(2..=64).contains(&self.points) {
+            c.error(
+                &path.field("points"),
+                format!(
+                    "must be 2 to 64 (the particle and up to 63 past positions), got {}",
+                    self.points
+                ),
+            );
+        }
+        if self.every == 0 {
+            c.error(&path.field("every"), "must be at least 1 step");
+        }
+        super::check_sizes(c, &path.field("width"), &self.width, "width");
+        super::check_colors(c, &path.field("color"), &self.color);
+    }
 }
 
 fn default_trail_points() -> u32 {
