@@ -105,37 +105,32 @@ pub(crate) fn thin_effects(
     mut effects: Query<ThinnedItem>,
 ) {
     let cameras: Vec<_> = cameras.iter().filter(|(c, _)| c.is_active).collect();
+    // (entity, its own scale, pixels across, expected alive): every scale is decided before
+    // any is written, so an entity's component changes only when its thinning does.
     let mut weighed = Vec::new();
-    for (entity, effect, transform, seen, aabb, lod, mut thinning) in &mut effects {
+    for (entity, effect, transform, seen, aabb, lod, _) in &effects {
         let pixels = match (seen.get(), aabb) {
             (false, _) => 0.0,
             (true, None) => f32::INFINITY,
             (true, Some(aabb)) => pixels_across(&cameras, transform, aabb),
         };
-        let expected_alive = assets.get(&effect.handle).map_or(0, |a| {
-            a.graph
-                .groups
-                .iter()
-                .map(|g| g.effect.ir.expected_alive())
-                .sum()
-        });
+        let expected_alive = assets
+            .get(&effect.handle)
+            .map_or(0, |a| a.graph.expected_alive());
         let own = clamp01(effect.spawn_scale) * lod.map_or(1.0, |l| l.scale(pixels));
-        thinning.set_if_neq(PlumeThinning {
-            scale: own,
-            pixels,
-            expected_alive,
-        });
         weighed.push((entity, own, pixels, expected_alive));
     }
-    let Some(limit) = budget.and_then(|b| b.live_particles) else {
-        return;
+    let shares = match budget.and_then(|b| b.live_particles) {
+        Some(limit) => budget_shares(&weighed, limit),
+        None => vec![1.0; weighed.len()],
     };
-    let shares = budget_shares(&weighed, limit);
-    for ((entity, own, ..), share) in weighed.iter().zip(shares) {
-        if share < 1.0 {
-            if let Ok((.., mut thinning)) = effects.get_mut(*entity) {
-                thinning.scale = own * share;
-            }
+    for ((entity, own, pixels, expected_alive), share) in weighed.into_iter().zip(shares) {
+        if let Ok((.., mut thinning)) = effects.get_mut(entity) {
+            thinning.set_if_neq(PlumeThinning {
+                scale: own * share,
+                pixels,
+                expected_alive,
+            });
         }
     }
 }

@@ -56,7 +56,7 @@ type EffectItem = (
     &'static PlumeEffect,
     &'static GlobalTransform,
     &'static ViewVisibility,
-    Option<&'static PlumeThinning>,
+    &'static PlumeThinning,
 );
 
 /// Copies the effect entities and the time step into [`ExtractedEffects`]. Entities whose
@@ -90,7 +90,7 @@ pub(crate) fn extract_effects(
             world_from_local: transform.to_matrix(),
             control: control.clone(),
             visible: seen.get(),
-            spawn_scale: thinning.map_or(control.spawn_scale, |t| t.scale),
+            spawn_scale: thinning.scale,
         });
     }
 }

@@ -69,6 +69,15 @@ impl CompiledGraph {
         Diagnostics { items }
     }
 
+    /// About how many particles every group keeps alive unthinned, together
+    /// ([`EffectIr::expected_alive`](crate::ir::EffectIr::expected_alive)).
+    pub fn expected_alive(&self) -> u64 {
+        self.groups
+            .iter()
+            .map(|g| g.effect.ir.expected_alive())
+            .sum()
+    }
+
     /// A graph of one group (an effect without `groups` or `events`).
     pub fn single(name: &str, effect: CompiledEffect) -> Self {
         Self {
