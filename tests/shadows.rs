@@ -2,6 +2,8 @@
 //! the shadowed light exactly what its shadow map lets through. A host's map through the
 //! embedding API (standard and reversed depth), pixel by pixel across the shadow's edge, and
 //! the map `plume render` draws from the scene's meshes, on the ground and on lit particles;
+//! the lookup once a particle (`shadow_at: Particle`) on a sprite and a mesh particle, and
+//! how little it changes a picture of smoke;
 //! each pixel against the f64 light ([`Shadow::visibility`] on the map's depths read back) in
 //! both renderers: within one 8-bit step for an opaque surface, two for a sprite's blended
 //! pixel (llvmpipe blends an 8-bit target in 8-bit fixed point: the source colour and its
@@ -125,6 +127,50 @@ fn half_map(gpu: &Gpu, side: u32, (near, far): (f32, f32)) -> wgpu::Texture {
     map
 }
 
+/// A host's shadow map seen from 5 m along +z, orthographic over x and y in [−4, 4] and depth
+/// over [0, 10] m, 16 x 16 texels: its left half (x < 0) holds a surface 2.5 m from the light,
+/// its right half nothing; and the lights that name it (ambient 0.1, a white light travelling
+/// along −z that the map shadows), with its depths for the f64 verdicts.
+fn host_shadow(gpu: &Gpu, reversed: bool) -> (Lights, wgpu::Texture) {
+    const MAP: u32 = 16;
+    let sun_view = DMat4::look_at_rh(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, DVec3::Y);
+    // Depth 0.25 is 2.5 m from the light; the origin is at 5 m (0.5).
+    let (near, far, projection) = match reversed {
+        false => (
+            0.25,
+            1.0,
+            DMat4::orthographic_rh(-4.0, 4.0, -4.0, 4.0, 0.0, 10.0),
+        ),
+        true => (
+            0.75,
+            0.0,
+            DMat4::orthographic_rh(-4.0, 4.0, -4.0, 4.0, 10.0, 0.0),
+        ),
+    };
+    let map = half_map(gpu, MAP, (near, far));
+    let layer = (0..MAP * MAP)
+        .map(|i| if i % MAP < MAP / 2 { near } else { far })
+        .collect();
+    let lights = Lights {
+        ambient: DVec3::splat(0.1),
+        sources: vec![LightSource::Directional {
+            direction: -DVec3::Z,
+            color: DVec3::ONE,
+        }],
+        shadow: Some(Shadow {
+            source: 0,
+            cascades: vec![projection * sun_view],
+            reversed,
+            depths: Some(ShadowDepths {
+                width: MAP,
+                height: MAP,
+                layers: vec![layer],
+            }),
+        }),
+    };
+    (lights, map)
+}
+
 /// How far (8-bit steps) a sprite's blended pixel may be from the f64 one (see the top).
 const BLENDED: f64 = 2.0;
 
@@ -146,15 +192,26 @@ fn pixel(image: &[u8], w: u32, (x, y): (u32, u32)) -> [u8; 3] {
 }
 
 /// One flat lit sprite 2.5 m across its radius at the origin, facing the camera 10 m away
-/// along +z and the light travelling along −z; the host's map seen from 5 m along +z,
-/// orthographic over x and y in [−4, 4] and depth over [0, 10] m, its left half (x < 0)
-/// holding a surface 2.5 m from the light (in front of the sprite), its right half nothing.
+/// along +z, under the host's map of `host_shadow` (its left half in front of the sprite).
 /// Each pixel of two rows across the sprite, the shadow's edge among them, is the f64 light
 /// with the map's verdict, in both renderers, for a standard and a reversed map.
 #[test]
 fn a_hosts_shadow_map_darkens_a_lit_sprite_by_its_verdict() {
+    hosts_map_across_a_sprite("Pixel");
+}
+
+/// As above with `shadow_at: Particle`: the map is looked up once, at the sprite's centre,
+/// which lies on the shadow's edge (half lit by the bilinear blend), so every pixel of the
+/// sprite takes half the light on both sides of the edge, as the f64 twin
+/// (`Lights::seen_from_particle`) says.
+#[test]
+fn a_sprite_looked_up_once_takes_its_centres_verdict_at_every_pixel() {
+    hosts_map_across_a_sprite("Particle");
+}
+
+/// The host's map of the two tests above across a lit sprite looked up `shadow_at`.
+fn hosts_map_across_a_sprite(shadow_at: &str) {
     const SIDE: u32 = 65;
-    const MAP: u32 = 16;
     let gpu = gpu();
     let [r, g, b] = COLOR;
     let src = format!(
@@ -162,7 +219,7 @@ fn a_hosts_shadow_map_darkens_a_lit_sprite_by_its_verdict() {
     emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
     camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
     render: Render(color: [(0.0, ({r}, {g}, {b}, 1.0))], size: [(0.0, 5.0)],
-                   background: (0.0, 0.0, 0.0), lit: Some(Lit(normals: Flat))))"#
+                   background: (0.0, 0.0, 0.0), lit: Some(Lit(normals: Flat, shadow_at: {shadow_at}))))"#
     );
     // No light of the file casts a shadow: the host's map is read because it asks for it.
     let options = plume::CompileOptions {
@@ -174,46 +231,21 @@ fn a_hosts_shadow_map_darkens_a_lit_sprite_by_its_verdict() {
     sim.run(1, |_| {}).unwrap();
     let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
     let radius = 2.5 / (10.0 * 20f64.to_radians().tan()) * f64::from(SIDE) / 2.0;
-    let sun_view = DMat4::look_at_rh(DVec3::new(0.0, 0.0, 5.0), DVec3::ZERO, DVec3::Y);
     for reversed in [false, true] {
-        // Depth 0.25 is 2.5 m from the light; the sprite is at 5 m (0.5).
-        let (near, far, projection) = match reversed {
-            false => (
-                0.25,
-                1.0,
-                DMat4::orthographic_rh(-4.0, 4.0, -4.0, 4.0, 0.0, 10.0),
-            ),
-            true => (
-                0.75,
-                0.0,
-                DMat4::orthographic_rh(-4.0, 4.0, -4.0, 4.0, 10.0, 0.0),
-            ),
-        };
-        let map = half_map(&gpu, MAP, (near, far));
-        let layer = (0..MAP * MAP)
-            .map(|i| if i % MAP < MAP / 2 { near } else { far })
-            .collect();
-        let lights = Lights {
-            ambient: DVec3::splat(0.1),
-            sources: vec![LightSource::Directional {
-                direction: -DVec3::Z,
-                color: DVec3::ONE,
-            }],
-            shadow: Some(Shadow {
-                source: 0,
-                cascades: vec![projection * sun_view],
-                reversed,
-                depths: Some(ShadowDepths {
-                    width: MAP,
-                    height: MAP,
-                    layers: vec![layer],
-                }),
-            }),
-        };
+        let (lights, map) = host_shadow(&gpu, reversed);
         let metres = 2.5 / radius;
         let shadowed = lights.received(DVec3::Z, DVec3::new(-1.0, 0.0, 0.0), 0.0);
         let lit = lights.received(DVec3::Z, DVec3::new(1.0, 0.0, 0.0), 0.0);
         assert_eq!((shadowed.x, lit.x), (0.1, 1.1), "the map's verdicts");
+        let per_particle = shadow_at == "Particle";
+        let seen = match per_particle {
+            true => lights.seen_from_particle(DVec3::ZERO),
+            false => lights.clone(),
+        };
+        if per_particle {
+            let half = seen.received(DVec3::Z, DVec3::new(1.0, 0.0, 0.0), 0.0);
+            assert_eq!(half.x, 0.6, "the centre's verdict: half lit");
+        }
         let mut wrong = Vec::new();
         let mut ramp = 0;
         for (kind, image) in images(
@@ -227,7 +259,7 @@ fn a_hosts_shadow_map_darkens_a_lit_sprite_by_its_verdict() {
             for up in [0, 6] {
                 for right in -8..=8 {
                     let p = DVec3::new(f64::from(right), f64::from(up), 0.0) * metres;
-                    let light = lights.received(DVec3::Z, p, 0.0);
+                    let light = seen.received(DVec3::Z, p, 0.0);
                     ramp += usize::from(light.x > 0.1 && light.x < 1.1);
                     let offset = (f64::from(right), f64::from(up));
                     let want = sprite_pixel(light, offset, radius);
@@ -235,15 +267,21 @@ fn a_hosts_shadow_map_darkens_a_lit_sprite_by_its_verdict() {
                     let xy = ((c + right) as u32, (c - up) as u32);
                     let got = pixel(&image, SIDE, xy);
                     if (0..3).any(|k| (f64::from(got[k]) - want[k]).abs() > BLENDED) {
-                        wrong.push(format!("{kind}, reversed {reversed}: pixel ({right}, {up}) is {got:?}, the f64 light gives {want:.2?}"));
+                        wrong.push(format!("{kind}, shadow_at {shadow_at}, reversed {reversed}: pixel ({right}, {up}) is {got:?}, the f64 light gives {want:.2?}"));
                     }
                 }
             }
         }
         assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+        // Looked up at each pixel, the rows cross the edge's ramp; once a particle, every
+        // pixel has the centre's half light.
+        let ramp_pixels = match per_particle {
+            true => 2 * 2 * 17,
+            false => 4,
+        };
         assert!(
-            ramp >= 4,
-            "the rows cross the edge's ramp ({ramp} pixels in it)"
+            ramp >= ramp_pixels,
+            "{shadow_at}: {ramp} pixels between shadow and light, want {ramp_pixels}"
         );
     }
 }
@@ -367,4 +405,115 @@ fn a_lit_look_reads_shadows_only_where_asked() {
     let sim = Effect::new(&gpu, unlit).unwrap();
     let mut renderer = sim.renderer(&target.target()).unwrap();
     renderer.set_shadow_map(&map).unwrap();
+}
+
+/// effects/shadowed_smoke.ron drawn with its shadow looked up at every pixel and once a
+/// particle (`shadow_at: Particle`), after 4 s of smoke, in both renderers: the two images
+/// are told apart by few pixels, and by little (the bounds below; docs/effect-format.md,
+/// "Received shadows", quotes the figures this prints). Puffs are small beside the wall's
+/// shadow, so a puff across its edge is the only one whose pixels differ, and it is seen
+/// through the many puffs over it.
+#[test]
+fn smoke_looked_up_once_a_particle_looks_as_looked_up_at_every_pixel() {
+    const W: u32 = 320;
+    const H: u32 = 180;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("effects/shadowed_smoke.ron");
+    let per_pixel = std::fs::read_to_string(&path).unwrap();
+    let per_particle = per_pixel.replace("wrap: 0.3)", "wrap: 0.3, shadow_at: Particle)");
+    assert_ne!(per_pixel, per_particle);
+    let gpu = gpu();
+    let mut drawn = Vec::new();
+    for source in [&per_pixel, &per_particle] {
+        let options = plume::CompileOptions {
+            base_dir: path.parent().map(|p| p.to_path_buf()),
+            ..Default::default()
+        };
+        let effect = plume::compile_str(source, &options).unwrap();
+        let triangles = effect.ir.scene_triangles();
+        let mut sim = Effect::new(&gpu, effect).unwrap();
+        sim.run(240, |_| {}).unwrap();
+        let camera = Camera::from_effect(&sim.compiled().ir.camera, W as f32 / H as f32);
+        let format = Offscreen::new(&gpu, 1, 1).unwrap().target().color_format;
+        let mut scene = Scene::new(&gpu, &triangles, format, (W, H))
+            .unwrap()
+            .expect("a scene");
+        let lights = scene.cast_shadow(&sim.compiled().ir.lights).unwrap();
+        scene.set_lights(&lights);
+        drawn.push(images(
+            &gpu,
+            &sim,
+            &camera,
+            (W, H),
+            Some((&scene, &lights)),
+            None,
+        ));
+    }
+    let (pixel, particle) = (&drawn[0], &drawn[1]);
+    for ((kind, a), (_, b)) in pixel.iter().zip(particle) {
+        let (mean, most, over) = differences(a, b, 8);
+        let changed = differences(a, b, 0).2;
+        let channels = a.len();
+        eprintln!("{kind}: mean {mean:.4} steps, largest {most}, {changed} of {channels} channels differ, {over} by more than 8 steps");
+        assert!(
+            changed > 0,
+            "{kind}: the lookups differ somewhere (puffs cross the edge)"
+        );
+        assert!(mean < 0.05, "{kind}: mean difference {mean} steps");
+        assert!(
+            over * 1000 < channels,
+            "{kind}: {over} channels differ by more than 8 steps"
+        );
+    }
+}
+
+/// A lit cube drawn as a mesh particle (`render.mesh`, an opaque 2 m cube at the origin, its
+/// front face toward the camera) under the host's map of `host_shadow`, whose shadow's edge
+/// runs through its centre: looked up once a particle, its front face is evenly half lit on
+/// both sides of the edge (ambient 0.1 plus half the light), as `Lights::seen_from_particle`
+/// says, within one 8-bit step (opaque: nothing blended).
+#[test]
+fn a_mesh_particle_looked_up_once_takes_its_centres_verdict() {
+    const SIDE: u32 = 65;
+    let gpu = gpu();
+    let cube = write("shadow-cube.obj", &box_obj([-0.5; 3], [0.5; 3]));
+    let [r, g, b] = COLOR;
+    let src = format!(
+        r#"Effect(name: "shadowed cube", capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    render: Render(color: [(0.0, ({r}, {g}, {b}, 1.0))], size: [(0.0, 2.0)], blend: Opaque,
+                   background: (0.0, 0.0, 0.0), mesh: Some(ParticleMesh(file: {cube:?})),
+                   lit: Some(Lit(normals: Flat, shadow_at: Particle))))"#
+    );
+    let options = plume::CompileOptions {
+        receive_shadows: true,
+        ..Default::default()
+    };
+    let effect = plume::compile_str(&src, &options).unwrap();
+    let lit = effect.ir.render.lit.clone().unwrap();
+    let mut sim = Effect::new(&gpu, effect).unwrap();
+    sim.run(1, |_| {}).unwrap();
+    let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
+    let (lights, map) = host_shadow(&gpu, false);
+    let seen = lights.seen_from_particle(DVec3::ZERO);
+    let light = seen.received(DVec3::Z, DVec3::new(0.0, 0.0, 1.0), 0.0);
+    assert_eq!(light.x, 0.6, "the centre's verdict: half lit");
+    let want = lit.shade(DVec3::from(COLOR), light) * 255.0;
+    let target = Offscreen::new(&gpu, SIDE, SIDE).unwrap();
+    let mut renderer = sim.renderer(&target.target()).unwrap();
+    renderer.set_lights(&lights);
+    renderer.set_shadow_map(&map).unwrap();
+    let image = target.render(&sim, &renderer, &camera).unwrap();
+    // The face spans about 15 pixels either side of the centre: 5 pixels in, each side.
+    let c = SIDE / 2;
+    for xy in [(c - 5, c), (c + 5, c), (c, c - 5), (c - 5, c + 5)] {
+        let got = pixel(&image, SIDE, xy);
+        for k in 0..3 {
+            let diff = (f64::from(got[k]) - want[k]).abs();
+            assert!(
+                diff <= 1.0,
+                "pixel {xy:?} is {got:?}, the f64 light gives {want:?}"
+            );
+        }
+    }
 }

@@ -16,7 +16,7 @@ use crate::base::path::ValuePath;
 use crate::base::values::Vec3;
 use crate::base::writer::{f32_lit, Writer};
 use crate::features::shadow::{
-    shadow_declarations_wgsl, Shadow, SHADOW_BYTES, SHADOW_FIELDS_WGSL, SHADOW_WGSL,
+    shadow_declarations_wgsl, Shadow, ShadowAt, SHADOW_BYTES, SHADOW_FIELDS_WGSL, SHADOW_WGSL,
 };
 
 /// Most light sources (directional and point) one draw reads.
@@ -184,6 +184,23 @@ impl Lights {
         written
             .iter()
             .any(|l| matches!(l, Light::Directional { shadow: true, .. }))
+    }
+
+    /// The lights as every pixel of a particle centred at `centre` receives them where its
+    /// look says `shadow_at: Particle`: the shadowed source dimmed by the map's verdict at the
+    /// centre ([`Shadow::visibility`]), and no map left to look up. The f64 twin of
+    /// `particle_shadow`.
+    pub fn seen_from_particle(&self, centre: DVec3) -> Lights {
+        let mut lights = self.clone();
+        if let Some(shadow) = lights.shadow.take() {
+            let seen = shadow.visibility(centre);
+            if let Some(LightSource::Directional { color, .. }) =
+                lights.sources.get_mut(shadow.source)
+            {
+                *color *= seen;
+            }
+        }
+        lights
     }
 
     /// The light (per channel) that a surface at `p` with unit normal `n` receives, both in
@@ -412,7 +429,7 @@ pub fn check(lights: &[Light], c: &mut Checker) {
 /// receives, the WGSL twin of [`Lights::received`]. The runtime writes the uniform in the
 /// view each frame ([`Lights::transformed`] by the camera's view), so no pixel moves a light;
 /// `wrap` is a constant of the look.
-pub(crate) fn emit_received_light(w: &mut Writer, wrap: f64, shadows: bool) {
+pub(crate) fn emit_received_light(w: &mut Writer, wrap: f64, shadows: Option<ShadowAt>) {
     w.comment("A light source: (direction the light travels, 0) or (position, 1); (colour · intensity, range).");
     w.block("struct LightSource", |w| {
         w.line("place: vec4<f32>,");
@@ -429,13 +446,17 @@ pub(crate) fn emit_received_light(w: &mut Writer, wrap: f64, shadows: bool) {
     w.line(format!(
         "@group(0) @binding({LIGHTS_BINDING}) var<uniform> lights: Lights;"
     ));
-    if shadows {
+    if let Some(at) = shadows {
         for line in shadow_declarations_wgsl().lines() {
             w.line(line);
         }
         w.blank();
         for line in SHADOW_WGSL.lines() {
             w.line(line);
+        }
+        if at == ShadowAt::Particle {
+            w.comment("The shadowed source's light at the particle being lit (render.lit.shadow_at: Particle): set from shadow_visibility at its centre before its pixels are lit.");
+            w.line("var<private> particle_shadow: f32 = 1.0;");
         }
     }
     w.line(format!("const LIGHT_WRAP: f32 = {};", f32_lit(wrap)));
@@ -460,15 +481,16 @@ pub(crate) fn emit_received_light(w: &mut Writer, wrap: f64, shadows: bool) {
 
 /// Emits, inside a loop over the sources (`i`) at view-space point `p`, `toward` (the unit
 /// vector toward source i) and `color` (its light there, the shadowed source's through its
-/// map when the draw reads `shadows`): the twin of [`Lights::incoming`].
-pub fn emit_incoming(w: &mut Writer, shadows: bool) {
+/// map when the draw reads `shadows`, looked up where it says): the twin of
+/// [`Lights::incoming`].
+pub fn emit_incoming(w: &mut Writer, shadows: Option<ShadowAt>) {
     w.line("let source = lights.sources[i];");
     w.comment("A unit direction (zero where a host gave none: no light).");
     w.line("var toward = -source.place.xyz;");
     w.line("var color = source.color.rgb;");
-    if shadows {
+    if let Some(at) = shadows {
         w.block("if (i == lights.shadow.x)", |w| {
-            w.line("color = color * shadow_visibility(p);");
+            w.line(format!("color = color * {};", at.visibility_wgsl()));
         });
     }
     w.block("if (source.place.w > 0.5)", |w| {

@@ -12,6 +12,7 @@
 //! shadow's edge is a texel wide ramp rather than a staircase.
 
 use glam::{DMat4, DVec3, DVec4};
+use serde::Deserialize;
 
 /// Most cascades (layers of the map, each with its projection) a draw reads.
 pub const SHADOW_CASCADES_MOST: usize = 4;
@@ -35,6 +36,30 @@ pub fn shadow_declarations_wgsl() -> String {
          @group(0) @binding({standard}) var shadow_standard: sampler_comparison;\n\
          @group(0) @binding({reversed}) var shadow_reversed: sampler_comparison;"
     )
+}
+
+/// Where a lit look looks its shadow up (`render.lit.shadow_at`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
+pub enum ShadowAt {
+    /// At every pixel's own point: a shadow's edge crosses a sprite as it crosses the scene.
+    #[default]
+    Pixel,
+    /// Once a particle, at its centre, the whole sprite taking that verdict: one lookup a
+    /// particle (in the vertex shader, or as the compute renderer loads its record) rather
+    /// than one a pixel. For sprites small beside the shadow's features (smoke under a wall).
+    Particle,
+}
+
+impl ShadowAt {
+    /// The WGSL that a light's colour is multiplied by at view-space point `p`: the map's
+    /// verdict there, or the particle's own (`particle_shadow`, which each shader that lights
+    /// sets from `shadow_visibility` at the particle's centre before it lights a pixel).
+    pub(crate) fn visibility_wgsl(self) -> &'static str {
+        match self {
+            ShadowAt::Pixel => "shadow_visibility(p)",
+            ShadowAt::Particle => "particle_shadow",
+        }
+    }
 }
 
 /// The source index in the uniform that no light has: no shadow.

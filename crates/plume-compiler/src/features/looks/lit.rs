@@ -16,6 +16,7 @@ use serde::Deserialize;
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::base::writer::{f32_lit, Writer};
+use crate::features::shadow::ShadowAt;
 
 /// The normal a lit sprite has at each pixel.
 #[derive(Clone, Debug, Default, PartialEq, Eq, Deserialize)]
@@ -66,6 +67,10 @@ pub struct Lit {
     /// The part of the colour that glows by itself and is not lit, in [0, 1].
     #[serde(default)]
     pub emissive: f64,
+    /// Where a shadowed light's map is looked up: at each pixel (the default) or once a
+    /// particle, at its centre.
+    #[serde(default)]
+    pub shadow_at: ShadowAt,
     /// Whether the draw reads a shadow map (`features::shadow`): set by the compiler where a
     /// light of the file casts a shadow or `CompileOptions::receive_shadows` asks for it, never
     /// by the file. Without it the draw module holds no lookup.
@@ -93,6 +98,17 @@ impl Lit {
                 c.error(&at, "a lit look's map is laid out as the sprite's texture, its frames played with it: give render.texture too");
             }
         }
+    }
+
+    /// Where the draw looks a shadow up; `None` where it reads no shadow map.
+    pub(crate) fn shadow_lookup(&self) -> Option<ShadowAt> {
+        self.shadows.then_some(self.shadow_at)
+    }
+
+    /// Whether the draw looks its shadow up once a particle: its vertex shader (or the compute
+    /// renderer's load of its record) sets `particle_shadow` from the particle's centre.
+    pub(crate) fn shadow_per_particle(&self) -> bool {
+        self.shadow_lookup() == Some(ShadowAt::Particle)
     }
 
     /// The variant of `normals`, as the file writes it.
@@ -256,7 +272,7 @@ impl Lit {
     /// `p`, and `lit_color(c, light)`: the WGSL twins of [`Self::light`] and [`Self::shade`].
     /// The look's maps are declared here too.
     pub fn emit_lit_color(&self, w: &mut Writer, turned: bool) {
-        crate::features::lights::emit_received_light(w, self.wrap, self.shadows);
+        crate::features::lights::emit_received_light(w, self.wrap, self.shadow_lookup());
         w.line(format!(
             "const LIT_EMISSIVE: f32 = {};",
             f32_lit(self.emissive)
@@ -318,7 +334,7 @@ impl Lit {
                     w.block(
                         format!("for (var i = 0u; i < min(lights.count.x, {}u); i++)", crate::features::lights::LIGHTS_MOST),
                         |w| {
-                            crate::features::lights::emit_incoming(w, self.shadows);
+                            crate::features::lights::emit_incoming(w, self.shadow_lookup());
                             w.comment("Toward the light in the sprite's frame; each axis weighted t², its map by the sign.");
                             w.line("let t = toward * basis;");
                             w.line("let response = select(lbf, rtb, vec3<bool>(t.x > 0.0, t.y > 0.0, t.z <= 0.0));");

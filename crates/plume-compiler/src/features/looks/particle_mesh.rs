@@ -164,12 +164,13 @@ impl MeshIr {
     /// Emits the mesh's vertex buffer and `vs_mesh` / `fs_mesh`: an instance per particle
     /// (`sprite_at`), its mesh placed in the sprite's frame (`oriented`: from its half axes;
     /// else upright facing the camera), each vertex coloured as the sprite, lit by its face
-    /// normal when `lit` (`lit_color`, `received_light` in scope), written through `blend`.
+    /// normal when `lit` (`lit_color`, `received_light` in scope; a shadow looked up once a
+    /// particle at its centre where the look says so), written through `blend`.
     pub fn emit_draw(
         &self,
         w: &mut Writer,
         oriented: bool,
-        lit: bool,
+        lit: Option<&crate::features::looks::lit::Lit>,
         blend: crate::features::looks::Blend,
     ) {
         w.comment(format!(
@@ -218,7 +219,10 @@ impl MeshIr {
                 w.line("let p = s.center.xyz + m.x * ax + m.y * ay + m.z * az;");
                 w.line("out.clip = draw.proj * vec4<f32>(p, 1.0);");
                 w.line("out.color = s.color;");
-                if lit {
+                if let Some(look) = lit {
+                    if look.shadow_per_particle() {
+                        w.line("particle_shadow = shadow_visibility(s.center.xyz);");
+                    }
                     w.comment("The face normal by the inverse transpose: each axis over its length squared.");
                     w.line("let n = mesh_vertices[2u * vertex + 1u].xyz;");
                     w.line("let inv = vec3<f32>(1.0) / max(vec3<f32>(dot(ax, ax), dot(ay, ay), dot(az, az)), vec3<f32>(1e-30));");

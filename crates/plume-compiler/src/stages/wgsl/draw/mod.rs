@@ -302,13 +302,12 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         lit.emit_map_fns(&mut w, shape.splat);
     }
     w.blank();
-    let lit = ir.render.lit.is_some();
     emit_vertex(
         &mut w,
         shape,
         ir.render.turns_quad(),
         texture.is_some(),
-        lit,
+        ir.render.lit.as_ref(),
     );
     w.blank();
     let lit_turned = ir.render.lit.as_ref().map(|l| (l, ir.render.turns_quad()));
@@ -333,7 +332,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         mesh.emit_draw(
             &mut w,
             ir.render.turns_quad(),
-            ir.render.lit.is_some(),
+            ir.render.lit.as_ref(),
             ir.render.blend,
         );
     }

@@ -12,8 +12,10 @@ pub(super) fn emit_vertex(
     shape: &DrawShape,
     oriented: bool,
     textured: bool,
-    lit: bool,
+    look: Option<&crate::features::looks::lit::Lit>,
 ) {
+    let lit = look.is_some();
+    let particle_shadow = look.is_some_and(|l| l.shadow_per_particle());
     w.block("struct Sprite", |w| {
         w.line("@builtin(position) clip: vec4<f32>,");
         w.line("@location(0) uv: vec2<f32>,");
@@ -32,6 +34,10 @@ pub(super) fn emit_vertex(
             w.line("@location(4) @interpolate(flat) basis_x: vec3<f32>,");
             w.line("@location(5) @interpolate(flat) basis_y: vec3<f32>,");
             w.line("@location(6) @interpolate(flat) basis_z: vec3<f32>,");
+        }
+        if particle_shadow {
+            w.comment("The shadowed light's verdict at the sprite's centre (shadow_at: Particle).");
+            w.line("@location(7) @interpolate(flat) shadow: f32,");
         }
     });
     w.blank();
@@ -53,6 +59,9 @@ pub(super) fn emit_vertex(
                 w.line("out.basis_x = vec3<f32>(1.0, 0.0, 0.0);");
                 w.line("out.basis_y = vec3<f32>(0.0, 1.0, 0.0);");
                 w.line("out.basis_z = vec3<f32>(0.0, 0.0, 1.0);");
+            }
+            if particle_shadow {
+                w.line("out.shadow = 1.0;");
             }
             w.line("let s = sprite_at(instance);");
             w.block("if (!s.visible)", |w| w.line("return out;"));
@@ -94,6 +103,9 @@ pub(super) fn emit_vertex(
                     w.line("out.basis_y = basis[1];");
                     w.line("out.basis_z = basis[2];");
                 }
+            }
+            if particle_shadow {
+                w.line("out.shadow = shadow_visibility(s.center.xyz);");
             }
             w.line("return out;");
         },
@@ -154,6 +166,9 @@ pub(super) fn emit_fragment(
                     w.comment("The lit maps first: their derivatives before any discard.");
                 }
                 w.line(format!("let maps = {};", look.maps_wgsl()));
+                if look.shadow_per_particle() {
+                    w.line("particle_shadow = in.shadow;");
+                }
                 w.comment("The texel before the light: its fetch is under way while the light is worked out (docs/performance.md, \"Lit sprites\").");
                 w.line(format!("let unlit = shade({shaded});"));
                 match oriented {

@@ -147,8 +147,13 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
     w.blank();
     let lit = lit_record_vec4s(ir);
     let maps = ir.render.lit.as_ref().map_or("", |l| l.splat_maps_wgsl());
+    let per_particle_shadow = ir
+        .render
+        .lit
+        .as_ref()
+        .is_some_and(|l| l.shadow_per_particle());
     if lit > 0 {
-        emit_lit_record(w, lit);
+        emit_lit_record(w, lit, per_particle_shadow);
         w.blank();
     }
     let additive = ir.render.blend == crate::stages::schema::Blend::Additive;
@@ -233,13 +238,23 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
                 "batch[{stride}u * t + {at}u] = splats[{vec4s}u * k + {r}u];"
             ));
         }
+        if per_particle_shadow {
+            let row = lit_record_row(shape.host.is_some());
+            let place = |r: u32| format!("bitcast<vec4<f32>>(batch[{stride}u * t + {}u])", row + r);
+            let centre = match lit {
+                1 => format!("{}.xyz", place(0)),
+                _ => format!("vec3<f32>({}.w, {}.w, {}.w)", place(0), place(1), place(2)),
+            };
+            w.comment("shadow_at: Particle: the shadowed light's verdict at the quad's centre, looked up once as its record is loaded.");
+            w.line(format!("batch_shadow[t] = shadow_visibility({centre});"));
+        }
     };
     let evaluate = |w: &mut Writer| {
         if affine {
             evaluate_affine(
                 w,
                 stride,
-                &lit_shade(lit, maps, shape.host.is_some(), stride),
+                &lit_shade(lit, maps, shape.host.is_some(), stride, per_particle_shadow),
             );
             return;
         }
@@ -282,7 +297,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         w.line("let du = (vec2<f32>(r0.x, r1.x) - uv * r2.x) / s;");
         w.line("let dv = (vec2<f32>(r0.y, r1.y) - uv * r2.y) / s;");
         w.line("let color = vec4<f32>(rgb, bitcast<f32>(r3.x));");
-        let shade = lit_shade(lit, maps, shape.host.is_some(), stride);
+        let shade = lit_shade(lit, maps, shape.host.is_some(), stride, per_particle_shadow);
         if depth {
             w.line(format!("let unfaded = {shade};"));
             w.line("let shaded = vec4<f32>(unfaded.rgb, unfaded.a * fade);");
@@ -290,6 +305,18 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
             w.line(format!("let shaded = {shade};"));
         }
     };
+    // A turned lit quad's four more vec4s fit WebGPU's 16 KiB of workgroup memory in
+    // batches of 64.
+    let batch = if additive || lit > 1 {
+        composite::SPLAT_ADDITIVE_QUAD_BATCH
+    } else {
+        composite::SPLAT_BATCH
+    };
+    if per_particle_shadow {
+        w.comment("Each record's shadow verdict at its centre, beside its record in the batch (shadow_at: Particle).");
+        w.line(format!("var<workgroup> batch_shadow: array<f32, {batch}>;"));
+        w.blank();
+    }
     emit_composite(
         w,
         shape,
@@ -297,13 +324,7 @@ pub(crate) fn emit_quad_raster(w: &mut Writer, ir: &EffectIr, shape: &DrawShape)
         splat_slices(ir),
         composite::RecordBatch {
             vec4s: stride,
-            // A turned lit quad's four more vec4s fit WebGPU's 16 KiB of workgroup memory
-            // in batches of 64.
-            size: if additive || lit > 1 {
-                composite::SPLAT_ADDITIVE_QUAD_BATCH
-            } else {
-                composite::SPLAT_BATCH
-            },
+            size: batch,
             diagonals: additive,
             prefetch: composite::Prefetch::None,
         },
@@ -359,15 +380,19 @@ fn evaluate_affine(w: &mut Writer, stride: u32, shade: &str) {
 /// The composite's shading of record j at corner coordinates uv: `splat_shade`'s colour, and
 /// for a lit look (`lit` vec4s of place, [`lit_record_vec4s`]) that colour lit as the fragment
 /// shader lights it, from the place the record keeps ([`lit_record_row`]) and the look's map
-/// texels there (`maps`, WGSL).
-fn lit_shade(lit: u32, maps: &str, host: bool, stride: u32) -> String {
+/// texels there (`maps`, WGSL); `shadow`: the record's own shadow verdict, which its load
+/// kept in `batch_shadow` (`shadow_at: Particle`).
+fn lit_shade(lit: u32, maps: &str, host: bool, stride: u32, shadow: bool) -> String {
     let unlit = "splat_shade(uv, du, dv, color, r3.y)";
     if lit == 0 {
         return unlit.to_string();
     }
     let row = lit_record_row(host);
     let at = |r: u32| format!("bitcast<vec4<f32>>(batch[{stride}u * j + {r}u])");
-    let place: Vec<String> = (row..row + lit).map(at).collect();
+    let mut place: Vec<String> = (row..row + lit).map(at).collect();
+    if shadow {
+        place.insert(0, "batch_shadow[j]".into());
+    }
     format!("lit_record({unlit}, uv, {maps}, {})", place.join(", "))
 }
 
@@ -375,13 +400,21 @@ fn lit_shade(lit: u32, maps: &str, host: bool, stride: u32) -> String {
 /// there as the fragment shader lights it (`maps`: the look's map texels there), from the
 /// place its record keeps: for `lit` = 1 its centre and half size `q` (upright, facing the
 /// camera: the view's basis), else (unit x axis, centre x) in `a`, (unit y axis, centre y) in
-/// `b`, (facing, centre z) in `f` and its half sizes in `h.xy`.
-pub(crate) fn emit_lit_record(w: &mut Writer, lit: u32) {
+/// `b`, (facing, centre z) in `f` and its half sizes in `h.xy`. With `shadow` (`shadow_at:
+/// Particle`) the quad's shadow verdict comes first, as `shadow`.
+pub(crate) fn emit_lit_record(w: &mut Writer, lit: u32, shadow: bool) {
+    let (shadow_arg, take_shadow) = match shadow {
+        true => ("shadow: f32, ", "particle_shadow = shadow;"),
+        false => ("", ""),
+    };
     if lit == 1 {
         w.comment("An upright lit quad's colour at corner coordinates uv, from its record's centre and half size (view space).");
         w.block(
-            "fn lit_record(c: vec4<f32>, uv: vec2<f32>, maps: mat2x4<f32>, q: vec4<f32>) -> vec4<f32>",
+            format!("fn lit_record(c: vec4<f32>, uv: vec2<f32>, maps: mat2x4<f32>, {shadow_arg}q: vec4<f32>) -> vec4<f32>"),
             |w| {
+                if shadow {
+                    w.line(take_shadow);
+                }
                 w.line("let p = q.xyz + vec3<f32>(uv * q.w, 0.0);");
                 w.line("return lit_color(c, lit_light(uv, VIEW_BASIS, maps, p));");
             },
@@ -390,8 +423,11 @@ pub(crate) fn emit_lit_record(w: &mut Writer, lit: u32) {
     }
     w.comment("A lit quad's colour at corner coordinates uv, from its record's basis, centre and half sizes (view space).");
     w.block(
-        "fn lit_record(c: vec4<f32>, uv: vec2<f32>, maps: mat2x4<f32>, a: vec4<f32>, b: vec4<f32>, f: vec4<f32>, h: vec4<f32>) -> vec4<f32>",
+        format!("fn lit_record(c: vec4<f32>, uv: vec2<f32>, maps: mat2x4<f32>, {shadow_arg}a: vec4<f32>, b: vec4<f32>, f: vec4<f32>, h: vec4<f32>) -> vec4<f32>"),
         |w| {
+            if shadow {
+                w.line(take_shadow);
+            }
             w.line("let p = vec3<f32>(a.w, b.w, f.w) + (uv.x * h.x) * a.xyz + (uv.y * h.y) * b.xyz;");
             w.line("let basis = mat3x3<f32>(a.xyz, b.xyz, f.xyz);");
             w.line("return lit_color(c, lit_light(uv, basis, maps, p));");
