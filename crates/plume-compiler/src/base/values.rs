@@ -171,3 +171,31 @@ pub fn origin() -> Vec3 {
 pub(crate) fn unit_scale() -> f64 {
     1.0
 }
+
+/// Reads the variant `Name(field: value, ...)` of an enum into a struct of its own, `T`, whose
+/// fields are `fields`: how forces and colliders keep each variant's schema in the variant's
+/// own module (serde's derive reads only struct variants written inside the enum).
+pub(crate) fn struct_variant<'de, A, T>(
+    variant: A,
+    fields: &'static [&'static str],
+) -> Result<T, A::Error>
+where
+    A: serde::de::VariantAccess<'de>,
+    T: Deserialize<'de>,
+{
+    variant.struct_variant(fields, StructVariant(std::marker::PhantomData))
+}
+
+/// The visitor of [`struct_variant`]: the variant's named fields handed to `T`'s own
+/// `Deserialize`.
+struct StructVariant<T>(std::marker::PhantomData<T>);
+
+impl<'de, T: Deserialize<'de>> serde::de::Visitor<'de> for StructVariant<T> {
+    type Value = T;
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("named fields")
+    }
+    fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
+        T::deserialize(serde::de::value::MapAccessDeserializer::new(map))
+    }
+}

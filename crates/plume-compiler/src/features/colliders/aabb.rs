@@ -4,8 +4,9 @@
 //! per-axis exit times. Ties go to the lower axis, in f64 and WGSL alike.
 
 use glam::DVec3;
+use serde::Deserialize;
 
-use super::Hit;
+use super::{check_bounce, ColliderIr, Hit, Surface};
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::base::values::Vec3;
@@ -25,8 +26,50 @@ pub struct BoxIr {
     pub inside: bool,
 }
 
+/// `Box(...)` as effect files write it: an axis-aligned box that particles stay outside of,
+/// or inside with `inside: true`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Aabb {
+    /// Lower corner.
+    pub min: Vec3,
+    /// Upper corner (greater than `min` on every axis).
+    pub max: Vec3,
+    /// Fraction of normal speed kept on a bounce, in [0, 1].
+    pub restitution: f64,
+    /// Fraction of tangential speed lost on a bounce, in [0, 1].
+    pub friction: f64,
+    /// Keep particles inside (a container) instead of outside.
+    #[serde(default)]
+    pub inside: bool,
+}
+
+/// The fields of [`Aabb`].
+pub(crate) const FIELDS: &[&str] = &["min", "max", "restitution", "friction", "inside"];
+
+impl Aabb {
+    /// Checks the corners and the bounce; `path` names the variant.
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
+        check_corners(path, c, self.min, self.max);
+        check_bounce(path, c, self.restitution, self.friction);
+    }
+
+    /// Lowers the checked box.
+    pub(crate) fn lower(&self) -> ColliderIr {
+        ColliderIr {
+            surface: Surface::Box(BoxIr {
+                min: self.min.d(),
+                max: self.max.d(),
+                inside: self.inside,
+            }),
+            restitution: self.restitution,
+            friction: self.friction,
+        }
+    }
+}
+
 /// Checks the corners: finite and `min < max` on every axis (a flat box has no inside).
-pub fn check(path: &ValuePath, c: &mut Checker, min: Vec3, max: Vec3) {
+fn check_corners(path: &ValuePath, c: &mut Checker, min: Vec3, max: Vec3) {
     let ok = c.vec3(&path.field("min"), min) & c.vec3(&path.field("max"), max);
     if ok && (min.0 >= max.0 || min.1 >= max.1 || min.2 >= max.2) {
         c.error(

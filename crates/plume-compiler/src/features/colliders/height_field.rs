@@ -6,8 +6,9 @@
 //! The heights reach the GPU through the `collider_data` binding.
 
 use glam::DVec3;
+use serde::Deserialize;
 
-use super::Hit;
+use super::{check_bounce, ColliderIr, Hit, Surface};
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::base::writer::{f32_lit, Writer};
@@ -33,9 +34,65 @@ pub struct HeightFieldIr {
     pub heights: Vec<f64>,
 }
 
+/// `HeightField(...)` as effect files write it: terrain, heights on a regular grid over an x-z
+/// rectangle, bilinear between samples; particles over the rectangle are kept above it.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HeightField {
+    /// The rectangle's (x, z) corner where the first row's first height sits.
+    pub min: (f64, f64),
+    /// The opposite (x, z) corner.
+    pub max: (f64, f64),
+    /// Heights (y, in metres): one row per z sample from min to max, each row one height per
+    /// x sample from min to max; at least 2 x 2, every row the same length. Empty when
+    /// `image` gives them.
+    #[serde(default)]
+    pub heights: Vec<Vec<f64>>,
+    /// An 8- or 16-bit greyscale PNG whose pixels are the heights instead (top row first,
+    /// relative to the effect file; see [`super::height_image`]).
+    #[serde(default)]
+    pub image: Option<String>,
+    /// With `image`: the heights (m) of black and of white.
+    #[serde(default)]
+    pub height: Option<(f64, f64)>,
+    /// Fraction of normal speed kept on a bounce, in [0, 1].
+    pub restitution: f64,
+    /// Fraction of tangential speed lost on a bounce, in [0, 1].
+    pub friction: f64,
+}
+
+/// The fields of [`HeightField`].
+pub(crate) const FIELDS: &[&str] = &[
+    "min",
+    "max",
+    "heights",
+    "image",
+    "height",
+    "restitution",
+    "friction",
+];
+
+impl HeightField {
+    /// Checks the rectangle, the grid (an image's already read into it) and the bounce; `path`
+    /// names the variant.
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
+        check_grid(path, c, self.min, self.max, &self.heights);
+        check_bounce(path, c, self.restitution, self.friction);
+    }
+
+    /// Lowers the checked height field.
+    pub(crate) fn lower(&self) -> ColliderIr {
+        ColliderIr {
+            surface: Surface::HeightField(HeightFieldIr::new(self.min, self.max, &self.heights)),
+            restitution: self.restitution,
+            friction: self.friction,
+        }
+    }
+}
+
 /// Checks the rectangle and the grid: finite, min < max, at least 2 x 2 samples, rows of one
 /// length.
-pub fn check(
+fn check_grid(
     path: &ValuePath,
     c: &mut Checker,
     min: (f64, f64),

@@ -88,12 +88,12 @@ pub(crate) fn read_height_images(
 ) {
     for (i, collider) in collide.iter_mut().enumerate() {
         let path = collider_path(i, collider);
-        let Collider::HeightField {
+        let Collider::HeightField(super::height_field::HeightField {
             heights,
             image,
             height,
             ..
-        } = collider
+        }) = collider
         else {
             continue;
         };

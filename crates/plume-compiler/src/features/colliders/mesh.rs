@@ -22,7 +22,9 @@ use std::sync::Arc;
 
 use glam::{DMat3, DVec3};
 
-use super::{collider_path, Collider, Hit};
+use serde::Deserialize;
+
+use super::{check_bounce, collider_path, Collider, ColliderIr, Hit, Surface};
 use crate::base::check::Checker;
 use crate::base::mesh::TriMesh;
 use crate::base::path::ValuePath;
@@ -77,8 +79,83 @@ pub(crate) fn rotation_matrix(rotation: Vec3) -> DMat3 {
     crate::base::mesh::rotation_degrees(rotation.d())
 }
 
+/// `Mesh(...)` as effect files write it: a closed triangle mesh from an OBJ file, baked into
+/// a signed distance field; particles stay outside it.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mesh {
+    /// The OBJ file, relative to the effect file.
+    pub file: String,
+    /// Where the mesh's origin sits in the world (m).
+    #[serde(default = "crate::base::values::origin")]
+    pub offset: Vec3,
+    /// The mesh's size against the world's (> 0).
+    #[serde(default = "crate::base::values::unit_scale")]
+    pub scale: f64,
+    /// Degrees about x, then y, then z (the world's axes).
+    #[serde(default = "crate::base::values::origin")]
+    pub rotation: Vec3,
+    /// Field cells along the mesh's longest side (4 to 128).
+    #[serde(default = "default_resolution")]
+    pub resolution: u32,
+    /// Fraction of normal speed kept on a bounce, in [0, 1].
+    pub restitution: f64,
+    /// Fraction of tangential speed lost on a bounce, in [0, 1].
+    pub friction: f64,
+    /// The mesh and its baked field, made by [`read_meshes`] before the checks.
+    #[serde(skip)]
+    pub baked: Option<Arc<Baked>>,
+}
+
+/// The fields of [`Mesh`].
+pub(crate) const FIELDS: &[&str] = &[
+    "file",
+    "offset",
+    "scale",
+    "rotation",
+    "resolution",
+    "restitution",
+    "friction",
+];
+
+fn default_resolution() -> u32 {
+    DEFAULT_RESOLUTION
+}
+
+impl Mesh {
+    /// Checks the placement, the resolution (the file was read before) and the bounce; `path`
+    /// names the variant.
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
+        check_placement_and_resolution(
+            path,
+            c,
+            (self.offset, self.scale, self.rotation, self.resolution),
+            self.baked.is_some(),
+        );
+        check_bounce(path, c, self.restitution, self.friction);
+    }
+
+    /// Lowers the checked mesh collider.
+    pub(crate) fn lower(&self) -> ColliderIr {
+        ColliderIr {
+            surface: Surface::Mesh(MeshIr {
+                file: self.file.clone(),
+                offset: self.offset.d(),
+                scale: self.scale,
+                rotation: rotation_matrix(self.rotation),
+                baked: self
+                    .baked
+                    .clone()
+                    .expect("the checks refuse a mesh collider not read"),
+            }),
+            restitution: self.restitution,
+            friction: self.friction,
+        }
+    }
+}
+
 /// Checks a mesh collider's placement and resolution (its file was read before).
-pub fn check(
+fn check_placement_and_resolution(
     path: &ValuePath,
     c: &mut Checker,
     (offset, scale, rotation, resolution): (Vec3, f64, Vec3, u32),
@@ -103,12 +180,12 @@ pub fn check(
 pub fn read_meshes(collide: &mut [Collider], base_dir: Option<&Path>, c: &mut Checker) {
     for (i, collider) in collide.iter_mut().enumerate() {
         let path = collider_path(i, collider);
-        let Collider::Mesh {
+        let Collider::Mesh(Mesh {
             file,
             resolution,
             baked,
             ..
-        } = collider
+        }) = collider
         else {
             continue;
         };

@@ -27,6 +27,8 @@ pub use schema::{collider_path, Collider};
 
 use glam::DVec3;
 
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
 use crate::base::writer::{f32_lit, Writer};
 
 /// Contacts resolved per substep; past that the particle stops at its last contact.
@@ -60,6 +62,12 @@ pub enum Surface {
     Mesh(mesh::MeshIr),
     /// The surfaces a depth image shows.
     SceneDepth(scene_depth::SceneDepthIr),
+}
+
+/// Checks the bounce every collider has: `restitution` and `friction`, each in [0, 1].
+fn check_bounce(path: &ValuePath, c: &mut Checker, restitution: f64, friction: f64) {
+    c.within(&path.field("restitution"), restitution, 0.0, 1.0);
+    c.within(&path.field("friction"), friction, 0.0, 1.0);
 }
 
 /// A collider in the IR: a surface and how particles bounce off it.

@@ -2,9 +2,52 @@
 //! distance to the plane changes from >= 0 to < 0.
 
 use glam::DVec3;
+use serde::Deserialize;
 
-use super::Hit;
+use super::{check_bounce, ColliderIr, Hit, Surface};
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+use crate::base::values::Vec3;
 use crate::base::writer::{vec3_lit, Writer};
+
+/// `Plane(...)` as effect files write it: a half-space boundary; particles live on the side
+/// the normal points to.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plane {
+    /// Any point on the plane.
+    pub point: Vec3,
+    /// Points into the allowed side (any length but zero).
+    pub normal: Vec3,
+    /// Fraction of normal speed kept on a bounce, in [0, 1].
+    pub restitution: f64,
+    /// Fraction of tangential speed lost on a bounce, in [0, 1].
+    pub friction: f64,
+}
+
+/// The fields of [`Plane`].
+pub(crate) const FIELDS: &[&str] = &["point", "normal", "restitution", "friction"];
+
+impl Plane {
+    /// Checks the point, the normal (not zero) and the bounce; `path` names the variant.
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
+        c.vec3(&path.field("point"), self.point);
+        c.direction(&path.field("normal"), self.normal);
+        check_bounce(path, c, self.restitution, self.friction);
+    }
+
+    /// Lowers the checked plane (its normal made unit).
+    pub(crate) fn lower(&self) -> ColliderIr {
+        ColliderIr {
+            surface: Surface::Plane(PlaneIr {
+                point: self.point.d(),
+                normal: crate::features::forces::safe_normalize(self.normal.d()),
+            }),
+            restitution: self.restitution,
+            friction: self.friction,
+        }
+    }
+}
 
 /// A collision plane with a unit normal.
 #[derive(Clone, Copy, Debug, PartialEq)]

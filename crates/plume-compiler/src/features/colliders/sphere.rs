@@ -3,8 +3,9 @@
 //! root in [0, 1], in the cancellation-free form of the quadratic formula.
 
 use glam::DVec3;
+use serde::Deserialize;
 
-use super::Hit;
+use super::{check_bounce, ColliderIr, Hit, Surface};
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::base::values::Vec3;
@@ -21,10 +22,47 @@ pub struct SphereIr {
     pub inside: bool,
 }
 
-/// Checks the centre and the radius.
-pub fn check(path: &ValuePath, c: &mut Checker, center: Vec3, radius: f64) {
-    c.vec3(&path.field("center"), center);
-    c.positive(&path.field("radius"), radius);
+/// `Sphere(...)` as effect files write it: a ball that particles stay outside of, or inside
+/// with `inside: true`.
+#[derive(Clone, Debug, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Sphere {
+    /// Centre.
+    pub center: Vec3,
+    /// Radius (m), > 0.
+    pub radius: f64,
+    /// Fraction of normal speed kept on a bounce, in [0, 1].
+    pub restitution: f64,
+    /// Fraction of tangential speed lost on a bounce, in [0, 1].
+    pub friction: f64,
+    /// Keep particles inside (a container) instead of outside.
+    #[serde(default)]
+    pub inside: bool,
+}
+
+/// The fields of [`Sphere`].
+pub(crate) const FIELDS: &[&str] = &["center", "radius", "restitution", "friction", "inside"];
+
+impl Sphere {
+    /// Checks the centre, the radius (> 0) and the bounce; `path` names the variant.
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
+        c.vec3(&path.field("center"), self.center);
+        c.positive(&path.field("radius"), self.radius);
+        check_bounce(path, c, self.restitution, self.friction);
+    }
+
+    /// Lowers the checked sphere.
+    pub(crate) fn lower(&self) -> ColliderIr {
+        ColliderIr {
+            surface: Surface::Sphere(SphereIr {
+                center: self.center.d(),
+                radius: self.radius,
+                inside: self.inside,
+            }),
+            restitution: self.restitution,
+            friction: self.friction,
+        }
+    }
 }
 
 /// `v / |v|`, or +y when `v` is too short to normalise (a particle at the very centre).

@@ -16,15 +16,12 @@ pub mod vortex;
 pub mod wind;
 
 use glam::DVec3;
-use std::marker::PhantomData;
 
-use serde::de::{
-    self, value::MapAccessDeserializer, Deserialize, Deserializer, EnumAccess, VariantAccess,
-};
+use serde::de::{self, Deserialize, Deserializer, EnumAccess, VariantAccess};
 
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
-use crate::base::values::Vec3;
+use crate::base::values::{struct_variant, Vec3};
 use crate::base::writer::Writer;
 
 /// A force as written in an effect file.
@@ -117,20 +114,6 @@ pub const VARIANTS: &[&str] = &[
     "VectorField",
 ];
 
-/// Reads `Name(field: value, ...)` into the force module's own struct, so each force's
-/// schema lives with the rest of the force (serde's derive would need struct variants here).
-struct StructVariant<T>(PhantomData<T>);
-
-impl<'de, T: Deserialize<'de>> de::Visitor<'de> for StructVariant<T> {
-    type Value = T;
-    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        f.write_str("named fields")
-    }
-    fn visit_map<A: de::MapAccess<'de>>(self, map: A) -> Result<T, A::Error> {
-        T::deserialize(MapAccessDeserializer::new(map))
-    }
-}
-
 /// The variant names (serde reports unknown ones with the list of expected names).
 #[derive(serde::Deserialize)]
 #[serde(variant_identifier)]
@@ -159,30 +142,14 @@ impl<'de> de::Visitor<'de> for ForceVisitor {
         let (kind, variant): (Kind, _) = data.variant()?;
         Ok(match kind {
             Kind::Gravity => Force::Gravity(variant.newtype_variant()?),
-            Kind::Drag => {
-                Force::Drag(variant.struct_variant(drag::FIELDS, StructVariant(PhantomData))?)
-            }
-            Kind::Wind => {
-                Force::Wind(variant.struct_variant(wind::FIELDS, StructVariant(PhantomData))?)
-            }
-            Kind::Attractor => Force::Attractor(
-                variant.struct_variant(attractor::FIELDS, StructVariant(PhantomData))?,
-            ),
-            Kind::Vortex => {
-                Force::Vortex(variant.struct_variant(vortex::FIELDS, StructVariant(PhantomData))?)
-            }
-            Kind::Flock => {
-                Force::Flock(variant.struct_variant(flock::FIELDS, StructVariant(PhantomData))?)
-            }
-            Kind::Custom => {
-                Force::Custom(variant.struct_variant(custom::FIELDS, StructVariant(PhantomData))?)
-            }
-            Kind::Turbulence => Force::Turbulence(
-                variant.struct_variant(turbulence::FIELDS, StructVariant(PhantomData))?,
-            ),
-            Kind::VectorField => Force::VectorField(
-                variant.struct_variant(vector_field::FIELDS, StructVariant(PhantomData))?,
-            ),
+            Kind::Drag => Force::Drag(struct_variant(variant, drag::FIELDS)?),
+            Kind::Wind => Force::Wind(struct_variant(variant, wind::FIELDS)?),
+            Kind::Attractor => Force::Attractor(struct_variant(variant, attractor::FIELDS)?),
+            Kind::Vortex => Force::Vortex(struct_variant(variant, vortex::FIELDS)?),
+            Kind::Flock => Force::Flock(struct_variant(variant, flock::FIELDS)?),
+            Kind::Custom => Force::Custom(struct_variant(variant, custom::FIELDS)?),
+            Kind::Turbulence => Force::Turbulence(struct_variant(variant, turbulence::FIELDS)?),
+            Kind::VectorField => Force::VectorField(struct_variant(variant, vector_field::FIELDS)?),
         })
     }
 }

@@ -75,9 +75,46 @@ pub struct SceneDepthIr {
     pub image: Option<Arc<DepthImage>>,
 }
 
-/// Checks the thickness.
-pub fn check(path: &ValuePath, c: &mut Checker, thickness: f64) {
-    c.positive(&path.field("thickness"), thickness);
+/// `SceneDepth(...)` as effect files write it: the surfaces the view's depth image shows,
+/// given at run time by the host (or by the scene `plume render` and `plume preview` draw).
+#[derive(Clone, Debug, PartialEq, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SceneDepth {
+    /// How far behind a surface a particle still collides (m, > 0); farther behind, it is
+    /// behind the object, not in it, and passes.
+    #[serde(default = "default_thickness")]
+    pub thickness: f64,
+    /// Fraction of normal speed kept on a bounce, in [0, 1].
+    pub restitution: f64,
+    /// Fraction of tangential speed lost on a bounce, in [0, 1].
+    pub friction: f64,
+}
+
+/// The fields of [`SceneDepth`].
+pub(crate) const FIELDS: &[&str] = &["thickness", "restitution", "friction"];
+
+fn default_thickness() -> f64 {
+    DEFAULT_THICKNESS
+}
+
+impl SceneDepth {
+    /// Checks the thickness (> 0) and the bounce; `path` names the variant.
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
+        c.positive(&path.field("thickness"), self.thickness);
+        super::check_bounce(path, c, self.restitution, self.friction);
+    }
+
+    /// Lowers the checked collider (its image comes at run time).
+    pub(crate) fn lower(&self) -> super::ColliderIr {
+        super::ColliderIr {
+            surface: super::Surface::SceneDepth(SceneDepthIr {
+                thickness: self.thickness,
+                image: None,
+            }),
+            restitution: self.restitution,
+            friction: self.friction,
+        }
+    }
 }
 
 /// Where a world point is against the image.
