@@ -306,25 +306,14 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Re
             "picks a flipbook frame, but there is no flipbook: give render.texture with frames: (columns, rows) of more than one",
         );
     }
-    if let crate::stages::schema::Blend::Mask(cutoff) = r.blend {
-        c.within(
-            &path.field("blend").variant("Mask").inner(),
-            cutoff,
-            0.0,
-            1.0,
-        );
-    }
+    r.blend.check(&path.field("blend"), c);
     looks::check_colors(c, &path.field("color"), &r.color);
     looks::check_sizes(c, &path.field("size"), &r.size, "size");
     if let Some(heights) = &r.size_y {
         looks::check_sizes(c, &path.field("size_y"), heights, "size");
     }
     if let Some(alpha) = &r.alpha {
-        let p = path.field("alpha");
-        looks::check_stop_times(c, &p, &alpha.iter().map(|s| s.0).collect::<Vec<_>>());
-        for (i, s) in alpha.iter().enumerate() {
-            c.within(&p.index(i).component(1, "alpha"), s.1, 0.0, 1.0);
-        }
+        looks::check_alphas(c, &path.field("alpha"), alpha);
     }
     if let Some(t) = &r.trail {
         t.check(c, &path.field("trail"));
@@ -349,80 +338,17 @@ fn check_render(c: &mut Checker, path: &ValuePath, r: &crate::stages::schema::Re
     {
         c.within(&bg.component(j, name), x, 0.0, 1.0);
     }
-    let orient = path.field("orient");
-    match r.orient {
-        Orient::Camera | Orient::FaceCamera => {}
-        Orient::Velocity {
-            stretch,
-            max_length,
-        } => {
-            let v = orient.variant("Velocity");
-            c.non_negative(&v.field("stretch"), stretch);
-            c.positive(&v.field("max_length"), max_length);
-        }
-        Orient::Fixed(normal) => c.direction(&orient.variant("Fixed").inner(), normal),
-    }
+    r.orient.check(&path.field("orient"), c);
     if let Some(t) = &r.texture {
-        let texture = path.field("texture");
-        if t.file.trim().is_empty() {
-            c.error(
-                &texture.field("file"),
-                "names no file; give a PNG's path relative to the effect file",
-            );
-        }
-        if t.second.as_ref().is_some_and(|s| s.file.trim().is_empty()) {
-            c.error(
-                &texture.field("second").field("file"),
-                "names no file; give a PNG's path relative to the effect file",
-            );
-        }
-        let frames = texture.field("frames");
-        for (i, (name, n)) in [("columns", t.frames.0), ("rows", t.frames.1)]
-            .into_iter()
-            .enumerate()
-        {
-            if n == 0 {
-                c.error(&frames.component(i, name), "must be at least 1");
-            }
-        }
-        match t.play {
-            crate::stages::schema::Play::Rate(fps) => {
-                c.positive(&texture.field("play").variant("Rate").inner(), fps);
-            }
-            crate::stages::schema::Play::OverLife if t.random_start => c.error(
-                &texture.field("random_start"),
-                "applies to frames played at a rate (play: Rate(fps)); a flipbook played over life starts at frame 0",
-            ),
-            crate::stages::schema::Play::OverLife => {}
-        }
+        t.check(&path.field("texture"), c);
     }
     if let Some(d) = r.soft {
         c.positive(&path.field("soft"), d);
     }
-    if let Some(g) = r.glow {
-        let p = path.field("glow");
-        c.non_negative(&p.field("threshold"), g.threshold);
-        c.non_negative(&p.field("strength"), g.strength);
-        // A wider blur costs 6 σ texel reads per pixel in each direction.
-        c.within(&p.field("radius"), g.radius, 1e-4, 0.05);
-        // Below 1 it would dim the image itself; past f16's largest value the HDR image
-        // clamps anyway.
-        c.within(
-            &p.field("clamp"),
-            g.clamp,
-            1.0,
-            crate::features::looks::glow::GLOW_CLAMP_MOST,
-        );
+    if let Some(g) = &r.glow {
+        g.check(&path.field("glow"), c);
     }
     if let Some(rotation) = &r.rotation {
-        let p = path.field("rotation");
-        c.range(&p.field("angle"), rotation.angle);
-        c.range(&p.field("spin"), rotation.spin);
-        if let Orient::Velocity { .. } = r.orient {
-            c.error(
-                &p,
-                "cannot turn a sprite whose direction render.orient: Velocity sets; use Camera or Fixed orientation, or leave rotation out",
-            );
-        }
+        rotation.check(&path.field("rotation"), r.orient, c);
     }
 }

@@ -3,6 +3,9 @@
 
 use serde::Deserialize;
 
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
+
 /// Bloom in `plume render`'s images (`render.glow`); an embedding host does its own
 /// post-processing.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
@@ -24,6 +27,19 @@ pub struct Glow {
     /// finite value, is the HDR image's own limit: no clamp of its own.
     #[serde(default = "default_glow_clamp")]
     pub clamp: f64,
+}
+
+impl Glow {
+    /// Checks the threshold and strength (>= 0), the blur's radius (a wider one costs 6 σ
+    /// texel reads a pixel in each direction) and the clamp (below 1 it would dim the image
+    /// itself; past f16's largest value the HDR image clamps anyway); `path` names
+    /// `render.glow`.
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
+        c.non_negative(&path.field("threshold"), self.threshold);
+        c.non_negative(&path.field("strength"), self.strength);
+        c.within(&path.field("radius"), self.radius, 1e-4, 0.05);
+        c.within(&path.field("clamp"), self.clamp, 1.0, GLOW_CLAMP_MOST);
+    }
 }
 
 fn default_glow_threshold() -> f64 {

@@ -52,6 +52,13 @@ pub enum Blend {
 }
 
 impl Blend {
+    /// Checks a `Mask`'s cutoff, in [0, 1]; `path` names `render.blend`.
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
+        if let Blend::Mask(cutoff) = *self {
+            c.within(&path.variant("Mask").inner(), cutoff, 0.0, 1.0);
+        }
+    }
+
     /// Whether the fragment's colour is changed before blending ([`Self::emit_blend_out`];
     /// `Premultiplied` shades its coverage apart from its opacity instead).
     pub(crate) fn changes_output(self) -> bool {
@@ -155,6 +162,14 @@ pub(crate) fn check_colors(c: &mut Checker, colors: &ValuePath, stops: &[ColorSt
         {
             c.within(&p.component(j, name), x, 0.0, hi);
         }
+    }
+}
+
+/// Checks an opacity curve: its stop times, each opacity in [0, 1].
+pub(crate) fn check_alphas(c: &mut Checker, alphas: &ValuePath, stops: &[SizeStop]) {
+    check_stop_times(c, alphas, &stops.iter().map(|s| s.0).collect::<Vec<_>>());
+    for (i, s) in stops.iter().enumerate() {
+        c.within(&alphas.index(i).component(1, "alpha"), s.1, 0.0, 1.0);
     }
 }
 

@@ -9,6 +9,8 @@
 
 use glam::DVec3;
 
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
 use crate::base::values::Vec3;
 use crate::base::writer::{f32_lit, Writer};
 use serde::Deserialize;
@@ -42,6 +44,25 @@ pub enum Orient {
 pub(crate) const STILL_SPEED2: f64 = 1e-30;
 
 /// The orientation, lowered: the fixed plane's axes computed once in f64.
+impl Orient {
+    /// Checks a streak's `stretch` (>= 0) and `max_length` (> 0), and a fixed plane's normal
+    /// (not zero); `path` names `render.orient`.
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
+        match *self {
+            Orient::Camera | Orient::FaceCamera => {}
+            Orient::Velocity {
+                stretch,
+                max_length,
+            } => {
+                let v = path.variant("Velocity");
+                c.non_negative(&v.field("stretch"), stretch);
+                c.positive(&v.field("max_length"), max_length);
+            }
+            Orient::Fixed(normal) => c.direction(&path.variant("Fixed").inner(), normal),
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum OrientIr {
     /// Parallel to the image plane, upright.

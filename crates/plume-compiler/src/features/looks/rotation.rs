@@ -11,6 +11,8 @@
 
 use glam::DVec3;
 
+use crate::base::check::Checker;
+use crate::base::path::ValuePath;
 use crate::base::rng::{rand_u32, stream, unit};
 use crate::base::values::Range;
 use crate::base::writer::{f32_lit, Writer};
@@ -27,6 +29,27 @@ pub struct Rotation {
     /// Spin range (degrees per second, counter-clockwise).
     #[serde(default)]
     pub spin: Range,
+}
+
+impl Rotation {
+    /// Checks the angle and spin ranges, and that the sprite's direction is its own to turn
+    /// (not `orient`'s: a streak along its velocity cannot turn); `path` names
+    /// `render.rotation`.
+    pub(crate) fn check(
+        &self,
+        path: &ValuePath,
+        orient: crate::features::looks::orient::Orient,
+        c: &mut Checker,
+    ) {
+        c.range(&path.field("angle"), self.angle);
+        c.range(&path.field("spin"), self.spin);
+        if let crate::features::looks::orient::Orient::Velocity { .. } = orient {
+            c.error(
+                path,
+                "cannot turn a sprite whose direction render.orient: Velocity sets; use Camera or Fixed orientation, or leave rotation out",
+            );
+        }
+    }
 }
 
 /// Rotation, lowered to radians.

@@ -19,6 +19,7 @@ use crate::base::rng::{rand_u32, stream};
 use crate::base::writer::{f32_lit, u32_lit, Writer};
 use serde::Deserialize;
 
+mod check;
 mod second;
 pub use second::{SecondTexture, SECOND_TEXTURE_BINDING};
 
