@@ -98,7 +98,7 @@ pub struct CompiledEffect {
     /// one particle buffer; None for an effect without trails.
     pub trail_wgsl: Option<String>,
     /// The naga-validated WGSL module of the flock's grid search (`Flock(neighbors: Grid)`;
-    /// see [`crate::forces::flock::FlockIr::emit_search_module`]); None for any other effect.
+    /// see `emit_search_module`); None for any other effect.
     pub flock_search_wgsl: Option<String>,
     /// Warnings from the stability analysis and other checks, located in the source.
     pub warnings: Diagnostics,
@@ -395,7 +395,7 @@ pub(crate) fn compile_group(
 
 /// What the compiler adds to one group for its events.
 #[derive(Clone, Debug, Default)]
-pub struct GroupLinks {
+pub(crate) struct GroupLinks {
     /// Events the group fires.
     pub events: Vec<EventIr>,
     /// Events the group is fed by.

@@ -77,7 +77,7 @@ impl Diagnostic {
     }
 
     /// The one-line headline: `path: message`, or just the message without a path.
-    pub fn headline(&self) -> String {
+    pub(crate) fn headline(&self) -> String {
         if self.path.is_empty() {
             self.message.clone()
         } else {

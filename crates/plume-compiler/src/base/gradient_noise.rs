@@ -11,7 +11,7 @@ use crate::base::rng::pcg;
 use crate::base::writer::{f32_lit, Writer};
 
 /// Coordinates (in cells) are clamped to this magnitude before conversion to integers.
-pub const CELL_LIMIT: f64 = 1.0e9;
+pub(crate) const CELL_LIMIT: f64 = 1.0e9;
 
 /// Hash multipliers of the three lattice coordinates (odd, unrelated).
 const HASH_X: u32 = 0x8da6_b343;
@@ -107,7 +107,7 @@ pub fn noise(key: u32, q: DVec3) -> f64 {
 
 /// Emits `turb_gradient` and `turb_curl(key, q)`, the WGSL twins of [`curl`] (once per
 /// module).
-pub fn emit_curl_helpers(w: &mut Writer) {
+pub(crate) fn emit_curl_helpers(w: &mut Writer) {
     w.comment("Curl noise: the curl of a potential of three 3D gradient noises, analytic.");
     w.block("fn turb_gradient(h: u32) -> vec3<f32>", |w| {
         w.line("let b = h & 15u;");

@@ -101,7 +101,7 @@ impl Attribute {
     }
 
     /// What it holds, for `--emit layout`.
-    pub fn meaning(self) -> &'static str {
+    pub(crate) fn meaning(self) -> &'static str {
         match self {
             Attribute::Position => "position (m)",
             Attribute::Velocity => "velocity (m/s)",
@@ -125,9 +125,9 @@ impl Attribute {
 }
 
 /// A stored word holding two 16-bit floats (fields x and y of its attribute).
-pub const HALF2: &str = "f16x2";
+pub(crate) const HALF2: &str = "f16x2";
 /// A stored word holding one 16-bit float in its low half (field z of its attribute).
-pub const HALF1: &str = "f16";
+pub(crate) const HALF1: &str = "f16";
 
 /// One resource binding of the compiled module (group 0).
 #[derive(Clone, Debug, PartialEq, Eq)]

@@ -20,7 +20,7 @@ pub struct LifetimeSteps {
 }
 
 /// Marks a particle that never dies.
-pub const NEVER: u32 = u32::MAX;
+pub(crate) const NEVER: u32 = u32::MAX;
 
 /// Tolerance for a lifetime that is an exact multiple of dt written in decimal.
 const MULTIPLE_EPS: f64 = 1e-9;

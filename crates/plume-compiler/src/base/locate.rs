@@ -12,7 +12,7 @@ use crate::base::diagnostics::{Pos, Span};
 
 /// Spans of values in a RON document, keyed by lookup path (`emitters[0].shape.radius`).
 #[derive(Debug, Default)]
-pub struct SourceMap {
+pub(crate) struct SourceMap {
     spans: HashMap<String, Span>,
 }
 
@@ -31,7 +31,7 @@ impl SourceMap {
 
     /// The span of characters `[start, end)` of the string value at `path` (an expression's
     /// mistake), or the string's own span when the characters cannot be mapped.
-    pub fn find_in_string(
+    pub(crate) fn find_in_string(
         &self,
         source: &str,
         path: &str,

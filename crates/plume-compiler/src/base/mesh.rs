@@ -128,7 +128,7 @@ impl TriMesh {
 
     /// Edges that an odd number of triangles use (a closed surface uses each an even number
     /// of times, two for a manifold), and the first such edge's ends.
-    pub fn open_edges(&self) -> (usize, Option<(DVec3, DVec3)>) {
+    pub(crate) fn open_edges(&self) -> (usize, Option<(DVec3, DVec3)>) {
         let mut uses: HashMap<(u32, u32), u32> = HashMap::new();
         for tri in &self.triangles {
             for k in 0..3 {

@@ -40,21 +40,21 @@ pub mod stream {
     /// One draw for the lifetime.
     pub const LIFETIME: u32 = 6;
     /// Three draws for a fallback direction (radial velocity from the exact centre).
-    pub const FALLBACK_DIRECTION: u32 = 7;
+    pub(crate) const FALLBACK_DIRECTION: u32 = 7;
     /// One draw for a flipbook's first frame (`render.texture.random_start`).
     pub(crate) const FLIPBOOK: u32 = 10;
     /// One draw for a sprite's starting angle (`render.rotation.angle`).
-    pub const ROTATION_ANGLE: u32 = 11;
+    pub(crate) const ROTATION_ANGLE: u32 = 11;
     /// One draw for a sprite's spin (`render.rotation.spin`).
-    pub const ROTATION_SPIN: u32 = 12;
+    pub(crate) const ROTATION_SPIN: u32 = 12;
     /// One draw for a particle's palette colour (`render.palette`).
-    pub const PALETTE: u32 = 13;
+    pub(crate) const PALETTE: u32 = 13;
     /// One draw for the triangle (or the field cell) a mesh spawn shape picks.
     pub(crate) const MESH_PICK: u32 = 14;
     /// One draw for the face a box's surface picks (`Box(surface: true)`).
     pub(crate) const FACE_PICK: u32 = 15;
     /// One draw for a particle's starting age (an emitter's `age`).
-    pub const START_AGE: u32 = 16;
+    pub(crate) const START_AGE: u32 = 16;
     /// `rand(k)` in custom expressions draws from stream CUSTOM + k (k <= 255).
     pub const CUSTOM: u32 = 64;
 }
@@ -81,7 +81,7 @@ impl ParticleDraws {
     }
 
     /// Three uniform numbers from streams `base`, `base + 1` and `base + 2`.
-    pub fn unit3(&self, base: u32) -> glam::DVec3 {
+    pub(crate) fn unit3(&self, base: u32) -> glam::DVec3 {
         glam::DVec3::new(self.unit(base), self.unit(base + 1), self.unit(base + 2))
     }
 }
@@ -108,7 +108,7 @@ pub(crate) fn emit_pcg(w: &mut Writer, name: &str) {
 }
 
 /// Emits the WGSL twins of [`pcg`], [`rand_u32`] and [`unit()`].
-pub fn emit_wgsl(w: &mut Writer) {
+pub(crate) fn emit_wgsl(w: &mut Writer) {
     w.comment("PCG hash (integer, bit-identical to the CPU reference).");
     emit_pcg(w, "pcg");
     w.block("fn rand_u32(id: u32, stream: u32) -> u32", |w| {

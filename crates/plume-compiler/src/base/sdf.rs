@@ -1,7 +1,7 @@
 //! Signed distance fields baked from closed triangle meshes, for the `Mesh` collider and for
 //! spawning in a mesh's volume.
 //!
-//! **Grid.** Nodes sit `cell` apart on a box around the mesh, padded by [`PAD`] cells on every
+//! **Grid.** Nodes sit `cell` apart on a box around the mesh, padded by `PAD` cells on every
 //! side (so every border node is outside, at a distance of at least `PAD` cells); `cell` is the
 //! mesh's longest side over the resolution. Each node holds the signed distance (negative
 //! inside) from its position to the mesh, as f32: the values the GPU and the f64 reference both
@@ -28,7 +28,7 @@ use glam::DVec3;
 use crate::base::mesh::{fnv1a, read_obj, TriMesh, FNV_OFFSET};
 
 /// Cells of padding around the mesh's box.
-pub const PAD: u32 = 3;
+pub(crate) const PAD: u32 = 3;
 
 /// The most cells along a mesh's longest side.
 pub(crate) const MAX_RESOLUTION: u32 = 128;

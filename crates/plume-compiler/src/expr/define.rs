@@ -11,7 +11,7 @@ use super::parse::{Ast, AstKind};
 use super::ExprError;
 
 /// The most nodes the named expressions read by one expression may expand to in all.
-pub const MAX_EXPANDED: usize = 16_384;
+pub(crate) const MAX_EXPANDED: usize = 16_384;
 
 /// A named expression.
 #[derive(Clone, Debug, PartialEq)]

@@ -8,7 +8,7 @@ use crate::base::writer::{f32_lit, vec3_lit, Writer};
 
 /// Names the WGSL in scope must provide for the variables: position and velocity (`vec3<f32>`),
 /// the time `t`, and for age, life and rand the module's particle context
-/// ([`crate::features::forces::custom::emit_context`]).
+/// (`emit_context`).
 pub struct Emitter<'w> {
     w: &'w mut Writer,
     next: usize,

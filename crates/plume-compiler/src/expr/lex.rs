@@ -5,7 +5,7 @@ use super::ExprError;
 
 /// One token of an expression.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Tok {
+pub(crate) enum Tok {
     /// A number literal, as written (`2`, `0.5`, `1e-3`).
     Num(f64),
     /// A variable, parameter or function name.

@@ -30,14 +30,14 @@ pub use typed::{Expr, Ty, Var};
 /// operation can overflow before its result is clamped back.
 pub const VALUE_BOUND: f64 = 1.0e18;
 /// Divisors smaller than this in magnitude give 0: 1e18 / 1e-20 = 1e38 still fits in f32.
-pub const DIV_FLOOR: f64 = 1.0e-20;
+pub(crate) const DIV_FLOOR: f64 = 1.0e-20;
 /// `log(x)` reads max(x, this): log(1e-30) = −69.1.
-pub const LOG_FLOOR: f64 = 1.0e-30;
+pub(crate) const LOG_FLOOR: f64 = 1.0e-30;
 /// `exp` (and `pow`) clamp their exponent to [EXP_MIN, EXP_MAX]: e^EXP_MAX = [`VALUE_BOUND`],
 /// e^EXP_MIN is a normal f32.
-pub const EXP_MAX: f64 = 41.446_531_673_892_82;
+pub(crate) const EXP_MAX: f64 = 41.446_531_673_892_82;
 /// See [`EXP_MAX`].
-pub const EXP_MIN: f64 = -87.0;
+pub(crate) const EXP_MIN: f64 = -87.0;
 /// `normalize(v)` is zero when |v|² is at most this (the same guard as the built-in forces').
 pub(crate) const NORMALIZE_FLOOR: f64 = 1.0e-20;
 /// The most tokens an expression may have: keeps the recursive passes' depth small.

@@ -136,7 +136,7 @@ pub struct Scope<'a> {
     /// The effect's named expressions (`define`), expanded where they are read.
     pub defines: &'a [super::define::Define],
     /// Nodes the named expressions read so far have expanded to (at most
-    /// [`super::define::MAX_EXPANDED`]).
+    /// `MAX_EXPANDED`).
     pub expanded: std::cell::Cell<usize>,
 }
 

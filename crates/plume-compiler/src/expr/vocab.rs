@@ -94,13 +94,13 @@ pub enum Op1 {
     Acos,
     /// `atan`
     Atan,
-    /// `log2` of max(a, [`super::LOG_FLOOR`]).
+    /// `log2` of max(a, `LOG_FLOOR`).
     Log2,
     /// `sqrt` of max(a, 0).
     Sqrt,
     /// `exp`, its argument clamped so the result stays within the value bound.
     Exp,
-    /// `log` of max(a, [`super::LOG_FLOOR`]).
+    /// `log` of max(a, `LOG_FLOOR`).
     Log,
     /// `sin`
     Sin,
@@ -127,7 +127,7 @@ pub enum Op2 {
     Sub,
     /// `*` (a scalar scales a vec3; two vec3s multiply per component).
     Mul,
-    /// `/`, zero where the divisor is within [`super::DIV_FLOOR`] of zero.
+    /// `/`, zero where the divisor is within `DIV_FLOOR` of zero.
     Div,
     /// `min`
     Min,
@@ -138,7 +138,7 @@ pub enum Op2 {
     /// `atan2(y, x)`: 0 at (0, 0).
     Atan2,
     /// `rem(a, b)`: a − b · trunc(a / b), the remainder with a's sign; 0 where the divisor is
-    /// within [`super::DIV_FLOOR`] of zero.
+    /// within `DIV_FLOOR` of zero.
     Rem,
     /// `dot`
     Dot,

@@ -441,7 +441,7 @@ impl AttributesIr {
     // ---- WGSL ----
 
     /// `, a0: f32, a2: vec3<f32>`: the kept attributes as a function's trailing parameters.
-    pub fn params_wgsl(&self, kept: u64) -> String {
+    pub(crate) fn params_wgsl(&self, kept: u64) -> String {
         self.iter_kept(kept)
             .map(|(i, a)| format!(", a{i}: {}", a.wgsl_ty()))
             .collect()
@@ -513,7 +513,7 @@ impl AttributesIr {
 
     /// Declares `ctx_aI` for each attribute that a custom force reads (`read`), as the
     /// particle context the forces' `accel` reads them from.
-    pub fn emit_context(&self, w: &mut Writer, read: u64) {
+    pub(crate) fn emit_context(&self, w: &mut Writer, read: u64) {
         for (i, a) in self.iter_kept(read) {
             w.line(format!("var<private> ctx_a{i}: {};", a.wgsl_ty()));
         }
@@ -521,7 +521,12 @@ impl AttributesIr {
 
     /// Sets `ctx_aI` for each attribute that a custom force reads (`read`) from `value(i)`,
     /// a WGSL expression of its value.
-    pub fn emit_set_context(&self, w: &mut Writer, read: u64, value: impl Fn(usize) -> String) {
+    pub(crate) fn emit_set_context(
+        &self,
+        w: &mut Writer,
+        read: u64,
+        value: impl Fn(usize) -> String,
+    ) {
         for (i, _) in self.iter_kept(read) {
             w.line(format!("ctx_a{i} = {};", value(i)));
         }

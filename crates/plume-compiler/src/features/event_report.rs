@@ -15,7 +15,7 @@ use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 
 /// The most firings one reported event may keep between two readbacks.
-pub const MAX_REPORT: u32 = 65_536;
+pub(crate) const MAX_REPORT: u32 = 65_536;
 
 /// Bytes of a report buffer's header: the firings counted since the last readback, the steps
 /// gathered since the effect started, the bound, and a word of padding.
@@ -29,7 +29,7 @@ pub fn buffer_bytes(most: u32) -> u64 {
     REPORT_HEADER_BYTES + u64::from(most) * REPORT_BYTES
 }
 
-/// Checks an event's `report` bound (at `path`): at most [`MAX_REPORT`]; and that an event
+/// Checks an event's `report` bound (at `path`): at most `MAX_REPORT`; and that an event
 /// without a `target` reports (else it would do nothing).
 pub fn check(c: &mut Checker, path: &ValuePath, report: u32, has_target: bool) {
     if report > MAX_REPORT {

@@ -316,7 +316,7 @@ fn passed_id(e: &EventIr, id: &str) -> String {
 /// its record, in its slot, and its bit in `fired` (the kernel appends its id and slot with
 /// the rest of its workgroup's: [`emit_workgroup_appends`]). An `Every` event's firing is
 /// guarded by its period.
-pub fn emit_fire(
+pub(crate) fn emit_fire(
     w: &mut Writer,
     events: &[EventIr],
     fires_here: impl Fn(TriggerIr) -> bool,
@@ -355,7 +355,7 @@ pub fn emit_fire(
 /// global atomic a workgroup, not one a firing: thousands of firings a step adding to one word
 /// wait on each other), and each firing writes its id and slot at the workgroup's base plus
 /// its place. A [`Ordering::Bucketed`] stream's id range is widened the same way.
-pub enum AppendPart {
+pub(crate) enum AppendPart {
     /// The workgroup's counters (module scope).
     Declarations,
     /// Their reset, by thread 0 before the first barrier.
@@ -369,7 +369,7 @@ pub enum AppendPart {
 }
 
 /// Emits `part` of the appends of the firings of `events` (see [`AppendPart`]).
-pub fn emit_workgroup_appends(w: &mut Writer, events: &[EventIr], part: AppendPart) {
+pub(crate) fn emit_workgroup_appends(w: &mut Writer, events: &[EventIr], part: AppendPart) {
     for (j, e) in events.iter().enumerate() {
         let bucketed = e.ordering == Ordering::Bucketed;
         let out = Role::EventOut(j as u8).name();

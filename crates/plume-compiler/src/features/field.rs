@@ -235,7 +235,7 @@ impl FieldIr {
 
     /// WGSL: `field_eval` (the baked terms' sum), `field_sample` (grid or fallback) and the
     /// `bake` kernel. Expects `field: array<vec4<f32>>` bound.
-    pub fn emit_wgsl(&self, w: &mut Writer, terms: &[Term]) {
+    pub(crate) fn emit_wgsl(&self, w: &mut Writer, terms: &[Term]) {
         let [nx, ny, nz] = self.resolution;
         w.line(format!("const FIELD_NX: u32 = {};", u32_lit(nx)));
         w.line(format!("const FIELD_NY: u32 = {};", u32_lit(ny)));

@@ -23,7 +23,7 @@ use crate::features::shadow::{
 pub const LIGHTS_MOST: usize = 8;
 
 /// Bytes of the lights uniform: the ambient light and the source count (32),
-/// [`LIGHTS_MOST`] sources of two vec4s each, then the shadow ([`SHADOW_BYTES`]).
+/// [`LIGHTS_MOST`] sources of two vec4s each, then the shadow (`SHADOW_BYTES`).
 pub const LIGHTS_BYTES: u64 = 32 + 32 * LIGHTS_MOST as u64 + SHADOW_BYTES;
 
 /// Binding of the lights uniform in a lit effect's draw module.
@@ -220,7 +220,7 @@ impl Lights {
     /// there: a point light's fallen off with distance and range, the shadowed one's times
     /// [`Shadow::visibility`]). The first [`LIGHTS_MOST`], as the draw reads them; the twin
     /// of [`emit_incoming`]'s WGSL.
-    pub fn incoming(&self, p: DVec3) -> impl Iterator<Item = (DVec3, DVec3)> + '_ {
+    pub(crate) fn incoming(&self, p: DVec3) -> impl Iterator<Item = (DVec3, DVec3)> + '_ {
         let shadowed = self.shadow.as_ref().map(|s| (s.source, s.visibility(p)));
         self.sources
             .iter()
@@ -483,7 +483,7 @@ pub(crate) fn emit_received_light(w: &mut Writer, wrap: f64, shadows: Option<Sha
 /// vector toward source i) and `color` (its light there, the shadowed source's through its
 /// map when the draw reads `shadows`, looked up where it says): the twin of
 /// [`Lights::incoming`].
-pub fn emit_incoming(w: &mut Writer, shadows: Option<ShadowAt>) {
+pub(crate) fn emit_incoming(w: &mut Writer, shadows: Option<ShadowAt>) {
     w.line("let source = lights.sources[i];");
     w.comment("A unit direction (zero where a host gave none: no light).");
     w.line("var toward = -source.place.xyz;");

@@ -59,7 +59,7 @@ fn path(i: usize) -> ValuePath {
 
 /// Reads every scene mesh's file (relative to `base_dir`); an unreadable or empty mesh, or a
 /// NaN vertex, is recorded in `c` at the mesh's `file`.
-pub fn read_scene(scene: &mut [SceneMesh], base_dir: Option<&Path>, c: &mut Checker) {
+pub(crate) fn read_scene(scene: &mut [SceneMesh], base_dir: Option<&Path>, c: &mut Checker) {
     for (i, entry) in scene.iter_mut().enumerate() {
         let SceneMesh::Mesh { file, mesh, .. } = entry;
         let full = base_dir.map_or_else(|| PathBuf::from(&*file), |dir| dir.join(&*file));

@@ -19,7 +19,7 @@ pub const SHADOW_CASCADES_MOST: usize = 4;
 
 /// Bytes of the shadow's part of the lights uniform: (source, cascades, reversed, unused) as
 /// u32, then [`SHADOW_CASCADES_MOST`] matrices.
-pub const SHADOW_BYTES: u64 = 16 + 64 * SHADOW_CASCADES_MOST as u64;
+pub(crate) const SHADOW_BYTES: u64 = 16 + 64 * SHADOW_CASCADES_MOST as u64;
 
 /// Binding of the shadow map (`texture_depth_2d_array`) in a lit draw module.
 pub const SHADOW_MAP_BINDING: u32 = 52;
@@ -29,7 +29,7 @@ pub const SHADOW_MAP_BINDING: u32 = 52;
 pub const SHADOW_SAMPLER_BINDINGS: [u32; 2] = [53, 54];
 
 /// A draw module's declarations of the shadow map and its samplers.
-pub fn shadow_declarations_wgsl() -> String {
+pub(crate) fn shadow_declarations_wgsl() -> String {
     let [standard, reversed] = SHADOW_SAMPLER_BINDINGS;
     format!(
         "@group(0) @binding({SHADOW_MAP_BINDING}) var shadow_map: texture_depth_2d_array;\n\
@@ -196,7 +196,7 @@ pub(crate) const SHADOW_FIELDS_WGSL: &str =
 /// `lights.shadow`, `lights.cascades`, `shadow_map` (a `texture_depth_2d_array`) and the
 /// comparison samplers `shadow_standard` (`LessEqual`) and `shadow_reversed`
 /// (`GreaterEqual`), both linear and clamped to the edge, which each shader declares at its
-/// own bindings ([`shadow_declarations_wgsl`] in a draw module). The sampler's bilinear
+/// own bindings (`shadow_declarations_wgsl` in a draw module). The sampler's bilinear
 /// weights are the hardware's, a step of 1/256 of a texel on most GPUs.
 pub const SHADOW_WGSL: &str = r#"// How much of the shadowed source's light reaches point p (in the lights' space): the first
 // cascade whose box holds p decides, by the comparison sampler of the map's depth convention

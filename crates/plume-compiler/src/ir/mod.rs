@@ -157,7 +157,7 @@ impl RenderIr {
 
     /// Whether the quad's half axes are computed (oriented or rotated) rather than the upright
     /// camera-facing square.
-    pub fn turns_quad(&self) -> bool {
+    pub(crate) fn turns_quad(&self) -> bool {
         self.orient != crate::features::looks::orient::OrientIr::Camera
             || self.rotation.is_some()
             || self.size_y.is_some()
@@ -187,7 +187,7 @@ impl EffectIr {
 
     /// Whether the group's particles store their tint: a stateful group fed by an event that
     /// passes the parent's colour on (the GPU cannot derive it from the child's id).
-    pub fn stores_tint(&self) -> bool {
+    pub(crate) fn stores_tint(&self) -> bool {
         self.stateless.is_none() && self.event_inputs.iter().any(|e| e.inherit_color)
     }
 
@@ -292,7 +292,7 @@ impl EffectIr {
 
     /// The normal speed below which a contact does not bounce: twice what the effect's constant
     /// acceleration adds in one substep, so a particle resting on a collider stays at rest.
-    pub fn rest_speed(&self) -> f64 {
+    pub(crate) fn rest_speed(&self) -> f64 {
         let g: glam::DVec3 = self
             .terms
             .iter()

@@ -17,10 +17,10 @@ use crate::ir::EffectIr;
 use crate::reference::sim::ReferenceSim;
 
 /// Particles a calibration follows.
-pub const SAMPLES: u32 = 64;
+pub(crate) const SAMPLES: u32 = 64;
 
 /// The most substeps a budget may ask of a scheme (and of the truth).
-pub const MAX_SUBSTEPS: u32 = 64;
+pub(crate) const MAX_SUBSTEPS: u32 = 64;
 
 /// The truth's most substeps: RK4 doubled up to here.
 const TRUTH_MAX_SUBSTEPS: u32 = 256;

@@ -15,7 +15,7 @@ pub struct Spawned {
     pub x: DVec3,
     /// Velocity (m/s).
     pub v: DVec3,
-    /// Step index whose update kills it ([`NEVER`] when immortal).
+    /// Step index whose update kills it (`NEVER` when immortal).
     pub die_at: u32,
     /// Its starting age in whole steps (`Emitter::age`; 0 without one).
     pub start: u32,

@@ -263,7 +263,7 @@ impl Schedule {
     /// Skips `n` steps at once when no step from now on can spawn anything (every rate is 0 or
     /// has ended, every burst has fired), as stepping them would; returns false, skipping
     /// nothing, otherwise.
-    pub fn skip_idle(&mut self, n: u64) -> bool {
+    pub(crate) fn skip_idle(&mut self, n: u64) -> bool {
         if self.next_step == 0 || !self.pending.is_empty() {
             return false;
         }
@@ -292,7 +292,7 @@ impl Schedule {
     }
 
     /// Lifetime in seconds of particle `id` that dies at the update of step `die_at`
-    /// (None for [`crate::base::lifetime::NEVER`]).
+    /// (None for `NEVER`).
     pub fn lifetime(&self, id: u32, die_at: u32) -> Option<f64> {
         if die_at == crate::base::lifetime::NEVER {
             return None;
@@ -369,7 +369,7 @@ impl LiveSegments {
     }
 
     /// Plans `steps` more steps of `schedule` and records them, skipping in O(1) steps that can
-    /// spawn nothing ([`Schedule::skip_idle`]).
+    /// spawn nothing (`skip_idle`).
     pub fn advance(&mut self, schedule: &mut Schedule, steps: u64) {
         self.advance_noting(schedule, steps, &mut Vec::new());
     }

@@ -19,7 +19,7 @@ pub const MAX_FORCES: usize = 512;
 pub(crate) const MAX_VOLUMES: usize = 256;
 
 /// Checks the whole effect; returns the checker holding every error found.
-pub fn check_effect(effect: &EffectSpec) -> Checker {
+pub(crate) fn check_effect(effect: &EffectSpec) -> Checker {
     let mut c = Checker::default();
     let root = ValuePath::root();
     for (field, len, max, why) in [

@@ -139,7 +139,7 @@ impl BoxIr {
     }
 
     /// A point on the forbidden side moved onto the nearest face, `margin` beyond it.
-    pub fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
+    pub(crate) fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
         if self.inside {
             if self.contains(x) {
                 return x;
@@ -181,7 +181,7 @@ impl BoxIr {
         }
     }
 
-    /// The WGSL twins of [`BoxIr::hit`] and [`BoxIr::push_out`].
+    /// The WGSL twins of [`BoxIr::hit`] and `push_out`.
     pub fn emit(&self, w: &mut Writer, i: usize) {
         let (mn, mx) = (vec3_lit(self.min), vec3_lit(self.max));
         let tiny = f32_lit(TINY);

@@ -17,7 +17,7 @@ use crate::base::writer::{f32_lit, Writer};
 const TINY: f64 = 1e-30;
 
 /// The most samples a height field may have (the storage binding stays small).
-pub const MAX_SAMPLES: usize = 1 << 20;
+pub(crate) const MAX_SAMPLES: usize = 1 << 20;
 
 /// A height field collider.
 #[derive(Clone, Debug, PartialEq)]
@@ -324,7 +324,7 @@ impl HeightFieldIr {
     }
 
     /// A point under the field lifted onto it, `margin` above.
-    pub fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
+    pub(crate) fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
         if !self.over(x) {
             return x;
         }
@@ -364,7 +364,7 @@ impl HeightFieldIr {
         )
     }
 
-    /// The WGSL twins of [`HeightFieldIr::hit`] and [`HeightFieldIr::push_out`], reading the
+    /// The WGSL twins of [`HeightFieldIr::hit`] and `push_out`, reading the
     /// heights from `collider_data` at `offset`.
     pub fn emit(&self, w: &mut Writer, i: usize, offset: u32) {
         let (cw, cd) = self.cell_size();

@@ -102,7 +102,7 @@ pub struct Mesh {
     pub restitution: f64,
     /// Fraction of tangential speed lost on a bounce, in [0, 1].
     pub friction: f64,
-    /// The mesh and its baked field, made by [`read_meshes`] before the checks.
+    /// The mesh and its baked field, made by `read_meshes` before the checks.
     #[serde(skip)]
     pub baked: Option<Arc<Baked>>,
 }
@@ -177,7 +177,7 @@ fn check_placement_and_resolution(
 /// Reads every `Mesh` collider's file and bakes (or loads from the cache) its field, files
 /// relative to `base_dir`; what is wrong is recorded in `c` at the collider's `file`: an
 /// unreadable or empty mesh, a NaN vertex, a mesh that is not closed.
-pub fn read_meshes(collide: &mut [Collider], base_dir: Option<&Path>, c: &mut Checker) {
+pub(crate) fn read_meshes(collide: &mut [Collider], base_dir: Option<&Path>, c: &mut Checker) {
     for (i, collider) in collide.iter_mut().enumerate() {
         let path = collider_path(i, collider);
         let Collider::Mesh(Mesh {
@@ -301,7 +301,7 @@ impl MeshIr {
     }
 
     /// A point inside moved out along the gradient, `margin` beyond the surface.
-    pub fn push_out(&self, mut x: DVec3, margin: f64) -> DVec3 {
+    pub(crate) fn push_out(&self, mut x: DVec3, margin: f64) -> DVec3 {
         let mut g = self.grid(x);
         if !self.in_box(g) {
             return x;
@@ -354,7 +354,7 @@ impl MeshIr {
         )
     }
 
-    /// The WGSL twins of [`MeshIr::hit`] and [`MeshIr::push_out`], reading the field from
+    /// The WGSL twins of [`MeshIr::hit`] and `push_out`, reading the field from
     /// `collider_data` at `offset`.
     pub fn emit(&self, w: &mut Writer, i: usize, offset: u32) {
         let [nx, ny, _] = self.baked.sdf.counts;

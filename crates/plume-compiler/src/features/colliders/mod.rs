@@ -7,7 +7,7 @@
 //! position against every collider, takes the first contact, puts the particle there (a few
 //! f32 ulps outside), applies Latta's response (normal speed reflected by restitution,
 //! tangential speed reduced by friction) and moves it the rest of the substep with its new
-//! velocity, testing that segment again. At most [`MAX_CONTACTS`] contacts are resolved per
+//! velocity, testing that segment again. At most `MAX_CONTACTS` contacts are resolved per
 //! substep; a particle that would need more stays at its last contact for the rest of the
 //! substep (it keeps its new velocity), so nothing passes through. A particle that starts a
 //! substep inside a solid (spawned there, or rounding) is first pushed out to the nearest
@@ -32,7 +32,7 @@ use crate::base::path::ValuePath;
 use crate::base::writer::{f32_lit, Writer};
 
 /// Contacts resolved per substep; past that the particle stops at its last contact.
-pub const MAX_CONTACTS: u32 = 4;
+pub(crate) const MAX_CONTACTS: u32 = 4;
 
 /// The contact margin, relative to the larger of |x| and the colliders' own coordinates:
 /// 16 f32 ulps, so that rounding cannot leave a particle on the wrong side of a surface.
@@ -108,7 +108,7 @@ impl Surface {
     }
 
     /// `x` moved to the allowed side (plus `margin`) when it is on the forbidden one.
-    pub fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
+    pub(crate) fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
         match self {
             Surface::Plane(p) => p.push_out(x, margin),
             Surface::Sphere(s) => s.push_out(x, margin),
@@ -123,7 +123,7 @@ impl Surface {
     /// scene depth is not: its image only changes between frames, and the end's push-out
     /// (every substep) already leaves each particle outside; skipping the start's saves a
     /// lookup of the image per particle and substep.
-    pub fn pushes_at_start(&self) -> bool {
+    pub(crate) fn pushes_at_start(&self) -> bool {
         !matches!(self, Surface::SceneDepth(_))
     }
 
@@ -153,7 +153,7 @@ impl Surface {
     }
 
     /// The thinnest feature the surface has, for the f32 resolution warning (None: unbounded).
-    pub fn thinnest(&self) -> Option<f64> {
+    pub(crate) fn thinnest(&self) -> Option<f64> {
         match self {
             Surface::Plane(_) | Surface::HeightField(_) | Surface::SceneDepth(_) => None,
             Surface::Sphere(s) => Some(s.radius),

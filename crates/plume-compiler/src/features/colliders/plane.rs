@@ -74,7 +74,7 @@ impl PlaneIr {
     }
 
     /// A point behind the plane moved onto it, `margin` in front.
-    pub fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
+    pub(crate) fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
         let d = self.distance(x);
         if d < 0.0 {
             x + (margin - d) * self.normal
@@ -83,7 +83,7 @@ impl PlaneIr {
         }
     }
 
-    /// The WGSL twins of [`PlaneIr::hit`] and [`PlaneIr::push_out`].
+    /// The WGSL twins of [`PlaneIr::hit`] and `push_out`.
     pub fn emit(&self, w: &mut Writer, i: usize) {
         let (p, n) = (vec3_lit(self.point), vec3_lit(self.normal));
         w.block(

@@ -117,7 +117,7 @@ impl SphereIr {
     }
 
     /// A point on the forbidden side moved onto the surface, `margin` into the allowed side.
-    pub fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
+    pub(crate) fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
         let m = x - self.center;
         let l2 = m.dot(m);
         let r2 = self.radius * self.radius;
@@ -141,7 +141,7 @@ impl SphereIr {
         }
     }
 
-    /// The WGSL twins of [`SphereIr::hit`] and [`SphereIr::push_out`].
+    /// The WGSL twins of [`SphereIr::hit`] and `push_out`.
     pub fn emit(&self, w: &mut Writer, i: usize) {
         let c = vec3_lit(self.center);
         let r = f32_lit(self.radius);

@@ -238,7 +238,7 @@ impl EmitterIr {
     }
 
     /// The position and velocity of particle `id`, the emitter's `k`-th, spawned at `step` in
-    /// a frame at `origin` (the f64 twin of [`Self::emit_wgsl`]).
+    /// a frame at `origin` (the f64 twin of `emit_wgsl`).
     pub fn sample(
         &self,
         seed_mix: u32,
@@ -257,7 +257,7 @@ impl EmitterIr {
     }
 
     /// Whether its spawn position or velocity reads `origin` (an event's firing particle).
-    pub fn reads_origin(&self) -> bool {
+    pub(crate) fn reads_origin(&self) -> bool {
         let reads = |e: &crate::expr::Expr| e.reads(crate::expr::Var::Origin);
         matches!(&self.shape, ShapeIr::Custom { expr, .. } if reads(expr))
             || matches!(&self.velocity, VelocityIr::Custom { expr, .. } if reads(expr))
@@ -281,7 +281,7 @@ impl EmitterIr {
 
     /// Emits the statements of emitter `e`'s `emit_e(id, k, step)` that set its position and
     /// velocity (`s.x`, `s.v`): the WGSL twin of [`Self::sample`].
-    pub fn emit_wgsl(&self, w: &mut Writer, e: usize) {
+    pub(crate) fn emit_wgsl(&self, w: &mut Writer, e: usize) {
         self.shape.emit_wgsl(w, e, self.timing.dt);
         self.velocity.emit_wgsl(w, &self.shape, self.timing.dt);
     }
@@ -289,7 +289,7 @@ impl EmitterIr {
 
 /// Reads every `Mesh` spawn shape's file into its placed surface (files relative to
 /// `base_dir`), recording what is wrong in `c` at the shape's `file`.
-pub fn read_mesh_shapes(emitters: &mut [Emitter], base_dir: Option<&Path>, c: &mut Checker) {
+pub(crate) fn read_mesh_shapes(emitters: &mut [Emitter], base_dir: Option<&Path>, c: &mut Checker) {
     for (i, emitter) in emitters.iter_mut().enumerate() {
         let path = ValuePath::root().field("emitters").index(i);
         emitter.read_mesh_shape(&path, base_dir, c);

@@ -142,7 +142,7 @@ fn default_resolution() -> u32 {
 impl Shape {
     /// Reads a `Mesh` shape's file into its placed surface (relative to `base_dir`), recording
     /// what is wrong in `c` at `path` (the shape) `.file`; other shapes read nothing.
-    pub fn read_mesh(&mut self, path: &ValuePath, base_dir: Option<&Path>, c: &mut Checker) {
+    pub(crate) fn read_mesh(&mut self, path: &ValuePath, base_dir: Option<&Path>, c: &mut Checker) {
         let Shape::Mesh {
             file,
             offset,

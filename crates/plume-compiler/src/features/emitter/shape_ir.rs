@@ -221,7 +221,7 @@ impl ShapeIr {
 
     /// Emits the statements that set `s.x` (and, on a mesh, `surface_normal`) inside emitter
     /// `e`'s `emit_e(id, k, step)`, for steps of `dt`: the WGSL twin of [`Self::sample`].
-    pub fn emit_wgsl(&self, w: &mut Writer, e: usize, dt: f64) {
+    pub(crate) fn emit_wgsl(&self, w: &mut Writer, e: usize, dt: f64) {
         let two_pi = f32_lit(2.0 * PI);
         let pi = f32_lit(PI);
         match self {
@@ -335,7 +335,7 @@ impl ShapeIr {
 
     /// The spawn position of the particle drawing `d`, the `k`-th of its emitter, spawned at
     /// time `t` in a frame at `origin`, and on a mesh the surface's normal there (zero elsewhere): the f64 twin of
-    /// [`Self::emit_wgsl`].
+    /// `emit_wgsl`.
     pub fn sample(&self, d: &ParticleDraws, k: u32, (t, origin): (f64, DVec3)) -> (DVec3, DVec3) {
         let x = match self {
             ShapeIr::Custom { expr, .. } => {

@@ -133,7 +133,7 @@ impl SpawnTiming {
     }
 
     /// Spawns from step 0 for ever, the burst once: what an emitter without timing fields does.
-    pub fn is_plain(&self) -> bool {
+    pub(crate) fn is_plain(&self) -> bool {
         self.start_step == 0
             && self.end_step.is_none()
             && self.every.is_none()
@@ -208,7 +208,7 @@ impl SpawnTiming {
         }
     }
 
-    /// The IR's words for what is not plain (empty when [`Self::is_plain`]).
+    /// The IR's words for what is not plain (empty when `is_plain`).
     pub fn describe(&self) -> String {
         let mut parts = Vec::new();
         if self.start_step > 0 {

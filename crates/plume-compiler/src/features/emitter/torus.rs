@@ -40,7 +40,7 @@ pub struct TorusIr {
 
 impl TorusIr {
     /// Emits the statements that set `s.x`: the WGSL twin of [`Self::sample`].
-    pub fn emit_wgsl(&self, w: &mut Writer) {
+    pub(crate) fn emit_wgsl(&self, w: &mut Writer) {
         let (two_pi, pi) = (f32_lit(2.0 * PI), f32_lit(PI));
         w.line(format!("let u = {};", wgsl_unit3(stream::POSITION)));
         w.line(format!("let phi = {two_pi} * u.x - {pi};"));

@@ -206,7 +206,7 @@ impl VelocityIr {
 
     /// Emits the statements that set `s.v` inside an emitter's `emit_e(id, k, step)`, after
     /// `shape`'s, for steps of `dt`: the WGSL twin of [`Self::sample`].
-    pub fn emit_wgsl(&self, w: &mut Writer, shape: &ShapeIr, dt: f64) {
+    pub(crate) fn emit_wgsl(&self, w: &mut Writer, shape: &ShapeIr, dt: f64) {
         let two_pi = f32_lit(2.0 * PI);
         let pi = f32_lit(PI);
         match self {
@@ -286,7 +286,7 @@ impl VelocityIr {
 
     /// The spawn velocity of the particle drawing `d`, spawned at `x` on `shape` at time `t`
     /// in a frame at `origin` (`normal`: the surface's normal there, zero off a mesh): the
-    /// f64 twin of [`Self::emit_wgsl`].
+    /// f64 twin of `emit_wgsl`.
     pub fn sample(
         &self,
         d: &ParticleDraws,

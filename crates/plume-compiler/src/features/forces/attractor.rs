@@ -18,7 +18,7 @@ use crate::base::values::Vec3;
 use crate::base::writer::{f32_lit, vec3_lit, Writer};
 
 /// The default core radius is `range / DEFAULT_CORE_DIVISOR`.
-pub const DEFAULT_CORE_DIVISOR: f64 = 10.0;
+pub(crate) const DEFAULT_CORE_DIVISOR: f64 = 10.0;
 
 /// Field names, as written in effect files.
 pub(crate) const FIELDS: &[&str] = &["center", "range", "strength", "core"];

@@ -71,7 +71,7 @@ pub struct CustomTerm {
     pub origins: Vec<usize>,
     /// The effect's seed mix, for `rand(k)`.
     pub seed_mix: u32,
-    /// Estimated by [`CustomTerm::estimate_stiffness`] at lowering.
+    /// Estimated by `estimate_stiffness` at lowering.
     pub stiffness: Stiffness,
 }
 
@@ -99,7 +99,7 @@ impl CustomTerm {
     /// that speed, at t = 0 and, for a term that reads the age, at ages over a particle's life
     /// (never at its spawn alone); whichever binds harder at step `h` is kept. An estimate: a
     /// stiffness outside the sampled region or at another time is not seen.
-    pub fn estimate_stiffness(&mut self, emitters: &[EmitterIr], h: f64) {
+    pub(crate) fn estimate_stiffness(&mut self, emitters: &[EmitterIr], h: f64) {
         let speed = emitters
             .iter()
             .map(|e| e.velocity.max_speed())
@@ -206,7 +206,7 @@ fn spectral_norm(m: DMat3) -> f64 {
 /// Declares the particle context that custom terms read through `ctx_*` (its id for rand, its
 /// age at the step's start and that time, its lifetime), set by the kernels before any
 /// `accel` call ([`emit_set_context`]).
-pub fn emit_context(w: &mut Writer) {
+pub(crate) fn emit_context(w: &mut Writer) {
     w.comment("The particle a custom force is evaluated for: set before every accel call.");
     w.line("var<private> ctx_id: u32;");
     w.line("var<private> ctx_age0: f32;");
@@ -216,7 +216,7 @@ pub fn emit_context(w: &mut Writer) {
 
 /// Sets the particle context: `id`, `born` and `die_at` are WGSL u32 expressions (`die_at`
 /// None when no emitter sets a lifetime, `born` None when the age is not read).
-pub fn emit_set_context(
+pub(crate) fn emit_set_context(
     w: &mut Writer,
     dt: f64,
     id: &str,

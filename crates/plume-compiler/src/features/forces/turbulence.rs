@@ -26,7 +26,7 @@ pub(crate) const MAX_OCTAVES: u32 = 8;
 /// An upper bound of |∂(∇ × ψ)/∂q| (spectral norm) for one octave, measured over 100,000
 /// points by the test `jacobian_bound_holds` (largest seen: 17.7); the stability pass
 /// takes ω² = strength · octaves · JACOBIAN_BOUND / scale.
-pub const JACOBIAN_BOUND: f64 = 20.0;
+pub(crate) const JACOBIAN_BOUND: f64 = 20.0;
 
 /// Golden-ratio step between the keys of time slices.
 const SLICE_STEP: u32 = 0x9e37_79b9;

@@ -10,7 +10,7 @@
 //! outside it: `Clamp` (the border's values extend), `Tile` (the field repeats; it is
 //! continuous where its first and last nodes agree) or `Zero`. a = strength · sample.
 //!
-//! The file is read once, at compile time ([`read_vector_fields`]); its samples reach the GPU
+//! The file is read once, at compile time (`read_vector_fields`); its samples reach the GPU
 //! in the `force_data` storage binding as f32 (12 bytes a node), and the f64 reference
 //! ([`VectorFieldTerm::sample`]) interpolates the very same f32 values. One vector field per
 //! effect.
@@ -66,7 +66,7 @@ pub struct VectorField {
     /// What the field is outside its box.
     #[serde(default)]
     pub outside: Outside,
-    /// The file's grid, read by [`read_vector_fields`] before the checks.
+    /// The file's grid, read by `read_vector_fields` before the checks.
     #[serde(skip)]
     pub grid: Option<Arc<Grid>>,
 }
@@ -170,7 +170,7 @@ pub(crate) fn parse_fga(text: &str) -> Result<Grid, String> {
 
 /// Reads every vector field's file (relative to `base_dir`) into its grid, recording what is
 /// wrong, located at the force's `file`, in `c`.
-pub fn read_vector_fields(forces: &mut [Force], base_dir: Option<&Path>, c: &mut Checker) {
+pub(crate) fn read_vector_fields(forces: &mut [Force], base_dir: Option<&Path>, c: &mut Checker) {
     for (i, force) in forces.iter_mut().enumerate() {
         let path = super::force_path(i, force).field("file");
         let Force::VectorField(field) = force else {
@@ -207,7 +207,7 @@ impl VectorField {
         c.positive(&path.field("scale"), self.scale);
     }
 
-    /// Lowers to a term (after [`read_vector_fields`] gave it its grid; None otherwise, which
+    /// Lowers to a term (after `read_vector_fields` gave it its grid; None otherwise, which
     /// the read recorded as an error).
     pub fn lower(&self, origin: usize) -> Option<VectorFieldTerm> {
         Some(VectorFieldTerm {

@@ -37,14 +37,14 @@ pub struct LookBy {
     /// The t at which the colour (and opacity) stops are read, instead of the life fraction.
     pub color_t: Option<Expr>,
     /// The flipbook frame shown, instead of the texture's `play`: its whole part, wrapped
-    /// around the frames ([`frame_of`]).
+    /// around the frames (`frame_of`).
     pub frame: Option<Expr>,
 }
 
 /// The frame a `frame_by` value shows of `frames`: its whole part (at least 0, at most 2^24,
 /// where an f32 still counts whole numbers) wrapped around the frames; the f64 twin of the
 /// draw's.
-pub fn frame_of(value: f64, frames: u32) -> u32 {
+pub(crate) fn frame_of(value: f64, frames: u32) -> u32 {
     ((value.floor().clamp(0.0, FRAME_MOST)) as u32) % frames.max(1)
 }
 

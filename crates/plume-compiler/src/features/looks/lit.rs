@@ -123,7 +123,7 @@ impl Lit {
 
     /// The maps the look reads, in binding order ([`LIT_MAP_BINDINGS`]), each with the field
     /// that names it: a normal map, or the two six-way lightmaps; none for computed normals.
-    pub fn map_files(&self) -> Vec<(&'static str, &str)> {
+    pub(crate) fn map_files(&self) -> Vec<(&'static str, &str)> {
         match &self.normals {
             Normals::Map { file } => vec![("file", file)],
             Normals::SixWay {
@@ -170,7 +170,7 @@ impl Lit {
     /// quad with half axes `axes` facing the side `toward_eye` points to receives from
     /// `lights` (all in one space): by its normal for `Flat`, `Sphere` and `Map` (as
     /// [`crate::features::lights::Lights::received`]), or through its six-way lightmaps.
-    /// `maps` are the look's map texels there (RGBA in [0, 1], in [`Self::map_files`] order;
+    /// `maps` are the look's map texels there (RGBA in [0, 1], in `map_files` order;
     /// unread without maps). The f64 twin of the WGSL `lit_light`.
     pub fn light(
         &self,
@@ -243,7 +243,7 @@ impl Lit {
 
     /// The WGSL of the look's map texels at a fragment (`in`): `lit_maps(in)`, or zeros that
     /// `lit_light` does not read.
-    pub fn maps_wgsl(&self) -> &'static str {
+    pub(crate) fn maps_wgsl(&self) -> &'static str {
         match self.map_files().is_empty() {
             false => "lit_maps(in)",
             true => "mat2x4<f32>()",
@@ -271,7 +271,7 @@ impl Lit {
     /// `lit_light(uv, basis, maps, p)`, the light at corner coordinates `uv`, view-space point
     /// `p`, and `lit_color(c, light)`: the WGSL twins of [`Self::light`] and [`Self::shade`].
     /// The look's maps are declared here too.
-    pub fn emit_lit_color(&self, w: &mut Writer, turned: bool) {
+    pub(crate) fn emit_lit_color(&self, w: &mut Writer, turned: bool) {
         crate::features::lights::emit_received_light(w, self.wrap, self.shadow_lookup());
         w.line(format!(
             "const LIT_EMISSIVE: f32 = {};",

@@ -24,7 +24,7 @@ use crate::base::values::{ColorStop, SizeStop};
 /// The brightest colour channel an effect may ask for, in its stops and from `color_by`:
 /// above 1 is HDR light, which blooms with glow or on an HDR host. The compute renderer's
 /// fixed-point light holds this much from one fragment (`stages/wgsl/draw/splat/light.rs`).
-pub const COLOR_MOST: f64 = 128.0;
+pub(crate) const COLOR_MOST: f64 = 128.0;
 
 /// How sprites combine with what is behind them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
@@ -67,7 +67,7 @@ impl Blend {
 
     /// Whether a sprite of colour `rgba` draws nothing: alpha 0 but for `Premultiplied`, where
     /// light with no opacity still adds (WGSL, of `s.color`).
-    pub fn hidden_wgsl(self) -> &'static str {
+    pub(crate) fn hidden_wgsl(self) -> &'static str {
         match self {
             Blend::Premultiplied => {
                 "max(max(s.color.r, s.color.g), max(s.color.b, s.color.a)) <= 0.0"
@@ -76,7 +76,7 @@ impl Blend {
         }
     }
 
-    /// The f64 twin of [`Self::hidden_wgsl`]: whether a sprite of colour `rgba` draws nothing.
+    /// The f64 twin of `hidden_wgsl`: whether a sprite of colour `rgba` draws nothing.
     pub fn hides(self, rgba: [f64; 4]) -> bool {
         match self {
             Blend::Premultiplied => rgba.iter().all(|&c| c <= 0.0),
@@ -103,7 +103,7 @@ impl Blend {
     /// blend: for `Multiply` the colour times its opacity (the blend multiplies what lies
     /// behind by it and adds what lies behind times 1 − a); for `Mask` the colour, opaque, or
     /// nothing below the cutoff. Nothing for a blend that needs none.
-    pub fn emit_blend_out(self, w: &mut crate::base::writer::Writer) {
+    pub(crate) fn emit_blend_out(self, w: &mut crate::base::writer::Writer) {
         if !self.changes_output() {
             return;
         }

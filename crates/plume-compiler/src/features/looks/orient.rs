@@ -134,7 +134,7 @@ impl OrientIr {
         matches!(self, OrientIr::Velocity { .. })
     }
 
-    /// The f64 twin of [`Self::emit_half_axes`]: the world-space half axes of a sprite of
+    /// The f64 twin of `emit_half_axes`: the world-space half axes of a sprite of
     /// width `size` and height `height` (for `Velocity`: its length before stretching) moving
     /// at `velocity`, `to_eye` from the camera's eye, for a camera whose unit right and up
     /// vectors (in world space) are `camera_right` and `camera_up`.
@@ -186,7 +186,7 @@ impl OrientIr {
     /// WGSL lines that set `s.half_x` and `s.half_y` (view space, vec3) from `s.size` (the
     /// width), the WGSL expression `height` and, for `Velocity`, a world-space
     /// `vel: vec3<f32>` in scope.
-    pub fn emit_half_axes(&self, w: &mut Writer, height: &str) {
+    pub(crate) fn emit_half_axes(&self, w: &mut Writer, height: &str) {
         match *self {
             OrientIr::FaceCamera => {
                 let floor = f32_lit(FACING_FLOOR2);

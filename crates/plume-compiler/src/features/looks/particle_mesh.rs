@@ -166,7 +166,7 @@ impl MeshIr {
     /// else upright facing the camera), each vertex coloured as the sprite, lit by its face
     /// normal when `lit` (`lit_color`, `received_light` in scope; a shadow looked up once a
     /// particle at its centre where the look says so), written through `blend`.
-    pub fn emit_draw(
+    pub(crate) fn emit_draw(
         &self,
         w: &mut Writer,
         oriented: bool,

@@ -2,8 +2,8 @@
 //! each particle joined to the one spawned before it in its ribbon: lightning, worms, the trail
 //! an emitter leaves as it moves. This module owns the option end to end: its schema and
 //! checks, which ribbon a particle joins and where in it ([`Link`]), the table the spawn
-//! kernels write ([`Ribbon::emit_write`]), the draw's vertex and fragment shaders
-//! ([`Ribbon::emit_draw`]) and the f64 twin of which particles the draw joins
+//! kernels write (`emit_write`), the draw's vertex and fragment shaders
+//! (`emit_draw`) and the f64 twin of which particles the draw joins
 //! ([`Ribbon::chains`]).
 //!
 //! A particle's link is a key (which ribbon) and an ordinal (its place in it), fixed at spawn:
@@ -233,7 +233,7 @@ impl Ribbon {
 
     /// Emits, in a spawn kernel that has stored particle `id` in `slot`, the write of its table
     /// entry for the link (`key`, `ordinal`: u32 WGSL expressions).
-    pub fn emit_write(&self, w: &mut Writer, key: &str, ordinal: &str) {
+    pub(crate) fn emit_write(&self, w: &mut Writer, key: &str, ordinal: &str) {
         w.comment("Its ribbon's entry (features/looks/ribbon.rs): slot, id + 1, key, ordinal.");
         w.line(format!("let ribbon_key = {key};"));
         w.line(format!("let ribbon_ordinal = {ordinal};"));
@@ -273,7 +273,12 @@ impl Ribbon {
 
     /// Emits the draw module's ribbon shaders, `vs_ribbon` and `fs_ribbon`, after `sprite_at`
     /// (which, with no slot list, takes a slot), `load_particle` and `DrawView`.
-    pub fn emit_draw(&self, w: &mut Writer, capacity: u32, blend: crate::features::looks::Blend) {
+    pub(crate) fn emit_draw(
+        &self,
+        w: &mut Writer,
+        capacity: u32,
+        blend: crate::features::looks::Blend,
+    ) {
         w.line(format!(
             "@group(0) @binding({RIBBON_DRAW_BINDING}) var<storage, read> ribbon_table: array<vec4<u32>>;"
         ));

@@ -3,7 +3,7 @@
 //! the reference drawing turns its quads with.
 //!
 //! Each particle draws a starting angle and a spin (both uniform in their ranges, from its id:
-//! streams [`stream::ROTATION_ANGLE`] and [`stream::ROTATION_SPIN`]); at an age of `lived`
+//! streams `ROTATION_ANGLE` and `ROTATION_SPIN`); at an age of `lived`
 //! whole steps its quad is turned by angle + spin · lived · dt within its own plane,
 //! counter-clockwise from half_x towards half_y (as the camera sees it for `Camera`; about the
 //! normal, right-handed, for `Fixed`). A round untextured dot looks the same at every angle:

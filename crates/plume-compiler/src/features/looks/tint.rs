@@ -29,7 +29,7 @@ pub struct TintSource<'a> {
 }
 
 /// The most colours a palette may hold.
-pub const MAX_PALETTE: usize = 256;
+pub(crate) const MAX_PALETTE: usize = 256;
 
 /// The packed tint of a particle with no colour of its own: white.
 pub const WHITE: u32 = 0xffff_ffff;
@@ -57,7 +57,7 @@ pub(crate) fn check_palette(c: &mut Checker, path: &ValuePath, palette: &[Vec3])
 }
 
 /// The palette colour of particle `id`: entry ⌊u · n⌋ for the 24-bit uniform draw u of stream
-/// [`stream::PALETTE`], in integers (the same entry on the GPU).
+/// `PALETTE`, in integers (the same entry on the GPU).
 pub fn pick(palette: &[DVec3], seed_mix: u32, id: u32) -> DVec3 {
     let n = palette.len() as u64;
     let u = u64::from(rand_u32(seed_mix, id, stream::PALETTE) >> 8);

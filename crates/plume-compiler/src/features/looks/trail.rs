@@ -1,7 +1,7 @@
 //! Trails (`render.trail`). This module owns the option end to end: its lowered form, the
 //! update's line that records a sample into the ring buffer, which ring entries the draw reads
 //! (the same arithmetic for the WGSL and its CPU twin, [`TrailIr::window`]), and the f64
-//! reference's history ([`History`]).
+//! reference's history (`History`).
 //!
 //! The update of step `s` records the particle's position at the step's start (time s · dt)
 //! when `s` is a multiple of `every`: sample k = s / every goes to ring entry k mod R, where
@@ -166,7 +166,7 @@ impl TrailIr {
     }
 
     /// The ribbon's width (m) at trail fraction `t`.
-    pub fn width_at(&self, t: f64) -> f64 {
+    pub(crate) fn width_at(&self, t: f64) -> f64 {
         let stops: Vec<(f64, [f64; 1])> = self.width.iter().map(|&(t, w)| (t, [w])).collect();
         crate::base::values::interpolate(&stops, t)[0]
     }
@@ -211,7 +211,7 @@ impl TrailIr {
 /// One particle's recorded samples in the f64 reference, newest first: the CPU twin of its
 /// ring entries.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct History {
+pub(crate) struct History {
     samples: Vec<DVec3>,
 }
 

@@ -21,7 +21,7 @@ pub fn shared_lifetime(ir: &EffectIr) -> Option<crate::base::lifetime::LifetimeS
 /// fraction (gradients, a flipbook played over life) and cannot derive the spawn step from
 /// `die_at` and the shared lifetime draw, or needs every particle's age (a flipbook played at
 /// a rate, a spin) and some particles never die.
-pub fn needs_spawn_step(ir: &EffectIr) -> bool {
+pub(crate) fn needs_spawn_step(ir: &EffectIr) -> bool {
     if ir.stateless.is_some() {
         return false;
     }
@@ -46,7 +46,7 @@ pub fn fed_ages_derived(ir: &EffectIr) -> bool {
 }
 
 /// Decides the layout for a resolved IR.
-pub fn decide(ir: &EffectIr) -> Layout {
+pub(crate) fn decide(ir: &EffectIr) -> Layout {
     let half_motion = ir.stateless.is_none() && ir.accuracy.as_ref().is_some_and(|a| a.half_motion);
     let motion = if ir.integrator == Integrator::Verlet {
         Attribute::Displacement

@@ -4,6 +4,6 @@
 use crate::ir::EffectIr;
 
 /// Drops every term that cannot act.
-pub fn prune(ir: &mut EffectIr) {
+pub(crate) fn prune(ir: &mut EffectIr) {
     ir.terms.retain(|t| t.as_dyn().can_act());
 }

@@ -23,7 +23,7 @@ use crate::ir::EffectIr;
 use crate::stages::schema::Integrator;
 
 /// Horizon (s) for growth warnings when some particles never die.
-pub const IMMORTAL_HORIZON: f64 = 60.0;
+pub(crate) const IMMORTAL_HORIZON: f64 = 60.0;
 /// Growth factor over the horizon that triggers a warning.
 pub(crate) const GROWTH_LIMIT: f64 = 2.0;
 /// The largest fall speed x h / core before passes through a soft core lose energy accuracy
@@ -59,7 +59,7 @@ pub fn growth_per_step(i: Integrator, wh: f64) -> Option<f64> {
     }
 }
 
-/// The longest a particle lives (s), or [`IMMORTAL_HORIZON`] when some never die.
+/// The longest a particle lives (s), or `IMMORTAL_HORIZON` when some never die.
 pub fn horizon(ir: &EffectIr) -> f64 {
     let mut longest: f64 = 0.0;
     for e in &ir.emitters {
@@ -99,7 +99,7 @@ fn force_value_path(force_names: &[&'static str], origin: usize, field: &str) ->
 }
 
 /// Analyses the IR and returns warnings (with lookup paths).
-pub fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, String)> {
+pub(crate) fn analyse(ir: &EffectIr, force_names: &[&'static str]) -> Vec<(Diagnostic, String)> {
     let mut out: Vec<(Diagnostic, String)> = Vec::new();
     let mut warn = |path: ValuePath, msg: String| {
         out.push((Diagnostic::warning(path.display, msg), path.lookup));

@@ -203,7 +203,7 @@ pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
 }
 
 /// Decides `ir.stateless` from the file's `state` and records why.
-pub fn decide(ir: &mut EffectIr) -> Result<(), Checker> {
+pub(crate) fn decide(ir: &mut EffectIr) -> Result<(), Checker> {
     match (ir.state, plan(ir)) {
         (State::Stateful, _) => {
             ir.stateless = None;

@@ -20,7 +20,7 @@ pub(crate) fn emit_declarations(w: &mut Writer, binding: u32) {
 
 /// A batched module's entry point starts by taking its instance (`inst_expr`) and that
 /// instance's step parameters; other modules' entry points need neither.
-pub fn emit_instance(w: &mut Writer, layout: &Layout, inst_expr: &str) {
+pub(crate) fn emit_instance(w: &mut Writer, layout: &Layout, inst_expr: &str) {
     if layout.batched {
         w.line(format!("inst = {inst_expr};"));
         w.line("params = step_params[inst];");

@@ -427,7 +427,7 @@ fn single_index(layout: &Layout, i: &str, slots: &str) -> String {
 /// as (name, WGSL type, expression): `w0`, `w1`, ... its 16-byte words, then `t2` (its
 /// 8-byte pair) and `t1` (its 4-byte word) where the layout has those planes: the names
 /// [`particle_from_words`] reads. Shared by the compute module and the draw modules.
-pub fn word_loads(
+pub(crate) fn word_loads(
     layout: &Layout,
     buffer: &str,
     i: &str,
@@ -473,7 +473,7 @@ fn loaded_word(layout: &Layout, j: usize) -> String {
 /// The `Particle(...)` constructor from its stored words as [`word_loads`] names them (the
 /// inverse of [`word_values`]); shared by the compute module's `load_particle` and the draw
 /// module's. Motion in halves is unpacked to the struct's f32 fields.
-pub fn particle_from_words(layout: &Layout) -> String {
+pub(crate) fn particle_from_words(layout: &Layout) -> String {
     let mut fields = Vec::new();
     let mut j = 0;
     for a in &layout.attributes {
@@ -500,7 +500,7 @@ pub fn particle_from_words(layout: &Layout) -> String {
 
 /// The particle struct `p` as its stored words (u32 WGSL expressions, in order): motion in
 /// halves is packed with `f32_to_half`, x in the low half.
-pub fn word_values(layout: &Layout) -> Vec<String> {
+pub(crate) fn word_values(layout: &Layout) -> Vec<String> {
     let mut out = Vec::new();
     for a in &layout.attributes {
         let (names, _) = a.fields();

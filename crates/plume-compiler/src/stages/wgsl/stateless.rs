@@ -204,7 +204,7 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
 /// step's at a dynamic offset (a one-thread kernel advancing it cost a dispatch a step). The
 /// same contract as the stateful update's firings (`events.rs`): the f64 reference steps the
 /// same particles.
-pub fn emit_fire(w: &mut Writer, ir: &EffectIr) {
+pub(crate) fn emit_fire(w: &mut Writer, ir: &EffectIr) {
     if ir.events.is_empty() {
         return;
     }

@@ -17,7 +17,7 @@
 //! pixel, it passes freely too: depth collision only knows what the camera sees.
 //!
 //! **Swept.** The substep's segment is sampled at one point per pixel it crosses on screen
-//! (at most [`MAX_SAMPLES`]); a crossing is a sample in front of its surface followed by one
+//! (at most `MAX_SAMPLES`); a crossing is a sample in front of its surface followed by one
 //! inside it, or behind it by at most `thickness` plus how much deeper the particle went
 //! between the two, so a particle moving fast along the view ray does not pass through. The
 //! crossing is bisected to the last point in front, until known to `CONTACT_PRECISION` of
@@ -28,7 +28,7 @@
 //! **Inside.** A particle found inside the surface at the end of a substep (a resting particle
 //! slid onto a pixel that shows the surface a little nearer) is moved along its view ray to
 //! just in front of it. There is no push-out at the start of a substep
-//! ([`super::Surface::pushes_at_start`]).
+//! (`pushes_at_start`).
 //!
 //! The f64 reference ([`SceneDepthIr::hit`]) runs the same steps on the same f32 image and
 //! camera, given to `ReferenceSim::set_scene_depth`; f32 and f64 may round a point onto
@@ -51,7 +51,7 @@ pub use image::{at, DepthCamera, DepthImage, CAMERA_VEC4S, CAMERA_WORDS};
 pub(crate) const DEFAULT_THICKNESS: f64 = 0.5;
 
 /// The most points a substep's segment is sampled at.
-pub const MAX_SAMPLES: u32 = 32;
+pub(crate) const MAX_SAMPLES: u32 = 32;
 
 /// The most bisection halvings of a crossing.
 pub(super) const BISECTIONS: u32 = 16;
@@ -359,7 +359,7 @@ impl SceneDepthIr {
     }
 
     /// `x` moved along its view ray to `margin` in front of the surface when it is inside it.
-    pub fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
+    pub(crate) fn push_out(&self, x: DVec3, margin: f64) -> DVec3 {
         let Some(image) = self.image.as_deref() else {
             return x;
         };

@@ -19,7 +19,7 @@ fn mat(first: usize) -> String {
 }
 
 impl SceneDepthIr {
-    /// The WGSL twins of [`SceneDepthIr::hit`] and [`SceneDepthIr::push_out`].
+    /// The WGSL twins of [`SceneDepthIr::hit`] and `push_out`.
     pub fn emit(&self, w: &mut Writer, i: usize) {
         let thickness = f32_lit(self.thickness);
         let tiny = f32_lit(TINY_W);

@@ -16,7 +16,12 @@ impl FlockIr {
     /// effect's `layout` gives them. The main module writes those buffers, so there they must
     /// be read-write; read through read-only bindings, the same search ran faster at every size
     /// (docs/performance.md, "Flocking"), as a driver may cache loads it knows no thread writes.
-    pub fn emit_search_module(&self, name: &str, capacity: u32, layout: &Layout) -> Option<String> {
+    pub(crate) fn emit_search_module(
+        &self,
+        name: &str,
+        capacity: u32,
+        layout: &Layout,
+    ) -> Option<String> {
         let Neighbors::Grid { cell } = self.neighbors else {
             return None;
         };

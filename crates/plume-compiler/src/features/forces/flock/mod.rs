@@ -193,10 +193,10 @@ pub const GRID_TILE: u32 = 16;
 /// once (80 registers), 2 x 16 and 4 x 8; two mask words for rounds of up to 64 and the pair
 /// loop's next loads started before its pair function were slower (docs/performance.md,
 /// "Flocking"; benchmarks/h100-speed/flock-batches/README.md).
-pub const GRID_ONE_LOADS: u32 = 10;
+pub(crate) const GRID_ONE_LOADS: u32 = 10;
 
 /// Loads of [`GRID_ONE_LOADS`] candidates in a round of the one-thread search.
-pub const GRID_ONE_LOADS_PER_ROUND: u32 = 3;
+pub(crate) const GRID_ONE_LOADS_PER_ROUND: u32 = 3;
 
 /// Sub-cells along x of each cell where the one-thread search runs (from [`GRID_SPLIT_BELOW`]):
 /// a row is then 2 x 3 + 1 = 7 sub-cells, 7/3 of a cell, where a boid reaches 2 cells of it
@@ -206,7 +206,7 @@ pub const GRID_ONE_LOADS_PER_ROUND: u32 = 3;
 /// round differently. Rows clipped, sub-cell by sub-cell, to the sphere of the radius (44%
 /// fewer candidates than whole cells) were slower: the clipping cost more than it saved
 /// (docs/performance.md, "Flocking").
-pub const GRID_X_SPLIT: u32 = 3;
+pub(crate) const GRID_X_SPLIT: u32 = 3;
 
 /// Candidates the split search loads and tests a round (one bit each in the round's mask):
 /// at 16k boids as fast as 8 and faster than 32.
@@ -214,7 +214,7 @@ pub(crate) const GRID_ROUND: u32 = 16;
 
 /// Spare entries of the sorted snapshot past its last boid, for the loads past a run (up to
 /// one fewer than the longer of the two searches' loads at a time).
-pub const GRID_SPARE: u32 = if GRID_ROUND > GRID_ONE_LOADS {
+pub(crate) const GRID_SPARE: u32 = if GRID_ROUND > GRID_ONE_LOADS {
     GRID_ROUND
 } else {
     GRID_ONE_LOADS
@@ -253,7 +253,7 @@ impl FlockIr {
 
     /// Sub-cells along x of a grid cell for `capacity` boids: [`GRID_X_SPLIT`] where the
     /// one-thread search runs, 1 (whole cells) where the split search does.
-    pub fn x_split(capacity: u32) -> u32 {
+    pub(crate) fn x_split(capacity: u32) -> u32 {
         if Self::split_search(capacity) {
             1
         } else {

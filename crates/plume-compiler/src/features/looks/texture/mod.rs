@@ -438,7 +438,7 @@ impl TextureIr {
     /// filtered for the screen-space derivatives `gx`, `gy` of its unclamped atlas coordinate.
     /// The fragment shader takes those derivatives from the rasteriser (`dpdxFine`), the
     /// compute splat from its quad's projective map, so both sample the same mip levels.
-    pub fn emit_texel_fn(&self, w: &mut Writer) {
+    pub(crate) fn emit_texel_fn(&self, w: &mut Writer) {
         if let Some(second) = &self.second {
             return self.emit_texel_product_fn(second, w);
         }
@@ -479,7 +479,7 @@ impl TextureIr {
 
     /// Emits the fragment shader's body for a textured sprite: the frame's texel at the
     /// fragment's corner coordinates `in.uv`, times the colour (`frame_texel` in scope).
-    pub fn emit_fragment_body(&self, w: &mut Writer) {
+    pub(crate) fn emit_fragment_body(&self, w: &mut Writer) {
         Self::emit_fragment_coordinates(w);
         w.comment(
             "Only the triangle primitive reaches outside the quad: nothing of the frame there.",
