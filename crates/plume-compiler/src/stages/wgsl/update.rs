@@ -20,11 +20,17 @@ use crate::stages::passes::layout::{Attribute, Layout};
 pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.comment("One particle's update: loaded, advanced, stored (or freed) in place. Returns its outcome: bit 0 whether it died, bit 1 + j whether it fired event j; and its id.");
     w.block("fn update_particle(i: u32) -> vec2<u32>", |w| {
-        w.comment("A free slot's id word is all the update reads of it.");
-        w.block("if (slot_is_free(i))", |w| {
-            w.line("return vec2<u32>(0u, 0u);")
-        });
-        w.line("var p = load_particle(i);");
+        if reads_whole_slots(ir) {
+            w.comment("Most slots live: every word loaded at once, no load waiting on another.");
+            w.line("var p = load_particle(i);");
+            w.block("if (p.id == DEAD)", |w| w.line("return vec2<u32>(0u, 0u);"));
+        } else {
+            w.comment("A free slot's id word is all the update reads of it.");
+            w.block("if (slot_is_free(i))", |w| {
+                w.line("return vec2<u32>(0u, 0u);")
+            });
+            w.line("var p = load_particle(i);");
+        }
         emit_body(w, ir, layout);
     });
     w.blank();
@@ -54,6 +60,10 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
         return;
     }
     let counters = crate::stages::wgsl::batch::counters(layout);
+    if ir.events.is_empty() && ir.event_inputs.is_empty() && !layout.batched {
+        emit_update_freeing_each(w, counters);
+        return;
+    }
     // A workgroup's deaths and firings are appended together: a workgroup atomic each, then
     // one global atomic a workgroup. One global atomic a death or firing (rain at 10M: 180k
     // deaths and 37k firings a step, each adding to the same few words) serialised them.
@@ -122,6 +132,41 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
             emit_workgroup_appends(w, &ir.events, AppendPart::Write);
         },
     );
+}
+
+/// `update` for an effect that runs alone (not batched), fires no events and is fed by none:
+/// each dying particle pushes its slot on the free list with a global atomic of its own. No
+/// barrier holds a workgroup's threads together, so a thread that finishes early makes room
+/// for the next; appending a workgroup's deaths together takes three barriers, which slow an
+/// update with much arithmetic (docs/performance.md, "The update at large sizes"). Groups
+/// with events keep that: their firings go to few words, and the particles events spawn die
+/// in crowds, whose atomics on one word would queue.
+fn emit_update_freeing_each(w: &mut Writer, counters: &str) {
+    w.line("@compute @workgroup_size(WORKGROUP)");
+    w.block(
+        "fn update(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            crate::base::kernel::emit_thread_index(w, "i", Some("chunk.len"));
+            w.line("let outcome = update_particle(i);");
+            w.block("if ((outcome.x & 1u) != 0u)", |w| {
+                w.line(format!("let top = atomicAdd(&{counters}.free_count, 1u);"));
+                w.line("free_list[top] = chunk.base + i;");
+                w.line(format!("atomicAdd(&{counters}.died, 1u);"));
+            });
+        },
+    );
+}
+
+/// Whether the update loads a slot's every word at once, then tests its id: where most slots
+/// hold a live particle (the emitters keep at least half the capacity alive) and the group
+/// has no events (an event-fed group's count nobody knows, and a graph's steps were measured
+/// as they are), so that no load waits on the id word's. Elsewhere it reads the id word first
+/// and a free slot's other words not at all
+/// (docs/performance.md, "The update at large sizes", has what each costs where).
+fn reads_whole_slots(ir: &EffectIr) -> bool {
+    ir.events.is_empty()
+        && ir.event_inputs.is_empty()
+        && 2 * ir.expected_alive() >= u64::from(ir.capacity)
 }
 
 /// `hold_particle(i)`: a batched instance's particle on a step its instance sits out (paused,
