@@ -171,6 +171,27 @@ fn host_shadow(gpu: &Gpu, reversed: bool) -> (Lights, wgpu::Texture) {
     (lights, map)
 }
 
+/// `effect` run `steps` steps, its camera at the aspect of a `w` x `h` image, and the scene
+/// its meshes make in that size, lit by its lights with the shadow map they cast.
+fn run_in_scene(
+    gpu: &Gpu,
+    effect: plume::CompiledEffect,
+    steps: u64,
+    (w, h): (u32, u32),
+) -> (Effect, Camera, Scene, Lights) {
+    let triangles = effect.ir.scene_triangles();
+    let mut sim = Effect::new(gpu, effect).unwrap();
+    sim.run(steps, |_| {}).unwrap();
+    let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
+    let format = Offscreen::new(gpu, 1, 1).unwrap().target().color_format;
+    let mut scene = Scene::new(gpu, &triangles, format, (w, h))
+        .unwrap()
+        .expect("a scene");
+    let lights = scene.cast_shadow(&sim.compiled().ir.lights).unwrap();
+    scene.set_lights(&lights);
+    (sim, camera, scene, lights)
+}
+
 /// How far (8-bit steps) a sprite's blended pixel may be from the f64 one (see the top).
 const BLENDED: f64 = 2.0;
 
@@ -318,18 +339,8 @@ fn the_scenes_meshes_shadow_the_ground_and_lit_particles() {
                    background: (0.0, 0.0, 0.0), lit: Some(Lit(normals: Flat))))"#,
         low.x, low.y, low.z, high.x, high.y, high.z
     );
-    let effect = compile(&src);
-    let triangles = effect.ir.scene_triangles();
     let gpu = gpu();
-    let mut sim = Effect::new(&gpu, effect).unwrap();
-    sim.run(1, |_| {}).unwrap();
-    let camera = Camera::from_effect(&sim.compiled().ir.camera, W as f32 / H as f32);
-    let format = Offscreen::new(&gpu, 1, 1).unwrap().target().color_format;
-    let mut scene = Scene::new(&gpu, &triangles, format, (W, H))
-        .unwrap()
-        .expect("a scene");
-    let lights = scene.cast_shadow(&sim.compiled().ir.lights).unwrap();
-    scene.set_lights(&lights);
+    let (sim, camera, scene, lights) = run_in_scene(&gpu, compile(&src), 1, (W, H));
     let mut with_depths = lights.clone();
     let map = scene.shadow_map().expect("a shadow map");
     with_depths.shadow.as_mut().unwrap().depths = Some(map.read_depths().unwrap());
@@ -429,16 +440,7 @@ fn smoke_looked_up_once_a_particle_looks_as_looked_up_at_every_pixel() {
             ..Default::default()
         };
         let effect = plume::compile_str(source, &options).unwrap();
-        let triangles = effect.ir.scene_triangles();
-        let mut sim = Effect::new(&gpu, effect).unwrap();
-        sim.run(240, |_| {}).unwrap();
-        let camera = Camera::from_effect(&sim.compiled().ir.camera, W as f32 / H as f32);
-        let format = Offscreen::new(&gpu, 1, 1).unwrap().target().color_format;
-        let mut scene = Scene::new(&gpu, &triangles, format, (W, H))
-            .unwrap()
-            .expect("a scene");
-        let lights = scene.cast_shadow(&sim.compiled().ir.lights).unwrap();
-        scene.set_lights(&lights);
+        let (sim, camera, scene, lights) = run_in_scene(&gpu, effect, 240, (W, H));
         drawn.push(images(
             &gpu,
             &sim,
