@@ -1,12 +1,16 @@
 #!/usr/bin/env bash
 # bevy_plume against bevy_hanabi 0.20 on the same fountain (crates/bevy_plume/examples/versus_hanabi.rs),
-# one headless Bevy app per run, both plugins alternated case by case, in one device call.
+# one headless Bevy app per run, the two plugins alternated case by case, in one device call:
+# MSAA off and 4x, fountains of 1M and 10M particles, 1,000 effects of 1,000 (two rounds), the
+# 1M fountain in a Camera2d view, and the empty app beside each. Every line has frame, CPU and
+# GPU times (median and p90 over 120 frames) and the last frame's lit pixels.
 # Build here:
 #   cd crates/bevy_plume && CARGO_PROFILE_RELEASE_STRIP=true cargo +nightly build --release \
 #       --ignore-rust-version --features hanabi --example versus_hanabi
-#   xz -T2 -6 -c target/release/examples/versus_hanabi > ../../.bench/versus_hanabi.xz
+#   xz -T2 -6 -c target/release/examples/versus_hanabi > ../../.bin/versus_hanabi.xz
 # Run there (with .gl unpacked as ../shared/tools/gpu-prep.sh says, Vulkan on the NVIDIA driver):
-#   bash benchmarks/bevy-versus-hanabi.sh .bench/versus_hanabi.xz OUT
+#   bash benchmarks/bevy-versus-hanabi.sh .bin/versus_hanabi.xz OUT
+# Then: python3 benchmarks/bevy-versus-summary.py OUT/versus.jsonl
 set -u
 packed=$1; out=$2; mkdir -p "$out"
 bin=/tmp/versus_hanabi
@@ -22,28 +26,23 @@ run() { # plugin, then the case's arguments
   echo "$line" | tee -a "$out/versus.jsonl"
 }
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader | tee "$out/device.txt"
-run empty --live 1
-# Plume with each renderer (auto takes compute for 65,536 particles or more on a GPU); the
-# compute renderer's fixed cost per effect is also measured on small effects.
-for c in "--live 100000" "--live 1000000" "--live 10000000" "--live 1000 --effects 1"; do
-  for p in "hanabi" "plume --draw raster" "plume --draw compute"; do
-    run $p $c
-  done
-done
-# Many small effects: the CPU's case, three rounds alternated (the two plugins' CPU times
-# move by up to 15% from run to run), each round with the empty frame beside it.
-for round in 1 2 3; do
-  for c in "--live 1000 --effects 100" "--live 1000 --effects 1000"; do
+for msaa in 1 4; do
+  run empty --live 1 --msaa $msaa
+  for live in 1000000 10000000; do
     for p in "hanabi" "plume --draw auto"; do
-      run $p $c
+      shot=""; [ $msaa = 1 ] && shot="--out $out/${p%% *}-$live.png"
+      run $p --live $live --msaa $msaa $shot
     done
   done
-  run empty --live 1
-done
-run plume --draw compute --live 1000 --effects 100
-# The side-by-side frames, 1M particles each.
-timeout 150 "$bin" --plugin hanabi --live 1000000 --frames 5 --out "$out/hanabi-1M.png" >/dev/null 2>&1
-for d in raster compute; do
-  timeout 150 "$bin" --plugin plume --draw $d --live 1000000 --frames 5 --out "$out/plume-$d-1M.png" >/dev/null 2>&1
+  for round in 1 2; do
+    for p in "hanabi" "plume --draw auto"; do
+      run $p --live 1000 --effects 1000 --msaa $msaa
+    done
+  done
+  run empty --live 1 --msaa $msaa --view 2d
+  for p in "hanabi" "plume --draw auto"; do
+    shot=""; [ $msaa = 1 ] && shot="--out $out/${p%% *}-2d.png"
+    run $p --live 1000000 --view 2d --msaa $msaa $shot
+  done
 done
 ls -la "$out"

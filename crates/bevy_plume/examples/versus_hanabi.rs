@@ -1,30 +1,43 @@
 //! The same fountain in bevy_plume and in bevy_hanabi 0.20, one plugin per run, in a headless
-//! 1280x720 Bevy app; prints one JSON line of frame times.
+//! 1280x720 Bevy app; prints one JSON line of frame, CPU and GPU times.
 //!
 //! ```sh
 //! cargo +nightly run --release --ignore-rust-version --features hanabi --example versus_hanabi -- \
 //!     --plugin plume --live 1000000 [--effects 1] [--frames 120] [--out frame.png] \
-//!     [--draw auto|raster|compute]
+//!     [--draw auto|raster|compute] [--msaa 1|4] [--view 3d|2d]
 //! ```
 //!
 //! The fountain: particles spawned at a constant rate for `live` of them alive at once over a
 //! 2 s lifetime, launched up at about 8 m/s (Plume: a 12° cone at 7.5 to 8.5 m/s; hanabi:
 //! 8 m/s up plus a uniform ±1.5 m/s per axis: the two have no common velocity form), gravity,
 //! linear drag 0.5, size 0.05 m to 0.01 m and a blue that fades out over life, alpha blended,
-//! unsorted. With `--effects K`, K such fountains of `live` particles each on a grid.
+//! unsorted, each sprite parallel to the camera's image plane (Plume's `orient: Camera`,
+//! hanabi's `ParallelCameraDepthPlane`, its cheaper orientation). With `--effects K`, K such
+//! fountains of `live` particles each on a grid. `--view 2d` draws them through a `Camera2d`
+//! (orthographic, 100 pixels a metre) instead of a `Camera3d`; `--msaa` sets the camera's
+//! `Msaa` (default 1: off).
 //!
-//! Timing, per frame once the fountains are full: `cpu_ms` is `App::update` (main and render
-//! worlds: pipelined rendering is off, so the render world runs inside it); `frame_ms` adds the
-//! wait until the GPU has finished the frame. Medians over `--frames` frames. `--draw` picks
-//! Plume's renderer (`PlumeDraw`; default auto).
+//! Timing, per frame once the fountains are full, medians and 90th percentiles over `--frames`
+//! frames: `cpu_ms` is `App::update` (main and render worlds: pipelined rendering is off, so the
+//! render world runs inside it); `frame_ms` adds the wait until the GPU has finished the frame;
+//! `gpu_ms` is the GPU's time from the first to the last of the frame's command buffers
+//! (timestamps written by an empty compute pass placed before every other command buffer of the
+//! frame and one placed after them; null where the adapter has no timestamp queries).
+//! `lit_pixels` counts the last frame's pixels that differ from its background (its most common
+//! colour) by more than 2 of 255 in a channel, so that a run that draws nothing shows it.
+//! `--draw` picks Plume's renderer (`PlumeDraw`; default auto).
 
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use bevy::camera::RenderTarget;
 use bevy::prelude::*;
 use bevy::render::render_resource::TextureFormat;
-use bevy::render::renderer::RenderDevice;
-use bevy::render::view::screenshot::{save_to_disk, Screenshot};
+use bevy::render::renderer::{
+    PendingCommandBuffers, RenderDevice, RenderGraph, RenderGraphSystems, RenderQueue,
+};
+use bevy::render::view::screenshot::{save_to_disk, Screenshot, ScreenshotCaptured};
+use bevy::render::RenderApp;
 use bevy::time::TimeUpdateStrategy;
 use bevy_plume::headless::{default_plugins, Headless};
 use bevy_plume::{PlumeDraw, PlumeEffect, PlumeEffectAsset, PlumePlugin};
@@ -48,6 +61,10 @@ struct Args {
     out: Option<String>,
     /// Plume's renderer.
     draw: PlumeDraw,
+    /// Samples a pixel: 1 or 4.
+    msaa: u32,
+    /// A `Camera2d` instead of a `Camera3d`.
+    two_d: bool,
 }
 
 fn parse() -> Result<Args, String> {
@@ -58,6 +75,8 @@ fn parse() -> Result<Args, String> {
         frames: 120,
         out: None,
         draw: PlumeDraw::Auto,
+        msaa: 1,
+        two_d: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -86,6 +105,19 @@ fn parse() -> Result<Args, String> {
                     "raster" => PlumeDraw::Raster,
                     "compute" => PlumeDraw::Compute,
                     _ => return Err(format!("--draw {value}: auto, raster or compute")),
+                }
+            }
+            "--msaa" => {
+                args.msaa = match number()? {
+                    n @ (1 | 4) => n,
+                    _ => return Err(format!("--msaa {value}: 1 or 4")),
+                }
+            }
+            "--view" => {
+                args.two_d = match value.as_str() {
+                    "3d" => false,
+                    "2d" => true,
+                    _ => return Err(format!("--view {value}: 3d or 2d")),
                 }
             }
             _ => return Err(format!("unknown argument {flag}")),
@@ -124,15 +156,37 @@ fn main() {
     }
     app.finish();
     app.cleanup();
+    let timer = FrameTimer::new(&mut app);
     let image = Image::new_target_texture(1280, 720, TextureFormat::Rgba8UnormSrgb, None);
     let image = app.world_mut().resource_mut::<Assets<Image>>().add(image);
     let spread = grid_spacing(args.effects);
-    app.world_mut().spawn((
-        Camera3d::default(),
-        RenderTarget::Image(image.clone().into()),
-        Transform::from_xyz(0.0, 4.0, 14.0 + spread * (args.effects as f32).sqrt())
-            .looking_at(Vec3::new(0.0, 3.0, 0.0), Vec3::Y),
-    ));
+    let msaa = if args.msaa == 4 {
+        Msaa::Sample4
+    } else {
+        Msaa::Off
+    };
+    let target = RenderTarget::Image(image.clone().into());
+    if args.two_d {
+        // 100 pixels a metre: the 7.2 m the image is high hold the fountain's 3 m.
+        app.world_mut().spawn((
+            Camera2d,
+            msaa,
+            target,
+            Projection::Orthographic(OrthographicProjection {
+                scale: 0.01,
+                ..OrthographicProjection::default_2d()
+            }),
+            Transform::from_xyz(0.0, 3.0, 0.0),
+        ));
+    } else {
+        app.world_mut().spawn((
+            Camera3d::default(),
+            msaa,
+            target,
+            Transform::from_xyz(0.0, 4.0, 14.0 + spread * (args.effects as f32).sqrt())
+                .looking_at(Vec3::new(0.0, 3.0, 0.0), Vec3::Y),
+        ));
+    }
     let rate = f64::from(args.live) / LIFETIME;
     match args.plugin {
         Plugin::Plume => spawn_plume(&mut app, &args, rate, spread),
@@ -151,6 +205,7 @@ fn main() {
     }
     let mut cpu = Vec::new();
     let mut frame = Vec::new();
+    let mut gpu = Vec::new();
     for _ in 0..args.frames {
         let t0 = Instant::now();
         app.update();
@@ -159,31 +214,202 @@ fn main() {
         let t2 = Instant::now();
         cpu.push((t1 - t0).as_secs_f64() * 1e3);
         frame.push((t2 - t0).as_secs_f64() * 1e3);
-    }
-    if let Some(out) = &args.out {
-        app.world_mut()
-            .spawn(Screenshot::image(image))
-            .observe(save_to_disk(out.clone()));
-        for _ in 0..10 {
-            app.update();
-            wait();
+        if let Some(timer) = &timer {
+            gpu.push(timer.read_ms(&device));
         }
+    }
+    let captured: Arc<Mutex<Option<Image>>> = Arc::default();
+    let sink = captured.clone();
+    let mut screenshot = app.world_mut().spawn(Screenshot::image(image));
+    screenshot.observe(move |shot: On<ScreenshotCaptured>| {
+        *sink.lock().unwrap() = Some(shot.image.clone());
+    });
+    if let Some(out) = &args.out {
+        screenshot.observe(save_to_disk(out.clone()));
+    }
+    let mut lit_pixels = None;
+    for _ in 0..30 {
+        app.update();
+        wait();
+        if let Some(shot) = captured.lock().unwrap().take() {
+            lit_pixels = Some(count_lit_pixels(&shot));
+        }
+        if lit_pixels.is_some() {
+            break;
+        }
+    }
+    // Let the screenshot's file be written.
+    for _ in 0..3 {
+        app.update();
+        wait();
     }
     let name = match args.plugin {
         Plugin::Plume => "plume",
         Plugin::Hanabi => "hanabi",
         Plugin::Empty => "empty",
     };
+    let optional = |v: Option<f64>| v.map_or("null".to_string(), |v| format!("{v:.3}"));
+    let (gpu_median, gpu_p90) = if gpu.is_empty() {
+        (None, None)
+    } else {
+        (Some(quantile(&mut gpu, 0.5)), Some(quantile(&mut gpu, 0.9)))
+    };
     println!(
-        "{{\"plugin\":\"{name}\",\"draw\":\"{:?}\",\"live_per_effect\":{},\"effects\":{},\"frames\":{},\"frame_ms\":{:.3},\"frame_ms_p90\":{:.3},\"cpu_ms\":{:.3}}}",
+        "{{\"plugin\":\"{name}\",\"draw\":\"{:?}\",\"view\":\"{}\",\"msaa\":{},\"live_per_effect\":{},\"effects\":{},\"frames\":{},\"frame_ms\":{:.3},\"frame_ms_p90\":{:.3},\"cpu_ms\":{:.3},\"cpu_ms_p90\":{:.3},\"gpu_ms\":{},\"gpu_ms_p90\":{},\"lit_pixels\":{}}}",
         args.draw,
+        if args.two_d { "2d" } else { "3d" },
+        args.msaa,
         args.live,
         args.effects,
         args.frames,
         quantile(&mut frame, 0.5),
         quantile(&mut frame, 0.9),
         quantile(&mut cpu, 0.5),
+        quantile(&mut cpu, 0.9),
+        optional(gpu_median),
+        optional(gpu_p90),
+        lit_pixels.map_or("null".to_string(), |n| n.to_string()),
     );
+}
+
+/// The GPU's time for a frame: timestamps written first and last among the frame's command
+/// buffers (each by an empty compute pass, whose end timestamp Vulkan writes once every command
+/// before it has finished), resolved into a buffer read back after the frame.
+#[derive(Resource, Clone)]
+struct FrameTimer {
+    queries: wgpu::QuerySet,
+    resolved: wgpu::Buffer,
+    readback: wgpu::Buffer,
+    /// Nanoseconds a timestamp tick.
+    period_ns: f64,
+}
+
+impl FrameTimer {
+    /// Adds the timer's two systems to the render world's root schedule; `None` where the
+    /// device has no timestamp queries.
+    fn new(app: &mut App) -> Option<Self> {
+        let render = app.sub_app_mut(RenderApp);
+        let device = render
+            .world()
+            .resource::<RenderDevice>()
+            .wgpu_device()
+            .clone();
+        if !device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
+            return None;
+        }
+        let period_ns = f64::from(
+            render
+                .world()
+                .resource::<RenderQueue>()
+                .get_timestamp_period(),
+        );
+        let buffer = |label, usage| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: 16,
+                usage,
+                mapped_at_creation: false,
+            })
+        };
+        let timer = Self {
+            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
+                label: Some("frame timer"),
+                ty: wgpu::QueryType::Timestamp,
+                count: 2,
+            }),
+            resolved: buffer(
+                "frame timer resolved",
+                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
+            ),
+            readback: buffer(
+                "frame timer readback",
+                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+            ),
+            period_ns,
+        };
+        render.insert_resource(timer.clone()).add_systems(
+            RenderGraph,
+            (
+                stamp_frame_start.in_set(RenderGraphSystems::Begin),
+                stamp_frame_end
+                    .after(RenderGraphSystems::Render)
+                    .before(RenderGraphSystems::Submit),
+            ),
+        );
+        Some(timer)
+    }
+
+    /// The last frame's GPU time in milliseconds (waits for the read back).
+    fn read_ms(&self, device: &wgpu::Device) -> f64 {
+        let slice = self.readback.slice(..);
+        slice.map_async(wgpu::MapMode::Read, |_| {});
+        let _ = device.poll(wgpu::PollType::wait_indefinitely());
+        let ticks = {
+            let bytes = slice
+                .get_mapped_range()
+                .expect("the frame timer's read back is mapped");
+            let stamp = |i: usize| u64::from_le_bytes(bytes[i * 8..i * 8 + 8].try_into().unwrap());
+            stamp(1).saturating_sub(stamp(0))
+        };
+        self.readback.unmap();
+        ticks as f64 * self.period_ns * 1e-6
+    }
+
+    /// An encoder holding one empty compute pass that writes timestamp `index`.
+    fn stamp(&self, device: &RenderDevice, index: u32, start: bool) -> wgpu::CommandEncoder {
+        let mut encoder = device
+            .wgpu_device()
+            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+        encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+            label: Some("frame timer"),
+            timestamp_writes: Some(wgpu::ComputePassTimestampWrites {
+                query_set: &self.queries,
+                beginning_of_pass_write_index: start.then_some(index),
+                end_of_pass_write_index: (!start).then_some(index),
+            }),
+        });
+        encoder
+    }
+}
+
+fn stamp_frame_start(
+    timer: Res<FrameTimer>,
+    device: Res<RenderDevice>,
+    mut pending: ResMut<PendingCommandBuffers>,
+) {
+    pending.push_encoder(timer.stamp(&device, 0, true), "frame timer start");
+}
+
+fn stamp_frame_end(
+    timer: Res<FrameTimer>,
+    device: Res<RenderDevice>,
+    mut pending: ResMut<PendingCommandBuffers>,
+) {
+    let mut encoder = timer.stamp(&device, 1, false);
+    encoder.resolve_query_set(&timer.queries, 0..2, &timer.resolved, 0);
+    encoder.copy_buffer_to_buffer(&timer.resolved, 0, &timer.readback, 0, 16);
+    pending.push_encoder(encoder, "frame timer end");
+}
+
+/// Pixels that differ from the image's most common colour by more than 2 in a channel.
+fn count_lit_pixels(image: &Image) -> u64 {
+    let rgba = image
+        .clone()
+        .try_into_dynamic()
+        .expect("an RGBA8 image")
+        .to_rgba8();
+    let mut counts = std::collections::HashMap::new();
+    for p in rgba.pixels() {
+        *counts.entry(p.0).or_insert(0u64) += 1;
+    }
+    let background = counts
+        .into_iter()
+        .max_by_key(|&(_, n)| n)
+        .map(|(c, _)| c)
+        .unwrap_or_default();
+    rgba.pixels()
+        .filter(|p| p.0.iter().zip(background).any(|(&a, b)| a.abs_diff(b) > 2))
+        .count() as u64
 }
 
 /// Metres between fountains on the grid of `n`.
@@ -293,6 +519,6 @@ fn spawn_hanabi(app: &mut App, args: &Args, rate: f64, spread: f32) {
         gradient: size,
         screen_space_size: false,
     })
-    .render(OrientModifier::new(OrientMode::FaceCameraPosition));
+    .render(OrientModifier::new(OrientMode::ParallelCameraDepthPlane));
     spawn_grid(app, args.effects, spread, asset, ParticleEffect::new);
 }
