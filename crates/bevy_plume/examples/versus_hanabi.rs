@@ -51,6 +51,9 @@ enum Plugin {
     Hanabi,
     /// The same app without particles: the frame's floor.
     Empty,
+    /// The same app with `--effects` entities that carry what a `PlumeEffect` requires
+    /// (transform, visibility, a render-world twin) and no plugin: Bevy's own cost of them.
+    Bare,
 }
 
 struct Args {
@@ -92,7 +95,8 @@ fn parse() -> Result<Args, String> {
                     "plume" => Plugin::Plume,
                     "hanabi" => Plugin::Hanabi,
                     "empty" => Plugin::Empty,
-                    _ => return Err(format!("--plugin {value}: plume, hanabi or empty")),
+                    "bare" => Plugin::Bare,
+                    _ => return Err(format!("--plugin {value}: plume, hanabi, empty or bare")),
                 }
             }
             "--live" => args.live = number()?.max(1),
@@ -152,7 +156,7 @@ fn main() {
         Plugin::Hanabi => {
             app.add_plugins(bevy_hanabi::HanabiPlugin);
         }
-        Plugin::Empty => {}
+        Plugin::Empty | Plugin::Bare => {}
     }
     app.finish();
     app.cleanup();
@@ -191,6 +195,15 @@ fn main() {
     match args.plugin {
         Plugin::Plume => spawn_plume(&mut app, &args, rate, spread),
         Plugin::Hanabi => spawn_hanabi(&mut app, &args, rate, spread),
+        Plugin::Bare => {
+            for i in 0..args.effects {
+                app.world_mut().spawn((
+                    Transform::from_translation(grid_position(i, args.effects, spread)),
+                    Visibility::default(),
+                    bevy::render::sync_world::SyncToRenderWorld::default(),
+                ));
+            }
+        }
         Plugin::Empty => {}
     }
     // Fill the fountains: a lifetime and a half of frames.
@@ -247,6 +260,7 @@ fn main() {
         Plugin::Plume => "plume",
         Plugin::Hanabi => "hanabi",
         Plugin::Empty => "empty",
+        Plugin::Bare => "bare",
     };
     let optional = |v: Option<f64>| v.map_or("null".to_string(), |v| format!("{v:.3}"));
     let (gpu_median, gpu_p90) = if gpu.is_empty() {
