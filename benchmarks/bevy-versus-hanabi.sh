@@ -2,7 +2,8 @@
 # bevy_plume against bevy_hanabi 0.20 on the same fountain (crates/bevy_plume/examples/versus_hanabi.rs),
 # one headless Bevy app per run, the two plugins alternated case by case, in one device call:
 # MSAA off and 4x, fountains of 1M and 10M particles, 1,000 effects of 1,000 (two rounds), the
-# 1M fountain in a Camera2d view, and the empty app beside each. Every line has frame, CPU and
+# 1M fountain in a Camera2d view, and the empty app beside each; then a thousand bare entities
+# beside the thousand effects. Every line has frame, CPU and
 # GPU times (median and p90 over 120 frames) and the last frame's lit pixels.
 # Build here:
 #   cd crates/bevy_plume && CARGO_PROFILE_RELEASE_STRIP=true cargo +nightly build --release \
@@ -43,6 +44,14 @@ for msaa in 1 4; do
   for p in "hanabi" "plume --draw auto"; do
     shot=""; [ $msaa = 1 ] && shot="--out $out/${p%% *}-2d.png"
     run $p --live 1000000 --view 2d --msaa $msaa $shot
+  done
+done
+# Where the CPU time of a thousand effects goes: the same app with a thousand bare entities
+# (what a PlumeEffect requires, no plugin) beside each plugin's, four rounds (floor.jsonl).
+for round in 1 2 3 4; do
+  for p in empty bare plume hanabi; do
+    timeout 100 "$bin" --plugin $p --live 1000 --effects 1000 --frames 120 2>/dev/null | tail -1 \
+      | tee -a "$out/floor.jsonl"
   done
 done
 ls -la "$out"
