@@ -21,8 +21,8 @@
 //! frames: `cpu_ms` is `App::update` (main and render worlds: pipelined rendering is off, so the
 //! render world runs inside it); `frame_ms` adds the wait until the GPU has finished the frame;
 //! `gpu_ms` is the GPU's time from the first to the last of the frame's command buffers
-//! (timestamps written by an empty compute pass placed before every other command buffer of the
-//! frame and one placed after them; null where the adapter has no timestamp queries).
+//! (Plume's `GpuTimer`, its stamps placed before every other command buffer of the frame and
+//! after them; every other frame is timed; null where the adapter has no timestamp queries).
 //! `lit_pixels` counts the last frame's pixels that differ from its background (its most common
 //! colour) by more than 2 of 255 in a channel, so that a run that draws nothing shows it.
 //! `--draw` picks Plume's renderer (`PlumeDraw`; default auto).
@@ -41,6 +41,7 @@ use bevy::render::RenderApp;
 use bevy::time::TimeUpdateStrategy;
 use bevy_plume::headless::{default_plugins, Headless};
 use bevy_plume::{PlumeDraw, PlumeEffect, PlumeEffectAsset, PlumePlugin};
+use plume_runtime::{Gpu, GpuTimer};
 
 /// Seconds each particle lives.
 const LIFETIME: f64 = 2.0;
@@ -218,7 +219,9 @@ fn main() {
     }
     let mut cpu = Vec::new();
     let mut frame = Vec::new();
-    let mut gpu = Vec::new();
+    if let Some(timer) = &timer {
+        timer.readings.lock().unwrap().clear();
+    }
     for _ in 0..args.frames {
         let t0 = Instant::now();
         app.update();
@@ -227,9 +230,6 @@ fn main() {
         let t2 = Instant::now();
         cpu.push((t1 - t0).as_secs_f64() * 1e3);
         frame.push((t2 - t0).as_secs_f64() * 1e3);
-        if let Some(timer) = &timer {
-            gpu.push(timer.read_ms(&device));
-        }
     }
     let captured: Arc<Mutex<Option<Image>>> = Arc::default();
     let sink = captured.clone();
@@ -263,6 +263,9 @@ fn main() {
         Plugin::Bare => "bare",
     };
     let optional = |v: Option<f64>| v.map_or("null".to_string(), |v| format!("{v:.3}"));
+    let mut gpu = timer.map_or_else(Vec::new, |t| {
+        std::mem::take(&mut *t.readings.lock().unwrap())
+    });
     let (gpu_median, gpu_p90) = if gpu.is_empty() {
         (None, None)
     } else {
@@ -286,16 +289,16 @@ fn main() {
     );
 }
 
-/// The GPU's time for a frame: timestamps written first and last among the frame's command
-/// buffers (each by an empty compute pass, whose end timestamp Vulkan writes once every command
-/// before it has finished), resolved into a buffer read back after the frame.
+/// The GPU's time for a frame, by Plume's `GpuTimer`: its start stamped in a command buffer
+/// placed before every other of the frame, its end in one placed after them (each an empty
+/// compute pass; Vulkan writes the end once every command before it has finished). A reading
+/// comes back two frames later, without waiting, and the timer stamps again once it has: every
+/// other frame is timed.
 #[derive(Resource, Clone)]
 struct FrameTimer {
-    queries: wgpu::QuerySet,
-    resolved: wgpu::Buffer,
-    readback: wgpu::Buffer,
-    /// Nanoseconds a timestamp tick.
-    period_ns: f64,
+    timer: Arc<Mutex<GpuTimer>>,
+    /// Milliseconds of each timed frame, as they came back.
+    readings: Arc<Mutex<Vec<f64>>>,
 }
 
 impl FrameTimer {
@@ -303,43 +306,13 @@ impl FrameTimer {
     /// device has no timestamp queries.
     fn new(app: &mut App) -> Option<Self> {
         let render = app.sub_app_mut(RenderApp);
-        let device = render
-            .world()
-            .resource::<RenderDevice>()
-            .wgpu_device()
-            .clone();
-        if !device.features().contains(wgpu::Features::TIMESTAMP_QUERY) {
-            return None;
-        }
-        let period_ns = f64::from(
-            render
-                .world()
-                .resource::<RenderQueue>()
-                .get_timestamp_period(),
+        let gpu = Gpu::from_device(
+            render.world().resource::<RenderDevice>().wgpu_device(),
+            render.world().resource::<RenderQueue>(),
         );
-        let buffer = |label, usage| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: 16,
-                usage,
-                mapped_at_creation: false,
-            })
-        };
         let timer = Self {
-            queries: device.create_query_set(&wgpu::QuerySetDescriptor {
-                label: Some("frame timer"),
-                ty: wgpu::QueryType::Timestamp,
-                count: 2,
-            }),
-            resolved: buffer(
-                "frame timer resolved",
-                wgpu::BufferUsages::QUERY_RESOLVE | wgpu::BufferUsages::COPY_SRC,
-            ),
-            readback: buffer(
-                "frame timer readback",
-                wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-            ),
-            period_ns,
+            timer: Arc::new(Mutex::new(GpuTimer::new(&gpu)?)),
+            readings: Arc::default(),
         };
         render.insert_resource(timer.clone()).add_systems(
             RenderGraph,
@@ -352,38 +325,6 @@ impl FrameTimer {
         );
         Some(timer)
     }
-
-    /// The last frame's GPU time in milliseconds (waits for the read back).
-    fn read_ms(&self, device: &wgpu::Device) -> f64 {
-        let slice = self.readback.slice(..);
-        slice.map_async(wgpu::MapMode::Read, |_| {});
-        let _ = device.poll(wgpu::PollType::wait_indefinitely());
-        let ticks = {
-            let bytes = slice
-                .get_mapped_range()
-                .expect("the frame timer's read back is mapped");
-            let stamp = |i: usize| u64::from_le_bytes(bytes[i * 8..i * 8 + 8].try_into().unwrap());
-            stamp(1).saturating_sub(stamp(0))
-        };
-        self.readback.unmap();
-        ticks as f64 * self.period_ns * 1e-6
-    }
-
-    /// An encoder holding one empty compute pass that writes timestamp `index`.
-    fn stamp(&self, device: &RenderDevice, index: u32, start: bool) -> wgpu::CommandEncoder {
-        let mut encoder = device
-            .wgpu_device()
-            .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-        encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-            label: Some("frame timer"),
-            timestamp_writes: Some(wgpu::ComputePassTimestampWrites {
-                query_set: &self.queries,
-                beginning_of_pass_write_index: start.then_some(index),
-                end_of_pass_write_index: (!start).then_some(index),
-            }),
-        });
-        encoder
-    }
 }
 
 fn stamp_frame_start(
@@ -391,7 +332,15 @@ fn stamp_frame_start(
     device: Res<RenderDevice>,
     mut pending: ResMut<PendingCommandBuffers>,
 ) {
-    pending.push_encoder(timer.stamp(&device, 0, true), "frame timer start");
+    let mut encoder = device
+        .wgpu_device()
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    match timer.timer.lock().unwrap().begin(&mut encoder) {
+        Ok(Some(ns)) => timer.readings.lock().unwrap().push(ns as f64 * 1e-6),
+        Ok(None) => {}
+        Err(err) => warn_once!("frame timer: {err}"),
+    }
+    pending.push_encoder(encoder, "frame timer start");
 }
 
 fn stamp_frame_end(
@@ -399,9 +348,10 @@ fn stamp_frame_end(
     device: Res<RenderDevice>,
     mut pending: ResMut<PendingCommandBuffers>,
 ) {
-    let mut encoder = timer.stamp(&device, 1, false);
-    encoder.resolve_query_set(&timer.queries, 0..2, &timer.resolved, 0);
-    encoder.copy_buffer_to_buffer(&timer.resolved, 0, &timer.readback, 0, 16);
+    let mut encoder = device
+        .wgpu_device()
+        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
+    timer.timer.lock().unwrap().end(&mut encoder);
     pending.push_encoder(encoder, "frame timer end");
 }
 
