@@ -327,32 +327,47 @@ impl FrameTimer {
     }
 }
 
+/// Stamps the frame's start (taking a reading that came back) before its other command buffers.
 fn stamp_frame_start(
     timer: Res<FrameTimer>,
     device: Res<RenderDevice>,
-    mut pending: ResMut<PendingCommandBuffers>,
+    pending: ResMut<PendingCommandBuffers>,
 ) {
-    let mut encoder = device
-        .wgpu_device()
-        .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    match timer.timer.lock().unwrap().begin(&mut encoder) {
+    push_stamp(&device, pending, "frame timer start", |encoder| match timer
+        .timer
+        .lock()
+        .unwrap()
+        .begin(encoder)
+    {
         Ok(Some(ns)) => timer.readings.lock().unwrap().push(ns as f64 * 1e-6),
         Ok(None) => {}
         Err(err) => warn_once!("frame timer: {err}"),
-    }
-    pending.push_encoder(encoder, "frame timer start");
+    });
 }
 
+/// Stamps the frame's end after its other command buffers.
 fn stamp_frame_end(
     timer: Res<FrameTimer>,
     device: Res<RenderDevice>,
+    pending: ResMut<PendingCommandBuffers>,
+) {
+    push_stamp(&device, pending, "frame timer end", |encoder| {
+        timer.timer.lock().unwrap().end(encoder);
+    });
+}
+
+/// A command buffer of its own, recorded by `record`, among the frame's pending ones.
+fn push_stamp(
+    device: &RenderDevice,
     mut pending: ResMut<PendingCommandBuffers>,
+    name: &'static str,
+    record: impl FnOnce(&mut wgpu::CommandEncoder),
 ) {
     let mut encoder = device
         .wgpu_device()
         .create_command_encoder(&wgpu::CommandEncoderDescriptor::default());
-    timer.timer.lock().unwrap().end(&mut encoder);
-    pending.push_encoder(encoder, "frame timer end");
+    record(&mut encoder);
+    pending.push_encoder(encoder, name);
 }
 
 /// Pixels that differ from the image's most common colour by more than 2 in a channel.
