@@ -5,21 +5,21 @@
 //! into [`GivenLights`], a map both worlds hold; the main world keeps one `PointLight` entity
 //! per light here, each marked [`PlumeLightOf`] its effect, and removes them with it.
 
-use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
 use bevy::camera::Exposure;
+use bevy::ecs::entity::EntityHashMap;
 use bevy::prelude::*;
 use plume_runtime::LightSource;
 
 /// The latest lights each effect's particles give off, world space, by main-world entity:
 /// written by the render world, read by the main world.
 #[derive(Resource, Clone, Default)]
-pub(crate) struct GivenLights(pub Arc<Mutex<HashMap<Entity, Vec<LightSource>>>>);
+pub(crate) struct GivenLights(pub Arc<Mutex<EntityHashMap<Vec<LightSource>>>>);
 
 impl GivenLights {
     /// The map, even if a panicking thread left it poisoned.
-    pub fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<Entity, Vec<LightSource>>> {
+    pub fn lock(&self) -> std::sync::MutexGuard<'_, EntityHashMap<Vec<LightSource>>> {
         self.0.lock().unwrap_or_else(|p| p.into_inner())
     }
 }
@@ -47,7 +47,7 @@ pub(crate) fn given_lights_to_point_lights(
         .unwrap_or_default()
         .exposure();
     let given = given.lock();
-    let mut kept: HashMap<Entity, Vec<Entity>> = HashMap::new();
+    let mut kept: EntityHashMap<Vec<Entity>> = EntityHashMap::default();
     for (entity, of, ..) in &lights {
         kept.entry(of.0).or_default().push(entity);
     }

@@ -124,14 +124,18 @@ pub(crate) fn thin_effects(
         Some(limit) => budget_shares(&weighed, limit),
         None => vec![1.0; weighed.len()],
     };
-    for ((entity, own, pixels, expected_alive), share) in weighed.into_iter().zip(shares) {
-        if let Ok((.., mut thinning)) = effects.get_mut(entity) {
-            thinning.set_if_neq(PlumeThinning {
-                scale: own * share,
-                pixels,
-                expected_alive,
-            });
-        }
+    // The query visits the entities in the order it did above (nothing was spawned or
+    // changed archetype in between): the weights zip with them.
+    let weights = weighed.into_iter().zip(shares);
+    for ((entity, .., mut thinning), ((weighed_entity, own, pixels, expected_alive), share)) in
+        effects.iter_mut().zip(weights)
+    {
+        debug_assert_eq!(entity, weighed_entity);
+        thinning.set_if_neq(PlumeThinning {
+            scale: own * share,
+            pixels,
+            expected_alive,
+        });
     }
 }
 

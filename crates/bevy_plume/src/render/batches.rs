@@ -13,9 +13,12 @@
 //! depth sort, flocking, baked fields or scene-depth colliders. A batched entity gets
 //! no measured bounds (a declared `bounds` still culls it) and is sorted with its batch.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
+use bevy::ecs::entity::{EntityHashMap, EntityHashSet};
+use bevy::platform::collections::hash_map::Entry;
+use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use plume_compiler::graph::CompiledGraph;
@@ -49,7 +52,7 @@ pub(crate) struct PlumeBatches {
     /// Each file variant's batches (None: one that emptied, its place kept so indices hold).
     sets: HashMap<SetKey, BatchSet>,
     /// Each batched entity, by main-world entity.
-    pub members: HashMap<Entity, Member>,
+    pub members: EntityHashMap<Member>,
 }
 
 /// One file variant's batches and its batched compile.
@@ -67,7 +70,10 @@ pub(crate) struct RenderBatch {
     /// The entity in each instance's place.
     slots: Vec<Option<Entity>>,
     /// Its draws, by the camera's render-world entity: (target, renderer, frame last queued).
-    pub views: HashMap<Entity, (DrawTarget, EffectRenderer, u64)>,
+    pub views: EntityHashMap<(DrawTarget, EffectRenderer, u64)>,
+    /// Each place's steps this frame in parts (`EffectBatch::advance_along`), kept from frame
+    /// to frame so that recording them allocates nothing.
+    parts: Vec<Vec<(u64, Option<Placement>)>>,
     /// Bytes of particle state it holds.
     pub particle_bytes: u64,
     /// Its particles alive, as last read back (`PlumeDiagnosticsPlugin` reads them).
@@ -165,7 +171,7 @@ pub(crate) fn sync_batches(
         *crowds.entry(set_key(key)).or_default() += 1;
     }
     let delta = extracted.delta;
-    let mut alive = std::collections::HashSet::with_capacity(batches.members.len());
+    let mut alive = EntityHashSet::with_capacity(batches.members.len());
     for (e, key) in extracted.effects.iter().zip(keys) {
         // One that can no longer be batched (now drawn by the compute renderer) leaves: the
         // instances make it an effect of its own.
@@ -247,7 +253,7 @@ pub(crate) fn sync_batches(
     let gone: Vec<Entity> = batches
         .members
         .keys()
-        .filter(|e| !alive.contains(e))
+        .filter(|&e| !alive.contains(e))
         .copied()
         .collect();
     for entity in gone {
@@ -303,8 +309,8 @@ impl PlumeBatches {
     ) -> Result<(), String> {
         let id = set_key(&key);
         let set = match self.sets.entry(id) {
-            std::collections::hash_map::Entry::Occupied(set) => set.into_mut(),
-            std::collections::hash_map::Entry::Vacant(place) => {
+            Entry::Occupied(set) => set.into_mut(),
+            Entry::Vacant(place) => {
                 let graph = variant_graph(e, &key, variants)?;
                 if graph.groups.len() != 1 || !graph.streams.is_empty() {
                     return Ok(());
@@ -342,7 +348,8 @@ impl PlumeBatches {
                 let made = RenderBatch {
                     batch,
                     slots: vec![None; instances as usize],
-                    views: HashMap::new(),
+                    views: EntityHashMap::default(),
+                    parts: vec![Vec::new(); instances as usize],
                     particle_bytes: per_instance * u64::from(instances),
                     alive: 0,
                 };
@@ -405,15 +412,13 @@ impl PlumeBatches {
         let members = &mut self.members;
         for set in self.sets.values_mut() {
             for batch in set.batches.iter_mut().flatten() {
-                let parts: Vec<Vec<(u64, Option<Placement>)>> = batch
-                    .slots
-                    .iter()
-                    .map(|slot| {
-                        slot.and_then(|e| members.get_mut(&e))
-                            .map_or_else(Vec::new, path)
-                    })
-                    .collect();
-                if let Err(err) = batch.batch.advance_along(encoder, &parts) {
+                for (slot, parts) in batch.slots.iter().zip(&mut batch.parts) {
+                    parts.clear();
+                    if let Some(member) = slot.and_then(|e| members.get_mut(&e)) {
+                        path(member, parts);
+                    }
+                }
+                if let Err(err) = batch.batch.advance_along(encoder, &batch.parts) {
                     error!("{}: {err}", set.compiled.ir.name);
                 }
             }
@@ -421,25 +426,27 @@ impl PlumeBatches {
     }
 }
 
-/// `member`'s steps this frame, taken from its clock, along its motion since the last frame
-/// (as a world-space effect alone steps: `motion::parts`).
-fn path(member: &mut Member) -> Vec<(u64, Option<Placement>)> {
+/// Appends to `parts` `member`'s steps this frame, taken from its clock, along its motion
+/// since the last frame (as a world-space effect alone steps: `motion::parts`).
+fn path(member: &mut Member, parts: &mut Vec<(u64, Option<Placement>)>) {
     let steps = std::mem::take(&mut member.clock.steps);
     let to = member.world_from_local;
     // In local space the emitters stay in the entity's own space: nothing to place.
     if !member.key.variant.placed || !to.is_finite() {
         // Its emitters stay where they were.
-        return vec![(steps, None)];
+        parts.push((steps, None));
+        return;
     }
     let from = member.placed_at.replace(to).unwrap_or(to);
     let placed = |at: Mat4| Placement::from_cols(at.to_cols_array());
     match steps {
-        0 => Vec::new(),
+        0 => {}
         // One place for every step: what `motion::parts` gives too, without its interpolation.
-        _ if steps == 1 || from == to => vec![(steps, placed(to))],
-        _ => motion::parts(steps, from, to)
-            .into_iter()
-            .map(|(n, at)| (n, placed(at)))
-            .collect(),
+        _ if steps == 1 || from == to => parts.push((steps, placed(to))),
+        _ => parts.extend(
+            motion::parts(steps, from, to)
+                .into_iter()
+                .map(|(n, at)| (n, placed(at))),
+        ),
     }
 }

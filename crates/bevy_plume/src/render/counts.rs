@@ -4,9 +4,9 @@
 //! timestamps around them where the device has timestamp queries. Nothing is read back while
 //! the diagnostics plugin is not added (this resource is absent).
 
-use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
 
+use bevy::ecs::entity::EntityHashMap;
 use bevy::prelude::*;
 use plume_compiler::reference::Totals;
 use plume_runtime::{Gpu, GpuTimer};
@@ -27,11 +27,11 @@ pub(crate) struct WatchedCounts {
 
 /// Each effect entity's last counts: written by the render world, read by the main world.
 #[derive(Resource, Clone, Default)]
-pub(crate) struct SharedCounts(pub Arc<Mutex<HashMap<Entity, Totals>>>);
+pub(crate) struct SharedCounts(pub Arc<Mutex<EntityHashMap<Totals>>>);
 
 impl SharedCounts {
     /// The map, even if a panicking thread left it poisoned.
-    pub fn lock(&self) -> std::sync::MutexGuard<'_, HashMap<Entity, Totals>> {
+    pub fn lock(&self) -> std::sync::MutexGuard<'_, EntityHashMap<Totals>> {
         self.0.lock().unwrap_or_else(|p| p.into_inner())
     }
 }

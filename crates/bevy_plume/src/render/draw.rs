@@ -3,8 +3,6 @@
 //! in 3D, by its z in 2D; the particles within it in Plume's own order, back to front when the
 //! file says `sort`), and drawn with Plume's pipelines straight into Bevy's render pass.
 
-use std::collections::HashMap;
-
 use bevy::core_pipeline::core_2d::{Transparent2d, CORE_2D_DEPTH_FORMAT};
 use bevy::core_pipeline::core_3d::{Transparent3d, TransparentSortingInfo3d, CORE_3D_DEPTH_FORMAT};
 use bevy::math::FloatOrd;
@@ -175,7 +173,7 @@ fn queue_view(
     };
     let frame = store.frame;
     // The batches this camera sees an entity of, each with the first such entity.
-    let mut seen_batches = HashMap::new();
+    let mut seen_batches = bevy::platform::collections::HashMap::new();
     for &(render_entity, main_entity) in &visible.entities_cpu_culling {
         let Some(instance) = store.instances.get_mut(&main_entity.id()) else {
             if let Some(id) = batches.batch_id(main_entity.id()) {

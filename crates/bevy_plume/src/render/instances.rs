@@ -6,9 +6,11 @@
 //! nothing until it is ready (an older version of it goes on drawing meanwhile), then starts
 //! with the time it waited caught up.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::sync::Arc;
 
+use bevy::ecs::entity::{EntityHashMap, EntityHashSet};
+use bevy::platform::collections::HashMap;
 use bevy::prelude::*;
 use bevy::render::renderer::{RenderDevice, RenderQueue};
 use bevy::tasks::{AsyncComputeTaskPool, Task};
@@ -93,7 +95,7 @@ pub(crate) struct Instance {
     /// The entity's render-world twin.
     pub render_entity: Entity,
     /// Its draws, by the camera's render-world entity.
-    pub views: HashMap<Entity, ViewDraw>,
+    pub views: EntityHashMap<ViewDraw>,
     /// The kernels that pick the lights its particles give off (`render.light`; empty when
     /// they give off none), made on its first frame.
     pub particle_lights: Option<plume_runtime::ParticleLights>,
@@ -185,9 +187,9 @@ pub(crate) struct PlumeInstances {
     /// Bevy's render device as Plume's [`Gpu`] (made on first use).
     pub gpu: Option<Gpu>,
     /// The instances.
-    pub instances: HashMap<Entity, Instance>,
+    pub instances: EntityHashMap<Instance>,
     /// Builds that failed, by entity, so an error is logged once, not every frame.
-    failed: HashMap<Entity, BuildKey>,
+    failed: EntityHashMap<BuildKey>,
     /// The files' variants compiled for a seed or for world space, so that a thousand
     /// instances of one file compile it once: by (the file version's address, seed, placed),
     /// with that version kept alive beside it (dropped once no instance uses it).
@@ -196,7 +198,7 @@ pub(crate) struct PlumeInstances {
     compiling: Compiling,
     /// Effect time (s) that entities waiting for their variant have let pass, caught up by
     /// their instance's first frame, so that it runs as if it had started when spawned.
-    waiting: HashMap<Entity, f64>,
+    waiting: EntityHashMap<f64>,
     /// Frames seen (ages views' draws).
     pub frame: u64,
 }
@@ -218,7 +220,7 @@ pub(crate) fn sync_instances(
         .gpu
         .get_or_insert_with(|| Gpu::from_device(device.wgpu_device(), &queue))
         .clone();
-    let mut alive = std::collections::HashSet::with_capacity(extracted.effects.len());
+    let mut alive = EntityHashSet::with_capacity(extracted.effects.len());
     for e in &extracted.effects {
         alive.insert(e.main);
         let key = BuildKey::of(e);
@@ -380,7 +382,7 @@ fn build(
         capacity,
         placed_at: None,
         render_entity: e.render,
-        views: HashMap::new(),
+        views: EntityHashMap::default(),
         particle_lights: None,
         counts: None,
         particle_bytes,

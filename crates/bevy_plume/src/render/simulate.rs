@@ -8,9 +8,8 @@
 //! camera's opaque and transparent passes ([`composite_for_view`]): it reads the depth the
 //! opaque pass drew.
 
-use std::collections::HashMap;
-
 use bevy::core_pipeline::prepass::ViewPrepassTextures;
+use bevy::ecs::entity::{EntityHashMap, EntityHashSet};
 use bevy::ecs::system::SystemParam;
 use bevy::pbr::ViewShadowBindings;
 use bevy::prelude::*;
@@ -105,7 +104,7 @@ pub(crate) fn simulate(
     // Bounds: the planned instances' reductions go into the shared pass, after their steps.
     let mut boxes = measured.lock();
     boxes.retain(|entity, _| store.instances.contains_key(entity));
-    let mut reducing = std::collections::HashSet::new();
+    let mut reducing = EntityHashSet::default();
     for (entity, _) in &planned {
         if let Some(instance) = store.instances.get(entity).filter(|i| measures_bounds(i)) {
             match instance.effect.watch_bounds_begin(encoder) {
@@ -146,7 +145,7 @@ pub(crate) fn simulate(
         }
     }
     // The rest measure in passes of their own.
-    let planned: std::collections::HashSet<Entity> = planned.iter().map(|(e, _)| *e).collect();
+    let planned: EntityHashSet = planned.iter().map(|(e, _)| *e).collect();
     for (entity, instance) in &store.instances {
         if !measures_bounds(instance) {
             boxes.remove(entity);
@@ -242,7 +241,7 @@ fn measures_bounds(instance: &Instance) -> bool {
 
 /// Puts a reading that came back into `boxes`.
 fn note_bounds(
-    boxes: &mut HashMap<Entity, MeasuredBox>,
+    boxes: &mut EntityHashMap<MeasuredBox>,
     entity: Entity,
     instance: &Instance,
     watch: BoundsWatch,

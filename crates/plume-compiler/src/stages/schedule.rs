@@ -17,7 +17,7 @@ use crate::features::forces::noise::TIME_PERIOD;
 use crate::ir::EffectIr;
 
 /// What one step spawns.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct StepPlan {
     /// Step index k.
     pub step: u64,
@@ -195,9 +195,20 @@ impl Schedule {
 
     /// Plans the next step.
     pub fn next_plan(&mut self) -> StepPlan {
+        let mut plan = StepPlan::default();
+        self.next_plan_into(&mut plan);
+        plan
+    }
+
+    /// [`Self::next_plan`] written into `plan`, whose lists are cleared and refilled: a
+    /// caller planning many steps (a batch's instances, every frame) allocates nothing.
+    pub fn next_plan_into(&mut self, plan: &mut StepPlan) {
         let step = self.next_step;
         let first_id = self.next_id;
-        let mut emitters = Vec::with_capacity(self.rates.len());
+        let emitters = &mut plan.emitters;
+        let bursts = &mut plan.bursts;
+        emitters.clear();
+        bursts.clear();
         for e in 0..self.rates.len() {
             let timing = self.timings[e];
             let mut count = 0u64;
@@ -225,7 +236,6 @@ impl Schedule {
             self.emitted[e] = self.emitted[e].wrapping_add(count);
             self.next_id += count;
         }
-        let mut bursts = Vec::new();
         while bursts.len() < SLOTS as usize {
             let Some(mut burst) = self.pending.pop_front() else {
                 break;
@@ -251,13 +261,9 @@ impl Schedule {
             }
         }
         self.next_step += 1;
-        StepPlan {
-            step,
-            time: step as f64 * self.dt,
-            first_id,
-            emitters,
-            bursts,
-        }
+        plan.step = step;
+        plan.time = step as f64 * self.dt;
+        plan.first_id = first_id;
     }
 
     /// Skips `n` steps at once when no step from now on can spawn anything (every rate is 0 or

@@ -18,7 +18,7 @@ use plume_compiler::batch::compile_batched;
 use plume_compiler::bursts::Burst;
 use plume_compiler::passes::layout::{Role, COUNTERS_BYTES};
 use plume_compiler::placement::Placement;
-use plume_compiler::schedule::Schedule;
+use plume_compiler::schedule::{Schedule, StepPlan};
 use plume_compiler::wgsl::WORKGROUP;
 use plume_compiler::CompiledEffect;
 
@@ -86,6 +86,8 @@ pub struct EffectBatch {
     /// Bytes of one instance's row, and of one step's rows (aligned for a dynamic offset).
     row_bytes: u64,
     step_stride: u64,
+    /// The plan each instance's next step is written into while its row is recorded.
+    plan: StepPlan,
 }
 
 /// What one instance keeps.
@@ -187,6 +189,7 @@ impl EffectBatch {
             kernels,
             row_bytes,
             step_stride,
+            plan: StepPlan::default(),
         };
         // Every instance's slots free and its counters zeroed, in one dispatch.
         let mut encoder = gpu.device.create_command_encoder(&Default::default());

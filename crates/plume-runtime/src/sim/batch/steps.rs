@@ -129,8 +129,11 @@ impl EffectBatch {
         let wraps = self.batched.ir.wraps_kernel_time();
         let mut bytes = vec![0u8; stride * n as usize];
         let mut most_requested = vec![0u32; n as usize];
+        // One plan's lists, refilled for every instance and step.
+        let plan = &mut self.plan;
         for (j, most) in most_requested.iter_mut().enumerate() {
-            let step = self.effect.groups[0].schedule.next_plan().step as u32;
+            self.effect.groups[0].schedule.next_plan_into(plan);
+            let step = plan.step as u32;
             for (k, state) in self.instances.iter_mut().enumerate() {
                 let at = j * stride + k * row;
                 let out = &mut bytes[at..at + row];
@@ -141,11 +144,11 @@ impl EffectBatch {
                     if let Some(placement) = placement {
                         state.placement = placement;
                     }
-                    let plan = state.schedule.next_plan();
+                    state.schedule.next_plan_into(plan);
                     *most = (*most).max(plan.requested());
                     write_params_row(
                         out,
-                        &plan,
+                        plan,
                         layout,
                         wraps,
                         &state.placement,
