@@ -2,18 +2,20 @@
 //! bevy-inspector-egui, through the component's `Reflect`: its params, time scale, pause
 //! (`playing`), seed, spawn scale, space and renderer. A change takes effect from the next
 //! frame (a new seed or space compiles its variant on Bevy's task pool, the particles go on
-//! meanwhile; a param reaches the running kernels without a compile).
+//! meanwhile; a param reaches the running kernels without a compile). Beside it, the plugin's
+//! diagnostics in `PlumeOverlayPlugin`'s window.
 //!
 //! In a window: `cargo +nightly run --ignore-rust-version --features inspector --example
 //! inspector`. A shot of the window's 120th frame (under Xvfb without a display):
 //! `... --example inspector -- --window-shot inspector.png --frames 120`.
 
+use bevy::diagnostic::FrameTimeDiagnosticsPlugin;
 use bevy::prelude::*;
 use bevy::reflect::ReflectMut;
 use bevy_egui::{egui, EguiContext, EguiPlugin, EguiPrimaryContextPass, PrimaryEguiContext};
 use bevy_inspector_egui::{bevy_inspector, DefaultInspectorConfigPlugin};
 use bevy_plume::headless::{default_plugins, Headless, HeadlessPlugin};
-use bevy_plume::{PlumeEffect, PlumePlugin};
+use bevy_plume::{PlumeEffect, PlumeOverlayPlugin, PlumePlugin};
 
 /// The repository's effect files, as the asset folder.
 const EFFECTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../effects");
@@ -38,6 +40,8 @@ fn main() -> AppExit {
         // defaults name are registered by hand, before its plugin.
         .register_type::<Name>()
         .add_plugins(DefaultInspectorConfigPlugin)
+        // The plugin's diagnostics in a window of their own, at the top right.
+        .add_plugins((FrameTimeDiagnosticsPlugin::default(), PlumeOverlayPlugin))
         .add_systems(Startup, setup)
         .add_systems(EguiPrimaryContextPass, effects_window);
     if let Some(headless) = headless {
@@ -80,7 +84,7 @@ fn effects_window(world: &mut World) {
         return;
     };
     let mut context = context.clone();
-    let effects: Vec<(Entity, String, PlumeEffect)> = world
+    let mut effects: Vec<(Entity, String, PlumeEffect)> = world
         .query::<(Entity, Option<&Name>, &PlumeEffect)>()
         .iter(world)
         .map(|(e, name, effect)| {
@@ -91,6 +95,7 @@ fn effects_window(world: &mut World) {
             )
         })
         .collect();
+    effects.sort_by(|a, b| a.1.cmp(&b.1));
     egui::Window::new("Plume effects")
         .default_pos((8.0, 8.0))
         .default_width(300.0)

@@ -30,6 +30,8 @@ mod effect;
 mod event_reports;
 pub mod headless;
 mod mesh_particles;
+#[cfg(feature = "overlay")]
+mod overlay;
 mod particle_lights;
 mod render;
 mod thinning;
@@ -42,6 +44,8 @@ pub use effect::{
 };
 pub use event_reports::{PlumeEventFired, PlumeEventsMissed};
 pub use mesh_particles::obj_of;
+#[cfg(feature = "overlay")]
+pub use overlay::{PlumeOverlay, PlumeOverlayPlugin};
 pub use particle_lights::PlumeLightOf;
 pub use plume_compiler;
 pub use plume_runtime;
