@@ -100,6 +100,8 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
             ("headless", 1),
             // 2: the diagnostics, which read the render world's counts.
             ("diagnostics", 2),
+            // 3: the on-screen overlay, which draws the diagnostics.
+            ("overlay", 3),
         ],
     ),
 ];
