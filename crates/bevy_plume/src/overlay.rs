@@ -12,6 +12,23 @@ use crate::diagnostics::{PlumeDiagnosticsPlugin, PlumeParticleCounts};
 /// Adds the overlay window to the primary window, and [`PlumeDiagnosticsPlugin`] when it is not
 /// added yet. Add it after bevy_egui's `EguiPlugin` when the game adds that itself; otherwise
 /// it adds `EguiPlugin` too. [`PlumeOverlay`] shows and hides the window.
+///
+/// ```no_run
+/// use bevy::diagnostic::FrameTimeDiagnosticsPlugin;
+/// use bevy::prelude::*;
+/// use bevy_plume::{PlumeOverlay, PlumeOverlayPlugin, PlumePlugin};
+///
+/// App::new()
+///     .add_plugins((DefaultPlugins, PlumePlugin))
+///     .add_plugins((FrameTimeDiagnosticsPlugin::default(), PlumeOverlayPlugin))
+///     // F3 shows and hides the window.
+///     .add_systems(Update, |keys: Res<ButtonInput<KeyCode>>, mut overlay: ResMut<PlumeOverlay>| {
+///         if keys.just_pressed(KeyCode::F3) {
+///             overlay.shown = !overlay.shown;
+///         }
+///     })
+///     .run();
+/// ```
 #[derive(Default)]
 pub struct PlumeOverlayPlugin;
 
