@@ -15,7 +15,7 @@ use bevy::reflect::ReflectMut;
 use bevy_egui::{egui, EguiContext, EguiPlugin, EguiPrimaryContextPass, PrimaryEguiContext};
 use bevy_inspector_egui::{bevy_inspector, DefaultInspectorConfigPlugin};
 use bevy_plume::headless::{default_plugins, Headless, HeadlessPlugin};
-use bevy_plume::{PlumeEffect, PlumeOverlayPlugin, PlumePlugin};
+use bevy_plume::{PlumeEffect, PlumeGpuTime, PlumeOverlayPlugin, PlumePlugin};
 
 /// The repository's effect files, as the asset folder.
 const EFFECTS: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../../effects");
@@ -52,7 +52,7 @@ fn main() -> AppExit {
 
 /// A camera, and two effects: a fountain with a seed of its own, and a magnetic bottle whose
 /// params (`gyro`, the field's turning rate, and `L`, the bottle's half length) are set at
-/// spawn so that they can be dragged live.
+/// spawn so that they can be dragged live; both timed on the GPU, for the overlay's column.
 fn setup(mut commands: Commands, assets: Res<AssetServer>) {
     commands.spawn((
         Camera3d::default(),
@@ -61,6 +61,7 @@ fn setup(mut commands: Commands, assets: Res<AssetServer>) {
     commands.spawn((
         Name::new("fountain"),
         PlumeEffect::new(assets.load("fountain.ron")).with_seed(7),
+        PlumeGpuTime::default(),
         Transform::from_xyz(-2.0, 0.0, 0.0),
     ));
     commands.spawn((
@@ -69,6 +70,7 @@ fn setup(mut commands: Commands, assets: Res<AssetServer>) {
             .with_param("gyro", 3.0)
             .with_param("L", 1.0)
             .with_time_scale(0.5),
+        PlumeGpuTime::default(),
         Transform::from_xyz(2.0, 1.5, 0.0),
     ));
 }

@@ -9,7 +9,8 @@ use bevy::diagnostic::{Diagnostic, DiagnosticPath, Diagnostics, RegisterDiagnost
 use bevy::prelude::*;
 use bevy::render::{Render, RenderApp, RenderSystems};
 
-use crate::render::counts::{SharedCounts, WatchedCounts};
+use crate::effect::PlumeGpuTime;
+use crate::render::counts::{SharedCounts, SharedGpuTimes, WatchedCounts};
 use crate::render::instances::PlumeRenderStats;
 
 /// An effect entity's particles, as last read back from the GPU without waiting (a frame or
@@ -45,7 +46,8 @@ impl From<plume_compiler::reference::Totals> for PlumeParticleCounts {
 /// Adds Plume's diagnostics (add it beside [`crate::PlumePlugin`]): effect instances, batches,
 /// camera draws (and of them the compute renderer's), particle state on the GPU, live
 /// particles and the GPU time of the steps, measured every frame from the render world's
-/// [`PlumeRenderStats`] of the frame before; and each effect entity's [`PlumeParticleCounts`].
+/// [`PlumeRenderStats`] of the frame before; each effect entity's [`PlumeParticleCounts`]; and
+/// the steps' GPU time of each entity that asks for it with a [`crate::PlumeGpuTime`].
 /// The live counts and the timestamps are read back without waiting (a copy of a few bytes per
 /// effect a frame), only while this plugin is added.
 #[derive(Default)]
@@ -85,9 +87,10 @@ impl Plugin for PlumeDiagnosticsPlugin {
             .register_diagnostic(Diagnostic::new(Self::LIVE_PARTICLES))
             .register_diagnostic(Diagnostic::new(Self::STEP_GPU_MS).with_suffix(" ms"))
             .register_type::<PlumeParticleCounts>()
-            .add_systems(Update, (measure, particle_counts));
+            .add_systems(Update, (measure, particle_counts, gpu_times));
         let watched = WatchedCounts::default();
-        app.insert_resource(watched.shared.clone());
+        app.insert_resource(watched.shared.clone())
+            .insert_resource(watched.gpu_times.clone());
         if let Some(render_app) = app.get_sub_app_mut(RenderApp) {
             render_app
                 .insert_resource(watched)
@@ -146,6 +149,17 @@ fn particle_counts(
         }
         if let Ok(mut e) = commands.get_entity(*entity) {
             e.insert(PlumeParticleCounts::from(*t));
+        }
+    }
+}
+
+/// Gives each timed effect entity its steps' last GPU time.
+fn gpu_times(shared: Res<SharedGpuTimes>, mut timed: Query<(Entity, &mut PlumeGpuTime)>) {
+    let shared = shared.lock();
+    for (entity, mut time) in &mut timed {
+        let steps_ms = shared.get(&entity).map(|&ns| ns as f32 * 1e-6);
+        if time.steps_ms != steps_ms {
+            time.steps_ms = steps_ms;
         }
     }
 }

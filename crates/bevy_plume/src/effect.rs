@@ -357,3 +357,32 @@ impl Default for PlumeThinning {
         }
     }
 }
+
+/// Asks for an effect entity's GPU time. While [`crate::PlumeDiagnosticsPlugin`] is added
+/// and the device has timestamp queries, the entity's steps are recorded apart (never batched,
+/// in compute passes of their own between two timestamps, rather than in the pass the other
+/// effects share) and `steps_ms` holds their GPU time, read back without waiting (a frame or
+/// two old). Their draws are not timed. Recording apart costs a little CPU and GPU time of its
+/// own, so ask for it on the effects you look at, not on every one.
+///
+/// ```no_run
+/// # use bevy::prelude::*;
+/// # use bevy_plume::{PlumeEffect, PlumeGpuTime};
+/// # fn spawn(mut commands: Commands, assets: Res<AssetServer>) {
+/// commands.spawn((PlumeEffect::new(assets.load("smoke.plume.ron")), PlumeGpuTime::default()));
+/// # }
+/// fn report(timed: Query<(&Name, &PlumeGpuTime)>) {
+///     for (name, time) in &timed {
+///         if let Some(ms) = time.steps_ms {
+///             info!("{name}: {ms:.3} ms of steps");
+///         }
+///     }
+/// }
+/// ```
+#[derive(Component, Clone, Copy, Debug, Default, PartialEq, Reflect)]
+#[reflect(Component)]
+pub struct PlumeGpuTime {
+    /// GPU milliseconds of the entity's last timed frame of steps (None before the first
+    /// reading, and where the device has no timestamp queries).
+    pub steps_ms: Option<f32>,
+}

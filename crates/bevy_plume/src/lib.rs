@@ -39,8 +39,8 @@ mod thinning;
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};
 pub use diagnostics::{PlumeDiagnosticsPlugin, PlumeParticleCounts};
 pub use effect::{
-    PlumeBurst, PlumeDraw, PlumeEffect, PlumeSimulate, PlumeThinning, SimulationSpace,
-    AUTO_COMPUTE_CAPACITY,
+    PlumeBurst, PlumeDraw, PlumeEffect, PlumeGpuTime, PlumeSimulate, PlumeThinning,
+    SimulationSpace, AUTO_COMPUTE_CAPACITY,
 };
 pub use event_reports::{PlumeEventFired, PlumeEventsMissed};
 pub use mesh_particles::obj_of;
@@ -101,6 +101,7 @@ impl Plugin for PlumePlugin {
             .register_type::<PlumeLightOf>()
             .register_type::<PlumeLod>()
             .register_type::<PlumeThinning>()
+            .register_type::<PlumeGpuTime>()
             .register_type::<PlumeBudget>()
             .init_resource::<effect::FiredBursts>()
             .init_resource::<mesh_particles::MeshedEffects>()

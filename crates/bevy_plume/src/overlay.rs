@@ -1,13 +1,15 @@
 //! An on-screen overlay of the plugin's diagnostics ([`PlumeOverlayPlugin`], behind the crate's
 //! `overlay` feature): an egui window (bevy_egui) with what [`PlumeDiagnosticsPlugin`]
 //! measures, Bevy's frame time where `FrameTimeDiagnosticsPlugin` is added, and each effect
-//! entity's [`PlumeParticleCounts`].
+//! entity's [`PlumeParticleCounts`] (and its steps' GPU time where it has a
+//! [`crate::PlumeGpuTime`]).
 
 use bevy::diagnostic::{DiagnosticPath, DiagnosticsStore, FrameTimeDiagnosticsPlugin};
 use bevy::prelude::*;
 use bevy_egui::{egui, EguiContexts, EguiPlugin, EguiPrimaryContextPass};
 
 use crate::diagnostics::{PlumeDiagnosticsPlugin, PlumeParticleCounts};
+use crate::effect::PlumeGpuTime;
 
 /// Adds the overlay window to the primary window, and [`PlumeDiagnosticsPlugin`] when it is not
 /// added yet. Add it after bevy_egui's `EguiPlugin` when the game adds that itself; otherwise
@@ -72,18 +74,71 @@ const ROWS: [(&str, DiagnosticPath, usize); 8] = [
     ("steps' GPU time", PlumeDiagnosticsPlugin::STEP_GPU_MS, 3),
 ];
 
-/// The window: each diagnostic's smoothed value with its suffix (a row whose diagnostic has no
-/// measurement yet, such as the GPU time on a device without timestamp queries, is left out),
-/// then a row per effect entity with counts, named by its `Name` where it has one.
+/// The diagnostics table: each diagnostic of [`ROWS`] with a measurement, as (label, its
+/// smoothed value with its suffix). A diagnostic not added, or with no measurement yet (the
+/// GPU time on a device without timestamp queries), has no row.
+fn diagnostic_rows(store: &DiagnosticsStore) -> Vec<(&'static str, String)> {
+    ROWS.iter()
+        .filter_map(|(label, path, digits)| {
+            let diagnostic = store.get(path)?;
+            let value = diagnostic.smoothed()?;
+            Some((*label, format!("{value:.digits$}{}", diagnostic.suffix)))
+        })
+        .collect()
+}
+
+/// The effects table's headings: the steps' GPU time only where an entity asks for it.
+fn effect_headings(timed: bool) -> &'static [&'static str] {
+    match timed {
+        true => &["effect", "alive", "spawned", "dropped", "steps' GPU ms"],
+        false => &["effect", "alive", "spawned", "dropped"],
+    }
+}
+
+/// What the effects table reads of an entity.
+type EffectItem<'a> = (
+    Entity,
+    Option<&'a Name>,
+    &'a PlumeParticleCounts,
+    Option<&'a PlumeGpuTime>,
+);
+
+/// The effects table: a row per effect entity with counts, by its `Name` where it has one
+/// (else its entity), sorted by that; the GPU time column (when `timed`) shows an entity's
+/// [`PlumeGpuTime`], "-" where it has none or no reading yet.
+fn effect_rows<'a>(effects: impl Iterator<Item = EffectItem<'a>>, timed: bool) -> Vec<Vec<String>> {
+    let mut rows: Vec<Vec<String>> = effects
+        .map(|(entity, name, counts, time)| {
+            let mut row = vec![
+                name.map_or(entity.to_string(), Name::to_string),
+                counts.alive.to_string(),
+                counts.spawned.to_string(),
+                counts.dropped.to_string(),
+            ];
+            if timed {
+                let ms = time.and_then(|t| t.steps_ms);
+                row.push(ms.map_or("-".to_string(), |ms| format!("{ms:.3}")));
+            }
+            row
+        })
+        .collect();
+    rows.sort_by(|a, b| a[0].cmp(&b[0]));
+    rows
+}
+
+/// The window: the diagnostics table ([`diagnostic_rows`]), then the effects table
+/// ([`effect_rows`]).
 fn overlay_window(
     mut contexts: EguiContexts,
     overlay: Res<PlumeOverlay>,
     store: Res<DiagnosticsStore>,
-    effects: Query<(Entity, Option<&Name>, &PlumeParticleCounts)>,
+    effects: Query<EffectItem>,
+    timed: Query<(), With<PlumeGpuTime>>,
 ) -> Result {
     if !overlay.shown {
         return Ok(());
     }
+    let timed = !timed.is_empty();
     let context = contexts.ctx_mut()?;
     egui::Window::new("Plume")
         .anchor(egui::Align2::RIGHT_TOP, (-8.0, 8.0))
@@ -92,45 +147,135 @@ fn overlay_window(
             egui::Grid::new("plume diagnostics")
                 .num_columns(2)
                 .show(ui, |ui| {
-                    for (label, path, digits) in &ROWS {
-                        let Some(diagnostic) = store.get(path) else {
-                            continue;
-                        };
-                        let Some(value) = diagnostic.smoothed() else {
-                            continue;
-                        };
-                        ui.label(*label);
-                        ui.label(format!("{value:.digits$}{}", diagnostic.suffix));
+                    for (label, value) in diagnostic_rows(&store) {
+                        ui.label(label);
+                        ui.label(value);
                         ui.end_row();
                     }
                 });
-            let mut rows: Vec<(String, PlumeParticleCounts)> = effects
-                .iter()
-                .map(|(entity, name, counts)| {
-                    (name.map_or(entity.to_string(), Name::to_string), *counts)
-                })
-                .collect();
+            let rows = effect_rows(effects.iter(), timed);
             if rows.is_empty() {
                 return;
             }
-            rows.sort_by(|a, b| a.0.cmp(&b.0));
             ui.separator();
+            let headings = effect_headings(timed);
             egui::Grid::new("plume effects")
-                .num_columns(4)
+                .num_columns(headings.len())
                 .striped(true)
                 .show(ui, |ui| {
-                    for heading in ["effect", "alive", "spawned", "dropped"] {
-                        ui.strong(heading);
+                    for heading in headings {
+                        ui.strong(*heading);
                     }
                     ui.end_row();
-                    for (name, counts) in rows {
-                        ui.label(name);
-                        ui.label(counts.alive.to_string());
-                        ui.label(counts.spawned.to_string());
-                        ui.label(counts.dropped.to_string());
+                    for row in rows {
+                        for cell in row {
+                            ui.label(cell);
+                        }
                         ui.end_row();
                     }
                 });
         });
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use bevy::diagnostic::{Diagnostic, DiagnosticMeasurement};
+    use bevy::platform::time::Instant;
+
+    use super::*;
+
+    /// A diagnostic at `path` with the given measurements.
+    fn measured(path: DiagnosticPath, suffix: &'static str, values: &[f64]) -> Diagnostic {
+        let mut diagnostic = Diagnostic::new(path).with_suffix(suffix);
+        for &value in values {
+            diagnostic.add_measurement(DiagnosticMeasurement {
+                time: Instant::now(),
+                value,
+            });
+        }
+        diagnostic
+    }
+
+    #[test]
+    fn the_diagnostics_table_shows_what_is_measured_in_its_own_order() {
+        let mut store = DiagnosticsStore::default();
+        store.add(measured(
+            PlumeDiagnosticsPlugin::STEP_GPU_MS,
+            " ms",
+            &[0.25],
+        ));
+        store.add(measured(
+            PlumeDiagnosticsPlugin::LIVE_PARTICLES,
+            "",
+            &[1200.0],
+        ));
+        store.add(measured(
+            PlumeDiagnosticsPlugin::PARTICLE_MIB,
+            " MiB",
+            &[3.25],
+        ));
+        // Added, never measured (a device without timestamps leaves the GPU time so).
+        store.add(measured(PlumeDiagnosticsPlugin::BATCHES, "", &[]));
+        let rows = diagnostic_rows(&store);
+        assert_eq!(
+            rows,
+            [
+                ("live particles", "1200".to_string()),
+                ("particle state", "3.2 MiB".to_string()),
+                ("steps' GPU time", "0.250 ms".to_string()),
+            ]
+        );
+    }
+
+    #[test]
+    fn the_effects_table_is_sorted_by_name_with_times_where_asked() {
+        let counts = |alive| PlumeParticleCounts {
+            alive,
+            spawned: alive + 5,
+            dropped: 1,
+            ..Default::default()
+        };
+        let smoke = (Name::new("smoke"), counts(40));
+        let sparks = (Name::new("sparks"), counts(7));
+        let unnamed = (Entity::from_raw_u32(3).unwrap(), counts(2));
+        let timed = PlumeGpuTime {
+            steps_ms: Some(0.0626),
+        };
+        let waiting = PlumeGpuTime { steps_ms: None };
+        let items = || {
+            [
+                (
+                    Entity::from_raw_u32(1).unwrap(),
+                    Some(&sparks.0),
+                    &sparks.1,
+                    Some(&waiting),
+                ),
+                (
+                    Entity::from_raw_u32(2).unwrap(),
+                    Some(&smoke.0),
+                    &smoke.1,
+                    Some(&timed),
+                ),
+                (unnamed.0, None, &unnamed.1, None),
+            ]
+            .into_iter()
+        };
+        let row = |cells: &[&str]| cells.iter().map(|c| c.to_string()).collect::<Vec<_>>();
+        let unnamed_label = unnamed.0.to_string();
+        assert_eq!(
+            effect_rows(items(), true),
+            [
+                row(&[&unnamed_label, "2", "7", "1", "-"]),
+                row(&["smoke", "40", "45", "1", "0.063"]),
+                row(&["sparks", "7", "12", "1", "-"]),
+            ]
+        );
+        assert_eq!(
+            effect_rows(items(), false)[1],
+            row(&["smoke", "40", "45", "1"])
+        );
+        assert_eq!(effect_headings(true).len(), 5);
+        assert_eq!(effect_headings(false).len(), 4);
+    }
 }

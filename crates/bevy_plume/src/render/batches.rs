@@ -167,8 +167,10 @@ pub(crate) fn sync_batches(
     // Entities of each variant this frame, alone, batched or new.
     let keys: Vec<BuildKey> = extracted.effects.iter().map(BuildKey::of).collect();
     let mut crowds: HashMap<SetKey, usize> = HashMap::new();
-    for key in &keys {
-        *crowds.entry(set_key(key)).or_default() += 1;
+    for (e, key) in extracted.effects.iter().zip(&keys) {
+        if can_batch(e) {
+            *crowds.entry(set_key(key)).or_default() += 1;
+        }
     }
     let delta = extracted.delta;
     let mut alive = EntityHashSet::with_capacity(batches.members.len());
@@ -268,8 +270,12 @@ fn set_key(key: &BuildKey) -> SetKey {
     (Arc::as_ptr(&key.graph) as usize, key.variant)
 }
 
-/// Whether `e` may join a batch (before its file is looked at): drawn by the raster renderer.
+/// Whether `e` may join a batch (before its file is looked at): drawn by the raster renderer,
+/// and not timed on its own ([`crate::PlumeGpuTime`]).
 fn can_batch(e: &ExtractedEffect) -> bool {
+    if e.timed {
+        return false;
+    }
     let capacity: u64 = e
         .asset
         .graph

@@ -23,6 +23,21 @@ pub(crate) struct WatchedCounts {
     last_step_ns: Option<u64>,
     /// Every running instance's last counts, by main-world entity (batched entities aside).
     pub shared: SharedCounts,
+    /// Nanoseconds of each timed instance's last timed steps ([`crate::PlumeGpuTime`]), by
+    /// main-world entity.
+    pub gpu_times: SharedGpuTimes,
+}
+
+/// Each timed effect entity's steps' GPU time in nanoseconds: written by the render world,
+/// read by the main world.
+#[derive(Resource, Clone, Default)]
+pub(crate) struct SharedGpuTimes(pub Arc<Mutex<EntityHashMap<u64>>>);
+
+impl SharedGpuTimes {
+    /// The map, even if a panicking thread left it poisoned.
+    pub fn lock(&self) -> std::sync::MutexGuard<'_, EntityHashMap<u64>> {
+        self.0.lock().unwrap_or_else(|p| p.into_inner())
+    }
 }
 
 /// Each effect entity's last counts: written by the render world, read by the main world.
@@ -87,6 +102,13 @@ impl WatchedCounts {
             alive += batch.alive;
         }
         stats.live_particles = alive;
+        let mut times = self.gpu_times.lock();
+        times.clear();
+        for (entity, instance) in &store.instances {
+            if let Some(ns) = instance.step_gpu_ns.filter(|_| instance.timed) {
+                times.insert(*entity, ns);
+            }
+        }
         stats.step_gpu_ns = self.last_step_ns;
     }
 }

@@ -6,7 +6,7 @@ use bevy::render::sync_world::RenderEntity;
 use bevy::render::Extract;
 
 use crate::asset::PlumeEffectAsset;
-use crate::effect::{PlumeBurst, PlumeEffect, PlumeThinning};
+use crate::effect::{PlumeBurst, PlumeEffect, PlumeGpuTime, PlumeThinning};
 
 /// One effect entity as the render world sees it this frame.
 #[derive(Clone)]
@@ -25,6 +25,8 @@ pub(crate) struct ExtractedEffect {
     pub visible: bool,
     /// The fraction of its spawns it keeps ([`crate::PlumeThinning::scale`]).
     pub spawn_scale: f32,
+    /// Whether its steps' GPU time is asked for ([`crate::PlumeGpuTime`]).
+    pub timed: bool,
 }
 
 impl ExtractedEffect {
@@ -57,6 +59,7 @@ type EffectItem = (
     &'static GlobalTransform,
     &'static ViewVisibility,
     &'static PlumeThinning,
+    Has<PlumeGpuTime>,
 );
 
 /// Copies the effect entities and the time step into [`ExtractedEffects`]. Entities whose
@@ -71,7 +74,7 @@ pub(crate) fn extract_effects(
 ) {
     extracted.effects.clear();
     extracted.delta = time.delta_secs_f64();
-    for (main, render, control, transform, seen, thinning) in &effects {
+    for (main, render, control, transform, seen, thinning, timed) in &effects {
         // Drawn as a Bevy mesh: the file compiled with it, once that is done.
         let handle = match &control.mesh {
             Some(mesh) => match meshed.get(&control.handle, mesh) {
@@ -91,6 +94,7 @@ pub(crate) fn extract_effects(
             control: control.clone(),
             visible: seen.get(),
             spawn_scale: thinning.scale,
+            timed,
         });
     }
 }

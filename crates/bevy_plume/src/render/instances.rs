@@ -109,6 +109,14 @@ pub(crate) struct Instance {
     params: BTreeMap<String, f32>,
     /// Whether a refused burst was reported (said once per instance).
     burst_refused: bool,
+    /// Whether its steps' GPU time is asked for ([`crate::PlumeGpuTime`]): its steps are then
+    /// recorded apart, between the timestamps of `timer`.
+    pub timed: bool,
+    /// The timer of its steps, made on its first timed frame where the device has timestamp
+    /// queries.
+    pub timer: Option<plume_runtime::GpuTimer>,
+    /// Nanoseconds of its last timed frame of steps.
+    pub step_gpu_ns: Option<u64>,
 }
 
 /// An instance's steps from the app's time: whole steps of `dt` a frame, the rest carried.
@@ -255,6 +263,11 @@ pub(crate) fn sync_instances(
             instance.space = e.control.space;
             instance.draw = e.control.draw;
             instance.render_entity = e.render;
+            instance.timed = e.timed;
+            if !e.timed {
+                instance.timer = None;
+                instance.step_gpu_ns = None;
+            }
             instance.control_from_code(e);
             instance.clock.advance_time(e.effect_time(extracted.delta));
         }
@@ -389,6 +402,9 @@ fn build(
         undrawable: Vec::new(),
         params: BTreeMap::new(),
         burst_refused: false,
+        timed: e.timed,
+        timer: None,
+        step_gpu_ns: None,
     })
 }
 

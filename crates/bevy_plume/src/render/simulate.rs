@@ -60,7 +60,11 @@ pub(crate) fn simulate(
     }
     batches.record_steps(encoder);
     let mut planned = Vec::new();
+    // An instance whose GPU time is asked for is timed only while the diagnostics read back.
+    let timing = watched.is_some();
+    let gpu = store.gpu.clone();
     for (entity, instance) in store.instances.iter_mut() {
+        let timed = timing && instance.timed && begin_timing(instance, gpu.as_ref(), encoder);
         let steps = std::mem::take(&mut instance.clock.steps);
         let in_world = instance.space == SimulationSpace::World;
         let name = &instance.effect.compiled().ir.name;
@@ -77,8 +81,9 @@ pub(crate) fn simulate(
             (true, _) => motion::parts(steps, instance.placed_at.unwrap_or(to), to),
             (false, _) => vec![(steps, to)],
         };
-        // One plan holds at most 256 steps (a long warm-up records its own passes).
-        let plan = parts.len() == 1 && steps <= 256 && instance.effect.plans_steps();
+        // One plan holds at most 256 steps (a long warm-up records its own passes); a timed
+        // instance records its own passes, between its timestamps.
+        let plan = !timed && parts.len() == 1 && steps <= 256 && instance.effect.plans_steps();
         for (n, at) in parts {
             if in_world && finite {
                 if let Some(placement) = Placement::from_cols(at.to_cols_array()) {
@@ -99,6 +104,9 @@ pub(crate) fn simulate(
         }
         if finite {
             instance.placed_at = Some(to);
+        }
+        if let Some(timer) = instance.timer.as_mut().filter(|_| timed) {
+            timer.end(encoder);
         }
     }
     // Bounds: the planned instances' reductions go into the shared pass, after their steps.
@@ -164,6 +172,35 @@ pub(crate) fn simulate(
     watch_reports(encoder, &store, &fired);
     if let Some(watched) = watched.as_deref_mut() {
         watched.end(encoder, &mut store, &mut batches, &mut stats);
+    }
+}
+
+/// Stamps the start of a timed instance's steps (making its timer on the first frame), taking
+/// the time of an earlier frame's that came back; false where the device has no timestamp
+/// queries or the last reading is still out (its steps then go untimed this frame).
+fn begin_timing(
+    instance: &mut Instance,
+    gpu: Option<&plume_runtime::Gpu>,
+    encoder: &mut wgpu::CommandEncoder,
+) -> bool {
+    if instance.timer.is_none() {
+        instance.timer = gpu.and_then(plume_runtime::GpuTimer::new);
+    }
+    let Some(timer) = instance.timer.as_mut() else {
+        return false;
+    };
+    match timer.begin(encoder) {
+        Ok(taken) => {
+            instance.step_gpu_ns = taken.or(instance.step_gpu_ns);
+            timer.is_begun()
+        }
+        Err(err) => {
+            warn_once!(
+                "{}: its steps' timer: {err}",
+                instance.effect.compiled().ir.name
+            );
+            false
+        }
     }
 }
 

@@ -99,6 +99,11 @@ impl GpuTimer {
         Ok(taken)
     }
 
+    /// Whether the last [`Self::begin`] stamped a start (the work then recorded is timed).
+    pub fn is_begun(&self) -> bool {
+        self.begun
+    }
+
     /// After the work: stamps its end and records the timestamps' copy, when begun.
     pub fn end(&mut self, encoder: &mut wgpu::CommandEncoder) {
         if !std::mem::take(&mut self.begun) {
