@@ -296,6 +296,9 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "fill_ms": r.fill_seconds.map(|s| s * 1e3),
                 "sort_alone": sort_alone.as_ref().map(sort_json),
                 "dispatches": args.profile.then(|| dispatches_json(&r.dispatches)),
+                "build_ms": r.build_seconds[0] * 1e3,
+                "build_again_ms": r.build_seconds[1] * 1e3,
+                "build_again_uncached_ms": r.build_seconds[2] * 1e3,
             })
         );
     } else {
@@ -312,6 +315,12 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
             );
         }
         println!("  bytes per particle  {}", r.bytes_per_particle);
+        println!(
+            "  build               {:.1} ms, again {:.1} ms with the device's cache of kernels, {:.1} ms without",
+            r.build_seconds[0] * 1e3,
+            r.build_seconds[1] * 1e3,
+            r.build_seconds[2] * 1e3
+        );
         println!(
             "  update (stateful)   {:.4} ms/step, {:.3} G particle-steps/s, {:.1} GB/s",
             r.seconds_per_step * 1e3,

@@ -57,7 +57,7 @@ impl CopyKernel {
             .min(gpu.limits.max_buffer_size)
             / 16
             * 16;
-        let module = crate::device::gpu::shader_module(device, "copy", COPY_WGSL);
+        let module = gpu.shader_module("copy", COPY_WGSL);
         let pipeline = gpu.compute_pipeline(&module, entry, None);
         let layout = pipeline.get_bind_group_layout(0);
         let mut parts = Vec::new();

@@ -66,6 +66,11 @@ pub struct BenchResult {
     pub fill_seconds: Option<f64>,
     /// With [`BenchOptions::profile`]: each dispatch's time a step (timestamps included).
     pub dispatches: Vec<DispatchTime>,
+    /// Wall seconds of building the effect at N (`Effect::new`: its buffers and kernels): the
+    /// first time in the process; again, its modules and pipelines taken from the device's
+    /// cache; and again on the same device with an empty cache (what every build cost before
+    /// the cache, the driver's own caches warm).
+    pub build_seconds: [f64; 3],
 }
 
 impl BenchResult {
@@ -133,6 +138,7 @@ pub fn bench(
     let live = ((f64::from(particles) * options.occupancy.clamp(0.0, 1.0)).round() as u32).max(1);
     let compiled = compile_occupied(effect, particles, live, State::Stateful)?;
     let bpp = compiled.layout.bytes_per_particle;
+    let build_seconds = time_builds(gpu, &compiled)?;
     let timer = PassTimer::new(gpu);
     // Warm the pipelines up on a throwaway copy so step 0 of the measured one is not a
     // first dispatch.
@@ -254,7 +260,20 @@ pub fn bench(
         },
         stateless,
         dispatches,
+        build_seconds,
     })
+}
+
+/// Wall seconds of building `compiled` (`Effect::new`) three times in a row, each build
+/// dropped once made: first, again, and again with an empty cache
+/// ([`BenchResult::build_seconds`]).
+fn time_builds(gpu: &Gpu, compiled: &CompiledEffect) -> Result<[f64; 3], RuntimeError> {
+    let build = |gpu: &Gpu| {
+        let start = std::time::Instant::now();
+        drop(crate::sim::effect::Effect::new(gpu, compiled.clone())?);
+        Ok::<_, RuntimeError>(start.elapsed().as_secs_f64())
+    };
+    Ok([build(gpu)?, build(gpu)?, build(&gpu.with_empty_cache())?])
 }
 
 /// Particles whose baked-field error `plume bench` measures (the first by id).

@@ -76,7 +76,7 @@ impl DepthCopy {
                 "@group(0) @binding(0) var depth: texture_2d<f32>;"
             };
             let source = format!("{declaration}\n{}", include_str!("depth_copy.wgsl"));
-            let module = crate::device::gpu::shader_module(&gpu.device, "depth copy", source);
+            let module = gpu.shader_module("depth copy", &source);
             gpu.compute_pipeline(&module, "main", None)
         })
     }

@@ -4,6 +4,7 @@
 
 use std::sync::{Arc, Mutex};
 
+use crate::device::pipeline_cache::PipelineCache;
 use crate::error::RuntimeError;
 
 /// Which backends to search.
@@ -69,6 +70,8 @@ pub struct Gpu {
     errors: Arc<Mutex<Option<String>>>,
     /// Why the device was lost, once it has been (never cleared: a lost device stays lost).
     lost: Arc<Mutex<Option<String>>>,
+    /// Modules, layouts and pipelines made on this device, shared by every clone.
+    pub(crate) cache: Arc<PipelineCache>,
 }
 
 /// An instance searching `backends`, with no display (headless work).
@@ -167,6 +170,7 @@ impl Gpu {
             downlevel: Some(downlevel),
             errors,
             lost,
+            cache: Arc::default(),
         };
         Ok((gpu, adapter))
     }
@@ -184,6 +188,7 @@ impl Gpu {
             downlevel: None,
             errors: Arc::default(),
             lost: Arc::default(),
+            cache: Arc::default(),
         }
     }
 
@@ -279,18 +284,53 @@ impl Gpu {
         layout: Option<&wgpu::PipelineLayout>,
         constants: &[(&str, f64)],
     ) -> wgpu::ComputePipeline {
-        self.device
-            .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-                label: Some(entry),
-                layout,
-                module,
-                entry_point: Some(entry),
-                compilation_options: wgpu::PipelineCompilationOptions {
-                    constants,
-                    ..Default::default()
-                },
-                cache: None,
-            })
+        self.cache.compute((module, entry), layout, constants, || {
+            self.device
+                .create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                    label: Some(entry),
+                    layout,
+                    module,
+                    entry_point: Some(entry),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants,
+                        ..Default::default()
+                    },
+                    cache: None,
+                })
+        })
+    }
+
+    /// This device with a cache of its own, empty (`plume bench` times a build without the
+    /// shared one).
+    pub(crate) fn with_empty_cache(&self) -> Self {
+        Self {
+            cache: Arc::default(),
+            ..self.clone()
+        }
+    }
+
+    /// The module of WGSL `source`, made once per source on this device (see
+    /// [`crate::device::pipeline_cache::shader_module`]).
+    pub(crate) fn shader_module(&self, label: &str, source: &str) -> wgpu::ShaderModule {
+        self.cache.module(&self.device, label, source)
+    }
+
+    /// The bind group layout of `entries`, made once per set of entries on this device.
+    pub(crate) fn bind_group_layout(
+        &self,
+        label: &str,
+        entries: &[wgpu::BindGroupLayoutEntry],
+    ) -> wgpu::BindGroupLayout {
+        self.cache.bind_group_layout(&self.device, label, entries)
+    }
+
+    /// The pipeline layout of the one bind group layout `group`, made once per layout.
+    pub(crate) fn pipeline_layout(
+        &self,
+        label: &str,
+        group: &wgpu::BindGroupLayout,
+    ) -> wgpu::PipelineLayout {
+        self.cache.pipeline_layout(&self.device, label, group)
     }
 
     /// Whether GPU timestamp queries are available.
@@ -358,32 +398,4 @@ pub(crate) fn texture_2d_descriptor(
         usage,
         view_formats: &[],
     }
-}
-
-/// Builds a WGSL module with wgpu's bounds checks but without its loop bounding.
-///
-/// By default wgpu gives every loop a hidden counter that breaks out after 2^64 iterations
-/// (so a shader cannot hang the driver); that counter hides a loop's trip count from the
-/// driver's compiler, which then no longer unrolls `for (var k = 0u; k < 10u; k++)`, and the
-/// arrays such loops index move from registers to memory: with the counters the radix sort's
-/// downsweep was far slower than with the same loops unrolled by hand (docs/performance.md,
-/// "Depth sort and the radix sort"). Every loop in Plume's kernels, written here or generated
-/// by the compiler, ends by construction: a counter runs to a bound, a binary search narrows,
-/// or a bit is cleared each iteration; effect files cannot write loops.
-pub(crate) fn shader_module<'a>(
-    device: &wgpu::Device,
-    label: &str,
-    source: impl Into<std::borrow::Cow<'a, str>>,
-) -> wgpu::ShaderModule {
-    let checks = wgpu::ShaderRuntimeChecks {
-        force_loop_bounding: false,
-        ..wgpu::ShaderRuntimeChecks::checked()
-    };
-    let descriptor = wgpu::ShaderModuleDescriptor {
-        label: Some(label),
-        source: wgpu::ShaderSource::Wgsl(source.into()),
-    };
-    // SAFETY: bounds checks stay on; the loop bounding is off, which wgpu requires only that
-    // no loop be infinite, and none is (see above).
-    unsafe { device.create_shader_module_trusted(descriptor, checks) }
 }

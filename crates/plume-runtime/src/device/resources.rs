@@ -310,16 +310,9 @@ impl Resources {
                 Ok((b.binding, buffer))
             })
             .collect::<Result<_, RuntimeError>>()?;
-        let module = crate::device::gpu::shader_module(device, &effect.ir.name, &effect.wgsl);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("plume"),
-            entries: &crate::device::bind_layout::entries(effect),
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("plume"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
+        let module = gpu.shader_module(&effect.ir.name, &effect.wgsl);
+        let layout = gpu.bind_group_layout("plume", &crate::device::bind_layout::entries(effect));
+        let pipeline_layout = gpu.pipeline_layout("plume", &layout);
         let resources = Self {
             gpu: gpu.clone(),
             chunk_slots,

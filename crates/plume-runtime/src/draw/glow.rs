@@ -74,7 +74,7 @@ impl GlowPasses {
         let hdr = hdr_texture.create_view(&Default::default());
         let blurred = hdr_image("glow blurred along x", wgpu::TextureUsages::STORAGE_BINDING)
             .create_view(&Default::default());
-        let module = crate::device::gpu::shader_module(device, "glow", include_str!("glow.wgsl"));
+        let module = gpu.shader_module("glow", include_str!("glow.wgsl"));
         let pass = |entry: &str, views: &[(u32, &wgpu::TextureView)]| {
             let pipeline = gpu.compute_pipeline(&module, entry, None);
             let mut entries = vec![wgpu::BindGroupEntry {

@@ -107,7 +107,7 @@ impl LiveList {
             STORAGE | wgpu::BufferUsages::INDIRECT,
             |b| b[..4].copy_from_slice(&primitive.vertices().to_le_bytes()),
         )?;
-        let module = crate::device::gpu::shader_module(device, "live list", LIVE_LIST_WGSL);
+        let module = gpu.shader_module("live list", LIVE_LIST_WGSL);
         let pipeline = |entry| gpu.compute_pipeline(&module, entry, None);
         let (flags, scatter) = (pipeline("flags"), pipeline("scatter"));
         let id_word = effect

@@ -5,6 +5,7 @@ use plume_compiler::schema::Blend;
 use plume_compiler::texture::{SAMPLER_BINDING, TEXTURE_BINDING};
 
 use crate::device::gpu::Gpu;
+use crate::device::pipeline_cache::RenderKey;
 use crate::draw::target::DrawTarget;
 use crate::draw::texture::SpriteTexture;
 
@@ -34,6 +35,49 @@ pub(crate) fn plain(topology: wgpu::PrimitiveTopology) -> wgpu::PrimitiveState {
 /// buffers (the reference drawing feeds its quads and ribbons so).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn vertex_pipeline(
+    gpu: &Gpu,
+    module: &wgpu::ShaderModule,
+    (vs, fs): (&str, &str),
+    primitive: wgpu::PrimitiveState,
+    target: &DrawTarget,
+    blend: wgpu::BlendState,
+    layout: Option<&wgpu::PipelineLayout>,
+    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
+) -> wgpu::RenderPipeline {
+    let make = || {
+        create_pipeline(
+            gpu,
+            module,
+            (vs, fs),
+            primitive,
+            target,
+            blend,
+            layout,
+            buffers,
+        )
+    };
+    // Shared through the device's cache where the module and the target say it all (the
+    // reference drawing's pipelines, with layouts and vertex buffers of their own, are not).
+    if layout.is_some() || !buffers.is_empty() {
+        return make();
+    }
+    let key = RenderKey {
+        module: module.clone(),
+        entries: (vs.to_string(), fs.to_string()),
+        primitive,
+        depth: target
+            .depth
+            .map(|d| (d.format, d.compare, target.writes_depth)),
+        samples: target.sample_count,
+        color: target.color_format,
+        blend,
+    };
+    gpu.cache.render(key, make)
+}
+
+/// [`vertex_pipeline`], made.
+#[allow(clippy::too_many_arguments)]
+fn create_pipeline(
     gpu: &Gpu,
     module: &wgpu::ShaderModule,
     (vs, fs): (&str, &str),

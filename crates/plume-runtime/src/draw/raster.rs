@@ -495,7 +495,7 @@ fn alive_instances(
             b[16..20].copy_from_slice(&capacity.to_le_bytes());
         },
     )?;
-    let module = crate::device::gpu::shader_module(device, "draw args", DRAW_ARGS_WGSL);
+    let module = gpu.shader_module("draw args", DRAW_ARGS_WGSL);
     let kernel = gpu.compute_pipeline(&module, "draw_args", None);
     let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("draw args"),
@@ -552,7 +552,7 @@ pub(crate) fn draw_module(
     } else {
         plume_compiler::wgsl::draw::emit(&effect.ir, &effect.layout, shape)
     };
-    let module = crate::device::gpu::shader_module(&gpu.device, "draw", source);
+    let module = gpu.shader_module("draw", &source);
     let mut entries = Vec::new();
     if shape.through_list {
         let order = match list {

@@ -49,7 +49,7 @@ impl TrailDraw {
             Some(compiled) if shape == DrawShape::single(&effect.ir) => compiled.clone(),
             _ => trail::emit(&effect.ir, &effect.layout, &shape),
         };
-        let module = crate::device::gpu::shader_module(&gpu.device, "trail", source);
+        let module = gpu.shader_module("trail", &source);
         let pipeline = render_pipeline(
             gpu,
             &module,

@@ -204,7 +204,7 @@ impl ReferenceRenderer {
             include_str!("reference_sprite.wgsl"),
         ]
         .concat();
-        let module = crate::device::gpu::shader_module(device, "sprites", source);
+        let module = gpu.shader_module("sprites", &source);
         let camera = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("camera"),
             size: CAMERA_BYTES,

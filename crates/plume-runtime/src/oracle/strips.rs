@@ -112,7 +112,7 @@ impl StripPipeline {
             include_str!("reference_strip.wgsl"),
         ]
         .concat();
-        let module = crate::device::gpu::shader_module(device, "reference strips", source);
+        let module = gpu.shader_module("reference strips", &source);
         let pipeline = vertex_pipeline(
             gpu,
             &module,

@@ -113,7 +113,7 @@ impl Scene {
             include_str!("scene.wgsl"),
         ]
         .concat();
-        let module = crate::device::gpu::shader_module(device, "scene", source);
+        let module = gpu.shader_module("scene", &source);
         let mut entries = [0, 1]
             .map(|binding| wgpu::BindGroupLayoutEntry {
                 binding,

@@ -66,7 +66,7 @@ impl SceneShadow {
             wgpu::BufferUsages::UNIFORM,
             |b| b.copy_from_slice(&words),
         )?;
-        let module = crate::device::gpu::shader_module(device, "scene shadow", SHADER);
+        let module = gpu.shader_module("scene shadow", SHADER);
         let pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
             label: Some("scene shadow"),
             layout: None,

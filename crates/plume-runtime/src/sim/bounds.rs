@@ -139,7 +139,7 @@ impl BoundsProbe {
         gpu: &Gpu,
         buffers: &[(&plume_compiler::Layout, &[Chunk])],
     ) -> Result<Self, RuntimeError> {
-        let module = crate::device::gpu::shader_module(&gpu.device, "live bounds", BOUNDS_WGSL);
+        let module = gpu.shader_module("live bounds", BOUNDS_WGSL);
         let pipeline = gpu.compute_pipeline(&module, "bounds", None);
         let keys = filled_buffer(gpu, "live bounds", 24, STORAGE, |_| {})?;
         let empty = filled_buffer(gpu, "empty bounds", 24, STORAGE, |b| {

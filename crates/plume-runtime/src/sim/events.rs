@@ -73,9 +73,7 @@ impl EventOrder {
         order: &wgpu::Buffer,
         count: u32,
     ) -> Result<Self, RuntimeError> {
-        let module = |label: &str, source: &'static str| {
-            crate::device::gpu::shader_module(&gpu.device, label, source)
-        };
+        let module = |label: &str, source: &'static str| gpu.shader_module(label, source);
         let dispatch = |module: &wgpu::ShaderModule,
                         entry: &'static str,
                         entries: &[(u32, &wgpu::Buffer)],

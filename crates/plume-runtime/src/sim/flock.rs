@@ -56,7 +56,7 @@ impl FlockPass {
                     .flock_search_wgsl
                     .as_deref()
                     .expect("the compiler emits a grid flock's search module");
-                let module = crate::device::gpu::shader_module(&gpu.device, "flock search", source);
+                let module = gpu.shader_module("flock search", source);
                 let search = gpu.compute_pipeline(&module, "flock_grid", None);
                 let entries: Vec<(u32, &wgpu::Buffer)> = effect
                     .layout

@@ -73,11 +73,7 @@ impl ReportGather {
         let buffer = filled_buffer(gpu, "event report", bytes, STORAGE, |data| {
             data[..header.len()].copy_from_slice(&header)
         })?;
-        let module = crate::device::gpu::shader_module(
-            &gpu.device,
-            "event report",
-            include_str!("event_report.wgsl"),
-        );
+        let module = gpu.shader_module("event report", include_str!("event_report.wgsl"));
         let entry = if clears { "gather_and_clear" } else { "gather" };
         let pipeline = gpu.compute_pipeline(&module, entry, None);
         let bind = gpu.bind_buffers(

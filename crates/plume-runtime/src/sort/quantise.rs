@@ -52,11 +52,7 @@ impl DepthQuantise {
         n: u64,
     ) -> Result<Self, RuntimeError> {
         let device = &gpu.device;
-        let module = crate::device::gpu::shader_module(
-            device,
-            "depth quantise",
-            include_str!("depth_quantise.wgsl"),
-        );
+        let module = gpu.shader_module("depth quantise", include_str!("depth_quantise.wgsl"));
         let pipeline = |entry| gpu.compute_pipeline(&module, entry, None);
         let (reset, reduce, quantise, identity) = (
             pipeline("range_reset"),

@@ -154,9 +154,7 @@ impl GpuSorter {
     }
 
     fn build(gpu: &Gpu, ranking: Ranking) -> Self {
-        let module = |label: &str, source: String| {
-            crate::device::gpu::shader_module(&gpu.device, label, source)
-        };
+        let module = |label: &str, source: String| gpu.shader_module(label, &source);
         let sort = module(
             "sort",
             format!(

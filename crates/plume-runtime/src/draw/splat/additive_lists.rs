@@ -29,8 +29,7 @@ impl AdditiveLists {
     /// The kernels of `additive_lists.wgsl` on `layout` (the tile kernels' layout).
     pub(super) fn new(gpu: &Gpu, layout: &wgpu::BindGroupLayout) -> Result<Self, RuntimeError> {
         let device = &gpu.device;
-        let module = crate::device::gpu::shader_module(
-            device,
+        let module = gpu.shader_module(
             "additive lists",
             concat!(
                 include_str!("../../device/workgroup_scan.wgsl"),

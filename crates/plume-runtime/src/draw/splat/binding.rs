@@ -68,7 +68,7 @@ pub(super) fn tile_kernels(
         include_str!("tiles_shared.wgsl"),
         include_str!("splat.wgsl")
     );
-    let module = crate::device::gpu::shader_module(device, "splat", &source);
+    let module = gpu.shader_module("splat", &source);
     let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
         label: Some("splat tiles"),
         bind_group_layouts: &[Some(layout)],
@@ -126,7 +126,7 @@ pub(super) fn ribbon_module(
         ..shape
     };
     let source = trail::emit(&effect.ir, &effect.layout, &shape);
-    let module = crate::device::gpu::shader_module(&gpu.device, "splat ribbons", source);
+    let module = gpu.shader_module("splat ribbons", &source);
     let entries = crate::draw::trail::trail_buffers(effect, res, shape.through_list)?;
     Ok((module, entries))
 }

@@ -90,11 +90,7 @@ impl HostSplat {
             .iter()
             .map(|_| AsyncRead::new(&gpu, "splat entries needed", 4))
             .collect();
-        let module = crate::device::gpu::shader_module(
-            &gpu.device,
-            "splat over the host",
-            include_str!("host.wgsl"),
-        );
+        let module = gpu.shader_module("splat over the host", include_str!("host.wgsl"));
         // Over whatever the pass holds: the splat has tested depth itself, so the triangle
         // passes any depth attachment the pass has, and writes none.
         let blit_target = match target.depth {
