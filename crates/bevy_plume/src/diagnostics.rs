@@ -12,6 +12,7 @@ use bevy::render::{Render, RenderApp, RenderSystems};
 use crate::effect::PlumeGpuTime;
 use crate::render::counts::{SharedCounts, SharedGpuTimes, WatchedCounts};
 use crate::render::instances::PlumeRenderStats;
+use crate::thinning::MeasuredSteps;
 
 /// An effect entity's particles, as last read back from the GPU without waiting (a frame or
 /// two old), kept up to date while [`PlumeDiagnosticsPlugin`] is added. A batched entity has
@@ -107,11 +108,19 @@ fn share_stats(stats: Res<PlumeRenderStats>, shared: Res<SharedStats>) {
     }
 }
 
-/// Adds the last counts to Bevy's diagnostics.
-fn measure(mut diagnostics: Diagnostics, shared: Res<SharedStats>) {
+/// Adds the last counts to Bevy's diagnostics, and the steps' GPU time to what the budget
+/// reads.
+fn measure(
+    mut diagnostics: Diagnostics,
+    shared: Res<SharedStats>,
+    measured: Option<ResMut<MeasuredSteps>>,
+) {
     let Ok(s) = shared.0.lock().map(|s| *s) else {
         return;
     };
+    if let Some(mut measured) = measured {
+        measured.gpu_ms = s.step_gpu_ns.map(|ns| ns as f32 * 1e-6);
+    }
     diagnostics.add_measurement(&PlumeDiagnosticsPlugin::INSTANCES, || s.instances as f64);
     diagnostics.add_measurement(&PlumeDiagnosticsPlugin::BATCHES, || s.batches as f64);
     diagnostics.add_measurement(&PlumeDiagnosticsPlugin::DRAWS, || s.draws as f64);

@@ -346,6 +346,9 @@ pub struct PlumeThinning {
     pub pixels: f32,
     /// Particles its file keeps alive unthinned (estimated: `Effect::expected_alive`).
     pub expected_alive: u64,
+    /// Its steps paused by the budget's GPU time ([`crate::PlumeBudget::step_gpu_ms`]): an
+    /// unseen effect that stands still until seen or allowed again.
+    pub paused: bool,
 }
 
 impl Default for PlumeThinning {
@@ -354,6 +357,7 @@ impl Default for PlumeThinning {
             scale: 1.0,
             pixels: f32::INFINITY,
             expected_alive: 0,
+            paused: false,
         }
     }
 }

@@ -103,6 +103,7 @@ impl Plugin for PlumePlugin {
             .register_type::<PlumeThinning>()
             .register_type::<PlumeGpuTime>()
             .register_type::<PlumeBudget>()
+            .init_resource::<thinning::MeasuredSteps>()
             .init_resource::<effect::FiredBursts>()
             .init_resource::<mesh_particles::MeshedEffects>()
             .add_message::<PlumeEventFired>()

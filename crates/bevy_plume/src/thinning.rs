@@ -62,18 +62,32 @@ impl PlumeLod {
 /// capacity: `Effect::expected_alive`) times its own spawn scale and level of detail; while
 /// their sum is over the budget, the least visible effects are thinned first (unseen ones,
 /// then the fewest pixels across, in that order), each as far as it takes, down to spawning
-/// nothing. Their particles alive live on, so the count follows within a lifetime. Insert it
-/// as a resource; none (the default) is no budget.
+/// nothing. Their particles alive live on, so the count follows within a lifetime.
+///
+/// It may also bound the GPU time of a frame's steps (`step_gpu_ms`). Thinning spawns does not
+/// shorten a step (a step runs over every slot of an effect's capacity, alive or not), so this
+/// part pauses steps instead: while the estimate is over the budget, effects that no camera
+/// sees stop stepping, the largest capacity first, each marked [`PlumeThinning::paused`];
+/// they stand still until a camera sees them or the budget allows them again. An effect in
+/// view is never paused, so a budget smaller than what the seen effects take is not kept. The
+/// estimate is the last measured steps' GPU time spread over the slots that stepped, a frame
+/// or two old: it needs [`crate::PlumeDiagnosticsPlugin`] (which measures it) and timestamp
+/// queries, and is not kept without them (said once). A batched entity saves little paused:
+/// its batch steps every slot while any member steps. Insert it as a resource; none (the
+/// default) is no budget.
 ///
 /// ```no_run
 /// # use bevy::prelude::*;
 /// App::new().insert_resource(bevy_plume::PlumeBudget::live_particles(200_000));
+/// App::new().insert_resource(bevy_plume::PlumeBudget::step_gpu_ms(0.5));
 /// ```
 #[derive(Resource, Clone, Copy, Debug, Default, PartialEq, Reflect)]
 #[reflect(Resource)]
 pub struct PlumeBudget {
     /// The most particles every effect together is expected to keep alive (None: no limit).
     pub live_particles: Option<u64>,
+    /// The most GPU milliseconds a frame's steps may take (None: no limit).
+    pub step_gpu_ms: Option<f32>,
 }
 
 impl PlumeBudget {
@@ -81,8 +95,41 @@ impl PlumeBudget {
     pub fn live_particles(count: u64) -> Self {
         Self {
             live_particles: Some(count),
+            step_gpu_ms: None,
         }
     }
+
+    /// At most `ms` GPU milliseconds of steps a frame.
+    pub fn step_gpu_ms(ms: f32) -> Self {
+        Self {
+            live_particles: None,
+            step_gpu_ms: Some(ms),
+        }
+    }
+
+    /// This budget, with at most `ms` GPU milliseconds of steps a frame too.
+    pub fn with_step_gpu_ms(self, ms: f32) -> Self {
+        Self {
+            step_gpu_ms: Some(ms),
+            ..self
+        }
+    }
+}
+
+/// The steps' GPU time last measured, in ms (written by `PlumeDiagnosticsPlugin`; None where
+/// it is not added or the device has no timestamp queries), for [`PlumeBudget::step_gpu_ms`].
+#[derive(Resource, Clone, Copy, Debug, Default)]
+pub(crate) struct MeasuredSteps {
+    pub gpu_ms: Option<f32>,
+}
+
+/// What [`thin_effects`] remembers between frames for the budget of GPU time.
+#[derive(Default)]
+pub(crate) struct StepsLedger {
+    /// Slots that stepped in the last frame decided.
+    stepped_slots: u64,
+    /// Frames with a budget of GPU time and no measurement.
+    unmeasured_frames: u32,
 }
 
 /// What [`thin_effects`] reads of each effect entity.
@@ -100,43 +147,119 @@ type ThinnedItem = (
 /// and the budget.
 pub(crate) fn thin_effects(
     budget: Option<Res<PlumeBudget>>,
+    measured: Option<Res<MeasuredSteps>>,
+    mut ledger: Local<StepsLedger>,
     assets: Res<Assets<PlumeEffectAsset>>,
     cameras: Query<(&Camera, &GlobalTransform)>,
     mut effects: Query<ThinnedItem>,
 ) {
+    let budget = budget.map(|b| *b).unwrap_or_default();
     let cameras: Vec<_> = cameras.iter().filter(|(c, _)| c.is_active).collect();
     // (entity, its own scale, pixels across, expected alive): every scale is decided before
     // any is written, so an entity's component changes only when its thinning does.
     let mut weighed = Vec::new();
+    // (slots, whether it steps unpaused, whether the budget may pause it) of each.
+    let mut steppers = Vec::new();
     for (entity, effect, transform, seen, aabb, lod, _) in &effects {
         let pixels = match (seen.get(), aabb) {
             (false, _) => 0.0,
             (true, None) => f32::INFINITY,
             (true, Some(aabb)) => pixels_across(&cameras, transform, aabb),
         };
-        let expected_alive = assets
-            .get(&effect.handle)
-            .map_or(0, |a| a.graph.expected_alive());
+        let asset = assets.get(&effect.handle);
+        let expected_alive = asset.map_or(0, |a| a.graph.expected_alive());
         let own = clamp01(effect.spawn_scale) * lod.map_or(1.0, |l| l.scale(pixels));
         weighed.push((entity, own, pixels, expected_alive));
+        let slots = asset.map_or(0, |a| {
+            a.graph
+                .groups
+                .iter()
+                .map(|g| u64::from(g.effect.ir.capacity))
+                .sum()
+        });
+        let always = effect.simulate == crate::effect::PlumeSimulate::Always;
+        let steps = effect.playing && (seen.get() || always);
+        steppers.push((slots, steps, steps && !seen.get()));
     }
-    let shares = match budget.and_then(|b| b.live_particles) {
+    let shares = match budget.live_particles {
         Some(limit) => budget_shares(&weighed, limit),
         None => vec![1.0; weighed.len()],
     };
+    let paused = match budget.step_gpu_ms {
+        Some(limit) => {
+            let measured = measured.and_then(|m| m.gpu_ms);
+            pauses(&weighed, &steppers, limit, measured, &mut ledger)
+        }
+        None => vec![false; weighed.len()],
+    };
+    ledger.stepped_slots = steppers
+        .iter()
+        .zip(&paused)
+        .filter(|((_, steps, _), paused)| *steps && !**paused)
+        .map(|((slots, ..), _)| slots)
+        .sum();
     // The query visits the entities in the order it did above (nothing was spawned or
     // changed archetype in between): the weights zip with them.
-    let weights = weighed.into_iter().zip(shares);
-    for ((entity, .., mut thinning), ((weighed_entity, own, pixels, expected_alive), share)) in
-        effects.iter_mut().zip(weights)
+    let weights = weighed.into_iter().zip(shares).zip(paused);
+    for (
+        (entity, .., mut thinning),
+        (((weighed_entity, own, pixels, expected_alive), share), paused),
+    ) in effects.iter_mut().zip(weights)
     {
         debug_assert_eq!(entity, weighed_entity);
         thinning.set_if_neq(PlumeThinning {
             scale: own * share,
             pixels,
             expected_alive,
+            paused,
         });
     }
+}
+
+/// Which effects the budget of `limit` GPU ms of steps pauses: none until a measurement has
+/// come back; then, while the estimate (`measured` ms over the slots that stepped last frame,
+/// times the slots that would step) is over `limit`, the unseen ones the budget may pause,
+/// the largest capacity first (then by entity, for a stable order). `steppers`: (slots,
+/// whether it steps unpaused, whether it may be paused) of each of `weighed`.
+fn pauses(
+    weighed: &[(Entity, f32, f32, u64)],
+    steppers: &[(u64, bool, bool)],
+    limit: f32,
+    measured: Option<f32>,
+    ledger: &mut StepsLedger,
+) -> Vec<bool> {
+    let mut paused = vec![false; steppers.len()];
+    let Some(ms) = measured else {
+        ledger.unmeasured_frames += 1;
+        if ledger.unmeasured_frames == 120 {
+            warn!("bevy_plume: PlumeBudget::step_gpu_ms is not kept: add PlumeDiagnosticsPlugin, which measures the steps' GPU time (and needs timestamp queries)");
+        }
+        return paused;
+    };
+    if ledger.stepped_slots == 0 {
+        return paused;
+    }
+    let per_slot = f64::from(ms) / ledger.stepped_slots as f64;
+    let mut cost: f64 = steppers
+        .iter()
+        .filter(|(_, steps, _)| *steps)
+        .map(|(slots, ..)| *slots as f64 * per_slot)
+        .sum();
+    let mut order: Vec<usize> = (0..steppers.len()).filter(|&i| steppers[i].2).collect();
+    order.sort_by(|&a, &b| {
+        steppers[b]
+            .0
+            .cmp(&steppers[a].0)
+            .then(weighed[a].0.cmp(&weighed[b].0))
+    });
+    for i in order {
+        if cost <= f64::from(limit) {
+            break;
+        }
+        paused[i] = true;
+        cost -= steppers[i].0 as f64 * per_slot;
+    }
+    paused
 }
 
 /// Each effect's share (0 to 1) of what it asks for, so that the sum of what they keep alive

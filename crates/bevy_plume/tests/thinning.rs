@@ -6,7 +6,10 @@ mod common;
 
 use bevy::prelude::*;
 use bevy::render::RenderApp;
-use bevy_plume::{read_totals, PlumeBudget, PlumeEffect, PlumeLod, PlumeThinning, SimulationSpace};
+use bevy_plume::{
+    read_totals, PlumeBudget, PlumeDiagnosticsPlugin, PlumeEffect, PlumeLod, PlumeThinning,
+    SimulationSpace,
+};
 use common::Harness;
 
 /// 300 particles a second living 1 s (300 alive unthinned), barely moving, in a declared 1 m
@@ -140,4 +143,70 @@ fn a_budget_thins_the_unseen_effects_first_then_the_smallest() {
     h.app.world_mut().remove_resource::<PlumeBudget>();
     h.update(2);
     assert!(unseen.iter().all(|&e| thinning(&mut h, e).scale == 1.0));
+}
+
+#[test]
+fn a_budget_of_gpu_time_pauses_the_steps_of_unseen_effects() {
+    let _one = serial();
+    let dir = common::asset_dir("thinning_gpu_budget");
+    // Stateful, so that every step runs a kernel over its slots.
+    let mist = MIST.replacen("capacity: 400,", "capacity: 400, state: Stateful,", 1);
+    std::fs::write(dir.join("mist.plume.ron"), mist).unwrap();
+    let mut h = Harness::with_app(&dir, |app| {
+        app.add_plugins(PlumeDiagnosticsPlugin);
+    });
+    let handle = h.load("mist.plume.ron");
+    h.wait_for_pipelines();
+    let mist = PlumeEffect::new(handle);
+    let seen = spawn(&mut h, mist.clone(), Vec3::ZERO, ());
+    // Behind the camera (at z = 10, looking at the origin): culled by their bounds.
+    let unseen: Vec<Entity> = (0..4)
+        .map(|i| {
+            spawn(
+                &mut h,
+                mist.clone(),
+                Vec3::new(2.0 * i as f32, 0.0, 30.0),
+                (),
+            )
+        })
+        .collect();
+    h.wait_for_effects();
+    let steps = |h: &Harness, e: Entity| totals(h, e).steps;
+    let timed = h
+        .app
+        .sub_app(RenderApp)
+        .world()
+        .resource::<bevy::render::renderer::RenderDevice>()
+        .features()
+        .contains(bevy::render::render_resource::WgpuFeatures::TIMESTAMP_QUERY);
+    // A budget no step fits: every unseen effect stops stepping, the one in view goes on.
+    h.app.insert_resource(PlumeBudget::step_gpu_ms(1e-6));
+    h.update(10);
+    let before: Vec<u64> = unseen.iter().map(|&e| steps(&h, e)).collect();
+    let seen_before = steps(&h, seen);
+    h.update(20);
+    assert!(!thinning(&mut h, seen).paused);
+    assert!(
+        steps(&h, seen) >= seen_before + 19,
+        "the effect in view steps on"
+    );
+    for (&e, &was) in unseen.iter().zip(&before) {
+        match timed {
+            // lavapipe has timestamp queries.
+            true => {
+                assert!(thinning(&mut h, e).paused, "{e}: {:?}", thinning(&mut h, e));
+                assert_eq!(steps(&h, e), was, "{e} stands still while paused");
+            }
+            false => assert!(!thinning(&mut h, e).paused, "no measurement, no pause"),
+        }
+    }
+    // A budget they all fit: they step again.
+    h.app.insert_resource(PlumeBudget::step_gpu_ms(1000.0));
+    h.update(5);
+    let resumed: Vec<u64> = unseen.iter().map(|&e| steps(&h, e)).collect();
+    h.update(10);
+    for (&e, &was) in unseen.iter().zip(&resumed) {
+        assert!(!thinning(&mut h, e).paused);
+        assert!(steps(&h, e) >= was + 9, "{e} steps again");
+    }
 }

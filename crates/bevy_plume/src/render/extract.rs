@@ -27,13 +27,16 @@ pub(crate) struct ExtractedEffect {
     pub spawn_scale: f32,
     /// Whether its steps' GPU time is asked for ([`crate::PlumeGpuTime`]).
     pub timed: bool,
+    /// Whether the budget's GPU time pauses its steps ([`crate::PlumeThinning::paused`]).
+    pub paused: bool,
 }
 
 impl ExtractedEffect {
     /// Seconds of the effect's time this frame of `delta` app seconds: scaled, and none while
-    /// paused, or unseen when it simulates only while visible.
+    /// paused (by game code or the budget), or unseen when it simulates only while visible.
     pub(crate) fn effect_time(&self, delta: f64) -> f64 {
         let runs = self.control.playing
+            && !self.paused
             && (self.visible || self.control.simulate == crate::effect::PlumeSimulate::Always);
         match runs {
             true => delta * f64::from(self.control.time_scale.max(0.0)),
@@ -95,6 +98,7 @@ pub(crate) fn extract_effects(
             visible: seen.get(),
             spawn_scale: thinning.scale,
             timed,
+            paused: thinning.paused,
         });
     }
 }

@@ -302,6 +302,7 @@ impl Gpu {
 
     /// This device with a cache of its own, empty (`plume bench` times a build without the
     /// shared one).
+    #[cfg(feature = "tools")]
     pub(crate) fn with_empty_cache(&self) -> Self {
         Self {
             cache: Arc::default(),
