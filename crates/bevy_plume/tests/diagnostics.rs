@@ -68,16 +68,10 @@ fn the_plugins_counts_are_bevy_diagnostics() {
         assert!(counts.steps >= 1);
     }
     // The steps' GPU time, where the device has timestamp queries (lavapipe has).
-    let device = h
-        .app
-        .sub_app(bevy::render::RenderApp)
-        .world()
-        .resource::<bevy::render::renderer::RenderDevice>()
-        .features();
     let timed = store
         .get(&PlumeDiagnosticsPlugin::STEP_GPU_MS)
         .and_then(|d| d.value());
-    match device.contains(bevy::render::render_resource::WgpuFeatures::TIMESTAMP_QUERY) {
+    match h.has_timestamps() {
         true => assert!(timed.is_some_and(|ms| ms > 0.0 && ms < 1000.0), "{timed:?}"),
         false => assert_eq!(timed, None),
     }
@@ -147,13 +141,7 @@ fn a_timed_effect_has_its_own_steps_gpu_time() {
             .expect("still timed")
             .steps_ms
     };
-    let device = h
-        .app
-        .sub_app(bevy::render::RenderApp)
-        .world()
-        .resource::<bevy::render::renderer::RenderDevice>()
-        .features();
-    if !device.contains(bevy::render::render_resource::WgpuFeatures::TIMESTAMP_QUERY) {
+    if !h.has_timestamps() {
         assert_eq!(ms(many), None);
         return;
     }

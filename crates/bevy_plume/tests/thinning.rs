@@ -172,13 +172,7 @@ fn a_budget_of_gpu_time_pauses_the_steps_of_unseen_effects() {
         .collect();
     h.wait_for_effects();
     let steps = |h: &Harness, e: Entity| totals(h, e).steps;
-    let timed = h
-        .app
-        .sub_app(RenderApp)
-        .world()
-        .resource::<bevy::render::renderer::RenderDevice>()
-        .features()
-        .contains(bevy::render::render_resource::WgpuFeatures::TIMESTAMP_QUERY);
+    let timed = h.has_timestamps();
     // A budget no step fits: every unseen effect stops stepping, the one in view goes on.
     h.app.insert_resource(PlumeBudget::step_gpu_ms(1e-6));
     h.update(10);

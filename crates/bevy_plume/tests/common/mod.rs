@@ -266,6 +266,16 @@ impl Harness {
         assert!(ready, "Bevy's pipelines were not ready within 600 frames");
     }
 
+    /// Whether Bevy's device has timestamp queries (lavapipe has): what the GPU times need.
+    pub fn has_timestamps(&self) -> bool {
+        self.app
+            .sub_app(bevy::render::RenderApp)
+            .world()
+            .resource::<bevy::render::renderer::RenderDevice>()
+            .features()
+            .contains(bevy::render::render_resource::WgpuFeatures::TIMESTAMP_QUERY)
+    }
+
     /// Runs frames until every effect entity has a running instance (a world-space effect,
     /// one with a seed or params of its own, compiles its variant on Bevy's async pool first:
     /// a frame or two, many more on a busy machine, where a fixed count of frames was not

@@ -45,16 +45,41 @@ pub(crate) fn vertex_pipeline(
     buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
 ) -> wgpu::RenderPipeline {
     let make = || {
-        create_pipeline(
-            gpu,
-            module,
-            (vs, fs),
-            primitive,
-            target,
-            blend,
-            layout,
-            buffers,
-        )
+        gpu.device
+            .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(vs),
+                layout,
+                vertex: wgpu::VertexState {
+                    module,
+                    entry_point: Some(vs),
+                    compilation_options: Default::default(),
+                    buffers,
+                },
+                primitive,
+                depth_stencil: target.depth.map(|d| wgpu::DepthStencilState {
+                    format: d.format,
+                    depth_write_enabled: Some(target.writes_depth),
+                    depth_compare: Some(d.compare),
+                    stencil: Default::default(),
+                    bias: Default::default(),
+                }),
+                multisample: wgpu::MultisampleState {
+                    count: target.sample_count,
+                    ..Default::default()
+                },
+                fragment: Some(wgpu::FragmentState {
+                    module,
+                    entry_point: Some(fs),
+                    compilation_options: Default::default(),
+                    targets: &[Some(wgpu::ColorTargetState {
+                        format: target.color_format,
+                        blend: Some(blend),
+                        write_mask: wgpu::ColorWrites::ALL,
+                    })],
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
     };
     // Shared through the device's cache where the module and the target say it all (the
     // reference drawing's pipelines, with layouts and vertex buffers of their own, are not).
@@ -73,55 +98,6 @@ pub(crate) fn vertex_pipeline(
         blend,
     };
     gpu.cache.render(key, make)
-}
-
-/// [`vertex_pipeline`], made.
-#[allow(clippy::too_many_arguments)]
-fn create_pipeline(
-    gpu: &Gpu,
-    module: &wgpu::ShaderModule,
-    (vs, fs): (&str, &str),
-    primitive: wgpu::PrimitiveState,
-    target: &DrawTarget,
-    blend: wgpu::BlendState,
-    layout: Option<&wgpu::PipelineLayout>,
-    buffers: &[Option<wgpu::VertexBufferLayout<'_>>],
-) -> wgpu::RenderPipeline {
-    gpu.device
-        .create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some(vs),
-            layout,
-            vertex: wgpu::VertexState {
-                module,
-                entry_point: Some(vs),
-                compilation_options: Default::default(),
-                buffers,
-            },
-            primitive,
-            depth_stencil: target.depth.map(|d| wgpu::DepthStencilState {
-                format: d.format,
-                depth_write_enabled: Some(target.writes_depth),
-                depth_compare: Some(d.compare),
-                stencil: Default::default(),
-                bias: Default::default(),
-            }),
-            multisample: wgpu::MultisampleState {
-                count: target.sample_count,
-                ..Default::default()
-            },
-            fragment: Some(wgpu::FragmentState {
-                module,
-                entry_point: Some(fs),
-                compilation_options: Default::default(),
-                targets: &[Some(wgpu::ColorTargetState {
-                    format: target.color_format,
-                    blend: Some(blend),
-                    write_mask: wgpu::ColorWrites::ALL,
-                })],
-            }),
-            multiview_mask: None,
-            cache: None,
-        })
 }
 
 /// Bind group 0 of a draw: its buffers, the sprite texture and sampler when it has one, and
