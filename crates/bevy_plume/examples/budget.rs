@@ -6,10 +6,13 @@
 //! case, in a process of its own, runs 60 frames to settle (more than a particle's life), then
 //! 60 timed frames, and prints one JSON line: the median and 90th-percentile frame (ms), the
 //! GPU time of the steps where the device has timestamps, the particles alive (read back by
-//! `PlumeDiagnosticsPlugin`), and how many effects are seen and how many spawn at all. The
+//! `PlumeDiagnosticsPlugin`), and how many effects are seen, how many spawn at all and how
+//! many the budget's GPU time pauses. The
 //! cases: `none`; `lod` (`PlumeLod::new(24.0, 0.0)` on every effect: every spawn from 24
 //! pixels across, none unseen); `budget` (`PlumeBudget::live_particles(20_000)`, a tenth of
-//! what they keep alive unthinned); `both`.
+//! what they keep alive unthinned); `both`; `gpu=MS` (`PlumeBudget::step_gpu_ms(MS)`: the
+//! unseen effects' steps paused while the steps would take more; not among the defaults,
+//! since what fits depends on the device).
 //!
 //! `cargo +nightly run --ignore-rust-version --example budget [CASE ...]` (a debug build, as
 //! the tests run; docs/bevy.md gives its figures on lavapipe).
@@ -59,14 +62,17 @@ fn main() -> AppExit {
     }
     let case = cases[0].as_str();
     let (lod, budget) = match case {
-        "none" => (false, false),
-        "lod" => (true, false),
-        "budget" => (false, true),
-        "both" => (true, true),
-        other => {
-            eprintln!("error: unknown case `{other}`: none, lod, budget or both");
-            return AppExit::from_code(2);
-        }
+        "none" => (false, None),
+        "lod" => (true, None),
+        "budget" => (false, Some(PlumeBudget::live_particles(20_000))),
+        "both" => (true, Some(PlumeBudget::live_particles(20_000))),
+        other => match other.strip_prefix("gpu=").map(str::parse::<f32>) {
+            Some(Ok(ms)) => (false, Some(PlumeBudget::step_gpu_ms(ms))),
+            _ => {
+                eprintln!("error: unknown case `{other}`: none, lod, budget, both or gpu=MS");
+                return AppExit::from_code(2);
+            }
+        },
     };
     match run(case, lod, budget) {
         Ok(()) => AppExit::Success,
@@ -78,7 +84,7 @@ fn main() -> AppExit {
 }
 
 /// Runs one case and prints its line.
-fn run(case: &str, lod: bool, budget: bool) -> Result<(), String> {
+fn run(case: &str, lod: bool, budget: Option<PlumeBudget>) -> Result<(), String> {
     let dir = std::env::temp_dir().join(format!("plume-budget-{}", std::process::id()));
     std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
     std::fs::write(dir.join("fountain.plume.ron"), FOUNTAIN).map_err(|e| e.to_string())?;
@@ -97,8 +103,8 @@ fn run(case: &str, lod: bool, budget: bool) -> Result<(), String> {
     .insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f64(
         1.0 / 60.0,
     )));
-    if budget {
-        app.insert_resource(PlumeBudget::live_particles(20_000));
+    if let Some(budget) = budget {
+        app.insert_resource(budget);
     }
     app.finish();
     app.cleanup();
@@ -167,6 +173,7 @@ fn run(case: &str, lod: bool, budget: bool) -> Result<(), String> {
         .collect();
     let spawning = thinnings.iter().filter(|t| t.scale > 0.0).count();
     let seen = thinnings.iter().filter(|t| t.pixels > 0.0).count();
+    let paused = thinnings.iter().filter(|t| t.paused).count();
     let percentile = |times: &mut Vec<f64>, p: f64| -> Option<f64> {
         times.sort_by(f64::total_cmp);
         let i = ((times.len() as f64 - 1.0) * p).round() as usize;
@@ -174,7 +181,7 @@ fn run(case: &str, lod: bool, budget: bool) -> Result<(), String> {
     };
     let gpu_median = percentile(&mut gpu, 0.5).map_or("null".into(), |ms| format!("{ms:.3}"));
     println!(
-        "{{\"case\":\"{case}\",\"effects\":{EFFECTS},\"seen\":{seen},\"spawning\":{spawning},\"live_particles\":{},\"frame_median_ms\":{:.3},\"frame_p90_ms\":{:.3},\"step_gpu_median_ms\":{gpu_median}}}",
+        "{{\"case\":\"{case}\",\"effects\":{EFFECTS},\"seen\":{seen},\"spawning\":{spawning},\"paused\":{paused},\"live_particles\":{},\"frame_median_ms\":{:.3},\"frame_p90_ms\":{:.3},\"step_gpu_median_ms\":{gpu_median}}}",
         stats.live_particles,
         percentile(&mut frames, 0.5).unwrap_or(f64::NAN),
         percentile(&mut frames, 0.9).unwrap_or(f64::NAN),

@@ -73,8 +73,8 @@ impl PlumeLod {
 /// estimate is the last measured steps' GPU time spread over the slots that stepped, a frame
 /// or two old: it needs [`crate::PlumeDiagnosticsPlugin`] (which measures it) and timestamp
 /// queries, and is not kept without them (said once). A batched entity saves little paused:
-/// its batch steps every slot while any member steps. Insert it as a resource; none (the
-/// default) is no budget.
+/// its batch steps every slot while any member steps, so it only stops spawning and its
+/// particles age on. Insert it as a resource; none (the default) is no budget.
 ///
 /// ```no_run
 /// # use bevy::prelude::*;
