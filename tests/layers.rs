@@ -95,6 +95,8 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
             ("mesh_particles", 0),
             ("event_reports", 0),
             ("thinning", 0),
+            // The maps both worlds hold (imports nothing of the crate).
+            ("shared", 0),
             // 1: the render world, which reads them; the headless runner, which waits on them.
             ("render", 1),
             ("headless", 1),

@@ -5,10 +5,7 @@
 //! reading into [`MeasuredBounds`], a map both worlds hold; the main world turns it into the
 //! entity's `Aabb` here.
 
-use std::sync::{Arc, Mutex};
-
 use bevy::camera::primitives::Aabb;
-use bevy::ecs::entity::EntityHashMap;
 use bevy::prelude::*;
 
 use crate::asset::PlumeEffectAsset;
@@ -25,15 +22,7 @@ pub(crate) struct MeasuredBox {
 
 /// The latest measured box of every running effect without declared bounds, by main-world
 /// entity: written by the render world, read by the main world.
-#[derive(Resource, Clone, Default)]
-pub(crate) struct MeasuredBounds(pub Arc<Mutex<EntityHashMap<MeasuredBox>>>);
-
-impl MeasuredBounds {
-    /// The map, even if a panicking thread left it poisoned.
-    pub fn lock(&self) -> std::sync::MutexGuard<'_, EntityHashMap<MeasuredBox>> {
-        self.0.lock().unwrap_or_else(|p| p.into_inner())
-    }
-}
+pub(crate) type MeasuredBounds = crate::shared::EntityShared<MeasuredBox>;
 
 /// Marks an [`Aabb`] that the plugin gave an effect entity from its file's `bounds`: kept in
 /// step with the file (a hot reload may change or remove them). An `Aabb` the game inserted

@@ -34,6 +34,7 @@ mod mesh_particles;
 mod overlay;
 mod particle_lights;
 mod render;
+mod shared;
 mod thinning;
 
 pub use asset::{PlumeEffectAsset, PlumeEffectLoader, PlumeLoadError};

@@ -5,8 +5,6 @@
 //! into [`GivenLights`], a map both worlds hold; the main world keeps one `PointLight` entity
 //! per light here, each marked [`PlumeLightOf`] its effect, and removes them with it.
 
-use std::sync::{Arc, Mutex};
-
 use bevy::camera::Exposure;
 use bevy::ecs::entity::EntityHashMap;
 use bevy::prelude::*;
@@ -14,15 +12,7 @@ use plume_runtime::LightSource;
 
 /// The latest lights each effect's particles give off, world space, by main-world entity:
 /// written by the render world, read by the main world.
-#[derive(Resource, Clone, Default)]
-pub(crate) struct GivenLights(pub Arc<Mutex<EntityHashMap<Vec<LightSource>>>>);
-
-impl GivenLights {
-    /// The map, even if a panicking thread left it poisoned.
-    pub fn lock(&self) -> std::sync::MutexGuard<'_, EntityHashMap<Vec<LightSource>>> {
-        self.0.lock().unwrap_or_else(|p| p.into_inner())
-    }
-}
+pub(crate) type GivenLights = crate::shared::EntityShared<Vec<LightSource>>;
 
 /// A `PointLight` the plugin keeps for a light that the particles of effect entity `.0` give
 /// off (`render.light`): moved, coloured and removed by the plugin.

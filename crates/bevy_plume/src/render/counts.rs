@@ -4,9 +4,6 @@
 //! timestamps around them where the device has timestamp queries. Nothing is read back while
 //! the diagnostics plugin is not added (this resource is absent).
 
-use std::sync::{Arc, Mutex};
-
-use bevy::ecs::entity::EntityHashMap;
 use bevy::prelude::*;
 use plume_compiler::reference::Totals;
 use plume_runtime::{Gpu, GpuTimer};
@@ -30,26 +27,10 @@ pub(crate) struct WatchedCounts {
 
 /// Each timed effect entity's steps' GPU time in nanoseconds: written by the render world,
 /// read by the main world.
-#[derive(Resource, Clone, Default)]
-pub(crate) struct SharedGpuTimes(pub Arc<Mutex<EntityHashMap<u64>>>);
-
-impl SharedGpuTimes {
-    /// The map, even if a panicking thread left it poisoned.
-    pub fn lock(&self) -> std::sync::MutexGuard<'_, EntityHashMap<u64>> {
-        self.0.lock().unwrap_or_else(|p| p.into_inner())
-    }
-}
+pub(crate) type SharedGpuTimes = crate::shared::EntityShared<u64>;
 
 /// Each effect entity's last counts: written by the render world, read by the main world.
-#[derive(Resource, Clone, Default)]
-pub(crate) struct SharedCounts(pub Arc<Mutex<EntityHashMap<Totals>>>);
-
-impl SharedCounts {
-    /// The map, even if a panicking thread left it poisoned.
-    pub fn lock(&self) -> std::sync::MutexGuard<'_, EntityHashMap<Totals>> {
-        self.0.lock().unwrap_or_else(|p| p.into_inner())
-    }
-}
+pub(crate) type SharedCounts = crate::shared::EntityShared<Totals>;
 
 impl WatchedCounts {
     /// Before the frame's steps: takes the steps' time that came back and stamps their start.
