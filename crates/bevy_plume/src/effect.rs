@@ -245,6 +245,12 @@ impl PlumeEffect {
         Self { space, ..self }
     }
 
+    /// Whether it steps this frame, seen by a camera or not: while playing, and unseen only
+    /// when it simulates always.
+    pub(crate) fn steps_when(&self, seen: bool) -> bool {
+        self.playing && (seen || self.simulate == PlumeSimulate::Always)
+    }
+
     /// Simulated as `simulate` says (only while seen: [`PlumeSimulate::WhenVisible`]).
     pub fn with_simulate(self, simulate: PlumeSimulate) -> Self {
         Self { simulate, ..self }

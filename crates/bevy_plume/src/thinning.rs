@@ -170,15 +170,8 @@ pub(crate) fn thin_effects(
         let expected_alive = asset.map_or(0, |a| a.graph.expected_alive());
         let own = clamp01(effect.spawn_scale) * lod.map_or(1.0, |l| l.scale(pixels));
         weighed.push((entity, own, pixels, expected_alive));
-        let slots = asset.map_or(0, |a| {
-            a.graph
-                .groups
-                .iter()
-                .map(|g| u64::from(g.effect.ir.capacity))
-                .sum()
-        });
-        let always = effect.simulate == crate::effect::PlumeSimulate::Always;
-        let steps = effect.playing && (seen.get() || always);
+        let slots = asset.map_or(0, |a| a.graph.capacity());
+        let steps = effect.steps_when(seen.get());
         steppers.push((slots, steps, steps && !seen.get()));
     }
     let shares = match budget.live_particles {

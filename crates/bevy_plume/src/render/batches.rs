@@ -276,13 +276,7 @@ fn can_batch(e: &ExtractedEffect) -> bool {
     if e.timed {
         return false;
     }
-    let capacity: u64 = e
-        .asset
-        .graph
-        .groups
-        .iter()
-        .map(|g| u64::from(g.effect.ir.capacity))
-        .sum();
+    let capacity = e.asset.graph.capacity();
     match e.control.draw {
         PlumeDraw::Raster => true,
         PlumeDraw::Auto => capacity < AUTO_COMPUTE_CAPACITY,

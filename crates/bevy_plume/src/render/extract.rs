@@ -35,9 +35,7 @@ impl ExtractedEffect {
     /// Seconds of the effect's time this frame of `delta` app seconds: scaled, and none while
     /// paused (by game code or the budget), or unseen when it simulates only while visible.
     pub(crate) fn effect_time(&self, delta: f64) -> f64 {
-        let runs = self.control.playing
-            && !self.paused
-            && (self.visible || self.control.simulate == crate::effect::PlumeSimulate::Always);
+        let runs = !self.paused && self.control.steps_when(self.visible);
         match runs {
             true => delta * f64::from(self.control.time_scale.max(0.0)),
             false => 0.0,

@@ -377,11 +377,7 @@ fn build(
             u64::from(g.effect.ir.capacity) * u64::from(per_particle)
         })
         .sum();
-    let capacity = graph
-        .groups
-        .iter()
-        .map(|g| u64::from(g.effect.ir.capacity))
-        .sum();
+    let capacity = graph.capacity();
     let effect = Effect::from_graph(gpu, graph)
         .map_err(|err| format!("{}: the effect could not start: {err}", e.asset.path))?;
     Ok(Instance {

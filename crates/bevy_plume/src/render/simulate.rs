@@ -62,7 +62,7 @@ pub(crate) fn simulate(
     let mut planned = Vec::new();
     // An instance whose GPU time is asked for is timed only while the diagnostics read back.
     let timing = watched.is_some();
-    let gpu = store.gpu.clone();
+    let gpu = timing.then(|| store.gpu.clone()).flatten();
     for (entity, instance) in store.instances.iter_mut() {
         let timed = timing && instance.timed && begin_timing(instance, gpu.as_ref(), encoder);
         let steps = std::mem::take(&mut instance.clock.steps);

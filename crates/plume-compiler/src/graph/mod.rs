@@ -78,6 +78,14 @@ impl CompiledGraph {
             .sum()
     }
 
+    /// Particle slots of every group together (their capacities).
+    pub fn capacity(&self) -> u64 {
+        self.groups
+            .iter()
+            .map(|g| u64::from(g.effect.ir.capacity))
+            .sum()
+    }
+
     /// A graph of one group (an effect without `groups` or `events`).
     pub fn single(name: &str, effect: CompiledEffect) -> Self {
         Self {

@@ -46,7 +46,7 @@ pub(crate) struct RenderKey {
     pub blend: wgpu::BlendState,
 }
 
-/// The shared objects of one device (every clone of a [`Gpu`] shares them).
+/// The shared objects of one device (every clone of a `Gpu` shares them).
 #[derive(Default)]
 pub(crate) struct PipelineCache {
     modules: Mutex<HashMap<SourceKey, wgpu::ShaderModule>>,
