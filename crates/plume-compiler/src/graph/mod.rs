@@ -7,6 +7,7 @@
 
 mod inherit;
 pub mod reference;
+mod totals;
 
 pub use reference::ReferenceGraph;
 
@@ -67,23 +68,6 @@ impl CompiledGraph {
             items.extend(g.effect.warnings.items.iter().cloned());
         }
         Diagnostics { items }
-    }
-
-    /// About how many particles every group keeps alive unthinned, together
-    /// ([`EffectIr::expected_alive`](crate::ir::EffectIr::expected_alive)).
-    pub fn expected_alive(&self) -> u64 {
-        self.groups
-            .iter()
-            .map(|g| g.effect.ir.expected_alive())
-            .sum()
-    }
-
-    /// Particle slots of every group together (their capacities).
-    pub fn capacity(&self) -> u64 {
-        self.groups
-            .iter()
-            .map(|g| u64::from(g.effect.ir.capacity))
-            .sum()
     }
 
     /// A graph of one group (an effect without `groups` or `events`).
