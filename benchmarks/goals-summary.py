@@ -19,8 +19,8 @@ for line in (out / "splat/splat.jsonl").open():
     draw = d["draw"]
     print(
         pathlib.Path(d["effect"]).name, d["particles"], "raster", round(draw["ms"], 2),
-        "splat", round(draw["splat_ms"] or 0, 3), "prep", draw["prepare_ms"] and round(draw["prepare_ms"], 3),
-        rounded(draw["splat_stages_ms"]),
+        "compute", round(draw.get("compute_ms", draw.get("splat_ms")) or 0, 3), "prep", draw["prepare_ms"] and round(draw["prepare_ms"], 3),
+        rounded(draw.get("compute_stages_ms", draw.get("splat_stages_ms"))),
     )
 for line in (out / "speed/sort.jsonl").open():
     d = json.loads(line)

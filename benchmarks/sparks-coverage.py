@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """How much drawing the sparks 10M frame of the goals holds (docs/performance.md, "What bounds
 sparks"): a Monte Carlo model of effects/sparks.ron after `plume bench --steps 5` (dt 1/60,
-every spark of the burst alive), projected as the splat projects it at 1280x720. It counts, a
+every spark of the burst alive), projected as the compute renderer projects it at 1280x720. It counts, a
 spark on average: the pixels its streak covers (the fragments any renderer must shade), the
 pixels of its box (what a box test visits), and the 16x16 tiles its box touches (the
-splat's entries: compare with `splat_entries` of the bench, 53.7M). Pure Python, no numpy:
+compute renderer's entries: compare with `compute_entries` of the bench, 53.7M). Pure Python, no numpy:
 python3 benchmarks/sparks-coverage.py [SAMPLES]
 """
 import math

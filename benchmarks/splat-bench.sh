@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The compute splat against the raster pipeline (docs/performance.md, "The compute splat"):
+# The compute renderer against the raster pipeline (docs/performance.md, "The compute renderer"):
 # `plume bench --render 1280x720` times both draws of the same frame, the splat with its stages
 # (project, scan, emit, sort, ranges, raster), in one run per effect. Discs (fountain) and
 # quads (snow: textured and rotating; smoke: a sorted, textured flipbook; boids: textured,

@@ -350,7 +350,7 @@ fn one_draw_draws_every_instance_as_the_reference_draws_their_particles() {
     );
     // The compute renderer does not turn instances by their transforms: it refuses, saying
     // which draws a batch.
-    let refused = plume::runtime::outputs::Splat::new(batch.effect(), SIDE, SIDE)
+    let refused = plume::runtime::outputs::ComputeOffscreen::new(batch.effect(), SIDE, SIDE)
         .err()
         .expect("refused")
         .to_string();

@@ -40,9 +40,9 @@ fn bench_runs_at_a_tiny_size_and_reports_its_fields() {
     // The fountain sorts (so a frame prepares keys and a sort) and cannot be stateless.
     assert!(d.prepare.is_some_and(|p| p > 0.0), "{d:?}");
     assert_eq!(d.stateless, None);
-    // Round camera-facing sprites: the compute splat draws them too.
+    // Round camera-facing sprites: the compute renderer draws them too.
     assert!(
-        d.splat.is_some_and(|(s, entries)| s > 0.0 && entries > 0),
+        d.compute.is_some_and(|(s, entries)| s > 0.0 && entries > 0),
         "{d:?}"
     );
 }
@@ -60,13 +60,13 @@ fn bench_draws_a_stateless_effect_from_its_closed_form() {
     let d = r.render.expect("draw timed");
     assert!(d.stateless.is_some_and(|s| s > 0.0), "{d:?}");
     assert_eq!(d.prepare, None, "sparks does not sort");
-    // Sparks glow: the compute splat draws them into an HDR image and times the bloom too.
+    // Sparks glow: the compute renderer draws them into an HDR image and times the bloom too.
     assert!(
-        d.splat.is_some_and(|(s, entries)| s > 0.0 && entries > 0),
+        d.compute.is_some_and(|(s, entries)| s > 0.0 && entries > 0),
         "{d:?}"
     );
     assert!(
-        d.splat_stages
+        d.compute_stages
             .iter()
             .any(|(stage, s)| *stage == "glow" && *s > 0.0),
         "{d:?}"

@@ -3,13 +3,13 @@
 //! goes, a cut-out is its colour, opaque, where its opacity reaches the cutoff and nothing
 //! elsewhere, a premultiplied colour adds its light and dims what is behind by its opacity,
 //! an opaque one covers its whole disc;
-//! all draw what the CPU-fed reference drawing draws; the compute splat leaves them to the
+//! all draw what the CPU-fed reference drawing draws; the compute renderer leaves them to the
 //! raster draw.
 
 mod common;
 
 use common::*;
-use plume::runtime::outputs::Splat;
+use plume::runtime::outputs::ComputeOffscreen;
 use plume::runtime::Effect;
 
 /// One sprite 2 m across at the origin, seen from 5 m, over a grey background.
@@ -170,8 +170,8 @@ fn many_multiplied_and_masked_sprites_draw_as_the_reference_does() {
         let mut sim = Effect::new(&gpu, compile(&source)).unwrap();
         sim.run(30, |_| {}).unwrap();
         assert!(
-            Splat::why_not(&[&sim.compiled().ir]).is_some(),
-            "{blend}: the splat refuses"
+            ComputeOffscreen::why_not(&[&sim.compiled().ir]).is_some(),
+            "{blend}: the compute renderer refuses"
         );
         // The reference draws the particles in the GPU's depth order: a cut-out replaces what
         // is behind, so the order shows.

@@ -1,13 +1,13 @@
 //! Glow (`render.glow`) in `plume render`'s images, on llvmpipe: light above the threshold
 //! spreads into a halo that fades with distance and stops where the blur's kernel ends, an
-//! image with nothing above the threshold is the plain image, and the compute splat blooms
+//! image with nothing above the threshold is the plain image, and the compute renderer blooms
 //! the same image.
 
 mod common;
 
 use common::*;
+use plume::runtime::outputs::ComputeOffscreen;
 use plume::runtime::outputs::Offscreen;
-use plume::runtime::outputs::Splat;
 use plume::runtime::{Effect, Gpu};
 
 const W: u32 = 160;
@@ -52,11 +52,11 @@ fn draw(sim: &Effect) -> (Vec<u8>, Vec<u8>) {
     (a, b)
 }
 
-/// The image of `sim` from the compute splat, checked to come out the same in a second frame:
+/// The image of `sim` from the compute renderer, checked to come out the same in a second frame:
 /// each pixel's light is summed exactly (and stopped at the glow's clamp), whatever the order
 /// of its tile's list.
 fn splat_twice(sim: &Effect) -> Vec<u8> {
-    let mut splat = Splat::new(sim, W, H).unwrap();
+    let mut splat = ComputeOffscreen::new(sim, W, H).unwrap();
     let camera = sim.camera(W as f32 / H as f32);
     let img = splat.render(sim, &camera).unwrap();
     assert!(
@@ -108,7 +108,7 @@ fn bright_light_spreads_into_a_halo_that_fades_and_ends_with_the_kernel() {
 fn a_colour_above_one_glows_as_that_much_stacked_light_does() {
     // One sprite of colour 40 at alpha 0.1 is 4.0 of light at its centre, as 40 stacked sprites
     // of colour 1 are: the same HDR image (to the f16 roundings of the stack's 40 blends, under
-    // a 2048th of the value each), so the same bloom, in the raster draw and the compute splat.
+    // a 2048th of the value each), so the same bloom, in the raster draw and the compute renderer.
     let gpu = gpu();
     let glow = "Some(Glow(threshold: 0.5, strength: 1.0, radius: 0.03))";
     let stacked = stack(&gpu, 40, 0.1, glow);
@@ -161,8 +161,8 @@ fn light_below_the_threshold_leaves_the_image_as_it_is() {
 }
 
 #[test]
-fn the_compute_splat_glows_as_the_raster_draw_does() {
-    // The splat sums the stack in f32 and stores the HDR image as f16 once; the raster draw
+fn the_compute_renderer_glows_as_the_raster_draw_does() {
+    // The compute renderer sums the stack in f32 and stores the HDR image as f16 once; the raster draw
     // adds each sprite into its f16 target, rounding at every blend (each rounding under
     // 1/2048 of the value: 40 of them move a pixel by about 2% of a step at most before the
     // bloom). Both bloom the same HDR image with the same passes, so the halo and the disc
@@ -175,7 +175,7 @@ fn the_compute_splat_glows_as_the_raster_draw_does() {
             alpha,
             "Some(Glow(threshold: 0.5, strength: 2.0, radius: 0.03))",
         );
-        assert!(Splat::draws(&sim.compiled().ir));
+        assert!(ComputeOffscreen::draws(&sim.compiled().ir));
         let (raster, _) = draw(&sim);
         let img = splat_twice(&sim);
         let (mean, max, _) = differences(&raster, &img, 1);
@@ -193,11 +193,11 @@ fn the_compute_splat_glows_as_the_raster_draw_does() {
 }
 
 #[test]
-fn the_glows_clamp_bounds_the_halo_and_the_compute_splat_stops_there() {
+fn the_glows_clamp_bounds_the_halo_and_the_compute_renderer_stops_there() {
     // 400 opaque white sprites stacked: 400 of light at the centre. Unclamped, the halo past
     // the rim is 400 times the kernel's tail there; with `clamp: 2.0` the stack blooms as light
     // of 2 does, so a few sigma past the rim it fades out where the unclamped halo is still
-    // full. The splat stops adding light into a pixel at the clamp (each slice of a tile's
+    // full. The compute renderer stops adding light into a pixel at the clamp (each slice of a tile's
     // list once its own sprites reach it), the raster draw adds all 400 and the bloom clamps
     // what it reads: the same image either way, to the step the test above allows.
     // (Unclamped, the raster draw's 400
@@ -232,6 +232,6 @@ fn the_glows_clamp_bounds_the_halo_and_the_compute_splat_stops_there() {
     let (mean, max, _) = differences(&clamped_raster, &img, 1);
     eprintln!("clamp 2: splat vs raster: mean {mean:.4}, max {max}");
     assert!(mean < 0.05 && max <= 2, "clamp 2: mean {mean}, max {max}");
-    // And the splat's halo is the clamped one, not the full one.
+    // And the compute renderer's halo is the clamped one, not the full one.
     assert!(red(&img, rim + 5) < 200, "splat: {}", red(&img, rim + 5));
 }

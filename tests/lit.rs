@@ -13,7 +13,7 @@ use glam::{DVec3, DVec4};
 use plume::compiler::lights::{LightSource, Lights};
 use plume::compiler::lit::Lit;
 use plume::runtime::oracle::{sprites, ReferenceRenderer};
-use plume::runtime::outputs::{Offscreen, Splat};
+use plume::runtime::outputs::{ComputeOffscreen, Offscreen};
 use plume::runtime::{Camera, Effect, Gpu};
 
 /// Odd, so that the sprite's centre (the image's) is a pixel's centre.
@@ -125,7 +125,7 @@ fn images(gpu: &Gpu, sim: &Effect, lights: Option<&Lights>) -> Vec<(&'static str
         }
         out.push((kind, target.render(sim, &renderer, &camera).unwrap()));
     }
-    let mut splat = Splat::new(sim, SIDE, SIDE).unwrap();
+    let mut splat = ComputeOffscreen::new(sim, SIDE, SIDE).unwrap();
     if let Some(lights) = lights {
         splat.set_lights(lights);
     }
@@ -387,7 +387,7 @@ fn six_way_lightmaps_weigh_each_light_by_its_direction() {
 
 /// Many particles, turned, textured and lit by every kind of light, from a camera off to the
 /// side: the raster draw agrees with the reference drawing, which builds each sprite's frame
-/// on the CPU and lights it in world space, and the compute splat with the raster draw.
+/// on the CPU and lights it in world space, and the compute renderer with the raster draw.
 #[test]
 fn turned_textured_lit_sprites_agree_with_the_reference_drawing() {
     let gpu = gpu();
@@ -440,7 +440,7 @@ fn turned_textured_lit_sprites_agree_with_the_reference_drawing() {
         let raster = assert_draws_agree(&sim, 96, false, &what);
         // A textured quad may be opaque to its edge, where a pixel centre within the
         // rasteriser's vertex snapping is covered by one draw and not the other (the whole
-        // texel apart): the splat is held to 4 x 4 squares, as tests/render.rs holds it.
+        // texel apart): the compute renderer is held to 4 x 4 squares, as tests/render.rs holds it.
         let splat = splat_image(&sim, 96);
         let (mean, max, _) = differences(&raster, &splat, 2);
         let local = local_difference(&raster, &splat, 96, 4);

@@ -1,6 +1,6 @@
 //! Colour, opacity and size set by expressions (`render.color_by`, `alpha_by`, `size_by`): the
 //! raster draw
-//! and the compute splat against the CPU-fed reference drawing, which evaluates the same
+//! and the compute renderer against the CPU-fed reference drawing, which evaluates the same
 //! expression trees in f64, for stateful and stateless effects; and the factors themselves
 //! (a random hue per particle, a size that grows with age, a colour from speed) measured in
 //! the drawing's inputs.

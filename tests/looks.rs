@@ -305,7 +305,7 @@ fn a_sprite_in_a_fixed_plane_is_foreshortened_as_the_plane_is() {
     }
 }
 
-/// Asserts that the compute splat's image of `sim` is the raster draw's: it places each pixel
+/// Asserts that the compute renderer's image of `sim` is the raster draw's: it places each pixel
 /// on the quad through the quad's projective map where the rasteriser interpolates corner
 /// coordinates over two triangles (the same values to about 1e-4 of a pixel), tests coverage
 /// at pixel centres without the rasteriser's sub-pixel snapping, and rounds to 8 bits after
@@ -334,12 +334,12 @@ fn assert_splat_matches_raster(sim: &Effect, raster: &[u8], what: &str) {
     eprintln!("{what}: splat vs raster: mean {mean:.4}, max {max}, {over} over 2, 4x4 {local:.2}");
     assert!(
         mean < 0.02 && local < 4.0 && over * 2000 < splat.len(),
-        "{what}: the splat differs from the raster draw: mean {mean}, max {max}, {over} over 2, 4x4 {local}"
+        "{what}: the compute renderer differs from the raster draw: mean {mean}, max {max}, {over} over 2, 4x4 {local}"
     );
 }
 
 #[test]
-fn the_compute_splat_draws_oriented_sprites_as_the_raster_draw_does() {
+fn the_compute_renderer_draws_oriented_sprites_as_the_raster_draw_does() {
     let gpu = gpu();
     let cases = [
         // Streaked along the velocity, seen from the front and from an angle.
@@ -370,19 +370,19 @@ fn the_compute_splat_draws_oriented_sprites_as_the_raster_draw_does() {
     }
 }
 
-/// The splat composites camera-facing quads by an affine map (they lie parallel to the image
+/// The compute renderer composites camera-facing quads by an affine map (they lie parallel to the image
 /// plane, so one w holds over each) only where the projection's w ignores view x and y. A
 /// camera turned against the view the sprites face (the projection times a turn of 0.6 rad
-/// about y: w = 0.56 x - 0.83 z) makes even a camera-facing quad projective, and the splat must
+/// about y: w = 0.56 x - 0.83 z) makes even a camera-facing quad projective, and the compute renderer must
 /// then divide at each pixel as the rasteriser interpolates. One big sprite straight ahead of
 /// the turned camera, its w ranging over a fifth of its value: with nothing overlapping, the
 /// two draws differ by rounding alone (in no pixel here; the bounds allow a step in a few),
 /// where the sprite composited affinely from its w at each tile's centre lands up to 5 steps
 /// off, 7,467 channels more than 2, and 4 x 4 squares 3.4 steps apart.
 #[test]
-fn the_compute_splat_divides_at_each_pixel_where_the_projection_tilts() {
+fn the_compute_renderer_divides_at_each_pixel_where_the_projection_tilts() {
     use plume::runtime::oracle::group_renderer;
-    use plume::runtime::outputs::{Offscreen, Splat};
+    use plume::runtime::outputs::{ComputeOffscreen, Offscreen};
     use plume::runtime::Camera;
     let gpu = gpu();
     // At (4 sin 0.6, 0, 4 - 4 cos 0.6): 4 m straight ahead of the turned camera at (0, 0, 4).
@@ -405,7 +405,7 @@ fn the_compute_splat_divides_at_each_pixel_where_the_projection_tilts() {
     let target = Offscreen::new(sim.gpu(), SIDE, SIDE).unwrap();
     let renderer = group_renderer(&sim, 0, &target.target()).unwrap();
     let raster = target.render(&sim, &renderer, &tilted).unwrap();
-    let mut splat = Splat::new(&sim, SIDE, SIDE).unwrap();
+    let mut splat = ComputeOffscreen::new(&sim, SIDE, SIDE).unwrap();
     let splat_img = splat.render(&sim, &tilted).unwrap();
     let lit = raster.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
     assert!(lit > 5000, "the raster draw shows {lit} pixels");
@@ -420,13 +420,13 @@ fn the_compute_splat_divides_at_each_pixel_where_the_projection_tilts() {
     eprintln!("tilted: splat vs raster: mean {mean:.4}, max {max}, {over} over 2, 4x4 {local:.2}");
     assert!(
         mean < 0.01 && local < 1.0 && over == 0,
-        "tilted projection: the splat differs from the raster draw: mean {mean}, max {max}, {over} over 2, 4x4 {local}"
+        "tilted projection: the compute renderer differs from the raster draw: mean {mean}, max {max}, {over} over 2, 4x4 {local}"
     );
 }
 
 /// A sprite of `size` drawn at `distance` metres from the eye, its size measured in metres or
 /// in the image (`size_in`): the lit pixels' radius of gyration in pixels, after checking the
-/// GPU draw against the CPU-fed reference drawing and the compute splat against the raster.
+/// GPU draw against the CPU-fed reference drawing and the compute renderer against the raster.
 fn sprite_radius(gpu: &Gpu, distance: f64, size_in: &str, size: f64) -> f64 {
     let src = format!(
         r#"Effect(

@@ -1,6 +1,6 @@
 //! Mesh particles (`render.mesh`) on llvmpipe: a lit cube's front face is as bright as
 //! Lambert's law says (its back faces culled), meshes turned, stretched, sorted and lit match
-//! the CPU-fed reference drawing (each mesh placed and lit in f64), and the compute splat
+//! the CPU-fed reference drawing (each mesh placed and lit in f64), and the compute renderer
 //! leaves them to the raster draw.
 
 mod common;
@@ -9,7 +9,7 @@ use std::path::PathBuf;
 
 use common::*;
 use glam::DVec3;
-use plume::runtime::outputs::{Offscreen, Splat};
+use plume::runtime::outputs::{ComputeOffscreen, Offscreen};
 use plume::runtime::Effect;
 
 /// Odd, so that the image's centre is a pixel's centre.
@@ -148,8 +148,8 @@ fn turned_sorted_lit_meshes_agree_with_the_reference_drawing() {
         sim.run(30, |_| {}).unwrap();
         let what = format!("{mesh} {orient} {blend}");
         assert!(
-            !Splat::draws(&sim.compiled().ir),
-            "{what}: the splat draws no meshes"
+            !ComputeOffscreen::draws(&sim.compiled().ir),
+            "{what}: the compute renderer draws no meshes"
         );
         let raster = assert_draws_agree(&sim, 128, false, &what);
         let lit = raster.chunks(4).filter(|p| p[..3] != [13, 13, 13]).count();

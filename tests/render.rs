@@ -13,8 +13,8 @@ use plume::compiler::schema::State;
 use plume::runtime::bench::{renderer_with, DeadSlots, DrawOptions};
 use plume::runtime::oracle;
 use plume::runtime::oracle::{sprites, ReferenceRenderer};
+use plume::runtime::outputs::ComputeOffscreen;
 use plume::runtime::outputs::Offscreen;
-use plume::runtime::outputs::Splat;
 use plume::runtime::{Camera, Effect, Gpu};
 use plume::{compile_str, CompileOptions, CompiledEffect};
 
@@ -40,7 +40,7 @@ fn beyond_one_step(a: &[u8], b: &[u8]) -> f64 {
 
 /// Draws `sim` as [`draw_gpu`] does, but into a 16-bit float target that is rounded to 8 bits
 /// once at the end (the glow's HDR image; with nothing bright enough to bloom unless the effect
-/// glows): the raster draw without a rounding after every blend, as the compute splat
+/// glows): the raster draw without a rounding after every blend, as the compute renderer
 /// composites.
 fn draw_gpu_hdr(sim: &Effect, w: u32, h: u32) -> Vec<u8> {
     let gpu = sim.gpu().clone();
@@ -471,8 +471,8 @@ fn a_compacted_list_of_live_slots_draws_what_hidden_free_slots_draw() {
 }
 
 #[test]
-fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
-    // The splat tests coverage at pixel centres with exact float arithmetic where the
+fn the_compute_renderer_draws_what_the_raster_draw_draws_for_every_example() {
+    // The compute renderer tests coverage at pixel centres with exact float arithmetic where the
     // rasteriser snaps vertices to sub-pixel steps, packs a disc's colour to 10 bits and its
     // extent and alpha to f16 (under 0.13 of an 8-bit step per sprite), and composites in f32,
     // rounding once. It is compared with the raster draw into a 16-bit float target, rounded
@@ -487,8 +487,8 @@ fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
     for path in examples() {
         let sim = advance_to_show(simulate(&gpu, compile_file(&path), 0));
         let name = path.file_name().unwrap().to_string_lossy();
-        if !Splat::draws(&sim.compiled().ir) {
-            eprintln!("{name}: trails, not for the splat");
+        if !ComputeOffscreen::draws(&sim.compiled().ir) {
+            eprintln!("{name}: trails, not for the compute renderer");
             continue;
         }
         compared += 1;
@@ -501,7 +501,7 @@ fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
         };
         for &(w, h) in sizes {
             let raster = draw_gpu_hdr(&sim, w, h);
-            let mut splat = Splat::new(&sim, w, h).unwrap();
+            let mut splat = ComputeOffscreen::new(&sim, w, h).unwrap();
             let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
             let img = splat.render(&sim, &camera).unwrap();
             // Every sprite reached each tile it touches: no entry lost or overwritten.
@@ -528,7 +528,7 @@ fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
                 "{name} {w}x{h}: splat vs raster: mean {mean:.5} ({beyond_one:.5} beyond one step), max {max}, {over} channels over 3, 4x4 {local:.2}"
             );
             // Both images are rounded to 8 bits once: the raster one from its 16-bit float
-            // target (each blend there rounds to 1/16 of an 8-bit step or finer), the splat's
+            // target (each blend there rounds to 1/16 of an 8-bit step or finer), the compute renderer's
             // from f32 sums. The clear colour alone may then land a step apart (f16's 0.1 is
             // 25.49 steps, f32's 25.50), so differences are counted beyond one step. Discs fade
             // to nothing at their rim, and every pixel stays within 3 steps. A textured quad
@@ -567,14 +567,17 @@ fn the_compute_splat_draws_what_the_raster_draw_draws_for_every_example() {
             );
         }
     }
-    assert!(compared >= 8, "only {compared} examples drawn by the splat");
+    assert!(
+        compared >= 8,
+        "only {compared} examples drawn by the compute renderer"
+    );
 }
 
 #[test]
-fn the_compute_splat_draws_every_group_of_a_graph_in_group_order() {
+fn the_compute_renderer_draws_every_group_of_a_graph_in_group_order() {
     // The graph examples, every group composited into one image in group order, each over
     // what the ones before drew, against the raster draw of the same groups into a float
-    // target (rounded once, as the splat): rain.ron's drops (velocity-aligned streaks, quads:
+    // target (rounded once, as the compute renderer): rain.ron's drops (velocity-aligned streaks, quads:
     // only edge pixels may flip, see the test above) and the splashes their ground hits fire;
     // fireworks.ron's shells, sparks and embers, all drawn into the HDR image the top-level
     // group's glow blooms, as `plume render` does.
@@ -593,7 +596,7 @@ fn the_compute_splat_draws_every_group_of_a_graph_in_group_order() {
         );
         let (w, h) = (320, 180);
         let raster = draw_gpu_hdr(&sim, w, h);
-        let mut splat = Splat::new(&sim, w, h).unwrap();
+        let mut splat = ComputeOffscreen::new(&sim, w, h).unwrap();
         let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
         let img = splat.render(&sim, &camera).unwrap();
         assert!(splat.entries_are_complete().unwrap());
@@ -629,7 +632,7 @@ fn the_splat_grows_its_entry_list_when_a_frame_needs_more() {
     );
     let sim = simulate(&gpu, compile(&src), 1);
     let (w, h) = (480, 270);
-    let mut splat = Splat::new(&sim, w, h).unwrap();
+    let mut splat = ComputeOffscreen::new(&sim, w, h).unwrap();
     let first = splat.entries();
     let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
     let img = splat.render(&sim, &camera).unwrap();
@@ -668,7 +671,7 @@ fn additive_light_composites_the_same_whatever_order_its_lists_hold() {
     for (look, hdr) in [(glowing, true), (plain, false)] {
         let draw = |points: &[DVec3]| {
             let sim = simulate(&gpu, compile(&still_points(points, &look)), 1);
-            let mut splat = Splat::new(&sim, w, h).unwrap();
+            let mut splat = ComputeOffscreen::new(&sim, w, h).unwrap();
             let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
             let img = splat.render(&sim, &camera).unwrap();
             assert!(splat.entries_are_complete().unwrap());
@@ -707,7 +710,7 @@ fn additive_lists_of_more_tiles_than_a_band_hold_every_entry() {
     // The additive lists count a workgroup's entries in workgroup memory 4,096 tiles at a
     // time; a 1,025 x 1,009 image has 65 x 64 = 4,160 tiles (the last column and row a pixel
     // wide), two bands, and its partial sums stay within llvmpipe's 128 MiB binding. Sprites
-    // spread over the whole image land in both, and the splat draws what the raster draw draws.
+    // spread over the whole image land in both, and the compute renderer draws what the raster draw draws.
     let gpu = gpu();
     // Rows of sprites from below the image's bottom edge (the second band's one row of tiles)
     // to its top.
@@ -723,7 +726,7 @@ fn additive_lists_of_more_tiles_than_a_band_hold_every_entry() {
     let look = "render: Render(color: [(0.0, (0.9, 0.5, 0.2, 0.8))], size: [(0.0, 0.5)], blend: Additive, background: (0.0, 0.0, 0.0), glow: Some(Glow(threshold: 2.0, strength: 1.5, radius: 0.02))),";
     let sim = simulate(&gpu, compile(&still_points(&points, look)), 1);
     let (w, h) = (1025, 1009);
-    let mut splat = Splat::new(&sim, w, h).unwrap();
+    let mut splat = ComputeOffscreen::new(&sim, w, h).unwrap();
     let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
     let img = splat.render(&sim, &camera).unwrap();
     assert!(splat.entries_are_complete().unwrap());

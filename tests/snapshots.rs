@@ -71,7 +71,7 @@ fn every_bad_input_gets_a_located_error_and_matches_its_snapshot() {
     });
 }
 
-/// The splat's composite in both of its forms: with a thread per mask word (every adapter) and
+/// The compute renderer's composite in both of its forms: with a thread per mask word (every adapter) and
 /// with subgroup transposes (adapters whose subgroups are 32 wide, such as NVIDIA's; llvmpipe
 /// has none, so this is where that form is checked off the GPU). Every example that the
 /// splat draws with a generated composite (quads, ribbons), into an 8-bit and an HDR image,

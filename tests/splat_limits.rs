@@ -1,11 +1,11 @@
-//! The compute splat at the adapter's limits: a tile list that grows past the largest buffer
+//! The compute renderer at the adapter's limits: a tile list that grows past the largest buffer
 //! a binding may hold is a clear error that says what to do instead, not a wgpu validation
 //! failure.
 
 mod common;
 
 use common::*;
-use plume::runtime::outputs::Splat;
+use plume::runtime::outputs::ComputeOffscreen;
 use plume::runtime::{Camera, Effect};
 
 #[test]
@@ -26,7 +26,7 @@ fn a_tile_list_past_the_binding_limit_is_an_error() {
     let mut sim = Effect::new(&small, compile(src)).unwrap();
     sim.run(1, |_| {}).unwrap();
     let (w, h) = (480, 270);
-    let mut splat = Splat::new(&sim, w, h).unwrap();
+    let mut splat = ComputeOffscreen::new(&sim, w, h).unwrap();
     let camera = Camera::from_effect(&sim.compiled().ir.camera, w as f32 / h as f32);
     let error = splat.render(&sim, &camera).unwrap_err().to_string();
     assert!(

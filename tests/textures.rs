@@ -2,7 +2,7 @@
 //! textured sprite shows its texture's pattern the right way up (and along the velocity when
 //! it is velocity-aligned), a flipbook shows frame k at the documented time (over life and at
 //! a rate, stateful and stateless), each image matches the CPU-fed reference drawing (frame
-//! chosen in f64), and the compute splat samples them as the raster draw does.
+//! chosen in f64), and the compute renderer samples them as the raster draw does.
 
 mod common;
 
@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use common::*;
 use plume::compiler::schema::State;
-use plume::runtime::outputs::Splat;
+use plume::runtime::outputs::ComputeOffscreen;
 use plume::runtime::{Effect, Gpu};
 use plume::{compile_str, CompileOptions};
 
@@ -322,8 +322,8 @@ fn a_random_start_gives_particles_born_together_different_frames() {
 }
 
 #[test]
-fn the_compute_splat_samples_textures_as_the_raster_draw_does() {
-    // The splat maps each pixel to the quad's texture coordinates through the quad's
+fn the_compute_renderer_samples_textures_as_the_raster_draw_does() {
+    // The compute renderer maps each pixel to the quad's texture coordinates through the quad's
     // projective map and takes their derivatives from it, where the rasteriser interpolates
     // over two triangles and differences 2 x 2 pixel blocks: for these quads (affine, or
     // projective but smooth over a pixel) both give the same coordinates and mip level to
@@ -356,7 +356,7 @@ fn the_compute_splat_samples_textures_as_the_raster_draw_does() {
             let what = format!("{state:?} {extra} after {steps} steps");
             let mut sim = probe(&gpu, &dir, (0.0, 0.0, 0.0), None, extra, state);
             sim.run(steps, |_| {}).unwrap();
-            assert!(Splat::draws(&sim.compiled().ir), "{what}");
+            assert!(ComputeOffscreen::draws(&sim.compiled().ir), "{what}");
             let (raster, _) = draw_both(&sim);
             let splat = splat_image(&sim, SIDE);
             let lit = raster.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
@@ -366,7 +366,7 @@ fn the_compute_splat_samples_textures_as_the_raster_draw_does() {
             eprintln!("{what}: mean {mean:.4}, max {max}, {over} over 2, 4x4 {local:.2}");
             assert!(
                 mean < 0.05 && local < 4.0 && over * 1000 < splat.len(),
-                "{what}: the splat differs from the raster draw: mean {mean}, max {max}, {over} over 2, 4x4 {local}"
+                "{what}: the compute renderer differs from the raster draw: mean {mean}, max {max}, {over} over 2, 4x4 {local}"
             );
         }
     }
@@ -473,7 +473,7 @@ fn a_texture_can_give_colour_alone_or_opacity_from_its_red_channel() {
     // (the sprite stays opaque); OpacityFromRed keeps the colour and takes the opacity from
     // the red channel (0.8 on the left, none on the right). A second image laid out as the
     // first, (0.4, 1, 0.6) on the left, multiplies the colour too as its own mapping says
-    // (ModulateRgb: its colour). The raster draw, the compute splat and the reference drawing
+    // (ModulateRgb: its colour). The raster draw, the compute renderer and the reference drawing
     // alike.
     let gpu = gpu();
     let dir = scratch("sample");
@@ -533,7 +533,7 @@ fn a_texture_can_give_colour_alone_or_opacity_from_its_red_channel() {
             let expect = [0, 1, 2].map(|c| (255.0_f64 * want[c] * want[3]).round() as u8);
             assert_close(seen, expect, &format!("{mapping}, {side} half"));
         }
-        let mut splat = Splat::new(&sim, SIDE, SIDE).unwrap();
+        let mut splat = ComputeOffscreen::new(&sim, SIDE, SIDE).unwrap();
         let camera = plume::runtime::Camera::from_effect(&sim.compiled().ir.camera, 1.0);
         let splatted = splat.render(&sim, &camera).unwrap();
         let (mean, max, _) = differences(&gpu_img, &splatted, 2);

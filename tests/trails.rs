@@ -2,7 +2,7 @@
 //! particle's past positions as the f64 reference records them (slots reused, the ring split
 //! across particle buffers), the drawn ribbon passes through those positions within a pixel
 //! and nowhere the particle has not been, and matches the CPU-fed drawing (vertices in f64), an effect without a trail stores no history, and the
-//! compute splat draws the same ribbons.
+//! compute renderer draws the same ribbons.
 
 mod common;
 
@@ -13,8 +13,8 @@ use plume::compiler::reference::ReferenceSim;
 use plume::runtime::oracle;
 use plume::runtime::oracle::read_trails;
 use plume::runtime::oracle::ReferenceRenderer;
+use plume::runtime::outputs::ComputeOffscreen;
 use plume::runtime::outputs::Offscreen;
-use plume::runtime::outputs::Splat;
 use plume::runtime::Camera;
 use plume::runtime::Effect;
 use plume::CompiledEffect;
@@ -277,12 +277,12 @@ fn only_an_effect_with_a_trail_stores_history() {
 }
 
 #[test]
-fn the_compute_splat_draws_the_ribbons_the_raster_draw_draws() {
+fn the_compute_renderer_draws_the_ribbons_the_raster_draw_draws() {
     // The thrown particle's ribbon (15 segments, two triangles each) and the recycled slots'
-    // ribbons, drawn by the splat (each triangle's pixels given perspective-correct
+    // ribbons, drawn by the compute renderer (each triangle's pixels given perspective-correct
     // barycentric weights from the inverse of its homogeneous pixel coordinates) and by the
     // raster pipeline: the same ribbons, shaded as fs_trail does. The rasteriser snaps
-    // vertices to 1/256 pixel and the splat does not, so a pixel centre on a strip's edge may
+    // vertices to 1/256 pixel and the compute renderer does not, so a pixel centre on a strip's edge may
     // flip; across the strip the alpha falls to 0 at that edge, so a flipped pixel differs by
     // little. A ribbon offset, missing or widened would differ by tens of steps.
     // Additive ribbons composite in tiles as alpha ones do (the sum in list order), so a
@@ -300,13 +300,13 @@ fn the_compute_splat_draws_the_ribbons_the_raster_draw_draws() {
         ("recycled", &recycled),
         ("recycled, additive", &additive),
     ] {
-        assert!(Splat::draws(&sim.compiled().ir));
+        assert!(ComputeOffscreen::draws(&sim.compiled().ir));
         let target = Offscreen::new(&gpu, SIDE, SIDE).unwrap();
         let camera = target.effect_camera(sim);
         let raster = target
             .render(sim, &sim.renderer(&target.target()).unwrap(), &camera)
             .unwrap();
-        let mut splat = Splat::new(sim, SIDE, SIDE).unwrap();
+        let mut splat = ComputeOffscreen::new(sim, SIDE, SIDE).unwrap();
         let img = splat.render(sim, &camera).unwrap();
         assert!(splat.entries_are_complete().unwrap());
         assert!(

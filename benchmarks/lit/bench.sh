@@ -5,7 +5,7 @@
 #              and smoke-one-light-map.ron (normal-mapped, three lights and the sun alone),
 #              smoke-six-way.ron (six-way lightmaps, three lights) and smoke-unlit.ron (the
 #              same smoke unlit), 1M particles, the draw at 1280x720
-#              (raster and compute splat), in three rounds, alternated.
+#              (raster and compute renderer), in three rounds, alternated.
 set -euo pipefail
 plume=$1
 out=$2

@@ -4,7 +4,7 @@
 #   shadow.jsonl  smoke-unlit.ron, smoke-one-light-map.ron (normal-mapped, one directional
 #                 light) and smoke-shadow-map.ron (the same light's shadow cast by a wall from
 #                 the scene's meshes), smoke-shadow-particle.ron (the same shadow looked up once
-#                 a particle), 1M particles, the draw at 1280x720 (raster and compute splat),
+#                 a particle), 1M particles, the draw at 1280x720 (raster and compute renderer),
 #                 in three rounds, alternated.
 #   meshes-200.jsonl  ../meshes/puffs-200.ron (200-triangle spheres, lit) at 100k, twice.
 set -euo pipefail

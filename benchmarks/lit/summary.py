@@ -1,4 +1,4 @@
-"""Medians of benchmarks/lit/bench.sh's lit.jsonl: each effect's raster draw and compute splat
+"""Medians of benchmarks/lit/bench.sh's lit.jsonl: each effect's raster draw and compute renderer
 at 1M particles, 1280x720, and their ratios to the unlit smoke of the same run.
 Usage: python3 summary.py LIT.JSONL"""
 import collections
@@ -9,7 +9,8 @@ import sys
 rows = [json.loads(line) for line in open(sys.argv[1])]
 by = collections.defaultdict(list)
 for r in rows:
-    by[r["effect"]].append((r["draw"]["ms"], r["draw"]["splat_ms"]))
+    # Files written by older builds name the compute renderer's time splat_ms.
+    by[r["effect"]].append((r["draw"]["ms"], r["draw"].get("compute_ms", r["draw"].get("splat_ms"))))
 base = by["benchmarks/lit/smoke-unlit.ron"] if "benchmarks/lit/smoke-unlit.ron" in by else next(
     v for k, v in by.items() if k.endswith("smoke-unlit.ron"))
 med = lambda v, i: statistics.median(x[i] for x in v)

@@ -231,10 +231,10 @@ pub fn assert_back_to_front(effect: &CompiledEffect, drawn: &[ParticleRecord]) {
     }
 }
 
-/// `sim` drawn by the compute splat from the effect's camera, `side` pixels square.
+/// `sim` drawn by the compute renderer from the effect's camera, `side` pixels square.
 pub fn splat_image(sim: &Effect, side: u32) -> Vec<u8> {
-    let mut splat =
-        plume::runtime::outputs::Splat::new(sim, side, side).expect("the splat draws it");
+    let mut splat = plume::runtime::outputs::ComputeOffscreen::new(sim, side, side)
+        .expect("the compute renderer draws it");
     let camera = plume::runtime::Camera::from_effect(&sim.compiled().ir.camera, 1.0);
     let img = splat.render(sim, &camera).unwrap();
     assert!(splat.entries_are_complete().unwrap(), "splat entries lost");
@@ -271,7 +271,7 @@ pub fn local_difference(a: &[u8], b: &[u8], width: u32, block: u32) -> f64 {
 /// Asserts that `sim`'s raster draw at `side` pixels agrees with the CPU-fed reference drawing
 /// (a channel a step apart where rounding crosses a half, a rim pixel's coverage a few steps
 /// where sizes differ by f32 rounding: a mean difference under 0.05 and at most one value in
-/// 1,000 more than 4 apart) and, when `splat`, with the compute splat (at most one in 1,000
+/// 1,000 more than 4 apart) and, when `splat`, with the compute renderer (at most one in 1,000
 /// more than 2 apart); returns the raster image.
 pub fn assert_draws_agree(sim: &Effect, side: u32, splat: bool, what: &str) -> Vec<u8> {
     let (gpu_img, cpu_img) = draw_and_reference(sim, side);

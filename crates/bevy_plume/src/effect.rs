@@ -29,7 +29,7 @@ pub enum SimulationSpace {
 pub enum PlumeDraw {
     /// The compute renderer for an effect of 65,536 particles or more on a GPU adapter,
     /// where compute beats the raster units, by far on GPUs that have few of them
-    /// (docs/performance.md, "The compute splat");
+    /// (docs/performance.md, "The compute renderer");
     /// the raster one for smaller effects (the compute one costs a few passes over the whole
     /// image per effect), on a CPU adapter (lavapipe, llvmpipe) and wherever the compute one
     /// cannot draw.
@@ -37,11 +37,11 @@ pub enum PlumeDraw {
     Auto,
     /// Plume's raster pipelines in the camera's transparent pass.
     Raster,
-    /// The compute splat (Plume's `Effect::compute_renderer`): after the camera's opaque pass
+    /// The compute renderer (Plume's `Effect::compute_renderer`): after the camera's opaque pass
     /// it composites the effect into an image of its own, every pixel tested (and for
     /// `render.soft` faded) against the camera's depth, and one full-screen triangle in the
     /// transparent pass puts that image over the camera's. Where it cannot draw (a camera
-    /// whose viewport is not its whole target, an effect the splat refuses) the raster one
+    /// whose viewport is not its whole target, an effect the compute renderer refuses) the raster one
     /// draws, and the reason is logged once.
     Compute,
 }

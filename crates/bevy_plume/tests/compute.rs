@@ -1,6 +1,6 @@
 //! The compute renderer in Bevy's view (`PlumeDraw::Compute`), headless on lavapipe: it draws
 //! what the raster renderer draws, with and without MSAA, and the scene Bevy draws hides the
-//! particles behind it (the splat tests each pixel against the camera's depth after the
+//! particles behind it (the compute renderer tests each pixel against the camera's depth after the
 //! opaque pass). `BEVY_PLUME_TEST_IMAGES=DIR` keeps the images. One app at a time (the tests share two CPU cores and one driver).
 
 mod common;

@@ -68,9 +68,9 @@ fn draw_json(d: &plume_runtime::bench::DrawTimes) -> serde_json::Value {
         "light_ms": d.light.map(|s| s * 1e3),
         "compaction_ms": d.compacted.map(|(c, _)| c * 1e3),
         "triangle_ms": d.triangle * 1e3,
-        "splat_ms": d.splat.map(|s| s.0 * 1e3),
-        "splat_entries": d.splat.map(|s| s.1),
-        "splat_stages_ms": d.splat_stages.iter().map(|(n, s)| (n.to_string(), s * 1e3)).collect::<std::collections::BTreeMap<_, _>>(),
+        "compute_ms": d.compute.map(|s| s.0 * 1e3),
+        "compute_entries": d.compute.map(|s| s.1),
+        "compute_stages_ms": d.compute_stages.iter().map(|(n, s)| (n.to_string(), s * 1e3)).collect::<std::collections::BTreeMap<_, _>>(),
         "compacted_ms": d.compacted.map(|(_, s)| s * 1e3),
         "stateless_ms": d.stateless.map(|s| s * 1e3),
         "glow_draw_ms": d.glow.map(|g| g.0 * 1e3),
@@ -424,28 +424,28 @@ pub fn bench_command(args: &BenchArgs) -> ExitCode {
                 "    one triangle      {:.3} ms (a triangle per sprite instead of a quad)",
                 d.triangle * 1e3
             );
-            match d.splat {
+            match d.compute {
                 Some((seconds, entries)) => {
                     println!(
-                        "    compute splat     {:.3} ms for the same image in compute shaders ({entries} tile entries sorted)",
+                        "    compute renderer     {:.3} ms for the same image in compute shaders ({entries} tile entries sorted)",
                         seconds * 1e3,
                     );
                     let stages: Vec<String> = d
-                        .splat_stages
+                        .compute_stages
                         .iter()
                         .map(|(name, s)| format!("{name} {:.3}", s * 1e3))
                         .collect();
                     println!("      stages (ms)     {}", stages.join(", "));
                     let (faster, ratio) = if seconds < d.draw {
-                        ("the compute splat", d.draw / seconds)
+                        ("the compute renderer", d.draw / seconds)
                     } else {
                         ("the raster pipeline", seconds / d.draw)
                     };
                     println!(
-                        "    faster here       {faster}, {ratio:.1}x (plume render --draw auto takes the splat on a GPU adapter, raster on a CPU one)"
+                        "    faster here       {faster}, {ratio:.1}x (plume render --draw auto takes the compute renderer on a GPU adapter, raster on a CPU one)"
                     );
                 }
-                None => println!("    compute splat     - (it does not draw this effect)"),
+                None => println!("    compute renderer     - (it does not draw this effect)"),
             }
             if let Some((draw, blur)) = d.glow {
                 println!(

@@ -8,7 +8,7 @@ use std::process::ExitCode;
 use indicatif::{ProgressBar, ProgressStyle};
 use plume_compiler::graph::CompiledGraph;
 use plume_runtime::outputs::{
-    contact_sheet, gif, png, write_atomically, Frame8, Offscreen, Scene, Splat,
+    contact_sheet, gif, png, write_atomically, ComputeOffscreen, Frame8, Offscreen, Scene,
 };
 use plume_runtime::{Effect, Gpu, GpuChoice, RuntimeError};
 
@@ -34,9 +34,10 @@ pub struct RenderArgs {
     /// With a .png output: tile every frame into one contact sheet.
     #[arg(long)]
     sheet: bool,
-    /// How frames are drawn: `raster` (the render pipeline an embedding host uses), `splat`
-    /// (or `compute`: compute shaders only, the same image; faster where raster units are few,
-    /// as on an H100), or `auto`: the splat on a GPU where it draws the effect, else raster.
+    /// How frames are drawn: `raster` (the render pipeline an embedding host uses), `compute`
+    /// (the compute renderer: compute shaders only, the same image; faster where raster units
+    /// are few, as on an H100), or `auto`: the compute renderer on a GPU where it draws the
+    /// effect, else raster.
     #[arg(long, value_enum, default_value_t = DrawMethod::Auto)]
     draw: DrawMethod,
     /// Leave out the scene: without it, the meshes the effect names (its mesh colliders and
@@ -69,22 +70,20 @@ pub(crate) fn parse_size(s: &str) -> Result<(u32, u32), String> {
 /// How `plume render` draws its frames.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum DrawMethod {
-    /// The compute splat where it is faster and draws the effect ([`DrawMethod::resolve`]),
-    /// else the render pipeline.
+    /// The compute renderer where it is faster and draws the effect, else the render pipeline.
     Auto,
     /// The render pipeline: the effect's draw module, as an embedding host draws it.
     Raster,
-    /// The compute splat: the same image from compute shaders only.
-    #[value(alias = "compute")]
-    Splat,
+    /// The compute renderer: the same image from compute shaders only.
+    Compute,
 }
 
 impl DrawMethod {
-    /// The method `auto` stands for on `gpu` for `graph`, and why. The splat is far faster than
+    /// The method `auto` stands for on `gpu` for `graph`, and why. The compute renderer is far faster than
     /// the raster pipeline on GPUs whose raster units are few (docs/performance.md, "The compute
-    /// splat") and slower on llvmpipe, whose raster path is the CPU's; it draws every group's
+    /// renderer") and slower on llvmpipe, whose raster path is the CPU's; it draws every group's
     /// sprites (any texture, orientation, rotation and height, glowing or not) and ribbons; the
-    /// scene's meshes are drawn by the raster pipeline first and the splat tests their depth
+    /// scene's meshes are drawn by the raster pipeline first and the compute renderer tests their depth
     /// (`Effect::compute_renderer`).
     pub(crate) fn resolve(self, gpu: &Gpu, graph: &CompiledGraph) -> (Self, String) {
         if self != DrawMethod::Auto {
@@ -95,12 +94,12 @@ impl DrawMethod {
         let why_not = if gpu.info.device_type == wgpu::DeviceType::Cpu {
             Some("a CPU adapter rasterises faster than it splats")
         } else {
-            Splat::why_not(&irs)
+            ComputeOffscreen::why_not(&irs)
         };
         match why_not {
             Some(why) => (DrawMethod::Raster, format!("auto: {why}")),
             None => (
-                DrawMethod::Splat,
+                DrawMethod::Compute,
                 "auto: a GPU adapter, where compute beats its raster units".into(),
             ),
         }
@@ -123,7 +122,7 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
     eprintln!(
         "draw: {} ({why})",
         match draw {
-            DrawMethod::Splat => "the compute splat",
+            DrawMethod::Compute => "the compute renderer",
             _ => "the raster pipeline",
         }
     );
@@ -163,10 +162,10 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         scene.set_lights(&scene_lights);
     }
     let mut sim = Effect::from_graph(&gpu, graph)?;
-    // Over the scene's meshes the splat is the embedding API's compute renderer, which tests
-    // their depth; without meshes, the splat draws the image alone.
+    // Over the scene's meshes the compute renderer is the embedding API's compute renderer, which tests
+    // their depth; without meshes, the compute renderer draws the image alone.
     let mut renderer = match (&scene, draw) {
-        (Some(_), DrawMethod::Splat) => {
+        (Some(_), DrawMethod::Compute) => {
             sim.compute_renderer(&Scene::target(target.target()), w, h)?
         }
         (Some(_), _) => sim.renderer(&Scene::target(target.target()))?,
@@ -178,7 +177,7 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         scene.bind_to(&mut renderer, &scene_lights)?;
     }
     let mut splat = match (draw, &scene) {
-        (DrawMethod::Splat, None) => Some(Splat::new(&sim, w, h)?),
+        (DrawMethod::Compute, None) => Some(ComputeOffscreen::new(&sim, w, h)?),
         _ => None,
     };
     let camera = target.effect_camera(&sim);

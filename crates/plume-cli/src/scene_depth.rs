@@ -1,5 +1,5 @@
 //! The depth a `SceneDepth` collider meets where the command draws no scene of its own
-//! (`plume run`, `plume bench`, `plume render --draw splat`): the effect's scene meshes drawn
+//! (`plume run`, `plume bench`, `plume render --draw compute`): the effect's scene meshes drawn
 //! once from the effect's camera.
 
 use plume_runtime::outputs::Scene;

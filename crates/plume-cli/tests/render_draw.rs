@@ -1,6 +1,6 @@
 //! `plume render --draw`: `auto` (the default) says which renderer it took and why (on a CPU
-//! adapter, llvmpipe here, the raster pipeline), `compute` is the splat's other name, and over
-//! the meshes an effect names the splat tests their depth (the embedding API's compute
+//! adapter, llvmpipe here, the raster pipeline), `compute` takes the compute renderer, and over
+//! the meshes an effect names the compute renderer tests their depth (the embedding API's compute
 //! renderer) and draws the raster image.
 
 mod common;
@@ -34,7 +34,7 @@ fn render_effect(name: &str, args: &[&str], out: &Path) -> (bool, String) {
 }
 
 #[test]
-fn auto_says_which_renderer_it_took_and_compute_names_the_splat() {
+fn auto_says_which_renderer_it_took_and_compute_takes_the_compute_renderer() {
     let out = std::env::temp_dir().join(format!("plume-render-draw-{}.png", std::process::id()));
     let (ok, err) = render(&[], &out);
     assert!(ok, "{err}");
@@ -48,15 +48,18 @@ fn auto_says_which_renderer_it_took_and_compute_names_the_splat() {
     );
     let (ok, err) = render(&["--draw", "compute"], &out);
     assert!(ok, "{err}");
-    assert!(err.contains("draw: the compute splat (as asked)"), "{err}");
+    assert!(
+        err.contains("draw: the compute renderer (as asked)"),
+        "{err}"
+    );
     assert!(image::open(&out).is_ok(), "a PNG");
     std::fs::remove_file(&out).ok();
 }
 
 #[test]
-fn over_the_scene_s_meshes_the_splat_draws_the_raster_image() {
+fn over_the_scene_s_meshes_the_compute_renderer_draws_the_raster_image() {
     // crystal.ron names a mesh (a collider) that `plume render` draws around the particles:
-    // the splat now draws over it too, tested against its depth.
+    // the compute renderer now draws over it too, tested against its depth.
     let paths = common::image_pair("crystal");
     let args = |draw| {
         [
@@ -70,7 +73,7 @@ fn over_the_scene_s_meshes_the_splat_draws_the_raster_image() {
     assert!(err.contains("scene:"), "the meshes are drawn: {err}");
     let (a, b) = common::take_images(&paths);
     // The same meshes; the particles in front of them and not behind: a raster draw rounds
-    // after every blend and snaps edges, the splat blends once at pixel centres (tests/embed.rs
+    // after every blend and snaps edges, the compute renderer blends once at pixel centres (tests/embed.rs
     // in the facade measures the same gap on five effects), so the mean stays small.
     let diff = common::mean_difference(&a, &b);
     assert!(diff < 1.0, "mean difference {diff:.3} of 255");
@@ -81,6 +84,6 @@ fn over_the_scene_s_meshes_the_splat_draws_the_raster_image() {
     let mesh_grey = b.pixels().filter(|p| grey(p)).count();
     assert!(
         mesh_grey > 100,
-        "only {mesh_grey} grey mesh pixels under the splat"
+        "only {mesh_grey} grey mesh pixels under the compute renderer"
     );
 }

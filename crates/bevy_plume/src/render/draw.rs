@@ -34,7 +34,7 @@ pub(crate) fn view_target(view: &ExtractedView, msaa: &Msaa, depth_prepass: bool
 }
 
 /// The size of the compute renderer's image for a camera: its target's, when its viewport is
-/// the whole target (the splat's image maps the projection onto the whole depth texture it
+/// the whole target (the compute renderer's image maps the projection onto the whole depth texture it
 /// reads); None otherwise.
 fn compute_size(view: &ExtractedView, camera: Option<&ExtractedCamera>) -> Option<(u32, u32)> {
     let size = camera?.physical_target_size?;

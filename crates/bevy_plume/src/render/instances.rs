@@ -449,7 +449,7 @@ impl Instance {
             .filter_map(|g| self.effect.group_compiled(g).ok())
             .map(|c| &c.ir)
             .collect();
-        plume_runtime::outputs::Splat::why_not(&groups).is_none()
+        plume_runtime::outputs::ComputeOffscreen::why_not(&groups).is_none()
     }
 
     /// The draw for the camera `view` into `target`, made (or remade, when the camera's

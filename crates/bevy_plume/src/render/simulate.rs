@@ -397,7 +397,7 @@ pub(crate) fn prepare_for_view(
 }
 
 /// Prepares every compute-renderer draw the current camera queued this frame, between its
-/// opaque and transparent passes: the splat copies the depth the opaque pass drew, composites
+/// opaque and transparent passes: the compute renderer copies the depth the opaque pass drew, composites
 /// the effect against it, and the transparent pass puts the image over the camera's.
 pub(crate) fn composite_for_view(
     view: ViewQuery<(Entity, &ExtractedView, &ViewDepthStencilTexture)>,

@@ -1,5 +1,5 @@
-//! One preview frame: the effect's steps due and its draw into the scene texture (GPU
-//! timestamps and counters recorded for the probe), the scene and the on-screen text onto the
+//! One preview frame: the effect's steps due and its draw into the frame target (GPU
+//! timestamps and counters recorded for the probe), the frame and the on-screen text onto the
 //! window's surface, and screenshots of the effect's image.
 
 use std::path::PathBuf;
@@ -27,7 +27,7 @@ impl Running {
             None => self.clock.steps_due(elapsed),
         };
         let (w, h) = (self.config.width, self.config.height);
-        self.scene.resize(&self.gpu, (w, h))?;
+        self.target.resize(&self.gpu, (w, h))?;
         let mut encoder = self.gpu.device.create_command_encoder(&Default::default());
         let mut stepped = None;
         let mut drawn = false;
@@ -57,7 +57,7 @@ impl Running {
             }
             let bg = loaded.effect.compiled().ir.render.background;
             let mut color = wgpu::RenderPassColorAttachment {
-                view: self.scene.view(),
+                view: self.target.view(),
                 depth_slice: None,
                 resolve_target: None,
                 ops: wgpu::Operations {
@@ -121,7 +121,7 @@ impl Running {
             });
             loaded.renderer.draw(&mut pass);
             drop(pass);
-            self.scene.finish(&mut encoder);
+            self.target.finish(&mut encoder);
             drawn = true;
             let top = &loaded.effect;
             counters = top
@@ -156,7 +156,7 @@ impl Running {
                 occlusion_query_set: None,
                 multiview_mask: None,
             });
-            self.scene.blit(&mut pass);
+            self.target.blit(&mut pass);
             self.overlay.draw(
                 &self.gpu.device,
                 &self.gpu.queue,
@@ -202,9 +202,9 @@ impl Running {
 
     /// Writes the last frame (the effect's image, without the on-screen text) as a PNG.
     pub(super) fn save_screenshot(&self, path: &std::path::Path) -> Result<(), String> {
-        let (w, h) = self.scene.size();
+        let (w, h) = self.target.size();
         let pixels =
-            read_texture(&self.gpu, self.scene.texture(), w, h).map_err(|e| e.to_string())?;
+            read_texture(&self.gpu, self.target.texture(), w, h).map_err(|e| e.to_string())?;
         let png = png(&Frame8 {
             width: w,
             height: h,

@@ -7,9 +7,9 @@ use plume_compiler::graph::CompiledGraph;
 use plume_runtime::{DrawTarget, Effect};
 
 use super::clock::StepClock;
+use super::frame_target::FrameTarget;
 use super::orbit::Orbit;
 use super::reload::Outcome;
-use super::scene::Scene;
 use super::state::{Loaded, Running};
 use super::Options;
 use crate::render::DrawMethod;
@@ -81,7 +81,7 @@ impl Running {
             .iter()
             .flat_map(|g| g.effect.ir.scene_triangles())
             .collect();
-        let format = Scene::draw_format(glow.as_ref());
+        let format = FrameTarget::draw_format(glow.as_ref());
         let size = (self.config.width.max(1), self.config.height.max(1));
         let mut meshes = plume_runtime::outputs::Scene::new(&self.gpu, &triangles, format, size)
             .map_err(|e| e.to_string())?;
@@ -109,7 +109,7 @@ impl Running {
             None => DrawTarget::new(format),
         };
         let mut renderer = match method {
-            DrawMethod::Splat => effect.compute_renderer(&target, size.0, size.1),
+            DrawMethod::Compute => effect.compute_renderer(&target, size.0, size.1),
             _ => effect.renderer(&target),
         }
         .map_err(|e| e.to_string())?;
@@ -133,7 +133,7 @@ impl Running {
         };
         // Last, and all or nothing: the old effect keeps drawing into a matching scene if this
         // fails.
-        self.scene.set_glow(&self.gpu, glow)?;
+        self.target.set_glow(&self.gpu, glow)?;
         self.effect = Some(Loaded {
             effect,
             renderer,

@@ -5,7 +5,7 @@
 //! step and per draw, the integrator, whether it is stateless, warnings) are on screen.
 //!
 //! One module per job: `clock` (real time to fixed steps), `orbit` (the camera), `reload`
-//! (watching and recompiling), `scene` (the frame texture and its copy to the window),
+//! (watching and recompiling), `frame_target` (the frame texture and its copy to the window),
 //! `overlay` (on-screen text), `probe` (GPU figures read without waiting), and the winit
 //! application that ties them together: `state` (what exists once the window is open),
 //! `window` (opening it and its events), `live` (loading, reloading and restarting the
@@ -14,12 +14,12 @@
 mod clock;
 mod figures;
 mod frame;
+mod frame_target;
 mod live;
 mod orbit;
 mod overlay;
 mod probe;
 mod reload;
-mod scene;
 mod state;
 mod window;
 

@@ -11,11 +11,11 @@ use winit::dpi::PhysicalPosition;
 use winit::window::Window;
 
 use super::clock::StepClock;
+use super::frame_target::FrameTarget;
 use super::orbit::Orbit;
 use super::overlay::Overlay;
 use super::probe::Probe;
 use super::reload::{EffectFile, Watcher};
-use super::scene::Scene;
 
 /// The effect running now (one group or several) and its draw.
 pub(super) struct Loaded {
@@ -49,7 +49,7 @@ pub(super) struct Running {
     pub(super) surface: wgpu::Surface<'static>,
     pub(super) config: wgpu::SurfaceConfiguration,
     pub(super) gpu: Gpu,
-    pub(super) scene: Scene,
+    pub(super) target: FrameTarget,
     pub(super) overlay: Overlay,
     pub(super) probe: Probe,
     pub(super) file: EffectFile,

@@ -15,10 +15,10 @@ use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 use super::clock::StepClock;
+use super::frame_target::FrameTarget;
 use super::overlay::Overlay;
 use super::probe::Probe;
 use super::reload::{EffectFile, Watcher};
-use super::scene::Scene;
 use super::state::{Mouse, Running};
 use super::Options;
 
@@ -91,7 +91,7 @@ impl App {
         surface.configure(&gpu.device, &config);
         eprintln!("adapter: {}", gpu.describe());
         let mut running = Running {
-            scene: Scene::new(&gpu.device, config.format, (config.width, config.height)),
+            target: FrameTarget::new(&gpu.device, config.format, (config.width, config.height)),
             overlay: Overlay::new(&gpu.device, &gpu.queue, config.format),
             probe: Probe::new(&gpu.device, &gpu.queue, gpu.has_timestamps()),
             file: EffectFile::new(&self.options.file, self.options.overrides.clone()),

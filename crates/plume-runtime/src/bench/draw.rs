@@ -1,16 +1,16 @@
 //! `plume bench --render`: the draw of the effect's own picture at N particles, timed every way
 //! it can be drawn (blending off, vertices only, one triangle a sprite, hidden quads against a
-//! compacted list, the compute splat stage by stage, into an HDR image to glow, stateless).
+//! compacted list, the compute renderer stage by stage, into an HDR image to glow, stateless).
 
 use plume_compiler::schema::State;
 use plume_compiler::{compile_effect, EffectSpec};
 
-use crate::bench::scene::draw_scene;
+use crate::bench::effect_copy::draw_copy;
 use crate::bench::timer::PassTimer;
 use crate::device::gpu::Gpu;
 use crate::draw::raster::{DeadSlots, DrawOptions};
 use crate::draw::renderer::EffectRenderer;
-use crate::draw::splat::{Splat, STAGES};
+use crate::draw::splat::{ComputeOffscreen, STAGES};
 use crate::error::RuntimeError;
 use crate::outputs::offscreen::Offscreen;
 use crate::outputs::scene::Scene;
@@ -23,7 +23,7 @@ use crate::sort::radix::SortAlgorithm;
 #[derive(Clone, Debug, PartialEq)]
 pub struct DrawTimes {
     /// Live particles drawn: the effect's own scene scaled to N
-    /// ([`crate::bench::scene::draw_scene`]).
+    /// ([`crate::bench::effect_copy::draw_copy`]).
     pub particles: u64,
     /// Steps run before drawing.
     pub steps: u64,
@@ -47,12 +47,12 @@ pub struct DrawTimes {
     /// The same draw with one triangle per sprite instead of a quad (3 vertices and 1
     /// primitive instead of 4 and 2; 30% more area).
     pub triangle: f64,
-    /// The compute splat of the same image ([`Splat`]): its one compute pass (the frame
+    /// The compute renderer of the same image ([`ComputeOffscreen`]): its one compute pass (the frame
     /// preparation, a sort when the effect sorts, excluded as for the draw), and the (tile,
     /// sprite) entries it sorted; None for sprites it cannot draw (oriented ones).
-    pub splat: Option<(f64, u64)>,
-    /// The splat's stages timed one by one (each the median of [`DRAW_REPEATS`]).
-    pub splat_stages: Vec<(&'static str, f64)>,
+    pub compute: Option<(f64, u64)>,
+    /// The compute renderer's stages timed one by one (each the median of [`DRAW_REPEATS`]).
+    pub compute_stages: Vec<(&'static str, f64)>,
     /// The same N particles of a stateless copy of the effect, drawn from the closed form in
     /// the vertex shader, when the effect can be stateless.
     pub stateless: Option<f64>,
@@ -76,7 +76,7 @@ pub(crate) fn time_draws(
     (particles, slots): (u32, u32),
     (width, height): (u32, u32),
 ) -> Result<DrawTimes, RuntimeError> {
-    let (scene, steps) = draw_scene(effect, particles, slots);
+    let (scene, steps) = draw_copy(effect, particles, slots);
     let compile = |state| {
         let mut e = scene.clone();
         e.state = state;
@@ -111,7 +111,7 @@ pub(crate) fn time_draws(
         ..Default::default()
     };
     // A light that casts a shadow is blocked by the shadow map of the effect's scene meshes,
-    // as `plume render` draws it: bound to the draw and the splat.
+    // as `plume render` draws it: bound to the draw and the compute renderer.
     let shadow = shadow_of_scene(gpu, sim, target.target().color_format, (width, height))?;
     let mut shadowed = sim.renderer_with(&target.target(), &hidden_slots)?;
     if let Some((lights, scene)) = &shadow {
@@ -142,15 +142,15 @@ pub(crate) fn time_draws(
             },
         )?,
     )?;
-    // An effect the splat does not draw, or not at this size on this adapter: no splat line.
-    let made = match Splat::draws(&sim.compiled().ir) {
-        true => match Splat::new(sim, width, height) {
+    // An effect the compute renderer does not draw, or not at this size on this adapter: no compute line.
+    let made = match ComputeOffscreen::draws(&sim.compiled().ir) {
+        true => match ComputeOffscreen::new(sim, width, height) {
             Err(RuntimeError::Unsupported(_)) => None,
             made => Some(made?),
         },
         false => None,
     };
-    let (splat, splat_stages) = if let Some(mut splat) = made {
+    let (splat, compute_stages) = if let Some(mut splat) = made {
         if let Some((lights, scene)) = &shadow {
             splat.set_lights(lights);
             splat.set_shadow_map(scene_map(scene))?;
@@ -288,8 +288,8 @@ pub(crate) fn time_draws(
         prepare,
         compacted,
         triangle,
-        splat,
-        splat_stages,
+        compute: splat,
+        compute_stages,
         stateless,
         glow,
         light,

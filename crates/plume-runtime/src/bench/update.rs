@@ -9,8 +9,8 @@ use plume_compiler::{CompiledEffect, EffectSpec};
 
 use crate::bench::copy::CopyKernel;
 use crate::bench::draw::{time_draws, DrawTimes};
+use crate::bench::effect_copy::{compile_bench_as, compile_occupied};
 use crate::bench::profile::{profiled, DispatchTime};
-use crate::bench::scene::{compile_bench_as, compile_occupied};
 use crate::bench::timer::{PassTimer, TimingSource};
 use crate::device::gpu::Gpu;
 use crate::device::resources::STEPS_PER_SUBMIT;
@@ -221,7 +221,7 @@ pub fn bench(
     let render = match options.render {
         None => None,
         Some((w, h)) => {
-            // The draw is measured on the effect's own picture at N particles (draw_scene),
+            // The draw is measured on the effect's own picture at N particles (draw_copy),
             // after the update's copy is gone.
             drop(sim);
             Some(time_draws(

@@ -1,7 +1,7 @@
 //! A few bytes of a buffer read back without waiting on the GPU: the copy is recorded into a
 //! frame's encoder, mapped once the host has submitted that encoder (the next frame asks), and
 //! read a frame or more later when the mapping is done. For what a renderer or a host learns
-//! from the GPU every frame (how many tile entries the splat needed, the live particles' box),
+//! from the GPU every frame (how many tile entries the compute renderer needed, the live particles' box),
 //! where `read_buffer`'s wait would stall the frame.
 
 use std::sync::atomic::{AtomicU8, Ordering};

@@ -1,6 +1,6 @@
 //! A group's frame: what any view of it needs before it is drawn (a stateless group's segment
 //! table, the depth keys and their sort along the camera's axis), whatever draws it, the
-//! raster draw or the compute splat; and the draw order that sort gives, read back.
+//! raster draw or the compute renderer; and the draw order that sort gives, read back.
 
 use plume_compiler::reference::ParticleRecord;
 

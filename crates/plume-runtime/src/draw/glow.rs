@@ -15,7 +15,7 @@ pub const HDR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba16Float;
 /// The HDR image to draw into and the bloom passes into an RGBA8 image, for one image size.
 pub struct GlowPasses {
     hdr: wgpu::TextureView,
-    /// The HDR image itself (the compute splat copies its image into it).
+    /// The HDR image itself (the compute renderer copies its image into it).
     hdr_texture: wgpu::Texture,
     blur_x: (wgpu::ComputePipeline, wgpu::BindGroup),
     blur_y: (wgpu::ComputePipeline, wgpu::BindGroup),

@@ -6,7 +6,7 @@
 //! order it gives); the ribbons drawn before it ([`trail`]), the sprite
 //! texture ([`texture`]), a lit draw's lights ([`lights`]), the scene depth a soft draw reads ([`scene_depth`]), and what they
 //! share ([`pipeline`], [`target`], [`camera`]); then the two image-only ways of drawing that
-//! `plume render` uses: the compute splat ([`splat`]) and the bloom of a glowing effect
+//! `plume render` uses: the compute renderer ([`splat`]) and the bloom of a glowing effect
 //! ([`glow`]).
 //!
 //! Imports [`crate::device`], [`crate::sort`] and [`crate::sim`]; nothing above.

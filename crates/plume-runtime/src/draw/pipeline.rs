@@ -118,7 +118,7 @@ pub(crate) fn draw_group(
     )
 }
 
-/// A bind group of `layout` (a render pipeline's or the compute splat's): `buffers`, the
+/// A bind group of `layout` (a render pipeline's or the compute renderer's): `buffers`, the
 /// sprite texture and sampler (and a lit look's maps, a second image) when there is one, and
 /// the `extra` resources at their bindings (the scene depth, a shadow map and its samplers).
 pub(crate) fn bind_resources(

@@ -16,18 +16,18 @@ use crate::sim::effect::Effect;
 /// two ways:
 /// - raster ([`Effect::renderer`]): each group's draw module on a render pipeline for that
 ///   target, drawn in the host's render pass;
-/// - compute ([`Effect::compute_renderer`]): the compute splat composites every group into an
+/// - compute ([`Effect::compute_renderer`]): the compute renderer composites every group into an
 ///   image of its own, tested against the host's depth, and the host's render pass puts that
 ///   image over its colour with one full-screen triangle. Faster where raster units are few,
 ///   as on data-centre GPUs, by far for large effects (docs/performance.md, "The compute
-///   splat").
+///   renderer").
 ///
 /// Prepared each frame by [`Effect::prepare_draw`], recorded into a render pass by
 /// [`Self::draw`].
 pub struct EffectRenderer {
     /// (group index, its draw), in group order (raster).
     parts: Vec<(usize, GroupDraw)>,
-    /// The compute splat into the host's images (compute).
+    /// The compute renderer into the host's images (compute).
     compute: Option<HostSplat>,
     /// The shadow map bound last ([`Self::set_shadow_map`]), so that binding it again is free.
     shadow_map: Option<wgpu::Texture>,
@@ -260,13 +260,13 @@ impl Effect {
 
     /// The compute renderer of this effect, every group, into `width` x `height` targets like
     /// `target` ([`EffectRenderer`] says how it draws). Its image is the raster draw's, as
-    /// `plume render --draw splat` draws it: every look, ribbons, the depth test (`Less`,
+    /// `plume render --draw compute` draws it: every look, ribbons, the depth test (`Less`,
     /// `LessEqual`, `Greater`, `GreaterEqual` or `Always`) and soft particles. The host records
-    /// [`Effect::prepare_draw`] after its depth is drawn (the splat reads it in a compute
+    /// [`Effect::prepare_draw`] after its depth is drawn (the compute renderer reads it in a compute
     /// pass), then [`EffectRenderer::draw`] in a pass over its colour (any format and sample
     /// count). A glowing effect puts its light into the host's target as it is (an HDR target
     /// keeps it, for the host's bloom), as the raster renderer does. Make a new one when the
-    /// target's size changes. An error for what the splat cannot draw ([`crate::outputs::Splat::why_not`]).
+    /// target's size changes. An error for what the compute renderer cannot draw ([`crate::outputs::ComputeOffscreen::why_not`]).
     pub fn compute_renderer(
         &self,
         target: &DrawTarget,

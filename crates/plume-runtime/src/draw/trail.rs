@@ -97,7 +97,7 @@ impl TrailDraw {
 }
 
 /// What a trail draw module reads besides its view (the raster draw's and the compute
-/// splat's alike): the depth order when it draws `through_list`, and each particle buffer with
+/// renderer's alike): the depth order when it draws `through_list`, and each particle buffer with
 /// its trail ring.
 pub(crate) fn trail_buffers(
     effect: &CompiledEffect,

@@ -1,6 +1,6 @@
 //! Headless outputs, for the `plume` command and tools: images drawn offscreen ([`Offscreen`],
-//! through the same [`crate::EffectRenderer`] a host records; or the compute [`Splat`]),
-//! bloomed when the effect glows ([`GlowPasses`] into [`HDR_FORMAT`]), encoded as PNG, contact
+//! through the same [`crate::EffectRenderer`] a host records; or [`ComputeOffscreen`], by the
+//! compute renderer), bloomed when the effect glows ([`GlowPasses`] into [`HDR_FORMAT`]), encoded as PNG, contact
 //! sheet or GIF ([`Frame8`]), over the meshes the effect names ([`Scene`], shadowed by [`SceneShadow`]); the particle exports (`.csv`, `.ply`) and their [`Summary`].
 //! Every file is written atomically ([`write_atomically`]).
 //!
@@ -14,7 +14,7 @@ pub(crate) mod scene_shadow;
 
 pub use crate::device::readback::read_texture;
 pub use crate::draw::glow::{GlowPasses, HDR_FORMAT};
-pub use crate::draw::splat::Splat;
+pub use crate::draw::splat::ComputeOffscreen;
 pub use export::{
     csv, csv_groups, export, export_groups, ply, ply_groups, summarize, write_atomically, Summary,
 };

@@ -240,7 +240,7 @@ impl GpuSorter {
     /// (`scan_reduce`), then each block scanned from its prefix (`scan_apply`), which up to
     /// [`SCAN_PREFIX_MAX`] blocks adds up the totals before its own and past that reads them
     /// as `scan_totals`, one workgroup, scanned them in a dispatch between. (Short scans applied
-    /// level by level are slower on long scans such as the splat's: docs/performance.md, "Depth
+    /// level by level are slower on long scans such as the compute renderer's: docs/performance.md, "Depth
     /// sort and the radix sort".)
     fn scan(
         &self,

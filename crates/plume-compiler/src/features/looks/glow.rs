@@ -22,7 +22,7 @@ pub struct Glow {
     pub radius: f64,
     /// Light above this level (per channel) blooms as this level does (the bloom's clamp):
     /// where thousands of additive layers pile up, the halo spreads no wider than light at
-    /// this level would. The image shows no light past 1 anyway, so the compute splat stops
+    /// this level would. The image shows no light past 1 anyway, so the compute renderer stops
     /// adding light into a pixel once every channel reaches it. The default, f16's largest
     /// finite value, is the HDR image's own limit: no clamp of its own.
     #[serde(default = "default_glow_clamp")]

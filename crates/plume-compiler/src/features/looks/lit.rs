@@ -6,7 +6,7 @@
 //! stay unlit (`emissive`), and `wrap` lets light reach round the terminator of thin volumes.
 //!
 //! Both renderers shade each pixel the same way (`emit_lit_color`: the fragment shader,
-//! and the compute splat's composite from the quad's half axes and centre it keeps); the
+//! and the compute renderer's composite from the quad's half axes and centre it keeps); the
 //! reference drawing shades in world space, and [`Lit::shade`] is the f64 twin the tests
 //! check single pixels against.
 
@@ -202,7 +202,7 @@ impl Lit {
     /// Emits, for a look with maps (a normal map, six-way lightmaps), `lit_map_texel_k` for
     /// each (its texel, as `frame_texel` samples the texture) and the maps' texels at a
     /// pixel, as the columns of a `mat2x4`: `lit_maps(in)` for the fragment shader (their
-    /// derivatives taken before any discard) and, for the compute splat,
+    /// derivatives taken before any discard) and, for the compute renderer,
     /// `splat_lit_maps(uv, du, dv, frame)`; nothing for computed normals.
     pub(crate) fn emit_map_fns(&self, w: &mut Writer, splat: bool) {
         let maps = self.map_files().len();
@@ -230,7 +230,7 @@ impl Lit {
         });
         if splat {
             w.blank();
-            w.comment("The lit look's map texels at corner coordinates uv (their derivatives du, dv), for the compute splat.");
+            w.comment("The lit look's map texels at corner coordinates uv (their derivatives du, dv), for the compute renderer.");
             w.block(
                 "fn splat_lit_maps(uv: vec2<f32>, du: vec2<f32>, dv: vec2<f32>, frame: u32) -> mat2x4<f32>",
                 |w| {
@@ -250,7 +250,7 @@ impl Lit {
         }
     }
 
-    /// The WGSL of the look's map texels at corner coordinates `uv` in the compute splat's
+    /// The WGSL of the look's map texels at corner coordinates `uv` in the compute renderer's
     /// composite (`du`, `dv`, the frame in `r3.y`), as [`Self::maps_wgsl`].
     pub(crate) fn splat_maps_wgsl(&self) -> &'static str {
         match self.map_files().is_empty() {

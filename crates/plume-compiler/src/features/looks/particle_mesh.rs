@@ -11,7 +11,7 @@
 //! [`MESH_VERTICES_BINDING`]); the raster pipeline culls the back faces (OBJ winds triangles
 //! counter-clockwise seen from outside). Particles are drawn in slot order, or back to front
 //! with `sort: true`; no depth is written, so meshes of one group cross over each other only as
-//! that order says. The compute splat does not draw meshes.
+//! that order says. The compute renderer does not draw meshes.
 
 use std::path::Path;
 use std::sync::Arc;

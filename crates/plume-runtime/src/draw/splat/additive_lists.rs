@@ -1,5 +1,5 @@
 //! Additive light's tile lists, placed without a sort: the kernels of `additive_lists.wgsl` and
-//! the stages they take in the splat's order. The composites (the generated one of quads and
+//! the stages they take in the compute renderer's order. The composites (the generated one of quads and
 //! ribbon segments, and `splat.wgsl`'s raster of discs) sum additive light in fixed point
 //! (`plume_compiler`'s splat `light`), exactly, so a tile's list may hold its
 //! entries in any order; counting and placing them replaces the scan, emit, radix sort and
@@ -53,7 +53,7 @@ impl AdditiveLists {
         Ok(lists)
     }
 
-    /// Records what `stage` of the splat's stages does for additive lists into `pass`, with
+    /// Records what `stage` of the compute renderer's stages does for additive lists into `pass`, with
     /// the tile kernels' bind `group`, for `sprites` sprites over `tiles` tiles: "scan" counts
     /// the entries and finds each tile's run, "emit" places them, "sort" and "ranges" do
     /// nothing. `false`: the stage is not one of these (the group records it as for any list).
@@ -68,7 +68,9 @@ impl AdditiveLists {
     ) -> Result<bool, RuntimeError> {
         let chunks = gpu.grid(u64::from(sprites).div_ceil(CHUNK), 1)?;
         let bands = u32::try_from(tiles.div_ceil(BAND)).map_err(|_| {
-            RuntimeError::Output(format!("{tiles} tiles are more than the splat counts"))
+            RuntimeError::Output(format!(
+                "{tiles} tiles are more than the compute renderer counts"
+            ))
         })?;
         let mut dispatch = |kernel: &wgpu::ComputePipeline, (x, y): (u32, u32), z: u32| {
             pass.set_bind_group(0, group, &[]);

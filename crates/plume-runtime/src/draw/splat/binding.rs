@@ -1,4 +1,4 @@
-//! What the splat's groups bind: the tile kernels of `splat.wgsl` and their shared layout (which
+//! What the compute renderer's groups bind: the tile kernels of `splat.wgsl` and their shared layout (which
 //! `additive_lists.wgsl` shares too), the bind groups of the generated kernels (buffers, and the sprite texture where there is one),
 //! the trail module a group's ribbons are drawn from, and the check that a frame's entry lists are
 //! complete.
@@ -111,7 +111,7 @@ pub(super) fn bind(
     gpu.bind_buffers("splat", layout, &entries)
 }
 
-/// The trail draw module of `effect` in the splat's shape (its `project` and `composite` for
+/// The trail draw module of `effect` in the compute renderer's shape (its `project` and `composite` for
 /// ribbon segments) and the buffers it reads, as the raster trail draw binds them: every
 /// slot, in the depth order when the effect sorts.
 pub(super) fn ribbon_module(

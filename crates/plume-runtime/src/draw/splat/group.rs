@@ -1,7 +1,7 @@
-//! One group's compute splat: its `project` kernel (from the group's draw module), the scan,
+//! One group's compute renderer: its `project` kernel (from the group's draw module), the scan,
 //! the (tile, sprite) entries and their sort, and the composite (the fixed disc kernel of
 //! `splat.wgsl` or the group's generated `composite`), into an image it owns or shares with
-//! the groups drawn before it ([`super::Splat`] strings them together).
+//! the groups drawn before it ([`super::ComputeOffscreen`] strings them together).
 
 use plume_compiler::wgsl::draw::{
     splat_additive_lists, splat_discs, splat_hdr_pitch, splat_light_ceiling, splat_quad_words,
@@ -73,7 +73,7 @@ pub(crate) struct SplatImage {
     pub(crate) light_ceiling: u32,
 }
 
-/// The compute splat of one group into `width` x `height` images.
+/// The compute renderer of one group into `width` x `height` images.
 pub(crate) struct GroupSplat {
     gpu: Gpu,
     width: u32,
@@ -109,7 +109,7 @@ pub(crate) struct GroupSplat {
     disc_slices: u32,
 }
 
-/// The splat's stages, in order.
+/// The compute renderer's stages, in order.
 pub const STAGES: [&str; 6] = ["project", "scan", "emit", "sort", "ranges", "raster"];
 
 impl GroupSplat {
@@ -142,7 +142,7 @@ impl GroupSplat {
                 let segments = u64::from(effect.ir.capacity) * u64::from(trail::segments(trail));
                 let count = u32::try_from(segments).map_err(|_| {
                     RuntimeError::Output(format!(
-                        "{segments} ribbon segments are more than the compute splat counts (2^32); draw this effect with the raster pipeline"
+                        "{segments} ribbon segments are more than the compute renderer counts (2^32); draw this effect with the raster pipeline"
                     ))
                 })?;
                 let (module, entries) = ribbon_module(&gpu, effect, res, shape)?;
@@ -190,7 +190,7 @@ impl GroupSplat {
         }
         if largest > limit {
             return Err(RuntimeError::Unsupported(format!(
-                "{}: the compute splat of {count} records into {width}x{height} needs a {largest}-byte buffer, past the adapter's {limit}-byte binding limit; draw this effect with the raster pipeline",
+                "{}: the compute renderer of {count} records into {width}x{height} needs a {largest}-byte buffer, past the adapter's {limit}-byte binding limit; draw this effect with the raster pipeline",
                 gpu.info.name
             )));
         }
@@ -356,7 +356,7 @@ impl GroupSplat {
         let limit = self.gpu.limits.max_storage_buffer_binding_size;
         if len * 4 > limit {
             return Err(RuntimeError::Unsupported(format!(
-                "the compute splat's tile lists need {len} entries, {} bytes a list, past the adapter's {limit}-byte binding limit; draw this effect with the raster pipeline",
+                "the compute renderer's tile lists need {len} entries, {} bytes a list, past the adapter's {limit}-byte binding limit; draw this effect with the raster pipeline",
                 len * 4
             )));
         }
@@ -427,7 +427,7 @@ impl GroupSplat {
     }
 
     /// Records the camera, the steps done (`steps`, from the group's frame preparation) and
-    /// the sprites' size scale into `encoder`, before the splat's pass.
+    /// the sprites' size scale into `encoder`, before the compute renderer's pass.
     pub(crate) fn write_view(
         &self,
         encoder: &mut wgpu::CommandEncoder,
@@ -476,7 +476,7 @@ impl GroupSplat {
         (self.lights.is_some(), shadowed)
     }
 
-    /// Records the splat itself into `pass`: project, scan, entries, sort, ranges, raster.
+    /// Records the compute renderer itself into `pass`: project, scan, entries, sort, ranges, raster.
     pub(crate) fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
         for stage in STAGES {
             self.record_stage(pass, stage)?;
@@ -484,7 +484,7 @@ impl GroupSplat {
         Ok(())
     }
 
-    /// Records one stage of the splat into `pass` (the benchmark times them one by one).
+    /// Records one stage of the compute renderer into `pass` (the benchmark times them one by one).
     pub(crate) fn record_stage(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
@@ -547,7 +547,7 @@ impl GroupSplat {
             },
             _ => {
                 return Err(RuntimeError::Output(format!(
-                    "the splat has no stage {stage}"
+                    "the compute renderer has no stage {stage}"
                 )))
             }
         }

@@ -1,6 +1,6 @@
-//! The compute splat drawn into a host's images: the embedding API's compute renderer
+//! The compute renderer drawn into a host's images: the embedding API's compute renderer
 //! ([`crate::EffectRenderer`] made by `Effect::compute_renderer`). Each frame, after the host has
-//! drawn its depth, the splat composites every group into its own HDR image, testing (and for
+//! drawn its depth, the compute renderer composites every group into its own HDR image, testing (and for
 //! `render.soft`, fading) each pixel against a copy of the host's depth; then one full-screen
 //! triangle in the host's render pass puts that image over the host's colour (`host.wgsl`).
 //!
@@ -12,7 +12,7 @@ use std::sync::Mutex;
 
 use plume_compiler::wgsl::draw::{splat_hdr_pitch, HostDepthTest, SplatHost};
 
-use super::Splat;
+use super::ComputeOffscreen;
 use crate::device::async_read::AsyncRead;
 use crate::device::depth_copy::{check_texture, DepthCopy};
 use crate::device::gpu::Gpu;
@@ -23,7 +23,7 @@ use crate::sim::effect::Effect;
 
 /// What changes from frame to frame, behind a lock (the renderer is prepared through `&self`).
 struct Frame {
-    splat: Splat,
+    splat: ComputeOffscreen,
     depth_copy: DepthCopy,
     /// The host's depth texture (set by `set_scene_depth`), copied each frame.
     scene_depth: Option<wgpu::Texture>,
@@ -48,7 +48,7 @@ pub(crate) struct HostSplat {
     blit_group: wgpu::BindGroup,
 }
 
-/// The splat's test for a host depth test.
+/// The compute renderer's test for a host depth test.
 fn depth_test(compare: wgpu::CompareFunction) -> Result<HostDepthTest, RuntimeError> {
     Ok(match compare {
         wgpu::CompareFunction::Less => HostDepthTest::Less,
@@ -84,14 +84,14 @@ impl HostSplat {
             depth,
             soft: target.soft,
         };
-        let splat = Splat::with_host(effect, width, height, Some(host))?;
+        let splat = ComputeOffscreen::with_host(effect, width, height, Some(host))?;
         let readbacks = splat
             .parts
             .iter()
             .map(|_| AsyncRead::new(&gpu, "splat entries needed", 4))
             .collect();
         let module = gpu.shader_module("splat over the host", include_str!("host.wgsl"));
-        // Over whatever the pass holds: the splat has tested depth itself, so the triangle
+        // Over whatever the pass holds: the compute renderer has tested depth itself, so the triangle
         // passes any depth attachment the pass has, and writes none.
         let blit_target = match target.depth {
             Some(d) => target.with_depth_compare(d.format, wgpu::CompareFunction::Always),
@@ -268,7 +268,7 @@ impl HostSplat {
         Ok(())
     }
 
-    /// Records the splat's image over the host's colour into `pass`.
+    /// Records the compute renderer's image over the host's colour into `pass`.
     pub(crate) fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
         pass.set_pipeline(&self.blit);
         pass.set_bind_group(0, &self.blit_group, &[]);

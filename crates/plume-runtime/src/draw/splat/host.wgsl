@@ -1,5 +1,5 @@
-// The compute splat's image put over a host's colour attachment: one triangle covering the
-// target, each fragment reading its pixel's premultiplied light and coverage (the splat's HDR
+// The compute renderer's image put over a host's colour attachment: one triangle covering the
+// target, each fragment reading its pixel's premultiplied light and coverage (the compute renderer's HDR
 // image: (r, g) and (b, coverage) as f16 pairs, rows of `pitch` pixels). The pipeline blends
 // with (One, OneMinusSrcAlpha): the host's colour shows through as much as the particles
 // leave uncovered, and additive light adds.

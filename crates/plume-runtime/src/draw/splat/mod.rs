@@ -1,4 +1,5 @@
-//! The compute splat: another way to draw `plume render`'s images, in compute shaders only, for
+//! The compute renderer (its modules are named `splat` for what it does: it splats each particle
+//! into the screen tiles it covers): another way to draw images, in compute shaders only, for
 //! GPUs whose raster units are few (an H100 has graphics units in only a small part of the chip,
 //! and the raster draw of 10M sprites is bound by their vertex and primitive rate; see
 //! docs/performance.md). It gives the raster draw's image: the same sprites (the draw module's
@@ -46,18 +47,18 @@ use group::{GroupSplat, SplatImage};
 pub(crate) use host::HostSplat;
 use plume_compiler::wgsl::draw::SplatHost;
 
-/// A glowing effect's bloom: the splat's HDR image is copied into the glow's HDR texture, and
+/// A glowing effect's bloom: the compute renderer's HDR image is copied into the glow's HDR texture, and
 /// the same two blur passes as the raster draw's write `output` (RGBA8).
 struct SplatGlow {
     passes: GlowPasses,
     output: wgpu::Texture,
 }
 
-/// A compute splat of an effect (every group, in group order) into `width` x `height` images.
+/// A compute renderer of an effect (every group, in group order) into `width` x `height` images.
 ///
 /// ```
 /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
-/// use plume_runtime::outputs::Splat;
+/// use plume_runtime::outputs::ComputeOffscreen;
 /// use plume_runtime::{Effect, Gpu};
 /// let source = r#"Effect(name: "streaks", capacity: 64,
 ///     emitters: [Emitter(burst: 64, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 0.5),
@@ -68,13 +69,13 @@ struct SplatGlow {
 /// let gpu = Gpu::new(&Default::default())?;
 /// let mut streaks = Effect::new(&gpu, effect)?;
 /// streaks.run(10, |_| {})?;
-/// let mut splat = Splat::new(&streaks, 64, 48)?;
+/// let mut splat = ComputeOffscreen::new(&streaks, 64, 48)?;
 /// let image = splat.render(&streaks, &streaks.camera(64.0 / 48.0))?;
 /// assert_eq!(image.len(), 64 * 48 * 4); // RGBA8 rows, top row first
 /// # Ok(())
 /// # }
 /// ```
-pub struct Splat {
+pub struct ComputeOffscreen {
     gpu: Gpu,
     width: u32,
     height: u32,
@@ -89,8 +90,8 @@ pub struct Splat {
     size_scale: f32,
 }
 
-impl Splat {
-    /// Whether the splat can draw `ir`: any sprite (textured or round, any orientation,
+impl ComputeOffscreen {
+    /// Whether the compute renderer can draw `ir`: any sprite (textured or round, any orientation,
     /// rotation and height, glowing or not), alpha or additive, and trails of a stateful
     /// effect; not ribbons joining particles (`render.ribbon`), meshes (`render.mesh`), nor `Multiply`, `Mask`,
     /// `Premultiplied` or `Opaque` blending, which the raster draw draws.
@@ -102,12 +103,12 @@ impl Splat {
             && matches!(ir.render.blend, Blend::Alpha | Blend::Additive)
     }
 
-    /// Why the splat cannot draw an effect whose groups are `groups`, or `None` when it can.
+    /// Why the compute renderer cannot draw an effect whose groups are `groups`, or `None` when it can.
     pub fn why_not(groups: &[&EffectIr]) -> Option<&'static str> {
         groups
             .iter()
             .any(|ir| !Self::draws(ir))
-            .then_some("the compute splat draws neither ribbons joining particles (render.ribbon), meshes (render.mesh), Multiply, Mask, Premultiplied or Opaque blending, nor trails of stateless effects")
+            .then_some("the compute renderer draws neither ribbons joining particles (render.ribbon), meshes (render.mesh), Multiply, Mask, Premultiplied or Opaque blending, nor trails of stateless effects")
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
@@ -205,7 +206,7 @@ impl Splat {
         })
     }
 
-    /// Records what the frame needs before the splat's pass into `encoder`: each group's frame
+    /// Records what the frame needs before the compute renderer's pass into `encoder`: each group's frame
     /// preparation (frame table, depth sort) and the camera.
     pub fn prepare(
         &self,
@@ -222,7 +223,7 @@ impl Splat {
         Ok(())
     }
 
-    /// Records the splat itself into `pass`: each group's project, scan, entries, sort,
+    /// Records the compute renderer itself into `pass`: each group's project, scan, entries, sort,
     /// ranges and composite, in group order.
     pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
         for (_, part) in &self.parts {
@@ -231,7 +232,7 @@ impl Splat {
         Ok(())
     }
 
-    /// Records one stage of the splat into `pass`, for every group in order (the benchmark
+    /// Records one stage of the compute renderer into `pass`, for every group in order (the benchmark
     /// times them one by one).
     #[cfg(feature = "tools")]
     pub(crate) fn record_stage(
@@ -245,7 +246,7 @@ impl Splat {
         Ok(())
     }
 
-    /// Records the bloom of a glowing effect after the splat's pass: its HDR image copied into
+    /// Records the bloom of a glowing effect after the compute renderer's pass: its HDR image copied into
     /// the glow's texture, then the two blur passes (nothing for an effect that does not glow).
     pub(crate) fn record_glow(&self, encoder: &mut wgpu::CommandEncoder) {
         let Some(glow) = &self.glow else {

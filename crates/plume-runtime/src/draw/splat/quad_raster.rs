@@ -48,7 +48,7 @@ pub(super) struct MergeTargets<'a> {
 }
 
 impl QuadRaster {
-    /// The composite of `module` (the group's draw module in the splat's `shape`, or its trail
+    /// The composite of `module` (the group's draw module in the compute renderer's `shape`, or its trail
     /// module for `ribbons`) into a `width` x `height` image.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn new(

@@ -1,4 +1,4 @@
-// The compute splat's tile kernels (not generated: they are the same for every effect; the
+// The compute renderer's tile kernels (not generated: they are the same for every effect; the
 // effect-specific part, `project`, is in the effect's draw module). After `project` has written
 // each sprite's pixel extent and colour and its tile count, and the counts have been scanned:
 //   clear:  the keys of entries past those emit writes to the largest key (unused entries

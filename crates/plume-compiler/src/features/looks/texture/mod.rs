@@ -437,7 +437,7 @@ impl TextureIr {
     /// (column, row) at `quad` (the sprite's corner coordinates mapped to [0, 1]², v down),
     /// filtered for the screen-space derivatives `gx`, `gy` of its unclamped atlas coordinate.
     /// The fragment shader takes those derivatives from the rasteriser (`dpdxFine`), the
-    /// compute splat from its quad's projective map, so both sample the same mip levels.
+    /// compute renderer from its quad's projective map, so both sample the same mip levels.
     pub(crate) fn emit_texel_fn(&self, w: &mut Writer) {
         if let Some(second) = &self.second {
             return self.emit_texel_product_fn(second, w);
@@ -504,7 +504,7 @@ impl TextureIr {
         w.line("let gy = dpdyFine(unclamped);");
     }
 
-    /// Emits, in the compute splat's function of `uv`, `du`, `dv` and `frame`, the frame's
+    /// Emits, in the compute renderer's function of `uv`, `du`, `dv` and `frame`, the frame's
     /// atlas cell `cell`, the pixel's place in it `quad`, and the derivatives `gx`, `gy` of its
     /// atlas coordinate from those of `uv`.
     pub(crate) fn emit_splat_coordinates(w: &mut Writer) {
@@ -515,7 +515,7 @@ impl TextureIr {
         w.line("let gy = vec2<f32>(dv.x, -dv.y) * 0.5 * FRAME_SIZE;");
     }
 
-    /// Emits the compute splat's shading of a textured sprite: `splat_shade(uv, du, dv, color,
+    /// Emits the compute renderer's shading of a textured sprite: `splat_shade(uv, du, dv, color,
     /// frame)` is the frame's texel at corner coordinates `uv`, whose derivatives along the
     /// image's x and y are `du` and `dv`, times the colour (as [`Self::emit_fragment_body`]).
     pub(crate) fn emit_splat_shade(&self, w: &mut Writer) {

@@ -51,20 +51,20 @@ pub struct DrawShape {
     pub through_list: bool,
     /// The sprite's primitive: a quad (a 4-vertex strip) or one triangle around the disc.
     pub primitive: Primitive,
-    /// Whether the module also holds `project`, the compute splat's first kernel (the
+    /// Whether the module also holds `project`, the compute renderer's first kernel (the
     /// runtime's `splat.rs` draws `plume render`'s images with it).
     pub splat: bool,
-    /// Whether the splat composites into an HDR image (the effect glows, or the top-level
+    /// Whether the compute renderer composites into an HDR image (the effect glows, or the top-level
     /// group of its graph does: every group then draws into the one HDR image).
     pub hdr: bool,
     /// Whether the fragment shader fades sprites near the host's depth buffer, bound at
     /// [`SCENE_DEPTH_BINDING`] (an effect with `render.soft`, drawn into a pass with depth).
     pub soft: bool,
-    /// Set when the splat draws for a host's image (the embedding API's compute draw): it
+    /// Set when the compute renderer draws for a host's image (the embedding API's compute draw): it
     /// keeps each pixel's coverage for the composite over the host's colour, and tests (and
     /// fades) against the host's depth. Needs `splat` and `hdr`.
     pub host: Option<SplatHost>,
-    /// Whether the splat's HDR light stops at a ceiling below f16's largest value (the
+    /// Whether the compute renderer's HDR light stops at a ceiling below f16's largest value (the
     /// top-level group's glow clamp, `render.glow.clamp`): its composite then tests each
     /// pixel's light against `splat_tiles.light_ceiling` once a mask word. Without a clamp
     /// the test would never pass, and it costs time in every HDR composite (docs/performance.md,
@@ -74,7 +74,7 @@ pub struct DrawShape {
     /// (`light_keys_pass`, `light_pick_pass`; the runtime draws them with an identity view
     /// and no slot list).
     pub particle_light: bool,
-    /// Whether the splat's composite may use subgroup operations: the adapter's subgroups are
+    /// Whether the compute renderer's composite may use subgroup operations: the adapter's subgroups are
     /// exactly 32 invocations wide (the runtime checks), and its line masks are then built by
     /// bit-matrix transposes, a subgroup each, instead of a thread per mask word.
     pub subgroups: bool,
@@ -104,13 +104,13 @@ impl Primitive {
     }
 }
 
-/// Bindings of the splat's `project` kernel: its view (image size, tiles, instance count), the
+/// Bindings of the compute renderer's `project` kernel: its view (image size, tiles, instance count), the
 /// projected sprites (16 bytes each), each sprite's tile count, the same count again (the
 /// runtime scans that copy in place into offsets), and the sprite's tile rectangle (computed
 /// once here, so every later kernel agrees on it).
 pub const SPLAT_BINDINGS: [u32; 5] = [20, 21, 22, 23, 24];
 
-/// Side of the splat's square screen tiles (pixels).
+/// Side of the compute renderer's square screen tiles (pixels).
 pub const SPLAT_TILE: u32 = 16;
 
 impl DrawShape {
@@ -355,7 +355,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
 
 /// `sprite_at(instance)`: instance → slot (through `order` when there is one) → particle →
 /// whether it shows, its centre in view space, its colour and size. Shared by the vertex shader
-/// and the splat's `project`, so both draw the same sprites.
+/// and the compute renderer's `project`, so both draw the same sprites.
 fn emit_sprite_at(w: &mut Writer, ir: &EffectIr, layout: &Layout, shape: &DrawShape, life: bool) {
     let stateless = ir.stateless.is_some();
     w.comment(

@@ -1,4 +1,4 @@
-//! The compute splat's kernels for ribbons: a record per segment of a ribbon's strip (the two
+//! The compute renderer's kernels for ribbons: a record per segment of a ribbon's strip (the two
 //! triangles between ribbon points s and s + 1), `project` (its tile box and count) and
 //! `composite` (each pixel's perspective-correct barycentric weights in the segment's
 //! triangles, shaded as `fs_trail` does).
@@ -17,7 +17,7 @@ use crate::stages::wgsl::draw::splat::{
 };
 use crate::stages::wgsl::draw::DrawShape;
 
-/// Vec4s of a ribbon segment's record in the compute splat's composite:
+/// Vec4s of a ribbon segment's record in the compute renderer's composite:
 /// - three: the rows of the map from pixels to its first triangle's barycentric weights (xyz;
 ///   w, the triangle's vertices' clip z);
 /// - one: the fourth vertex in the first triangle's weights, from which a pixel's weights in the
@@ -37,7 +37,7 @@ pub fn segments(trail: &TrailIr) -> u32 {
 }
 
 /// Emits `segment_record(k)`, `project` and `composite` for the ribbons of `ir` (the trail
-/// module's `ribbon_of`, `ribbon_point` and the splat's declarations are in scope).
+/// module's `ribbon_of`, `ribbon_point` and the compute renderer's declarations are in scope).
 pub(super) fn emit(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawShape) {
     w.line(format!(
         "const SEGMENTS: u32 = {};",

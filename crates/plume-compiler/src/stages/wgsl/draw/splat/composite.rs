@@ -1,4 +1,4 @@
-//! The splat's composite kernels, the same for every record kind (quads, ribbon segments):
+//! The compute renderer's composite kernels, the same for every record kind (quads, ribbon segments):
 //! `composite`, a workgroup per tile blending its list front to back, and `merge`, which
 //! composes the slices of a tile's list. The record kind supplies the code that loads a record
 //! and evaluates it at a pixel.
@@ -35,7 +35,7 @@ pub const SPLAT_SLICES: u32 = 8;
 pub fn splat_slices(ir: &crate::ir::EffectIr) -> u32 {
     match ir.render.blend {
         crate::stages::schema::Blend::Additive => SPLAT_SLICES,
-        // The splat composites alpha and additive light only (`Splat::draws`).
+        // The compute renderer composites alpha and additive light only (`ComputeOffscreen::draws`).
         _ => 1,
     }
 }
@@ -78,7 +78,7 @@ pub(crate) enum Prefetch {
     /// the first batch and then after each batch's records are made, so that they arrive
     /// while the masks and the walk run and `load` reads them. Ribbon segments, each made from
     /// several scattered loads, gained from their entries loaded ahead and more from the
-    /// segments' loads too (docs/performance.md, "The compute splat"; benchmarks/h100-splat/runs/).
+    /// segments' loads too (docs/performance.md, "The compute renderer"; benchmarks/h100-splat/runs/).
     Loads {
         declare: &'static str,
         issue: &'static str,

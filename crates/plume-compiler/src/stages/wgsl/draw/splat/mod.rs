@@ -1,5 +1,5 @@
-//! The compute splat's part of the draw module: its bindings and the `project` kernel, which
-//! writes each sprite's record and tile box for the splat's tile kernels (the runtime's
+//! The compute renderer's part of the draw module: its bindings and the `project` kernel, which
+//! writes each sprite's record and tile box for the compute renderer's tile kernels (the runtime's
 //! `splat.wgsl`).
 //!
 //! Two kinds of record. Round camera-facing sprites ([`splat_discs`]) are discs: 16 bytes (a
@@ -26,7 +26,7 @@ use crate::base::writer::{f32_lit, Writer};
 use crate::features::looks::orient::OrientIr;
 use crate::ir::EffectIr;
 
-/// Whether the splat draws `ir`'s sprites as discs (round, camera-facing, square, untextured:
+/// Whether the compute renderer draws `ir`'s sprites as discs (round, camera-facing, square, untextured:
 /// the runtime's fixed raster kernel) rather than as quads (`composite`, generated). Into
 /// an HDR image (`hdr`: the effect or its graph glows) sprites are drawn as quads: their
 /// colours may pass what a disc's 10-bit record holds.
@@ -38,7 +38,7 @@ pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
         && !hdr
 }
 
-/// Whether the splat builds `ir`'s tile lists without a sort: additive light, which the
+/// Whether the compute renderer builds `ir`'s tile lists without a sort: additive light, which the
 /// composites (the generated one of quads and ribbon segments, and the runtime's disc kernel)
 /// sum in fixed point, the same in any order. Its `project` keeps the counts once, for no
 /// scan reads a second copy.
@@ -46,7 +46,7 @@ pub fn splat_additive_lists(ir: &EffectIr) -> bool {
     ir.render.blend == crate::stages::schema::Blend::Additive
 }
 
-/// Pixels per row of the splat's HDR image (a glowing effect's): the width rounded up to 32,
+/// Pixels per row of the compute renderer's HDR image (a glowing effect's): the width rounded up to 32,
 /// so that a row of 8-byte pixels is a whole number of 256-byte copy rows and the image can be
 /// copied into the glow's HDR texture as it is.
 pub fn splat_hdr_pitch(width: u32) -> u32 {
@@ -80,7 +80,7 @@ pub(crate) fn lit_record_row(host: bool) -> u32 {
     3 + u32::from(host)
 }
 
-/// How the splat meets a host's image (the embedding API's compute draw): the image keeps each
+/// How the compute renderer meets a host's image (the embedding API's compute draw): the image keeps each
 /// pixel's coverage, so that a full-screen pass can put it over the host's colour, and every
 /// pixel of a sprite or ribbon is tested against the host's depth (a copy of it, one f32 a
 /// pixel at [`SPLAT_HOST_DEPTH_BINDING`]) as the rasteriser's depth test would test its
@@ -173,7 +173,7 @@ fn emit_host_fade(w: &mut Writer, ir: &EffectIr, host: SplatHost, raster_soft: b
 /// `Params`, 8 words), the sorted entries' sprites, each tile's run of entries, the image.
 pub const SPLAT_RASTER_BINDINGS: [u32; 4] = [25, 26, 27, 28];
 
-/// The splat's declarations: its view and output buffers (bindings [`SPLAT_BINDINGS`]), for
+/// The compute renderer's declarations: its view and output buffers (bindings [`SPLAT_BINDINGS`]), for
 /// quads the tile buffers `composite` reads ([`SPLAT_RASTER_BINDINGS`]), and for a host's
 /// image its depth (`host_fade`).
 pub(crate) fn emit_splat_declarations(
@@ -183,7 +183,7 @@ pub(crate) fn emit_splat_declarations(
     shape: &DrawShape,
 ) {
     let hdr = shape.hdr;
-    w.comment("The compute splat's image: size in pixels, tiles, and the instances to project.");
+    w.comment("The compute renderer's image: size in pixels, tiles, and the instances to project.");
     w.block("struct SplatView", |w| {
         w.line("width: u32,");
         w.line("height: u32,");
@@ -254,7 +254,7 @@ pub(crate) fn emit_splat_declarations(
     ));
 }
 
-/// `project`: the splat's first kernel. Instance k's sprite as the rasteriser would place it,
+/// `project`: the compute renderer's first kernel. Instance k's sprite as the rasteriser would place it,
 /// in 16 bytes: its centre in pixels (two f32), its half extent in pixels and its alpha (two
 /// f16), its RGB (three 10-bit unorms); and how many screen tiles its pixels touch (0 when
 /// hidden, clipped, or covering no pixel centre). Pixels are square (the projection's aspect is

@@ -1,4 +1,4 @@
-//! Quads, every sprite the splat does not draw as a disc: `project` writes each one's record
+//! Quads, every sprite the compute renderer does not draw as a disc: `project` writes each one's record
 //! (the projective map from pixels back to its corner coordinates, its colour, its box), and
 //! `composite` maps each pixel centre back onto the quad and shades it as the fragment shader
 //! does. A quad that faces the camera is composited by an affine map where the view allows

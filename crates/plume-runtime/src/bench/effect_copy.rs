@@ -121,7 +121,7 @@ fn scale_shape(shape: &mut plume_compiler::schema::Shape, scale: f64, about: gla
 ///
 /// The capacity is `slots`, or a tenth more than `particles` if that is more, so the
 /// randomness of lifetimes drops nothing.
-pub fn draw_scene(effect: &EffectSpec, particles: u32, slots: u32) -> (EffectSpec, u64) {
+pub fn draw_copy(effect: &EffectSpec, particles: u32, slots: u32) -> (EffectSpec, u64) {
     let mut e = effect.clone();
     let params = e.params.clone();
     let mean = |l: &plume_compiler::schema::Range| 0.5 * (l.0 + l.1);

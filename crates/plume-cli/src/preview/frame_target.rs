@@ -9,7 +9,7 @@ use plume_runtime::outputs::{GlowPasses, FORMAT, HDR_FORMAT};
 use plume_runtime::Gpu;
 
 const BLIT_WGSL: &str = r#"
-@group(0) @binding(0) var scene: texture_2d<f32>;
+@group(0) @binding(0) var frame: texture_2d<f32>;
 
 @vertex
 fn vs(@builtin(vertex_index) v: u32) -> @builtin(position) vec4<f32> {
@@ -20,12 +20,12 @@ fn vs(@builtin(vertex_index) v: u32) -> @builtin(position) vec4<f32> {
 
 @fragment
 fn fs(@builtin(position) p: vec4<f32>) -> @location(0) vec4<f32> {
-    return textureLoad(scene, vec2<i32>(p.xy), 0);
+    return textureLoad(frame, vec2<i32>(p.xy), 0);
 }
 "#;
 
 /// The frame texture and the copy onto the surface.
-pub struct Scene {
+pub struct FrameTarget {
     texture: wgpu::Texture,
     view: wgpu::TextureView,
     size: (u32, u32),
@@ -37,7 +37,7 @@ pub struct Scene {
     bloom: Option<GlowPasses>,
 }
 
-impl Scene {
+impl FrameTarget {
     /// A `width` x `height` frame copied onto surfaces of `surface_format`.
     pub fn new(
         device: &wgpu::Device,
