@@ -1,5 +1,5 @@
 //! Mesh particles (`render.mesh`) on llvmpipe: a lit cube's front face is as bright as
-//! Lambert's law says (its back faces culled), meshes turned, stretched, sorted and lit match
+//! Lambert's law says (its back faces culled), meshes turned, stretched, sorted, lit and unlit (drawn indexed) match
 //! the CPU-fed reference drawing (each mesh placed and lit in f64), and the compute renderer
 //! leaves them to the raster draw.
 
@@ -102,28 +102,53 @@ fn a_lit_cubes_front_face_follows_lamberts_law() {
 }
 
 #[test]
-fn turned_sorted_lit_meshes_agree_with_the_reference_drawing() {
+fn turned_sorted_lit_and_unlit_meshes_agree_with_the_reference_drawing() {
     let gpu = gpu();
     let dir = cube_dir("many");
     let ico = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("effects/meshes/ico.obj");
-    for (mesh, orient, blend, extra) in [
+    let lit = "Some(Lit(wrap: 0.2, emissive: 0.1))";
+    // Unlit meshes are drawn indexed (each shared corner once): sorted through the indirect
+    // indexed draw, unsorted through the direct one.
+    for (mesh, orient, blend, extra, lit, sort) in [
         (
             "cube.obj".to_string(),
             "Velocity(stretch: 0.3, max_length: 2.0)",
             "Alpha",
             "",
+            lit,
+            true,
         ),
         (
             "cube.obj".to_string(),
             "Fixed((0.3, 1.0, 0.2))",
             "Opaque",
             ", rotation: Some(Rotation(angle: (0.0, 360.0), spin: (-90.0, 90.0)))",
+            lit,
+            true,
         ),
         (
             ico.display().to_string(),
             "Camera",
             "Additive",
             ", size_y: Some([(0.0, 0.2), (1.0, 0.6)])",
+            lit,
+            true,
+        ),
+        (
+            ico.display().to_string(),
+            "Velocity(stretch: 0.3, max_length: 2.0)",
+            "Alpha",
+            "",
+            "None",
+            true,
+        ),
+        (
+            "cube.obj".to_string(),
+            "Fixed((0.3, 1.0, 0.2))",
+            "Additive",
+            ", rotation: Some(Rotation(angle: (0.0, 360.0), spin: (-90.0, 90.0)))",
+            "None",
+            false,
         ),
     ] {
         let src = format!(
@@ -131,7 +156,7 @@ fn turned_sorted_lit_meshes_agree_with_the_reference_drawing() {
     name: "meshes",
     capacity: 300,
     seed: 9,
-    sort: true,
+    sort: {sort},
     emitters: [Emitter(burst: 300, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 2.0),
                        velocity: Radial(speed: (0.5, 2.0)), lifetime: Some((4.0, 6.0)))],
     camera: Camera(eye: (6.0, 3.0, 8.0), target: (0.0, 0.0, 0.0), fov_y: 45.0),
@@ -141,12 +166,12 @@ fn turned_sorted_lit_meshes_agree_with_the_reference_drawing() {
     render: Render(color: [(0.0, (0.7, 0.7, 0.7, 0.9)), (1.0, (0.5, 0.4, 0.3, 0.6))],
                    size: [(0.0, 0.4), (1.0, 0.2)], orient: {orient}, blend: {blend},
                    background: (0.05, 0.05, 0.05), mesh: Some(ParticleMesh(file: "{mesh}")),
-                   lit: Some(Lit(wrap: 0.2, emissive: 0.1)){extra}),
+                   lit: {lit}{extra}),
 )"#
         );
         let mut sim = Effect::new(&gpu, compile_in(&dir, &src)).unwrap();
         sim.run(30, |_| {}).unwrap();
-        let what = format!("{mesh} {orient} {blend}");
+        let what = format!("{mesh} {orient} {blend} lit {lit} sort {sort}");
         assert!(
             !ComputeOffscreen::draws(&sim.compiled().ir),
             "{what}: the compute renderer draws no meshes"

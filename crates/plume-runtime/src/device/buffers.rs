@@ -1,4 +1,5 @@
-//! Small buffers every stage makes: one created filled ([`filled_buffer`]), the staging copy
+//! Small buffers every stage makes: one created filled ([`filled_buffer`], or with 32-bit
+//! words: [`words_buffer`]), the staging copy
 //! that carries per-call parameters inside the caller's encoder ([`staging`]), and the usage
 //! set of a storage buffer that is also copied and read back ([`STORAGE`]).
 
@@ -41,6 +42,21 @@ pub fn filled_buffer(
     }
     buffer.unmap();
     Ok(buffer)
+}
+
+/// A buffer created holding `words` (little-endian), at least 16 bytes long.
+pub fn words_buffer(
+    gpu: &Gpu,
+    label: &str,
+    words: impl ExactSizeIterator<Item = u32>,
+    usage: wgpu::BufferUsages,
+) -> Result<wgpu::Buffer, RuntimeError> {
+    let size = (words.len() as u64 * 4).max(16);
+    filled_buffer(gpu, label, size, usage, |b| {
+        for (chunk, word) in b.chunks_exact_mut(4).zip(words) {
+            chunk.copy_from_slice(&word.to_le_bytes());
+        }
+    })
 }
 
 /// A small buffer holding `bytes`, to copy from inside an encoder: per-call parameters are

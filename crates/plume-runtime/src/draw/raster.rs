@@ -26,7 +26,7 @@ use plume_compiler::wgsl::draw::{
 };
 use plume_compiler::CompiledEffect;
 
-use crate::device::buffers::{filled_buffer, STORAGE};
+use crate::device::buffers::{filled_buffer, words_buffer, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::device::resources::Resources;
 use crate::draw::camera::{record_draw_view, Camera};
@@ -94,15 +94,16 @@ enum Instances {
     },
 }
 
-/// Writes the indirect draw's instance count from the counters: capacity − free count (word
-/// 4 of `args` holds the capacity and word 0 the vertices per sprite, written once).
+/// Writes the indirect draw's instance count (word 1, in both the plain and the indexed
+/// form) from the counters: capacity − free count. Word 0 holds the vertices (or indices) per
+/// sprite and word 5, past both forms, the capacity, written once; the rest are zero.
 const DRAW_ARGS_WGSL: &str = r#"
 @group(0) @binding(0) var<storage, read> counters: array<u32>;
 @group(0) @binding(1) var<storage, read_write> args: array<u32>;
 
 @compute @workgroup_size(1)
 fn draw_args() {
-    args[1] = args[4] - min(counters[0], args[4]);
+    args[1] = args[5] - min(counters[0], args[5]);
 }
 "#;
 
@@ -127,8 +128,11 @@ pub(crate) struct GroupDraw {
     /// The lights of a lit look (`render.lit`).
     lights: Option<LightsUniform>,
     instances: Instances,
-    /// Vertices per sprite (4: a quad strip; 3: a triangle).
+    /// Vertices per sprite (4: a quad strip; 3: a triangle; a mesh's), or indices where
+    /// `indices` is set.
     vertices: u32,
+    /// The index buffer of an indexed draw (an unlit mesh's).
+    indices: Option<wgpu::Buffer>,
     size_scale: f32,
     gpu: Gpu,
 }
@@ -208,9 +212,13 @@ impl GroupDraw {
             ),
             (None, None) => (("vs", "fs"), plain(topology)),
         };
-        let vertices = match (ribbon, mesh) {
+        let mesh_buffers = match ribbon {
+            Some(_) => None,
+            None => mesh.map(|m| m.buffers(effect.ir.render.lit.is_some())),
+        };
+        let vertices = match (ribbon, &mesh_buffers) {
             (Some(_), _) => plume_compiler::ribbon::SEGMENT_VERTICES,
-            (None, Some(mesh)) => mesh.vertices(),
+            (None, Some(buffers)) => buffers.draw_count(),
             (None, None) => options.primitive.vertices(),
         };
         // Opaque and cut-out meshes write depth where the target lets them; nothing else does.
@@ -245,20 +253,20 @@ impl GroupDraw {
             })?;
             entries.push((plume_compiler::ribbon::RIBBON_DRAW_BINDING, table.clone()));
         }
-        if let Some(mesh) = mesh {
-            let words = mesh.vertex_words();
-            let buffer = filled_buffer(
-                gpu,
-                "mesh vertices",
-                (words.len() * 4).max(16) as u64,
-                STORAGE,
-                |b| {
-                    for (chunk, word) in b.chunks_exact_mut(4).zip(&words) {
-                        chunk.copy_from_slice(&word.to_le_bytes());
-                    }
-                },
-            )?;
+        let mut indices = None;
+        if let Some(buffers) = &mesh_buffers {
+            let words = buffers.vertex_words.iter().map(|w| w.to_bits());
+            let buffer = words_buffer(gpu, "mesh vertices", words, STORAGE)?;
             entries.push((plume_compiler::particle_mesh::MESH_VERTICES_BINDING, buffer));
+            if let Some(list) = &buffers.indices {
+                let usage = wgpu::BufferUsages::INDEX;
+                indices = Some(words_buffer(
+                    gpu,
+                    "mesh indices",
+                    list.iter().copied(),
+                    usage,
+                )?);
+            }
         }
         let lights = LightsUniform::new(gpu, effect);
         if let Some(lights) = &lights {
@@ -321,6 +329,7 @@ impl GroupDraw {
             lights,
             instances,
             vertices,
+            indices,
             size_scale: 1.0,
             gpu: gpu.clone(),
         })
@@ -448,17 +457,23 @@ impl GroupDraw {
         }
         pass.set_pipeline(&self.pipeline);
         pass.set_bind_group(0, &self.group, &[]);
-        let vertices = 0..self.vertices;
-        match &self.instances {
-            Instances::Slots(n) => pass.draw(vertices, 0..*n),
-            Instances::Frame(n) => {
-                let n = n.load(Ordering::Relaxed);
-                if n > 0 {
-                    pass.draw(vertices, 0..n);
-                }
-            }
-            Instances::Alive { args, .. } => pass.draw_indirect(args, 0),
-            Instances::Compacted(live) => pass.draw_indirect(&live.args, 0),
+        if let Some(indices) = &self.indices {
+            pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+        }
+        let indexed = self.indices.is_some();
+        let instances = match &self.instances {
+            Instances::Slots(n) => 0..*n,
+            Instances::Frame(n) => 0..n.load(Ordering::Relaxed),
+            // Meshes, the indexed draws, are never compacted: only `Alive`'s arguments have
+            // the indexed form's five words.
+            Instances::Alive { args, .. } if indexed => return pass.draw_indexed_indirect(args, 0),
+            Instances::Alive { args, .. } => return pass.draw_indirect(args, 0),
+            Instances::Compacted(live) => return pass.draw_indirect(&live.args, 0),
+        };
+        match (instances.is_empty(), indexed) {
+            (true, _) => {}
+            (false, true) => pass.draw_indexed(0..self.vertices, 0, instances),
+            (false, false) => pass.draw(0..self.vertices, instances),
         }
     }
 }
@@ -492,7 +507,7 @@ fn alive_instances(
         STORAGE | wgpu::BufferUsages::INDIRECT,
         |b| {
             b[..4].copy_from_slice(&vertices.to_le_bytes());
-            b[16..20].copy_from_slice(&capacity.to_le_bytes());
+            b[20..24].copy_from_slice(&capacity.to_le_bytes());
         },
     )?;
     let module = gpu.shader_module("draw args", DRAW_ARGS_WGSL);

@@ -6,10 +6,15 @@
 //! with `render.lit` each triangle is lit by its own face normal, per vertex (Lambert's law,
 //! `wrap` and `emissive` as for lit sprites), which the reference drawing does alike in f64.
 //!
-//! The draw module's `vs_mesh` draws an instance per particle and 3 vertices per triangle,
-//! read from a storage buffer of the mesh's corners and face normals (binding
-//! [`MESH_VERTICES_BINDING`]); the raster pipeline culls the back faces (OBJ winds triangles
-//! counter-clockwise seen from outside). Particles are drawn in slot order, or back to front
+//! The draw module's `vs_mesh` draws an instance per particle, its vertices read from a
+//! storage buffer (binding [`MESH_VERTICES_BINDING`]) as [`MeshIr::buffers`] lays them out. An
+//! unlit mesh is drawn indexed: each distinct corner once in the buffer, an index per
+//! triangle corner, so a corner that several triangles share can be shaded once (the GPU's
+//! vertex reuse; the draw of many mesh particles is bound by its vertices, see
+//! docs/performance.md). A lit mesh lights each triangle by its own face normal, so no two
+//! triangles share a vertex: 3 vertices per triangle, each a corner and its face normal. The
+//! raster pipeline culls the back faces (OBJ winds triangles counter-clockwise seen from
+//! outside). Particles are drawn in slot order, or back to front
 //! with `sort: true`; no depth is written, so meshes of one group cross over each other only as
 //! that order says. The compute renderer does not draw meshes.
 
@@ -44,6 +49,26 @@ pub(crate) const CLASHES: [(&str, &str); 4] = [
     ("ribbon", "ribbons"),
     ("soft", "soft fade"),
 ];
+
+/// A mesh's vertex buffer and how the draw reads it ([`MeshIr::buffers`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MeshBuffers {
+    /// The storage buffer's words, as f32: per distinct corner its position (w 0) when
+    /// indexed; else per triangle corner its position then its face normal (w 0 each).
+    pub vertex_words: Vec<f32>,
+    /// The index buffer (u32, three per triangle) of an indexed draw.
+    pub indices: Option<Vec<u32>>,
+}
+
+impl MeshBuffers {
+    /// Vertices (or indices, for an indexed draw) a particle draws: three per triangle.
+    pub fn draw_count(&self) -> u32 {
+        match &self.indices {
+            Some(indices) => indices.len() as u32,
+            None => (self.vertex_words.len() / 8) as u32,
+        }
+    }
+}
 
 /// The mesh, loaded.
 #[derive(Clone, PartialEq)]
@@ -119,22 +144,42 @@ impl MeshIr {
         }
     }
 
-    /// Vertices a particle draws: three per triangle.
-    pub fn vertices(&self) -> u32 {
-        3 * self.triangles.len() as u32
-    }
-
-    /// The vertex buffer's words: per corner, its position (w 0) then its triangle's unit face
-    /// normal (w 0), as f32.
-    pub fn vertex_words(&self) -> Vec<f32> {
-        let mut words = Vec::with_capacity(self.triangles.len() * 24);
-        for t in self.triangles.iter() {
-            let n = face_normal(t);
-            for p in t {
-                words.extend([p.x, p.y, p.z, 0.0, n.x, n.y, n.z, 0.0].map(|x| x as f32));
+    /// The vertex buffer (and for an unlit mesh the index buffer) the draw module that
+    /// [`Self::emit_draw`] writes reads: `lit` says whether the look is lit (`render.lit`).
+    /// Unlit, corners are merged where their f32 positions are equal, in the order the
+    /// triangles first name them.
+    pub fn buffers(&self, lit: bool) -> MeshBuffers {
+        let f32s = |p: DVec3| [p.x as f32, p.y as f32, p.z as f32];
+        if lit {
+            let mut words = Vec::with_capacity(self.triangles.len() * 24);
+            for t in self.triangles.iter() {
+                let n = f32s(face_normal(t));
+                for p in t {
+                    let p = f32s(*p);
+                    words.extend([p[0], p[1], p[2], 0.0, n[0], n[1], n[2], 0.0]);
+                }
             }
+            return MeshBuffers {
+                vertex_words: words,
+                indices: None,
+            };
         }
-        words
+        let mut index_of = std::collections::HashMap::new();
+        let mut words = Vec::new();
+        let mut indices = Vec::with_capacity(self.triangles.len() * 3);
+        for p in self.triangles.iter().flatten() {
+            let p = f32s(*p);
+            let next = index_of.len() as u32;
+            let i = *index_of.entry(p.map(f32::to_bits)).or_insert_with(|| {
+                words.extend([p[0], p[1], p[2], 0.0]);
+                next
+            });
+            indices.push(i);
+        }
+        MeshBuffers {
+            vertex_words: words,
+            indices: Some(indices),
+        }
     }
 
     /// The mesh placed for a sprite of centre `center` and half axes `half_x`, `half_y`: each
@@ -173,17 +218,31 @@ impl MeshIr {
         lit: Option<&crate::features::looks::lit::Lit>,
         blend: crate::features::looks::Blend,
     ) {
-        w.comment(format!(
-            "render.mesh {:?}: {} triangles, a corner's position then its face normal.",
-            self.file,
-            self.triangles.len()
-        ));
+        w.comment(match lit {
+            Some(_) => format!(
+                "render.mesh {:?}: {} triangles, a corner's position then its face normal.",
+                self.file,
+                self.triangles.len()
+            ),
+            None => format!(
+                "render.mesh {:?}: {} triangles drawn indexed, each distinct corner's position.",
+                self.file,
+                self.triangles.len()
+            ),
+        });
         w.line(format!(
             "@group(0) @binding({MESH_VERTICES_BINDING}) var<storage, read> mesh_vertices: array<vec4<f32>>;"
         ));
+        let buffers = self.buffers(lit.is_some());
+        // Indexed, `vertex` is the index: a distinct corner, one vec4 each; else a triangle
+        // corner, two vec4s each.
+        let (vertices, stride) = match &buffers.indices {
+            Some(_) => (buffers.vertex_words.len() / 4, ""),
+            None => (buffers.vertex_words.len() / 8, "2u * "),
+        };
         w.line(format!(
             "const MESH_VERTICES: u32 = {};",
-            u32_lit(self.vertices())
+            u32_lit(vertices as u32)
         ));
         w.blank();
         w.block("struct MeshVertex", |w| {
@@ -215,7 +274,7 @@ impl MeshIr {
                 }
                 w.line("let across = cross(ax, ay);");
                 w.line("let az = across * (length(ax) * inverseSqrt(max(dot(across, across), 1e-30)));");
-                w.line("let m = mesh_vertices[2u * vertex].xyz;");
+                w.line(format!("let m = mesh_vertices[{stride}vertex].xyz;"));
                 w.line("let p = s.center.xyz + m.x * ax + m.y * ay + m.z * az;");
                 w.line("out.clip = draw.proj * vec4<f32>(p, 1.0);");
                 w.line("out.color = s.color;");
@@ -299,9 +358,40 @@ mod tests {
     }
 
     #[test]
-    fn vertex_words_hold_each_corner_and_its_face_normal() {
-        let words = one_triangle().vertex_words();
-        assert_eq!(words.len(), 24);
-        assert_eq!(&words[8..16], &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
+    fn a_lit_mesh_holds_each_corner_and_its_face_normal() {
+        let buffers = one_triangle().buffers(true);
+        assert_eq!(buffers.vertex_words.len(), 24);
+        assert_eq!(
+            &buffers.vertex_words[8..16],
+            &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]
+        );
+        assert_eq!((buffers.draw_count(), buffers.indices), (3, None));
+    }
+
+    #[test]
+    fn an_unlit_mesh_holds_each_distinct_corner_once_and_indexes_them() {
+        // Two triangles sharing the edge from x to y: four distinct corners.
+        let mesh = MeshIr {
+            triangles: Arc::new([
+                [DVec3::ZERO, DVec3::X, DVec3::Y],
+                [DVec3::X, DVec3::new(1.0, 1.0, 0.0), DVec3::Y],
+            ]),
+            ..one_triangle()
+        };
+        let buffers = mesh.buffers(false);
+        assert_eq!(buffers.indices.as_deref(), Some(&[0, 1, 2, 1, 3, 2][..]));
+        assert_eq!(buffers.draw_count(), 6);
+        assert_eq!(buffers.vertex_words.len(), 16);
+        assert_eq!(&buffers.vertex_words[12..16], &[1.0, 1.0, 0.0, 0.0]);
+        // Each index names the corner the triangle has there.
+        for (corner, &i) in mesh
+            .triangles
+            .iter()
+            .flatten()
+            .zip(&buffers.indices.unwrap())
+        {
+            let at = &buffers.vertex_words[4 * i as usize..4 * i as usize + 3];
+            assert_eq!(at, &[corner.x as f32, corner.y as f32, corner.z as f32]);
+        }
     }
 }
