@@ -11,14 +11,16 @@ import sys
 
 
 def case_of(r):
-    return (r.get("view", "3d"), r.get("msaa", 1), r["live_per_effect"], r["effects"])
+    return (r.get("view", "3d"), r.get("msaa", 1), r["live_per_effect"], r["effects"],
+            r.get("mesh", False))
 
 
 def name(case):
-    view, msaa, live, effects = case
+    view, msaa, live, effects, mesh = case
     size = f"{live // 1_000_000}M" if live >= 1_000_000 else f"{live:,}"
     what = f"{effects:,} effects of {size}" if effects > 1 else f"1 effect, {size}"
-    return f"{view.upper()}, MSAA {'off' if msaa == 1 else f'{msaa}x'}, {what}"
+    meshes = ", 200-triangle meshes" if mesh else ""
+    return f"{view.upper()}, MSAA {'off' if msaa == 1 else f'{msaa}x'}, {what}{meshes}"
 
 
 def cell(r, key):

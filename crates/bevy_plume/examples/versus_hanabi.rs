@@ -4,7 +4,7 @@
 //! ```sh
 //! cargo +nightly run --release --ignore-rust-version --features hanabi --example versus_hanabi -- \
 //!     --plugin plume --live 1000000 [--effects 1] [--frames 120] [--out frame.png] \
-//!     [--draw auto|raster|compute] [--msaa 1|4] [--view 3d|2d]
+//!     [--draw auto|raster|compute] [--msaa 1|4] [--view 3d|2d] [--mesh 1]
 //! ```
 //!
 //! The fountain: particles spawned at a constant rate for `live` of them alive at once over a
@@ -15,7 +15,10 @@
 //! hanabi's `ParallelCameraDepthPlane`, its cheaper orientation). With `--effects K`, K such
 //! fountains of `live` particles each on a grid. `--view 2d` draws them through a `Camera2d`
 //! (orthographic, 100 pixels a metre) instead of a `Camera3d`; `--msaa` sets the camera's
-//! `Msaa` (default 1: off).
+//! `Msaa` (default 1: off). `--mesh 1` draws every particle as a mesh instead of a sprite: the
+//! same Bevy `Mesh` in both plugins, a UV sphere of 200 triangles (Bevy's `uv(10, 11)`), 1 m
+//! across at size 1 (Plume: `PlumeEffect::with_mesh`, unlit as the fountain's look; hanabi:
+//! `EffectMesh`, its mesh particles unlit).
 //!
 //! Timing, per frame once the fountains are full, medians and 90th percentiles over `--frames`
 //! frames: `cpu_ms` is `App::update` (main and render worlds: pipelined rendering is off, so the
@@ -69,6 +72,8 @@ struct Args {
     msaa: u32,
     /// A `Camera2d` instead of a `Camera3d`.
     two_d: bool,
+    /// Every particle drawn as a 200-triangle sphere.
+    mesh: bool,
 }
 
 fn parse() -> Result<Args, String> {
@@ -81,6 +86,7 @@ fn parse() -> Result<Args, String> {
         draw: PlumeDraw::Auto,
         msaa: 1,
         two_d: false,
+        mesh: false,
     };
     let mut it = std::env::args().skip(1);
     while let Some(flag) = it.next() {
@@ -118,6 +124,7 @@ fn parse() -> Result<Args, String> {
                     _ => return Err(format!("--msaa {value}: 1 or 4")),
                 }
             }
+            "--mesh" => args.mesh = number()? == 1,
             "--view" => {
                 args.two_d = match value.as_str() {
                     "3d" => false,
@@ -193,9 +200,13 @@ fn main() {
         ));
     }
     let rate = f64::from(args.live) / LIFETIME;
+    let mesh = args.mesh.then(|| {
+        let sphere = Sphere::new(0.5).mesh().uv(10, 11);
+        app.world_mut().resource_mut::<Assets<Mesh>>().add(sphere)
+    });
     match args.plugin {
-        Plugin::Plume => spawn_plume(&mut app, &args, rate, spread),
-        Plugin::Hanabi => spawn_hanabi(&mut app, &args, rate, spread),
+        Plugin::Plume => spawn_plume(&mut app, &args, rate, spread, mesh),
+        Plugin::Hanabi => spawn_hanabi(&mut app, &args, rate, spread, mesh),
         Plugin::Bare => {
             for i in 0..args.effects {
                 app.world_mut().spawn((
@@ -272,9 +283,10 @@ fn main() {
         (Some(quantile(&mut gpu, 0.5)), Some(quantile(&mut gpu, 0.9)))
     };
     println!(
-        "{{\"plugin\":\"{name}\",\"draw\":\"{:?}\",\"view\":\"{}\",\"msaa\":{},\"live_per_effect\":{},\"effects\":{},\"frames\":{},\"frame_ms\":{:.3},\"frame_ms_p90\":{:.3},\"cpu_ms\":{:.3},\"cpu_ms_p90\":{:.3},\"gpu_ms\":{},\"gpu_ms_p90\":{},\"lit_pixels\":{}}}",
+        "{{\"plugin\":\"{name}\",\"draw\":\"{:?}\",\"view\":\"{}\",\"mesh\":{},\"msaa\":{},\"live_per_effect\":{},\"effects\":{},\"frames\":{},\"frame_ms\":{:.3},\"frame_ms_p90\":{:.3},\"cpu_ms\":{:.3},\"cpu_ms_p90\":{:.3},\"gpu_ms\":{},\"gpu_ms_p90\":{},\"lit_pixels\":{}}}",
         args.draw,
         if args.two_d { "2d" } else { "3d" },
+        args.mesh,
         args.msaa,
         args.live,
         args.effects,
@@ -436,34 +448,38 @@ fn plume_source(live: u32, rate: f64) -> String {
     )
 }
 
-fn spawn_plume(app: &mut App, args: &Args, rate: f64, spread: f32) {
+fn spawn_plume(app: &mut App, args: &Args, rate: f64, spread: f32, mesh: Option<Handle<Mesh>>) {
     let source = plume_source(args.live, rate);
     let asset = PlumeEffectAsset::compile("fountain.plume.ron", &source, None)
         .unwrap_or_else(|e| panic!("the benchmark's fountain does not compile:\n{e}"));
     let draw = args.draw;
     spawn_grid(app, args.effects, spread, asset, |h| {
-        PlumeEffect::new(h).with_draw(draw)
+        let effect = PlumeEffect::new(h).with_draw(draw);
+        match &mesh {
+            Some(mesh) => effect.with_mesh(mesh.clone()),
+            None => effect,
+        }
     });
 }
 
-/// Adds `asset` and spawns `n` effects of it on the grid, each made by `effect`.
+/// Adds `asset` and spawns `n` effects of it on the grid, each made by `effect`; returns them.
 fn spawn_grid<A: Asset, C: Component>(
     app: &mut App,
     n: u32,
     spread: f32,
     asset: A,
     effect: impl Fn(Handle<A>) -> C,
-) {
+) -> Vec<Entity> {
     let handle = app.world_mut().resource_mut::<Assets<A>>().add(asset);
-    for i in 0..n {
-        app.world_mut().spawn((
-            effect(handle.clone()),
-            Transform::from_translation(grid_position(i, n, spread)),
-        ));
-    }
+    (0..n)
+        .map(|i| {
+            let at = Transform::from_translation(grid_position(i, n, spread));
+            app.world_mut().spawn((effect(handle.clone()), at)).id()
+        })
+        .collect()
 }
 
-fn spawn_hanabi(app: &mut App, args: &Args, rate: f64, spread: f32) {
+fn spawn_hanabi(app: &mut App, args: &Args, rate: f64, spread: f32, mesh: Option<Handle<Mesh>>) {
     use bevy_hanabi::prelude::*;
     let w = ExprWriter::new();
     let age = SetAttributeModifier::new(Attribute::AGE, w.lit(0.).expr());
@@ -499,5 +515,12 @@ fn spawn_hanabi(app: &mut App, args: &Args, rate: f64, spread: f32) {
         screen_space_size: false,
     })
     .render(OrientModifier::new(OrientMode::ParallelCameraDepthPlane));
-    spawn_grid(app, args.effects, spread, asset, ParticleEffect::new);
+    let effects = spawn_grid(app, args.effects, spread, asset, ParticleEffect::new);
+    if let Some(mesh) = mesh {
+        for e in effects {
+            app.world_mut()
+                .entity_mut(e)
+                .insert(EffectMesh(mesh.clone()));
+        }
+    }
 }
