@@ -117,8 +117,13 @@ fn the_orbit_example_keeps_its_trails_with_the_reference() {
 /// One particle thrown up and to the right under gravity, seen side on; its sprite has no size,
 /// so only its white ribbon (0.15 m wide, 16 points, a sample every 2 steps) is drawn.
 fn thrown(gpu: &plume::runtime::Gpu) -> (CompiledEffect, Effect) {
-    let effect = compile(
-        r#"Effect(
+    let effect = compile(THROWN);
+    let sim = Effect::new(gpu, effect.clone()).unwrap();
+    (effect, sim)
+}
+
+/// One particle thrown up and across the view under gravity, its trail 16 points long.
+const THROWN: &str = r#"Effect(
     name: "trail-thrown",
     capacity: 1,
     dt: 0.016666666666666666,
@@ -129,11 +134,7 @@ fn thrown(gpu: &plume::runtime::Gpu) -> (CompiledEffect, Effect) {
     render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 0.0)], background: (0.0, 0.0, 0.0),
                    trail: Some(Trail(points: 16, every: 2, width: [(0.0, 0.15)],
                                      color: [(0.0, (1.0, 1.0, 1.0, 1.0))]))),
-)"#,
-    );
-    let sim = Effect::new(gpu, effect.clone()).unwrap();
-    (effect, sim)
-}
+)"#;
 
 const SIDE: u32 = 240;
 
@@ -325,4 +326,78 @@ fn the_compute_renderer_draws_the_ribbons_the_raster_draw_draws() {
             "{name}: splat and raster ribbons differ: mean {mean}, max {max}, {over} over 3, 4x4 {local}"
         );
     }
+}
+
+/// A lit trail (`render.lit`) is lit as a flat card whose normal faces the eye, square to the
+/// trail: a straight ribbon across the view (normal +z) under a light at 60° to that normal
+/// is half as bright as the same ribbon unlit (Lambert's law, within an 8-bit step), an arc
+/// under a point light with wrap, emissive and ambient light matches the reference drawing
+/// (each point lit in f64), and the compute renderer leaves lit trails to the raster draw.
+#[test]
+fn a_lit_trail_follows_lamberts_law_and_the_reference_drawing() {
+    let gpu = gpu();
+    let straight = |lit: &str| {
+        format!(
+            r#"Effect(
+    name: "trail-lit",
+    capacity: 1,
+    dt: 0.016666666666666666,
+    emitters: [Emitter(burst: 1, shape: Point((-2.5, 0.0, 0.0)), velocity: Constant((4.0, 0.0, 0.0)))],
+    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    lights: [Directional(direction: (0.0, -0.8660254037844386, -0.5))],
+    render: Render(color: [(0.0, (0.8, 0.6, 1.0, 1.0))], size: [(0.0, 0.0)], background: (0.0, 0.0, 0.0),
+                   trail: Some(Trail(points: 16, every: 2, width: [(0.0, 0.5)],
+                                     color: [(0.0, (1.0, 1.0, 1.0, 1.0))])){lit}),
+)"#
+        )
+    };
+    let draw = |source: &str| {
+        let mut sim = Effect::new(&gpu, compile(source)).unwrap();
+        sim.run(40, |_| {}).unwrap();
+        let target = Offscreen::new(&gpu, SIDE, SIDE).unwrap();
+        let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
+        let img = target
+            .render(&sim, &sim.renderer(&target.target()).unwrap(), &camera)
+            .unwrap();
+        (img, camera, sim)
+    };
+    let (unlit, camera, _) = draw(&straight(""));
+    let (lit, _, sim) = draw(&straight(", lit: Some(Lit())"));
+    assert!(!ComputeOffscreen::draws(&sim.compiled().ir));
+    // Pixels on the ribbon's centre line, along its middle (it runs from x = -1.8 to 0.2).
+    for x in [-1.4, -1.0, -0.6, -0.2] {
+        let (px, py) = camera.project(SIDE, SIDE, DVec3::new(x, 0.0, 0.0)).unwrap();
+        let at = 4 * (py as usize * SIDE as usize + px as usize);
+        for c in 0..3 {
+            let (u, l) = (f64::from(unlit[at + c]), f64::from(lit[at + c]));
+            assert!(
+                u > 150.0 || c == 1 && u > 110.0,
+                "x {x}: unlit {u} in channel {c}"
+            );
+            assert!(
+                (l - 0.5 * u).abs() <= 1.0,
+                "x {x}, channel {c}: lit {l}, unlit {u}"
+            );
+        }
+    }
+    // The thrown arc: its normal turns along the trail; a point light, wrap and emissive.
+    let arc = compile(
+        &THROWN
+            .replace(
+                "integrator: Euler,",
+                "integrator: Euler,\n    lights: [Point(position: (0.5, 2.0, 1.5), color: (1.0, 0.8, 0.6), intensity: 3.0, range: 6.0), Ambient(intensity: 0.1)],",
+            )
+            .replace(
+                "color: [(0.0, (1.0, 1.0, 1.0, 1.0))]))),",
+                "color: [(0.0, (1.0, 1.0, 1.0, 1.0))])), lit: Some(Lit(wrap: 0.3, emissive: 0.2))),",
+            ),
+    );
+    assert!(arc.ir.render.lit.is_some());
+    let mut sim = Effect::new(&gpu, arc).unwrap();
+    sim.run(40, |_| {}).unwrap();
+    let img = assert_draws_agree(&sim, SIDE, false, "lit arc");
+    assert!(
+        img.chunks(4).filter(|p| p[0] > 20).count() > 300,
+        "the arc is drawn"
+    );
 }

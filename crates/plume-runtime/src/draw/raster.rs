@@ -26,10 +26,11 @@ use plume_compiler::wgsl::draw::{
 };
 use plume_compiler::CompiledEffect;
 
-use crate::device::buffers::{filled_buffer, words_buffer, STORAGE};
+use crate::device::buffers::{words_buffer, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::device::resources::Resources;
 use crate::draw::camera::{record_draw_view, Camera};
+use crate::draw::instances::{alive_instances, Instances};
 use crate::draw::lights::{LightsUniform, ShadowBinding};
 use crate::draw::live_list::LiveList;
 use crate::draw::pipeline::{blend_state, draw_group, plain, render_pipeline};
@@ -77,35 +78,6 @@ pub struct DrawOptions {
     /// The sprite's geometry: a quad (the default) or one triangle around the disc.
     pub primitive: Primitive,
 }
-
-/// How many instances a draw issues.
-enum Instances {
-    /// One per slot of the capacity.
-    Slots(u32),
-    /// The stateless frame's threads, set when the frame is prepared.
-    Frame(AtomicU32),
-    /// The compacted live slots, drawn indirectly.
-    Compacted(Box<LiveList>),
-    /// Written on the GPU: an indirect draw whose instance count is capacity − free count.
-    Alive {
-        args: wgpu::Buffer,
-        kernel: wgpu::ComputePipeline,
-        group: wgpu::BindGroup,
-    },
-}
-
-/// Writes the indirect draw's instance count (word 1, in both the plain and the indexed
-/// form) from the counters: capacity − free count. Word 0 holds the vertices (or indices) per
-/// sprite and word 5, past both forms, the capacity, written once; the rest are zero.
-const DRAW_ARGS_WGSL: &str = r#"
-@group(0) @binding(0) var<storage, read> counters: array<u32>;
-@group(0) @binding(1) var<storage, read_write> args: array<u32>;
-
-@compute @workgroup_size(1)
-fn draw_args() {
-    args[1] = args[5] - min(counters[0], args[5]);
-}
-"#;
 
 /// One group's draw into one kind of target (its ribbons, then its sprites): a part of the
 /// public [`crate::EffectRenderer`], prepared each frame by [`crate::Effect::prepare_draw`].
@@ -298,8 +270,8 @@ impl GroupDraw {
                 },
                 target,
                 blend,
-                &view,
-                placeholder.as_ref(),
+                &shared_uniforms(&view, lights.as_ref()),
+                &bound_views(placeholder.as_ref(), lights.as_ref()),
             )?),
             _ => None,
         };
@@ -352,9 +324,6 @@ impl GroupDraw {
         if self.soft {
             self.scene_depth = Some(depth.clone());
             self.rebind();
-            if let Some(trail) = &mut self.trail {
-                trail.set_scene_depth(&self.gpu, depth);
-            }
         }
     }
 
@@ -373,15 +342,14 @@ impl GroupDraw {
         (lights.is_some(), lights.is_some_and(|l| l.shadow.is_some()))
     }
 
-    /// Makes bind group 0 again with the scene depth and shadow map held now.
+    /// Makes bind group 0 again (and its trail's) with the scene depth and shadow map held now.
     fn rebind(&mut self) {
-        self.group = draw_group(
-            &self.gpu,
-            &self.pipeline,
-            &self.buffers,
-            self.texture.as_ref(),
-            &bound_views(self.scene_depth.as_ref(), self.lights.as_ref()),
-        );
+        let views = bound_views(self.scene_depth.as_ref(), self.lights.as_ref());
+        let texture = self.texture.as_ref();
+        self.group = draw_group(&self.gpu, &self.pipeline, &self.buffers, texture, &views);
+        if let Some(trail) = &mut self.trail {
+            trail.rebind(&self.gpu, &views);
+        }
     }
 
     /// Scales every sprite's size (1: the effect's own sizes).
@@ -478,6 +446,15 @@ impl GroupDraw {
     }
 }
 
+/// The uniforms a trail shares with its sprites' draw: the `DrawView` and a lit look's lights.
+fn shared_uniforms(
+    view: &wgpu::Buffer,
+    lights: Option<&LightsUniform>,
+) -> Vec<(u32, wgpu::Buffer)> {
+    let lights = lights.map(|l| (LIGHTS_BINDING, l.buffer.clone()));
+    [(0, view.clone())].into_iter().chain(lights).collect()
+}
+
 /// The resources a draw binds besides its buffers and texture: the scene depth (a soft
 /// draw's) and the shadow map with its samplers (a lit one's).
 fn bound_views<'a>(
@@ -489,52 +466,6 @@ fn bound_views<'a>(
         .and_then(|l| l.shadow.as_ref())
         .map_or(Vec::new(), ShadowBinding::entries);
     depth.into_iter().chain(shadow).collect()
-}
-
-/// An indirect draw of the live particles (a sorted stateful effect: they come first in the
-/// depth order) and the kernel that writes its count.
-fn alive_instances(
-    gpu: &Gpu,
-    res: &Resources,
-    capacity: u32,
-    vertices: u32,
-) -> Result<Instances, RuntimeError> {
-    let device = &gpu.device;
-    let args = filled_buffer(
-        gpu,
-        "draw args",
-        32,
-        STORAGE | wgpu::BufferUsages::INDIRECT,
-        |b| {
-            b[..4].copy_from_slice(&vertices.to_le_bytes());
-            b[20..24].copy_from_slice(&capacity.to_le_bytes());
-        },
-    )?;
-    let module = gpu.shader_module("draw args", DRAW_ARGS_WGSL);
-    let kernel = gpu.compute_pipeline(&module, "draw_args", None);
-    let group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("draw args"),
-        layout: &kernel.get_bind_group_layout(0),
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: res
-                    .counters
-                    .as_ref()
-                    .expect("a stateful effect has counters")
-                    .as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: args.as_entire_binding(),
-            },
-        ],
-    });
-    Ok(Instances::Alive {
-        args,
-        kernel,
-        group,
-    })
 }
 
 /// The draw module's shape on this device: how many particle buffers it binds (a stateless

@@ -3,9 +3,7 @@
 //! it reads. [`crate::draw::raster::EffectRenderer`] draws it before its sprites, in the same pass
 //! and with the same blending, one instance per slot (a free slot's ribbon is degenerate).
 
-use plume_compiler::wgsl::draw::{
-    DrawShape, DRAW_VIEW_BYTES, FIRST_DATA_BINDING, SCENE_DEPTH_BINDING,
-};
+use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES, FIRST_DATA_BINDING};
 use plume_compiler::wgsl::trail::{self, FIRST_TRAIL_BINDING};
 use plume_compiler::CompiledEffect;
 
@@ -27,7 +25,9 @@ pub(crate) struct TrailDraw {
 
 impl TrailDraw {
     /// The trail draw of `effect` (stateful, with a trail), whose buffers `res` holds, bound as
-    /// `shape` says; `view` is the sprite draw's `DrawView` uniform, shared.
+    /// `shape` says. It shares the sprite draw's uniforms (`shared`: the `DrawView`, and a lit
+    /// look's lights) and the views its group binds (`views`: the scene depth of a soft draw, a
+    /// lit look's shadow map and samplers), as its module reads what the sprites' does.
     #[allow(clippy::too_many_arguments)]
     pub(crate) fn new(
         gpu: &Gpu,
@@ -36,8 +36,8 @@ impl TrailDraw {
         shape: DrawShape,
         target: &DrawTarget,
         blend: wgpu::BlendState,
-        view: &wgpu::Buffer,
-        scene_depth: Option<&wgpu::TextureView>,
+        shared: &[(u32, wgpu::Buffer)],
+        views: &[(u32, wgpu::BindingResource<'_>)],
     ) -> Result<Self, RuntimeError> {
         let spec = effect
             .ir
@@ -62,14 +62,12 @@ impl TrailDraw {
             },
             blend,
         );
-        debug_assert_eq!(view.size(), DRAW_VIEW_BYTES);
-        let mut buffers = vec![(0, view.clone())];
+        debug_assert!(shared
+            .iter()
+            .any(|(b, v)| *b == 0 && v.size() == DRAW_VIEW_BYTES));
+        let mut buffers = shared.to_vec();
         buffers.extend(trail_buffers(effect, res, shape.through_list)?);
-        let extra: Vec<_> = scene_depth
-            .map(|d| (SCENE_DEPTH_BINDING, wgpu::BindingResource::TextureView(d)))
-            .into_iter()
-            .collect();
-        let group = draw_group(gpu, &pipeline, &buffers, None, &extra);
+        let group = draw_group(gpu, &pipeline, &buffers, None, views);
         Ok(Self {
             pipeline,
             buffers,
@@ -79,13 +77,10 @@ impl TrailDraw {
         })
     }
 
-    /// Binds the host's depth for soft ribbons (see `EffectRenderer::set_scene_depth`).
-    pub(crate) fn set_scene_depth(&mut self, gpu: &Gpu, depth: &wgpu::TextureView) {
-        let extra = [(
-            SCENE_DEPTH_BINDING,
-            wgpu::BindingResource::TextureView(depth),
-        )];
-        self.group = draw_group(gpu, &self.pipeline, &self.buffers, None, &extra);
+    /// Binds `views` again (the sprite draw's, after the host gave another scene depth or
+    /// shadow map).
+    pub(crate) fn rebind(&mut self, gpu: &Gpu, views: &[(u32, wgpu::BindingResource<'_>)]) {
+        self.group = draw_group(gpu, &self.pipeline, &self.buffers, None, views);
     }
 
     /// Records the ribbons into `pass`.

@@ -33,7 +33,8 @@ pub(crate) const STRIP_VERTEX_BYTES: u64 = 32;
 /// The trail strips of `records` (in draw order) whose points `trails` holds by id, facing a camera
 /// with view matrix `view`, as a triangle list: each segment the two triangles the GPU's strip
 /// makes of it. Colours are the particle's at its life fraction times the trail's at each
-/// point's fraction.
+/// point's fraction, and with `render.lit` lit at each point by the effect's lights through
+/// the strip's normal there (`trail::strip_normals`).
 pub fn trail_strips(
     records: &[ParticleRecord],
     trails: &[(u32, Vec<DVec3>)],
@@ -61,9 +62,16 @@ pub fn trail_strips(
         let c = ir.render.color_at(life);
         let particle = [c[0] * r.tint.x, c[1] * r.tint.y, c[2] * r.tint.z, c[3]];
         let sides = trail.strip_vertices(points, eye, 1.0);
+        let normals = plume_compiler::trail::strip_normals(points, eye);
         push_triangles(&mut out, &sides, &|j| {
             let tint = trail.color_at(j as f64 / f64::from(trail.ring()));
-            std::array::from_fn(|c| (particle[c] * tint[c]) as f32)
+            let c: [f64; 4] = std::array::from_fn(|c| particle[c] * tint[c]);
+            let rgb = DVec3::new(c[0], c[1], c[2]);
+            let rgb = match &ir.render.lit {
+                Some(lit) => lit.shade(rgb, ir.lights.received(normals[j], points[j], lit.wrap)),
+                None => rgb,
+            };
+            [rgb.x as f32, rgb.y as f32, rgb.z as f32, c[3] as f32]
         });
     }
     out

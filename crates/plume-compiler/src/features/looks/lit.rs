@@ -346,18 +346,33 @@ impl Lit {
             },
         );
         w.blank();
-        w.comment(
-            "Colour c lit by light: its unlit (emissive) part plus the rest times the light.",
-        );
-        w.block(
-            "fn lit_color(c: vec4<f32>, light: vec3<f32>) -> vec4<f32>",
-            |w| {
-                w.line(
-                    "return vec4<f32>(c.rgb * (LIT_EMISSIVE + (1.0 - LIT_EMISSIVE) * light), c.a);",
-                );
-            },
-        );
+        emit_lit_color_fn(w);
     }
+
+    /// Emits what a lit trail's strip needs (the trail draw module's): the lights'
+    /// declarations, `received_light` and `lit_color`. A strip is a flat card: its normal comes
+    /// from its geometry ([`crate::features::looks::trail::strip_normals`]), whatever
+    /// `normals` says (maps are a sprite's texture).
+    pub(crate) fn emit_strip_lighting(&self, w: &mut Writer) {
+        crate::features::lights::emit_received_light(w, self.wrap, self.shadow_lookup());
+        w.line(format!(
+            "const LIT_EMISSIVE: f32 = {};",
+            f32_lit(self.emissive)
+        ));
+        w.blank();
+        emit_lit_color_fn(w);
+    }
+}
+
+/// `lit_color(c, light)`: the WGSL twin of [`Lit::shade`] (`LIT_EMISSIVE` in scope).
+fn emit_lit_color_fn(w: &mut Writer) {
+    w.comment("Colour c lit by light: its unlit (emissive) part plus the rest times the light.");
+    w.block(
+        "fn lit_color(c: vec4<f32>, light: vec3<f32>) -> vec4<f32>",
+        |w| {
+            w.line("return vec4<f32>(c.rgb * (LIT_EMISSIVE + (1.0 - LIT_EMISSIVE) * light), c.a);");
+        },
+    );
 }
 
 /// A quad's basis: its unit axes (`axes` at right angles) and its facing, toward the side

@@ -145,7 +145,7 @@ impl MeshIr {
     }
 
     /// The vertex buffer (and for an unlit mesh the index buffer) the draw module that
-    /// [`Self::emit_draw`] writes reads: `lit` says whether the look is lit (`render.lit`).
+    /// `emit_draw` writes reads: `lit` says whether the look is lit (`render.lit`).
     /// Unlit, corners are merged where their f32 positions are equal, in the order the
     /// triangles first name them.
     pub fn buffers(&self, lit: bool) -> MeshBuffers {

@@ -103,6 +103,22 @@ pub fn strip_sides(points: &[DVec3], eye: DVec3, half: &dyn Fn(usize) -> f64) ->
         .collect()
 }
 
+/// The unit normal of a lit trail's strip at each of `points` (as [`strip_sides`] places them,
+/// seen from `eye`): the strip is a flat card, its normal the way to the eye made square to the
+/// strip's direction there; zero where the strip has no direction or runs along the line of
+/// sight. The f64 twin of the trail module's lighting.
+pub fn strip_normals(points: &[DVec3], eye: DVec3) -> Vec<DVec3> {
+    let last = points.len().saturating_sub(1);
+    (0..points.len())
+        .map(|j| {
+            let along = points[j.saturating_sub(1)] - points[(j + 1).min(last)];
+            let e = eye - points[j];
+            let facing = e - along * (e.dot(along) / along.length_squared().max(1e-30));
+            facing.normalize_or_zero()
+        })
+        .collect()
+}
+
 /// Bytes of one ring entry: the position's three f32 bit patterns and the id + 1.
 pub(crate) const ENTRY_BYTES: u32 = 16;
 

@@ -109,6 +109,11 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     draw::emit_finite3(&mut w);
     w.blank();
     emit_entry(&mut w, shape);
+    // The compute renderer leaves lit trails to the raster draw.
+    if let Some(lit) = ir.render.lit.as_ref().filter(|_| !shape.splat) {
+        w.blank();
+        lit.emit_strip_lighting(&mut w);
+    }
     if shape.splat {
         w.blank();
         emit_splat_declarations(&mut w, ir, false, shape);
@@ -335,6 +340,16 @@ fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
                 "q.color = color_at(f) * trail_color(t) * vec4<f32>({tint}, 1.0);"
             )),
             None => w.line("q.color = color_at(f) * trail_color(t);"),
+        }
+        if let Some(lit) = ir.render.lit.as_ref().filter(|_| !shape.splat) {
+            if lit.shadow_per_particle() {
+                w.line("particle_shadow = shadow_visibility((draw.view * vec4<f32>(r.x, 1.0)).xyz);");
+            }
+            w.comment("Lit as a flat card: the strip's normal is the way to the eye, square to the trail.");
+            w.line("let e = -q.center.xyz;");
+            w.line("let facing = e - along * (dot(e, along) / max(dot(along, along), 1e-30));");
+            w.line("let n = facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
+            w.line("q.color = lit_color(q.color, received_light(n, q.center.xyz));");
         }
         w.line("return q;");
     });
