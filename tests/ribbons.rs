@@ -1,7 +1,7 @@
 //! Ribbons that join particles (`render.ribbon`) on the GPU (llvmpipe in CI): the table the
 //! spawn kernels write holds the links the f64 reference gives (emitters' bursts split into
 //! ribbons, rows shared and overwritten, children joined by their parent), the drawn strips
-//! match the CPU-fed drawing of the chains the table joins, a segment is drawn only between
+//! match the CPU-fed drawing of the chains the table joins (lit too), a segment is drawn only between
 //! particles the table joins, and an effect without ribbons keeps no table.
 
 mod common;
@@ -165,6 +165,38 @@ fn the_drawn_ribbons_match_the_cpu_fed_drawing() {
             "{name}: GPU and CPU-fed ribbons differ: mean {mean}, max {max}, {over} over 2"
         );
     }
+}
+
+/// A lit look lights its ribbons as it lights trails (each strip a flat card facing the eye,
+/// square to the ribbon): the lit bolts match the reference drawing (each point lit in f64)
+/// as closely as the unlit ones do, and the light changes them.
+#[test]
+fn lit_ribbons_match_the_cpu_fed_drawing() {
+    let lit_bolts = BOLTS
+        .replace(
+            "    render: Render(",
+            "    lights: [Point(position: (1.0, 1.0, 1.5), color: (1.0, 0.8, 0.6), intensity: 2.0, range: 5.0),\n             Ambient(intensity: 0.2)],\n    render: Render(",
+        )
+        .replace(
+            "split: Some(12)))),",
+            "split: Some(12))), lit: Some(Lit(wrap: 0.3, emissive: 0.1))),",
+        );
+    let gpu = gpu();
+    let draw = |source: &str| {
+        let mut sim = Effect::from_graph(&gpu, graph(source)).unwrap();
+        assert_eq!(sim.compiled().ir.render.lit.is_some(), source != BOLTS);
+        sim.run(33, |_| {}).unwrap();
+        draw_group_and_reference(&sim, 0, 200)
+    };
+    let (lit, reference) = draw(&lit_bolts);
+    let (unlit, _) = draw(BOLTS);
+    let (mean, max, over) = differences(&lit, &reference, 2);
+    assert!(
+        mean < 0.02 && max <= 8 && over * 1000 < lit.len(),
+        "GPU and CPU-fed lit ribbons differ: mean {mean}, max {max}, {over} over 2"
+    );
+    let (_, _, changed) = differences(&lit, &unlit, 8);
+    assert!(changed > 200, "the light changes only {changed} channels");
 }
 
 #[test]

@@ -621,7 +621,8 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
                 _ => format!("{}, sample: {sample}))", t.trim_end_matches("))")),
             };
             let looks = match ribbon {
-                // A ribbon draws no trail, texture, lit shading, turned sprite or height.
+                // A ribbon draws no trail, texture, turned sprite or height; it is made unlit here
+                // (a lit look's maps need a texture).
                 Some(ribbon) => format!(
                     "orient: Camera, texture: None, rotation: None, soft: {soft}, glow: {glow}, trail: None, size_y: None, alpha: {alphas}, palette: {palette}, lit: None, light: {light}, ribbon: {ribbon}"
                 ),

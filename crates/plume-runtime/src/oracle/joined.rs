@@ -97,7 +97,17 @@ pub fn ribbon_strips(
         let points: Vec<(DVec3, f64, [f32; 4])> = chain.iter().map(|id| shown[id]).collect();
         let centres: Vec<DVec3> = points.iter().map(|p| p.0).collect();
         let sides = plume_compiler::trail::strip_sides(&centres, eye, &|j| points[j].1);
-        push_triangles(&mut out, &sides, &|j| points[j].2);
+        let normals = plume_compiler::trail::strip_normals(&centres, eye);
+        push_triangles(&mut out, &sides, &|j| {
+            let c = points[j].2;
+            let Some(lit) = &ir.render.lit else {
+                return c;
+            };
+            let rgb = DVec3::new(c[0].into(), c[1].into(), c[2].into());
+            let light = ir.lights.received(normals[j], centres[j], lit.wrap);
+            let rgb = lit.shade(rgb, light).as_vec3();
+            [rgb.x, rgb.y, rgb.z, c[3]]
+        });
     }
     out
 }

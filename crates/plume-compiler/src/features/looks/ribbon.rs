@@ -77,10 +77,9 @@ pub const SEGMENT_VERTICES: u32 = 4;
 pub type Table = Vec<Option<(u32, Link)>>;
 
 /// The render fields a ribbon does not draw, and what each would draw.
-pub(crate) const CLASHES: [(&str, &str); 6] = [
+pub(crate) const CLASHES: [(&str, &str); 5] = [
     ("trail", "trails"),
     ("texture", "texture"),
-    ("lit", "lit shading"),
     ("size_y", "separate heights"),
     ("rotation", "turned sprites"),
     ("orient", "oriented sprites"),
@@ -277,6 +276,7 @@ impl Ribbon {
         &self,
         w: &mut Writer,
         capacity: u32,
+        lit: Option<&crate::features::looks::lit::Lit>,
         blend: crate::features::looks::Blend,
     ) {
         w.line(format!(
@@ -367,6 +367,17 @@ impl Ribbon {
                 w.line("out.clip = draw.proj * vec4<f32>(here.center.xyz + sign * offset, 1.0);");
                 w.line("out.across = sign;");
                 w.line("out.color = here.color;");
+                if let Some(lit) = lit {
+                    if lit.shadow_per_particle() {
+                        w.line("particle_shadow = shadow_visibility(here.center.xyz);");
+                    }
+                    w.comment("Lit as a flat card, as a lit trail is: the strip's normal is the way to the eye, square to the ribbon.");
+                    w.line("let along = before - after;");
+                    w.line("let e = -here.center.xyz;");
+                    w.line("let facing = e - along * (dot(e, along) / max(dot(along, along), 1e-30));");
+                    w.line("let n = facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
+                    w.line("out.color = lit_color(here.color, received_light(n, here.center.xyz));");
+                }
                 w.line("return out;");
             },
         );

@@ -325,7 +325,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         .filter(|_| !shape.through_list && !shape.splat)
     {
         w.blank();
-        ribbon.emit_draw(&mut w, ir.capacity, ir.render.blend);
+        ribbon.emit_draw(&mut w, ir.capacity, ir.render.lit.as_ref(), ir.render.blend);
     }
     if let Some(mesh) = ir.render.mesh.as_ref().filter(|_| !shape.splat) {
         w.blank();
