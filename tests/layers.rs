@@ -35,15 +35,19 @@ const LAYERS: &[(&str, &[(&str, u32)])] = &[
             // 3: the effect IR that gathers the features' lowered forms.
             ("ir", 3),
             // 4: the stages: schema, checks, lowering, passes, integrators, WGSL kernel assembly,
-            //    schedule; beside them the f64 reference simulator, which executes the IR the
-            //    stages make and which the accuracy pass runs to calibrate a budget's choice.
+            //    schedule.
             ("stages", 4),
-            ("reference", 4),
-            // 5: the single-group compile driver, and its batched form.
-            ("compile", 5),
-            ("batch", 5),
-            // 6: effects with groups and the events between them (and their f64 reference run).
-            ("graph", 6),
+            // 5: the f64 reference simulator, which executes the IR the stages make on their
+            //    step contract (schedule, integrators, schema): no stage imports it.
+            ("reference", 5),
+            // 6: the accuracy pass, which runs the reference to calibrate a budget's choice;
+            //    the passes reach it only through the chooser the compile driver hands them.
+            ("calibration", 6),
+            // 7: the single-group compile driver, and its batched form.
+            ("compile", 7),
+            ("batch", 7),
+            // 8: effects with groups and the events between them (and their f64 reference run).
+            ("graph", 8),
         ],
     ),
     (

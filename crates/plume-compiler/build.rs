@@ -1,5 +1,5 @@
 //! Hashes the compiler's sources into `PLUME_COMPILER_BUILD`, the build a remembered
-//! calibration was made by (`stages/passes/calibration_cache.rs`): a calibration stored on disk
+//! calibration was made by (`calibration/cache.rs`): a calibration stored on disk
 //! is taken back only by the build that made it, so a change to the compiler never reuses a
 //! choice an older one made.
 

@@ -153,7 +153,7 @@ fn cache_dir() -> Option<PathBuf> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    plume_compiler::passes::calibration_cache::remember_calibrations_in(cache_dir());
+    plume_compiler::calibration::cache::remember_calibrations_in(cache_dir());
     match cli.command {
         Command::Check { files } => check(&files),
         Command::Compile {

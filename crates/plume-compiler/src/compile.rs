@@ -299,7 +299,7 @@ pub(crate) fn compile_group(
     ir.events.clone_from(&links.events);
     ir.event_inputs.clone_from(&links.inputs);
     // A budget's calibration is remembered by the effect's content, its seed aside
-    // (`passes::accuracy::choose`): the IR as it would be lowered with seed 0.
+    // (`calibration::accuracy::choose`): the IR as it would be lowered with seed 0.
     if ir.accuracy.is_some() {
         let mut unseeded = lower::lower(&EffectSpec {
             seed: 0,
@@ -360,8 +360,8 @@ pub(crate) fn compile_group(
         }
     }
     let names: Vec<&'static str> = effect.forces.iter().map(|f| f.name()).collect();
-    let (layout, warnings) =
-        passes::run(&mut ir, &names).map_err(|c| CompileError::Invalid(prefixed(c.errors)))?;
+    let (layout, warnings) = passes::run(&mut ir, &names, &crate::calibration::accuracy::choose)
+        .map_err(|c| CompileError::Invalid(prefixed(c.errors)))?;
     let wgsl = wgsl::emit_module(&ir, &layout);
     naga_check::validate(&wgsl)?;
     let draw_wgsl = wgsl::draw::emit(&ir, &layout, &wgsl::draw::DrawShape::single(&ir));

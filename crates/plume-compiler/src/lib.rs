@@ -5,8 +5,8 @@
 //! kernel), and one draw module (a vertex shader that reads the particles from the GPU buffers
 //! and a fragment shader for the sprites), both validated by naga. The pipeline, one module per stage:
 //! parse ([`schema`], located [`Diagnostics`]) → check ([`validate`]) → lower to the [`ir`] →
-//! [`passes`] (fold, prune, accuracy, integrator, stability, the unused field dropped, state,
-//! layout) → [`wgsl`] writer → naga's validation. This crate does not depend on wgpu.
+//! [`passes`] (fold, prune, accuracy ([`calibration`]), integrator, stability, the unused field
+//! dropped, state, layout) → [`wgsl`] writer → naga's validation. This crate does not depend on wgpu.
 //!
 //! ```
 //! let source = r#"Effect(
@@ -35,7 +35,7 @@
 
 //!
 //! The crate is layered, every import pointing down (docs/ARCHITECTURE.md draws it):
-//! `base` (leaves) → `expr` → `features` → `ir` → `stages` and `reference` (side by side) →
+//! `base` (leaves) → `expr` → `features` → `ir` → `stages` → `reference` → `calibration` →
 //! `compile` and `batch` → `graph`. The public API: compiling a file or a string
 //! ([`compile_str`], [`compile_effect`], [`graph`]), the diagnostics, the IR and layout to
 //! inspect, and the modules the runtime, the Bevy plugin and the tests share with the compiler
@@ -44,6 +44,7 @@
 
 mod base;
 pub mod batch;
+pub mod calibration;
 mod compile;
 pub mod expr;
 mod features;

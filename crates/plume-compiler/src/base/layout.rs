@@ -344,7 +344,7 @@ pub struct Layout {
     /// Attributes in struct order.
     pub attributes: Vec<Attribute>,
     /// Whether the motion attribute is stored in 16-bit floats (an accuracy budget that
-    /// allows it: `stages::passes::accuracy`). Such a layout keeps its words unpadded: whole
+    /// allows it: `calibration::accuracy`). Such a layout keeps its words unpadded: whole
     /// 16-byte planes, then a plane of 8-byte and one of 4-byte words for the rest
     /// ([`Layout::planes`]).
     pub half_motion: bool,

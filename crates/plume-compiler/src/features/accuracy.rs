@@ -1,7 +1,7 @@
 //! Accuracy budgets (`accuracy`): the error an author accepts, stated in metres over the first
 //! seconds of each particle's life. This module owns the budget's schema, its checks, its
 //! lowered form and what the compiler chose to meet it; the choice itself is made by
-//! `stages::passes::accuracy` from f64 runs of sample particles (`reference::calibrate`), and
+//! `calibration::accuracy` from f64 runs of sample particles (`reference::calibrate`), and
 //! `plume accuracy` checks the budget on the GPU.
 
 use glam::DVec3;
@@ -130,7 +130,7 @@ pub struct AccuracyIr {
     /// host's: `CompileOptions::accuracy_camera`).
     pub(crate) host_camera: Option<BudgetCamera>,
     /// Whether the choice was taken from an earlier calibration of the same content in this
-    /// process (`stages::passes::accuracy::choose`) rather than calibrated here.
+    /// process (`calibration::accuracy::choose`) rather than calibrated here.
     pub remembered: bool,
     /// The effect's content, its seed aside, as the key a calibration is remembered by (set
     /// by the compile driver; None: not remembered).

@@ -5,7 +5,7 @@
 //! converged RK4 of `plume_compiler::reference::calibrate`).
 
 use plume_compiler::accuracy::{Choice, Scheme};
-use plume_compiler::passes::accuracy::measures;
+use plume_compiler::calibration::accuracy::measures;
 use plume_compiler::reference::calibrate::{self, Trajectories};
 use plume_compiler::{compile_effect, EffectSpec, Integrator};
 

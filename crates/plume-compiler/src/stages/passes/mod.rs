@@ -3,8 +3,6 @@
 //! integrator (Auto, and Exact's preconditions), analyse stability,
 //! decide whether particles need state at all, and decide the particle layout.
 
-pub mod accuracy;
-pub mod calibration_cache;
 pub mod fold;
 pub mod integrator;
 pub mod layout;
@@ -17,17 +15,26 @@ use crate::base::diagnostics::Diagnostic;
 use crate::ir::EffectIr;
 use layout::Layout;
 
-/// Runs every pass. Errors come back in a `Checker` (with lookup paths); on success the
-/// layout and the warnings (each with its lookup path) come back.
+/// The accuracy pass, which `compile` hands to [`run`] (`calibration::accuracy::choose`): with
+/// a budget it picks the scheme for `ir` (the bool: whether the closed form applies) and may
+/// warn; errors come back in a `Checker`. Passed in, so that no stage imports the reference
+/// simulator it runs.
+pub type AccuracyChooser =
+    dyn Fn(&mut EffectIr, bool) -> Result<Option<(Diagnostic, String)>, Checker>;
+
+/// Runs every pass, the accuracy pass by `choose_accuracy`. Errors come back in a `Checker`
+/// (with lookup paths); on success the layout and the warnings (each with its lookup path)
+/// come back.
 pub fn run(
     ir: &mut EffectIr,
     force_names: &[&'static str],
+    choose_accuracy: &AccuracyChooser,
 ) -> Result<(Layout, Vec<(Diagnostic, String)>), Checker> {
     fold::fold(ir);
     prune::prune(ir);
     // A budget picks the scheme before Auto's default does (and leaves Exact to it).
     let exact_possible = integrator::exact_blocker(ir, force_names).is_none();
-    let budget_warning = accuracy::choose(ir, exact_possible)?;
+    let budget_warning = choose_accuracy(ir, exact_possible)?;
     integrator::resolve(ir, force_names)?;
     let mut warnings = stability::analyse(ir, force_names);
     warnings.extend(budget_warning);

@@ -53,7 +53,7 @@ fn folder() -> &'static Mutex<Option<PathBuf>> {
 /// budget.
 ///
 /// ```
-/// use plume_compiler::passes::calibration_cache::remember_calibrations_in;
+/// use plume_compiler::calibration::cache::remember_calibrations_in;
 /// let dir = std::env::temp_dir().join(format!("plume-doc-cache-{}", std::process::id()));
 /// remember_calibrations_in(Some(dir.clone()));
 /// let src = r#"Effect(name: "pulled", capacity: 64,

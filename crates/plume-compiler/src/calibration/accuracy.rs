@@ -24,10 +24,10 @@ use crate::base::check::Checker;
 use crate::base::diagnostics::Diagnostic;
 use crate::base::path::ValuePath;
 use crate::base::values::Integrator;
+use crate::calibration::cache as calibration_cache;
 use crate::features::accuracy::{AccuracyIr, Choice, Measure, Scheme, Screen};
 use crate::ir::EffectIr;
 use crate::reference::calibrate::{self, Metric, MAX_SUBSTEPS};
-use crate::stages::passes::calibration_cache;
 
 /// The share of the budget the f64 error may take: the rest is f32's.
 const F64_SHARE: f64 = 0.5;
