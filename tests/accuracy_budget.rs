@@ -257,12 +257,12 @@ fn a_pixel_budget_integrates_a_distant_effect_more_cheaply_and_both_stay_within_
 }
 
 /// A group fed by events alone has no particles of its own: the graph's compiler calibrates its
-/// budget on a stand-in (its spawn rule where its parent first fires in f64, with the share of
-/// the parent's velocity the event passes on), and the GPU check of that stand-in keeps the
+/// budget on a sample burst (its spawn rule where its parent first fires in f64, with the share of
+/// the parent's velocity the event passes on), and the GPU check of that sample burst keeps the
 /// budget. Shells fly up under gravity (closed form: Exact) and burst into debris that an
 /// attractor pulls through its core (no closed form: stepped).
 #[test]
-fn a_group_fed_by_events_is_calibrated_and_checked_on_a_stand_in() {
+fn a_group_fed_by_events_is_calibrated_and_checked_on_a_sample_burst() {
     let src = r#"Effect(
     name: "shells",
     capacity: 8,
@@ -282,10 +282,10 @@ fn a_group_fed_by_events_is_calibrated_and_checked_on_a_stand_in() {
     let shells = graph.groups[0].effect.ir.accuracy.clone().unwrap();
     assert_eq!(shells.choice, Some(Choice::Exact), "{}", shells.describe());
     let debris = graph.groups[1].effect.ir.accuracy.clone().unwrap();
-    let stand_in = debris.stand_in.expect("a stand-in for the debris");
+    let sample_burst = debris.sample_burst.expect("a sample burst for the debris");
     // Where a shell dies: above its launch point, after about half a second of flight.
-    assert!(stand_in.offset[1] > 1.5, "{stand_in:?}");
-    assert!(stand_in.velocity != [0.0; 3], "{stand_in:?}");
+    assert!(sample_burst.offset[1] > 1.5, "{sample_burst:?}");
+    assert!(sample_burst.velocity != [0.0; 3], "{sample_burst:?}");
     let Some(Choice::Stepped {
         scheme, samples, ..
     }) = debris.choice
@@ -294,22 +294,22 @@ fn a_group_fed_by_events_is_calibrated_and_checked_on_a_stand_in() {
     };
     assert_eq!(samples, 64, "{}", debris.describe());
     assert!(
-        debris.describe().contains("stand-in burst"),
+        debris.describe().contains("of a sample burst at"),
         "{}",
         debris.describe()
     );
     assert_eq!(graph.groups[1].effect.ir.integrator, scheme.integrator);
 
     // Checked on the GPU as `plume accuracy` does: the debris alone, its spawn rule its one
-    // emitter, the stand-in fired at the first step (256 particles).
+    // emitter, the sample burst fired at the first step (256 particles).
     let effect = plume::compiler::parse_with(src, &CompileOptions::default()).unwrap();
     let groups = plume::compiler::graph::group_effects(&effect);
-    let alone = plume::compiler::graph::reference::stand_in_group(&groups, &graph, 1, 256)
+    let alone = plume::compiler::graph::reference::sampled_group(&groups, &graph, 1, 256)
         .expect("the shells fire");
     assert_eq!(alone.emitters, vec![groups[0].events[0].as_emitter()]);
     assert_eq!(
-        alone.stand_in.map(|b| (b.emitter, b.count, b.offset)),
-        Some((0, 256, stand_in.offset))
+        alone.sample_burst.map(|b| (b.emitter, b.count, b.offset)),
+        Some((0, 256, sample_burst.offset))
     );
     let check = check_budget(&gpu(), &alone).unwrap().expect("a budget");
     assert!(

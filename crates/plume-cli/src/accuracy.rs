@@ -81,7 +81,7 @@ fn accuracy_of_groups(
 ) -> ExitCode {
     let mut failed = false;
     let groups = plume_compiler::graph::group_effects(effect);
-    // The stand-ins of the groups fed by events alone come from an f64 run of the whole graph.
+    // The sample bursts of the groups fed by events alone come from an f64 run of the whole graph.
     let graph = match plume_compiler::graph::compile_graph(effect, "") {
         Ok(graph) => graph,
         Err(e) => {
@@ -93,23 +93,23 @@ fn accuracy_of_groups(
         group.events.clear();
         let label = format!("{name} group {:?}", group.name);
         if group.emitters.is_empty() {
-            match plume_compiler::graph::reference::stand_in_group(
+            match plume_compiler::graph::reference::sampled_group(
                 &groups,
                 &graph,
                 g,
                 plume_runtime::bench::CHECKED,
             ) {
-                Some(stand_in) => group = stand_in,
+                Some(sampled) => group = sampled,
                 None => {
                     eprintln!(
                         "{label}: note: fed by events alone, and no event into it fired within {} steps of an f64 run: not measured",
-                        plume_compiler::graph::reference::STAND_IN_STEPS
+                        plume_compiler::graph::reference::SAMPLE_SEARCH_STEPS
                     );
                     continue;
                 }
             }
             if !args.json {
-                let b = group.stand_in.expect("a stand-in");
+                let b = group.sample_burst.expect("a sample burst");
                 println!(
                     "== {label} (fed by events: {} particles of its spawn rule at ({:.2}, {:.2}, {:.2}), where its parent first fires in f64, with {:?} m/s of the parent's velocity)",
                     b.count, b.offset[0], b.offset[1], b.offset[2], b.velocity

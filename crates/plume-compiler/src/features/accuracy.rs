@@ -123,9 +123,9 @@ pub struct AccuracyIr {
     /// The chosen scheme's estimated error with its motion in halves, where it was measured.
     pub half_estimate: Option<f64>,
     /// For a group fed by events alone, the sample it is calibrated on: a burst of its event's
-    /// spawn rule at the parent's first firing (`Effect::stand_in`). None: the group's own
+    /// spawn rule at the parent's first firing (`EffectSpec::sample_burst`). None: the group's own
     /// emitters' first particles.
-    pub stand_in: Option<crate::features::bursts::Burst>,
+    pub sample_burst: Option<crate::features::bursts::Burst>,
     /// The camera a pixel budget is measured through when it is not the effect's own (a
     /// host's: `CompileOptions::accuracy_camera`).
     pub(crate) host_camera: Option<BudgetCamera>,
@@ -168,7 +168,7 @@ impl Accuracy {
             choice: None,
             half_motion: false,
             half_estimate: None,
-            stand_in: None,
+            sample_burst: None,
             host_camera: None,
             remembered: false,
             content: None,
@@ -304,7 +304,7 @@ pub enum Choice {
         estimated: Option<f64>,
     },
     /// No particle of the group's own to calibrate with (a group fed by events alone whose
-    /// parent never fired in the f64 run that looks for a stand-in): the file's scheme
+    /// parent never fired in the f64 run that looks for a sample burst): the file's scheme
     /// stands, and `plume accuracy` checks it.
     Uncalibrated {
         /// The file's scheme.
@@ -403,9 +403,9 @@ impl AccuracyIr {
                     }
                     _ => {}
                 }
-                let sample = match &self.stand_in {
+                let sample = match &self.sample_burst {
                     Some(b) => format!(
-                        " of a stand-in burst at ({:.2}, {:.2}, {:.2}), where its parent first fires,",
+                        " of a sample burst at ({:.2}, {:.2}, {:.2}), where its parent first fires,",
                         b.offset[0], b.offset[1], b.offset[2]
                     ),
                     None => String::new(),

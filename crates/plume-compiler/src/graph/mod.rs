@@ -259,17 +259,17 @@ fn compile_all(effect: &EffectSpec, source: &str) -> Result<CompiledGraph, Compi
         warnings: locate(warnings),
     };
     // A group fed by events alone has no particles of its own to calibrate a budget on: it is
-    // compiled again with a stand-in, its spawn rule where its parent first fires in f64.
+    // compiled again with a sample burst, its spawn rule where its parent first fires in f64.
     for (g, (e, l)) in effects.iter().zip(&links).enumerate() {
         if e.accuracy.is_none() || !e.emitters.is_empty() {
             continue;
         }
-        let Some(burst) = reference::stand_in(&graph, g, crate::reference::calibrate::SAMPLES)
+        let Some(burst) = reference::sample_burst(&graph, g, crate::reference::calibrate::SAMPLES)
         else {
             continue;
         };
         let mut sampled = e.clone();
-        sampled.stand_in = Some(burst);
+        sampled.sample_burst = Some(burst);
         graph.groups[g].effect =
             crate::compile::compile_group(&sampled, l, &group_prefix(g), &locate)?;
     }

@@ -107,13 +107,13 @@ impl ReferenceGraph {
 }
 
 /// Steps the f64 run looks for a parent's first firing before giving up (20 s at 60 Hz).
-pub const STAND_IN_STEPS: u64 = 1_200;
+pub const SAMPLE_SEARCH_STEPS: u64 = 1_200;
 
-/// The stand-in sample of group `g`, fed by events alone (`Effect::stand_in`): a burst of
+/// The sample burst of group `g`, fed by events alone (`EffectSpec::sample_burst`): a burst of
 /// `particles` of the spawn rule of the first event into it, at the position of its parent's
 /// first firing in an f64 run of `graph` and with the share of that parent's velocity the event
-/// passes on. None when no event feeds `g` or none fires within [`STAND_IN_STEPS`].
-pub fn stand_in(
+/// passes on. None when no event feeds `g` or none fires within [`SAMPLE_SEARCH_STEPS`].
+pub fn sample_burst(
     graph: &CompiledGraph,
     g: usize,
     particles: u32,
@@ -131,7 +131,7 @@ pub fn stand_in(
         .find(|i| i.stream == s)?
         .clone();
     let mut run = ReferenceGraph::new(graph);
-    for _ in 0..STAND_IN_STEPS {
+    for _ in 0..SAMPLE_SEARCH_STEPS {
         run.step();
         if let Some(f) = run.group(stream.parent).fired(stream.out_slot).first() {
             let v = input.inherit_velocity * f.v;
@@ -148,23 +148,23 @@ pub fn stand_in(
 
 /// Group `g` of `groups` (the file's groups as effects of their own, `graph::group_effects`),
 /// fed by events alone, made measurable alone: its events left out, the spawn rule of the first
-/// event into it as its one emitter, and a [`stand_in`] burst of `particles` of it
-/// (`Effect::stand_in`, which the budget check and `plume accuracy`'s sweep fire at their first
-/// step). None when no event into it fires within [`STAND_IN_STEPS`].
-pub fn stand_in_group(
+/// event into it as its one emitter, and a [`sample_burst`] of `particles` of it
+/// (`EffectSpec::sample_burst`, which the budget check and `plume accuracy`'s sweep fire at their first
+/// step). None when no event into it fires within [`SAMPLE_SEARCH_STEPS`].
+pub fn sampled_group(
     groups: &[crate::stages::schema::EffectSpec],
     graph: &CompiledGraph,
     g: usize,
     particles: u32,
 ) -> Option<crate::stages::schema::EffectSpec> {
-    let burst = stand_in(graph, g, particles)?;
+    let burst = sample_burst(graph, g, particles)?;
     let stream = graph.streams.iter().find(|s| s.child == g)?;
     let event = &groups[stream.parent].events[stream.out_slot];
     let mut group = groups[g].clone();
     group.events.clear();
     group.emitters = vec![event.as_emitter()];
     group.bursts = true;
-    group.stand_in = Some(crate::features::bursts::Burst {
+    group.sample_burst = Some(crate::features::bursts::Burst {
         emitter: 0,
         ..burst
     });

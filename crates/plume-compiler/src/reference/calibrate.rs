@@ -102,16 +102,16 @@ pub(crate) fn run_stored(
     sample.stateless = None;
     let window = steps as f64 * ir.dt + 0.5 * ir.dt;
     // A group fed by events alone is sampled by a burst of its spawn rule at its parent's first
-    // firing (`AccuracyIr::stand_in`), spawned at the first step as its children would be.
-    let stand_in = ir.accuracy.as_ref().and_then(|a| a.stand_in);
-    if stand_in.is_some() {
+    // firing (`AccuracyIr::sample_burst`), spawned at the first step as its children would be.
+    let sample_burst = ir.accuracy.as_ref().and_then(|a| a.sample_burst);
+    if sample_burst.is_some() {
         sample.bursts = true;
     }
     let mut sim = ReferenceSim::new(&sample);
     sim.set_motion_in_halves(halves);
-    if let Some(burst) = stand_in {
+    if let Some(burst) = sample_burst {
         sim.burst(burst)
-            .expect("the stand-in names one of the group's emitters");
+            .expect("the sample burst names one of the group's emitters");
     }
     let mut out = Trajectories::default();
     for _ in 0..steps {

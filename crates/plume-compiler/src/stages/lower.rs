@@ -63,7 +63,7 @@ pub fn lower(effect: &EffectSpec) -> EffectIr {
         integrator_reason: String::from("chosen in the file"),
         accuracy: effect.accuracy.as_ref().map(|a| {
             let mut lowered = a.lower();
-            lowered.stand_in = effect.stand_in;
+            lowered.sample_burst = effect.sample_burst;
             lowered.host_camera = effect.accuracy_camera.map(|c| BudgetCamera {
                 eye: c.eye.d(),
                 target: c.target.d(),

@@ -215,7 +215,7 @@ pub struct EffectSpec {
     /// fast as the parent first fires, found by an f64 run of the graph. Set by the graph's
     /// compiler and by `plume accuracy`, never by the file.
     #[serde(skip)]
-    pub stand_in: Option<crate::features::bursts::Burst>,
+    pub sample_burst: Option<crate::features::bursts::Burst>,
     /// The camera a pixel budget is measured through instead of `camera`: set by
     /// `CompileOptions::accuracy_camera` (a host's), never by the file.
     #[serde(skip)]

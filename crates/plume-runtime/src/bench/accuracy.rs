@@ -140,7 +140,7 @@ pub fn reference(
     };
     let c = compile(effect, integrator, dt)?;
     let mut sim = ReferenceSim::new(&c.ir);
-    if let Some(burst) = effect.stand_in {
+    if let Some(burst) = effect.sample_burst {
         sim.burst(burst).map_err(RuntimeError::Output)?;
     }
     sim.run(steps_for(plan.duration, dt)?);
@@ -164,20 +164,20 @@ fn max_and_rms(errors: &[f64]) -> (f64, f64) {
     (max, rms)
 }
 
-/// Runs `steps` of `c` on `engine`, after firing `stand_in` (a group fed by events alone:
-/// `Effect::stand_in`); returns the live particles and the wall time of the steps.
+/// Runs `steps` of `c` on `engine`, after firing `sample_burst` (a group fed by events alone:
+/// `EffectSpec::sample_burst`); returns the live particles and the wall time of the steps.
 fn timed_run(
     engine: &Engine,
     c: plume_compiler::CompiledEffect,
     steps: u64,
-    stand_in: Option<plume_compiler::bursts::Burst>,
+    sample_burst: Option<plume_compiler::bursts::Burst>,
 ) -> Result<(Vec<plume_compiler::reference::ParticleRecord>, f64), RuntimeError> {
     Ok(match engine {
         Engine::Gpu(gpu) => {
             // Warm up: drivers compile shaders on first dispatch; keep that out of the timing.
             RunningEffect::new(gpu, c.clone())?.run(1, |_| {})?;
             let mut sim = RunningEffect::new(gpu, c)?;
-            if let Some(burst) = stand_in {
+            if let Some(burst) = sample_burst {
                 sim.burst(0, burst)?;
             }
             let start = Instant::now();
@@ -187,7 +187,7 @@ fn timed_run(
         }
         Engine::Cpu => {
             let mut sim = ReferenceSim::new(&c.ir);
-            if let Some(burst) = stand_in {
+            if let Some(burst) = sample_burst {
                 sim.burst(burst).map_err(RuntimeError::Output)?;
             }
             let start = Instant::now();
@@ -223,7 +223,7 @@ pub fn measure(
                 Err(e) => return Err(e),
             };
             let steps = steps_for(plan.duration, dt)?;
-            let (records, seconds) = timed_run(engine, c, steps, effect.stand_in)?;
+            let (records, seconds) = timed_run(engine, c, steps, effect.sample_burst)?;
             let errors: Vec<f64> = records
                 .iter()
                 .filter_map(|r| truth.get(&r.id).map(|t| (r.position - *t).length()))
@@ -311,7 +311,7 @@ pub fn field_sweep(
     let steps = steps_for(duration, effect.dt)?;
     let run = |e: &EffectSpec| -> Result<(Vec<(u32, DVec3)>, f64), RuntimeError> {
         let c = compile_effect(e, "").map_err(|err| RuntimeError::Output(err.to_string()))?;
-        let (records, seconds) = timed_run(engine, c, steps, effect.stand_in)?;
+        let (records, seconds) = timed_run(engine, c, steps, effect.sample_burst)?;
         Ok((
             records.iter().map(|r| (r.id, r.position)).collect(),
             seconds / steps as f64,

@@ -51,7 +51,7 @@ pub fn check_budget(gpu: &Gpu, effect: &EffectSpec) -> Result<Option<BudgetCheck
     }
     let mut checked = effect.clone();
     checked.capacity = checked.capacity.min(CHECKED);
-    checked.bursts |= checked.stand_in.is_some();
+    checked.bursts |= checked.sample_burst.is_some();
     let compiled =
         compile_effect(&checked, "").map_err(|e| RuntimeError::Compile(e.to_string()))?;
     let ir = compiled.ir.clone();
@@ -72,8 +72,8 @@ pub fn check_budget(gpu: &Gpu, effect: &EffectSpec) -> Result<Option<BudgetCheck
     };
     let window = steps as f64 * ir.dt + 0.5 * ir.dt;
     let mut sim = RunningEffect::new(gpu, compiled)?;
-    // A group fed by events alone is measured on its stand-in, as it was calibrated.
-    if let Some(burst) = checked.stand_in {
+    // A group fed by events alone is measured on its sample burst, as it was calibrated.
+    if let Some(burst) = checked.sample_burst {
         sim.burst(0, burst)?;
     }
     let mut on_gpu = Vec::with_capacity(steps as usize);
