@@ -479,9 +479,11 @@ fn the_compute_renderer_draws_what_the_raster_draw_draws_for_every_example() {
     // once too: the 8-bit target's rounding after every blend (llvmpipe's blend unit works in
     // 8-bit fixed point) loses faint layers, 13 steps apart in a 4 x 4 square of smoke's
     // piled-up base. A misplaced sprite (half a pixel off: mean difference 1.25 on the
-    // tornado), a wrong colour or order is far outside what is allowed below.
-    // Trailed effects are the raster draw's alone (tests/trails.rs); every other example is
-    // compared, glowing ones after the same bloom.
+    // tornado), a wrong colour or order is far outside what is allowed below. A lit colour
+    // past 1 would blend unclamped in the float target but clamped in the compute renderer's
+    // image (as in the 8-bit target `plume render` draws into), so the lit examples' lights
+    // keep their colours within 1. Every example the compute renderer draws is compared,
+    // glowing ones after the same bloom.
     let gpu = gpu();
     let mut compared = 0;
     for path in examples() {

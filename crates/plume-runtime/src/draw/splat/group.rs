@@ -260,11 +260,9 @@ impl GroupSplat {
                 reads.push((0, draw_view.clone()));
             }
         }
-        // A lit look's composite shades each pixel by the lights (in the view: no matrix).
-        let mut lights = match ribbons {
-            true => None,
-            false => LightsUniform::new(&gpu, effect),
-        };
+        // A lit look's composite shades each pixel (each ribbon point) by the lights (in the
+        // view: no matrix).
+        let mut lights = LightsUniform::new(&gpu, effect);
         if let Some(lights) = &lights {
             reads.push((LIGHTS_BINDING, lights.buffer.clone()));
         }

@@ -92,14 +92,13 @@ pub struct ComputeOffscreen {
 
 impl ComputeOffscreen {
     /// Whether the compute renderer can draw `ir`: any sprite (textured or round, any orientation,
-    /// rotation and height, glowing or not), alpha or additive, and unlit trails of a stateful
-    /// effect; not ribbons joining particles (`render.ribbon`), meshes (`render.mesh`), lit
-    /// trails, nor `Multiply`, `Mask`, `Premultiplied` or `Opaque` blending, which the raster
-    /// draw draws.
+    /// rotation and height, glowing or not, lit or not), alpha or additive, and trails of a
+    /// stateful effect; not ribbons joining particles (`render.ribbon`), meshes
+    /// (`render.mesh`), nor `Multiply`, `Mask`, `Premultiplied` or `Opaque` blending, which the
+    /// raster draw draws.
     pub fn draws(ir: &EffectIr) -> bool {
         use plume_compiler::schema::Blend;
-        let trail = ir.render.trail.is_some();
-        (!trail || (ir.stateless.is_none() && ir.render.lit.is_none()))
+        (ir.render.trail.is_none() || ir.stateless.is_none())
             && ir.render.ribbon.is_none()
             && ir.render.mesh.is_none()
             && matches!(ir.render.blend, Blend::Alpha | Blend::Additive)
@@ -110,7 +109,7 @@ impl ComputeOffscreen {
         groups
             .iter()
             .any(|ir| !Self::draws(ir))
-            .then_some("the compute renderer draws neither ribbons joining particles (render.ribbon), meshes (render.mesh), Multiply, Mask, Premultiplied or Opaque blending, nor lit trails or trails of stateless effects")
+            .then_some("the compute renderer draws neither ribbons joining particles (render.ribbon), meshes (render.mesh), Multiply, Mask, Premultiplied or Opaque blending, nor trails of stateless effects")
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot

@@ -109,8 +109,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     draw::emit_finite3(&mut w);
     w.blank();
     emit_entry(&mut w, shape);
-    // The compute renderer leaves lit trails to the raster draw.
-    if let Some(lit) = ir.render.lit.as_ref().filter(|_| !shape.splat) {
+    if let Some(lit) = &ir.render.lit {
         w.blank();
         lit.emit_strip_lighting(&mut w);
     }
@@ -300,12 +299,34 @@ fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
         w.line("return r;");
     });
     w.blank();
-    w.comment("Ribbon point j of a visible ribbon: its centre in view space, the offset to its sides, its colour.");
+    match ir.render.lit {
+        Some(_) => w.comment("Ribbon point j of a visible ribbon: its centre in view space, the offset to its sides, its colour (unlit), the ribbon's direction there."),
+        None => w.comment("Ribbon point j of a visible ribbon: its centre in view space, the offset to its sides, its colour."),
+    }
     w.block("struct RibbonPoint", |w| {
         w.line("center: vec4<f32>,");
         w.line("offset: vec3<f32>,");
         w.line("color: vec4<f32>,");
+        if ir.render.lit.is_some() {
+            w.line("along: vec3<f32>,");
+        }
     });
+    if let Some(lit) = &ir.render.lit {
+        w.blank();
+        w.comment("Point q of ribbon r lit as a flat card: the strip's normal is the way to the eye, square to the trail.");
+        w.block(
+            "fn lit_point_color(r: Ribbon, q: RibbonPoint) -> vec4<f32>",
+            |w| {
+                if lit.shadow_per_particle() {
+                    w.line("particle_shadow = shadow_visibility((draw.view * vec4<f32>(r.x, 1.0)).xyz);");
+                }
+                w.line("let e = -q.center.xyz;");
+                w.line("let facing = e - q.along * (dot(e, q.along) / max(dot(q.along, q.along), 1e-30));");
+                w.line("let n = facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
+                w.line("return lit_color(q.color, received_light(n, q.center.xyz));");
+            },
+        );
+    }
     w.blank();
     w.block("fn ribbon_point(r: Ribbon, j: u32) -> RibbonPoint", |w| {
         w.line("let here = point_at(r.slot, r.x, r.newest, j);");
@@ -341,15 +362,8 @@ fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
             )),
             None => w.line("q.color = color_at(f) * trail_color(t);"),
         }
-        if let Some(lit) = ir.render.lit.as_ref().filter(|_| !shape.splat) {
-            if lit.shadow_per_particle() {
-                w.line("particle_shadow = shadow_visibility((draw.view * vec4<f32>(r.x, 1.0)).xyz);");
-            }
-            w.comment("Lit as a flat card: the strip's normal is the way to the eye, square to the trail.");
-            w.line("let e = -q.center.xyz;");
-            w.line("let facing = e - along * (dot(e, along) / max(dot(along, along), 1e-30));");
-            w.line("let n = facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
-            w.line("q.color = lit_color(q.color, received_light(n, q.center.xyz));");
+        if ir.render.lit.is_some() {
+            w.line("q.along = along;");
         }
         w.line("return q;");
     });
@@ -368,7 +382,10 @@ fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
             w.line("let sign = f32(vertex & 1u) * 2.0 - 1.0;");
             w.line("out.clip = draw.proj * vec4<f32>(q.center.xyz + sign * q.offset, 1.0);");
             w.line("out.across = sign;");
-            w.line("out.color = q.color;");
+            match ir.render.lit {
+                Some(_) => w.line("out.color = lit_point_color(r, q);"),
+                None => w.line("out.color = q.color;"),
+            }
             w.line("return out;");
         },
     );

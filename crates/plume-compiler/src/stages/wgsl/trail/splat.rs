@@ -51,7 +51,13 @@ pub(super) fn emit(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawS
         w.line(format!("words: array<vec4<u32>, {SPLAT_SEGMENT_VEC4S}>,"));
     });
     w.blank();
-    emit_segment_record(w);
+    emit_segment_loads(w);
+    w.blank();
+    emit_segment_record(w, false);
+    if ir.render.lit.is_some() {
+        w.blank();
+        emit_segment_record(w, true);
+    }
     w.blank();
     // Additive segments get lists without a sort ([`crate::stages::wgsl::draw::splat_additive_lists`]).
     let sorted = !crate::stages::wgsl::draw::splat_additive_lists(ir);
@@ -70,7 +76,7 @@ pub(super) fn emit(w: &mut Writer, ir: &EffectIr, trail: &TrailIr, shape: &DrawS
 /// and v3 at point s + 1, drawn as the strip's triangles (v0, v1, v2) and (v1, v2, v3). A
 /// triangle with a vertex outside the depth range, or without area, draws nothing, as the
 /// triangle-by-triangle splat had it.
-fn emit_segment_record(w: &mut Writer) {
+fn emit_segment_loads(w: &mut Writer) {
     w.comment("Every load segment k's record needs: the particle and the ring entries, whose places follow from the slot and the step alone (a slot past the capacity, the order's padding, loads slot CAPACITY - 1's, which the record does not use).");
     w.block("struct SegmentLoads", |w| {
         w.line("p: Particle,");
@@ -95,9 +101,19 @@ fn emit_segment_record(w: &mut Writer) {
         w.comment("Every load issued before any is tested. Loaded after the particle's tests, they would take three round trips to memory, not one.");
         w.line("return segment_record_from(k, segment_loads(k));");
     });
-    w.blank();
+}
+
+/// `segment_record_from(k, loads)`: segment k as a record, from its loads (`segment_loads(k)`),
+/// its colours unlit; with `lit`, `lit_segment_record_from`, the same with its points lit
+/// (`lit_point_color`), which only `composite` calls, so that `project`, which needs only the
+/// record's box, reads no lights.
+fn emit_segment_record(w: &mut Writer, lit: bool) {
+    let name = match lit {
+        true => "lit_segment_record_from",
+        false => "segment_record_from",
+    };
     w.comment("Segment k as a record, from its loads (`segment_loads(k)`).");
-    w.block("fn segment_record_from(k: u32, loads: SegmentLoads) -> SegmentRecord", |w| {
+    w.block(format!("fn {name}(k: u32, loads: SegmentLoads) -> SegmentRecord"), |w| {
         w.line("var rec: SegmentRecord;");
         w.line("rec.valid = false;");
         w.line("let instance = k / SEGMENTS;");
@@ -181,8 +197,16 @@ fn emit_segment_record(w: &mut Writer) {
         w.line("rec.words[1] = vec4<u32>(bitcast<vec3<u32>>(rows[1]), bitcast<u32>(zs.y));");
         w.line("rec.words[2] = vec4<u32>(bitcast<vec3<u32>>(rows[2]), bitcast<u32>(zs.z));");
         w.line("rec.words[3] = bitcast<vec4<u32>>(fourth);");
-        w.line("let c_near = min(near.color, vec4<f32>(65504.0));");
-        w.line("let c_far = min(far.color, vec4<f32>(65504.0));");
+        match lit {
+            true => {
+                w.line("let c_near = min(lit_point_color(r, near), vec4<f32>(65504.0));");
+                w.line("let c_far = min(lit_point_color(r, far), vec4<f32>(65504.0));");
+            }
+            false => {
+                w.line("let c_near = min(near.color, vec4<f32>(65504.0));");
+                w.line("let c_far = min(far.color, vec4<f32>(65504.0));");
+            }
+        }
         w.line("rec.words[4] = vec4<u32>(pack2x16float(c_near.rg), pack2x16float(c_near.ba), pack2x16float(c_far.rg), pack2x16float(c_far.ba));");
         w.line("rec.words[5] = vec4<u32>(second, 0u, box);");
         w.line("return rec;");
@@ -198,7 +222,10 @@ fn emit_segment_composite(w: &mut Writer, ir: &EffectIr, shape: &DrawShape) {
     let stride = batch_stride(n, additive);
     let load = |w: &mut Writer| {
         w.comment("Made again from the particle state (loaded while the batch before was composited): the same record `project` made, its weights' rows moved from the box corner to the tile's origin (their constant terms absorb the shift; the fourth vertex's weights do not change).");
-        w.line("let rec = segment_record_from(k, loads);");
+        match ir.render.lit {
+            Some(_) => w.line("let rec = lit_segment_record_from(k, loads);"),
+            None => w.line("let rec = segment_record_from(k, loads);"),
+        }
         w.line(format!(
             "let shift = vec2<f32>(vec2<i32>(unpack_corner(rec.words[{}u].z)) - vec2<i32>(origin));",
             n - 1
