@@ -1,7 +1,7 @@
 //! Lit particles (`render.lit`) in a Bevy scene, on llvmpipe (lavapipe): Bevy's own
 //! `DirectionalLight`, `PointLight` and ambient light (global, or a camera's own) light the
-//! sprites, not the effect file's lights; turning the light turns the lit side, and a scene
-//! with no light leaves them dark as it leaves a lit mesh.
+//! sprites and trails, not the effect file's lights; turning the light turns the lit side,
+//! and a scene with no light leaves them dark as it leaves a lit mesh.
 
 mod common;
 
@@ -145,6 +145,53 @@ fn a_point_light_lights_the_side_it_is_on() {
         left > 40.0 && left > 3.0 * right.max(1.0),
         "a lamp on the left: left third {left:.1}, right third {right:.1}"
     );
+}
+
+/// Streaks moving along +x across the view, each trailing a ribbon square to the line of
+/// sight, so that lit it faces the camera (+z): lit as a flat card, it takes a light from in
+/// front and none from behind (no wrap, no ambient light).
+const STREAKS: &str = r#"Effect(name: "streaks", capacity: 8,
+    emitters: [Emitter(rate: 2.0, shape: Point((-3.0, 0.0, 0.0)), velocity: Constant((1.5, 0.0, 0.0)),
+                       lifetime: Some((3.0, 3.0)))],
+    render: Render(color: [(0.0, (0.8, 0.8, 0.8, 1.0))], size: [(0.0, 0.0)],
+                   trail: Some(Trail(points: 24, every: 2, width: [(0.0, 0.6)],
+                                     color: [(0.0, (1.0, 1.0, 1.0, 1.0))])),
+                   lit: Some(Lit())))
+"#;
+
+#[test]
+fn bevys_lights_light_trails_as_cards_facing_the_eye() {
+    let _one = serial();
+    let (mut h, handle) = Harness::with_effect("lit-trails", STREAKS);
+    h.app.insert_resource(GlobalAmbientLight::NONE);
+    h.app.world_mut().spawn(PlumeEffect::new(handle));
+    // The sun behind the camera, travelling toward -z: onto the ribbons' faces.
+    let sun = h
+        .app
+        .world_mut()
+        .spawn((
+            DirectionalLight {
+                illuminance: 8_000.0,
+                ..default()
+            },
+            Transform::from_xyz(0.0, 0.0, 5.0).looking_at(Vec3::ZERO, Vec3::Y),
+        ))
+        .id();
+    h.update(60);
+    let front = h.capture_running();
+    let (lit, _, _) = common::lit_pixels(&front, 40);
+    let brightest = front.pixels().map(|p| p.0[0]).max().unwrap_or(0);
+    // Three or four ribbons 0.6 m wide in view, about 5 pixels at 10 m.
+    assert!(
+        lit > 30 && brightest > 150,
+        "lit from the front, only {lit} pixels show, the brightest {brightest}"
+    );
+    // The sun behind the ribbons: their backs are lit, the faces the camera sees are dark.
+    *h.app.world_mut().get_mut::<Transform>(sun).unwrap() =
+        Transform::from_xyz(0.0, 0.0, -5.0).looking_at(Vec3::ZERO, Vec3::Y);
+    h.update(2);
+    let (lit, _, _) = common::lit_pixels(&h.capture(), 8);
+    assert_eq!(lit, 0, "lit from behind, yet {lit} pixels show");
 }
 
 /// Bright embers hovering at the origin that give off 4 lights (`render.light`), in front of a
