@@ -49,6 +49,16 @@ fn sides(image: &image::RgbaImage) -> (f64, f64) {
     (row(-0.9, -0.35), row(0.35, 0.9))
 }
 
+/// A sun of 8,000 lux at `from`, shining toward the origin.
+fn spawn_sun(h: &mut Harness, from: Vec3) -> Entity {
+    let sun = DirectionalLight {
+        illuminance: 8_000.0,
+        ..default()
+    };
+    let at = Transform::from_translation(from).looking_at(Vec3::ZERO, Vec3::Y);
+    h.app.world_mut().spawn((sun, at)).id()
+}
+
 #[test]
 fn bevys_lights_light_the_particles() {
     let _one = serial();
@@ -56,17 +66,7 @@ fn bevys_lights_light_the_particles() {
     h.app.insert_resource(GlobalAmbientLight::NONE);
     h.app.world_mut().spawn(PlumeEffect::new(handle));
     // The sun from the right (+x), travelling toward -x.
-    let sun = h
-        .app
-        .world_mut()
-        .spawn((
-            DirectionalLight {
-                illuminance: 8_000.0,
-                ..default()
-            },
-            Transform::from_xyz(5.0, 0.0, 0.0).looking_at(Vec3::ZERO, Vec3::Y),
-        ))
-        .id();
+    let sun = spawn_sun(&mut h, Vec3::new(5.0, 0.0, 0.0));
     h.update(10);
     let (left, right) = sides(&h.capture_running());
     assert!(
@@ -166,17 +166,7 @@ fn bevys_lights_light_trails_as_cards_facing_the_eye() {
     h.app.insert_resource(GlobalAmbientLight::NONE);
     h.app.world_mut().spawn(PlumeEffect::new(handle));
     // The sun behind the camera, travelling toward -z: onto the ribbons' faces.
-    let sun = h
-        .app
-        .world_mut()
-        .spawn((
-            DirectionalLight {
-                illuminance: 8_000.0,
-                ..default()
-            },
-            Transform::from_xyz(0.0, 0.0, 5.0).looking_at(Vec3::ZERO, Vec3::Y),
-        ))
-        .id();
+    let sun = spawn_sun(&mut h, Vec3::new(0.0, 0.0, 5.0));
     h.update(60);
     let front = h.capture_running();
     let (lit, _, _) = common::lit_pixels(&front, 40);

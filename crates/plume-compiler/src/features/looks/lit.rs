@@ -361,7 +361,25 @@ impl Lit {
         ));
         w.blank();
         emit_lit_color_fn(w);
+        w.blank();
+        emit_card_normal_fn(w);
     }
+}
+
+/// `card_normal(c, along)`: the unit normal of a lit strip (a trail's or a ribbon's) at
+/// view-space point `c`, running `along` there: a flat card facing the eye, the way to the eye
+/// made square to the strip. The WGSL twin of
+/// [`strip_normals`](crate::features::looks::trail::strip_normals).
+pub(crate) fn emit_card_normal_fn(w: &mut Writer) {
+    w.comment("A lit strip's normal at view-space c, running along `along`: the way to the eye (the view's origin), square to the strip.");
+    w.block(
+        "fn card_normal(c: vec3<f32>, along: vec3<f32>) -> vec3<f32>",
+        |w| {
+            w.line("let e = -c;");
+            w.line("let facing = e - along * (dot(e, along) / max(dot(along, along), 1e-30));");
+            w.line("return facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
+        },
+    );
 }
 
 /// `lit_color(c, light)`: the WGSL twin of [`Lit::shade`] (`LIT_EMISSIVE` in scope).

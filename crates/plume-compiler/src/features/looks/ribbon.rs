@@ -324,6 +324,10 @@ impl Ribbon {
             },
         );
         w.blank();
+        if lit.is_some() {
+            crate::features::looks::lit::emit_card_normal_fn(w);
+            w.blank();
+        }
         w.block("struct StripVertex", |w| {
             w.line("@builtin(position) clip: vec4<f32>,");
             w.line("@location(0) across: f32,");
@@ -371,11 +375,8 @@ impl Ribbon {
                     if lit.shadow_per_particle() {
                         w.line("particle_shadow = shadow_visibility(here.center.xyz);");
                     }
-                    w.comment("Lit as a flat card, as a lit trail is: the strip's normal is the way to the eye, square to the ribbon.");
-                    w.line("let along = before - after;");
-                    w.line("let e = -here.center.xyz;");
-                    w.line("let facing = e - along * (dot(e, along) / max(dot(along, along), 1e-30));");
-                    w.line("let n = facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
+                    w.comment("Lit as a flat card facing the eye, as a lit trail is.");
+                    w.line("let n = card_normal(here.center.xyz, before - after);");
                     w.line("out.color = lit_color(here.color, received_light(n, here.center.xyz));");
                 }
                 w.line("return out;");

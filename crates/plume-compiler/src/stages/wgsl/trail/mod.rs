@@ -313,16 +313,14 @@ fn emit_vertex(w: &mut Writer, ir: &EffectIr, shape: &DrawShape, life: bool) {
     });
     if let Some(lit) = &ir.render.lit {
         w.blank();
-        w.comment("Point q of ribbon r lit as a flat card: the strip's normal is the way to the eye, square to the trail.");
+        w.comment("Point q of ribbon r lit as a flat card facing the eye.");
         w.block(
             "fn lit_point_color(r: Ribbon, q: RibbonPoint) -> vec4<f32>",
             |w| {
                 if lit.shadow_per_particle() {
                     w.line("particle_shadow = shadow_visibility((draw.view * vec4<f32>(r.x, 1.0)).xyz);");
                 }
-                w.line("let e = -q.center.xyz;");
-                w.line("let facing = e - q.along * (dot(e, q.along) / max(dot(q.along, q.along), 1e-30));");
-                w.line("let n = facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
+                w.line("let n = card_normal(q.center.xyz, q.along);");
                 w.line("return lit_color(q.color, received_light(n, q.center.xyz));");
             },
         );
