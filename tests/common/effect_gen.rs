@@ -621,10 +621,10 @@ fn render(flavor: Flavor) -> BoxedStrategy<String> {
                 _ => format!("{}, sample: {sample}))", t.trim_end_matches("))")),
             };
             let looks = match ribbon {
-                // A ribbon draws no trail, texture, turned sprite or height; it is made unlit here
-                // (a lit look's maps need a texture).
+                // A ribbon draws no trail, texture, turned sprite or height (and the lit looks
+                // made here have no maps, which would need a texture).
                 Some(ribbon) => format!(
-                    "orient: Camera, texture: None, rotation: None, soft: {soft}, glow: {glow}, trail: None, size_y: None, alpha: {alphas}, palette: {palette}, lit: None, light: {light}, ribbon: {ribbon}"
+                    "orient: Camera, texture: None, rotation: None, soft: {soft}, glow: {glow}, trail: None, size_y: None, alpha: {alphas}, palette: {palette}, lit: {lit}, light: {light}, ribbon: {ribbon}"
                 ),
                 None => format!(
                     "orient: {o}, texture: {t}, rotation: {r}, soft: {soft}, glow: {glow}, trail: {trail}, size_y: {heights}, alpha: {alphas}, palette: {palette}, lit: {lit}, light: {light}, frame_by: {frame_by}"
