@@ -311,7 +311,7 @@ fn passing_on_a_colour_a_group_does_not_have_is_warned_about() {
 #[test]
 fn a_stateless_group_fires_on_death_and_every_period_as_its_stateful_twin_does() {
     // Exact shells with a lifetime and no kill volume: stateless, firing from their closed form
-    // (a stream of them, so segments spawn and expire within a batch of steps). Each sheds a
+    // (a stream of them, so segments spawn and expire within a submission of steps). Each sheds a
     // puff every 3 steps and bursts on death. The same file with the shells `state: Stateful`
     // must spawn the same children, and both match the reference.
     let src = |state: &str| {

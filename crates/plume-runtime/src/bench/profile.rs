@@ -1,4 +1,4 @@
-//! `plume bench --profile`: one timed batch of steps run again with a GPU timestamp after
+//! `plume bench --profile`: one timed submission of steps run again with a GPU timestamp after
 //! every dispatch (`device::dispatch_marks`), for where a step's time goes.
 
 pub use crate::device::dispatch_marks::DispatchTime;
@@ -11,7 +11,7 @@ use crate::error::RuntimeError;
 /// few dozen dispatches a step stay well inside the timestamps one profile takes.
 const PROFILE_STEPS: u32 = 16;
 
-/// Runs `time(n)` (a timed batch of n steps: `steps`, at most [`PROFILE_STEPS`]) with this
+/// Runs `time(n)` (a timed submission of n steps: `steps`, at most [`PROFILE_STEPS`]) with this
 /// thread's marks collected, and returns each dispatch's time a step. An adapter without
 /// timestamps inside passes is an error that says so.
 pub(crate) fn profiled(
@@ -28,7 +28,7 @@ pub(crate) fn profiled(
     }
     dispatch_marks::begin(gpu);
     let timed = time(steps);
-    // Closed whether or not the batch ran, so no later pass writes marks.
+    // Closed whether or not the submission ran, so no later pass writes marks.
     let times = dispatch_marks::finish(gpu, steps);
     timed?;
     times

@@ -176,11 +176,12 @@ impl Effect {
         let plans = self
             .groups_mut()
             .iter_mut()
-            .map(|g| g.plan_graph_batch(&mut encoder, n))
+            .map(|g| g.plan_graph_submission(&mut encoder, n))
             .collect::<Result<Vec<Vec<StepPlan>>, _>>()?;
         gpu.queue.submit([encoder.finish()]);
         let events = self.events().expect("a graph has its streams");
-        let seconds = timer.time(|pass| events.record_batch(self.groups(), pass, &plans, n))?;
+        let seconds =
+            timer.time(|pass| events.record_submission(self.groups(), pass, &plans, n))?;
         gpu.take_error()?;
         Ok(seconds)
     }
@@ -200,7 +201,7 @@ impl Effect {
             .orders
             .iter()
             .map(|s| {
-                // The last step's firings came from the last batch's table, as step 1's of it
+                // The last step's firings came from the last submission's table, as step 1's of it
                 // would: the ordering that the steps took.
                 let order = s.for_step(&self.groups()[s.stream.parent], 1);
                 median_after_warmup(repeats, || {

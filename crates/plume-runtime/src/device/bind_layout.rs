@@ -42,7 +42,7 @@ pub(crate) fn entries(effect: &CompiledEffect) -> Vec<wgpu::BindGroupLayoutEntry
                 Role::Params => {
                     buffer_entry(b.binding, ty, true, Some(effect.layout.params_bytes()))
                 }
-                // The step a stateless group's `fire` fires for: one a step of the batch, each
+                // The step a stateless group's `fire` fires for: one a step of the submission, each
                 // at its own offset (`StatelessSteps::record_fire`).
                 Role::FireState => buffer_entry(b.binding, ty, true, Some(b.bytes)),
                 Role::Chunk | Role::DepthAxis => buffer_entry(b.binding, ty, false, Some(16)),

@@ -16,11 +16,11 @@ use crate::device::gpu::Gpu;
 use crate::device::readback::read_buffer;
 use crate::error::RuntimeError;
 
-/// The most timestamps one collection takes (wgpu's limit for a query set); a batch that
+/// The most timestamps one collection takes (wgpu's limit for a query set); a submission that
 /// records more is an error (`finish`), not a profile that silently misses its last steps.
 const MOST_MARKS: u32 = 4096;
 
-/// One kind of dispatch's time in a profiled batch of steps: what `plume bench --profile`
+/// One kind of dispatch's time in a profiled submission of steps: what `plume bench --profile`
 /// prints, and what a host reads from [`crate::bench::BenchResult::dispatches`]:
 ///
 /// ```no_run

@@ -257,7 +257,7 @@ impl Resources {
             .filter(|b| !made_apart(b.role))
             .map(|b| {
                 let size = match b.role {
-                    // A step of the batch at each storage offset (`fire_state_stride`).
+                    // A step of the submission at each storage offset (`fire_state_stride`).
                     Role::FireState => {
                         plume_compiler::passes::stateless::FIRE_BATCH_STEPS * fire_state_stride(gpu)
                     }

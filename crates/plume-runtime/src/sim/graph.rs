@@ -4,7 +4,7 @@
 //! start of the next step [`crate::sim::events`] puts the firing slots in id order (its first
 //! kernel also pops the children's slots), and the child's `event_spawn` turns them, in that
 //! order, into particles. Every
-//! step of every group and every stream is recorded into one compute pass per batch of
+//! step of every group and every stream is recorded into one compute pass per submission of
 //! steps: nothing is read back between steps.
 
 use plume_compiler::events::{
@@ -28,13 +28,13 @@ pub(crate) struct StreamOrder {
     /// For a bucketed stream whose firing group is stateless, the same firings' ordering by
     /// counting, which a step takes when the host knows it orders at most
     /// [`COUNTED_MAX`] firings: a stateless group fires over a table whose size the host sets
-    /// each batch (one dispatch, not three: fireworks' rockets fire over a few hundred threads of
+    /// each submission (one dispatch, not three: fireworks' rockets fire over a few hundred threads of
     /// their 9,403 slots at 10M).
     pub(crate) counted: Option<EventOrder>,
 }
 
 impl StreamOrder {
-    /// The ordering that step `j` of the planned batch records, given the firing group.
+    /// The ordering that step `j` of the planned submission records, given the firing group.
     pub(crate) fn for_step(&self, parent: &Group, j: usize) -> &EventOrder {
         match (&self.counted, parent.firings_bound(j)) {
             (Some(counted), Some(bound)) if bound <= u64::from(COUNTED_MAX) => counted,
@@ -228,7 +228,7 @@ impl Events {
             let n = (steps - done).min(u64::from(STEPS_PER_SUBMIT));
             let plans = groups
                 .iter_mut()
-                .map(|g| g.plan_graph_batch(encoder, n))
+                .map(|g| g.plan_graph_submission(encoder, n))
                 .collect::<Result<Vec<_>, _>>()?;
             if gpu_work {
                 let writes = timestamps.map(|(set, first)| wgpu::ComputePassTimestampWrites {
@@ -240,17 +240,17 @@ impl Events {
                     label: Some("graph steps"),
                     timestamp_writes: writes,
                 });
-                self.record_batch(groups, &mut pass, &plans, n)?;
+                self.record_submission(groups, &mut pass, &plans, n)?;
             }
             done += n;
         }
         Ok(gpu_work && steps > 0)
     }
 
-    /// Records a planned batch of `steps` steps (each group's plans, from `plan_graph_batch`):
+    /// Records a planned submission of `steps` steps (each group's plans, from `plan_graph_submission`):
     /// per step, each stream's ordering and its child's event spawn, in stream order, then each
     /// group's own step.
-    pub(crate) fn record_batch(
+    pub(crate) fn record_submission(
         &self,
         groups: &[Group],
         pass: &mut wgpu::ComputePass<'_>,

@@ -189,10 +189,10 @@ impl Group {
         Ok(())
     }
 
-    /// An effect graph's step batch (at most [`STEPS_PER_SUBMIT`] steps): plans the next `n`
+    /// An effect graph's steps of one submission (at most [`STEPS_PER_SUBMIT`] steps): plans the next `n`
     /// steps and records their parameters' copy into `encoder`. A stateless group only
     /// advances its bookkeeping and returns no plans.
-    pub(crate) fn plan_graph_batch(
+    pub(crate) fn plan_graph_submission(
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
         n: u64,
@@ -202,13 +202,13 @@ impl Group {
             if stateless.firing.is_none() {
                 stateless.advance(&mut self.schedule, n, |_| {});
             } else {
-                // The batch's table and its first step, for `fire` (see wgsl/stateless.rs).
+                // The submission's table and its first step, for `fire` (see wgsl/stateless.rs).
                 if n > plume_compiler::passes::stateless::FIRE_BATCH_STEPS {
                     return Err(RuntimeError::Gpu(format!(
-                        "a batch of {n} steps is longer than a firing stateless group's table covers"
+                        "a submission of {n} steps is longer than a firing stateless group's table covers"
                     )));
                 }
-                // Every segment live at some step of the batch: those live at its start, and
+                // Every segment live at some step of the submission: those live at its start, and
                 // every one its steps spawn (one spawned and gone within it included).
                 let mut seen: Vec<plume_compiler::schedule::Segment> =
                     stateless.segments.iter().copied().collect();
@@ -217,7 +217,7 @@ impl Group {
                     .advance_noting(&mut self.schedule, n, &mut seen);
                 let (table, threads) = StatelessSteps::fire_table(&self.effect, &seen)?;
                 stateless.set_fire_threads(threads);
-                // Each step of the batch at its own offset, which its `fire` binds.
+                // Each step of the submission at its own offset, which its `fire` binds.
                 let stride = crate::device::resources::fire_state_stride(&self.gpu) as usize;
                 let mut state = vec![0u8; n as usize * stride];
                 for (j, word) in state.chunks_exact_mut(stride).enumerate() {
@@ -242,7 +242,7 @@ impl Group {
         self.plan_steps(encoder, n)
     }
 
-    /// Records step `j` of a batch planned by [`Self::plan_graph_batch`] (for a stateless
+    /// Records step `j` of a submission planned by [`Self::plan_graph_submission`] (for a stateless
     /// group, its firings if it fires events, else nothing).
     pub(crate) fn record_graph_step(
         &self,
@@ -272,7 +272,7 @@ impl Group {
         })
     }
 
-    /// Records the spawn of the `input`-th event this group is fed by at step `j` of the batch.
+    /// Records the spawn of the `input`-th event this group is fed by at step `j` of the submission.
     pub(crate) fn record_event_spawn(
         &self,
         pass: &mut wgpu::ComputePass<'_>,
@@ -478,7 +478,7 @@ impl Group {
     }
 
     /// For a stateless group that fires events, the most firings of one event that step `j` of
-    /// the planned batch orders ([`StatelessSteps::firings_bound`]); None for a stateful group,
+    /// the planned submission orders ([`StatelessSteps::firings_bound`]); None for a stateful group,
     /// whose firings the host cannot bound below its capacity.
     pub(crate) fn firings_bound(&self, j: usize) -> Option<u64> {
         match &self.steps {

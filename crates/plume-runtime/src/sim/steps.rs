@@ -42,8 +42,8 @@ pub(crate) struct StatefulSteps {
 }
 
 /// A stateless group's events: its `fire` kernel (a step's firings from the closed form, over
-/// the batch's segment table, for the step its `fire_state` binding holds), and how many
-/// threads the current batch's table has, and the batch's before it.
+/// the submission's segment table, for the step its `fire_state` binding holds), and how many
+/// threads the current submission's table has, and the one's before it.
 pub struct Firing {
     fire: wgpu::ComputePipeline,
     threads: u64,
@@ -243,7 +243,7 @@ pub fn params_bytes(
 }
 
 /// One step's parameters (see [`params_bytes`]) into `row`, whose bytes past them are left as
-/// they are. Allocates nothing unless the step fires bursts: a batch writes a row per
+/// they are. Allocates nothing unless the step fires bursts: a submission writes a row per
 /// instance per step.
 pub(crate) fn write_params_row(
     row: &mut [u8],
@@ -346,7 +346,7 @@ impl StatelessSteps {
         ))
     }
 
-    /// The `fire_frame` table of `segments` (every segment live at some step of a batch), with
+    /// The `fire_frame` table of `segments` (every segment live at some step of a submission), with
     /// each one's first thread, and the threads in all. Only the spawn steps and ids matter to
     /// `fire`, which computes each particle's age at its step.
     pub fn fire_table(
@@ -386,7 +386,7 @@ impl StatelessSteps {
         ))
     }
 
-    /// Sets the current batch's table size ([`Self::fire_table`]'s threads).
+    /// Sets the current submission's table size ([`Self::fire_table`]'s threads).
     pub(crate) fn set_fire_threads(&mut self, threads: u64) {
         if let Some(f) = &mut self.firing {
             f.previous_threads = f.threads;
@@ -394,9 +394,9 @@ impl StatelessSteps {
         }
     }
 
-    /// The most firings of one event that step `j` of the current batch orders: those of the
-    /// step before, which fired over the current batch's table or, for its first step, over
-    /// the batch's before it (each particle of the table fires an event at most once a step).
+    /// The most firings of one event that step `j` of the current submission orders: those of the
+    /// step before, which fired over the current submission's table or, for its first step, over
+    /// the submission's before it (each particle of the table fires an event at most once a step).
     pub fn firings_bound(&self, j: usize) -> Option<u64> {
         self.firing.as_ref().map(|f| {
             if j == 0 {
@@ -407,8 +407,8 @@ impl StatelessSteps {
         })
     }
 
-    /// Records the firings of step `j` of the batch (its step, in `fire_state` at the offset
-    /// `Group::plan_graph_batch` wrote it, bound at that dynamic offset).
+    /// Records the firings of step `j` of the submission (its step, in `fire_state` at the offset
+    /// `Group::plan_graph_submission` wrote it, bound at that dynamic offset).
     pub(crate) fn record_fire(
         &self,
         gpu: &Gpu,

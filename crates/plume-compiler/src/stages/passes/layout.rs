@@ -362,14 +362,14 @@ pub(crate) fn decide(ir: &EffectIr) -> Layout {
                 role: Role::FireFrame,
                 space: Space::Read,
                 bytes: plan.fire_table_bytes(),
-                meaning: "written by the CPU per batch of steps: the segments that may hold live particles at any of its steps (as `frame`), for the `fire` kernel",
+                meaning: "written by the CPU per submission of steps: the segments that may hold live particles at any of its steps (as `frame`), for the `fire` kernel",
             },
             Binding {
                 binding: 20,
                 role: Role::FireState,
                 space: Space::Read,
                 bytes: 16,
-                meaning: "the step `fire` fires for: the CPU writes each step of the batch at an offset of its own and binds it at that dynamic offset",
+                meaning: "the step `fire` fires for: the CPU writes each step of the submission at an offset of its own and binds it at that dynamic offset",
             },
         ]);
     }

@@ -196,11 +196,11 @@ pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
 }
 
 /// Emits a firing stateless group's `fire` kernel. It runs once a step over
-/// `fire_frame`, the segments that may hold live particles at any step of the batch: a
+/// `fire_frame`, the segments that may hold live particles at any step of the submission: a
 /// particle spawned by the step in `fire_state` and not dead before it fires, at the end of
 /// the step, what its events' triggers say (`Death` in the step its lifetime ends, `Every(P)`
 /// after every P steps lived), with its closed form at that moment. `fire_state` holds the
-/// step: the runtime writes every step of the batch at an offset of its own and binds the
+/// step: the runtime writes every step of the submission at an offset of its own and binds the
 /// step's at a dynamic offset (a one-thread kernel advancing it cost a dispatch a step). The
 /// same contract as the stateful update's firings (`events.rs`): the f64 reference steps the
 /// same particles.
@@ -217,7 +217,7 @@ pub(crate) fn emit_fire(w: &mut Writer, ir: &EffectIr) {
             emit_segment_of(w, "fire_frame", "t", SegmentSearch::Eighths);
             w.line("let step = fire_state[0];");
             w.line("let born = seg.b.y;");
-            w.comment("Spawned by a later step of the batch: nothing yet.");
+            w.comment("Spawned by a later step of the submission: nothing yet.");
             w.block("if (born > step)", |w| w.line("return;"));
             w.line("let j = t - seg.a.x;");
             w.line("let id = seg.a.y + j;");
