@@ -15,7 +15,7 @@ use plume_compiler::ribbon::{Link, Table};
 
 use crate::draw::camera::Camera;
 use crate::error::RuntimeError;
-use crate::oracle::strips::{push_triangles, StripVertex};
+use crate::oracle::strips::{push_triangles, strip_color, StripVertex};
 use crate::sim::effect::Effect;
 
 /// One entry of the GPU's ribbon table: the id and link of the particle that wrote it last,
@@ -99,14 +99,8 @@ pub fn ribbon_strips(
         let sides = plume_compiler::trail::strip_sides(&centres, eye, &|j| points[j].1);
         let normals = plume_compiler::trail::strip_normals(&centres, eye);
         push_triangles(&mut out, &sides, &|j| {
-            let c = points[j].2;
-            let Some(lit) = &ir.render.lit else {
-                return c;
-            };
-            let rgb = DVec3::new(c[0].into(), c[1].into(), c[2].into());
-            let light = ir.lights.received(normals[j], centres[j], lit.wrap);
-            let rgb = lit.shade(rgb, light).as_vec3();
-            [rgb.x, rgb.y, rgb.z, c[3]]
+            let c = points[j].2.map(f64::from);
+            strip_color(ir, c, normals[j], centres[j])
         });
     }
     out

@@ -65,16 +65,23 @@ pub fn trail_strips(
         let normals = plume_compiler::trail::strip_normals(points, eye);
         push_triangles(&mut out, &sides, &|j| {
             let tint = trail.color_at(j as f64 / f64::from(trail.ring()));
-            let c: [f64; 4] = std::array::from_fn(|c| particle[c] * tint[c]);
-            let rgb = DVec3::new(c[0], c[1], c[2]);
-            let rgb = match &ir.render.lit {
-                Some(lit) => lit.shade(rgb, ir.lights.received(normals[j], points[j], lit.wrap)),
-                None => rgb,
-            };
-            [rgb.x as f32, rgb.y as f32, rgb.z as f32, c[3] as f32]
+            let c = std::array::from_fn(|c| particle[c] * tint[c]);
+            strip_color(ir, c, normals[j], points[j])
         });
     }
     out
+}
+
+/// A strip point's colour `c` as drawn: lit at world point `p` through the strip's unit
+/// `normal` there when the look is lit (the effect's lights, `Lights::received`, `Lit::shade`),
+/// else as it is.
+pub(crate) fn strip_color(ir: &EffectIr, c: [f64; 4], normal: DVec3, p: DVec3) -> [f32; 4] {
+    let rgb = DVec3::new(c[0], c[1], c[2]);
+    let rgb = match &ir.render.lit {
+        Some(lit) => lit.shade(rgb, ir.lights.received(normal, p, lit.wrap)),
+        None => rgb,
+    };
+    [rgb.x as f32, rgb.y as f32, rgb.z as f32, c[3] as f32]
 }
 
 /// Appends the triangles of a strip whose points' vertices are `sides` (side −1, then +1) and
