@@ -6,7 +6,7 @@ use crate::base::values::{Range, Vec3};
 
 /// Collects semantic errors while the schema is walked.
 #[derive(Debug, Default)]
-pub struct Checker {
+pub(crate) struct Checker {
     /// The errors found so far, with display and lookup paths.
     pub errors: Vec<(Diagnostic, String)>,
 }

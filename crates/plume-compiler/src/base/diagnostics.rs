@@ -26,7 +26,7 @@ impl fmt::Display for Severity {
 
 /// A position in the source: 1-based line and column (columns count characters).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub struct Pos {
+pub(crate) struct Pos {
     /// 1-based line number.
     pub line: usize,
     /// 1-based column, in characters.
@@ -37,9 +37,9 @@ pub struct Pos {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Span {
     /// First character of the range.
-    pub start: Pos,
+    pub(crate) start: Pos,
     /// One past the last character of the range.
-    pub end: Pos,
+    pub(crate) end: Pos,
 }
 
 /// One error or warning.

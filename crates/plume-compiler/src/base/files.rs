@@ -3,7 +3,7 @@
 //! `CompileOptions::files` (the Bevy plugin's, which reads them through Bevy's asset server,
 //! so that they load from any asset source and an edit reloads the effect). The source is set
 //! for the length of one compile on the compiling thread ([`with_source`]); every reader asks
-//! [`read`] for bytes, so no feature opens a file itself.
+//! `read` for bytes, so no feature opens a file itself.
 
 use std::cell::RefCell;
 use std::path::Path;
@@ -76,7 +76,7 @@ thread_local! {
     static CURRENT: RefCell<Option<Files>> = const { RefCell::new(None) };
 }
 
-/// Runs `f` with `files` as the source [`read`] reads from (disk when None), then puts back
+/// Runs `f` with `files` as the source `read` reads from (disk when None), then puts back
 /// the one before.
 pub fn with_source<R>(files: Option<Files>, f: impl FnOnce() -> R) -> R {
     let before = CURRENT.with(|c| c.replace(files));
@@ -87,7 +87,7 @@ pub fn with_source<R>(files: Option<Files>, f: impl FnOnce() -> R) -> R {
 
 /// The bytes of the file at `path`, from the current source, at most `most` of them: a larger
 /// file is refused (with its size) before it is read from disk.
-pub fn read(path: &Path, most: u64) -> Result<Vec<u8>, ReadError> {
+pub(crate) fn read(path: &Path, most: u64) -> Result<Vec<u8>, ReadError> {
     let bytes = match CURRENT.with(|c| c.borrow().clone()) {
         Some(files) => files.0.read(path).map_err(ReadError::Open)?,
         None => {
@@ -112,7 +112,7 @@ pub(crate) fn on_disk() -> bool {
 
 /// Why a file could not be read.
 #[derive(Debug)]
-pub enum ReadError {
+pub(crate) enum ReadError {
     /// It could not be found or opened.
     Open(std::io::Error),
     /// It was opened but not read.

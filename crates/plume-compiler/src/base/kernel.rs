@@ -10,7 +10,7 @@ pub const WORKGROUP: u32 = 256;
 /// Emits the index of this thread in a 2D dispatch of WORKGROUP-wide groups (`let {var} = ...`;
 /// 2D because one dimension holds at most 65,535 groups), and a return for threads at or past
 /// `bound` when one is given. Every kernel takes `gid` and `groups` builtins for it.
-pub fn emit_thread_index(w: &mut Writer, var: &str, bound: Option<&str>) {
+pub(crate) fn emit_thread_index(w: &mut Writer, var: &str, bound: Option<&str>) {
     w.line(format!("let {var} = gid.x + gid.y * groups.x * WORKGROUP;"));
     if let Some(bound) = bound {
         w.block(format!("if ({var} >= {bound})"), |w| w.line("return;"));

@@ -23,7 +23,7 @@ pub(crate) const MAX_TRIANGLES: usize = 1 << 21;
 /// A triangle mesh: welded vertices and triangles of vertex indices (counter-clockwise seen
 /// from outside, as OBJ writes them; nothing here depends on it).
 #[derive(Clone, Debug, PartialEq)]
-pub struct TriMesh {
+pub(crate) struct TriMesh {
     /// Distinct vertex positions.
     pub vertices: Vec<DVec3>,
     /// Triangles, three indices into `vertices` each.

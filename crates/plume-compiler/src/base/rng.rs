@@ -56,13 +56,13 @@ pub mod stream {
     /// One draw for a particle's starting age (an emitter's `age`).
     pub(crate) const START_AGE: u32 = 16;
     /// `rand(k)` in custom expressions draws from stream CUSTOM + k (k <= 255).
-    pub const CUSTOM: u32 = 64;
+    pub(crate) const CUSTOM: u32 = 64;
 }
 
 /// One particle's draws, as the f64 twins of the spawn read them: the same words as the WGSL's
 /// `rand_u32(id, stream)` and `rand_unit(id, stream)`.
 #[derive(Clone, Copy, Debug)]
-pub struct ParticleDraws {
+pub(crate) struct ParticleDraws {
     /// The effect's [`seed_mix`].
     pub seed_mix: u32,
     /// The particle's id.

@@ -40,7 +40,7 @@ const MAGIC: &[u8; 8] = b"PLUMESDF";
 
 /// A baked field: nodes, their box and their signed distances.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Sdf {
+pub(crate) struct Sdf {
     /// Nodes along x, y and z.
     pub counts: [u32; 3],
     /// Node (0, 0, 0)'s position, in the mesh's coordinates.

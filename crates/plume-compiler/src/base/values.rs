@@ -30,11 +30,11 @@ pub struct Rgba(pub f64, pub f64, pub f64, pub f64);
 
 /// A colour at a fraction of a particle's life, written `(t, (r, g, b, a))`.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-pub struct ColorStop(pub f64, pub Rgba);
+pub(crate) struct ColorStop(pub f64, pub Rgba);
 
 /// A sprite diameter in metres at a fraction of a particle's life, written `(t, size)`.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-pub struct SizeStop(pub f64, pub f64);
+pub(crate) struct SizeStop(pub f64, pub f64);
 
 /// The integration scheme.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, serde::Serialize)]
@@ -153,7 +153,7 @@ pub(crate) fn default_colors() -> Vec<ColorStop> {
 }
 
 /// `v / |v|`, or zero when `v` is too short to normalise (mirrors the WGSL guard).
-pub fn safe_normalize(v: DVec3) -> DVec3 {
+pub(crate) fn safe_normalize(v: DVec3) -> DVec3 {
     let l2 = v.length_squared();
     if l2 > 1e-20 {
         v / l2.sqrt()

@@ -79,7 +79,7 @@ fn content_key(ir: &EffectIr, exact_possible: bool) -> Option<u64> {
 /// aside: compiling the same effect again, or a variant with another seed (a Bevy instance's),
 /// takes it from memory instead of calibrating again (docs/performance.md, "The compiler's own
 /// speed").
-pub fn choose(
+pub(crate) fn choose(
     ir: &mut EffectIr,
     exact_possible: bool,
 ) -> Result<Option<(Diagnostic, String)>, Checker> {

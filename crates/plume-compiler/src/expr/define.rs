@@ -1,7 +1,7 @@
 //! Named expressions (`define: {"r": "length(x - vec3(0.0, 1.0, 0.0))"}`): written once and
 //! read by name in any expression of the effect, as if their text stood there in parentheses.
 //! Each is parsed here; the type checker expands a name where it is read, in the scope of that
-//! place ([`super::typed::check`]), so one that reads `v` is an error only where `v` is not
+//! place (`super::typed::check`), so one that reads `v` is an error only where `v` is not
 //! known. A name that refers back to itself through others is an error at its definition, and
 //! expansions are counted, so that definitions doubling one another cannot blow a tree up.
 
@@ -15,7 +15,7 @@ pub(crate) const MAX_EXPANDED: usize = 16_384;
 
 /// A named expression.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Define {
+pub(crate) struct Define {
     /// Its name, as expressions read it.
     pub name: String,
     /// Its syntax tree (character ranges within its own string), or why there is none.
@@ -24,7 +24,7 @@ pub struct Define {
 
 /// What a named expression holds.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Body {
+pub(crate) enum Body {
     /// Its syntax tree.
     Parsed(Ast),
     /// Its text does not parse (the mistake is reported at the definition).

@@ -103,7 +103,7 @@ pub fn find(name: &str) -> Option<&'static Draw> {
 impl Draw {
     /// The draw's expansion for its first stream `k` (already checked to fit under
     /// `max_rand`), every node placed at the call's characters `[start, end)`.
-    pub fn expand(&self, k: u32, (start, end): (usize, usize)) -> Result<Ast, ExprError> {
+    pub(crate) fn expand(&self, k: u32, (start, end): (usize, usize)) -> Result<Ast, ExprError> {
         let text = self
             .template
             .replace("K0", &k.to_string())

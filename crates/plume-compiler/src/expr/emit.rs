@@ -36,7 +36,7 @@ fn widen(value: String, from: Ty, to: Ty) -> String {
 
 impl<'w> Emitter<'w> {
     /// An emitter writing into `w`.
-    pub fn new(w: &'w mut Writer, rand_stream: u32) -> Self {
+    pub(crate) fn new(w: &'w mut Writer, rand_stream: u32) -> Self {
         Self {
             w,
             next: 0,
@@ -66,7 +66,7 @@ impl<'w> Emitter<'w> {
 
     /// Writes the statements for `e` and returns the WGSL expression (a name or a literal)
     /// holding its value.
-    pub fn value(&mut self, e: &Expr) -> String {
+    pub(crate) fn value(&mut self, e: &Expr) -> String {
         let ty = e.ty;
         match &e.node {
             Node::Scalar(x) => f32_lit(*x),

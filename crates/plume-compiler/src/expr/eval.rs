@@ -34,7 +34,7 @@ pub struct Inputs {
 }
 
 /// The most attributes an effect may declare.
-pub const MAX_ATTRIBUTES: usize = 16;
+pub(crate) const MAX_ATTRIBUTES: usize = 16;
 
 /// A particle's attribute values, by index: a vector, or a number in `x`.
 pub(crate) type Attrs = [DVec3; MAX_ATTRIBUTES];
@@ -135,7 +135,7 @@ pub fn smoothstep(e0: f64, e1: f64, a: f64) -> f64 {
 }
 
 /// Evaluates `e` for one particle.
-pub fn eval(e: &Expr, inp: &Inputs) -> Value {
+pub(crate) fn eval(e: &Expr, inp: &Inputs) -> Value {
     match &e.node {
         Node::Scalar(x) => Value::S(*x),
         Node::Param { value, .. } => Value::S(*value),

@@ -51,7 +51,7 @@ fn widen(e: Expr, ty: Ty) -> Option<Expr> {
 }
 
 /// Folds `e` bottom-up.
-pub fn fold(e: Expr) -> Expr {
+pub(crate) fn fold(e: Expr) -> Expr {
     let ty = e.ty;
     let node = match e.node {
         Node::Unary(op, a) => Node::Unary(op, Box::new(fold(*a))),

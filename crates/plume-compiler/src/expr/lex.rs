@@ -18,7 +18,7 @@ pub(crate) enum Tok {
 
 /// A token and the characters `[start, end)` it covers.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Token {
+pub(crate) struct Token {
     /// What it is.
     pub(crate) tok: Tok,
     /// First character (0-based, in characters).

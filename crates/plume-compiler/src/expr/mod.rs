@@ -1,5 +1,5 @@
 //! Custom expressions: a small typed language for accelerations (`Custom(accel: "...")`),
-//! compiled like the rest of an effect. A string goes through the [`lex`]er and the [`parse`]r
+//! compiled like the rest of an effect. A string goes through the `lex`er and the [`parse`]r
 //! into a syntax tree, the type checker ([`typed`]) turns it into a typed tree with every
 //! mistake located inside the string, [`fold`] simplifies it, [`emit`] writes it to WGSL and
 //! [`eval`] interprets the very same tree in f64 for the reference.
@@ -14,16 +14,16 @@ pub mod draws;
 pub mod emit;
 pub mod eval;
 pub mod fold;
-pub mod lex;
+pub(crate) mod lex;
 mod names;
 pub mod parse;
 pub mod tree;
 pub mod typed;
-pub mod vocab;
+pub(crate) mod vocab;
 
 use std::collections::BTreeMap;
 
-pub use typed::{Expr, Ty, Var};
+pub(crate) use typed::{Expr, Ty, Var};
 
 /// Every value an expression computes stays within ±this: the product of two bounded values
 /// (1e36) and a sum of three such products stay far below f32's largest (3.4e38), so no
@@ -53,15 +53,15 @@ pub struct Names<'a> {
     /// Params are read at run time (`CompileOptions::live_params`), not folded.
     pub live: bool,
     /// The effect's attributes (`features::attributes`), in name order.
-    pub attrs: &'a [typed::AttrName],
+    pub(crate) attrs: &'a [typed::AttrName],
     /// The effect's named expressions (`define`).
-    pub defines: &'a [define::Define],
+    pub(crate) defines: &'a [define::Define],
 }
 
 impl<'a> Names<'a> {
     /// The scope of an expression evaluated at spawn, before the attributes hold values,
     /// that may read `vars` and whose value is `role` ("a position").
-    pub fn scope(&self, vars: &'a [Var], role: &'a str) -> typed::Scope<'a> {
+    pub(crate) fn scope(&self, vars: &'a [Var], role: &'a str) -> typed::Scope<'a> {
         typed::Scope {
             params: self.params,
             dt: self.dt,
@@ -86,7 +86,7 @@ impl<'a> Names<'a> {
 
 /// A mistake in an expression, at characters `[start, end)` of the string.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ExprError {
+pub(crate) struct ExprError {
     /// What is wrong.
     pub message: String,
     /// First character (0-based).
@@ -108,7 +108,8 @@ impl ExprError {
 
 /// Parses and type-checks `text` as an acceleration of type `want` (reading any variable),
 /// then folds it. `params` are the effect's named constants and `dt` its step.
-pub fn compile(
+#[cfg(test)]
+pub(crate) fn compile(
     text: &str,
     want: Ty,
     params: &BTreeMap<String, f64>,
@@ -131,8 +132,9 @@ pub fn compile(
     )
 }
 
-/// [`compile`] in `scope`: with `scope.live`, params are read at run time and never folded.
-pub fn compile_in(text: &str, want: Ty, scope: &typed::Scope) -> Result<Expr, ExprError> {
+/// Parses, type-checks and folds `text` as a value of type `want` in `scope`: with
+/// `scope.live`, params are read at run time and never folded.
+pub(crate) fn compile_in(text: &str, want: Ty, scope: &typed::Scope) -> Result<Expr, ExprError> {
     let tokens = lex::tokenize(text)?;
     if tokens.len() > MAX_TOKENS {
         let t = &tokens[MAX_TOKENS];

@@ -11,7 +11,7 @@ pub(crate) const MAX_DEPTH: usize = 64;
 
 /// A binary operator as written.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum BinOp {
+pub(crate) enum BinOp {
     /// `+`
     Add,
     /// `-`
@@ -91,7 +91,7 @@ impl BinOp {
 
 /// A syntax tree node and the characters it covers.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Ast {
+pub(crate) struct Ast {
     /// What it is.
     pub kind: AstKind,
     /// First character.
@@ -102,7 +102,7 @@ pub struct Ast {
 
 /// The shapes of syntax.
 #[derive(Clone, Debug, PartialEq)]
-pub enum AstKind {
+pub(crate) enum AstKind {
     /// A number literal.
     Num(f64),
     /// A variable or parameter name.
@@ -118,7 +118,7 @@ pub enum AstKind {
 }
 
 /// Parses a whole expression; trailing tokens are an error.
-pub fn parse(tokens: &[Token]) -> Result<Ast, ExprError> {
+pub(crate) fn parse(tokens: &[Token]) -> Result<Ast, ExprError> {
     let mut p = Parser { tokens, at: 0 };
     if p.peek().tok == Tok::End {
         return Err(ExprError::new(

@@ -8,7 +8,7 @@ use glam::DVec3;
 use super::vocab::{Op1, Op2, Op3, Ty, Var};
 /// A node of the typed tree.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Node {
+pub(crate) enum Node {
     /// A scalar constant.
     Scalar(f64),
     /// A vector constant.
@@ -41,14 +41,14 @@ pub enum Node {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Expr {
     /// What it computes.
-    pub node: Node,
+    pub(crate) node: Node,
     /// Its type.
-    pub ty: Ty,
+    pub(crate) ty: Ty,
 }
 
 impl Expr {
     /// A node of a known type.
-    pub fn new(node: Node, ty: Ty) -> Self {
+    pub(crate) fn new(node: Node, ty: Ty) -> Self {
         Self { node, ty }
     }
 
@@ -63,7 +63,7 @@ impl Expr {
     }
 
     /// Every variable the expression reads (after folding, only those that matter).
-    pub fn reads(&self, var: Var) -> bool {
+    pub(crate) fn reads(&self, var: Var) -> bool {
         matches!(self.node, Node::Var(v) if v == var)
             || self.children().iter().any(|c| c.reads(var))
     }
@@ -81,7 +81,7 @@ impl Expr {
 
     /// Whether it reads the gradient noise through `op` ([`Op1::Noise`] or [`Op1::Curl`]): the
     /// module then needs its helpers.
-    pub fn uses(&self, op: Op1) -> bool {
+    pub(crate) fn uses(&self, op: Op1) -> bool {
         matches!(&self.node, Node::Unary(o, _) if *o == op)
             || self.children().iter().any(|c| c.uses(op))
     }
@@ -91,7 +91,7 @@ impl Expr {
         matches!(self.node, Node::Rand(_)) || self.children().iter().any(|c| c.draws_random())
     }
 
-    /// Sets every [`Node::Param`] of index `index` to `value`.
+    /// Sets every `Node::Param` of index `index` to `value`.
     pub fn set_param(&mut self, index: u32, value: f64) {
         match &mut self.node {
             Node::Param { index: i, value: v } if *i == index => *v = value,
@@ -122,19 +122,19 @@ pub struct Scope<'a> {
     pub params: &'a BTreeMap<String, f64>,
     /// The effect's dt (s).
     pub dt: f64,
-    /// Params are read at run time ([`Node::Param`]) instead of folded as constants.
+    /// Params are read at run time (`Node::Param`) instead of folded as constants.
     pub live: bool,
     /// The variables it may read (`VARIABLES` for a force; fewer at spawn).
-    pub vars: &'a [Var],
+    pub(crate) vars: &'a [Var],
     /// What its value is, for messages: "an acceleration".
     pub role: &'a str,
     /// The effect's attributes, in name order.
-    pub attrs: &'a [AttrName],
+    pub(crate) attrs: &'a [AttrName],
     /// Whether the attributes hold values where this expression is evaluated (not at spawn,
     /// where they are being given theirs).
     pub(crate) reads_attrs: bool,
     /// The effect's named expressions (`define`), expanded where they are read.
-    pub defines: &'a [super::define::Define],
+    pub(crate) defines: &'a [super::define::Define],
     /// Nodes the named expressions read so far have expanded to (at most
     /// `MAX_EXPANDED`).
     pub expanded: std::cell::Cell<usize>,
@@ -143,7 +143,7 @@ pub struct Scope<'a> {
 /// An attribute as expressions see it: its name, type, and its value when it never changes
 /// from a constant (then reading it is reading the constant).
 #[derive(Clone, Debug, PartialEq)]
-pub struct AttrName {
+pub(crate) struct AttrName {
     /// As written in the file.
     pub name: String,
     /// Its type.

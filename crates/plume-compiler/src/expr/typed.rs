@@ -3,14 +3,14 @@
 //! every mistake reported at its characters.
 
 use super::parse::{Ast, AstKind, BinOp};
-pub use super::tree::{AttrName, Expr, Node, Scope};
-pub use super::vocab::{
-    closest, Op1, Op2, Op3, Ty, Var, EVERY_VARIABLE, FUNCTIONS, MAX_RAND, VARIABLES,
+pub(crate) use super::tree::{AttrName, Expr, Node, Scope};
+pub(crate) use super::vocab::{
+    Op1, Op2, Op3, Ty, Var, EVERY_VARIABLE, FUNCTIONS, MAX_RAND, VARIABLES,
 };
 use super::ExprError;
 
 /// Type-checks a syntax tree into a typed tree.
-pub fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
+pub(crate) fn check(ast: &Ast, scope: &Scope) -> Result<Expr, ExprError> {
     let err = |msg: String| ExprError::new(msg, ast.start, ast.end);
     match &ast.kind {
         AstKind::Num(x) => {

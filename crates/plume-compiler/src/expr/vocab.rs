@@ -27,7 +27,7 @@ impl Ty {
 
 /// What an expression may read about the particle and the simulation.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
-pub enum Var {
+pub(crate) enum Var {
     /// Position (m), vec3.
     X,
     /// Velocity (m/s), vec3.
@@ -71,7 +71,7 @@ impl Var {
 
 /// Operations of one operand.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Op1 {
+pub(crate) enum Op1 {
     /// `-a`
     Neg,
     /// `abs`
@@ -120,7 +120,7 @@ pub enum Op1 {
 
 /// Operations of two operands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Op2 {
+pub(crate) enum Op2 {
     /// `+`
     Add,
     /// `-`
@@ -152,7 +152,7 @@ pub enum Op2 {
 
 /// Operations of three operands.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Op3 {
+pub(crate) enum Op3 {
     /// `vec3(a, b, c)`
     Vec3,
     /// `clamp(a, lo, hi)` = min(max(a, lo), hi).
@@ -166,11 +166,11 @@ pub enum Op3 {
 }
 
 /// The variables of a particle as it steps (a custom force's, an attribute's change).
-pub const VARIABLES: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life];
+pub(crate) const VARIABLES: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life];
 
 /// Every variable some expression reads: names a param, attribute or definition may not
 /// take, and what a definition may read (checked again where it is read).
-pub const EVERY_VARIABLE: &[Var] = &[
+pub(crate) const EVERY_VARIABLE: &[Var] = &[
     Var::X,
     Var::V,
     Var::T,
@@ -181,7 +181,7 @@ pub const EVERY_VARIABLE: &[Var] = &[
 ];
 
 /// Functions and their arities, for messages and the arity check.
-pub const FUNCTIONS: &[(&str, usize)] = &[
+pub(crate) const FUNCTIONS: &[(&str, usize)] = &[
     ("vec3", 3),
     ("dot", 2),
     ("cross", 2),
@@ -225,7 +225,7 @@ pub const FUNCTIONS: &[(&str, usize)] = &[
 ];
 
 /// The largest `k` in `rand(k)`.
-pub const MAX_RAND: u32 = 255;
+pub(crate) const MAX_RAND: u32 = 255;
 
 /// The known name nearest `name` by edit distance, when it is near enough to be a slip (at
 /// most a third of its letters changed, at least one).

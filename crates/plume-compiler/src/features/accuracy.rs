@@ -58,7 +58,7 @@ pub(crate) fn deserialize_budget<'de, D: Deserializer<'de>>(
 pub(crate) const MAX_WINDOW_STEPS: f64 = 20_000.0;
 
 /// Checks a budget at `path`, for steps of `dt` seconds.
-pub fn check(c: &mut Checker, path: &ValuePath, budget: &Accuracy, dt: f64) {
+pub(crate) fn check(c: &mut Checker, path: &ValuePath, budget: &Accuracy, dt: f64) {
     match (budget.position, budget.pixels) {
         (Some(p), None) => {
             c.positive(&path.field("position"), p);

@@ -8,7 +8,7 @@
 //! form, the WGSL (a function per spawn value and per change, the context the custom forces
 //! read them through) and the f64 twin the reference runs. Only what a scene requires is kept:
 //! an attribute that nothing reads is not stored, and one that is a constant never changed is
-//! read as that constant ([`crate::expr::typed::AttrName::constant`]).
+//! read as that constant (`crate::expr::typed::AttrName::constant`).
 //!
 //! When they are evaluated: a spawn value as the particle spawns, from its position and
 //! velocity then, the time of the step and its random numbers; a change once a step, after the
@@ -24,7 +24,7 @@ use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 use crate::base::rng::stream;
 use crate::base::writer::{f32_lit, Writer};
-pub use crate::expr::eval::MAX_ATTRIBUTES;
+pub(crate) use crate::expr::eval::MAX_ATTRIBUTES;
 use crate::expr::eval::{eval, Attrs, Inputs, Value};
 use crate::expr::typed::{AttrName, Node};
 use crate::expr::{self, Expr, ExprError, Names, Ty, Var};
@@ -64,7 +64,7 @@ pub(crate) type Declared = BTreeMap<String, Attribute>;
 
 /// How an attribute changes over a particle's life.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Change {
+pub(crate) enum Change {
     /// It keeps its spawn value.
     None,
     /// Its change per second, added times dt once a step.
@@ -75,7 +75,7 @@ pub enum Change {
 
 /// A lowered attribute.
 #[derive(Clone, Debug, PartialEq)]
-pub struct AttributeIr {
+pub(crate) struct AttributeIr {
     /// As written in the file.
     pub name: String,
     /// f32 or vec3.
@@ -119,7 +119,7 @@ impl AttributeIr {
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct AttributesIr {
     /// Every declared attribute, kept or not.
-    pub list: Vec<AttributeIr>,
+    pub(crate) list: Vec<AttributeIr>,
     /// The effect's dt (s), the step a rate is integrated over.
     pub dt: f64,
     /// The effect's seed mix, for `rand(k)`.
@@ -151,7 +151,7 @@ fn change_role(name: &str, rate: bool) -> String {
 /// What the expressions of an effect see of its attributes: each one's name, its type (its
 /// spawn value's; f32 where that does not compile) and its constant value when its spawn
 /// value folds to one and it never changes.
-pub fn names(declared: &Declared, names: Names) -> Vec<AttrName> {
+pub(crate) fn names(declared: &Declared, names: Names) -> Vec<AttrName> {
     let names = Names {
         attrs: &[],
         ..names
@@ -178,7 +178,7 @@ pub fn names(declared: &Declared, names: Names) -> Vec<AttrName> {
 /// Records the mistakes of `declared` (at `path`, the file's `attributes`) in `c`: names an
 /// expression cannot use or that hide another name, too many, expressions that do not
 /// compile, a rate and an update both given. `names.attrs` is [`names`]'s result.
-pub fn check(c: &mut Checker, path: &ValuePath, declared: &Declared, names: Names) {
+pub(crate) fn check(c: &mut Checker, path: &ValuePath, declared: &Declared, names: Names) {
     use crate::expr::typed::{EVERY_VARIABLE, FUNCTIONS};
     if declared.len() > MAX_ATTRIBUTES {
         c.error(
@@ -244,7 +244,7 @@ pub fn check(c: &mut Checker, path: &ValuePath, declared: &Declared, names: Name
 
 impl AttributesIr {
     /// Lowers `declared` (after [`check`] passed); `names.attrs` is [`names`]'s result.
-    pub fn lower(declared: &Declared, names: Names, seed_mix: u32) -> Self {
+    pub(crate) fn lower(declared: &Declared, names: Names, seed_mix: u32) -> Self {
         let list = declared
             .iter()
             .zip(names.attrs)
@@ -318,7 +318,7 @@ impl AttributesIr {
     }
 
     /// Whether a kept attribute's spawn value or change reads the gradient noise through `op`.
-    pub fn uses(&self, kept: u64, op: crate::expr::typed::Op1) -> bool {
+    pub(crate) fn uses(&self, kept: u64, op: crate::expr::typed::Op1) -> bool {
         self.iter_kept(kept)
             .any(|(_, a)| a.spawn.uses(op) || a.change_expr().is_some_and(|e| e.uses(op)))
     }

@@ -31,7 +31,7 @@ pub fn buffer_bytes(most: u32) -> u64 {
 
 /// Checks an event's `report` bound (at `path`): at most `MAX_REPORT`; and that an event
 /// without a `target` reports (else it would do nothing).
-pub fn check(c: &mut Checker, path: &ValuePath, report: u32, has_target: bool) {
+pub(crate) fn check(c: &mut Checker, path: &ValuePath, report: u32, has_target: bool) {
     if report > MAX_REPORT {
         c.error(
             &path.field("report"),

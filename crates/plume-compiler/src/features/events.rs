@@ -29,7 +29,7 @@ pub(crate) const MAX_COUNT: u32 = 65_536;
 
 /// When a particle fires an event.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]
-pub enum Trigger {
+pub(crate) enum Trigger {
     /// When it dies (end of its lifetime or a kill volume), where it died.
     Death,
     /// When it hits a collider during a step, where the step leaves it.
@@ -47,7 +47,7 @@ pub enum Trigger {
 #[serde(deny_unknown_fields)]
 pub struct Event {
     /// What fires it.
-    pub on: Trigger,
+    pub(crate) on: Trigger,
     /// The name of the group the new particles join; None for an event that only reports.
     #[serde(default, deserialize_with = "crate::features::event_report::some_name")]
     pub target: Option<String>,
@@ -99,7 +99,7 @@ impl Event {
 
 /// When an event fires, in the IR.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum TriggerIr {
+pub(crate) enum TriggerIr {
     /// At death.
     Death,
     /// After a step with a collision.
@@ -154,7 +154,7 @@ impl Ordering {
 #[derive(Clone, Debug, PartialEq)]
 pub struct EventIr {
     /// What fires it.
-    pub trigger: TriggerIr,
+    pub(crate) trigger: TriggerIr,
     /// How its firings are put in order.
     pub ordering: Ordering,
     /// The index of the target group (None: the event only reports).
@@ -212,7 +212,7 @@ pub fn in_binding(j: usize) -> u32 {
 }
 
 /// The bindings events add to a group's compute module.
-pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> Vec<Binding> {
+pub(crate) fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> Vec<Binding> {
     let cap = u64::from(capacity);
     let mut out = Vec::new();
     for j in 0..events.len() {
@@ -487,7 +487,7 @@ pub(crate) fn emit_fire_appended(
 /// `store` emits (for input j) the store of the spawned particle `s` with id `id` (and packed tint `tint`,
 /// when the group stores tints) in `slot`: the same code as the group's own spawn. `own` is
 /// the WGSL of the group's own tint for the particle `id` when it stores tints (`tint.rs`).
-pub fn emit_kernels(
+pub(crate) fn emit_kernels(
     w: &mut Writer,
     inputs: &[EventInputIr],
     own: Option<&str>,

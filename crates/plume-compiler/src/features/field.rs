@@ -69,7 +69,7 @@ pub(crate) const MAX_NODES: u64 = 256 * 256 * 256;
 
 impl Field {
     /// Checks resolution, bounds, and that a time-dependent force is baked every step.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker, time_dependent: Option<usize>) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker, time_dependent: Option<usize>) {
         let Field::Baked {
             resolution,
             min,
@@ -116,7 +116,7 @@ impl Field {
     }
 
     /// Lowers to the IR's field, or None when forces are evaluated.
-    pub fn lower(&self) -> Option<FieldIr> {
+    pub(crate) fn lower(&self) -> Option<FieldIr> {
         match self {
             Field::Evaluated => None,
             Field::Baked {

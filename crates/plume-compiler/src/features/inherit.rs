@@ -35,14 +35,14 @@ pub type Pair = (usize, usize);
 
 /// The attributes a group keeps because it passes them or inherits them (a bit set): both
 /// sides keep them, whatever else reads them.
-pub fn kept(events: &[EventIr], inputs: &[EventInputIr]) -> u64 {
+pub(crate) fn kept(events: &[EventIr], inputs: &[EventInputIr]) -> u64 {
     let passed = events.iter().flat_map(|e| e.passes.iter().copied());
     let inherited = inputs.iter().flat_map(|i| i.inherits.iter().map(|p| p.1));
     passed.chain(inherited).fold(0, |set, a| set | (1u64 << a))
 }
 
 /// The bindings the passed attributes add to a group's compute module.
-pub fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> Vec<Binding> {
+pub(crate) fn bindings(events: &[EventIr], inputs: &[EventInputIr], capacity: u32) -> Vec<Binding> {
     let mut out = Vec::new();
     for (j, e) in events
         .iter()
@@ -115,7 +115,7 @@ pub(crate) fn emit_find(w: &mut Writer, input: &EventInputIr, order: &str) {
 
 /// The WGSL value child attribute `child` (of type `vec3` when `vec3`) takes from the parent
 /// in input `j`, or None when it does not inherit there.
-pub fn taken(j: usize, input: &EventInputIr, child: usize, vec3: bool) -> Option<String> {
+pub(crate) fn taken(j: usize, input: &EventInputIr, child: usize, vec3: bool) -> Option<String> {
     let k = input.inherits.iter().position(|&(_, c)| c == child)? as u32;
     let word = |c: u32| {
         format!(

@@ -368,7 +368,7 @@ pub(crate) fn range_window(d2: f64, range: f64) -> f64 {
 
 /// Checks the file's lights: colours and intensities >= 0, directions that are not zero,
 /// ranges > 0, at most [`LIGHTS_MOST`] sources.
-pub fn check(lights: &[Light], c: &mut Checker) {
+pub(crate) fn check(lights: &[Light], c: &mut Checker) {
     let root = ValuePath::root().field("lights");
     let mut sources = 0;
     let mut shadows = 0;

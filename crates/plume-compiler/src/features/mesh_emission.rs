@@ -48,12 +48,12 @@ pub struct MeshSurface {
     /// The surface's area (m²).
     pub area: f64,
     /// With `volume: true`: the inside cells to spawn in instead of the surface.
-    pub volume: Option<VolumeCells>,
+    pub(crate) volume: Option<VolumeCells>,
 }
 
 /// The cells of a mesh's field whose centre is inside it, placed in the world.
 #[derive(Clone, Debug, PartialEq)]
-pub struct VolumeCells {
+pub(crate) struct VolumeCells {
     /// Each inside cell's index, (k · cy + j) · cx + i.
     pub cells: Vec<u32>,
     /// Cells along x, y and z.

@@ -17,7 +17,7 @@ pub mod forces;
 pub mod inherit;
 pub mod lights;
 pub mod looks;
-pub mod mesh_emission;
+pub(crate) mod mesh_emission;
 pub mod placement;
 pub mod scene;
 pub mod shadow;

@@ -18,7 +18,7 @@ use crate::base::values::Vec3;
 /// A scene mesh as written in an effect file.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub enum SceneMesh {
+pub(crate) enum SceneMesh {
     /// A triangle mesh from an OBJ file, placed in the world.
     Mesh {
         /// The OBJ file, relative to the effect file.
@@ -40,7 +40,7 @@ pub enum SceneMesh {
 
 /// A scene mesh in the IR: the mesh and where it sits.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SceneMeshIr {
+pub(crate) struct SceneMeshIr {
     /// The mesh file as the effect names it.
     pub file: String,
     /// Where the mesh's origin sits in the world.

@@ -40,7 +40,7 @@ pub(crate) fn shadow_declarations_wgsl() -> String {
 
 /// Where a lit look looks its shadow up (`render.lit.shadow_at`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize)]
-pub enum ShadowAt {
+pub(crate) enum ShadowAt {
     /// At every pixel's own point: a shadow's edge crosses a sprite as it crosses the scene.
     #[default]
     Pixel,

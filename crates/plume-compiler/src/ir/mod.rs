@@ -9,7 +9,7 @@ mod display;
 pub mod stateless;
 
 use crate::base::values::{interpolate, scalar_at, Integrator, State};
-pub use crate::features::emitter::{Basis, EmitterIr, ShapeIr, VelocityIr};
+pub(crate) use crate::features::emitter::{EmitterIr, ShapeIr};
 use crate::features::looks::glow::Glow;
 use crate::features::looks::tint::TintSource;
 use crate::features::looks::Blend;
@@ -51,7 +51,7 @@ pub struct EffectIr {
     /// Colliders, in file order.
     pub colliders: Vec<crate::features::colliders::ColliderIr>,
     /// Meshes drawn and not simulated (the file's `scene`; the first group's only).
-    pub scene: Vec<crate::features::scene::SceneMeshIr>,
+    pub(crate) scene: Vec<crate::features::scene::SceneMeshIr>,
     /// The lights the file names (the default ones when it names none): what a lit look is
     /// drawn with unless a host passes its own.
     pub lights: crate::features::lights::Lights,
@@ -59,7 +59,7 @@ pub struct EffectIr {
     /// light the scene's meshes in `plume render` even when the look is unlit.
     pub lights_named: bool,
     /// Kill volumes.
-    pub kills: Vec<KillIr>,
+    pub(crate) kills: Vec<KillIr>,
     /// Whether a depth sort is requested.
     pub sort: bool,
     /// The state the file asks for (Auto, Stateful or Stateless).
@@ -366,7 +366,7 @@ impl EffectIr {
 
 /// A kill volume.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum KillIr {
+pub(crate) enum KillIr {
     /// Inside an axis-aligned box.
     InsideBox(DVec3, DVec3),
     /// Outside an axis-aligned box.

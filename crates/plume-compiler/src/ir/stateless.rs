@@ -4,7 +4,7 @@
 
 /// Most segments the table holds: 65,536 × 32 bytes = 2 MiB of bookkeeping, whatever the
 /// particle count.
-pub const MAX_SEGMENTS: u64 = 65_536;
+pub(crate) const MAX_SEGMENTS: u64 = 65_536;
 
 /// Bytes of one segment entry (two `vec4<u32>`).
 pub const SEGMENT_BYTES: u64 = 32;

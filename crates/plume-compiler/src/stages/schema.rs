@@ -7,15 +7,16 @@
 use serde::Deserialize;
 
 use crate::base::values::default_colors;
-pub use crate::base::values::{ColorStop, Counts, Integrator, Range, Rgba, SizeStop, State, Vec3};
+pub(crate) use crate::base::values::{ColorStop, SizeStop};
+pub use crate::base::values::{Counts, Integrator, Range, Rgba, State, Vec3};
 pub use crate::features::colliders::Collider;
 pub use crate::features::emitter::{Emitter, Shape, Velocity};
 pub use crate::features::events::Event;
 use crate::features::forces::Force;
 pub use crate::features::looks::glow::Glow;
-pub use crate::features::looks::orient::Orient;
+pub(crate) use crate::features::looks::orient::Orient;
 pub use crate::features::looks::rotation::Rotation;
-pub use crate::features::looks::texture::{Play, Texture};
+pub use crate::features::looks::texture::Texture;
 pub use crate::features::looks::trail::Trail;
 pub use crate::features::looks::Blend;
 
@@ -145,11 +146,11 @@ pub struct EffectSpec {
     pub collide: Vec<Collider>,
     /// Volumes that kill particles at the end of a step.
     #[serde(default)]
-    pub kill: Vec<KillVolume>,
+    pub(crate) kill: Vec<KillVolume>,
     /// Meshes drawn around the effect and not simulated: what a `SceneDepth` collider meets
     /// in `plume render` and `plume preview` (see `features::scene`).
     #[serde(default)]
-    pub scene: Vec<crate::features::scene::SceneMesh>,
+    pub(crate) scene: Vec<crate::features::scene::SceneMesh>,
     /// What lights the sprites of a lit look (`render.lit`): directional, point and ambient
     /// lights (see [`crate::features::lights`]); a white sun and some ambient light when none
     /// is named.
@@ -246,18 +247,18 @@ fn default_background() -> Vec3 {
 pub struct Render {
     /// Colour gradient over the life fraction age / lifetime (0 for immortal particles).
     #[serde(default = "default_colors")]
-    pub color: Vec<ColorStop>,
+    pub(crate) color: Vec<ColorStop>,
     /// Sprite diameter (m) over the life fraction.
     #[serde(default = "default_sizes")]
-    pub size: Vec<SizeStop>,
+    pub(crate) size: Vec<SizeStop>,
     /// The sprite's height (its y axis) over the life fraction, when it differs from its
     /// width: then `size` is the width. For `Velocity` sprites, the length before stretching.
     #[serde(default)]
-    pub size_y: Option<Vec<SizeStop>>,
+    pub(crate) size_y: Option<Vec<SizeStop>>,
     /// Opacity over the life fraction with stops of its own, `(t, alpha)`: replaces the colour
     /// stops' alpha.
     #[serde(default)]
-    pub alpha: Option<Vec<SizeStop>>,
+    pub(crate) alpha: Option<Vec<SizeStop>>,
     /// Alpha or Additive.
     #[serde(default)]
     pub blend: Blend,
@@ -266,7 +267,7 @@ pub struct Render {
     pub background: Vec3,
     /// Which way each sprite faces: the camera, stretched along the velocity, or a fixed plane.
     #[serde(default)]
-    pub orient: Orient,
+    pub(crate) orient: Orient,
     /// What the size stops measure: metres (`World`) or fractions of the image's height
     /// (`Screen`; see `features::looks::screen_size`).
     #[serde(default)]
@@ -373,7 +374,7 @@ impl Default for Render {
 /// Volumes that kill particles at the end of a step.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub enum KillVolume {
+pub(crate) enum KillVolume {
     /// Kills particles inside the box.
     InsideBox {
         /// Lower corner.
@@ -463,7 +464,7 @@ pub struct Group {
     pub collide: Vec<Collider>,
     /// Volumes that kill its particles at the end of a step.
     #[serde(default)]
-    pub kill: Vec<KillVolume>,
+    pub(crate) kill: Vec<KillVolume>,
     /// Draw back to front.
     #[serde(default)]
     pub sort: bool,

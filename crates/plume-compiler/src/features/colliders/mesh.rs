@@ -1,6 +1,6 @@
 //! `Mesh`: a closed triangle mesh from an OBJ file, placed in the world by `offset`, `scale`
 //! and `rotation`; particles stay outside it. The mesh is baked once into a signed distance
-//! field ([`crate::base::sdf`]) whose f32 values the GPU (the `collider_data` binding) and the f64
+//! field (`crate::base::sdf`) whose f32 values the GPU (the `collider_data` binding) and the f64
 //! reference both interpolate, so both collide with the very same surface: the field's zero
 //! level, which is the mesh to within its resolution (a cell is the mesh's longest side over
 //! `resolution`).
@@ -54,9 +54,9 @@ const TINY: f64 = 1e-30;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Baked {
     /// The signed distance field particles collide with.
-    pub sdf: Sdf,
+    pub(crate) sdf: Sdf,
     /// The mesh itself, for drawing the scene.
-    pub mesh: TriMesh,
+    pub(crate) mesh: TriMesh,
 }
 
 /// A mesh collider in the IR: the baked field and where it sits.
@@ -356,7 +356,7 @@ impl MeshIr {
 
     /// The WGSL twins of [`MeshIr::hit`] and `push_out`, reading the field from
     /// `collider_data` at `offset`.
-    pub fn emit(&self, w: &mut Writer, i: usize, offset: u32) {
+    pub(crate) fn emit(&self, w: &mut Writer, i: usize, offset: u32) {
         let [nx, ny, _] = self.baked.sdf.counts;
         let v3 = |v: DVec3| {
             format!(

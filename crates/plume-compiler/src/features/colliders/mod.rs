@@ -14,16 +14,16 @@
 //! surface, and every particle is pushed out once more after the loop.
 
 pub mod aabb;
-pub mod height_field;
-pub mod height_image;
+pub(crate) mod height_field;
+pub(crate) mod height_image;
 pub mod mesh;
 pub mod plane;
 pub mod scene_depth;
 mod schema;
 pub mod sphere;
 
-pub use crate::base::sdf;
-pub use schema::{collider_path, Collider};
+pub(crate) use schema::collider_path;
+pub use schema::Collider;
 
 use glam::DVec3;
 
@@ -228,7 +228,7 @@ impl ColliderIr {
 }
 
 /// The largest coordinate any collider is built from, at least 1 (for the margin).
-pub fn scale(colliders: &[ColliderIr]) -> f64 {
+pub(crate) fn scale(colliders: &[ColliderIr]) -> f64 {
     colliders
         .iter()
         .map(|c| c.surface.scale())
@@ -253,7 +253,7 @@ fn push_out_all(colliders: &[ColliderIr], mut x: DVec3, scale: f64, start: bool)
 /// The f64 reference of the swept resolution (see the module doc): the particle moved from
 /// `x0` to `x` this substep of length `h`; `v` is its velocity (Verlet: its displacement).
 /// Returns whether it touched a collider.
-pub fn resolve(
+pub(crate) fn resolve(
     colliders: &[ColliderIr],
     rest_speed: f64,
     x0: DVec3,

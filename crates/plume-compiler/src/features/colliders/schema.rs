@@ -41,7 +41,7 @@ impl Collider {
     }
 
     /// Checks the collider's parameters; `path` names the variant.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
         match self {
             Collider::Plane(x) => x.check(path, c),
             Collider::Sphere(x) => x.check(path, c),
@@ -53,7 +53,7 @@ impl Collider {
     }
 
     /// Lowers a checked collider to the IR.
-    pub fn lower(&self) -> ColliderIr {
+    pub(crate) fn lower(&self) -> ColliderIr {
         match self {
             Collider::Plane(x) => x.lower(),
             Collider::Sphere(x) => x.lower(),
@@ -116,7 +116,7 @@ impl<'de> Deserialize<'de> for Collider {
 }
 
 /// Path of the `i`-th collider, with its variant named.
-pub fn collider_path(i: usize, c: &Collider) -> ValuePath {
+pub(crate) fn collider_path(i: usize, c: &Collider) -> ValuePath {
     ValuePath::root()
         .field("collide")
         .index(i)

@@ -51,7 +51,7 @@ impl<T: Default> Default for Amount<T> {
 /// An amount in the IR: its value as the effect compiles, and with live params the index of
 /// the param it follows (in `EffectIr::live_params`, name order).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct AmountIr<T> {
+pub(crate) struct AmountIr<T> {
     /// The value (the param's, as the file gives it, for a param).
     pub value: T,
     /// The live param it follows, when it is one and params are live.
@@ -177,7 +177,7 @@ impl<'de, T: AmountKind> Deserialize<'de> for Amount<T> {
 
 impl<T: AmountKind> Amount<T> {
     /// The value as the effect compiles (a param's as the file gives it; 0 for a param the
-    /// file lacks, which [`Amount::check`] refuses).
+    /// file lacks, which `Amount::check` refuses).
     pub fn value(&self, params: &BTreeMap<String, f64>) -> T {
         match self {
             Amount::Value(v) => *v,
@@ -188,7 +188,7 @@ impl<T: AmountKind> Amount<T> {
     }
 
     /// Records in `c` a negative number or a param the file does not give, at `path`.
-    pub fn check(&self, c: &mut Checker, path: &ValuePath, names: Names) {
+    pub(crate) fn check(&self, c: &mut Checker, path: &ValuePath, names: Names) {
         match self {
             Amount::Value(v) => {
                 c.non_negative(path, v.as_f64());
@@ -224,7 +224,7 @@ impl<T: AmountKind> Amount<T> {
 
     /// The lowered amount (after [`Amount::check`] passed): with live params, a param's value
     /// is the f32 the host's would be and its index is kept.
-    pub fn lower(&self, names: Names) -> AmountIr<T> {
+    pub(crate) fn lower(&self, names: Names) -> AmountIr<T> {
         match self {
             Amount::Value(v) => AmountIr {
                 value: *v,

@@ -25,11 +25,14 @@ use crate::base::values::Range;
 use crate::base::writer::Writer;
 use crate::expr::Names;
 
-pub use amount::{Amount, AmountIr, AmountKind};
+pub use amount::Amount;
+pub(crate) use amount::AmountKind;
 pub use shape::Shape;
-pub use shape_ir::{box_face_thresholds, ConeIr, ShapeIr};
-pub use timing::{Every, SpawnTiming};
-pub use velocity::{Velocity, VelocityIr};
+pub(crate) use shape_ir::ShapeIr;
+pub use timing::Every;
+pub(crate) use timing::SpawnTiming;
+pub use velocity::Velocity;
+pub(crate) use velocity::VelocityIr;
 
 /// One particle source.
 #[derive(Clone, Debug, PartialEq, Deserialize)]
@@ -85,9 +88,9 @@ pub struct EmitterIr {
     /// At which steps it spawns.
     pub timing: SpawnTiming,
     /// Spawn position.
-    pub shape: ShapeIr,
+    pub(crate) shape: ShapeIr,
     /// Spawn velocity.
-    pub velocity: VelocityIr,
+    pub(crate) velocity: VelocityIr,
     /// Lifetime range (s).
     pub lifetime: Option<(f64, f64)>,
     /// The lifetime as whole steps (see [`crate::base::lifetime`]).
@@ -98,7 +101,7 @@ pub struct EmitterIr {
 
 /// An orthonormal pair spanning the plane perpendicular to a unit vector.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Basis {
+pub(crate) struct Basis {
     /// First tangent.
     pub t1: DVec3,
     /// Second tangent (`n × t1`).
@@ -134,7 +137,7 @@ impl Emitter {
 
     /// Records in `c` what is wrong with the emitter at `path`; `names` are what its
     /// expressions may name (and the step, `names.dt`).
-    pub fn check(&self, c: &mut Checker, path: &ValuePath, names: Names) {
+    pub(crate) fn check(&self, c: &mut Checker, path: &ValuePath, names: Names) {
         let dt = names.dt;
         self.rate.check(c, &path.field("rate"), names);
         self.burst.check(c, &path.field("burst"), names);
@@ -193,7 +196,7 @@ impl Emitter {
 
     /// The emitter's lowered form (after [`Emitter::check`] passed) in an effect of
     /// `seed_mix`.
-    pub fn lower(&self, names: Names, seed_mix: u32) -> EmitterIr {
+    pub(crate) fn lower(&self, names: Names, seed_mix: u32) -> EmitterIr {
         let dt = names.dt;
         let shape = self.shape.lower(names, seed_mix);
         let (burst, rate) = (self.burst.lower(names), self.rate.lower(names));
@@ -222,7 +225,7 @@ impl Emitter {
 impl EmitterIr {
     /// Whether its spawn expressions (a `Custom` shape or velocity) read the gradient noise
     /// through `op`.
-    pub fn uses(&self, op: crate::expr::typed::Op1) -> bool {
+    pub(crate) fn uses(&self, op: crate::expr::typed::Op1) -> bool {
         let shape = matches!(&self.shape, ShapeIr::Custom { expr, .. } if expr.uses(op));
         let velocity = matches!(&self.velocity, VelocityIr::Custom { expr, .. } if expr.uses(op));
         shape || velocity

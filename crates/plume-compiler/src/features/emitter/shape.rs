@@ -173,7 +173,7 @@ impl Shape {
 
     /// Records in `c` what is wrong with the shape at `path` (the emitter's `shape`); `names`
     /// are what its expression may name.
-    pub fn check(&self, c: &mut Checker, path: &ValuePath, names: Names) {
+    pub(crate) fn check(&self, c: &mut Checker, path: &ValuePath, names: Names) {
         match self {
             Shape::Custom(text) => {
                 SpawnValue::Position.check(text, &path.variant("Custom").inner(), c, names);
@@ -296,7 +296,7 @@ impl Shape {
     }
 
     /// The shape's lowered form (after [`Shape::check`] passed), for an effect of `seed_mix`.
-    pub fn lower(&self, names: Names, seed_mix: u32) -> ShapeIr {
+    pub(crate) fn lower(&self, names: Names, seed_mix: u32) -> ShapeIr {
         match self {
             Shape::Custom(text) => {
                 let expr = SpawnValue::Position

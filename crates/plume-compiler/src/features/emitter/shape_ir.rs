@@ -16,7 +16,7 @@ use crate::features::mesh_emission::MeshSurface;
 
 /// Spawn shape in the IR.
 #[derive(Clone, Debug, PartialEq)]
-pub enum ShapeIr {
+pub(crate) enum ShapeIr {
     /// One point.
     Point(DVec3),
     /// Uniform in a ball.
@@ -98,7 +98,7 @@ pub enum ShapeIr {
 /// (+z last), T_i = ⌊2³² (a_0 + … + a_i) / A⌋ with a_i the faces' areas and A their sum, so
 /// that the face picked by a word r is the number of i with r >= T_i (T_i = 2³² never
 /// counts). None when the box has no area (a point or a segment: its volume is its surface).
-pub fn box_face_thresholds(min: DVec3, max: DVec3) -> Option<[u64; 5]> {
+pub(crate) fn box_face_thresholds(min: DVec3, max: DVec3) -> Option<[u64; 5]> {
     let d = max - min;
     let areas = [
         d.y * d.z,
@@ -446,7 +446,7 @@ fn emit_sphere(w: &mut Writer, center: DVec3, radius: f64, surface: bool) {
 
 /// A cone's spawn volume or side: a frustum along a unit axis from its base.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ConeIr {
+pub(crate) struct ConeIr {
     /// Centre of the base.
     pub base: DVec3,
     /// Unit axis from the base to the top.

@@ -23,7 +23,7 @@ const NEWTON_STEPS: u32 = 8;
 
 /// A torus's spawn volume or surface.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TorusIr {
+pub(crate) struct TorusIr {
     /// Centre of the ring.
     pub center: DVec3,
     /// Unit axis (the ring lies in the plane it is normal to).

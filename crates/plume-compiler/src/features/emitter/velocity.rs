@@ -58,7 +58,7 @@ pub enum Velocity {
 
 /// Spawn velocity in the IR.
 #[derive(Clone, Debug, PartialEq)]
-pub enum VelocityIr {
+pub(crate) enum VelocityIr {
     /// Fixed velocity.
     Constant(DVec3),
     /// Uniform in a cone: cos θ uniform in [cos angle, 1].
@@ -101,7 +101,7 @@ pub enum VelocityIr {
 impl Velocity {
     /// Records in `c` what is wrong with the velocity at `path` (the emitter's `velocity`),
     /// given the emitter's shape; `names` are what its expression may name.
-    pub fn check(&self, c: &mut Checker, path: &ValuePath, on_mesh: bool, names: Names) {
+    pub(crate) fn check(&self, c: &mut Checker, path: &ValuePath, on_mesh: bool, names: Names) {
         match self {
             Velocity::Custom(text) => {
                 SpawnValue::Velocity.check(text, &path.variant("Custom").inner(), c, names);
@@ -138,7 +138,7 @@ impl Velocity {
 
     /// The velocity's lowered form (after [`Velocity::check`] passed), for particles that
     /// spawn on `shape` in an effect of `seed_mix`.
-    pub fn lower(&self, names: Names, shape: &ShapeIr, seed_mix: u32) -> VelocityIr {
+    pub(crate) fn lower(&self, names: Names, shape: &ShapeIr, seed_mix: u32) -> VelocityIr {
         match self {
             Velocity::Custom(text) => {
                 let expr = SpawnValue::Velocity

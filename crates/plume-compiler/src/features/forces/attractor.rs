@@ -40,7 +40,7 @@ pub struct Attractor {
 
 impl Attractor {
     /// Checks a finite centre, `range > 0`, a finite strength and `0 < core <= range`.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
         c.vec3(&path.field("center"), self.center);
         c.positive(&path.field("range"), self.range);
         c.finite(&path.field("strength"), self.strength);
@@ -55,7 +55,7 @@ impl Attractor {
     }
 
     /// Lowers to an attractor term.
-    pub fn lower(&self, origin: usize) -> AttractorTerm {
+    pub(crate) fn lower(&self, origin: usize) -> AttractorTerm {
         AttractorTerm {
             center: self.center.d(),
             range: self.range,

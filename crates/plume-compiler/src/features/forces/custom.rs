@@ -21,7 +21,7 @@ pub(crate) const FIELDS: &[&str] = &["accel"];
 
 /// What a custom force's expressions may name besides the variables: the effect's `params`
 /// and its `dt`.
-pub use crate::expr::Names as Scope;
+pub(crate) use crate::expr::Names as Scope;
 
 fn typed(scope: Scope<'_>) -> expr::typed::Scope<'_> {
     scope.scope_with_attrs(expr::typed::VARIABLES, "an acceleration")
@@ -36,7 +36,7 @@ pub struct Custom {
 
 impl Custom {
     /// Parses and type-checks the expression; a mistake is an error at its characters.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker, scope: Scope) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker, scope: Scope) {
         if let Err(e) = expr::compile_in(&self.accel, Ty::Vec3, &typed(scope)) {
             c.error_in_string(&path.field("accel"), e.start, e.end, e.message);
         }
@@ -44,7 +44,7 @@ impl Custom {
 
     /// Lowers to a term: a constant term when the expression folds to a constant, else a
     /// custom term. Call only after [`Custom::check`] found no error.
-    pub fn lower(&self, origin: usize, seed_mix: u32, scope: Scope) -> Term {
+    pub(crate) fn lower(&self, origin: usize, seed_mix: u32, scope: Scope) -> Term {
         let expr = expr::compile_in(&self.accel, Ty::Vec3, &typed(scope))
             .expect("checked before lowering");
         if let Node::Vector(accel) = expr.node {
@@ -76,7 +76,7 @@ pub struct CustomTerm {
 }
 
 /// The rand streams of custom expressions start here (below are the spawn's).
-pub use crate::base::rng::stream::CUSTOM as RAND_STREAM;
+pub(crate) use crate::base::rng::stream::CUSTOM as RAND_STREAM;
 
 impl CustomTerm {
     /// Whether the term reads the particle context (id, age or lifetime).

@@ -30,13 +30,13 @@ pub struct Drag {
 
 impl Drag {
     /// Checks `k >= 0` and a finite fluid velocity.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
         c.non_negative(&path.field("k"), self.k);
         c.vec3(&path.field("fluid"), self.fluid);
     }
 
     /// Lowers to a drag term.
-    pub fn lower(&self, origin: usize) -> DragTerm {
+    pub(crate) fn lower(&self, origin: usize) -> DragTerm {
         DragTerm {
             k: self.k,
             fluid: self.fluid.d(),

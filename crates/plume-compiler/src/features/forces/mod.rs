@@ -11,7 +11,7 @@ pub mod drag;
 pub mod flock;
 pub mod noise;
 pub mod turbulence;
-pub mod vector_field;
+pub(crate) mod vector_field;
 pub mod vortex;
 pub mod wind;
 
@@ -65,7 +65,7 @@ impl Force {
 
     /// Checks the force's parameters; `path` already names the variant, `scope` holds what
     /// expressions may name besides their variables.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker, scope: custom::Scope) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker, scope: custom::Scope) {
         match self {
             Force::Gravity(g) => {
                 c.vec3(&path.inner(), *g);
@@ -83,7 +83,7 @@ impl Force {
 
     /// Lowers to IR terms; `origin` is the force's index in the file, `seed` the effect's seed.
     /// A Flock lowers to no term: it couples particles, so it is `EffectIr::flock` instead.
-    pub fn lower(&self, origin: usize, seed: u32, scope: custom::Scope) -> Vec<Term> {
+    pub(crate) fn lower(&self, origin: usize, seed: u32, scope: custom::Scope) -> Vec<Term> {
         match self {
             Force::Gravity(g) => vec![Term::Constant(constant::ConstantTerm {
                 accel: g.d(),
@@ -329,7 +329,7 @@ impl Term {
     }
 }
 
-pub use crate::base::values::safe_normalize;
+pub(crate) use crate::base::values::safe_normalize;
 
 /// The samples of the effect's vector field, as the `force_data` binding holds them; None
 /// without one.

@@ -56,7 +56,7 @@ pub struct Turbulence {
 
 impl Turbulence {
     /// Checks the parameters.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
         c.finite(&path.field("strength"), self.strength);
         c.positive(&path.field("scale"), self.scale);
         if !(1..=MAX_OCTAVES).contains(&self.octaves) {
@@ -69,7 +69,7 @@ impl Turbulence {
     }
 
     /// Lowers to a term keyed by the effect's seed and the force's index.
-    pub fn lower(&self, origin: usize, seed: u32) -> TurbulenceTerm {
+    pub(crate) fn lower(&self, origin: usize, seed: u32) -> TurbulenceTerm {
         TurbulenceTerm {
             strength: self.strength,
             scale: self.scale,

@@ -201,7 +201,7 @@ fn read_file(file: &str, base_dir: Option<&Path>) -> Result<Grid, String> {
 
 impl VectorField {
     /// Checks the placement and strength (the file was checked as it was read).
-    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
         c.finite(&path.field("strength"), self.strength);
         c.vec3(&path.field("offset"), self.offset);
         c.positive(&path.field("scale"), self.scale);
@@ -209,7 +209,7 @@ impl VectorField {
 
     /// Lowers to a term (after `read_vector_fields` gave it its grid; None otherwise, which
     /// the read recorded as an error).
-    pub fn lower(&self, origin: usize) -> Option<VectorFieldTerm> {
+    pub(crate) fn lower(&self, origin: usize) -> Option<VectorFieldTerm> {
         Some(VectorFieldTerm {
             grid: self.grid.clone()?,
             strength: self.strength,

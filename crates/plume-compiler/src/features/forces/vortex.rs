@@ -60,7 +60,7 @@ fn one() -> f64 {
 
 impl Vortex {
     /// Checks geometry (> 0 range and height, non-zero axis) and finite strengths.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
         c.vec3(&path.field("center"), self.center);
         c.direction(&path.field("axis"), self.axis);
         c.positive(&path.field("range"), self.range);
@@ -80,7 +80,7 @@ impl Vortex {
     }
 
     /// Lowers to a vortex term with a unit axis.
-    pub fn lower(&self, origin: usize) -> VortexTerm {
+    pub(crate) fn lower(&self, origin: usize) -> VortexTerm {
         VortexTerm {
             center: self.center.d(),
             axis: safe_normalize(self.axis.d()),

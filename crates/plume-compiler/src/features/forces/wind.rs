@@ -35,7 +35,7 @@ pub struct Wind {
 
 impl Wind {
     /// Checks the direction, strength and noise parameters.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
         c.direction(&path.field("direction"), self.direction);
         c.finite(&path.field("strength"), self.strength);
         c.non_negative(&path.field("noise"), self.noise);

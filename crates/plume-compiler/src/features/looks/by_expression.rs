@@ -29,16 +29,16 @@ const VARS: &[Var] = &[Var::X, Var::V, Var::T, Var::Age, Var::Life];
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LookBy {
     /// Multiplies the colour stops' RGB (a vec3).
-    pub color: Option<Expr>,
+    pub(crate) color: Option<Expr>,
     /// Multiplies the colour's alpha.
-    pub alpha: Option<Expr>,
+    pub(crate) alpha: Option<Expr>,
     /// Multiplies the size (and the height, with `size_y`).
-    pub size: Option<Expr>,
+    pub(crate) size: Option<Expr>,
     /// The t at which the colour (and opacity) stops are read, instead of the life fraction.
-    pub color_t: Option<Expr>,
+    pub(crate) color_t: Option<Expr>,
     /// The flipbook frame shown, instead of the texture's `play`: its whole part, wrapped
     /// around the frames (`frame_of`).
-    pub frame: Option<Expr>,
+    pub(crate) frame: Option<Expr>,
 }
 
 /// The frame a `frame_by` value shows of `frames`: its whole part (at least 0, at most 2^24,
@@ -94,7 +94,7 @@ const FIELDS: [(&str, Ty, &str); 5] = [
 
 impl LookBy {
     /// Records mistakes in the strings (at `path`, the render section) in `c`.
-    pub fn check(c: &mut Checker, path: &ValuePath, written: Written, names: Names) {
+    pub(crate) fn check(c: &mut Checker, path: &ValuePath, written: Written, names: Names) {
         for (text, (field, ty, role)) in written.into_iter().zip(FIELDS) {
             if let Some(Err(e)) = text.map(|t| compile(t, ty, role, names)) {
                 c.error_in_string(&path.field(field), e.start, e.end, e.message);
@@ -103,7 +103,7 @@ impl LookBy {
     }
 
     /// Lowers the strings (after [`LookBy::check`] passed).
-    pub fn lower(written: Written, names: Names) -> Self {
+    pub(crate) fn lower(written: Written, names: Names) -> Self {
         let [color, alpha, size, color_t, frame] = std::array::from_fn(|i| {
             let (_, ty, role) = FIELDS[i];
             written[i].map(|t| compile(t, ty, role, names).expect("checked before lowering"))
@@ -148,7 +148,7 @@ impl LookBy {
     }
 
     /// Whether any reads the gradient noise through `op` (`noise` or `curl`).
-    pub fn uses(&self, op: crate::expr::typed::Op1) -> bool {
+    pub(crate) fn uses(&self, op: crate::expr::typed::Op1) -> bool {
         self.exprs().any(|e| e.uses(op))
     }
 

@@ -70,7 +70,7 @@ pub struct Lit {
     /// Where a shadowed light's map is looked up: at each pixel (the default) or once a
     /// particle, at its centre.
     #[serde(default)]
-    pub shadow_at: ShadowAt,
+    pub(crate) shadow_at: ShadowAt,
     /// Whether the draw reads a shadow map (`features::shadow`): set by the compiler where a
     /// light of the file casts a shadow or `CompileOptions::receive_shadows` asks for it, never
     /// by the file. Without it the draw module holds no lookup.
@@ -81,7 +81,7 @@ pub struct Lit {
 impl Lit {
     /// Checks `wrap` and `emissive` (each in [0, 1]), and that each map names a file and has a
     /// texture to follow (`textured`).
-    pub fn check(&self, path: &ValuePath, textured: bool, c: &mut Checker) {
+    pub(crate) fn check(&self, path: &ValuePath, textured: bool, c: &mut Checker) {
         c.within(&path.field("wrap"), self.wrap, 0.0, 1.0);
         c.within(&path.field("emissive"), self.emissive, 0.0, 1.0);
         for (field, file) in self.map_files() {

@@ -18,7 +18,7 @@ use serde::Deserialize;
 /// How a sprite's quad is oriented (`render.orient`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub enum Orient {
+pub(crate) enum Orient {
     /// Parallel to the image plane: a round dot from every side.
     #[default]
     Camera,
@@ -91,7 +91,7 @@ pub(crate) const FACING_FLOOR2: f64 = 1e-12;
 
 impl OrientIr {
     /// Lowers the schema's orientation (already checked: a fixed normal is a direction).
-    pub fn lower(orient: &Orient) -> Self {
+    pub(crate) fn lower(orient: &Orient) -> Self {
         match *orient {
             Orient::Camera => OrientIr::Camera,
             Orient::FaceCamera => OrientIr::FaceCamera,

@@ -3,7 +3,7 @@
 //! particles are split into `count` buckets by slot (slot mod count) and each bucket gives
 //! its brightest visible particle (by the luminance of its drawn colour times its opacity),
 //! so the lights are bright and spread over the whole group rather than bunched. Two small
-//! kernels of the draw module find them on the GPU ([`ParticleLight::emit_kernels`]: a
+//! kernels of the draw module find them on the GPU (`ParticleLight::emit_kernels`: a
 //! maximum per bucket, then the particle that holds it), and [`ParticleLight::pick`] is the
 //! f64 twin over the particles' drawn colours. The runtime reads the few lights back;
 //! `plume render` and `plume preview` light the scene's meshes with them, and the Bevy plugin
@@ -59,7 +59,7 @@ pub const LIGHT_WORKGROUP: u32 = 256;
 
 impl ParticleLight {
     /// Checks `count` (1 to [`LIGHTS_MOST`]), `intensity` (>= 0) and `range` (> 0).
-    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
         if self.count == 0 || self.count as usize > LIGHTS_MOST {
             c.error(
                 &path.field("count"),
@@ -107,7 +107,7 @@ impl ParticleLight {
     /// brightness's bits plus one: 0 is an empty bucket) with atomic maxima, in its workgroup
     /// and then once per workgroup in the buffer; `light_pick_pass` writes the particle that
     /// holds its bucket's key into the list (equal keys: any of them).
-    pub fn emit_kernels(&self, w: &mut Writer, capacity: u32) {
+    pub(crate) fn emit_kernels(&self, w: &mut Writer, capacity: u32) {
         w.comment(
             "render.light: each bucket's brightest particle (slot mod count), and its light.",
         );

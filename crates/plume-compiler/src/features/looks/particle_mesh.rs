@@ -95,7 +95,7 @@ impl std::fmt::Debug for MeshIr {
 impl ParticleMesh {
     /// Checks that the look names a file and draws nothing a mesh leaves out: `set(field)`
     /// says whether the group's `render.FIELD` is given. `render` is the look's path.
-    pub fn check(&self, render: &ValuePath, set: &dyn Fn(&str) -> bool, c: &mut Checker) {
+    pub(crate) fn check(&self, render: &ValuePath, set: &dyn Fn(&str) -> bool, c: &mut Checker) {
         if self.file.trim().is_empty() {
             c.error(
                 &render.field("mesh").field("file"),
@@ -136,7 +136,7 @@ impl MeshIr {
 
     /// The mesh `spec` names, standing in for a file that could not be read (`missing` says
     /// why): no triangles.
-    pub fn stand_in(spec: &ParticleMesh, missing: String) -> Self {
+    pub(crate) fn stand_in(spec: &ParticleMesh, missing: String) -> Self {
         Self {
             file: spec.file.clone(),
             triangles: Arc::new([]),

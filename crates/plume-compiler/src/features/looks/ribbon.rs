@@ -98,7 +98,13 @@ impl Ribbon {
     /// Checks the sizes, and that the look is one a ribbon draws: `set(field)` says whether
     /// the group's `render.FIELD` is given (for `orient`: other than `Camera`), and `sort`
     /// whether it sorts. `root` is the group's path.
-    pub fn check(&self, root: &ValuePath, set: &dyn Fn(&str) -> bool, sort: bool, c: &mut Checker) {
+    pub(crate) fn check(
+        &self,
+        root: &ValuePath,
+        set: &dyn Fn(&str) -> bool,
+        sort: bool,
+        c: &mut Checker,
+    ) {
         let path = &root.field("render").field("ribbon");
         if !(2..=4096).contains(&self.points) {
             c.error(

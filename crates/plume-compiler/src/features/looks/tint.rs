@@ -73,7 +73,7 @@ pub fn own(tint: TintSource<'_>, id: u32) -> DVec3 {
 /// The tint of a particle of the group spawned as `id` that inherits `inherited` (white from an
 /// emitter or an event that passes no colour on): its own times the inherited one, at 8 bits a
 /// channel where the group stores it.
-pub fn spawned(tint: TintSource<'_>, id: u32, inherited: DVec3) -> DVec3 {
+pub(crate) fn spawned(tint: TintSource<'_>, id: u32, inherited: DVec3) -> DVec3 {
     let c = own(tint, id) * inherited;
     if tint.stored {
         stored(c)

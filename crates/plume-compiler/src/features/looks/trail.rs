@@ -39,10 +39,10 @@ pub struct Trail {
     pub every: u32,
     /// Ribbon width (m) along the trail, `(t, width)`: t = 0 at the particle, 1 at the tail.
     #[serde(default = "default_trail_width")]
-    pub width: Vec<SizeStop>,
+    pub(crate) width: Vec<SizeStop>,
     /// Colour along the trail, `(t, (r, g, b, a))`, multiplying the particle's own colour.
     #[serde(default = "default_colors")]
-    pub color: Vec<ColorStop>,
+    pub(crate) color: Vec<ColorStop>,
 }
 
 impl Trail {

@@ -51,7 +51,7 @@ pub fn exact_blocker(ir: &EffectIr, force_names: &[&'static str]) -> Option<(Str
 }
 
 /// Resolves `ir.integrator` to a concrete integrator and records why.
-pub fn resolve(ir: &mut EffectIr, force_names: &[&'static str]) -> Result<(), Checker> {
+pub(crate) fn resolve(ir: &mut EffectIr, force_names: &[&'static str]) -> Result<(), Checker> {
     let blocker = exact_blocker(ir, force_names);
     match (ir.integrator, blocker) {
         (Integrator::Auto, None) => {

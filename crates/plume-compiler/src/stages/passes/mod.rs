@@ -6,7 +6,7 @@
 pub mod fold;
 pub mod integrator;
 pub mod layout;
-pub mod prune;
+pub(crate) mod prune;
 pub mod stability;
 pub mod stateless;
 
@@ -19,13 +19,13 @@ use layout::Layout;
 /// a budget it picks the scheme for `ir` (the bool: whether the closed form applies) and may
 /// warn; errors come back in a `Checker`. Passed in, so that no stage imports the reference
 /// simulator it runs.
-pub type AccuracyChooser =
+pub(crate) type AccuracyChooser =
     dyn Fn(&mut EffectIr, bool) -> Result<Option<(Diagnostic, String)>, Checker>;
 
 /// Runs every pass, the accuracy pass by `choose_accuracy`. Errors come back in a `Checker`
 /// (with lookup paths); on success the layout and the warnings (each with its lookup path)
 /// come back.
-pub fn run(
+pub(crate) fn run(
     ir: &mut EffectIr,
     force_names: &[&'static str],
     choose_accuracy: &AccuracyChooser,

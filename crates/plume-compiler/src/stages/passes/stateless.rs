@@ -18,9 +18,8 @@
 
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
-pub use crate::ir::stateless::{
-    StatelessIr, FIRE_BATCH_STEPS, FRAME_HEADER_BYTES, MAX_SEGMENTS, SEGMENT_BYTES,
-};
+pub(crate) use crate::ir::stateless::{StatelessIr, MAX_SEGMENTS};
+pub use crate::ir::stateless::{FIRE_BATCH_STEPS, FRAME_HEADER_BYTES, SEGMENT_BYTES};
 use crate::ir::EffectIr;
 use crate::stages::schema::{Integrator, State};
 
@@ -69,7 +68,7 @@ fn emitter_bounds(ir: &EffectIr, e: usize) -> Result<(u64, u64, Option<u32>), St
 }
 
 /// Why the effect needs state, naming the cause and its path, or the stateless plan.
-pub fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
+pub(crate) fn plan(ir: &EffectIr) -> Result<StatelessIr, (String, ValuePath)> {
     if ir.integrator != Integrator::Exact {
         return Err((
             format!(

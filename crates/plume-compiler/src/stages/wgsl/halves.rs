@@ -6,7 +6,7 @@ use crate::base::writer::Writer;
 /// `half_to_f32(bits)`: the 16-bit float in the low half of `bits` (a half-motion layout's
 /// loads). Written with integer operations rather than `unpack2x16float`, which naga admits
 /// only with a capability that some adapters lack (llvmpipe's Vulkan without shader-f16).
-pub fn emit_half_unpack(w: &mut Writer) {
+pub(crate) fn emit_half_unpack(w: &mut Writer) {
     w.block("fn half_to_f32(bits: u32) -> f32", |w| {
         w.line("let sign = (bits & 0x8000u) << 16u;");
         w.line("let exponent = (bits >> 10u) & 0x1fu;");

@@ -13,7 +13,8 @@ pub mod stateless;
 pub mod trail;
 pub mod update;
 
-pub use crate::base::kernel::{emit_thread_index, word_index, WORKGROUP};
+pub(crate) use crate::base::kernel::emit_thread_index;
+pub use crate::base::kernel::{word_index, WORKGROUP};
 use crate::base::rng;
 use crate::base::writer::{u32_lit, Writer};
 use crate::ir::EffectIr;
@@ -21,7 +22,7 @@ use crate::stages::integrators;
 use crate::stages::passes::layout::{Attribute, Layout, Role};
 pub use counters::{counter_word, COUNTER_FIELDS};
 use halves::emit_half_pack;
-pub use halves::emit_half_unpack;
+pub(crate) use halves::emit_half_unpack;
 
 /// Emits the complete WGSL module for a resolved IR and its layout.
 pub(crate) fn emit_module(ir: &EffectIr, layout: &Layout) -> String {

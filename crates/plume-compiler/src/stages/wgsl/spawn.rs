@@ -10,7 +10,7 @@ use crate::ir::{EffectIr, EmitterIr};
 use crate::stages::passes::layout::{Attribute, Layout};
 
 /// Emits `spawn_prepare` and `spawn`.
-pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+pub(crate) fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.comment(
         "Pops this step's slots: never more than are free; the rest are dropped and counted.",
     );

@@ -146,7 +146,7 @@ fn emit_spawn_draws(w: &mut Writer, ir: &EffectIr, id: &str, born: &str, none: &
 /// a thread storing its own particle left every store half-coalesced, well short of a
 /// write-only kernel's bandwidth, and staging them through workgroup memory cost a barrier
 /// that CPU adapters pay dearly for: docs/performance.md, "Stateless effects".)
-pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+pub(crate) fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     let dead_fields: Vec<&str> = layout
         .words()
         .iter()

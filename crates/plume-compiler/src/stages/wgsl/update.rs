@@ -17,7 +17,7 @@ use crate::stages::integrators;
 use crate::stages::passes::layout::{Attribute, Layout};
 
 /// Emits `update` (see the module doc).
-pub fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
+pub(crate) fn emit(w: &mut Writer, ir: &EffectIr, layout: &Layout) {
     w.comment("One particle's update: loaded, advanced, stored (or freed) in place. Returns its outcome: bit 0 whether it died, bit 1 + j whether it fired event j; and its id.");
     w.block("fn update_particle(i: u32) -> vec2<u32>", |w| {
         if reads_whole_slots(ir) {

@@ -23,10 +23,10 @@ pub struct DepthCamera {
 /// f32 words of [`DepthCamera::words`], in vec4s: (width, height, 0, 0); view · projection's
 /// columns; the view's row 2 (−depth = row 2 · (x, 1)); the inverse projection's columns; the
 /// inverse view's; the view's.
-pub const CAMERA_VEC4S: usize = 18;
+pub(crate) const CAMERA_VEC4S: usize = 18;
 
 /// f32 words of [`DepthCamera::words`].
-pub const CAMERA_WORDS: usize = 4 * CAMERA_VEC4S;
+pub(crate) const CAMERA_WORDS: usize = 4 * CAMERA_VEC4S;
 
 /// Where each part starts in [`DepthCamera::words`], in vec4s.
 pub mod at {

@@ -45,7 +45,8 @@ use super::Hit;
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
 
-pub use image::{at, DepthCamera, DepthImage, CAMERA_VEC4S, CAMERA_WORDS};
+pub use image::{at, DepthCamera, DepthImage};
+pub(crate) use image::{CAMERA_VEC4S, CAMERA_WORDS};
 
 /// The thickness when the file gives none (m).
 pub(crate) const DEFAULT_THICKNESS: f64 = 0.5;

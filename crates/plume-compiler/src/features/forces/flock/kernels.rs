@@ -77,7 +77,7 @@ impl FlockIr {
     /// The per-step kernels: `flock_snapshot` (+ the partial sums), `flock_reduce` (Global),
     /// and the neighbour pass (`flock_pairs`, or the grid's build kernels; its search is
     /// `emit_search_module`).
-    pub fn emit_kernels(&self, w: &mut Writer, capacity: u32, verlet_h: Option<f64>) {
+    pub(crate) fn emit_kernels(&self, w: &mut Writer, capacity: u32, verlet_h: Option<f64>) {
         self.emit_snapshot(w, verlet_h);
         if self.scope == Scope::Global {
             w.blank();

@@ -97,7 +97,7 @@ pub struct Flock {
 
 impl Flock {
     /// Checks `radius > 0`, non-negative strengths and `cell >= radius`.
-    pub fn check(&self, path: &ValuePath, c: &mut Checker) {
+    pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
         c.positive(&path.field("radius"), self.radius);
         c.non_negative(&path.field("separation"), self.separation);
         c.non_negative(&path.field("avoidance"), self.avoidance);
@@ -277,7 +277,7 @@ impl FlockIr {
     }
 
     /// The f64 reference of the per-step pass: all pairs, in id order.
-    pub fn frozen(&self, boids: &[(DVec3, DVec3)]) -> Vec<Frozen> {
+    pub(crate) fn frozen(&self, boids: &[(DVec3, DVec3)]) -> Vec<Frozen> {
         let n = boids.len();
         let global = (self.scope == Scope::Global && n > 0).then(|| {
             let (sx, sv) = boids
@@ -344,7 +344,7 @@ impl FlockIr {
     }
 
     /// The flock's acceleration on a boid at its live (x, v), given the step's frozen values.
-    pub fn accel(&self, frozen: &Frozen, x: DVec3, v: DVec3) -> DVec3 {
+    pub(crate) fn accel(&self, frozen: &Frozen, x: DVec3, v: DVec3) -> DVec3 {
         frozen.push
             + self.cohesion * (frozen.c - frozen.weight * x)
             + self.alignment * (frozen.vbar - frozen.weight * v)

@@ -35,7 +35,7 @@ pub struct Texture {
     pub frames: (u32, u32),
     /// How the frames play.
     #[serde(default)]
-    pub play: Play,
+    pub(crate) play: Play,
     /// With `Rate`: each particle starts the loop at a frame drawn from its id, so particles
     /// born together do not play in step (a flock's wing beats).
     #[serde(default)]
@@ -89,7 +89,7 @@ fn one_frame() -> (u32, u32) {
 
 /// How a flipbook's frames play (`render.texture.play`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Deserialize)]
-pub enum Play {
+pub(crate) enum Play {
     /// Once over each particle's life: frame k of n from life fraction k/n (frame 0 for a
     /// particle that never dies).
     #[default]
@@ -128,7 +128,7 @@ pub struct TextureIr {
     /// Atlas rows.
     pub rows: u32,
     /// How the frames play.
-    pub play: Play,
+    pub(crate) play: Play,
     /// Whether each particle's loop starts at a frame drawn from its id (with `Rate`).
     pub random_start: bool,
     /// What a texel does to the colour.
@@ -286,7 +286,7 @@ impl TextureIr {
 
     /// The texture `spec` names, standing in for a file that could not be read (`missing`
     /// says why): its frames and how they play, each frame one white texel.
-    pub fn stand_in(spec: &Texture, missing: String) -> Self {
+    pub(crate) fn stand_in(spec: &Texture, missing: String) -> Self {
         let (columns, rows) = spec.frames;
         Self {
             file: spec.file.clone(),

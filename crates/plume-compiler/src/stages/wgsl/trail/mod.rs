@@ -22,7 +22,7 @@ use crate::stages::wgsl::emit_particle_struct;
 
 mod splat;
 
-pub use splat::{segments, SPLAT_SEGMENT_VEC4S};
+pub use splat::segments;
 
 /// Binding of chunk 0's trail ring in the trail draw module (chunk c at this + c).
 pub const FIRST_TRAIL_BINDING: u32 = 40;

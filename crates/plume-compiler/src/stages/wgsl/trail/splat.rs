@@ -29,7 +29,7 @@ use crate::stages::wgsl::draw::DrawShape;
 ///
 /// Records are not stored: `project` and `composite` both make them from the particle state
 /// (`segment_record`), as a million ribbons of 23 segments would need 2.2 GB of them.
-pub const SPLAT_SEGMENT_VEC4S: u32 = 6;
+pub(crate) const SPLAT_SEGMENT_VEC4S: u32 = 6;
 
 /// Segments of one ribbon's strip: two triangles between each pair of neighbouring points.
 pub fn segments(trail: &TrailIr) -> u32 {
