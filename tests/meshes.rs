@@ -1,5 +1,6 @@
 //! Mesh particles (`render.mesh`) on llvmpipe: a lit cube's front face is as bright as
-//! Lambert's law says (its back faces culled), meshes turned, stretched, sorted, lit and unlit (drawn indexed) match
+//! Lambert's law says (its back faces culled), and lit per pixel under a point light close to
+//! it; meshes turned, stretched, sorted, lit and unlit (drawn indexed) match
 //! the CPU-fed reference drawing (each mesh placed and lit in f64), and the compute renderer
 //! leaves them to the raster draw.
 
@@ -99,6 +100,54 @@ fn a_lit_cubes_front_face_follows_lamberts_law() {
             }
         }
     }
+}
+
+#[test]
+fn a_point_light_close_to_a_face_lights_it_per_pixel() {
+    // The 2 m cube's front face (z = 1) with a point light 0.5 m in front of its middle: the
+    // middle receives 16 times the light its corners do, at nearly right angles. Lit per
+    // pixel, the middle pixel has what Lambert's law gives there; blended from the corners it
+    // would be as dark as they are.
+    let gpu = gpu();
+    let dir = cube_dir("point");
+    let src = r#"Effect(
+    name: "cube",
+    capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    lights: [Point(position: (0.0, 0.0, 1.5), intensity: 0.1, range: 20.0), Ambient(intensity: 0.1)],
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 2.0)], blend: Opaque,
+                   background: (0.0, 0.0, 0.0), mesh: Some(ParticleMesh(file: "cube.obj")),
+                   lit: Some(Lit())),
+)"#;
+    let effect = compile_in(&dir, src);
+    let lights = effect.ir.lights.clone();
+    let mut sim = Effect::new(&gpu, effect).unwrap();
+    sim.run(1, |_| {}).unwrap();
+    let light_at = |x: f64, y: f64| lights.received(DVec3::Z, DVec3::new(x, y, 1.0), 0.0).x;
+    let middle = light_at(0.0, 0.0);
+    let corners = light_at(1.0, 1.0);
+    assert!(
+        middle > 0.45 && middle < 0.95 && corners < 0.12,
+        "{middle} {corners}"
+    );
+    let (gpu_img, cpu_img) = draw_and_reference(&sim, SIDE);
+    let k = 4 * (SIDE / 2 * SIDE + SIDE / 2) as usize;
+    for (name, img) in [("raster", &gpu_img), ("reference", &cpu_img)] {
+        for ch in 0..3 {
+            let got = f64::from(img[k + ch]);
+            assert!(
+                (got - middle * 255.0).abs() <= 1.0,
+                "{name} channel {ch}: got {got}, want {:.2}",
+                middle * 255.0
+            );
+        }
+    }
+    let (mean, max, over) = differences(&gpu_img, &cpu_img, 4);
+    assert!(
+        mean < 0.5 && over * 100 < gpu_img.len(),
+        "mean {mean}, max {max}, {over} over 4"
+    );
 }
 
 #[test]

@@ -103,7 +103,7 @@ pub(crate) struct GroupDraw {
     /// Vertices per sprite (4: a quad strip; 3: a triangle; a mesh's), or indices where
     /// `indices` is set.
     vertices: u32,
-    /// The index buffer of an indexed draw (an unlit mesh's).
+    /// The index buffer of an indexed draw (a mesh's).
     indices: Option<wgpu::Buffer>,
     size_scale: f32,
     gpu: Gpu,
@@ -186,7 +186,7 @@ impl GroupDraw {
         };
         let mesh_buffers = match ribbon {
             Some(_) => None,
-            None => mesh.map(|m| m.buffers(effect.ir.render.lit.is_some())),
+            None => mesh.map(|m| m.buffers()),
         };
         let vertices = match (ribbon, &mesh_buffers) {
             (Some(_), _) => plume_compiler::ribbon::SEGMENT_VERTICES,
@@ -230,15 +230,9 @@ impl GroupDraw {
             let words = buffers.vertex_words.iter().map(|w| w.to_bits());
             let buffer = words_buffer(gpu, "mesh vertices", words, STORAGE)?;
             entries.push((plume_compiler::particle_mesh::MESH_VERTICES_BINDING, buffer));
-            if let Some(list) = &buffers.indices {
-                let usage = wgpu::BufferUsages::INDEX;
-                indices = Some(words_buffer(
-                    gpu,
-                    "mesh indices",
-                    list.iter().copied(),
-                    usage,
-                )?);
-            }
+            let list = buffers.indices.iter().copied();
+            let usage = wgpu::BufferUsages::INDEX;
+            indices = Some(words_buffer(gpu, "mesh indices", list, usage)?);
         }
         let lights = LightsUniform::new(gpu, effect);
         if let Some(lights) = &lights {

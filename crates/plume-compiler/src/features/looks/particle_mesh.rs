@@ -3,17 +3,18 @@
 //! axis, y along the second, z along their cross product, so `orient`, `rotation`, `size` and
 //! `size_y` place, turn and scale it as they would the quad (one unit of the mesh is the
 //! particle's width along x and z, its height along y). Colour and opacity are the sprite's;
-//! with `render.lit` each triangle is lit by its own face normal, per vertex (Lambert's law,
-//! `wrap` and `emissive` as for lit sprites), which the reference drawing does alike in f64.
+//! with `render.lit` each triangle is lit by its own face normal, per pixel (Lambert's law,
+//! `wrap` and `emissive` as for lit sprites), which the reference drawing does in f64 at a
+//! grid of points over each triangle.
 //!
 //! The draw module's `vs_mesh` draws an instance per particle, its vertices read from a
-//! storage buffer (binding [`MESH_VERTICES_BINDING`]) as [`MeshIr::buffers`] lays them out. An
-//! unlit mesh is drawn indexed: each distinct corner once in the buffer, an index per
-//! triangle corner, so a corner that several triangles share can be shaded once (the GPU's
-//! vertex reuse; the draw of many mesh particles is bound by its vertices, see
-//! docs/performance.md). A lit mesh lights each triangle by its own face normal, so no two
-//! triangles share a vertex: 3 vertices per triangle, each a corner and its face normal. The
-//! raster pipeline culls the back faces (OBJ winds triangles counter-clockwise seen from
+//! storage buffer (binding [`MESH_VERTICES_BINDING`]) as [`MeshIr::buffers`] lays them out,
+//! drawn indexed: each distinct corner once in the buffer, an index per triangle corner, so a
+//! corner that several triangles share can be shaded once (the GPU's vertex reuse; the draw of
+//! many mesh particles is bound by its vertices, see docs/performance.md). So a vertex has no
+//! one face: `fs_mesh` finds a lit triangle's normal from how the view-space point changes
+//! from pixel to pixel (`dpdx`, `dpdy`: both lie in the triangle's plane), turned toward the
+//! viewer, and lights the pixel there. The raster pipeline culls the back faces (OBJ winds triangles counter-clockwise seen from
 //! outside). Particles are drawn in slot order, or back to front
 //! with `sort: true`; no depth is written, so meshes of one group cross over each other only as
 //! that order says. The compute renderer does not draw meshes.
@@ -50,23 +51,19 @@ pub(crate) const CLASHES: [(&str, &str); 4] = [
     ("soft", "soft fade"),
 ];
 
-/// A mesh's vertex buffer and how the draw reads it ([`MeshIr::buffers`]).
+/// A mesh's vertex and index buffers, as the draw reads them ([`MeshIr::buffers`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct MeshBuffers {
-    /// The storage buffer's words, as f32: per distinct corner its position (w 0) when
-    /// indexed; else per triangle corner its position then its face normal (w 0 each).
+    /// The storage buffer's words, as f32: per distinct corner its position (w 0).
     pub vertex_words: Vec<f32>,
-    /// The index buffer (u32, three per triangle) of an indexed draw.
-    pub indices: Option<Vec<u32>>,
+    /// The index buffer: three corners per triangle.
+    pub indices: Vec<u32>,
 }
 
 impl MeshBuffers {
-    /// Vertices (or indices, for an indexed draw) a particle draws: three per triangle.
+    /// Indices a particle draws: three per triangle.
     pub fn draw_count(&self) -> u32 {
-        match &self.indices {
-            Some(indices) => indices.len() as u32,
-            None => (self.vertex_words.len() / 8) as u32,
-        }
+        self.indices.len() as u32
     }
 }
 
@@ -144,26 +141,10 @@ impl MeshIr {
         }
     }
 
-    /// The vertex buffer (and for an unlit mesh the index buffer) the draw module that
-    /// `emit_draw` writes reads: `lit` says whether the look is lit (`render.lit`).
-    /// Unlit, corners are merged where their f32 positions are equal, in the order the
-    /// triangles first name them.
-    pub fn buffers(&self, lit: bool) -> MeshBuffers {
+    /// The vertex and index buffers the draw module that `emit_draw` writes reads: corners
+    /// merged where their f32 positions are equal, in the order the triangles first name them.
+    pub fn buffers(&self) -> MeshBuffers {
         let f32s = |p: DVec3| [p.x as f32, p.y as f32, p.z as f32];
-        if lit {
-            let mut words = Vec::with_capacity(self.triangles.len() * 24);
-            for t in self.triangles.iter() {
-                let n = f32s(face_normal(t));
-                for p in t {
-                    let p = f32s(*p);
-                    words.extend([p[0], p[1], p[2], 0.0, n[0], n[1], n[2], 0.0]);
-                }
-            }
-            return MeshBuffers {
-                vertex_words: words,
-                indices: None,
-            };
-        }
         let mut index_of = std::collections::HashMap::new();
         let mut words = Vec::new();
         let mut indices = Vec::with_capacity(self.triangles.len() * 3);
@@ -178,7 +159,7 @@ impl MeshIr {
         }
         MeshBuffers {
             vertex_words: words,
-            indices: Some(indices),
+            indices,
         }
     }
 
@@ -208,9 +189,10 @@ impl MeshIr {
 
     /// Emits the mesh's vertex buffer and `vs_mesh` / `fs_mesh`: an instance per particle
     /// (`sprite_at`), its mesh placed in the sprite's frame (`oriented`: from its half axes;
-    /// else upright facing the camera), each vertex coloured as the sprite, lit by its face
-    /// normal when `lit` (`lit_color`, `received_light` in scope; a shadow looked up once a
-    /// particle at its centre where the look says so), written through `blend`.
+    /// else upright facing the camera), each vertex coloured as the sprite; when `lit`, each
+    /// pixel lit by its triangle's normal (`lit_color`, `received_light` in scope; a shadow
+    /// looked up once a particle at its centre where the look says so), written through
+    /// `blend`.
     pub(crate) fn emit_draw(
         &self,
         w: &mut Writer,
@@ -218,36 +200,30 @@ impl MeshIr {
         lit: Option<&crate::features::looks::lit::Lit>,
         blend: crate::features::looks::Blend,
     ) {
-        w.comment(match lit {
-            Some(_) => format!(
-                "render.mesh {:?}: {} triangles, a corner's position then its face normal.",
-                self.file,
-                self.triangles.len()
-            ),
-            None => format!(
-                "render.mesh {:?}: {} triangles drawn indexed, each distinct corner's position.",
-                self.file,
-                self.triangles.len()
-            ),
-        });
+        let per_particle_shadow = lit.is_some_and(|l| l.shadow_per_particle());
+        w.comment(format!(
+            "render.mesh {:?}: {} triangles drawn indexed, each distinct corner's position.",
+            self.file,
+            self.triangles.len()
+        ));
         w.line(format!(
             "@group(0) @binding({MESH_VERTICES_BINDING}) var<storage, read> mesh_vertices: array<vec4<f32>>;"
         ));
-        let buffers = self.buffers(lit.is_some());
-        // Indexed, `vertex` is the index: a distinct corner, one vec4 each; else a triangle
-        // corner, two vec4s each.
-        let (vertices, stride) = match &buffers.indices {
-            Some(_) => (buffers.vertex_words.len() / 4, ""),
-            None => (buffers.vertex_words.len() / 8, "2u * "),
-        };
+        let corners = self.buffers().vertex_words.len() / 4;
         w.line(format!(
             "const MESH_VERTICES: u32 = {};",
-            u32_lit(vertices as u32)
+            u32_lit(corners as u32)
         ));
         w.blank();
         w.block("struct MeshVertex", |w| {
             w.line("@builtin(position) clip: vec4<f32>,");
             w.line("@location(0) color: vec4<f32>,");
+            if lit.is_some() {
+                w.line("@location(1) at: vec3<f32>,");
+            }
+            if per_particle_shadow {
+                w.line("@location(2) @interpolate(flat) shadow: f32,");
+            }
         });
         w.blank();
         w.comment("Instance i: particle i's mesh, in its sprite's frame scaled by its size.");
@@ -274,29 +250,43 @@ impl MeshIr {
                 }
                 w.line("let across = cross(ax, ay);");
                 w.line("let az = across * (length(ax) * inverseSqrt(max(dot(across, across), 1e-30)));");
-                w.line(format!("let m = mesh_vertices[{stride}vertex].xyz;"));
+                w.line("let m = mesh_vertices[vertex].xyz;");
                 w.line("let p = s.center.xyz + m.x * ax + m.y * ay + m.z * az;");
                 w.line("out.clip = draw.proj * vec4<f32>(p, 1.0);");
                 w.line("out.color = s.color;");
-                if let Some(look) = lit {
-                    if look.shadow_per_particle() {
-                        w.line("particle_shadow = shadow_visibility(s.center.xyz);");
-                    }
-                    w.comment("The face normal by the inverse transpose: each axis over its length squared.");
-                    w.line("let n = mesh_vertices[2u * vertex + 1u].xyz;");
-                    w.line("let inv = vec3<f32>(1.0) / max(vec3<f32>(dot(ax, ax), dot(ay, ay), dot(az, az)), vec3<f32>(1e-30));");
-                    w.line("let nv = n.x * inv.x * ax + n.y * inv.y * ay + n.z * inv.z * az;");
-                    w.line("let unit = nv * inverseSqrt(max(dot(nv, nv), 1e-30));");
-                    w.line("out.color = lit_color(s.color, received_light(unit, p));");
+                if lit.is_some() {
+                    w.line("out.at = p;");
+                }
+                if per_particle_shadow {
+                    w.line("out.shadow = shadow_visibility(s.center.xyz);");
                 }
                 w.line("return out;");
             },
         );
         w.blank();
         w.line("@fragment");
+        let Some(_) = lit else {
+            w.block(
+                "fn fs_mesh(in: MeshVertex) -> @location(0) vec4<f32>",
+                |w| w.line(format!("return {};", blend.strip_out_wgsl("1.0"))),
+            );
+            return;
+        };
         w.block(
-            "fn fs_mesh(in: MeshVertex) -> @location(0) vec4<f32>",
-            |w| w.line(format!("return {};", blend.strip_out_wgsl("1.0"))),
+            "fn fs_mesh(vertex: MeshVertex) -> @location(0) vec4<f32>",
+            |w| {
+                w.comment("The triangle's normal: the point's steps to the next pixels both lie in its plane. Back faces are culled, so it faces the viewer: the way to the eye, or +z for an orthographic view.");
+                w.line("let across = cross(dpdx(vertex.at), dpdy(vertex.at));");
+                w.line("let toward = select(-vertex.at, vec3<f32>(0.0, 0.0, 1.0), draw.proj[3][3] == 1.0);");
+                w.line("let facing = select(-across, across, dot(across, toward) >= 0.0);");
+                w.line("let unit = facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
+                if per_particle_shadow {
+                    w.line("particle_shadow = vertex.shadow;");
+                }
+                w.line("var in = vertex;");
+                w.line("in.color = lit_color(vertex.color, received_light(unit, vertex.at));");
+                w.line(format!("return {};", blend.strip_out_wgsl("1.0")));
+            },
         );
     }
 }
@@ -358,18 +348,7 @@ mod tests {
     }
 
     #[test]
-    fn a_lit_mesh_holds_each_corner_and_its_face_normal() {
-        let buffers = one_triangle().buffers(true);
-        assert_eq!(buffers.vertex_words.len(), 24);
-        assert_eq!(
-            &buffers.vertex_words[8..16],
-            &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0]
-        );
-        assert_eq!((buffers.draw_count(), buffers.indices), (3, None));
-    }
-
-    #[test]
-    fn an_unlit_mesh_holds_each_distinct_corner_once_and_indexes_them() {
+    fn a_mesh_holds_each_distinct_corner_once_and_indexes_them() {
         // Two triangles sharing the edge from x to y: four distinct corners.
         let mesh = MeshIr {
             triangles: Arc::new([
@@ -378,18 +357,13 @@ mod tests {
             ]),
             ..one_triangle()
         };
-        let buffers = mesh.buffers(false);
-        assert_eq!(buffers.indices.as_deref(), Some(&[0, 1, 2, 1, 3, 2][..]));
+        let buffers = mesh.buffers();
+        assert_eq!(buffers.indices, [0, 1, 2, 1, 3, 2]);
         assert_eq!(buffers.draw_count(), 6);
         assert_eq!(buffers.vertex_words.len(), 16);
         assert_eq!(&buffers.vertex_words[12..16], &[1.0, 1.0, 0.0, 0.0]);
         // Each index names the corner the triangle has there.
-        for (corner, &i) in mesh
-            .triangles
-            .iter()
-            .flatten()
-            .zip(&buffers.indices.unwrap())
-        {
+        for (corner, &i) in mesh.triangles.iter().flatten().zip(&buffers.indices) {
             let at = &buffers.vertex_words[4 * i as usize..4 * i as usize + 3];
             assert_eq!(at, &[corner.x as f32, corner.y as f32, corner.z as f32]);
         }
