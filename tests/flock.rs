@@ -272,3 +272,18 @@ fn flocking_runs_are_deterministic() {
         assert_eq!(first, run(), "capacity {capacity}");
     }
 }
+
+#[test]
+fn a_second_flock_is_refused_where_it_is_written() {
+    let src = pair(Integrator::SemiImplicitEuler, 1.0, 0.0, 0.0).replace(
+        "forces: [Flock(",
+        "forces: [Flock(radius: 0.5), Gravity((0.0, -1.0, 0.0)), Flock(",
+    );
+    let err = plume::compile_str(&src, &Default::default()).unwrap_err();
+    let text = err.render("pair.ron", &src);
+    assert!(
+        text.contains("forces[2] (Flock): a second Flock: an effect has one flock")
+            && text.contains("pair.ron:3:"),
+        "{text}"
+    );
+}

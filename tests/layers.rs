@@ -155,6 +155,42 @@ fn layers_point_down() {
 }
 
 #[test]
+fn stages_name_no_feature_variant() {
+    let root = workspace_root();
+    let mut report = String::new();
+    for file in rust_files(&root.join("crates/plume-compiler/src/stages")) {
+        let shown = file.strip_prefix(&root).unwrap_or(&file).display();
+        for named in feature_variants_named(&strip_comments_and_tests(&read(&file))) {
+            writeln!(report, "  {shown}: {named}").unwrap();
+        }
+    }
+    assert!(
+        report.is_empty(),
+        "stages reach forces and colliders through their methods, never by variant:\n\
+         {report}\nAsk the feature instead (a method on `Force`, `Term`, `ForceTerm`, `Collider` \
+         or `Surface` in the feature's own module)."
+    );
+}
+
+/// Each `Force::X`, `Term::X`, `Collider::X` or `Surface::X` (a variant: X capitalised) the
+/// text names.
+fn feature_variants_named(text: &str) -> Vec<String> {
+    let mut named = Vec::new();
+    for kind in ["Force::", "Term::", "Collider::", "Surface::"] {
+        for (at, _) in text.match_indices(kind) {
+            let before = text[..at].bytes().next_back();
+            let after = text[at + kind.len()..].bytes().next();
+            let whole_word = !before.is_some_and(|b| b.is_ascii_alphanumeric() || b == b'_');
+            if whole_word && after.is_some_and(|b| b.is_ascii_uppercase()) {
+                let end = segments_end(text.as_bytes(), at + kind.len() - 2);
+                named.push(text[at..end].to_owned());
+            }
+        }
+    }
+    named
+}
+
+#[test]
 fn files_stay_small() {
     let root = workspace_root();
     let mut dirs: Vec<PathBuf> = crate_sources(&root)
@@ -852,6 +888,18 @@ fn an_upward_import_through_a_root_reexport_is_reported() {
         ],
         "{problems:#?}"
     );
+}
+
+#[test]
+fn a_feature_variant_named_in_code_is_found() {
+    let text = "match t { Term::Custom(c) => 1, _ => 0 }\nlet f = forces::Force::Wind;\n\
+                let g = MyTerm::Other; t.as_dyn().linear(); Term::as_dyn(t);";
+    assert_eq!(
+        feature_variants_named(text),
+        ["Force::Wind", "Term::Custom"]
+    );
+    let commented = "// Term::Custom\nfn f() {}";
+    assert!(feature_variants_named(&strip_comments_and_tests(commented)).is_empty());
 }
 
 #[test]

@@ -296,10 +296,8 @@ impl EffectIr {
         let g: glam::DVec3 = self
             .terms
             .iter()
-            .filter_map(|t| match t {
-                Term::Constant(c) => Some(c.accel),
-                _ => None,
-            })
+            .filter_map(|t| t.as_dyn().linear())
+            .map(|linear| linear.accel)
             .sum();
         2.0 * g.length() * self.h()
     }

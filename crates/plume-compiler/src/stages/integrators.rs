@@ -14,7 +14,6 @@
 use glam::DVec3;
 
 use crate::base::writer::{f32_lit, vec3_lit, Writer};
-use crate::features::forces::Term;
 use crate::ir::EffectIr;
 use crate::stages::schema::Integrator;
 
@@ -70,15 +69,10 @@ impl ExactStep {
 /// drags -k_i (v - u_i) written -k (v - u) with k = Σk_i, u = Σ(k_i u_i) / k. Returns (g, k, u).
 pub(crate) fn merged_drag(ir: &EffectIr) -> (DVec3, f64, DVec3) {
     let (mut g, mut k, mut ku) = (DVec3::ZERO, 0.0, DVec3::ZERO);
-    for t in &ir.terms {
-        match t {
-            Term::Constant(c) => g += c.accel,
-            Term::Drag(d) => {
-                k += d.k;
-                ku += d.k * d.fluid;
-            }
-            _ => {}
-        }
+    for linear in ir.terms.iter().filter_map(|t| t.as_dyn().linear()) {
+        g += linear.accel;
+        k += linear.k;
+        ku += linear.k_fluid;
     }
     let u = if k > 0.0 { ku / k } else { DVec3::ZERO };
     (g, k, u)

@@ -3,7 +3,6 @@
 
 use crate::base::rng::seed_mix;
 use crate::features::accuracy::BudgetCamera;
-use crate::features::forces::Force;
 use crate::ir::{CameraIr, EffectIr, KillIr, RenderIr};
 use crate::stages::schema::{Collider, EffectSpec, KillVolume};
 
@@ -49,10 +48,11 @@ pub fn lower(effect: &EffectSpec) -> EffectIr {
             .flat_map(|(i, f)| f.lower(i, effect.seed, scope))
             .collect(),
         field: effect.field.lower(),
-        flock: effect.forces.iter().enumerate().find_map(|(i, f)| match f {
-            Force::Flock(flock) => Some(flock.lower(i)),
-            _ => None,
-        }),
+        flock: effect
+            .forces
+            .iter()
+            .enumerate()
+            .find_map(|(i, f)| f.lower_flock(i)),
         attributes: crate::features::attributes::AttributesIr::lower(
             &effect.attributes,
             scope,
@@ -168,13 +168,11 @@ pub fn lower(effect: &EffectSpec) -> EffectIr {
     for (i, e) in ir.emitters.iter_mut().enumerate() {
         e.timing.key = crate::base::rng::pcg(ir.seed_mix ^ (i as u32).wrapping_mul(0x9e37_79b9));
     }
-    // Custom terms estimate their stiffness over the emitters' region, now that it is known.
+    // Terms that need the emitters' region (a custom term's stiffness) learn it now.
     let h = ir.h();
     let emitters = ir.emitters.clone();
     for term in &mut ir.terms {
-        if let crate::features::forces::Term::Custom(c) = term {
-            c.estimate_stiffness(&emitters, h);
-        }
+        term.fit_to_emitters(&emitters, h);
     }
     ir
 }

@@ -80,28 +80,18 @@ pub(crate) fn check_effect(effect: &EffectSpec) -> Checker {
     for (i, e) in effect.emitters.iter().enumerate() {
         e.check(&mut c, &root.field("emitters").index(i), scope);
     }
-    let noisy = effect
-        .forces
-        .iter()
-        .position(|f| matches!(f, crate::features::forces::Force::Wind(w) if w.noise != 0.0));
-    effect.field.check(&root.field("field"), &mut c, noisy);
+    let changing = effect.forces.iter().position(|f| f.changes_when_baked());
+    effect.field.check(&root.field("field"), &mut c, changing);
     check_params(&mut c, &root.field("params"), effect);
-    // Forces an effect has at most one of, and what to do instead of a second.
-    let single = [
-        (
-            "Flock",
-            "an effect has one flock (merge their strengths into one)",
-        ),
-        (
-            "VectorField",
-            "an effect samples one (resample them into one file)",
-        ),
-    ];
     for (i, f) in effect.forces.iter().enumerate() {
         f.check(&force_path(i, f), &mut c, scope);
-        if let Some((name, instead)) = single.iter().find(|(name, _)| *name == f.name()) {
-            if effect.forces[..i].iter().any(|e| e.name() == *name) {
-                c.error(&force_path(i, f), format!("a second {name}: {instead}"));
+        // A force an effect has at most one of, and what to do instead of a second.
+        if let Some(instead) = f.at_most_one() {
+            if effect.forces[..i].iter().any(|e| e.name() == f.name()) {
+                c.error(
+                    &force_path(i, f),
+                    format!("a second {}: {instead}", f.name()),
+                );
             }
         }
     }
@@ -110,14 +100,16 @@ pub(crate) fn check_effect(effect: &EffectSpec) -> Checker {
     }
     crate::features::scene::check(&effect.scene, &mut c);
     crate::features::lights::check(&effect.lights, &mut c);
-    let mut scene_depths = 0;
     for (i, collider) in effect.collide.iter().enumerate() {
         let path = crate::features::colliders::collider_path(i, collider);
         collider.check(&path, &mut c);
-        if let crate::features::colliders::Collider::SceneDepth { .. } = collider {
-            scene_depths += 1;
-            if scene_depths > 1 {
-                c.error(&path, "an effect collides with the scene's depth once: one SceneDepth collider (give it the thickness it needs)");
+        // A collider an effect has at most one of: why, and what to do instead.
+        if let Some(once) = collider.at_most_one() {
+            if effect.collide[..i]
+                .iter()
+                .any(|e| e.name() == collider.name())
+            {
+                c.error(&path, once);
             }
         }
     }

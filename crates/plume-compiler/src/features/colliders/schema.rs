@@ -40,6 +40,14 @@ impl Collider {
         }
     }
 
+    /// For a collider an effect may have only one of: why, and what to do instead of a second.
+    pub(crate) fn at_most_one(&self) -> Option<&'static str> {
+        match self {
+            Collider::SceneDepth(_) => Some("an effect collides with the scene's depth once: one SceneDepth collider (give it the thickness it needs)"),
+            _ => None,
+        }
+    }
+
     /// Checks the collider's parameters; `path` names the variant.
     pub(crate) fn check(&self, path: &ValuePath, c: &mut Checker) {
         match self {

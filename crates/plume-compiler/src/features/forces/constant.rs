@@ -2,7 +2,7 @@
 
 use glam::DVec3;
 
-use super::ForceTerm;
+use super::{ForceTerm, Linear};
 use crate::base::writer::{vec3_lit, Writer};
 
 /// `a = accel` everywhere.
@@ -26,6 +26,12 @@ impl ForceTerm for ConstantTerm {
     }
     fn can_act(&self) -> bool {
         self.accel != DVec3::ZERO
+    }
+    fn linear(&self) -> Option<Linear> {
+        Some(Linear {
+            accel: self.accel,
+            ..Linear::default()
+        })
     }
     fn emit_wgsl(&self, w: &mut Writer) {
         w.line(format!("a += {};", vec3_lit(self.accel)));

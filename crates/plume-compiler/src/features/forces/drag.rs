@@ -81,6 +81,13 @@ impl ForceTerm for DragTerm {
             self.k, self.fluid.x, self.fluid.y, self.fluid.z
         )
     }
+    fn linear(&self) -> Option<super::Linear> {
+        Some(super::Linear {
+            k: self.k,
+            k_fluid: self.k * self.fluid,
+            ..Default::default()
+        })
+    }
     fn can_act(&self) -> bool {
         self.k > 0.0
     }

@@ -81,6 +81,29 @@ impl Force {
         }
     }
 
+    /// Whether the force changes with time where a baked field holds it (a noisy Wind): a
+    /// grid baked once would freeze it.
+    pub(crate) fn changes_when_baked(&self) -> bool {
+        matches!(self, Force::Wind(w) if w.noise != 0.0)
+    }
+
+    /// For a force an effect may have only one of: what to do instead of a second.
+    pub(crate) fn at_most_one(&self) -> Option<&'static str> {
+        match self {
+            Force::Flock(_) => Some("an effect has one flock (merge their strengths into one)"),
+            Force::VectorField(_) => Some("an effect samples one (resample them into one file)"),
+            _ => None,
+        }
+    }
+
+    /// The flock a Flock force lowers to (`EffectIr::flock`); None for every other force.
+    pub(crate) fn lower_flock(&self, origin: usize) -> Option<flock::FlockIr> {
+        match self {
+            Force::Flock(flock) => Some(flock.lower(origin)),
+            _ => None,
+        }
+    }
+
     /// Lowers to IR terms; `origin` is the force's index in the file, `seed` the effect's seed.
     /// A Flock lowers to no term: it couples particles, so it is `EffectIr::flock` instead.
     pub(crate) fn lower(&self, origin: usize, seed: u32, scope: custom::Scope) -> Vec<Term> {
@@ -214,8 +237,20 @@ pub struct ParticleCtx {
     pub attrs: crate::expr::eval::Attrs,
 }
 
-/// WGSL functions that force terms share ([`ForceTerm::wgsl_helpers`]): the module writes
-/// each set once, in the order of their keys.
+/// A term's part of the acceleration g − k (v − u) that the Exact integrator solves in closed
+/// form ([`ForceTerm::linear`]): `accel` adds to g, `k` to k and `k_fluid` to k u.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Linear {
+    /// Constant acceleration (m/s²).
+    pub accel: DVec3,
+    /// Drag rate (1/s).
+    pub k: f64,
+    /// The drag rate times the fluid's velocity the drag pulls toward.
+    pub k_fluid: DVec3,
+}
+
+/// WGSL functions that force terms and expressions share ([`ForceTerm::wgsl_helpers`]): the
+/// module writes each set once, in the order of their keys.
 #[derive(Clone, Copy, Debug)]
 pub struct WgslHelpers {
     /// Names the set: terms that return the same key share one copy.
@@ -223,6 +258,19 @@ pub struct WgslHelpers {
     /// Writes the functions.
     pub emit: fn(&mut Writer),
 }
+
+/// The gradient noise's curl (`turb_gradient`, `turb_curl`): Turbulence and the expressions'
+/// `curl` and `noise` call it.
+pub(crate) const CURL_HELPERS: WgslHelpers = WgslHelpers {
+    key: "curl",
+    emit: crate::base::gradient_noise::emit_curl_helpers,
+};
+
+/// The gradient noise (`grad_noise`) the expressions' `noise` calls, besides the curl's.
+pub(crate) const GRADIENT_NOISE_HELPERS: WgslHelpers = WgslHelpers {
+    key: "gradient noise",
+    emit: crate::base::gradient_noise::emit_noise_helper,
+};
 
 /// What every IR force term provides: WGSL, the f64 reference, and facts for the passes.
 pub trait ForceTerm {
@@ -271,8 +319,12 @@ pub trait ForceTerm {
         None
     }
     /// The WGSL functions this term's statements call, written once per module however many
-    /// terms call them; None for a term that calls none of its own.
-    fn wgsl_helpers(&self) -> Option<WgslHelpers> {
+    /// terms (or expressions) call them; empty for a term that calls none of its own.
+    fn wgsl_helpers(&self) -> Vec<WgslHelpers> {
+        Vec::new()
+    }
+    /// The term as part of the closed form's g − k (v − u); None for a term it cannot hold.
+    fn linear(&self) -> Option<Linear> {
         None
     }
     /// The f32 words this term reads on the GPU from the `force_data` binding
@@ -314,6 +366,18 @@ pub enum Term {
 }
 
 impl Term {
+    /// Learns what the term needs from the lowered emitters (`h` the substep): a custom
+    /// term estimates its stiffness over the region they spawn in.
+    pub(crate) fn fit_to_emitters(
+        &mut self,
+        emitters: &[crate::features::emitter::EmitterIr],
+        h: f64,
+    ) {
+        if let Term::Custom(c) = self {
+            c.estimate_stiffness(emitters, h);
+        }
+    }
+
     /// The term behind the common interface.
     pub fn as_dyn(&self) -> &dyn ForceTerm {
         match self {
@@ -330,6 +394,44 @@ impl Term {
 }
 
 pub(crate) use crate::base::values::safe_normalize;
+
+/// Constant terms folded into one and drags merged into one, first, so a kernel adds one
+/// vector and does one multiply for them; the other terms keep their order after them.
+pub(crate) fn fold(terms: Vec<Term>) -> Vec<Term> {
+    let mut constant: Option<constant::ConstantTerm> = None;
+    let mut drag: Option<drag::DragTerm> = None;
+    let mut rest = Vec::new();
+    for term in terms {
+        match term {
+            Term::Constant(c) => {
+                constant = Some(match constant {
+                    None => c,
+                    Some(acc) => {
+                        let mut origins = acc.origins;
+                        origins.extend(c.origins);
+                        constant::ConstantTerm {
+                            accel: acc.accel + c.accel,
+                            origins,
+                        }
+                    }
+                });
+            }
+            Term::Drag(d) => {
+                drag = Some(match drag {
+                    None => d,
+                    Some(acc) => acc.merge(&d),
+                });
+            }
+            other => rest.push(other),
+        }
+    }
+    constant
+        .map(Term::Constant)
+        .into_iter()
+        .chain(drag.map(Term::Drag))
+        .chain(rest)
+        .collect()
+}
 
 /// The samples of the effect's vector field, as the `force_data` binding holds them; None
 /// without one.

@@ -125,11 +125,11 @@ pub(crate) fn emit_helpers(w: &mut Writer) {
 }
 
 impl ForceTerm for NoiseTerm {
-    fn wgsl_helpers(&self) -> Option<super::WgslHelpers> {
-        Some(super::WgslHelpers {
+    fn wgsl_helpers(&self) -> Vec<super::WgslHelpers> {
+        vec![super::WgslHelpers {
             key: "noise",
             emit: emit_helpers,
-        })
+        }]
     }
     fn closed_form_blocker(&self) -> String {
         "has noise".into()

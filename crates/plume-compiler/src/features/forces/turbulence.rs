@@ -127,10 +127,9 @@ impl TurbulenceTerm {
     }
 }
 
-/// Emits the WGSL twins of [`curl`] (`base::gradient_noise`) and the octave / slice sum (once
-/// per module).
+/// Emits the octave / slice sum `turb_octaves` (once per module), which calls the curl's
+/// helpers ([`super::CURL_HELPERS`], the WGSL twins of `base::gradient_noise::curl`).
 pub(crate) fn emit_helpers(w: &mut Writer) {
-    crate::base::gradient_noise::emit_curl_helpers(w);
     w.block(
         "fn turb_octaves(key: u32, slice: i32, q: vec3<f32>, octaves: u32) -> vec3<f32>",
         |w| {
@@ -163,11 +162,12 @@ pub(crate) fn emit_helpers(w: &mut Writer) {
 }
 
 impl ForceTerm for TurbulenceTerm {
-    fn wgsl_helpers(&self) -> Option<super::WgslHelpers> {
-        Some(super::WgslHelpers {
+    fn wgsl_helpers(&self) -> Vec<super::WgslHelpers> {
+        let own = super::WgslHelpers {
             key: "turbulence",
             emit: emit_helpers,
-        })
+        };
+        vec![super::CURL_HELPERS, own]
     }
     fn origins(&self) -> &[usize] {
         &self.origins

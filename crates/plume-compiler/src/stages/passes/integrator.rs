@@ -3,14 +3,13 @@
 
 use crate::base::check::Checker;
 use crate::base::path::ValuePath;
-use crate::features::forces::Term;
 use crate::ir::EffectIr;
 use crate::stages::schema::Integrator;
 
 /// Why the Exact integrator cannot be used, naming the force or feature, or None if it can.
 pub fn exact_blocker(ir: &EffectIr, force_names: &[&'static str]) -> Option<(String, ValuePath)> {
     for term in &ir.terms {
-        if matches!(term, Term::Constant(_) | Term::Drag(_)) {
+        if term.as_dyn().linear().is_some() {
             continue;
         }
         let origin = term.as_dyn().origins()[0];

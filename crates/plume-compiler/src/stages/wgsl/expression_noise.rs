@@ -1,26 +1,20 @@
 //! The compute module's gradient-noise helpers for expressions (`noise`, `curl`).
 
-use crate::base::writer::Writer;
+use crate::features::forces::{WgslHelpers, CURL_HELPERS, GRADIENT_NOISE_HELPERS};
 use crate::ir::EffectIr;
-use crate::stages::integrators;
 
-/// The gradient noise's helpers that expressions call (`noise` reads `grad_noise`, `curl`
-/// reads `turb_curl`), when some expression of the module reads them; a Turbulence force
-/// brings `turb_curl` itself.
-pub(super) fn emit(w: &mut Writer, ir: &EffectIr) {
+/// The helper sets that the module's expressions call: `curl` reads `turb_curl`, `noise` reads
+/// `grad_noise` (and the curl's `turb_gradient`). The module writes them with the terms' own,
+/// each set once, so a Turbulence force and a `curl` share one copy.
+pub(super) fn helpers(ir: &EffectIr) -> Vec<WgslHelpers> {
     use crate::expr::typed::Op1;
     let (noise, curl) = (ir.compute_uses(Op1::Noise), ir.compute_uses(Op1::Curl));
-    let turbulence = integrators::needs_accel(ir.integrator)
-        && ir
-            .terms
-            .iter()
-            .any(|t| matches!(t, crate::features::forces::Term::Turbulence(_)));
-    if (noise || curl) && !turbulence {
-        crate::base::gradient_noise::emit_curl_helpers(w);
-        w.blank();
+    let mut sets = Vec::new();
+    if noise || curl {
+        sets.push(CURL_HELPERS);
     }
     if noise {
-        crate::base::gradient_noise::emit_noise_helper(w);
-        w.blank();
+        sets.push(GRADIENT_NOISE_HELPERS);
     }
+    sets
 }

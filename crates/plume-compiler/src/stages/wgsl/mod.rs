@@ -168,7 +168,18 @@ pub(crate) fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
     w.blank();
     rng::emit_wgsl(&mut w);
     w.blank();
-    expression_noise::emit(&mut w, ir);
+    // Each set of helper functions the expressions and the force terms call, once, in the
+    // order of their keys.
+    let mut helpers = expression_noise::helpers(ir);
+    if integrators::needs_accel(ir.integrator) {
+        helpers.extend(ir.terms.iter().flat_map(|t| t.as_dyn().wgsl_helpers()));
+    }
+    helpers.sort_by_key(|h| h.key);
+    helpers.dedup_by_key(|h| h.key);
+    for h in helpers {
+        (h.emit)(&mut w);
+        w.blank();
+    }
     if ir.render.palette.is_some() {
         crate::features::looks::tint::emit_palette_fn(&mut w, ir.tint());
         w.blank();
@@ -188,18 +199,6 @@ pub(crate) fn emit_module(ir: &EffectIr, layout: &Layout) -> String {
         w.blank();
     }
     if integrators::needs_accel(ir.integrator) {
-        // Each set of helper functions the terms call, once, in the order of their keys.
-        let mut helpers: Vec<_> = ir
-            .terms
-            .iter()
-            .filter_map(|t| t.as_dyn().wgsl_helpers())
-            .collect();
-        helpers.sort_by_key(|h| h.key);
-        helpers.dedup_by_key(|h| h.key);
-        for h in helpers {
-            (h.emit)(&mut w);
-            w.blank();
-        }
         if context {
             crate::features::forces::custom::emit_context(&mut w);
             ir.attributes
