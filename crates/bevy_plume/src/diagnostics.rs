@@ -162,13 +162,18 @@ fn particle_counts(
     }
 }
 
-/// Gives each timed effect entity its steps' last GPU time.
+/// Gives each timed effect entity its steps' and draws' last GPU times.
 fn gpu_times(shared: Res<SharedGpuTimes>, mut timed: Query<(Entity, &mut PlumeGpuTime)>) {
     let shared = shared.lock();
+    let ms = |ns: Option<u64>| ns.map(|ns| ns as f32 * 1e-6);
     for (entity, mut time) in &mut timed {
-        let steps_ms = shared.get(&entity).map(|&ns| ns as f32 * 1e-6);
-        if time.steps_ms != steps_ms {
-            time.steps_ms = steps_ms;
+        let times = shared.get(&entity).copied().unwrap_or_default();
+        let now = PlumeGpuTime {
+            steps_ms: ms(times.steps_ns),
+            draw_ms: ms(times.draw_ns),
+        };
+        if *time != now {
+            *time = now;
         }
     }
 }

@@ -372,8 +372,11 @@ impl Default for PlumeThinning {
 /// and the device has timestamp queries, the entity's steps are recorded apart (never batched,
 /// in compute passes of their own between two timestamps, rather than in the pass the other
 /// effects share) and `steps_ms` holds their GPU time, read back without waiting (a frame or
-/// two old). Their draws are not timed. Recording apart costs a little CPU and GPU time of its
-/// own, so ask for it on the effects you look at, not on every one.
+/// two old). Where the device also writes timestamps inside passes, `draw_ms` holds its draws'
+/// GPU time, summed over the cameras that draw it: each camera's preparation (depth sort,
+/// culling, the compute renderer's passes) and its draw inside Bevy's transparent pass.
+/// Recording apart costs a little CPU and GPU time of its own, so ask for it on the effects
+/// you look at, not on every one.
 ///
 /// ```no_run
 /// # use bevy::prelude::*;
@@ -383,8 +386,8 @@ impl Default for PlumeThinning {
 /// # }
 /// fn report(timed: Query<(&Name, &PlumeGpuTime)>) {
 ///     for (name, time) in &timed {
-///         if let Some(ms) = time.steps_ms {
-///             info!("{name}: {ms:.3} ms of steps");
+///         if let (Some(steps), Some(draws)) = (time.steps_ms, time.draw_ms) {
+///             info!("{name}: {steps:.3} ms of steps, {draws:.3} ms of draws");
 ///         }
 ///     }
 /// }
@@ -395,4 +398,8 @@ pub struct PlumeGpuTime {
     /// GPU milliseconds of the entity's last timed frame of steps (None before the first
     /// reading, and where the device has no timestamp queries).
     pub steps_ms: Option<f32>,
+    /// GPU milliseconds of the entity's draws in its last timed frame, over every camera
+    /// that drew it (None before the first reading, while no camera draws it, and where the
+    /// device has no timestamps inside passes).
+    pub draw_ms: Option<f32>,
 }

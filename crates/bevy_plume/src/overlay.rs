@@ -87,10 +87,18 @@ fn diagnostic_rows(store: &DiagnosticsStore) -> Vec<(&'static str, String)> {
         .collect()
 }
 
-/// The effects table's headings: the steps' GPU time only where an entity asks for it.
+/// The effects table's headings: the steps' and draws' GPU times only where an entity asks
+/// for them.
 fn effect_headings(timed: bool) -> &'static [&'static str] {
     match timed {
-        true => &["effect", "alive", "spawned", "dropped", "steps' GPU ms"],
+        true => &[
+            "effect",
+            "alive",
+            "spawned",
+            "dropped",
+            "steps' GPU ms",
+            "draws' GPU ms",
+        ],
         false => &["effect", "alive", "spawned", "dropped"],
     }
 }
@@ -104,7 +112,7 @@ type EffectItem<'a> = (
 );
 
 /// The effects table: a row per effect entity with counts, by its `Name` where it has one
-/// (else its entity), sorted by that; the GPU time column (when `timed`) shows an entity's
+/// (else its entity), sorted by that; the GPU time columns (when `timed`) show an entity's
 /// [`PlumeGpuTime`], "-" where it has none or no reading yet.
 fn effect_rows<'a>(effects: impl Iterator<Item = EffectItem<'a>>, timed: bool) -> Vec<Vec<String>> {
     let mut rows: Vec<Vec<String>> = effects
@@ -116,8 +124,9 @@ fn effect_rows<'a>(effects: impl Iterator<Item = EffectItem<'a>>, timed: bool) -
                 counts.dropped.to_string(),
             ];
             if timed {
-                let ms = time.and_then(|t| t.steps_ms);
-                row.push(ms.map_or("-".to_string(), |ms| format!("{ms:.3}")));
+                let cell = |ms: Option<f32>| ms.map_or("-".to_string(), |ms| format!("{ms:.3}"));
+                row.push(cell(time.and_then(|t| t.steps_ms)));
+                row.push(cell(time.and_then(|t| t.draw_ms)));
             }
             row
         })
@@ -241,8 +250,9 @@ mod tests {
         let unnamed = (Entity::from_raw_u32(3).unwrap(), counts(2));
         let timed = PlumeGpuTime {
             steps_ms: Some(0.0626),
+            draw_ms: Some(0.25),
         };
-        let waiting = PlumeGpuTime { steps_ms: None };
+        let waiting = PlumeGpuTime::default();
         let items = || {
             [
                 (
@@ -266,16 +276,16 @@ mod tests {
         assert_eq!(
             effect_rows(items(), true),
             [
-                row(&[&unnamed_label, "2", "7", "1", "-"]),
-                row(&["smoke", "40", "45", "1", "0.063"]),
-                row(&["sparks", "7", "12", "1", "-"]),
+                row(&[&unnamed_label, "2", "7", "1", "-", "-"]),
+                row(&["smoke", "40", "45", "1", "0.063", "0.250"]),
+                row(&["sparks", "7", "12", "1", "-", "-"]),
             ]
         );
         assert_eq!(
             effect_rows(items(), false)[1],
             row(&["smoke", "40", "45", "1"])
         );
-        assert_eq!(effect_headings(true).len(), 5);
+        assert_eq!(effect_headings(true).len(), 6);
         assert_eq!(effect_headings(false).len(), 4);
     }
 }

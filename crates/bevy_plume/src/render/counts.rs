@@ -20,14 +20,20 @@ pub(crate) struct WatchedCounts {
     last_step_ns: Option<u64>,
     /// Every running instance's last counts, by main-world entity (batched entities aside).
     pub shared: SharedCounts,
-    /// Nanoseconds of each timed instance's last timed steps ([`crate::PlumeGpuTime`]), by
-    /// main-world entity.
+    /// Each timed instance's last GPU times ([`crate::PlumeGpuTime`]), by main-world entity.
     pub gpu_times: SharedGpuTimes,
 }
 
-/// Each timed effect entity's steps' GPU time in nanoseconds: written by the render world,
-/// read by the main world.
-pub(crate) type SharedGpuTimes = crate::shared::EntityShared<u64>;
+/// Each timed effect entity's GPU times: written by the render world, read by the main world.
+pub(crate) type SharedGpuTimes = crate::shared::EntityShared<GpuTimes>;
+
+/// A timed effect entity's last GPU times in nanoseconds: its steps', and its draws' summed
+/// over the cameras that drew it (each `None` until read).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub(crate) struct GpuTimes {
+    pub steps_ns: Option<u64>,
+    pub draw_ns: Option<u64>,
+}
 
 /// Each effect entity's last counts: written by the render world, read by the main world.
 pub(crate) type SharedCounts = crate::shared::EntityShared<Totals>;
@@ -85,10 +91,19 @@ impl WatchedCounts {
         stats.live_particles = alive;
         let mut times = self.gpu_times.lock();
         times.clear();
-        for (entity, instance) in &store.instances {
-            if let Some(ns) = instance.step_gpu_ns.filter(|_| instance.timed) {
-                times.insert(*entity, ns);
-            }
+        for (entity, instance) in store.instances.iter().filter(|(_, i)| i.timed) {
+            let draws = instance
+                .views
+                .values()
+                .filter_map(|d| d.timing.as_ref()?.ns());
+            let draw_ns = draws.reduce(|a, b| a + b);
+            times.insert(
+                *entity,
+                GpuTimes {
+                    steps_ns: instance.step_gpu_ns,
+                    draw_ns,
+                },
+            );
         }
         stats.step_gpu_ns = self.last_step_ns;
     }

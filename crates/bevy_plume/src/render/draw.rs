@@ -310,7 +310,15 @@ fn draw_entity<'w>(
         .get(&entity)
         .and_then(|instance| instance.views.get(&view));
     if let Some(draw) = draw {
+        // A timed draw is stamped before and after, inside the pass (`DrawTiming`).
+        let timer = draw.timing.as_ref().and_then(|t| t.pass.as_ref());
+        if let Some(timer) = timer {
+            timer.stamp_in_pass(pass.wgpu_pass(), false);
+        }
         draw.renderer.draw(pass.wgpu_pass());
+        if let Some(timer) = timer {
+            timer.stamp_in_pass(pass.wgpu_pass(), true);
+        }
     } else if let Some(batch) = world.resource::<PlumeBatches>().batch_of(entity) {
         if let Some((_, renderer, _)) = batch.views.get(&view) {
             renderer.draw(pass.wgpu_pass());

@@ -70,6 +70,73 @@ pub(crate) struct ViewDraw {
     pub renderer: EffectRenderer,
     /// The frame it was last queued in (a camera that stops seeing it drops it).
     pub frame: u64,
+    /// Its GPU time, where the entity's is asked for ([`crate::PlumeGpuTime`]) and the
+    /// diagnostics read back.
+    pub timing: Option<DrawTiming>,
+}
+
+/// The timers of one camera's draw of a timed entity: its preparation (the compute work
+/// before Bevy's transparent pass: depth sort, culling, the compute renderer's passes) and
+/// its draw inside that pass. Each reading is a frame or two old.
+pub(crate) struct DrawTiming {
+    /// Between empty compute passes around the preparation (None: no timestamp queries).
+    prepare: Option<plume_runtime::GpuTimer>,
+    /// Inside Bevy's pass around the draw (None: no timestamps inside passes).
+    pub pass: Option<plume_runtime::GpuTimer>,
+    /// Nanoseconds of the last timed preparation and pass.
+    prepare_ns: Option<u64>,
+    pass_ns: Option<u64>,
+}
+
+impl DrawTiming {
+    /// The timers on `gpu`, whichever it has.
+    pub(crate) fn new(gpu: &plume_runtime::Gpu) -> Self {
+        Self {
+            prepare: plume_runtime::GpuTimer::new(gpu),
+            pass: plume_runtime::GpuTimer::in_passes(gpu),
+            prepare_ns: None,
+            pass_ns: None,
+        }
+    }
+
+    /// Before the preparation: takes its last reading and stamps its start.
+    pub(crate) fn begin_prepare(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(timer) = &mut self.prepare {
+            match timer.begin(encoder) {
+                Ok(taken) => self.prepare_ns = taken.or(self.prepare_ns),
+                Err(err) => warn_once!("plume draw timer: {err}"),
+            }
+        }
+    }
+
+    /// After the preparation: stamps its end.
+    pub(crate) fn end_prepare(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(timer) = &mut self.prepare {
+            timer.end(encoder);
+        }
+    }
+
+    /// Before Bevy's pass: takes the pass timer's last reading and times this frame's draw.
+    pub(crate) fn begin_pass(&mut self) {
+        if let Some(timer) = &mut self.pass {
+            match timer.begin_in_pass() {
+                Ok(taken) => self.pass_ns = taken.or(self.pass_ns),
+                Err(err) => warn_once!("plume draw timer: {err}"),
+            }
+        }
+    }
+
+    /// After Bevy's pass: records the copy of the draw's stamps.
+    pub(crate) fn end_pass(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        if let Some(timer) = &mut self.pass {
+            timer.end_after_pass(encoder);
+        }
+    }
+
+    /// The draw's last GPU time, its preparation's and its pass's, once both were read.
+    pub(crate) fn ns(&self) -> Option<u64> {
+        Some(self.prepare_ns? + self.pass_ns?)
+    }
 }
 
 /// One effect entity's simulation and draws.
@@ -497,6 +564,7 @@ impl Instance {
                         size,
                         renderer,
                         frame,
+                        timing: None,
                     },
                 );
                 Some(())

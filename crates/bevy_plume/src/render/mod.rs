@@ -86,11 +86,15 @@ pub(crate) fn build(app: &mut App) {
                 simulate::composite_for_view
                     .after(main_opaque_pass_3d)
                     .before(main_transparent_pass_3d),
+                simulate::end_draw_timing.after(main_transparent_pass_3d),
             ),
         )
         .add_systems(
             Core2d,
-            simulate::prepare_for_view.before(Core2dSystems::MainPass),
+            (
+                simulate::prepare_for_view.before(Core2dSystems::MainPass),
+                simulate::end_draw_timing.after(Core2dSystems::MainPass),
+            ),
         );
 }
 

@@ -24,7 +24,7 @@ use crate::event_reports::FiredEvents;
 use crate::particle_lights::GivenLights;
 use crate::render::batches::PlumeBatches;
 use crate::render::counts::WatchedCounts;
-use crate::render::instances::{Instance, PlumeInstances, PlumeRenderStats};
+use crate::render::instances::{DrawTiming, Instance, PlumeInstances, PlumeRenderStats};
 use crate::render::lights::ExtractedLights;
 use crate::render::motion;
 
@@ -303,6 +303,7 @@ pub(crate) fn prepare_for_view(
     mut store: ResMut<PlumeInstances>,
     mut batches: ResMut<PlumeBatches>,
     lights: Res<ExtractedLights>,
+    watched: Option<Res<WatchedCounts>>,
 ) {
     let (view_entity, view, prepass, shadows) = view.into_inner();
     // The scene's lights as this camera sees them (its exposure, its own ambient light).
@@ -340,7 +341,8 @@ pub(crate) fn prepare_for_view(
             }
         }
     }
-    for instance in store.instances.values_mut() {
+    let PlumeInstances { instances, gpu, .. } = &mut *store;
+    for instance in instances.values_mut() {
         // Drawn through the entity's transform only in local space.
         let world_from_local = match instance.space {
             SimulationSpace::World => Mat4::IDENTITY,
@@ -349,6 +351,14 @@ pub(crate) fn prepare_for_view(
         if let Some(draw) = instance.views.get_mut(&view_entity) {
             if draw.frame != frame {
                 continue;
+            }
+            // A timed entity's draw is timed while the diagnostics read back.
+            match (gpu.as_ref(), instance.timed && watched.is_some()) {
+                (Some(gpu), true) => draw
+                    .timing
+                    .get_or_insert_with(|| DrawTiming::new(gpu))
+                    .begin_pass(),
+                _ => draw.timing = None,
             }
             if draw.renderer.is_soft() && !draw.renderer.is_compute() {
                 if let Some(depth) = prepass.and_then(|p| p.depth_only_view()) {
@@ -386,13 +396,41 @@ pub(crate) fn prepare_for_view(
             if draw.renderer.is_compute() {
                 continue;
             }
+            if let Some(timing) = &mut draw.timing {
+                timing.begin_prepare(encoder);
+            }
             if let Err(err) = instance
                 .effect
                 .prepare_draw(encoder, &draw.renderer, &camera)
             {
                 error!("{}: {err}", instance.effect.compiled().ir.name);
             }
+            if let Some(timing) = &mut draw.timing {
+                timing.end_prepare(encoder);
+            }
         }
+    }
+}
+
+/// After the current camera's transparent pass: records the copy of each timed draw's stamps
+/// written inside it ([`DrawTiming`]).
+pub(crate) fn end_draw_timing(
+    view: ViewQuery<(Entity, &ExtractedView)>,
+    mut context: RenderContext,
+    mut store: ResMut<PlumeInstances>,
+) {
+    let (view_entity, _) = view.into_inner();
+    let mut timings = store
+        .instances
+        .values_mut()
+        .filter_map(|instance| instance.views.get_mut(&view_entity)?.timing.as_mut())
+        .peekable();
+    if timings.peek().is_none() {
+        return;
+    }
+    let encoder = context.command_encoder();
+    for timing in timings {
+        timing.end_pass(encoder);
     }
 }
 
@@ -428,11 +466,17 @@ pub(crate) fn composite_for_view(
         draw.renderer.set_scene_depth(depth_view);
         let camera = view_camera(view, world_from_local);
         let encoder = context.command_encoder();
+        if let Some(timing) = &mut draw.timing {
+            timing.begin_prepare(encoder);
+        }
         if let Err(err) = instance
             .effect
             .prepare_draw(encoder, &draw.renderer, &camera)
         {
             error!("{}: {err}", instance.effect.compiled().ir.name);
+        }
+        if let Some(timing) = &mut draw.timing {
+            timing.end_prepare(encoder);
         }
     }
 }

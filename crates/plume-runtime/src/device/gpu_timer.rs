@@ -1,6 +1,9 @@
 //! The GPU time of work a host records into its encoder, read back without waiting: a
-//! timestamp written by an empty compute pass before the work and one after, resolved and
-//! copied into a reading ([`crate::device::async_read`]) a frame or two before it is taken.
+//! timestamp written by an empty compute pass before the work and one after (or, for a draw
+//! among others in the host's render pass, written inside that pass), resolved and copied into
+//! a reading ([`crate::device::async_read`]) a frame or two before it is taken.
+
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::device::async_read::AsyncRead;
 use crate::device::gpu::Gpu;
@@ -41,8 +44,11 @@ pub struct GpuTimer {
     reading: AsyncRead,
     /// Nanoseconds a tick.
     period: f32,
-    /// Whether this frame's first timestamp was written.
+    /// Whether this frame's work is timed: its first timestamp written, or for stamps inside
+    /// a render pass, to be written.
     begun: bool,
+    /// Whether the end of the work was stamped inside a render pass this frame.
+    stamped_in_pass: AtomicBool,
 }
 
 impl GpuTimer {
@@ -66,7 +72,64 @@ impl GpuTimer {
             reading: AsyncRead::new(gpu, "gpu timer reading", 16),
             period: gpu.queue.get_timestamp_period(),
             begun: false,
+            stamped_in_pass: AtomicBool::new(false),
         })
+    }
+
+    /// A timer whose stamps go inside the host's render pass ([`Self::stamp_in_pass`]), for a
+    /// draw recorded among others in a pass the host owns; None where the device cannot write
+    /// timestamps inside passes (`TIMESTAMP_QUERY_INSIDE_PASSES`).
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{Gpu, GpuTimer};
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let Some(mut timer) = GpuTimer::in_passes(&gpu) else {
+    ///     return Ok(()); // no timestamps inside passes
+    /// };
+    /// let target = gpu.device.create_texture(&wgpu::TextureDescriptor {
+    ///     label: None,
+    ///     size: wgpu::Extent3d { width: 4, height: 4, depth_or_array_layers: 1 },
+    ///     mip_level_count: 1,
+    ///     sample_count: 1,
+    ///     dimension: wgpu::TextureDimension::D2,
+    ///     format: wgpu::TextureFormat::Rgba8Unorm,
+    ///     usage: wgpu::TextureUsages::RENDER_ATTACHMENT,
+    ///     view_formats: &[],
+    /// });
+    /// let view = target.create_view(&Default::default());
+    /// let mut timed = None;
+    /// for _ in 0..4 {
+    ///     timed = timer.begin_in_pass()?.or(timed);
+    ///     let mut encoder = gpu.device.create_command_encoder(&Default::default());
+    ///     {
+    ///         let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+    ///             color_attachments: &[Some(wgpu::RenderPassColorAttachment {
+    ///                 view: &view,
+    ///                 depth_slice: None,
+    ///                 resolve_target: None,
+    ///                 ops: wgpu::Operations::default(),
+    ///             })],
+    ///             ..Default::default()
+    ///         });
+    ///         timer.stamp_in_pass(&mut pass, false);
+    ///         // ... the host's draw, e.g. `EffectRenderer::draw(&mut pass)` ...
+    ///         timer.stamp_in_pass(&mut pass, true);
+    ///     }
+    ///     timer.end_after_pass(&mut encoder);
+    ///     gpu.queue.submit([encoder.finish()]);
+    ///     gpu.device.poll(wgpu::PollType::wait_indefinitely())?;
+    /// }
+    /// assert!(timed.expect("a reading came back") < 1_000_000_000);
+    /// # Ok(())
+    /// # }
+    /// ```
+    pub fn in_passes(gpu: &Gpu) -> Option<Self> {
+        let inside = wgpu::Features::TIMESTAMP_QUERY_INSIDE_PASSES;
+        match gpu.device.features().contains(inside) {
+            true => Self::new(gpu),
+            false => None,
+        }
     }
 
     /// An empty compute pass that writes timestamp `index` at its start (0) or end (1).
@@ -87,16 +150,49 @@ impl GpuTimer {
         &mut self,
         encoder: &mut wgpu::CommandEncoder,
     ) -> Result<Option<u64>, RuntimeError> {
-        let taken = self.reading.poll()?.map(|bytes| {
-            let tick =
-                |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
-            (tick(8).saturating_sub(tick(0)) as f64 * f64::from(self.period)) as u64
-        });
+        let taken = self.take_reading()?;
         self.begun = self.reading.is_free();
         if self.begun {
             self.stamp(encoder, 0);
         }
         Ok(taken)
+    }
+
+    /// Before the render pass that [`Self::stamp_in_pass`] stamps: takes a reading that came
+    /// back (nanoseconds) and, when the last one was taken, times this frame's work.
+    pub fn begin_in_pass(&mut self) -> Result<Option<u64>, RuntimeError> {
+        let taken = self.take_reading()?;
+        self.begun = self.reading.is_free();
+        self.stamped_in_pass.store(false, Ordering::Relaxed);
+        Ok(taken)
+    }
+
+    /// Writes the start (`end` false) or the end of the timed work into the host's render
+    /// pass, when this frame is timed. Only for a timer made by [`Self::in_passes`].
+    pub fn stamp_in_pass(&self, pass: &mut wgpu::RenderPass<'_>, end: bool) {
+        if self.begun {
+            pass.write_timestamp(&self.set, u32::from(end));
+            self.stamped_in_pass.store(end, Ordering::Relaxed);
+        }
+    }
+
+    /// After the render pass: records the timestamps' copy when both were written this frame
+    /// (a frame whose work was not recorded goes untimed).
+    pub fn end_after_pass(&mut self, encoder: &mut wgpu::CommandEncoder) {
+        let stamped = self.stamped_in_pass.swap(false, Ordering::Relaxed);
+        if std::mem::take(&mut self.begun) && stamped {
+            encoder.resolve_query_set(&self.set, 0..2, &self.resolved, 0);
+            self.reading.record_copy(encoder, &self.resolved);
+        }
+    }
+
+    /// The nanoseconds between an earlier frame's stamps, once their reading has come back.
+    fn take_reading(&mut self) -> Result<Option<u64>, RuntimeError> {
+        Ok(self.reading.poll()?.map(|bytes| {
+            let tick =
+                |at: usize| u64::from_le_bytes(bytes[at..at + 8].try_into().expect("8 bytes"));
+            (tick(8).saturating_sub(tick(0)) as f64 * f64::from(self.period)) as u64
+        }))
     }
 
     /// Whether the last [`Self::begin`] stamped a start (the work then recorded is timed).
