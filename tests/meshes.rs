@@ -1,6 +1,6 @@
 //! Mesh particles (`render.mesh`) on llvmpipe: a lit cube's front face is as bright as
 //! Lambert's law says (its back faces culled), and lit per pixel under a point light close to
-//! it; meshes turned, stretched, sorted, lit and unlit (drawn indexed) match
+//! it; a glTF mesh is drawn as its OBJ twin; meshes turned, stretched, sorted, lit and unlit (drawn indexed) match
 //! the CPU-fed reference drawing (each mesh placed and lit in f64), and the compute renderer
 //! leaves them to the raster draw.
 
@@ -40,6 +40,40 @@ fn cube_dir(name: &str) -> PathBuf {
     }
     std::fs::write(dir.join("cube.obj"), obj).unwrap();
     dir
+}
+
+/// `cube.obj` of `dir` again as `cube.gltf` with its buffer in `cube.bin`: the same corners,
+/// and each face's quad fanned into two triangles as OBJ faces are.
+fn write_cube_gltf(dir: &std::path::Path) {
+    let mut bin: Vec<u8> = (0..8u32)
+        .flat_map(|k| [0, 1, 2].map(|bit| if k >> bit & 1 == 1 { 0.5f32 } else { -0.5 }))
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let faces: [[u32; 4]; 6] = [
+        [5, 6, 8, 7],
+        [2, 4, 8, 6],
+        [1, 3, 4, 2],
+        [1, 5, 7, 3],
+        [3, 7, 8, 4],
+        [1, 2, 6, 5],
+    ];
+    let indices: Vec<u32> = faces
+        .iter()
+        .flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]].map(|i| i - 1))
+        .collect();
+    bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
+    std::fs::write(dir.join("cube.bin"), &bin).unwrap();
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+  "buffers": [{{"uri": "cube.bin", "byteLength": {}}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 96}}, {{"buffer": 0, "byteOffset": 96, "byteLength": 144}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 8, "type": "VEC3",
+                  "min": [-0.5, -0.5, -0.5], "max": [0.5, 0.5, 0.5]}},
+                {{"bufferView": 1, "componentType": 5125, "count": 36, "type": "SCALAR"}}]}}"#,
+        bin.len()
+    );
+    std::fs::write(dir.join("cube.gltf"), json).unwrap();
 }
 
 fn compile_in(dir: &std::path::Path, src: &str) -> plume::CompiledEffect {
@@ -229,6 +263,41 @@ fn turned_sorted_lit_and_unlit_meshes_agree_with_the_reference_drawing() {
         let lit = raster.chunks(4).filter(|p| p[..3] != [13, 13, 13]).count();
         assert!(lit > 2000, "{what}: only {lit} pixels drawn");
     }
+}
+
+#[test]
+fn a_gltf_mesh_is_drawn_as_its_obj_twin() {
+    let gpu = gpu();
+    let dir = cube_dir("gltf");
+    write_cube_gltf(&dir);
+    let src = |file: &str| {
+        format!(
+            r#"Effect(
+    name: "cubes",
+    capacity: 40,
+    seed: 3,
+    emitters: [Emitter(burst: 40, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 2.0),
+                       velocity: Radial(speed: (0.5, 1.0)))],
+    camera: Camera(eye: (6.0, 3.0, 8.0), target: (0.0, 0.0, 0.0), fov_y: 45.0),
+    lights: [Directional(direction: (1.0, -1.0, 0.3)), Ambient(intensity: 0.2)],
+    render: Render(color: [(0.0, (0.8, 0.6, 0.4, 1.0))], size: [(0.0, 0.5)], blend: Opaque,
+                   orient: Fixed((0.3, 1.0, 0.2)), mesh: Some(ParticleMesh(file: "{file}")),
+                   lit: Some(Lit())),
+)"#
+        )
+    };
+    let obj = compile_in(&dir, &src("cube.obj"));
+    let gltf = compile_in(&dir, &src("cube.gltf"));
+    let buffers = |e: &plume::CompiledEffect| e.ir.render.mesh.as_ref().unwrap().buffers();
+    assert_eq!(buffers(&gltf), buffers(&obj));
+    let image = |effect| {
+        let mut sim = Effect::new(&gpu, effect).unwrap();
+        sim.run(10, |_| {}).unwrap();
+        draw_and_reference(&sim, SIDE).0
+    };
+    let (from_obj, from_gltf) = (image(obj), image(gltf));
+    assert!(from_obj.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count() > 200);
+    assert_eq!(from_gltf, from_obj);
 }
 
 #[test]

@@ -1,7 +1,7 @@
 //! The leaves everything shares: diagnostics and spans, value paths and the checker, value
 //! types, the WGSL text writer and kernel helpers, the PCG hash, lifetimes in steps, the
-//! particle layout's types, naga validation, and meshes read from OBJ files with their baked
-//! signed distance fields.
+//! particle layout's types, naga validation, and meshes read from OBJ and glTF files with
+//! their baked signed distance fields.
 //!
 //! Architecture invariant: nothing here imports anything of the crate outside `base`.
 

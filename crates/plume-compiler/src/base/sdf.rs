@@ -25,7 +25,7 @@ use std::path::Path;
 
 use glam::DVec3;
 
-use crate::base::mesh::{fnv1a, read_obj, TriMesh, FNV_OFFSET};
+use crate::base::mesh::{fnv1a, read_mesh, TriMesh, FNV_OFFSET};
 
 /// Cells of padding around the mesh's box.
 pub(crate) const PAD: u32 = 3;
@@ -378,7 +378,7 @@ pub(crate) fn cached_or_baked(
 /// `resolution`; says what is wrong otherwise: the file's problems, a mesh that is not closed
 /// (it has no inside) or flat (no volume).
 pub(crate) fn read_and_bake(path: &Path, resolution: u32) -> Result<(Sdf, TriMesh), String> {
-    let (mesh, bytes) = read_obj(path)?;
+    let (mesh, bytes) = read_mesh(path)?;
     let (open, first) = mesh.open_edges();
     if let Some((a, b)) = first {
         return Err(format!(

@@ -26,7 +26,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use crate::base::mesh::{read_obj, rotation_degrees};
+use crate::base::mesh::{read_mesh, rotation_degrees};
 use crate::base::sdf::{read_and_bake, Sdf};
 use crate::base::values::Vec3;
 use crate::base::writer::{u32_lit, vec3_lit, Writer};
@@ -128,7 +128,7 @@ pub fn place(
             }
             (mesh, Some(cells))
         }
-        None => (read_obj(&path)?.0, None),
+        None => (read_mesh(&path)?.0, None),
     };
     let mut cumulative = Vec::with_capacity(mesh.triangles.len());
     let mut triangles = Vec::with_capacity(mesh.triangles.len());

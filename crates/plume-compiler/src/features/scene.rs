@@ -11,7 +11,7 @@ use glam::{DMat3, DVec3};
 use serde::Deserialize;
 
 use crate::base::check::Checker;
-use crate::base::mesh::{read_obj, rotation_degrees, TriMesh};
+use crate::base::mesh::{read_mesh, rotation_degrees, TriMesh};
 use crate::base::path::ValuePath;
 use crate::base::values::Vec3;
 
@@ -63,7 +63,7 @@ pub(crate) fn read_scene(scene: &mut [SceneMesh], base_dir: Option<&Path>, c: &m
     for (i, entry) in scene.iter_mut().enumerate() {
         let SceneMesh::Mesh { file, mesh, .. } = entry;
         let full = base_dir.map_or_else(|| PathBuf::from(&*file), |dir| dir.join(&*file));
-        match read_obj(&full) {
+        match read_mesh(&full) {
             Ok((read, _)) => *mesh = Some(Arc::new(read)),
             Err(message) => c.error(&path(i).field("file"), message),
         }

@@ -115,7 +115,7 @@ impl MeshIr {
     /// `render.mesh.file`.
     pub fn load(spec: &ParticleMesh, base_dir: Option<&Path>) -> Result<Self, String> {
         let path = crate::features::looks::texture::resolve(&spec.file, base_dir);
-        let (mesh, _) = crate::base::mesh::read_obj(&path)?;
+        let (mesh, _) = crate::base::mesh::read_mesh(&path)?;
         if mesh.triangles.len() > TRIANGLES_MOST {
             return Err(format!(
                 "mesh `{}` has {} triangles; a particle's mesh may have at most {TRIANGLES_MOST}, as every particle draws them all: simplify it",

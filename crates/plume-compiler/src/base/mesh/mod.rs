@@ -1,11 +1,13 @@
-//! Triangle meshes read from Wavefront OBJ files (with the `tobj` crate): every object of the
-//! file merged, polygons fanned into triangles, and vertices at the very same position welded
-//! into one, so that the mesh's topology (which edges two triangles share) is the shape's, not
+//! Triangle meshes read from Wavefront OBJ files (with the `tobj` crate) or glTF files
+//! (`gltf_scene`): every object (or primitive) of the file merged, polygons fanned into
+//! triangles, and vertices at the very same position welded into one, so that the mesh's topology (which edges two triangles share) is the shape's, not
 //! the file's (an OBJ repeats a corner once per normal or texture coordinate it has).
 //!
 //! What is checked here, with the file named in every message: that the file can be read, is
 //! not too big, parses, has triangles, and that every coordinate is finite. Whether a mesh is
 //! closed is asked by the features that need an inside ([`TriMesh::open_edges`]).
+
+mod gltf_scene;
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -30,42 +32,53 @@ pub(crate) struct TriMesh {
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// Reads the OBJ file at `path`, or says what is wrong with it.
-pub(crate) fn read_obj(path: &Path) -> Result<(TriMesh, Vec<u8>), String> {
+/// A part of a mesh file before its vertices are welded: an OBJ object, or a glTF primitive
+/// placed in its scene.
+pub(crate) struct Piece {
+    /// What the file calls it, for messages.
+    pub name: String,
+    /// Its vertex positions.
+    pub positions: Vec<DVec3>,
+    /// Its triangles, three indices into `positions` each.
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// Reads the mesh file at `path` (glTF where it ends in `.gltf` or `.glb`, else OBJ), or says
+/// what is wrong with it. Also hands back the bytes read (the file's, then those of any buffer
+/// a glTF reads from beside it), which a cache keyed on the mesh hashes.
+pub(crate) fn read_mesh(path: &Path) -> Result<(TriMesh, Vec<u8>), String> {
     let shown = path.display();
-    let bytes = crate::base::files::read(path, MAX_FILE_BYTES).map_err(|e| match e {
+    let mut bytes = crate::base::files::read(path, MAX_FILE_BYTES).map_err(|e| match e {
         ReadError::Open(e) => format!("cannot open mesh `{shown}`: {e}"),
         ReadError::Read(e) => format!("cannot read mesh `{shown}`: {e}"),
         ReadError::TooLarge(size) => format!(
             "mesh `{shown}` is {size} bytes, more than the {MAX_FILE_BYTES} a mesh file may have: simplify it"
         ),
     })?;
-    let options = tobj::LoadOptions {
-        triangulate: true,
-        ignore_points: true,
-        ignore_lines: true,
-        ..Default::default()
+    let (pieces, none) = match gltf_scene::is_gltf(path) {
+        true => {
+            let (pieces, external) = gltf_scene::pieces(path, &bytes)?;
+            bytes.extend(external);
+            (pieces, "no triangle primitives in its scene")
+        }
+        false => (
+            obj_pieces(path, &bytes)?,
+            "no `f` lines with 3 or more corners",
+        ),
     };
-    // Materials are not needed: a missing .mtl must not stop a collider.
-    let (models, _materials) = tobj::load_obj_buf(&mut bytes.as_slice(), &options, |_| {
-        Err(tobj::LoadError::OpenFileFailed)
-    })
-    .map_err(|e| format!("cannot read mesh `{shown}` as OBJ: {e}"))?;
     let mut mesh = TriMesh {
         vertices: Vec::new(),
         triangles: Vec::new(),
     };
     let mut welded: HashMap<[u64; 3], u32> = HashMap::new();
-    for model in &models {
-        let m = &model.mesh;
-        let mut index_of = Vec::with_capacity(m.positions.len() / 3);
-        for (k, p) in m.positions.chunks_exact(3).enumerate() {
-            let v = DVec3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]));
+    for piece in &pieces {
+        let mut index_of = Vec::with_capacity(piece.positions.len());
+        for (k, &v) in piece.positions.iter().enumerate() {
             if !v.is_finite() {
                 return Err(format!(
-                    "mesh `{shown}`: vertex {} of object `{}` is ({}, {}, {}): every coordinate must be finite",
+                    "mesh `{shown}`: vertex {} of {} is ({}, {}, {}): every coordinate must be finite",
                     k + 1,
-                    model.name,
+                    piece.name,
                     v.x,
                     v.y,
                     v.z
@@ -80,8 +93,8 @@ pub(crate) fn read_obj(path: &Path) -> Result<(TriMesh, Vec<u8>), String> {
             });
             index_of.push(index);
         }
-        for t in m.indices.chunks_exact(3) {
-            let tri = [t[0], t[1], t[2]].map(|i| index_of[i as usize]);
+        for t in &piece.triangles {
+            let tri = t.map(|i| index_of[i as usize]);
             // A triangle with two corners at one position has no area and no edges to share.
             if tri[0] != tri[1] && tri[1] != tri[2] && tri[0] != tri[2] {
                 mesh.triangles.push(tri);
@@ -94,11 +107,43 @@ pub(crate) fn read_obj(path: &Path) -> Result<(TriMesh, Vec<u8>), String> {
         }
     }
     if mesh.triangles.is_empty() {
-        return Err(format!(
-            "mesh `{shown}` has no triangles (no `f` lines with 3 or more corners)"
-        ));
+        return Err(format!("mesh `{shown}` has no triangles ({none})"));
     }
     Ok((mesh, bytes))
+}
+
+/// The objects of an OBJ file, each a piece: polygons fanned into triangles.
+fn obj_pieces(path: &Path, bytes: &[u8]) -> Result<Vec<Piece>, String> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    // Materials are not needed: a missing .mtl must not stop a collider.
+    let (models, _materials) = tobj::load_obj_buf(&mut &bytes[..], &options, |_| {
+        Err(tobj::LoadError::OpenFileFailed)
+    })
+    .map_err(|e| format!("cannot read mesh `{}` as OBJ: {e}", path.display()))?;
+    Ok(models
+        .into_iter()
+        .map(|model| {
+            let m = model.mesh;
+            Piece {
+                name: format!("object `{}`", model.name),
+                positions: m
+                    .positions
+                    .chunks_exact(3)
+                    .map(|p| DVec3::new(p[0].into(), p[1].into(), p[2].into()))
+                    .collect(),
+                triangles: m
+                    .indices
+                    .chunks_exact(3)
+                    .map(|t| [t[0], t[1], t[2]])
+                    .collect(),
+            }
+        })
+        .collect())
 }
 
 impl TriMesh {
@@ -206,13 +251,13 @@ mod tests {
 
     #[test]
     fn corners_repeated_per_face_are_welded_into_a_closed_cube() {
-        let (mesh, _) = read_obj(&write("cube.obj", CUBE_BY_FACE)).unwrap();
+        let (mesh, _) = read_mesh(&write("cube.obj", CUBE_BY_FACE)).unwrap();
         assert_eq!(mesh.vertices.len(), 8);
         assert_eq!(mesh.triangles.len(), 12);
         assert_eq!(mesh.open_edges().0, 0);
         assert_eq!(mesh.bounds(), (DVec3::ZERO, DVec3::ONE));
         let open = CUBE_BY_FACE.replace("f 21 24 23 22\n", "");
-        let (mesh, _) = read_obj(&write("box.obj", &open)).unwrap();
+        let (mesh, _) = read_mesh(&write("box.obj", &open)).unwrap();
         let (count, first) = mesh.open_edges();
         assert_eq!(count, 4);
         assert!(first.is_some());
@@ -220,20 +265,20 @@ mod tests {
 
     #[test]
     fn bad_files_are_refused_with_why() {
-        let error = read_obj(Path::new("no/such/rock.obj")).unwrap_err();
+        let error = read_mesh(Path::new("no/such/rock.obj")).unwrap_err();
         assert!(
             error.starts_with("cannot open mesh `no/such/rock.obj`"),
             "{error}"
         );
         let nan = CUBE_BY_FACE.replacen("v 1 1 1", "v NaN 1 1", 1);
-        let error = read_obj(&write("nan.obj", &nan)).unwrap_err();
+        let error = read_mesh(&write("nan.obj", &nan)).unwrap_err();
         assert!(
             error.contains("vertex 7 of object `cube` is (NaN, 1, 1)"),
             "{error}"
         );
-        let error = read_obj(&write("lines.obj", "v 0 0 0\nv 1 0 0\nl 1 2\n")).unwrap_err();
+        let error = read_mesh(&write("lines.obj", "v 0 0 0\nv 1 0 0\nl 1 2\n")).unwrap_err();
         assert!(error.contains("has no triangles"), "{error}");
-        let error = read_obj(&write("junk.obj", "v 0 0 0\nf 1 2 3\n")).unwrap_err();
+        let error = read_mesh(&write("junk.obj", "v 0 0 0\nf 1 2 3\n")).unwrap_err();
         assert!(
             error.contains("as OBJ: face vertex index out of bounds"),
             "{error}"
