@@ -197,6 +197,14 @@ pub enum PlumeLoadError {
     /// The compiler refused the file; the text is its located diagnostic.
     #[error("{0}")]
     Compile(String),
+    /// The files the effect names kept naming more files, past the rounds the loader reads.
+    #[error("{path}: its files name more files after {rounds} rounds of reading them")]
+    FileRounds {
+        /// The asset path.
+        path: String,
+        /// The rounds read.
+        rounds: usize,
+    },
 }
 
 /// Loads `*.plume.ron` and `*.plume` files (and any file loaded with the type
@@ -231,38 +239,46 @@ impl AssetLoader for PlumeEffectLoader {
         // The compiler resolves a file against the effect's directory in its source; the
         // loader reads it back as the asset path the name gives relative to the effect.
         let base_dir = asset_path.parent().unwrap_or(Path::new("")).to_path_buf();
-        let asked = Arc::new(Asked::default());
-        let first = PlumeEffectAsset::compile_from(
-            &path,
-            &source,
-            Some(base_dir.clone()),
-            Some(Files(asked.clone())),
-        );
-        let wanted = asked.paths();
-        if wanted.is_empty() {
-            // It names no file: the first compile is the effect (or its located error).
-            return first.map_err(PlumeLoadError::Compile);
-        }
+        // Compiled with the files read so far, each file it asks for and was not given is
+        // read through the asset server, and it is compiled again: until it asks for nothing
+        // new (a glTF names its buffers, read only once the glTF itself is).
         let mut read = HashMap::new();
-        for wanted in wanted {
-            let name = wanted.strip_prefix(&base_dir).unwrap_or(&wanted);
-            let bytes = match load_context
-                .path()
-                .resolve_embed_str(&name.to_string_lossy())
-            {
-                Ok(file) => match load_context.read_asset_bytes(&file).await {
-                    Ok(bytes) => Ok(bytes),
-                    Err(e) => Err(format!("{file}: {e}")),
-                },
-                Err(e) => Err(e.to_string()),
-            };
-            read.insert(wanted, bytes);
+        for _ in 0..MAX_FILE_ROUNDS {
+            let files = Arc::new(Loaded {
+                read: read.clone(),
+                asked: Mutex::default(),
+            });
+            let compiled = PlumeEffectAsset::compile_from(
+                &path,
+                &source,
+                Some(base_dir.clone()),
+                Some(Files(files.clone())),
+            );
+            let wanted = files.asked();
+            if wanted.is_empty() {
+                // Bevy's asset server logs the error, the located diagnostic whole, and keeps
+                // the last good version of the asset (on a hot reload) in use.
+                return compiled.map_err(PlumeLoadError::Compile);
+            }
+            for wanted in wanted {
+                let name = wanted.strip_prefix(&base_dir).unwrap_or(&wanted);
+                let bytes = match load_context
+                    .path()
+                    .resolve_embed_str(&name.to_string_lossy())
+                {
+                    Ok(file) => match load_context.read_asset_bytes(&file).await {
+                        Ok(bytes) => Ok(bytes),
+                        Err(e) => Err(format!("{file}: {e}")),
+                    },
+                    Err(e) => Err(e.to_string()),
+                };
+                read.insert(wanted, bytes);
+            }
         }
-        let files = Some(Files(Arc::new(Read(read))));
-        // Bevy's asset server logs the error, the located diagnostic whole, and keeps the last
-        // good version of the asset (on a hot reload) in use.
-        PlumeEffectAsset::compile_from(&path, &source, Some(base_dir), files)
-            .map_err(PlumeLoadError::Compile)
+        Err(PlumeLoadError::FileRounds {
+            path,
+            rounds: MAX_FILE_ROUNDS,
+        })
     }
 
     fn extensions(&self) -> &[&str] {
@@ -270,46 +286,43 @@ impl AssetLoader for PlumeEffectLoader {
     }
 }
 
-/// The files a compile asked for, none of them given: what the loader must read.
-#[derive(Default)]
-struct Asked(Mutex<Vec<PathBuf>>);
+/// The most rounds of files the loader reads for one effect (the files it names, then the
+/// files those name, ...).
+const MAX_FILE_ROUNDS: usize = 8;
 
-impl Asked {
-    fn paths(&self) -> Vec<PathBuf> {
-        let mut paths = self.0.lock().unwrap_or_else(|p| p.into_inner()).clone();
+/// The files the loader read through the asset server so far, by the paths the compiler asks
+/// for (or why one could not be read), and those it asked for that are not among them yet.
+struct Loaded {
+    read: HashMap<PathBuf, Result<Vec<u8>, String>>,
+    asked: Mutex<Vec<PathBuf>>,
+}
+
+impl Loaded {
+    /// The files asked for and not read yet, each once.
+    fn asked(&self) -> Vec<PathBuf> {
+        let mut paths = self.asked.lock().unwrap_or_else(|p| p.into_inner()).clone();
         paths.sort();
         paths.dedup();
         paths
     }
 }
 
-impl FileSource for Asked {
+impl FileSource for Loaded {
     fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
-        let mut asked = self.0.lock().unwrap_or_else(|p| p.into_inner());
-        asked.push(path.to_path_buf());
-        Err(std::io::Error::new(
-            std::io::ErrorKind::NotFound,
-            "not read yet",
-        ))
-    }
-}
-
-/// The files the loader read through the asset server, by the paths the compiler asks for
-/// (or why one could not be read).
-struct Read(HashMap<PathBuf, Result<Vec<u8>, String>>);
-
-impl FileSource for Read {
-    fn read(&self, path: &Path) -> std::io::Result<Vec<u8>> {
-        match self.0.get(path) {
+        match self.read.get(path) {
             Some(Ok(bytes)) => Ok(bytes.clone()),
             Some(Err(why)) => Err(std::io::Error::new(
                 std::io::ErrorKind::NotFound,
                 why.clone(),
             )),
-            None => Err(std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                "not among the files the effect named when it was loaded",
-            )),
+            None => {
+                let mut asked = self.asked.lock().unwrap_or_else(|p| p.into_inner());
+                asked.push(path.to_path_buf());
+                Err(std::io::Error::new(
+                    std::io::ErrorKind::NotFound,
+                    "not read yet",
+                ))
+            }
         }
     }
 }

@@ -1,7 +1,7 @@
 //! An effect's own files go through Bevy's asset server (on llvmpipe, lavapipe): a texture
 //! named relative to the effect is read from the effect's asset source, so an edit to it on
 //! disk reloads the effect, and an effect and its texture load from Bevy's embedded source,
-//! which is not a folder on disk.
+//! which is not a folder on disk, as do a glTF mesh and the buffer file it names.
 
 mod common;
 
@@ -111,4 +111,74 @@ fn an_effect_and_its_texture_load_from_the_embedded_source() {
     h.update(5);
     let blue = centre(&mut h);
     assert!(dominant(blue, 2), "the embedded texture drew {blue:?}");
+}
+
+/// A unit cube (±0.5) as glTF, its positions and indices in the buffer file `bin_uri`: the
+/// glTF's text and the buffer's bytes.
+fn cube_gltf(bin_uri: &str) -> (String, Vec<u8>) {
+    let mut bin: Vec<u8> = (0..8u32)
+        .flat_map(|k| [0, 1, 2].map(|bit| if k >> bit & 1 == 1 { 0.5f32 } else { -0.5 }))
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    // Each face's corners counter-clockwise seen from outside, fanned into two triangles.
+    let faces: [[u32; 4]; 6] = [
+        [4, 5, 7, 6],
+        [1, 3, 7, 5],
+        [0, 2, 3, 1],
+        [0, 4, 6, 2],
+        [2, 6, 7, 3],
+        [0, 1, 5, 4],
+    ];
+    let indices = faces
+        .iter()
+        .flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]]);
+    bin.extend(indices.flat_map(u32::to_le_bytes));
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scenes": [{{"nodes": [0]}}], "nodes": [{{"mesh": 0}}],
+  "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}, "indices": 1}}]}}],
+  "buffers": [{{"uri": "{bin_uri}", "byteLength": {}}}],
+  "bufferViews": [{{"buffer": 0, "byteLength": 96}}, {{"buffer": 0, "byteOffset": 96, "byteLength": 144}}],
+  "accessors": [{{"bufferView": 0, "componentType": 5126, "count": 8, "type": "VEC3",
+                  "min": [-0.5, -0.5, -0.5], "max": [0.5, 0.5, 0.5]}},
+                {{"bufferView": 1, "componentType": 5125, "count": 36, "type": "SCALAR"}}]}}"#,
+        bin.len()
+    );
+    (json, bin)
+}
+
+#[test]
+fn a_gltf_mesh_and_its_buffer_load_from_the_embedded_source() {
+    let _one = serial();
+    let dir = asset_dir("embedded-gltf");
+    let mut h = Harness::new(&dir);
+    let (gltf, bin) = cube_gltf("cube.bin");
+    {
+        let registry = h.app.world().resource::<EmbeddedAssetRegistry>();
+        let put = |path: &str, bytes: Vec<u8>| {
+            registry.insert_asset(PathBuf::from(path), Path::new(path), bytes);
+        };
+        // One red cube 3 m across at the origin: the buffer is asked for only once the glTF
+        // has been read, so the loader reads a second round of files.
+        let effect = swatch_effect("unused.png").replace(
+            r#"texture: Some(Texture(file: "unused.png"))"#,
+            r#"mesh: Some(ParticleMesh(file: "../art/cube.gltf"))"#,
+        );
+        let effect = effect.replace("(1.0, 1.0, 1.0, 1.0)", "(0.9, 0.05, 0.05, 1.0)");
+        put("fx/cube.plume.ron", effect.into_bytes());
+        put("art/cube.gltf", gltf.into_bytes());
+        put("art/cube.bin", bin);
+    }
+    let handle: Handle<PlumeEffectAsset> = h.load("embedded://fx/cube.plume.ron");
+    assert!(
+        h.app
+            .world()
+            .resource::<Assets<PlumeEffectAsset>>()
+            .contains(&handle),
+        "the embedded effect did not load: {:?}",
+        h.load_errors.lock().unwrap()
+    );
+    h.app.world_mut().spawn(PlumeEffect::new(handle));
+    h.update(5);
+    let red = centre(&mut h);
+    assert!(dominant(red, 0), "the glTF cube drew {red:?}");
 }
