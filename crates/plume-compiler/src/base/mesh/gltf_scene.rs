@@ -187,9 +187,7 @@ mod tests {
             .collect();
         let index_offset = bin.len();
         bin.extend(indices.iter().flat_map(|i| i.to_le_bytes()));
-        while bin.len() % 4 != 0 {
-            bin.push(0);
-        }
+        bin.resize(bin.len().next_multiple_of(4), 0);
         let uri = uri.map_or(String::new(), |u| format!(r#""uri": "{u}", "#));
         let json = format!(
             r#"{{"asset": {{"version": "2.0"}}, "scene": 0,
@@ -211,9 +209,7 @@ mod tests {
     /// A binary glTF: the header, the JSON chunk (space-padded), the BIN chunk.
     fn glb(json: &str, bin: &[u8]) -> Vec<u8> {
         let mut json = json.as_bytes().to_vec();
-        while json.len() % 4 != 0 {
-            json.push(b' ');
-        }
+        json.resize(json.len().next_multiple_of(4), b' ');
         let total = 12 + 8 + json.len() + 8 + bin.len();
         let mut out = Vec::new();
         out.extend(b"glTF");
