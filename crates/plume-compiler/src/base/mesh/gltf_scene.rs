@@ -78,17 +78,24 @@ pub(crate) fn pieces(path: &Path, bytes: &[u8]) -> Result<(Vec<Piece>, Vec<u8>),
                 None => format!("mesh {} (primitive {})", mesh.index(), primitive.index()),
             };
             let reader = primitive.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+            // An accessor past the end of its buffer reads as none: refused, not skipped.
+            let unread =
+                |what| format!("mesh `{shown}`: {name}'s {what} lie past its buffer's end");
             let Some(positions) = reader.read_positions() else {
-                continue;
+                match primitive.get(&gltf::Semantic::Positions) {
+                    Some(_) => return Err(unread("positions")),
+                    None => continue,
+                }
             };
             let positions: Vec<DVec3> = positions
                 .map(|p| {
                     transform.transform_point3(DVec3::new(p[0].into(), p[1].into(), p[2].into()))
                 })
                 .collect();
-            let indices: Vec<u32> = match reader.read_indices() {
-                Some(indices) => indices.into_u32().collect(),
-                None => (0..positions.len() as u32).collect(),
+            let indices: Vec<u32> = match (reader.read_indices(), primitive.indices()) {
+                (Some(indices), _) => indices.into_u32().collect(),
+                (None, Some(_)) => return Err(unread("indices")),
+                (None, None) => (0..positions.len() as u32).collect(),
             };
             if let Some(&bad) = indices.iter().find(|&&i| i as usize >= positions.len()) {
                 return Err(format!(
@@ -282,6 +289,8 @@ mod tests {
     fn bad_gltf_files_are_refused_with_why() {
         let dir = dir();
         let (json, bin) = cube_document(Some("gone.bin"));
+        let encoded = base64::engine::general_purpose::STANDARD.encode(&bin);
+        let inline = format!("data:application/octet-stream;base64,{encoded}");
         let cases = [
             ("junk.gltf", b"{ not json".to_vec(), "cannot read mesh"),
             ("missing.gltf", json.into_bytes(), "cannot open its buffer"),
@@ -289,6 +298,14 @@ mod tests {
                 "short.glb",
                 glb(&cube_document(None).0, &bin[..64]),
                 "buffer 0 has 64 bytes, fewer than the 168",
+            ),
+            (
+                "long.gltf",
+                cube_document(Some(&inline))
+                    .0
+                    .replacen(r#""count": 36"#, r#""count": 360"#, 1)
+                    .into_bytes(),
+                "(primitive 0)'s indices lie past its buffer's end",
             ),
             (
                 "text.gltf",
