@@ -22,13 +22,33 @@ pub(crate) fn is_gltf(path: &Path) -> bool {
 /// the external buffers it reads (which a cache keyed on the mesh must see too).
 pub(crate) fn pieces(path: &Path, bytes: &[u8]) -> Result<(Vec<Piece>, Vec<u8>), String> {
     let shown = path.display();
-    let file = gltf::Gltf::from_slice(bytes)
-        .map_err(|e| format!("cannot read mesh `{shown}` as glTF: {e}"))?;
+    let not_gltf = |e: gltf::Error| format!("cannot read mesh `{shown}` as glTF: {e}");
+    let gltf::Gltf { document, blob } =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(not_gltf)?;
+    // The gltf crate's validation looks a primitive's POSITION accessor up unchecked (one past
+    // the file's accessors panics): such an index is refused here first.
+    let json = document.into_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, primitive) in mesh.primitives.iter().enumerate() {
+            if let Some(index) = primitive
+                .attributes
+                .values()
+                .find(|i| i.value() >= json.accessors.len())
+            {
+                return Err(format!(
+                    "mesh `{shown}`: mesh {m} (primitive {p}) names accessor {}, past the file's {}",
+                    index.value(),
+                    json.accessors.len()
+                ));
+            }
+        }
+    }
+    let document = gltf::Document::from_json(json).map_err(not_gltf)?;
     let mut external = Vec::new();
     let mut buffers = Vec::new();
-    for buffer in file.document.buffers() {
+    for buffer in document.buffers() {
         let data = match buffer.source() {
-            gltf::buffer::Source::Bin => file.blob.clone().ok_or_else(|| {
+            gltf::buffer::Source::Bin => blob.clone().ok_or_else(|| {
                 format!(
                     "mesh `{shown}`: buffer {} is the binary chunk, which the file does not have",
                     buffer.index()
@@ -52,15 +72,17 @@ pub(crate) fn pieces(path: &Path, bytes: &[u8]) -> Result<(Vec<Piece>, Vec<u8>),
         }
         buffers.push(data);
     }
-    let document = &file.document;
     let mut placed = Vec::new();
     match document
         .default_scene()
         .or_else(|| document.scenes().next())
     {
         Some(scene) => {
+            // A tree of nodes is no deeper than it has nodes; deeper, its nodes form a cycle.
+            let deepest = document.nodes().len();
             for node in scene.nodes() {
-                place(&node, DMat4::IDENTITY, &mut placed);
+                place(&node, DMat4::IDENTITY, deepest, &mut placed)
+                    .map_err(|cycle| format!("mesh `{shown}`: {cycle}"))?;
             }
         }
         None => placed.extend(document.meshes().map(|m| (m, DMat4::IDENTITY))),
@@ -120,8 +142,20 @@ pub(crate) fn pieces(path: &Path, bytes: &[u8]) -> Result<(Vec<Piece>, Vec<u8>),
     Ok((pieces, external))
 }
 
-/// Each mesh under `node` (itself included) with its transform in the scene.
-fn place<'a>(node: &gltf::Node<'a>, parent: DMat4, out: &mut Vec<(gltf::Mesh<'a>, DMat4)>) {
+/// Each mesh under `node` (itself included) with its transform in the scene, or the cycle
+/// found where the nodes go on past `depth` more levels.
+fn place<'a>(
+    node: &gltf::Node<'a>,
+    parent: DMat4,
+    depth: usize,
+    out: &mut Vec<(gltf::Mesh<'a>, DMat4)>,
+) -> Result<(), String> {
+    if depth == 0 {
+        return Err(format!(
+            "node {} is its own ancestor: a scene's nodes must form a tree",
+            node.index()
+        ));
+    }
     let local = node
         .transform()
         .matrix()
@@ -131,8 +165,9 @@ fn place<'a>(node: &gltf::Node<'a>, parent: DMat4, out: &mut Vec<(gltf::Mesh<'a>
         out.push((mesh, transform));
     }
     for child in node.children() {
-        place(&child, transform, out);
+        place(&child, transform, depth - 1, out)?;
     }
+    Ok(())
 }
 
 /// The bytes of a buffer at `uri`: a base64 `data:` URI, or a file beside the glTF at `path`.
@@ -286,14 +321,44 @@ mod tests {
     }
 
     #[test]
+    fn damaged_gltf_files_are_read_or_refused_never_a_panic() {
+        let dir = dir();
+        let (json, bin) = cube_document(None);
+        let good = glb(&json, &bin);
+        // Bytes overwritten at spread positions (the header, the JSON, the binary chunk) with
+        // values from the PCG hash, a few at a time.
+        let mut key = 1u32;
+        for case in 0..400 {
+            let mut bytes = good.clone();
+            for _ in 0..1 + case % 3 {
+                key = crate::base::rng::pcg(key);
+                let at = key as usize % bytes.len();
+                bytes[at] = (crate::base::rng::pcg(key) >> 24) as u8;
+            }
+            let path = dir.join(format!("damaged-{case}.glb"));
+            std::fs::write(&path, &bytes).unwrap();
+            match read_mesh(&path) {
+                Ok((mesh, _)) => assert!(mesh.vertices.iter().all(|v| v.is_finite())),
+                Err(why) => assert!(why.contains("damaged-"), "{why}"),
+            }
+            std::fs::remove_file(&path).unwrap();
+        }
+    }
+
+    #[test]
     fn bad_gltf_files_are_refused_with_why() {
         let dir = dir();
         let (json, bin) = cube_document(Some("gone.bin"));
         let encoded = base64::engine::general_purpose::STANDARD.encode(&bin);
         let inline = format!("data:application/octet-stream;base64,{encoded}");
+        let inline_json = cube_document(Some(&inline)).0;
         let cases = [
             ("junk.gltf", b"{ not json".to_vec(), "cannot read mesh"),
-            ("missing.gltf", json.into_bytes(), "cannot open its buffer"),
+            (
+                "missing.gltf",
+                json.clone().into_bytes(),
+                "cannot open its buffer",
+            ),
             (
                 "short.glb",
                 glb(&cube_document(None).0, &bin[..64]),
@@ -306,6 +371,20 @@ mod tests {
                     .replacen(r#""count": 36"#, r#""count": 360"#, 1)
                     .into_bytes(),
                 "(primitive 0)'s indices lie past its buffer's end",
+            ),
+            (
+                "accessor.gltf",
+                inline_json
+                    .replacen(r#""POSITION": 0"#, r#""POSITION": 7"#, 1)
+                    .into_bytes(),
+                "(primitive 0) names accessor 7, past the file's 2",
+            ),
+            (
+                "cycle.gltf",
+                inline_json
+                    .replacen(r#"{"mesh": 0}"#, r#"{"mesh": 0, "children": [0]}"#, 1)
+                    .into_bytes(),
+                "is its own ancestor: a scene's nodes must form a tree",
             ),
             (
                 "text.gltf",
