@@ -16,6 +16,18 @@ use plume::runtime::Effect;
 /// Odd, so that the image's centre is a pixel's centre.
 const SIDE: u32 = 65;
 
+/// The unit cube's faces, front (+z) first and back (−z) last, each by its corners
+/// counter-clockwise seen from outside, counted from 1 as OBJ does: corner k has x from bit 0
+/// of k − 1, y from bit 1, z from bit 2.
+const CUBE_FACES: [[u32; 4]; 6] = [
+    [5, 6, 8, 7],
+    [2, 4, 8, 6],
+    [1, 3, 4, 2],
+    [1, 5, 7, 3],
+    [3, 7, 8, 4],
+    [1, 2, 6, 5],
+];
+
 /// A directory of this test's own holding `cube.obj`: the unit cube (±0.5), wound
 /// counter-clockwise seen from outside, its front face (+z) first and its back face (−z)
 /// last, so that a back face drawn would cover the front one.
@@ -27,15 +39,7 @@ fn cube_dir(name: &str) -> PathBuf {
         let c = |bit: u32| if k >> bit & 1 == 1 { 0.5 } else { -0.5 };
         obj += &format!("v {} {} {}\n", c(0), c(1), c(2));
     }
-    // Corner k has x from bit 0, y from bit 1, z from bit 2 (OBJ counts from 1).
-    for face in [
-        [5, 6, 8, 7],
-        [2, 4, 8, 6],
-        [1, 3, 4, 2],
-        [1, 5, 7, 3],
-        [3, 7, 8, 4],
-        [1, 2, 6, 5],
-    ] {
+    for face in CUBE_FACES {
         obj += &format!("f {} {} {} {}\n", face[0], face[1], face[2], face[3]);
     }
     std::fs::write(dir.join("cube.obj"), obj).unwrap();
@@ -49,15 +53,7 @@ fn write_cube_gltf(dir: &std::path::Path) {
         .flat_map(|k| [0, 1, 2].map(|bit| if k >> bit & 1 == 1 { 0.5f32 } else { -0.5 }))
         .flat_map(f32::to_le_bytes)
         .collect();
-    let faces: [[u32; 4]; 6] = [
-        [5, 6, 8, 7],
-        [2, 4, 8, 6],
-        [1, 3, 4, 2],
-        [1, 5, 7, 3],
-        [3, 7, 8, 4],
-        [1, 2, 6, 5],
-    ];
-    let indices: Vec<u32> = faces
+    let indices: Vec<u32> = CUBE_FACES
         .iter()
         .flat_map(|f| [f[0], f[1], f[2], f[0], f[2], f[3]].map(|i| i - 1))
         .collect();

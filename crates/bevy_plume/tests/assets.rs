@@ -54,6 +54,23 @@ fn centre(h: &mut Harness) -> [u8; 3] {
     [p[0], p[1], p[2]]
 }
 
+/// Loads the effect at `path` of Bevy's embedded source (failing the test where it does not
+/// load), spawns it and gives the colour drawn at the origin a few frames on.
+fn draw_embedded(h: &mut Harness, path: &str) -> [u8; 3] {
+    let handle: Handle<PlumeEffectAsset> = h.load(&format!("embedded://{path}"));
+    assert!(
+        h.app
+            .world()
+            .resource::<Assets<PlumeEffectAsset>>()
+            .contains(&handle),
+        "the embedded effect did not load: {:?}",
+        h.load_errors.lock().unwrap()
+    );
+    h.app.world_mut().spawn(PlumeEffect::new(handle));
+    h.update(5);
+    centre(h)
+}
+
 #[test]
 fn an_edited_texture_reloads_the_effect() {
     let _one = serial();
@@ -98,18 +115,7 @@ fn an_effect_and_its_texture_load_from_the_embedded_source() {
         );
         put("art/blue.png", png([20, 20, 230]));
     }
-    let handle: Handle<PlumeEffectAsset> = h.load("embedded://fx/swatch.plume.ron");
-    assert!(
-        h.app
-            .world()
-            .resource::<Assets<PlumeEffectAsset>>()
-            .contains(&handle),
-        "the embedded effect did not load: {:?}",
-        h.load_errors.lock().unwrap()
-    );
-    h.app.world_mut().spawn(PlumeEffect::new(handle));
-    h.update(5);
-    let blue = centre(&mut h);
+    let blue = draw_embedded(&mut h, "fx/swatch.plume.ron");
     assert!(dominant(blue, 2), "the embedded texture drew {blue:?}");
 }
 
@@ -168,17 +174,6 @@ fn a_gltf_mesh_and_its_buffer_load_from_the_embedded_source() {
         put("art/cube.gltf", gltf.into_bytes());
         put("art/cube.bin", bin);
     }
-    let handle: Handle<PlumeEffectAsset> = h.load("embedded://fx/cube.plume.ron");
-    assert!(
-        h.app
-            .world()
-            .resource::<Assets<PlumeEffectAsset>>()
-            .contains(&handle),
-        "the embedded effect did not load: {:?}",
-        h.load_errors.lock().unwrap()
-    );
-    h.app.world_mut().spawn(PlumeEffect::new(handle));
-    h.update(5);
-    let red = centre(&mut h);
+    let red = draw_embedded(&mut h, "fx/cube.plume.ron");
     assert!(dominant(red, 0), "the glTF cube drew {red:?}");
 }
