@@ -2,7 +2,8 @@
 //! the shadowed light exactly what its shadow map lets through. A host's map through the
 //! embedding API (standard and reversed depth), pixel by pixel across the shadow's edge, and
 //! the map `plume render` draws from the scene's meshes, on the ground and on lit particles;
-//! the lookup once a particle (`shadow_at: Particle`) on a sprite and a mesh particle, and
+//! the lookup at each pixel and once a particle (`shadow_at: Particle`) on a sprite and a mesh
+//! particle, and
 //! how little it changes a picture of smoke;
 //! each pixel against the f64 light ([`Shadow::visibility`] on the map's depths read back) in
 //! both renderers: within one 8-bit step for an opaque surface, two for a sprite's blended
@@ -473,9 +474,13 @@ fn smoke_looked_up_once_a_particle_looks_as_looked_up_at_every_pixel() {
 /// runs through its centre: looked up once a particle, its front face is evenly half lit on
 /// both sides of the edge (ambient 0.1 plus half the light), as `Lights::seen_from_particle`
 /// says, within one 8-bit step (opaque: nothing blended).
-#[test]
-fn a_mesh_particle_looked_up_once_takes_its_centres_verdict() {
-    const SIDE: u32 = 65;
+/// Pixels across the 65-pixel image of [`cube_in_the_hosts_shadow`].
+const CUBE_SIDE: u32 = 65;
+
+/// A lit cube 2 m across at the origin, its front face toward the camera 10 m away, in the
+/// host's half-shadowed map (standard depth) looked up `shadow_at`, drawn by the raster
+/// pipeline: the image, the host's lights and the look.
+fn cube_in_the_hosts_shadow(shadow_at: &str) -> (Vec<u8>, Lights, plume::compiler::lit::Lit) {
     let gpu = gpu();
     let cube = write("shadow-cube.obj", &box_obj([-0.5; 3], [0.5; 3]));
     let [r, g, b] = COLOR;
@@ -485,7 +490,7 @@ fn a_mesh_particle_looked_up_once_takes_its_centres_verdict() {
     camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
     render: Render(color: [(0.0, ({r}, {g}, {b}, 1.0))], size: [(0.0, 2.0)], blend: Opaque,
                    background: (0.0, 0.0, 0.0), mesh: Some(ParticleMesh(file: {cube:?})),
-                   lit: Some(Lit(normals: Flat, shadow_at: Particle))))"#
+                   lit: Some(Lit(normals: Flat, shadow_at: {shadow_at}))))"#
     );
     let options = plume::CompileOptions {
         receive_shadows: true,
@@ -497,19 +502,25 @@ fn a_mesh_particle_looked_up_once_takes_its_centres_verdict() {
     sim.run(1, |_| {}).unwrap();
     let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
     let (lights, map) = host_shadow(&gpu, false);
-    let seen = lights.seen_from_particle(DVec3::ZERO);
-    let light = seen.received(DVec3::Z, DVec3::new(0.0, 0.0, 1.0), 0.0);
-    assert_eq!(light.x, 0.6, "the centre's verdict: half lit");
-    let want = lit.shade(DVec3::from(COLOR), light) * 255.0;
-    let target = Offscreen::new(&gpu, SIDE, SIDE).unwrap();
+    let target = Offscreen::new(&gpu, CUBE_SIDE, CUBE_SIDE).unwrap();
     let mut renderer = sim.renderer(&target.target()).unwrap();
     renderer.set_lights(&lights);
     renderer.set_shadow_map(&map).unwrap();
     let image = target.render(&sim, &renderer, &camera).unwrap();
-    // The face spans about 15 pixels either side of the centre: 5 pixels in, each side.
-    let c = SIDE / 2;
+    (image, lights, lit)
+}
+
+#[test]
+fn a_mesh_particle_looked_up_once_takes_its_centres_verdict() {
+    let (image, lights, lit) = cube_in_the_hosts_shadow("Particle");
+    let seen = lights.seen_from_particle(DVec3::ZERO);
+    let light = seen.received(DVec3::Z, DVec3::new(0.0, 0.0, 1.0), 0.0);
+    assert_eq!(light.x, 0.6, "the centre's verdict: half lit");
+    let want = lit.shade(DVec3::from(COLOR), light) * 255.0;
+    // The face spans about 10 pixels either side of the centre: 5 pixels in, each side.
+    let c = CUBE_SIDE / 2;
     for xy in [(c - 5, c), (c + 5, c), (c, c - 5), (c - 5, c + 5)] {
-        let got = pixel(&image, SIDE, xy);
+        let got = pixel(&image, CUBE_SIDE, xy);
         for k in 0..3 {
             let diff = (f64::from(got[k]) - want[k]).abs();
             assert!(
@@ -518,4 +529,35 @@ fn a_mesh_particle_looked_up_once_takes_its_centres_verdict() {
             );
         }
     }
+}
+
+/// As above, looked up at each pixel (the default): a mesh is lit per pixel, so across its
+/// face each pixel takes the map's verdict at the point it shows, from shadow to light.
+#[test]
+fn a_mesh_particle_takes_the_maps_verdict_at_each_pixel() {
+    let (image, lights, lit) = cube_in_the_hosts_shadow("Pixel");
+    // The front face lies 9 m from the eye: metres a pixel there.
+    let metres = 2.0 * 9.0 * 20f64.to_radians().tan() / f64::from(CUBE_SIDE);
+    let c = (CUBE_SIDE / 2) as i32;
+    let (mut darkest, mut brightest) = (f64::INFINITY, 0f64);
+    let mut wrong = Vec::new();
+    for up in [-6, 0, 6] {
+        for right in -8..=8 {
+            let p = DVec3::new(f64::from(right) * metres, f64::from(up) * metres, 1.0);
+            let light = lights.received(DVec3::Z, p, 0.0);
+            (darkest, brightest) = (darkest.min(light.x), brightest.max(light.x));
+            let want = lit.shade(DVec3::from(COLOR), light) * 255.0;
+            let got = pixel(&image, CUBE_SIDE, ((c + right) as u32, (c - up) as u32));
+            if (0..3).any(|k| (f64::from(got[k]) - want[k]).abs() > 1.0) {
+                wrong.push(format!(
+                    "pixel ({right}, {up}) is {got:?}, the f64 light gives {want:.2?}"
+                ));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+    assert!(
+        darkest == 0.1 && brightest == 1.1,
+        "the rows cross the shadow's edge: light from {darkest} to {brightest}"
+    );
 }
