@@ -245,7 +245,7 @@ impl AssetLoader for PlumeEffectLoader {
         let mut read = HashMap::new();
         for _ in 0..MAX_FILE_ROUNDS {
             let files = Arc::new(Loaded {
-                read: read.clone(),
+                read: std::mem::take(&mut read),
                 asked: Mutex::default(),
             });
             let compiled = PlumeEffectAsset::compile_from(
@@ -260,6 +260,9 @@ impl AssetLoader for PlumeEffectLoader {
                 // the last good version of the asset (on a hot reload) in use.
                 return compiled.map_err(PlumeLoadError::Compile);
             }
+            // The asset keeps its files (its variants compile from them): the bytes are
+            // copied only where another round is needed.
+            read = files.read.clone();
             for wanted in wanted {
                 let name = wanted.strip_prefix(&base_dir).unwrap_or(&wanted);
                 let bytes = match load_context
