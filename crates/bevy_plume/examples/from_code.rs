@@ -5,10 +5,10 @@
 //! In a window: `cargo +nightly run --ignore-rust-version --example from_code`.
 //! Headless: `... --example from_code -- --headless from_code.png --frames 90`: with no mouse,
 //! a burst fires every quarter second along a line and the wind blows from the left.
-//! The effect file is `crates/bevy_plume/assets/impact.plume.ron`. `tests/click.rs` includes
+//! The effect file is `crates/bevy_plume/assets/impact.plume.ron`. `tests/app/click.rs` includes
 //! this file as a module and clicks through [`burst_on_click`].
 
-#![allow(dead_code)] // tests/click.rs uses part of it.
+#![allow(dead_code)] // tests/app/click.rs uses part of it.
 
 use bevy::core_pipeline::prepass::DepthPrepass;
 use bevy::prelude::*;

@@ -1,7 +1,7 @@
 //! bevy_hanabi's `2d` example with bevy_plume: `effects/hanabi/2d.ron`, a widening ring of pale
 //! blue dots in the plane z = 0, seen by a `Camera2d` whose orthographic view is 1 m tall.
 //! (hanabi's white square moving through z = 0 is a `Mesh2d`, which needs Bevy's sprite
-//! renderer, a feature this crate leaves out; tests/two_d.rs checks the sorting by z.)
+//! renderer, a feature this crate leaves out; tests/app/two_d.rs checks the sorting by z.)
 //!
 //! In a window: `cargo +nightly run --ignore-rust-version --example two_d`.
 //! Headless: `... --example two_d -- --headless two_d.png --frames 180`.

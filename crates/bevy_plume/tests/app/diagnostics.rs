@@ -1,16 +1,15 @@
 //! `PlumeDiagnosticsPlugin`: the render world's counts reach Bevy's `DiagnosticsStore`.
 
-mod common;
-
+use crate::common::{asset_dir, dots, serial, Harness};
 use bevy::diagnostic::DiagnosticsStore;
 use bevy::prelude::*;
 use bevy_plume::{
     PlumeDiagnosticsPlugin, PlumeEffect, PlumeGpuTime, PlumeParticleCounts, BATCH_FROM,
 };
-use common::{asset_dir, dots, Harness};
 
 #[test]
 fn the_plugins_counts_are_bevy_diagnostics() {
+    let _one = serial();
     let dir = asset_dir("diagnostics");
     std::fs::write(
         dir.join("dots.plume.ron"),
@@ -92,6 +91,7 @@ fn stateful_dots(count: u32) -> String {
 
 #[test]
 fn a_timed_effect_has_its_own_steps_and_draw_gpu_times() {
+    let _one = serial();
     let dir = asset_dir("gpu_time");
     std::fs::write(dir.join("many.plume.ron"), stateful_dots(20_000)).unwrap();
     std::fs::write(dir.join("few.plume.ron"), stateful_dots(16)).unwrap();

@@ -1,22 +1,12 @@
 //! The compute renderer in Bevy's view (`PlumeDraw::Compute`), headless on lavapipe: it draws
 //! what the raster renderer draws, with and without MSAA, and the scene Bevy draws hides the
 //! particles behind it (the compute renderer tests each pixel against the camera's depth after the
-//! opaque pass). `BEVY_PLUME_TEST_IMAGES=DIR` keeps the images. One app at a time (the tests share two CPU cores and one driver).
+//! opaque pass). `BEVY_PLUME_TEST_IMAGES=DIR` keeps the images.
 
-mod common;
-
-use std::sync::Mutex;
-
+use crate::common::{asset_dir, dots, lit_pixels, project, serial, Harness};
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{PlumeDraw, PlumeEffect, PlumeRenderStats};
-use common::{asset_dir, dots, lit_pixels, project, Harness};
-
-static ONE_APP: Mutex<()> = Mutex::new(());
-
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    ONE_APP.lock().unwrap_or_else(|p| p.into_inner())
-}
 
 /// Dots 0.6 m across (about 6 pixels here), so that edges and blending show.
 fn big_dots(rgb: (f64, f64, f64)) -> String {

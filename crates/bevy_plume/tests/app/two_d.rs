@@ -4,11 +4,9 @@
 //! dot, one behind does not, whichever was spawned first.
 //! `BEVY_PLUME_TEST_IMAGES=DIR` keeps the images.
 
-mod common;
-
+use crate::common::{asset_dir, lit_pixels, serial, Harness, HEIGHT, WIDTH};
 use bevy::prelude::*;
 use bevy_plume::PlumeEffect;
-use common::{asset_dir, lit_pixels, Harness, HEIGHT, WIDTH};
 
 /// One orange particle at (20, 10), 16 units across, that never dies.
 const DOT: &str = r#"Effect(
@@ -71,6 +69,7 @@ fn draw(name: &str, disc_z: Option<f32>, disc_first: bool) -> image::RgbaImage {
 
 #[test]
 fn a_camera2d_draws_a_particle_where_its_projection_puts_it() {
+    let _one = serial();
     let image = draw("2d-dot", None, false);
     let (n, x, y) = lit_pixels(&image, 40);
     let (cx, cy) = centre();
@@ -93,6 +92,7 @@ fn a_camera2d_draws_a_particle_where_its_projection_puts_it() {
 
 #[test]
 fn in_2d_effects_sort_by_z_whatever_their_spawn_order() {
+    let _one = serial();
     let (cx, cy) = centre();
     for disc_first in [true, false] {
         let behind = draw(&format!("2d-behind-{disc_first}"), Some(-1.0), disc_first);

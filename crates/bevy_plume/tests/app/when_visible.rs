@@ -2,12 +2,10 @@
 //! culled) takes no steps, while a copy that always simulates goes on; brought into view, it
 //! takes up where it stopped, one step a frame again.
 
-mod common;
-
+use crate::common::{asset_dir, serial, Harness};
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{read_totals, PlumeEffect, PlumeSimulate, SimulationSpace};
-use common::{asset_dir, Harness};
 
 /// 100 dots that never die and barely move, in a declared 1 m box, so Bevy culls the effect
 /// by its bounds from the first frame.
@@ -27,6 +25,7 @@ fn steps(h: &Harness, entity: Entity) -> u64 {
 
 #[test]
 fn an_unseen_effect_that_simulates_when_visible_waits_and_takes_up_where_it_stopped() {
+    let _one = serial();
     let dir = asset_dir("when_visible");
     std::fs::write(dir.join("boxed.plume.ron"), BOXED).unwrap();
     let mut h = Harness::new(&dir);

@@ -3,11 +3,9 @@
 //! `PlumeEventFired` messages with the entity, in world space, a few frames after the step;
 //! firings past the bound arrive as a `PlumeEventsMissed` count.
 
-mod common;
-
+use crate::common::{serial, Harness};
 use bevy::prelude::*;
 use bevy_plume::{PlumeEffect, PlumeEventFired, PlumeEventsMissed, SimulationSpace};
-use common::Harness;
 
 /// Eight drops that fall 1 m onto the floor of the effect's space (y = 0) and bounce, every
 /// bounce reported, at most `BOUND` a readback. One step a frame (the harness's 1/60 s).
@@ -27,13 +25,6 @@ const FIRST_BOUNCE_STEP: u64 = 26;
 /// readback's 3 (docs/effect-format.md, "Reported events") and the next frame's `PreUpdate`,
 /// which sends what the render world read back after the main world's `Update` had run.
 const MOST_FRAMES_PAST_STEP: u64 = 4;
-
-/// Runs the tests one at a time (two Bevy apps would share two CPU cores and one driver).
-static ONE_APP: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    ONE_APP.lock().unwrap_or_else(|p| p.into_inner())
-}
 
 /// What the game heard, with the frame each message came in.
 #[derive(Resource, Default)]

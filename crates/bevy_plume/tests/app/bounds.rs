@@ -3,14 +3,12 @@
 //! reach), so Bevy culls the effect when all its particles are out of view and draws it when
 //! they are in view. Headless on lavapipe.
 
-mod common;
-
+use crate::common::{dots, serial, Harness};
 use bevy::camera::primitives::Aabb;
 use bevy::camera::visibility::NoFrustumCulling;
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{read_particles, PlumeEffect, PlumeRenderStats};
-use common::{dots, Harness};
 
 fn stats(h: &Harness) -> PlumeRenderStats {
     *h.app
@@ -32,6 +30,7 @@ fn measured_aabb(h: &mut Harness, entity: Entity) -> Aabb {
 
 #[test]
 fn measured_bounds_hold_the_particles_and_cull_an_effect_out_of_view() {
+    let _one = serial();
     // No `bounds:` in the file: 300 dots, 0.15 m across, spread at most 0.13 m.
     let (mut h, handle) =
         Harness::with_effect("measured_bounds", &dots(300, 100.0, (1.0, 1.0, 1.0)));

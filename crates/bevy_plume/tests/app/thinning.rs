@@ -2,15 +2,13 @@
 //! on screen, and a particle budget (`PlumeBudget`) thins the least visible effects first; the
 //! GPU spawns what each entity's `PlumeThinning` says.
 
-mod common;
-
+use crate::common::{serial, Harness};
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{
     read_totals, PlumeBudget, PlumeDiagnosticsPlugin, PlumeEffect, PlumeLod, PlumeThinning,
     SimulationSpace,
 };
-use common::Harness;
 
 /// 300 particles a second living 1 s (300 alive unthinned), barely moving, in a declared 1 m
 /// box, so Bevy sees (or culls) the effect by its bounds from the first frame.
@@ -21,13 +19,6 @@ const MIST: &str = r#"Effect(name: "mist", capacity: 400,
     bounds: Some((min: (-0.5, -0.5, -0.5), max: (0.5, 0.5, 0.5))),
     render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 0.1)], blend: Additive),
 )"#;
-
-/// Runs the tests one at a time: two apps at once would share lavapipe's two cores.
-static ONE_APP: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    ONE_APP.lock().unwrap_or_else(|p| p.into_inner())
-}
 
 fn spawn(h: &mut Harness, effect: PlumeEffect, at: Vec3, extra: impl Bundle) -> Entity {
     h.app
@@ -148,7 +139,7 @@ fn a_budget_thins_the_unseen_effects_first_then_the_smallest() {
 #[test]
 fn a_budget_of_gpu_time_pauses_the_steps_of_unseen_effects() {
     let _one = serial();
-    let dir = common::asset_dir("thinning_gpu_budget");
+    let dir = crate::common::asset_dir("thinning_gpu_budget");
     // Stateful, so that every step runs a kernel over its slots.
     let mist = MIST.replacen("capacity: 400,", "capacity: 400, state: Stateful,", 1);
     std::fs::write(dir.join("mist.plume.ron"), mist).unwrap();

@@ -3,23 +3,13 @@
 //! disk reloads the effect, and an effect and its texture load from Bevy's embedded source,
 //! which is not a folder on disk, as do a glTF mesh and the buffer file it names.
 
-mod common;
-
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::time::Duration;
 
+use crate::common::{asset_dir, project, serial, Harness};
 use bevy::asset::io::embedded::EmbeddedAssetRegistry;
 use bevy::prelude::*;
 use bevy_plume::{PlumeEffect, PlumeEffectAsset};
-use common::{asset_dir, project, Harness};
-
-/// Runs the tests one at a time.
-static ONE_APP: Mutex<()> = Mutex::new(());
-
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    ONE_APP.lock().unwrap_or_else(|p| p.into_inner())
-}
 
 /// One opaque sprite 3 m across at the origin, white times its texture, `file`.
 fn swatch_effect(file: &str) -> String {

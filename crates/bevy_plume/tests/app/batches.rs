@@ -2,22 +2,13 @@
 //! each entity still its own (its particles where it stands, its bursts, its pause), and the
 //! batch freed when its last entity goes. Headless on lavapipe.
 
-mod common;
-
+use crate::common::{dots, lit_pixels, project, serial, Harness};
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{
     read_particles, read_totals, PlumeBurst, PlumeEffect, PlumeRenderStats, SimulationSpace,
     BATCH_FROM,
 };
-use common::{dots, lit_pixels, project, Harness};
-
-/// Runs the tests one at a time (two apps at once on lavapipe lost a screenshot here).
-static ONE_APP: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    ONE_APP.lock().unwrap_or_else(|p| p.into_inner())
-}
 
 fn stats(h: &Harness) -> PlumeRenderStats {
     *h.app

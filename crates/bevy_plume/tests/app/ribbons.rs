@@ -3,12 +3,10 @@
 //! renderer even where the compute one is asked for (it draws no ribbons: the effect falls
 //! back, as `Auto` picks the raster one for it). `BEVY_PLUME_TEST_IMAGES=DIR` keeps the image.
 
-mod common;
-
+use crate::common::{asset_dir, project, serial, Harness};
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{PlumeDraw, PlumeEffect, PlumeRenderStats};
-use common::{asset_dir, project, Harness};
 
 /// 60 particles a second spawned at x = -3 + 4 t on a slight wave, living 3 s, joined into one
 /// ribbon 0.3 m wide.
@@ -23,6 +21,7 @@ const STREAM: &str = r#"Effect(
 
 #[test]
 fn a_ribbon_is_drawn_along_the_path_its_particles_were_spawned_on() {
+    let _one = serial();
     let dir = asset_dir("ribbons");
     std::fs::write(dir.join("stream.plume.ron"), STREAM).unwrap();
     let mut h = Harness::new(&dir);

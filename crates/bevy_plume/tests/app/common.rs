@@ -2,7 +2,7 @@
 //! image over a black background, frames stepped by hand at a fixed 1/60 s, and the image
 //! read back as RGBA8.
 
-#![allow(dead_code)] // each test file uses its own part of the harness
+#![allow(dead_code)] // each test module uses its own part of the harness
 
 use std::path::Path;
 use std::sync::{Arc, Mutex};
@@ -16,6 +16,15 @@ use bevy::render::view::screenshot::{Screenshot, ScreenshotCaptured};
 use bevy::time::TimeUpdateStrategy;
 use bevy_plume::headless::{default_plugins, Headless};
 use bevy_plume::{PlumeEffect, PlumeEffectAsset, PlumePlugin};
+
+/// Runs the tests one at a time: each holds the guard while its app lives (two Bevy apps
+/// would share two CPU cores and one driver).
+pub fn serial() -> std::sync::MutexGuard<'static, ()> {
+    static ONE_APP: Mutex<()> = Mutex::new(());
+    ONE_APP
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
 
 /// Image size of every test.
 pub const WIDTH: u32 = 160;

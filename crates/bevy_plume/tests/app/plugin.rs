@@ -1,24 +1,14 @@
 //! The plugin in a headless Bevy app on llvmpipe (lavapipe): effects drawn where the scene
 //! puts them, a graph effect, hot reload and its errors, local space, restart, instances
-//! coming and going, and bursts and params from game code. One app at a time (the tests share two CPU cores and one driver).
+//! coming and going, and bursts and params from game code.
 
-mod common;
-
-use std::sync::Mutex;
 use std::time::Duration;
 
+use crate::common::{asset_dir, dots, lit_pixels, project, serial, Harness, WIDTH};
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::plume_compiler::reference::{ParticleRecord, Totals};
 use bevy_plume::{PlumeBurst, PlumeEffect, PlumeRenderStats, SimulationSpace};
-use common::{asset_dir, dots, lit_pixels, project, Harness, WIDTH};
-
-/// Runs the tests one at a time.
-static ONE_APP: Mutex<()> = Mutex::new(());
-
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    ONE_APP.lock().unwrap_or_else(|p| p.into_inner())
-}
 
 /// Pixels further than this from where the effect's centre projects fail the placement
 /// checks: the burst spreads at most 0.13 m (about 1.3 px at 10 m with this camera), so
@@ -715,13 +705,14 @@ fn each_camera_sees_a_sorted_effect_in_its_own_depth_order() {
     let mut h = Harness::new(&dir);
     // The harness's camera looks from +z; a second one looks from −z.
     let behind = h.add_camera(
-        Transform::from_xyz(0.0, 0.0, -common::CAMERA_DISTANCE).looking_at(Vec3::ZERO, Vec3::Y),
+        Transform::from_xyz(0.0, 0.0, -crate::common::CAMERA_DISTANCE)
+            .looking_at(Vec3::ZERO, Vec3::Y),
     );
     let handle = h.load("discs.plume.ron");
     h.app.world_mut().spawn(PlumeEffect::new(handle));
     // 0.3 s: the back disc has turned green (its life at 0.15 of 2 s).
     h.update(18);
-    let centre = |image: &image::RgbaImage| image.get_pixel(WIDTH / 2, common::HEIGHT / 2).0;
+    let centre = |image: &image::RgbaImage| image.get_pixel(WIDTH / 2, crate::common::HEIGHT / 2).0;
     let front = centre(&h.capture_running());
     let back = centre(&h.capture_of(behind));
     // From +z the red disc is nearer; from −z the green one.

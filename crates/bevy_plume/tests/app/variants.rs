@@ -2,12 +2,10 @@
 //! in the frame it is spawned, and once its variant is ready it has caught up the time it
 //! waited, step for step with a copy spawned in the same frame that needed no variant.
 
-mod common;
-
+use crate::common::{dots, serial, Harness};
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{read_totals, PlumeEffect, SimulationSpace};
-use common::{dots, Harness};
 
 fn steps(h: &Harness, entity: Entity) -> Option<u64> {
     read_totals(h.app.sub_app(RenderApp).world(), entity, 0).map(|t| t.expect("read back").steps)
@@ -15,6 +13,7 @@ fn steps(h: &Harness, entity: Entity) -> Option<u64> {
 
 #[test]
 fn a_seeded_copy_starts_late_but_runs_in_step_with_the_file_as_written() {
+    let _one = serial();
     let (mut h, handle) = Harness::with_effect("variants", &dots(50, 100.0, (1.0, 1.0, 1.0)));
     h.camera();
     h.wait_for_pipelines();

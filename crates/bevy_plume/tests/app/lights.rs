@@ -3,18 +3,9 @@
 //! sprites and trails, not the effect file's lights; turning the light turns the lit side,
 //! and a scene with no light leaves them dark as it leaves a lit mesh.
 
-mod common;
-
+use crate::common::{project, serial, Harness, HEIGHT, WIDTH};
 use bevy::prelude::*;
 use bevy_plume::PlumeEffect;
-use common::{project, Harness, HEIGHT, WIDTH};
-
-/// Runs the tests one at a time (two Bevy apps would share two CPU cores and one driver).
-static ONE_APP: std::sync::Mutex<()> = std::sync::Mutex::new(());
-
-fn serial() -> std::sync::MutexGuard<'static, ()> {
-    ONE_APP.lock().unwrap_or_else(|p| p.into_inner())
-}
 
 /// One opaque grey puff 4 m across at the origin, shaded as a half sphere. Its file names a
 /// bright white light from straight ahead, which a Bevy scene must not use.
@@ -169,7 +160,7 @@ fn bevys_lights_light_trails_as_cards_facing_the_eye() {
     let sun = spawn_sun(&mut h, Vec3::new(0.0, 0.0, 5.0));
     h.update(60);
     let front = h.capture_running();
-    let (lit, _, _) = common::lit_pixels(&front, 40);
+    let (lit, _, _) = crate::common::lit_pixels(&front, 40);
     let brightest = front.pixels().map(|p| p.0[0]).max().unwrap_or(0);
     // Three or four ribbons 0.6 m wide in view, about 5 pixels at 10 m.
     assert!(
@@ -180,7 +171,7 @@ fn bevys_lights_light_trails_as_cards_facing_the_eye() {
     *h.app.world_mut().get_mut::<Transform>(sun).unwrap() =
         Transform::from_xyz(0.0, 0.0, -5.0).looking_at(Vec3::ZERO, Vec3::Y);
     h.update(2);
-    let (lit, _, _) = common::lit_pixels(&h.capture(), 8);
+    let (lit, _, _) = crate::common::lit_pixels(&h.capture(), 8);
     assert_eq!(lit, 0, "lit from behind, yet {lit} pixels show");
 }
 

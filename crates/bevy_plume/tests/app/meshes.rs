@@ -4,12 +4,10 @@
 //! raster one for it); and a file with no mesh, given a Bevy mesh in code, draws that mesh.
 //! `BEVY_PLUME_TEST_IMAGES=DIR` keeps the image.
 
-mod common;
-
+use crate::common::{asset_dir, project, serial, Harness};
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{PlumeDraw, PlumeEffect, PlumeRenderStats};
-use common::{asset_dir, project, Harness};
 
 /// One particle at (0.5, 0.25, 0) drawn as `plate.obj` 2 m across.
 const PLATE: &str = r#"Effect(
@@ -26,6 +24,7 @@ const PLATE_OBJ: &str =
 
 #[test]
 fn a_mesh_particle_covers_where_its_mesh_projects() {
+    let _one = serial();
     let dir = asset_dir("meshes");
     std::fs::write(dir.join("plate.plume.ron"), PLATE).unwrap();
     std::fs::write(dir.join("plate.obj"), PLATE_OBJ).unwrap();
@@ -58,6 +57,7 @@ fn a_mesh_particle_covers_where_its_mesh_projects() {
 /// 2 m by 1 m, not the 2 m square its sprite would be.
 #[test]
 fn a_bevy_mesh_draws_the_particles_of_a_file_without_one() {
+    let _one = serial();
     let dir = asset_dir("bevy-mesh");
     let sprites = PLATE.replace(", mesh: Some(ParticleMesh(file: \"plate.obj\"))", "");
     assert!(!sprites.contains("mesh"));

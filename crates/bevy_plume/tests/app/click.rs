@@ -4,11 +4,10 @@
 //! outside the window bursts nothing. Headless on lavapipe, with a
 //! window entity that only carries the cursor (no display).
 
-#[path = "../examples/from_code.rs"]
+#[path = "../../examples/from_code.rs"]
 mod from_code;
 
-mod common;
-
+use crate::common::{serial, Harness, HEIGHT, WIDTH};
 use bevy::input::mouse::MouseButtonInput;
 use bevy::input::ButtonState;
 use bevy::math::DVec2;
@@ -16,7 +15,6 @@ use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy::window::WindowResolution;
 use bevy_plume::{read_particles, PlumeEffect};
-use common::{Harness, HEIGHT, WIDTH};
 use from_code::{burst_on_click, Impacts};
 
 /// Clicks the left button with the cursor at pixel `at` of the window (None: outside it) and
@@ -39,6 +37,7 @@ fn click(h: &mut Harness, window: Entity, at: Option<Vec2>) {
 
 #[test]
 fn a_click_bursts_where_the_cursor_s_ray_meets_the_ground() {
+    let _one = serial();
     let mut h = Harness::new(std::path::Path::new(from_code::ASSETS));
     // The example's camera: up and back, looking down at the ground.
     let camera = h.camera();

@@ -1,12 +1,10 @@
 //! `RenderLayers`, headless on lavapipe: a camera draws the effects on its layers and no other,
 //! in 3D and in 2D, as Bevy's visibility decides for its own meshes and sprites.
 
-mod common;
-
+use crate::common::{dots, lit_pixels, serial, Harness};
 use bevy::camera::visibility::RenderLayers;
 use bevy::prelude::*;
 use bevy_plume::{PlumeEffect, SimulationSpace};
-use common::{dots, lit_pixels, Harness};
 
 /// The lit pixels of a frame where the camera sees layer 1 and a red effect sits on
 /// `layer` (None: no `RenderLayers`, which is layer 0), in 2D when `two_d`.
@@ -49,6 +47,7 @@ fn lit_with(name: &str, layer: Option<usize>, two_d: bool) -> u32 {
 
 #[test]
 fn a_camera_draws_the_effects_on_its_render_layers_alone() {
+    let _one = serial();
     for two_d in [false, true] {
         let on = lit_with(&format!("layers-on-{two_d}"), Some(1), two_d);
         assert!(
