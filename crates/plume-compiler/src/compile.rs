@@ -440,7 +440,10 @@ fn look_file<T>(
 }
 
 /// Puts `prefix` (`groups[0].`) before every path of `items`.
-pub fn prefixed(items: Vec<(Diagnostic, String)>, prefix: &str) -> Vec<(Diagnostic, String)> {
+pub(crate) fn prefixed(
+    items: Vec<(Diagnostic, String)>,
+    prefix: &str,
+) -> Vec<(Diagnostic, String)> {
     if prefix.is_empty() {
         return items;
     }

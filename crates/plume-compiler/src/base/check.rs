@@ -13,7 +13,7 @@ pub(crate) struct Checker {
 
 impl Checker {
     /// Records an error at `path`.
-    pub fn error(&mut self, path: &ValuePath, message: impl Into<String>) {
+    pub(crate) fn error(&mut self, path: &ValuePath, message: impl Into<String>) {
         self.errors.push((
             Diagnostic::error(path.display.clone(), message),
             path.lookup.clone(),
@@ -37,7 +37,7 @@ impl Checker {
     }
 
     /// `x` must be a finite number; returns whether it is.
-    pub fn finite(&mut self, path: &ValuePath, x: f64) -> bool {
+    pub(crate) fn finite(&mut self, path: &ValuePath, x: f64) -> bool {
         if x.is_finite() {
             true
         } else {
@@ -47,7 +47,7 @@ impl Checker {
     }
 
     /// `x` must be finite and > 0; returns whether it is.
-    pub fn positive(&mut self, path: &ValuePath, x: f64) -> bool {
+    pub(crate) fn positive(&mut self, path: &ValuePath, x: f64) -> bool {
         let ok = self.finite(path, x) && x > 0.0;
         if x.is_finite() && !ok {
             self.error(path, format!("must be > 0, got {x}"));
@@ -76,14 +76,14 @@ impl Checker {
     }
 
     /// `x` must be finite and in `[lo, hi]`.
-    pub fn within(&mut self, path: &ValuePath, x: f64, lo: f64, hi: f64) {
+    pub(crate) fn within(&mut self, path: &ValuePath, x: f64, lo: f64, hi: f64) {
         if self.finite(path, x) && !(lo..=hi).contains(&x) {
             self.error(path, format!("must be in [{lo}, {hi}], got {x}"));
         }
     }
 
     /// Every component of `v` must be finite; returns whether they are.
-    pub fn vec3(&mut self, path: &ValuePath, v: Vec3) -> bool {
+    pub(crate) fn vec3(&mut self, path: &ValuePath, v: Vec3) -> bool {
         let mut ok = true;
         for (i, (name, x)) in [("x", v.0), ("y", v.1), ("z", v.2)].into_iter().enumerate() {
             ok &= self.finite(&path.component(i, name), x);
@@ -92,7 +92,7 @@ impl Checker {
     }
 
     /// `v` must be finite and have a length that can be normalised.
-    pub fn direction(&mut self, path: &ValuePath, v: Vec3) {
+    pub(crate) fn direction(&mut self, path: &ValuePath, v: Vec3) {
         if self.vec3(path, v) && !is_normalizable(v) {
             self.error(
                 path,
@@ -105,7 +105,7 @@ impl Checker {
     }
 
     /// A `(min, max)` range: both finite and `min <= max`.
-    pub fn range(&mut self, path: &ValuePath, r: Range) -> bool {
+    pub(crate) fn range(&mut self, path: &ValuePath, r: Range) -> bool {
         let ok = self.finite(&path.component(0, "min"), r.0)
             & self.finite(&path.component(1, "max"), r.1);
         if ok && r.0 > r.1 {

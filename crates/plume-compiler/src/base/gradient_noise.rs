@@ -39,7 +39,7 @@ fn gradient(h: u32) -> DVec3 {
 }
 
 /// The curl of one slice's potential at q (in cells), from the analytic gradients.
-pub fn curl(key: u32, q: DVec3) -> DVec3 {
+pub(crate) fn curl(key: u32, q: DVec3) -> DVec3 {
     let q = q.clamp(DVec3::splat(-CELL_LIMIT), DVec3::splat(CELL_LIMIT));
     let cell = q.floor();
     let f = q - cell;
@@ -82,7 +82,7 @@ pub fn curl(key: u32, q: DVec3) -> DVec3 {
 /// The gradient noise's value at q (in cells): the sum over the cell's 8 corners of the
 /// corner's gradient (the first of [`curl`]'s three) dotted with the offset from it, weighted
 /// by the quintic fades; within about ±1.
-pub fn noise(key: u32, q: DVec3) -> f64 {
+pub(crate) fn noise(key: u32, q: DVec3) -> f64 {
     let q = q.clamp(DVec3::splat(-CELL_LIMIT), DVec3::splat(CELL_LIMIT));
     let cell = q.floor();
     let f = q - cell;

@@ -18,7 +18,7 @@ pub(crate) struct SourceMap {
 
 impl SourceMap {
     /// Scans `source` and records the span of every value it can reach.
-    pub fn build(source: &str) -> Self {
+    pub(crate) fn build(source: &str) -> Self {
         let tokens = tokenize(source);
         let mut scanner = Scanner {
             tokens: &tokens,
@@ -54,7 +54,7 @@ impl SourceMap {
     }
 
     /// The span of the value at `path`, or of its nearest recorded ancestor.
-    pub fn find(&self, path: &str) -> Option<Span> {
+    pub(crate) fn find(&self, path: &str) -> Option<Span> {
         let mut p = path.to_string();
         loop {
             if let Some(s) = self.spans.get(&p) {

@@ -5,18 +5,18 @@
 //!
 //! Architecture invariant: nothing here imports anything of the crate outside `base`.
 
-pub mod check;
-pub mod diagnostics;
+pub(crate) mod check;
+pub(crate) mod diagnostics;
 pub mod files;
 pub(crate) mod gradient_noise;
-pub mod kernel;
-pub mod layout;
+pub(crate) mod kernel;
+pub(crate) mod layout;
 pub mod lifetime;
-pub mod locate;
-pub mod mesh;
+pub(crate) mod locate;
+pub(crate) mod mesh;
 pub(crate) mod naga_check;
-pub mod path;
+pub(crate) mod path;
 pub mod rng;
 pub(crate) mod sdf;
-pub mod values;
-pub mod writer;
+pub(crate) mod values;
+pub(crate) mod writer;

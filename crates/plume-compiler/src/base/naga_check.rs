@@ -14,7 +14,7 @@ pub struct NagaRejection {
 }
 
 /// Parses and validates `wgsl`; returns the naga module on success.
-pub fn validate(wgsl: &str) -> Result<naga::Module, NagaRejection> {
+pub(crate) fn validate(wgsl: &str) -> Result<naga::Module, NagaRejection> {
     let module = naga::front::wgsl::parse_str(wgsl).map_err(|e| NagaRejection {
         message: e.emit_to_string(wgsl),
         wgsl: wgsl.to_string(),

@@ -71,12 +71,12 @@ pub(crate) struct ParticleDraws {
 
 impl ParticleDraws {
     /// The raw 32-bit word of `stream`.
-    pub fn word(&self, stream: u32) -> u32 {
+    pub(crate) fn word(&self, stream: u32) -> u32 {
         rand_u32(self.seed_mix, self.id, stream)
     }
 
     /// The uniform number in [0, 1) of `stream`.
-    pub fn unit(&self, stream: u32) -> f64 {
+    pub(crate) fn unit(&self, stream: u32) -> f64 {
         unit(self.word(stream))
     }
 

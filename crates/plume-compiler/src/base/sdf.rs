@@ -54,7 +54,7 @@ pub(crate) struct Sdf {
 impl Sdf {
     /// The trilinear value at grid coordinates `g` (in cells from node 0), clamped to the
     /// grid. The WGSL twin is the `Mesh` collider's `mesh{i}_value`.
-    pub fn value(&self, g: DVec3) -> f64 {
+    pub(crate) fn value(&self, g: DVec3) -> f64 {
         let n = self.counts.map(f64::from);
         let gc = g.clamp(DVec3::ZERO, DVec3::new(n[0] - 1.0, n[1] - 1.0, n[2] - 1.0));
         let base = gc
@@ -77,13 +77,13 @@ impl Sdf {
 
     /// The field's gradient at `g` by central differences half a cell either side (in value
     /// per cell).
-    pub fn gradient(&self, g: DVec3) -> DVec3 {
+    pub(crate) fn gradient(&self, g: DVec3) -> DVec3 {
         let d = |e: DVec3| self.value(g + 0.5 * e) - self.value(g - 0.5 * e);
         DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z))
     }
 
     /// The grid's last node, in grid coordinates.
-    pub fn last(&self) -> DVec3 {
+    pub(crate) fn last(&self) -> DVec3 {
         DVec3::new(
             f64::from(self.counts[0] - 1),
             f64::from(self.counts[1] - 1),
@@ -156,7 +156,7 @@ fn owns_edge(a: (f64, f64), b: (f64, f64)) -> bool {
 }
 
 /// Bakes `mesh` at `resolution` cells along its longest side.
-pub fn bake(mesh: &TriMesh, resolution: u32) -> Sdf {
+pub(crate) fn bake(mesh: &TriMesh, resolution: u32) -> Sdf {
     let (lo, hi) = mesh.bounds();
     let cell = (hi - lo).max_element() / f64::from(resolution);
     let min = lo - DVec3::splat(f64::from(PAD) * cell);

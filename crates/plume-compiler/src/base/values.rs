@@ -163,7 +163,7 @@ pub(crate) fn safe_normalize(v: DVec3) -> DVec3 {
 }
 
 /// `(0, 0, 0)`: the serde default of a placement's offset and rotation.
-pub fn origin() -> Vec3 {
+pub(crate) fn origin() -> Vec3 {
     Vec3(0.0, 0.0, 0.0)
 }
 

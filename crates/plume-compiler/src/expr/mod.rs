@@ -97,7 +97,7 @@ pub(crate) struct ExprError {
 
 impl ExprError {
     /// An error over `[start, end)`.
-    pub fn new(message: impl Into<String>, start: usize, end: usize) -> Self {
+    pub(crate) fn new(message: impl Into<String>, start: usize, end: usize) -> Self {
         Self {
             message: message.into(),
             start,

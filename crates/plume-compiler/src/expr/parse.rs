@@ -68,7 +68,7 @@ impl BinOp {
     }
 
     /// Applies a comparison (false for the arithmetic operators).
-    pub fn compare(self, a: f64, b: f64) -> bool {
+    pub(crate) fn compare(self, a: f64, b: f64) -> bool {
         match self {
             BinOp::Lt => a < b,
             BinOp::Le => a <= b,

@@ -5,7 +5,7 @@ use super::parse::BinOp;
 
 /// The type of a value.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Ty {
+pub(crate) enum Ty {
     /// A number (f32 on the GPU, f64 in the reference).
     Scalar,
     /// Three numbers.
@@ -16,7 +16,7 @@ pub enum Ty {
 
 impl Ty {
     /// As written in messages.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Ty::Scalar => "f32",
             Ty::Vec3 => "vec3",
@@ -48,7 +48,7 @@ pub(crate) enum Var {
 
 impl Var {
     /// The name as written.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Var::X => "x",
             Var::V => "v",
@@ -229,7 +229,7 @@ pub(crate) const MAX_RAND: u32 = 255;
 
 /// The known name nearest `name` by edit distance, when it is near enough to be a slip (at
 /// most a third of its letters changed, at least one).
-pub fn closest<'n>(name: &str, known: impl Iterator<Item = &'n str>) -> Option<&'n str> {
+pub(crate) fn closest<'n>(name: &str, known: impl Iterator<Item = &'n str>) -> Option<&'n str> {
     let most = (name.chars().count() / 3).max(1);
     known
         .map(|k| (edit_distance(name, k), k))

@@ -88,7 +88,7 @@ pub(crate) struct AttributeIr {
 
 impl AttributeIr {
     /// 4-byte words it takes.
-    pub fn width(&self) -> u8 {
+    pub(crate) fn width(&self) -> u8 {
         match self.ty {
             Ty::Vec3 => 3,
             _ => 1,
@@ -103,7 +103,7 @@ impl AttributeIr {
     }
 
     /// Whether its value changes after spawn.
-    pub fn changes(&self) -> bool {
+    pub(crate) fn changes(&self) -> bool {
         self.change != Change::None
     }
 

@@ -94,7 +94,7 @@ impl VolumeCells {
     }
 
     /// The point for a cell draw `r` and three unit draws (the f64 twin).
-    pub fn point(&self, r: u32, u: DVec3) -> DVec3 {
+    pub(crate) fn point(&self, r: u32, u: DVec3) -> DVec3 {
         let c = self.cells[(r % self.cells.len() as u32) as usize];
         let [cx, cy, _] = self.counts;
         let (i, j, k) = (c % cx, (c / cx) % cy, c / (cx * cy));
@@ -107,7 +107,7 @@ impl VolumeCells {
 
 /// Reads the mesh at `file` (relative to `base_dir`) and places it; with `volume`, the
 /// resolution of the field whose inside cells it spawns in (the mesh must then be closed).
-pub fn place(
+pub(crate) fn place(
     file: &str,
     base_dir: Option<&Path>,
     (offset, scale, rotation): (Vec3, f64, Vec3),

@@ -71,7 +71,7 @@ pub(crate) fn read_scene(scene: &mut [SceneMesh], base_dir: Option<&Path>, c: &m
 }
 
 /// Checks each scene mesh's placement.
-pub fn check(scene: &[SceneMesh], c: &mut Checker) {
+pub(crate) fn check(scene: &[SceneMesh], c: &mut Checker) {
     for (i, entry) in scene.iter().enumerate() {
         let SceneMesh::Mesh {
             offset,
@@ -90,7 +90,7 @@ pub fn check(scene: &[SceneMesh], c: &mut Checker) {
 
 impl SceneMesh {
     /// Lowers a checked scene mesh to the IR.
-    pub fn lower(&self) -> SceneMeshIr {
+    pub(crate) fn lower(&self) -> SceneMeshIr {
         let SceneMesh::Mesh {
             file,
             offset,

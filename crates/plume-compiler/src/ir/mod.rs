@@ -377,7 +377,7 @@ pub(crate) enum KillIr {
 
 impl KillIr {
     /// Whether a particle at `x` dies (the f64 twin of the WGSL test).
-    pub fn kills(&self, x: DVec3) -> bool {
+    pub(crate) fn kills(&self, x: DVec3) -> bool {
         match *self {
             KillIr::InsideBox(min, max) => x.cmpge(min).all() && x.cmple(max).all(),
             KillIr::OutsideBox(min, max) => !(x.cmpge(min).all() && x.cmple(max).all()),
@@ -387,7 +387,7 @@ impl KillIr {
     }
 
     /// The thinnest a particle must cross to pass through an Inside volume (None for Outside).
-    pub fn thickness(&self) -> Option<f64> {
+    pub(crate) fn thickness(&self) -> Option<f64> {
         match *self {
             KillIr::InsideBox(min, max) => Some((max - min).min_element()),
             KillIr::InsideSphere(_, r) => Some(2.0 * r),

@@ -24,7 +24,7 @@ pub(crate) struct AtAge {
 
 impl AtAge {
     /// The closed form of `ir`'s forces at age `tau`.
-    pub fn new(ir: &EffectIr, tau: f64) -> Self {
+    pub(crate) fn new(ir: &EffectIr, tau: f64) -> Self {
         let (g, k, u) = merged_drag(ir);
         let step = ExactStep::for_drag(g, k, u, tau);
         let q = if k > 0.0 {
@@ -40,7 +40,7 @@ impl AtAge {
     }
 
     /// A particle's position and velocity at this age, from its spawn state.
-    pub fn state(&self, x0: DVec3, v0: DVec3) -> (DVec3, DVec3) {
+    pub(crate) fn state(&self, x0: DVec3, v0: DVec3) -> (DVec3, DVec3) {
         self.step.apply(x0, v0)
     }
 

@@ -24,7 +24,7 @@ pub(crate) fn names<'a>(
 }
 
 /// Lowers a checked effect. Call only after [`crate::stages::validate::check_effect`] found no errors.
-pub fn lower(effect: &EffectSpec) -> EffectIr {
+pub(crate) fn lower(effect: &EffectSpec) -> EffectIr {
     let (defines, _) = crate::expr::define::parse_all(&effect.define);
     let attrs =
         crate::features::attributes::names(&effect.attributes, names(effect, &defines, &[]));

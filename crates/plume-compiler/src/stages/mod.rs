@@ -6,8 +6,8 @@
 //! calibration runs (`reference/calibrate.rs`), to choose a budget's scheme; features never
 //! import a stage.
 
-pub mod integrators;
-pub mod lower;
+pub(crate) mod integrators;
+pub(crate) mod lower;
 pub mod passes;
 pub mod schedule;
 pub mod schema;

@@ -148,7 +148,7 @@ fn obj_pieces(path: &Path, bytes: &[u8]) -> Result<Vec<Piece>, String> {
 
 impl TriMesh {
     /// The triangle's corners.
-    pub fn corners(&self, t: usize) -> [DVec3; 3] {
+    pub(crate) fn corners(&self, t: usize) -> [DVec3; 3] {
         self.triangles[t].map(|i| self.vertices[i as usize])
     }
 
@@ -164,7 +164,7 @@ impl TriMesh {
     }
 
     /// The smallest box holding every vertex.
-    pub fn bounds(&self) -> (DVec3, DVec3) {
+    pub(crate) fn bounds(&self) -> (DVec3, DVec3) {
         self.vertices.iter().fold(
             (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
             |(lo, hi), &v| (lo.min(v), hi.max(v)),

@@ -14,7 +14,7 @@ use crate::base::check::Checker;
 /// Reads `file` (relative to `base_dir`, the effect file's directory, when given) into rows
 /// of heights from `black` to `white`; an error says what is wrong with the file, for the
 /// collider's `image` field.
-pub fn read(
+pub(crate) fn read(
     file: &str,
     base_dir: Option<&Path>,
     (black, white): (f64, f64),

@@ -39,12 +39,12 @@ impl SpawnValue {
     }
 
     /// Parses, type-checks and folds `text`; a mistake is located inside it.
-    pub fn compile(self, text: &str, names: Names) -> Result<Expr, expr::ExprError> {
+    pub(super) fn compile(self, text: &str, names: Names) -> Result<Expr, expr::ExprError> {
         expr::compile_in(text, Ty::Vec3, &names.scope(self.vars(), self.role()))
     }
 
     /// Records a mistake in `text` in `c`, at its characters in the string at `path`.
-    pub fn check(self, text: &str, path: &ValuePath, c: &mut Checker, names: Names) {
+    pub(super) fn check(self, text: &str, path: &ValuePath, c: &mut Checker, names: Names) {
         if let Err(e) = self.compile(text, names) {
             c.error_in_string(path, e.start, e.end, e.message);
         }
@@ -54,7 +54,7 @@ impl SpawnValue {
 /// Emits the statements that evaluate `e` inside an emitter's `emit_e(id, k, step)` and assign
 /// it to `target` (`s.x` or `s.v`), in a block of its own (its `let`s are its own): the spawn
 /// step's time is `f32(step) * dt`, `x` the position already drawn.
-pub fn emit(w: &mut Writer, e: &Expr, target: &str, dt: f64) {
+pub(super) fn emit(w: &mut Writer, e: &Expr, target: &str, dt: f64) {
     w.block("", |w| {
         if e.draws_random() {
             w.line("let ctx_id = id;");
@@ -79,7 +79,7 @@ pub fn emit(w: &mut Writer, e: &Expr, target: &str, dt: f64) {
 
 /// The f64 twin of [`emit`]: `e` for particle `id` of an effect of `seed_mix`, the `k`-th
 /// of its emitter, spawned at time `t` at position `x` in a frame at `origin`.
-pub fn value(
+pub(super) fn value(
     e: &Expr,
     seed_mix: u32,
     (id, k): (u32, u32),

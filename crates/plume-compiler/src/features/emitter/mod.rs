@@ -110,7 +110,7 @@ pub(crate) struct Basis {
 
 impl Basis {
     /// A right-handed basis around unit `n`.
-    pub fn around(n: DVec3) -> Self {
+    pub(crate) fn around(n: DVec3) -> Self {
         let helper = if n.x.abs() > 0.9 { DVec3::Y } else { DVec3::X };
         let t1 = n.cross(helper).normalize();
         let t2 = n.cross(t1);

@@ -125,7 +125,7 @@ pub(crate) fn box_face_thresholds(min: DVec3, max: DVec3) -> Option<[u64; 5]> {
 
 impl ShapeIr {
     /// The centre that radial velocities point away from.
-    pub fn center(&self) -> DVec3 {
+    pub(crate) fn center(&self) -> DVec3 {
         match self {
             ShapeIr::Point(p) => *p,
             ShapeIr::Sphere { center, .. }
@@ -163,7 +163,7 @@ impl ShapeIr {
     }
 
     /// The farthest any spawn position lies from the origin (for precision warnings).
-    pub fn extent(&self) -> f64 {
+    pub(crate) fn extent(&self) -> f64 {
         match self {
             ShapeIr::Point(p) => p.abs().max_element(),
             ShapeIr::Sphere { center, radius }
@@ -336,7 +336,12 @@ impl ShapeIr {
     /// The spawn position of the particle drawing `d`, the `k`-th of its emitter, spawned at
     /// time `t` in a frame at `origin`, and on a mesh the surface's normal there (zero elsewhere): the f64 twin of
     /// `emit_wgsl`.
-    pub fn sample(&self, d: &ParticleDraws, k: u32, (t, origin): (f64, DVec3)) -> (DVec3, DVec3) {
+    pub(crate) fn sample(
+        &self,
+        d: &ParticleDraws,
+        k: u32,
+        (t, origin): (f64, DVec3),
+    ) -> (DVec3, DVec3) {
         let x = match self {
             ShapeIr::Custom { expr, .. } => {
                 super::expression::value(expr, d.seed_mix, (d.id, k), (t, origin), DVec3::ZERO)

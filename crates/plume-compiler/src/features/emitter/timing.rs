@@ -235,7 +235,7 @@ impl SpawnTiming {
 
 /// Records in `c` what is wrong with an emitter's timing fields at `path` (the emitter), for
 /// steps of `dt`: `burst` is its burst, which `every` repeats.
-pub fn check(
+pub(super) fn check(
     c: &mut Checker,
     path: &ValuePath,
     (start, duration, every, cycles): (f64, Option<f64>, Option<Every>, Option<u32>),

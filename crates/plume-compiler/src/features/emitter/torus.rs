@@ -68,7 +68,7 @@ impl TorusIr {
     }
 
     /// The spawn position of the particle drawing `d`.
-    pub fn sample(&self, d: &ParticleDraws) -> DVec3 {
+    pub(crate) fn sample(&self, d: &ParticleDraws) -> DVec3 {
         let u = d.unit3(stream::POSITION);
         let phi = 2.0 * PI * u.x - PI;
         let rho = match self.surface {

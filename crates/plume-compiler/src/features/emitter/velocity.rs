@@ -193,7 +193,7 @@ fn check_speed(c: &mut Checker, path: &ValuePath, speed: Range) {
 
 impl VelocityIr {
     /// The largest spawn speed.
-    pub fn max_speed(&self) -> f64 {
+    pub(crate) fn max_speed(&self) -> f64 {
         match self {
             VelocityIr::Constant(v) => v.length(),
             VelocityIr::Cone { speed, .. }
@@ -287,7 +287,7 @@ impl VelocityIr {
     /// The spawn velocity of the particle drawing `d`, spawned at `x` on `shape` at time `t`
     /// in a frame at `origin` (`normal`: the surface's normal there, zero off a mesh): the
     /// f64 twin of `emit_wgsl`.
-    pub fn sample(
+    pub(crate) fn sample(
         &self,
         d: &ParticleDraws,
         shape: &ShapeIr,

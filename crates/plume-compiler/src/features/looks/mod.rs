@@ -3,7 +3,7 @@
 //! reference drawing uses.
 
 pub mod by_expression;
-pub mod glow;
+pub(crate) mod glow;
 pub mod lit;
 pub mod orient;
 pub mod particle_light;

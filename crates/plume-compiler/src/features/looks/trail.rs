@@ -233,7 +233,7 @@ pub(crate) struct History {
 
 impl History {
     /// Records the position at the start of step `step`, if the trail samples it.
-    pub fn record(&mut self, trail: &TrailIr, step: u64, x: DVec3) {
+    pub(crate) fn record(&mut self, trail: &TrailIr, step: u64, x: DVec3) {
         if trail.samples_at(step) {
             self.samples.insert(0, x);
             self.samples.truncate(trail.ring() as usize);
@@ -241,7 +241,7 @@ impl History {
     }
 
     /// The ribbon's points: `now`, then the samples newest first.
-    pub fn ribbon(&self, now: DVec3) -> Vec<DVec3> {
+    pub(crate) fn ribbon(&self, now: DVec3) -> Vec<DVec3> {
         std::iter::once(now)
             .chain(self.samples.iter().copied())
             .collect()
