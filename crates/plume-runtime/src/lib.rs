@@ -28,6 +28,11 @@
 //!
 //! The CPU f64 reference simulator lives in `plume_compiler::reference`.
 
+// An item no path from the crate's root reaches is `pub(crate)`, so the public API reads as
+// what it is and the dead-code lint sees the rest. Checked with `tools` on: `bench` and
+// `oracle` reach a few items (the sort, the draw's options) that embedders do not.
+#![cfg_attr(feature = "tools", warn(unreachable_pub))]
+
 #[cfg(feature = "tools")]
 pub mod bench;
 mod device;

@@ -38,7 +38,7 @@ pub struct SortBench {
 /// The stages a sort's first dispatches make, timed by difference: (name, dispatches up to
 /// its end). Reduce-then-scan: the first pass's upsweep, digit scan and downsweep; OneSweep: the
 /// counts of every pass (a clear and the histogram), their scan, the first pass.
-pub fn first_stages(ranking: Ranking) -> [(&'static str, usize); 3] {
+pub(crate) fn first_stages(ranking: Ranking) -> [(&'static str, usize); 3] {
     match ranking {
         Ranking::OneSweep => [("histogram", 2), ("offsets", 3), ("first_sweep", 4)],
         Ranking::Subgroup | Ranking::Portable => {

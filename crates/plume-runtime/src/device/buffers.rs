@@ -8,13 +8,13 @@ use crate::error::RuntimeError;
 
 /// Usage of every storage buffer the runtime makes: kernels read and write it, readback copies
 /// from it, and the draw's vertex shader reads it as read-only storage.
-pub const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
+pub(crate) const STORAGE: wgpu::BufferUsages = wgpu::BufferUsages::STORAGE
     .union(wgpu::BufferUsages::COPY_SRC)
     .union(wgpu::BufferUsages::COPY_DST);
 
 /// A buffer created mapped and filled by `fill`. Fails (rather than panics) when the device
 /// cannot map it, as after a device loss, which it then reports.
-pub fn filled_buffer(
+pub(crate) fn filled_buffer(
     gpu: &Gpu,
     label: &str,
     size: u64,
@@ -45,7 +45,7 @@ pub fn filled_buffer(
 }
 
 /// A buffer created holding `words` (little-endian), at least 16 bytes long.
-pub fn words_buffer(
+pub(crate) fn words_buffer(
     gpu: &Gpu,
     label: &str,
     words: impl ExactSizeIterator<Item = u32>,
@@ -62,7 +62,7 @@ pub fn words_buffer(
 /// A small buffer holding `bytes`, to copy from inside an encoder: per-call parameters are
 /// copied in the caller's encoder, in order, rather than written with `Queue::write_buffer`
 /// (which would apply every write before any of the submission's commands run).
-pub fn staging(gpu: &Gpu, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, RuntimeError> {
+pub(crate) fn staging(gpu: &Gpu, label: &str, bytes: &[u8]) -> Result<wgpu::Buffer, RuntimeError> {
     filled_buffer(
         gpu,
         label,

@@ -69,7 +69,7 @@ pub(crate) fn read_words(
 
 /// The totals from the counters' bytes (free count, spawn base, spawn count, spawned,
 /// dropped, died): alive is the capacity less the free count.
-pub fn decode_totals(counters: &[u8], capacity: u32, steps: u64) -> Totals {
+pub(crate) fn decode_totals(counters: &[u8], capacity: u32, steps: u64) -> Totals {
     let word = |i: usize| {
         u64::from(u32::from_le_bytes([
             counters[4 * i],

@@ -19,11 +19,11 @@ use crate::error::RuntimeError;
 
 /// Steps recorded per submission: bounds the parameter buffer (256 B a step) and how long
 /// one submission keeps the GPU busy.
-pub const STEPS_PER_SUBMIT: u32 = 256;
+pub(crate) const STEPS_PER_SUBMIT: u32 = 256;
 
 /// Steps one plan of a batch holds ([`crate::sim::batch`]): a batch's step parameters are a row
 /// per instance, so its buffer holds fewer steps than an effect's.
-pub const BATCH_STEPS: u32 = 8;
+pub(crate) const BATCH_STEPS: u32 = 8;
 
 /// Bytes of the `params` binding: one step's parameters (a batch's: every instance's rows,
 /// as the batch sized the binding).
@@ -41,7 +41,7 @@ pub(crate) fn binding_bytes(effect: &CompiledEffect, role: Role) -> u64 {
 
 /// One particle buffer: global slots `base .. base + len`, and the compute bind group that
 /// binds it (with every shared buffer).
-pub struct Chunk {
+pub(crate) struct Chunk {
     /// First global slot.
     pub base: u64,
     /// Slots held.
@@ -115,7 +115,7 @@ impl Resources {
     /// buffer when given (tests use it to exercise the split on small effects). `shared` holds
     /// buffers made elsewhere for some bindings (an effect graph's event buffers, which two
     /// groups bind); the others are allocated here.
-    pub fn new(
+    pub(crate) fn new(
         gpu: &Gpu,
         effect: &CompiledEffect,
         max_chunk_slots: Option<u64>,
@@ -351,7 +351,7 @@ impl Resources {
     }
 
     /// Number of particle buffers the state (or the stateless view) is split into.
-    pub fn chunk_count(&self) -> usize {
+    pub(crate) fn chunk_count(&self) -> usize {
         self.chunk_count as usize
     }
 
@@ -362,7 +362,7 @@ impl Resources {
     }
 
     /// The particle buffers with their bind groups, allocated on first use.
-    pub fn chunks(&self, effect: &CompiledEffect) -> Result<&[Chunk], RuntimeError> {
+    pub(crate) fn chunks(&self, effect: &CompiledEffect) -> Result<&[Chunk], RuntimeError> {
         if let Some(c) = self.chunks.get() {
             return Ok(c);
         }
@@ -523,7 +523,7 @@ impl Resources {
     }
 
     /// A compute pipeline of the module's entry point `entry`, on the shared layout.
-    pub fn pipeline(&self, entry: &str) -> wgpu::ComputePipeline {
+    pub(crate) fn pipeline(&self, entry: &str) -> wgpu::ComputePipeline {
         self.gpu
             .compute_pipeline(&self.module, entry, Some(&self.pipeline_layout))
     }

@@ -24,7 +24,7 @@ pub struct GlowPasses {
 
 /// The blur's taps on each side of the centre and its exponent factor −1 / (2 σ²), for a
 /// standard deviation of `radius` × `height` texels (at least half a texel): taps reach 3 σ.
-pub fn kernel(radius: f64, height: u32) -> (i32, f32) {
+pub(crate) fn kernel(radius: f64, height: u32) -> (i32, f32) {
     let sigma = (radius * f64::from(height)).max(0.5);
     (
         (3.0 * sigma).ceil() as i32,

@@ -83,7 +83,7 @@ pub(crate) struct LiveList {
 
 impl LiveList {
     /// The live list of `effect`, whose buffers `res` holds.
-    pub fn new(
+    pub(crate) fn new(
         gpu: &Gpu,
         res: &Resources,
         effect: &CompiledEffect,
@@ -162,7 +162,7 @@ impl LiveList {
     }
 
     /// Records the flags, their scan and the scatter into `pass`.
-    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
+    pub(crate) fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
         pass.set_pipeline(&self.flags);
         for (flags, _, len) in &self.parts {
             let (x, y) = self.gpu.grid(*len, 256)?;

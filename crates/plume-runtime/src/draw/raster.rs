@@ -65,7 +65,7 @@ pub enum DeadSlots {
 /// The capacity from which [`DeadSlots::BySize`] compacts the list of live slots: about where
 /// 4 hidden vertices a slot cost what the list's three small dispatches do (docs/performance.md,
 /// "Free slots: hidden quads or a compacted list").
-pub const COMPACT_FROM_SLOTS: u32 = 4096;
+pub(crate) const COMPACT_FROM_SLOTS: u32 = 4096;
 
 /// Choices of a draw beyond its target.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]

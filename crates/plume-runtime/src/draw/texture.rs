@@ -43,7 +43,7 @@ impl SpriteTexture {
     /// Uploads `texture` (texels stored as they are: `Rgba8Unorm`, no sRGB decoding, as the
     /// effect's colour stops). An error for a texture whose file could not be read when the
     /// effect was compiled to be stepped only (`CompileOptions::step_only`): drawing needs it.
-    pub fn new(gpu: &Gpu, texture: &TextureIr) -> Result<Self, RuntimeError> {
+    pub(crate) fn new(gpu: &Gpu, texture: &TextureIr) -> Result<Self, RuntimeError> {
         if let Some(why) = &texture.missing {
             return Err(RuntimeError::Compile(format!(
                 "{why} (the effect was compiled to be stepped, not drawn; drawing it needs its texture)"

@@ -19,7 +19,7 @@ use crate::oracle::strips::StripVertex;
 /// edge is at most an eighth of its distance from the nearest point light (and at least 4 with
 /// a shadow map), at most 16. A point light's inverse square then changes by at most about a
 /// quarter across a piece, which a straight blend follows within the tests' 8-bit tolerance.
-pub fn pieces_per_edge(lights: &Lights, t: &[DVec3; 3]) -> usize {
+pub(crate) fn pieces_per_edge(lights: &Lights, t: &[DVec3; 3]) -> usize {
     let edge = (0..3)
         .map(|k| t[k].distance(t[(k + 1) % 3]))
         .fold(0.0, f64::max);

@@ -53,7 +53,7 @@ struct First {
 }
 
 /// One stream's ordering: its dispatches, in order.
-pub struct EventOrder {
+pub(crate) struct EventOrder {
     first: First,
     rest: Vec<Dispatch>,
 }
@@ -65,7 +65,7 @@ impl EventOrder {
     /// The ordering of a stream whose firing group has `n` slots: `keys`, `vals` (n each) and
     /// `records` (the count, the id range, then the records) are the firing group's. The firing
     /// slots, in id order, go to `order` (n). Each firing asks for `count` children.
-    pub fn new(
+    pub(crate) fn new(
         gpu: &Gpu,
         ordering: Ordering,
         n: u64,
@@ -221,7 +221,7 @@ impl EventOrder {
 
     /// Records the ordering of this step's firings, and the preparation of the children's
     /// spawn, into `pass`.
-    pub fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
+    pub(crate) fn record(&self, pass: &mut wgpu::ComputePass<'_>) {
         self.record_with(pass, true);
     }
 

@@ -30,7 +30,7 @@ struct GridPass {
 }
 
 /// The flocking kernels of one effect.
-pub struct FlockPass {
+pub(crate) struct FlockPass {
     snapshot: Option<wgpu::ComputePipeline>,
     reduce: Option<wgpu::ComputePipeline>,
     /// All pairs (None with the grid, whose search is its own).
@@ -40,7 +40,7 @@ pub struct FlockPass {
 
 impl FlockPass {
     /// The pass for `flock` of `effect`, whose buffers `res` holds.
-    pub fn new(
+    pub(crate) fn new(
         gpu: &Gpu,
         res: &Resources,
         effect: &CompiledEffect,
@@ -95,7 +95,7 @@ impl FlockPass {
 
     /// The pass's stages in recording order, for timing them one by one.
     #[cfg(feature = "tools")]
-    pub fn stage_names(&self) -> &'static [&'static str] {
+    pub(crate) fn stage_names(&self) -> &'static [&'static str] {
         match (&self.grid, &self.reduce) {
             (Some(_), None) => &["bucket counts", "scan", "scatter", "rank", "search"],
             (Some(_), Some(_)) => &[
@@ -113,7 +113,7 @@ impl FlockPass {
 
     /// Records one step's flocking pass (one chunk: boids index slots globally) with the
     /// step's parameters at `offset`: snapshot, means, neighbour search.
-    pub fn record(
+    pub(crate) fn record(
         &self,
         gpu: &Gpu,
         pass: &mut wgpu::ComputePass<'_>,

@@ -20,7 +20,7 @@ use crate::error::RuntimeError;
 use crate::sim::flock::FlockPass;
 
 /// The kernels that advance an effect.
-pub enum Steps {
+pub(crate) enum Steps {
     /// Spawn and update kernels over the particle state.
     Stateful(StatefulSteps),
     /// Bookkeeping, and the `evaluate` kernel that writes the view when it is read back.
@@ -44,7 +44,7 @@ pub(crate) struct StatefulSteps {
 /// A stateless group's events: its `fire` kernel (a step's firings from the closed form, over
 /// the submission's segment table, for the step its `fire_state` binding holds), and how many
 /// threads the current submission's table has, and the one's before it.
-pub struct Firing {
+pub(crate) struct Firing {
     fire: wgpu::ComputePipeline,
     threads: u64,
     previous_threads: u64,
@@ -53,7 +53,7 @@ pub struct Firing {
 /// A stateless effect's `evaluate` kernel and its bookkeeping: steps only advance the live
 /// segments; the view is computed when it is read. A group that fires events also runs its
 /// `fire` kernel every step ([`Firing`]).
-pub struct StatelessSteps {
+pub(crate) struct StatelessSteps {
     evaluate: wgpu::ComputePipeline,
     /// The `fire` kernels of a group that fires events.
     pub firing: Option<Firing>,
@@ -69,7 +69,11 @@ fn groups(gpu: &Gpu, threads: u64) -> Result<(u32, u32), RuntimeError> {
 
 impl Steps {
     /// The kernels of `effect`, whose buffers `res` holds.
-    pub fn new(gpu: &Gpu, res: &Resources, effect: &CompiledEffect) -> Result<Self, RuntimeError> {
+    pub(crate) fn new(
+        gpu: &Gpu,
+        res: &Resources,
+        effect: &CompiledEffect,
+    ) -> Result<Self, RuntimeError> {
         if let Some(plan) = &effect.ir.stateless {
             return Ok(Steps::Stateless(StatelessSteps {
                 evaluate: res.pipeline("evaluate"),
@@ -134,7 +138,7 @@ impl StatefulSteps {
     /// per step, a field bake when it bakes every step, the spawn kernels when something spawns
     /// (a step that requests nothing changes no counter), the flocking pass, then the update
     /// per chunk.
-    pub fn record(
+    pub(crate) fn record(
         &self,
         gpu: &Gpu,
         pass: &mut wgpu::ComputePass<'_>,
@@ -217,7 +221,7 @@ impl StatefulSteps {
 impl StatefulSteps {
     /// The flocking pass, when the effect flocks.
     #[cfg(feature = "tools")]
-    pub fn flock(&self) -> Option<&FlockPass> {
+    pub(crate) fn flock(&self) -> Option<&FlockPass> {
         self.flock.as_ref()
     }
 }
@@ -227,7 +231,7 @@ impl StatefulSteps {
 /// index, then for a placed effect the `placement`'s rows (`features::placement`), then
 /// (count, counter before, 0, 0) per emitter slot, then for an effect that takes bursts their
 /// slots (`features::bursts`), then the `live_params` (`CompileOptions::live_params`).
-pub fn params_bytes(
+pub(crate) fn params_bytes(
     plans: &[StepPlan],
     layout: &Layout,
     stride: u64,
@@ -290,7 +294,12 @@ pub(crate) fn write_params_row(
 
 impl StatelessSteps {
     /// Advances the bookkeeping by `steps`, calling `progress(done)` every 2^16 steps.
-    pub fn advance(&mut self, schedule: &mut Schedule, steps: u64, mut progress: impl FnMut(u64)) {
+    pub(crate) fn advance(
+        &mut self,
+        schedule: &mut Schedule,
+        steps: u64,
+        mut progress: impl FnMut(u64),
+    ) {
         let mut done = 0;
         while done < steps {
             let n = (steps - done).min(1 << 16);
@@ -349,7 +358,7 @@ impl StatelessSteps {
     /// The `fire_frame` table of `segments` (every segment live at some step of a submission), with
     /// each one's first thread, and the threads in all. Only the spawn steps and ids matter to
     /// `fire`, which computes each particle's age at its step.
-    pub fn fire_table(
+    pub(crate) fn fire_table(
         effect: &CompiledEffect,
         segments: &[Segment],
     ) -> Result<(Vec<u8>, u64), RuntimeError> {
@@ -397,7 +406,7 @@ impl StatelessSteps {
     /// The most firings of one event that step `j` of the current submission orders: those of the
     /// step before, which fired over the current submission's table or, for its first step, over
     /// the submission's before it (each particle of the table fires an event at most once a step).
-    pub fn firings_bound(&self, j: usize) -> Option<u64> {
+    pub(crate) fn firings_bound(&self, j: usize) -> Option<u64> {
         self.firing.as_ref().map(|f| {
             if j == 0 {
                 f.previous_threads

@@ -17,7 +17,7 @@ use crate::sort::radix::{GpuSorter, SortAlgorithm, SortProgram};
 
 /// The depth sort's stages in recording order: the keys of every slot, their live range, the
 /// radix sort (whose first pass maps the keys to 16 bits over that range).
-pub const DEPTH_SORT_STAGES: [&str; 3] = ["keys", "range", "sort"];
+pub(crate) const DEPTH_SORT_STAGES: [&str; 3] = ["keys", "range", "sort"];
 
 /// How the keys kernel reads the particles.
 enum Keys {
@@ -42,7 +42,11 @@ pub(crate) struct DepthSort {
 
 impl DepthSort {
     /// The sort stage of `effect`, whose buffers `res` holds.
-    pub fn new(gpu: &Gpu, res: &Resources, effect: &CompiledEffect) -> Result<Self, RuntimeError> {
+    pub(crate) fn new(
+        gpu: &Gpu,
+        res: &Resources,
+        effect: &CompiledEffect,
+    ) -> Result<Self, RuntimeError> {
         let buffers = sort_buffers(res)?;
         let keys = if effect.layout.stateless() {
             let (pipeline, group) = res.standalone(effect, "depth_keys");
@@ -69,7 +73,7 @@ impl DepthSort {
 
     /// Records the keys of every slot and their sort into `pass`. `chunks` are the particle
     /// buffers (unused by a stateless effect, which evaluates its particles in place).
-    pub fn record(
+    pub(crate) fn record(
         &self,
         gpu: &Gpu,
         pass: &mut wgpu::ComputePass<'_>,

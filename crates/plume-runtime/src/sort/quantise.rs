@@ -23,7 +23,7 @@ use crate::error::RuntimeError;
 type Dispatch = (wgpu::ComputePipeline, wgpu::BindGroup, (u32, u32));
 
 /// The quantising kernels of one sort buffer, built once.
-pub struct DepthQuantise {
+pub(crate) struct DepthQuantise {
     /// The range's reset and reduction, in recording order.
     range_dispatches: [Dispatch; 2],
     /// The map of every key in place and every slot's value (the bitonic sort's path).
@@ -45,7 +45,7 @@ pub(crate) const KEY_BITS: u32 = 16;
 impl DepthQuantise {
     /// The kernels that quantise the first `n` keys of `keys` in place (and, for the bitonic
     /// sort, give `vals` every slot's index).
-    pub fn new(
+    pub(crate) fn new(
         gpu: &Gpu,
         keys: &wgpu::Buffer,
         vals: &wgpu::Buffer,
@@ -109,7 +109,7 @@ impl DepthQuantise {
 
     /// The live range the reduction leaves: the smallest and largest live key, for the radix
     /// sort's first pass to map the keys by.
-    pub fn range(&self) -> &wgpu::Buffer {
+    pub(crate) fn range(&self) -> &wgpu::Buffer {
         &self.range
     }
 

@@ -15,7 +15,7 @@ use crate::device::gpu::Gpu;
 use crate::error::RuntimeError;
 use crate::sort::onesweep::SweepKernels;
 use crate::sort::program;
-pub use crate::sort::program::SortProgram;
+pub(crate) use crate::sort::program::SortProgram;
 
 /// Which sort.
 // The benchmarks (feature `tools`) choose the sort and its ranking; the draw takes the defaults.

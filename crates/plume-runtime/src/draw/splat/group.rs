@@ -110,7 +110,7 @@ pub(crate) struct GroupSplat {
 }
 
 /// The compute renderer's stages, in order.
-pub const STAGES: [&str; 6] = ["project", "scan", "emit", "sort", "ranges", "raster"];
+pub(crate) const STAGES: [&str; 6] = ["project", "scan", "emit", "sort", "ranges", "raster"];
 
 impl GroupSplat {
     /// A splat of `group`'s sprites, or of its ribbons (`ribbons`: the strips' segments,

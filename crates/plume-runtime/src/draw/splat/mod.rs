@@ -42,7 +42,7 @@ use crate::draw::glow::GlowPasses;
 use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
 #[cfg(feature = "tools")]
-pub use group::STAGES;
+pub(crate) use group::STAGES;
 use group::{GroupSplat, SplatImage};
 pub(crate) use host::HostSplat;
 use plume_compiler::wgsl::draw::SplatHost;
