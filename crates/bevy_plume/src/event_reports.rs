@@ -60,13 +60,18 @@ pub(crate) struct Reported {
 
 impl FiredEvents {
     /// The queue, even if a panicking thread left it poisoned.
-    pub fn lock(&self) -> std::sync::MutexGuard<'_, Reported> {
+    pub(crate) fn lock(&self) -> std::sync::MutexGuard<'_, Reported> {
         self.0.lock().unwrap_or_else(|p| p.into_inner())
     }
 
     /// Queues the reports of `entity`'s effect, whose simulation space maps to the world by
     /// `to_world`.
-    pub fn push(&self, entity: Entity, reports: Vec<plume_runtime::EventReport>, to_world: Mat4) {
+    pub(crate) fn push(
+        &self,
+        entity: Entity,
+        reports: Vec<plume_runtime::EventReport>,
+        to_world: Mat4,
+    ) {
         let mut queue = self.lock();
         for report in reports {
             if report.missed() > 0 {

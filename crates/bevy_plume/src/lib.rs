@@ -23,6 +23,10 @@
 //!
 //! See docs/bevy.md in the Plume repository for what is supported and what is measured.
 
+// An item no path from the crate's root reaches is `pub(crate)`, so the public API reads as
+// what it is and the dead-code lint sees the rest.
+#![warn(unreachable_pub)]
+
 mod asset;
 mod bounds;
 mod diagnostics;

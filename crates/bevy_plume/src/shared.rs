@@ -26,7 +26,7 @@ impl<T: Send + Sync + 'static> Default for EntityShared<T> {
 
 impl<T: Send + Sync + 'static> EntityShared<T> {
     /// The map, even if a panicking thread left it poisoned.
-    pub fn lock(&self) -> MutexGuard<'_, EntityHashMap<T>> {
+    pub(crate) fn lock(&self) -> MutexGuard<'_, EntityHashMap<T>> {
         self.0.lock().unwrap_or_else(|p| p.into_inner())
     }
 }

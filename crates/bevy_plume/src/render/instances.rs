@@ -511,7 +511,7 @@ impl Instance {
 
     /// Whether the compute renderer draws every group of the effect (it draws no ribbons
     /// joining particles): `PlumeDraw::Auto` picks it only then.
-    pub fn compute_draws(&self) -> bool {
+    pub(crate) fn compute_draws(&self) -> bool {
         let groups: Vec<&plume_compiler::EffectIr> = (0..self.effect.group_names().len())
             .filter_map(|g| self.effect.group_compiled(g).ok())
             .map(|c| &c.ir)
@@ -524,7 +524,7 @@ impl Instance {
     /// `compute_size` when that is given and the effect takes it (else the raster one, the
     /// reason logged once); None, with the reason logged once, when the effect cannot be
     /// drawn there.
-    pub fn view_draw(
+    pub(crate) fn view_draw(
         &mut self,
         view: Entity,
         target: DrawTarget,
