@@ -182,12 +182,6 @@ impl GroupSplat {
             .max(8 * u64::from(width) * u64::from(height))
             .max(partial_bytes)
             .max(if sliced_discs { disc_light_bytes } else { 0 });
-        if effect.layout.batched {
-            return Err(RuntimeError::Unsupported(format!(
-                "{}: a batch is drawn by the raster renderer (Effect::renderer), which turns each instance by its transform",
-                effect.ir.name
-            )));
-        }
         if largest > limit {
             return Err(RuntimeError::Unsupported(format!(
                 "{}: the compute renderer of {count} records into {width}x{height} needs a {largest}-byte buffer, past the adapter's {limit}-byte binding limit; draw this effect with the raster pipeline",

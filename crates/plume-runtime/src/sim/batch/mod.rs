@@ -41,7 +41,8 @@ pub struct BatchInstance(pub u32);
 
 /// Many instances of one effect in one set of buffers: one dispatch chain steps them all
 /// ([`Self::advance`]) and one draw draws them all (the draw of [`Self::effect`], through
-/// [`Effect::renderer`] and [`Effect::prepare_draw`] as for any effect).
+/// [`Effect::renderer`] or [`Effect::compute_renderer`], and [`Effect::prepare_draw`], as for
+/// any effect; each instance through its own transform).
 ///
 /// Batches take effects of one group without events, trails, depth sort, flocking, a baked
 /// field, motion in halves or a scene-depth collider (`plume_compiler::batch::unbatchable`
