@@ -8,9 +8,10 @@
 //! entity goes.
 //!
 //! What can be batched: either space (a local-space entity's particles are drawn through its
-//! transform), drawn by the raster renderer (not `PlumeDraw::Compute`, nor `Auto` at
-//! [`AUTO_COMPUTE_CAPACITY`] particles and up), stateful, one group without events, trails,
-//! depth sort, flocking, baked fields or scene-depth colliders. A batched entity gets
+//! transform), either renderer (a batch is drawn by one: entities of a variant that draw by
+//! the raster pipeline and by the compute renderer, `PlumeDraw::Compute` or `Auto` at
+//! [`AUTO_COMPUTE_CAPACITY`] particles and up, are batched apart), stateful, one group without
+//! events, trails, depth sort, flocking, baked fields or scene-depth colliders. A batched entity gets
 //! no measured bounds (a declared `bounds` still culls it) and is sorted with its batch.
 
 use std::collections::BTreeMap;
@@ -43,8 +44,8 @@ const BATCH_ROOM: u64 = 256;
 /// The most particle state one batch allocates: fewer instances of a larger effect.
 const BATCH_BYTES: u64 = 32 << 20;
 
-/// A file variant's batches: by (the file version's address, variant).
-pub(crate) type SetKey = (usize, Variant);
+/// A file variant's batches: by (the file version's address, variant, how they draw).
+pub(crate) type SetKey = (usize, Variant, PlumeDraw);
 
 /// The batched entities and their batches.
 #[derive(Resource, Default)]
@@ -69,8 +70,12 @@ pub(crate) struct RenderBatch {
     pub batch: EffectBatch,
     /// The entity in each instance's place.
     slots: Vec<Option<Entity>>,
-    /// Its draws, by the camera's render-world entity: (target, renderer, frame last queued).
-    pub views: EntityHashMap<(DrawTarget, EffectRenderer, u64)>,
+    /// How it draws: `Raster`, `Compute`, or `Auto` (the compute renderer on a GPU adapter).
+    pub draw: PlumeDraw,
+    /// The compute renderer failed to draw it once (said then): the raster one does.
+    pub compute_refused: bool,
+    /// Its draws, by the camera's render-world entity.
+    pub views: EntityHashMap<BatchView>,
     /// Each place's steps this frame in parts (`EffectBatch::advance_along`), kept from frame
     /// to frame so that recording them allocates nothing.
     parts: Vec<Vec<(u64, Option<Placement>)>>,
@@ -78,6 +83,16 @@ pub(crate) struct RenderBatch {
     pub particle_bytes: u64,
     /// Its particles alive, as last read back (`PlumeDiagnosticsPlugin` reads them).
     pub alive: u64,
+}
+
+/// A batch's draw for one camera.
+pub(crate) struct BatchView {
+    pub target: DrawTarget,
+    /// The compute renderer's image size (None: drawn by the raster renderer).
+    pub size: Option<(u32, u32)>,
+    pub renderer: EffectRenderer,
+    /// The frame that last queued it.
+    pub frame: u64,
 }
 
 /// One batched entity.
@@ -169,15 +184,16 @@ pub(crate) fn sync_batches(
     let mut crowds: HashMap<SetKey, usize> = HashMap::new();
     for (e, key) in extracted.effects.iter().zip(&keys) {
         if can_batch(e) {
-            *crowds.entry(set_key(key)).or_default() += 1;
+            *crowds.entry(set_key(key, e)).or_default() += 1;
         }
     }
     let delta = extracted.delta;
     let mut alive = EntityHashSet::with_capacity(batches.members.len());
     for (e, key) in extracted.effects.iter().zip(keys) {
-        // One that can no longer be batched (now drawn by the compute renderer) leaves: the
-        // instances make it an effect of its own.
-        if batches.members.contains_key(&e.main) && !can_batch(e) {
+        // One that can no longer be batched (now timed on its own), or draws another way than
+        // its batch, leaves: the instances make it an effect of its own.
+        let leaves = |m: &Member| !can_batch(e) || m.set.2 != batch_draw(e);
+        if batches.members.get(&e.main).is_some_and(leaves) {
             batches.leave(e.main);
         }
         // How the entity's build differs from its batch place's: not at all (Some(true)), by
@@ -204,7 +220,7 @@ pub(crate) fn sync_batches(
             None => {}
         }
         if !batches.members.contains_key(&e.main) && !store.instances.contains_key(&e.main) {
-            let crowd = crowds.get(&set_key(&key)).copied().unwrap_or(0);
+            let crowd = crowds.get(&set_key(&key, e)).copied().unwrap_or(0);
             if crowd >= BATCH_FROM && can_batch(e) {
                 let joined = batches.join(&gpu, e, key.clone(), crowd, &mut store.variants);
                 if let Err(message) = joined {
@@ -265,23 +281,24 @@ pub(crate) fn sync_batches(
     bursts.0.retain(|(entity, _)| !alive.contains(entity));
 }
 
-/// The batches of `key`'s file variant.
-fn set_key(key: &BuildKey) -> SetKey {
-    (Arc::as_ptr(&key.graph) as usize, key.variant)
+/// The batches of `key`'s file variant that `e` may join.
+fn set_key(key: &BuildKey, e: &ExtractedEffect) -> SetKey {
+    (Arc::as_ptr(&key.graph) as usize, key.variant, batch_draw(e))
 }
 
-/// Whether `e` may join a batch (before its file is looked at): drawn by the raster renderer,
-/// and not timed on its own ([`crate::PlumeGpuTime`]).
-fn can_batch(e: &ExtractedEffect) -> bool {
-    if e.timed {
-        return false;
-    }
-    let capacity = e.asset.graph.capacity();
+/// How a batch of `e` draws: as `e` would alone, `Auto` below [`AUTO_COMPUTE_CAPACITY`]
+/// particles being the raster renderer.
+fn batch_draw(e: &ExtractedEffect) -> PlumeDraw {
     match e.control.draw {
-        PlumeDraw::Raster => true,
-        PlumeDraw::Auto => capacity < AUTO_COMPUTE_CAPACITY,
-        PlumeDraw::Compute => false,
+        PlumeDraw::Auto if e.asset.graph.capacity() < AUTO_COMPUTE_CAPACITY => PlumeDraw::Raster,
+        draw => draw,
     }
+}
+
+/// Whether `e` may join a batch (before its file is looked at): not timed on its own
+/// ([`crate::PlumeGpuTime`]).
+fn can_batch(e: &ExtractedEffect) -> bool {
+    !e.timed
 }
 
 impl PlumeBatches {
@@ -307,7 +324,7 @@ impl PlumeBatches {
         crowd: usize,
         variants: &mut crate::render::instances::Variants,
     ) -> Result<(), String> {
-        let id = set_key(&key);
+        let id = set_key(&key, e);
         let set = match self.sets.entry(id) {
             Entry::Occupied(set) => set.into_mut(),
             Entry::Vacant(place) => {
@@ -348,6 +365,8 @@ impl PlumeBatches {
                 let made = RenderBatch {
                     batch,
                     slots: vec![None; instances as usize],
+                    draw: id.2,
+                    compute_refused: false,
                     views: EntityHashMap::default(),
                     parts: vec![Vec::new(); instances as usize],
                     particle_bytes: per_instance * u64::from(instances),

@@ -18,7 +18,7 @@ use bevy::render::view::{ExtractedView, RenderVisibleEntities};
 use plume_runtime::DrawTarget;
 
 use crate::effect::{PlumeDraw, PlumeEffect, AUTO_COMPUTE_CAPACITY};
-use crate::render::batches::PlumeBatches;
+use crate::render::batches::{BatchView, PlumeBatches};
 use crate::render::instances::{PlumeInstances, PlumeRenderStats};
 
 /// The target a camera's transparent pass draws into: its colour format and samples, Bevy's
@@ -192,16 +192,7 @@ fn queue_view(
                     && instance.compute_draws()
             }
         };
-        let (target, size) = match compute_image.filter(|_| compute) {
-            // The compute renderer reads the main pass's depth (sample 0 of a multisampled
-            // one): soft particles fade with MSAA too.
-            Some(Some(size)) => (target.with_soft(true), Some(size)),
-            Some(None) => {
-                warn_once!("bevy_plume: a camera whose viewport is not its whole target draws effects with the raster renderer");
-                (target, None)
-            }
-            None => (target, None),
-        };
+        let (target, size) = compute_target(target, compute_image.filter(|_| compute));
         if instance
             .view_draw(view_entity, target, size, frame)
             .is_none()
@@ -225,33 +216,88 @@ fn queue_view(
         let Some(batch) = batches.batch_mut(id) else {
             continue;
         };
+        let compute = !batch.compute_refused
+            && match batch.draw {
+                PlumeDraw::Raster => false,
+                PlumeDraw::Compute => true,
+                PlumeDraw::Auto => {
+                    let ir = &batch.batch.compiled().ir;
+                    *gpu_adapter
+                        && plume_runtime::outputs::ComputeOffscreen::why_not(&[ir]).is_none()
+                }
+            };
+        let (drawn_into, size) = compute_target(target, compute_image.filter(|_| compute));
         if !batch
             .views
             .get(&view_entity)
-            .is_some_and(|(t, _, _)| *t == target)
+            .is_some_and(|v| v.target == drawn_into && v.size == size)
         {
-            match batch.batch.effect().renderer(&target) {
-                Ok(renderer) => {
-                    batch.views.insert(view_entity, (target, renderer, frame));
+            let name = &batch.batch.compiled().ir.name;
+            let drawn = match size {
+                Some((w, h)) => match batch.batch.effect().compute_renderer(&drawn_into, w, h) {
+                    Ok(renderer) => Ok((drawn_into, size, renderer)),
+                    Err(err) => {
+                        warn!("{name}: the compute renderer cannot draw its batch ({err}): the raster one does");
+                        batch.compute_refused = true;
+                        batch
+                            .batch
+                            .effect()
+                            .renderer(&target)
+                            .map(|r| (target, None, r))
+                    }
+                },
+                None => batch
+                    .batch
+                    .effect()
+                    .renderer(&target)
+                    .map(|r| (target, None, r)),
+            };
+            match drawn {
+                Ok((target, size, renderer)) => {
+                    let view = BatchView {
+                        target,
+                        size,
+                        renderer,
+                        frame,
+                    };
+                    batch.views.insert(view_entity, view);
                 }
                 Err(err) => {
-                    warn_once!(
-                        "{}: a batch cannot be drawn: {err}",
-                        batch.batch.compiled().ir.name
-                    );
+                    warn_once!("{name}: a batch cannot be drawn: {err}");
                     continue;
                 }
             }
         }
-        if let Some(draw) = batch.views.get_mut(&view_entity) {
-            draw.2 = frame;
-        }
+        let Some(view) = batch.views.get_mut(&view_entity) else {
+            continue;
+        };
+        view.frame = frame;
         stats.draws += 1;
+        if view.renderer.is_compute() {
+            stats.compute_draws += 1;
+        }
         let center = batches
             .members
             .get(&entity.1.id())
             .map_or(Vec3::ZERO, |m| m.world_from_local().w_axis.truncate());
         add(entity, center);
+    }
+}
+
+/// The target and compute image size an effect is drawn with: the compute renderer's where
+/// `compute` gives its image size (it reads the main pass's depth, sample 0 of a multisampled
+/// one, so soft particles fade with MSAA too), else the raster renderer's.
+fn compute_target(
+    target: DrawTarget,
+    compute: Option<Option<(u32, u32)>>,
+) -> (DrawTarget, Option<(u32, u32)>) {
+    match compute {
+        Some(Some(size)) => (target.with_soft(true), Some(size)),
+        Some(None) => {
+            warn_once!("bevy_plume: a camera whose viewport is not its whole target draws effects with the raster renderer");
+            (target, None)
+        }
+        None => (target, None),
     }
 }
 
@@ -263,7 +309,7 @@ pub(crate) fn retire_unseen(mut store: ResMut<PlumeInstances>, mut batches: ResM
         instance.views.retain(|_, draw| draw.frame == frame);
     }
     for batch in batches.batches_mut() {
-        batch.views.retain(|_, draw| draw.2 == frame);
+        batch.views.retain(|_, view| view.frame == frame);
     }
 }
 
@@ -320,8 +366,8 @@ fn draw_entity<'w>(
             timer.stamp_in_pass(pass.wgpu_pass(), true);
         }
     } else if let Some(batch) = world.resource::<PlumeBatches>().batch_of(entity) {
-        if let Some((_, renderer, _)) = batch.views.get(&view) {
-            renderer.draw(pass.wgpu_pass());
+        if let Some(batch_view) = batch.views.get(&view) {
+            batch_view.renderer.draw(pass.wgpu_pass());
         }
     }
 }

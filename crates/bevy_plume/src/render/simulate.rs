@@ -22,7 +22,7 @@ use crate::bounds::{MeasuredBounds, MeasuredBox};
 use crate::effect::SimulationSpace;
 use crate::event_reports::FiredEvents;
 use crate::particle_lights::GivenLights;
-use crate::render::batches::PlumeBatches;
+use crate::render::batches::{BatchView, PlumeBatches};
 use crate::render::counts::WatchedCounts;
 use crate::render::instances::{DrawTiming, Instance, PlumeInstances, PlumeRenderStats};
 use crate::render::lights::ExtractedLights;
@@ -316,11 +316,16 @@ pub(crate) fn prepare_for_view(
     let frame = store.frame;
     // A batch is in world space: drawn through the camera alone.
     for batch in batches.batches_mut() {
-        if let Some((_, renderer, queued)) = batch.views.get_mut(&view_entity) {
+        if let Some(BatchView {
+            renderer,
+            frame: queued,
+            ..
+        }) = batch.views.get_mut(&view_entity)
+        {
             if *queued != frame {
                 continue;
             }
-            if renderer.is_soft() {
+            if renderer.is_soft() && !renderer.is_compute() {
                 if let Some(depth) = prepass.and_then(|p| p.depth_only_view()) {
                     renderer.set_scene_depth(depth);
                 }
@@ -330,6 +335,11 @@ pub(crate) fn prepare_for_view(
                 if let Err(err) = renderer.set_shadow_map(map) {
                     warn_once!("{}: {err}", batch.batch.compiled().ir.name);
                 }
+            }
+            // The compute renderer's draw is prepared after the opaque pass
+            // (`composite_for_view`).
+            if renderer.is_compute() {
+                continue;
             }
             let camera = view_camera(view, Mat4::IDENTITY);
             if let Err(err) = batch
@@ -441,10 +451,31 @@ pub(crate) fn composite_for_view(
     view: ViewQuery<(Entity, &ExtractedView, &ViewDepthStencilTexture)>,
     mut context: RenderContext,
     mut store: ResMut<PlumeInstances>,
+    mut batches: ResMut<PlumeBatches>,
 ) {
     let (view_entity, view, depth) = view.into_inner();
     let frame = store.frame;
     let mut depth_view = None;
+    // A batch is in world space: drawn through the camera alone.
+    for batch in batches.batches_mut() {
+        let Some(draw) = batch.views.get_mut(&view_entity) else {
+            continue;
+        };
+        if draw.frame != frame || !draw.renderer.is_compute() {
+            continue;
+        }
+        let depth_view = depth_view.get_or_insert_with(|| scene_depth_view(depth));
+        draw.renderer.set_scene_depth(depth_view);
+        let camera = view_camera(view, Mat4::IDENTITY);
+        let encoder = context.command_encoder();
+        if let Err(err) = batch
+            .batch
+            .effect()
+            .prepare_draw(encoder, &draw.renderer, &camera)
+        {
+            error!("{}: {err}", batch.batch.compiled().ir.name);
+        }
+    }
     for instance in store.instances.values_mut() {
         let world_from_local = match instance.space {
             SimulationSpace::World => Mat4::IDENTITY,
@@ -456,13 +487,7 @@ pub(crate) fn composite_for_view(
         if draw.frame != frame || !draw.renderer.is_compute() {
             continue;
         }
-        let depth_view = depth_view.get_or_insert_with(|| {
-            depth.texture().create_view(&wgpu::TextureViewDescriptor {
-                label: Some("plume scene depth"),
-                aspect: wgpu::TextureAspect::DepthOnly,
-                ..Default::default()
-            })
-        });
+        let depth_view = depth_view.get_or_insert_with(|| scene_depth_view(depth));
         draw.renderer.set_scene_depth(depth_view);
         let camera = view_camera(view, world_from_local);
         let encoder = context.command_encoder();
@@ -479,6 +504,15 @@ pub(crate) fn composite_for_view(
             timing.end_prepare(encoder);
         }
     }
+}
+
+/// The depth the camera's opaque pass drew, for the compute renderer to composite against.
+fn scene_depth_view(depth: &ViewDepthStencilTexture) -> bevy::render::render_resource::TextureView {
+    depth.texture().create_view(&wgpu::TextureViewDescriptor {
+        label: Some("plume scene depth"),
+        aspect: wgpu::TextureAspect::DepthOnly,
+        ..Default::default()
+    })
 }
 
 /// The scene's lights in an effect's own space (`world_from_local`: the identity for a

@@ -6,8 +6,8 @@ use crate::common::{dots, lit_pixels, project, serial, Harness};
 use bevy::prelude::*;
 use bevy::render::RenderApp;
 use bevy_plume::{
-    read_particles, read_totals, PlumeBurst, PlumeEffect, PlumeRenderStats, SimulationSpace,
-    BATCH_FROM,
+    read_particles, read_totals, PlumeBurst, PlumeDraw, PlumeEffect, PlumeRenderStats,
+    SimulationSpace, BATCH_FROM,
 };
 
 fn stats(h: &Harness) -> PlumeRenderStats {
@@ -143,19 +143,40 @@ fn a_crowd_of_one_file_runs_as_one_batch_each_entity_its_own() {
 #[test]
 fn a_batched_crowd_in_local_space_moves_with_its_entities() {
     let _one = serial();
+    crowd_in_local_space("batches_local", PlumeDraw::Auto);
+}
+
+#[test]
+fn a_batched_crowd_drawn_by_the_compute_renderer_moves_with_its_entities() {
+    let _one = serial();
+    crowd_in_local_space("batches_local_compute", PlumeDraw::Compute);
+}
+
+/// Ten local-space entities of one file batched, drawn by `draw` (`Auto`: the raster renderer,
+/// for so few particles): lifted 1.5 m, their particles are drawn lifted with them, and read
+/// back in each entity's own space.
+fn crowd_in_local_space(name: &str, draw: PlumeDraw) {
     // Stateful as written (in local space the file is compiled as written, and these dots
     // would be stateless: their particles computed in the draw, nothing to batch).
     let file = dots(40, 100.0, (0.2, 1.0, 0.2)).replace(
         r#"Effect(name: "dots","#,
         r#"Effect(name: "dots", state: Stateful,"#,
     );
-    let (mut h, handle) = Harness::with_effect("batches_local", &file);
+    let (mut h, handle) = Harness::with_effect(name, &file);
     let entities = spawn_row(&mut h, 10, || {
-        PlumeEffect::new(handle.clone()).with_space(SimulationSpace::Local)
+        PlumeEffect::new(handle.clone())
+            .with_space(SimulationSpace::Local)
+            .with_draw(draw)
     });
     h.update(3);
     let now = stats(&h);
     assert_eq!((now.instances, now.batches), (10, 1), "{now:?}");
+    let compute_draws = usize::from(draw == PlumeDraw::Compute);
+    assert_eq!(
+        (now.draws, now.compute_draws),
+        (1, compute_draws),
+        "one draw for the batch, by the {draw:?} renderer: {now:?}"
+    );
     // Every entity goes up 1.5 m: its particles, in its own space, go with it.
     for &entity in &entities {
         h.app
