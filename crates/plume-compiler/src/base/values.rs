@@ -3,7 +3,13 @@
 //! with serde's derive; they import nothing of the crate, so every layer can use them.
 
 use glam::DVec3;
-use serde::Deserialize;
+use serde::{Deserialize, Deserializer};
+
+/// Reads an optional number written plainly (`core: 1.0`, not `core: Some(1.0)`): for
+/// `#[serde(default, deserialize_with = "plain_some")]`, a missing field being `None`.
+pub(crate) fn plain_some<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
+    f64::deserialize(d).map(Some)
+}
 
 /// A 3-vector written `(x, y, z)`.
 #[derive(Clone, Copy, Debug, PartialEq, Deserialize)]

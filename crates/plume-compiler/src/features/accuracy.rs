@@ -19,10 +19,10 @@ use crate::base::values::Integrator;
 #[serde(deny_unknown_fields)]
 pub struct Accuracy {
     /// The largest distance (m) from the exact trajectory.
-    #[serde(default, deserialize_with = "plain_some")]
+    #[serde(default, deserialize_with = "crate::base::values::plain_some")]
     pub position: Option<f64>,
     /// The largest distance on screen (pixels) from the exact trajectory's image.
-    #[serde(default, deserialize_with = "plain_some")]
+    #[serde(default, deserialize_with = "crate::base::values::plain_some")]
     pub pixels: Option<f64>,
     /// The image height (pixels) a pixel budget is for.
     #[serde(default = "default_height")]
@@ -38,11 +38,6 @@ fn default_over() -> f64 {
 
 fn default_height() -> u32 {
     720
-}
-
-/// An optional number written without `Some`.
-fn plain_some<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-    f64::deserialize(d).map(Some)
 }
 
 /// Reads `accuracy: (position: .., over: ..)` (or `Accuracy(..)`) as a budget: the field is

@@ -34,7 +34,7 @@ pub struct Attractor {
     pub strength: f64,
     /// Radius (m) inside which the pull falls linearly to 0 at the centre; in (0, range].
     /// Defaults to range / 10.
-    #[serde(default, deserialize_with = "super::plain_some")]
+    #[serde(default, deserialize_with = "crate::base::values::plain_some")]
     pub core: Option<f64>,
 }
 

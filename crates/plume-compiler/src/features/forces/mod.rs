@@ -183,12 +183,6 @@ impl<'de> Deserialize<'de> for Force {
     }
 }
 
-/// Reads an optional number written plainly (`core: 1.0`, not `core: Some(1.0)`); a missing
-/// field is `None` through `#[serde(default)]`.
-fn plain_some<'de, D: Deserializer<'de>>(d: D) -> Result<Option<f64>, D::Error> {
-    f64::deserialize(d).map(Some)
-}
-
 /// How a term limits the step size, for the stability analysis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Stiffness {

@@ -50,7 +50,7 @@ pub struct Vortex {
     pub curve: f64,
     /// Radius (m) inside which spin and pull fall linearly to 0 on the axis, and below which the
     /// funnel does not narrow; in (0, range]. Defaults to range / 10.
-    #[serde(default, deserialize_with = "super::plain_some")]
+    #[serde(default, deserialize_with = "crate::base::values::plain_some")]
     pub core: Option<f64>,
 }
 
