@@ -151,6 +151,13 @@ pub struct PlumeBurst {
 }
 
 impl PlumeBurst {
+    /// The runtime's burst: the same count, emitter, offset and added velocity.
+    pub(crate) fn to_runtime(self) -> plume_compiler::bursts::Burst {
+        plume_compiler::bursts::Burst::new(self.emitter, self.count)
+            .at(self.position.to_array())
+            .with_velocity(self.velocity.to_array())
+    }
+
     /// `count` particles of the first emitter, where and as fast as it spawns them.
     pub fn new(count: u32) -> Self {
         Self {

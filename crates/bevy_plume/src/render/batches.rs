@@ -175,10 +175,7 @@ pub(crate) fn sync_batches(
     queue: Res<RenderQueue>,
 ) {
     let batches = &mut *batches;
-    let gpu = store
-        .gpu
-        .get_or_insert_with(|| Gpu::from_device(device.wgpu_device(), &queue))
-        .clone();
+    let gpu = store.gpu(&device, &queue);
     // Entities of each variant this frame, alone, batched or new.
     let keys: Vec<BuildKey> = extracted.effects.iter().map(BuildKey::of).collect();
     let mut crowds: HashMap<SetKey, usize> = HashMap::new();
@@ -260,10 +257,7 @@ pub(crate) fn sync_batches(
             continue;
         };
         for burst in fired {
-            let fired = plume_compiler::bursts::Burst::new(burst.emitter, burst.count)
-                .at(burst.position.to_array())
-                .with_velocity(burst.velocity.to_array());
-            if let Err(err) = batch.batch.burst(member.instance, fired) {
+            if let Err(err) = batch.batch.burst(member.instance, burst.to_runtime()) {
                 warn_once!("a burst was refused: {err}");
             }
         }

@@ -278,6 +278,15 @@ pub(crate) struct PlumeInstances {
     pub frame: u64,
 }
 
+impl PlumeInstances {
+    /// Bevy's render device as Plume's [`Gpu`], made on first use.
+    pub(crate) fn gpu(&mut self, device: &RenderDevice, queue: &RenderQueue) -> Gpu {
+        self.gpu
+            .get_or_insert_with(|| Gpu::from_device(device.wgpu_device(), queue))
+            .clone()
+    }
+}
+
 /// Brings the instances in line with this frame's effect entities: new ones built, changed
 /// ones rebuilt (a failed rebuild logs why and keeps the last good one running), gone ones
 /// dropped; then how many steps each records this frame.
@@ -291,10 +300,7 @@ pub(crate) fn sync_instances(
 ) {
     let store = &mut *store;
     store.frame += 1;
-    let gpu = store
-        .gpu
-        .get_or_insert_with(|| Gpu::from_device(device.wgpu_device(), &queue))
-        .clone();
+    let gpu = store.gpu(&device, &queue);
     let mut alive = EntityHashSet::with_capacity(extracted.effects.len());
     for e in &extracted.effects {
         alive.insert(e.main);
@@ -492,10 +498,7 @@ impl Instance {
     /// logged, once per instance.
     fn fire(&mut self, bursts: &[PlumeBurst]) {
         for burst in bursts {
-            let fired = plume_compiler::bursts::Burst::new(burst.emitter, burst.count)
-                .at(burst.position.to_array())
-                .with_velocity(burst.velocity.to_array());
-            if let Err(err) = self.effect.burst(burst.group, fired) {
+            if let Err(err) = self.effect.burst(burst.group, burst.to_runtime()) {
                 if !self.burst_refused {
                     self.burst_refused = true;
                     let fix = match self.key.variant.bursts {
