@@ -21,19 +21,7 @@ pub(crate) struct SweepKernels {
 }
 
 impl SweepKernels {
-    /// The module's source: the workgroup scan, the shared radix kernels, the subgroup
-    /// ranking, OneSweep.
-    pub(super) fn source() -> String {
-        format!(
-            "{}\n{}\n{}\n{}",
-            include_str!("../device/workgroup_scan.wgsl"),
-            include_str!("radix.wgsl"),
-            include_str!("radix_subgroup.wgsl"),
-            include_str!("radix_onesweep.wgsl")
-        )
-    }
-
-    /// The kernels of `module` (built from [`Self::source`]).
+    /// The kernels of `module` (`radix_source(Ranking::OneSweep)`).
     pub(super) fn new(gpu: &Gpu, module: &wgpu::ShaderModule) -> Self {
         let pipeline = |entry: &str| gpu.compute_pipeline(module, entry, None);
         Self {

@@ -46,6 +46,39 @@ pub enum Ranking {
 }
 
 impl Ranking {
+    /// The label of its radix module.
+    fn module_label(self) -> &'static str {
+        match self {
+            Ranking::OneSweep => "radix (OneSweep)",
+            Ranking::Subgroup => "radix (subgroup ranking)",
+            Ranking::Portable => "radix (portable ranking)",
+        }
+    }
+}
+
+/// The radix module of `ranking`: the workgroup scan, the kernels every ranking shares and its
+/// downsweep (OneSweep's on top of the subgroup ranking). naga 30 takes subgroup builtins
+/// without WGSL's `enable subgroups;` (it refuses the directive); the device's SUBGROUP
+/// feature is what allows them.
+pub(super) fn radix_source(ranking: Ranking) -> String {
+    let downsweep = match ranking {
+        Ranking::OneSweep => concat!(
+            include_str!("radix_subgroup.wgsl"),
+            "\n",
+            include_str!("radix_onesweep.wgsl")
+        ),
+        Ranking::Subgroup => include_str!("radix_subgroup.wgsl"),
+        Ranking::Portable => include_str!("radix_portable.wgsl"),
+    };
+    format!(
+        "{}\n{}\n{}",
+        include_str!("../device/workgroup_scan.wgsl"),
+        include_str!("radix.wgsl"),
+        downsweep
+    )
+}
+
+impl Ranking {
     /// The fastest ranking `gpu` can run.
     pub fn best_for(gpu: &Gpu) -> Self {
         Self::runnable_on(gpu)[0]
@@ -164,29 +197,7 @@ impl GpuSorter {
             ),
         );
         // The shared kernels and one downsweep: a subgroup module only on adapters with them.
-        let radix = match ranking {
-            Ranking::Subgroup => module(
-                "radix (subgroup ranking)",
-                // naga 30 takes subgroup builtins without WGSL's `enable subgroups;` (it refuses
-                // the directive); the device's SUBGROUP feature is what allows them.
-                format!(
-                    "{}\n{}\n{}",
-                    include_str!("../device/workgroup_scan.wgsl"),
-                    include_str!("radix.wgsl"),
-                    include_str!("radix_subgroup.wgsl")
-                ),
-            ),
-            Ranking::OneSweep => module("radix (OneSweep)", SweepKernels::source()),
-            Ranking::Portable => module(
-                "radix (portable ranking)",
-                format!(
-                    "{}\n{}\n{}",
-                    include_str!("../device/workgroup_scan.wgsl"),
-                    include_str!("radix.wgsl"),
-                    include_str!("radix_portable.wgsl")
-                ),
-            ),
-        };
+        let radix = module(ranking.module_label(), radix_source(ranking));
         let pipeline =
             |module: &wgpu::ShaderModule, entry: &str| gpu.compute_pipeline(module, entry, None);
         Self {
@@ -512,6 +523,8 @@ impl GpuSorter {
 mod tests {
     use naga::valid::{Capabilities, ValidationFlags, Validator};
 
+    use super::{radix_source, Ranking};
+
     /// Parses and validates `source` with naga, allowing subgroup operations; panics with
     /// naga's located message otherwise.
     fn validate(source: &str) {
@@ -529,19 +542,9 @@ mod tests {
     // subgroups, so it runs only the portable ranking, and this catches a broken subgroup or
     // OneSweep module before an adapter that runs them does.
     #[test]
-    fn both_radix_modules_validate() {
-        validate(&format!(
-            "{}\n{}\n{}",
-            include_str!("../device/workgroup_scan.wgsl"),
-            include_str!("radix.wgsl"),
-            include_str!("radix_portable.wgsl")
-        ));
-        validate(&format!(
-            "{}\n{}\n{}",
-            include_str!("../device/workgroup_scan.wgsl"),
-            include_str!("radix.wgsl"),
-            include_str!("radix_subgroup.wgsl")
-        ));
-        validate(&crate::sort::onesweep::SweepKernels::source());
+    fn every_radix_module_validates() {
+        for ranking in [Ranking::Portable, Ranking::Subgroup, Ranking::OneSweep] {
+            validate(&radix_source(ranking));
+        }
     }
 }
