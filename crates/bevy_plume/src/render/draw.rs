@@ -17,9 +17,10 @@ use bevy::render::sync_world::MainEntity;
 use bevy::render::view::{ExtractedView, RenderVisibleEntities};
 use plume_runtime::DrawTarget;
 
-use crate::effect::{PlumeDraw, PlumeEffect, AUTO_COMPUTE_CAPACITY};
+use crate::effect::{PlumeEffect, AUTO_COMPUTE_CAPACITY};
 use crate::render::batches::{BatchView, PlumeBatches};
 use crate::render::instances::{PlumeInstances, PlumeRenderStats};
+use crate::render::renderer_choice::{draws_by_compute, renderer_or_raster};
 
 /// The target a camera's transparent pass draws into: its colour format and samples, Bevy's
 /// reversed-Z depth buffer tested (nearer is greater) and never written. Soft particles fade
@@ -183,15 +184,10 @@ fn queue_view(
             }
             continue;
         };
-        let compute = match instance.draw {
-            PlumeDraw::Raster => false,
-            PlumeDraw::Compute => true,
-            PlumeDraw::Auto => {
-                *gpu_adapter
-                    && instance.capacity >= AUTO_COMPUTE_CAPACITY
-                    && instance.compute_draws()
-            }
-        };
+        let large = instance.capacity >= AUTO_COMPUTE_CAPACITY;
+        let compute = draws_by_compute(instance.draw, *gpu_adapter, large, || {
+            instance.compute_draws()
+        });
         let (target, size) = compute_target(target, compute_image.filter(|_| compute));
         if instance
             .view_draw(view_entity, target, size, frame)
@@ -216,44 +212,21 @@ fn queue_view(
         let Some(batch) = batches.batch_mut(id) else {
             continue;
         };
+        // A batch's `Auto` is the compute renderer's only when its effect is large.
         let compute = !batch.compute_refused
-            && match batch.draw {
-                PlumeDraw::Raster => false,
-                PlumeDraw::Compute => true,
-                PlumeDraw::Auto => {
-                    let ir = &batch.batch.compiled().ir;
-                    *gpu_adapter
-                        && plume_runtime::outputs::ComputeOffscreen::why_not(&[ir]).is_none()
-                }
-            };
-        let (drawn_into, size) = compute_target(target, compute_image.filter(|_| compute));
+            && draws_by_compute(batch.draw, *gpu_adapter, true, || {
+                let ir = &batch.batch.compiled().ir;
+                plume_runtime::outputs::ComputeOffscreen::why_not(&[ir]).is_none()
+            });
+        let (target, size) = compute_target(target, compute_image.filter(|_| compute));
         if !batch
             .views
             .get(&view_entity)
-            .is_some_and(|v| v.target == drawn_into && v.size == size)
+            .is_some_and(|v| v.target == target && v.size == size)
         {
-            let name = &batch.batch.compiled().ir.name;
-            let drawn = match size {
-                Some((w, h)) => match batch.batch.effect().compute_renderer(&drawn_into, w, h) {
-                    Ok(renderer) => Ok((drawn_into, size, renderer)),
-                    Err(err) => {
-                        warn!("{name}: the compute renderer cannot draw its batch ({err}): the raster one does");
-                        batch.compute_refused = true;
-                        batch
-                            .batch
-                            .effect()
-                            .renderer(&target)
-                            .map(|r| (target, None, r))
-                    }
-                },
-                None => batch
-                    .batch
-                    .effect()
-                    .renderer(&target)
-                    .map(|r| (target, None, r)),
-            };
-            match drawn {
-                Ok((target, size, renderer)) => {
+            let effect = batch.batch.effect();
+            match renderer_or_raster(effect, &target, size, &mut batch.compute_refused) {
+                (size, Ok(renderer)) => {
                     let view = BatchView {
                         target,
                         size,
@@ -262,7 +235,8 @@ fn queue_view(
                     };
                     batch.views.insert(view_entity, view);
                 }
-                Err(err) => {
+                (_, Err(err)) => {
+                    let name = &effect.compiled().ir.name;
                     warn_once!("{name}: a batch cannot be drawn: {err}");
                     continue;
                 }

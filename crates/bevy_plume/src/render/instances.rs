@@ -20,6 +20,7 @@ use plume_runtime::{DrawTarget, Effect, EffectRenderer, Gpu};
 use crate::asset::Variant;
 use crate::effect::{PlumeBurst, PlumeDraw, SimulationSpace};
 use crate::render::extract::{ExtractedBursts, ExtractedEffect, ExtractedEffects};
+use crate::render::renderer_choice::renderer_or_raster;
 
 /// At most this much effect time is stepped in one frame; a longer frame (a stall, a
 /// breakpoint) drops the rest rather than stepping ever more to catch up.
@@ -542,22 +543,11 @@ impl Instance {
             }
         }
         let name = self.effect.compiled().ir.name.clone();
-        let compute = size.map(|(w, h)| self.effect.compute_renderer(&target, w, h));
-        let renderer = match compute {
-            Some(Ok(renderer)) => Ok(renderer),
-            Some(Err(err)) => {
-                warn!("{name}: the compute renderer cannot draw it ({err}): the raster one does");
-                self.compute_refused = true;
-                self.effect.renderer(&target)
-            }
-            None => {
-                if self.undrawable.contains(&target) {
-                    return None;
-                }
-                self.effect.renderer(&target)
-            }
-        };
-        let size = size.filter(|_| !self.compute_refused);
+        if size.is_none() && self.undrawable.contains(&target) {
+            return None;
+        }
+        let (size, renderer) =
+            renderer_or_raster(&self.effect, &target, size, &mut self.compute_refused);
         match renderer {
             Ok(renderer) => {
                 self.views.insert(

@@ -2,7 +2,8 @@
 //! [`lights`]), the instances on Bevy's
 //! device ([`instances`]), the compute work: steps before the cameras and each camera's draw
 //! preparation before its main pass ([`simulate`], world-space steps along the entity's
-//! motion in [`motion`]), and the draw in the transparent phases, 3D and 2D ([`draw`]).
+//! motion in [`motion`]), and the draw in the transparent phases, 3D and 2D ([`draw`]), by the renderer
+//! [`renderer_choice`] picks.
 
 pub(crate) mod batches;
 pub(crate) mod counts;
@@ -12,6 +13,7 @@ pub(crate) mod instances;
 pub(crate) mod lights;
 pub(crate) mod motion;
 pub(crate) mod read;
+pub(crate) mod renderer_choice;
 pub(crate) mod simulate;
 
 use bevy::core_pipeline::core_2d::Transparent2d;
