@@ -82,10 +82,18 @@ impl DrawMethod {
     /// The method `auto` stands for on `gpu` for `graph`, and why. The compute renderer is far faster than
     /// the raster pipeline on GPUs whose raster units are few (docs/performance.md, "The compute
     /// renderer") and slower on llvmpipe, whose raster path is the CPU's; it draws every group's
-    /// sprites (any texture, orientation, rotation and height, glowing or not) and ribbons; the
-    /// scene's meshes are drawn by the raster pipeline first and the compute renderer tests their depth
-    /// (`Effect::compute_renderer`).
-    pub(crate) fn resolve(self, gpu: &Gpu, graph: &CompiledGraph) -> (Self, String) {
+    /// sprites (any texture, orientation, rotation and height, glowing or not), ribbons and
+    /// solid mesh particles; the scene's meshes are drawn by the raster pipeline first and the
+    /// compute renderer tests their depth (`Effect::compute_renderer`, which draws no mesh
+    /// particles).
+    /// `over_host`: the compute renderer would draw over a host's image (the scene's meshes,
+    /// the preview's window), which it does with no mesh particles.
+    pub(crate) fn resolve(
+        self,
+        gpu: &Gpu,
+        graph: &CompiledGraph,
+        over_host: bool,
+    ) -> (Self, String) {
         if self != DrawMethod::Auto {
             return (self, "as asked".into());
         }
@@ -93,6 +101,8 @@ impl DrawMethod {
             graph.groups.iter().map(|g| &g.effect.ir).collect();
         let why_not = if gpu.info.device_type == wgpu::DeviceType::Cpu {
             Some("a CPU adapter rasterises faster than it splats")
+        } else if over_host {
+            ComputeOffscreen::why_not_for_host(&irs)
         } else {
             ComputeOffscreen::why_not(&irs)
         };
@@ -118,7 +128,14 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         backend: args.backend.clone(),
     })?;
     eprintln!("adapter: {}", gpu.describe());
-    let (draw, why) = args.draw.resolve(&gpu, &graph);
+    let triangles: Vec<_> = graph
+        .groups
+        .iter()
+        .flat_map(|g| g.effect.ir.scene_triangles())
+        .collect();
+    // Over the scene's meshes the compute renderer is the embedding API's.
+    let over_scene = !args.no_scene && !triangles.is_empty();
+    let (draw, why) = args.draw.resolve(&gpu, &graph, over_scene);
     eprintln!(
         "draw: {} ({why})",
         match draw {
@@ -130,11 +147,6 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
     // An effect that glows is drawn into an HDR image and bloomed (render.glow).
     let glow = graph.groups[0].effect.ir.render.glow;
     let target = Offscreen::with_glow(&gpu, w, h, glow.as_ref())?;
-    let triangles: Vec<_> = graph
-        .groups
-        .iter()
-        .flat_map(|g| g.effect.ir.scene_triangles())
-        .collect();
     let mut scene = match args.no_scene {
         false => Scene::new(&gpu, &triangles, target.target().color_format, (w, h))?,
         true => None,

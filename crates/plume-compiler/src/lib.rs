@@ -63,8 +63,8 @@ pub use compile::{
     compile_effect, compile_str, parse, parse_with, CompileError, CompileOptions, CompiledEffect,
 };
 pub use features::looks::{
-    by_expression, lit, orient, particle_light, particle_mesh, ribbon, rotation, screen_size,
-    texture, tint, trail,
+    by_expression, lit, mesh_splat, orient, particle_light, particle_mesh, ribbon, rotation,
+    screen_size, texture, tint, trail,
 };
 pub use features::{
     accuracy, attributes, bursts, colliders, emitter, event_report, events, field, forces, inherit,

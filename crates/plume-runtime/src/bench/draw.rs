@@ -143,7 +143,7 @@ pub(crate) fn time_draws(
         )?,
     )?;
     // An effect the compute renderer does not draw, or not at this size on this adapter: no compute line.
-    let made = match ComputeOffscreen::draws(&sim.compiled().ir) {
+    let made = match ComputeOffscreen::why_not(&[&sim.compiled().ir]).is_none() {
         true => match ComputeOffscreen::new(sim, width, height) {
             Err(RuntimeError::Unsupported(_)) => None,
             made => Some(made?),

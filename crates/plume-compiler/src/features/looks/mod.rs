@@ -5,6 +5,7 @@
 pub mod by_expression;
 pub(crate) mod glow;
 pub mod lit;
+pub mod mesh_splat;
 pub mod orient;
 pub mod particle_light;
 pub mod particle_mesh;

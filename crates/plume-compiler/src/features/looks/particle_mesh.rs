@@ -17,7 +17,8 @@
 //! viewer, and lights the pixel there. The raster pipeline culls the back faces (OBJ winds triangles counter-clockwise seen from
 //! outside). Particles are drawn in slot order, or back to front
 //! with `sort: true`; no depth is written, so meshes of one group cross over each other only as
-//! that order says. The compute renderer does not draw meshes.
+//! that order says. The compute renderer draws solid meshes (`Opaque`, `Mask`) its own way
+//! ([`super::mesh_splat`]).
 
 use std::path::Path;
 use std::sync::Arc;

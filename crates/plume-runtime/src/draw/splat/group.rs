@@ -468,14 +468,6 @@ impl GroupSplat {
         (self.lights.is_some(), shadowed)
     }
 
-    /// Records the compute renderer itself into `pass`: project, scan, entries, sort, ranges, raster.
-    pub(crate) fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
-        for stage in STAGES {
-            self.record_stage(pass, stage)?;
-        }
-        Ok(())
-    }
-
     /// Records one stage of the compute renderer into `pass` (the benchmark times them one by one).
     pub(crate) fn record_stage(
         &self,

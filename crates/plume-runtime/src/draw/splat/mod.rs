@@ -26,11 +26,15 @@
 //! passes. The embedding API's compute renderer ([`host`]) draws the same splat into a host's
 //! images: an HDR image that keeps each pixel's coverage, every pixel tested against a copy of
 //! the host's depth, put over the host's colour by one full-screen triangle.
+//!
+//! A group of solid mesh particles is a part of another kind ([`meshes`]): its meshes covered
+//! into a visibility buffer and each pixel shaded once, into the same image.
 
 mod additive_lists;
 mod binding;
 mod group;
 mod host;
+mod meshes;
 mod quad_raster;
 
 use plume_compiler::wgsl::draw::{splat_hdr_pitch, splat_light_ceiling};
@@ -41,10 +45,11 @@ use crate::draw::camera::Camera;
 use crate::draw::glow::GlowPasses;
 use crate::error::RuntimeError;
 use crate::sim::effect::Effect;
+use group::SplatImage;
 #[cfg(feature = "tools")]
 pub(crate) use group::STAGES;
-use group::{GroupSplat, SplatImage};
 pub(crate) use host::HostSplat;
+use meshes::SplatPart;
 use plume_compiler::wgsl::draw::SplatHost;
 
 /// A glowing effect's bloom: the compute renderer's HDR image is copied into the glow's HDR texture, and
@@ -81,7 +86,7 @@ pub struct ComputeOffscreen {
     height: u32,
     /// Per group, its ribbons (if it has a trail) then its sprites, with the group's index;
     /// the first part owns the image the others draw over.
-    parts: Vec<(usize, GroupSplat)>,
+    parts: Vec<(usize, SplatPart)>,
     /// Set when the effect glows (its groups composite into an HDR image).
     glow: Option<SplatGlow>,
     /// The buffer a host's depth is copied into (a host splat whose draw tests depth).
@@ -92,24 +97,52 @@ pub struct ComputeOffscreen {
 
 impl ComputeOffscreen {
     /// Whether the compute renderer can draw `ir`: any sprite (textured or round, any orientation,
-    /// rotation and height, glowing or not, lit or not), alpha or additive, and trails of a
-    /// stateful effect; not ribbons joining particles (`render.ribbon`), meshes
-    /// (`render.mesh`), nor `Multiply`, `Mask`, `Premultiplied` or `Opaque` blending, which the
-    /// raster draw draws.
+    /// rotation and height, glowing or not, lit or not), alpha or additive, trails of a
+    /// stateful effect, and solid mesh particles (`render.mesh` with `Opaque` or `Mask`
+    /// blending, receiving no shadow, in an effect that does not glow: [`Self::why_not`]);
+    /// not ribbons joining particles (`render.ribbon`), other
+    /// meshes, nor `Multiply`, `Mask`, `Premultiplied` or `Opaque` sprites, which the raster
+    /// draw draws.
     pub fn draws(ir: &EffectIr) -> bool {
         use plume_compiler::schema::Blend;
-        (ir.render.trail.is_none() || ir.stateless.is_none())
-            && ir.render.ribbon.is_none()
-            && ir.render.mesh.is_none()
-            && matches!(ir.render.blend, Blend::Alpha | Blend::Additive)
+        use plume_compiler::wgsl::draw::splat_mesh_refusal;
+        let look = match ir.render.mesh {
+            Some(_) => splat_mesh_refusal(ir, false).is_none(),
+            None => matches!(ir.render.blend, Blend::Alpha | Blend::Additive),
+        };
+        (ir.render.trail.is_none() || ir.stateless.is_none()) && ir.render.ribbon.is_none() && look
     }
 
-    /// Why the compute renderer cannot draw an effect whose groups are `groups`, or `None` when it can.
+    /// Why the compute renderer cannot draw an effect whose groups are `groups`, or `None` when
+    /// it can: a group it does not draw ([`Self::draws`]), a group after mesh particles (the
+    /// raster pipeline tests it against their depth), or meshes in a glowing effect (whose
+    /// image is HDR).
     pub fn why_not(groups: &[&EffectIr]) -> Option<&'static str> {
+        if groups.iter().any(|ir| !Self::draws(ir)) {
+            return Some("the compute renderer draws no ribbons joining particles (render.ribbon), no mesh particles but solid ones (blend: Opaque or Mask) that receive no shadow, no sprites blended by Multiply, Mask, Premultiplied or Opaque, and no trails of stateless effects");
+        }
+        let first_mesh = groups.iter().position(|ir| ir.render.mesh.is_some())?;
+        if groups[first_mesh..]
+            .iter()
+            .any(|ir| ir.render.mesh.is_none())
+        {
+            return Some("the compute renderer draws no sprites after mesh particles, which the raster pipeline tests against the meshes' depth");
+        }
+        let hdr = groups[0].render.glow.is_some();
         groups
             .iter()
-            .any(|ir| !Self::draws(ir))
-            .then_some("the compute renderer draws neither ribbons joining particles (render.ribbon), meshes (render.mesh), Multiply, Mask, Premultiplied or Opaque blending, nor trails of stateless effects")
+            .find_map(|ir| plume_compiler::wgsl::draw::splat_mesh_refusal(ir, hdr))
+    }
+
+    /// [`Self::why_not`] for the embedding API's compute renderer (a host's image, tested
+    /// against the host's depth), which draws no mesh particles.
+    pub fn why_not_for_host(groups: &[&EffectIr]) -> Option<&'static str> {
+        Self::why_not(groups).or_else(|| {
+            groups
+                .iter()
+                .any(|ir| ir.render.mesh.is_some())
+                .then_some("the embedding API's compute renderer draws no mesh particles")
+        })
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
@@ -133,7 +166,11 @@ impl ComputeOffscreen {
             )));
         }
         let irs: Vec<&EffectIr> = effect.groups().iter().map(|g| &g.effect.ir).collect();
-        if let Some(why) = Self::why_not(&irs) {
+        let why_not = match host {
+            Some(_) => Self::why_not_for_host(&irs),
+            None => Self::why_not(&irs),
+        };
+        if let Some(why) = why_not {
             return Err(RuntimeError::Output(format!(
                 "{why}: draw this effect with the raster pipeline (plume render --draw raster)"
             )));
@@ -166,7 +203,7 @@ impl ComputeOffscreen {
                     .map(|g| g.clamp),
             ),
         };
-        let mut parts: Vec<(usize, GroupSplat)> = Vec::with_capacity(irs.len());
+        let mut parts: Vec<(usize, SplatPart)> = Vec::with_capacity(irs.len());
         for (g, group) in effect.groups().iter().enumerate() {
             // Ribbons first, as the raster draw draws them under the group's sprites.
             let kinds: &[bool] = match irs[g].render.trail {
@@ -175,7 +212,7 @@ impl ComputeOffscreen {
             };
             for &ribbons in kinds {
                 let under = parts.first().map(|(_, p)| p.image().clone());
-                let part = GroupSplat::new(group, ribbons, &image, under.as_ref())?;
+                let part = SplatPart::new(group, ribbons, &image, under.as_ref())?;
                 parts.push((g, part));
             }
         }

@@ -30,9 +30,9 @@ use common::{
 use splat::{emit_project, emit_project_quads, emit_quad_raster, emit_splat_declarations};
 pub use splat::{
     splat_additive_lists, splat_affine_quads, splat_discs, splat_hdr_pitch, splat_light_ceiling,
-    splat_light_constants, splat_quad_words, splat_slices, HostDepthTest, SplatHost,
-    SPLAT_FLAT_VIEW, SPLAT_HOST_DEPTH_BINDING, SPLAT_PARTIAL_BINDING, SPLAT_RASTER_BINDINGS,
-    SPLAT_SLICES,
+    splat_light_constants, splat_mesh_refusal, splat_quad_words, splat_slices, HostDepthTest,
+    SplatHost, SPLAT_FLAT_VIEW, SPLAT_HOST_DEPTH_BINDING, SPLAT_PARTIAL_BINDING,
+    SPLAT_RASTER_BINDINGS, SPLAT_SLICES,
 };
 use sprite_shaders::{emit_fragment, emit_vertex};
 
@@ -238,7 +238,9 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         w.blank();
         t.emit_declarations(&mut w);
     }
-    if shape.splat {
+    // A mesh look drawn by the compute renderer has kernels of its own (`mesh_splat`).
+    let splat_mesh = ir.render.mesh.as_ref().filter(|_| shape.splat);
+    if shape.splat && splat_mesh.is_none() {
         w.blank();
         emit_splat_declarations(&mut w, ir, splat_discs(ir, shape.hdr), shape);
     }
@@ -340,7 +342,16 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         w.blank();
         light.emit_kernels(&mut w, ir.capacity);
     }
-    if shape.splat {
+    if let Some(mesh) = splat_mesh {
+        w.blank();
+        crate::features::looks::mesh_splat::emit_mesh_splat(
+            &mut w,
+            mesh,
+            ir.render.turns_quad(),
+            ir.render.lit.is_some(),
+            ir.render.blend,
+        );
+    } else if shape.splat {
         w.blank();
         if splat_discs(ir, shape.hdr) {
             emit_project(&mut w, ir);

@@ -38,6 +38,19 @@ pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
         && !hdr
 }
 
+/// Why the compute renderer cannot draw `ir`'s mesh look into its image (`hdr`: an HDR image, a
+/// glowing effect's): only solid meshes that receive no shadow, into an 8-bit image
+/// ([`crate::features::looks::mesh_splat`]); `None` when it can, or when `ir` draws no meshes.
+pub fn splat_mesh_refusal(ir: &EffectIr, hdr: bool) -> Option<&'static str> {
+    ir.render.mesh.as_ref()?;
+    let shadowed = ir
+        .render
+        .lit
+        .as_ref()
+        .is_some_and(|l| l.shadow_lookup().is_some());
+    crate::features::looks::mesh_splat::refusal(ir.render.blend, shadowed, hdr)
+}
+
 /// Whether the compute renderer builds `ir`'s tile lists without a sort: additive light, which the
 /// composites (the generated one of quads and ribbon segments, and the runtime's disc kernel)
 /// sum in fixed point, the same in any order. Its `project` keeps the counts once, for no

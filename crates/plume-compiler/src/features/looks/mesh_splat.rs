@@ -1,0 +1,333 @@
+//! Mesh particles drawn by the compute renderer: solid meshes (`blend: Opaque` or `Mask`),
+//! rasterised in compute shaders into a visibility buffer, then shaded once a pixel. The
+//! raster pipeline's draw of the same meshes (`vs_mesh`, `fs_mesh`: [`super::particle_mesh`])
+//! writes depth into the offscreen target, so the nearest triangle shows; here:
+//!
+//! - `mesh_clear`: every pixel's depth to the far plane, its pick to none;
+//! - `mesh_place`: each particle's frame (centre, the mesh's three axes, colour) from
+//!   `sprite_at`, as `vs_mesh` places the mesh; hidden particles (and, for `Mask`, those
+//!   below the cutoff, which `fs_mesh` discards whole) get none;
+//! - `mesh_raster`, twice (a uniform's phase): a thread per (particle, triangle) in draw
+//!   order covers the pixel centres inside the triangle (culling back faces, clipped to the
+//!   near and far planes as the raster pipeline clips), first keeping each pixel's least
+//!   depth (`atomicMin` on the f32's bits, which order as the depths do), then, where its
+//!   depth is the one kept, the least (draw position, triangle) there, so a tie goes to the
+//!   first drawn as the raster pipeline's `Less` test leaves it. One kernel for both phases,
+//!   so both compute each depth with the same instructions;
+//! - `mesh_shade`: a thread per pixel shades the picked triangle at the pixel's centre (the
+//!   view-space point interpolated perspective-correct, the triangle's face normal turned to
+//!   the viewer, as `fs_mesh` finds it from `dpdx` and `dpdy`) and writes the image, or the
+//!   background where nothing covers it and this part owns the image.
+//!
+//! Coverage uses homogeneous edge functions (each corner's clip x, y, w): a pixel centre is
+//! inside when its three weights are positive, and the weights are the perspective-correct
+//! barycentrics up to one factor, so no division by a corner's w is needed and a triangle
+//! crossing the eye plane needs no clipping; its pixel box comes from the triangle clipped to
+//! the near plane.
+
+use super::particle_mesh::{MeshIr, MESH_VERTICES_BINDING};
+use super::Blend;
+use crate::base::writer::{f32_lit, u32_lit, Writer};
+
+/// The compute mesh kernels' own bindings: the parameters (uniform: width, height, particles,
+/// background, phase), the triangles' corner indices, the particles' frames, each pixel's
+/// depth and pick, and the image (one RGBA8 word a pixel). The corners are read from
+/// [`MESH_VERTICES_BINDING`], as the raster draw reads them.
+pub const MESH_SPLAT_BINDINGS: [u32; 6] = [56, 57, 58, 59, 60, 61];
+
+/// 32-bit words of one particle's frame in the compute mesh draw: centre (w: 1 shown, 0
+/// hidden), the mesh's x, y and z axes, and the colour.
+pub const MESH_FRAME_WORDS: u64 = 20;
+
+/// Why the compute renderer cannot draw a mesh look blended by `blend`, lit by a look that
+/// reads a shadow map (`shadowed`), into an HDR image (`hdr`: a glowing effect's); `None` when
+/// it can.
+pub(crate) fn refusal(blend: Blend, shadowed: bool, hdr: bool) -> Option<&'static str> {
+    if !matches!(blend, Blend::Opaque | Blend::Mask(_)) {
+        Some("the compute renderer draws solid mesh particles only (blend: Opaque or Mask)")
+    } else if shadowed {
+        Some("the compute renderer draws no mesh particles that receive shadows")
+    } else if hdr {
+        Some("the compute renderer draws no mesh particles into a glowing effect's image")
+    } else {
+        None
+    }
+}
+
+/// Emits the compute mesh kernels (module doc) into the draw module, after `sprite_at`:
+/// `oriented` as `vs_mesh` places the mesh, `lit` with `lit_color` and `received_light` in
+/// scope, the particles' alpha tested against a `Mask` cutoff.
+pub(crate) fn emit_mesh_splat(
+    w: &mut Writer,
+    mesh: &MeshIr,
+    oriented: bool,
+    lit: bool,
+    blend: Blend,
+) {
+    let [params, indices, frames, depth, pick, image] = MESH_SPLAT_BINDINGS;
+    let triangles = mesh.triangles.len() as u32;
+    w.comment(format!(
+        "render.mesh {:?} drawn by the compute renderer: {triangles} triangles a particle.",
+        mesh.file
+    ));
+    w.block("struct MeshSplat", |w| {
+        w.line("width: u32,");
+        w.line("height: u32,");
+        w.line("count: u32,");
+        w.comment(
+            "RGBA8; alpha 0: the parts before drew the image, leave it where nothing covers.",
+        );
+        w.line("background: u32,");
+        w.comment("mesh_raster: 0 keeps the least depth, 1 the first triangle at it.");
+        w.line("phase: u32,");
+    });
+    w.block("struct MeshFrame", |w| {
+        w.line("center: vec4<f32>,");
+        w.line("ax: vec4<f32>,");
+        w.line("ay: vec4<f32>,");
+        w.line("az: vec4<f32>,");
+        w.line("color: vec4<f32>,");
+    });
+    w.line(format!(
+        "@group(0) @binding({MESH_VERTICES_BINDING}) var<storage, read> mesh_vertices: array<vec4<f32>>;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({params}) var<uniform> mesh_splat: MeshSplat;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({indices}) var<storage, read> mesh_indices: array<u32>;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({frames}) var<storage, read_write> mesh_frames: array<MeshFrame>;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({depth}) var<storage, read_write> mesh_depth: array<atomic<u32>>;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({pick}) var<storage, read_write> mesh_pick: array<atomic<u32>>;"
+    ));
+    w.line(format!(
+        "@group(0) @binding({image}) var<storage, read_write> mesh_image: array<u32>;"
+    ));
+    w.line(format!(
+        "const MESH_TRIANGLES: u32 = {};",
+        u32_lit(triangles)
+    ));
+    w.comment("The far plane's depth, as the raster draw's depth buffer is cleared.");
+    w.line("const MESH_FAR: u32 = 0x3f800000u;");
+    w.line("const MESH_NONE: u32 = 0xffffffffu;");
+    w.blank();
+    emit_place(w, oriented, blend);
+    w.blank();
+    emit_cover(w);
+    w.blank();
+    emit_raster(w);
+    w.blank();
+    emit_shade(w, lit);
+}
+
+/// `mesh_clear` and `mesh_place` (a thread per pixel, a thread per particle).
+fn emit_place(w: &mut Writer, oriented: bool, blend: Blend) {
+    w.line("@compute @workgroup_size(256)");
+    w.block(
+        "fn mesh_clear(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let pixel = gid.x + gid.y * groups.x * 256u;");
+            w.block("if (pixel >= mesh_splat.width * mesh_splat.height)", |w| {
+                w.line("return;")
+            });
+            w.line("atomicStore(&mesh_depth[pixel], MESH_FAR);");
+            w.line("atomicStore(&mesh_pick[pixel], MESH_NONE);");
+        },
+    );
+    w.blank();
+    w.comment(
+        "Particle i's mesh frame, as vs_mesh places the mesh; centre w 0 when it draws nothing.",
+    );
+    w.line("@compute @workgroup_size(256)");
+    w.block(
+        "fn mesh_place(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let i = gid.x + gid.y * groups.x * 256u;");
+            w.block("if (i >= mesh_splat.count)", |w| w.line("return;"));
+            w.line("var f: MeshFrame;");
+            w.line("f.center = vec4<f32>(0.0);");
+            w.line("let s = sprite_at(i);");
+            let shows = match blend {
+                Blend::Mask(cutoff) => format!("s.visible && s.color.a >= {}", f32_lit(cutoff)),
+                _ => "s.visible".to_string(),
+            };
+            w.block(format!("if ({shows})"), |w| {
+                match oriented {
+                    true => {
+                        w.line("let ax = 2.0 * s.half_x;");
+                        w.line("let ay = 2.0 * s.half_y;");
+                    }
+                    false => {
+                        w.line("let ax = vec3<f32>(s.size, 0.0, 0.0);");
+                        w.line("let ay = vec3<f32>(0.0, s.size, 0.0);");
+                    }
+                }
+                w.line("let across = cross(ax, ay);");
+                w.line("let az = across * (length(ax) * inverseSqrt(max(dot(across, across), 1e-30)));");
+                w.line("f.center = vec4<f32>(s.center.xyz, 1.0);");
+                w.line("f.ax = vec4<f32>(ax, 0.0);");
+                w.line("f.ay = vec4<f32>(ay, 0.0);");
+                w.line("f.az = vec4<f32>(az, 0.0);");
+                w.line("f.color = s.color;");
+            });
+            w.line("mesh_frames[i] = f;");
+        },
+    );
+}
+
+/// `mesh_corner`, `mesh_edges` and `mesh_box`: a corner in view space, the triangle's
+/// homogeneous edge functions, and the pixels its part in front of the near plane may cover.
+fn emit_cover(w: &mut Writer) {
+    w.block("fn mesh_corner(f: MeshFrame, k: u32) -> vec3<f32>", |w| {
+        w.line("let m = mesh_vertices[mesh_indices[k]].xyz;");
+        w.line("return f.center.xyz + m.x * f.ax.xyz + m.y * f.ay.xyz + m.z * f.az.xyz;");
+    });
+    w.blank();
+    w.comment("Rows: each corner's edge function (the cross product of the other two corners' clip x, y, w); a pixel centre (x, y, 1) in NDC weighs corner k by dot(row k, p). Zero rows for a back face or one of no area (the determinant is then not positive).");
+    w.block(
+        "fn mesh_edges(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>) -> mat3x3<f32>",
+        |w| {
+            w.line("let e0 = cross(c1.xyw, c2.xyw);");
+            w.line("let e1 = cross(c2.xyw, c0.xyw);");
+            w.line("let e2 = cross(c0.xyw, c1.xyw);");
+            w.block("if (!(dot(c0.xyw, e0) > 0.0))", |w| {
+                w.line("return mat3x3<f32>(vec3<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0));")
+            });
+            w.line("return mat3x3<f32>(e0, e1, e2);");
+        },
+    );
+    w.blank();
+    w.comment("Pixel centre (px, py) in NDC.");
+    w.block("fn mesh_ndc(px: u32, py: u32) -> vec3<f32>", |w| {
+        w.line("let size = vec2<f32>(f32(mesh_splat.width), f32(mesh_splat.height));");
+        w.line("let at = (vec2<f32>(f32(px), f32(py)) + 0.5) / size;");
+        w.line("return vec3<f32>(at.x * 2.0 - 1.0, 1.0 - at.y * 2.0, 1.0);");
+    });
+    w.blank();
+    w.comment("The first and last pixel (x, y) whose centres the triangle's part in front of the near plane (clip z >= 0) may cover; first > last when none.");
+    w.block(
+        "fn mesh_box(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>) -> vec4<i32>",
+        |w| {
+            w.line("var lo = vec2<f32>(1e30);");
+            w.line("var hi = vec2<f32>(-1e30);");
+            w.line("let c = array<vec4<f32>, 3>(c0, c1, c2);");
+            w.block("for (var k = 0u; k < 3u; k++)", |w| {
+                w.line("let a = c[k];");
+                w.line("let b = c[(k + 1u) % 3u];");
+                w.block("if (a.z >= 0.0 && a.w > 0.0)", |w| {
+                    w.line("lo = min(lo, a.xy / a.w);");
+                    w.line("hi = max(hi, a.xy / a.w);");
+                });
+                w.comment("Where the edge crosses the near plane.");
+                w.block("if ((a.z >= 0.0) != (b.z >= 0.0))", |w| {
+                    w.line("let q = mix(a, b, a.z / (a.z - b.z));");
+                    w.block("if (q.w > 0.0)", |w| {
+                        w.line("lo = min(lo, q.xy / q.w);");
+                        w.line("hi = max(hi, q.xy / q.w);");
+                    });
+                });
+            });
+            w.line("let size = vec2<f32>(f32(mesh_splat.width), f32(mesh_splat.height));");
+            w.comment("NDC to pixels (y down), then the centres inside: x + 0.5 within [lo, hi].");
+            w.line("let plo = (vec2<f32>(lo.x, -hi.y) * 0.5 + 0.5) * size - 0.5;");
+            w.line("let phi = (vec2<f32>(hi.x, -lo.y) * 0.5 + 0.5) * size - 0.5;");
+            w.line("let first = clamp(ceil(plo), vec2<f32>(0.0), size);");
+            w.line("let last = clamp(floor(phi), vec2<f32>(-1.0), size - 1.0);");
+            w.line("return vec4<i32>(vec2<i32>(first), vec2<i32>(last));");
+        },
+    );
+}
+
+/// `mesh_raster`: a thread per (particle, triangle), in draw order.
+fn emit_raster(w: &mut Writer) {
+    w.line("@compute @workgroup_size(256)");
+    w.block(
+        "fn mesh_raster(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let job = gid.x + gid.y * groups.x * 256u;");
+            w.line("let i = job / MESH_TRIANGLES;");
+            w.line("let t = job % MESH_TRIANGLES;");
+            w.block("if (i >= mesh_splat.count)", |w| w.line("return;"));
+            w.line("let f = mesh_frames[i];");
+            w.block("if (f.center.w == 0.0)", |w| w.line("return;"));
+            w.line("let c0 = draw.proj * vec4<f32>(mesh_corner(f, 3u * t), 1.0);");
+            w.line("let c1 = draw.proj * vec4<f32>(mesh_corner(f, 3u * t + 1u), 1.0);");
+            w.line("let c2 = draw.proj * vec4<f32>(mesh_corner(f, 3u * t + 2u), 1.0);");
+            w.line("let e = mesh_edges(c0, c1, c2);");
+            w.block("if (all(e[0] == vec3<f32>(0.0)))", |w| w.line("return;"));
+            w.line("let zs = vec3<f32>(c0.z, c1.z, c2.z);");
+            w.line("let ws = vec3<f32>(c0.w, c1.w, c2.w);");
+            w.line("let bounds = mesh_box(c0, c1, c2);");
+            w.line("let id = i * MESH_TRIANGLES + t;");
+            w.block("for (var py = bounds.y; py <= bounds.w; py++)", |w| {
+                w.block("for (var px = bounds.x; px <= bounds.z; px++)", |w| {
+                    w.line("let p = mesh_ndc(u32(px), u32(py));");
+                    w.line("let b = vec3<f32>(dot(e[0], p), dot(e[1], p), dot(e[2], p));");
+                    w.block("if (any(b < vec3<f32>(0.0)))", |w| w.line("continue;"));
+                    w.line("let depth = dot(b, zs) / dot(b, ws);");
+                    w.comment("In front of the near plane and before the far one (the depth buffer's clear fails Less).");
+                    w.block("if (!(dot(b, ws) > 0.0) || !(depth >= 0.0) || !(depth < 1.0))", |w| {
+                        w.line("continue;")
+                    });
+                    w.line("let pixel = u32(py) * mesh_splat.width + u32(px);");
+                    w.comment("Without the sign, so that -0 orders as 0.");
+                    w.line("let bits = bitcast<u32>(depth) & 0x7fffffffu;");
+                    w.block("if (mesh_splat.phase == 0u)", |w| {
+                        w.line("atomicMin(&mesh_depth[pixel], bits);");
+                    });
+                    w.block(
+                        "else if (atomicLoad(&mesh_depth[pixel]) == bits)",
+                        |w| w.line("atomicMin(&mesh_pick[pixel], id);"),
+                    );
+                });
+            });
+        },
+    );
+}
+
+/// `mesh_shade`: a thread per pixel.
+fn emit_shade(w: &mut Writer, lit: bool) {
+    w.line("@compute @workgroup_size(256)");
+    w.block(
+        "fn mesh_shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let pixel = gid.x + gid.y * groups.x * 256u;");
+            w.block("if (pixel >= mesh_splat.width * mesh_splat.height)", |w| {
+                w.line("return;")
+            });
+            w.line("let id = atomicLoad(&mesh_pick[pixel]);");
+            w.block("if (id == MESH_NONE)", |w| {
+                w.block("if ((mesh_splat.background >> 24u) != 0u)", |w| {
+                    w.line("mesh_image[pixel] = mesh_splat.background;");
+                });
+                w.line("return;");
+            });
+            w.line("let f = mesh_frames[id / MESH_TRIANGLES];");
+            w.line("var color = f.color;");
+            if lit {
+                w.line("let t = id % MESH_TRIANGLES;");
+                w.line("let p0 = mesh_corner(f, 3u * t);");
+                w.line("let p1 = mesh_corner(f, 3u * t + 1u);");
+                w.line("let p2 = mesh_corner(f, 3u * t + 2u);");
+                w.line("let e = mesh_edges(draw.proj * vec4<f32>(p0, 1.0), draw.proj * vec4<f32>(p1, 1.0), draw.proj * vec4<f32>(p2, 1.0));");
+                w.line("let p = mesh_ndc(pixel % mesh_splat.width, pixel / mesh_splat.width);");
+                w.line("let b = vec3<f32>(dot(e[0], p), dot(e[1], p), dot(e[2], p));");
+                w.comment("The weights are perspective-correct up to their sum.");
+                w.line("let at = (b.x * p0 + b.y * p1 + b.z * p2) / max(b.x + b.y + b.z, 1e-30);");
+                w.comment("The face normal turned toward the viewer, as fs_mesh finds it.");
+                w.line("let across = cross(p1 - p0, p2 - p0);");
+                w.line("let toward = select(-at, vec3<f32>(0.0, 0.0, 1.0), draw.proj[3][3] == 1.0);");
+                w.line("let facing = select(-across, across, dot(across, toward) >= 0.0);");
+                w.line("let unit = facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
+                w.line("color = lit_color(color, received_light(unit, at));");
+            }
+            w.line("mesh_image[pixel] = pack4x8unorm(vec4<f32>(clamp(color.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));");
+        },
+    );
+}

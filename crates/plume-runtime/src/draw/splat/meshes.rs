@@ -1,0 +1,389 @@
+//! One group's solid mesh particles drawn by the compute renderer: the kernels of the group's
+//! draw module (the compiler's `mesh_splat`) that clear a visibility buffer, place each
+//! particle's mesh, rasterise every (particle, triangle) twice (the least depth a pixel, then
+//! the first triangle at it) and shade each pixel once, into the image the group owns or
+//! shares with the groups drawn before it. [`SplatPart`] is what [`super::ComputeOffscreen`]
+//! strings together: a group's sprites (or ribbons) or its meshes.
+
+use plume_compiler::lights::{Lights, LIGHTS_BINDING};
+use plume_compiler::mesh_splat::{MESH_FRAME_WORDS, MESH_SPLAT_BINDINGS};
+use plume_compiler::particle_mesh::MESH_VERTICES_BINDING;
+use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES};
+
+use super::binding::{bind, uniform};
+use super::group::{GroupSplat, SplatImage};
+use crate::device::buffers::{words_buffer, STORAGE};
+use crate::device::gpu::Gpu;
+use crate::draw::camera::{record_draw_view, Camera};
+use crate::draw::lights::LightsUniform;
+use crate::draw::raster::{draw_module, draw_shape};
+use crate::error::RuntimeError;
+use crate::sim::group::Group;
+
+/// A part of the compute renderer's image: one group's sprites (or its ribbons), or its meshes.
+/// Each boxed: a part is large, and the parts live in one list.
+pub(crate) enum SplatPart {
+    Sprites(Box<GroupSplat>),
+    Meshes(Box<MeshSplat>),
+}
+
+/// The compute renderer of one group's solid meshes.
+pub(crate) struct MeshSplat {
+    gpu: Gpu,
+    pixels: u64,
+    /// Particle slots placed: the group's capacity.
+    count: u32,
+    triangles: u32,
+    draw_view: wgpu::Buffer,
+    lights: Option<LightsUniform>,
+    image: wgpu::Buffer,
+    /// A zero word: meshes need no list that could be too short (a host's readback of the
+    /// entries needed reads it).
+    status: wgpu::Buffer,
+    /// `mesh_clear`, `mesh_place`, `mesh_raster`, `mesh_shade`.
+    kernels: [wgpu::ComputePipeline; 4],
+    /// Their bind groups; `mesh_raster` has one a phase.
+    clear_group: wgpu::BindGroup,
+    place_group: wgpu::BindGroup,
+    raster_groups: [wgpu::BindGroup; 2],
+    shade_group: wgpu::BindGroup,
+}
+
+impl MeshSplat {
+    /// The compute renderer of `group`'s meshes into `image`'s size: into `under`, the image of
+    /// the parts drawn before it, or into an image of its own over the group's background.
+    pub(crate) fn new(
+        group: &Group,
+        image: &SplatImage,
+        under: Option<&wgpu::Buffer>,
+    ) -> Result<Self, RuntimeError> {
+        let gpu = group.gpu.clone();
+        let (res, effect) = (&group.res, &group.effect);
+        let mesh = effect.ir.render.mesh.as_ref().ok_or_else(|| {
+            RuntimeError::Output("a mesh part of the compute renderer draws no mesh".into())
+        })?;
+        if let Some(why) = plume_compiler::wgsl::draw::splat_mesh_refusal(&effect.ir, image.hdr) {
+            return Err(RuntimeError::Output(why.into()));
+        }
+        let (width, height) = (image.width, image.height);
+        let pixels = u64::from(width) * u64::from(height);
+        let count = effect.ir.capacity;
+        let triangles = mesh.triangles.len() as u32;
+        let jobs = u64::from(count) * u64::from(triangles);
+        if jobs > u64::from(u32::MAX) {
+            return Err(RuntimeError::Unsupported(format!(
+                "{count} particles of {triangles} triangles are more than the compute renderer's mesh draw counts (2^32); draw this effect with the raster pipeline"
+            )));
+        }
+        let shape = DrawShape {
+            splat: true,
+            ..draw_shape(effect, res)
+        };
+        let (module, mut particles) = draw_module(&gpu, effect, res, &shape, None)?;
+        let device = &gpu.device;
+        let draw_view = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("mesh splat draw view"),
+            size: DRAW_VIEW_BYTES,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let words = |label, n: u64| {
+            device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some(label),
+                size: n.max(4) * 4,
+                usage: STORAGE,
+                mapped_at_creation: false,
+            })
+        };
+        let buffers = mesh.buffers();
+        let vertices = words_buffer(
+            &gpu,
+            "mesh vertices",
+            buffers.vertex_words.iter().map(|w| w.to_bits()),
+            STORAGE,
+        )?;
+        let indices = words_buffer(
+            &gpu,
+            "mesh indices",
+            buffers.indices.iter().copied(),
+            STORAGE,
+        )?;
+        let frames = words("mesh frames", MESH_FRAME_WORDS * u64::from(count));
+        let depth = words("mesh depth", pixels);
+        let pick = words("mesh pick", pixels);
+        let image_buffer = match under {
+            Some(under) => under.clone(),
+            None => words("image", pixels),
+        };
+        let bg = effect.ir.render.background;
+        // As a clear colour reaches an 8-bit target: each channel rounded to the nearest step.
+        let byte = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u32;
+        // Alpha 0: the parts before drew the image; pixels no mesh covers keep it.
+        let background = match under {
+            Some(_) => 0,
+            None => byte(bg.x) | byte(bg.y) << 8 | byte(bg.z) << 16 | 255 << 24,
+        };
+        let params = |phase| {
+            uniform(
+                &gpu,
+                "mesh splat",
+                &[width, height, count, background, phase],
+            )
+        };
+        let [b_params, b_indices, b_frames, b_depth, b_pick, b_image] = MESH_SPLAT_BINDINGS;
+        let lights = LightsUniform::new(&gpu, effect);
+        let kernel = |entry| gpu.compute_pipeline(&module, entry, None);
+        let kernels = [
+            kernel("mesh_clear"),
+            kernel("mesh_place"),
+            kernel("mesh_raster"),
+            kernel("mesh_shade"),
+        ];
+        gpu.take_error()?;
+        let layout = |k: usize| kernels[k].get_bind_group_layout(0);
+        let first = params(0)?;
+        let clear_group = bind(
+            &gpu,
+            &layout(0),
+            &[
+                (b_params, first.clone()),
+                (b_depth, depth.clone()),
+                (b_pick, pick.clone()),
+            ],
+        );
+        particles.extend([
+            (0, draw_view.clone()),
+            (b_params, first.clone()),
+            (b_frames, frames.clone()),
+        ]);
+        let place_group = bind(&gpu, &layout(1), &particles);
+        let corners = [
+            (0, draw_view.clone()),
+            (MESH_VERTICES_BINDING, vertices),
+            (b_indices, indices),
+            (b_frames, frames),
+        ];
+        let raster = |params: wgpu::Buffer| {
+            let mut entries = corners.to_vec();
+            entries.extend([
+                (b_params, params),
+                (b_depth, depth.clone()),
+                (b_pick, pick.clone()),
+            ]);
+            bind(&gpu, &layout(2), &entries)
+        };
+        let raster_groups = [raster(first.clone()), raster(params(1)?)];
+        // The unlit shade reads the particles' colours alone: no corners, view or lights.
+        let mut shade = vec![
+            (b_params, first),
+            (b_frames, corners[3].1.clone()),
+            (b_pick, pick),
+            (b_image, image_buffer.clone()),
+        ];
+        if let Some(lights) = &lights {
+            shade.extend(corners[..3].iter().cloned());
+            shade.push((LIGHTS_BINDING, lights.buffer.clone()));
+        }
+        let shade_group = bind(&gpu, &layout(3), &shade);
+        gpu.take_error()?;
+        Ok(Self {
+            status: words("mesh splat status", 1),
+            gpu,
+            pixels,
+            count,
+            triangles,
+            draw_view,
+            lights,
+            image: image_buffer,
+            kernels,
+            clear_group,
+            place_group,
+            raster_groups,
+            shade_group,
+        })
+    }
+
+    /// Records the camera, the steps done and the size scale before the compute renderer's
+    /// pass, as a sprite part does.
+    fn write_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+        steps: u64,
+        size_scale: f32,
+    ) -> Result<(), RuntimeError> {
+        if let Some(lights) = &self.lights {
+            lights.record(&self.gpu, encoder, camera)?;
+        }
+        record_draw_view(
+            &self.gpu,
+            encoder,
+            &self.draw_view,
+            camera,
+            steps,
+            size_scale,
+        )
+    }
+
+    /// Records the mesh draw's kernels of `stage` (the compute renderer's stages: `project`
+    /// clears and places, `raster` rasterises and shades; the others have none here).
+    fn record_stage(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        stage: &str,
+    ) -> Result<(), RuntimeError> {
+        let [clear, place, raster, shade] = &self.kernels;
+        let (px, py) = self.gpu.grid(self.pixels, 256)?;
+        match stage {
+            "project" => {
+                pass.set_pipeline(clear);
+                pass.set_bind_group(0, &self.clear_group, &[]);
+                pass.dispatch_workgroups(px, py, 1);
+                let (x, y) = self.gpu.grid(u64::from(self.count), 256)?;
+                pass.set_pipeline(place);
+                pass.set_bind_group(0, &self.place_group, &[]);
+                pass.dispatch_workgroups(x, y, 1);
+            }
+            "raster" => {
+                let jobs = u64::from(self.count) * u64::from(self.triangles);
+                let (x, y) = self.gpu.grid(jobs, 256)?;
+                pass.set_pipeline(raster);
+                for group in &self.raster_groups {
+                    pass.set_bind_group(0, group, &[]);
+                    pass.dispatch_workgroups(x, y, 1);
+                }
+                pass.set_pipeline(shade);
+                pass.set_bind_group(0, &self.shade_group, &[]);
+                pass.dispatch_workgroups(px, py, 1);
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+}
+
+impl SplatPart {
+    /// The part of `group` (its ribbons, `ribbons`, or else its sprites or meshes) into
+    /// `image`, over `under` (the image of the parts before it) or an image of its own.
+    pub(crate) fn new(
+        group: &Group,
+        ribbons: bool,
+        image: &SplatImage,
+        under: Option<&wgpu::Buffer>,
+    ) -> Result<Self, RuntimeError> {
+        match (&group.effect.ir.render.mesh, ribbons) {
+            (Some(_), false) => Ok(Self::Meshes(Box::new(MeshSplat::new(group, image, under)?))),
+            _ => Ok(Self::Sprites(Box::new(GroupSplat::new(
+                group, ribbons, image, under,
+            )?))),
+        }
+    }
+
+    /// See [`GroupSplat::write_view`].
+    pub(crate) fn write_view(
+        &self,
+        encoder: &mut wgpu::CommandEncoder,
+        camera: &Camera,
+        steps: u64,
+        size_scale: f32,
+    ) -> Result<(), RuntimeError> {
+        match self {
+            Self::Sprites(s) => s.write_view(encoder, camera, steps, size_scale),
+            Self::Meshes(m) => m.write_view(encoder, camera, steps, size_scale),
+        }
+    }
+
+    /// Records every stage into `pass`.
+    pub(crate) fn record(&self, pass: &mut wgpu::ComputePass<'_>) -> Result<(), RuntimeError> {
+        for stage in super::group::STAGES {
+            self.record_stage(pass, stage)?;
+        }
+        Ok(())
+    }
+
+    /// Records one stage into `pass` (the benchmark times them one by one).
+    pub(crate) fn record_stage(
+        &self,
+        pass: &mut wgpu::ComputePass<'_>,
+        stage: &str,
+    ) -> Result<(), RuntimeError> {
+        match self {
+            Self::Sprites(s) => s.record_stage(pass, stage),
+            Self::Meshes(m) => m.record_stage(pass, stage),
+        }
+    }
+
+    /// See [`GroupSplat::fits_or_grow`]; meshes always fit.
+    pub(crate) fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
+        match self {
+            Self::Sprites(s) => s.fits_or_grow(),
+            Self::Meshes(_) => Ok(true),
+        }
+    }
+
+    /// See [`GroupSplat::grow`]; nothing for meshes.
+    pub(crate) fn grow(&mut self, needed: u64) -> Result<(), RuntimeError> {
+        match self {
+            Self::Sprites(s) => s.grow(needed),
+            Self::Meshes(_) => Ok(()),
+        }
+    }
+
+    /// See [`GroupSplat::status`].
+    pub(crate) fn status(&self) -> &wgpu::Buffer {
+        match self {
+            Self::Sprites(s) => s.status(),
+            Self::Meshes(m) => &m.status,
+        }
+    }
+
+    /// See [`GroupSplat::entries_are_complete`]; meshes have no entries.
+    pub(crate) fn entries_are_complete(&self) -> Result<bool, RuntimeError> {
+        match self {
+            Self::Sprites(s) => s.entries_are_complete(),
+            Self::Meshes(_) => Ok(true),
+        }
+    }
+
+    /// The image this part draws into.
+    pub(crate) fn image(&self) -> &wgpu::Buffer {
+        match self {
+            Self::Sprites(s) => s.image(),
+            Self::Meshes(m) => &m.image,
+        }
+    }
+
+    /// Lights the part with `lights` from the next frame on.
+    pub(crate) fn set_lights(&self, lights: &Lights) {
+        let uniform = match self {
+            Self::Sprites(s) => return s.set_lights(lights),
+            Self::Meshes(m) => &m.lights,
+        };
+        if let Some(uniform) = uniform {
+            uniform.set(lights);
+        }
+    }
+
+    /// Reads `map` as the shadow map from the next frame on (mesh parts read none).
+    pub(crate) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
+        if let Self::Sprites(s) = self {
+            s.set_shadow_map(map);
+        }
+    }
+
+    /// (Whether the part is lit, whether it reads a shadow map.)
+    pub(crate) fn lit_and_shadowed(&self) -> (bool, bool) {
+        match self {
+            Self::Sprites(s) => s.lit_and_shadowed(),
+            Self::Meshes(m) => (m.lights.is_some(), false),
+        }
+    }
+
+    /// Entries the lists hold now (none for meshes).
+    pub(crate) fn entries(&self) -> u64 {
+        match self {
+            Self::Sprites(s) => s.entries(),
+            Self::Meshes(_) => 0,
+        }
+    }
+}

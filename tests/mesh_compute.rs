@@ -1,0 +1,282 @@
+//! Solid mesh particles (`blend: Opaque` or `Mask`) drawn by the compute renderer give the
+//! raster draw's image, as `plume render` draws them (depth written, the nearest showing):
+//! lit and unlit, turned and stretched, sorted and not, cut out below a `Mask` cutoff, with
+//! the camera among them (triangles crossing the near plane), and over sprites drawn first;
+//! the near red cube shows in front of the far blue one whichever is drawn first; and what the
+//! compute renderer leaves to the raster draw, it refuses with the reason.
+
+mod common;
+
+use std::path::PathBuf;
+
+use common::*;
+use plume::runtime::outputs::{ComputeOffscreen, Offscreen};
+use plume::runtime::{Camera, Effect};
+
+const SIDE: u32 = 96;
+
+/// A directory of this test's own holding `cube.obj`, the unit cube (±0.5) wound
+/// counter-clockwise seen from outside.
+fn cube_dir(name: &str) -> PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("plume-mesh-compute-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut obj = String::new();
+    for k in 0..8 {
+        let c = |bit: u32| if k >> bit & 1 == 1 { 0.5 } else { -0.5 };
+        obj += &format!("v {} {} {}\n", c(0), c(1), c(2));
+    }
+    for face in [
+        [5, 6, 8, 7],
+        [2, 4, 8, 6],
+        [1, 3, 4, 2],
+        [1, 5, 7, 3],
+        [3, 7, 8, 4],
+        [1, 2, 6, 5],
+    ] {
+        obj += &format!("f {} {} {} {}\n", face[0], face[1], face[2], face[3]);
+    }
+    std::fs::write(dir.join("cube.obj"), obj).unwrap();
+    dir
+}
+
+fn compile_in(dir: &std::path::Path, src: &str) -> plume::CompiledEffect {
+    let options = plume::CompileOptions {
+        base_dir: Some(dir.to_path_buf()),
+        ..Default::default()
+    };
+    plume::compile_str(src, &options).unwrap_or_else(|e| panic!("{}", e.render("mesh.ron", src)))
+}
+
+/// (The raster draw into a target whose solid meshes write depth, as `plume render` draws
+/// them; the compute renderer's image), from the effect's camera.
+fn both_draws(sim: &Effect, side: u32) -> (Vec<u8>, Vec<u8>) {
+    let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
+    let target = Offscreen::new(sim.gpu(), side, side).unwrap();
+    let renderer = sim.renderer(&target.target_for(sim)).unwrap();
+    assert!(renderer.writes_depth());
+    let raster = target.render(sim, &renderer, &camera).unwrap();
+    let mut compute =
+        ComputeOffscreen::new(sim, side, side).expect("the compute renderer draws it");
+    (raster, compute.render(sim, &camera).unwrap())
+}
+
+/// The compute renderer's image of `sim` against the raster draw's. The two cover a pixel
+/// where its centre is inside a triangle, but the raster pipeline tests it in fixed point
+/// (8 bits below the pixel) and the compute one in f32, so a centre within a rounding of an
+/// edge may go to the triangle on the other side, or to the background: at most 1 pixel in
+/// 200 may differ by more than 2 steps. Elsewhere the same triangle is shaded by the same
+/// sums in f32 (its view-space point and face normal found another way, `dpdx` against the
+/// edge weights), so a pixel may differ by a step of rounding: the mean difference stays
+/// under 0.1 of a step. Returns the compute image and how many pixels it drew.
+fn assert_agree(sim: &Effect, background: [u8; 3], what: &str) -> (Vec<u8>, usize) {
+    let (raster, compute) = both_draws(sim, SIDE);
+    let (mean, max, over) = differences(&raster, &compute, 2);
+    let pixels = (SIDE * SIDE) as usize;
+    assert!(
+        mean < 0.1 && over * 200 < pixels,
+        "{what}: compute vs raster: mean {mean:.4}, largest {max}, {over} channels over 2"
+    );
+    let drawn = compute.chunks(4).filter(|p| p[..3] != background).count();
+    (compute, drawn)
+}
+
+#[test]
+fn solid_meshes_drawn_by_the_compute_renderer_match_the_raster_draw() {
+    let gpu = gpu();
+    let dir = cube_dir("many");
+    let ico = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("effects/meshes/ico.obj");
+    let lit = "Some(Lit(wrap: 0.2, emissive: 0.1))";
+    let cases = [
+        // Lit cubes, turned and spinning, sorted: the nearest face shows.
+        (
+            "cube.obj".to_string(),
+            "Fixed((0.3, 1.0, 0.2))",
+            "Opaque",
+            ", rotation: Some(Rotation(angle: (0.0, 360.0), spin: (-90.0, 90.0)))",
+            lit,
+            true,
+            8.0,
+        ),
+        // Unlit spheres facing the camera, stretched, in slot order.
+        (
+            ico.display().to_string(),
+            "Camera",
+            "Opaque",
+            ", size_y: Some([(0.0, 0.2), (1.0, 0.6)])",
+            "None",
+            false,
+            8.0,
+        ),
+        // Lit spheres along their velocity, cut out as their alpha falls below 0.75.
+        (
+            ico.display().to_string(),
+            "Velocity(stretch: 0.3, max_length: 2.0)",
+            "Mask(0.75)",
+            "",
+            lit,
+            true,
+            8.0,
+        ),
+        // The camera among the cubes: some cross the near plane, some are behind it.
+        (
+            "cube.obj".to_string(),
+            "Fixed((0.3, 1.0, 0.2))",
+            "Opaque",
+            "",
+            lit,
+            false,
+            1.2,
+        ),
+    ];
+    for (mesh, orient, blend, extra, lit, sort, eye) in cases {
+        let src = format!(
+            r#"Effect(
+    name: "meshes",
+    capacity: 300,
+    seed: 9,
+    sort: {sort},
+    emitters: [Emitter(burst: 300, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 2.0),
+                       velocity: Radial(speed: (0.5, 2.0)), lifetime: Some((4.0, 6.0)))],
+    camera: Camera(eye: ({x:?}, {y:?}, {eye:?}), target: (0.0, 0.0, 0.0), fov_y: 60.0),
+    lights: [Directional(direction: (1.0, -1.0, 0.3), color: (1.0, 0.9, 0.8)),
+             Point(position: (-1.0, 1.0, 2.0), color: (0.3, 0.5, 1.0), intensity: 2.0, range: 6.0),
+             Ambient(intensity: 0.15)],
+    render: Render(color: [(0.0, (0.7, 0.7, 0.7, 0.9)), (1.0, (0.5, 0.4, 0.3, 0.6))],
+                   size: [(0.0, 0.4), (1.0, 0.2)], orient: {orient}, blend: {blend},
+                   background: (0.05, 0.05, 0.05), mesh: Some(ParticleMesh(file: "{mesh}")),
+                   lit: {lit}{extra}),
+)"#,
+            x = eye * 0.75,
+            y = eye * 0.375,
+        );
+        let mut sim = Effect::new(&gpu, compile_in(&dir, &src)).unwrap();
+        sim.run(30, |_| {}).unwrap();
+        let what = format!("{mesh} {orient} {blend} lit {lit} sort {sort} eye {eye}");
+        assert!(ComputeOffscreen::draws(&sim.compiled().ir), "{what}");
+        let (_, drawn) = assert_agree(&sim, [13, 13, 13], &what);
+        assert!(drawn > 500, "{what}: only {drawn} pixels drawn");
+    }
+}
+
+#[test]
+fn the_nearest_cube_shows_whichever_is_drawn_first() {
+    let gpu = gpu();
+    let dir = cube_dir("depth");
+    for zs in [(2.0, -2.0), (-2.0, 2.0)] {
+        let src = format!(
+            r#"Effect(
+    name: "cubes",
+    capacity: 2,
+    emitters: [
+        Emitter(burst: 1, shape: Point((0.0, 0.0, {:?})), velocity: Constant((0.0, 0.0, 0.0))),
+        Emitter(burst: 1, shape: Point((0.0, 0.0, {:?})), velocity: Constant((0.0, 0.0, 0.0))),
+    ],
+    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 2.0)], blend: Opaque,
+                   background: (0.0, 0.0, 0.0), mesh: Some(ParticleMesh(file: "cube.obj")),
+                   size_by: Some("1.5 - 0.25 * x.z"),
+                   color_by: Some("vec3(0.25 * (x.z + 2.0), 0.0, 0.25 * (2.0 - x.z))")),
+)"#,
+            zs.0, zs.1
+        );
+        let mut sim = Effect::new(&gpu, compile_in(&dir, &src)).unwrap();
+        sim.run(1, |_| {}).unwrap();
+        let (side, camera) = (65, Camera::from_effect(&sim.compiled().ir.camera, 1.0));
+        let image = ComputeOffscreen::new(&sim, side, side)
+            .unwrap()
+            .render(&sim, &camera)
+            .unwrap();
+        let pixel = |dx: u32| {
+            let k = 4 * ((side / 2) * side + side / 2 + dx) as usize;
+            [image[k], image[k + 1], image[k + 2]]
+        };
+        assert_eq!(pixel(0), [255, 0, 0], "{zs:?}: the near red cube in front");
+        // At 10 m the 4 m cube spans ±17.8 pixels, the near 2 m one at 7 m ±12.7.
+        assert_eq!(pixel(15), [0, 0, 255], "{zs:?}: the far cube's rim");
+        assert_eq!(pixel(25), [0, 0, 0], "{zs:?}: the background");
+    }
+}
+
+#[test]
+fn meshes_over_sprites_drawn_first_match_the_raster_draw() {
+    let gpu = gpu();
+    let dir = cube_dir("graph");
+    let src = r#"Effect(
+    name: "glitter",
+    capacity: 400,
+    seed: 5,
+    emitters: [Emitter(burst: 400, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 2.5),
+                       velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (5.0, 2.0, 6.0), target: (0.0, 0.0, 0.0), fov_y: 50.0),
+    lights: [Directional(direction: (1.0, -1.0, -0.5)), Ambient(intensity: 0.3)],
+    render: Render(color: [(0.0, (1.0, 0.8, 0.3, 0.8))], size: [(0.0, 0.3)], blend: Alpha,
+                   background: (0.0, 0.0, 0.1)),
+    groups: [Group(
+        name: "cubes",
+        capacity: 40,
+        emitters: [Emitter(burst: 40, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 2.0),
+                           velocity: Constant((0.0, 0.0, 0.0)))],
+        render: Render(color: [(0.0, (0.4, 0.7, 0.9, 1.0))], size: [(0.0, 0.5)], blend: Opaque,
+                       orient: Fixed((0.2, 1.0, 0.1)), mesh: Some(ParticleMesh(file: "cube.obj")),
+                       lit: Some(Lit())),
+    )],
+)"#;
+    let options = plume::CompileOptions {
+        base_dir: Some(dir.clone()),
+        ..Default::default()
+    };
+    let graph = plume::compiler::graph::compile_graph_str(src, &options)
+        .unwrap_or_else(|e| panic!("{}", e.render("glitter.ron", src)));
+    let mut sim = Effect::from_graph(&gpu, graph).unwrap();
+    sim.run(2, |_| {}).unwrap();
+    let irs: Vec<_> = (0..sim.group_names().len())
+        .map(|g| &sim.group_compiled(g).unwrap().ir)
+        .collect();
+    assert_eq!(ComputeOffscreen::why_not(&irs), None);
+    assert!(ComputeOffscreen::why_not_for_host(&irs).is_some_and(|w| w.contains("mesh")));
+    let (_, drawn) = assert_agree(&sim, [0, 0, 26], "sprites then meshes");
+    assert!(drawn > 1500, "only {drawn} pixels drawn");
+}
+
+#[test]
+fn the_compute_renderer_refuses_what_it_leaves_to_the_raster_draw() {
+    let dir = cube_dir("refused");
+    let effect = |blend: &str, glow: &str| {
+        compile_in(
+            &dir,
+            &format!(
+                r#"Effect(name: "cubes", capacity: 8,
+    emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))],
+    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 1.0)], blend: {blend},
+                   mesh: Some(ParticleMesh(file: "cube.obj")){glow}))"#
+            ),
+        )
+    };
+    for (blend, glow, why) in [
+        ("Alpha", "", "solid"),
+        ("Additive", "", "solid"),
+        (
+            "Opaque",
+            ", glow: Some(Glow(threshold: 0.5, strength: 2.0, radius: 0.01))",
+            "glowing",
+        ),
+    ] {
+        let compiled = effect(blend, glow);
+        let why_not = ComputeOffscreen::why_not(&[&compiled.ir]);
+        assert!(
+            why_not.is_some_and(|w| w.contains(why)),
+            "{blend}{glow}: {why_not:?}"
+        );
+    }
+    let solid = effect("Opaque", "");
+    assert_eq!(ComputeOffscreen::why_not(&[&solid.ir]), None);
+    let sprites = plume::compile_str(
+        r#"Effect(name: "dots", capacity: 8,
+    emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))])"#,
+        &Default::default(),
+    )
+    .unwrap();
+    let after = ComputeOffscreen::why_not(&[&solid.ir, &sprites.ir]);
+    assert!(after.is_some_and(|w| w.contains("after mesh")), "{after:?}");
+}
