@@ -234,7 +234,7 @@ fn meshes_over_sprites_drawn_first_match_the_raster_draw() {
         .map(|g| &sim.group_compiled(g).unwrap().ir)
         .collect();
     assert_eq!(ComputeOffscreen::why_not(&irs), None);
-    assert!(ComputeOffscreen::why_not_for_host(&irs).is_some_and(|w| w.contains("mesh")));
+    assert_eq!(ComputeOffscreen::why_not_for_host(&irs), None);
     let (_, drawn) = assert_agree(&sim, [0, 0, 26], "sprites then meshes");
     assert!(drawn > 1500, "only {drawn} pixels drawn");
 }
@@ -279,4 +279,145 @@ fn the_compute_renderer_refuses_what_it_leaves_to_the_raster_draw() {
     .unwrap();
     let after = ComputeOffscreen::why_not(&[&solid.ir, &sprites.ir]);
     assert!(after.is_some_and(|w| w.contains("after mesh")), "{after:?}");
+}
+
+/// The host's depth format in [`host_draws`].
+const HOST_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
+
+/// `sim` drawn for a host as the embedding API draws it, over a depth buffer holding a wall
+/// `wall` metres in front of the camera (None: the far plane; `camera`'s projection may be
+/// reversed: `compare` is then `Greater`): by the raster renderer writing depth into it, and
+/// by the compute renderer testing its copy of it. (raster, compute) images.
+fn host_draws(
+    sim: &Effect,
+    camera: &Camera,
+    compare: wgpu::CompareFunction,
+    wall: Option<f32>,
+) -> (Vec<u8>, Vec<u8>) {
+    let gpu = sim.gpu();
+    let target = Offscreen::new(gpu, SIDE, SIDE).unwrap();
+    let wall_depth = match wall {
+        Some(d) => {
+            let clip = camera.proj * glam::Vec4::new(0.0, 0.0, -d, 1.0);
+            clip.z / clip.w
+        }
+        None if compare == wgpu::CompareFunction::Greater => 0.0,
+        None => 1.0,
+    };
+    let host = plume::runtime::DrawTarget::new(plume::runtime::outputs::FORMAT)
+        .with_depth_compare(HOST_DEPTH, compare);
+    let draw = |compute: bool| {
+        let depth = gpu.device.create_texture(&wgpu::TextureDescriptor {
+            label: Some("host depth"),
+            size: wgpu::Extent3d {
+                width: SIDE,
+                height: SIDE,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: HOST_DEPTH,
+            usage: wgpu::TextureUsages::RENDER_ATTACHMENT | wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        });
+        let view = depth.create_view(&Default::default());
+        let mut renderer = match compute {
+            true => sim.compute_renderer(&host, SIDE, SIDE).unwrap(),
+            false => sim.renderer(&host.with_depth_writes(true)).unwrap(),
+        };
+        assert_eq!(renderer.is_compute(), compute);
+        if compute {
+            renderer.set_scene_depth(&view);
+        }
+        let mut encoder = gpu.device.create_command_encoder(&Default::default());
+        // The host's geometry: a wall filling its depth buffer.
+        encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+            label: Some("wall"),
+            color_attachments: &[],
+            depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                view: &view,
+                depth_ops: Some(wgpu::Operations {
+                    load: wgpu::LoadOp::Clear(wall_depth),
+                    store: wgpu::StoreOp::Store,
+                }),
+                stencil_ops: None,
+            }),
+            timestamp_writes: None,
+            occlusion_query_set: None,
+            multiview_mask: None,
+        });
+        sim.prepare_draw(&mut encoder, &renderer, camera).unwrap();
+        {
+            // Writable for the raster draw's meshes; the compute one tested its copy already.
+            let depth_ops = (!compute).then_some(wgpu::Operations {
+                load: wgpu::LoadOp::Load,
+                store: wgpu::StoreOp::Store,
+            });
+            let mut pass = encoder.begin_render_pass(&wgpu::RenderPassDescriptor {
+                label: Some("particles"),
+                color_attachments: &[Some(target.attachment(glam::DVec3::splat(0.05)))],
+                depth_stencil_attachment: Some(wgpu::RenderPassDepthStencilAttachment {
+                    view: &view,
+                    depth_ops,
+                    stencil_ops: None,
+                }),
+                timestamp_writes: None,
+                occlusion_query_set: None,
+                multiview_mask: None,
+            });
+            renderer.draw(&mut pass);
+        }
+        gpu.queue.submit([encoder.finish()]);
+        gpu.take_error().unwrap();
+        target.read().unwrap()
+    };
+    (draw(false), draw(true))
+}
+
+#[test]
+fn over_a_hosts_depth_the_compute_renderer_draws_meshes_as_the_raster_one() {
+    let gpu = gpu();
+    let dir = cube_dir("host");
+    let src = r#"Effect(
+    name: "cubes",
+    capacity: 200,
+    seed: 4,
+    sort: true,
+    emitters: [Emitter(burst: 200, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 2.0),
+                       velocity: Radial(speed: (0.2, 0.6)))],
+    camera: Camera(eye: (0.0, 1.0, 7.0), target: (0.0, 0.0, 0.0), fov_y: 50.0),
+    lights: [Directional(direction: (1.0, -1.0, -0.4)), Ambient(intensity: 0.25)],
+    render: Render(color: [(0.0, (0.9, 0.6, 0.3, 1.0))], size: [(0.0, 0.45)], blend: Opaque,
+                   orient: Fixed((0.3, 1.0, 0.2)), mesh: Some(ParticleMesh(file: "cube.obj")),
+                   lit: Some(Lit(wrap: 0.3))),
+)"#;
+    let mut sim = Effect::new(&gpu, compile_in(&dir, src)).unwrap();
+    sim.run(10, |_| {}).unwrap();
+    let standard = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
+    let reversed = Camera {
+        proj: glam::Mat4::perspective_infinite_reverse_rh(50f32.to_radians(), 1.0, 0.1),
+        ..standard
+    };
+    let background = [13, 13, 13];
+    for (camera, compare, what) in [
+        (&standard, wgpu::CompareFunction::Less, "standard depth"),
+        (&reversed, wgpu::CompareFunction::Greater, "reversed depth"),
+    ] {
+        // The wall 6 m away cuts through the cubes: those behind it are hidden.
+        let (raster, compute) = host_draws(&sim, camera, compare, Some(6.0));
+        let (open_raster, _) = host_draws(&sim, camera, compare, None);
+        let drawn = |image: &[u8]| image.chunks(4).filter(|p| p[..3] != background).count();
+        assert!(
+            drawn(&raster) > 500 && drawn(&raster) + 200 < drawn(&open_raster),
+            "{what}: the wall hides cubes: {} pixels drawn, {} without it",
+            drawn(&raster),
+            drawn(&open_raster)
+        );
+        let (mean, max, over) = differences(&raster, &compute, 2);
+        assert!(
+            mean < 0.1 && over * 200 < (SIDE * SIDE) as usize,
+            "{what}: compute vs raster over the host's depth: mean {mean:.4}, largest {max}, {over} channels over 2"
+        );
+    }
 }

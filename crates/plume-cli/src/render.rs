@@ -84,10 +84,10 @@ impl DrawMethod {
     /// renderer") and slower on llvmpipe, whose raster path is the CPU's; it draws every group's
     /// sprites (any texture, orientation, rotation and height, glowing or not), ribbons and
     /// solid mesh particles; the scene's meshes are drawn by the raster pipeline first and the
-    /// compute renderer tests their depth (`Effect::compute_renderer`, which draws no mesh
-    /// particles).
+    /// compute renderer tests their depth (`Effect::compute_renderer`).
     /// `over_host`: the compute renderer would draw over a host's image (the scene's meshes,
-    /// the preview's window), which it does with no mesh particles.
+    /// the preview's window), where a glowing effect's meshes are drawn too (the host's image
+    /// is not bloomed by the compute renderer).
     pub(crate) fn resolve(
         self,
         gpu: &Gpu,

@@ -260,14 +260,14 @@ impl Effect {
 
     /// The compute renderer of this effect, every group, into `width` x `height` targets like
     /// `target` ([`EffectRenderer`] says how it draws). Its image is the raster draw's, as
-    /// `plume render --draw compute` draws it: every sprite look, ribbons, the depth test (`Less`,
+    /// `plume render --draw compute` draws it: every sprite look, ribbons, solid meshes, the depth test (`Less`,
     /// `LessEqual`, `Greater`, `GreaterEqual` or `Always`) and soft particles. The host records
     /// [`Effect::prepare_draw`] after its depth is drawn (the compute renderer reads it in a compute
     /// pass), then [`EffectRenderer::draw`] in a pass over its colour (any format and sample
     /// count). A glowing effect puts its light into the host's target as it is (an HDR target
     /// keeps it, for the host's bloom), as the raster renderer does. Make a new one when the
     /// target's size changes. An error for what the compute renderer cannot draw over a host
-    /// ([`crate::outputs::ComputeOffscreen::why_not_for_host`]: no mesh particles).
+    /// ([`crate::outputs::ComputeOffscreen::why_not_for_host`]).
     pub fn compute_renderer(
         &self,
         target: &DrawTarget,

@@ -19,11 +19,16 @@
 //!   the viewer, as `fs_mesh` finds it from `dpdx` and `dpdy`) and writes the image, or the
 //!   background where nothing covers it and this part owns the image.
 //!
+//! Over a host's image (the embedding API's compute renderer) the image holds light and
+//! coverage as f16 pairs, each pixel is tested against the host's depth as its depth test
+//! would test a fragment, and with reversed Z (a `Greater` test) the nearest depth is the
+//! largest: the kept depth is then the greatest and the far plane 0.
+//!
 //! Coverage uses homogeneous edge functions (each corner's clip x, y, w): a pixel centre is
 //! inside when its three weights are positive, and the weights are the perspective-correct
 //! barycentrics up to one factor, so no division by a corner's w is needed and a triangle
 //! crossing the eye plane needs no clipping; its pixel box comes from the triangle clipped to
-//! the near plane.
+//! the clip volume's depth range (0 <= z <= w).
 
 use super::particle_mesh::{MeshIr, MESH_VERTICES_BINDING};
 use super::Blend;
@@ -39,15 +44,29 @@ pub const MESH_SPLAT_BINDINGS: [u32; 6] = [56, 57, 58, 59, 60, 61];
 /// hidden), the mesh's x, y and z axes, and the colour.
 pub const MESH_FRAME_WORDS: u64 = 20;
 
+/// How the compute mesh draw meets a host's image (the embedding API's compute renderer): it
+/// writes premultiplied light and coverage as f16 pairs, keeps the nearest particle by the
+/// host's depth convention, and tests each pixel against the host's depth.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct MeshHost {
+    /// Reversed Z: the nearest depth is the largest, the far plane 0.
+    pub(crate) reversed: bool,
+    /// The host's depth test, a WGSL condition on a pixel's depth `z` and the host's `scene`;
+    /// None when the host draws without depth.
+    pub(crate) passes: Option<&'static str>,
+    /// The binding of the host's depth (one f32 a pixel).
+    pub(crate) depth_binding: u32,
+}
+
 /// Why the compute renderer cannot draw a mesh look blended by `blend`, lit by a look that
-/// reads a shadow map (`shadowed`), into an HDR image (`hdr`: a glowing effect's); `None` when
-/// it can.
-pub(crate) fn refusal(blend: Blend, shadowed: bool, hdr: bool) -> Option<&'static str> {
+/// reads a shadow map (`shadowed`), in a glowing effect that blooms its own image (`glows`);
+/// `None` when it can.
+pub(crate) fn refusal(blend: Blend, shadowed: bool, glows: bool) -> Option<&'static str> {
     if !matches!(blend, Blend::Opaque | Blend::Mask(_)) {
         Some("the compute renderer draws solid mesh particles only (blend: Opaque or Mask)")
     } else if shadowed {
         Some("the compute renderer draws no mesh particles that receive shadows")
-    } else if hdr {
+    } else if glows {
         Some("the compute renderer draws no mesh particles into a glowing effect's image")
     } else {
         None
@@ -60,11 +79,11 @@ pub(crate) fn refusal(blend: Blend, shadowed: bool, hdr: bool) -> Option<&'stati
 pub(crate) fn emit_mesh_splat(
     w: &mut Writer,
     mesh: &MeshIr,
-    oriented: bool,
-    lit: bool,
-    blend: Blend,
+    (oriented, lit, blend): (bool, bool, Blend),
+    host: Option<&MeshHost>,
 ) {
     let [params, indices, frames, depth, pick, image] = MESH_SPLAT_BINDINGS;
+    let reversed = host.is_some_and(|h| h.reversed);
     let triangles = mesh.triangles.len() as u32;
     w.comment(format!(
         "render.mesh {:?} drawn by the compute renderer: {triangles} triangles a particle.",
@@ -106,24 +125,44 @@ pub(crate) fn emit_mesh_splat(
     w.line(format!(
         "@group(0) @binding({pick}) var<storage, read_write> mesh_pick: array<atomic<u32>>;"
     ));
-    w.line(format!(
-        "@group(0) @binding({image}) var<storage, read_write> mesh_image: array<u32>;"
-    ));
+    match host {
+        None => w.line(format!(
+            "@group(0) @binding({image}) var<storage, read_write> mesh_image: array<u32>;"
+        )),
+        Some(h) => {
+            w.comment("A host's image: per pixel (r, g) and (b, coverage) as f16 pairs, rows of the width rounded up to 32.");
+            w.line(format!(
+                "@group(0) @binding({image}) var<storage, read_write> mesh_image: array<vec2<u32>>;"
+            ));
+            if h.passes.is_some() {
+                w.comment("The host's depth, one f32 a pixel (a copy of its depth image).");
+                w.line(format!(
+                    "@group(0) @binding({}) var<storage, read> host_depth: array<f32>;",
+                    h.depth_binding
+                ));
+            }
+        }
+    }
     w.line(format!(
         "const MESH_TRIANGLES: u32 = {};",
         u32_lit(triangles)
     ));
-    w.comment("The far plane's depth, as the raster draw's depth buffer is cleared.");
-    w.line("const MESH_FAR: u32 = 0x3f800000u;");
+    w.comment(
+        "The far plane's depth, as the raster draw's depth buffer is cleared (0 with reversed Z).",
+    );
+    w.line(format!(
+        "const MESH_FAR: u32 = {};",
+        if reversed { "0u" } else { "0x3f800000u" }
+    ));
     w.line("const MESH_NONE: u32 = 0xffffffffu;");
     w.blank();
     emit_place(w, oriented, blend);
     w.blank();
     emit_cover(w);
     w.blank();
-    emit_raster(w);
+    emit_raster(w, reversed, host.and_then(|h| h.passes));
     w.blank();
-    emit_shade(w, lit);
+    emit_shade(w, lit, host.is_some());
 }
 
 /// `mesh_clear` and `mesh_place` (a thread per pixel, a thread per particle).
@@ -210,26 +249,35 @@ fn emit_cover(w: &mut Writer) {
         w.line("return vec3<f32>(at.x * 2.0 - 1.0, 1.0 - at.y * 2.0, 1.0);");
     });
     w.blank();
-    w.comment("The first and last pixel (x, y) whose centres the triangle's part in front of the near plane (clip z >= 0) may cover; first > last when none.");
+    w.block("fn mesh_in_depth(c: vec4<f32>) -> bool", |w| {
+        w.line("return c.w > 0.0 && c.z >= 0.0 && c.z <= c.w;")
+    });
+    w.blank();
+    w.comment("The first and last pixel (x, y) whose centres the triangle's part inside the clip volume's depth range may cover; first > last when none.");
     w.block(
         "fn mesh_box(c0: vec4<f32>, c1: vec4<f32>, c2: vec4<f32>) -> vec4<i32>",
         |w| {
             w.line("var lo = vec2<f32>(1e30);");
             w.line("var hi = vec2<f32>(-1e30);");
             w.line("let c = array<vec4<f32>, 3>(c0, c1, c2);");
+            w.comment("The corners inside the clip volume's depth range (0 <= z <= w), and where each edge crosses either of its planes inside the other; the two planes meet only at w = 0.");
             w.block("for (var k = 0u; k < 3u; k++)", |w| {
                 w.line("let a = c[k];");
                 w.line("let b = c[(k + 1u) % 3u];");
-                w.block("if (a.z >= 0.0 && a.w > 0.0)", |w| {
+                w.block("if (mesh_in_depth(a))", |w| {
                     w.line("lo = min(lo, a.xy / a.w);");
                     w.line("hi = max(hi, a.xy / a.w);");
                 });
-                w.comment("Where the edge crosses the near plane.");
-                w.block("if ((a.z >= 0.0) != (b.z >= 0.0))", |w| {
-                    w.line("let q = mix(a, b, a.z / (a.z - b.z));");
-                    w.block("if (q.w > 0.0)", |w| {
-                        w.line("lo = min(lo, q.xy / q.w);");
-                        w.line("hi = max(hi, q.xy / q.w);");
+                w.comment("Signed distances to the near-side plane z = 0 and the far-side one z = w.");
+                w.line("let da = vec2<f32>(a.z, a.w - a.z);");
+                w.line("let db = vec2<f32>(b.z, b.w - b.z);");
+                w.block("for (var plane = 0u; plane < 2u; plane++)", |w| {
+                    w.block("if ((da[plane] >= 0.0) != (db[plane] >= 0.0))", |w| {
+                        w.line("let q = mix(a, b, da[plane] / (da[plane] - db[plane]));");
+                        w.block("if (q.w > 0.0 && q.z >= -1e-6 * q.w && q.z <= q.w * (1.0 + 1e-6))", |w| {
+                            w.line("lo = min(lo, q.xy / q.w);");
+                            w.line("hi = max(hi, q.xy / q.w);");
+                        });
                     });
                 });
             });
@@ -244,8 +292,10 @@ fn emit_cover(w: &mut Writer) {
     );
 }
 
-/// `mesh_raster`: a thread per (particle, triangle), in draw order.
-fn emit_raster(w: &mut Writer) {
+/// `mesh_raster`: a thread per (particle, triangle), in draw order; the nearest depth the
+/// least (the largest with `reversed` Z); each pixel tested against the host's depth where
+/// `passes` gives the test.
+fn emit_raster(w: &mut Writer, reversed: bool, passes: Option<&str>) {
     w.line("@compute @workgroup_size(256)");
     w.block(
         "fn mesh_raster(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
@@ -271,15 +321,27 @@ fn emit_raster(w: &mut Writer) {
                     w.line("let b = vec3<f32>(dot(e[0], p), dot(e[1], p), dot(e[2], p));");
                     w.block("if (any(b < vec3<f32>(0.0)))", |w| w.line("continue;"));
                     w.line("let depth = dot(b, zs) / dot(b, ws);");
-                    w.comment("In front of the near plane and before the far one (the depth buffer's clear fails Less).");
-                    w.block("if (!(dot(b, ws) > 0.0) || !(depth >= 0.0) || !(depth < 1.0))", |w| {
+                    w.comment("Inside the clip volume's depth range, and not at the far plane's depth, which the depth buffer's clear holds and a strict test fails.");
+                    let inside = match reversed {
+                        false => "depth >= 0.0 && depth < 1.0",
+                        true => "depth > 0.0 && depth <= 1.0",
+                    };
+                    w.block(format!("if (!(dot(b, ws) > 0.0) || !({inside}))"), |w| {
                         w.line("continue;")
                     });
                     w.line("let pixel = u32(py) * mesh_splat.width + u32(px);");
+                    if let Some(passes) = passes {
+                        w.line("let z = depth;");
+                        w.line("let scene = host_depth[pixel];");
+                        w.block(format!("if (!({passes}))"), |w| w.line("continue;"));
+                    }
                     w.comment("Without the sign, so that -0 orders as 0.");
                     w.line("let bits = bitcast<u32>(depth) & 0x7fffffffu;");
                     w.block("if (mesh_splat.phase == 0u)", |w| {
-                        w.line("atomicMin(&mesh_depth[pixel], bits);");
+                        w.line(format!(
+                            "{}(&mesh_depth[pixel], bits);",
+                            if reversed { "atomicMax" } else { "atomicMin" }
+                        ));
                     });
                     w.block(
                         "else if (atomicLoad(&mesh_depth[pixel]) == bits)",
@@ -291,8 +353,9 @@ fn emit_raster(w: &mut Writer) {
     );
 }
 
-/// `mesh_shade`: a thread per pixel.
-fn emit_shade(w: &mut Writer, lit: bool) {
+/// `mesh_shade`: a thread per pixel, into an 8-bit image, or a `host`'s (light and coverage
+/// as f16 pairs, unclamped as the raster draw into an HDR target leaves it).
+fn emit_shade(w: &mut Writer, lit: bool, host: bool) {
     w.line("@compute @workgroup_size(256)");
     w.block(
         "fn mesh_shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
@@ -303,9 +366,12 @@ fn emit_shade(w: &mut Writer, lit: bool) {
             });
             w.line("let id = atomicLoad(&mesh_pick[pixel]);");
             w.block("if (id == MESH_NONE)", |w| {
-                w.block("if ((mesh_splat.background >> 24u) != 0u)", |w| {
-                    w.line("mesh_image[pixel] = mesh_splat.background;");
-                });
+                // A host's image is cleared each frame; what the parts before drew stays.
+                if !host {
+                    w.block("if ((mesh_splat.background >> 24u) != 0u)", |w| {
+                        w.line("mesh_image[pixel] = mesh_splat.background;");
+                    });
+                }
                 w.line("return;");
             });
             w.line("let f = mesh_frames[id / MESH_TRIANGLES];");
@@ -327,7 +393,14 @@ fn emit_shade(w: &mut Writer, lit: bool) {
                 w.line("let unit = facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
                 w.line("color = lit_color(color, received_light(unit, at));");
             }
-            w.line("mesh_image[pixel] = pack4x8unorm(vec4<f32>(clamp(color.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));");
+            match host {
+                false => w.line("mesh_image[pixel] = pack4x8unorm(vec4<f32>(clamp(color.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"),
+                true => {
+                    w.line("let x = pixel % mesh_splat.width;");
+                    w.line("let row = (pixel / mesh_splat.width) * ((mesh_splat.width + 31u) & ~31u);");
+                    w.line("mesh_image[row + x] = vec2<u32>(pack2x16float(color.rg), pack2x16float(vec2<f32>(color.b, 1.0)));");
+                }
+            }
         },
     );
 }

@@ -8,7 +8,9 @@
 use plume_compiler::lights::{Lights, LIGHTS_BINDING};
 use plume_compiler::mesh_splat::{MESH_FRAME_WORDS, MESH_SPLAT_BINDINGS};
 use plume_compiler::particle_mesh::MESH_VERTICES_BINDING;
-use plume_compiler::wgsl::draw::{DrawShape, DRAW_VIEW_BYTES};
+use plume_compiler::wgsl::draw::{
+    splat_hdr_pitch, DrawShape, DRAW_VIEW_BYTES, SPLAT_HOST_DEPTH_BINDING,
+};
 
 use super::binding::{bind, uniform};
 use super::group::{GroupSplat, SplatImage};
@@ -62,7 +64,10 @@ impl MeshSplat {
         let mesh = effect.ir.render.mesh.as_ref().ok_or_else(|| {
             RuntimeError::Output("a mesh part of the compute renderer draws no mesh".into())
         })?;
-        if let Some(why) = plume_compiler::wgsl::draw::splat_mesh_refusal(&effect.ir, image.hdr) {
+        if let Some(why) = plume_compiler::wgsl::draw::splat_mesh_refusal(
+            &effect.ir,
+            image.hdr && image.host.is_none(),
+        ) {
             return Err(RuntimeError::Output(why.into()));
         }
         let (width, height) = (image.width, image.height);
@@ -77,6 +82,8 @@ impl MeshSplat {
         }
         let shape = DrawShape {
             splat: true,
+            hdr: image.hdr,
+            host: image.host,
             ..draw_shape(effect, res)
         };
         let (module, mut particles) = draw_module(&gpu, effect, res, &shape, None)?;
@@ -111,15 +118,21 @@ impl MeshSplat {
         let frames = words("mesh frames", MESH_FRAME_WORDS * u64::from(count));
         let depth = words("mesh depth", pixels);
         let pick = words("mesh pick", pixels);
-        let image_buffer = match under {
-            Some(under) => under.clone(),
-            None => words("image", pixels),
+        // An HDR image (a host's) holds two words a pixel in rows of the width rounded to 32.
+        let image_buffer = match (under, image.hdr) {
+            (Some(under), _) => under.clone(),
+            (None, true) => words(
+                "image",
+                2 * u64::from(splat_hdr_pitch(width)) * u64::from(height),
+            ),
+            (None, false) => words("image", pixels),
         };
         let bg = effect.ir.render.background;
         // As a clear colour reaches an 8-bit target: each channel rounded to the nearest step.
         let byte = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u32;
         // Alpha 0: the parts before drew the image; pixels no mesh covers keep it.
         let background = match under {
+            _ if image.host.is_some() => 0,
             Some(_) => 0,
             None => byte(bg.x) | byte(bg.y) << 8 | byte(bg.z) << 16 | 255 << 24,
         };
@@ -170,6 +183,10 @@ impl MeshSplat {
                 (b_depth, depth.clone()),
                 (b_pick, pick.clone()),
             ]);
+            // A host's depth, which each pixel is tested against.
+            if let Some(host_depth) = &image.host_depth {
+                entries.push((SPLAT_HOST_DEPTH_BINDING, host_depth.clone()));
+            }
             bind(&gpu, &layout(2), &entries)
         };
         let raster_groups = [raster(first.clone()), raster(params(1)?)];

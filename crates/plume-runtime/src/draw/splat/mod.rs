@@ -116,8 +116,19 @@ impl ComputeOffscreen {
     /// Why the compute renderer cannot draw an effect whose groups are `groups`, or `None` when
     /// it can: a group it does not draw ([`Self::draws`]), a group after mesh particles (the
     /// raster pipeline tests it against their depth), or meshes in a glowing effect (whose
-    /// image is HDR).
+    /// image is bloomed from HDR light).
     pub fn why_not(groups: &[&EffectIr]) -> Option<&'static str> {
+        Self::refusal(groups, false)
+    }
+
+    /// [`Self::why_not`] for the embedding API's compute renderer (a host's image, tested
+    /// against the host's depth, which the host blooms if it will: meshes in a glowing effect
+    /// are drawn).
+    pub fn why_not_for_host(groups: &[&EffectIr]) -> Option<&'static str> {
+        Self::refusal(groups, true)
+    }
+
+    fn refusal(groups: &[&EffectIr], host: bool) -> Option<&'static str> {
         if groups.iter().any(|ir| !Self::draws(ir)) {
             return Some("the compute renderer draws no ribbons joining particles (render.ribbon), no mesh particles but solid ones (blend: Opaque or Mask) that receive no shadow, no sprites blended by Multiply, Mask, Premultiplied or Opaque, and no trails of stateless effects");
         }
@@ -128,21 +139,10 @@ impl ComputeOffscreen {
         {
             return Some("the compute renderer draws no sprites after mesh particles, which the raster pipeline tests against the meshes' depth");
         }
-        let hdr = groups[0].render.glow.is_some();
+        let glows = groups[0].render.glow.is_some() && !host;
         groups
             .iter()
-            .find_map(|ir| plume_compiler::wgsl::draw::splat_mesh_refusal(ir, hdr))
-    }
-
-    /// [`Self::why_not`] for the embedding API's compute renderer (a host's image, tested
-    /// against the host's depth), which draws no mesh particles.
-    pub fn why_not_for_host(groups: &[&EffectIr]) -> Option<&'static str> {
-        Self::why_not(groups).or_else(|| {
-            groups
-                .iter()
-                .any(|ir| ir.render.mesh.is_some())
-                .then_some("the embedding API's compute renderer draws no mesh particles")
-        })
+            .find_map(|ir| plume_compiler::wgsl::draw::splat_mesh_refusal(ir, glows))
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot

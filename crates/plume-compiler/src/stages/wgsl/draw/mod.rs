@@ -344,13 +344,13 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
     }
     if let Some(mesh) = splat_mesh {
         w.blank();
-        crate::features::looks::mesh_splat::emit_mesh_splat(
-            &mut w,
-            mesh,
+        let look = (
             ir.render.turns_quad(),
             ir.render.lit.is_some(),
             ir.render.blend,
         );
+        let host = shape.host.map(splat::mesh_host);
+        crate::features::looks::mesh_splat::emit_mesh_splat(&mut w, mesh, look, host.as_ref());
     } else if shape.splat {
         w.blank();
         if splat_discs(ir, shape.hdr) {

@@ -38,17 +38,18 @@ pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
         && !hdr
 }
 
-/// Why the compute renderer cannot draw `ir`'s mesh look into its image (`hdr`: an HDR image, a
-/// glowing effect's): only solid meshes that receive no shadow, into an 8-bit image
-/// ([`crate::features::looks::mesh_splat`]); `None` when it can, or when `ir` draws no meshes.
-pub fn splat_mesh_refusal(ir: &EffectIr, hdr: bool) -> Option<&'static str> {
+/// Why the compute renderer cannot draw `ir`'s mesh look into its image (`glows`: the HDR image
+/// of a glowing effect, which it blooms itself; a host's HDR image is drawn): only solid
+/// meshes that receive no shadow ([`crate::features::looks::mesh_splat`]); `None` when it can,
+/// or when `ir` draws no meshes.
+pub fn splat_mesh_refusal(ir: &EffectIr, glows: bool) -> Option<&'static str> {
     ir.render.mesh.as_ref()?;
     let shadowed = ir
         .render
         .lit
         .as_ref()
         .is_some_and(|l| l.shadow_lookup().is_some());
-    crate::features::looks::mesh_splat::refusal(ir.render.blend, shadowed, hdr)
+    crate::features::looks::mesh_splat::refusal(ir.render.blend, shadowed, glows)
 }
 
 /// Whether the compute renderer builds `ir`'s tile lists without a sort: additive light, which the
@@ -125,7 +126,7 @@ pub enum HostDepthTest {
 
 impl HostDepthTest {
     /// The WGSL comparison that passes `z` against `scene`.
-    fn passes(self) -> &'static str {
+    pub(crate) fn passes(self) -> &'static str {
         match self {
             HostDepthTest::Less => "z < scene",
             HostDepthTest::LessEqual => "z <= scene",
@@ -133,6 +134,19 @@ impl HostDepthTest {
             HostDepthTest::GreaterEqual => "z >= scene",
             HostDepthTest::Always => "true",
         }
+    }
+}
+
+/// How the compute mesh draw meets `host`: by its depth test's convention (reversed Z for
+/// `Greater` and `GreaterEqual`) and against its depth.
+pub(crate) fn mesh_host(host: SplatHost) -> crate::features::looks::mesh_splat::MeshHost {
+    crate::features::looks::mesh_splat::MeshHost {
+        reversed: matches!(
+            host.depth,
+            Some(HostDepthTest::Greater | HostDepthTest::GreaterEqual)
+        ),
+        passes: host.depth.map(HostDepthTest::passes),
+        depth_binding: SPLAT_HOST_DEPTH_BINDING,
     }
 }
 
