@@ -1,7 +1,7 @@
 //! Mesh particles (`render.mesh`) in Bevy's view, headless on lavapipe: a particle drawn as a
-//! square plate covers the square its corners project to, by the raster renderer even where
-//! the compute one is asked for (it draws no meshes: the effect falls back, as `Auto` picks the
-//! raster one for it); and a file with no mesh, given a Bevy mesh in code, draws that mesh.
+//! square plate covers the square its corners project to, drawn by the raster renderer and by
+//! the compute one (an opaque mesh over Bevy's reversed depth); and a file with no mesh, given
+//! a Bevy mesh in code, draws that mesh.
 //! `BEVY_PLUME_TEST_IMAGES=DIR` keeps the image.
 
 use crate::common::{asset_dir, project, serial, Harness};
@@ -28,28 +28,38 @@ fn a_mesh_particle_covers_where_its_mesh_projects() {
     let dir = asset_dir("meshes");
     std::fs::write(dir.join("plate.plume.ron"), PLATE).unwrap();
     std::fs::write(dir.join("plate.obj"), PLATE_OBJ).unwrap();
-    let mut h = Harness::new(&dir);
-    h.camera();
-    h.wait_for_pipelines();
-    let plate = h.load("plate.plume.ron");
-    h.app.world_mut().spawn((
-        PlumeEffect::new(plate).with_draw(PlumeDraw::Compute),
-        Transform::IDENTITY,
-    ));
-    h.update(5);
-    let image = h.capture_running();
-    if let Ok(out) = std::env::var("BEVY_PLUME_TEST_IMAGES") {
-        image
-            .save(std::path::Path::new(&out).join("mesh.png"))
-            .unwrap();
+    for draw in [PlumeDraw::Raster, PlumeDraw::Compute] {
+        let mut h = Harness::new(&dir);
+        h.camera();
+        h.wait_for_pipelines();
+        let plate = h.load("plate.plume.ron");
+        h.app
+            .world_mut()
+            .spawn((PlumeEffect::new(plate).with_draw(draw), Transform::IDENTITY));
+        h.update(5);
+        let image = h.capture_running();
+        if let Ok(out) = std::env::var("BEVY_PLUME_TEST_IMAGES") {
+            image
+                .save(std::path::Path::new(&out).join(format!("mesh-{draw:?}.png")))
+                .unwrap();
+        }
+        assert_covers(
+            &image,
+            (-0.5, 1.25),
+            (1.5, -0.75),
+            &format!("{draw:?} plate"),
+        );
+        let stats = *h
+            .app
+            .sub_app(RenderApp)
+            .world()
+            .resource::<PlumeRenderStats>();
+        let want = usize::from(draw == PlumeDraw::Compute);
+        assert_eq!(
+            stats.compute_draws, want,
+            "{draw:?}: which renderer drew the mesh"
+        );
     }
-    assert_covers(&image, (-0.5, 1.25), (1.5, -0.75), "plate");
-    let stats = *h
-        .app
-        .sub_app(RenderApp)
-        .world()
-        .resource::<PlumeRenderStats>();
-    assert_eq!(stats.compute_draws, 0, "the raster renderer draws meshes");
 }
 
 /// The same particle with no mesh in its file, drawn as a Bevy mesh given in code
