@@ -1,7 +1,8 @@
 //! Solid mesh particles (`blend: Opaque` or `Mask`) drawn by the compute renderer give the
 //! raster draw's image, as `plume render` draws them (depth written, the nearest showing):
 //! lit and unlit, turned and stretched, sorted and not, cut out below a `Mask` cutoff, with
-//! the camera among them (triangles crossing the near plane), and over sprites drawn first;
+//! the camera among them (triangles crossing the near plane), large (triangles of hundreds of
+//! pixels, each covered by a workgroup), and over sprites drawn first;
 //! the near red cube shows in front of the far blue one whichever is drawn first; and what the
 //! compute renderer leaves to the raster draw, it refuses with the reason.
 
@@ -127,6 +128,18 @@ fn solid_meshes_drawn_by_the_compute_renderer_match_the_raster_draw() {
             lit,
             false,
             1.2,
+        ),
+        // Cubes 8 times as large: faces of hundreds of pixels, each covered by a workgroup,
+        // more than the compute renderer's first list of big triangles holds (it grows and
+        // draws again).
+        (
+            "cube.obj".to_string(),
+            "Fixed((0.3, 1.0, 0.2))",
+            "Opaque",
+            ", size_by: Some(\"8.0\")",
+            lit,
+            true,
+            8.0,
         ),
     ];
     for (mesh, orient, blend, extra, lit, sort, eye) in cases {

@@ -8,8 +8,9 @@
 //!   `sprite_at`, as `vs_mesh` places the mesh; hidden particles (and, for `Mask`, those
 //!   below the cutoff, which `fs_mesh` discards whole) get none;
 //! - `mesh_raster`, twice (a uniform's phase): a thread per (particle, triangle) in draw
-//!   order covers the pixel centres inside the triangle (culling back faces, clipped to the
-//!   near and far planes as the raster pipeline clips), first keeping each pixel's least
+//!   order (a workgroup per triangle for big ones, `mesh_raster_big`) covers the pixel
+//!   centres inside the triangle (culling back faces, clipped to the near and far planes as
+//!   the raster pipeline clips), first keeping each pixel's least
 //!   depth (`atomicMin` on the f32's bits, which order as the depths do), then, where its
 //!   depth is the one kept, the least (draw position, triangle) there, so a tie goes to the
 //!   first drawn as the raster pipeline's `Less` test leaves it. One kernel for both phases,
@@ -36,9 +37,14 @@ use crate::base::writer::{f32_lit, u32_lit, Writer};
 
 /// The compute mesh kernels' own bindings: the parameters (uniform: width, height, particles,
 /// background, phase), the triangles' corner indices, the particles' frames, each pixel's
-/// depth and pick, and the image (one RGBA8 word a pixel). The corners are read from
-/// [`MESH_VERTICES_BINDING`], as the raster draw reads them.
-pub const MESH_SPLAT_BINDINGS: [u32; 6] = [56, 57, 58, 59, 60, 61];
+/// depth and pick, the image (one RGBA8 word a pixel, or a host's two), and the list of big
+/// triangles (a count, then ids). The corners are read from [`MESH_VERTICES_BINDING`], as the
+/// raster draw reads them.
+pub const MESH_SPLAT_BINDINGS: [u32; 7] = [56, 57, 58, 59, 60, 61, 62];
+
+/// Pixels in a triangle's box past which a workgroup covers it (`mesh_raster_big`), not one
+/// thread.
+pub const BIG_TRIANGLE_PIXELS: u32 = 256;
 
 /// 32-bit words of one particle's frame in the compute mesh draw: centre (w: 1 shown, 0
 /// hidden), the mesh's x, y and z axes, and the colour.
@@ -82,7 +88,7 @@ pub(crate) fn emit_mesh_splat(
     (oriented, lit, blend): (bool, bool, Blend),
     host: Option<&MeshHost>,
 ) {
-    let [params, indices, frames, depth, pick, image] = MESH_SPLAT_BINDINGS;
+    let [params, indices, frames, depth, pick, image, big] = MESH_SPLAT_BINDINGS;
     let reversed = host.is_some_and(|h| h.reversed);
     let triangles = mesh.triangles.len() as u32;
     w.comment(format!(
@@ -143,6 +149,14 @@ pub(crate) fn emit_mesh_splat(
             }
         }
     }
+    w.comment("The big triangles mesh_raster lists for mesh_raster_big: how many it met (the list may hold fewer), and their ids.");
+    w.block("struct MeshBig", |w| {
+        w.line("count: atomic<u32>,");
+        w.line("ids: array<u32>,");
+    });
+    w.line(format!(
+        "@group(0) @binding({big}) var<storage, read_write> mesh_big: MeshBig;"
+    ));
     w.line(format!(
         "const MESH_TRIANGLES: u32 = {};",
         u32_lit(triangles)
@@ -177,6 +191,7 @@ fn emit_place(w: &mut Writer, oriented: bool, blend: Blend) {
             });
             w.line("atomicStore(&mesh_depth[pixel], MESH_FAR);");
             w.line("atomicStore(&mesh_pick[pixel], MESH_NONE);");
+            w.block("if (pixel == 0u)", |w| w.line("atomicStore(&mesh_big.count, 0u);"));
         },
     );
     w.blank();
@@ -292,61 +307,114 @@ fn emit_cover(w: &mut Writer) {
     );
 }
 
-/// `mesh_raster`: a thread per (particle, triangle), in draw order; the nearest depth the
-/// least (the largest with `reversed` Z); each pixel tested against the host's depth where
-/// `passes` gives the test.
+/// `mesh_triangle`, `mesh_cover` and the two kernels that cover pixels: `mesh_raster`, a
+/// thread per (particle, triangle) in draw order, and `mesh_raster_big`, a workgroup per
+/// triangle of the list `mesh_raster` leaves it (those whose pixel box passes
+/// [`BIG_TRIANGLE_PIXELS`], so that a mesh close to the camera is not one thread's thousands of
+/// pixels). The nearest depth is the least (the largest with `reversed` Z); each pixel is tested
+/// against the host's depth where `passes` gives the test.
 fn emit_raster(w: &mut Writer, reversed: bool, passes: Option<&str>) {
+    w.block("struct MeshTriangle", |w| {
+        w.comment(
+            "The edge functions (all zero: nothing to draw), corner depths and w, pixel box, id.",
+        );
+        w.line("e: mat3x3<f32>,");
+        w.line("zs: vec3<f32>,");
+        w.line("ws: vec3<f32>,");
+        w.line("bounds: vec4<i32>,");
+        w.line("id: u32,");
+    });
+    w.blank();
+    w.comment("Triangle t of the particle drawn i-th, set up for covering; e all zero when it draws nothing (a hidden particle, a back face).");
+    w.block("fn mesh_triangle(i: u32, t: u32) -> MeshTriangle", |w| {
+        w.line("var m: MeshTriangle;");
+        w.line("m.id = i * MESH_TRIANGLES + t;");
+        w.line("let f = mesh_frames[i];");
+        w.block("if (f.center.w == 0.0)", |w| w.line("return m;"));
+        w.line("let c0 = draw.proj * vec4<f32>(mesh_corner(f, 3u * t), 1.0);");
+        w.line("let c1 = draw.proj * vec4<f32>(mesh_corner(f, 3u * t + 1u), 1.0);");
+        w.line("let c2 = draw.proj * vec4<f32>(mesh_corner(f, 3u * t + 2u), 1.0);");
+        w.line("m.e = mesh_edges(c0, c1, c2);");
+        w.line("m.zs = vec3<f32>(c0.z, c1.z, c2.z);");
+        w.line("m.ws = vec3<f32>(c0.w, c1.w, c2.w);");
+        w.line("m.bounds = mesh_box(c0, c1, c2);");
+        w.line("return m;");
+    });
+    w.blank();
+    w.comment("Pixel (px, py) of triangle m: its depth kept if nearest (phase 0), then its id if its depth is the one kept (phase 1).");
+    w.block("fn mesh_cover(m: MeshTriangle, px: i32, py: i32)", |w| {
+        w.line("let p = mesh_ndc(u32(px), u32(py));");
+        w.line("let b = vec3<f32>(dot(m.e[0], p), dot(m.e[1], p), dot(m.e[2], p));");
+        w.block("if (any(b < vec3<f32>(0.0)))", |w| w.line("return;"));
+        w.line("let depth = dot(b, m.zs) / dot(b, m.ws);");
+        w.comment("Inside the clip volume's depth range, and not at the far plane's depth, which the depth buffer's clear holds and a strict test fails.");
+        let inside = match reversed {
+            false => "depth >= 0.0 && depth < 1.0",
+            true => "depth > 0.0 && depth <= 1.0",
+        };
+        w.block(format!("if (!(dot(b, m.ws) > 0.0) || !({inside}))"), |w| {
+            w.line("return;")
+        });
+        w.line("let pixel = u32(py) * mesh_splat.width + u32(px);");
+        if let Some(passes) = passes {
+            w.line("let z = depth;");
+            w.line("let scene = host_depth[pixel];");
+            w.block(format!("if (!({passes}))"), |w| w.line("return;"));
+        }
+        w.comment("Without the sign, so that -0 orders as 0.");
+        w.line("let bits = bitcast<u32>(depth) & 0x7fffffffu;");
+        w.block("if (mesh_splat.phase == 0u)", |w| {
+            w.line(format!(
+                "{}(&mesh_depth[pixel], bits);",
+                if reversed { "atomicMax" } else { "atomicMin" }
+            ));
+        });
+        w.block(
+            "else if (atomicLoad(&mesh_depth[pixel]) == bits)",
+            |w| w.line("atomicMin(&mesh_pick[pixel], m.id);"),
+        );
+    });
+    w.blank();
     w.line("@compute @workgroup_size(256)");
     w.block(
         "fn mesh_raster(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
         |w| {
             w.line("let job = gid.x + gid.y * groups.x * 256u;");
             w.line("let i = job / MESH_TRIANGLES;");
-            w.line("let t = job % MESH_TRIANGLES;");
             w.block("if (i >= mesh_splat.count)", |w| w.line("return;"));
-            w.line("let f = mesh_frames[i];");
-            w.block("if (f.center.w == 0.0)", |w| w.line("return;"));
-            w.line("let c0 = draw.proj * vec4<f32>(mesh_corner(f, 3u * t), 1.0);");
-            w.line("let c1 = draw.proj * vec4<f32>(mesh_corner(f, 3u * t + 1u), 1.0);");
-            w.line("let c2 = draw.proj * vec4<f32>(mesh_corner(f, 3u * t + 2u), 1.0);");
-            w.line("let e = mesh_edges(c0, c1, c2);");
-            w.block("if (all(e[0] == vec3<f32>(0.0)))", |w| w.line("return;"));
-            w.line("let zs = vec3<f32>(c0.z, c1.z, c2.z);");
-            w.line("let ws = vec3<f32>(c0.w, c1.w, c2.w);");
-            w.line("let bounds = mesh_box(c0, c1, c2);");
-            w.line("let id = i * MESH_TRIANGLES + t;");
-            w.block("for (var py = bounds.y; py <= bounds.w; py++)", |w| {
-                w.block("for (var px = bounds.x; px <= bounds.z; px++)", |w| {
-                    w.line("let p = mesh_ndc(u32(px), u32(py));");
-                    w.line("let b = vec3<f32>(dot(e[0], p), dot(e[1], p), dot(e[2], p));");
-                    w.block("if (any(b < vec3<f32>(0.0)))", |w| w.line("continue;"));
-                    w.line("let depth = dot(b, zs) / dot(b, ws);");
-                    w.comment("Inside the clip volume's depth range, and not at the far plane's depth, which the depth buffer's clear holds and a strict test fails.");
-                    let inside = match reversed {
-                        false => "depth >= 0.0 && depth < 1.0",
-                        true => "depth > 0.0 && depth <= 1.0",
-                    };
-                    w.block(format!("if (!(dot(b, ws) > 0.0) || !({inside}))"), |w| {
-                        w.line("continue;")
+            w.line("let m = mesh_triangle(i, job % MESH_TRIANGLES);");
+            w.block("if (all(m.e[0] == vec3<f32>(0.0)))", |w| w.line("return;"));
+            w.line("let span = max(m.bounds.zw - m.bounds.xy + 1, vec2<i32>(0));");
+            w.block(format!("if (span.x * span.y > {BIG_TRIANGLE_PIXELS})"), |w| {
+                w.comment("A big triangle is mesh_raster_big's, listed in phase 0. Past the list's end it is counted, not drawn: the runtime grows the list by the count and draws the frame again.");
+                w.block("if (mesh_splat.phase == 0u)", |w| {
+                    w.line("let k = atomicAdd(&mesh_big.count, 1u);");
+                    w.block("if (k < arrayLength(&mesh_big.ids))", |w| {
+                        w.line("mesh_big.ids[k] = m.id;");
                     });
-                    w.line("let pixel = u32(py) * mesh_splat.width + u32(px);");
-                    if let Some(passes) = passes {
-                        w.line("let z = depth;");
-                        w.line("let scene = host_depth[pixel];");
-                        w.block(format!("if (!({passes}))"), |w| w.line("continue;"));
-                    }
-                    w.comment("Without the sign, so that -0 orders as 0.");
-                    w.line("let bits = bitcast<u32>(depth) & 0x7fffffffu;");
-                    w.block("if (mesh_splat.phase == 0u)", |w| {
-                        w.line(format!(
-                            "{}(&mesh_depth[pixel], bits);",
-                            if reversed { "atomicMax" } else { "atomicMin" }
-                        ));
-                    });
-                    w.block(
-                        "else if (atomicLoad(&mesh_depth[pixel]) == bits)",
-                        |w| w.line("atomicMin(&mesh_pick[pixel], id);"),
-                    );
+                });
+                w.line("return;");
+            });
+            w.block("for (var py = m.bounds.y; py <= m.bounds.w; py++)", |w| {
+                w.block("for (var px = m.bounds.x; px <= m.bounds.z; px++)", |w| {
+                    w.line("mesh_cover(m, px, py);");
+                });
+            });
+        },
+    );
+    w.blank();
+    w.line("@compute @workgroup_size(256)");
+    w.block(
+        "fn mesh_raster_big(@builtin(local_invocation_index) lane: u32, @builtin(workgroup_id) group: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
+        |w| {
+            w.line("let listed = min(atomicLoad(&mesh_big.count), arrayLength(&mesh_big.ids));");
+            w.block("for (var k = group.x; k < listed; k += groups.x)", |w| {
+                w.line("let id = mesh_big.ids[k];");
+                w.line("let m = mesh_triangle(id / MESH_TRIANGLES, id % MESH_TRIANGLES);");
+                w.line("let span = m.bounds.zw - m.bounds.xy + 1;");
+                w.line("let n = u32(span.x * span.y);");
+                w.block("for (var q = lane; q < n; q += 256u)", |w| {
+                    w.line("mesh_cover(m, m.bounds.x + i32(q % u32(span.x)), m.bounds.y + i32(q / u32(span.x)));");
                 });
             });
         },

@@ -39,17 +39,27 @@ pub(crate) struct MeshSplat {
     draw_view: wgpu::Buffer,
     lights: Option<LightsUniform>,
     image: wgpu::Buffer,
-    /// A zero word: meshes need no list that could be too short (a host's readback of the
-    /// entries needed reads it).
-    status: wgpu::Buffer,
-    /// `mesh_clear`, `mesh_place`, `mesh_raster`, `mesh_shade`.
-    kernels: [wgpu::ComputePipeline; 4],
-    /// Their bind groups; `mesh_raster` has one a phase.
+    /// The big triangles' list (a count, then ids): its first word is the status a host's
+    /// readback reads (the triangles the last frame listed).
+    big: wgpu::Buffer,
+    /// Ids the list holds.
+    big_len: u64,
+    /// `mesh_clear`, `mesh_place`, `mesh_raster`, `mesh_raster_big`, `mesh_shade`.
+    kernels: [wgpu::ComputePipeline; 5],
+    /// What the kernels that read the big list bind besides it: `mesh_clear`, then
+    /// `mesh_raster` (and `mesh_raster_big`) in each phase.
+    clear_entries: Vec<(u32, wgpu::Buffer)>,
+    raster_entries: [Vec<(u32, wgpu::Buffer)>; 2],
+    /// Bind groups: `mesh_clear`'s, `mesh_place`'s, per phase `mesh_raster`'s and
+    /// `mesh_raster_big`'s, and `mesh_shade`'s.
     clear_group: wgpu::BindGroup,
     place_group: wgpu::BindGroup,
-    raster_groups: [wgpu::BindGroup; 2],
+    raster_groups: [[wgpu::BindGroup; 2]; 2],
     shade_group: wgpu::BindGroup,
 }
+
+/// Workgroups of `mesh_raster_big`, each taking every so many of the listed triangles.
+const BIG_WORKGROUPS: u32 = 512;
 
 impl MeshSplat {
     /// The compute renderer of `group`'s meshes into `image`'s size: into `under`, the image of
@@ -64,10 +74,8 @@ impl MeshSplat {
         let mesh = effect.ir.render.mesh.as_ref().ok_or_else(|| {
             RuntimeError::Output("a mesh part of the compute renderer draws no mesh".into())
         })?;
-        if let Some(why) = plume_compiler::wgsl::draw::splat_mesh_refusal(
-            &effect.ir,
-            image.hdr && image.host.is_none(),
-        ) {
+        let glows = image.hdr && image.host.is_none();
+        if let Some(why) = plume_compiler::wgsl::draw::splat_mesh_refusal(&effect.ir, glows) {
             return Err(RuntimeError::Output(why.into()));
         }
         let (width, height) = (image.width, image.height);
@@ -94,14 +102,7 @@ impl MeshSplat {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let words = |label, n: u64| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size: n.max(4) * 4,
-                usage: STORAGE,
-                mapped_at_creation: false,
-            })
-        };
+        let words = |label, n: u64| storage_words(&gpu, label, n);
         let buffers = mesh.buffers();
         let vertices = words_buffer(
             &gpu,
@@ -130,11 +131,11 @@ impl MeshSplat {
         let bg = effect.ir.render.background;
         // As a clear colour reaches an 8-bit target: each channel rounded to the nearest step.
         let byte = |x: f64| (x.clamp(0.0, 1.0) * 255.0).round() as u32;
-        // Alpha 0: the parts before drew the image; pixels no mesh covers keep it.
-        let background = match under {
-            _ if image.host.is_some() => 0,
-            Some(_) => 0,
-            None => byte(bg.x) | byte(bg.y) << 8 | byte(bg.z) << 16 | 255 << 24,
+        // Alpha 0: the parts before drew the image (or a host's image); pixels no mesh covers
+        // keep it.
+        let background = match (under, image.host) {
+            (None, None) => byte(bg.x) | byte(bg.y) << 8 | byte(bg.z) << 16 | 255 << 24,
+            _ => 0,
         };
         let params = |phase| {
             uniform(
@@ -143,33 +144,29 @@ impl MeshSplat {
                 &[width, height, count, background, phase],
             )
         };
-        let [b_params, b_indices, b_frames, b_depth, b_pick, b_image] = MESH_SPLAT_BINDINGS;
+        let [b_params, b_indices, b_frames, b_depth, b_pick, b_image, _] = MESH_SPLAT_BINDINGS;
         let lights = LightsUniform::new(&gpu, effect);
         let kernel = |entry| gpu.compute_pipeline(&module, entry, None);
         let kernels = [
             kernel("mesh_clear"),
             kernel("mesh_place"),
             kernel("mesh_raster"),
+            kernel("mesh_raster_big"),
             kernel("mesh_shade"),
         ];
         gpu.take_error()?;
-        let layout = |k: usize| kernels[k].get_bind_group_layout(0);
         let first = params(0)?;
-        let clear_group = bind(
-            &gpu,
-            &layout(0),
-            &[
-                (b_params, first.clone()),
-                (b_depth, depth.clone()),
-                (b_pick, pick.clone()),
-            ],
-        );
+        let clear_entries = vec![
+            (b_params, first.clone()),
+            (b_depth, depth.clone()),
+            (b_pick, pick.clone()),
+        ];
         particles.extend([
             (0, draw_view.clone()),
             (b_params, first.clone()),
             (b_frames, frames.clone()),
         ]);
-        let place_group = bind(&gpu, &layout(1), &particles);
+        let place_group = bind(&gpu, &kernels[1].get_bind_group_layout(0), &particles);
         let corners = [
             (0, draw_view.clone()),
             (MESH_VERTICES_BINDING, vertices),
@@ -187,9 +184,9 @@ impl MeshSplat {
             if let Some(host_depth) = &image.host_depth {
                 entries.push((SPLAT_HOST_DEPTH_BINDING, host_depth.clone()));
             }
-            bind(&gpu, &layout(2), &entries)
+            entries
         };
-        let raster_groups = [raster(first.clone()), raster(params(1)?)];
+        let raster_entries = [raster(first.clone()), raster(params(1)?)];
         // The unlit shade reads the particles' colours alone: no corners, view or lights.
         let mut shade = vec![
             (b_params, first),
@@ -201,10 +198,13 @@ impl MeshSplat {
             shade.extend(corners[..3].iter().cloned());
             shade.push((LIGHTS_BINDING, lights.buffer.clone()));
         }
-        let shade_group = bind(&gpu, &layout(3), &shade);
+        let shade_group = bind(&gpu, &kernels[4].get_bind_group_layout(0), &shade);
+        let big_len = FIRST_BIG_TRIANGLES;
+        let big = words("mesh big triangles", 1 + big_len);
+        let (clear_group, raster_groups) =
+            big_groups(&gpu, &kernels, &big, &clear_entries, &raster_entries);
         gpu.take_error()?;
         Ok(Self {
-            status: words("mesh splat status", 1),
             gpu,
             pixels,
             count,
@@ -212,12 +212,46 @@ impl MeshSplat {
             draw_view,
             lights,
             image: image_buffer,
+            big,
+            big_len,
             kernels,
+            clear_entries,
+            raster_entries,
             clear_group,
             place_group,
             raster_groups,
             shade_group,
         })
+    }
+
+    /// Whether the big triangles' list held every one the last frame listed (read after it
+    /// ran); if not, it is grown, and the frame must be drawn again.
+    fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
+        let needed = u64::from(crate::device::readback::read_words(&self.gpu, &self.big, 1)?[0]);
+        let fits = needed <= self.big_len;
+        self.grow(needed)?;
+        Ok(fits)
+    }
+
+    /// Grows the big triangles' list to a quarter more than `needed` if it holds fewer.
+    fn grow(&mut self, needed: u64) -> Result<(), RuntimeError> {
+        if needed <= self.big_len {
+            return Ok(());
+        }
+        let len = needed + needed / 4 + 4096;
+        let limit = self.gpu.limits.max_storage_buffer_binding_size;
+        if 4 * (1 + len) > limit {
+            return Err(RuntimeError::Unsupported(format!(
+                "{needed} big mesh triangles are more than the compute renderer lists within the adapter's {limit}-byte binding limit; draw this effect with the raster pipeline"
+            )));
+        }
+        self.big = storage_words(&self.gpu, "mesh big triangles", 1 + len);
+        self.big_len = len;
+        let (e, r) = (&self.clear_entries, &self.raster_entries);
+        let (clear, raster) = big_groups(&self.gpu, &self.kernels, &self.big, e, r);
+        self.clear_group = clear;
+        self.raster_groups = raster;
+        Ok(())
     }
 
     /// Records the camera, the steps done and the size scale before the compute renderer's
@@ -249,7 +283,7 @@ impl MeshSplat {
         pass: &mut wgpu::ComputePass<'_>,
         stage: &str,
     ) -> Result<(), RuntimeError> {
-        let [clear, place, raster, shade] = &self.kernels;
+        let [clear, place, raster, raster_big, shade] = &self.kernels;
         let (px, py) = self.gpu.grid(self.pixels, 256)?;
         match stage {
             "project" => {
@@ -264,10 +298,13 @@ impl MeshSplat {
             "raster" => {
                 let jobs = u64::from(self.count) * u64::from(self.triangles);
                 let (x, y) = self.gpu.grid(jobs, 256)?;
-                pass.set_pipeline(raster);
-                for group in &self.raster_groups {
-                    pass.set_bind_group(0, group, &[]);
+                for [small, big] in &self.raster_groups {
+                    pass.set_pipeline(raster);
+                    pass.set_bind_group(0, small, &[]);
                     pass.dispatch_workgroups(x, y, 1);
+                    pass.set_pipeline(raster_big);
+                    pass.set_bind_group(0, big, &[]);
+                    pass.dispatch_workgroups(BIG_WORKGROUPS, 1, 1);
                 }
                 pass.set_pipeline(shade);
                 pass.set_bind_group(0, &self.shade_group, &[]);
@@ -277,6 +314,45 @@ impl MeshSplat {
         }
         Ok(())
     }
+}
+
+/// Ids the big triangles' list holds at first.
+const FIRST_BIG_TRIANGLES: u64 = 1 << 10;
+
+/// A storage buffer of `n` words (at least 4).
+fn storage_words(gpu: &Gpu, label: &str, n: u64) -> wgpu::Buffer {
+    gpu.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some(label),
+        size: n.max(4) * 4,
+        usage: STORAGE,
+        mapped_at_creation: false,
+    })
+}
+
+/// The bind groups of the kernels that read the big triangles' list `big`: `mesh_clear`'s
+/// (of `clear`), and per phase `mesh_raster`'s and `mesh_raster_big`'s (of `raster`).
+fn big_groups(
+    gpu: &Gpu,
+    kernels: &[wgpu::ComputePipeline; 5],
+    big: &wgpu::Buffer,
+    clear: &[(u32, wgpu::Buffer)],
+    raster: &[Vec<(u32, wgpu::Buffer)>; 2],
+) -> (wgpu::BindGroup, [[wgpu::BindGroup; 2]; 2]) {
+    let b_big = MESH_SPLAT_BINDINGS[6];
+    let with_big = |entries: &[(u32, wgpu::Buffer)]| {
+        let mut all = entries.to_vec();
+        all.push((b_big, big.clone()));
+        all
+    };
+    let group = |k: usize, entries: &[(u32, wgpu::Buffer)]| {
+        bind(
+            gpu,
+            &kernels[k].get_bind_group_layout(0),
+            &with_big(entries),
+        )
+    };
+    let phase = |p: usize| [group(2, &raster[p]), group(3, &raster[p])];
+    (group(0, clear), [phase(0), phase(1)])
 }
 
 impl SplatPart {
@@ -330,27 +406,27 @@ impl SplatPart {
         }
     }
 
-    /// See [`GroupSplat::fits_or_grow`]; meshes always fit.
+    /// See [`GroupSplat::fits_or_grow`]: the sprites' entries, or the meshes' big triangles.
     pub(crate) fn fits_or_grow(&mut self) -> Result<bool, RuntimeError> {
         match self {
             Self::Sprites(s) => s.fits_or_grow(),
-            Self::Meshes(_) => Ok(true),
+            Self::Meshes(m) => m.fits_or_grow(),
         }
     }
 
-    /// See [`GroupSplat::grow`]; nothing for meshes.
+    /// See [`GroupSplat::grow`]: the sprites' entries, or the meshes' big triangles.
     pub(crate) fn grow(&mut self, needed: u64) -> Result<(), RuntimeError> {
         match self {
             Self::Sprites(s) => s.grow(needed),
-            Self::Meshes(_) => Ok(()),
+            Self::Meshes(m) => m.grow(needed),
         }
     }
 
-    /// See [`GroupSplat::status`].
+    /// See [`GroupSplat::status`]: the entries, or the big triangles, the last frame needed.
     pub(crate) fn status(&self) -> &wgpu::Buffer {
         match self {
             Self::Sprites(s) => s.status(),
-            Self::Meshes(m) => &m.status,
+            Self::Meshes(m) => &m.big,
         }
     }
 
