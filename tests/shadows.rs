@@ -3,7 +3,7 @@
 //! embedding API (standard and reversed depth), pixel by pixel across the shadow's edge, and
 //! the map `plume render` draws from the scene's meshes, on the ground and on lit particles;
 //! the lookup at each pixel and once a particle (`shadow_at: Particle`) on a sprite and a mesh
-//! particle, and
+//! particle (drawn by both renderers), and
 //! how little it changes a picture of smoke;
 //! each pixel against the f64 light ([`Shadow::visibility`] on the map's depths read back) in
 //! both renderers: within one 8-bit step for an opaque surface, two for a sprite's blended
@@ -17,7 +17,7 @@ use common::*;
 use glam::{DMat4, DVec3};
 use plume::compiler::lights::{LightSource, Lights};
 use plume::compiler::shadow::{Shadow, ShadowDepths};
-use plume::runtime::outputs::{Offscreen, Scene, SCENE_GREY};
+use plume::runtime::outputs::{ComputeOffscreen, Offscreen, Scene, SCENE_GREY};
 use plume::runtime::{Camera, Effect, Gpu};
 
 const COLOR: [f64; 3] = [0.8, 0.6, 0.4];
@@ -479,8 +479,14 @@ const CUBE_SIDE: u32 = 65;
 
 /// A lit cube 2 m across at the origin, its front face toward the camera 10 m away, in the
 /// host's half-shadowed map (standard depth) looked up `shadow_at`, drawn by the raster
-/// pipeline: the image, the host's lights and the look.
-fn cube_in_the_hosts_shadow(shadow_at: &str) -> (Vec<u8>, Lights, plume::compiler::lit::Lit) {
+/// pipeline and by the compute renderer: the images, the host's lights and the look.
+fn cube_in_the_hosts_shadow(
+    shadow_at: &str,
+) -> (
+    Vec<(&'static str, Vec<u8>)>,
+    Lights,
+    plume::compiler::lit::Lit,
+) {
     let gpu = gpu();
     let cube = write("shadow-cube.obj", &box_obj([-0.5; 3], [0.5; 3]));
     let [r, g, b] = COLOR;
@@ -506,27 +512,37 @@ fn cube_in_the_hosts_shadow(shadow_at: &str) -> (Vec<u8>, Lights, plume::compile
     let mut renderer = sim.renderer(&target.target()).unwrap();
     renderer.set_lights(&lights);
     renderer.set_shadow_map(&map).unwrap();
-    let image = target.render(&sim, &renderer, &camera).unwrap();
-    (image, lights, lit)
+    let raster = target.render(&sim, &renderer, &camera).unwrap();
+    let mut compute = ComputeOffscreen::new(&sim, CUBE_SIDE, CUBE_SIDE).unwrap();
+    compute.set_lights(&lights);
+    compute.set_shadow_map(&map).unwrap();
+    let computed = compute.render(&sim, &camera).unwrap();
+    (
+        vec![("raster", raster), ("compute renderer", computed)],
+        lights,
+        lit,
+    )
 }
 
 #[test]
 fn a_mesh_particle_looked_up_once_takes_its_centres_verdict() {
-    let (image, lights, lit) = cube_in_the_hosts_shadow("Particle");
+    let (images, lights, lit) = cube_in_the_hosts_shadow("Particle");
     let seen = lights.seen_from_particle(DVec3::ZERO);
     let light = seen.received(DVec3::Z, DVec3::new(0.0, 0.0, 1.0), 0.0);
     assert_eq!(light.x, 0.6, "the centre's verdict: half lit");
     let want = lit.shade(DVec3::from(COLOR), light) * 255.0;
     // The face spans about 10 pixels either side of the centre: 5 pixels in, each side.
     let c = CUBE_SIDE / 2;
-    for xy in [(c - 5, c), (c + 5, c), (c, c - 5), (c - 5, c + 5)] {
-        let got = pixel(&image, CUBE_SIDE, xy);
-        for k in 0..3 {
-            let diff = (f64::from(got[k]) - want[k]).abs();
-            assert!(
-                diff <= 1.0,
-                "pixel {xy:?} is {got:?}, the f64 light gives {want:?}"
-            );
+    for (kind, image) in &images {
+        for xy in [(c - 5, c), (c + 5, c), (c, c - 5), (c - 5, c + 5)] {
+            let got = pixel(image, CUBE_SIDE, xy);
+            for k in 0..3 {
+                let diff = (f64::from(got[k]) - want[k]).abs();
+                assert!(
+                    diff <= 1.0,
+                    "{kind}: pixel {xy:?} is {got:?}, the f64 light gives {want:?}"
+                );
+            }
         }
     }
 }
@@ -535,23 +551,25 @@ fn a_mesh_particle_looked_up_once_takes_its_centres_verdict() {
 /// face each pixel takes the map's verdict at the point it shows, from shadow to light.
 #[test]
 fn a_mesh_particle_takes_the_maps_verdict_at_each_pixel() {
-    let (image, lights, lit) = cube_in_the_hosts_shadow("Pixel");
+    let (images, lights, lit) = cube_in_the_hosts_shadow("Pixel");
     // The front face lies 9 m from the eye: metres a pixel there.
     let metres = 2.0 * 9.0 * 20f64.to_radians().tan() / f64::from(CUBE_SIDE);
     let c = (CUBE_SIDE / 2) as i32;
     let (mut darkest, mut brightest) = (f64::INFINITY, 0f64);
     let mut wrong = Vec::new();
-    for up in [-6, 0, 6] {
-        for right in -8..=8 {
-            let p = DVec3::new(f64::from(right) * metres, f64::from(up) * metres, 1.0);
-            let light = lights.received(DVec3::Z, p, 0.0);
-            (darkest, brightest) = (darkest.min(light.x), brightest.max(light.x));
-            let want = lit.shade(DVec3::from(COLOR), light) * 255.0;
-            let got = pixel(&image, CUBE_SIDE, ((c + right) as u32, (c - up) as u32));
-            if (0..3).any(|k| (f64::from(got[k]) - want[k]).abs() > 1.0) {
-                wrong.push(format!(
-                    "pixel ({right}, {up}) is {got:?}, the f64 light gives {want:.2?}"
-                ));
+    for (kind, image) in &images {
+        for up in [-6, 0, 6] {
+            for right in -8..=8 {
+                let p = DVec3::new(f64::from(right) * metres, f64::from(up) * metres, 1.0);
+                let light = lights.received(DVec3::Z, p, 0.0);
+                (darkest, brightest) = (darkest.min(light.x), brightest.max(light.x));
+                let want = lit.shade(DVec3::from(COLOR), light) * 255.0;
+                let got = pixel(image, CUBE_SIDE, ((c + right) as u32, (c - up) as u32));
+                if (0..3).any(|k| (f64::from(got[k]) - want[k]).abs() > 1.0) {
+                    wrong.push(format!(
+                        "{kind}: pixel ({right}, {up}) is {got:?}, the f64 light gives {want:.2?}"
+                    ));
+                }
             }
         }
     }

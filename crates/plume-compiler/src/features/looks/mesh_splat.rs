@@ -31,6 +31,7 @@
 //! crossing the eye plane needs no clipping; its pixel box comes from the triangle clipped to
 //! the clip volume's depth range (0 <= z <= w).
 
+use super::lit::Lit;
 use super::particle_mesh::{MeshIr, MESH_VERTICES_BINDING};
 use super::Blend;
 use crate::base::writer::{f32_lit, u32_lit, Writer};
@@ -64,14 +65,11 @@ pub(crate) struct MeshHost {
     pub(crate) depth_binding: u32,
 }
 
-/// Why the compute renderer cannot draw a mesh look blended by `blend`, lit by a look that
-/// reads a shadow map (`shadowed`), in a glowing effect that blooms its own image (`glows`);
-/// `None` when it can.
-pub(crate) fn refusal(blend: Blend, shadowed: bool, glows: bool) -> Option<&'static str> {
+/// Why the compute renderer cannot draw a mesh look blended by `blend` in a glowing effect that
+/// blooms its own image (`glows`); `None` when it can.
+pub(crate) fn refusal(blend: Blend, glows: bool) -> Option<&'static str> {
     if !matches!(blend, Blend::Opaque | Blend::Mask(_)) {
         Some("the compute renderer draws solid mesh particles only (blend: Opaque or Mask)")
-    } else if shadowed {
-        Some("the compute renderer draws no mesh particles that receive shadows")
     } else if glows {
         Some("the compute renderer draws no mesh particles into a glowing effect's image")
     } else {
@@ -85,7 +83,7 @@ pub(crate) fn refusal(blend: Blend, shadowed: bool, glows: bool) -> Option<&'sta
 pub(crate) fn emit_mesh_splat(
     w: &mut Writer,
     mesh: &MeshIr,
-    (oriented, lit, blend): (bool, bool, Blend),
+    (oriented, lit, blend): (bool, Option<&Lit>, Blend),
     host: Option<&MeshHost>,
 ) {
     let [params, indices, frames, depth, pick, image, big] = MESH_SPLAT_BINDINGS;
@@ -423,7 +421,7 @@ fn emit_raster(w: &mut Writer, reversed: bool, passes: Option<&str>) {
 
 /// `mesh_shade`: a thread per pixel, into an 8-bit image, or a `host`'s (light and coverage
 /// as f16 pairs, unclamped as the raster draw into an HDR target leaves it).
-fn emit_shade(w: &mut Writer, lit: bool, host: bool) {
+fn emit_shade(w: &mut Writer, lit: Option<&Lit>, host: bool) {
     w.line("@compute @workgroup_size(256)");
     w.block(
         "fn mesh_shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
@@ -444,7 +442,11 @@ fn emit_shade(w: &mut Writer, lit: bool, host: bool) {
             });
             w.line("let f = mesh_frames[id / MESH_TRIANGLES];");
             w.line("var color = f.color;");
-            if lit {
+            if let Some(lit) = lit {
+                if lit.shadow_per_particle() {
+                    w.comment("The shadow looked up once a particle, at its centre, as vs_mesh looks it up.");
+                    w.line("particle_shadow = shadow_visibility(f.center.xyz);");
+                }
                 w.line("let t = id % MESH_TRIANGLES;");
                 w.line("let p0 = mesh_corner(f, 3u * t);");
                 w.line("let p1 = mesh_corner(f, 3u * t + 1u);");

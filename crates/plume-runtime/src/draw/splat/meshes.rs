@@ -17,7 +17,8 @@ use super::group::{GroupSplat, SplatImage};
 use crate::device::buffers::{words_buffer, STORAGE};
 use crate::device::gpu::Gpu;
 use crate::draw::camera::{record_draw_view, Camera};
-use crate::draw::lights::LightsUniform;
+use crate::draw::lights::{LightsUniform, ShadowBinding};
+use crate::draw::pipeline::bind_resources;
 use crate::draw::raster::{draw_module, draw_shape};
 use crate::error::RuntimeError;
 use crate::sim::group::Group;
@@ -56,6 +57,10 @@ pub(crate) struct MeshSplat {
     place_group: wgpu::BindGroup,
     raster_groups: [[wgpu::BindGroup; 2]; 2],
     shade_group: wgpu::BindGroup,
+    /// What `mesh_shade` binds besides a shadow map, to bind it again with another map.
+    shade_entries: Vec<(u32, wgpu::Buffer)>,
+    /// A lit look's shadow map and its samplers, for a look that reads one.
+    shadow: Option<ShadowBinding>,
 }
 
 /// Workgroups of `mesh_raster_big`, each taking every so many of the listed triangles.
@@ -145,7 +150,9 @@ impl MeshSplat {
             )
         };
         let [b_params, b_indices, b_frames, b_depth, b_pick, b_image, _] = MESH_SPLAT_BINDINGS;
-        let lights = LightsUniform::new(&gpu, effect);
+        let mut lights = LightsUniform::new(&gpu, effect);
+        // The shade owns the shadow map's binding (the lights keep none of their own).
+        let shadow = lights.as_mut().and_then(|l| l.shadow.take());
         let kernel = |entry| gpu.compute_pipeline(&module, entry, None);
         let kernels = [
             kernel("mesh_clear"),
@@ -198,7 +205,7 @@ impl MeshSplat {
             shade.extend(corners[..3].iter().cloned());
             shade.push((LIGHTS_BINDING, lights.buffer.clone()));
         }
-        let shade_group = bind(&gpu, &kernels[4].get_bind_group_layout(0), &shade);
+        let shade_group = shade_group(&gpu, &kernels[4], &shade, shadow.as_ref());
         let big_len = FIRST_BIG_TRIANGLES;
         let big = words("mesh big triangles", 1 + big_len);
         let (clear_group, raster_groups) =
@@ -221,7 +228,19 @@ impl MeshSplat {
             place_group,
             raster_groups,
             shade_group,
+            shade_entries: shade,
+            shadow,
         })
+    }
+
+    /// Reads `map` (a depth texture's array view) as the shadow map from the next frame on;
+    /// nothing for a look that reads none.
+    fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
+        if let Some(shadow) = &mut self.shadow {
+            shadow.map = map.clone();
+            let (kernel, entries) = (&self.kernels[4], &self.shade_entries);
+            self.shade_group = shade_group(&self.gpu, kernel, entries, Some(shadow));
+        }
     }
 
     /// Whether the big triangles' list held every one the last frame listed (read after it
@@ -314,6 +333,19 @@ impl MeshSplat {
         }
         Ok(())
     }
+}
+
+/// `mesh_shade`'s bind group: `buffers`, and the shadow map with its samplers where the look
+/// reads one.
+fn shade_group(
+    gpu: &Gpu,
+    kernel: &wgpu::ComputePipeline,
+    buffers: &[(u32, wgpu::Buffer)],
+    shadow: Option<&ShadowBinding>,
+) -> wgpu::BindGroup {
+    let extra = shadow.map_or(Vec::new(), ShadowBinding::entries);
+    let layout = kernel.get_bind_group_layout(0);
+    bind_resources(gpu, &layout, buffers, None, &extra)
 }
 
 /// Ids the big triangles' list holds at first.
@@ -457,10 +489,11 @@ impl SplatPart {
         }
     }
 
-    /// Reads `map` as the shadow map from the next frame on (mesh parts read none).
+    /// Reads `map` as the shadow map from the next frame on.
     pub(crate) fn set_shadow_map(&mut self, map: &wgpu::TextureView) {
-        if let Self::Sprites(s) = self {
-            s.set_shadow_map(map);
+        match self {
+            Self::Sprites(s) => s.set_shadow_map(map),
+            Self::Meshes(m) => m.set_shadow_map(map),
         }
     }
 
@@ -468,7 +501,7 @@ impl SplatPart {
     pub(crate) fn lit_and_shadowed(&self) -> (bool, bool) {
         match self {
             Self::Sprites(s) => s.lit_and_shadowed(),
-            Self::Meshes(m) => (m.lights.is_some(), false),
+            Self::Meshes(m) => (m.lights.is_some(), m.shadow.is_some()),
         }
     }
 

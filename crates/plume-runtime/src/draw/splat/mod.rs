@@ -99,10 +99,9 @@ impl ComputeOffscreen {
     /// Whether the compute renderer can draw `ir`: any sprite (textured or round, any orientation,
     /// rotation and height, glowing or not, lit or not), alpha or additive, trails of a
     /// stateful effect, and solid mesh particles (`render.mesh` with `Opaque` or `Mask`
-    /// blending, receiving no shadow, in an effect that does not glow: [`Self::why_not`]);
-    /// not ribbons joining particles (`render.ribbon`), other
-    /// meshes, nor `Multiply`, `Mask`, `Premultiplied` or `Opaque` sprites, which the raster
-    /// draw draws.
+    /// blending, in an effect that does not glow: [`Self::why_not`]); not ribbons joining
+    /// particles (`render.ribbon`), other meshes, nor `Multiply`, `Mask`, `Premultiplied` or
+    /// `Opaque` sprites, which the raster draw draws.
     pub fn draws(ir: &EffectIr) -> bool {
         use plume_compiler::schema::Blend;
         use plume_compiler::wgsl::draw::splat_mesh_refusal;
@@ -130,7 +129,7 @@ impl ComputeOffscreen {
 
     fn refusal(groups: &[&EffectIr], host: bool) -> Option<&'static str> {
         if groups.iter().any(|ir| !Self::draws(ir)) {
-            return Some("the compute renderer draws no ribbons joining particles (render.ribbon), no mesh particles but solid ones (blend: Opaque or Mask) that receive no shadow, no sprites blended by Multiply, Mask, Premultiplied or Opaque, and no trails of stateless effects");
+            return Some("the compute renderer draws no ribbons joining particles (render.ribbon), no mesh particles but solid ones (blend: Opaque or Mask), no sprites blended by Multiply, Mask, Premultiplied or Opaque, and no trails of stateless effects");
         }
         let first_mesh = groups.iter().position(|ir| ir.render.mesh.is_some())?;
         if groups[first_mesh..]

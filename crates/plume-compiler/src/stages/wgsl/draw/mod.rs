@@ -346,7 +346,7 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
         w.blank();
         let look = (
             ir.render.turns_quad(),
-            ir.render.lit.is_some(),
+            ir.render.lit.as_ref(),
             ir.render.blend,
         );
         let host = shape.host.map(splat::mesh_host);

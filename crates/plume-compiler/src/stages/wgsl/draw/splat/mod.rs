@@ -40,16 +40,11 @@ pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
 
 /// Why the compute renderer cannot draw `ir`'s mesh look into its image (`glows`: the HDR image
 /// of a glowing effect, which it blooms itself; a host's HDR image is drawn): only solid
-/// meshes that receive no shadow ([`crate::features::looks::mesh_splat`]); `None` when it can,
-/// or when `ir` draws no meshes.
+/// meshes ([`crate::features::looks::mesh_splat`]); `None` when it can, or when `ir` draws no
+/// meshes.
 pub fn splat_mesh_refusal(ir: &EffectIr, glows: bool) -> Option<&'static str> {
     ir.render.mesh.as_ref()?;
-    let shadowed = ir
-        .render
-        .lit
-        .as_ref()
-        .is_some_and(|l| l.shadow_lookup().is_some());
-    crate::features::looks::mesh_splat::refusal(ir.render.blend, shadowed, glows)
+    crate::features::looks::mesh_splat::refusal(ir.render.blend, glows)
 }
 
 /// Whether the compute renderer builds `ir`'s tile lists without a sort: additive light, which the
