@@ -434,3 +434,41 @@ fn over_a_hosts_depth_the_compute_renderer_draws_meshes_as_the_raster_one() {
         );
     }
 }
+
+#[test]
+fn meshes_at_the_extremes_draw_as_the_raster_draw_does() {
+    // Cubes at places a renderer of triangles finds hard, one effect each, seen from 5 m
+    // along +z: one of size 0 (nothing drawn), one around the eye (every face a back face),
+    // one whose faces cross the near plane and the eye plane, one filling the view from just
+    // in front, one 200 m across (faces of thousands of pixels), one far beyond the far
+    // plane, one at a coordinate f32 barely holds.
+    let gpu = gpu();
+    let dir = cube_dir("extremes");
+    for (at, size, drawn) in [
+        ((0.0, 0.0, 0.0), 0.0, false),
+        ((0.0, 0.0, 5.0), 2.0, false),
+        ((1.3, 0.0, 4.8), 2.0, true),
+        ((0.0, 0.0, 3.0), 2.0, true),
+        ((0.0, 0.0, -150.0), 200.0, true),
+        ((0.0, 0.0, -1.0e7), 1.0, false),
+        ((3.0e38, 0.0, 0.0), 1.0, false),
+    ] {
+        let src = format!(
+            r#"Effect(
+    name: "extreme",
+    capacity: 1,
+    emitters: [Emitter(burst: 1, shape: Point({at:?}), velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (0.0, 0.0, 5.0), target: (0.0, 0.0, 0.0), fov_y: 60.0),
+    lights: [Directional(direction: (1.0, -1.0, -0.5)), Ambient(intensity: 0.3)],
+    render: Render(color: [(0.0, (0.9, 0.6, 0.3, 1.0))], size: [(0.0, {size:?})], blend: Opaque,
+                   orient: Fixed((0.2, 1.0, 0.3)), background: (0.05, 0.05, 0.05),
+                   mesh: Some(ParticleMesh(file: "cube.obj")), lit: Some(Lit())),
+)"#
+        );
+        let mut sim = Effect::new(&gpu, compile_in(&dir, &src)).unwrap();
+        sim.run(1, |_| {}).unwrap();
+        let what = format!("a cube {size} m across at {at:?}");
+        let (_, pixels) = assert_agree(&sim, [13, 13, 13], &what);
+        assert_eq!(pixels > 0, drawn, "{what}: {pixels} pixels drawn");
+    }
+}
