@@ -4,7 +4,8 @@
 //! the camera among them (triangles crossing the near plane), large (triangles of hundreds of
 //! pixels, each covered by a workgroup), and over sprites drawn first;
 //! the near red cube shows in front of the far blue one whichever is drawn first; and what the
-//! compute renderer leaves to the raster draw, it refuses with the reason.
+//! compute renderer leaves to the raster draw, it refuses with the reason. A glowing effect's
+//! meshes bloom as the raster draw's do.
 
 mod common;
 
@@ -247,7 +248,6 @@ fn meshes_over_sprites_drawn_first_match_the_raster_draw() {
         .map(|g| &sim.group_compiled(g).unwrap().ir)
         .collect();
     assert_eq!(ComputeOffscreen::why_not(&irs), None);
-    assert_eq!(ComputeOffscreen::why_not_for_host(&irs), None);
     let (_, drawn) = assert_agree(&sim, [0, 0, 26], "sprites then meshes");
     assert!(drawn > 1500, "only {drawn} pixels drawn");
 }
@@ -266,15 +266,7 @@ fn the_compute_renderer_refuses_what_it_leaves_to_the_raster_draw() {
             ),
         )
     };
-    for (blend, glow, why) in [
-        ("Alpha", "", "solid"),
-        ("Additive", "", "solid"),
-        (
-            "Opaque",
-            ", glow: Some(Glow(threshold: 0.5, strength: 2.0, radius: 0.01))",
-            "glowing",
-        ),
-    ] {
+    for (blend, glow, why) in [("Alpha", "", "solid"), ("Additive", "", "solid")] {
         let compiled = effect(blend, glow);
         let why_not = ComputeOffscreen::why_not(&[&compiled.ir]);
         assert!(
@@ -284,6 +276,8 @@ fn the_compute_renderer_refuses_what_it_leaves_to_the_raster_draw() {
     }
     let solid = effect("Opaque", "");
     assert_eq!(ComputeOffscreen::why_not(&[&solid.ir]), None);
+    let glowing = effect("Opaque", GLOW);
+    assert_eq!(ComputeOffscreen::why_not(&[&glowing.ir]), None);
     let sprites = plume::compile_str(
         r#"Effect(name: "dots", capacity: 8,
     emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 0.0, 0.0)))])"#,
@@ -471,4 +465,43 @@ fn meshes_at_the_extremes_draw_as_the_raster_draw_does() {
         let (_, pixels) = assert_agree(&sim, [13, 13, 13], &what);
         assert_eq!(pixels > 0, drawn, "{what}: {pixels} pixels drawn");
     }
+}
+
+/// A glow whose threshold the lit cubes' light passes.
+const GLOW: &str = ", glow: Some(Glow(threshold: 0.5, strength: 2.0, radius: 0.02))";
+
+#[test]
+fn a_glowing_effects_meshes_bloom_as_the_raster_draws_do() {
+    let gpu = gpu();
+    let dir = cube_dir("glow");
+    let src = format!(
+        r#"Effect(
+    name: "hot cubes",
+    capacity: 60,
+    seed: 2,
+    emitters: [Emitter(burst: 60, shape: Sphere(center: (0.0, 0.0, 0.0), radius: 2.0),
+                       velocity: Constant((0.0, 0.0, 0.0)))],
+    camera: Camera(eye: (4.0, 2.0, 6.0), target: (0.0, 0.0, 0.0), fov_y: 50.0),
+    lights: [Directional(direction: (1.0, -1.0, -0.5), intensity: 1.5), Ambient(intensity: 0.3)],
+    render: Render(color: [(0.0, (1.0, 0.7, 0.4, 1.0))], size: [(0.0, 0.5)], blend: Opaque,
+                   orient: Fixed((0.2, 1.0, 0.1)), background: (0.0, 0.0, 0.0),
+                   mesh: Some(ParticleMesh(file: "cube.obj")), lit: Some(Lit()){GLOW}),
+)"#
+    );
+    let mut sim = Effect::new(&gpu, compile_in(&dir, &src)).unwrap();
+    sim.run(2, |_| {}).unwrap();
+    let glow = sim.compiled().ir.render.glow.unwrap();
+    let camera = Camera::from_effect(&sim.compiled().ir.camera, 1.0);
+    let target = Offscreen::with_glow(&gpu, SIDE, SIDE, Some(&glow)).unwrap();
+    let renderer = sim.renderer(&target.target_for(&sim)).unwrap();
+    let raster = target.render(&sim, &renderer, &camera).unwrap();
+    let mut compute = ComputeOffscreen::new(&sim, SIDE, SIDE).unwrap();
+    let computed = compute.render(&sim, &camera).unwrap();
+    let (mean, max, over) = differences(&raster, &computed, 2);
+    assert!(
+        mean < 0.1 && over * 200 < (SIDE * SIDE) as usize,
+        "glowing meshes, compute vs raster: mean {mean:.4}, largest {max}, {over} channels over 2"
+    );
+    let lit = computed.chunks(4).filter(|p| p[..3] != [0, 0, 0]).count();
+    assert!(lit > 1000, "only {lit} pixels lit");
 }

@@ -85,15 +85,7 @@ impl DrawMethod {
     /// sprites (any texture, orientation, rotation and height, glowing or not), ribbons and
     /// solid mesh particles; the scene's meshes are drawn by the raster pipeline first and the
     /// compute renderer tests their depth (`Effect::compute_renderer`).
-    /// `over_host`: the compute renderer would draw over a host's image (the scene's meshes,
-    /// the preview's window), where a glowing effect's meshes are drawn too (the host's image
-    /// is not bloomed by the compute renderer).
-    pub(crate) fn resolve(
-        self,
-        gpu: &Gpu,
-        graph: &CompiledGraph,
-        over_host: bool,
-    ) -> (Self, String) {
+    pub(crate) fn resolve(self, gpu: &Gpu, graph: &CompiledGraph) -> (Self, String) {
         if self != DrawMethod::Auto {
             return (self, "as asked".into());
         }
@@ -101,8 +93,6 @@ impl DrawMethod {
             graph.groups.iter().map(|g| &g.effect.ir).collect();
         let why_not = if gpu.info.device_type == wgpu::DeviceType::Cpu {
             Some("a CPU adapter rasterises faster than it splats")
-        } else if over_host {
-            ComputeOffscreen::why_not_for_host(&irs)
         } else {
             ComputeOffscreen::why_not(&irs)
         };
@@ -133,9 +123,7 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         .iter()
         .flat_map(|g| g.effect.ir.scene_triangles())
         .collect();
-    // Over the scene's meshes the compute renderer is the embedding API's.
-    let over_scene = !args.no_scene && !triangles.is_empty();
-    let (draw, why) = args.draw.resolve(&gpu, &graph, over_scene);
+    let (draw, why) = args.draw.resolve(&gpu, &graph);
     eprintln!(
         "draw: {} ({why})",
         match draw {

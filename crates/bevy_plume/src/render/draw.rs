@@ -216,7 +216,7 @@ fn queue_view(
         let compute = !batch.compute_refused
             && draws_by_compute(batch.draw, *gpu_adapter, true, || {
                 let ir = &batch.batch.compiled().ir;
-                plume_runtime::outputs::ComputeOffscreen::why_not_for_host(&[ir]).is_none()
+                plume_runtime::outputs::ComputeOffscreen::why_not(&[ir]).is_none()
             });
         let (target, size) = compute_target(target, compute_image.filter(|_| compute));
         if !batch

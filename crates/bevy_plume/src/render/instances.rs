@@ -520,7 +520,7 @@ impl Instance {
             .filter_map(|g| self.effect.group_compiled(g).ok())
             .map(|c| &c.ir)
             .collect();
-        plume_runtime::outputs::ComputeOffscreen::why_not_for_host(&groups).is_none()
+        plume_runtime::outputs::ComputeOffscreen::why_not(&groups).is_none()
     }
 
     /// The draw for the camera `view` into `target`, made (or remade, when the camera's

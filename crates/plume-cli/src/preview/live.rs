@@ -102,7 +102,7 @@ impl Running {
         if let Some(meshes) = &meshes {
             meshes.set_lights(&scene_lights);
         }
-        let (method, why) = self.draw.resolve(&self.gpu, &compiled, true);
+        let (method, why) = self.draw.resolve(&self.gpu, &compiled);
         let effect = Effect::from_graph(&self.gpu, compiled).map_err(|e| e.to_string())?;
         let target = match &meshes {
             Some(_) => plume_runtime::outputs::Scene::target(DrawTarget::new(format)),

@@ -267,7 +267,7 @@ impl Effect {
     /// count). A glowing effect puts its light into the host's target as it is (an HDR target
     /// keeps it, for the host's bloom), as the raster renderer does. Make a new one when the
     /// target's size changes. An error for what the compute renderer cannot draw over a host
-    /// ([`crate::outputs::ComputeOffscreen::why_not_for_host`]).
+    /// ([`crate::outputs::ComputeOffscreen::why_not`]).
     pub fn compute_renderer(
         &self,
         target: &DrawTarget,

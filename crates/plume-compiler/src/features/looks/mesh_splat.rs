@@ -65,16 +65,10 @@ pub(crate) struct MeshHost {
     pub(crate) depth_binding: u32,
 }
 
-/// Why the compute renderer cannot draw a mesh look blended by `blend` in a glowing effect that
-/// blooms its own image (`glows`); `None` when it can.
-pub(crate) fn refusal(blend: Blend, glows: bool) -> Option<&'static str> {
-    if !matches!(blend, Blend::Opaque | Blend::Mask(_)) {
-        Some("the compute renderer draws solid mesh particles only (blend: Opaque or Mask)")
-    } else if glows {
-        Some("the compute renderer draws no mesh particles into a glowing effect's image")
-    } else {
-        None
-    }
+/// Why the compute renderer cannot draw a mesh look blended by `blend`; `None` when it can.
+pub(crate) fn refusal(blend: Blend) -> Option<&'static str> {
+    (!matches!(blend, Blend::Opaque | Blend::Mask(_)))
+        .then_some("the compute renderer draws solid mesh particles only (blend: Opaque or Mask)")
 }
 
 /// Emits the compute mesh kernels (module doc) into the draw module, after `sprite_at`:
@@ -84,7 +78,7 @@ pub(crate) fn emit_mesh_splat(
     w: &mut Writer,
     mesh: &MeshIr,
     (oriented, lit, blend): (bool, Option<&Lit>, Blend),
-    host: Option<&MeshHost>,
+    (hdr, host): (bool, Option<&MeshHost>),
 ) {
     let [params, indices, frames, depth, pick, image, big] = MESH_SPLAT_BINDINGS;
     let reversed = host.is_some_and(|h| h.reversed);
@@ -129,23 +123,23 @@ pub(crate) fn emit_mesh_splat(
     w.line(format!(
         "@group(0) @binding({pick}) var<storage, read_write> mesh_pick: array<atomic<u32>>;"
     ));
-    match host {
-        None => w.line(format!(
+    match hdr {
+        false => w.line(format!(
             "@group(0) @binding({image}) var<storage, read_write> mesh_image: array<u32>;"
         )),
-        Some(h) => {
-            w.comment("A host's image: per pixel (r, g) and (b, coverage) as f16 pairs, rows of the width rounded up to 32.");
+        true => {
+            w.comment("An HDR image (a host's, or a glowing effect's): per pixel (r, g) and (b, coverage) as f16 pairs, rows of the width rounded up to 32.");
             w.line(format!(
                 "@group(0) @binding({image}) var<storage, read_write> mesh_image: array<vec2<u32>>;"
             ));
-            if h.passes.is_some() {
-                w.comment("The host's depth, one f32 a pixel (a copy of its depth image).");
-                w.line(format!(
-                    "@group(0) @binding({}) var<storage, read> host_depth: array<f32>;",
-                    h.depth_binding
-                ));
-            }
         }
+    }
+    if let Some(h) = host.filter(|h| h.passes.is_some()) {
+        w.comment("The host's depth, one f32 a pixel (a copy of its depth image).");
+        w.line(format!(
+            "@group(0) @binding({}) var<storage, read> host_depth: array<f32>;",
+            h.depth_binding
+        ));
     }
     w.comment("The big triangles mesh_raster lists for mesh_raster_big: how many it met (the list may hold fewer), and their ids.");
     w.block("struct MeshBig", |w| {
@@ -174,7 +168,7 @@ pub(crate) fn emit_mesh_splat(
     w.blank();
     emit_raster(w, reversed, host.and_then(|h| h.passes));
     w.blank();
-    emit_shade(w, lit, host.is_some());
+    emit_shade(w, lit, hdr, host.is_some());
 }
 
 /// `mesh_clear` and `mesh_place` (a thread per pixel, a thread per particle).
@@ -419,9 +413,10 @@ fn emit_raster(w: &mut Writer, reversed: bool, passes: Option<&str>) {
     );
 }
 
-/// `mesh_shade`: a thread per pixel, into an 8-bit image, or a `host`'s (light and coverage
-/// as f16 pairs, unclamped as the raster draw into an HDR target leaves it).
-fn emit_shade(w: &mut Writer, lit: Option<&Lit>, host: bool) {
+/// `mesh_shade`: a thread per pixel, into an 8-bit image, or an HDR one (`hdr`: light and
+/// coverage as f16 pairs, unclamped as the raster draw into an HDR target leaves it but for
+/// f16's largest finite value), a `host`'s or a glowing effect's.
+fn emit_shade(w: &mut Writer, lit: Option<&Lit>, hdr: bool, host: bool) {
     w.line("@compute @workgroup_size(256)");
     w.block(
         "fn mesh_shade(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>)",
@@ -431,11 +426,18 @@ fn emit_shade(w: &mut Writer, lit: Option<&Lit>, host: bool) {
                 w.line("return;")
             });
             w.line("let id = atomicLoad(&mesh_pick[pixel]);");
+            if hdr {
+                w.line("let at_pixel = (pixel / mesh_splat.width) * ((mesh_splat.width + 31u) & ~31u) + pixel % mesh_splat.width;");
+            }
             w.block("if (id == MESH_NONE)", |w| {
                 // A host's image is cleared each frame; what the parts before drew stays.
                 if !host {
-                    w.block("if ((mesh_splat.background >> 24u) != 0u)", |w| {
-                        w.line("mesh_image[pixel] = mesh_splat.background;");
+                    w.block("if ((mesh_splat.background >> 24u) != 0u)", |w| match hdr {
+                        false => w.line("mesh_image[pixel] = mesh_splat.background;"),
+                        true => {
+                            w.line("let bg = unpack4x8unorm(mesh_splat.background).rgb;");
+                            w.line("mesh_image[at_pixel] = vec2<u32>(pack2x16float(bg.rg), pack2x16float(vec2<f32>(bg.b, 1.0)));");
+                        }
                     });
                 }
                 w.line("return;");
@@ -463,12 +465,11 @@ fn emit_shade(w: &mut Writer, lit: Option<&Lit>, host: bool) {
                 w.line("let unit = facing * inverseSqrt(max(dot(facing, facing), 1e-30));");
                 w.line("color = lit_color(color, received_light(unit, at));");
             }
-            match host {
+            match hdr {
                 false => w.line("mesh_image[pixel] = pack4x8unorm(vec4<f32>(clamp(color.rgb, vec3<f32>(0.0), vec3<f32>(1.0)), 1.0));"),
                 true => {
-                    w.line("let x = pixel % mesh_splat.width;");
-                    w.line("let row = (pixel / mesh_splat.width) * ((mesh_splat.width + 31u) & ~31u);");
-                    w.line("mesh_image[row + x] = vec2<u32>(pack2x16float(color.rg), pack2x16float(vec2<f32>(color.b, 1.0)));");
+                    w.line("let c = min(color.rgb, vec3<f32>(65504.0));");
+                    w.line("mesh_image[at_pixel] = vec2<u32>(pack2x16float(c.rg), pack2x16float(vec2<f32>(c.b, 1.0)));");
                 }
             }
         },

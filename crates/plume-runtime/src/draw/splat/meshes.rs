@@ -79,8 +79,7 @@ impl MeshSplat {
         let mesh = effect.ir.render.mesh.as_ref().ok_or_else(|| {
             RuntimeError::Output("a mesh part of the compute renderer draws no mesh".into())
         })?;
-        let glows = image.hdr && image.host.is_none();
-        if let Some(why) = plume_compiler::wgsl::draw::splat_mesh_refusal(&effect.ir, glows) {
+        if let Some(why) = plume_compiler::wgsl::draw::splat_mesh_refusal(&effect.ir) {
             return Err(RuntimeError::Output(why.into()));
         }
         let (width, height) = (image.width, image.height);

@@ -99,49 +99,31 @@ impl ComputeOffscreen {
     /// Whether the compute renderer can draw `ir`: any sprite (textured or round, any orientation,
     /// rotation and height, glowing or not, lit or not), alpha or additive, trails of a
     /// stateful effect, and solid mesh particles (`render.mesh` with `Opaque` or `Mask`
-    /// blending, in an effect that does not glow: [`Self::why_not`]); not ribbons joining
+    /// blending); not ribbons joining
     /// particles (`render.ribbon`), other meshes, nor `Multiply`, `Mask`, `Premultiplied` or
     /// `Opaque` sprites, which the raster draw draws.
     pub fn draws(ir: &EffectIr) -> bool {
         use plume_compiler::schema::Blend;
         use plume_compiler::wgsl::draw::splat_mesh_refusal;
         let look = match ir.render.mesh {
-            Some(_) => splat_mesh_refusal(ir, false).is_none(),
+            Some(_) => splat_mesh_refusal(ir).is_none(),
             None => matches!(ir.render.blend, Blend::Alpha | Blend::Additive),
         };
         (ir.render.trail.is_none() || ir.stateless.is_none()) && ir.render.ribbon.is_none() && look
     }
 
     /// Why the compute renderer cannot draw an effect whose groups are `groups`, or `None` when
-    /// it can: a group it does not draw ([`Self::draws`]), a group after mesh particles (the
-    /// raster pipeline tests it against their depth), or meshes in a glowing effect (whose
-    /// image is bloomed from HDR light).
+    /// it can: a group it does not draw ([`Self::draws`]), or a group after mesh particles (the
+    /// raster pipeline tests it against their depth).
     pub fn why_not(groups: &[&EffectIr]) -> Option<&'static str> {
-        Self::refusal(groups, false)
-    }
-
-    /// [`Self::why_not`] for the embedding API's compute renderer (a host's image, tested
-    /// against the host's depth, which the host blooms if it will: meshes in a glowing effect
-    /// are drawn).
-    pub fn why_not_for_host(groups: &[&EffectIr]) -> Option<&'static str> {
-        Self::refusal(groups, true)
-    }
-
-    fn refusal(groups: &[&EffectIr], host: bool) -> Option<&'static str> {
         if groups.iter().any(|ir| !Self::draws(ir)) {
             return Some("the compute renderer draws no ribbons joining particles (render.ribbon), no mesh particles but solid ones (blend: Opaque or Mask), no sprites blended by Multiply, Mask, Premultiplied or Opaque, and no trails of stateless effects");
         }
         let first_mesh = groups.iter().position(|ir| ir.render.mesh.is_some())?;
-        if groups[first_mesh..]
+        groups[first_mesh..]
             .iter()
             .any(|ir| ir.render.mesh.is_none())
-        {
-            return Some("the compute renderer draws no sprites after mesh particles, which the raster pipeline tests against the meshes' depth");
-        }
-        let glows = groups[0].render.glow.is_some() && !host;
-        groups
-            .iter()
-            .find_map(|ir| plume_compiler::wgsl::draw::splat_mesh_refusal(ir, glows))
+            .then_some("the compute renderer draws no sprites after mesh particles, which the raster pipeline tests against the meshes' depth")
     }
 
     /// A splat of `effect` into `width` x `height` images; an error for sprites it cannot
@@ -165,11 +147,7 @@ impl ComputeOffscreen {
             )));
         }
         let irs: Vec<&EffectIr> = effect.groups().iter().map(|g| &g.effect.ir).collect();
-        let why_not = match host {
-            Some(_) => Self::why_not_for_host(&irs),
-            None => Self::why_not(&irs),
-        };
-        if let Some(why) = why_not {
+        if let Some(why) = Self::why_not(&irs) {
             return Err(RuntimeError::Output(format!(
                 "{why}: draw this effect with the raster pipeline (plume render --draw raster)"
             )));

@@ -350,7 +350,8 @@ pub fn emit(ir: &EffectIr, layout: &Layout, shape: &DrawShape) -> String {
             ir.render.blend,
         );
         let host = shape.host.map(splat::mesh_host);
-        crate::features::looks::mesh_splat::emit_mesh_splat(&mut w, mesh, look, host.as_ref());
+        let image = (shape.hdr, host.as_ref());
+        crate::features::looks::mesh_splat::emit_mesh_splat(&mut w, mesh, look, image);
     } else if shape.splat {
         w.blank();
         if splat_discs(ir, shape.hdr) {

@@ -38,13 +38,11 @@ pub fn splat_discs(ir: &EffectIr, hdr: bool) -> bool {
         && !hdr
 }
 
-/// Why the compute renderer cannot draw `ir`'s mesh look into its image (`glows`: the HDR image
-/// of a glowing effect, which it blooms itself; a host's HDR image is drawn): only solid
-/// meshes ([`crate::features::looks::mesh_splat`]); `None` when it can, or when `ir` draws no
-/// meshes.
-pub fn splat_mesh_refusal(ir: &EffectIr, glows: bool) -> Option<&'static str> {
+/// Why the compute renderer cannot draw `ir`'s mesh look: only solid meshes
+/// ([`crate::features::looks::mesh_splat`]); `None` when it can, or when `ir` draws no meshes.
+pub fn splat_mesh_refusal(ir: &EffectIr) -> Option<&'static str> {
     ir.render.mesh.as_ref()?;
-    crate::features::looks::mesh_splat::refusal(ir.render.blend, glows)
+    crate::features::looks::mesh_splat::refusal(ir.render.blend)
 }
 
 /// Whether the compute renderer builds `ir`'s tile lists without a sort: additive light, which the
