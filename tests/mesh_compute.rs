@@ -2,10 +2,9 @@
 //! raster draw's image, as `plume render` draws them (depth written, the nearest showing):
 //! lit and unlit, turned and stretched, sorted and not, cut out below a `Mask` cutoff, with
 //! the camera among them (triangles crossing the near plane), large (triangles of hundreds of
-//! pixels, each covered by a workgroup), and over sprites drawn first;
-//! the near red cube shows in front of the far blue one whichever is drawn first; and what the
-//! compute renderer leaves to the raster draw, it refuses with the reason. A glowing effect's
-//! meshes bloom as the raster draw's do.
+//! pixels, each covered by a workgroup), and over sprites drawn first (tests/meshes.rs draws
+//! its nearest-cube test with it too); a glowing effect's meshes bloom as the raster draw's
+//! do; and what the compute renderer leaves to the raster draw, it refuses with the reason.
 
 mod common;
 
@@ -23,22 +22,8 @@ fn cube_dir(name: &str) -> PathBuf {
     let dir =
         std::env::temp_dir().join(format!("plume-mesh-compute-{}-{name}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let mut obj = String::new();
-    for k in 0..8 {
-        let c = |bit: u32| if k >> bit & 1 == 1 { 0.5 } else { -0.5 };
-        obj += &format!("v {} {} {}\n", c(0), c(1), c(2));
-    }
-    for face in [
-        [5, 6, 8, 7],
-        [2, 4, 8, 6],
-        [1, 3, 4, 2],
-        [1, 5, 7, 3],
-        [3, 7, 8, 4],
-        [1, 2, 6, 5],
-    ] {
-        obj += &format!("f {} {} {} {}\n", face[0], face[1], face[2], face[3]);
-    }
-    std::fs::write(dir.join("cube.obj"), obj).unwrap();
+    let cube = common::meshes::box_obj([-0.5; 3], [0.5; 3]);
+    std::fs::write(dir.join("cube.obj"), cube).unwrap();
     dir
 }
 
@@ -170,45 +155,6 @@ fn solid_meshes_drawn_by_the_compute_renderer_match_the_raster_draw() {
         assert!(ComputeOffscreen::draws(&sim.compiled().ir), "{what}");
         let (_, drawn) = assert_agree(&sim, [13, 13, 13], &what);
         assert!(drawn > 500, "{what}: only {drawn} pixels drawn");
-    }
-}
-
-#[test]
-fn the_nearest_cube_shows_whichever_is_drawn_first() {
-    let gpu = gpu();
-    let dir = cube_dir("depth");
-    for zs in [(2.0, -2.0), (-2.0, 2.0)] {
-        let src = format!(
-            r#"Effect(
-    name: "cubes",
-    capacity: 2,
-    emitters: [
-        Emitter(burst: 1, shape: Point((0.0, 0.0, {:?})), velocity: Constant((0.0, 0.0, 0.0))),
-        Emitter(burst: 1, shape: Point((0.0, 0.0, {:?})), velocity: Constant((0.0, 0.0, 0.0))),
-    ],
-    camera: Camera(eye: (0.0, 0.0, 10.0), target: (0.0, 0.0, 0.0), fov_y: 40.0),
-    render: Render(color: [(0.0, (1.0, 1.0, 1.0, 1.0))], size: [(0.0, 2.0)], blend: Opaque,
-                   background: (0.0, 0.0, 0.0), mesh: Some(ParticleMesh(file: "cube.obj")),
-                   size_by: Some("1.5 - 0.25 * x.z"),
-                   color_by: Some("vec3(0.25 * (x.z + 2.0), 0.0, 0.25 * (2.0 - x.z))")),
-)"#,
-            zs.0, zs.1
-        );
-        let mut sim = Effect::new(&gpu, compile_in(&dir, &src)).unwrap();
-        sim.run(1, |_| {}).unwrap();
-        let (side, camera) = (65, Camera::from_effect(&sim.compiled().ir.camera, 1.0));
-        let image = ComputeOffscreen::new(&sim, side, side)
-            .unwrap()
-            .render(&sim, &camera)
-            .unwrap();
-        let pixel = |dx: u32| {
-            let k = 4 * ((side / 2) * side + side / 2 + dx) as usize;
-            [image[k], image[k + 1], image[k + 2]]
-        };
-        assert_eq!(pixel(0), [255, 0, 0], "{zs:?}: the near red cube in front");
-        // At 10 m the 4 m cube spans ±17.8 pixels, the near 2 m one at 7 m ±12.7.
-        assert_eq!(pixel(15), [0, 0, 255], "{zs:?}: the far cube's rim");
-        assert_eq!(pixel(25), [0, 0, 0], "{zs:?}: the background");
     }
 }
 

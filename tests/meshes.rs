@@ -2,7 +2,8 @@
 //! Lambert's law says (its back faces culled), and lit per pixel under a point light close to
 //! it; a glTF mesh is drawn as its OBJ twin; meshes turned, stretched, sorted, lit and unlit (drawn indexed) match
 //! the CPU-fed reference drawing (each mesh placed and lit in f64), and the compute renderer
-//! leaves blended ones to the raster draw.
+//! leaves blended ones to the raster draw; the nearest of two opaque cubes shows in both
+//! renderers.
 
 mod common;
 
@@ -372,6 +373,16 @@ fn opaque_meshes_write_depth_so_the_nearest_shows_whatever_the_draw_order() {
         // The far cube's rim, outside the near one's image, is drawn too: at 10 m the 4 m
         // cube spans ±17.8 pixels, the near 2 m one at 7 m ±12.7.
         assert_eq!(pixel(&image, 15), [0, 0, 255], "{zs:?}: the far cube's rim");
+        // The compute renderer keeps the nearest triangle a pixel too.
+        let computed = ComputeOffscreen::new(&sim, SIDE, SIDE)
+            .unwrap()
+            .render(&sim, &camera)
+            .unwrap();
+        assert_eq!(
+            [pixel(&computed, 0), pixel(&computed, 15)],
+            [[255, 0, 0], [0, 0, 255]],
+            "{zs:?}: the compute renderer's near red cube in front, the far one's rim"
+        );
         // Without depth writes (the plain target), in the order drawn.
         let plain = sim.renderer(&target.target()).unwrap();
         assert!(!plain.writes_depth());

@@ -32,7 +32,7 @@
 //! the clip volume's depth range (0 <= z <= w).
 
 use super::lit::Lit;
-use super::particle_mesh::{MeshIr, MESH_VERTICES_BINDING};
+use super::particle_mesh::{emit_mesh_axes, MeshIr, MESH_VERTICES_BINDING};
 use super::Blend;
 use crate::base::writer::{f32_lit, u32_lit, Writer};
 
@@ -204,18 +204,7 @@ fn emit_place(w: &mut Writer, oriented: bool, blend: Blend) {
                 _ => "s.visible".to_string(),
             };
             w.block(format!("if ({shows})"), |w| {
-                match oriented {
-                    true => {
-                        w.line("let ax = 2.0 * s.half_x;");
-                        w.line("let ay = 2.0 * s.half_y;");
-                    }
-                    false => {
-                        w.line("let ax = vec3<f32>(s.size, 0.0, 0.0);");
-                        w.line("let ay = vec3<f32>(0.0, s.size, 0.0);");
-                    }
-                }
-                w.line("let across = cross(ax, ay);");
-                w.line("let az = across * (length(ax) * inverseSqrt(max(dot(across, across), 1e-30)));");
+                emit_mesh_axes(w, oriented);
                 w.line("f.center = vec4<f32>(s.center.xyz, 1.0);");
                 w.line("f.ax = vec4<f32>(ax, 0.0);");
                 w.line("f.ay = vec4<f32>(ay, 0.0);");

@@ -239,18 +239,7 @@ impl MeshIr {
                 w.block("if (!s.visible || vertex >= MESH_VERTICES)", |w| {
                     w.line("return out;")
                 });
-                match oriented {
-                    true => {
-                        w.line("let ax = 2.0 * s.half_x;");
-                        w.line("let ay = 2.0 * s.half_y;");
-                    }
-                    false => {
-                        w.line("let ax = vec3<f32>(s.size, 0.0, 0.0);");
-                        w.line("let ay = vec3<f32>(0.0, s.size, 0.0);");
-                    }
-                }
-                w.line("let across = cross(ax, ay);");
-                w.line("let az = across * (length(ax) * inverseSqrt(max(dot(across, across), 1e-30)));");
+                emit_mesh_axes(w, oriented);
                 w.line("let m = mesh_vertices[vertex].xyz;");
                 w.line("let p = s.center.xyz + m.x * ax + m.y * ay + m.z * az;");
                 w.line("out.clip = draw.proj * vec4<f32>(p, 1.0);");
@@ -290,6 +279,24 @@ impl MeshIr {
             },
         );
     }
+}
+
+/// `ax`, `ay`, `az`: the mesh's axes for sprite `s`, in the sprite's frame scaled by its size
+/// (`oriented`: from its half axes; else upright facing the camera), z along their cross
+/// product as long as x. Shared by `vs_mesh` and the compute renderer's `mesh_place`.
+pub(crate) fn emit_mesh_axes(w: &mut Writer, oriented: bool) {
+    match oriented {
+        true => {
+            w.line("let ax = 2.0 * s.half_x;");
+            w.line("let ay = 2.0 * s.half_y;");
+        }
+        false => {
+            w.line("let ax = vec3<f32>(s.size, 0.0, 0.0);");
+            w.line("let ay = vec3<f32>(0.0, s.size, 0.0);");
+        }
+    }
+    w.line("let across = cross(ax, ay);");
+    w.line("let az = across * (length(ax) * inverseSqrt(max(dot(across, across), 1e-30)));");
 }
 
 /// A triangle's unit normal by the right-hand rule (counter-clockwise corners face it); zero

@@ -150,3 +150,19 @@ pub(super) fn entries_are_complete(
     }
     Ok(needed <= sprites.len() && seen == counts[..seen.len()])
 }
+
+/// Records a part's view before the compute renderer's pass: its lit look's lights in the
+/// camera's view (`lights`, if lit), then the camera, the steps done and the sprites' size
+/// scale into `draw_view`.
+pub(super) fn record_part_view(
+    gpu: &Gpu,
+    encoder: &mut wgpu::CommandEncoder,
+    (draw_view, lights): (&wgpu::Buffer, Option<&crate::draw::lights::LightsUniform>),
+    camera: &crate::draw::camera::Camera,
+    (steps, size_scale): (u64, f32),
+) -> Result<(), RuntimeError> {
+    if let Some(lights) = lights {
+        lights.record(gpu, encoder, camera)?;
+    }
+    crate::draw::camera::record_draw_view(gpu, encoder, draw_view, camera, steps, size_scale)
+}

@@ -12,11 +12,11 @@ use plume_compiler::wgsl::trail;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use super::additive_lists::AdditiveLists;
-use super::binding::{bind, ribbon_module, tile_kernels, tile_layout, uniform};
+use super::binding::{bind, record_part_view, ribbon_module, tile_kernels, tile_layout, uniform};
 use super::quad_raster::{MergeTargets, QuadGroups, QuadRaster};
 use crate::device::buffers::STORAGE;
 use crate::device::gpu::Gpu;
-use crate::draw::camera::{record_draw_view, Camera};
+use crate::draw::camera::Camera;
 use crate::draw::lights::LightsUniform;
 use crate::draw::raster::{draw_module, draw_shape};
 use crate::draw::texture::SpriteTexture;
@@ -429,17 +429,8 @@ impl GroupSplat {
     ) -> Result<(), RuntimeError> {
         let flat = camera.proj.x_axis.w == 0.0 && camera.proj.y_axis.w == 0.0;
         self.flat_view.store(flat, Ordering::Relaxed);
-        if let Some(lights) = &self.lights {
-            lights.record(&self.gpu, encoder, camera)?;
-        }
-        record_draw_view(
-            &self.gpu,
-            encoder,
-            &self.draw_view,
-            camera,
-            steps,
-            size_scale,
-        )
+        let view = (&self.draw_view, self.lights.as_ref());
+        record_part_view(&self.gpu, encoder, view, camera, (steps, size_scale))
     }
 
     /// Lights a lit look's quads with `lights` from the next frame on.

@@ -12,11 +12,11 @@ use plume_compiler::wgsl::draw::{
     splat_hdr_pitch, DrawShape, DRAW_VIEW_BYTES, SPLAT_HOST_DEPTH_BINDING,
 };
 
-use super::binding::{bind, uniform};
+use super::binding::{bind, record_part_view, uniform};
 use super::group::{GroupSplat, SplatImage};
 use crate::device::buffers::{words_buffer, STORAGE};
 use crate::device::gpu::Gpu;
-use crate::draw::camera::{record_draw_view, Camera};
+use crate::draw::camera::Camera;
 use crate::draw::lights::{LightsUniform, ShadowBinding};
 use crate::draw::pipeline::bind_resources;
 use crate::draw::raster::{draw_module, draw_shape};
@@ -281,17 +281,8 @@ impl MeshSplat {
         steps: u64,
         size_scale: f32,
     ) -> Result<(), RuntimeError> {
-        if let Some(lights) = &self.lights {
-            lights.record(&self.gpu, encoder, camera)?;
-        }
-        record_draw_view(
-            &self.gpu,
-            encoder,
-            &self.draw_view,
-            camera,
-            steps,
-            size_scale,
-        )
+        let view = (&self.draw_view, self.lights.as_ref());
+        record_part_view(&self.gpu, encoder, view, camera, (steps, size_scale))
     }
 
     /// Records the mesh draw's kernels of `stage` (the compute renderer's stages: `project`
