@@ -24,7 +24,8 @@ pub enum SimulationSpace {
 }
 
 /// Which of Plume's renderers draws an effect for a camera. Both draw in Bevy's transparent
-/// 3D phase, tested against the camera's depth, into its format and MSAA, every look.
+/// phase into the camera's format and MSAA, every look: in 3D tested against the camera's
+/// depth, in 2D sorted with the sprites by the entity's z.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, Reflect)]
 pub enum PlumeDraw {
     /// The compute renderer for an effect of 65,536 particles or more on a GPU adapter,
@@ -32,7 +33,8 @@ pub enum PlumeDraw {
     /// (docs/performance.md, "The compute renderer");
     /// the raster one for smaller effects (the compute one costs a few passes over the whole
     /// image per effect), on a CPU adapter (lavapipe, llvmpipe) and wherever the compute one
-    /// cannot draw.
+    /// cannot draw. In 2D, the raster one always (it tests the 2D depth; the compute one
+    /// cannot read it).
     #[default]
     Auto,
     /// Plume's raster pipelines in the camera's transparent pass.
@@ -42,7 +44,9 @@ pub enum PlumeDraw {
     /// `render.soft` faded) against the camera's depth, and one full-screen triangle in the
     /// transparent pass puts that image over the camera's. Where it cannot draw (a camera
     /// whose viewport is not its whole target, an effect the compute renderer refuses) the raster one
-    /// draws, and the reason is logged once.
+    /// draws, and the reason is logged once. In 2D it composites before the main pass with no
+    /// depth to test (Bevy 0.20 keeps a 2D camera's depth a render attachment): opaque 2D
+    /// meshes in front of the effect's z do not hide its particles.
     Compute,
 }
 

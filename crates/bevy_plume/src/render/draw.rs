@@ -113,9 +113,10 @@ pub(crate) fn queue_effects(
 }
 
 /// Queues one item per visible effect per 2D camera (`Camera2d`) into Bevy's transparent 2D
-/// phase, sorted with the sprites by its entity's z (larger in front), drawn by the raster
-/// renderer (the compute one reads a 3D camera's depth) and tested against the 2D depth
-/// buffer as sprites are.
+/// phase, sorted with the sprites by its entity's z (larger in front): drawn by the raster
+/// renderer, tested against the 2D depth buffer as sprites are, or where the effect asks for
+/// it (`PlumeDraw::Compute`; `Auto` keeps the raster one in 2D) by the compute renderer,
+/// which cannot read a 2D camera's depth and draws over it.
 pub(crate) fn queue_effects_2d(
     draw_functions: Option<Res<DrawFunctions<Transparent2d>>>,
     phases: Option<ResMut<ViewSortedRenderPhases<Transparent2d>>>,
@@ -131,7 +132,7 @@ pub(crate) fn queue_effects_2d(
         return;
     };
     let mut shared = (&mut *store, &mut *batches, &mut *stats, false);
-    for (view_entity, view, _, msaa, visible, _) in &views {
+    for (view_entity, view, camera, msaa, visible, _) in &views {
         let Some(phase) = phases.get_mut(&view.retained_view_entity) else {
             continue;
         };
@@ -141,7 +142,7 @@ pub(crate) fn queue_effects_2d(
             .with_soft(false);
         queue_view(
             &mut shared,
-            (view_entity, target, None),
+            (view_entity, target, Some(compute_size(view, camera))),
             visible,
             &mut |entity, center| {
                 phase.add_transient(Transparent2d {

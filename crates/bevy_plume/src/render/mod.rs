@@ -95,6 +95,9 @@ pub(crate) fn build(app: &mut App) {
             Core2d,
             (
                 simulate::prepare_for_view.before(Core2dSystems::MainPass),
+                simulate::composite_for_view_2d
+                    .after(simulate::prepare_for_view)
+                    .before(Core2dSystems::MainPass),
                 simulate::end_draw_timing.after(Core2dSystems::MainPass),
             ),
         );

@@ -454,6 +454,41 @@ pub(crate) fn composite_for_view(
     mut batches: ResMut<PlumeBatches>,
 ) {
     let (view_entity, view, depth) = view.into_inner();
+    prepare_compute_draws(
+        (view_entity, view, Some(depth)),
+        &mut context,
+        &mut store,
+        &mut batches,
+    );
+}
+
+/// Prepares every compute-renderer draw a 2D camera queued this frame, before its main pass.
+/// A 2D camera's depth is a render attachment only (Bevy 0.20): nothing is copied, so nothing
+/// hides the particles; the effect sorts with the sprites by its entity's z as the raster
+/// renderer's does.
+pub(crate) fn composite_for_view_2d(
+    view: ViewQuery<(Entity, &ExtractedView)>,
+    mut context: RenderContext,
+    mut store: ResMut<PlumeInstances>,
+    mut batches: ResMut<PlumeBatches>,
+) {
+    let (view_entity, view) = view.into_inner();
+    prepare_compute_draws(
+        (view_entity, view, None),
+        &mut context,
+        &mut store,
+        &mut batches,
+    );
+}
+
+/// Records the compute renderer's work for one camera's draws: each compute draw of `view`
+/// made this frame, tested against `depth` (the opaque pass's, copied) where there is one.
+fn prepare_compute_draws(
+    (view_entity, view, depth): (Entity, &ExtractedView, Option<&ViewDepthStencilTexture>),
+    context: &mut RenderContext,
+    store: &mut PlumeInstances,
+    batches: &mut PlumeBatches,
+) {
     let frame = store.frame;
     let mut depth_view = None;
     // A batch is in world space: drawn through the camera alone.
@@ -464,8 +499,10 @@ pub(crate) fn composite_for_view(
         if draw.frame != frame || !draw.renderer.is_compute() {
             continue;
         }
-        let depth_view = depth_view.get_or_insert_with(|| scene_depth_view(depth));
-        draw.renderer.set_scene_depth(depth_view);
+        if let Some(depth) = depth {
+            let depth_view = depth_view.get_or_insert_with(|| scene_depth_view(depth));
+            draw.renderer.set_scene_depth(depth_view);
+        }
         let camera = view_camera(view, Mat4::IDENTITY);
         let encoder = context.command_encoder();
         if let Err(err) = batch
@@ -487,8 +524,10 @@ pub(crate) fn composite_for_view(
         if draw.frame != frame || !draw.renderer.is_compute() {
             continue;
         }
-        let depth_view = depth_view.get_or_insert_with(|| scene_depth_view(depth));
-        draw.renderer.set_scene_depth(depth_view);
+        if let Some(depth) = depth {
+            let depth_view = depth_view.get_or_insert_with(|| scene_depth_view(depth));
+            draw.renderer.set_scene_depth(depth_view);
+        }
         let camera = view_camera(view, world_from_local);
         let encoder = context.command_encoder();
         if let Some(timing) = &mut draw.timing {

@@ -1,12 +1,13 @@
 //! Effects in 2D views (`Camera2d`), headless on lavapipe: a particle is drawn where Bevy's
 //! orthographic 2D camera puts it, and in the transparent 2D phase (where Bevy's sprites are
 //! drawn) effects sort by their entity's z: a larger blue one in front (larger z) covers the
-//! dot, one behind does not, whichever was spawned first.
+//! dot, one behind does not, whichever was spawned first; drawn by the compute renderer
+//! (`PlumeDraw::Compute`), the same picture.
 //! `BEVY_PLUME_TEST_IMAGES=DIR` keeps the images.
 
 use crate::common::{asset_dir, lit_pixels, serial, Harness, HEIGHT, WIDTH};
 use bevy::prelude::*;
-use bevy_plume::PlumeEffect;
+use bevy_plume::{PlumeDraw, PlumeEffect, PlumeRenderStats};
 
 /// One orange particle at (20, 10), 16 units across, that never dies.
 const DOT: &str = r#"Effect(
@@ -30,8 +31,14 @@ fn centre() -> (f32, f32) {
 }
 
 /// A 2D app with the dot at z = 0 and, when `disc_z` is given, the blue disc at that z
-/// (spawned before the dot when `disc_first`); the image after a few frames.
-fn draw(name: &str, disc_z: Option<f32>, disc_first: bool) -> image::RgbaImage {
+/// (spawned before the dot when `disc_first`), both drawn by `renderer`; the image after a
+/// few frames, and how many draws the compute renderer made in the last.
+fn draw_by(
+    name: &str,
+    disc_z: Option<f32>,
+    disc_first: bool,
+    renderer: PlumeDraw,
+) -> (image::RgbaImage, usize) {
     let dir = asset_dir(name);
     std::fs::write(dir.join("dot.plume.ron"), DOT).unwrap();
     std::fs::write(dir.join("disc.plume.ron"), DISC).unwrap();
@@ -43,7 +50,7 @@ fn draw(name: &str, disc_z: Option<f32>, disc_first: bool) -> image::RgbaImage {
     let spawn_disc = |h: &mut Harness| {
         if let Some(z) = disc_z {
             h.app.world_mut().spawn((
-                PlumeEffect::new(disc.clone()),
+                PlumeEffect::new(disc.clone()).with_draw(renderer),
                 Transform::from_xyz(0.0, 0.0, z),
             ));
         }
@@ -51,9 +58,10 @@ fn draw(name: &str, disc_z: Option<f32>, disc_first: bool) -> image::RgbaImage {
     if disc_first {
         spawn_disc(&mut h);
     }
-    h.app
-        .world_mut()
-        .spawn((PlumeEffect::new(dot), Transform::IDENTITY));
+    h.app.world_mut().spawn((
+        PlumeEffect::new(dot).with_draw(renderer),
+        Transform::IDENTITY,
+    ));
     if !disc_first {
         spawn_disc(&mut h);
     }
@@ -64,6 +72,21 @@ fn draw(name: &str, disc_z: Option<f32>, disc_first: bool) -> image::RgbaImage {
             .save(std::path::Path::new(&out).join(format!("{name}.png")))
             .unwrap();
     }
+    let stats = *h
+        .app
+        .sub_app(bevy::render::RenderApp)
+        .world()
+        .resource::<PlumeRenderStats>();
+    (image, stats.compute_draws)
+}
+
+/// [`draw_by`] with the default renderer (in 2D, the raster one).
+fn draw(name: &str, disc_z: Option<f32>, disc_first: bool) -> image::RgbaImage {
+    let (image, compute_draws) = draw_by(name, disc_z, disc_first, PlumeDraw::Auto);
+    assert_eq!(
+        compute_draws, 0,
+        "Auto draws 2D effects with the raster renderer"
+    );
     image
 }
 
@@ -107,5 +130,37 @@ fn in_2d_effects_sort_by_z_whatever_their_spawn_order() {
             p[0] < 20 && p[2] > 200,
             "disc in front (z 1), spawned first: {disc_first}: the dot's centre is {p:?}, not blue"
         );
+    }
+}
+
+#[test]
+fn in_2d_the_compute_renderer_draws_and_sorts_as_the_raster_one() {
+    let _one = serial();
+    for (disc_z, what) in [
+        (None, "the dot"),
+        (Some(-1.0), "disc behind"),
+        (Some(1.0), "disc in front"),
+    ] {
+        let name = format!("2d-compute-{what}").replace(' ', "-");
+        let raster = draw(&format!("{name}-raster"), disc_z, false);
+        let (compute, compute_draws) = draw_by(&name, disc_z, false, PlumeDraw::Compute);
+        let effects = if disc_z.is_some() { 2 } else { 1 };
+        assert_eq!(
+            compute_draws, effects,
+            "{what}: every effect drawn by the compute renderer"
+        );
+        // The same picture but for the rounding of a soft edge (the compute renderer
+        // composites in f32 and rounds once).
+        let differing = raster
+            .pixels()
+            .zip(compute.pixels())
+            .filter(|(a, b)| (0..3).any(|k| a.0[k].abs_diff(b.0[k]) > 3))
+            .count();
+        assert!(
+            differing <= 20,
+            "{what}: {differing} pixels differ by more than 3 steps"
+        );
+        let (n, _, _) = lit_pixels(&compute, 40);
+        assert!(n >= 40, "{what}: only {n} pixels lit");
     }
 }
