@@ -240,20 +240,23 @@ const HOST_DEPTH: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 /// `sim` drawn for a host as the embedding API draws it, over a depth buffer holding a wall
 /// `wall` metres in front of the camera (None: the far plane; `camera`'s projection may be
 /// reversed: `compare` is then `Greater`): by the raster renderer writing depth into it, and
-/// by the compute renderer testing its copy of it. (raster, compute) images.
+/// by the compute renderer testing its copy of it, or where `composite_at` gives a distance,
+/// not reading it but put over the host at that distance's depth
+/// (`EffectRenderer::set_composite_depth`). (raster, compute) images.
 fn host_draws(
     sim: &Effect,
     camera: &Camera,
     compare: wgpu::CompareFunction,
-    wall: Option<f32>,
+    (wall, composite_at): (Option<f32>, Option<f32>),
 ) -> (Vec<u8>, Vec<u8>) {
     let gpu = sim.gpu();
     let target = Offscreen::new(gpu, SIDE, SIDE).unwrap();
+    let ndc = |d: f32| {
+        let clip = camera.proj * glam::Vec4::new(0.0, 0.0, -d, 1.0);
+        clip.z / clip.w
+    };
     let wall_depth = match wall {
-        Some(d) => {
-            let clip = camera.proj * glam::Vec4::new(0.0, 0.0, -d, 1.0);
-            clip.z / clip.w
-        }
+        Some(d) => ndc(d),
         None if compare == wgpu::CompareFunction::Greater => 0.0,
         None => 1.0,
     };
@@ -280,8 +283,10 @@ fn host_draws(
             false => sim.renderer(&host.with_depth_writes(true)).unwrap(),
         };
         assert_eq!(renderer.is_compute(), compute);
-        if compute {
-            renderer.set_scene_depth(&view);
+        match (compute, composite_at) {
+            (true, None) => renderer.set_scene_depth(&view),
+            (true, Some(d)) => renderer.set_composite_depth(Some(ndc(d))),
+            (false, _) => {}
         }
         let mut encoder = gpu.device.create_command_encoder(&Default::default());
         // The host's geometry: a wall filling its depth buffer.
@@ -358,8 +363,8 @@ fn over_a_hosts_depth_the_compute_renderer_draws_meshes_as_the_raster_one() {
         (&reversed, wgpu::CompareFunction::Greater, "reversed depth"),
     ] {
         // The wall 6 m away cuts through the cubes: those behind it are hidden.
-        let (raster, compute) = host_draws(&sim, camera, compare, Some(6.0));
-        let (open_raster, _) = host_draws(&sim, camera, compare, None);
+        let (raster, compute) = host_draws(&sim, camera, compare, (Some(6.0), None));
+        let (open_raster, open_compute) = host_draws(&sim, camera, compare, (None, None));
         let drawn = |image: &[u8]| image.chunks(4).filter(|p| p[..3] != background).count();
         assert!(
             drawn(&raster) > 500 && drawn(&raster) + 200 < drawn(&open_raster),
@@ -371,6 +376,16 @@ fn over_a_hosts_depth_the_compute_renderer_draws_meshes_as_the_raster_one() {
         assert!(
             mean < 0.1 && over * 200 < (SIDE * SIDE) as usize,
             "{what}: compute vs raster over the host's depth: mean {mean:.4}, largest {max}, {over} channels over 2"
+        );
+        // Not reading the host's depth, the compute renderer's image put at one depth: behind
+        // the wall (the cubes' centre, 7 m away) nothing shows; in front (5 m) all of it,
+        // as with no wall.
+        let (_, behind) = host_draws(&sim, camera, compare, (Some(6.0), Some(7.1)));
+        assert_eq!(drawn(&behind), 0, "{what}: the image put behind the wall");
+        let (_, before) = host_draws(&sim, camera, compare, (Some(6.0), Some(5.0)));
+        assert_eq!(
+            before, open_compute,
+            "{what}: the image put before the wall"
         );
     }
 }

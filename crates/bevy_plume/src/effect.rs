@@ -45,8 +45,9 @@ pub enum PlumeDraw {
     /// transparent pass puts that image over the camera's. Where it cannot draw (a camera
     /// whose viewport is not its whole target, an effect the compute renderer refuses) the raster one
     /// draws, and the reason is logged once. In 2D it composites before the main pass with no
-    /// depth to test (Bevy 0.20 keeps a 2D camera's depth a render attachment): opaque 2D
-    /// meshes in front of the effect's z do not hide its particles.
+    /// depth to read (Bevy 0.20 keeps a 2D camera's depth a render attachment) and its image
+    /// is tested against the 2D depth at the entity's depth: what is drawn in front of the
+    /// entity's z hides the whole effect.
     Compute,
 }
 

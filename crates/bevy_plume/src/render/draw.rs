@@ -116,7 +116,7 @@ pub(crate) fn queue_effects(
 /// phase, sorted with the sprites by its entity's z (larger in front): drawn by the raster
 /// renderer, tested against the 2D depth buffer as sprites are, or where the effect asks for
 /// it (`PlumeDraw::Compute`; `Auto` keeps the raster one in 2D) by the compute renderer,
-/// which cannot read a 2D camera's depth and draws over it.
+/// which cannot read a 2D camera's depth: its image is tested at the entity's depth.
 pub(crate) fn queue_effects_2d(
     draw_functions: Option<Res<DrawFunctions<Transparent2d>>>,
     phases: Option<ResMut<ViewSortedRenderPhases<Transparent2d>>>,

@@ -463,9 +463,10 @@ pub(crate) fn composite_for_view(
 }
 
 /// Prepares every compute-renderer draw a 2D camera queued this frame, before its main pass.
-/// A 2D camera's depth is a render attachment only (Bevy 0.20): nothing is copied, so nothing
-/// hides the particles; the effect sorts with the sprites by its entity's z as the raster
-/// renderer's does.
+/// A 2D camera's depth is a render attachment only (Bevy 0.20): nothing is copied; an
+/// instance's image is put over the camera's at its entity's depth, tested against the 2D
+/// depth there (`set_composite_depth`), so what the camera drew in front of the entity's z
+/// hides it, as the effect sorts with the sprites by that z.
 pub(crate) fn composite_for_view_2d(
     view: ViewQuery<(Entity, &ExtractedView)>,
     mut context: RenderContext,
@@ -524,9 +525,17 @@ fn prepare_compute_draws(
         if draw.frame != frame || !draw.renderer.is_compute() {
             continue;
         }
-        if let Some(depth) = depth {
-            let depth_view = depth_view.get_or_insert_with(|| scene_depth_view(depth));
-            draw.renderer.set_scene_depth(depth_view);
+        match depth {
+            Some(depth) => {
+                let depth_view = depth_view.get_or_insert_with(|| scene_depth_view(depth));
+                draw.renderer.set_scene_depth(depth_view);
+            }
+            // A 2D camera: the image at the entity's depth.
+            None => {
+                let at = instance.world_from_local.w_axis;
+                let clip = view.clip_from_view * view.world_from_view.to_matrix().inverse() * at;
+                draw.renderer.set_composite_depth(Some(clip.z / clip.w));
+            }
         }
         let camera = view_camera(view, world_from_local);
         let encoder = context.command_encoder();

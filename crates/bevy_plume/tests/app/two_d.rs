@@ -2,7 +2,8 @@
 //! orthographic 2D camera puts it, and in the transparent 2D phase (where Bevy's sprites are
 //! drawn) effects sort by their entity's z: a larger blue one in front (larger z) covers the
 //! dot, one behind does not, whichever was spawned first; drawn by the compute renderer
-//! (`PlumeDraw::Compute`), the same picture.
+//! (`PlumeDraw::Compute`), the same picture; and an opaque 2D mesh in front of an effect's z
+//! hides it in both renderers, one behind it does not.
 //! `BEVY_PLUME_TEST_IMAGES=DIR` keeps the images.
 
 use crate::common::{asset_dir, lit_pixels, serial, Harness, HEIGHT, WIDTH};
@@ -31,13 +32,14 @@ fn centre() -> (f32, f32) {
 }
 
 /// A 2D app with the dot at z = 0 and, when `disc_z` is given, the blue disc at that z
-/// (spawned before the dot when `disc_first`), both drawn by `renderer`; the image after a
+/// (spawned before the dot when `disc_first`), both drawn by `renderer`, and where `card_z`
+/// is given an opaque green 2D mesh 30 units square over the dot at that z; the image after a
 /// few frames, and how many draws the compute renderer made in the last.
 fn draw_by(
     name: &str,
-    disc_z: Option<f32>,
-    disc_first: bool,
+    (disc_z, disc_first): (Option<f32>, bool),
     renderer: PlumeDraw,
+    card_z: Option<f32>,
 ) -> (image::RgbaImage, usize) {
     let dir = asset_dir(name);
     std::fs::write(dir.join("dot.plume.ron"), DOT).unwrap();
@@ -55,6 +57,23 @@ fn draw_by(
             ));
         }
     };
+    if let Some(z) = card_z {
+        let mesh = h
+            .app
+            .world_mut()
+            .resource_mut::<Assets<Mesh>>()
+            .add(Rectangle::new(30.0, 30.0));
+        let green = h
+            .app
+            .world_mut()
+            .resource_mut::<Assets<ColorMaterial>>()
+            .add(ColorMaterial::from_color(Color::srgb(0.0, 1.0, 0.0)));
+        h.app.world_mut().spawn((
+            Mesh2d(mesh),
+            MeshMaterial2d(green),
+            Transform::from_xyz(20.0, 10.0, z),
+        ));
+    }
     if disc_first {
         spawn_disc(&mut h);
     }
@@ -82,7 +101,7 @@ fn draw_by(
 
 /// [`draw_by`] with the default renderer (in 2D, the raster one).
 fn draw(name: &str, disc_z: Option<f32>, disc_first: bool) -> image::RgbaImage {
-    let (image, compute_draws) = draw_by(name, disc_z, disc_first, PlumeDraw::Auto);
+    let (image, compute_draws) = draw_by(name, (disc_z, disc_first), PlumeDraw::Auto, None);
     assert_eq!(
         compute_draws, 0,
         "Auto draws 2D effects with the raster renderer"
@@ -143,7 +162,7 @@ fn in_2d_the_compute_renderer_draws_and_sorts_as_the_raster_one() {
     ] {
         let name = format!("2d-compute-{what}").replace(' ', "-");
         let raster = draw(&format!("{name}-raster"), disc_z, false);
-        let (compute, compute_draws) = draw_by(&name, disc_z, false, PlumeDraw::Compute);
+        let (compute, compute_draws) = draw_by(&name, (disc_z, false), PlumeDraw::Compute, None);
         let effects = if disc_z.is_some() { 2 } else { 1 };
         assert_eq!(
             compute_draws, effects,
@@ -162,5 +181,24 @@ fn in_2d_the_compute_renderer_draws_and_sorts_as_the_raster_one() {
         );
         let (n, _, _) = lit_pixels(&compute, 40);
         assert!(n >= 40, "{what}: only {n} pixels lit");
+    }
+}
+
+#[test]
+fn an_opaque_2d_mesh_in_front_hides_the_effect_in_both_renderers() {
+    let _one = serial();
+    let (cx, cy) = centre();
+    for renderer in [PlumeDraw::Raster, PlumeDraw::Compute] {
+        for (card_z, dot_shows) in [(1.0, false), (-1.0, true)] {
+            let name = format!("2d-card-{renderer:?}-{card_z}");
+            let (image, _) = draw_by(&name, (None, false), renderer, Some(card_z));
+            let p = image.get_pixel(cx as u32, cy as u32).0;
+            let orange = p[0] > 200;
+            let green = p[0] < 20 && p[1] > 200;
+            assert!(
+                if dot_shows { orange } else { green },
+                "{renderer:?}, an opaque card at z {card_z}: the dot's centre is {p:?}"
+            );
+        }
     }
 }

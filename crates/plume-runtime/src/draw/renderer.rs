@@ -113,6 +113,18 @@ impl EffectRenderer {
         }
     }
 
+    /// For the compute renderer over a host whose depth it cannot read: puts its image over
+    /// the host's at NDC depth `depth` (the effect's place, say its origin's depth), tested
+    /// against the pass's depth attachment by the target's compare function, so that what the
+    /// host drew in front of that depth hides the effect. None (the default): everywhere, each
+    /// pixel tested against the host's depth bound with [`Self::set_scene_depth`]. Nothing for
+    /// the raster renderer, whose fragments test their own depths.
+    pub fn set_composite_depth(&mut self, depth: Option<f32>) {
+        if let Some(compute) = &self.compute {
+            compute.set_composite_depth(depth);
+        }
+    }
+
     /// Scales every sprite's size (1: the effect's own sizes).
     pub fn set_size_scale(&mut self, scale: f32) {
         if let Some(compute) = &self.compute {

@@ -45,6 +45,14 @@ pub(crate) struct HostSplat {
     soft: bool,
     frame: Mutex<Frame>,
     blit: wgpu::RenderPipeline,
+    /// The blit tested at one depth against the pass's depth attachment by the target's
+    /// compare function ([`Self::set_composite_depth`]), and its bind group; None for a
+    /// target without depth.
+    blit_at_depth: Option<(wgpu::RenderPipeline, wgpu::BindGroup)>,
+    /// Whether the blit is tested at a depth (set by [`Self::set_composite_depth`]).
+    at_depth: std::sync::atomic::AtomicBool,
+    /// The blit's uniform: the image's pitch, width and height, and the depth it is put at.
+    pitch: wgpu::Buffer,
     blit_group: wgpu::BindGroup,
 }
 
@@ -103,36 +111,51 @@ impl HostSplat {
             dst_factor: wgpu::BlendFactor::OneMinusSrcAlpha,
             operation: wgpu::BlendOperation::Add,
         };
-        let blit = crate::draw::pipeline::render_pipeline(
-            &gpu,
-            &module,
-            ("vs", "fs"),
-            crate::draw::pipeline::plain(wgpu::PrimitiveTopology::TriangleList),
-            &blit_target,
-            wgpu::BlendState {
-                color: premultiplied,
-                alpha: premultiplied,
-            },
-        );
-        let pitch = super::binding::uniform(
+        let blit_pipeline = |target: &DrawTarget| {
+            crate::draw::pipeline::render_pipeline(
+                &gpu,
+                &module,
+                ("vs", "fs"),
+                crate::draw::pipeline::plain(wgpu::PrimitiveTopology::TriangleList),
+                target,
+                wgpu::BlendState {
+                    color: premultiplied,
+                    alpha: premultiplied,
+                },
+            )
+        };
+        let blit = blit_pipeline(&blit_target);
+        let blit_at_depth = target
+            .depth
+            .map(|_| blit_pipeline(&target.with_depth_writes(false)));
+        let pitch = crate::device::buffers::words_buffer(
             &gpu,
             "splat host pitch",
-            &[splat_hdr_pitch(width), width, height, 0],
+            [splat_hdr_pitch(width), width, height, 0].into_iter(),
+            wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
         )?;
-        let blit_group = gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
-            label: Some("splat over the host"),
-            layout: &blit.get_bind_group_layout(0),
-            entries: &[
-                wgpu::BindGroupEntry {
-                    binding: 0,
-                    resource: pitch.as_entire_binding(),
-                },
-                wgpu::BindGroupEntry {
-                    binding: 1,
-                    resource: splat.parts[0].1.image().as_entire_binding(),
-                },
-            ],
+        // Each pipeline's own layout (derived from the module): a bind group for each.
+        let blit_group = |pipeline: &wgpu::RenderPipeline| {
+            gpu.device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("splat over the host"),
+                layout: &pipeline.get_bind_group_layout(0),
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: pitch.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: splat.parts[0].1.image().as_entire_binding(),
+                    },
+                ],
+            })
+        };
+        let blit_at_depth = blit_at_depth.map(|p| {
+            let group = blit_group(&p);
+            (p, group)
         });
+        let blit_group = blit_group(&blit);
         Ok(Self {
             gpu,
             width,
@@ -151,8 +174,26 @@ impl HostSplat {
                 far_written: false,
             }),
             blit,
+            blit_at_depth,
+            at_depth: std::sync::atomic::AtomicBool::new(false),
+            pitch,
             blit_group,
         })
+    }
+
+    /// Puts the image over the host's at NDC depth `depth`, tested against the pass's depth
+    /// attachment by the target's compare function, or (None, the default) everywhere: the
+    /// compute renderer has tested each pixel against its copy of the host's depth. For a
+    /// host whose depth the compute renderer cannot read (a Bevy 2D camera's), so that what
+    /// the host drew in front of that depth hides the effect.
+    pub(crate) fn set_composite_depth(&self, depth: Option<f32>) {
+        let at = depth.filter(|_| self.blit_at_depth.is_some());
+        self.at_depth
+            .store(at.is_some(), std::sync::atomic::Ordering::Relaxed);
+        let bits = at.unwrap_or(0.0).to_bits();
+        self.gpu
+            .queue
+            .write_buffer(&self.pitch, 12, &bits.to_le_bytes());
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Frame> {
@@ -270,8 +311,17 @@ impl HostSplat {
 
     /// Records the compute renderer's image over the host's colour into `pass`.
     pub(crate) fn draw(&self, pass: &mut wgpu::RenderPass<'_>) {
-        pass.set_pipeline(&self.blit);
-        pass.set_bind_group(0, &self.blit_group, &[]);
+        let at_depth = self.at_depth.load(std::sync::atomic::Ordering::Relaxed);
+        match (&self.blit_at_depth, at_depth) {
+            (Some((tested, group)), true) => {
+                pass.set_pipeline(tested);
+                pass.set_bind_group(0, group, &[]);
+            }
+            _ => {
+                pass.set_pipeline(&self.blit);
+                pass.set_bind_group(0, &self.blit_group, &[]);
+            }
+        }
         pass.draw(0..3, 0..1);
     }
 }
