@@ -45,7 +45,7 @@ pub const MESH_SPLAT_BINDINGS: [u32; 7] = [56, 57, 58, 59, 60, 61, 62];
 
 /// Pixels in a triangle's box past which a workgroup covers it (`mesh_raster_big`), not one
 /// thread.
-pub const BIG_TRIANGLE_PIXELS: u32 = 256;
+pub(crate) const BIG_TRIANGLE_PIXELS: u32 = 256;
 
 /// 32-bit words of one particle's frame in the compute mesh draw: centre (w: 1 shown, 0
 /// hidden), the mesh's x, y and z axes, and the colour.

@@ -26,7 +26,9 @@ use crate::sim::group::Group;
 /// A part of the compute renderer's image: one group's sprites (or its ribbons), or its meshes.
 /// Each boxed: a part is large, and the parts live in one list.
 pub(crate) enum SplatPart {
+    /// A group's sprites, or its ribbons: projected, listed by tile and composited.
     Sprites(Box<GroupSplat>),
+    /// A group's solid meshes: covered into a visibility buffer and shaded a pixel each.
     Meshes(Box<MeshSplat>),
 }
 
