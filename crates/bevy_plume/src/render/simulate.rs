@@ -466,7 +466,8 @@ pub(crate) fn composite_for_view(
 /// A 2D camera's depth is a render attachment only (Bevy 0.20): nothing is copied; an
 /// instance's image is put over the camera's at its entity's depth, tested against the 2D
 /// depth there (`set_composite_depth`), so what the camera drew in front of the entity's z
-/// hides it, as the effect sorts with the sprites by that z.
+/// hides it, as the effect sorts with the sprites by that z. A batch, whose members stand at
+/// many depths, is put over the camera's image untested.
 pub(crate) fn composite_for_view_2d(
     view: ViewQuery<(Entity, &ExtractedView)>,
     mut context: RenderContext,

@@ -119,6 +119,25 @@ impl EffectRenderer {
     /// host drew in front of that depth hides the effect. None (the default): everywhere, each
     /// pixel tested against the host's depth bound with [`Self::set_scene_depth`]. Nothing for
     /// the raster renderer, whose fragments test their own depths.
+    ///
+    /// ```
+    /// # fn main() -> Result<(), Box<dyn std::error::Error>> {
+    /// use plume_runtime::{glam, DrawTarget, Effect, Gpu};
+    /// let source = r#"Effect(name: "dots", capacity: 8,
+    ///     emitters: [Emitter(burst: 8, shape: Point((0.0, 0.0, 0.0)), velocity: Constant((0.0, 1.0, 0.0)))])"#;
+    /// let gpu = Gpu::new(&Default::default())?;
+    /// let dots = Effect::from_source(&gpu, source, &Default::default())?;
+    /// // A host with reversed depth (Greater) whose depth texture is not bindable.
+    /// let target = DrawTarget::new(wgpu::TextureFormat::Rgba8Unorm)
+    ///     .with_depth_compare(wgpu::TextureFormat::Depth32Float, wgpu::CompareFunction::Greater);
+    /// let mut particles = dots.compute_renderer(&target, 320, 180)?;
+    /// // The effect's origin, 5 m in front of the host's camera, in NDC depth.
+    /// let proj = glam::Mat4::perspective_infinite_reverse_rh(1.0, 16.0 / 9.0, 0.1);
+    /// let clip = proj * glam::Vec4::new(0.0, 0.0, -5.0, 1.0);
+    /// particles.set_composite_depth(Some(clip.z / clip.w));
+    /// # Ok(())
+    /// # }
+    /// ```
     pub fn set_composite_depth(&mut self, depth: Option<f32>) {
         if let Some(compute) = &self.compute {
             compute.set_composite_depth(depth);
