@@ -118,11 +118,6 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
         backend: args.backend.clone(),
     })?;
     eprintln!("adapter: {}", gpu.describe());
-    let triangles: Vec<_> = graph
-        .groups
-        .iter()
-        .flat_map(|g| g.effect.ir.scene_triangles())
-        .collect();
     let (draw, why) = args.draw.resolve(&gpu, &graph);
     eprintln!(
         "draw: {} ({why})",
@@ -135,6 +130,11 @@ fn render_frames(args: &RenderArgs, graph: CompiledGraph) -> Result<Vec<Frame8>,
     // An effect that glows is drawn into an HDR image and bloomed (render.glow).
     let glow = graph.groups[0].effect.ir.render.glow;
     let target = Offscreen::with_glow(&gpu, w, h, glow.as_ref())?;
+    let triangles: Vec<_> = graph
+        .groups
+        .iter()
+        .flat_map(|g| g.effect.ir.scene_triangles())
+        .collect();
     let mut scene = match args.no_scene {
         false => Scene::new(&gpu, &triangles, target.target().color_format, (w, h))?,
         true => None,
